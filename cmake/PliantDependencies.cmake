@@ -1,0 +1,25 @@
+# Every third-party dependency, found from Debian packages (see ../shared/DEPENDENCIES.md).
+find_package(Threads REQUIRED)
+find_package(TBB CONFIG REQUIRED)
+find_package(fmt CONFIG REQUIRED)
+find_package(nlohmann_json 3.11 CONFIG REQUIRED)
+find_package(CLI11 CONFIG REQUIRED)
+find_package(tinyobjloader CONFIG REQUIRED)
+
+if(PLIANT_BUILD_TESTS)
+  find_package(GTest CONFIG REQUIRED)
+endif()
+if(PLIANT_BUILD_BENCH)
+  find_package(benchmark CONFIG REQUIRED)
+endif()
+
+set(PLIANT_HAS_EMBREE OFF)
+if(PLIANT_WITH_EMBREE)
+  find_package(embree 3 CONFIG QUIET)
+  if(embree_FOUND)
+    set(PLIANT_HAS_EMBREE ON)
+  else()
+    message(WARNING "Embree 3 not found: BVH benchmarks run without the Embree peer "
+                    "(install libembree-dev, or scripts/install-deps)")
+  endif()
+endif()

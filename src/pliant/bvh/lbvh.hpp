@@ -1,0 +1,69 @@
+// LBVH: a linear bounding volume hierarchy over boxes the caller owns, built and refitted in
+// parallel, GPU style (Karras 2012; hierarchy and boxes in one bottom-up pass after Apetrei 2014,
+// "Fast and Simple Agglomerative LBVH Construction").
+//
+// build(boxes): Morton codes of box centres (30 bits) → parallel radix sort → one bottom-up pass in
+// which every leaf climbs until it is the first to reach a node (an atomic exchange of range ends
+// decides who goes on), writing child links and boxes. Sorted positions break ties between equal
+// Morton codes, so the tree is a radix tree over distinct 62-bit keys: depth ≤ 63, identical boxes
+// give a balanced tree. O(n) work, deterministic for any number of threads.
+//
+// refit(boxes): new boxes for the same primitives, hierarchy kept; leaves climb with per-node
+// atomic counters (the second arrival merges). O(n). Boxes are merged with exact min/max, so the
+// result is bitwise independent of scheduling.
+//
+// Preconditions: boxes finite and non-empty (checked by build, not by refit: refit is the per-step
+// hot path; a NaN box there only makes overlaps fail). At most 2^31 - 1 boxes. The LBVH does not
+// keep a reference to the caller's boxes between calls.
+// Thread safety: build/refit must not run concurrently with anything else on the same LBVH;
+// const queries may run concurrently.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pliant/bvh/node.hpp"
+#include "pliant/core/aabb.hpp"
+#include "pliant/core/radix_sort.hpp"
+
+namespace pliant::bvh {
+
+class LBVH {
+public:
+    void build(std::span<const AABB> boxes);
+    void refit(std::span<const AABB> boxes);
+
+    std::int32_t num_primitives() const { return static_cast<std::int32_t>(m_primitives.size()); }
+    // Root internal node, or -1 with fewer than two primitives.
+    std::int32_t root() const { return m_root; }
+    std::span<const Node> nodes() const { return m_nodes; }
+    // Box of each leaf position (Morton order), as of the last build/refit.
+    std::span<const AABB> leaf_boxes() const { return m_leaf_boxes; }
+    // Primitive (index into the caller's boxes) at each leaf position.
+    std::span<const std::uint32_t> primitives() const { return m_primitives; }
+    // Box of everything (empty box when there are no primitives).
+    AABB bounds() const;
+    // Bytes held (nodes, leaf boxes, permutation, scratch).
+    std::size_t memory_bytes() const;
+
+    // Checks every structural invariant — each leaf reached exactly once, child ranges tile their
+    // parent's, parent links, every stored box equal to the merge of its subtree's leaf boxes —
+    // and throws InternalError naming the first violation. O(n); for tests.
+    void validate() const;
+
+private:
+    void compute_leaf_order(std::span<const AABB> boxes);
+    void build_hierarchy();
+
+    std::vector<Node> m_nodes;               // n - 1 internal nodes
+    std::vector<AABB> m_leaf_boxes;          // n, Morton order
+    std::vector<std::uint32_t> m_primitives; // n, Morton order → primitive id
+    std::vector<std::int32_t> m_leaf_parent; // n, (parent << 1) | slot
+    std::vector<std::uint64_t> m_keys;       // n Morton codes, sorted
+    std::vector<std::int32_t> m_counters;    // n - 1 atomics: range ends (build), visits (refit)
+    std::int32_t m_root = -1;
+    RadixSorter m_sorter;
+};
+
+}  // namespace pliant::bvh

@@ -1,0 +1,30 @@
+// The LBVH node layout: internal nodes only, one 64-byte cache line each, holding both children's
+// boxes so that a traversal step tests two children from one line.
+//
+// Leaves are the primitives in Morton order ("leaf positions" 0..n-1). Internal node p splits the
+// leaf range [first, last] between positions p and p+1 (Karras 2012 / Apetrei 2014 indexing): its
+// left child covers [first, p] and its right child [p+1, last]. A child reference c ≥ 0 is an
+// internal node; c < 0 is the leaf at position ~c.
+#pragma once
+
+#include <cstdint>
+#include <type_traits>
+
+#include "pliant/core/aabb.hpp"
+#include "pliant/core/host_device.hpp"
+
+namespace pliant::bvh {
+
+struct alignas(64) Node {
+    AABB box[2];             // box[0]: left child, box[1]: right child
+    std::int32_t child[2];   // ≥ 0 internal node index, < 0 leaf position ~c
+    std::int32_t last;       // last leaf position of this subtree
+    std::int32_t parent;     // (parent node << 1) | slot of this node in it; -1 at the root
+};
+static_assert(sizeof(Node) == 64 && std::is_trivially_copyable_v<Node>);
+
+PLIANT_HOST_DEVICE constexpr bool is_leaf(std::int32_t child) { return child < 0; }
+PLIANT_HOST_DEVICE constexpr std::int32_t leaf_position(std::int32_t child) { return ~child; }
+PLIANT_HOST_DEVICE constexpr std::int32_t leaf_reference(std::int32_t position) { return ~position; }
+
+}  // namespace pliant::bvh
