@@ -1,0 +1,186 @@
+#include "pliant/bvh/lbvh.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+#include "pliant/bvh/traversal.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "support/brute_force.hpp"
+#include "support/random_meshes.hpp"
+
+namespace pliant::bvh {
+namespace {
+
+std::vector<test::Pair> self_pairs(const LBVH& tree) {
+    std::vector<PrimitivePair> pairs;
+    SelfOverlapCollector collector;
+    collector.collect(tree, [](std::uint32_t, std::uint32_t) { return true; }, pairs);
+    return pairs;
+}
+
+std::vector<test::Pair> cross_pairs(const LBVH& a, const LBVH& b) {
+    ChunkedBuffer<test::Pair> buffer;
+    buffer.reset(num_chunks(a.num_primitives(), QUERY_GRAIN));
+    for_each_overlap(a, b, [&](std::int64_t chunk, std::uint32_t i, std::uint32_t j) {
+        buffer.chunk(chunk).emplace_back(i, j);
+    });
+    std::vector<test::Pair> pairs;
+    buffer.gather(pairs);
+    return pairs;
+}
+
+void expect_self_pairs_match_brute_force(std::span<const AABB> boxes) {
+    LBVH tree;
+    tree.build(boxes);
+    tree.validate();
+    const auto pairs = self_pairs(tree);
+    const auto normal = test::normalized(pairs);
+    EXPECT_EQ(std::adjacent_find(normal.begin(), normal.end()), normal.end()) << "duplicate pair";
+    EXPECT_EQ(normal, test::brute_force_self_overlaps(boxes));
+}
+
+TEST(LBVH, RandomSoupsMatchBruteForce) {
+    for (const int n : {2, 3, 10, 100, 2000}) {
+        for (const float size : {0.01f, 0.1f, 0.5f}) {
+            SCOPED_TRACE(testing::Message() << "n=" << n << " size=" << size);
+            const auto mesh = test::random_triangle_soup(n, size, static_cast<std::uint32_t>(n));
+            expect_self_pairs_match_brute_force(test::triangle_boxes(mesh));
+        }
+    }
+}
+
+TEST(LBVH, JitteredSheetMatchesBruteForce) {
+    const auto mesh = test::jittered_sheet(40, 30, 0.3f, 0.05f, 11);
+    expect_self_pairs_match_brute_force(test::triangle_boxes(mesh, 0.002f));
+}
+
+TEST(LBVH, IdenticalBoxesGiveABalancedTreeAndEveryPair) {
+    const std::vector<AABB> boxes(513, AABB{{0, 0, 0}, {1, 1, 1}});
+    LBVH tree;
+    tree.build(boxes);
+    tree.validate();
+    // Equal Morton codes: the position tie-break must keep the tree shallow, not a chain.
+    int depth = 0;
+    for (std::int32_t link = tree.nodes()[0].parent; link >= 0;
+         link = tree.nodes()[static_cast<std::size_t>(link >> 1)].parent) {
+        ++depth;
+    }
+    EXPECT_LE(depth, 12);
+    EXPECT_EQ(self_pairs(tree).size(), 513u * 512u / 2u);
+}
+
+TEST(LBVH, EqualMortonCodesFromTinyBoxes) {
+    // Boxes far smaller than one 1024³ Morton cell of the scene: many share a code.
+    auto boxes = test::random_boxes(3000, 1e-4f, 5);
+    boxes.push_back({{100, 100, 100}, {101, 101, 101}});  // stretches the scene bounds
+    expect_self_pairs_match_brute_force(boxes);
+}
+
+TEST(LBVH, FlatAndDegenerateBoxes) {
+    std::vector<AABB> boxes;
+    for (int i = 0; i < 300; ++i) {  // points on a line, some coincident
+        const Vec3f p{static_cast<float>(i / 2) * 0.01f, 0.0f, 0.0f};
+        boxes.push_back(AABB::of_point(p));
+    }
+    expect_self_pairs_match_brute_force(boxes);
+}
+
+TEST(LBVH, ZeroAndOnePrimitive) {
+    LBVH tree;
+    tree.build({});
+    tree.validate();
+    EXPECT_EQ(tree.root(), -1);
+    EXPECT_TRUE(self_pairs(tree).empty());
+    EXPECT_TRUE(tree.bounds().is_empty());
+    const std::vector<AABB> one{{{0, 0, 0}, {1, 1, 1}}};
+    tree.build(one);
+    tree.validate();
+    EXPECT_TRUE(self_pairs(tree).empty());
+    EXPECT_EQ(tree.bounds(), one[0]);
+    tree.refit(one);
+    LBVH other;
+    other.build(test::random_boxes(50, 0.3f, 1));
+    EXPECT_EQ(test::normalized(cross_pairs(tree, other)).size(),
+              test::brute_force_overlaps(one, test::random_boxes(50, 0.3f, 1)).size());
+    EXPECT_EQ(cross_pairs(other, tree).size(), cross_pairs(tree, other).size());
+}
+
+TEST(LBVH, RejectsBadBoxes) {
+    std::vector<AABB> boxes = test::random_boxes(10, 0.1f, 2);
+    boxes[4].lo.y = NAN;
+    LBVH tree;
+    try {
+        tree.build(boxes);
+        FAIL();
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("box 4"), std::string::npos) << e.what();
+    }
+    boxes[4] = AABB{};  // empty
+    EXPECT_THROW(tree.build(boxes), InvalidInput);
+    boxes.pop_back();
+    tree.build(test::random_boxes(10, 0.1f, 2));
+    EXPECT_THROW(tree.refit(boxes), InvalidInput);  // 9 boxes for 10 primitives
+}
+
+TEST(LBVH, RefitTracksMotionAndMatchesRebuild) {
+    auto mesh = test::jittered_sheet(30, 30, 0.2f, 0.0f, 3);
+    LBVH tree;
+    tree.build(test::triangle_boxes(mesh, 0.001f));
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-0.02f, 0.02f);
+    for (int step = 0; step < 5; ++step) {
+        for (Vec3f& p : mesh.positions) {
+            p += Vec3f{u(rng), u(rng), 0.5f * std::sin(10.0f * p.x + static_cast<float>(step))};
+        }
+        const auto boxes = test::triangle_boxes(mesh, 0.001f);
+        tree.refit(boxes);
+        tree.validate();
+        EXPECT_EQ(test::normalized(self_pairs(tree)), test::brute_force_self_overlaps(boxes));
+    }
+}
+
+TEST(LBVH, PairTraversalMatchesBruteForce) {
+    const auto a = test::random_boxes(700, 0.05f, 21);
+    const auto b = test::random_boxes(400, 0.08f, 22);
+    LBVH ta, tb;
+    ta.build(a);
+    tb.build(b);
+    auto pairs = cross_pairs(ta, tb);
+    std::sort(pairs.begin(), pairs.end());
+    EXPECT_EQ(pairs, test::brute_force_overlaps(a, b));
+}
+
+TEST(LBVH, BitwiseIdenticalForOneAndManyThreads) {
+    const auto mesh = test::jittered_sheet(120, 100, 0.3f, 0.05f, 4);
+    const auto boxes = test::triangle_boxes(mesh, 0.004f);
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        LBVH tree;
+        tree.build(boxes);
+        tree.refit(boxes);
+        return std::make_pair(std::vector<Node>(tree.nodes().begin(), tree.nodes().end()), self_pairs(tree));
+    };
+    const auto one = run(1);
+    const auto many = run(4);
+    set_num_threads(0);
+    ASSERT_EQ(one.first.size(), many.first.size());
+    EXPECT_EQ(std::memcmp(one.first.data(), many.first.data(), one.first.size() * sizeof(Node)), 0);
+    EXPECT_EQ(one.second, many.second);  // same pairs in the same order
+    EXPECT_GT(one.second.size(), 100000u);
+}
+
+TEST(LBVH, ScaleInvariance) {
+    for (const float scale : {1e-6f, 1e6f}) {
+        auto mesh = test::jittered_sheet(25, 25, 0.3f, 0.1f, 8);
+        for (Vec3f& p : mesh.positions) {
+            p *= scale;
+        }
+        expect_self_pairs_match_brute_force(test::triangle_boxes(mesh));
+    }
+}
+
+}  // namespace
+}  // namespace pliant::bvh
