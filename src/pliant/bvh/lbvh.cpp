@@ -13,6 +13,7 @@ namespace pliant::bvh {
 namespace {
 
 constexpr std::int64_t LEAF_GRAIN = 1 << 12;
+constexpr std::int64_t WIDE_GRAIN = 1 << 10;
 constexpr std::int32_t NO_BOUND = -1;
 
 // Dissimilarity of neighbouring leaves i and i+1: Morton XOR in the high word, position XOR in the
@@ -25,10 +26,6 @@ PLIANT_HOST_DEVICE inline std::uint64_t delta(const std::uint64_t* keys, std::in
 
 std::int32_t atomic_exchange(std::int32_t& slot, std::int32_t value) {
     return std::atomic_ref<std::int32_t>(slot).exchange(value, std::memory_order_acq_rel);
-}
-
-std::int32_t atomic_increment(std::int32_t& slot) {
-    return std::atomic_ref<std::int32_t>(slot).fetch_add(1, std::memory_order_acq_rel);
 }
 
 }  // namespace
@@ -123,6 +120,77 @@ void LBVH::build_hierarchy() {
     std::fill(m_counters.begin(), m_counters.end(), 0);
 }
 
+namespace {
+
+float half_area(const AABB& b) {
+    const Vec3f e = b.extent();
+    return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+}  // namespace
+
+void LBVH::collapse() {
+    // Breadth first over the binary tree: each wide node starts with the two children of its
+    // binary node and repeatedly opens the internal slot of largest surface area (the one most
+    // likely to be entered) until it has four slots or only leaves.
+    struct Slot {
+        std::int32_t ref;  // binary child reference (≥ 0 internal, < 0 leaf)
+        AABB box;
+    };
+    m_wide.clear();
+    m_wide_source.assign(1, m_root);
+    m_level_offsets.assign(1, 0);
+    std::int32_t level_end = 1;
+    for (std::int32_t w = 0; w < static_cast<std::int32_t>(m_wide_source.size()); ++w) {
+        if (w == level_end) {
+            m_level_offsets.push_back(w);
+            level_end = static_cast<std::int32_t>(m_wide_source.size());
+        }
+        const Node& source = m_nodes[static_cast<std::size_t>(m_wide_source[static_cast<std::size_t>(w)])];
+        Slot slots[WIDTH] = {{source.child[0], source.box[0]}, {source.child[1], source.box[1]}};
+        int count = 2;
+        while (count < WIDTH) {
+            int open = -1;
+            for (int k = 0; k < count; ++k) {
+                if (!is_leaf(slots[k].ref) &&
+                    (open < 0 || half_area(slots[k].box) > half_area(slots[open].box))) {
+                    open = k;
+                }
+            }
+            if (open < 0) {
+                break;
+            }
+            const Node& opened = m_nodes[static_cast<std::size_t>(slots[open].ref)];
+            for (int k = count; k > open + 1; --k) {
+                slots[k] = slots[k - 1];
+            }
+            slots[open] = {opened.child[0], opened.box[0]};
+            slots[open + 1] = {opened.child[1], opened.box[1]};
+            ++count;
+        }
+        WideNode node{};
+        for (int k = 0; k < WIDTH; ++k) {
+            if (k >= count) {
+                node.set_box(k, AABB{});
+                node.child[k] = EMPTY_SLOT;
+                node.last[k] = -1;
+                continue;
+            }
+            node.set_box(k, slots[k].box);
+            if (is_leaf(slots[k].ref)) {
+                node.child[k] = slots[k].ref;
+                node.last[k] = leaf_position(slots[k].ref);
+            } else {
+                node.child[k] = static_cast<std::int32_t>(m_wide_source.size());
+                node.last[k] = m_nodes[static_cast<std::size_t>(slots[k].ref)].last;
+                m_wide_source.push_back(slots[k].ref);
+            }
+        }
+        m_wide.push_back(node);
+    }
+    m_level_offsets.push_back(static_cast<std::int32_t>(m_wide.size()));
+}
+
 void LBVH::build(std::span<const AABB> boxes) {
     if (boxes.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
         throw InvalidInput(fmt::format("LBVH::build: {} boxes, at most {} supported", boxes.size(),
@@ -138,13 +206,13 @@ void LBVH::build(std::span<const AABB> boxes) {
     }
     compute_leaf_order(boxes);
     m_root = -1;
+    m_wide.clear();
+    m_level_offsets.clear();
     if (boxes.size() < 2) {
-        m_nodes.clear();
-        m_leaf_parent.assign(boxes.size(), -1);
-        m_counters.clear();
         return;
     }
     build_hierarchy();
+    collapse();
 }
 
 void LBVH::refit(std::span<const AABB> boxes) {
@@ -152,40 +220,45 @@ void LBVH::refit(std::span<const AABB> boxes) {
         throw InvalidInput(fmt::format("LBVH::refit: boxes.size() ({}) != primitives in the tree ({})",
                                        boxes.size(), m_primitives.size()));
     }
-    const auto n = static_cast<std::int64_t>(boxes.size());
-    Node* nodes = m_nodes.data();
-    // Every node is visited exactly twice per refit, so counter parity tells the first arrival
-    // without resetting the counters.
     parallel_for(
-        n,
-        [&](std::int64_t leaf) {
-            const auto k = static_cast<std::size_t>(leaf);
-            AABB box = boxes[m_primitives[k]];
-            m_leaf_boxes[k] = box;
-            std::int32_t link = m_leaf_parent[k];
-            while (link >= 0) {
-                Node& node = nodes[link >> 1];
-                node.box[link & 1] = box;
-                if ((atomic_increment(m_counters[static_cast<std::size_t>(link >> 1)]) & 1) == 0) {
-                    return;
-                }
-                box = merge(node.box[0], node.box[1]);
-                link = node.parent;
-            }
+        static_cast<std::int64_t>(boxes.size()),
+        [&](std::int64_t i) {
+            m_leaf_boxes[static_cast<std::size_t>(i)] = boxes[m_primitives[static_cast<std::size_t>(i)]];
         },
         LEAF_GRAIN);
+    // Deepest level first: a node's children are all on deeper levels, already refitted.
+    WideNode* wide = m_wide.data();
+    for (int level = depth() - 1; level >= 0; --level) {
+        const std::int32_t begin = m_level_offsets[static_cast<std::size_t>(level)];
+        const std::int32_t end = m_level_offsets[static_cast<std::size_t>(level) + 1];
+        parallel_for(
+            end - begin,
+            [&](std::int64_t offset) {
+                WideNode& node = wide[begin + offset];
+                for (int k = 0; k < WIDTH; ++k) {
+                    const std::int32_t c = node.child[k];
+                    if (c == EMPTY_SLOT) {
+                        continue;
+                    }
+                    node.set_box(k, is_leaf(c) ? m_leaf_boxes[static_cast<std::size_t>(leaf_position(c))]
+                                               : wide[c].bounds());
+                }
+            },
+            WIDE_GRAIN);
+    }
 }
 
 AABB LBVH::bounds() const {
-    if (m_root >= 0) {
-        const Node& r = m_nodes[static_cast<std::size_t>(m_root)];
-        return merge(r.box[0], r.box[1]);
+    if (has_nodes()) {
+        return m_wide.front().bounds();
     }
     return m_leaf_boxes.empty() ? AABB{} : m_leaf_boxes.front();
 }
 
 std::size_t LBVH::memory_bytes() const {
-    return m_nodes.capacity() * sizeof(Node) + m_leaf_boxes.capacity() * sizeof(AABB) +
+    return m_wide.capacity() * sizeof(WideNode) + m_level_offsets.capacity() * sizeof(std::int32_t) +
+           m_wide_source.capacity() * sizeof(std::int32_t) +
+           m_nodes.capacity() * sizeof(Node) + m_leaf_boxes.capacity() * sizeof(AABB) +
            m_primitives.capacity() * sizeof(std::uint32_t) +
            m_leaf_parent.capacity() * sizeof(std::int32_t) +
            m_keys.capacity() * sizeof(std::uint64_t) + m_counters.capacity() * sizeof(std::int32_t);
@@ -195,56 +268,61 @@ void LBVH::validate() const {
     const std::int32_t n = num_primitives();
     PLIANT_CHECK_EQ(m_leaf_boxes.size(), static_cast<std::size_t>(n));
     if (n < 2) {
-        PLIANT_CHECK_EQ(m_root, -1);
+        PLIANT_CHECK(m_wide.empty());
         return;
     }
-    PLIANT_CHECK(m_root >= 0 && m_root < n - 1);
-    PLIANT_CHECK_EQ(m_nodes[static_cast<std::size_t>(m_root)].parent, -1);
-    std::vector<int> leaf_seen(static_cast<std::size_t>(n), 0);
-    // Iterative DFS carrying each node's expected range and returning its merged box.
+    // Depth-first over the wide tree carrying each node's expected leaf range and depth; checks
+    // ranges and breadth-first placement, then boxes bottom-up.
     struct Item {
-        std::int32_t node, first, last, link;
+        std::int32_t node, first, last, depth;
     };
-    std::vector<Item> stack{{m_root, 0, n - 1, -1}};
-    std::vector<AABB> subtree_box(static_cast<std::size_t>(n - 1));
+    std::vector<Item> stack{{0, 0, n - 1, 0}};
+    std::vector<int> leaf_seen(static_cast<std::size_t>(n), 0);
+    std::vector<int> node_seen(m_wide.size(), 0);
     std::vector<std::int32_t> order;
     while (!stack.empty()) {
         const Item item = stack.back();
         stack.pop_back();
-        const Node& node = m_nodes[static_cast<std::size_t>(item.node)];
-        PLIANT_CHECK_EQ(node.parent, item.link);
-        PLIANT_CHECK_EQ(node.last, item.last);
-        PLIANT_CHECK(item.first <= item.node && item.node < item.last);
+        PLIANT_CHECK(item.node >= m_level_offsets[static_cast<std::size_t>(item.depth)] &&
+                     item.node < m_level_offsets[static_cast<std::size_t>(item.depth) + 1]);
+        ++node_seen[static_cast<std::size_t>(item.node)];
         order.push_back(item.node);
-        const std::int32_t ranges[2][2] = {{item.first, item.node}, {item.node + 1, item.last}};
-        for (int s = 0; s < 2; ++s) {
-            const std::int32_t c = node.child[s];
-            if (is_leaf(c)) {
-                const std::int32_t p = leaf_position(c);
-                PLIANT_CHECK(ranges[s][0] == p && ranges[s][1] == p);
-                ++leaf_seen[static_cast<std::size_t>(p)];
-                PLIANT_CHECK_EQ(m_leaf_parent[static_cast<std::size_t>(p)], (item.node << 1) | s);
-                PLIANT_CHECK(node.box[s] == m_leaf_boxes[static_cast<std::size_t>(p)]);
-            } else {
-                PLIANT_CHECK(ranges[s][0] < ranges[s][1]);
-                stack.push_back({c, ranges[s][0], ranges[s][1], (item.node << 1) | s});
+        const WideNode& node = m_wide[static_cast<std::size_t>(item.node)];
+        std::int32_t next = item.first;
+        int used = 0;
+        for (int k = 0; k < WIDTH; ++k) {
+            const std::int32_t c = node.child[k];
+            if (c == EMPTY_SLOT) {
+                PLIANT_CHECK(node.box(k).is_empty() && node.last[k] == -1);
+                continue;
             }
+            PLIANT_CHECK_EQ(k, used);  // used slots first
+            ++used;
+            PLIANT_CHECK_GE(node.last[k], next);
+            if (is_leaf(c)) {
+                PLIANT_CHECK_EQ(leaf_position(c), next);
+                PLIANT_CHECK_EQ(node.last[k], next);
+                ++leaf_seen[static_cast<std::size_t>(next)];
+                PLIANT_CHECK(node.box(k) == m_leaf_boxes[static_cast<std::size_t>(next)]);
+            } else {
+                PLIANT_CHECK(c > item.node && static_cast<std::size_t>(c) < m_wide.size());
+                PLIANT_CHECK(node.box(k) == m_wide[static_cast<std::size_t>(c)].bounds());
+                stack.push_back({c, next, node.last[k], item.depth + 1});
+            }
+            next = node.last[k] + 1;
         }
+        PLIANT_CHECK_GE(used, 2);
+        PLIANT_CHECK_EQ(next, item.last + 1);
     }
-    PLIANT_CHECK_EQ(order.size(), static_cast<std::size_t>(n - 1));
     for (std::int32_t p = 0; p < n; ++p) {
         PLIANT_CHECK_EQ(leaf_seen[static_cast<std::size_t>(p)], 1);
     }
-    // Boxes: children before parents (reverse DFS pre-order).
-    for (auto it = order.rbegin(); it != order.rend(); ++it) {
-        const Node& node = m_nodes[static_cast<std::size_t>(*it)];
-        for (int s = 0; s < 2; ++s) {
-            if (!is_leaf(node.child[s])) {
-                PLIANT_CHECK(node.box[s] == subtree_box[static_cast<std::size_t>(node.child[s])]);
-            }
-        }
-        subtree_box[static_cast<std::size_t>(*it)] = merge(node.box[0], node.box[1]);
+    for (const int seen : node_seen) {
+        PLIANT_CHECK_EQ(seen, 1);
     }
+    // Every node box equals the merge of its subtree's leaf boxes: by induction, since every slot
+    // box equals its child's bounds and leaf slots equal the leaf boxes (checked above).
+    PLIANT_CHECK_EQ(order.size(), m_wide.size());
 }
 
 }  // namespace pliant::bvh

@@ -8,9 +8,13 @@
 // Morton codes, so the tree is a radix tree over distinct 62-bit keys: depth ≤ 63, identical boxes
 // give a balanced tree. O(n) work, deterministic for any number of threads.
 //
-// refit(boxes): new boxes for the same primitives, hierarchy kept; leaves climb with per-node
-// atomic counters (the second arrival merges). O(n). Boxes are merged with exact min/max, so the
-// result is bitwise independent of scheduling.
+// The binary hierarchy is then collapsed into a 4-wide tree (wide_node.hpp), breadth first, each
+// node absorbing the children with the largest surface area; queries traverse the wide tree with
+// one SIMD test per four boxes.
+//
+// refit(boxes): new boxes for the same primitives, hierarchy kept: one parallel loop per depth of
+// the wide tree, deepest first. O(n). Boxes are merged with exact min/max, so the result is
+// bitwise independent of scheduling.
 //
 // Preconditions: boxes finite and non-empty (checked by build, not by refit: refit is the per-step
 // hot path; a NaN box there only makes overlaps fail). At most 2^31 - 1 boxes. The LBVH does not
@@ -24,6 +28,7 @@
 #include <vector>
 
 #include "pliant/bvh/node.hpp"
+#include "pliant/bvh/wide_node.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/core/radix_sort.hpp"
 
@@ -35,9 +40,12 @@ public:
     void refit(std::span<const AABB> boxes);
 
     std::int32_t num_primitives() const { return static_cast<std::int32_t>(m_primitives.size()); }
-    // Root internal node, or -1 with fewer than two primitives.
-    std::int32_t root() const { return m_root; }
-    std::span<const Node> nodes() const { return m_nodes; }
+    // True when there is a tree to traverse (two or more primitives); its root is nodes()[0].
+    bool has_nodes() const { return !m_wide.empty(); }
+    // The wide tree, breadth first (root at 0).
+    std::span<const WideNode> nodes() const { return m_wide; }
+    // Depth of the wide tree (0 without nodes).
+    int depth() const { return static_cast<int>(m_level_offsets.size()) - 1; }
     // Box of each leaf position (Morton order), as of the last build/refit.
     std::span<const AABB> leaf_boxes() const { return m_leaf_boxes; }
     // Primitive (index into the caller's boxes) at each leaf position.
@@ -47,21 +55,26 @@ public:
     // Bytes held (nodes, leaf boxes, permutation, scratch).
     std::size_t memory_bytes() const;
 
-    // Checks every structural invariant — each leaf reached exactly once, child ranges tile their
-    // parent's, parent links, every stored box equal to the merge of its subtree's leaf boxes —
-    // and throws InternalError naming the first violation. O(n); for tests.
+    // Checks every structural invariant — each leaf reached exactly once, slot ranges tile their
+    // node's range in order, `last` of each slot, breadth-first order, every stored box equal to
+    // the merge of its subtree's leaf boxes — and throws InternalError naming the first
+    // violation. O(n); for tests.
     void validate() const;
 
 private:
     void compute_leaf_order(std::span<const AABB> boxes);
     void build_hierarchy();
+    void collapse();
 
-    std::vector<Node> m_nodes;               // n - 1 internal nodes
+    std::vector<WideNode> m_wide;            // the traversal tree, breadth first
+    std::vector<std::int32_t> m_level_offsets;  // depth d holds m_wide[offsets[d] .. offsets[d+1])
+    std::vector<Node> m_nodes;               // n - 1 binary nodes (build scratch)
     std::vector<AABB> m_leaf_boxes;          // n, Morton order
     std::vector<std::uint32_t> m_primitives; // n, Morton order → primitive id
     std::vector<std::int32_t> m_leaf_parent; // n, (parent << 1) | slot
+    std::vector<std::int32_t> m_wide_source; // binary node each wide node was collapsed from
     std::vector<std::uint64_t> m_keys;       // n Morton codes, sorted
-    std::vector<std::int32_t> m_counters;    // n - 1 atomics: range ends (build), visits (refit)
+    std::vector<std::int32_t> m_counters;    // n - 1 atomics: range ends during the build
     std::int32_t m_root = -1;
     RadixSorter m_sorter;
 };

@@ -5,12 +5,18 @@
 // ends at or before i — half the work of a plain per-leaf query, no duplicates by construction.
 // Pair: every (a, b), a from tree A, b from tree B; each leaf of A queries B.
 //
-// Kernels are per leaf, GPU style (fixed-size stack, no allocation). Output goes through a visitor
+// Kernels are per leaf, GPU style (fixed-size stack, no allocation); the 4-wide nodes are tested
+// with SSE where available (x86-64 always has SSE2), a scalar loop otherwise. Output goes through a visitor
 // called as visit(chunk, a, b) with primitive ids; leaves are processed in fixed chunks in Morton
 // order and, within a leaf, in traversal order, so a visitor that appends to per-chunk buffers
 // (ChunkedBuffer) yields a result identical for 1 and N threads.
 #pragma once
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include <bit>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -21,58 +27,68 @@
 
 namespace pliant::bvh {
 
-// Deep enough for any LBVH: depth ≤ 63 (see lbvh.hpp) and the stack holds at most depth + 1.
-inline constexpr int TRAVERSAL_STACK = 64;
+// Deep enough for any LBVH: the wide tree has depth ≤ 63 (see lbvh.hpp) and every pop pushes at
+// most WIDTH entries, so the stack never holds more than 3 · 63 + 1.
+inline constexpr int TRAVERSAL_STACK = 192;
 inline constexpr std::int64_t QUERY_GRAIN = 256;
 
-// Leaves j > i of the tree rooted at `root` whose boxes overlap `query`: on_leaf(j) in traversal
-// order. `last_of_root` is the root's last leaf position.
-template <typename OnLeaf>
-PLIANT_HOST_DEVICE void query_leaves_after(const Node* nodes, std::int32_t root, const AABB& query,
-                                           std::int32_t i, OnLeaf&& on_leaf) {
-    std::int32_t stack[TRAVERSAL_STACK];
-    int top = 0;
-    stack[top++] = root;
-    while (top > 0) {
-        const Node& node = nodes[stack[--top]];
-        const std::int32_t split = static_cast<std::int32_t>(&node - nodes);
-        // Right child first onto the stack so the left one is visited first (Morton order).
-        if (node.last > i && overlaps(node.box[1], query)) {
-            const std::int32_t c = node.child[1];
-            if (is_leaf(c)) {
-                on_leaf(leaf_position(c));
-            } else {
-                stack[top++] = c;
-            }
-        }
-        if (split > i && overlaps(node.box[0], query)) {
-            const std::int32_t c = node.child[0];
-            if (is_leaf(c)) {
-                on_leaf(leaf_position(c));
-            } else {
-                stack[top++] = c;
-            }
-        }
+// A query box prepared for repeated slot tests.
+struct QueryBox {
+#if defined(__SSE2__)
+    __m128 lo_x, lo_y, lo_z, hi_x, hi_y, hi_z;
+    explicit QueryBox(const AABB& b)
+        : lo_x(_mm_set1_ps(b.lo.x)), lo_y(_mm_set1_ps(b.lo.y)), lo_z(_mm_set1_ps(b.lo.z)),
+          hi_x(_mm_set1_ps(b.hi.x)), hi_y(_mm_set1_ps(b.hi.y)), hi_z(_mm_set1_ps(b.hi.z)) {}
+#else
+    AABB box;
+    PLIANT_HOST_DEVICE explicit QueryBox(const AABB& b) : box(b) {}
+#endif
+};
+
+// Bit k set when slot k's box overlaps the query (closed intervals) and last[k] > after.
+// after = -1 keeps every used slot (unused slots have empty boxes and never pass).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned slot_mask(const WideNode& node, const QueryBox& q,
+                                                          std::int32_t after) {
+#if defined(__SSE2__)
+    __m128 m = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(node.lo_x), q.hi_x),
+                          _mm_cmple_ps(q.lo_x, _mm_load_ps(node.hi_x)));
+    m = _mm_and_ps(m, _mm_cmple_ps(_mm_load_ps(node.lo_y), q.hi_y));
+    m = _mm_and_ps(m, _mm_cmple_ps(q.lo_y, _mm_load_ps(node.hi_y)));
+    m = _mm_and_ps(m, _mm_cmple_ps(_mm_load_ps(node.lo_z), q.hi_z));
+    m = _mm_and_ps(m, _mm_cmple_ps(q.lo_z, _mm_load_ps(node.hi_z)));
+    const __m128i later = _mm_cmpgt_epi32(
+        _mm_load_si128(reinterpret_cast<const __m128i*>(node.last)), _mm_set1_epi32(after));
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(m, _mm_castsi128_ps(later))));
+#else
+    unsigned mask = 0;
+    for (int k = 0; k < WIDTH; ++k) {
+        mask |= (node.last[k] > after && overlaps(node.box(k), q.box) ? 1u : 0u) << k;
     }
+    return mask;
+#endif
 }
 
-// All leaves of the tree whose boxes overlap `query`: on_leaf(j).
+// Visits the tree from the root: on_leaf(j) for every leaf j > after whose box overlaps the query,
+// pruning slots whose leaves all come at or before `after`. Leaves are reported in a fixed order
+// that depends only on the tree and the query.
 template <typename OnLeaf>
-PLIANT_HOST_DEVICE void query_leaves(const Node* nodes, std::int32_t root, const AABB& query,
-                                     OnLeaf&& on_leaf) {
+PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std::int32_t after,
+                                   OnLeaf&& on_leaf) {
+    const QueryBox q(query);
     std::int32_t stack[TRAVERSAL_STACK];
     int top = 0;
-    stack[top++] = root;
+    stack[top++] = 0;
     while (top > 0) {
-        const Node& node = nodes[stack[--top]];
-        for (int s = 1; s >= 0; --s) {
-            if (overlaps(node.box[s], query)) {
-                const std::int32_t c = node.child[s];
-                if (is_leaf(c)) {
-                    on_leaf(leaf_position(c));
-                } else {
-                    stack[top++] = c;
-                }
+        const WideNode& node = nodes[stack[--top]];
+        unsigned mask = slot_mask(node, q, after);
+        while (mask != 0) {
+            const int k = std::countr_zero(mask);
+            mask &= mask - 1;
+            const std::int32_t c = node.child[k];
+            if (is_leaf(c)) {
+                on_leaf(leaf_position(c));
+            } else {
+                stack[top++] = c;
             }
         }
     }
@@ -82,18 +98,17 @@ PLIANT_HOST_DEVICE void query_leaves(const Node* nodes, std::int32_t root, const
 // earlier in Morton order). Chunks are fixed runs of QUERY_GRAIN leaves.
 template <typename Visit>
 void for_each_self_overlap(const LBVH& tree, Visit&& visit) {
-    const std::int32_t root = tree.root();
-    if (root < 0) {
+    if (!tree.has_nodes()) {
         return;
     }
-    const Node* nodes = tree.nodes().data();
+    const WideNode* nodes = tree.nodes().data();
     const AABB* boxes = tree.leaf_boxes().data();
     const std::uint32_t* prims = tree.primitives().data();
     parallel_for_chunks(tree.num_primitives(), QUERY_GRAIN,
                         [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
                             for (auto i = static_cast<std::int32_t>(begin); i < end; ++i) {
                                 const std::uint32_t a = prims[i];
-                                query_leaves_after(nodes, root, boxes[i], i, [&](std::int32_t j) {
+                                query_wide(nodes, boxes[i], i, [&](std::int32_t j) {
                                     visit(chunk, a, prims[j]);
                                 });
                             }
@@ -107,8 +122,8 @@ void for_each_overlap(const LBVH& tree_a, const LBVH& tree_b, Visit&& visit) {
     if (tree_a.num_primitives() == 0 || tree_b.num_primitives() == 0) {
         return;
     }
-    const Node* nodes_b = tree_b.nodes().data();
-    const std::int32_t root_b = tree_b.root();
+    const WideNode* nodes_b = tree_b.nodes().data();
+    const bool single_b = !tree_b.has_nodes();
     const AABB* boxes_a = tree_a.leaf_boxes().data();
     const AABB* boxes_b = tree_b.leaf_boxes().data();
     const std::uint32_t* prims_a = tree_a.primitives().data();
@@ -117,13 +132,13 @@ void for_each_overlap(const LBVH& tree_a, const LBVH& tree_b, Visit&& visit) {
                         [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
                             for (auto i = static_cast<std::int32_t>(begin); i < end; ++i) {
                                 const std::uint32_t a = prims_a[i];
-                                if (root_b < 0) {  // a single primitive in tree_b
+                                if (single_b) {  // a single primitive in tree_b
                                     if (overlaps(boxes_a[i], boxes_b[0])) {
                                         visit(chunk, a, prims_b[0]);
                                     }
                                     continue;
                                 }
-                                query_leaves(nodes_b, root_b, boxes_a[i], [&](std::int32_t j) {
+                                query_wide(nodes_b, boxes_a[i], -1, [&](std::int32_t j) {
                                     visit(chunk, a, prims_b[j]);
                                 });
                             }

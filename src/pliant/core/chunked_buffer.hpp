@@ -1,5 +1,5 @@
 // ChunkedBuffer<T>: variable-length parallel output made deterministic. Each fixed chunk of a
-// parallel_for_chunks loop appends to its own vector; gather() concatenates them in chunk order,
+// parallel_for_chunks loop appends to its own AppendBuffer; gather() concatenates them in chunk order,
 // so the result does not depend on the number of threads or on scheduling. Capacity is kept
 // between uses (no per-item allocation once warmed up).
 #pragma once
@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pliant/core/append_buffer.hpp"
 #include "pliant/core/parallel.hpp"
 
 namespace pliant {
@@ -25,8 +26,8 @@ public:
             m_chunks[c].clear();
         }
     }
-    std::vector<T>& chunk(std::int64_t c) { return m_chunks[static_cast<std::size_t>(c)]; }
-    const std::vector<T>& chunk(std::int64_t c) const { return m_chunks[static_cast<std::size_t>(c)]; }
+    AppendBuffer<T>& chunk(std::int64_t c) { return m_chunks[static_cast<std::size_t>(c)]; }
+    const AppendBuffer<T>& chunk(std::int64_t c) const { return m_chunks[static_cast<std::size_t>(c)]; }
     std::int64_t num_chunks() const { return static_cast<std::int64_t>(m_count); }
 
     std::size_t size() const {
@@ -52,7 +53,7 @@ public:
     }
 
 private:
-    std::vector<std::vector<T>> m_chunks;
+    std::vector<AppendBuffer<T>> m_chunks;
     std::size_t m_count = 0;
 };
 

@@ -1,0 +1,280 @@
+#include "pliant/collision/self_broad_phase.hpp"
+
+#include <fmt/format.h>
+
+#include "pliant/bvh/traversal.hpp"
+#include "pliant/collision/incidence.hpp"
+#include "pliant/collision/orphan_set.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/geometry/validate.hpp"
+
+namespace pliant::collision {
+namespace {
+
+constexpr std::int64_t BOX_GRAIN = 1 << 13;
+constexpr std::int64_t PAIR_GRAIN = 1 << 12;
+
+}  // namespace
+
+template <typename Real>
+SelfCollisionBroadPhase<Real>::SelfCollisionBroadPhase(std::span<const geometry::Triangle> triangles,
+                                                       std::size_t num_vertices)
+    : m_triangles(triangles.begin(), triangles.end()), m_num_vertices(num_vertices) {
+    geometry::validate_triangles(triangles, num_vertices, "SelfCollisionBroadPhase: triangles");
+    m_topology = geometry::build_topology(triangles, num_vertices);
+    m_owners = assign_representative_triangles(triangles, m_topology);
+    m_orphans = build_orphan_set(triangles, m_topology, m_owners);
+}
+
+template <typename Real>
+auto SelfCollisionBroadPhase<Real>::exact_edge_box(std::int32_t edge) const -> Box {
+    const geometry::Edge& e = m_topology.edges[static_cast<std::size_t>(edge)];
+    return merge(m_exact_vertex_boxes[static_cast<std::size_t>(e[0])],
+                 m_exact_vertex_boxes[static_cast<std::size_t>(e[1])]);
+}
+
+template <typename Real>
+auto SelfCollisionBroadPhase<Real>::exact_triangle_box(std::int32_t triangle) const -> Box {
+    const geometry::Triangle& t = m_triangles[static_cast<std::size_t>(triangle)];
+    return merge(merge(m_exact_vertex_boxes[static_cast<std::size_t>(t[0])],
+                       m_exact_vertex_boxes[static_cast<std::size_t>(t[1])]),
+                 m_exact_vertex_boxes[static_cast<std::size_t>(t[2])]);
+}
+
+// Confirmation of a pair that passed the float test: exact for double input, nothing to do for
+// float input (the float boxes are the exact ones).
+template <typename Real>
+bool SelfCollisionBroadPhase<Real>::overlaps_exact_vf(std::int32_t vertex, std::int32_t face) const {
+    if constexpr (std::is_same_v<Real, float>) {
+        return true;
+    } else {
+        return overlaps(m_exact_vertex_boxes[static_cast<std::size_t>(vertex)], exact_triangle_box(face));
+    }
+}
+
+template <typename Real>
+bool SelfCollisionBroadPhase<Real>::overlaps_exact_ee(std::int32_t edge_a, std::int32_t edge_b) const {
+    if constexpr (std::is_same_v<Real, float>) {
+        return true;
+    } else {
+        return overlaps(exact_edge_box(edge_a), exact_edge_box(edge_b));
+    }
+}
+
+template <typename Real>
+bool SelfCollisionBroadPhase<Real>::overlaps_exact_tt(std::int32_t triangle_a,
+                                                      std::int32_t triangle_b) const {
+    if constexpr (std::is_same_v<Real, float>) {
+        return true;
+    } else {
+        return overlaps(exact_triangle_box(triangle_a), exact_triangle_box(triangle_b));
+    }
+}
+
+template <typename Real>
+void SelfCollisionBroadPhase<Real>::compute_boxes(std::span<const Vec> positions_t0,
+                                                  std::span<const Vec> positions_t1, Real inflation) {
+    m_vertex_boxes.resize(m_num_vertices);
+    m_edge_boxes.resize(m_topology.num_edges());
+    m_triangle_boxes.resize(m_triangles.size());
+    if constexpr (!std::is_same_v<Real, float>) {
+        m_exact_vertex_boxes.resize(m_num_vertices);
+    }
+    // Edge and triangle boxes are merges of vertex boxes; outward rounding commutes with min/max,
+    // so the merged float boxes are the outward-rounded exact ones.
+    parallel_for(
+        static_cast<std::int64_t>(m_num_vertices),
+        [&](std::int64_t v) {
+            const auto k = static_cast<std::size_t>(v);
+            const Box box = Box{min(positions_t0[k], positions_t1[k]), max(positions_t0[k], positions_t1[k])}
+                                .inflated(inflation);
+            if constexpr (!std::is_same_v<Real, float>) {
+                m_exact_vertex_boxes[k] = box;
+            }
+            m_vertex_boxes[k] = outward_float(box);
+        },
+        BOX_GRAIN);
+    parallel_for(
+        static_cast<std::int64_t>(m_topology.num_edges()),
+        [&](std::int64_t e) {
+            const geometry::Edge& edge = m_topology.edges[static_cast<std::size_t>(e)];
+            m_edge_boxes[static_cast<std::size_t>(e)] = merge(m_vertex_boxes[static_cast<std::size_t>(edge[0])],
+                                                              m_vertex_boxes[static_cast<std::size_t>(edge[1])]);
+        },
+        BOX_GRAIN);
+    parallel_for(
+        static_cast<std::int64_t>(m_triangles.size()),
+        [&](std::int64_t t) {
+            const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(t)];
+            m_triangle_boxes[static_cast<std::size_t>(t)] =
+                merge(merge(m_vertex_boxes[static_cast<std::size_t>(tri[0])],
+                            m_vertex_boxes[static_cast<std::size_t>(tri[1])]),
+                      m_vertex_boxes[static_cast<std::size_t>(tri[2])]);
+        },
+        BOX_GRAIN);
+}
+
+template <typename Real>
+void SelfCollisionBroadPhase<Real>::traverse() {
+    m_triangle_pair_chunks.reset(num_chunks(m_bvh.num_primitives(), bvh::QUERY_GRAIN));
+    const geometry::Triangle* triangles = m_triangles.data();
+    bvh::for_each_self_overlap(m_bvh, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
+        if (share_vertex(triangles[a], triangles[b])) {
+            return;
+        }
+        const auto ia = static_cast<std::int32_t>(a);
+        const auto ib = static_cast<std::int32_t>(b);
+        if (overlaps_exact_tt(ia, ib)) {
+            m_triangle_pair_chunks.chunk(chunk).emplace_back(ia, ib);
+        }
+    });
+    m_triangle_pair_chunks.gather(m_triangle_pairs);
+    m_stats.triangle_pairs = static_cast<std::int64_t>(m_triangle_pairs.size());
+}
+
+template <typename Real>
+void SelfCollisionBroadPhase<Real>::test_features() {
+    const auto num_pairs = static_cast<std::int64_t>(m_triangle_pairs.size());
+    const auto num_orphan_vf = static_cast<std::int64_t>(m_orphans.vertex_face.size());
+    const auto num_orphan_ee = static_cast<std::int64_t>(m_orphans.edge_edge.size());
+    const std::int64_t pair_chunks = num_chunks(num_pairs, PAIR_GRAIN);
+    m_vf_chunks.reset(pair_chunks + num_chunks(num_orphan_vf, PAIR_GRAIN));
+    m_ee_chunks.reset(pair_chunks + num_chunks(num_orphan_ee, PAIR_GRAIN));
+    const AABB* vertex_boxes = m_vertex_boxes.data();
+    const AABB* edge_boxes = m_edge_boxes.data();
+    const AABB* triangle_boxes = m_triangle_boxes.data();
+
+    // R-triangle pairs: the vertices each triangle owns against the other's face, owned edges
+    // against owned edges. Non-adjacent triangles: no feature pair here is incident. Candidates
+    // are written unconditionally and kept by advancing the count (branch-free compaction).
+    parallel_for_chunks(num_pairs, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+        auto& vf = m_vf_chunks.chunk(c);
+        auto& ee = m_ee_chunks.chunk(c);
+        const OwnedFeatures* owned = m_owners.owned.data();
+        for (std::int64_t i = begin; i < end; ++i) {
+            const auto [a, b] = m_triangle_pairs[static_cast<std::size_t>(i)];
+            const OwnedFeatures& owned_a = owned[a];
+            const OwnedFeatures& owned_b = owned[b];
+            const AABB box_a = triangle_boxes[a];
+            const AABB box_b = triangle_boxes[b];
+            VertexFacePair* out_vf = vf.grow(6);
+            std::size_t num_vf = 0;
+            for (int k = 0; k < owned_a.num_vertices; ++k) {
+                const std::int32_t v = owned_a.vertices[k];
+                out_vf[num_vf] = {v, b};
+                num_vf += overlaps(vertex_boxes[v], box_b) && overlaps_exact_vf(v, b) ? 1 : 0;
+            }
+            for (int k = 0; k < owned_b.num_vertices; ++k) {
+                const std::int32_t v = owned_b.vertices[k];
+                out_vf[num_vf] = {v, a};
+                num_vf += overlaps(vertex_boxes[v], box_a) && overlaps_exact_vf(v, a) ? 1 : 0;
+            }
+            vf.commit(num_vf);
+            EdgeEdgePair* out_ee = ee.grow(9);
+            std::size_t num_ee = 0;
+            for (int i_a = 0; i_a < owned_a.num_edges; ++i_a) {
+                const std::int32_t ea = owned_a.edges[i_a];
+                const AABB box_ea = edge_boxes[ea];
+                if (!overlaps(box_ea, box_b)) {
+                    continue;
+                }
+                for (int i_b = 0; i_b < owned_b.num_edges; ++i_b) {
+                    const std::int32_t eb = owned_b.edges[i_b];
+                    out_ee[num_ee] = {std::min(ea, eb), std::max(ea, eb)};
+                    num_ee += overlaps(box_ea, edge_boxes[eb]) && overlaps_exact_ee(ea, eb) ? 1 : 0;
+                }
+            }
+            ee.commit(num_ee);
+        }
+    });
+    // Orphans: pairs between triangles that share a vertex; only their boxes are left to test.
+    parallel_for_chunks(num_orphan_vf, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+        auto& vf = m_vf_chunks.chunk(pair_chunks + c);
+        VertexFacePair* out = vf.grow(static_cast<std::size_t>(end - begin));
+        std::size_t count = 0;
+        for (std::int64_t i = begin; i < end; ++i) {
+            const VertexFacePair p = m_orphans.vertex_face[static_cast<std::size_t>(i)];
+            out[count] = p;
+            count += overlaps(vertex_boxes[p.vertex], triangle_boxes[p.face]) &&
+                             overlaps_exact_vf(p.vertex, p.face)
+                         ? 1
+                         : 0;
+        }
+        vf.commit(count);
+    });
+    parallel_for_chunks(num_orphan_ee, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+        auto& ee = m_ee_chunks.chunk(pair_chunks + c);
+        EdgeEdgePair* out = ee.grow(static_cast<std::size_t>(end - begin));
+        std::size_t count = 0;
+        for (std::int64_t i = begin; i < end; ++i) {
+            const EdgeEdgePair p = m_orphans.edge_edge[static_cast<std::size_t>(i)];
+            out[count] = p;
+            count += overlaps(edge_boxes[p.edge_a], edge_boxes[p.edge_b]) &&
+                             overlaps_exact_ee(p.edge_a, p.edge_b)
+                         ? 1
+                         : 0;
+        }
+        ee.commit(count);
+    });
+    m_vf_chunks.gather(m_pairs.vertex_face);
+    m_ee_chunks.gather(m_pairs.edge_edge);
+}
+
+template <typename Real>
+const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> positions_t0,
+                                                          std::span<const Vec> positions_t1,
+                                                          Real inflation) {
+    if (positions_t0.size() != m_num_vertices || positions_t1.size() != m_num_vertices) {
+        throw InvalidInput(fmt::format(
+            "SelfCollisionBroadPhase::update: positions_t0.size() ({}) and positions_t1.size() ({}) "
+            "must equal the mesh's vertex count ({})",
+            positions_t0.size(), positions_t1.size(), m_num_vertices));
+    }
+    if (!(inflation >= Real(0)) || !std::isfinite(inflation)) {
+        throw InvalidInput(fmt::format(
+            "SelfCollisionBroadPhase::update: inflation ({}) must be finite and >= 0", inflation));
+    }
+    m_stats = {};
+    Stopwatch watch;
+    compute_boxes(positions_t0, positions_t1, inflation);
+    m_stats.features_ms += watch.elapsed_ms();
+
+    watch.restart();
+    if (m_needs_build || m_bvh.num_primitives() != static_cast<std::int32_t>(m_triangles.size())) {
+        m_bvh.build(m_triangle_boxes);
+        m_needs_build = false;
+        m_stats.build_ms = watch.elapsed_ms();
+    } else {
+        m_bvh.refit(m_triangle_boxes);
+        m_stats.refit_ms = watch.elapsed_ms();
+    }
+
+    watch.restart();
+    traverse();
+    m_stats.traverse_ms = watch.elapsed_ms();
+
+    watch.restart();
+    test_features();
+    m_stats.features_ms += watch.elapsed_ms();
+    return m_pairs;
+}
+
+template <typename Real>
+std::size_t SelfCollisionBroadPhase<Real>::memory_bytes() const {
+    const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+    return bytes(m_triangles) + bytes(m_topology.edges) + bytes(m_topology.triangle_edges) +
+           bytes(m_topology.edge_triangle_offsets) + bytes(m_topology.edge_triangles) +
+           bytes(m_topology.vertex_triangle_offsets) + bytes(m_topology.vertex_triangles) +
+           bytes(m_owners.vertex_owner) + bytes(m_owners.edge_owner) + bytes(m_owners.owned) +
+           bytes(m_orphans.vertex_face) + bytes(m_orphans.edge_edge) + bytes(m_exact_vertex_boxes) +
+           bytes(m_vertex_boxes) + bytes(m_edge_boxes) + bytes(m_triangle_boxes) +
+           bytes(m_triangle_pairs) + bytes(m_pairs.vertex_face) + bytes(m_pairs.edge_edge) +
+           m_bvh.memory_bytes();
+}
+
+template class SelfCollisionBroadPhase<float>;
+template class SelfCollisionBroadPhase<double>;
+
+}  // namespace pliant::collision

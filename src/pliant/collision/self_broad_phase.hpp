@@ -1,0 +1,108 @@
+// SelfCollisionBroadPhase: every non-incident vertex-face and edge-edge pair of a deforming
+// triangle mesh whose feature boxes overlap — complete and duplicate-free.
+//
+// Each update (positions at the start and end of a step, or twice the same for a static query):
+//   1. feature boxes: vertex boxes span the vertex's two positions, grown by `inflation` (world
+//      units) on every side; edge and triangle boxes are exact merges of their vertex boxes;
+//   2. bvh: an LBVH over the triangle boxes, built on the first update (or after
+//      request_rebuild()) and refitted otherwise;
+//   3. traverse: triangle pairs whose boxes overlap and that share no vertex;
+//   4. features: for every such pair, R-triangle owned features (representative_triangles.hpp),
+//      plus the orphan set for triangles that share a vertex (orphan_set.hpp); a pair is kept when
+//      its feature boxes overlap (closed intervals).
+//
+// Real is the precision of the positions (float for simulation, double for files with double
+// coordinates). All filtering runs on float boxes (half the memory traffic of double); for double
+// input they are rounded outward, so no pair is lost, and every pair that passes is confirmed on
+// exact double boxes — the result is exactly the Real-precision answer.
+//
+// Output order is deterministic (identical for 1 and N threads); VF pairs (v, f) and EE pairs
+// (e1 < e2) appear once each. Not thread safe; one instance per mesh.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pliant/bvh/lbvh.hpp"
+#include "pliant/collision/feature_pairs.hpp"
+#include "pliant/collision/representative_triangles.hpp"
+#include "pliant/core/aabb.hpp"
+#include "pliant/core/chunked_buffer.hpp"
+#include "pliant/geometry/topology.hpp"
+
+namespace pliant::collision {
+
+struct BroadPhaseStats {
+    double build_ms = 0.0;     // LBVH build (0 when refitted)
+    double refit_ms = 0.0;     // LBVH refit (0 when built)
+    double traverse_ms = 0.0;  // BVH self traversal to non-adjacent triangle pairs
+    double features_ms = 0.0;  // feature boxes, R-triangle and orphan feature tests, gathering
+    std::int64_t triangle_pairs = 0;  // non-adjacent triangle pairs with overlapping boxes
+};
+
+template <typename Real>
+class SelfCollisionBroadPhase {
+public:
+    using Vec = Vec3<Real>;
+    using Box = BasicAABB<Real>;
+
+    // Precomputes topology, R-triangle owners and the orphan set. Throws InvalidInput for indices
+    // out of range or triangles that repeat a vertex.
+    SelfCollisionBroadPhase(std::span<const geometry::Triangle> triangles, std::size_t num_vertices);
+
+    // Runs the four stages for a step from positions_t0 to positions_t1 (#V each; pass the same
+    // span twice for a static query). inflation ≥ 0, world units. Returns the pairs, valid until
+    // the next update.
+    const FeaturePairs& update(std::span<const Vec> positions_t0, std::span<const Vec> positions_t1,
+                               Real inflation);
+
+    // The next update builds the BVH from scratch instead of refitting (after large motion).
+    void request_rebuild() { m_needs_build = true; }
+
+    const FeaturePairs& pairs() const { return m_pairs; }
+    const BroadPhaseStats& stats() const { return m_stats; }
+    const geometry::MeshTopology& topology() const { return m_topology; }
+    const RepresentativeTriangles& owners() const { return m_owners; }
+    const FeaturePairs& orphans() const { return m_orphans; }
+    const bvh::LBVH& bvh() const { return m_bvh; }
+    // Bytes held by the broad phase and its BVH (topology included).
+    std::size_t memory_bytes() const;
+
+private:
+    void compute_boxes(std::span<const Vec> positions_t0, std::span<const Vec> positions_t1,
+                       Real inflation);
+    void traverse();
+    void test_features();
+
+    std::vector<geometry::Triangle> m_triangles;
+    std::size_t m_num_vertices;
+    geometry::MeshTopology m_topology;
+    RepresentativeTriangles m_owners;
+    FeaturePairs m_orphans;
+
+    bool overlaps_exact_vf(std::int32_t vertex, std::int32_t face) const;
+    bool overlaps_exact_ee(std::int32_t edge_a, std::int32_t edge_b) const;
+    bool overlaps_exact_tt(std::int32_t triangle_a, std::int32_t triangle_b) const;
+    Box exact_edge_box(std::int32_t edge) const;
+    Box exact_triangle_box(std::int32_t triangle) const;
+
+    std::vector<Box> m_exact_vertex_boxes;  // #V, Real = double only
+    std::vector<AABB> m_vertex_boxes;       // #V, float, outward
+    std::vector<AABB> m_edge_boxes;         // #E
+    std::vector<AABB> m_triangle_boxes;     // #T, the BVH's boxes
+    bvh::LBVH m_bvh;
+    bool m_needs_build = true;
+
+    ChunkedBuffer<std::pair<std::int32_t, std::int32_t>> m_triangle_pair_chunks;
+    std::vector<std::pair<std::int32_t, std::int32_t>> m_triangle_pairs;
+    ChunkedBuffer<VertexFacePair> m_vf_chunks;
+    ChunkedBuffer<EdgeEdgePair> m_ee_chunks;
+    FeaturePairs m_pairs;
+    BroadPhaseStats m_stats;
+};
+
+extern template class SelfCollisionBroadPhase<float>;
+extern template class SelfCollisionBroadPhase<double>;
+
+}  // namespace pliant::collision

@@ -1,0 +1,196 @@
+#include "pliant/collision/self_broad_phase.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "pliant/collision/incidence.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/geometry/generate.hpp"
+#include "support/random_meshes.hpp"
+
+namespace pliant::collision {
+namespace {
+
+using geometry::TriangleMesh;
+
+// Independent reference: every (vertex, face) with v ∉ face and every edge pair sharing no vertex,
+// with boxes computed directly from the positions (not from merged vertex boxes).
+FeaturePairs brute_force(const TriangleMesh& mesh, std::span<const Vec3f> p0, std::span<const Vec3f> p1,
+                         float inflation) {
+    const auto topo = geometry::build_topology(mesh.triangles, mesh.num_vertices());
+    const auto box_of = [&](std::initializer_list<std::int32_t> vertices) {
+        AABB box;
+        for (const std::int32_t v : vertices) {
+            box.extend(p0[static_cast<std::size_t>(v)]);
+            box.extend(p1[static_cast<std::size_t>(v)]);
+        }
+        return box.inflated(inflation);
+    };
+    FeaturePairs pairs;
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(mesh.num_vertices()); ++v) {
+        if (topo.triangles_of_vertex(v).empty()) {
+            continue;
+        }
+        for (std::int32_t f = 0; f < static_cast<std::int32_t>(mesh.num_triangles()); ++f) {
+            const auto& t = mesh.triangles[static_cast<std::size_t>(f)];
+            if (!contains_vertex(t, v) && overlaps(box_of({v}), box_of({t[0], t[1], t[2]}))) {
+                pairs.vertex_face.push_back({v, f});
+            }
+        }
+    }
+    for (std::int32_t a = 0; a < static_cast<std::int32_t>(topo.num_edges()); ++a) {
+        for (std::int32_t b = a + 1; b < static_cast<std::int32_t>(topo.num_edges()); ++b) {
+            const auto& ea = topo.edges[static_cast<std::size_t>(a)];
+            const auto& eb = topo.edges[static_cast<std::size_t>(b)];
+            if (!share_vertex(ea, eb) && overlaps(box_of({ea[0], ea[1]}), box_of({eb[0], eb[1]}))) {
+                pairs.edge_edge.push_back({a, b});
+            }
+        }
+    }
+    return pairs;
+}
+
+template <typename T>
+std::vector<T> sorted(std::vector<T> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+}
+
+void expect_matches_brute_force(const TriangleMesh& mesh, const std::vector<Vec3f>& p1, float inflation) {
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    const FeaturePairs& got = broad.update(mesh.positions, p1, inflation);
+    const FeaturePairs expected = brute_force(mesh, mesh.positions, p1, inflation);
+    const auto vf = sorted(got.vertex_face);
+    const auto ee = sorted(got.edge_edge);
+    EXPECT_EQ(std::adjacent_find(vf.begin(), vf.end()), vf.end()) << "duplicate VF pair";
+    EXPECT_EQ(std::adjacent_find(ee.begin(), ee.end()), ee.end()) << "duplicate EE pair";
+    EXPECT_EQ(vf, expected.vertex_face);
+    EXPECT_EQ(ee, expected.edge_edge);
+    EXPECT_GT(expected.vertex_face.size() + expected.edge_edge.size(), 0u) << "vacuous case";
+}
+
+TEST(SelfBroadPhase, FoldedSheetStaticMatchesBruteForce) {
+    // Tight accordion: layers 1.5 edges apart, inflation a quarter edge — the benchmark workload.
+    TriangleMesh mesh = geometry::make_grid_sheet(40, 8, 1.0f, 0.2f);
+    const float edge = 1.0f / 40.0f;
+    geometry::fold_accordion(mesh.positions, 0.2f, 1.5f * edge);
+    expect_matches_brute_force(mesh, mesh.positions, 0.25f * edge);
+}
+
+TEST(SelfBroadPhase, CrumpledSweptSheetMatchesBruteForce) {
+    const TriangleMesh mesh = test::jittered_sheet(18, 14, 0.4f, 0.08f, 17);
+    std::vector<Vec3f> p1 = mesh.positions;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-0.03f, 0.03f);
+    for (Vec3f& p : p1) {
+        p += Vec3f{u(rng), u(rng), 3.0f * u(rng)};
+    }
+    expect_matches_brute_force(mesh, p1, 0.0f);
+    expect_matches_brute_force(mesh, p1, 0.01f);
+}
+
+TEST(SelfBroadPhase, RandomSoupMatchesBruteForce) {
+    const TriangleMesh mesh = test::random_triangle_soup(300, 0.15f, 8);
+    expect_matches_brute_force(mesh, mesh.positions, 0.0f);
+}
+
+// The trap of R-triangles: triangles sharing a vertex are skipped by the traversal, yet a vertex
+// owned by one can touch the other's face. A fan folded flat onto itself makes every such pair
+// overlap; the orphan set must deliver them.
+TEST(SelfBroadPhase, FoldedFanNeedsTheOrphanSet) {
+    TriangleMesh fan;
+    fan.positions = {{0, 0, 0}, {1, 0, 0}, {0.5f, 0.8f, 0}, {-0.5f, 0.8f, 0}, {-1, 0, 0}, {0.9f, 0.1f, 0.01f}};
+    fan.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 5}};
+    // Fold the last blade back over the first.
+    SelfCollisionBroadPhase<float> broad(fan.triangles, fan.num_vertices());
+    EXPECT_GT(broad.orphans().vertex_face.size(), 0u);
+    expect_matches_brute_force(fan, fan.positions, 0.05f);
+}
+
+TEST(SelfBroadPhase, RepresentativeTrianglesOwnEveryFeatureOnce) {
+    const TriangleMesh mesh = test::jittered_sheet(30, 20, 0.2f, 0.0f, 2);
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    const auto& owners = broad.owners();
+    const auto& topo = broad.topology();
+    std::vector<int> load(mesh.num_triangles(), 0);
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+        const std::int32_t t = owners.vertex_owner[v];
+        ASSERT_GE(t, 0);
+        ASSERT_TRUE(contains_vertex(mesh.triangles[static_cast<std::size_t>(t)], static_cast<std::int32_t>(v)));
+        ++load[static_cast<std::size_t>(t)];
+    }
+    for (std::size_t e = 0; e < topo.num_edges(); ++e) {
+        const std::int32_t t = owners.edge_owner[e];
+        const auto& te = topo.triangle_edges[static_cast<std::size_t>(t)];
+        ASSERT_NE(std::find(te.begin(), te.end(), static_cast<std::int32_t>(e)), te.end());
+        ++load[static_cast<std::size_t>(t)];
+    }
+    // The per-triangle lists agree with the owner arrays and the load is balanced.
+    std::size_t listed = 0;
+    for (std::size_t t = 0; t < owners.owned.size(); ++t) {
+        const OwnedFeatures& o = owners.owned[t];
+        for (int k = 0; k < o.num_vertices; ++k) {
+            EXPECT_EQ(owners.vertex_owner[static_cast<std::size_t>(o.vertices[k])], static_cast<std::int32_t>(t));
+        }
+        for (int k = 0; k < o.num_edges; ++k) {
+            EXPECT_EQ(owners.edge_owner[static_cast<std::size_t>(o.edges[k])], static_cast<std::int32_t>(t));
+        }
+        listed += o.num_vertices + o.num_edges;
+    }
+    EXPECT_EQ(listed, mesh.num_vertices() + topo.num_edges());
+    EXPECT_LE(*std::max_element(load.begin(), load.end()), 3);
+}
+
+TEST(SelfBroadPhase, DoubleMatchesFloatAndThreadsDoNotMatter) {
+    TriangleMesh mesh = geometry::make_grid_sheet(60, 30, 1.0f, 0.5f);
+    geometry::fold_accordion(mesh.positions, 0.25f, 0.025f);
+    std::vector<Vec3f> p1 = mesh.positions;
+    for (Vec3f& p : p1) {
+        p.z += 0.01f * std::sin(20.0f * p.x);
+    }
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+        broad.update(mesh.positions, p1, 0.004f);
+        return broad.update(mesh.positions, p1, 0.004f);  // the refit path
+    };
+    const FeaturePairs one = run(1);
+    const FeaturePairs many = run(4);
+    set_num_threads(0);
+    EXPECT_EQ(one.vertex_face, many.vertex_face);  // identical order, not just sets
+    EXPECT_EQ(one.edge_edge, many.edge_edge);
+    EXPECT_GT(one.edge_edge.size(), 1000u);
+}
+
+TEST(SelfBroadPhase, RejectsBadArguments) {
+    const TriangleMesh mesh = geometry::make_grid_sheet(3, 3, 1.0f, 1.0f);
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    std::vector<Vec3f> short_positions(mesh.positions.begin(), mesh.positions.end() - 1);
+    try {
+        broad.update(mesh.positions, short_positions, 0.0f);
+        FAIL();
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("positions_t1.size() (15)"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(broad.update(mesh.positions, mesh.positions, -1.0f), InvalidInput);
+    EXPECT_THROW(broad.update(mesh.positions, mesh.positions, NAN), InvalidInput);
+    std::vector<geometry::Triangle> bad = mesh.triangles;
+    bad[2][1] = 99;
+    EXPECT_THROW(SelfCollisionBroadPhase<float>(bad, mesh.num_vertices()), InvalidInput);
+}
+
+TEST(SelfBroadPhase, EmptyAndSingleTriangle) {
+    SelfCollisionBroadPhase<float> empty({}, 0);
+    EXPECT_TRUE(empty.update({}, {}, 0.0f).vertex_face.empty());
+    TriangleMesh one{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}};
+    SelfCollisionBroadPhase<float> single(one.triangles, 3);
+    const auto& pairs = single.update(one.positions, one.positions, 1.0f);
+    EXPECT_TRUE(pairs.vertex_face.empty());
+    EXPECT_TRUE(pairs.edge_edge.empty());
+}
+
+}  // namespace
+}  // namespace pliant::collision
