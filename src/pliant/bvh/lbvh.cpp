@@ -8,12 +8,14 @@
 #include "pliant/bvh/morton.hpp"
 #include "pliant/core/check.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/scan.hpp"
 
 namespace pliant::bvh {
 namespace {
 
 constexpr std::int64_t LEAF_GRAIN = 1 << 12;
 constexpr std::int64_t WIDE_GRAIN = 1 << 10;
+constexpr std::int64_t COLLAPSE_GRAIN = 1 << 10;
 constexpr std::int32_t NO_BOUND = -1;
 
 // Dissimilarity of neighbouring leaves i and i+1: Morton XOR in the high word, position XOR in the
@@ -130,65 +132,99 @@ float half_area(const AABB& b) {
 }  // namespace
 
 void LBVH::collapse() {
-    // Breadth first over the binary tree: each wide node starts with the two children of its
-    // binary node and repeatedly opens the internal slot of largest surface area (the one most
-    // likely to be entered) until it has four slots or only leaves.
-    struct Slot {
-        std::int32_t ref;  // binary child reference (≥ 0 internal, < 0 leaf)
-        AABB box;
-    };
-    m_wide.clear();
-    m_wide_source.assign(1, m_root);
-    m_level_offsets.assign(1, 0);
-    std::int32_t level_end = 1;
-    for (std::int32_t w = 0; w < static_cast<std::int32_t>(m_wide_source.size()); ++w) {
-        if (w == level_end) {
-            m_level_offsets.push_back(w);
-            level_end = static_cast<std::int32_t>(m_wide_source.size());
-        }
-        const Node& source = m_nodes[static_cast<std::size_t>(m_wide_source[static_cast<std::size_t>(w)])];
-        Slot slots[WIDTH] = {{source.child[0], source.box[0]}, {source.child[1], source.box[1]}};
-        int count = 2;
-        while (count < WIDTH) {
-            int open = -1;
-            for (int k = 0; k < count; ++k) {
-                if (!is_leaf(slots[k].ref) &&
-                    (open < 0 || half_area(slots[k].box) > half_area(slots[open].box))) {
-                    open = k;
-                }
-            }
-            if (open < 0) {
-                break;
-            }
-            const Node& opened = m_nodes[static_cast<std::size_t>(slots[open].ref)];
-            for (int k = count; k > open + 1; --k) {
-                slots[k] = slots[k - 1];
-            }
-            slots[open] = {opened.child[0], opened.box[0]};
-            slots[open + 1] = {opened.child[1], opened.box[1]};
-            ++count;
-        }
-        WideNode node{};
-        for (int k = 0; k < WIDTH; ++k) {
-            if (k >= count) {
-                node.set_box(k, AABB{});
-                node.child[k] = EMPTY_SLOT;
-                node.last[k] = -1;
-                continue;
-            }
-            node.set_box(k, slots[k].box);
-            if (is_leaf(slots[k].ref)) {
-                node.child[k] = slots[k].ref;
-                node.last[k] = leaf_position(slots[k].ref);
-            } else {
-                node.child[k] = static_cast<std::int32_t>(m_wide_source.size());
-                node.last[k] = m_nodes[static_cast<std::size_t>(slots[k].ref)].last;
-                m_wide_source.push_back(slots[k].ref);
-            }
-        }
-        m_wide.push_back(node);
+    // Breadth first over the binary tree, one parallel pass per level (GPU style): each wide node
+    // starts with the two children of its binary node and repeatedly opens the internal slot of
+    // largest surface area (the one most likely to be entered) until it has four slots or only
+    // leaves; a prefix sum over the level's internal-slot counts places the next level.
+    const std::int32_t n = num_primitives();
+    if (m_wide.size() < static_cast<std::size_t>(n - 1)) {
+        m_wide.resize(static_cast<std::size_t>(n - 1));
+        m_wide_source.resize(static_cast<std::size_t>(n - 1));
     }
-    m_level_offsets.push_back(static_cast<std::int32_t>(m_wide.size()));
+    m_slot_counts.resize(static_cast<std::size_t>(n));
+    WideNode* wide = m_wide.data();
+    std::int32_t* source = m_wide_source.data();
+    std::int32_t* counts = m_slot_counts.data();
+    const Node* binary = m_nodes.data();
+    source[0] = m_root;
+    m_level_offsets.assign(1, 0);
+    std::int32_t begin = 0;
+    std::int32_t end = 1;
+    while (begin < end) {
+        m_level_offsets.push_back(end);
+        // Step 1: choose the slots of every node of this level; internal slots keep their binary
+        // node in child[k] for now.
+        parallel_for(
+            end - begin,
+            [&](std::int64_t offset) {
+                const auto w = static_cast<std::int32_t>(begin + offset);
+                const Node& root = binary[source[w]];
+                std::int32_t refs[WIDTH] = {root.child[0], root.child[1]};
+                AABB boxes[WIDTH] = {root.box[0], root.box[1]};
+                float areas[WIDTH] = {half_area(root.box[0]), half_area(root.box[1])};
+                int count = 2;
+                while (count < WIDTH) {
+                    int open = -1;
+                    for (int k = 0; k < count; ++k) {
+                        if (!is_leaf(refs[k]) && (open < 0 || areas[k] > areas[open])) {
+                            open = k;
+                        }
+                    }
+                    if (open < 0) {
+                        break;
+                    }
+                    const Node& opened = binary[refs[open]];
+                    for (int k = count; k > open + 1; --k) {
+                        refs[k] = refs[k - 1];
+                        boxes[k] = boxes[k - 1];
+                        areas[k] = areas[k - 1];
+                    }
+                    refs[open] = opened.child[0];
+                    refs[open + 1] = opened.child[1];
+                    boxes[open] = opened.box[0];
+                    boxes[open + 1] = opened.box[1];
+                    areas[open] = half_area(opened.box[0]);
+                    areas[open + 1] = half_area(opened.box[1]);
+                    ++count;
+                }
+                WideNode& node = wide[w];
+                std::int32_t internal = 0;
+                for (int k = 0; k < WIDTH; ++k) {
+                    if (k >= count) {
+                        node.set_box(k, AABB{});
+                        node.child[k] = EMPTY_SLOT;
+                        node.last[k] = -1;
+                        continue;
+                    }
+                    node.set_box(k, boxes[k]);
+                    node.child[k] = refs[k];
+                    node.last[k] = is_leaf(refs[k]) ? leaf_position(refs[k]) : binary[refs[k]].last;
+                    internal += is_leaf(refs[k]) ? 0 : 1;
+                }
+                counts[w] = internal;
+            },
+            COLLAPSE_GRAIN);
+        // Step 2: where each node's internal children go on the next level.
+        const std::int32_t next = exclusive_scan(std::span(counts + begin, static_cast<std::size_t>(end - begin)));
+        // Step 3: link the children.
+        parallel_for(
+            end - begin,
+            [&](std::int64_t offset) {
+                const auto w = static_cast<std::int32_t>(begin + offset);
+                WideNode& node = wide[w];
+                std::int32_t at = end + counts[w];
+                for (int k = 0; k < WIDTH; ++k) {
+                    if (node.child[k] >= 0) {
+                        source[at] = node.child[k];
+                        node.child[k] = at++;
+                    }
+                }
+            },
+            COLLAPSE_GRAIN);
+        begin = end;
+        end += next;
+    }
+    m_num_wide = end;
 }
 
 void LBVH::build(std::span<const AABB> boxes) {
@@ -206,7 +242,7 @@ void LBVH::build(std::span<const AABB> boxes) {
     }
     compute_leaf_order(boxes);
     m_root = -1;
-    m_wide.clear();
+    m_num_wide = 0;
     m_level_offsets.clear();
     if (boxes.size() < 2) {
         return;
@@ -257,6 +293,7 @@ AABB LBVH::bounds() const {
 
 std::size_t LBVH::memory_bytes() const {
     return m_wide.capacity() * sizeof(WideNode) + m_level_offsets.capacity() * sizeof(std::int32_t) +
+           m_slot_counts.capacity() * sizeof(std::int32_t) +
            m_wide_source.capacity() * sizeof(std::int32_t) +
            m_nodes.capacity() * sizeof(Node) + m_leaf_boxes.capacity() * sizeof(AABB) +
            m_primitives.capacity() * sizeof(std::uint32_t) +
@@ -268,7 +305,7 @@ void LBVH::validate() const {
     const std::int32_t n = num_primitives();
     PLIANT_CHECK_EQ(m_leaf_boxes.size(), static_cast<std::size_t>(n));
     if (n < 2) {
-        PLIANT_CHECK(m_wide.empty());
+        PLIANT_CHECK(!has_nodes());
         return;
     }
     // Depth-first over the wide tree carrying each node's expected leaf range and depth; checks
@@ -278,7 +315,7 @@ void LBVH::validate() const {
     };
     std::vector<Item> stack{{0, 0, n - 1, 0}};
     std::vector<int> leaf_seen(static_cast<std::size_t>(n), 0);
-    std::vector<int> node_seen(m_wide.size(), 0);
+    std::vector<int> node_seen(static_cast<std::size_t>(m_num_wide), 0);
     std::vector<std::int32_t> order;
     while (!stack.empty()) {
         const Item item = stack.back();
@@ -305,7 +342,7 @@ void LBVH::validate() const {
                 ++leaf_seen[static_cast<std::size_t>(next)];
                 PLIANT_CHECK(node.box(k) == m_leaf_boxes[static_cast<std::size_t>(next)]);
             } else {
-                PLIANT_CHECK(c > item.node && static_cast<std::size_t>(c) < m_wide.size());
+                PLIANT_CHECK(c > item.node && c < m_num_wide);
                 PLIANT_CHECK(node.box(k) == m_wide[static_cast<std::size_t>(c)].bounds());
                 stack.push_back({c, next, node.last[k], item.depth + 1});
             }
@@ -322,7 +359,7 @@ void LBVH::validate() const {
     }
     // Every node box equals the merge of its subtree's leaf boxes: by induction, since every slot
     // box equals its child's bounds and leaf slots equal the leaf boxes (checked above).
-    PLIANT_CHECK_EQ(order.size(), m_wide.size());
+    PLIANT_CHECK_EQ(order.size(), static_cast<std::size_t>(m_num_wide));
 }
 
 }  // namespace pliant::bvh

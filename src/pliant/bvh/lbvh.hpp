@@ -41,9 +41,11 @@ public:
 
     std::int32_t num_primitives() const { return static_cast<std::int32_t>(m_primitives.size()); }
     // True when there is a tree to traverse (two or more primitives); its root is nodes()[0].
-    bool has_nodes() const { return !m_wide.empty(); }
+    bool has_nodes() const { return m_num_wide > 0; }
     // The wide tree, breadth first (root at 0).
-    std::span<const WideNode> nodes() const { return m_wide; }
+    std::span<const WideNode> nodes() const {
+        return std::span(m_wide).first(static_cast<std::size_t>(m_num_wide));
+    }
     // Depth of the wide tree (0 without nodes).
     int depth() const { return static_cast<int>(m_level_offsets.size()) - 1; }
     // Box of each leaf position (Morton order), as of the last build/refit.
@@ -66,7 +68,9 @@ private:
     void build_hierarchy();
     void collapse();
 
-    std::vector<WideNode> m_wide;            // the traversal tree, breadth first
+    std::vector<WideNode> m_wide;            // the traversal tree, breadth first (m_num_wide used)
+    std::int32_t m_num_wide = 0;
+    std::vector<std::int32_t> m_slot_counts;  // internal slots per wide node (build scratch)
     std::vector<std::int32_t> m_level_offsets;  // depth d holds m_wide[offsets[d] .. offsets[d+1])
     std::vector<Node> m_nodes;               // n - 1 binary nodes (build scratch)
     std::vector<AABB> m_leaf_boxes;          // n, Morton order

@@ -31,6 +31,7 @@ namespace pliant::bvh {
 // most WIDTH entries, so the stack never holds more than 3 · 63 + 1.
 inline constexpr int TRAVERSAL_STACK = 192;
 inline constexpr std::int64_t QUERY_GRAIN = 256;
+inline constexpr std::int64_t CLUSTER_GRAIN = 128;
 
 // A query box prepared for repeated slot tests.
 struct QueryBox {
@@ -94,8 +95,39 @@ PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std
     }
 }
 
-// visit(chunk, a, b) for every unordered overlapping pair of primitives of `tree` (a is the one
-// earlier in Morton order). Chunks are fixed runs of QUERY_GRAIN leaves.
+// Bit k set when slot k is a leaf at a position before `position` whose box overlaps the query.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned leaf_slots_before(const WideNode& node,
+                                                                  const QueryBox& q,
+                                                                  std::int32_t position) {
+#if defined(__SSE2__)
+    const __m128i children = _mm_load_si128(reinterpret_cast<const __m128i*>(node.child));
+    const __m128i last = _mm_load_si128(reinterpret_cast<const __m128i*>(node.last));
+    // Leaves have child < 0 (unused slots too, but their last is -1 and their box empty).
+    const __m128i is_leaf_before = _mm_and_si128(_mm_cmplt_epi32(children, _mm_setzero_si128()),
+                                                 _mm_cmplt_epi32(last, _mm_set1_epi32(position)));
+    const auto before = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(is_leaf_before)));
+    return before & slot_mask(node, q, -1);
+#else
+    unsigned mask = 0;
+    for (int k = 0; k < WIDTH; ++k) {
+        mask |= (node.child[k] < 0 && node.last[k] < position && overlaps(node.box(k), q.box) ? 1u : 0u) << k;
+    }
+    return mask;
+#endif
+}
+
+// Number of output chunks for_each_self_overlap uses for `tree` (size a ChunkedBuffer with it).
+inline std::int64_t num_self_overlap_chunks(const LBVH& tree) {
+    return num_chunks(static_cast<std::int64_t>(tree.nodes().size()), CLUSTER_GRAIN);
+}
+
+// visit(chunk, a, b) for every unordered overlapping pair of primitives of `tree`, exactly once.
+//
+// Leaf clusters: the leaf slots of each wide node (up to four leaves, neighbours in Morton order)
+// query the tree together with the union of their boxes, pruning subtrees that end before the
+// cluster's first leaf; every leaf j found is then tested against the cluster's leaves before it
+// in one SIMD step. This walks the upper tree once per cluster instead of once per leaf.
+// Chunks are fixed runs of CLUSTER_GRAIN wide nodes (num_self_overlap_chunks).
 template <typename Visit>
 void for_each_self_overlap(const LBVH& tree, Visit&& visit) {
     if (!tree.has_nodes()) {
@@ -104,15 +136,33 @@ void for_each_self_overlap(const LBVH& tree, Visit&& visit) {
     const WideNode* nodes = tree.nodes().data();
     const AABB* boxes = tree.leaf_boxes().data();
     const std::uint32_t* prims = tree.primitives().data();
-    parallel_for_chunks(tree.num_primitives(), QUERY_GRAIN,
-                        [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
-                            for (auto i = static_cast<std::int32_t>(begin); i < end; ++i) {
-                                const std::uint32_t a = prims[i];
-                                query_wide(nodes, boxes[i], i, [&](std::int32_t j) {
-                                    visit(chunk, a, prims[j]);
-                                });
-                            }
-                        });
+    parallel_for_chunks(
+        static_cast<std::int64_t>(tree.nodes().size()), CLUSTER_GRAIN,
+        [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
+            for (std::int64_t w = begin; w < end; ++w) {
+                const WideNode& cluster = nodes[w];
+                AABB cluster_box;
+                std::int32_t first = INT32_MAX;
+                for (int k = 0; k < WIDTH; ++k) {
+                    if (cluster.child[k] < 0 && cluster.child[k] != EMPTY_SLOT) {
+                        cluster_box.extend(cluster.box(k));
+                        first = first < cluster.last[k] ? first : cluster.last[k];
+                    }
+                }
+                if (first == INT32_MAX) {
+                    continue;
+                }
+                query_wide(nodes, cluster_box, first, [&](std::int32_t j) {
+                    const QueryBox q(boxes[j]);
+                    unsigned mask = leaf_slots_before(cluster, q, j);
+                    while (mask != 0) {
+                        const int k = std::countr_zero(mask);
+                        mask &= mask - 1;
+                        visit(chunk, prims[cluster.last[k]], prims[j]);
+                    }
+                });
+            }
+        });
 }
 
 // visit(chunk, a, b) for every a in tree_a, b in tree_b with overlapping boxes. Chunks are fixed
@@ -153,7 +203,7 @@ class SelfOverlapCollector {
 public:
     template <typename Accept>
     void collect(const LBVH& tree, Accept&& accept, std::vector<PrimitivePair>& out) {
-        m_buffer.reset(num_chunks(tree.num_primitives(), QUERY_GRAIN));
+        m_buffer.reset(num_self_overlap_chunks(tree));
         for_each_self_overlap(tree, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
             if (accept(a, b)) {
                 m_buffer.chunk(chunk).emplace_back(a, b);
