@@ -1,0 +1,92 @@
+#include "pliant/io/atomic_file.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+#include <utility>
+
+#include "pliant/core/error.hpp"
+
+namespace pliant::io {
+
+namespace {
+
+std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
+    static std::atomic<std::uint64_t> counter{0};
+    const std::uint64_t n = counter.fetch_add(1, std::memory_order_relaxed);
+    std::filesystem::path tmp = path;
+    tmp += fmt::format(".tmp-{}-{}", static_cast<long>(::getpid()), n);
+    return tmp;
+}
+
+// Removes the temporary file when the write does not reach the final rename.
+class TemporaryFile {
+public:
+    explicit TemporaryFile(std::filesystem::path path) : m_path(std::move(path)) {}
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+    ~TemporaryFile() {
+        if (m_is_owned) {
+            std::error_code ignored;
+            std::filesystem::remove(m_path, ignored);
+        }
+    }
+    const std::filesystem::path& path() const { return m_path; }
+    void release() { m_is_owned = false; }
+
+private:
+    std::filesystem::path m_path;
+    bool m_is_owned = true;
+};
+
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& path,
+                           FunctionRef<void(std::ostream&)> write) {
+    if (!path.has_filename()) {
+        throw IoError(fmt::format("{}: cannot write, expected a file name, got a directory path",
+                                  path.string()));
+    }
+
+    // Step 1: create the temporary next to the target. Ownership is taken before opening so that
+    // a file created by a failing open is removed as well.
+    TemporaryFile tmp(temporary_path_for(path));
+    std::ofstream out(tmp.path(), std::ios::binary | std::ios::trunc);
+    if (!out.is_open()) {
+        const int error = errno;
+        throw IoError(fmt::format("{}: cannot create the temporary file {}: {}", path.string(),
+                                  tmp.path().string(), std::strerror(error)));
+    }
+
+    // Step 2: the caller's content. Its exceptions propagate; ~TemporaryFile cleans up.
+    write(out);
+
+    // Step 3: everything must have reached the file before it may replace the target.
+    out.flush();
+    if (!out) {
+        throw IoError(fmt::format("{}: writing the temporary file {} failed", path.string(),
+                                  tmp.path().string()));
+    }
+    out.close();
+    if (out.fail()) {
+        throw IoError(fmt::format("{}: closing the temporary file {} failed", path.string(),
+                                  tmp.path().string()));
+    }
+
+    // Step 4: the atomic replacement.
+    std::error_code ec;
+    std::filesystem::rename(tmp.path(), path, ec);
+    if (ec) {
+        throw IoError(fmt::format("{}: cannot replace the file with {}: {}", path.string(),
+                                  tmp.path().string(), ec.message()));
+    }
+    tmp.release();
+}
+
+}  // namespace pliant::io

@@ -1,0 +1,29 @@
+// Atomic file replacement: readers of `path` see either the old content or the complete new
+// content, never a partial file.
+//
+// write_file_atomically(path, write) calls write(stream) on a binary stream to a temporary file in
+// the same directory (`<name>.tmp-<pid>-<counter>`, so the final rename stays on one file system),
+// flushes and closes it, checks the stream state, then renames it over `path` (replacing a file
+// there, or a symbolic link itself rather than its target). On any failure the temporary file is
+// removed and `path` is untouched (left absent if it did not exist):
+//   - the temporary cannot be created (e.g. the directory does not exist), the stream is in a
+//     failed state after `write`, flushing or closing fails, or the rename fails
+//     → IoError "<path>: <what failed>";
+//   - `write` throws → that exception propagates unchanged.
+// Not crash-durable: the data is not fsync'ed, so a power loss may still lose the new content.
+// The new file gets default permissions (0666 & ~umask), not those of the file it replaces.
+// Thread safe: concurrent calls use distinct temporary names; concurrent writers of the same
+// `path` leave one of the complete contents.
+#pragma once
+
+#include <filesystem>
+#include <ostream>
+
+#include "pliant/core/function_ref.hpp"
+
+namespace pliant::io {
+
+void write_file_atomically(const std::filesystem::path& path,
+                           FunctionRef<void(std::ostream&)> write);
+
+}  // namespace pliant::io

@@ -1,0 +1,27 @@
+// Text helpers shared by the OBJ and PLY readers: locale-independent number parsing of a whole
+// token (std::from_chars), and quoting of file content for error messages.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace pliant::io::detail {
+
+enum class ParseStatus { ok, not_a_number, out_of_range };
+
+// Parses the whole token as a decimal real ("1", "-2.5e-3", "+7", "nan", "inf"). Values that
+// underflow the type become the nearest representable value (possibly ±0); values that overflow
+// it give out_of_range. Anything else than one number, with no surrounding spaces, gives
+// not_a_number. `out` is written only on ok.
+ParseStatus parse_real(std::string_view token, float& out);
+ParseStatus parse_real(std::string_view token, double& out);
+
+// Parses the whole token as a decimal integer with optional sign.
+ParseStatus parse_integer(std::string_view token, std::int64_t& out);
+
+// `text` in single quotes for an error message: at most 40 characters (then "..."), bytes that
+// are not printable ASCII as \xNN.
+std::string quote(std::string_view text);
+
+}  // namespace pliant::io::detail
