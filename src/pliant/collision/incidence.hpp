@@ -8,15 +8,16 @@
 namespace pliant::collision {
 
 PLIANT_HOST_DEVICE inline bool contains_vertex(const geometry::Triangle& t, std::int32_t v) {
-    return (t[0] == v) | (t[1] == v) | (t[2] == v);
+    return (int{t[0] == v} | int{t[1] == v} | int{t[2] == v}) != 0;
 }
 
 PLIANT_HOST_DEVICE inline bool share_vertex(const geometry::Triangle& a, const geometry::Triangle& b) {
-    return contains_vertex(b, a[0]) | contains_vertex(b, a[1]) | contains_vertex(b, a[2]);
+    return (int{contains_vertex(b, a[0])} | int{contains_vertex(b, a[1])} |
+            int{contains_vertex(b, a[2])}) != 0;
 }
 
 PLIANT_HOST_DEVICE inline bool share_vertex(const geometry::Edge& a, const geometry::Edge& b) {
-    return (a[0] == b[0]) | (a[0] == b[1]) | (a[1] == b[0]) | (a[1] == b[1]);
+    return (int{a[0] == b[0]} | int{a[0] == b[1]} | int{a[1] == b[0]} | int{a[1] == b[1]}) != 0;
 }
 
 }  // namespace pliant::collision

@@ -55,8 +55,8 @@ PLIANT_HOST_DEVICE constexpr BasicAABB<T> merge(const BasicAABB<T>& a, const Bas
 // unpredictable ones.
 template <typename T>
 PLIANT_HOST_DEVICE constexpr bool overlaps(const BasicAABB<T>& a, const BasicAABB<T>& b) {
-    return (a.lo.x <= b.hi.x) & (b.lo.x <= a.hi.x) & (a.lo.y <= b.hi.y) & (b.lo.y <= a.hi.y) &
-           (a.lo.z <= b.hi.z) & (b.lo.z <= a.hi.z);
+    return (int{a.lo.x <= b.hi.x} & int{b.lo.x <= a.hi.x} & int{a.lo.y <= b.hi.y} &
+            int{b.lo.y <= a.hi.y} & int{a.lo.z <= b.hi.z} & int{b.lo.z <= a.hi.z}) != 0;
 }
 
 template <typename T>

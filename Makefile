@@ -1,0 +1,53 @@
+# pliant — the two commands a newcomer needs:
+#   make demo   install dependencies, configure, build, run `pliant demo` (outputs in out/demo)
+#   make test   install dependencies, configure, build, run every test with ctest
+# Other targets: build, bench, format, clean. Set PLIANT_SKIP_DEPS=1 to skip the package check.
+
+BUILD_DIR ?= build/release
+OUT_DIR ?= out/demo
+JOBS ?= 2
+CMAKE_ARGS ?=
+PLIANT := $(BUILD_DIR)/bin/pliant
+
+.DEFAULT_GOAL := help
+.PHONY: help deps configure build demo test bench format clean
+
+help:
+	@echo "make demo    install deps, build (Release, $(BUILD_DIR)), run the demo into $(OUT_DIR)"
+	@echo "make test    install deps, build, run all tests (ctest)"
+	@echo "make build   install deps, configure and build everything (no tests run)"
+	@echo "make bench   build, then run '$(PLIANT) bench bvh'"
+	@echo "make format  clang-format every C++ source in place"
+	@echo "make clean   remove build/ and out/"
+
+deps:
+	scripts/install-deps
+
+# cmake re-runs itself when CMakeLists change, so the tree is configured only once.
+configure: deps
+	@if [ ! -f $(BUILD_DIR)/CMakeCache.txt ]; then \
+	    cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS); \
+	fi
+
+build: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS)
+
+# The demo needs only the CLI: build that target, not the tests and benchmarks.
+demo: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target pliant
+	$(PLIANT) demo --out $(OUT_DIR)
+	@echo "make demo: outputs in $(OUT_DIR)/ (folded_sheet.ply, folded_sheet_t1.ply, summary.json)"
+
+test: build
+	ctest --test-dir $(BUILD_DIR) --output-on-failure -j$(JOBS)
+
+bench: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target pliant
+	$(PLIANT) bench bvh
+
+format:
+	@command -v clang-format >/dev/null || { echo "make format: clang-format not found" >&2; exit 1; }
+	find src apps tests bench \( -name '*.hpp' -o -name '*.cpp' \) -print0 | xargs -0 clang-format -i
+
+clean:
+	rm -rf build out

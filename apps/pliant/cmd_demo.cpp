@@ -1,0 +1,285 @@
+// pliant demo [--out DIR]
+//
+// Everything pliant does today, end to end, on generated data (no input files):
+//   1. the drape scene's sheet (2 m × 2 m, 134 × 134 quads, 35,912 triangles) folded like an
+//      accordion (layers 1.5 edge lengths apart; the BVH benchmark's workload, bvh_workload.hpp,
+//      at drape size), written to DIR/folded_sheet.ply; the self-collision broad phase on it,
+//      static, inflation a quarter edge: pair counts and stage timings;
+//   2. the same, swept from the folded sheet to a moved copy (a travelling sine wave of 0.1 edge
+//      lengths, DIR/folded_sheet_t1.ply);
+//   3. the paper's BVH table (bench/peers/bvh_table.hpp) at 2,244, 27,030 and 35,992 triangles,
+//      3 repetitions, beside Embree and brute force;
+//   4. DIR/summary.json with every number (schema in docs/formats.md).
+// Steps 1 and 2 run on the files' own numbers (double), so `pliant collide` on the written files
+// with the printed inflation reproduces their counts exactly.
+//
+// Human output on stdout (progress on stderr when it is a terminal); with --json, stdout is
+// summary.json's object. Throws IoError when DIR cannot be created or written, InternalError when
+// the BVH table's pair counts disagree between pliant, Embree and brute force (after writing the
+// summary). Takes a few seconds to a few tens of seconds on 2 vCPUs.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "commands.hpp"
+#include "peers/bvh_table.hpp"
+#include "peers/bvh_workload.hpp"
+#include "pliant/collision/self_broad_phase.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/geometry/triangle_mesh.hpp"
+#include "pliant/io/atomic_file.hpp"
+#include "pliant/io/mesh_io.hpp"
+
+namespace pliant::cli {
+namespace {
+
+constexpr std::int64_t DRAPE_TRIANGLES = 35912;  // 134 × 134 quads, DESIGN.md's drape scene
+constexpr float DRAPE_SIZE = 2.0f;               // m
+constexpr int COLLIDE_REPEATS = 5;
+constexpr int TABLE_REPEATS = 3;
+
+struct DemoOptions {
+    std::string out = "out/demo";
+};
+
+// 35912 → "35,912", as the BVH table prints counts.
+std::string thousands(std::int64_t n) {
+    const std::string digits = std::to_string(n < 0 ? -n : n);
+    std::string out = n < 0 ? "-" : "";
+    for (std::size_t i = 0; i < digits.size(); ++i) {
+        if (i > 0 && (digits.size() - i) % 3 == 0) {
+            out.push_back(',');
+        }
+        out.push_back(digits[i]);
+    }
+    return out;
+}
+
+// One broad-phase configuration, measured like `pliant collide --repeat N`: N fresh builds, then
+// N refits; build_ms over the builds, the other stages and total_ms over the refits (medians).
+// One untimed update first, so that allocation and thread start-up stay out of the numbers.
+nlohmann::ordered_json measure_broad_phase(const geometry::TriangleMeshD& mesh,
+                                           std::span<const Vec3d> positions_t1, double inflation,
+                                           bool swept) {
+    collision::SelfCollisionBroadPhase<double> broad_phase(mesh.triangles, mesh.num_vertices());
+    const std::span<const Vec3d> positions_t0(mesh.positions);
+    broad_phase.update(positions_t0, positions_t1, inflation);
+    std::vector<double> build_ms;
+    for (int i = 0; i < COLLIDE_REPEATS; ++i) {
+        broad_phase.request_rebuild();
+        broad_phase.update(positions_t0, positions_t1, inflation);
+        build_ms.push_back(broad_phase.stats().build_ms);
+    }
+    std::vector<double> refit_ms;
+    std::vector<double> traverse_ms;
+    std::vector<double> features_ms;
+    std::vector<double> total_ms;
+    for (int i = 0; i < COLLIDE_REPEATS; ++i) {
+        Stopwatch watch;
+        broad_phase.update(positions_t0, positions_t1, inflation);
+        total_ms.push_back(watch.elapsed_ms());
+        refit_ms.push_back(broad_phase.stats().refit_ms);
+        traverse_ms.push_back(broad_phase.stats().traverse_ms);
+        features_ms.push_back(broad_phase.stats().features_ms);
+    }
+    const collision::FeaturePairs& pairs = broad_phase.pairs();
+    return {
+        {"triangles", mesh.num_triangles()},
+        {"vertices", mesh.num_vertices()},
+        {"edges", broad_phase.topology().num_edges()},
+        {"triangle_pairs", broad_phase.stats().triangle_pairs},
+        {"vf_pairs", pairs.vertex_face.size()},
+        {"ee_pairs", pairs.edge_edge.size()},
+        {"build_ms", median(build_ms)},
+        {"refit_ms", median(refit_ms)},
+        {"traverse_ms", median(traverse_ms)},
+        {"features_ms", median(features_ms)},
+        {"total_ms", median(total_ms)},
+        {"repeat", COLLIDE_REPEATS},
+        {"threads", num_threads()},
+        {"inflation", inflation},
+        {"swept", swept},
+        {"memory_bytes", broad_phase.memory_bytes()},
+    };
+}
+
+std::string format_broad_phase(const std::string& title, const nlohmann::ordered_json& r) {
+    std::string text = title + "\n";
+    text += fmt::format("  {:<16}{:>10}   {:<16}{:>10}   {:<16}{:>10}\n", "triangle pairs",
+                        thousands(r["triangle_pairs"].get<std::int64_t>()), "VF pairs",
+                        thousands(r["vf_pairs"].get<std::int64_t>()), "EE pairs",
+                        thousands(r["ee_pairs"].get<std::int64_t>()));
+    text += fmt::format("  {:<16}{:>7.3f} ms   {:<16}{:>7.3f} ms   {:<16}{:>7.3f} ms\n", "build",
+                        r["build_ms"].get<double>(), "refit", r["refit_ms"].get<double>(),
+                        "traverse", r["traverse_ms"].get<double>());
+    text += fmt::format(
+        "  {:<16}{:>7.3f} ms   {:<16}{:>7.3f} ms   (medians of {}; total = one "
+        "refit-based update)\n",
+        "features", r["features_ms"].get<double>(), "total", r["total_ms"].get<double>(),
+        COLLIDE_REPEATS);
+    return text;
+}
+
+std::vector<Vec3d> to_double(std::span<const Vec3f> positions) {
+    std::vector<Vec3d> out;
+    out.reserve(positions.size());
+    for (const Vec3f& p : positions) {
+        out.push_back(vec3_cast<double>(p));
+    }
+    return out;
+}
+
+void make_output_directory(const std::filesystem::path& dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec || !std::filesystem::is_directory(dir)) {
+        throw IoError(fmt::format("{}: cannot create the output directory: {}", dir.string(),
+                                  ec ? ec.message() : "not a directory"));
+    }
+}
+
+void say(bool quiet, const std::string& text) {
+    if (!quiet) {
+        std::fputs(text.c_str(), stdout);
+        std::fflush(stdout);
+    }
+}
+
+void run_demo(const DemoOptions& options, const GlobalOptions& global) {
+    const bool quiet = global.json;  // --json: stdout carries only the summary object
+    const std::filesystem::path dir(options.out);
+    make_output_directory(dir);
+    const std::filesystem::path sheet_path = dir / "folded_sheet.ply";
+    const std::filesystem::path sheet_t1_path = dir / "folded_sheet_t1.ply";
+    const std::filesystem::path summary_path = dir / "summary.json";
+    Stopwatch demo_watch;
+
+    // Step 1: the folded drape-size sheet, static.
+    bench::BvhWorkloadOptions workload_options;
+    workload_options.sheet_size = DRAPE_SIZE;
+    workload_options.wavelength *= DRAPE_SIZE;  // the benchmark's shape, scaled to 2 m
+    const bench::BvhWorkload workload = bench::BvhWorkload::make(DRAPE_TRIANGLES, workload_options);
+    const geometry::TriangleMesh& sheet = workload.mesh;
+    io::write_mesh(sheet_path, sheet);
+    const float edge = workload.edge_length;
+    const auto inflation = static_cast<double>(workload.inflation);
+    say(quiet,
+        fmt::format("pliant demo: self-collision broad phase (LBVH + R-triangles + orphan sets)\n\n"
+                    "sheet: {} m x {} m, {} x {} quads, {} triangles, {} vertices, edge {:.6f} m\n"
+                    "folded like an accordion: panels {} m, layers {:.6f} m (1.5 edges) apart\n"
+                    "written to {}\n\n",
+                    DRAPE_SIZE, DRAPE_SIZE, workload.quads_per_side, workload.quads_per_side,
+                    thousands(static_cast<std::int64_t>(sheet.num_triangles())),
+                    thousands(static_cast<std::int64_t>(sheet.num_vertices())), edge,
+                    workload_options.panel_fraction * DRAPE_SIZE, workload_options.gap_edges * edge,
+                    sheet_path.string()));
+
+    geometry::TriangleMeshD sheet_d;
+    sheet_d.positions = to_double(sheet.positions);
+    sheet_d.triangles = sheet.triangles;
+    const nlohmann::ordered_json static_result =
+        measure_broad_phase(sheet_d, sheet_d.positions, inflation, false);
+    say(quiet,
+        format_broad_phase(fmt::format("static, inflation {} m (a quarter edge):", inflation),
+                           static_result));
+    say(quiet, fmt::format("  reproduce: pliant collide {} --inflate {} --repeat {}\n\n",
+                           sheet_path.string(), inflation, COLLIDE_REPEATS));
+
+    // Step 2: swept to a moved copy.
+    const std::vector<Vec3f> moved = workload.positions(1);
+    geometry::TriangleMesh sheet_t1{moved, sheet.triangles};
+    io::write_mesh(sheet_t1_path, sheet_t1);
+    const std::vector<Vec3d> moved_d = to_double(moved);
+    const nlohmann::ordered_json swept_result =
+        measure_broad_phase(sheet_d, moved_d, inflation, true);
+    say(quiet,
+        format_broad_phase(
+            fmt::format("swept to a moved copy (sine wave, amplitude {:.6f} m), inflation {} m:",
+                        workload.amplitude, inflation),
+            swept_result));
+    say(quiet,
+        fmt::format("  reproduce: pliant collide {} --to {} --inflate {} --repeat {}\n\n",
+                    sheet_path.string(), sheet_t1_path.string(), inflation, COLLIDE_REPEATS));
+
+    // Step 3: the paper's BVH table.
+    bench::BvhTableOptions table_options;
+    table_options.sizes = {2244, 27030, 35992};
+    table_options.repeats = TABLE_REPEATS;
+    table_options.threads = global.threads;
+    if (::isatty(::fileno(stderr)) != 0) {
+        table_options.progress = [](const std::string& message) {
+            std::fprintf(stderr, "%s\n", message.c_str());
+        };
+    }
+    say(quiet, "the paper's BVH table (Tables 1-3), measured now:\n");
+    const bench::BvhTableResult table = bench::run_bvh_table(table_options);
+    say(quiet, bench::format_bvh_table(table) + "\n");
+
+    // Step 4: the summary.
+    const nlohmann::ordered_json summary = {
+        {"sheet",
+         {{"size_m", DRAPE_SIZE},
+          {"quads_per_side", workload.quads_per_side},
+          {"triangles", sheet.num_triangles()},
+          {"vertices", sheet.num_vertices()},
+          {"edge_length_m", edge},
+          {"panel_m", workload_options.panel_fraction * DRAPE_SIZE},
+          {"layer_gap_m", workload_options.gap_edges * edge},
+          {"wave_amplitude_m", workload.amplitude},
+          {"file", sheet_path.string()},
+          {"file_t1", sheet_t1_path.string()}}},
+        {"static", static_result},
+        {"swept", swept_result},
+        {"bvh_table", bench::bvh_table_json(table)},
+        {"threads", num_threads()},
+        {"seconds", demo_watch.elapsed_ms() / 1000.0},
+    };
+    io::write_file_atomically(summary_path,
+                              [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
+
+    if (global.json) {
+        std::fputs((summary.dump(2) + "\n").c_str(), stdout);
+    } else {
+        say(quiet,
+            fmt::format("outputs in {}/:\n  {:<22}the folded sheet (binary PLY)\n  {:<22}its "
+                        "moved copy\n  {:<22}every number above\n",
+                        dir.string(), sheet_path.filename().string(),
+                        sheet_t1_path.filename().string(), summary_path.filename().string()));
+    }
+    if (!table.ok()) {
+        std::string errors;
+        for (const std::string& e : table.errors()) {
+            errors += "\n  " + e;
+        }
+        throw InternalError("demo: the BVH table's pair counts disagree:" + errors);
+    }
+}
+
+}  // namespace
+
+void register_demo(CLI::App& app, const GlobalOptions& global) {
+    auto options = std::make_shared<DemoOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "demo",
+        "Everything pliant does today, end to end, on generated data: folded drape-size sheet, "
+        "static and swept "
+        "self-collision broad phase, the paper's BVH table; writes PLY files and summary.json");
+    cmd->add_option("--out", options->out, "Output directory (created if missing)")
+        ->type_name("DIR");
+    cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
+    cmd->callback([options, &global] { run_demo(*options, global); });
+}
+
+}  // namespace pliant::cli

@@ -1,0 +1,22 @@
+// The pliant command line: one register_<command> per subcommand, each in cmd_<command>.cpp.
+// A command's callback throws pliant::Error on bad input; main turns it into
+// `pliant: error: <what>` and exit code 1. Usage errors (CLI11) exit with 2.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace pliant::cli {
+
+// Options every command shares, filled by main before the subcommand runs.
+struct GlobalOptions {
+    int threads = 0;    // 0: all hardware threads
+    bool json = false;  // machine-readable result on stdout
+};
+
+void register_collide(CLI::App& app, const GlobalOptions& global);
+void register_bench(CLI::App& app, const GlobalOptions& global);
+void register_demo(CLI::App& app, const GlobalOptions& global);
+
+}  // namespace pliant::cli

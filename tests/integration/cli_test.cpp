@@ -1,0 +1,336 @@
+// End-to-end tests of the pliant command line: exit codes and messages (0 ok, 1 bad input or I/O,
+// 2 usage), and `pliant collide` against a brute-force enumeration of the feature pairs on small
+// generated meshes written to OBJ/PLY files.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "integration/run_cli.hpp"
+#include "pliant/collision/incidence.hpp"
+#include "pliant/core/aabb.hpp"
+#include "pliant/geometry/generate.hpp"
+#include "pliant/geometry/topology.hpp"
+#include "pliant/io/mesh_io.hpp"
+#include "support/random_meshes.hpp"
+
+namespace pliant::test {
+namespace {
+
+struct PairCounts {
+    std::int64_t triangle_pairs = 0;
+    std::int64_t vf_pairs = 0;
+    std::int64_t ee_pairs = 0;
+};
+
+// O(n²) reference for the broad phase's contract: boxes span both ends of the step, grown by
+// `inflation`; closed overlap; VF = vertex not in the face, EE = edges sharing no vertex,
+// triangle pairs = triangles sharing no vertex.
+PairCounts brute_force_counts(const geometry::TriangleMeshD& mesh,
+                              std::span<const Vec3d> positions_t1, double inflation) {
+    const std::size_t num_vertices = mesh.num_vertices();
+    std::vector<AABBd> vertex_boxes(num_vertices);
+    for (std::size_t v = 0; v < num_vertices; ++v) {
+        vertex_boxes[v] =
+            AABBd{min(mesh.positions[v], positions_t1[v]), max(mesh.positions[v], positions_t1[v])}
+                .inflated(inflation);
+    }
+    const auto box_of = [&](std::span<const std::int32_t> corners) {
+        AABBd box;
+        for (const std::int32_t v : corners) {
+            box.extend(vertex_boxes[static_cast<std::size_t>(v)]);
+        }
+        return box;
+    };
+    std::vector<AABBd> face_boxes;
+    for (const geometry::Triangle& t : mesh.triangles) {
+        face_boxes.push_back(box_of(t));
+    }
+    const geometry::MeshTopology topology = geometry::build_topology(mesh.triangles, num_vertices);
+    std::vector<AABBd> edge_boxes;
+    for (const geometry::Edge& e : topology.edges) {
+        edge_boxes.push_back(box_of(e));
+    }
+
+    PairCounts counts;
+    for (std::size_t a = 0; a < mesh.num_triangles(); ++a) {
+        for (std::size_t b = a + 1; b < mesh.num_triangles(); ++b) {
+            if (!collision::share_vertex(mesh.triangles[a], mesh.triangles[b]) &&
+                overlaps(face_boxes[a], face_boxes[b])) {
+                ++counts.triangle_pairs;
+            }
+        }
+    }
+    for (std::size_t v = 0; v < num_vertices; ++v) {
+        for (std::size_t f = 0; f < mesh.num_triangles(); ++f) {
+            if (!collision::contains_vertex(mesh.triangles[f], static_cast<std::int32_t>(v)) &&
+                overlaps(vertex_boxes[v], face_boxes[f])) {
+                ++counts.vf_pairs;
+            }
+        }
+    }
+    for (std::size_t a = 0; a < topology.num_edges(); ++a) {
+        for (std::size_t b = a + 1; b < topology.num_edges(); ++b) {
+            if (!collision::share_vertex(topology.edges[a], topology.edges[b]) &&
+                overlaps(edge_boxes[a], edge_boxes[b])) {
+                ++counts.ee_pairs;
+            }
+        }
+    }
+    return counts;
+}
+
+// A small accordion-folded sheet (layers 1.5 edge lengths apart): many near non-adjacent pairs,
+// at the folds and between layers.
+geometry::TriangleMesh folded_sheet() {
+    constexpr int NX = 24;
+    constexpr int NY = 16;
+    constexpr float WIDTH = 1.0f;
+    geometry::TriangleMesh mesh = geometry::make_grid_sheet(NX, NY, WIDTH, 0.6f);
+    const float edge = WIDTH / NX;
+    geometry::fold_accordion(mesh.positions, 6.0f * edge, 1.5f * edge);
+    return mesh;
+}
+
+// The same mesh moved by a small smooth displacement (the end of a step).
+geometry::TriangleMesh moved(geometry::TriangleMesh mesh, float amplitude) {
+    for (Vec3f& p : mesh.positions) {
+        p.z += amplitude * std::sin(7.0f * p.x + 3.0f * p.y);
+        p.x += 0.5f * amplitude * std::cos(5.0f * p.y);
+    }
+    return mesh;
+}
+
+nlohmann::json parse_json(const CliResult& result) {
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return nlohmann::json::parse(result.out);
+}
+
+void expect_counts(const nlohmann::json& json, const PairCounts& expected,
+                   const geometry::TriangleMeshD& mesh) {
+    EXPECT_EQ(json.at("triangles").get<std::int64_t>(),
+              static_cast<std::int64_t>(mesh.num_triangles()));
+    EXPECT_EQ(json.at("vertices").get<std::int64_t>(),
+              static_cast<std::int64_t>(mesh.num_vertices()));
+    EXPECT_EQ(json.at("triangle_pairs").get<std::int64_t>(), expected.triangle_pairs);
+    EXPECT_EQ(json.at("vf_pairs").get<std::int64_t>(), expected.vf_pairs);
+    EXPECT_EQ(json.at("ee_pairs").get<std::int64_t>(), expected.ee_pairs);
+}
+
+TEST(Cli, HelpExitsZero) {
+    ScratchDir scratch;
+    const CliResult r = run_cli("--help", scratch);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("collide"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("demo"), std::string::npos) << r.out;
+}
+
+TEST(Cli, SubcommandHelpExitsZero) {
+    ScratchDir scratch;
+    const CliResult r = run_cli("collide --help", scratch);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("--inflate"), std::string::npos) << r.out;
+}
+
+TEST(Cli, VersionPrintsNameAndVersion) {
+    ScratchDir scratch;
+    const CliResult r = run_cli("--version", scratch);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("pliant " PLIANT_EXPECTED_VERSION), std::string::npos) << r.out;
+}
+
+TEST(Cli, UnknownOptionIsUsageError) {
+    ScratchDir scratch;
+    const CliResult r = run_cli("--no-such-option", scratch);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+}
+
+TEST(Cli, MissingSubcommandIsUsageError) {
+    ScratchDir scratch;
+    const CliResult r = run_cli("", scratch);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+}
+
+TEST(Collide, MissingFileNamesTheFile) {
+    ScratchDir scratch;
+    const auto missing = scratch / "no_such_mesh.ply";
+    const CliResult r = run_cli("collide " + quoted(missing), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(missing.string()), std::string::npos) << r.err;
+}
+
+TEST(Collide, BrokenFileIsIoError) {
+    ScratchDir scratch;
+    const auto broken = scratch / "broken.ply";
+    std::ofstream(broken)
+        << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n";
+    const CliResult r = run_cli("collide " + quoted(broken), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(broken.string()), std::string::npos) << r.err;
+}
+
+TEST(Collide, StaticMatchesBruteForce) {
+    ScratchDir scratch;
+    const auto path = scratch / "folded.ply";
+    io::write_mesh(path, folded_sheet());
+    const geometry::TriangleMeshD mesh = io::read_mesh(path);
+    constexpr double INFLATION = 0.01;  // about a quarter edge
+    const PairCounts expected = brute_force_counts(mesh, mesh.positions, INFLATION);
+    ASSERT_GT(expected.vf_pairs, 0);
+    ASSERT_GT(expected.ee_pairs, 0);
+
+    const nlohmann::json json =
+        parse_json(run_cli("collide " + quoted(path) + " --inflate 0.01 --json", scratch));
+    expect_counts(json, expected, mesh);
+    EXPECT_FALSE(json.at("swept").get<bool>());
+    EXPECT_EQ(json.at("inflation").get<double>(), INFLATION);
+    for (const char* key : {"edges", "build_ms", "refit_ms", "traverse_ms", "features_ms",
+                            "total_ms", "threads", "memory_bytes"}) {
+        EXPECT_TRUE(json.contains(key)) << key;
+    }
+}
+
+TEST(Collide, SweptMatchesBruteForce) {
+    ScratchDir scratch;
+    const auto path_t0 = scratch / "frame_t0.ply";
+    const auto path_t1 = scratch / "frame_t1.obj";
+    const geometry::TriangleMesh sheet = folded_sheet();
+    io::write_mesh(path_t0, sheet);
+    io::write_mesh(path_t1, moved(sheet, 0.04f));  // about an edge: layers meet
+    const geometry::TriangleMeshD mesh_t0 = io::read_mesh(path_t0);
+    const geometry::TriangleMeshD mesh_t1 = io::read_mesh(path_t1);
+    const PairCounts expected = brute_force_counts(mesh_t0, mesh_t1.positions, 0.0);
+    const PairCounts static_counts = brute_force_counts(mesh_t0, mesh_t0.positions, 0.0);
+    ASSERT_GT(expected.vf_pairs, static_counts.vf_pairs);
+
+    const nlohmann::json json = parse_json(run_cli(
+        "collide " + quoted(path_t0) + " --to " + quoted(path_t1) + " --repeat 3 --json", scratch));
+    expect_counts(json, expected, mesh_t0);
+    EXPECT_TRUE(json.at("swept").get<bool>());
+}
+
+TEST(Collide, CrumpledSheetMatchesBruteForceOnOneThread) {
+    ScratchDir scratch;
+    const auto path = scratch / "crumpled.obj";
+    io::write_mesh(path, jittered_sheet(20, 20, 0.4f, 0.08f, 11));
+    const geometry::TriangleMeshD mesh = io::read_mesh(path);
+    const PairCounts expected = brute_force_counts(mesh, mesh.positions, 0.02);
+
+    const nlohmann::json json = parse_json(
+        run_cli("--threads 1 collide " + quoted(path) + " --inflate 0.02 --json", scratch));
+    expect_counts(json, expected, mesh);
+    EXPECT_EQ(json.at("threads").get<int>(), 1);
+}
+
+TEST(Collide, HumanSummary) {
+    ScratchDir scratch;
+    const auto path = scratch / "folded.ply";
+    io::write_mesh(path, folded_sheet());
+    const CliResult r = run_cli("collide " + quoted(path), scratch);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    for (const char* line :
+         {"triangle pairs", "VF pairs", "EE pairs", "build", "refit", "traverse", "features"}) {
+        EXPECT_NE(r.out.find(line), std::string::npos) << line << " in\n" << r.out;
+    }
+}
+
+TEST(Collide, MismatchedFramesNameBothFilesAndCounts) {
+    ScratchDir scratch;
+    const auto path_t0 = scratch / "sheet_a.ply";
+    const auto path_t1 = scratch / "sheet_b.ply";
+    io::write_mesh(path_t0, geometry::make_grid_sheet(4, 4, 1.0f, 1.0f));  // 25 vertices
+    io::write_mesh(path_t1, geometry::make_grid_sheet(5, 4, 1.0f, 1.0f));  // 30 vertices
+    const CliResult r = run_cli("collide " + quoted(path_t0) + " --to " + quoted(path_t1), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(path_t0.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(path_t1.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("25"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("30"), std::string::npos) << r.err;
+}
+
+TEST(Collide, FramesWithDifferentTrianglesAreRejected) {
+    ScratchDir scratch;
+    const auto path_t0 = scratch / "sheet_a.ply";
+    const auto path_t1 = scratch / "sheet_b.ply";
+    geometry::TriangleMesh sheet = geometry::make_grid_sheet(4, 4, 1.0f, 1.0f);
+    io::write_mesh(path_t0, sheet);
+    std::swap(sheet.triangles[3][1], sheet.triangles[3][2]);
+    io::write_mesh(path_t1, sheet);
+    const CliResult r = run_cli("collide " + quoted(path_t0) + " --to " + quoted(path_t1), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("triangle 3"), std::string::npos) << r.err;
+}
+
+TEST(Collide, NegativeOrNanInflationIsUsageError) {
+    ScratchDir scratch;
+    const auto path = scratch / "sheet.ply";
+    io::write_mesh(path, geometry::make_grid_sheet(2, 2, 1.0f, 1.0f));
+    for (const char* value : {"-0.5", "nan", "inf", "abc"}) {
+        const CliResult r = run_cli("collide " + quoted(path) + " --inflate=" + value, scratch);
+        EXPECT_EQ(r.exit_code, 2) << value;
+        EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("--inflate"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(">= 0"), std::string::npos) << r.err;
+    }
+}
+
+TEST(Collide, ZeroRepeatIsUsageError) {
+    ScratchDir scratch;
+    const auto path = scratch / "sheet.ply";
+    io::write_mesh(path, geometry::make_grid_sheet(2, 2, 1.0f, 1.0f));
+    const CliResult r = run_cli("collide " + quoted(path) + " --repeat 0", scratch);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("--repeat"), std::string::npos) << r.err;
+}
+
+TEST(Collide, UnsupportedExtensionIsIoError) {
+    ScratchDir scratch;
+    const auto path = scratch / "mesh.stl";
+    std::ofstream(path) << "solid x\nendsolid x\n";
+    const CliResult r = run_cli("collide " + quoted(path), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(".stl"), std::string::npos) << r.err;
+}
+
+TEST(Demo, WritesOutputsThatCollideReproduces) {
+    ScratchDir scratch;
+    const auto dir = scratch / "demo";
+    const nlohmann::json summary = parse_json(run_cli("--json demo --out " + quoted(dir), scratch));
+    ASSERT_TRUE(std::filesystem::exists(dir / "folded_sheet.ply"));
+    ASSERT_TRUE(std::filesystem::exists(dir / "folded_sheet_t1.ply"));
+    ASSERT_TRUE(std::filesystem::exists(dir / "summary.json"));
+    EXPECT_EQ(nlohmann::json::parse(read_text(dir / "summary.json")), summary);
+    EXPECT_EQ(summary.at("sheet").at("triangles").get<std::int64_t>(), 35912);
+    EXPECT_EQ(summary.at("bvh_table").at("rows").size(), 3u);
+
+    // The written files and the printed inflation give the demo's counts exactly.
+    for (const char* mode : {"static", "swept"}) {
+        const nlohmann::json& expected = summary.at(mode);
+        std::string args = "collide " + quoted(dir / "folded_sheet.ply");
+        if (expected.at("swept").get<bool>()) {
+            args += " --to " + quoted(dir / "folded_sheet_t1.ply");
+        }
+        args += " --inflate " + expected.at("inflation").dump() + " --json";
+        const nlohmann::json json = parse_json(run_cli(args, scratch));
+        for (const char* key : {"triangle_pairs", "vf_pairs", "ee_pairs"}) {
+            EXPECT_EQ(json.at(key), expected.at(key)) << mode << " " << key;
+        }
+        EXPECT_GT(expected.at("vf_pairs").get<std::int64_t>(), 0) << mode;
+    }
+}
+
+}  // namespace
+}  // namespace pliant::test
