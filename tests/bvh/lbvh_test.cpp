@@ -18,12 +18,16 @@ std::vector<test::Pair> self_pairs(const LBVH& tree) {
     std::vector<PrimitivePair> pairs;
     SelfOverlapCollector collector;
     collector.collect(tree, [](std::uint32_t, std::uint32_t) { return true; }, pairs);
-    return pairs;
+    std::vector<test::Pair> out;
+    for (const PrimitivePair& p : pairs) {
+        out.emplace_back(p.first, p.second);
+    }
+    return out;
 }
 
 std::vector<test::Pair> cross_pairs(const LBVH& a, const LBVH& b) {
     ChunkedBuffer<test::Pair> buffer;
-    buffer.reset(num_chunks(a.num_primitives(), QUERY_GRAIN));
+    buffer.reset(num_overlap_chunks(a));
     for_each_overlap(a, b, [&](std::int64_t chunk, std::uint32_t i, std::uint32_t j) {
         buffer.chunk(chunk).emplace_back(i, j);
     });
@@ -35,7 +39,7 @@ std::vector<test::Pair> cross_pairs(const LBVH& a, const LBVH& b) {
 void expect_self_pairs_match_brute_force(std::span<const AABB> boxes) {
     LBVH tree;
     tree.build(boxes);
-    tree.validate();
+    tree.validate(boxes);
     const auto pairs = self_pairs(tree);
     const auto normal = test::normalized(pairs);
     EXPECT_EQ(std::adjacent_find(normal.begin(), normal.end()), normal.end()) << "duplicate pair";
@@ -61,7 +65,7 @@ TEST(LBVH, IdenticalBoxesGiveABalancedTreeAndEveryPair) {
     const std::vector<AABB> boxes(513, AABB{{0, 0, 0}, {1, 1, 1}});
     LBVH tree;
     tree.build(boxes);
-    tree.validate();
+    tree.validate(boxes);
     // Equal Morton codes: the position tie-break must keep the tree shallow, not a chain.
     // A balanced binary tree over 513 leaves has depth 10 (a chain would have 512); the 4-wide
     // tree is no deeper.
@@ -88,13 +92,13 @@ TEST(LBVH, FlatAndDegenerateBoxes) {
 TEST(LBVH, ZeroAndOnePrimitive) {
     LBVH tree;
     tree.build({});
-    tree.validate();
+    tree.validate({});
     EXPECT_FALSE(tree.has_nodes());
     EXPECT_TRUE(self_pairs(tree).empty());
     EXPECT_TRUE(tree.bounds().is_empty());
     const std::vector<AABB> one{{{0, 0, 0}, {1, 1, 1}}};
     tree.build(one);
-    tree.validate();
+    tree.validate(one);
     EXPECT_TRUE(self_pairs(tree).empty());
     EXPECT_EQ(tree.bounds(), one[0]);
     tree.refit(one);
@@ -134,7 +138,7 @@ TEST(LBVH, RefitTracksMotionAndMatchesRebuild) {
         }
         const auto boxes = test::triangle_boxes(mesh, 0.001f);
         tree.refit(boxes);
-        tree.validate();
+        tree.validate(boxes);
         EXPECT_EQ(test::normalized(self_pairs(tree)), test::brute_force_self_overlaps(boxes));
     }
 }

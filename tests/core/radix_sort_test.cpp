@@ -67,6 +67,30 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{200000, 30, 1u << 30}, Case{200000, 30, 7}, Case{150000, 64, ~0ull},
                       Case{70000, 64, 1}));
 
+TEST(RadixSort, ThirtyTwoBitKeysMatchStableSort) {
+    for (const int key_bits : {30, 32, 7}) {
+        std::mt19937 rng(static_cast<std::uint32_t>(key_bits));
+        const std::size_t n = 150000;
+        std::vector<std::uint32_t> keys32(n), values(n);
+        std::vector<std::uint64_t> keys64(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            keys32[i] = key_bits == 32 ? rng() : rng() & ((1u << key_bits) - 1);
+            keys64[i] = keys32[i];
+            values[i] = static_cast<std::uint32_t>(i);
+        }
+        auto expected_values = values;
+        reference_sort(keys64, expected_values);
+        auto v = values;
+        RadixSorter sorter;
+        sorter.sort(std::span(keys32), std::span(v), key_bits);
+        EXPECT_EQ(std::vector<std::uint64_t>(keys32.begin(), keys32.end()), keys64) << key_bits;
+        EXPECT_EQ(v, expected_values) << key_bits;
+    }
+    std::vector<std::uint32_t> k(4), v(4);
+    RadixSorter sorter;
+    EXPECT_THROW(sorter.sort(std::span(k), std::span(v), 33), InvalidInput);
+}
+
 TEST(RadixSort, RejectsMismatchedSpans) {
     std::vector<std::uint64_t> keys(3);
     std::vector<std::uint32_t> values(2);

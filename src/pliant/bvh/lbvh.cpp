@@ -21,9 +21,9 @@ constexpr std::int32_t NO_BOUND = -1;
 // Dissimilarity of neighbouring leaves i and i+1: Morton XOR in the high word, position XOR in the
 // low word (ties between equal codes). The node splitting at i is the parent of a range [l, r]
 // exactly when its δ is the smaller of the two range ends' (Apetrei 2014, Algorithm 1).
-PLIANT_HOST_DEVICE inline std::uint64_t delta(const std::uint64_t* keys, std::int32_t i) {
+PLIANT_HOST_DEVICE inline std::uint64_t delta(const std::uint32_t* keys, std::int32_t i) {
     const auto position_xor = static_cast<std::uint64_t>(static_cast<std::uint32_t>(i ^ (i + 1)));
-    return ((keys[i] ^ keys[i + 1]) << 32) | position_xor;
+    return (static_cast<std::uint64_t>(keys[i] ^ keys[i + 1]) << 32) | position_xor;
 }
 
 std::int32_t atomic_exchange(std::int32_t& slot, std::int32_t value) {
@@ -60,22 +60,14 @@ void LBVH::compute_leaf_order(std::span<const AABB> boxes) {
             m_primitives[k] = static_cast<std::uint32_t>(i);
         },
         LEAF_GRAIN);
-    m_sorter.sort(m_keys, m_primitives, MORTON_BITS);
-
-    m_leaf_boxes.resize(boxes.size());
-    parallel_for(
-        n, [&](std::int64_t i) {
-            m_leaf_boxes[static_cast<std::size_t>(i)] = boxes[m_primitives[static_cast<std::size_t>(i)]];
-        },
-        LEAF_GRAIN);
+    m_sorter.sort(std::span(m_keys), std::span(m_primitives), MORTON_BITS);
 }
 
-void LBVH::build_hierarchy() {
+void LBVH::build_hierarchy(std::span<const AABB> boxes) {
     const std::int32_t n = num_primitives();
     m_nodes.resize(static_cast<std::size_t>(n - 1));
-    m_leaf_parent.resize(static_cast<std::size_t>(n));
     m_counters.assign(static_cast<std::size_t>(n - 1), NO_BOUND);
-    const std::uint64_t* keys = m_keys.data();
+    const std::uint32_t* keys = m_keys.data();
     Node* nodes = m_nodes.data();
     std::int32_t root = -1;
 
@@ -87,7 +79,7 @@ void LBVH::build_hierarchy() {
             auto l = static_cast<std::int32_t>(leaf);
             std::int32_t r = l;
             std::int32_t current = leaf_reference(l);
-            AABB box = m_leaf_boxes[static_cast<std::size_t>(leaf)];
+            AABB box = boxes[m_primitives[static_cast<std::size_t>(leaf)]];
             for (;;) {
                 const bool is_left_child = l == 0 || (r != n - 1 && delta(keys, r) < delta(keys, l - 1));
                 const std::int32_t parent = is_left_child ? r : l - 1;
@@ -95,12 +87,6 @@ void LBVH::build_hierarchy() {
                 Node& node = nodes[parent];
                 node.child[slot] = current;
                 node.box[slot] = box;
-                const std::int32_t link = (parent << 1) | slot;
-                if (is_leaf(current)) {
-                    m_leaf_parent[static_cast<std::size_t>(leaf_position(current))] = link;
-                } else {
-                    nodes[current].parent = link;
-                }
                 const std::int32_t other =
                     atomic_exchange(m_counters[static_cast<std::size_t>(parent)], is_left_child ? l : r);
                 if (other == NO_BOUND) {
@@ -111,7 +97,6 @@ void LBVH::build_hierarchy() {
                 node.last = r;
                 current = parent;
                 if (l == 0 && r == n - 1) {
-                    node.parent = -1;
                     root = parent;
                     return;
                 }
@@ -244,10 +229,22 @@ void LBVH::build(std::span<const AABB> boxes) {
     m_root = -1;
     m_num_wide = 0;
     m_level_offsets.clear();
-    if (boxes.size() < 2) {
+    if (boxes.empty()) {
         return;
     }
-    build_hierarchy();
+    if (boxes.size() == 1) {  // one node, one used slot
+        m_wide.resize(1);
+        WideNode& node = m_wide[0];
+        for (int k = 0; k < WIDTH; ++k) {
+            node.set_box(k, k == 0 ? boxes[0] : AABB{});
+            node.child[k] = k == 0 ? leaf_reference(0) : EMPTY_SLOT;
+            node.last[k] = k == 0 ? 0 : -1;
+        }
+        m_num_wide = 1;
+        m_level_offsets = {0, 1};
+        return;
+    }
+    build_hierarchy(boxes);
     collapse();
 }
 
@@ -256,14 +253,9 @@ void LBVH::refit(std::span<const AABB> boxes) {
         throw InvalidInput(fmt::format("LBVH::refit: boxes.size() ({}) != primitives in the tree ({})",
                                        boxes.size(), m_primitives.size()));
     }
-    parallel_for(
-        static_cast<std::int64_t>(boxes.size()),
-        [&](std::int64_t i) {
-            m_leaf_boxes[static_cast<std::size_t>(i)] = boxes[m_primitives[static_cast<std::size_t>(i)]];
-        },
-        LEAF_GRAIN);
     // Deepest level first: a node's children are all on deeper levels, already refitted.
     WideNode* wide = m_wide.data();
+    const std::uint32_t* primitives = m_primitives.data();
     for (int level = depth() - 1; level >= 0; --level) {
         const std::int32_t begin = m_level_offsets[static_cast<std::size_t>(level)];
         const std::int32_t end = m_level_offsets[static_cast<std::size_t>(level) + 1];
@@ -276,8 +268,7 @@ void LBVH::refit(std::span<const AABB> boxes) {
                     if (c == EMPTY_SLOT) {
                         continue;
                     }
-                    node.set_box(k, is_leaf(c) ? m_leaf_boxes[static_cast<std::size_t>(leaf_position(c))]
-                                               : wide[c].bounds());
+                    node.set_box(k, is_leaf(c) ? boxes[primitives[leaf_position(c)]] : wide[c].bounds());
                 }
             },
             WIDE_GRAIN);
@@ -288,23 +279,22 @@ AABB LBVH::bounds() const {
     if (has_nodes()) {
         return m_wide.front().bounds();
     }
-    return m_leaf_boxes.empty() ? AABB{} : m_leaf_boxes.front();
+    return AABB{};
 }
 
 std::size_t LBVH::memory_bytes() const {
     return m_wide.capacity() * sizeof(WideNode) + m_level_offsets.capacity() * sizeof(std::int32_t) +
            m_slot_counts.capacity() * sizeof(std::int32_t) +
            m_wide_source.capacity() * sizeof(std::int32_t) +
-           m_nodes.capacity() * sizeof(Node) + m_leaf_boxes.capacity() * sizeof(AABB) +
+           m_nodes.capacity() * sizeof(Node) +
            m_primitives.capacity() * sizeof(std::uint32_t) +
-           m_leaf_parent.capacity() * sizeof(std::int32_t) +
-           m_keys.capacity() * sizeof(std::uint64_t) + m_counters.capacity() * sizeof(std::int32_t);
+           m_keys.capacity() * sizeof(std::uint32_t) + m_counters.capacity() * sizeof(std::int32_t);
 }
 
-void LBVH::validate() const {
+void LBVH::validate(std::span<const AABB> boxes) const {
     const std::int32_t n = num_primitives();
-    PLIANT_CHECK_EQ(m_leaf_boxes.size(), static_cast<std::size_t>(n));
-    if (n < 2) {
+    PLIANT_CHECK_EQ(boxes.size(), static_cast<std::size_t>(n));
+    if (n == 0) {
         PLIANT_CHECK(!has_nodes());
         return;
     }
@@ -340,7 +330,7 @@ void LBVH::validate() const {
                 PLIANT_CHECK_EQ(leaf_position(c), next);
                 PLIANT_CHECK_EQ(node.last[k], next);
                 ++leaf_seen[static_cast<std::size_t>(next)];
-                PLIANT_CHECK(node.box(k) == m_leaf_boxes[static_cast<std::size_t>(next)]);
+                PLIANT_CHECK(node.box(k) == boxes[m_primitives[static_cast<std::size_t>(next)]]);
             } else {
                 PLIANT_CHECK(c > item.node && c < m_num_wide);
                 PLIANT_CHECK(node.box(k) == m_wide[static_cast<std::size_t>(c)].bounds());
@@ -348,7 +338,7 @@ void LBVH::validate() const {
             }
             next = node.last[k] + 1;
         }
-        PLIANT_CHECK_GE(used, 2);
+        PLIANT_CHECK_GE(used, n == 1 ? 1 : 2);
         PLIANT_CHECK_EQ(next, item.last + 1);
     }
     for (std::int32_t p = 0; p < n; ++p) {

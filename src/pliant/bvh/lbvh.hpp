@@ -6,16 +6,15 @@
 // which every leaf climbs until it is the first to reach a node (an atomic exchange of range ends
 // decides who goes on), writing child links and boxes. Sorted positions break ties between equal
 // Morton codes, so the tree is a radix tree over distinct 62-bit keys: depth ≤ 63, identical boxes
-// give a balanced tree. O(n) work, deterministic for any number of threads.
-//
-// The binary hierarchy is then collapsed into a 4-wide tree (wide_node.hpp), breadth first, each
-// node absorbing the children with the largest surface area; queries traverse the wide tree with
-// one SIMD test per four boxes.
+// give a balanced tree. The binary hierarchy is then collapsed into a 4-wide tree (wide_node.hpp),
+// breadth first, each node absorbing the children of largest surface area; queries traverse the
+// wide tree with one SIMD test per four boxes. O(n) work, deterministic for any number of threads.
 //
 // refit(boxes): new boxes for the same primitives, hierarchy kept: one parallel loop per depth of
 // the wide tree, deepest first. O(n). Boxes are merged with exact min/max, so the result is
 // bitwise independent of scheduling.
 //
+// Leaf boxes live only in the wide nodes' slots (no separate copy): queries read them there.
 // Preconditions: boxes finite and non-empty (checked by build, not by refit: refit is the per-step
 // hot path; a NaN box there only makes overlaps fail). At most 2^31 - 1 boxes. The LBVH does not
 // keep a reference to the caller's boxes between calls.
@@ -40,46 +39,44 @@ public:
     void refit(std::span<const AABB> boxes);
 
     std::int32_t num_primitives() const { return static_cast<std::int32_t>(m_primitives.size()); }
-    // True when there is a tree to traverse (two or more primitives); its root is nodes()[0].
+    // True when there is at least one primitive; the root is nodes()[0] (a single primitive is one
+    // node with one used slot).
     bool has_nodes() const { return m_num_wide > 0; }
     // The wide tree, breadth first (root at 0).
     std::span<const WideNode> nodes() const {
         return std::span(m_wide).first(static_cast<std::size_t>(m_num_wide));
     }
-    // Depth of the wide tree (0 without nodes).
+    // Depth of the wide tree (0 without primitives).
     int depth() const { return static_cast<int>(m_level_offsets.size()) - 1; }
-    // Box of each leaf position (Morton order), as of the last build/refit.
-    std::span<const AABB> leaf_boxes() const { return m_leaf_boxes; }
-    // Primitive (index into the caller's boxes) at each leaf position.
+    // Primitive (index into the caller's boxes) at each leaf position (Morton order).
     std::span<const std::uint32_t> primitives() const { return m_primitives; }
     // Box of everything (empty box when there are no primitives).
     AABB bounds() const;
-    // Bytes held (nodes, leaf boxes, permutation, scratch).
+    // Bytes held (wide nodes, permutation, build scratch).
     std::size_t memory_bytes() const;
 
-    // Checks every structural invariant — each leaf reached exactly once, slot ranges tile their
-    // node's range in order, `last` of each slot, breadth-first order, every stored box equal to
-    // the merge of its subtree's leaf boxes — and throws InternalError naming the first
-    // violation. O(n); for tests.
-    void validate() const;
+    // Checks every structural invariant against the boxes of the last build/refit — each leaf
+    // reached exactly once, slot ranges tile their node's range in order, `last` of each slot,
+    // breadth-first order, leaf slots holding boxes[primitive], every other slot the bounds of its
+    // child — and throws InternalError naming the first violation. O(n); for tests.
+    void validate(std::span<const AABB> boxes) const;
 
 private:
     void compute_leaf_order(std::span<const AABB> boxes);
-    void build_hierarchy();
+    void build_hierarchy(std::span<const AABB> boxes);
     void collapse();
 
-    std::vector<WideNode> m_wide;            // the traversal tree, breadth first (m_num_wide used)
+    std::vector<WideNode> m_wide;               // the traversal tree (first m_num_wide used)
     std::int32_t m_num_wide = 0;
-    std::vector<std::int32_t> m_slot_counts;  // internal slots per wide node (build scratch)
     std::vector<std::int32_t> m_level_offsets;  // depth d holds m_wide[offsets[d] .. offsets[d+1])
-    std::vector<Node> m_nodes;               // n - 1 binary nodes (build scratch)
-    std::vector<AABB> m_leaf_boxes;          // n, Morton order
-    std::vector<std::uint32_t> m_primitives; // n, Morton order → primitive id
-    std::vector<std::int32_t> m_leaf_parent; // n, (parent << 1) | slot
-    std::vector<std::int32_t> m_wide_source; // binary node each wide node was collapsed from
-    std::vector<std::uint64_t> m_keys;       // n Morton codes, sorted
-    std::vector<std::int32_t> m_counters;    // n - 1 atomics: range ends during the build
-    std::int32_t m_root = -1;
+    std::vector<std::uint32_t> m_primitives;    // n, Morton order → primitive id
+    // Build scratch, kept to avoid reallocation between builds.
+    std::vector<Node> m_nodes;                  // n - 1 binary nodes
+    std::vector<std::uint32_t> m_keys;          // n Morton codes, sorted
+    std::vector<std::int32_t> m_counters;       // n - 1 atomics: range ends
+    std::vector<std::int32_t> m_wide_source;    // binary node each wide node is collapsed from
+    std::vector<std::int32_t> m_slot_counts;    // internal slots per wide node
+    std::int32_t m_root = -1;                   // binary root
     RadixSorter m_sorter;
 };
 

@@ -1,5 +1,6 @@
-// The LBVH node layout: internal nodes only, one 64-byte cache line each, holding both children's
-// boxes so that a traversal step tests two children from one line.
+// The binary LBVH node, built bottom-up (Apetrei 2014) and then collapsed into the 4-wide
+// traversal tree (wide_node.hpp): internal nodes only, one 64-byte cache line each, holding both
+// children's boxes.
 //
 // Leaves are the primitives in Morton order ("leaf positions" 0..n-1). Internal node p splits the
 // leaf range [first, last] between positions p and p+1 (Karras 2012 / Apetrei 2014 indexing): its
@@ -19,7 +20,6 @@ struct alignas(64) Node {
     AABB box[2];             // box[0]: left child, box[1]: right child
     std::int32_t child[2];   // ≥ 0 internal node index, < 0 leaf position ~c
     std::int32_t last;       // last leaf position of this subtree
-    std::int32_t parent;     // (parent node << 1) | slot of this node in it; -1 at the root
 };
 static_assert(sizeof(Node) == 64 && std::is_trivially_copyable_v<Node>);
 

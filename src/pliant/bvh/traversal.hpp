@@ -1,15 +1,21 @@
 // Overlap queries on LBVHs: all pairs of primitives whose boxes overlap (closed intervals).
 //
-// Self: every unordered pair {a, b}, a ≠ b, of one tree, reported exactly once. Each leaf i queries
-// the tree with its own box and keeps only leaves j > i, pruning every subtree whose leaf range
-// ends at or before i — half the work of a plain per-leaf query, no duplicates by construction.
-// Pair: every (a, b), a from tree A, b from tree B; each leaf of A queries B.
+// Self: every unordered pair {a, b}, a ≠ b, of one tree, reported exactly once. Pair: every
+// (a, b), a from tree A, b from tree B.
 //
-// Kernels are per leaf, GPU style (fixed-size stack, no allocation); the 4-wide nodes are tested
-// with SSE where available (x86-64 always has SSE2), a scalar loop otherwise. Output goes through a visitor
-// called as visit(chunk, a, b) with primitive ids; leaves are processed in fixed chunks in Morton
-// order and, within a leaf, in traversal order, so a visitor that appends to per-chunk buffers
-// (ChunkedBuffer) yields a result identical for 1 and N threads.
+// Both use leaf clusters: the leaf slots of one wide node (up to four leaves, neighbours in Morton
+// order) query a tree together with the union of their boxes; each leaf j found is then tested
+// against the cluster's leaves in one SIMD step. This walks the upper tree once per cluster
+// instead of once per leaf. For self queries, a cluster whose first leaf is at position f prunes
+// every subtree whose leaves all come at or before f and pairs leaf i with found leaf j only when
+// i < j — every pair once, by construction.
+//
+// Kernels are per cluster, GPU style (fixed-size stack, no allocation); the 4-wide nodes are
+// tested with SSE where available (x86-64 always has SSE2), a scalar loop otherwise. Output goes
+// through a visitor called as visit(chunk, a, b) with primitive ids. Clusters are processed in
+// fixed chunks of CLUSTER_GRAIN nodes in node order, and within a cluster in traversal order, so
+// a visitor that appends to per-chunk buffers (ChunkedBuffer sized by num_overlap_chunks) yields a
+// result identical for 1 and N threads.
 #pragma once
 
 #if defined(__SSE2__)
@@ -18,7 +24,6 @@
 
 #include <bit>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "pliant/bvh/lbvh.hpp"
@@ -30,7 +35,6 @@ namespace pliant::bvh {
 // Deep enough for any LBVH: the wide tree has depth ≤ 63 (see lbvh.hpp) and every pop pushes at
 // most WIDTH entries, so the stack never holds more than 3 · 63 + 1.
 inline constexpr int TRAVERSAL_STACK = 192;
-inline constexpr std::int64_t QUERY_GRAIN = 256;
 inline constexpr std::int64_t CLUSTER_GRAIN = 128;
 
 // A query box prepared for repeated slot tests.
@@ -69,9 +73,33 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned slot_mask(const WideNode& node, 
 #endif
 }
 
-// Visits the tree from the root: on_leaf(j) for every leaf j > after whose box overlaps the query,
-// pruning slots whose leaves all come at or before `after`. Leaves are reported in a fixed order
-// that depends only on the tree and the query.
+// Bit k set when slot k is a leaf whose box overlaps the query and whose position is < `before`
+// (before = INT32_MAX: every leaf slot).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned leaf_slot_mask(const WideNode& node,
+                                                               const QueryBox& q,
+                                                               std::int32_t before) {
+#if defined(__SSE2__)
+    // Used leaf slots have child < 0 and last = their position; unused slots fail the box test.
+    const __m128i leaf = _mm_cmplt_epi32(
+        _mm_load_si128(reinterpret_cast<const __m128i*>(node.child)), _mm_setzero_si128());
+    const __m128i earlier = _mm_cmplt_epi32(
+        _mm_load_si128(reinterpret_cast<const __m128i*>(node.last)), _mm_set1_epi32(before));
+    const auto mask = static_cast<unsigned>(
+        _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(leaf, earlier))));
+    return mask & slot_mask(node, q, -1);
+#else
+    unsigned mask = 0;
+    for (int k = 0; k < WIDTH; ++k) {
+        mask |= (node.child[k] < 0 && node.last[k] < before && overlaps(node.box(k), q.box) ? 1u : 0u)
+                << k;
+    }
+    return mask;
+#endif
+}
+
+// Visits the tree from the root: on_leaf(j, box_j) for every leaf j > after whose box overlaps
+// the query, pruning slots whose leaves all come at or before `after` (-1: no pruning). Leaves
+// are reported in a fixed order that depends only on the tree and the query.
 template <typename OnLeaf>
 PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std::int32_t after,
                                    OnLeaf&& on_leaf) {
@@ -87,7 +115,7 @@ PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std
             mask &= mask - 1;
             const std::int32_t c = node.child[k];
             if (is_leaf(c)) {
-                on_leaf(leaf_position(c));
+                on_leaf(leaf_position(c), node.box(k));
             } else {
                 stack[top++] = c;
             }
@@ -95,46 +123,30 @@ PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std
     }
 }
 
-// Bit k set when slot k is a leaf at a position before `position` whose box overlaps the query.
-PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned leaf_slots_before(const WideNode& node,
-                                                                  const QueryBox& q,
-                                                                  std::int32_t position) {
-#if defined(__SSE2__)
-    const __m128i children = _mm_load_si128(reinterpret_cast<const __m128i*>(node.child));
-    const __m128i last = _mm_load_si128(reinterpret_cast<const __m128i*>(node.last));
-    // Leaves have child < 0 (unused slots too, but their last is -1 and their box empty).
-    const __m128i is_leaf_before = _mm_and_si128(_mm_cmplt_epi32(children, _mm_setzero_si128()),
-                                                 _mm_cmplt_epi32(last, _mm_set1_epi32(position)));
-    const auto before = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(is_leaf_before)));
-    return before & slot_mask(node, q, -1);
-#else
-    unsigned mask = 0;
+// The leaf slots of a wide node as a query cluster: the union of their boxes and the first
+// position. Returns false when the node has no leaf slot.
+PLIANT_HOST_DEVICE inline bool leaf_cluster(const WideNode& node, AABB& box, std::int32_t& first) {
+    first = INT32_MAX;
     for (int k = 0; k < WIDTH; ++k) {
-        mask |= (node.child[k] < 0 && node.last[k] < position && overlaps(node.box(k), q.box) ? 1u : 0u) << k;
+        if (node.child[k] < 0 && node.child[k] != EMPTY_SLOT) {
+            box.extend(node.box(k));
+            first = first < node.last[k] ? first : node.last[k];
+        }
     }
-    return mask;
-#endif
+    return first != INT32_MAX;
 }
 
-// Number of output chunks for_each_self_overlap uses for `tree` (size a ChunkedBuffer with it).
-inline std::int64_t num_self_overlap_chunks(const LBVH& tree) {
+// Number of output chunks the queries below use when `tree` provides the clusters (the tree
+// itself for self queries, tree_a for pair queries): size a ChunkedBuffer with it.
+inline std::int64_t num_overlap_chunks(const LBVH& tree) {
     return num_chunks(static_cast<std::int64_t>(tree.nodes().size()), CLUSTER_GRAIN);
 }
 
-// visit(chunk, a, b) for every unordered overlapping pair of primitives of `tree`, exactly once.
-//
-// Leaf clusters: the leaf slots of each wide node (up to four leaves, neighbours in Morton order)
-// query the tree together with the union of their boxes, pruning subtrees that end before the
-// cluster's first leaf; every leaf j found is then tested against the cluster's leaves before it
-// in one SIMD step. This walks the upper tree once per cluster instead of once per leaf.
-// Chunks are fixed runs of CLUSTER_GRAIN wide nodes (num_self_overlap_chunks).
+// visit(chunk, a, b) for every unordered overlapping pair of primitives of `tree`, exactly once
+// (a earlier than b in Morton order).
 template <typename Visit>
 void for_each_self_overlap(const LBVH& tree, Visit&& visit) {
-    if (!tree.has_nodes()) {
-        return;
-    }
     const WideNode* nodes = tree.nodes().data();
-    const AABB* boxes = tree.leaf_boxes().data();
     const std::uint32_t* prims = tree.primitives().data();
     parallel_for_chunks(
         static_cast<std::int64_t>(tree.nodes().size()), CLUSTER_GRAIN,
@@ -142,19 +154,12 @@ void for_each_self_overlap(const LBVH& tree, Visit&& visit) {
             for (std::int64_t w = begin; w < end; ++w) {
                 const WideNode& cluster = nodes[w];
                 AABB cluster_box;
-                std::int32_t first = INT32_MAX;
-                for (int k = 0; k < WIDTH; ++k) {
-                    if (cluster.child[k] < 0 && cluster.child[k] != EMPTY_SLOT) {
-                        cluster_box.extend(cluster.box(k));
-                        first = first < cluster.last[k] ? first : cluster.last[k];
-                    }
-                }
-                if (first == INT32_MAX) {
+                std::int32_t first = 0;
+                if (!leaf_cluster(cluster, cluster_box, first)) {
                     continue;
                 }
-                query_wide(nodes, cluster_box, first, [&](std::int32_t j) {
-                    const QueryBox q(boxes[j]);
-                    unsigned mask = leaf_slots_before(cluster, q, j);
+                query_wide(nodes, cluster_box, first, [&](std::int32_t j, const AABB& box_j) {
+                    unsigned mask = leaf_slot_mask(cluster, QueryBox(box_j), j);
                     while (mask != 0) {
                         const int k = std::countr_zero(mask);
                         mask &= mask - 1;
@@ -165,37 +170,43 @@ void for_each_self_overlap(const LBVH& tree, Visit&& visit) {
         });
 }
 
-// visit(chunk, a, b) for every a in tree_a, b in tree_b with overlapping boxes. Chunks are fixed
-// runs of QUERY_GRAIN leaves of tree_a.
+// visit(chunk, a, b) for every a in tree_a, b in tree_b with overlapping boxes.
 template <typename Visit>
 void for_each_overlap(const LBVH& tree_a, const LBVH& tree_b, Visit&& visit) {
-    if (tree_a.num_primitives() == 0 || tree_b.num_primitives() == 0) {
+    if (!tree_b.has_nodes()) {
         return;
     }
+    const WideNode* nodes_a = tree_a.nodes().data();
     const WideNode* nodes_b = tree_b.nodes().data();
-    const bool single_b = !tree_b.has_nodes();
-    const AABB* boxes_a = tree_a.leaf_boxes().data();
-    const AABB* boxes_b = tree_b.leaf_boxes().data();
     const std::uint32_t* prims_a = tree_a.primitives().data();
     const std::uint32_t* prims_b = tree_b.primitives().data();
-    parallel_for_chunks(tree_a.num_primitives(), QUERY_GRAIN,
-                        [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
-                            for (auto i = static_cast<std::int32_t>(begin); i < end; ++i) {
-                                const std::uint32_t a = prims_a[i];
-                                if (single_b) {  // a single primitive in tree_b
-                                    if (overlaps(boxes_a[i], boxes_b[0])) {
-                                        visit(chunk, a, prims_b[0]);
-                                    }
-                                    continue;
-                                }
-                                query_wide(nodes_b, boxes_a[i], -1, [&](std::int32_t j) {
-                                    visit(chunk, a, prims_b[j]);
-                                });
-                            }
-                        });
+    parallel_for_chunks(
+        static_cast<std::int64_t>(tree_a.nodes().size()), CLUSTER_GRAIN,
+        [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
+            for (std::int64_t w = begin; w < end; ++w) {
+                const WideNode& cluster = nodes_a[w];
+                AABB cluster_box;
+                std::int32_t first = 0;
+                if (!leaf_cluster(cluster, cluster_box, first)) {
+                    continue;
+                }
+                query_wide(nodes_b, cluster_box, -1, [&](std::int32_t j, const AABB& box_j) {
+                    unsigned mask = leaf_slot_mask(cluster, QueryBox(box_j), INT32_MAX);
+                    while (mask != 0) {
+                        const int k = std::countr_zero(mask);
+                        mask &= mask - 1;
+                        visit(chunk, prims_a[cluster.last[k]], prims_b[j]);
+                    }
+                });
+            }
+        });
 }
 
-using PrimitivePair = std::pair<std::uint32_t, std::uint32_t>;
+struct PrimitivePair {
+    std::uint32_t first;
+    std::uint32_t second;
+    friend constexpr auto operator<=>(const PrimitivePair&, const PrimitivePair&) = default;
+};
 
 // Collects the self-overlapping pairs that `accept(a, b)` keeps into `out` (cleared first), in the
 // deterministic order above. Keeps its per-chunk buffers between calls.
@@ -203,10 +214,10 @@ class SelfOverlapCollector {
 public:
     template <typename Accept>
     void collect(const LBVH& tree, Accept&& accept, std::vector<PrimitivePair>& out) {
-        m_buffer.reset(num_self_overlap_chunks(tree));
+        m_buffer.reset(num_overlap_chunks(tree));
         for_each_self_overlap(tree, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
             if (accept(a, b)) {
-                m_buffer.chunk(chunk).emplace_back(a, b);
+                m_buffer.chunk(chunk).push_back({a, b});
             }
         });
         m_buffer.gather(out);

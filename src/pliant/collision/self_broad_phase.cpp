@@ -118,7 +118,7 @@ void SelfCollisionBroadPhase<Real>::compute_boxes(std::span<const Vec> positions
 
 template <typename Real>
 void SelfCollisionBroadPhase<Real>::traverse() {
-    m_triangle_pair_chunks.reset(bvh::num_self_overlap_chunks(m_bvh));
+    m_triangle_pair_chunks.reset(bvh::num_overlap_chunks(m_bvh));
     const geometry::Triangle* triangles = m_triangles.data();
     bvh::for_each_self_overlap(m_bvh, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
         if (share_vertex(triangles[a], triangles[b])) {
