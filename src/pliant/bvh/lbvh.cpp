@@ -63,7 +63,7 @@ void LBVH::compute_leaf_order(std::span<const AABB> boxes) {
     m_sorter.sort(std::span(m_keys), std::span(m_primitives), MORTON_BITS);
 }
 
-void LBVH::build_hierarchy(std::span<const AABB> boxes) {
+void LBVH::build_hierarchy() {
     const std::int32_t n = num_primitives();
     m_nodes.resize(static_cast<std::size_t>(n - 1));
     m_counters.assign(static_cast<std::size_t>(n - 1), NO_BOUND);
@@ -72,28 +72,26 @@ void LBVH::build_hierarchy(std::span<const AABB> boxes) {
     std::int32_t root = -1;
 
     // Every leaf climbs; at each node the first arrival stores its range end and stops, the second
-    // learns the full range, merges the two child boxes and goes on.
+    // learns the full range and goes on. Boxes are not needed here: the wide tree gets them from
+    // a refit once it is collapsed.
     parallel_for(
         n,
         [&](std::int64_t leaf) {
             auto l = static_cast<std::int32_t>(leaf);
             std::int32_t r = l;
             std::int32_t current = leaf_reference(l);
-            AABB box = boxes[m_primitives[static_cast<std::size_t>(leaf)]];
             for (;;) {
                 const bool is_left_child = l == 0 || (r != n - 1 && delta(keys, r) < delta(keys, l - 1));
                 const std::int32_t parent = is_left_child ? r : l - 1;
-                const int slot = is_left_child ? 0 : 1;
                 Node& node = nodes[parent];
-                node.child[slot] = current;
-                node.box[slot] = box;
+                node.child[is_left_child ? 0 : 1] = current;
                 const std::int32_t other =
                     atomic_exchange(m_counters[static_cast<std::size_t>(parent)], is_left_child ? l : r);
                 if (other == NO_BOUND) {
                     return;
                 }
                 (is_left_child ? r : l) = other;
-                box = merge(node.box[0], node.box[1]);
+                node.first = l;
                 node.last = r;
                 current = parent;
                 if (l == 0 && r == n - 1) {
@@ -104,72 +102,71 @@ void LBVH::build_hierarchy(std::span<const AABB> boxes) {
         },
         LEAF_GRAIN);
     m_root = root;
-    std::fill(m_counters.begin(), m_counters.end(), 0);
 }
 
-namespace {
-
-float half_area(const AABB& b) {
-    const Vec3f e = b.extent();
-    return e.x * e.y + e.y * e.z + e.z * e.x;
-}
-
-}  // namespace
 
 void LBVH::collapse() {
     // Breadth first over the binary tree, one parallel pass per level (GPU style): each wide node
-    // starts with the two children of its binary node and repeatedly opens the internal slot of
-    // largest surface area (the one most likely to be entered) until it has four slots or only
-    // leaves; a prefix sum over the level's internal-slot counts places the next level.
-    const std::int32_t n = num_primitives();
-    if (m_wide.size() < static_cast<std::size_t>(n - 1)) {
-        m_wide.resize(static_cast<std::size_t>(n - 1));
-        m_wide_source.resize(static_cast<std::size_t>(n - 1));
-    }
-    m_slot_counts.resize(static_cast<std::size_t>(n));
-    WideNode* wide = m_wide.data();
-    std::int32_t* source = m_wide_source.data();
-    std::int32_t* counts = m_slot_counts.data();
+    // starts with the two children of its binary node and repeatedly opens the internal slot with
+    // the most leaves (the widest subtree, for a mesh of similar triangles the largest) until it
+    // has four slots or only leaves; a prefix sum over the level's internal-slot counts places the
+    // next level. Boxes are filled afterwards by refit.
+    // Storage grows level by level (geometric reallocation): a wide tree has about n / 2 nodes,
+    // far fewer than the n - 1 bound.
     const Node* binary = m_nodes.data();
-    source[0] = m_root;
+    m_wide_source.resize(1);
+    m_wide_source[0] = m_root;
     m_level_offsets.assign(1, 0);
     std::int32_t begin = 0;
     std::int32_t end = 1;
     while (begin < end) {
         m_level_offsets.push_back(end);
+        if (m_wide.size() < static_cast<std::size_t>(end)) {
+            m_wide.resize(static_cast<std::size_t>(end));
+            m_slot_counts.resize(static_cast<std::size_t>(end));
+        }
+        m_wide_source.resize(static_cast<std::size_t>(end + WIDTH * (end - begin)));
+        WideNode* wide = m_wide.data();
+        std::int32_t* source = m_wide_source.data();
+        std::int32_t* counts = m_slot_counts.data();
         // Step 1: choose the slots of every node of this level; internal slots keep their binary
         // node in child[k] for now.
         parallel_for(
             end - begin,
             [&](std::int64_t offset) {
                 const auto w = static_cast<std::int32_t>(begin + offset);
-                const Node& root = binary[source[w]];
+                // Binary node p splits its range between positions p and p + 1; slot k covers leaf
+                // positions [firsts[k], lasts[k]].
+                const std::int32_t split = source[w];
+                const Node& root = binary[split];
                 std::int32_t refs[WIDTH] = {root.child[0], root.child[1]};
-                AABB boxes[WIDTH] = {root.box[0], root.box[1]};
-                float areas[WIDTH] = {half_area(root.box[0]), half_area(root.box[1])};
+                std::int32_t firsts[WIDTH] = {root.first, split + 1};
+                std::int32_t lasts[WIDTH] = {split, root.last};
                 int count = 2;
                 while (count < WIDTH) {
                     int open = -1;
                     for (int k = 0; k < count; ++k) {
-                        if (!is_leaf(refs[k]) && (open < 0 || areas[k] > areas[open])) {
+                        if (!is_leaf(refs[k]) &&
+                            (open < 0 || lasts[k] - firsts[k] > lasts[open] - firsts[open])) {
                             open = k;
                         }
                     }
                     if (open < 0) {
                         break;
                     }
-                    const Node& opened = binary[refs[open]];
+                    const std::int32_t opened_split = refs[open];
+                    const std::int32_t opened_last = lasts[open];
+                    const Node& opened = binary[opened_split];
                     for (int k = count; k > open + 1; --k) {
                         refs[k] = refs[k - 1];
-                        boxes[k] = boxes[k - 1];
-                        areas[k] = areas[k - 1];
+                        firsts[k] = firsts[k - 1];
+                        lasts[k] = lasts[k - 1];
                     }
                     refs[open] = opened.child[0];
                     refs[open + 1] = opened.child[1];
-                    boxes[open] = opened.box[0];
-                    boxes[open + 1] = opened.box[1];
-                    areas[open] = half_area(opened.box[0]);
-                    areas[open + 1] = half_area(opened.box[1]);
+                    lasts[open] = opened_split;
+                    firsts[open + 1] = opened_split + 1;
+                    lasts[open + 1] = opened_last;
                     ++count;
                 }
                 WideNode& node = wide[w];
@@ -181,9 +178,8 @@ void LBVH::collapse() {
                         node.last[k] = -1;
                         continue;
                     }
-                    node.set_box(k, boxes[k]);
                     node.child[k] = refs[k];
-                    node.last[k] = is_leaf(refs[k]) ? leaf_position(refs[k]) : binary[refs[k]].last;
+                    node.last[k] = lasts[k];
                     internal += is_leaf(refs[k]) ? 0 : 1;
                 }
                 counts[w] = internal;
@@ -244,8 +240,9 @@ void LBVH::build(std::span<const AABB> boxes) {
         m_level_offsets = {0, 1};
         return;
     }
-    build_hierarchy(boxes);
+    build_hierarchy();
     collapse();
+    refit(boxes);
 }
 
 void LBVH::refit(std::span<const AABB> boxes) {

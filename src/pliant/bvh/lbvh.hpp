@@ -63,7 +63,7 @@ public:
 
 private:
     void compute_leaf_order(std::span<const AABB> boxes);
-    void build_hierarchy(std::span<const AABB> boxes);
+    void build_hierarchy();
     void collapse();
 
     std::vector<WideNode> m_wide;               // the traversal tree (first m_num_wide used)
