@@ -232,16 +232,16 @@ void LBVH::build(std::span<const AABB> boxes) {
         m_wide.resize(1);
         WideNode& node = m_wide[0];
         for (int k = 0; k < WIDTH; ++k) {
-            node.set_box(k, k == 0 ? boxes[0] : AABB{});
+            node.set_box(k, AABB{});
             node.child[k] = k == 0 ? leaf_reference(0) : EMPTY_SLOT;
             node.last[k] = k == 0 ? 0 : -1;
         }
         m_num_wide = 1;
         m_level_offsets = {0, 1};
-        return;
+    } else {
+        build_hierarchy();
+        collapse();
     }
-    build_hierarchy();
-    collapse();
     refit(boxes);
 }
 
