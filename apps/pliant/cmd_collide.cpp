@@ -26,13 +26,11 @@
 #include <memory>
 #include <span>
 #include <string>
-#include <vector>
 
+#include "broad_phase_report.hpp"
 #include "commands.hpp"
-#include "pliant/collision/self_broad_phase.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
-#include "pliant/core/timer.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
 
@@ -44,21 +42,6 @@ struct CollideOptions {
     std::string mesh_t1;   // frame at t1; empty for a static query
     double inflate = 0.0;  // world units
     int repeat = 1;
-};
-
-struct CollideResult {
-    std::int64_t triangles = 0;
-    std::int64_t vertices = 0;
-    std::int64_t edges = 0;
-    std::int64_t triangle_pairs = 0;
-    std::int64_t vf_pairs = 0;
-    std::int64_t ee_pairs = 0;
-    double build_ms = 0.0;
-    double refit_ms = 0.0;
-    double traverse_ms = 0.0;
-    double features_ms = 0.0;
-    double total_ms = 0.0;
-    std::size_t memory_bytes = 0;
 };
 
 // CLI11's NonNegativeNumber lets NaN through; this one wants a finite number ≥ 0.
@@ -73,19 +56,6 @@ const CLI::Validator FINITE_NON_NEGATIVE(
         return {};
     },
     "", "FINITE_NON_NEGATIVE");
-
-// 35912 → "35,912", as the BVH table prints counts.
-std::string thousands(std::int64_t n) {
-    const std::string digits = std::to_string(n < 0 ? -n : n);
-    std::string out = n < 0 ? "-" : "";
-    for (std::size_t i = 0; i < digits.size(); ++i) {
-        if (i > 0 && (digits.size() - i) % 3 == 0) {
-            out.push_back(',');
-        }
-        out.push_back(digits[i]);
-    }
-    return out;
-}
 
 // The frame at t1 must be the same mesh as the frame at t0, moved.
 void check_same_mesh(const geometry::TriangleMeshD& mesh, const std::string& mesh_path,
@@ -110,90 +80,7 @@ void check_same_mesh(const geometry::TriangleMeshD& mesh, const std::string& mes
     }
 }
 
-CollideResult measure(const geometry::TriangleMeshD& mesh, std::span<const Vec3d> positions_t1,
-                      double inflation, int repeat) {
-    collision::SelfCollisionBroadPhase<double> broad_phase(mesh.triangles, mesh.num_vertices());
-    const std::span<const Vec3d> positions_t0(mesh.positions);
-
-    CollideResult result;
-    result.triangles = static_cast<std::int64_t>(mesh.num_triangles());
-    result.vertices = static_cast<std::int64_t>(mesh.num_vertices());
-    result.edges = static_cast<std::int64_t>(broad_phase.topology().num_edges());
-
-    bool has_counts = false;
-    const auto record_counts = [&](const collision::FeaturePairs& pairs) {
-        const auto triangle_pairs = broad_phase.stats().triangle_pairs;
-        const auto vf = static_cast<std::int64_t>(pairs.vertex_face.size());
-        const auto ee = static_cast<std::int64_t>(pairs.edge_edge.size());
-        if (has_counts && (triangle_pairs != result.triangle_pairs || vf != result.vf_pairs ||
-                           ee != result.ee_pairs)) {
-            throw InternalError(fmt::format(
-                "collide: repeated runs disagree: {}/{}/{} then {}/{}/{} triangle/VF/EE pairs",
-                result.triangle_pairs, result.vf_pairs, result.ee_pairs, triangle_pairs, vf, ee));
-        }
-        result.triangle_pairs = triangle_pairs;
-        result.vf_pairs = vf;
-        result.ee_pairs = ee;
-        has_counts = true;
-    };
-
-    // Step 1: fresh builds.
-    std::vector<double> build_ms;
-    for (int i = 0; i < repeat; ++i) {
-        broad_phase.request_rebuild();
-        record_counts(broad_phase.update(positions_t0, positions_t1, inflation));
-        build_ms.push_back(broad_phase.stats().build_ms);
-    }
-
-    // Step 2: refits, the per-step path of a simulation.
-    std::vector<double> refit_ms;
-    std::vector<double> traverse_ms;
-    std::vector<double> features_ms;
-    std::vector<double> total_ms;
-    for (int i = 0; i < repeat; ++i) {
-        Stopwatch watch;
-        const collision::FeaturePairs& pairs =
-            broad_phase.update(positions_t0, positions_t1, inflation);
-        total_ms.push_back(watch.elapsed_ms());
-        record_counts(pairs);
-        const collision::BroadPhaseStats& stats = broad_phase.stats();
-        refit_ms.push_back(stats.refit_ms);
-        traverse_ms.push_back(stats.traverse_ms);
-        features_ms.push_back(stats.features_ms);
-    }
-
-    result.build_ms = median(build_ms);
-    result.refit_ms = median(refit_ms);
-    result.traverse_ms = median(traverse_ms);
-    result.features_ms = median(features_ms);
-    result.total_ms = median(total_ms);
-    result.memory_bytes = broad_phase.memory_bytes();
-    return result;
-}
-
-void print_json(const CollideOptions& options, const CollideResult& r) {
-    const nlohmann::ordered_json out = {
-        {"triangles", r.triangles},
-        {"vertices", r.vertices},
-        {"edges", r.edges},
-        {"triangle_pairs", r.triangle_pairs},
-        {"vf_pairs", r.vf_pairs},
-        {"ee_pairs", r.ee_pairs},
-        {"build_ms", r.build_ms},
-        {"refit_ms", r.refit_ms},
-        {"traverse_ms", r.traverse_ms},
-        {"features_ms", r.features_ms},
-        {"total_ms", r.total_ms},
-        {"repeat", options.repeat},
-        {"threads", num_threads()},
-        {"inflation", options.inflate},
-        {"swept", !options.mesh_t1.empty()},
-        {"memory_bytes", r.memory_bytes},
-    };
-    std::fputs((out.dump(2) + "\n").c_str(), stdout);
-}
-
-void print_human(const CollideOptions& options, const CollideResult& r) {
+void print_human(const CollideOptions& options, const BroadPhaseReport& r) {
     const bool swept = !options.mesh_t1.empty();
     std::string text;
     if (swept) {
@@ -230,9 +117,11 @@ void run_collide(const CollideOptions& options, const GlobalOptions& global) {
     const std::span<const Vec3d> positions_t1 = options.mesh_t1.empty()
                                                     ? std::span<const Vec3d>(mesh.positions)
                                                     : std::span<const Vec3d>(mesh_t1.positions);
-    const CollideResult result = measure(mesh, positions_t1, options.inflate, options.repeat);
+    const BroadPhaseReport result = measure_broad_phase(mesh, positions_t1, options.inflate,
+                                                        options.repeat, !options.mesh_t1.empty(),
+                                                        /*warm_up=*/false);
     if (global.json) {
-        print_json(options, result);
+        std::fputs((to_json(result).dump(2) + "\n").c_str(), stdout);
     } else {
         print_human(options, result);
     }

@@ -31,10 +31,10 @@
 #include <system_error>
 #include <vector>
 
+#include "broad_phase_report.hpp"
 #include "commands.hpp"
 #include "peers/bvh_table.hpp"
 #include "peers/bvh_workload.hpp"
-#include "pliant/collision/self_broad_phase.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -54,65 +54,12 @@ struct DemoOptions {
     std::string out = "out/demo";
 };
 
-// 35912 → "35,912", as the BVH table prints counts.
-std::string thousands(std::int64_t n) {
-    const std::string digits = std::to_string(n < 0 ? -n : n);
-    std::string out = n < 0 ? "-" : "";
-    for (std::size_t i = 0; i < digits.size(); ++i) {
-        if (i > 0 && (digits.size() - i) % 3 == 0) {
-            out.push_back(',');
-        }
-        out.push_back(digits[i]);
-    }
-    return out;
-}
-
-// One broad-phase configuration, measured like `pliant collide --repeat N`: N fresh builds, then
-// N refits; build_ms over the builds, the other stages and total_ms over the refits (medians).
-// One untimed update first, so that allocation and thread start-up stay out of the numbers.
-nlohmann::ordered_json measure_broad_phase(const geometry::TriangleMeshD& mesh,
-                                           std::span<const Vec3d> positions_t1, double inflation,
-                                           bool swept) {
-    collision::SelfCollisionBroadPhase<double> broad_phase(mesh.triangles, mesh.num_vertices());
-    const std::span<const Vec3d> positions_t0(mesh.positions);
-    broad_phase.update(positions_t0, positions_t1, inflation);
-    std::vector<double> build_ms;
-    for (int i = 0; i < COLLIDE_REPEATS; ++i) {
-        broad_phase.request_rebuild();
-        broad_phase.update(positions_t0, positions_t1, inflation);
-        build_ms.push_back(broad_phase.stats().build_ms);
-    }
-    std::vector<double> refit_ms;
-    std::vector<double> traverse_ms;
-    std::vector<double> features_ms;
-    std::vector<double> total_ms;
-    for (int i = 0; i < COLLIDE_REPEATS; ++i) {
-        Stopwatch watch;
-        broad_phase.update(positions_t0, positions_t1, inflation);
-        total_ms.push_back(watch.elapsed_ms());
-        refit_ms.push_back(broad_phase.stats().refit_ms);
-        traverse_ms.push_back(broad_phase.stats().traverse_ms);
-        features_ms.push_back(broad_phase.stats().features_ms);
-    }
-    const collision::FeaturePairs& pairs = broad_phase.pairs();
-    return {
-        {"triangles", mesh.num_triangles()},
-        {"vertices", mesh.num_vertices()},
-        {"edges", broad_phase.topology().num_edges()},
-        {"triangle_pairs", broad_phase.stats().triangle_pairs},
-        {"vf_pairs", pairs.vertex_face.size()},
-        {"ee_pairs", pairs.edge_edge.size()},
-        {"build_ms", median(build_ms)},
-        {"refit_ms", median(refit_ms)},
-        {"traverse_ms", median(traverse_ms)},
-        {"features_ms", median(features_ms)},
-        {"total_ms", median(total_ms)},
-        {"repeat", COLLIDE_REPEATS},
-        {"threads", num_threads()},
-        {"inflation", inflation},
-        {"swept", swept},
-        {"memory_bytes", broad_phase.memory_bytes()},
-    };
+// One broad-phase configuration, measured like `pliant collide --repeat N` after one untimed
+// warm-up update.
+nlohmann::ordered_json measure(const geometry::TriangleMeshD& mesh,
+                               std::span<const Vec3d> positions_t1, double inflation, bool swept) {
+    return to_json(measure_broad_phase(mesh, positions_t1, inflation, COLLIDE_REPEATS, swept,
+                                       /*warm_up=*/true));
 }
 
 std::string format_broad_phase(const std::string& title, const nlohmann::ordered_json& r) {
@@ -190,7 +137,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     sheet_d.positions = to_double(sheet.positions);
     sheet_d.triangles = sheet.triangles;
     const nlohmann::ordered_json static_result =
-        measure_broad_phase(sheet_d, sheet_d.positions, inflation, false);
+        measure(sheet_d, sheet_d.positions, inflation, false);
     say(quiet,
         format_broad_phase(fmt::format("static, inflation {} m (a quarter edge):", inflation),
                            static_result));
@@ -203,7 +150,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     io::write_mesh(sheet_t1_path, sheet_t1);
     const std::vector<Vec3d> moved_d = to_double(moved);
     const nlohmann::ordered_json swept_result =
-        measure_broad_phase(sheet_d, moved_d, inflation, true);
+        measure(sheet_d, moved_d, inflation, true);
     say(quiet,
         format_broad_phase(
             fmt::format("swept to a moved copy (sine wave, amplitude {:.6f} m), inflation {} m:",
