@@ -73,7 +73,12 @@ void LBVH::build_hierarchy() {
 
     // Every leaf climbs; at each node the first arrival stores its range end and stops, the second
     // learns the full range and goes on. Boxes are not needed here: the wide tree gets them from
-    // a refit once it is collapsed.
+    // a refit once it is collapsed. A node whose children are both leaves needs no atomic: each
+    // leaf sees that its neighbour chooses the same parent, the left one goes on, the right one
+    // stops (about half of the exchanges of a balanced tree).
+    const auto chooses_right_parent = [keys, n](std::int32_t l, std::int32_t r) {
+        return l == 0 || (r != n - 1 && delta(keys, r) < delta(keys, l - 1));
+    };
     parallel_for(
         n,
         [&](std::int64_t leaf) {
@@ -81,12 +86,19 @@ void LBVH::build_hierarchy() {
             std::int32_t r = l;
             std::int32_t current = leaf_reference(l);
             for (;;) {
-                const bool is_left_child = l == 0 || (r != n - 1 && delta(keys, r) < delta(keys, l - 1));
+                const bool is_left_child = chooses_right_parent(l, r);
                 const std::int32_t parent = is_left_child ? r : l - 1;
                 Node& node = nodes[parent];
                 node.child[is_left_child ? 0 : 1] = current;
-                const std::int32_t other =
-                    atomic_exchange(m_counters[static_cast<std::size_t>(parent)], is_left_child ? l : r);
+                std::int32_t other = NO_BOUND;
+                if (l == r && is_left_child && !chooses_right_parent(r + 1, r + 1)) {
+                    other = r + 1;  // the sibling is leaf r + 1; this leaf goes on
+                } else if (l == r && !is_left_child && chooses_right_parent(l - 1, l - 1)) {
+                    return;  // the sibling is leaf l - 1, which goes on
+                } else {
+                    other = atomic_exchange(m_counters[static_cast<std::size_t>(parent)],
+                                            is_left_child ? l : r);
+                }
                 if (other == NO_BOUND) {
                     return;
                 }
@@ -213,12 +225,32 @@ void LBVH::build(std::span<const AABB> boxes) {
         throw InvalidInput(fmt::format("LBVH::build: {} boxes, at most {} supported", boxes.size(),
                                        std::numeric_limits<std::int32_t>::max()));
     }
-    for (std::size_t i = 0; i < boxes.size(); ++i) {
-        const AABB& b = boxes[i];
-        if (!is_finite(b.lo) || !is_finite(b.hi) || b.is_empty()) {
-            throw InvalidInput(fmt::format(
-                "LBVH::build: box {} is empty or not finite: lo ({}, {}, {}), hi ({}, {}, {})", i,
-                b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z));
+    // A valid box has lo ≤ hi on every axis and a finite extent: hi - lo is NaN or inf for NaN or
+    // infinite bounds and negative for an empty box. Checked branch-free, then located if bad.
+    const auto is_valid = [](const AABB& b) {
+        const Vec3f e = b.hi - b.lo;
+        return (int{e.x >= 0.0f} & int{e.y >= 0.0f} & int{e.z >= 0.0f} &
+                int{e.x <= std::numeric_limits<float>::max()} & int{e.y <= std::numeric_limits<float>::max()} &
+                int{e.z <= std::numeric_limits<float>::max()}) != 0;
+    };
+    const bool all_valid = parallel_reduce(
+        static_cast<std::int64_t>(boxes.size()), true,
+        [&](std::int64_t begin, std::int64_t end) {
+            int valid = 1;
+            for (std::int64_t i = begin; i < end; ++i) {
+                valid &= int{is_valid(boxes[static_cast<std::size_t>(i)])};
+            }
+            return valid != 0;
+        },
+        [](bool a, bool b) { return a && b; }, LEAF_GRAIN);
+    if (!all_valid) {
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+            const AABB& b = boxes[i];
+            if (!is_valid(b)) {
+                throw InvalidInput(fmt::format(
+                    "LBVH::build: box {} is empty, not finite or wider than the float range: lo ({}, {}, {}), hi ({}, {}, {})",
+                    i, b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z));
+            }
         }
     }
     compute_leaf_order(boxes);
