@@ -59,7 +59,8 @@ BroadPhaseReport measure_broad_phase(const geometry::TriangleMeshD& mesh,
     std::vector<double> total_ms;
     for (int i = 0; i < repeat; ++i) {
         Stopwatch watch;
-        const collision::FeaturePairs& pairs = broad_phase.update(positions_t0, positions_t1, inflation);
+        const collision::FeaturePairs& pairs =
+            broad_phase.update(positions_t0, positions_t1, inflation);
         total_ms.push_back(watch.elapsed_ms());
         record_counts(pairs);
         const collision::BroadPhaseStats& stats = broad_phase.stats();

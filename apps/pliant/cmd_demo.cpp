@@ -149,8 +149,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     geometry::TriangleMesh sheet_t1{moved, sheet.triangles};
     io::write_mesh(sheet_t1_path, sheet_t1);
     const std::vector<Vec3d> moved_d = to_double(moved);
-    const nlohmann::ordered_json swept_result =
-        measure(sheet_d, moved_d, inflation, true);
+    const nlohmann::ordered_json swept_result = measure(sheet_d, moved_d, inflation, true);
     say(quiet,
         format_broad_phase(
             fmt::format("swept to a moved copy (sine wave, amplitude {:.6f} m), inflation {} m:",

@@ -13,7 +13,8 @@
 int main(int argc, char** argv) {
     using namespace pliant;
     cli::GlobalOptions global;
-    CLI::App app{"pliant: fast deformable simulation (cloth with self-collision) and deformable volumes"};
+    CLI::App app{
+        "pliant: fast deformable simulation (cloth with self-collision) and deformable volumes"};
     app.set_version_flag("--version", fmt::format("pliant {}", PLIANT_VERSION));
     app.option_defaults()->always_capture_default();
     app.add_option("--threads", global.threads, "Worker threads (0 = all hardware threads)")

@@ -17,7 +17,8 @@ namespace {
 std::vector<test::Pair> self_pairs(const LBVH& tree) {
     std::vector<PrimitivePair> pairs;
     SelfOverlapCollector collector;
-    collector.collect(tree, [](std::uint32_t, std::uint32_t) { return true; }, pairs);
+    collector.collect(
+        tree, [](std::uint32_t, std::uint32_t) { return true; }, pairs);
     std::vector<test::Pair> out;
     for (const PrimitivePair& p : pairs) {
         out.emplace_back(p.first, p.second);
@@ -162,13 +163,15 @@ TEST(LBVH, BitwiseIdenticalForOneAndManyThreads) {
         LBVH tree;
         tree.build(boxes);
         tree.refit(boxes);
-        return std::make_pair(std::vector<WideNode>(tree.nodes().begin(), tree.nodes().end()), self_pairs(tree));
+        return std::make_pair(std::vector<WideNode>(tree.nodes().begin(), tree.nodes().end()),
+                              self_pairs(tree));
     };
     const auto one = run(1);
     const auto many = run(4);
     set_num_threads(0);
     ASSERT_EQ(one.first.size(), many.first.size());
-    EXPECT_EQ(std::memcmp(one.first.data(), many.first.data(), one.first.size() * sizeof(WideNode)), 0);
+    EXPECT_EQ(std::memcmp(one.first.data(), many.first.data(), one.first.size() * sizeof(WideNode)),
+              0);
     EXPECT_EQ(one.second, many.second);  // same pairs in the same order
     EXPECT_GT(one.second.size(), 100000u);
 }

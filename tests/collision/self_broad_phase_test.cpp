@@ -18,8 +18,8 @@ using geometry::TriangleMesh;
 
 // Independent reference: every (vertex, face) with v ∉ face and every edge pair sharing no vertex,
 // with boxes computed directly from the positions (not from merged vertex boxes).
-FeaturePairs brute_force(const TriangleMesh& mesh, std::span<const Vec3f> p0, std::span<const Vec3f> p1,
-                         float inflation) {
+FeaturePairs brute_force(const TriangleMesh& mesh, std::span<const Vec3f> p0,
+                         std::span<const Vec3f> p1, float inflation) {
     const auto topo = geometry::build_topology(mesh.triangles, mesh.num_vertices());
     const auto box_of = [&](std::initializer_list<std::int32_t> vertices) {
         AABB box;
@@ -59,7 +59,8 @@ std::vector<T> sorted(std::vector<T> v) {
     return v;
 }
 
-void expect_matches_brute_force(const TriangleMesh& mesh, const std::vector<Vec3f>& p1, float inflation) {
+void expect_matches_brute_force(const TriangleMesh& mesh, const std::vector<Vec3f>& p1,
+                                float inflation) {
     SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
     const FeaturePairs& got = broad.update(mesh.positions, p1, inflation);
     const FeaturePairs expected = brute_force(mesh, mesh.positions, p1, inflation);
@@ -102,7 +103,8 @@ TEST(SelfBroadPhase, RandomSoupMatchesBruteForce) {
 // overlap; the orphan set must deliver them.
 TEST(SelfBroadPhase, FoldedFanNeedsTheOrphanSet) {
     TriangleMesh fan;
-    fan.positions = {{0, 0, 0}, {1, 0, 0}, {0.5f, 0.8f, 0}, {-0.5f, 0.8f, 0}, {-1, 0, 0}, {0.9f, 0.1f, 0.01f}};
+    fan.positions = {{0, 0, 0},        {1, 0, 0},  {0.5f, 0.8f, 0},
+                     {-0.5f, 0.8f, 0}, {-1, 0, 0}, {0.9f, 0.1f, 0.01f}};
     fan.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 5}};
     // Fold the last blade back over the first.
     SelfCollisionBroadPhase<float> broad(fan.triangles, fan.num_vertices());
@@ -119,7 +121,8 @@ TEST(SelfBroadPhase, RepresentativeTrianglesOwnEveryFeatureOnce) {
     for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
         const std::int32_t t = owners.vertex_owner[v];
         ASSERT_GE(t, 0);
-        ASSERT_TRUE(contains_vertex(mesh.triangles[static_cast<std::size_t>(t)], static_cast<std::int32_t>(v)));
+        ASSERT_TRUE(contains_vertex(mesh.triangles[static_cast<std::size_t>(t)],
+                                    static_cast<std::int32_t>(v)));
         ++load[static_cast<std::size_t>(t)];
     }
     for (std::size_t e = 0; e < topo.num_edges(); ++e) {
@@ -133,10 +136,12 @@ TEST(SelfBroadPhase, RepresentativeTrianglesOwnEveryFeatureOnce) {
     for (std::size_t t = 0; t < owners.owned.size(); ++t) {
         const OwnedFeatures& o = owners.owned[t];
         for (int k = 0; k < o.num_vertices; ++k) {
-            EXPECT_EQ(owners.vertex_owner[static_cast<std::size_t>(o.vertices[k])], static_cast<std::int32_t>(t));
+            EXPECT_EQ(owners.vertex_owner[static_cast<std::size_t>(o.vertices[k])],
+                      static_cast<std::int32_t>(t));
         }
         for (int k = 0; k < o.num_edges; ++k) {
-            EXPECT_EQ(owners.edge_owner[static_cast<std::size_t>(o.edges[k])], static_cast<std::int32_t>(t));
+            EXPECT_EQ(owners.edge_owner[static_cast<std::size_t>(o.edges[k])],
+                      static_cast<std::int32_t>(t));
         }
         listed += o.num_vertices + o.num_edges;
     }
@@ -173,7 +178,8 @@ TEST(SelfBroadPhase, RejectsBadArguments) {
         broad.update(mesh.positions, short_positions, 0.0f);
         FAIL();
     } catch (const InvalidInput& e) {
-        EXPECT_NE(std::string(e.what()).find("positions_t1.size() (15)"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("positions_t1.size() (15)"), std::string::npos)
+            << e.what();
     }
     EXPECT_THROW(broad.update(mesh.positions, mesh.positions, -1.0f), InvalidInput);
     EXPECT_THROW(broad.update(mesh.positions, mesh.positions, NAN), InvalidInput);

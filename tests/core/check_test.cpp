@@ -37,8 +37,9 @@ TEST(Check, IsAnExpressionSafeInIfElse) {
 
 TEST(Log, SinkReceivesMessagesAboveLevel) {
     std::vector<std::pair<LogLevel, std::string>> got;
-    const LogSink previous = set_log_sink(
-        [&](LogLevel level, std::string_view message) { got.emplace_back(level, std::string(message)); });
+    const LogSink previous = set_log_sink([&](LogLevel level, std::string_view message) {
+        got.emplace_back(level, std::string(message));
+    });
     set_log_level(LogLevel::info);
     log_debug("hidden {}", 1);
     log_info("shown {}", 2);

@@ -22,7 +22,8 @@ protected:
 TEST_F(ParallelTest, ForVisitsEveryIndexOnce) {
     for (const std::int64_t n : {0, 1, 7, 4096, 4097, 100000}) {
         std::vector<std::atomic<int>> hits(static_cast<std::size_t>(n));
-        parallel_for(n, [&](std::int64_t i) { hits[static_cast<std::size_t>(i)]++; }, 1000);
+        parallel_for(
+            n, [&](std::int64_t i) { hits[static_cast<std::size_t>(i)]++; }, 1000);
         for (std::int64_t i = 0; i < n; ++i) {
             ASSERT_EQ(hits[static_cast<std::size_t>(i)].load(), 1) << "n=" << n << " i=" << i;
         }
@@ -73,7 +74,8 @@ TEST_F(ParallelTest, FloatReduceIsBitwiseIdenticalForOneAndManyThreads) {
 }
 
 TEST_F(ParallelTest, ExclusiveScanMatchesSequentialAndWorksInPlace) {
-    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{5}, std::size_t{100000}}) {
+    for (const std::size_t n :
+         {std::size_t{0}, std::size_t{1}, std::size_t{5}, std::size_t{100000}}) {
         std::vector<std::uint32_t> in(n);
         std::mt19937 rng(static_cast<std::uint32_t>(n));
         for (auto& v : in) {

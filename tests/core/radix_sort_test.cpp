@@ -16,7 +16,8 @@ namespace {
 void reference_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values) {
     std::vector<std::size_t> order(keys.size());
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
     std::vector<std::uint64_t> k(keys.size());
     std::vector<std::uint32_t> v(values.size());
     for (std::size_t i = 0; i < order.size(); ++i) {
@@ -61,11 +62,11 @@ TEST_P(RadixSortTest, MatchesStableSortForOneAndManyThreads) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Sizes, RadixSortTest,
-    ::testing::Values(Case{0, 64, 1}, Case{1, 64, 10}, Case{2, 64, 2}, Case{1000, 30, 1u << 30},
-                      Case{200000, 30, 1u << 30}, Case{200000, 30, 7}, Case{150000, 64, ~0ull},
-                      Case{70000, 64, 1}));
+INSTANTIATE_TEST_SUITE_P(Sizes, RadixSortTest,
+                         ::testing::Values(Case{0, 64, 1}, Case{1, 64, 10}, Case{2, 64, 2},
+                                           Case{1000, 30, 1u << 30}, Case{200000, 30, 1u << 30},
+                                           Case{200000, 30, 7}, Case{150000, 64, ~0ull},
+                                           Case{70000, 64, 1}));
 
 TEST(RadixSort, ThirtyTwoBitKeysMatchStableSort) {
     for (const int key_bits : {30, 32, 7}) {

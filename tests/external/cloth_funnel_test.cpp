@@ -13,12 +13,14 @@
 namespace pliant::collision {
 namespace {
 
-const std::filesystem::path FRAMES = std::filesystem::path(PLIANT_SHARED_DATA_DIR) / "cloth-funnel/frames";
+const std::filesystem::path FRAMES =
+    std::filesystem::path(PLIANT_SHARED_DATA_DIR) / "cloth-funnel/frames";
 
 class ClothFunnel : public ::testing::Test {
 protected:
     void SetUp() override {
-        if (!std::filesystem::exists(FRAMES / "227.ply") || !std::filesystem::exists(FRAMES / "228.ply")) {
+        if (!std::filesystem::exists(FRAMES / "227.ply") ||
+            !std::filesystem::exists(FRAMES / "228.ply")) {
             GTEST_SKIP() << "cloth-funnel frames not found at " << FRAMES
                          << " (../shared/data is not part of a user's clone)";
         }

@@ -19,8 +19,10 @@ TEST(Generate, GridSheetCountsAndExtent) {
     }
     // Counter-clockwise seen from +z: every normal points up.
     for (const Triangle& t : mesh.triangles) {
-        const Vec3f n = cross(mesh.positions[static_cast<std::size_t>(t[1])] - mesh.positions[static_cast<std::size_t>(t[0])],
-                              mesh.positions[static_cast<std::size_t>(t[2])] - mesh.positions[static_cast<std::size_t>(t[0])]);
+        const Vec3f n = cross(mesh.positions[static_cast<std::size_t>(t[1])] -
+                                  mesh.positions[static_cast<std::size_t>(t[0])],
+                              mesh.positions[static_cast<std::size_t>(t[2])] -
+                                  mesh.positions[static_cast<std::size_t>(t[0])]);
         ASSERT_GT(n.z, 0.0f);
     }
     EXPECT_THROW(make_grid_sheet(0, 3, 1.0f, 1.0f), InvalidInput);
@@ -39,7 +41,8 @@ TEST(Generate, AccordionFoldIsIsometricAndLayered) {
     const MeshTopology topo = build_topology(mesh.triangles, mesh.num_vertices());
     std::vector<float> rest;
     for (const Edge& e : topo.edges) {
-        rest.push_back(norm(mesh.positions[static_cast<std::size_t>(e[0])] - mesh.positions[static_cast<std::size_t>(e[1])]));
+        rest.push_back(norm(mesh.positions[static_cast<std::size_t>(e[0])] -
+                            mesh.positions[static_cast<std::size_t>(e[1])]));
     }
     const float gap = 0.05f;
     fold_accordion(mesh.positions, 0.5f, gap);

@@ -58,7 +58,8 @@ TEST(Topology, GridSheetSatisfiesEulerAndMatchesReference) {
     const TriangleMesh mesh = make_grid_sheet(7, 5, 1.0f, 1.0f);
     const MeshTopology topo = build_topology(mesh.triangles, mesh.num_vertices());
     // A disk: V - E + F = 1.
-    EXPECT_EQ(static_cast<std::int64_t>(mesh.num_vertices()) - static_cast<std::int64_t>(topo.num_edges()) +
+    EXPECT_EQ(static_cast<std::int64_t>(mesh.num_vertices()) -
+                  static_cast<std::int64_t>(topo.num_edges()) +
                   static_cast<std::int64_t>(mesh.num_triangles()),
               1);
     std::size_t boundary = 0;

@@ -16,7 +16,8 @@ std::vector<Pair> brute_force_self_overlaps(std::span<const AABB> boxes) {
     return pairs;
 }
 
-std::vector<Pair> brute_force_overlaps(std::span<const AABB> boxes_a, std::span<const AABB> boxes_b) {
+std::vector<Pair> brute_force_overlaps(std::span<const AABB> boxes_a,
+                                       std::span<const AABB> boxes_b) {
     std::vector<Pair> pairs;
     for (std::uint32_t a = 0; a < boxes_a.size(); ++a) {
         for (std::uint32_t b = 0; b < boxes_b.size(); ++b) {

@@ -46,7 +46,9 @@ void LBVH::compute_leaf_order(std::span<const AABB> boxes) {
         },
         [](const AABB& a, const AABB& b) { return merge(a, b); }, LEAF_GRAIN);
     const Vec3f extent = centre_bounds.extent();
-    const auto inverse = [](float e) { return e > 0.0f ? 1.0f / e : 0.0f; };
+    const auto inverse = [](float e) {
+        return e > 0.0f ? 1.0f / e : 0.0f;
+    };
     const Vec3f inv_extent{inverse(extent.x), inverse(extent.y), inverse(extent.z)};
 
     // Step 2: Morton codes, then a stable sort (equal codes keep primitive order).
@@ -115,7 +117,6 @@ void LBVH::build_hierarchy() {
         LEAF_GRAIN);
     m_root = root;
 }
-
 
 void LBVH::collapse() {
     // Breadth first over the binary tree, one parallel pass per level (GPU style): each wide node
@@ -198,7 +199,8 @@ void LBVH::collapse() {
             },
             COLLAPSE_GRAIN);
         // Step 2: where each node's internal children go on the next level.
-        const std::int32_t next = exclusive_scan(std::span(counts + begin, static_cast<std::size_t>(end - begin)));
+        const std::int32_t next =
+            exclusive_scan(std::span(counts + begin, static_cast<std::size_t>(end - begin)));
         // Step 3: link the children.
         parallel_for(
             end - begin,
@@ -230,7 +232,8 @@ void LBVH::build(std::span<const AABB> boxes) {
     const auto is_valid = [](const AABB& b) {
         const Vec3f e = b.hi - b.lo;
         return (int{e.x >= 0.0f} & int{e.y >= 0.0f} & int{e.z >= 0.0f} &
-                int{e.x <= std::numeric_limits<float>::max()} & int{e.y <= std::numeric_limits<float>::max()} &
+                int{e.x <= std::numeric_limits<float>::max()} &
+                int{e.y <= std::numeric_limits<float>::max()} &
                 int{e.z <= std::numeric_limits<float>::max()}) != 0;
     };
     const bool all_valid = parallel_reduce(
@@ -247,9 +250,10 @@ void LBVH::build(std::span<const AABB> boxes) {
         for (std::size_t i = 0; i < boxes.size(); ++i) {
             const AABB& b = boxes[i];
             if (!is_valid(b)) {
-                throw InvalidInput(fmt::format(
-                    "LBVH::build: box {} is empty, not finite or wider than the float range: lo ({}, {}, {}), hi ({}, {}, {})",
-                    i, b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z));
+                throw InvalidInput(
+                    fmt::format("LBVH::build: box {} is empty, not finite or wider than the float "
+                                "range: lo ({}, {}, {}), hi ({}, {}, {})",
+                                i, b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z));
             }
         }
     }
@@ -279,8 +283,9 @@ void LBVH::build(std::span<const AABB> boxes) {
 
 void LBVH::refit(std::span<const AABB> boxes) {
     if (boxes.size() != m_primitives.size()) {
-        throw InvalidInput(fmt::format("LBVH::refit: boxes.size() ({}) != primitives in the tree ({})",
-                                       boxes.size(), m_primitives.size()));
+        throw InvalidInput(
+            fmt::format("LBVH::refit: boxes.size() ({}) != primitives in the tree ({})",
+                        boxes.size(), m_primitives.size()));
     }
     // Deepest level first: a node's children are all on deeper levels, already refitted.
     WideNode* wide = m_wide.data();
@@ -297,7 +302,8 @@ void LBVH::refit(std::span<const AABB> boxes) {
                     if (c == EMPTY_SLOT) {
                         continue;
                     }
-                    node.set_box(k, is_leaf(c) ? boxes[primitives[leaf_position(c)]] : wide[c].bounds());
+                    node.set_box(
+                        k, is_leaf(c) ? boxes[primitives[leaf_position(c)]] : wide[c].bounds());
                 }
             },
             WIDE_GRAIN);
@@ -312,10 +318,10 @@ AABB LBVH::bounds() const {
 }
 
 std::size_t LBVH::memory_bytes() const {
-    return m_wide.capacity() * sizeof(WideNode) + m_level_offsets.capacity() * sizeof(std::int32_t) +
+    return m_wide.capacity() * sizeof(WideNode) +
+           m_level_offsets.capacity() * sizeof(std::int32_t) +
            m_slot_counts.capacity() * sizeof(std::int32_t) +
-           m_wide_source.capacity() * sizeof(std::int32_t) +
-           m_nodes.capacity() * sizeof(Node) +
+           m_wide_source.capacity() * sizeof(std::int32_t) + m_nodes.capacity() * sizeof(Node) +
            m_primitives.capacity() * sizeof(std::uint32_t) +
            m_keys.capacity() * sizeof(std::uint32_t) + m_counters.capacity() * sizeof(std::int32_t);
 }

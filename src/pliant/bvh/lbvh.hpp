@@ -66,17 +66,17 @@ private:
     void build_hierarchy();
     void collapse();
 
-    std::vector<WideNode> m_wide;               // the traversal tree (first m_num_wide used)
+    std::vector<WideNode> m_wide;  // the traversal tree (first m_num_wide used)
     std::int32_t m_num_wide = 0;
     std::vector<std::int32_t> m_level_offsets;  // depth d holds m_wide[offsets[d] .. offsets[d+1])
     std::vector<std::uint32_t> m_primitives;    // n, Morton order → primitive id
     // Build scratch, kept to avoid reallocation between builds.
-    std::vector<Node> m_nodes;                  // n - 1 binary nodes
-    std::vector<std::uint32_t> m_keys;          // n Morton codes, sorted
-    std::vector<std::int32_t> m_counters;       // n - 1 atomics: range ends
-    std::vector<std::int32_t> m_wide_source;    // binary node each wide node is collapsed from
-    std::vector<std::int32_t> m_slot_counts;    // internal slots per wide node
-    std::int32_t m_root = -1;                   // binary root
+    std::vector<Node> m_nodes;                // n - 1 binary nodes
+    std::vector<std::uint32_t> m_keys;        // n Morton codes, sorted
+    std::vector<std::int32_t> m_counters;     // n - 1 atomics: range ends
+    std::vector<std::int32_t> m_wide_source;  // binary node each wide node is collapsed from
+    std::vector<std::int32_t> m_slot_counts;  // internal slots per wide node
+    std::int32_t m_root = -1;                 // binary root
     RadixSorter m_sorter;
 };
 

@@ -21,12 +21,13 @@ PLIANT_HOST_DEVICE constexpr std::uint32_t spread_bits_3(std::uint32_t v) {
     return v;
 }
 
-// Morton code of p quantized on a 1024³ grid over `bounds` (points outside are clamped, NaN maps to 0;
-// an axis of zero extent maps to cell 0). x takes the highest bit of each triple.
+// Morton code of p quantized on a 1024³ grid over `bounds` (points outside are clamped, NaN maps to
+// 0; an axis of zero extent maps to cell 0). x takes the highest bit of each triple.
 PLIANT_HOST_DEVICE inline std::uint32_t morton_code(Vec3f p, Vec3f lo, Vec3f inv_extent) {
     const auto quantize = [](float u) {
         const float s = u * 1024.0f;
-        return static_cast<std::uint32_t>(s > 0.0f ? (s < 1023.0f ? s : 1023.0f) : 0.0f);  // NaN → 0
+        return static_cast<std::uint32_t>(s > 0.0f ? (s < 1023.0f ? s : 1023.0f)
+                                                   : 0.0f);  // NaN → 0
     };
     const std::uint32_t x = quantize((p.x - lo.x) * inv_extent.x);
     const std::uint32_t y = quantize((p.y - lo.y) * inv_extent.y);

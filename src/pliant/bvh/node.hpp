@@ -21,8 +21,14 @@ struct Node {
 };
 static_assert(sizeof(Node) == 16 && std::is_trivially_copyable_v<Node>);
 
-PLIANT_HOST_DEVICE constexpr bool is_leaf(std::int32_t child) { return child < 0; }
-PLIANT_HOST_DEVICE constexpr std::int32_t leaf_position(std::int32_t child) { return ~child; }
-PLIANT_HOST_DEVICE constexpr std::int32_t leaf_reference(std::int32_t position) { return ~position; }
+PLIANT_HOST_DEVICE constexpr bool is_leaf(std::int32_t child) {
+    return child < 0;
+}
+PLIANT_HOST_DEVICE constexpr std::int32_t leaf_position(std::int32_t child) {
+    return ~child;
+}
+PLIANT_HOST_DEVICE constexpr std::int32_t leaf_reference(std::int32_t position) {
+    return ~position;
+}
 
 }  // namespace pliant::bvh

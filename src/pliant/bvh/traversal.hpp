@@ -42,8 +42,12 @@ struct QueryBox {
 #if defined(__SSE2__)
     __m128 lo_x, lo_y, lo_z, hi_x, hi_y, hi_z;
     explicit QueryBox(const AABB& b)
-        : lo_x(_mm_set1_ps(b.lo.x)), lo_y(_mm_set1_ps(b.lo.y)), lo_z(_mm_set1_ps(b.lo.z)),
-          hi_x(_mm_set1_ps(b.hi.x)), hi_y(_mm_set1_ps(b.hi.y)), hi_z(_mm_set1_ps(b.hi.z)) {}
+        : lo_x(_mm_set1_ps(b.lo.x)),
+          lo_y(_mm_set1_ps(b.lo.y)),
+          lo_z(_mm_set1_ps(b.lo.z)),
+          hi_x(_mm_set1_ps(b.hi.x)),
+          hi_y(_mm_set1_ps(b.hi.y)),
+          hi_z(_mm_set1_ps(b.hi.z)) {}
 #else
     AABB box;
     PLIANT_HOST_DEVICE explicit QueryBox(const AABB& b) : box(b) {}
@@ -84,14 +88,15 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned leaf_slot_mask(const WideNode& n
         _mm_load_si128(reinterpret_cast<const __m128i*>(node.child)), _mm_setzero_si128());
     const __m128i earlier = _mm_cmplt_epi32(
         _mm_load_si128(reinterpret_cast<const __m128i*>(node.last)), _mm_set1_epi32(before));
-    const auto mask = static_cast<unsigned>(
-        _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(leaf, earlier))));
+    const auto mask =
+        static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(leaf, earlier))));
     return mask & slot_mask(node, q, -1);
 #else
     unsigned mask = 0;
     for (int k = 0; k < WIDTH; ++k) {
-        mask |= (node.child[k] < 0 && node.last[k] < before && overlaps(node.box(k), q.box) ? 1u : 0u)
-                << k;
+        mask |=
+            (node.child[k] < 0 && node.last[k] < before && overlaps(node.box(k), q.box) ? 1u : 0u)
+            << k;
     }
     return mask;
 #endif

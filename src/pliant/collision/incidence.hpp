@@ -11,7 +11,8 @@ PLIANT_HOST_DEVICE inline bool contains_vertex(const geometry::Triangle& t, std:
     return (int{t[0] == v} | int{t[1] == v} | int{t[2] == v}) != 0;
 }
 
-PLIANT_HOST_DEVICE inline bool share_vertex(const geometry::Triangle& a, const geometry::Triangle& b) {
+PLIANT_HOST_DEVICE inline bool share_vertex(const geometry::Triangle& a,
+                                            const geometry::Triangle& b) {
     return (int{contains_vertex(b, a[0])} | int{contains_vertex(b, a[1])} |
             int{contains_vertex(b, a[2])}) != 0;
 }

@@ -1,9 +1,9 @@
 // Orphan sets (Tang, Curtis, Yoon, Manocha 2008, "ICCD: Interactive Continuous Collision Detection
-// between Deformable Models using Connectivity-Based Culling"): the feature pairs the triangle-level
-// traversal can never produce. The traversal skips triangle pairs that share a vertex, yet such a
-// pair can carry features that share nothing — a vertex its R-triangle owns against the neighbour's
-// face (v ∉ face), or owned edges with four distinct vertices. Those pairs depend only on topology,
-// so they are listed once here and their boxes tested directly every step.
+// between Deformable Models using Connectivity-Based Culling"): the feature pairs the
+// triangle-level traversal can never produce. The traversal skips triangle pairs that share a
+// vertex, yet such a pair can carry features that share nothing — a vertex its R-triangle owns
+// against the neighbour's face (v ∉ face), or owned edges with four distinct vertices. Those pairs
+// depend only on topology, so they are listed once here and their boxes tested directly every step.
 //
 // Together with the R-triangle pairs of non-adjacent triangles this covers every non-incident VF
 // and EE pair exactly once.

@@ -18,8 +18,8 @@ std::int32_t least_loaded(std::span<const std::int32_t> candidates, const std::v
 
 }  // namespace
 
-RepresentativeTriangles assign_representative_triangles(std::span<const geometry::Triangle> triangles,
-                                                        const geometry::MeshTopology& topology) {
+RepresentativeTriangles assign_representative_triangles(
+    std::span<const geometry::Triangle> triangles, const geometry::MeshTopology& topology) {
     const std::size_t num_vertices = topology.vertex_triangle_offsets.size() - 1;
     RepresentativeTriangles r;
     r.vertex_owner.assign(num_vertices, -1);
@@ -28,7 +28,8 @@ RepresentativeTriangles assign_representative_triangles(std::span<const geometry
     std::vector<int> load(triangles.size(), 0);
 
     for (std::size_t e = 0; e < topology.num_edges(); ++e) {
-        const std::int32_t t = least_loaded(topology.triangles_of_edge(static_cast<std::int32_t>(e)), load);
+        const std::int32_t t =
+            least_loaded(topology.triangles_of_edge(static_cast<std::int32_t>(e)), load);
         PLIANT_CHECK_GE(t, 0);
         r.edge_owner[e] = t;
         ++load[static_cast<std::size_t>(t)];
@@ -36,7 +37,8 @@ RepresentativeTriangles assign_representative_triangles(std::span<const geometry
         owned.edges[owned.num_edges++] = static_cast<std::int32_t>(e);
     }
     for (std::size_t v = 0; v < num_vertices; ++v) {
-        const std::int32_t t = least_loaded(topology.triangles_of_vertex(static_cast<std::int32_t>(v)), load);
+        const std::int32_t t =
+            least_loaded(topology.triangles_of_vertex(static_cast<std::int32_t>(v)), load);
         if (t < 0) {
             continue;
         }

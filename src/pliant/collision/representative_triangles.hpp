@@ -32,7 +32,7 @@ struct RepresentativeTriangles {
     std::vector<OwnedFeatures> owned;        // #T, ids ascending within each list
 };
 
-RepresentativeTriangles assign_representative_triangles(std::span<const geometry::Triangle> triangles,
-                                                        const geometry::MeshTopology& topology);
+RepresentativeTriangles assign_representative_triangles(
+    std::span<const geometry::Triangle> triangles, const geometry::MeshTopology& topology);
 
 }  // namespace pliant::collision

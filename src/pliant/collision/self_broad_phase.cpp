@@ -19,8 +19,8 @@ constexpr std::int64_t PAIR_GRAIN = 1 << 12;
 }  // namespace
 
 template <typename Real>
-SelfCollisionBroadPhase<Real>::SelfCollisionBroadPhase(std::span<const geometry::Triangle> triangles,
-                                                       std::size_t num_vertices)
+SelfCollisionBroadPhase<Real>::SelfCollisionBroadPhase(
+    std::span<const geometry::Triangle> triangles, std::size_t num_vertices)
     : m_triangles(triangles.begin(), triangles.end()), m_num_vertices(num_vertices) {
     geometry::validate_triangles(triangles, num_vertices, "SelfCollisionBroadPhase: triangles");
     m_topology = geometry::build_topology(triangles, num_vertices);
@@ -46,16 +46,19 @@ auto SelfCollisionBroadPhase<Real>::exact_triangle_box(std::int32_t triangle) co
 // Confirmation of a pair that passed the float test: exact for double input, nothing to do for
 // float input (the float boxes are the exact ones).
 template <typename Real>
-bool SelfCollisionBroadPhase<Real>::overlaps_exact_vf(std::int32_t vertex, std::int32_t face) const {
+bool SelfCollisionBroadPhase<Real>::overlaps_exact_vf(std::int32_t vertex,
+                                                      std::int32_t face) const {
     if constexpr (std::is_same_v<Real, float>) {
         return true;
     } else {
-        return overlaps(m_exact_vertex_boxes[static_cast<std::size_t>(vertex)], exact_triangle_box(face));
+        return overlaps(m_exact_vertex_boxes[static_cast<std::size_t>(vertex)],
+                        exact_triangle_box(face));
     }
 }
 
 template <typename Real>
-bool SelfCollisionBroadPhase<Real>::overlaps_exact_ee(std::int32_t edge_a, std::int32_t edge_b) const {
+bool SelfCollisionBroadPhase<Real>::overlaps_exact_ee(std::int32_t edge_a,
+                                                      std::int32_t edge_b) const {
     if constexpr (std::is_same_v<Real, float>) {
         return true;
     } else {
@@ -75,7 +78,8 @@ bool SelfCollisionBroadPhase<Real>::overlaps_exact_tt(std::int32_t triangle_a,
 
 template <typename Real>
 void SelfCollisionBroadPhase<Real>::compute_boxes(std::span<const Vec> positions_t0,
-                                                  std::span<const Vec> positions_t1, Real inflation) {
+                                                  std::span<const Vec> positions_t1,
+                                                  Real inflation) {
     m_vertex_boxes.resize(m_num_vertices);
     m_edge_boxes.resize(m_topology.num_edges());
     m_triangle_boxes.resize(m_triangles.size());
@@ -88,8 +92,9 @@ void SelfCollisionBroadPhase<Real>::compute_boxes(std::span<const Vec> positions
         static_cast<std::int64_t>(m_num_vertices),
         [&](std::int64_t v) {
             const auto k = static_cast<std::size_t>(v);
-            const Box box = Box{min(positions_t0[k], positions_t1[k]), max(positions_t0[k], positions_t1[k])}
-                                .inflated(inflation);
+            const Box box =
+                Box{min(positions_t0[k], positions_t1[k]), max(positions_t0[k], positions_t1[k])}
+                    .inflated(inflation);
             if constexpr (!std::is_same_v<Real, float>) {
                 m_exact_vertex_boxes[k] = box;
             }
@@ -100,8 +105,9 @@ void SelfCollisionBroadPhase<Real>::compute_boxes(std::span<const Vec> positions
         static_cast<std::int64_t>(m_topology.num_edges()),
         [&](std::int64_t e) {
             const geometry::Edge& edge = m_topology.edges[static_cast<std::size_t>(e)];
-            m_edge_boxes[static_cast<std::size_t>(e)] = merge(m_vertex_boxes[static_cast<std::size_t>(edge[0])],
-                                                              m_vertex_boxes[static_cast<std::size_t>(edge[1])]);
+            m_edge_boxes[static_cast<std::size_t>(e)] =
+                merge(m_vertex_boxes[static_cast<std::size_t>(edge[0])],
+                      m_vertex_boxes[static_cast<std::size_t>(edge[1])]);
         },
         BOX_GRAIN);
     parallel_for(
@@ -149,75 +155,79 @@ void SelfCollisionBroadPhase<Real>::test_features() {
     // R-triangle pairs: the vertices each triangle owns against the other's face, owned edges
     // against owned edges. Non-adjacent triangles: no feature pair here is incident. Candidates
     // are written unconditionally and kept by advancing the count (branch-free compaction).
-    parallel_for_chunks(num_pairs, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
-        auto& vf = m_vf_chunks.chunk(c);
-        auto& ee = m_ee_chunks.chunk(c);
-        const OwnedFeatures* owned = m_owners.owned.data();
-        for (std::int64_t i = begin; i < end; ++i) {
-            const auto [a, b] = m_triangle_pairs[static_cast<std::size_t>(i)];
-            const OwnedFeatures& owned_a = owned[a];
-            const OwnedFeatures& owned_b = owned[b];
-            const AABB box_a = triangle_boxes[a];
-            const AABB box_b = triangle_boxes[b];
-            VertexFacePair* out_vf = vf.grow(6);
-            std::size_t num_vf = 0;
-            for (int k = 0; k < owned_a.num_vertices; ++k) {
-                const std::int32_t v = owned_a.vertices[k];
-                out_vf[num_vf] = {v, b};
-                num_vf += overlaps(vertex_boxes[v], box_b) && overlaps_exact_vf(v, b) ? 1 : 0;
-            }
-            for (int k = 0; k < owned_b.num_vertices; ++k) {
-                const std::int32_t v = owned_b.vertices[k];
-                out_vf[num_vf] = {v, a};
-                num_vf += overlaps(vertex_boxes[v], box_a) && overlaps_exact_vf(v, a) ? 1 : 0;
-            }
-            vf.commit(num_vf);
-            EdgeEdgePair* out_ee = ee.grow(9);
-            std::size_t num_ee = 0;
-            for (int i_a = 0; i_a < owned_a.num_edges; ++i_a) {
-                const std::int32_t ea = owned_a.edges[i_a];
-                const AABB box_ea = edge_boxes[ea];
-                if (!overlaps(box_ea, box_b)) {
-                    continue;
+    parallel_for_chunks(
+        num_pairs, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+            auto& vf = m_vf_chunks.chunk(c);
+            auto& ee = m_ee_chunks.chunk(c);
+            const OwnedFeatures* owned = m_owners.owned.data();
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto [a, b] = m_triangle_pairs[static_cast<std::size_t>(i)];
+                const OwnedFeatures& owned_a = owned[a];
+                const OwnedFeatures& owned_b = owned[b];
+                const AABB box_a = triangle_boxes[a];
+                const AABB box_b = triangle_boxes[b];
+                VertexFacePair* out_vf = vf.grow(6);
+                std::size_t num_vf = 0;
+                for (int k = 0; k < owned_a.num_vertices; ++k) {
+                    const std::int32_t v = owned_a.vertices[k];
+                    out_vf[num_vf] = {v, b};
+                    num_vf += overlaps(vertex_boxes[v], box_b) && overlaps_exact_vf(v, b) ? 1 : 0;
                 }
-                for (int i_b = 0; i_b < owned_b.num_edges; ++i_b) {
-                    const std::int32_t eb = owned_b.edges[i_b];
-                    out_ee[num_ee] = {std::min(ea, eb), std::max(ea, eb)};
-                    num_ee += overlaps(box_ea, edge_boxes[eb]) && overlaps_exact_ee(ea, eb) ? 1 : 0;
+                for (int k = 0; k < owned_b.num_vertices; ++k) {
+                    const std::int32_t v = owned_b.vertices[k];
+                    out_vf[num_vf] = {v, a};
+                    num_vf += overlaps(vertex_boxes[v], box_a) && overlaps_exact_vf(v, a) ? 1 : 0;
                 }
+                vf.commit(num_vf);
+                EdgeEdgePair* out_ee = ee.grow(9);
+                std::size_t num_ee = 0;
+                for (int i_a = 0; i_a < owned_a.num_edges; ++i_a) {
+                    const std::int32_t ea = owned_a.edges[i_a];
+                    const AABB box_ea = edge_boxes[ea];
+                    if (!overlaps(box_ea, box_b)) {
+                        continue;
+                    }
+                    for (int i_b = 0; i_b < owned_b.num_edges; ++i_b) {
+                        const std::int32_t eb = owned_b.edges[i_b];
+                        out_ee[num_ee] = {std::min(ea, eb), std::max(ea, eb)};
+                        num_ee +=
+                            overlaps(box_ea, edge_boxes[eb]) && overlaps_exact_ee(ea, eb) ? 1 : 0;
+                    }
+                }
+                ee.commit(num_ee);
             }
-            ee.commit(num_ee);
-        }
-    });
+        });
     // Orphans: pairs between triangles that share a vertex; only their boxes are left to test.
-    parallel_for_chunks(num_orphan_vf, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
-        auto& vf = m_vf_chunks.chunk(pair_chunks + c);
-        VertexFacePair* out = vf.grow(static_cast<std::size_t>(end - begin));
-        std::size_t count = 0;
-        for (std::int64_t i = begin; i < end; ++i) {
-            const VertexFacePair p = m_orphans.vertex_face[static_cast<std::size_t>(i)];
-            out[count] = p;
-            count += overlaps(vertex_boxes[p.vertex], triangle_boxes[p.face]) &&
-                             overlaps_exact_vf(p.vertex, p.face)
-                         ? 1
-                         : 0;
-        }
-        vf.commit(count);
-    });
-    parallel_for_chunks(num_orphan_ee, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
-        auto& ee = m_ee_chunks.chunk(pair_chunks + c);
-        EdgeEdgePair* out = ee.grow(static_cast<std::size_t>(end - begin));
-        std::size_t count = 0;
-        for (std::int64_t i = begin; i < end; ++i) {
-            const EdgeEdgePair p = m_orphans.edge_edge[static_cast<std::size_t>(i)];
-            out[count] = p;
-            count += overlaps(edge_boxes[p.edge_a], edge_boxes[p.edge_b]) &&
-                             overlaps_exact_ee(p.edge_a, p.edge_b)
-                         ? 1
-                         : 0;
-        }
-        ee.commit(count);
-    });
+    parallel_for_chunks(
+        num_orphan_vf, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+            auto& vf = m_vf_chunks.chunk(pair_chunks + c);
+            VertexFacePair* out = vf.grow(static_cast<std::size_t>(end - begin));
+            std::size_t count = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const VertexFacePair p = m_orphans.vertex_face[static_cast<std::size_t>(i)];
+                out[count] = p;
+                count += overlaps(vertex_boxes[p.vertex], triangle_boxes[p.face]) &&
+                                 overlaps_exact_vf(p.vertex, p.face)
+                             ? 1
+                             : 0;
+            }
+            vf.commit(count);
+        });
+    parallel_for_chunks(
+        num_orphan_ee, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+            auto& ee = m_ee_chunks.chunk(pair_chunks + c);
+            EdgeEdgePair* out = ee.grow(static_cast<std::size_t>(end - begin));
+            std::size_t count = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const EdgeEdgePair p = m_orphans.edge_edge[static_cast<std::size_t>(i)];
+                out[count] = p;
+                count += overlaps(edge_boxes[p.edge_a], edge_boxes[p.edge_b]) &&
+                                 overlaps_exact_ee(p.edge_a, p.edge_b)
+                             ? 1
+                             : 0;
+            }
+            ee.commit(count);
+        });
     m_vf_chunks.gather(m_pairs.vertex_face);
     m_ee_chunks.gather(m_pairs.edge_edge);
 }
@@ -227,10 +237,11 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> p
                                                           std::span<const Vec> positions_t1,
                                                           Real inflation) {
     if (positions_t0.size() != m_num_vertices || positions_t1.size() != m_num_vertices) {
-        throw InvalidInput(fmt::format(
-            "SelfCollisionBroadPhase::update: positions_t0.size() ({}) and positions_t1.size() ({}) "
-            "must equal the mesh's vertex count ({})",
-            positions_t0.size(), positions_t1.size(), m_num_vertices));
+        throw InvalidInput(
+            fmt::format("SelfCollisionBroadPhase::update: positions_t0.size() ({}) and "
+                        "positions_t1.size() ({}) "
+                        "must equal the mesh's vertex count ({})",
+                        positions_t0.size(), positions_t1.size(), m_num_vertices));
     }
     if (!(inflation >= Real(0)) || !std::isfinite(inflation)) {
         throw InvalidInput(fmt::format(
@@ -263,7 +274,9 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> p
 
 template <typename Real>
 std::size_t SelfCollisionBroadPhase<Real>::memory_bytes() const {
-    const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+    const auto bytes = [](const auto& v) {
+        return v.capacity() * sizeof(v[0]);
+    };
     return bytes(m_triangles) + bytes(m_topology.edges) + bytes(m_topology.triangle_edges) +
            bytes(m_topology.edge_triangle_offsets) + bytes(m_topology.edge_triangles) +
            bytes(m_topology.vertex_triangle_offsets) + bytes(m_topology.vertex_triangles) +

@@ -49,7 +49,8 @@ public:
 
     // Precomputes topology, R-triangle owners and the orphan set. Throws InvalidInput for indices
     // out of range or triangles that repeat a vertex.
-    SelfCollisionBroadPhase(std::span<const geometry::Triangle> triangles, std::size_t num_vertices);
+    SelfCollisionBroadPhase(std::span<const geometry::Triangle> triangles,
+                            std::size_t num_vertices);
 
     // Runs the four stages for a step from positions_t0 to positions_t1 (#V each; pass the same
     // span twice for a static query). inflation ≥ 0, world units. Returns the pairs, valid until

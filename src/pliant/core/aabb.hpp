@@ -1,6 +1,7 @@
 // AABB: an axis-aligned box [lo, hi] (closed), float (AABB) or double (AABBd). The empty box has
-// lo = +inf, hi = -inf so that merging with it is the identity; min/max are exact, so merged boxes are bitwise independent of
-// the order of merging (the BVH relies on this for deterministic refits).
+// lo = +inf, hi = -inf so that merging with it is the identity; min/max are exact, so merged boxes
+// are bitwise independent of the order of merging (the BVH relies on this for deterministic
+// refits).
 #pragma once
 
 #include <cmath>
@@ -70,14 +71,21 @@ PLIANT_HOST_DEVICE constexpr bool contains(const BasicAABB<T>& outer, const Basi
 inline AABB outward_float(const AABBd& box) {
     const auto down = [](double v) {
         const auto f = static_cast<float>(v);
-        return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+        return static_cast<double>(f) > v
+                   ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                   : f;
     };
     const auto up = [](double v) {
         const auto f = static_cast<float>(v);
-        return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+        return static_cast<double>(f) < v
+                   ? std::nextafter(f, std::numeric_limits<float>::infinity())
+                   : f;
     };
-    return {{down(box.lo.x), down(box.lo.y), down(box.lo.z)}, {up(box.hi.x), up(box.hi.y), up(box.hi.z)}};
+    return {{down(box.lo.x), down(box.lo.y), down(box.lo.z)},
+            {up(box.hi.x), up(box.hi.y), up(box.hi.z)}};
 }
-inline AABB outward_float(const AABB& box) { return box; }
+inline AABB outward_float(const AABB& box) {
+    return box;
+}
 
 }  // namespace pliant

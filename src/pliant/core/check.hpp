@@ -24,14 +24,14 @@ template <typename A, typename B>
 
 }  // namespace pliant::detail
 
-#define PLIANT_CHECK(cond)                                                                   \
-    ((cond) ? static_cast<void>(0)                                                           \
-            : ::pliant::detail::check_failed(#cond, std::string{},                           \
-                                             std::source_location::current()))
+#define PLIANT_CHECK(cond)      \
+    ((cond)                     \
+         ? static_cast<void>(0) \
+         : ::pliant::detail::check_failed(#cond, std::string{}, std::source_location::current()))
 
-#define PLIANT_CHECK_OP_(a, b, op)                                                           \
-    (((a)op(b)) ? static_cast<void>(0)                                                       \
-                : ::pliant::detail::check_op_failed(#a " " #op " " #b, (a), (b),             \
+#define PLIANT_CHECK_OP_(a, b, op)                                               \
+    (((a)op(b)) ? static_cast<void>(0)                                           \
+                : ::pliant::detail::check_op_failed(#a " " #op " " #b, (a), (b), \
                                                     std::source_location::current()))
 
 #define PLIANT_CHECK_EQ(a, b) PLIANT_CHECK_OP_(a, b, ==)

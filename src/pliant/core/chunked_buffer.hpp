@@ -1,6 +1,6 @@
 // ChunkedBuffer<T>: variable-length parallel output made deterministic. Each fixed chunk of a
-// parallel_for_chunks loop appends to its own AppendBuffer; gather() concatenates them in chunk order,
-// so the result does not depend on the number of threads or on scheduling. Capacity is kept
+// parallel_for_chunks loop appends to its own AppendBuffer; gather() concatenates them in chunk
+// order, so the result does not depend on the number of threads or on scheduling. Capacity is kept
 // between uses (no per-item allocation once warmed up).
 #pragma once
 
@@ -27,7 +27,9 @@ public:
         }
     }
     AppendBuffer<T>& chunk(std::int64_t c) { return m_chunks[static_cast<std::size_t>(c)]; }
-    const AppendBuffer<T>& chunk(std::int64_t c) const { return m_chunks[static_cast<std::size_t>(c)]; }
+    const AppendBuffer<T>& chunk(std::int64_t c) const {
+        return m_chunks[static_cast<std::size_t>(c)];
+    }
     std::int64_t num_chunks() const { return static_cast<std::int64_t>(m_count); }
 
     std::size_t size() const {
@@ -47,8 +49,9 @@ public:
         out.resize(offsets.back());
         detail::run_chunks(static_cast<std::int64_t>(m_count), [&](std::int64_t c) {
             const auto& src = m_chunks[static_cast<std::size_t>(c)];
-            std::copy(src.begin(), src.end(),
-                      out.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<std::size_t>(c)]));
+            std::copy(
+                src.begin(), src.end(),
+                out.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<std::size_t>(c)]));
         });
     }
 

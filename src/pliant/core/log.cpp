@@ -22,10 +22,14 @@ std::atomic<LogLevel>& level() {
 
 const char* level_name(LogLevel l) {
     switch (l) {
-        case LogLevel::debug: return "debug";
-        case LogLevel::info: return "info";
-        case LogLevel::warning: return "warning";
-        case LogLevel::error: return "error";
+        case LogLevel::debug:
+            return "debug";
+        case LogLevel::info:
+            return "info";
+        case LogLevel::warning:
+            return "warning";
+        case LogLevel::error:
+            return "error";
     }
     return "?";
 }
@@ -39,8 +43,12 @@ LogSink set_log_sink(LogSink new_sink) {
     return previous;
 }
 
-void set_log_level(LogLevel l) { level().store(l); }
-LogLevel log_level() { return level().load(); }
+void set_log_level(LogLevel l) {
+    level().store(l);
+}
+LogLevel log_level() {
+    return level().load();
+}
 
 void log_message(LogLevel l, std::string_view message) {
     std::lock_guard lock(sink_mutex());

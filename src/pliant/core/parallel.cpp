@@ -26,7 +26,9 @@ ThreadLimit& thread_limit() {
 
 }  // namespace
 
-int hardware_threads() { return tbb::info::default_concurrency(); }
+int hardware_threads() {
+    return tbb::info::default_concurrency();
+}
 
 void set_num_threads(int n) {
     if (n < 0) {

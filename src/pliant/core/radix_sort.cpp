@@ -14,11 +14,13 @@ constexpr std::int64_t SORT_GRAIN = 1 << 16;
 
 }  // namespace
 
-void RadixSorter::sort(std::span<std::uint64_t> keys, std::span<std::uint32_t> values, int key_bits) {
+void RadixSorter::sort(std::span<std::uint64_t> keys, std::span<std::uint32_t> values,
+                       int key_bits) {
     sort_impl(keys, values, key_bits, m_keys64);
 }
 
-void RadixSorter::sort(std::span<std::uint32_t> keys, std::span<std::uint32_t> values, int key_bits) {
+void RadixSorter::sort(std::span<std::uint32_t> keys, std::span<std::uint32_t> values,
+                       int key_bits) {
     sort_impl(keys, values, key_bits, m_keys32);
 }
 
@@ -58,13 +60,14 @@ void RadixSorter::sort_impl(std::span<Key> keys, std::span<std::uint32_t> values
 
     for (int shift = 0; shift < key_bits; shift += digit_bits) {
         // Step 1: per-chunk histograms of this digit.
-        parallel_for_chunks(n, SORT_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
-            std::uint32_t* histogram = m_histograms.data() + c * buckets;
-            std::fill(histogram, histogram + buckets, 0u);
-            for (std::int64_t i = begin; i < end; ++i) {
-                ++histogram[(src_keys[static_cast<std::size_t>(i)] >> shift) & digit_mask];
-            }
-        });
+        parallel_for_chunks(
+            n, SORT_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+                std::uint32_t* histogram = m_histograms.data() + c * buckets;
+                std::fill(histogram, histogram + buckets, 0u);
+                for (std::int64_t i = begin; i < end; ++i) {
+                    ++histogram[(src_keys[static_cast<std::size_t>(i)] >> shift) & digit_mask];
+                }
+            });
         // Step 2: skip the pass when one bucket holds every key; else turn counts into offsets,
         // digit-major then chunk-minor, which keeps the scatter stable.
         bool trivial = false;
@@ -83,15 +86,16 @@ void RadixSorter::sort_impl(std::span<Key> keys, std::span<std::uint32_t> values
             continue;
         }
         // Step 3: stable scatter.
-        parallel_for_chunks(n, SORT_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
-            std::uint32_t* cursor = m_histograms.data() + c * buckets;
-            for (std::int64_t i = begin; i < end; ++i) {
-                const Key key = src_keys[static_cast<std::size_t>(i)];
-                const std::uint32_t at = cursor[(key >> shift) & digit_mask]++;
-                dst_keys[at] = key;
-                dst_values[at] = src_values[static_cast<std::size_t>(i)];
-            }
-        });
+        parallel_for_chunks(n, SORT_GRAIN,
+                            [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+                                std::uint32_t* cursor = m_histograms.data() + c * buckets;
+                                for (std::int64_t i = begin; i < end; ++i) {
+                                    const Key key = src_keys[static_cast<std::size_t>(i)];
+                                    const std::uint32_t at = cursor[(key >> shift) & digit_mask]++;
+                                    dst_keys[at] = key;
+                                    dst_values[at] = src_values[static_cast<std::size_t>(i)];
+                                }
+                            });
         std::swap(src_keys, dst_keys);
         std::swap(src_values, dst_values);
     }

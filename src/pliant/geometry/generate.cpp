@@ -15,21 +15,23 @@ TriangleMesh make_grid_sheet(int nx, int ny, float width, float height) {
             fmt::format("make_grid_sheet: resolution {} x {} not in [1, 16384]", nx, ny));
     }
     if (!(width > 0.0f) || !(height > 0.0f) || !std::isfinite(width) || !std::isfinite(height)) {
-        throw InvalidInput(fmt::format(
-            "make_grid_sheet: size {} x {} must be finite and positive", width, height));
+        throw InvalidInput(fmt::format("make_grid_sheet: size {} x {} must be finite and positive",
+                                       width, height));
     }
     TriangleMesh mesh;
     const auto nvx = static_cast<std::size_t>(nx) + 1;
     mesh.positions.reserve(nvx * (static_cast<std::size_t>(ny) + 1));
     for (int j = 0; j <= ny; ++j) {
         for (int i = 0; i <= nx; ++i) {
-            mesh.positions.push_back({width * (static_cast<float>(i) / static_cast<float>(nx) - 0.5f),
-                                      height * (static_cast<float>(j) / static_cast<float>(ny) - 0.5f),
-                                      0.0f});
+            mesh.positions.push_back(
+                {width * (static_cast<float>(i) / static_cast<float>(nx) - 0.5f),
+                 height * (static_cast<float>(j) / static_cast<float>(ny) - 0.5f), 0.0f});
         }
     }
     mesh.triangles.reserve(2 * static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
-    const auto vertex = [nx](int i, int j) { return j * (nx + 1) + i; };
+    const auto vertex = [nx](int i, int j) {
+        return j * (nx + 1) + i;
+    };
     for (int j = 0; j < ny; ++j) {
         for (int i = 0; i < nx; ++i) {
             const std::int32_t a = vertex(i, j), b = vertex(i + 1, j), c = vertex(i + 1, j + 1),

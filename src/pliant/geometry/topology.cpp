@@ -21,7 +21,8 @@ void build_csr(std::span<const std::int32_t> keys_of_items, std::size_t num_keys
     std::vector<std::int32_t> cursor(offsets.begin(), offsets.end() - 1);
     for (std::size_t i = 0; i < keys_of_items.size(); ++i) {
         const auto key = static_cast<std::size_t>(keys_of_items[i]);
-        items[static_cast<std::size_t>(cursor[key]++)] = static_cast<std::int32_t>(i) / item_divisor;
+        items[static_cast<std::size_t>(cursor[key]++)] =
+            static_cast<std::int32_t>(i) / item_divisor;
     }
 }
 
@@ -64,7 +65,8 @@ MeshTopology build_topology(std::span<const Triangle> triangles, std::size_t num
                                   static_cast<std::int32_t>(keys[i] & 0xffffffffu)});
         }
         const std::uint32_t corner = corners[i];
-        topo.triangle_edges[corner / 3][corner % 3] = static_cast<std::int32_t>(topo.edges.size() - 1);
+        topo.triangle_edges[corner / 3][corner % 3] =
+            static_cast<std::int32_t>(topo.edges.size() - 1);
         topo.edge_triangles.push_back(static_cast<std::int32_t>(corner / 3));
     }
     topo.edge_triangle_offsets.push_back(static_cast<std::int32_t>(num_corners));
@@ -79,7 +81,8 @@ MeshTopology build_topology(std::span<const Triangle> triangles, std::size_t num
             corner_vertices[3 * t + k] = triangles[t][k];
         }
     }
-    build_csr(corner_vertices, num_vertices, topo.vertex_triangle_offsets, topo.vertex_triangles, 3);
+    build_csr(corner_vertices, num_vertices, topo.vertex_triangle_offsets, topo.vertex_triangles,
+              3);
     return topo;
 }
 

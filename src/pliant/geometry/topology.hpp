@@ -29,9 +29,10 @@ struct MeshTopology {
     std::size_t num_edges() const { return edges.size(); }
     std::span<const std::int32_t> triangles_of_edge(std::int32_t e) const {
         return std::span(edge_triangles)
-            .subspan(static_cast<std::size_t>(edge_triangle_offsets[static_cast<std::size_t>(e)]),
-                     static_cast<std::size_t>(edge_triangle_offsets[static_cast<std::size_t>(e) + 1] -
-                                              edge_triangle_offsets[static_cast<std::size_t>(e)]));
+            .subspan(
+                static_cast<std::size_t>(edge_triangle_offsets[static_cast<std::size_t>(e)]),
+                static_cast<std::size_t>(edge_triangle_offsets[static_cast<std::size_t>(e) + 1] -
+                                         edge_triangle_offsets[static_cast<std::size_t>(e)]));
     }
     std::span<const std::int32_t> triangles_of_vertex(std::int32_t v) const {
         return std::span(vertex_triangles)

@@ -35,8 +35,8 @@ void validate_triangles(std::span<const Triangle> triangles, std::size_t num_ver
         for (int k = 0; k < 3; ++k) {
             if (tri[k] < 0 || static_cast<std::size_t>(tri[k]) >= num_vertices) {
                 throw InvalidInput(fmt::format(
-                    "{}: triangle {} corner {} has vertex index {}, expected 0 <= index < {}",
-                    what, t, k, tri[k], num_vertices));
+                    "{}: triangle {} corner {} has vertex index {}, expected 0 <= index < {}", what,
+                    t, k, tri[k], num_vertices));
             }
         }
         if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
