@@ -110,6 +110,17 @@ TEST(LBVH, ZeroAndOnePrimitive) {
     EXPECT_EQ(cross_pairs(other, tree).size(), cross_pairs(tree, other).size());
 }
 
+TEST(LBVH, RebuildingWithOtherSizesKeepsNothingStale) {
+    LBVH tree;
+    for (const int n : {5000, 0, 1, 3, 20000, 2, 0, 700}) {
+        const auto boxes = test::random_boxes(n, 0.05f, static_cast<std::uint32_t>(n + 1));
+        tree.build(boxes);
+        tree.refit(boxes);
+        tree.validate(boxes);
+        EXPECT_EQ(test::normalized(self_pairs(tree)), test::brute_force_self_overlaps(boxes)) << n;
+    }
+}
+
 TEST(LBVH, RejectsBadBoxes) {
     std::vector<AABB> boxes = test::random_boxes(10, 0.1f, 2);
     boxes[4].lo.y = NAN;

@@ -94,9 +94,8 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE unsigned leaf_slot_mask(const WideNode& n
 #else
     unsigned mask = 0;
     for (int k = 0; k < WIDTH; ++k) {
-        mask |=
-            (node.child[k] < 0 && node.last[k] < before && overlaps(node.box(k), q.box) ? 1u : 0u)
-            << k;
+        const bool used_leaf = node.child[k] < 0 && node.last[k] >= 0;  // not EMPTY_SLOT
+        mask |= (used_leaf && node.last[k] < before && overlaps(node.box(k), q.box) ? 1u : 0u) << k;
     }
     return mask;
 #endif

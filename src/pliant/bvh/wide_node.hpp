@@ -4,7 +4,8 @@
 //
 // WideNode: 128 bytes, two cache lines. Slot k holds a child subtree: child[k] ≥ 0 is a WideNode,
 // child[k] < 0 the leaf at position ~child[k]; last[k] is the last leaf position under slot k, so
-// a self query for leaf i skips slots with last[k] ≤ i. Unused slots have an empty box
+// a self query from leaves at positions ≥ f skips slots with last[k] ≤ f. Unused slots
+// (child = EMPTY_SLOT) have an empty box
 // (lo = +inf, hi = -inf) and last = -1, so they never pass a test. Slots are in leaf order.
 // Nodes are stored breadth first: root at 0, children after parents, each depth contiguous.
 #pragma once

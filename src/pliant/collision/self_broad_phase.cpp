@@ -284,7 +284,8 @@ std::size_t SelfCollisionBroadPhase<Real>::memory_bytes() const {
            bytes(m_orphans.vertex_face) + bytes(m_orphans.edge_edge) + bytes(m_exact_vertex_boxes) +
            bytes(m_vertex_boxes) + bytes(m_edge_boxes) + bytes(m_triangle_boxes) +
            bytes(m_triangle_pairs) + bytes(m_pairs.vertex_face) + bytes(m_pairs.edge_edge) +
-           m_bvh.memory_bytes();
+           m_triangle_pair_chunks.memory_bytes() + m_vf_chunks.memory_bytes() +
+           m_ee_chunks.memory_bytes() + m_bvh.memory_bytes();
 }
 
 template class SelfCollisionBroadPhase<float>;

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <memory>
 #include <type_traits>
+#include <utility>
 
 namespace pliant {
 
@@ -16,6 +17,21 @@ class AppendBuffer {
     static_assert(std::is_trivially_destructible_v<T> && std::is_default_constructible_v<T>);
 
 public:
+    AppendBuffer() = default;
+    AppendBuffer(const AppendBuffer&) = delete;
+    AppendBuffer& operator=(const AppendBuffer&) = delete;
+    // A moved-from buffer is empty and usable.
+    AppendBuffer(AppendBuffer&& other) noexcept
+        : m_data(std::move(other.m_data)),
+          m_size(std::exchange(other.m_size, 0)),
+          m_capacity(std::exchange(other.m_capacity, 0)) {}
+    AppendBuffer& operator=(AppendBuffer&& other) noexcept {
+        m_data = std::move(other.m_data);
+        m_size = std::exchange(other.m_size, 0);
+        m_capacity = std::exchange(other.m_capacity, 0);
+        return *this;
+    }
+
     std::size_t size() const { return m_size; }
     bool empty() const { return m_size == 0; }
     void clear() { m_size = 0; }

@@ -1,7 +1,8 @@
 // PLIANT_CHECK(cond) / PLIANT_CHECK_EQ(a, b) / PLIANT_CHECK_LT …: always on, for invariants outside
 // hot loops; a failure throws InternalError naming the expression, both values and the source
 // location. PLIANT_DCHECK*: the same in debug builds, nothing in release builds (NDEBUG).
-// All of them are single expressions (no dangling-else hazard).
+// All of them are single expressions (no dangling-else hazard). The _OP forms evaluate their
+// arguments once more when the check fails (to print them): pass side-effect-free expressions.
 #pragma once
 
 #include <fmt/format.h>

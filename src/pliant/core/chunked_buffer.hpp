@@ -40,6 +40,15 @@ public:
         return total;
     }
 
+    // Bytes held by all chunks (capacity).
+    std::size_t memory_bytes() const {
+        std::size_t total = m_chunks.capacity() * sizeof(AppendBuffer<T>);
+        for (const AppendBuffer<T>& c : m_chunks) {
+            total += c.capacity() * sizeof(T);
+        }
+        return total;
+    }
+
     // out = chunk 0 ‖ chunk 1 ‖ … (copies in parallel).
     void gather(std::vector<T>& out) const {
         std::vector<std::size_t> offsets(m_count + 1, 0);

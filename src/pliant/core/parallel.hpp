@@ -8,7 +8,7 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
+#include <memory>
 
 #include "pliant/core/function_ref.hpp"
 
@@ -60,13 +60,16 @@ void parallel_for(std::int64_t n, Body&& body, std::int64_t grain = DEFAULT_GRAI
 template <typename T, typename Map, typename Combine>
 T parallel_reduce(std::int64_t n, T identity, Map&& map, Combine&& combine,
                   std::int64_t grain = DEFAULT_GRAIN) {
-    std::vector<T> partials(static_cast<std::size_t>(num_chunks(n, grain)), identity);
+    // One slot per chunk in a plain array: std::vector<bool> would pack the slots into shared
+    // words and make concurrent writes race.
+    const std::int64_t count = num_chunks(n, grain);
+    const auto partials = std::make_unique<T[]>(static_cast<std::size_t>(count));
     parallel_for_chunks(n, grain, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
         partials[static_cast<std::size_t>(c)] = map(begin, end);
     });
     T result = identity;
-    for (const T& p : partials) {
-        result = combine(result, p);
+    for (std::int64_t c = 0; c < count; ++c) {
+        result = combine(result, partials[static_cast<std::size_t>(c)]);
     }
     return result;
 }

@@ -24,6 +24,13 @@ public:
     void sort(std::span<std::uint64_t> keys, std::span<std::uint32_t> values, int key_bits = 64);
     void sort(std::span<std::uint32_t> keys, std::span<std::uint32_t> values, int key_bits = 32);
 
+    // Bytes of scratch kept between calls.
+    std::size_t memory_bytes() const {
+        return m_keys64.capacity() * sizeof(std::uint64_t) +
+               (m_keys32.capacity() + m_values.capacity() + m_histograms.capacity()) *
+                   sizeof(std::uint32_t);
+    }
+
 private:
     template <typename Key>
     void sort_impl(std::span<Key> keys, std::span<std::uint32_t> values, int key_bits,

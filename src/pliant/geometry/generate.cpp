@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "pliant/core/error.hpp"
+#include "pliant/geometry/validate.hpp"
 
 namespace pliant::geometry {
 
@@ -52,6 +53,10 @@ int nearest_square_sheet(std::int64_t triangles) {
     if (triangles < 2) {
         return 1;
     }
+    if (triangles > std::int64_t{2} * (1 << 14) * (1 << 14)) {  // make_grid_sheet's limit
+        throw InvalidInput(fmt::format("nearest_square_sheet: {} triangles, at most {} supported",
+                                       triangles, std::int64_t{2} * (1 << 14) * (1 << 14)));
+    }
     const auto guess = static_cast<std::int64_t>(std::sqrt(static_cast<double>(triangles) / 2.0));
     std::int64_t best = guess < 1 ? 1 : guess;
     for (std::int64_t n = best; n <= guess + 1; ++n) {
@@ -63,10 +68,11 @@ int nearest_square_sheet(std::int64_t triangles) {
 }
 
 void fold_accordion(std::span<Vec3f> positions, float panel, float gap) {
-    if (!(panel > 0.0f) || !(gap > 0.0f)) {
+    if (!(panel > 0.0f) || !(gap > 0.0f) || !std::isfinite(panel) || !std::isfinite(gap)) {
         throw InvalidInput(
             fmt::format("fold_accordion: panel ({}) and gap ({}) must be positive", panel, gap));
     }
+    validate_positions(std::span<const Vec3f>(positions), "fold_accordion: positions");
     float x_min = INFINITY;
     for (const Vec3f& p : positions) {
         x_min = std::min(x_min, p.x);
