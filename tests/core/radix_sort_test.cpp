@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 #include <random>
+#include <string>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -66,7 +67,14 @@ INSTANTIATE_TEST_SUITE_P(Sizes, RadixSortTest,
                          ::testing::Values(Case{0, 64, 1}, Case{1, 64, 10}, Case{2, 64, 2},
                                            Case{1000, 30, 1u << 30}, Case{200000, 30, 1u << 30},
                                            Case{200000, 30, 7}, Case{150000, 64, ~0ull},
-                                           Case{70000, 64, 1}));
+                                           Case{70000, 64, 1}),
+                         // Readable, stable names (the default prints the struct's bytes,
+                         // padding included).
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                             return "n" + std::to_string(info.param.n) + "_bits" +
+                                    std::to_string(info.param.key_bits) + "_case" +
+                                    std::to_string(info.index);
+                         });
 
 TEST(RadixSort, ThirtyTwoBitKeysMatchStableSort) {
     for (const int key_bits : {30, 32, 7}) {
