@@ -1,11 +1,11 @@
 #include "pliant/core/radix_sort.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <numeric>
 #include <random>
-#include <string>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -34,6 +34,11 @@ struct Case {
     int key_bits;
     std::uint64_t modulus;  // keys drawn in [0, modulus): small moduli force many equal keys
 };
+
+// How gtest (and so ctest's test names) print a case.
+void PrintTo(const Case& c, std::ostream* os) {
+    *os << "n=" << c.n << " key_bits=" << c.key_bits << " modulus=" << c.modulus;
+}
 
 class RadixSortTest : public ::testing::TestWithParam<Case> {
 protected:
@@ -70,10 +75,9 @@ INSTANTIATE_TEST_SUITE_P(Sizes, RadixSortTest,
                                            Case{70000, 64, 1}),
                          // Readable, stable names (the default prints the struct's bytes,
                          // padding included).
-                         [](const ::testing::TestParamInfo<Case>& info) {
-                             return "n" + std::to_string(info.param.n) + "_bits" +
-                                    std::to_string(info.param.key_bits) + "_case" +
-                                    std::to_string(info.index);
+                         [](const ::testing::TestParamInfo<Case>& param_info) {
+                             return fmt::format("n{}_bits{}_case{}", param_info.param.n,
+                                                param_info.param.key_bits, param_info.index);
                          });
 
 TEST(RadixSort, ThirtyTwoBitKeysMatchStableSort) {
