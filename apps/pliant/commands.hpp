@@ -16,6 +16,7 @@ struct GlobalOptions {
 };
 
 void register_collide(CLI::App& app, const GlobalOptions& global);
+void register_ccd(CLI::App& app, const GlobalOptions& global);
 void register_bench(CLI::App& app, const GlobalOptions& global);
 void register_demo(CLI::App& app, const GlobalOptions& global);
 

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
     app.parse_complete_callback([&] { set_num_threads(global.threads); });
 
     cli::register_collide(app, global);
+    cli::register_ccd(app, global);
     cli::register_bench(app, global);
     cli::register_demo(app, global);
 
