@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "pliant/collision/narrow_phase.hpp"
 #include "pliant/collision/self_broad_phase.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -13,7 +14,7 @@ namespace pliant::cli {
 
 BroadPhaseReport measure_broad_phase(const geometry::TriangleMeshD& mesh,
                                      std::span<const Vec3d> positions_t1, double inflation,
-                                     int repeat, bool swept, bool warm_up) {
+                                     int repeat, bool swept, bool warm_up, bool narrow) {
     collision::SelfCollisionBroadPhase<double> broad_phase(mesh.triangles, mesh.num_vertices());
     const std::span<const Vec3d> positions_t0(mesh.positions);
 
@@ -74,11 +75,26 @@ BroadPhaseReport measure_broad_phase(const geometry::TriangleMeshD& mesh,
     report.features_ms = median(features_ms);
     report.total_ms = median(total_ms);
     report.memory_bytes = broad_phase.memory_bytes();
+    if (narrow) {
+        std::vector<double> narrow_ms;
+        for (int i = 0; i < repeat; ++i) {
+            Stopwatch watch;
+            const collision::NarrowPhaseResult result = collision::continuous_narrow_phase(
+                positions_t0, positions_t1, std::span<const geometry::Triangle>(mesh.triangles),
+                std::span<const geometry::Edge>(broad_phase.topology().edges), broad_phase.pairs());
+            narrow_ms.push_back(watch.elapsed_ms());
+            report.vf_hits = result.vf_hits;
+            report.ee_hits = result.ee_hits;
+            report.earliest_toi = result.earliest_toi;
+        }
+        report.has_narrow = true;
+        report.narrow_ms = median(narrow_ms);
+    }
     return report;
 }
 
 nlohmann::ordered_json to_json(const BroadPhaseReport& r) {
-    return {
+    nlohmann::ordered_json out = {
         {"triangles", r.triangles},
         {"vertices", r.vertices},
         {"edges", r.edges},
@@ -96,6 +112,13 @@ nlohmann::ordered_json to_json(const BroadPhaseReport& r) {
         {"swept", r.swept},
         {"memory_bytes", r.memory_bytes},
     };
+    if (r.has_narrow) {
+        out["vf_hits"] = r.vf_hits;
+        out["ee_hits"] = r.ee_hits;
+        out["earliest_toi"] = r.earliest_toi;
+        out["narrow_ms"] = r.narrow_ms;
+    }
+    return out;
 }
 
 std::string thousands(std::int64_t n) {

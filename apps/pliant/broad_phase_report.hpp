@@ -32,13 +32,20 @@ struct BroadPhaseReport {
     int repeat = 0;
     double inflation = 0.0;  // world units
     bool swept = false;
+    // With the continuous narrow phase (collide --ccd): CCD on every VF and EE pair.
+    bool has_narrow = false;
+    std::int64_t vf_hits = 0;
+    std::int64_t ee_hits = 0;
+    double earliest_toi = 1.0;  // in [0, 1]; 1 without hits
+    double narrow_ms = 0.0;     // median over the repeats
 };
 
 // Runs SelfCollisionBroadPhase<double> on the step mesh.positions → positions_t1. warm_up adds
-// one untimed update first (allocation and thread start-up out of the numbers).
+// one untimed update first (allocation and thread start-up out of the numbers). narrow: also run
+// collision::continuous_narrow_phase on the pairs, `repeat` times.
 BroadPhaseReport measure_broad_phase(const geometry::TriangleMeshD& mesh,
                                      std::span<const Vec3d> positions_t1, double inflation,
-                                     int repeat, bool swept, bool warm_up);
+                                     int repeat, bool swept, bool warm_up, bool narrow = false);
 
 // The JSON object of `pliant collide --json` (schema in docs/formats.md).
 nlohmann::ordered_json to_json(const BroadPhaseReport& report);

@@ -1,4 +1,4 @@
-// pliant collide MESH [--to MESH_T1] [--inflate H] [--repeat N] [--json]
+// pliant collide MESH [--to MESH_T1] [--inflate H] [--repeat N] [--ccd] [--json]
 //
 // The self-collision broad phase (collision::SelfCollisionBroadPhase<double>) on one mesh file
 // (static: both ends of the step are MESH) or between two frames of the same mesh (swept: MESH at
@@ -42,6 +42,7 @@ struct CollideOptions {
     std::string mesh_t1;   // frame at t1; empty for a static query
     double inflate = 0.0;  // world units
     int repeat = 1;
+    bool ccd = false;  // also run the continuous narrow phase on the pairs
 };
 
 // CLI11's NonNegativeNumber lets NaN through; this one wants a finite number ≥ 0.
@@ -101,6 +102,12 @@ void print_human(const CollideOptions& options, const BroadPhaseReport& r) {
     text += fmt::format("  {:<16}{:>12.3f} ms   {}\n", "features", r.features_ms, runs);
     text += fmt::format("  {:<16}{:>12.3f} ms   {}, refit-based update end to end\n", "total",
                         r.total_ms, runs);
+    if (r.has_narrow) {
+        text += fmt::format("  {:<16}{:>12}\n", "VF hits (CCD)", thousands(r.vf_hits));
+        text += fmt::format("  {:<16}{:>12}\n", "EE hits (CCD)", thousands(r.ee_hits));
+        text += fmt::format("  {:<16}{:>12.6g}\n", "earliest toi", r.earliest_toi);
+        text += fmt::format("  {:<16}{:>12.3f} ms   {}\n", "narrow (CCD)", r.narrow_ms, runs);
+    }
     text += fmt::format("  {:<16}{:>12.2f} MiB\n", "memory",
                         static_cast<double>(r.memory_bytes) / (1024.0 * 1024.0));
     text += fmt::format("  {:<16}{:>12}\n", "threads", num_threads());
@@ -119,7 +126,7 @@ void run_collide(const CollideOptions& options, const GlobalOptions& global) {
                                                     : std::span<const Vec3d>(mesh_t1.positions);
     const BroadPhaseReport result = measure_broad_phase(mesh, positions_t1, options.inflate,
                                                         options.repeat, !options.mesh_t1.empty(),
-                                                        /*warm_up=*/false);
+                                                        /*warm_up=*/false, options.ccd);
     if (global.json) {
         std::fputs((to_json(result).dump(2) + "\n").c_str(), stdout);
     } else {
@@ -146,6 +153,10 @@ void register_collide(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--repeat", options->repeat, "Run N builds and N refits; timings are medians")
         ->type_name("N")
         ->check(CLI::Range(1, 1000000));
+    cmd->add_flag(
+        "--ccd", options->ccd,
+        "Also run the continuous narrow phase (conservative CCD) on every VF and EE pair: "
+        "vf_hits, ee_hits, earliest_toi, narrow_ms");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_collide(*options, global); });
 }
