@@ -7,8 +7,8 @@
 namespace pliant::bench {
 namespace {
 
-constexpr double BARYCENTRIC_EPS = 1e-6;  // unitless
-constexpr double DISTANCE_EPS = 1e-6;     // relative to the inputs' scale
+constexpr double BARYCENTRIC_EPS = 1e-10;  // unitless
+constexpr double DISTANCE_EPS = 1e-10;     // relative to the inputs' scale
 constexpr double POLY_EPS = 1e-12;        // relative to the coefficients' magnitude
 constexpr double ROOT_WIDTH = 1e-15;      // Newton / bisection stop, in t
 constexpr int MAX_ROOT_STEPS = 80;
@@ -18,7 +18,9 @@ using Cubic = std::array<double, 4>;
 
 double eval(const Cubic& c, double t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; }
 
-double eval_derivative(const Cubic& c, double t) { return (3.0 * c[3] * t + 2.0 * c[2]) * t + c[1]; }
+double eval_derivative(const Cubic& c, double t) {
+    return (3.0 * c[3] * t + 2.0 * c[2]) * t + c[1];
+}
 
 // det[a(t), b(t), c(t)] with a(t) = a0 + t da etc., as a cubic in t.
 Cubic det_cubic(const Vec3d& a0, const Vec3d& da, const Vec3d& b0, const Vec3d& db,

@@ -16,10 +16,11 @@
 // |p| <= 1e-12 · (|c0| + |c1| + |c2| + |c3|) is also a root (a tangential touch, or p ≡ 0 when the
 // four points stay coplanar: then only t = 0, p's critical points and t = 1 are tried). At each
 // root in increasing order the positions are evaluated and tested:
-//   vertex-face  the barycentrics of v projected onto the triangle's plane are all >= -1e-6
+//   vertex-face  the barycentrics of v projected onto the triangle's plane are all >= -1e-10
 //                (a triangle of zero area, |n|² <= 1e-30 · scale⁴, never passes);
 //   edge-edge    the closest points of the two segments (Ericson, Real-Time Collision Detection,
-//                §5.1.9) are within 1e-6 · scale, scale = the largest |coordinate| of the 8 inputs.
+//                §5.1.9) are within 1e-10 · scale, scale = the largest |coordinate| of the 8
+//                inputs.
 // The first root that passes is the time of impact.
 //
 // NOT conservative — this is the point of the comparison with pliant::collision's CCD. It misses
