@@ -29,6 +29,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/io/ccd_queries.hpp"
+#include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -178,7 +179,7 @@ void register_ccd(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--min-separation", options->min_separation,
                     "Report contacts closer than D (world units, >= 0)")
         ->type_name("D")
-        ->check(CLI::NonNegativeNumber);
+        ->check(finite_non_negative());
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_ccd(*options, global); });
 }

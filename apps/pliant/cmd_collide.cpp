@@ -19,8 +19,6 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <charconv>
-#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -33,6 +31,7 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -44,19 +43,6 @@ struct CollideOptions {
     int repeat = 1;
     bool ccd = false;  // also run the continuous narrow phase on the pairs
 };
-
-// CLI11's NonNegativeNumber lets NaN through; this one wants a finite number ≥ 0.
-const CLI::Validator FINITE_NON_NEGATIVE(
-    [](std::string& text) -> std::string {
-        double value = 0.0;
-        const char* end = text.data() + text.size();
-        const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-        if (ec != std::errc() || ptr != end || !std::isfinite(value) || value < 0.0) {
-            return fmt::format("must be a finite number >= 0, got '{}'", text);
-        }
-        return {};
-    },
-    "", "FINITE_NON_NEGATIVE");
 
 // The frame at t1 must be the same mesh as the frame at t0, moved.
 void check_same_mesh(const geometry::TriangleMeshD& mesh, const std::string& mesh_path,
@@ -149,7 +135,7 @@ void register_collide(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--inflate", options->inflate,
                     "Grow every feature box by H on every side (world units, finite, >= 0)")
         ->type_name("H")
-        ->check(FINITE_NON_NEGATIVE);
+        ->check(finite_non_negative());
     cmd->add_option("--repeat", options->repeat, "Run N builds and N refits; timings are medians")
         ->type_name("N")
         ->check(CLI::Range(1, 1000000));

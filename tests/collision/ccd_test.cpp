@@ -6,16 +6,15 @@
 #include <array>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <random>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/collision/segment_segment.hpp"
+#include "pliant/io/ccd_queries.hpp"
 
 namespace pliant::collision {
 namespace {
@@ -523,67 +522,20 @@ INSTANTIATE_TEST_SUITE_P(Kinds, CcdRandom, ::testing::Bool(),
 // ---------------------------------------------------------------------------------------------
 // The Sample-Queries data set (Wang et al. 2021): 0 false negatives required.
 
-struct Query {
-    Positions positions;
-    bool truth;
-};
-
-// Reads one Sample-Queries CSV: 8 rows per query, 7 integer columns (x num, x den, y num, y den,
-// z num, z den, truth). Fails the test on a malformed row.
-std::vector<Query> read_queries(const std::filesystem::path& path) {
-    std::ifstream in(path);
-    EXPECT_TRUE(in) << path;
-    std::vector<Query> queries;
-    std::string line;
-    int line_number = 0;
-    int row = 0;
-    Query current{};
-    while (std::getline(in, line)) {
-        ++line_number;
-        if (line.empty() || line == "\r") {
-            continue;
-        }
-        std::stringstream fields(line);
-        std::string field;
-        std::vector<std::string> columns;
-        while (std::getline(fields, field, ',')) {
-            columns.push_back(field);
-        }
-        if (columns.size() != 7) {
-            ADD_FAILURE() << path << ":" << line_number << ": expected 7 columns, got "
-                          << columns.size();
-            return {};
-        }
-        Vec3d x;
-        for (int axis = 0; axis < 3; ++axis) {
-            x[axis] = std::stod(columns[2 * axis]) / std::stod(columns[2 * axis + 1]);
-        }
-        current.positions[row] = x;
-        current.truth = std::stoi(columns[6]) != 0;
-        if (++row == 8) {
-            queries.push_back(current);
-            row = 0;
-        }
-    }
-    EXPECT_EQ(row, 0) << path << ": trailing partial query";
-    return queries;
-}
-
 TEST(CcdSampleQueries, NoFalseNegatives) {
     const std::filesystem::path root =
         std::filesystem::path(PLIANT_SHARED_DATA_DIR) / "ccd-queries";
     if (!std::filesystem::is_directory(root)) {
         GTEST_SKIP() << root << " not found";
     }
+    // Every file of unit-tests and erleben-*, read with the io module's reader.
     std::vector<std::filesystem::path> files;
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-        const std::string relative = std::filesystem::relative(entry.path(), root).string();
-        if (entry.is_regular_file() && entry.path().extension() == ".csv" &&
-            (relative.starts_with("unit-tests") || relative.starts_with("erleben-"))) {
-            files.push_back(entry.path());
+    for (const std::filesystem::path& file : io::find_ccd_query_files(root)) {
+        const std::string relative = std::filesystem::relative(file, root).string();
+        if (relative.starts_with("unit-tests") || relative.starts_with("erleben-")) {
+            files.push_back(file);
         }
     }
-    std::sort(files.begin(), files.end());
     ASSERT_FALSE(files.empty());
     int total_queries = 0;
     int total_false_negatives = 0;
@@ -591,19 +543,20 @@ TEST(CcdSampleQueries, NoFalseNegatives) {
     double total_ms = 0.0;
     for (const std::filesystem::path& file : files) {
         const std::string relative = std::filesystem::relative(file, root).string();
-        const bool is_edge_edge = relative.find("edge-edge") != std::string::npos;
-        ASSERT_TRUE(is_edge_edge || relative.find("vertex-face") != std::string::npos) << relative;
-        const std::vector<Query> queries = read_queries(file);
+        const io::CcdQuerySet set = io::read_ccd_queries(file);
+        const bool is_edge_edge = set.kind == io::CcdQueryKind::edge_edge;
+        const std::vector<io::CcdQuery>& queries = set.queries;
         int positives = 0;
         int false_negatives = 0;
         int false_positives = 0;
         const auto start = std::chrono::steady_clock::now();
-        for (const Query& query : queries) {
-            const CcdResult result =
-                is_edge_edge ? run_ee(query.positions) : run_vf(query.positions);
-            positives += query.truth ? 1 : 0;
-            false_negatives += (query.truth && !result.hit) ? 1 : 0;
-            false_positives += (!query.truth && result.hit) ? 1 : 0;
+        for (const io::CcdQuery& query : queries) {
+            ASSERT_GE(query.truth, 0) << relative << ": the sample sets carry a truth column";
+            const bool colliding = query.truth == 1;
+            const CcdResult result = is_edge_edge ? run_ee(query.points) : run_vf(query.points);
+            positives += colliding ? 1 : 0;
+            false_negatives += (colliding && !result.hit) ? 1 : 0;
+            false_positives += (!colliding && result.hit) ? 1 : 0;
         }
         const double ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)

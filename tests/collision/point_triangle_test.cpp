@@ -11,30 +11,22 @@
 #include <type_traits>
 #include <vector>
 
+#include "support/proximity_reference.hpp"
+
 namespace pliant::collision {
 namespace {
 
-using Long = long double;
-using Vec3L = Vec3<Long>;
+using test::distance_tolerance;
+using test::extent_of;
+using test::Long;
+using test::reference_point_segment_distance;
+using test::SampledDistance;
+using test::to_long;
+using test::Vec3L;
 using Region = PointTriangleRegion;
-
-template <typename Real>
-Vec3L to_long(Vec3<Real> v) {
-    return vec3_cast<Long>(v);
-}
 
 // Independent reference in long double: the projection onto the plane if it lies inside the
 // triangle (signed-area barycentrics), else the closest of the three edges as segments.
-Long reference_point_segment_distance(Vec3L p, Vec3L start, Vec3L end) {
-    const Vec3L direction = end - start;
-    const Long squared_length = squared_norm(direction);
-    Long parameter = 0;
-    if (squared_length > 0) {
-        parameter = std::clamp(dot(p - start, direction) / squared_length, Long(0), Long(1));
-    }
-    return norm(p - (start + direction * parameter));
-}
-
 Long reference_point_triangle_distance(Vec3L p, Vec3L a, Vec3L b, Vec3L c) {
     const Vec3L normal = cross(b - a, c - a);
     const Long squared_area = squared_norm(normal);
@@ -54,11 +46,6 @@ Long reference_point_triangle_distance(Vec3L p, Vec3L a, Vec3L b, Vec3L c) {
 // Dense sampling: the minimum distance to the barycentric grid points (i, j, k) / n, i + j + k = n.
 // Every point of the triangle lies within the longest edge / n of a grid point (it lies in a
 // sub-triangle whose edges are the triangle's edges / n), which bounds the sampling error.
-struct SampledDistance {
-    Long min_distance;
-    Long resolution;
-};
-
 SampledDistance sampled_point_triangle_distance(Vec3L p, Vec3L a, Vec3L b, Vec3L c, int n) {
     Long min_distance = std::numeric_limits<Long>::infinity();
     for (int i = 0; i <= n; ++i) {
@@ -71,22 +58,6 @@ SampledDistance sampled_point_triangle_distance(Vec3L p, Vec3L a, Vec3L b, Vec3L
     }
     const Long longest = std::max({norm(b - a), norm(c - b), norm(a - c)});
     return {min_distance, longest / n};
-}
-
-template <typename Real>
-Long extent_of(std::initializer_list<Vec3<Real>> points) {
-    Long extent = 0;
-    for (const Vec3<Real> point : points) {
-        extent = std::max(
-            {extent, std::fabs(Long(point.x)), std::fabs(Long(point.y)), std::fabs(Long(point.z))});
-    }
-    return extent;
-}
-
-// Absolute distance tolerance: a few dozen ulps of the largest coordinate.
-template <typename Real>
-Long distance_tolerance(Long extent) {
-    return 64 * Long(std::numeric_limits<Real>::epsilon()) * extent;
 }
 
 // Every invariant of the contract, and the distance against the exact reference.

@@ -10,26 +10,18 @@
 #include <string>
 #include <type_traits>
 
+#include "support/proximity_reference.hpp"
+
 namespace pliant::collision {
 namespace {
 
-using Long = long double;
-using Vec3L = Vec3<Long>;
-
-template <typename Real>
-Vec3L to_long(Vec3<Real> v) {
-    return vec3_cast<Long>(v);
-}
-
-Long reference_point_segment_distance(Vec3L p, Vec3L start, Vec3L end) {
-    const Vec3L direction = end - start;
-    const Long squared_length = squared_norm(direction);
-    Long parameter = 0;
-    if (squared_length > 0) {
-        parameter = std::clamp(dot(p - start, direction) / squared_length, Long(0), Long(1));
-    }
-    return norm(p - (start + direction * parameter));
-}
+using test::distance_tolerance;
+using test::extent_of;
+using test::Long;
+using test::reference_point_segment_distance;
+using test::SampledDistance;
+using test::to_long;
+using test::Vec3L;
 
 // Independent reference in long double. |P(s) - Q(t)|² is convex on [0, 1]²: its minimum is the
 // interior critical point (Cramer's rule) when that lies in the square, else on one of the four
@@ -61,11 +53,6 @@ Long reference_segment_segment_distance(Vec3L p0, Vec3L p1, Vec3L q0, Vec3L q1) 
 // Dense sampling: s on a grid of n + 1 values with the exact closest point of Q for each, and the
 // same with the roles swapped. A grid spacing of 1 / n leaves every parameter within 1 / (2n) of a
 // sample, so the sampled minimum exceeds the true one by at most the longer length / (2n).
-struct SampledDistance {
-    Long min_distance;
-    Long resolution;
-};
-
 SampledDistance sampled_segment_segment_distance(Vec3L p0, Vec3L p1, Vec3L q0, Vec3L q1, int n) {
     Long min_distance = std::numeric_limits<Long>::infinity();
     for (int i = 0; i <= n; ++i) {
@@ -75,22 +62,6 @@ SampledDistance sampled_segment_segment_distance(Vec3L p0, Vec3L p1, Vec3L q0, V
              reference_point_segment_distance(q0 + (q1 - q0) * parameter, p0, p1)});
     }
     return {min_distance, std::max(norm(p1 - p0), norm(q1 - q0)) / (2 * n)};
-}
-
-template <typename Real>
-Long extent_of(std::initializer_list<Vec3<Real>> points) {
-    Long extent = 0;
-    for (const Vec3<Real> point : points) {
-        extent = std::max(
-            {extent, std::fabs(Long(point.x)), std::fabs(Long(point.y)), std::fabs(Long(point.z))});
-    }
-    return extent;
-}
-
-// Absolute distance tolerance: a few dozen ulps of the largest coordinate.
-template <typename Real>
-Long distance_tolerance(Long extent) {
-    return 64 * Long(std::numeric_limits<Real>::epsilon()) * extent;
 }
 
 // Every invariant of the contract, and the distance against the exact reference.

@@ -69,6 +69,10 @@ TEST(CcdCommand, BrokenFileNamesFileAndLine) {
     const CliResult negative =
         run_cli("ccd " + quoted(scratch.path()) + " --min-separation -1", scratch);
     EXPECT_EQ(negative.exit_code, 2);
+    const CliResult not_a_number =
+        run_cli("ccd " + quoted(scratch.path()) + " --min-separation nan", scratch);
+    EXPECT_EQ(not_a_number.exit_code, 2);
+    EXPECT_NE(not_a_number.err.find("finite"), std::string::npos) << not_a_number.err;
 }
 
 TEST(CcdCommandExternal, NoFalseNegativesOnSampleQueriesAndClothFunnel) {
