@@ -19,9 +19,12 @@ namespace {
 using test::distance_tolerance;
 using test::extent_of;
 using test::Long;
+using test::RealNames;
+using test::RealTypes;
 using test::reference_point_segment_distance;
 using test::SampledDistance;
 using test::to_long;
+using test::vec;
 using test::Vec3L;
 using Region = PointTriangleRegion;
 
@@ -112,21 +115,8 @@ void expect_matches_sampling(const PointTriangleProximity<Real>& prox, Vec3<Real
 }
 
 template <typename Real>
-Vec3<Real> vec(double x, double y, double z) {
-    return {static_cast<Real>(x), static_cast<Real>(y), static_cast<Real>(z)};
-}
-
-template <typename Real>
 class PointTriangleTest : public ::testing::Test {};
 
-struct RealNames {
-    template <typename T>
-    static std::string GetName(int /*index*/) {
-        return std::is_same_v<T, float> ? "float" : "double";
-    }
-};
-
-using RealTypes = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(PointTriangleTest, RealTypes, RealNames);
 
 // The unit right triangle a = 0, b = x, c = y, and one query point per Voronoi region.

@@ -18,9 +18,12 @@ namespace {
 using test::distance_tolerance;
 using test::extent_of;
 using test::Long;
+using test::RealNames;
+using test::RealTypes;
 using test::reference_point_segment_distance;
 using test::SampledDistance;
 using test::to_long;
+using test::vec;
 using test::Vec3L;
 
 // Independent reference in long double. |P(s) - Q(t)|² is convex on [0, 1]²: its minimum is the
@@ -105,21 +108,8 @@ void expect_matches_sampling(const SegmentSegmentProximity<Real>& prox, Vec3<Rea
 }
 
 template <typename Real>
-Vec3<Real> vec(double x, double y, double z) {
-    return {static_cast<Real>(x), static_cast<Real>(y), static_cast<Real>(z)};
-}
-
-template <typename Real>
 class SegmentSegmentTest : public ::testing::Test {};
 
-struct RealNames {
-    template <typename T>
-    static std::string GetName(int /*index*/) {
-        return std::is_same_v<T, float> ? "float" : "double";
-    }
-};
-
-using RealTypes = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(SegmentSegmentTest, RealTypes, RealNames);
 
 struct ExpectedProximity {

@@ -2,10 +2,14 @@
 // segment-segment): independent of the code under test, in higher precision.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <limits>
+#include <string>
+#include <type_traits>
 
 #include "pliant/core/vec3.hpp"
 
@@ -52,5 +56,20 @@ template <typename Real>
 Long distance_tolerance(Long extent) {
     return 64 * Long(std::numeric_limits<Real>::epsilon()) * extent;
 }
+
+// A point of precision Real from double literals.
+template <typename Real>
+Vec3<Real> vec(double x, double y, double z) {
+    return {static_cast<Real>(x), static_cast<Real>(y), static_cast<Real>(z)};
+}
+
+// Typed tests over float and double, named "float" / "double".
+struct RealNames {
+    template <typename T>
+    static std::string GetName(int /*index*/) {
+        return std::is_same_v<T, float> ? "float" : "double";
+    }
+};
+using RealTypes = ::testing::Types<float, double>;
 
 }  // namespace pliant::test
