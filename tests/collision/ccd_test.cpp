@@ -41,12 +41,14 @@ Positions scaled(const Positions& p, double scale) {
     return out;
 }
 
-// Expects a hit whose toi is a lower bound of true_toi and within two tolerances of it.
+// Expects a hit whose toi is a lower bound of true_toi and within a few tolerances of it: a
+// terminal box is at most `tolerance` wide in t, or its values span at most tolerance × (F's
+// range over the step), which for these unit-speed motions is a few tolerances in t.
 void expect_hit_at(const CcdResult& result, double true_toi) {
     EXPECT_TRUE(result.hit);
     EXPECT_FALSE(result.hit_iteration_limit);
     EXPECT_LE(result.toi, true_toi);
-    EXPECT_GE(result.toi, true_toi - 2.0 * TOLERANCE);
+    EXPECT_GE(result.toi, true_toi - 4.0 * TOLERANCE);
 }
 
 void expect_no_hit(const CcdResult& result) {
@@ -155,6 +157,13 @@ TEST(CcdVertexFace, DegenerateFace) {
     const Vec3d c{2.0, 0.0, 0.0};
     expect_hit_at(run_vf({Vec3d{1.5, 0.4, 0.0}, a, b, c, Vec3d{1.5, -0.6, 0.0}, a, b, c}), 0.4);
     expect_no_hit(run_vf({Vec3d{2.5, 0.4, 0.0}, a, b, c, Vec3d{2.5, -0.6, 0.0}, a, b, c}));
+    // A needle face (c 2^-30 off the line of a and b) and a vertex sliding along the needle's
+    // line 2^-30 off its plane: near contact along the whole face for the whole step.
+    const Vec3d needle{2.0, 0x1p-30, 0.0};
+    const CcdResult sliding =
+        run_vf({Vec3d{-1.0, 0.0, 0x1p-30}, a, b, needle, Vec3d{3.0, 0.0, 0x1p-30}, a, b, needle});
+    expect_no_hit(sliding);
+    EXPECT_LT(sliding.iterations, 10'000);
 }
 
 TEST(CcdVertexFace, StaticConfigurations) {
@@ -200,8 +209,7 @@ TEST(CcdVertexFace, IterationLimitReportsConservativeHit) {
     const CcdResult limited = run_vf(p, {.max_iterations = 1});
     EXPECT_TRUE(limited.hit);
     EXPECT_TRUE(limited.hit_iteration_limit);
-    // The root box, plus the two t-halves it looks ahead to.
-    EXPECT_LE(limited.iterations, 3);
+    EXPECT_EQ(limited.iterations, 1);  // the root box
     EXPECT_EQ(limited.toi, 0.0);
     // Excluded by the root box alone: no hit even with one iteration.
     expect_no_hit(run_vf(vf_static_face({0.3, 0.3, 1.0}, {0.3, 0.3, 2.0}), {.max_iterations = 1}));
@@ -319,6 +327,54 @@ TEST(CcdEdgeEdge, MinSeparationTurnsNearMissIntoHit) {
     EXPECT_LE(near.toi, 0.49);
     EXPECT_GE(near.toi, 0.49 - 2.0 * TOLERANCE);
     expect_no_hit(run_ee(p, {.min_separation = 0.005}));
+}
+
+// Two edges of a folded cloth layer lying on each other (the cloth-funnel case): b is a within
+// a few 1e-6 (coordinates about 0.5) and passes through it. Every (u, u) is then within ~1e-6 of
+// contact for a long stretch of t, and a search that refines u and v before t needs ~1e6 boxes
+// (the search before the separating directions of ccd.hpp hit its 1,000,000-box limit here).
+// All coordinates are dyadic, so the positions below are exact.
+constexpr Vec3d LAYER_A0{0.25, -0.0625, -0.5};
+constexpr Vec3d LAYER_D{0x1p-8, 0x1p-9, -0x1p-9};  // a1 - a0
+constexpr Vec3d LAYER_W{0x1p-20, 0.0, -0x1p-18};   // offset of b at t = 0, -W at t = 1
+
+// b = a + (1 - 2t) W, with b1 tilted by `tilt`, plus a constant `offset`.
+Positions layered_edges(Vec3d tilt, Vec3d offset) {
+    const Vec3d a1 = LAYER_A0 + LAYER_D;
+    return {LAYER_A0, a1, LAYER_A0 + LAYER_W + offset, a1 + LAYER_W + tilt + offset,
+            LAYER_A0, a1, LAYER_A0 - LAYER_W + offset, a1 - LAYER_W + tilt + offset};
+}
+
+constexpr int FEW_BOXES = 10'000;
+
+TEST(CcdEdgeEdge, NearlyCoincidentEdgesPassingThroughEachOther) {
+    // Nearly parallel (b tilted by 2^-28): the endpoints a0 and b0 meet exactly at t = 0.5,
+    // and before t = 0.5 - 1e-3 the edges are at least ~1e-9 apart, far above rounding.
+    const CcdResult crossing = run_ee(layered_edges({0x1p-28, 0.0, 0.0}, {}));
+    EXPECT_TRUE(crossing.hit);
+    EXPECT_FALSE(crossing.hit_iteration_limit);
+    EXPECT_LE(crossing.toi, 0.5);
+    EXPECT_GE(crossing.toi, 0.5 - 1e-3);
+    EXPECT_LT(crossing.iterations, FEW_BOXES);
+    // Exactly parallel and overlapping along their whole length at t = 0.5.
+    const CcdResult parallel = run_ee(layered_edges({}, {}));
+    EXPECT_TRUE(parallel.hit);
+    EXPECT_LE(parallel.toi, 0.5);
+    EXPECT_GE(parallel.toi, 0.5 - 1e-3);
+    EXPECT_LT(parallel.iterations, FEW_BOXES);
+}
+
+TEST(CcdEdgeEdge, NearlyCoincidentEdgesMissingByNanometres) {
+    // The parallel layers shifted by 2^-30 (~1e-9) along y, out of the plane of W and D: they
+    // pass each other without touching (the offset is independent of W and D).
+    const CcdResult miss = run_ee(layered_edges({}, {0.0, 0x1p-30, 0.0}));
+    expect_no_hit(miss);
+    EXPECT_LT(miss.iterations, FEW_BOXES);
+    // With a minimum separation of 1e-8 they are in contact, from before t = 0.5.
+    const CcdResult near = run_ee(layered_edges({}, {0.0, 0x1p-30, 0.0}), {.min_separation = 1e-8});
+    EXPECT_TRUE(near.hit);
+    EXPECT_LE(near.toi, 0.5);
+    EXPECT_LT(near.iterations, FEW_BOXES);
 }
 
 TEST(CcdEdgeEdge, ScaleInvariance) {

@@ -25,6 +25,14 @@ constexpr double MAX_COORDINATE = 1e300;
 constexpr double RELATIVE_ERROR = 0x1p-45;
 // Absolute error from underflow: 64 of the smallest subnormal (each rounding adds at most half).
 constexpr double UNDERFLOW_ERROR = 0x1p-1068;
+// Rounding error of a projection n · F per unit of Σ |n_i| max|F_i|: 2^-50 > γ_3 (see ccd.hpp).
+constexpr double PROJECTION_ERROR = 0x1p-50;
+// Factor that covers the few roundings in computing an error bound or a separation (1 + 10 u).
+constexpr double ROUND_UP = 1.0 + 0x1p-40;
+// Error of a difference of two projections n · p of lerped points per unit of Σ |n_i| M_i.
+constexpr double STEP_PROJECTION_ERROR = 0x1p-48;
+// Below this sine of the angle between a and b, n is taken as any normal of a.
+constexpr double PARALLEL_SINE = 1e-6;
 
 enum class Kind { VERTEX_FACE, EDGE_EDGE };
 
@@ -52,8 +60,18 @@ struct Query {
     Kind kind;
     double start[4][3];
     double displacement[4][3];
-    double error[3];
+    double end[4][3];     // the inputs at t = 1 (start + displacement is within rounding of it)
+    double magnitude[3];  // M_axis: the largest |coordinate| of the 8 inputs on each axis
+    double error[3];      // error bound of one corner value per axis (ccd.hpp)
     double min_separation;
+    // The separating directions n and m of ccd.hpp (unit vectors), δ ‖n‖₁ rounded up, and the
+    // error bound of a slab test along them; used only when num_directions is 2.
+    int num_directions;
+    double direction[2][3];
+    double direction_separation[2];
+    double direction_slab_error[2];
+    // A surviving box whose corner values span at most this on every axis is terminal.
+    double codomain_tolerance;
 };
 
 // F at the 8 corners of box; corner index = it + 2 iu + 4 iv, each bit selecting lo or lo + width.
@@ -92,8 +110,10 @@ void evaluate_corners(const Query& query, const Box& box, double values[8][3]) {
     }
 }
 
-// True when, in some axis, every point of the box is provably farther than δ from 0.
+// True when, along some axis, every point of the box is provably farther than δ from 0; then,
+// when the query has separating directions, the same test along each of them (ccd.hpp).
 bool is_excluded(const Query& query, const double values[8][3]) {
+    double magnitude[3];  // largest |corner value| per axis, for the projections' rounding error
     for (int axis = 0; axis < 3; ++axis) {
         double lo = values[0][axis];
         double hi = values[0][axis];
@@ -107,8 +127,91 @@ bool is_excluded(const Query& query, const double values[8][3]) {
             hi + query.error[axis] < -query.min_separation) {
             return true;
         }
+        magnitude[axis] = std::max(-lo, hi);
+    }
+    for (int k = 0; k < query.num_directions; ++k) {
+        const double* n = query.direction[k];
+        double lo = 0.0;
+        double hi = 0.0;
+        for (int corner = 0; corner < 8; ++corner) {
+            const double value =
+                (n[0] * values[corner][0] + n[1] * values[corner][1]) + n[2] * values[corner][2];
+            lo = corner == 0 ? value : std::min(lo, value);
+            hi = corner == 0 ? value : std::max(hi, value);
+        }
+        double error = 0.0;
+        for (int axis = 0; axis < 3; ++axis) {
+            error += std::fabs(n[axis]) * (query.error[axis] + PROJECTION_ERROR * magnitude[axis]);
+        }
+        error = (error + UNDERFLOW_ERROR) * ROUND_UP;
+        if (lo - error > query.direction_separation[k] ||
+            hi + error < -query.direction_separation[k]) {
+            return true;
+        }
     }
     return false;
+}
+
+// The largest spread of the corner values over the three axes.
+double codomain_width(const double values[8][3]) {
+    double widest = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+        double lo = values[0][axis];
+        double hi = values[0][axis];
+        for (int corner = 1; corner < 8; ++corner) {
+            lo = std::min(lo, values[corner][axis]);
+            hi = std::max(hi, values[corner][axis]);
+        }
+        widest = std::max(widest, hi - lo);
+    }
+    return widest;
+}
+
+// The separating directions of ccd.hpp, from the positions at mid-step: n normal to the pair's
+// two direction vectors a (the longer) and b (the edges, or the face's edges f1 - f0 and f2 - f0),
+// or any normal of a when they are (nearly) parallel; m = â × n. Unit vectors. None when both
+// vectors are zero or not finite (the contact set is then a point for each t, or the input is out
+// of range).
+struct Directions {
+    int count = 0;
+    Vec3d direction[2];
+};
+
+Directions separating_directions(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4]) {
+    Vec3d mid[4];
+    for (int k = 0; k < 4; ++k) {
+        mid[k] = 0.5 * (t0[k] + t1[k]);
+    }
+    Vec3d a = kind == Kind::EDGE_EDGE ? mid[1] - mid[0] : mid[2] - mid[1];
+    Vec3d b = kind == Kind::EDGE_EDGE ? mid[3] - mid[2] : mid[3] - mid[1];
+    if (squared_norm(b) > squared_norm(a)) {
+        std::swap(a, b);
+    }
+    const double length_a = norm(a);
+    if (!(length_a > 0.0) || !std::isfinite(length_a)) {
+        return {};
+    }
+    Vec3d n = cross(a, b);
+    if (!(norm(n) > PARALLEL_SINE * length_a * norm(b))) {
+        // Nearly parallel: any normal of a; the axis least aligned with a keeps it well scaled.
+        const Vec3d magnitude{std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)};
+        const Vec3d axis = magnitude.x <= magnitude.y && magnitude.x <= magnitude.z
+                               ? Vec3d{1.0, 0.0, 0.0}
+                           : magnitude.y <= magnitude.z ? Vec3d{0.0, 1.0, 0.0}
+                                                        : Vec3d{0.0, 0.0, 1.0};
+        n = cross(a, axis);
+    }
+    const double length_n = norm(n);
+    if (!(length_n > 0.0) || !std::isfinite(length_n)) {
+        return {};
+    }
+    n = n * (1.0 / length_n);
+    return {.count = 2, .direction = {n, cross(a * (1.0 / length_a), n)}};
+}
+
+// δ ‖n‖₁ rounded up: the largest |n · F| inside the contact box [-δ, δ]³.
+double separation_along(const Vec3d& n, double min_separation) {
+    return min_separation * ((std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z)) * ROUND_UP);
 }
 
 // The dimension to split: among those wider than tolerance, the one along which F varies most
@@ -166,46 +269,209 @@ void push(std::vector<Box>& heap, const Box& box) {
     std::push_heap(heap.begin(), heap.end(), is_later);
 }
 
+// One projection x of the 4 points at the two ends t_a (x[0]) and t_b (x[1]) of a slab of time,
+// over all of the features: true when the two features' projections are more than `separation`
+// apart, on the same side, at both ends. F is bilinear in t and the feature parameters, so its
+// range over the slab lies between its values at t_a and t_b at the features' corners (for a
+// face: its 3 vertices, tighter than the (u, v) box of the search); each is a difference of two
+// projections, computed within `error`. Widens [lo, hi] to the range of those differences.
+bool is_step_excluded(Kind kind, const double (&x)[2][4], double error, double separation,
+                      double& range_lo, double& range_hi) {
+    double lo[2];
+    double hi[2];
+    for (int at = 0; at < 2; ++at) {
+        const double(&p)[4] = x[at];
+        if (kind == Kind::VERTEX_FACE) {
+            lo[at] = p[0] - std::max(std::max(p[1], p[2]), p[3]);
+            hi[at] = p[0] - std::min(std::min(p[1], p[2]), p[3]);
+        } else {
+            lo[at] = std::min(p[0], p[1]) - std::max(p[2], p[3]);
+            hi[at] = std::max(p[0], p[1]) - std::min(p[2], p[3]);
+        }
+    }
+    range_lo = std::min(lo[0], lo[1]);
+    range_hi = std::max(hi[0], hi[1]);
+    return ((lo[0] - error > separation) & (lo[1] - error > separation)) |
+           ((hi[0] + error < -separation) & (hi[1] + error < -separation));
+}
+
+// The slab [t_a, t_b] × (all of the features), along the axes and the query's separating
+// directions: true when it provably holds no contact. The points at t_a and t_b are the lerps
+// start + t displacement (exact inputs at t = 0), within about 5 u M_axis of exact, which the
+// bounds of ccd.hpp cover; at t = 0 and t = 1 the inputs themselves are used. codomain_width: the
+// widest range of F over the axes. With test_axes false only the directions are tested.
+bool is_slab_excluded(const Query& query, double t_a, double t_b, double& codomain_width,
+                      bool test_axes = true) {
+    double x[3][2][4];
+    bool is_excluded_slab = false;
+    codomain_width = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int k = 0; k < 4; ++k) {
+            x[axis][0][k] = t_a == 0.0 ? query.start[k][axis]
+                                       : query.start[k][axis] + t_a * query.displacement[k][axis];
+            x[axis][1][k] = t_b == 1.0 ? query.end[k][axis]
+                                       : query.start[k][axis] + t_b * query.displacement[k][axis];
+        }
+        if (test_axes) {
+            double lo = 0.0;
+            double hi = 0.0;
+            is_excluded_slab |= is_step_excluded(query.kind, x[axis], query.error[axis],
+                                                 query.min_separation, lo, hi);
+            codomain_width = std::max(codomain_width, hi - lo);
+        }
+    }
+    for (int d = 0; d < query.num_directions && !is_excluded_slab; ++d) {
+        const double* n = query.direction[d];
+        double projected[2][4];
+        for (int at = 0; at < 2; ++at) {
+            for (int k = 0; k < 4; ++k) {
+                projected[at][k] = (n[0] * x[0][at][k] + n[1] * x[1][at][k]) + n[2] * x[2][at][k];
+            }
+        }
+        double lo = 0.0;
+        double hi = 0.0;
+        is_excluded_slab |= is_step_excluded(query.kind, projected, query.direction_slab_error[d],
+                                             query.direction_separation[d], lo, hi);
+    }
+    return is_excluded_slab;
+}
+
 CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
                   const CcdOptions& options) {
-    // Step 1: sanitise the options (see ccd.hpp) and reject inputs out of range.
+    // Step 1: sanitise the options (see ccd.hpp).
     const double tolerance = std::isnan(options.tolerance)
                                  ? CcdOptions{}.tolerance
                                  : std::clamp(options.tolerance, MIN_TOLERANCE, 1.0);
     const int max_iterations = std::max(options.max_iterations, 1);
-    Query query{};
+    const double min_separation = options.min_separation > 0.0 ? options.min_separation : 0.0;
+
+    // Step 2: the query; inputs out of range report a conservative hit.
+    Query query;
     query.kind = kind;
-    query.min_separation = options.min_separation > 0.0 ? options.min_separation : 0.0;
+    query.min_separation = min_separation;
+    query.num_directions = 0;
+    query.codomain_tolerance = 0.0;
+    bool is_in_range = std::isfinite(min_separation);
     for (int axis = 0; axis < 3; ++axis) {
-        double magnitude = 0.0;
-        bool is_finite_input = true;
+        query.magnitude[axis] = 0.0;
         for (int k = 0; k < 4; ++k) {
-            for (const double x : {t0[k][axis], t1[k][axis]}) {
-                is_finite_input = is_finite_input && std::isfinite(x);
-                magnitude = std::max(magnitude, std::fabs(x));
+            for (const double c : {t0[k][axis], t1[k][axis]}) {
+                is_in_range &= std::fabs(c) < MAX_COORDINATE;  // false for NaN
+                query.magnitude[axis] = std::max(query.magnitude[axis], std::fabs(c));
             }
             query.start[k][axis] = t0[k][axis];
+            query.end[k][axis] = t1[k][axis];
             query.displacement[k][axis] = t1[k][axis] - t0[k][axis];
         }
-        if (!is_finite_input || !(magnitude < MAX_COORDINATE) ||
-            !std::isfinite(query.min_separation)) {
-            return {.hit = true, .toi = 0.0, .iterations = 0, .hit_iteration_limit = false};
-        }
-        query.error[axis] = magnitude * RELATIVE_ERROR + UNDERFLOW_ERROR;
+        query.error[axis] = query.magnitude[axis] * RELATIVE_ERROR + UNDERFLOW_ERROR;
+    }
+    if (!is_in_range) {
+        return {.hit = true, .toi = 0.0, .iterations = 0, .hit_iteration_limit = false};
     }
 
-    // Step 2: best-first bisection: always refine the open box with the smallest t_lo (ties: the
-    // deepest, which drills towards a terminal box instead of widening the front).
-    std::vector<Box>& heap = thread_heap();
+    // Step 3: the whole step at once, along the axes, then along the separating directions. Most
+    // pairs from a broad phase end here.
+    double codomain = 0.0;
+    if (is_slab_excluded(query, 0.0, 1.0, codomain)) {
+        return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
+    }
+    const Directions directions = separating_directions(kind, t0, t1);
+    query.num_directions = directions.count;
+    for (int d = 0; d < directions.count; ++d) {
+        const Vec3d& n = directions.direction[d];
+        query.direction[d][0] = n.x;
+        query.direction[d][1] = n.y;
+        query.direction[d][2] = n.z;
+        query.direction_separation[d] = separation_along(n, min_separation);
+        // A projection of a lerped point is within (5.1 u + γ_3) Σ |n_i| M_i of exact, a
+        // difference of two within 18.4 u Σ |n_i| M_i < 2^-48 Σ |n_i| M_i (ccd.hpp).
+        const double scale = std::fabs(n.x) * query.magnitude[0] +
+                             std::fabs(n.y) * query.magnitude[1] +
+                             std::fabs(n.z) * query.magnitude[2];
+        query.direction_slab_error[d] =
+            (scale * STEP_PROJECTION_ERROR + UNDERFLOW_ERROR) * ROUND_UP;
+    }
+    double unused = 0.0;
+    if (directions.count > 0 && is_slab_excluded(query, 0.0, 1.0, unused, false)) {
+        return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
+    }
+    // A box whose corner values span at most tolerance × (F's range over the step) is terminal.
+    query.codomain_tolerance = tolerance * codomain;
+    const Box root{{0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, 0};
+
+    // Step 4: the earliest time a contact cannot be excluded over all of (u, v): bisect t alone,
+    // earlier slabs first, dropping excluded slabs, until a surviving slab is within tolerance.
+    // Everything before it holds no contact, so the search of step 5 starts there. Without this,
+    // a contact that begins at one instant along a whole curve of (u, v) (parallel edges in
+    // contact, a vertex reaching a zero-area face) would be split in u and v along the curve
+    // first, and each piece refined in t on its own: O(1 / tolerance) boxes.
+    std::vector<Box>& heap = thread_heap();  // used as a stack here, in t order from the back
     heap.clear();
-    heap.push_back(Box{{0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, 0});
-    int iterations = 0;
-    double values[8][3];
-    double child_values[8][3];
+    int iterations = 1;  // the root box above
+    double start = 0.0;
+    bool is_any_left = false;  // a slab survived
+    heap.push_back(root);
+    bool is_evaluated = true;
     while (!heap.empty()) {
-        std::pop_heap(heap.begin(), heap.end(), is_later);
-        const Box box = heap.back();
+        const Box slab = heap.back();
         heap.pop_back();
+        if (iterations >= max_iterations) {
+            // Every slab before this one is excluded.
+            return {.hit = true,
+                    .toi = slab.lo[0],
+                    .iterations = iterations,
+                    .hit_iteration_limit = true};
+        }
+        if (!is_evaluated) {
+            ++iterations;
+            if (is_slab_excluded(query, slab.lo[0], slab.lo[0] + slab.width[0], codomain)) {
+                continue;
+            }
+        }
+        is_evaluated = false;
+        if (codomain <= query.codomain_tolerance) {
+            return {.hit = true,
+                    .toi = slab.lo[0],
+                    .iterations = iterations,
+                    .hit_iteration_limit = false};
+        }
+        if (!(slab.width[0] > tolerance)) {
+            start = slab.lo[0];
+            is_any_left = true;
+            break;
+        }
+        const auto [lower, upper] = split(slab, 0);
+        heap.push_back(upper);
+        heap.push_back(lower);
+    }
+    if (!is_any_left) {
+        return {.hit = false, .toi = 1.0, .iterations = iterations, .hit_iteration_limit = false};
+    }
+
+    // Step 5: best-first bisection of [start, 1] x [0, 1]^2: always refine the open box with the
+    // smallest t_lo (ties: the deepest, which drills towards a terminal box instead of widening
+    // the front). `box` is the box being refined; when has_box is true it has survived the test,
+    // its corner values are in `values`, and it starts no later than any box in the heap.
+    heap.clear();
+    Box box = root;
+    box.lo[0] = start;
+    box.width[0] = 1.0 - start;  // exact: start is dyadic
+    bool has_box = false;
+    heap.push_back(box);
+    double values[8][3];
+    double child_values[2][8][3];
+    for (;;) {
+        if (!has_box) {
+            if (heap.empty()) {
+                return {.hit = false,
+                        .toi = 1.0,
+                        .iterations = iterations,
+                        .hit_iteration_limit = false};
+            }
+            std::pop_heap(heap.begin(), heap.end(), is_later);
+            box = heap.back();
+            heap.pop_back();
+        }
         if (iterations >= max_iterations) {
             // box.lo[0] is the smallest t_lo of every unexplored box.
             return {.hit = true,
@@ -213,26 +479,45 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
                     .iterations = iterations,
                     .hit_iteration_limit = true};
         }
-        ++iterations;
-        if (is_box_excluded(query, box, values)) {
-            continue;
+        if (!has_box) {
+            ++iterations;
+            if (is_box_excluded(query, box, values)) {
+                continue;
+            }
         }
-        // Step 3: when splitting t excludes one half, keep only the other. Without this, a
-        // contact along a curve at one instant (parallel edges, a zero-area face) would be
-        // refined in u and v along the whole curve before t, costing O(1 / tolerance) boxes.
+        has_box = false;
+        if (codomain_width(values) <= query.codomain_tolerance) {
+            return {.hit = true,
+                    .toi = box.lo[0],
+                    .iterations = iterations,
+                    .hit_iteration_limit = false};
+        }
+        // Step 6: when splitting t excludes one half, go on with the other, directly when it
+        // starts no later than the heap's first box. Refining t before u and v keeps a contact
+        // near one instant from being cut into many pieces along (u, v).
         if (box.width[0] > tolerance) {
             const auto [lower, upper] = split(box, 0);
             iterations += 2;
-            const bool is_lower_excluded = is_box_excluded(query, lower, child_values);
-            const bool is_upper_excluded = is_box_excluded(query, upper, child_values);
-            if (is_lower_excluded || is_upper_excluded) {
-                if (!is_lower_excluded) {
-                    push(heap, lower);
-                }
-                if (!is_upper_excluded) {
+            const bool is_lower_excluded = is_box_excluded(query, lower, child_values[0]);
+            const bool is_upper_excluded = is_box_excluded(query, upper, child_values[1]);
+            if (!is_lower_excluded && is_upper_excluded) {
+                box = lower;  // same t_lo, deeper: first in heap order
+                std::copy_n(&child_values[0][0][0], 24, &values[0][0]);
+                has_box = true;
+                continue;
+            }
+            if (is_lower_excluded && !is_upper_excluded) {
+                if (heap.empty() || !is_later(upper, heap.front())) {
+                    box = upper;
+                    std::copy_n(&child_values[1][0][0], 24, &values[0][0]);
+                    has_box = true;
+                } else {
                     push(heap, upper);
                 }
                 continue;
+            }
+            if (is_lower_excluded) {
+                continue;  // both halves excluded
             }
         }
         const int dim = split_dimension(box, values, tolerance);
@@ -247,7 +532,6 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         push(heap, lower);
         push(heap, upper);
     }
-    return {.hit = false, .toi = 1.0, .iterations = iterations, .hit_iteration_limit = false};
 }
 
 }  // namespace
