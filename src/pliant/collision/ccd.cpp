@@ -345,35 +345,50 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
     const int max_iterations = std::max(options.max_iterations, 1);
     const double min_separation = options.min_separation > 0.0 ? options.min_separation : 0.0;
 
-    // Step 2: the query; inputs out of range report a conservative hit.
+    // Step 2: the whole step at once along the axes, straight from the inputs; most pairs from a
+    // broad phase end here. Inputs out of range report a conservative hit.
+    double magnitude[3];
+    double codomain = 0.0;  // the widest range of F over the step, over the axes
+    bool is_in_range = std::isfinite(min_separation);
+    bool is_excluded_step = false;
+    for (int axis = 0; axis < 3; ++axis) {
+        double x[2][4];
+        magnitude[axis] = 0.0;
+        for (int k = 0; k < 4; ++k) {
+            x[0][k] = t0[k][axis];
+            x[1][k] = t1[k][axis];
+            const double m0 = std::fabs(x[0][k]);
+            const double m1 = std::fabs(x[1][k]);
+            is_in_range &= (m0 < MAX_COORDINATE) & (m1 < MAX_COORDINATE);  // false for NaN
+            magnitude[axis] = std::max({magnitude[axis], m0, m1});
+        }
+        double lo = 0.0;
+        double hi = 0.0;
+        is_excluded_step |= is_step_excluded(
+            kind, x, magnitude[axis] * RELATIVE_ERROR + UNDERFLOW_ERROR, min_separation, lo, hi);
+        codomain = std::max(codomain, hi - lo);
+    }
+    if (!is_in_range) {
+        return {.hit = true, .toi = 0.0, .iterations = 0, .hit_iteration_limit = false};
+    }
+    if (is_excluded_step) {
+        return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
+    }
+
+    // Step 3: the query, then the whole step along the separating directions.
     Query query;
     query.kind = kind;
     query.min_separation = min_separation;
     query.num_directions = 0;
     query.codomain_tolerance = 0.0;
-    bool is_in_range = std::isfinite(min_separation);
     for (int axis = 0; axis < 3; ++axis) {
-        query.magnitude[axis] = 0.0;
         for (int k = 0; k < 4; ++k) {
-            for (const double c : {t0[k][axis], t1[k][axis]}) {
-                is_in_range &= std::fabs(c) < MAX_COORDINATE;  // false for NaN
-                query.magnitude[axis] = std::max(query.magnitude[axis], std::fabs(c));
-            }
             query.start[k][axis] = t0[k][axis];
             query.end[k][axis] = t1[k][axis];
             query.displacement[k][axis] = t1[k][axis] - t0[k][axis];
         }
-        query.error[axis] = query.magnitude[axis] * RELATIVE_ERROR + UNDERFLOW_ERROR;
-    }
-    if (!is_in_range) {
-        return {.hit = true, .toi = 0.0, .iterations = 0, .hit_iteration_limit = false};
-    }
-
-    // Step 3: the whole step at once, along the axes, then along the separating directions. Most
-    // pairs from a broad phase end here.
-    double codomain = 0.0;
-    if (is_slab_excluded(query, 0.0, 1.0, codomain)) {
-        return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
+        query.magnitude[axis] = magnitude[axis];
+        query.error[axis] = magnitude[axis] * RELATIVE_ERROR + UNDERFLOW_ERROR;
     }
     const Directions directions = separating_directions(kind, t0, t1);
     query.num_directions = directions.count;
@@ -391,7 +406,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         query.direction_slab_error[d] =
             (scale * STEP_PROJECTION_ERROR + UNDERFLOW_ERROR) * ROUND_UP;
     }
-    double unused = 0.0;
+    double unused = 0.0;  // the axes' range is already in codomain
     if (directions.count > 0 && is_slab_excluded(query, 0.0, 1.0, unused, false)) {
         return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
     }
@@ -412,6 +427,15 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
     bool is_any_left = false;  // a slab survived
     heap.push_back(root);
     bool is_evaluated = true;
+    // When the features' hulls already meet at t = 0 (neighbours in a cloth), the search starts
+    // at 0: nothing to bisect.
+    if (iterations < max_iterations) {
+        ++iterations;
+        if (!is_slab_excluded(query, 0.0, 0.0, unused)) {
+            is_any_left = true;
+            heap.clear();
+        }
+    }
     while (!heap.empty()) {
         const Box slab = heap.back();
         heap.pop_back();

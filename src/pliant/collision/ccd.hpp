@@ -33,8 +33,9 @@
 //      feature parameters, so over a slab of time and all of the features its range lies between
 //      its values at the slab's two ends at the features' corners (for a face its 3 vertices,
 //      tighter than the (u, v) square); most pairs from a broad phase end here.
-//   2. t alone: the same slab test, bisecting t, earlier slabs first, dropping excluded slabs,
-//      until a surviving slab is within tolerance wide; no contact precedes its start.
+//   2. t alone: the same slab test, first at the instant t = 0 (when it survives, the search
+//      starts at 0), then bisecting t, earlier slabs first, dropping excluded slabs, until a
+//      surviving slab is within tolerance wide; no contact precedes its start.
 //   3. best-first over [start, 1] × [0, 1]²: always refine the open box with the smallest t_lo
 //      (ties: the deepest). Refining a box first tries its two t-halves and goes on with the
 //      survivor when one is discarded; otherwise it bisects the dimension along which the corner
