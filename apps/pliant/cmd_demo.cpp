@@ -6,7 +6,8 @@
 //      at drape size), written to DIR/folded_sheet.ply; the self-collision broad phase on it,
 //      static, inflation a quarter edge: pair counts and stage timings;
 //   2. the same, swept from the folded sheet to a moved copy (a travelling sine wave of 0.1 edge
-//      lengths, DIR/folded_sheet_t1.ply);
+//      lengths, DIR/folded_sheet_t1.ply), with the continuous narrow phase (conservative CCD) on
+//      every pair: hits and the earliest time of impact;
 //   3. the paper's BVH table (bench/peers/bvh_table.hpp) at 2,244, 27,030 and 35,992 triangles,
 //      3 repetitions, beside Embree and brute force;
 //   4. DIR/summary.json with every number (schema in docs/formats.md).
@@ -56,10 +57,11 @@ struct DemoOptions {
 
 // One broad-phase configuration, measured like `pliant collide --repeat N` after one untimed
 // warm-up update.
+// With swept, the continuous narrow phase runs on the pairs too (`collide --ccd`).
 nlohmann::ordered_json measure(const geometry::TriangleMeshD& mesh,
                                std::span<const Vec3d> positions_t1, double inflation, bool swept) {
     return to_json(measure_broad_phase(mesh, positions_t1, inflation, COLLIDE_REPEATS, swept,
-                                       /*warm_up=*/true));
+                                       /*warm_up=*/true, /*narrow=*/swept));
 }
 
 std::string format_broad_phase(const std::string& title, const nlohmann::ordered_json& r) {
@@ -76,6 +78,13 @@ std::string format_broad_phase(const std::string& title, const nlohmann::ordered
         "refit-based update)\n",
         "features", r["features_ms"].get<double>(), "total", r["total_ms"].get<double>(),
         COLLIDE_REPEATS);
+    if (r.contains("narrow_ms")) {
+        text += fmt::format("  {:<16}{:>7.3f} ms   {:<16}{:>10}   {:<16}{:>10}   earliest toi {}\n",
+                            "narrow (CCD)", r["narrow_ms"].get<double>(), "VF hits",
+                            thousands(r["vf_hits"].get<std::int64_t>()), "EE hits",
+                            thousands(r["ee_hits"].get<std::int64_t>()),
+                            r["earliest_toi"].get<double>());
+    }
     return text;
 }
 
@@ -156,7 +165,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
                         workload.amplitude, inflation),
             swept_result));
     say(quiet,
-        fmt::format("  reproduce: pliant collide {} --to {} --inflate {} --repeat {}\n\n",
+        fmt::format("  reproduce: pliant collide {} --to {} --inflate {} --repeat {} --ccd\n\n",
                     sheet_path.string(), sheet_t1_path.string(), inflation, COLLIDE_REPEATS));
 
     // Step 3: the paper's BVH table.

@@ -204,8 +204,10 @@ TEST(CcdVertexFace, NonFiniteInputIsAConservativeHit) {
 }
 
 TEST(CcdVertexFace, IterationLimitReportsConservativeHit) {
-    // A near miss that the root box cannot exclude.
-    const Positions p = vf_static_face({0.6, 0.6, 1.0}, {0.6, 0.6, -1.0});
+    // A miss that no whole-step test can exclude: the vertex passes over the face (at t = 0.3 it
+    // is above (0.7, 0.1)) and crosses the plane at (0.5, -0.1), outside it.
+    const Positions p = vf_static_face({1.0, 0.4, 1.0}, {0.0, -0.6, -1.0});
+    expect_no_hit(run_vf(p));
     const CcdResult limited = run_vf(p, {.max_iterations = 1});
     EXPECT_TRUE(limited.hit);
     EXPECT_TRUE(limited.hit_iteration_limit);

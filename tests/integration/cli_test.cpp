@@ -320,13 +320,23 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
     for (const char* mode : {"static", "swept"}) {
         const nlohmann::json& expected = summary.at(mode);
         std::string args = "collide " + quoted(dir / "folded_sheet.ply");
-        if (expected.at("swept").get<bool>()) {
-            args += " --to " + quoted(dir / "folded_sheet_t1.ply");
+        const bool swept = expected.at("swept").get<bool>();
+        if (swept) {
+            args += " --to " + quoted(dir / "folded_sheet_t1.ply") + " --ccd";
         }
         args += " --inflate " + expected.at("inflation").dump() + " --json";
         const nlohmann::json json = parse_json(run_cli(args, scratch));
         for (const char* key : {"triangle_pairs", "vf_pairs", "ee_pairs"}) {
             EXPECT_EQ(json.at(key), expected.at(key)) << mode << " " << key;
+        }
+        EXPECT_EQ(expected.contains("vf_hits"), swept) << mode;
+        if (swept) {
+            // The layers are 1.5 edges apart and move by 0.1 edge: nothing touches.
+            for (const char* key : {"vf_hits", "ee_hits", "earliest_toi"}) {
+                EXPECT_EQ(json.at(key), expected.at(key)) << mode << " " << key;
+            }
+            EXPECT_EQ(expected.at("vf_hits").get<std::int64_t>(), 0);
+            EXPECT_EQ(expected.at("ee_hits").get<std::int64_t>(), 0);
         }
         EXPECT_GT(expected.at("vf_pairs").get<std::int64_t>(), 0) << mode;
     }

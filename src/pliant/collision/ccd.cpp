@@ -31,6 +31,9 @@ constexpr double PROJECTION_ERROR = 0x1p-50;
 constexpr double ROUND_UP = 1.0 + 0x1p-40;
 // Error of a difference of two projections n · p of lerped points per unit of Σ |n_i| M_i.
 constexpr double STEP_PROJECTION_ERROR = 0x1p-48;
+// Separating directions: n and m (boxes and slabs), plus up to two in-plane normals (slabs only).
+constexpr int BOX_DIRECTIONS = 2;
+constexpr int MAX_DIRECTIONS = 4;
 // Below this sine of the angle between a and b, n is taken as any normal of a.
 constexpr double PARALLEL_SINE = 1e-6;
 
@@ -67,9 +70,9 @@ struct Query {
     // The separating directions n and m of ccd.hpp (unit vectors), δ ‖n‖₁ rounded up, and the
     // error bound of a slab test along them; used only when num_directions is 2.
     int num_directions;
-    double direction[2][3];
-    double direction_separation[2];
-    double direction_slab_error[2];
+    double direction[MAX_DIRECTIONS][3];
+    double direction_separation[MAX_DIRECTIONS];
+    double direction_slab_error[MAX_DIRECTIONS];
     // A surviving box whose corner values span at most this on every axis is terminal.
     double codomain_tolerance;
 };
@@ -129,7 +132,7 @@ bool is_excluded(const Query& query, const double values[8][3]) {
         }
         magnitude[axis] = std::max(-lo, hi);
     }
-    for (int k = 0; k < query.num_directions; ++k) {
+    for (int k = 0; k < std::min(query.num_directions, BOX_DIRECTIONS); ++k) {
         const double* n = query.direction[k];
         double lo = 0.0;
         double hi = 0.0;
@@ -169,12 +172,13 @@ double codomain_width(const double values[8][3]) {
 
 // The separating directions of ccd.hpp, from the positions at mid-step: n normal to the pair's
 // two direction vectors a (the longer) and b (the edges, or the face's edges f1 - f0 and f2 - f0),
-// or any normal of a when they are (nearly) parallel; m = â × n. Unit vectors. None when both
-// vectors are zero or not finite (the contact set is then a point for each t, or the input is out
-// of range).
+// or any normal of a when they are (nearly) parallel; m = â × n; then, for the slab tests only,
+// the in-plane normals e × n of the pair's other edges (b, and for a face also f2 - f1), which
+// separate coplanar neighbours (a flat cloth). Unit vectors. None when both vectors are zero or
+// not finite (the contact set is then a point for each t, or the input is out of range).
 struct Directions {
     int count = 0;
-    Vec3d direction[2];
+    Vec3d direction[MAX_DIRECTIONS];
 };
 
 Directions separating_directions(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4]) {
@@ -206,7 +210,16 @@ Directions separating_directions(Kind kind, const Vec3d (&t0)[4], const Vec3d (&
         return {};
     }
     n = n * (1.0 / length_n);
-    return {.count = 2, .direction = {n, cross(a * (1.0 / length_a), n)}};
+    Directions directions{.count = 2, .direction = {n, cross(a * (1.0 / length_a), n)}};
+    const Vec3d others[2] = {b, mid[3] - mid[2]};  // for a face: f2 - f0 (or f1 - f0), f2 - f1
+    for (int k = 0; k < (kind == Kind::VERTEX_FACE ? 2 : 1); ++k) {
+        const Vec3d normal = cross(others[k], n);
+        const double length = norm(normal);
+        if (length > 0.0 && std::isfinite(length)) {
+            directions.direction[directions.count++] = normal * (1.0 / length);
+        }
+    }
+    return directions;
 }
 
 // δ ‖n‖₁ rounded up: the largest |n · F| inside the contact box [-δ, δ]³.

@@ -26,7 +26,9 @@
 // to the plane), and m · F nearly independent of u. They matter when the axes cannot separate a
 // box because F is nearly zero along a whole curve of (u, v): edges lying along each other (a
 // folded or stacked cloth), a zero-area face; the axes would then need O(1 / tolerance) boxes
-// along the curve.
+// along the curve. The whole-step and slab tests below also use the in-plane normals e × n of
+// the pair's other edges (b; for a face also f2 - f1), which separate coplanar neighbours in a
+// flat cloth.
 //
 // The search:
 //   1. The whole step at once, along the axes and then along n and m: F is bilinear in t and the
