@@ -1,0 +1,30 @@
+// ClothMaterial: the physical parameters of an XPBD cloth (SI units), with defaults for a light
+// cotton-like fabric.
+//
+// Compliances are XPBD's α (Macklin, Müller, Chentanez, "XPBD: Position-Based Simulation of
+// Compliant Constrained Dynamics", MIG 2016): the inverse stiffness of a constraint C with energy
+// ½ C² / α. A constraint's step uses α̃ = α / h² for the substep h, so 0 means rigid (as far as
+// the substeps converge) and larger values are softer.
+#pragma once
+
+namespace pliant::cloth {
+
+struct ClothMaterial {
+    // kg/m²: mass per unit of rest area; each vertex gets a third of its triangles' mass.
+    double areal_density = 0.15;
+    // m/N, per edge, for C = |x_i - x_j| - rest length (metres). 0: inextensible.
+    double stretch_compliance = 1e-7;
+    // rad²/J = 1/(N·m), per interior edge, for C = dihedral angle - rest angle (radians).
+    double bend_compliance = 1.0;
+    // 1/s: velocities lose the fraction damping · h of themselves every substep h.
+    double damping = 0.5;
+    // m: the distance the cloth keeps from obstacles (and, with self-collision, from itself).
+    double thickness = 0.005;
+    // Coulomb friction against obstacles (unitless): static (sticks while the tangential move is
+    // at most static_friction · penetration) and kinetic (slides, slowed by kinetic_friction ·
+    // penetration).
+    double static_friction = 0.4;
+    double kinetic_friction = 0.3;
+};
+
+}  // namespace pliant::cloth

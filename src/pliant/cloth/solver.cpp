@@ -1,0 +1,307 @@
+#include "pliant/cloth/solver.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "pliant/cloth/dihedral.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/geometry/topology.hpp"
+#include "pliant/geometry/validate.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
+constexpr std::int64_t VERTEX_GRAIN = 2048;
+
+void validate_material(const ClothMaterial& m) {
+    const auto check = [](double value, const char* name) {
+        if (!(value >= 0.0) || !std::isfinite(value)) {
+            throw InvalidInput(fmt::format(
+                "cloth material: {} must be a finite number >= 0, got {}", name, value));
+        }
+    };
+    check(m.areal_density, "areal_density");
+    check(m.stretch_compliance, "stretch_compliance");
+    check(m.bend_compliance, "bend_compliance");
+    check(m.damping, "damping");
+    check(m.thickness, "thickness");
+    check(m.static_friction, "static_friction");
+    check(m.kinetic_friction, "kinetic_friction");
+}
+
+// Wraps an angle difference into (-π, π].
+double wrap_angle(double angle) {
+    constexpr double TWO_PI = 2.0 * std::numbers::pi;
+    while (angle > std::numbers::pi) {
+        angle -= TWO_PI;
+    }
+    while (angle <= -std::numbers::pi) {
+        angle += TWO_PI;
+    }
+    return angle;
+}
+
+}  // namespace
+
+ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMaterial& material,
+                         std::span<const std::int32_t> pinned)
+    : m_material(material),
+      m_triangles(rest_mesh.triangles),
+      m_positions(rest_mesh.positions),
+      m_previous_positions(rest_mesh.positions),
+      m_velocities(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 0.0}),
+      m_inverse_masses(rest_mesh.positions.size(), 0.0),
+      m_contact_depths(rest_mesh.positions.size(), 0.0),
+      m_contact_normals(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 1.0}) {
+    validate_material(material);
+    geometry::validate_mesh(rest_mesh, "cloth mesh");
+    const std::size_t num_vertices = m_positions.size();
+
+    // Masses from the rest area.
+    std::vector<double> masses(num_vertices, 0.0);
+    for (const geometry::Triangle& t : m_triangles) {
+        const Vec3d& a = m_positions[static_cast<std::size_t>(t[0])];
+        const Vec3d& b = m_positions[static_cast<std::size_t>(t[1])];
+        const Vec3d& c = m_positions[static_cast<std::size_t>(t[2])];
+        const double third = material.areal_density * 0.5 * norm(cross(b - a, c - a)) / 3.0;
+        for (const std::int32_t v : t) {
+            masses[static_cast<std::size_t>(v)] += third;
+        }
+    }
+    for (std::size_t v = 0; v < num_vertices; ++v) {
+        m_inverse_masses[v] = masses[v] > 0.0 ? 1.0 / masses[v] : 0.0;
+    }
+    for (const std::int32_t v : pinned) {
+        if (v < 0 || static_cast<std::size_t>(v) >= num_vertices) {
+            throw InvalidInput(
+                fmt::format("cloth: pinned vertex {} out of range, expected an index in [0, {})", v,
+                            num_vertices));
+        }
+        m_inverse_masses[static_cast<std::size_t>(v)] = 0.0;
+    }
+
+    // Constraints from the topology.
+    const geometry::MeshTopology topology = geometry::build_topology(m_triangles, num_vertices);
+    for (const geometry::Edge& e : topology.edges) {
+        m_stretch_vertices.push_back({e[0], e[1]});
+        m_rest_lengths.push_back(norm(m_positions[static_cast<std::size_t>(e[1])] -
+                                      m_positions[static_cast<std::size_t>(e[0])]));
+    }
+    for (std::int32_t e = 0; e < static_cast<std::int32_t>(topology.num_edges()); ++e) {
+        const std::span<const std::int32_t> faces = topology.triangles_of_edge(e);
+        if (faces.size() != 2) {
+            continue;  // boundary or non-manifold edge: no bending
+        }
+        const geometry::Edge& edge = topology.edges[static_cast<std::size_t>(e)];
+        // Orient the shared edge as triangle A traverses it: A = (x0, x2, x3).
+        const geometry::Triangle& a = m_triangles[static_cast<std::size_t>(faces[0])];
+        const geometry::Triangle& b = m_triangles[static_cast<std::size_t>(faces[1])];
+        std::int32_t x2 = edge[0];
+        std::int32_t x3 = edge[1];
+        for (int k = 0; k < 3; ++k) {
+            if (a[static_cast<std::size_t>(k)] == edge[1] &&
+                a[static_cast<std::size_t>((k + 1) % 3)] == edge[0]) {
+                std::swap(x2, x3);
+            }
+        }
+        const auto opposite = [&](const geometry::Triangle& t) {
+            for (const std::int32_t v : t) {
+                if (v != edge[0] && v != edge[1]) {
+                    return v;
+                }
+            }
+            return t[0];
+        };
+        const std::array<std::int32_t, 4> vertices{opposite(a), opposite(b), x2, x3};
+        if (vertices[0] == vertices[1]) {
+            continue;  // two triangles on the same three vertices
+        }
+        m_bending_vertices.push_back(vertices);
+        const auto at = [&](std::int32_t v) {
+            return m_positions[static_cast<std::size_t>(v)];
+        };
+        m_rest_angles.push_back(dihedral_angle_value(at(vertices[0]), at(vertices[1]),
+                                                     at(vertices[2]), at(vertices[3])));
+    }
+    m_stretch_colors = color_constraints(
+        static_cast<std::int64_t>(m_stretch_vertices.size()),
+        static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
+            return std::span<const std::int32_t>(m_stretch_vertices[static_cast<std::size_t>(i)]);
+        });
+    m_bending_colors = color_constraints(
+        static_cast<std::int64_t>(m_bending_vertices.size()),
+        static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
+            return std::span<const std::int32_t>(m_bending_vertices[static_cast<std::size_t>(i)]);
+        });
+}
+
+void ClothSolver::add_obstacle(const Obstacle& obstacle) {
+    if (const auto* plane = std::get_if<PlaneObstacle>(&obstacle)) {
+        if (!(squared_norm(plane->normal) > 0.0)) {
+            throw InvalidInput("cloth: a plane obstacle needs a nonzero normal");
+        }
+    }
+    if (const auto* sphere = std::get_if<SphereObstacle>(&obstacle)) {
+        if (!(sphere->radius > 0.0) || !std::isfinite(sphere->radius)) {
+            throw InvalidInput(fmt::format(
+                "cloth: a sphere obstacle needs a finite radius > 0, got {}", sphere->radius));
+        }
+    }
+    if (const auto* box = std::get_if<BoxObstacle>(&obstacle)) {
+        if (!(box->min.x <= box->max.x && box->min.y <= box->max.y && box->min.z <= box->max.z)) {
+            throw InvalidInput("cloth: a box obstacle needs min <= max on every axis");
+        }
+    }
+    m_obstacles.push_back(obstacle);
+}
+
+ClothStepStats ClothSolver::step(double dt, int substeps) {
+    if (!(dt > 0.0) || !std::isfinite(dt) || substeps < 1) {
+        throw InvalidInput(fmt::format(
+            "cloth step: expected dt > 0 (finite) and substeps >= 1, got dt {} and substeps {}", dt,
+            substeps));
+    }
+    Stopwatch watch;
+    const double h = dt / substeps;
+    ClothStepStats stats;
+    for (int s = 0; s < substeps; ++s) {
+        stats.obstacle_contacts = substep(h);
+    }
+    stats.ms = watch.elapsed_ms();
+    return stats;
+}
+
+std::int64_t ClothSolver::substep(double h) {
+    const auto n = static_cast<std::int64_t>(m_positions.size());
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_previous_positions[v] = m_positions[v];
+            if (m_inverse_masses[v] > 0.0) {
+                m_velocities[v] += m_gravity * h;
+                m_positions[v] += m_velocities[v] * h;
+            }
+        },
+        VERTEX_GRAIN);
+    project_stretch(h);
+    project_bending(h);
+    const std::int64_t contacts = resolve_obstacles();
+    const double keep = std::max(0.0, 1.0 - m_material.damping * h);
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            Vec3d velocity = (m_positions[v] - m_previous_positions[v]) * (1.0 / h);
+            if (m_contact_depths[v] > 0.0) {
+                velocity = apply_friction(velocity, m_contact_normals[v], m_contact_depths[v] / h,
+                                          m_material.static_friction, m_material.kinetic_friction);
+            }
+            m_velocities[v] = velocity * keep;
+        },
+        VERTEX_GRAIN);
+    return contacts;
+}
+
+void ClothSolver::project_stretch(double h) {
+    const double alpha = m_material.stretch_compliance / (h * h);
+    for (std::int32_t c = 0; c < m_stretch_colors.num_colors(); ++c) {
+        const std::span<const std::int32_t> color = m_stretch_colors.color(c);
+        parallel_for(
+            static_cast<std::int64_t>(color.size()),
+            [&](std::int64_t k) {
+                const auto i = static_cast<std::size_t>(color[static_cast<std::size_t>(k)]);
+                const auto [p, q] = m_stretch_vertices[i];
+                const double w_p = m_inverse_masses[static_cast<std::size_t>(p)];
+                const double w_q = m_inverse_masses[static_cast<std::size_t>(q)];
+                const double w = w_p + w_q;
+                Vec3d& x_p = m_positions[static_cast<std::size_t>(p)];
+                Vec3d& x_q = m_positions[static_cast<std::size_t>(q)];
+                const Vec3d d = x_p - x_q;
+                const double length = norm(d);
+                if (!(w > 0.0) || !(length > 0.0)) {
+                    return;
+                }
+                const double lambda = -(length - m_rest_lengths[i]) / (w + alpha);
+                const Vec3d gradient = d * (1.0 / length);
+                x_p += gradient * (w_p * lambda);
+                x_q -= gradient * (w_q * lambda);
+            },
+            CONSTRAINT_GRAIN);
+    }
+}
+
+void ClothSolver::project_bending(double h) {
+    const double alpha = m_material.bend_compliance / (h * h);
+    for (std::int32_t c = 0; c < m_bending_colors.num_colors(); ++c) {
+        const std::span<const std::int32_t> color = m_bending_colors.color(c);
+        parallel_for(
+            static_cast<std::int64_t>(color.size()),
+            [&](std::int64_t k) {
+                const auto i = static_cast<std::size_t>(color[static_cast<std::size_t>(k)]);
+                const std::array<std::int32_t, 4>& vertices = m_bending_vertices[i];
+                Vec3d* x[4];
+                double w[4];
+                double weight = 0.0;
+                for (int j = 0; j < 4; ++j) {
+                    x[j] = &m_positions[static_cast<std::size_t>(
+                        vertices[static_cast<std::size_t>(j)])];
+                    w[j] = m_inverse_masses[static_cast<std::size_t>(
+                        vertices[static_cast<std::size_t>(j)])];
+                }
+                const DihedralAngle angle = dihedral_angle(*x[0], *x[1], *x[2], *x[3]);
+                if (!angle.is_valid) {
+                    return;
+                }
+                for (int j = 0; j < 4; ++j) {
+                    weight += w[j] * squared_norm(angle.gradient[static_cast<std::size_t>(j)]);
+                }
+                if (!(weight > 0.0)) {
+                    return;
+                }
+                const double constraint = wrap_angle(angle.angle - m_rest_angles[i]);
+                const double lambda = -constraint / (weight + alpha);
+                for (int j = 0; j < 4; ++j) {
+                    *x[j] += angle.gradient[static_cast<std::size_t>(j)] * (w[j] * lambda);
+                }
+            },
+            CONSTRAINT_GRAIN);
+    }
+}
+
+std::int64_t ClothSolver::resolve_obstacles() {
+    if (m_obstacles.empty()) {
+        return 0;
+    }
+    return parallel_reduce(
+        static_cast<std::int64_t>(m_positions.size()), std::int64_t{0},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::int64_t contacts = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                m_contact_depths[v] = 0.0;
+                if (!(m_inverse_masses[v] > 0.0)) {
+                    continue;
+                }
+                for (const Obstacle& obstacle : m_obstacles) {
+                    const ContactCorrection contact =
+                        push_out(obstacle, m_positions[v], m_material.thickness);
+                    if (contact.depth > m_contact_depths[v]) {
+                        m_contact_depths[v] = contact.depth;
+                        m_contact_normals[v] = contact.normal;
+                    }
+                }
+                contacts += m_contact_depths[v] > 0.0 ? 1 : 0;
+            }
+            return contacts;
+        },
+        [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
+}
+
+}  // namespace pliant::cloth
