@@ -19,5 +19,6 @@ void register_collide(CLI::App& app, const GlobalOptions& global);
 void register_ccd(CLI::App& app, const GlobalOptions& global);
 void register_bench(CLI::App& app, const GlobalOptions& global);
 void register_demo(CLI::App& app, const GlobalOptions& global);
+void register_cloth(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace pliant::cli

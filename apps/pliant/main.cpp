@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     cli::register_ccd(app, global);
     cli::register_bench(app, global);
     cli::register_demo(app, global);
+    cli::register_cloth(app, global);
 
     try {
         app.parse(argc, argv);

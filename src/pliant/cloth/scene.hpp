@@ -1,0 +1,58 @@
+// ClothScene: everything `pliant cloth` simulates, as plain data: the cloth (a generated grid or
+// a mesh file) and its placement, pins, material, obstacles, gravity, timing and output format.
+// Read from JSON by io::read_cloth_scene (format and defaults in docs/formats.md); built into a
+// ClothSolver by the caller.
+//
+// Units: SI; angles in degrees; +z up.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pliant/cloth/material.hpp"
+#include "pliant/cloth/obstacles.hpp"
+#include "pliant/core/vec3.hpp"
+
+namespace pliant::cloth {
+
+// A flat sheet of quads_x × quads_y quads, size_x × size_y metres, centred at the origin in the
+// z = 0 plane (geometry::make_grid_sheet), before the scene's transform.
+struct GridSheet {
+    std::array<double, 2> size{2.0, 2.0};
+    std::array<int, 2> quads{134, 134};
+};
+
+// An axis-aligned box of space; pins every vertex inside it (closed), after the transform.
+struct PinRegion {
+    Vec3d min;
+    Vec3d max;
+};
+
+struct ClothScene {
+    // The cloth: a grid, or a mesh file (OBJ/PLY; relative paths are relative to the scene file).
+    std::optional<GridSheet> grid;
+    std::filesystem::path mesh;
+    // Applied to the cloth's vertices in this order: rotate about x, then y, then z (degrees,
+    // right-handed), then translate (metres).
+    Vec3d rotate_degrees{0.0, 0.0, 0.0};
+    Vec3d translate{0.0, 0.0, 0.0};
+
+    std::vector<std::int32_t> pinned_vertices;
+    std::vector<PinRegion> pin_regions;
+
+    ClothMaterial material;
+    std::vector<Obstacle> obstacles;
+    Vec3d gravity{0.0, 0.0, -9.81};
+
+    double frames_per_second = 24.0;
+    int frames = 72;
+    int substeps = 20;  // per frame
+
+    std::string frame_format = "obj";  // "obj" or "ply"
+};
+
+}  // namespace pliant::cloth

@@ -1,0 +1,335 @@
+// Cloth scene JSON; the format is in docs/formats.md, the contract in cloth_scene.hpp.
+#include "pliant/io/cloth_scene.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <set>
+#include <string>
+
+#include "pliant/core/error.hpp"
+#include "pliant/io/detail/read_file.hpp"
+
+namespace pliant::io {
+namespace {
+
+using Json = nlohmann::json;
+
+std::string type_name(const Json& value) {
+    if (value.is_number_integer() || value.is_number_unsigned()) {
+        return "an integer";
+    }
+    if (value.is_number()) {
+        return "a number";
+    }
+    return fmt::format("a JSON {}", value.type_name());
+}
+
+// One JSON object being read: every key must be taken exactly by one of the get functions, and
+// finish() rejects keys nobody took. Errors name the file and the key path.
+class ObjectReader {
+public:
+    ObjectReader(const Json& object, std::string name, std::string path)
+        : m_object(object), m_name(std::move(name)), m_path(std::move(path)) {
+        if (!object.is_object()) {
+            fail(m_path.empty() ? "the scene" : m_path, "an object", type_name(object));
+        }
+    }
+
+    [[noreturn]] void fail(const std::string& key, const std::string& expected,
+                           const std::string& got) const {
+        throw IoError(fmt::format("{}: {}: expected {}, got {}", m_name, key, expected, got));
+    }
+
+    std::string key_path(const std::string& key) const {
+        return m_path.empty() ? key : fmt::format("{}.{}", m_path, key);
+    }
+
+    const Json* find(const std::string& key) {
+        m_known.insert(key);
+        const auto it = m_object.find(key);
+        return it == m_object.end() ? nullptr : &*it;
+    }
+
+    bool has(const std::string& key) const { return m_object.contains(key); }
+
+    double number(const std::string& key, double fallback, double lo, double hi) {
+        const Json* value = find(key);
+        if (value == nullptr) {
+            return fallback;
+        }
+        if (!value->is_number()) {
+            fail(key_path(key), "a number", type_name(*value));
+        }
+        const double x = value->get<double>();
+        if (!(x >= lo && x <= hi)) {
+            fail(key_path(key), fmt::format("a number in [{}, {}]", lo, hi), fmt::format("{}", x));
+        }
+        return x;
+    }
+
+    int integer(const std::string& key, int fallback, int lo, int hi) {
+        const Json* value = find(key);
+        if (value == nullptr) {
+            return fallback;
+        }
+        if (!value->is_number_integer() && !value->is_number_unsigned()) {
+            fail(key_path(key), "an integer", type_name(*value));
+        }
+        const auto x = value->get<std::int64_t>();
+        if (x < lo || x > hi) {
+            fail(key_path(key), fmt::format("an integer in [{}, {}]", lo, hi),
+                 fmt::format("{}", x));
+        }
+        return static_cast<int>(x);
+    }
+
+    Vec3d vector(const std::string& key, const Vec3d& fallback) {
+        const Json* value = find(key);
+        if (value == nullptr) {
+            return fallback;
+        }
+        return vector_value(*value, key_path(key));
+    }
+
+    Vec3d required_vector(const std::string& key) {
+        if (!has(key)) {
+            fail(key_path(key), "a required [x, y, z] array", "nothing");
+        }
+        return vector(key, {});
+    }
+
+    Vec3d vector_value(const Json& value, const std::string& where) const {
+        if (!value.is_array() || value.size() != 3) {
+            fail(where, "an array of 3 numbers",
+                 type_name(value) +
+                     (value.is_array() ? fmt::format(" of {} elements", value.size()) : ""));
+        }
+        double c[3];
+        for (std::size_t k = 0; k < 3; ++k) {
+            if (!value[k].is_number() || !std::isfinite(value[k].get<double>())) {
+                fail(fmt::format("{}[{}]", where, k), "a finite number", type_name(value[k]));
+            }
+            c[k] = value[k].get<double>();
+        }
+        return {c[0], c[1], c[2]};
+    }
+
+    std::string text(const std::string& key, const std::string& fallback,
+                     const std::set<std::string>& allowed) {
+        const Json* value = find(key);
+        if (value == nullptr) {
+            return fallback;
+        }
+        if (!value->is_string() || allowed.count(value->get<std::string>()) == 0) {
+            std::string list;
+            for (const std::string& a : allowed) {
+                list += fmt::format("{}\"{}\"", list.empty() ? "" : ", ", a);
+            }
+            fail(key_path(key), fmt::format("one of {}", list),
+                 value->is_string() ? fmt::format("\"{}\"", value->get<std::string>())
+                                    : type_name(*value));
+        }
+        return value->get<std::string>();
+    }
+
+    // Calls read(reader) on the object at key, when present.
+    bool object(const std::string& key, const std::function<void(ObjectReader&)>& read) {
+        const Json* value = find(key);
+        if (value == nullptr) {
+            return false;
+        }
+        ObjectReader inner(*value, m_name, key_path(key));
+        read(inner);
+        inner.finish();
+        return true;
+    }
+
+    const Json* array(const std::string& key) {
+        const Json* value = find(key);
+        if (value != nullptr && !value->is_array()) {
+            fail(key_path(key), "an array", type_name(*value));
+        }
+        return value;
+    }
+
+    const std::string& name() const { return m_name; }
+
+    void finish() const {
+        for (const auto& [key, value] : m_object.items()) {
+            if (m_known.count(key) == 0) {
+                std::string list;
+                for (const std::string& k : m_known) {
+                    list += fmt::format("{}{}", list.empty() ? "" : ", ", k);
+                }
+                fail(key_path(key), fmt::format("a known key ({})", list), "an unknown key");
+            }
+        }
+    }
+
+private:
+    const Json& m_object;
+    std::string m_name;
+    std::string m_path;
+    std::set<std::string> m_known;
+};
+
+constexpr double HUGE_VALUE = 1e12;
+
+void read_material(ObjectReader& r, cloth::ClothMaterial& m) {
+    m.areal_density = r.number("areal_density", m.areal_density, 1e-9, HUGE_VALUE);
+    m.stretch_compliance = r.number("stretch_compliance", m.stretch_compliance, 0.0, HUGE_VALUE);
+    m.bend_compliance = r.number("bend_compliance", m.bend_compliance, 0.0, HUGE_VALUE);
+    m.damping = r.number("damping", m.damping, 0.0, HUGE_VALUE);
+    m.thickness = r.number("thickness", m.thickness, 0.0, HUGE_VALUE);
+    m.static_friction = r.number("static_friction", m.static_friction, 0.0, HUGE_VALUE);
+    m.kinetic_friction = r.number("kinetic_friction", m.kinetic_friction, 0.0, HUGE_VALUE);
+}
+
+cloth::Obstacle read_obstacle(const Json& value, const std::string& name, const std::string& path) {
+    ObjectReader r(value, name, path);
+    cloth::Obstacle obstacle;
+    int kinds = 0;
+    kinds += r.object("plane", [&](ObjectReader& o) {
+        cloth::PlaneObstacle plane;
+        plane.point = o.vector("point", plane.point);
+        plane.normal = o.vector("normal", plane.normal);
+        if (!(squared_norm(plane.normal) > 0.0)) {
+            o.fail(o.key_path("normal"), "a nonzero vector", "[0, 0, 0]");
+        }
+        obstacle = plane;
+    });
+    kinds += r.object("sphere", [&](ObjectReader& o) {
+        cloth::SphereObstacle sphere;
+        sphere.center = o.vector("center", sphere.center);
+        sphere.radius = o.number("radius", sphere.radius, 1e-12, HUGE_VALUE);
+        obstacle = sphere;
+    });
+    kinds += r.object("box", [&](ObjectReader& o) {
+        cloth::BoxObstacle box;
+        box.min = o.required_vector("min");
+        box.max = o.required_vector("max");
+        if (!(box.min.x <= box.max.x && box.min.y <= box.max.y && box.min.z <= box.max.z)) {
+            o.fail(o.key_path("max"), "max >= min on every axis", "a smaller value");
+        }
+        obstacle = box;
+    });
+    r.finish();
+    if (kinds != 1) {
+        r.fail(path, "exactly one of \"plane\", \"sphere\", \"box\"",
+               fmt::format("{} of them", kinds));
+    }
+    return obstacle;
+}
+
+}  // namespace
+
+cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name,
+                                    const std::filesystem::path& base) {
+    const std::string file(name);
+    Json json;
+    try {
+        json = Json::parse(text);
+    } catch (const Json::exception& e) {  // parse_error, and out_of_range for 1e999
+        throw IoError(fmt::format("{}: not JSON: {}", file, e.what()));
+    }
+    cloth::ClothScene scene;
+    ObjectReader root(json, file, "");
+
+    const bool has_cloth = root.object("cloth", [&](ObjectReader& c) {
+        const bool has_grid = c.object("grid", [&](ObjectReader& g) {
+            cloth::GridSheet grid;
+            const Json* size = g.find("size");
+            if (size != nullptr) {
+                if (!size->is_array() || size->size() != 2 || !(*size)[0].is_number() ||
+                    !(*size)[1].is_number() || !((*size)[0].get<double>() > 0.0) ||
+                    !((*size)[1].get<double>() > 0.0) || !((*size)[0].get<double>() < 1e6) ||
+                    !((*size)[1].get<double>() < 1e6)) {
+                    g.fail(g.key_path("size"), "[width, height] in metres, each in (0, 1e6)",
+                           size->dump());
+                }
+                grid.size = {(*size)[0].get<double>(), (*size)[1].get<double>()};
+            }
+            const Json* quads = g.find("quads");
+            if (quads != nullptr) {
+                if (!quads->is_array() || quads->size() != 2 || !(*quads)[0].is_number_integer() ||
+                    !(*quads)[1].is_number_integer() || (*quads)[0].get<std::int64_t>() < 1 ||
+                    (*quads)[1].get<std::int64_t>() < 1 ||
+                    (*quads)[0].get<std::int64_t>() * (*quads)[1].get<std::int64_t>() >
+                        50'000'000) {
+                    g.fail(g.key_path("quads"),
+                           "[nx, ny], integers >= 1 with nx * ny <= 50,000,000", quads->dump());
+                }
+                grid.quads = {static_cast<int>((*quads)[0].get<std::int64_t>()),
+                              static_cast<int>((*quads)[1].get<std::int64_t>())};
+            }
+            scene.grid = grid;
+        });
+        const Json* mesh = c.find("mesh");
+        if (mesh != nullptr) {
+            if (!mesh->is_string() || mesh->get<std::string>().empty()) {
+                c.fail(c.key_path("mesh"), "a file name (OBJ or PLY)", type_name(*mesh));
+            }
+            const std::filesystem::path path(mesh->get<std::string>());
+            scene.mesh = path.is_absolute() ? path : base / path;
+        }
+        if (has_grid == (mesh != nullptr)) {
+            c.fail("cloth", "exactly one of \"grid\" and \"mesh\"", has_grid ? "both" : "neither");
+        }
+        scene.rotate_degrees = c.vector("rotate_degrees", scene.rotate_degrees);
+        scene.translate = c.vector("translate", scene.translate);
+    });
+    if (!has_cloth) {
+        root.fail("cloth", "a required object", "nothing");
+    }
+
+    root.object("pins", [&](ObjectReader& p) {
+        if (const Json* vertices = p.array("vertices")) {
+            for (std::size_t k = 0; k < vertices->size(); ++k) {
+                const Json& v = (*vertices)[k];
+                if (!v.is_number_integer() || v.get<std::int64_t>() < 0 ||
+                    v.get<std::int64_t>() > std::numeric_limits<std::int32_t>::max()) {
+                    p.fail(fmt::format("{}[{}]", p.key_path("vertices"), k),
+                           "a vertex index (integer >= 0)", v.dump());
+                }
+                scene.pinned_vertices.push_back(static_cast<std::int32_t>(v.get<std::int64_t>()));
+            }
+        }
+        if (const Json* regions = p.array("regions")) {
+            for (std::size_t k = 0; k < regions->size(); ++k) {
+                ObjectReader region((*regions)[k], p.name(),
+                                    fmt::format("{}[{}]", p.key_path("regions"), k));
+                cloth::PinRegion pin{region.required_vector("min"), region.required_vector("max")};
+                region.finish();
+                scene.pin_regions.push_back(pin);
+            }
+        }
+    });
+    root.object("material", [&](ObjectReader& m) { read_material(m, scene.material); });
+    if (const Json* obstacles = root.array("obstacles")) {
+        for (std::size_t k = 0; k < obstacles->size(); ++k) {
+            scene.obstacles.push_back(
+                read_obstacle((*obstacles)[k], file, fmt::format("obstacles[{}]", k)));
+        }
+    }
+    scene.gravity = root.vector("gravity", scene.gravity);
+    scene.frames_per_second = root.number("fps", scene.frames_per_second, 1e-3, 1e6);
+    scene.frames = root.integer("frames", scene.frames, 0, 1'000'000);
+    scene.substeps = root.integer("substeps", scene.substeps, 1, 100'000);
+    root.object("output", [&](ObjectReader& o) {
+        scene.frame_format = o.text("format", scene.frame_format, {"obj", "ply"});
+    });
+    root.finish();
+    return scene;
+}
+
+cloth::ClothScene read_cloth_scene(const std::filesystem::path& path) {
+    const std::string text = detail::read_file(path);
+    return parse_cloth_scene(text, path.string(),
+                             path.has_parent_path() ? path.parent_path() : ".");
+}
+
+}  // namespace pliant::io

@@ -1,0 +1,116 @@
+#include "pliant/io/cloth_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <variant>
+
+#include "pliant/core/error.hpp"
+
+namespace pliant::io {
+namespace {
+
+cloth::ClothScene parse(const std::string& text) {
+    return parse_cloth_scene(text, "scene.json", "/scenes");
+}
+
+// Expects IoError whose message names the file and contains every one of `parts`.
+void expect_error(const std::string& text, std::initializer_list<std::string> parts) {
+    try {
+        parse(text);
+        ADD_FAILURE() << "no error for " << text;
+    } catch (const IoError& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("scene.json"), std::string::npos) << message;
+        for (const std::string& part : parts) {
+            EXPECT_NE(message.find(part), std::string::npos) << message << " lacks " << part;
+        }
+    }
+}
+
+TEST(ClothScene, ReadsEveryKey) {
+    const cloth::ClothScene scene = parse(R"({
+        "cloth": {"grid": {"size": [1.5, 0.5], "quads": [30, 10]},
+                  "rotate_degrees": [90, 0, 0], "translate": [0, 0, 1]},
+        "pins": {"vertices": [0, 5], "regions": [{"min": [-1, -1, 0], "max": [1, 1, 2]}]},
+        "material": {"areal_density": 0.2, "stretch_compliance": 0, "bend_compliance": 3,
+                     "damping": 1, "thickness": 0.002, "static_friction": 0.5,
+                     "kinetic_friction": 0.4},
+        "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.5}},
+                      {"plane": {"point": [0, 0, -1], "normal": [0, 0, 1]}},
+                      {"box": {"min": [-1, -1, -1], "max": [1, 1, 0]}}],
+        "gravity": [0, 0, -1], "fps": 30, "frames": 10, "substeps": 5,
+        "output": {"format": "ply"}
+    })");
+    ASSERT_TRUE(scene.grid.has_value());
+    EXPECT_EQ(scene.grid->quads[0], 30);
+    EXPECT_DOUBLE_EQ(scene.grid->size[1], 0.5);
+    EXPECT_DOUBLE_EQ(scene.rotate_degrees.x, 90.0);
+    EXPECT_EQ(scene.pinned_vertices.size(), 2u);
+    EXPECT_EQ(scene.pin_regions.size(), 1u);
+    EXPECT_DOUBLE_EQ(scene.material.thickness, 0.002);
+    EXPECT_DOUBLE_EQ(scene.material.kinetic_friction, 0.4);
+    ASSERT_EQ(scene.obstacles.size(), 3u);
+    EXPECT_DOUBLE_EQ(std::get<cloth::SphereObstacle>(scene.obstacles[0]).radius, 0.5);
+    EXPECT_TRUE(std::holds_alternative<cloth::PlaneObstacle>(scene.obstacles[1]));
+    EXPECT_TRUE(std::holds_alternative<cloth::BoxObstacle>(scene.obstacles[2]));
+    EXPECT_DOUBLE_EQ(scene.gravity.z, -1.0);
+    EXPECT_EQ(scene.frames, 10);
+    EXPECT_EQ(scene.substeps, 5);
+    EXPECT_DOUBLE_EQ(scene.frames_per_second, 30.0);
+    EXPECT_EQ(scene.frame_format, "ply");
+}
+
+TEST(ClothScene, DefaultsAndRelativeMeshPath) {
+    const cloth::ClothScene scene = parse(R"({"cloth": {"mesh": "shirt.obj"}})");
+    EXPECT_FALSE(scene.grid.has_value());
+    EXPECT_EQ(scene.mesh, std::filesystem::path("/scenes/shirt.obj"));
+    EXPECT_EQ(scene.frames, 72);
+    EXPECT_EQ(scene.substeps, 20);
+    EXPECT_DOUBLE_EQ(scene.gravity.z, -9.81);
+    EXPECT_EQ(scene.frame_format, "obj");
+    EXPECT_DOUBLE_EQ(scene.material.thickness, cloth::ClothMaterial{}.thickness);
+}
+
+TEST(ClothScene, BrokenInputNamesTheKey) {
+    expect_error("{", {"not JSON"});
+    expect_error("[]", {"expected an object"});
+    expect_error("{}", {"cloth", "required"});
+    expect_error(R"({"cloth": {"grid": {}}, "colth": 1})", {"colth", "unknown key"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"strech_compliance": 1}})",
+                 {"material.strech_compliance", "unknown key", "stretch_compliance"});
+    expect_error(R"({"cloth": {"grid": {}, "mesh": "a.obj"}})", {"grid", "mesh", "both"});
+    expect_error(R"({"cloth": {}})", {"neither"});
+    expect_error(R"({"cloth": {"grid": {"quads": [0, 3]}}})", {"cloth.grid.quads", "[0,3]"});
+    expect_error(R"({"cloth": {"grid": {"size": [1, -1]}}})", {"cloth.grid.size"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"thickness": "5mm"}})",
+                 {"material.thickness", "a number", "string"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"damping": -1}})",
+                 {"material.damping", "[0,"});
+    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0]})",
+                 {"gravity", "3 numbers", "2 elements"});
+    expect_error(R"({"cloth": {"grid": {}}, "frames": 1.5})", {"frames", "an integer"});
+    expect_error(R"({"cloth": {"grid": {}}, "substeps": 0})", {"substeps"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": {}})", {"obstacles", "an array"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"cone": {}}]})",
+                 {"obstacles[0].cone", "unknown key"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{}]})", {"obstacles[0]", "exactly one"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"sphere": {"radius": -1}}]})",
+                 {"obstacles[0].sphere.radius"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"plane": {"normal": [0, 0, 0]}}]})",
+                 {"obstacles[0].plane.normal", "nonzero"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"box": {"min": [0, 0, 0]}}]})",
+                 {"obstacles[0].box.max", "required"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": {"vertices": [-1]}})",
+                 {"pins.vertices[0]", "vertex index"});
+    expect_error(R"({"cloth": {"grid": {}}, "output": {"format": "stl"}})",
+                 {"output.format", "\"obj\"", "\"stl\""});
+    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})", {"not JSON", "overflow"});
+}
+
+TEST(ClothScene, MissingFile) {
+    EXPECT_THROW(read_cloth_scene("/nonexistent/scene.json"), IoError);
+}
+
+}  // namespace
+}  // namespace pliant::io
