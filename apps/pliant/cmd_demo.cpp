@@ -1,4 +1,4 @@
-// pliant demo [--out DIR]
+// pliant demo [--out DIR] [--cloth-frames N]
 //
 // Everything pliant does today, end to end, on generated data (no input files):
 //   1. the drape scene's sheet (2 m × 2 m, 134 × 134 quads, 35,912 triangles) folded like an
@@ -10,7 +10,9 @@
 //      every pair: hits and the earliest time of impact;
 //   3. the paper's BVH table (bench/peers/bvh_table.hpp) at 2,244, 27,030 and 35,992 triangles,
 //      3 repetitions, beside Embree and brute force;
-//   4. DIR/summary.json with every number (schema in docs/formats.md).
+//   4. the standard drape scene (scenes/drape.json, built into the binary) through the XPBD cloth
+//      solver: DIR/drape/frames/frame_NNNN.obj and DIR/drape/stats.json (`pliant cloth`);
+//   5. DIR/summary.json with every number (schema in docs/formats.md).
 // Steps 1 and 2 run on the files' own numbers (double), so `pliant collide` on the written files
 // with the printed inflation reproduces their counts exactly.
 //
@@ -33,14 +35,17 @@
 #include <vector>
 
 #include "broad_phase_report.hpp"
+#include "cloth_run.hpp"
 #include "commands.hpp"
 #include "peers/bvh_table.hpp"
 #include "peers/bvh_workload.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/drape_scene.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/atomic_file.hpp"
+#include "pliant/io/cloth_scene.hpp"
 #include "pliant/io/mesh_io.hpp"
 
 namespace pliant::cli {
@@ -53,6 +58,7 @@ constexpr int TABLE_REPEATS = 3;
 
 struct DemoOptions {
     std::string out = "out/demo";
+    int cloth_frames = -1;  // -1: the drape scene's 72
 };
 
 // One broad-phase configuration, measured like `pliant collide --repeat N` after one untimed
@@ -182,7 +188,24 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     const bench::BvhTableResult table = bench::run_bvh_table(table_options);
     say(quiet, bench::format_bvh_table(table) + "\n");
 
-    // Step 4: the summary.
+    // Step 4: the standard drape scene (scenes/drape.json, built in).
+    const cloth::ClothScene drape =
+        io::parse_cloth_scene(DRAPE_SCENE_JSON, "scenes/drape.json (built in)", ".");
+    const int drape_frames = options.cloth_frames >= 0 ? options.cloth_frames : drape.frames;
+    const std::filesystem::path drape_dir = dir / "drape";
+    say(quiet, fmt::format("the drape scene (scenes/drape.json): {} frames of XPBD cloth, {} "
+                           "substeps per frame, onto a sphere:\n",
+                           drape_frames, drape.substeps));
+    const nlohmann::ordered_json drape_stats =
+        run_cloth_scene(drape, "scenes/drape.json", drape_dir, drape_frames,
+                        !quiet && ::isatty(::fileno(stderr)) != 0);
+    say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame; frames in {}\n  reproduce: "
+                           "pliant cloth scenes/drape.json --out {}\n\n",
+                           thousands(drape_stats["triangles"].get<std::int64_t>()),
+                           drape_stats["mean_ms_per_frame"].get<double>(),
+                           (drape_dir / "frames").string(), drape_dir.string()));
+
+    // Step 5: the summary.
     const nlohmann::ordered_json summary = {
         {"sheet",
          {{"size_m", DRAPE_SIZE},
@@ -198,6 +221,11 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         {"static", static_result},
         {"swept", swept_result},
         {"bvh_table", bench::bvh_table_json(table)},
+        {"drape",
+         {{"dir", drape_dir.string()},
+          {"frames", drape_frames},
+          {"triangles", drape_stats["triangles"]},
+          {"mean_ms_per_frame", drape_stats["mean_ms_per_frame"]}}},
         {"threads", num_threads()},
         {"seconds", demo_watch.elapsed_ms() / 1000.0},
     };
@@ -209,9 +237,11 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     } else {
         say(quiet,
             fmt::format("outputs in {}/:\n  {:<22}the folded sheet (binary PLY)\n  {:<22}its "
-                        "moved copy\n  {:<22}every number above\n",
+                        "moved copy\n  {:<22}the drape scene's frames (OBJ) and stats.json\n"
+                        "  {:<22}every number above\n",
                         dir.string(), sheet_path.filename().string(),
-                        sheet_t1_path.filename().string(), summary_path.filename().string()));
+                        sheet_t1_path.filename().string(), "drape/",
+                        summary_path.filename().string()));
     }
     if (!table.ok()) {
         std::string errors;
@@ -233,6 +263,9 @@ void register_demo(CLI::App& app, const GlobalOptions& global) {
         "self-collision broad phase, the paper's BVH table; writes PLY files and summary.json");
     cmd->add_option("--out", options->out, "Output directory (created if missing)")
         ->type_name("DIR");
+    cmd->add_option("--cloth-frames", options->cloth_frames,
+                    "Frames of the drape scene (default: the scene's 72)")
+        ->check(CLI::Range(0, 100'000));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_demo(*options, global); });
 }

@@ -308,13 +308,18 @@ TEST(Collide, UnsupportedExtensionIsIoError) {
 TEST(Demo, WritesOutputsThatCollideReproduces) {
     ScratchDir scratch;
     const auto dir = scratch / "demo";
-    const nlohmann::json summary = parse_json(run_cli("--json demo --out " + quoted(dir), scratch));
+    const nlohmann::json summary =
+        parse_json(run_cli("--json demo --cloth-frames 2 --out " + quoted(dir), scratch));
     ASSERT_TRUE(std::filesystem::exists(dir / "folded_sheet.ply"));
     ASSERT_TRUE(std::filesystem::exists(dir / "folded_sheet_t1.ply"));
     ASSERT_TRUE(std::filesystem::exists(dir / "summary.json"));
     EXPECT_EQ(nlohmann::json::parse(read_text(dir / "summary.json")), summary);
     EXPECT_EQ(summary.at("sheet").at("triangles").get<std::int64_t>(), 35912);
     EXPECT_EQ(summary.at("bvh_table").at("rows").size(), 3u);
+    EXPECT_EQ(summary.at("drape").at("frames"), 2);
+    EXPECT_EQ(summary.at("drape").at("triangles"), 35912);
+    EXPECT_TRUE(std::filesystem::exists(dir / "drape" / "frames" / "frame_0002.obj"));
+    EXPECT_TRUE(std::filesystem::exists(dir / "drape" / "stats.json"));
 
     // The written files and the printed inflation give the demo's counts exactly.
     for (const char* mode : {"static", "swept"}) {
