@@ -45,6 +45,7 @@ struct ClothScene {
     std::vector<PinRegion> pin_regions;
 
     ClothMaterial material;
+    bool self_collision = true;  // cloth/self_collision.hpp
     std::vector<Obstacle> obstacles;
     Vec3d gravity{0.0, 0.0, -9.81};
 

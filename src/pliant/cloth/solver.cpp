@@ -141,6 +141,15 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         });
 }
 
+void ClothSolver::enable_self_collision(bool enabled) {
+    if (!enabled) {
+        m_self_collision.reset();
+    } else if (!m_self_collision) {
+        m_self_collision =
+            std::make_unique<SelfCollision>(m_triangles, m_positions.size(), m_material.thickness);
+    }
+}
+
 void ClothSolver::add_obstacle(const Obstacle& obstacle) {
     if (const auto* plane = std::get_if<PlaneObstacle>(&obstacle)) {
         if (!(squared_norm(plane->normal) > 0.0)) {
@@ -170,8 +179,17 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     Stopwatch watch;
     const double h = dt / substeps;
     ClothStepStats stats;
+    if (m_self_collision) {
+        m_step_start = m_positions;
+        m_self_collision->gather(m_positions, m_velocities, dt, m_gravity);
+    }
     for (int s = 0; s < substeps; ++s) {
         stats.obstacle_contacts = substep(h);
+    }
+    if (m_self_collision) {
+        m_self_collision->enforce(m_step_start, m_positions, m_velocities);
+        stats.has_self_collision = true;
+        stats.self = m_self_collision->stats();
     }
     stats.ms = watch.elapsed_ms();
     return stats;
@@ -192,6 +210,10 @@ std::int64_t ClothSolver::substep(double h) {
         VERTEX_GRAIN);
     project_stretch(h);
     project_bending(h);
+    if (m_self_collision) {
+        m_self_collision->stats().contacts =
+            m_self_collision->project(m_positions, m_inverse_masses);
+    }
     const std::int64_t contacts = resolve_obstacles();
     const double keep = std::max(0.0, 1.0 - m_material.damping * h);
     parallel_for(

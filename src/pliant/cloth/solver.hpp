@@ -9,6 +9,9 @@
 //      for each constraint Δλ = -C / (Σ w_k |∇C_k|² + α / h²), x_k += w_k ∇C_k Δλ (λ starts at 0
 //      every substep: one iteration per substep);
 //   4. obstacles: every vertex is pushed `thickness` away from every obstacle (obstacles.hpp);
+//   (with self-collision: after 3, the cloth's own contacts are pushed thickness apart; before
+//   the first substep the candidate pairs are gathered and after the last the CCD fail-safe runs;
+//   self_collision.hpp)
 //   5. v = (x - x_previous) / h; Coulomb friction on the velocities of vertices in contact,
 //      bounded by their normal correction / h (obstacles.hpp: at the velocity level, friction
 //      never cancels a constraint's correction, which positional friction does, locking stretched
@@ -34,12 +37,14 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/material.hpp"
 #include "pliant/cloth/obstacles.hpp"
+#include "pliant/cloth/self_collision.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
@@ -48,6 +53,8 @@ namespace pliant::cloth {
 struct ClothStepStats {
     double ms = 0.0;                     // wall-clock time of the step
     std::int64_t obstacle_contacts = 0;  // vertices in contact with an obstacle in the last substep
+    bool has_self_collision = false;     // the fields below are filled
+    SelfCollisionStats self;             // self_collision.hpp
 };
 
 class ClothSolver {
@@ -61,6 +68,10 @@ public:
 
     void add_obstacle(const Obstacle& obstacle);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    // Self-collision handling (self_collision.hpp): proximity constraints every substep and the
+    // CCD fail-safe at the end of every step, so that no step ends with intersecting triangles
+    // when it started without. Off by default.
+    void enable_self_collision(bool enabled);
 
     // Advances the cloth by dt seconds in `substeps` equal substeps (dt > 0, substeps >= 1; else
     // InvalidInput).
@@ -91,6 +102,8 @@ private:
     std::vector<Vec3d> m_velocities;
     std::vector<double> m_inverse_masses;
     std::vector<Obstacle> m_obstacles;
+    std::unique_ptr<SelfCollision> m_self_collision;
+    std::vector<Vec3d> m_step_start;       // positions at the start of the step (self-collision)
     std::vector<double> m_contact_depths;  // this substep's obstacle correction per vertex (m)
     std::vector<Vec3d> m_contact_normals;
 

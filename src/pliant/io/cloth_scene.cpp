@@ -315,6 +315,12 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
                 read_obstacle((*obstacles)[k], file, fmt::format("obstacles[{}]", k)));
         }
     }
+    if (const Json* self = root.find("self_collision")) {
+        if (!self->is_boolean()) {
+            root.fail("self_collision", "true or false", type_name(*self));
+        }
+        scene.self_collision = self->get<bool>();
+    }
     scene.gravity = root.vector("gravity", scene.gravity);
     scene.frames_per_second = root.number("fps", scene.frames_per_second, 1e-3, 1e6);
     scene.frames = root.integer("frames", scene.frames, 0, 1'000'000);

@@ -1,0 +1,238 @@
+#include "pliant/cloth/self_collision.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "pliant/collision/ccd.hpp"
+#include "pliant/collision/point_triangle.hpp"
+#include "pliant/collision/segment_segment.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t PAIR_GRAIN = 512;
+
+// Pushes the features apart along normal so that their distance grows by `gap`, weighted by the
+// inverse masses w[k] and the closest point's barycentric weights b[k] (signed: + for the first
+// feature, - for the second). XPBD with zero compliance: Δλ = gap / Σ w_k b_k².
+void separate(std::span<Vec3d> positions, std::span<const double> inverse_masses,
+              const std::int32_t (&vertices)[4], const double (&weights)[4], const Vec3d& normal,
+              double gap) {
+    double denominator = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        denominator +=
+            inverse_masses[static_cast<std::size_t>(vertices[k])] * weights[k] * weights[k];
+    }
+    if (!(denominator > 0.0)) {
+        return;
+    }
+    const double lambda = gap / denominator;
+    for (int k = 0; k < 4; ++k) {
+        const auto v = static_cast<std::size_t>(vertices[k]);
+        positions[v] += normal * (inverse_masses[v] * weights[k] * lambda);
+    }
+}
+
+}  // namespace
+
+SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
+                             std::size_t num_vertices, double thickness)
+    : m_triangles(triangles.begin(), triangles.end()),
+      m_thickness(thickness),
+      m_gather_phase(triangles, num_vertices),
+      m_swept_phase(triangles, num_vertices) {}
+
+void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities,
+                           double dt, const Vec3d& gravity) {
+    Stopwatch watch;
+    // The predicted end of the step, x + dt v + ½ g dt² (exact for free flight); boxes swept from
+    // here to there and grown by the thickness.
+    m_predicted.resize(positions.size());
+    const Vec3d fall = gravity * (0.5 * dt * dt);
+    parallel_for(static_cast<std::int64_t>(positions.size()), [&](std::int64_t i) {
+        const auto v = static_cast<std::size_t>(i);
+        m_predicted[v] = positions[v] + velocities[v] * dt + fall;
+    });
+    m_candidates =
+        m_gather_phase.update(positions, std::span<const Vec3d>(m_predicted), m_thickness);
+    m_stats.candidate_pairs =
+        static_cast<std::int64_t>(m_candidates.vertex_face.size() + m_candidates.edge_edge.size());
+    m_stats.gather_ms = watch.elapsed_ms();
+}
+
+std::int64_t SelfCollision::project(std::span<Vec3d> positions,
+                                    std::span<const double> inverse_masses) const {
+    const auto& edges = m_gather_phase.topology().edges;
+    const auto num_vf = static_cast<std::int64_t>(m_candidates.vertex_face.size());
+    const auto num_ee = static_cast<std::int64_t>(m_candidates.edge_edge.size());
+    const auto at = [&](std::int32_t v) {
+        return positions[static_cast<std::size_t>(v)];
+    };
+    // A pair's features, weights, normal and distance at the current positions.
+    struct Proximity {
+        std::int32_t vertices[4];
+        double weights[4];
+        Vec3d normal;
+        double distance;
+    };
+    const auto proximity = [&](std::int64_t i) {
+        Proximity p{};
+        if (i < num_vf) {
+            const collision::VertexFacePair& pair =
+                m_candidates.vertex_face[static_cast<std::size_t>(i)];
+            const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(pair.face)];
+            const collision::PointTriangleProximity<double> q =
+                collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]));
+            p = {{pair.vertex, f[0], f[1], f[2]},
+                 {1.0, -q.barycentric.x, -q.barycentric.y, -q.barycentric.z},
+                 q.normal,
+                 q.distance};
+        } else {
+            const collision::EdgeEdgePair& pair =
+                m_candidates.edge_edge[static_cast<std::size_t>(i - num_vf)];
+            const geometry::Edge& a = edges[static_cast<std::size_t>(pair.edge_a)];
+            const geometry::Edge& b = edges[static_cast<std::size_t>(pair.edge_b)];
+            const collision::SegmentSegmentProximity<double> q =
+                collision::segment_segment_proximity(at(a[0]), at(a[1]), at(b[0]), at(b[1]));
+            p = {{a[0], a[1], b[0], b[1]},
+                 {1.0 - q.s, q.s, -(1.0 - q.t), -q.t},
+                 q.normal,
+                 q.distance};
+        }
+        return p;
+    };
+    // In parallel, the pairs closer than thickness (in pair order); then, sequentially, push each
+    // apart with its proximity at the positions as they are by then.
+    const std::vector<std::int64_t> close = parallel_reduce(
+        num_vf + num_ee, std::vector<std::int64_t>{},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::vector<std::int64_t> found;
+            for (std::int64_t i = begin; i < end; ++i) {
+                if (proximity(i).distance < m_thickness) {
+                    found.push_back(i);
+                }
+            }
+            return found;
+        },
+        [](std::vector<std::int64_t> a, const std::vector<std::int64_t>& b) {
+            a.insert(a.end(), b.begin(), b.end());
+            return a;
+        },
+        PAIR_GRAIN);
+    std::int64_t contacts = 0;
+    for (const std::int64_t i : close) {
+        const Proximity p = proximity(i);
+        if (p.distance < m_thickness) {
+            separate(positions, inverse_masses, p.vertices, p.weights, p.normal,
+                     m_thickness - p.distance);
+            ++contacts;
+        }
+    }
+    return contacts;
+}
+
+void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                            std::span<Vec3d> velocities) {
+    Stopwatch watch;
+    const auto& edges = m_swept_phase.topology().edges;
+    m_stats.ccd_hits = 0;
+    m_stats.reverted_vertices = 0;
+    m_stats.enforce_rounds = 0;
+    std::vector<std::uint8_t> reverted(positions.size(), 0);
+    for (int round = 0;; ++round) {
+        m_stats.enforce_rounds = round + 1;
+        if (round == ENFORCE_ROUNDS) {
+            // Last resort: every free vertex goes back; the frame's start is intersection-free.
+            for (std::size_t v = 0; v < positions.size(); ++v) {
+                if (positions[v] != positions_t0[v]) {
+                    positions[v] = positions_t0[v];
+                    velocities[v] = {0.0, 0.0, 0.0};
+                    m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
+                    reverted[v] = 1;
+                }
+            }
+            break;
+        }
+        const collision::FeaturePairs& pairs =
+            m_swept_phase.update(positions_t0, std::span<const Vec3d>(positions), 0.0);
+        const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+        const auto num_ee = static_cast<std::int64_t>(pairs.edge_edge.size());
+        // The vertices of every pair the CCD cannot clear, in pair order (deterministic).
+        const std::vector<std::int32_t> hit_vertices = parallel_reduce(
+            num_vf + num_ee, std::vector<std::int32_t>{},
+            [&](std::int64_t begin, std::int64_t end) {
+                std::vector<std::int32_t> hits;
+                const auto at0 = [&](std::int32_t v) {
+                    return positions_t0[static_cast<std::size_t>(v)];
+                };
+                const auto at1 = [&](std::int32_t v) {
+                    return positions[static_cast<std::size_t>(v)];
+                };
+                for (std::int64_t i = begin; i < end; ++i) {
+                    std::int32_t vertices[4];
+                    bool hit = false;
+                    if (i < num_vf) {
+                        const collision::VertexFacePair& p =
+                            pairs.vertex_face[static_cast<std::size_t>(i)];
+                        const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
+                        vertices[0] = p.vertex;
+                        vertices[1] = f[0];
+                        vertices[2] = f[1];
+                        vertices[3] = f[2];
+                        hit = collision::vertex_face_ccd(at0(p.vertex), at0(f[0]), at0(f[1]),
+                                                         at0(f[2]), at1(p.vertex), at1(f[0]),
+                                                         at1(f[1]), at1(f[2]))
+                                  .hit;
+                    } else {
+                        const collision::EdgeEdgePair& p =
+                            pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+                        const geometry::Edge& a = edges[static_cast<std::size_t>(p.edge_a)];
+                        const geometry::Edge& b = edges[static_cast<std::size_t>(p.edge_b)];
+                        vertices[0] = a[0];
+                        vertices[1] = a[1];
+                        vertices[2] = b[0];
+                        vertices[3] = b[1];
+                        hit = collision::edge_edge_ccd(at0(a[0]), at0(a[1]), at0(b[0]), at0(b[1]),
+                                                       at1(a[0]), at1(a[1]), at1(b[0]), at1(b[1]))
+                                  .hit;
+                    }
+                    if (hit) {
+                        hits.insert(hits.end(), vertices, vertices + 4);
+                    }
+                }
+                return hits;
+            },
+            [](std::vector<std::int32_t> a, const std::vector<std::int32_t>& b) {
+                a.insert(a.end(), b.begin(), b.end());
+                return a;
+            },
+            PAIR_GRAIN);
+        if (round == 0) {
+            m_stats.ccd_hits = static_cast<std::int64_t>(hit_vertices.size() / 4);
+        }
+        if (hit_vertices.empty()) {
+            break;
+        }
+        bool moved_any = false;
+        for (const std::int32_t vertex : hit_vertices) {
+            const auto v = static_cast<std::size_t>(vertex);
+            if (positions[v] != positions_t0[v]) {
+                positions[v] = positions_t0[v];
+                velocities[v] = {0.0, 0.0, 0.0};
+                moved_any = true;
+            }
+            m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
+            reverted[v] = 1;
+        }
+        if (!moved_any) {
+            // Every vertex of every remaining hit is already at its start: a contact at the
+            // frame's start itself (touching input). Nothing more a revert can do.
+            break;
+        }
+    }
+    m_stats.enforce_ms = watch.elapsed_ms();
+}
+
+}  // namespace pliant::cloth
