@@ -3,7 +3,8 @@
 // intersections.
 //
 // Per frame (ClothSolver::step):
-//   1. gather: the broad phase (collision/self_broad_phase.hpp: LBVH + R-triangles + orphan sets)
+//   1. gather (every few substeps, for the time until the next gather): the broad phase
+//   (collision/self_broad_phase.hpp: LBVH + R-triangles + orphan sets)
 //      swept from the frame's start positions x to the prediction x + dt v + ½ g dt², boxes grown
 //      by thickness: the vertex-face and edge-edge pairs that can come within thickness during the
 //      frame if it moves about as predicted, each once. Pairs that the prediction
@@ -52,7 +53,8 @@ public:
     SelfCollision(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
                   double thickness);
 
-    // Step 1. dt: the frame's duration (s); gravity (m/s²).
+    // Step 1. dt: the time the candidates must cover (s); gravity (m/s²). gather_ms and
+    // candidate_pairs describe the last call.
     void gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double dt,
                 const Vec3d& gravity);
     // Step 2; returns the pairs pushed apart.
