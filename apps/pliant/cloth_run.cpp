@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "output_directory.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
@@ -70,15 +71,6 @@ std::vector<std::int32_t> pinned_vertices(const cloth::ClothScene& scene,
     return pinned;
 }
 
-void make_directory(const std::filesystem::path& dir) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec || !std::filesystem::is_directory(dir)) {
-        throw IoError(fmt::format("{}: cannot create the output directory: {}", dir.string(),
-                                  ec ? ec.message() : "not a directory"));
-    }
-}
-
 }  // namespace
 
 nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
@@ -94,7 +86,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     solver.enable_self_collision(scene.self_collision);
 
     const std::filesystem::path frames_dir = out / "frames";
-    make_directory(frames_dir);
+    make_output_directory(frames_dir);
     geometry::TriangleMeshD state{mesh.positions, mesh.triangles};
     const auto write_frame = [&](int frame) {
         state.positions.assign(solver.positions().begin(), solver.positions().end());

@@ -37,6 +37,7 @@
 #include "broad_phase_report.hpp"
 #include "cloth_run.hpp"
 #include "commands.hpp"
+#include "output_directory.hpp"
 #include "peers/bvh_table.hpp"
 #include "peers/bvh_workload.hpp"
 #include "pliant/core/error.hpp"
@@ -101,15 +102,6 @@ std::vector<Vec3d> to_double(std::span<const Vec3f> positions) {
         out.push_back(vec3_cast<double>(p));
     }
     return out;
-}
-
-void make_output_directory(const std::filesystem::path& dir) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec || !std::filesystem::is_directory(dir)) {
-        throw IoError(fmt::format("{}: cannot create the output directory: {}", dir.string(),
-                                  ec ? ec.message() : "not a directory"));
-    }
 }
 
 void say(bool quiet, const std::string& text) {

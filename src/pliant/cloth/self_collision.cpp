@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pliant/collision/ccd.hpp"
+#include "pliant/collision/narrow_phase.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/collision/segment_segment.hpp"
 #include "pliant/core/parallel.hpp"
@@ -55,18 +55,19 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
         const auto v = static_cast<std::size_t>(i);
         m_predicted[v] = positions[v] + velocities[v] * dt + fall;
     });
-    m_candidates =
+    const collision::FeaturePairs& candidates =
         m_gather_phase.update(positions, std::span<const Vec3d>(m_predicted), m_thickness);
     m_stats.candidate_pairs =
-        static_cast<std::int64_t>(m_candidates.vertex_face.size() + m_candidates.edge_edge.size());
+        static_cast<std::int64_t>(candidates.vertex_face.size() + candidates.edge_edge.size());
     m_stats.gather_ms = watch.elapsed_ms();
 }
 
 std::int64_t SelfCollision::project(std::span<Vec3d> positions,
-                                    std::span<const double> inverse_masses) const {
+                                    std::span<const double> inverse_masses) {
+    const collision::FeaturePairs& candidates = m_gather_phase.pairs();
     const auto& edges = m_gather_phase.topology().edges;
-    const auto num_vf = static_cast<std::int64_t>(m_candidates.vertex_face.size());
-    const auto num_ee = static_cast<std::int64_t>(m_candidates.edge_edge.size());
+    const auto num_vf = static_cast<std::int64_t>(candidates.vertex_face.size());
+    const auto num_ee = static_cast<std::int64_t>(candidates.edge_edge.size());
     const auto at = [&](std::int32_t v) {
         return positions[static_cast<std::size_t>(v)];
     };
@@ -81,7 +82,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         Proximity p{};
         if (i < num_vf) {
             const collision::VertexFacePair& pair =
-                m_candidates.vertex_face[static_cast<std::size_t>(i)];
+                candidates.vertex_face[static_cast<std::size_t>(i)];
             const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(pair.face)];
             const collision::PointTriangleProximity<double> q =
                 collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]));
@@ -91,7 +92,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
                  q.distance};
         } else {
             const collision::EdgeEdgePair& pair =
-                m_candidates.edge_edge[static_cast<std::size_t>(i - num_vf)];
+                candidates.edge_edge[static_cast<std::size_t>(i - num_vf)];
             const geometry::Edge& a = edges[static_cast<std::size_t>(pair.edge_a)];
             const geometry::Edge& b = edges[static_cast<std::size_t>(pair.edge_b)];
             const collision::SegmentSegmentProximity<double> q =
@@ -130,6 +131,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
             ++contacts;
         }
     }
+    m_stats.contacts = contacts;
     return contacts;
 }
 
@@ -141,90 +143,55 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
     m_stats.reverted_vertices = 0;
     m_stats.enforce_rounds = 0;
     std::vector<std::uint8_t> reverted(positions.size(), 0);
+    // Puts v back at its start with zero velocity; true when that moved it.
+    const auto revert = [&](std::size_t v) {
+        m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
+        reverted[v] = 1;
+        if (positions[v] == positions_t0[v]) {
+            return false;
+        }
+        positions[v] = positions_t0[v];
+        velocities[v] = {0.0, 0.0, 0.0};
+        return true;
+    };
     for (int round = 0;; ++round) {
         m_stats.enforce_rounds = round + 1;
         if (round == ENFORCE_ROUNDS) {
-            // Last resort: every free vertex goes back; the frame's start is intersection-free.
+            // Last resort: every vertex that moved goes back; the frame's start is
+            // intersection-free.
             for (std::size_t v = 0; v < positions.size(); ++v) {
                 if (positions[v] != positions_t0[v]) {
-                    positions[v] = positions_t0[v];
-                    velocities[v] = {0.0, 0.0, 0.0};
-                    m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
-                    reverted[v] = 1;
+                    revert(v);
                 }
             }
             break;
         }
         const collision::FeaturePairs& pairs =
             m_swept_phase.update(positions_t0, std::span<const Vec3d>(positions), 0.0);
-        const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
-        const auto num_ee = static_cast<std::int64_t>(pairs.edge_edge.size());
-        // The vertices of every pair the CCD cannot clear, in pair order (deterministic).
-        const std::vector<std::int32_t> hit_vertices = parallel_reduce(
-            num_vf + num_ee, std::vector<std::int32_t>{},
-            [&](std::int64_t begin, std::int64_t end) {
-                std::vector<std::int32_t> hits;
-                const auto at0 = [&](std::int32_t v) {
-                    return positions_t0[static_cast<std::size_t>(v)];
-                };
-                const auto at1 = [&](std::int32_t v) {
-                    return positions[static_cast<std::size_t>(v)];
-                };
-                for (std::int64_t i = begin; i < end; ++i) {
-                    std::int32_t vertices[4];
-                    bool hit = false;
-                    if (i < num_vf) {
-                        const collision::VertexFacePair& p =
-                            pairs.vertex_face[static_cast<std::size_t>(i)];
-                        const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
-                        vertices[0] = p.vertex;
-                        vertices[1] = f[0];
-                        vertices[2] = f[1];
-                        vertices[3] = f[2];
-                        hit = collision::vertex_face_ccd(at0(p.vertex), at0(f[0]), at0(f[1]),
-                                                         at0(f[2]), at1(p.vertex), at1(f[0]),
-                                                         at1(f[1]), at1(f[2]))
-                                  .hit;
-                    } else {
-                        const collision::EdgeEdgePair& p =
-                            pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
-                        const geometry::Edge& a = edges[static_cast<std::size_t>(p.edge_a)];
-                        const geometry::Edge& b = edges[static_cast<std::size_t>(p.edge_b)];
-                        vertices[0] = a[0];
-                        vertices[1] = a[1];
-                        vertices[2] = b[0];
-                        vertices[3] = b[1];
-                        hit = collision::edge_edge_ccd(at0(a[0]), at0(a[1]), at0(b[0]), at0(b[1]),
-                                                       at1(a[0]), at1(a[1]), at1(b[0]), at1(b[1]))
-                                  .hit;
-                    }
-                    if (hit) {
-                        hits.insert(hits.end(), vertices, vertices + 4);
-                    }
-                }
-                return hits;
-            },
-            [](std::vector<std::int32_t> a, const std::vector<std::int32_t>& b) {
-                a.insert(a.end(), b.begin(), b.end());
-                return a;
-            },
-            PAIR_GRAIN);
+        const collision::NarrowPhaseResult narrow =
+            collision::continuous_narrow_phase(positions_t0, std::span<const Vec3d>(positions),
+                                               std::span<const geometry::Triangle>(m_triangles),
+                                               std::span<const geometry::Edge>(edges), pairs);
         if (round == 0) {
-            m_stats.ccd_hits = static_cast<std::int64_t>(hit_vertices.size() / 4);
+            m_stats.ccd_hits = narrow.vf_hits + narrow.ee_hits;
         }
-        if (hit_vertices.empty()) {
+        if (narrow.vf_hits + narrow.ee_hits == 0) {
             break;
         }
+        // The vertices of every pair the CCD cannot clear, in pair order (deterministic).
         bool moved_any = false;
-        for (const std::int32_t vertex : hit_vertices) {
-            const auto v = static_cast<std::size_t>(vertex);
-            if (positions[v] != positions_t0[v]) {
-                positions[v] = positions_t0[v];
-                velocities[v] = {0.0, 0.0, 0.0};
-                moved_any = true;
+        for (const collision::VertexFacePair& p : narrow.hits.vertex_face) {
+            const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
+            for (const std::int32_t v : {p.vertex, f[0], f[1], f[2]}) {
+                moved_any |= revert(static_cast<std::size_t>(v));
             }
-            m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
-            reverted[v] = 1;
+        }
+        for (const collision::EdgeEdgePair& p : narrow.hits.edge_edge) {
+            const geometry::Edge& a = edges[static_cast<std::size_t>(p.edge_a)];
+            const geometry::Edge& b = edges[static_cast<std::size_t>(p.edge_b)];
+            for (const std::int32_t v : {a[0], a[1], b[0], b[1]}) {
+                moved_any |= revert(static_cast<std::size_t>(v));
+            }
         }
         if (!moved_any) {
             // Every vertex of every remaining hit is already at its start: a contact at the

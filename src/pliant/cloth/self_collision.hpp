@@ -57,21 +57,19 @@ public:
     // candidate_pairs describe the last call.
     void gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double dt,
                 const Vec3d& gravity);
-    // Step 2; returns the pairs pushed apart.
-    std::int64_t project(std::span<Vec3d> positions, std::span<const double> inverse_masses) const;
+    // Step 2; returns the pairs pushed apart (also stats().contacts).
+    std::int64_t project(std::span<Vec3d> positions, std::span<const double> inverse_masses);
     // Step 3; positions_t0: the frame's start.
     void enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
                  std::span<Vec3d> velocities);
 
     const SelfCollisionStats& stats() const { return m_stats; }
-    SelfCollisionStats& stats() { return m_stats; }
 
 private:
     std::vector<geometry::Triangle> m_triangles;
     double m_thickness;
     collision::SelfCollisionBroadPhase<double> m_gather_phase;
     collision::SelfCollisionBroadPhase<double> m_swept_phase;
-    collision::FeaturePairs m_candidates;
     std::vector<Vec3d> m_predicted;
     SelfCollisionStats m_stats;
 };

@@ -218,8 +218,7 @@ std::int64_t ClothSolver::substep(double h) {
     project_stretch(h);
     project_bending(h);
     if (m_self_collision) {
-        m_self_collision->stats().contacts =
-            m_self_collision->project(m_positions, m_inverse_masses);
+        m_self_collision->project(m_positions, m_inverse_masses);
     }
     const std::int64_t contacts = resolve_obstacles();
     const double keep = std::max(0.0, 1.0 - m_material.damping * h);

@@ -349,6 +349,17 @@ bool is_slab_excluded(const Query& query, double t_a, double t_b, double& codoma
     return is_excluded_slab;
 }
 
+CcdResult no_hit(int iterations) {
+    return {.hit = false, .toi = 1.0, .iterations = iterations, .hit_iteration_limit = false};
+}
+
+CcdResult hit_at(double toi, int iterations, bool is_iteration_limit = false) {
+    return {.hit = true,
+            .toi = toi,
+            .iterations = iterations,
+            .hit_iteration_limit = is_iteration_limit};
+}
+
 CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
                   const CcdOptions& options) {
     // Step 1: sanitise the options (see ccd.hpp).
@@ -382,10 +393,10 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         codomain = std::max(codomain, hi - lo);
     }
     if (!is_in_range) {
-        return {.hit = true, .toi = 0.0, .iterations = 0, .hit_iteration_limit = false};
+        return hit_at(0.0, 0);
     }
     if (is_excluded_step) {
-        return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
+        return no_hit(1);
     }
 
     // Step 3: the query, then the whole step along the separating directions.
@@ -421,7 +432,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
     }
     double unused = 0.0;  // the axes' range is already in codomain
     if (directions.count > 0 && is_slab_excluded(query, 0.0, 1.0, unused, false)) {
-        return {.hit = false, .toi = 1.0, .iterations = 1, .hit_iteration_limit = false};
+        return no_hit(1);
     }
     // A box whose corner values span at most tolerance × (F's range over the step) is terminal.
     query.codomain_tolerance = tolerance * codomain;
@@ -454,10 +465,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         heap.pop_back();
         if (iterations >= max_iterations) {
             // Every slab before this one is excluded.
-            return {.hit = true,
-                    .toi = slab.lo[0],
-                    .iterations = iterations,
-                    .hit_iteration_limit = true};
+            return hit_at(slab.lo[0], iterations, true);
         }
         if (!is_evaluated) {
             ++iterations;
@@ -467,10 +475,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         }
         is_evaluated = false;
         if (codomain <= query.codomain_tolerance) {
-            return {.hit = true,
-                    .toi = slab.lo[0],
-                    .iterations = iterations,
-                    .hit_iteration_limit = false};
+            return hit_at(slab.lo[0], iterations);
         }
         if (!(slab.width[0] > tolerance)) {
             start = slab.lo[0];
@@ -482,7 +487,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         heap.push_back(lower);
     }
     if (!is_any_left) {
-        return {.hit = false, .toi = 1.0, .iterations = iterations, .hit_iteration_limit = false};
+        return no_hit(iterations);
     }
 
     // Step 5: best-first bisection of [start, 1] x [0, 1]^2: always refine the open box with the
@@ -500,10 +505,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
     for (;;) {
         if (!has_box) {
             if (heap.empty()) {
-                return {.hit = false,
-                        .toi = 1.0,
-                        .iterations = iterations,
-                        .hit_iteration_limit = false};
+                return no_hit(iterations);
             }
             std::pop_heap(heap.begin(), heap.end(), is_later);
             box = heap.back();
@@ -511,10 +513,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         }
         if (iterations >= max_iterations) {
             // box.lo[0] is the smallest t_lo of every unexplored box.
-            return {.hit = true,
-                    .toi = box.lo[0],
-                    .iterations = iterations,
-                    .hit_iteration_limit = true};
+            return hit_at(box.lo[0], iterations, true);
         }
         if (!has_box) {
             ++iterations;
@@ -524,10 +523,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         }
         has_box = false;
         if (codomain_width(values) <= query.codomain_tolerance) {
-            return {.hit = true,
-                    .toi = box.lo[0],
-                    .iterations = iterations,
-                    .hit_iteration_limit = false};
+            return hit_at(box.lo[0], iterations);
         }
         // Step 6: when splitting t excludes one half, go on with the other, directly when it
         // starts no later than the heap's first box. Refining t before u and v keeps a contact
@@ -560,10 +556,7 @@ CcdResult run_ccd(Kind kind, const Vec3d (&t0)[4], const Vec3d (&t1)[4],
         const int dim = split_dimension(box, values, tolerance);
         if (dim < 0) {
             // Every open box starts at or after box.lo[0], so no contact precedes it.
-            return {.hit = true,
-                    .toi = box.lo[0],
-                    .iterations = iterations,
-                    .hit_iteration_limit = false};
+            return hit_at(box.lo[0], iterations);
         }
         const auto [lower, upper] = split(box, dim);
         push(heap, lower);

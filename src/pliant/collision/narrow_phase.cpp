@@ -12,8 +12,15 @@ namespace {
 
 constexpr std::int64_t PAIR_GRAIN = 256;
 
-NarrowPhaseResult combine(const NarrowPhaseResult& a, const NarrowPhaseResult& b) {
-    return {a.vf_hits + b.vf_hits, a.ee_hits + b.ee_hits, std::min(a.earliest_toi, b.earliest_toi)};
+NarrowPhaseResult combine(NarrowPhaseResult a, const NarrowPhaseResult& b) {
+    a.vf_hits += b.vf_hits;
+    a.ee_hits += b.ee_hits;
+    a.earliest_toi = std::min(a.earliest_toi, b.earliest_toi);
+    a.hits.vertex_face.insert(a.hits.vertex_face.end(), b.hits.vertex_face.begin(),
+                              b.hits.vertex_face.end());
+    a.hits.edge_edge.insert(a.hits.edge_edge.end(), b.hits.edge_edge.begin(),
+                            b.hits.edge_edge.end());
+    return a;
 }
 
 }  // namespace
@@ -77,7 +84,15 @@ NarrowPhaseResult continuous_narrow_phase(std::span<const Vec3<Real>> positions_
                                         at(positions_t1, b[0]), at(positions_t1, b[1]), options);
                 }
                 if (hit.hit) {
-                    (is_vertex_face ? r.vf_hits : r.ee_hits) += 1;
+                    if (is_vertex_face) {
+                        ++r.vf_hits;
+                        r.hits.vertex_face.push_back(
+                            pairs.vertex_face[static_cast<std::size_t>(i)]);
+                    } else {
+                        ++r.ee_hits;
+                        r.hits.edge_edge.push_back(
+                            pairs.edge_edge[static_cast<std::size_t>(i - num_vf)]);
+                    }
                     r.earliest_toi = std::min(r.earliest_toi, hit.toi);
                 }
             }

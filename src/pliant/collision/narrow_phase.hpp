@@ -2,9 +2,9 @@
 // pair of FeaturePairs tested with the conservative CCD of ccd.hpp over the step
 // positions_t0 → positions_t1 (linear motion).
 //
-// Counts are sums and the earliest time of impact is a minimum, so the result does not depend on
-// the order of evaluation: identical for 1 and N threads. Positions are converted to double for
-// the CCD (exact for float input). O(pairs) CCD queries, in parallel over fixed chunks.
+// Counts are sums, the earliest time of impact is a minimum and the hit pairs are concatenated in
+// chunk order, so the result is identical for 1 and N threads. Positions are converted to double
+// for the CCD (exact for float input). O(pairs) CCD queries, in parallel over fixed chunks.
 #pragma once
 
 #include <cstdint>
@@ -20,6 +20,7 @@ struct NarrowPhaseResult {
     std::int64_t vf_hits = 0;   // vertex-face pairs the CCD cannot exclude
     std::int64_t ee_hits = 0;   // edge-edge pairs the CCD cannot exclude
     double earliest_toi = 1.0;  // smallest toi over all hits, in [0, 1]; 1 without hits
+    FeaturePairs hits;          // those pairs, in the order of the input pairs
 };
 
 // positions_t0 / positions_t1: #V each; triangles and edges index them (edges as in
