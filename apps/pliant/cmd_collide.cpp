@@ -1,4 +1,4 @@
-// pliant collide MESH [--to MESH_T1] [--inflate H] [--repeat N] [--ccd] [--json]
+// pliant collide MESH [--to MESH_T1] [--inflate H] [--repeat N] [--ccd] [--intersections] [--json]
 //
 // The self-collision broad phase (collision::SelfCollisionBroadPhase<double>) on one mesh file
 // (static: both ends of the step are MESH) or between two frames of the same mesh (swept: MESH at
@@ -27,8 +27,10 @@
 
 #include "broad_phase_report.hpp"
 #include "commands.hpp"
+#include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "validators.hpp"
@@ -41,7 +43,8 @@ struct CollideOptions {
     std::string mesh_t1;   // frame at t1; empty for a static query
     double inflate = 0.0;  // world units
     int repeat = 1;
-    bool ccd = false;  // also run the continuous narrow phase on the pairs
+    bool ccd = false;            // also run the continuous narrow phase on the pairs
+    bool intersections = false;  // also count intersecting triangle pairs (exact)
 };
 
 // The frame at t1 must be the same mesh as the frame at t0, moved.
@@ -67,7 +70,15 @@ void check_same_mesh(const geometry::TriangleMeshD& mesh, const std::string& mes
     }
 }
 
-void print_human(const CollideOptions& options, const BroadPhaseReport& r) {
+// Intersecting non-adjacent triangle pairs of MESH (and of MESH_T1), decided exactly.
+struct IntersectionCounts {
+    std::int64_t t0 = -1;
+    std::int64_t t1 = -1;  // -1: no MESH_T1
+    double ms = 0.0;
+};
+
+void print_human(const CollideOptions& options, const BroadPhaseReport& r,
+                 const IntersectionCounts& intersections) {
     const bool swept = !options.mesh_t1.empty();
     std::string text;
     if (swept) {
@@ -94,6 +105,13 @@ void print_human(const CollideOptions& options, const BroadPhaseReport& r) {
         text += fmt::format("  {:<16}{:>12.6g}\n", "earliest toi", r.earliest_toi);
         text += fmt::format("  {:<16}{:>12.3f} ms   {}\n", "narrow (CCD)", r.narrow_ms, runs);
     }
+    if (options.intersections) {
+        text += fmt::format("  {:<16}{:>12}   exact, MESH\n", "intersecting", intersections.t0);
+        if (intersections.t1 >= 0) {
+            text +=
+                fmt::format("  {:<16}{:>12}   exact, MESH_T1\n", "intersecting", intersections.t1);
+        }
+    }
     text += fmt::format("  {:<16}{:>12.2f} MiB\n", "memory",
                         static_cast<double>(r.memory_bytes) / (1024.0 * 1024.0));
     text += fmt::format("  {:<16}{:>12}\n", "threads", num_threads());
@@ -113,10 +131,30 @@ void run_collide(const CollideOptions& options, const GlobalOptions& global) {
     const BroadPhaseReport result = measure_broad_phase(mesh, positions_t1, options.inflate,
                                                         options.repeat, !options.mesh_t1.empty(),
                                                         /*warm_up=*/false, options.ccd);
+    IntersectionCounts intersections;
+    if (options.intersections) {
+        Stopwatch watch;
+        intersections.t0 = collision::count_intersecting_pairs(
+            std::span<const Vec3d>(mesh.positions),
+            std::span<const geometry::Triangle>(mesh.triangles));
+        if (!options.mesh_t1.empty()) {
+            intersections.t1 = collision::count_intersecting_pairs(
+                positions_t1, std::span<const geometry::Triangle>(mesh.triangles));
+        }
+        intersections.ms = watch.elapsed_ms();
+    }
     if (global.json) {
-        std::fputs((to_json(result).dump(2) + "\n").c_str(), stdout);
+        nlohmann::ordered_json json = to_json(result);
+        if (options.intersections) {
+            json["intersecting_pairs"] = intersections.t0;
+            if (intersections.t1 >= 0) {
+                json["intersecting_pairs_t1"] = intersections.t1;
+            }
+            json["intersections_ms"] = intersections.ms;
+        }
+        std::fputs((json.dump(2) + "\n").c_str(), stdout);
     } else {
-        print_human(options, result);
+        print_human(options, result, intersections);
     }
 }
 
@@ -143,6 +181,10 @@ void register_collide(CLI::App& app, const GlobalOptions& global) {
         "--ccd", options->ccd,
         "Also run the continuous narrow phase (conservative CCD) on every VF and EE pair: "
         "vf_hits, ee_hits, earliest_toi, narrow_ms");
+    cmd->add_flag("--intersections", options->intersections,
+                  "Also count the intersecting pairs of triangles that share no vertex, decided "
+                  "exactly (in MESH, and in MESH_T1 with --to): intersecting_pairs, "
+                  "intersecting_pairs_t1, intersections_ms");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_collide(*options, global); });
 }

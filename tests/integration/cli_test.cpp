@@ -233,6 +233,35 @@ TEST(Collide, CrumpledSheetMatchesBruteForceOnOneThread) {
     EXPECT_EQ(json.at("threads").get<int>(), 1);
 }
 
+// Two squares crossing at right angles: square A in z = 0 split along y = x, square B in x = 0
+// split along its diagonal through the origin. On the crossing segment (x = 0, z = 0,
+// y in [-0.5, 0.5]) every triangle of A meets every triangle of B (the two pairs that only touch
+// at the origin count too): 4 pairs. Moved apart by 5 m at t1: 0.
+TEST(Collide, IntersectionsCountsCrossingSquares) {
+    ScratchDir scratch;
+    geometry::TriangleMeshD crossing;
+    crossing.positions = {{-1, -1, 0},   {1, -1, 0},   {1, 1, 0},   {-1, 1, 0},
+                          {0, -0.5, -1}, {0, 0.5, -1}, {0, 0.5, 1}, {0, -0.5, 1}};
+    crossing.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+    geometry::TriangleMeshD apart = crossing;
+    for (std::size_t v = 4; v < 8; ++v) {
+        apart.positions[v].x += 5.0;
+    }
+    const auto path_t0 = scratch / "crossing.obj";
+    const auto path_t1 = scratch / "apart.ply";
+    io::write_mesh(path_t0, crossing);
+    io::write_mesh(path_t1, apart);
+    const nlohmann::json json = parse_json(run_cli(
+        "collide " + quoted(path_t0) + " --to " + quoted(path_t1) + " --intersections --json",
+        scratch));
+    EXPECT_EQ(json.at("intersecting_pairs").get<std::int64_t>(), 4);
+    EXPECT_EQ(json.at("intersecting_pairs_t1").get<std::int64_t>(), 0);
+    EXPECT_GE(json.at("intersections_ms").get<double>(), 0.0);
+    const nlohmann::json plain =
+        parse_json(run_cli("collide " + quoted(path_t0) + " --json", scratch));
+    EXPECT_FALSE(plain.contains("intersecting_pairs"));
+}
+
 TEST(Collide, HumanSummary) {
     ScratchDir scratch;
     const auto path = scratch / "folded.ply";
