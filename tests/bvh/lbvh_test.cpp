@@ -166,6 +166,93 @@ TEST(LBVH, PairTraversalMatchesBruteForce) {
     EXPECT_EQ(pairs, test::brute_force_overlaps(a, b));
 }
 
+// Euclidean distance from p to a box (0 inside), in double.
+double box_distance(const Vec3d& p, const AABB& box) {
+    const Vec3d lo = vec3_cast<double>(box.lo);
+    const Vec3d hi = vec3_cast<double>(box.hi);
+    const Vec3d gap = max(max(lo - p, p - hi), Vec3d{0.0, 0.0, 0.0});
+    return norm(gap);
+}
+
+TEST(LBVH, NearestQueryMatchesBruteForce) {
+    // Nearest box to random points, with the query's radius shrinking to the best distance found:
+    // the least (distance, index) must equal brute force, and within a finite radius nothing is
+    // found exactly when brute force finds nothing.
+    for (const int n : {1, 2, 7, 300, 5000}) {
+        const auto boxes = test::random_boxes(n, 0.01f, static_cast<std::uint32_t>(n + 40));
+        LBVH tree;
+        tree.build(boxes);
+        std::mt19937 rng(static_cast<std::uint32_t>(n));
+        std::uniform_real_distribution<double> u(-0.3, 1.3);
+        std::int64_t visited = 0;
+        for (int q = 0; q < 200; ++q) {
+            const Vec3d p{u(rng), u(rng), u(rng)};
+            double expected = INFINITY;
+            std::uint32_t expected_index = 0;
+            for (std::size_t i = 0; i < boxes.size(); ++i) {
+                const double d = box_distance(p, boxes[i]);
+                if (d < expected) {
+                    expected = d;
+                    expected_index = static_cast<std::uint32_t>(i);
+                }
+            }
+            for (const double radius : {double{INFINITY}, 0.05, 0.0}) {
+                double best = radius;
+                std::uint32_t best_index = UINT32_MAX;
+                query_wide_nearest(tree.nodes().data(), p, radius,
+                                   [&](std::int32_t leaf, const AABB& box) {
+                                       const std::uint32_t i = tree.primitives()[leaf];
+                                       EXPECT_EQ(box, boxes[i]);
+                                       const double d = box_distance(p, box);
+                                       ++visited;
+                                       if (d < best || (d == best && i < best_index)) {
+                                           best = d;
+                                           best_index = i;
+                                       }
+                                       return best;
+                                   });
+                SCOPED_TRACE(testing::Message() << "n=" << n << " q=" << q << " r=" << radius);
+                if (expected <= radius) {
+                    EXPECT_EQ(best, expected);
+                    EXPECT_EQ(best_index, expected_index);
+                } else {
+                    EXPECT_EQ(best_index, UINT32_MAX);
+                }
+            }
+        }
+        if (n == 5000) {
+            // Pruning works: far fewer leaves visited than 3 queries × 200 points × n.
+            EXPECT_LT(visited, 200 * 3 * n / 50);
+        }
+    }
+}
+
+TEST(LBVH, NearestQueryKeepsLeavesAtTheRadiusAndSurvivesRounding) {
+    // Boxes touching the query box's boundary (closed intervals) are visited; coordinates that
+    // are not floats are rounded outward, so a box at exactly the radius from a double point is
+    // not lost.
+    const std::vector<AABB> boxes{AABB::of_point({1.0f, 0.0f, 0.0f}),
+                                  AABB::of_point({0.0f, 0.1f, 0.0f}),
+                                  AABB::of_point({0.0f, 0.0f, -3.0f})};
+    LBVH tree;
+    tree.build(boxes);
+    const Vec3d p{0.0, 0.1 - 0.25, 0.0};  // 0.1 - 0.25 is not a float
+    int found = 0;
+    query_wide_nearest(tree.nodes().data(), p, 0.25 + static_cast<double>(0.1f) - 0.1,
+                       [&](std::int32_t leaf, const AABB&) {
+                           found |= 1 << tree.primitives()[leaf];
+                           return INFINITY;  // larger than the radius: ignored
+                       });
+    EXPECT_EQ(found, 2);
+    found = 0;
+    query_wide_nearest(tree.nodes().data(), Vec3d{0.0, 0.0, 0.0}, NAN,
+                       [&](std::int32_t, const AABB&) {
+                           ++found;
+                           return 0.0;
+                       });
+    EXPECT_EQ(found, 0);
+}
+
 TEST(LBVH, BitwiseIdenticalForOneAndManyThreads) {
     const auto mesh = test::jittered_sheet(120, 100, 0.3f, 0.05f, 4);
     const auto boxes = test::triangle_boxes(mesh, 0.004f);

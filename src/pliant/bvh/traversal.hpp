@@ -22,6 +22,7 @@
 #include <emmintrin.h>
 #endif
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <vector>
@@ -121,6 +122,85 @@ PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std
             if (is_leaf(c)) {
                 on_leaf(leaf_position(c), node.box(k));
             } else {
+                stack[top++] = c;
+            }
+        }
+    }
+}
+
+// The float box [point - r, point + r] rounded outward (r ≥ 0; r = +inf gives the whole space).
+inline AABB query_box_around(const Vec3d& point, double radius) {
+    return outward_float(AABBd{{point.x - radius, point.y - radius, point.z - radius},
+                               {point.x + radius, point.y + radius, point.z + radius}});
+}
+
+// Closest-point style query with a shrinking radius: visits the leaves whose boxes overlap the
+// closed box [point - r, point + r], where r starts at `radius` (world units, ≥ 0; +inf visits
+// every leaf) and becomes what on_leaf(j, box_j) returns — the caller's best distance so far, so
+// later subtrees are tested against a smaller box. A return value larger than the current radius
+// is ignored. The query box is rounded outward to float, so every leaf whose box is within r of
+// `point` along each axis is visited: a caller returning the distance of its nearest primitive
+// so far (a primitive is never farther than its box) finds every primitive at distance ≤ the
+// final r. Children are taken nearest box first (float distance from `point`, an ordering
+// heuristic only), leaves of a node before its inner children, so r shrinks early. The visit order
+// depends only on the tree, the query and on_leaf's return values. Fixed-size stack, no allocation.
+template <typename OnLeaf>
+void query_wide_nearest(const WideNode* nodes, const Vec3d& point, double radius,
+                        OnLeaf&& on_leaf) {
+    if (!(radius >= 0.0)) {
+        return;
+    }
+    QueryBox q(query_box_around(point, radius));
+    const Vec3f p = vec3_cast<float>(point);
+    std::int32_t stack[TRAVERSAL_STACK];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const WideNode& node = nodes[stack[--top]];
+        unsigned mask = slot_mask(node, q, -1);
+        if (mask == 0) {
+            continue;
+        }
+        // Order the overlapping slots by squared distance from p to their boxes.
+        float gap2[WIDTH];
+        for (int k = 0; k < WIDTH; ++k) {
+            const float dx = std::max(std::max(node.lo_x[k] - p.x, p.x - node.hi_x[k]), 0.0f);
+            const float dy = std::max(std::max(node.lo_y[k] - p.y, p.y - node.hi_y[k]), 0.0f);
+            const float dz = std::max(std::max(node.lo_z[k] - p.z, p.z - node.hi_z[k]), 0.0f);
+            gap2[k] = dx * dx + dy * dy + dz * dz;
+        }
+        int order[WIDTH];
+        int count = 0;
+        while (mask != 0) {
+            const int k = std::countr_zero(mask);
+            mask &= mask - 1;
+            int at = count++;
+            while (at > 0 && gap2[order[at - 1]] > gap2[k]) {
+                order[at] = order[at - 1];
+                --at;
+            }
+            order[at] = k;
+        }
+        // Leaves nearest first, each re-tested against the box as it shrinks.
+        for (int i = 0; i < count; ++i) {
+            const int k = order[i];
+            const std::int32_t c = node.child[k];
+            if (!is_leaf(c) || ((slot_mask(node, q, -1) >> k) & 1u) == 0) {
+                continue;
+            }
+            const double shrunk = on_leaf(leaf_position(c), node.box(k));
+            if (shrunk < radius) {
+                radius = shrunk;
+                q = QueryBox(query_box_around(point, radius));
+            }
+        }
+        // Inner children farthest first onto the stack, so the nearest is popped next; each is
+        // tested against the box current when it is popped.
+        const unsigned still = slot_mask(node, q, -1);
+        for (int i = count - 1; i >= 0; --i) {
+            const int k = order[i];
+            const std::int32_t c = node.child[k];
+            if (!is_leaf(c) && ((still >> k) & 1u) != 0) {
                 stack[top++] = c;
             }
         }

@@ -1,0 +1,216 @@
+#include "pliant/cloth/mesh_obstacle.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "pliant/bvh/traversal.hpp"
+#include "pliant/collision/point_triangle.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/geometry/topology.hpp"
+#include "pliant/geometry/validate.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t GEOMETRY_GRAIN = 1 << 12;
+
+std::size_t index(std::int32_t i) {
+    return static_cast<std::size_t>(i);
+}
+
+}  // namespace
+
+MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh)) {
+    if (m_mesh.triangles.empty()) {
+        throw InvalidInput(fmt::format(
+            "cloth::MeshObstacle: mesh has no triangles ({} vertices); expected at least one",
+            m_mesh.positions.size()));
+    }
+    geometry::validate_mesh(m_mesh, "cloth::MeshObstacle: mesh");
+    geometry::MeshTopology topology =
+        geometry::build_topology(m_mesh.triangles, m_mesh.positions.size());
+    m_triangle_edges = std::move(topology.triangle_edges);
+    m_edge_triangle_offsets = std::move(topology.edge_triangle_offsets);
+    m_edge_triangles = std::move(topology.edge_triangles);
+    m_vertex_triangle_offsets = std::move(topology.vertex_triangle_offsets);
+    m_vertex_triangles = std::move(topology.vertex_triangles);
+    m_face_normals.resize(m_mesh.triangles.size());
+    m_corner_angles.resize(m_mesh.triangles.size());
+    m_boxes.resize(m_mesh.triangles.size());
+    m_edge_normals.resize(topology.edges.size());
+    m_vertex_normals.resize(m_mesh.positions.size());
+    update_geometry();
+    m_tree.build(m_boxes);
+}
+
+void MeshObstacle::set_positions(std::span<const Vec3d> positions) {
+    if (positions.size() != m_mesh.positions.size()) {
+        throw InvalidInput(fmt::format(
+            "cloth::MeshObstacle::set_positions: positions.size() ({}) != the mesh's vertex count "
+            "({})",
+            positions.size(), m_mesh.positions.size()));
+    }
+    geometry::validate_positions(positions, "cloth::MeshObstacle::set_positions: positions");
+    std::copy(positions.begin(), positions.end(), m_mesh.positions.begin());
+    update_geometry();
+    m_tree.refit(m_boxes);
+}
+
+// Three passes, each writing by index (deterministic for any number of threads): per triangle
+// (unit normal, corner angles, box), per edge and per vertex (sums over incident triangles in
+// ascending order).
+void MeshObstacle::update_geometry() {
+    const std::span<const Vec3d> positions = m_mesh.positions;
+    const std::span<const geometry::Triangle> triangles = m_mesh.triangles;
+    const auto num_triangles = static_cast<std::int64_t>(triangles.size());
+
+    // Step 1: triangles.
+    parallel_for(
+        num_triangles,
+        [&](std::int64_t t) {
+            const auto i = static_cast<std::size_t>(t);
+            const geometry::Triangle& tri = triangles[i];
+            const Vec3d corners[3] = {positions[index(tri[0])], positions[index(tri[1])],
+                                      positions[index(tri[2])]};
+            const Vec3d n = cross(corners[1] - corners[0], corners[2] - corners[0]);
+            const double length = norm(n);
+            m_face_normals[i] = length > 0.0 ? n * (1.0 / length) : Vec3d{};
+            for (int k = 0; k < 3; ++k) {
+                const Vec3d e1 = corners[(k + 1) % 3] - corners[k];
+                const Vec3d e2 = corners[(k + 2) % 3] - corners[k];
+                m_corner_angles[i][static_cast<std::size_t>(k)] =
+                    std::atan2(norm(cross(e1, e2)), dot(e1, e2));
+            }
+            AABBd box;
+            for (const Vec3d& c : corners) {
+                box.extend(c);
+            }
+            m_boxes[i] = outward_float(box);
+        },
+        GEOMETRY_GRAIN);
+
+    // Step 2: edge pseudo-normals.
+    parallel_for(
+        static_cast<std::int64_t>(m_edge_normals.size()),
+        [&](std::int64_t e) {
+            const auto i = static_cast<std::size_t>(e);
+            Vec3d sum{};
+            for (std::int32_t k = m_edge_triangle_offsets[i]; k < m_edge_triangle_offsets[i + 1];
+                 ++k) {
+                sum += m_face_normals[index(m_edge_triangles[index(k)])];
+            }
+            m_edge_normals[i] = sum;
+        },
+        GEOMETRY_GRAIN);
+
+    // Step 3: angle-weighted vertex pseudo-normals.
+    parallel_for(
+        static_cast<std::int64_t>(m_vertex_normals.size()),
+        [&](std::int64_t v) {
+            const auto i = static_cast<std::size_t>(v);
+            Vec3d sum{};
+            for (std::int32_t k = m_vertex_triangle_offsets[i];
+                 k < m_vertex_triangle_offsets[i + 1]; ++k) {
+                const std::int32_t t = m_vertex_triangles[index(k)];
+                const geometry::Triangle& tri = triangles[index(t)];
+                const int corner = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
+                sum += m_face_normals[index(t)] *
+                       m_corner_angles[index(t)][static_cast<std::size_t>(corner)];
+            }
+            m_vertex_normals[i] = sum;
+        },
+        GEOMETRY_GRAIN);
+
+    // Step 4: bounds of the surface (exact min/max: order independent).
+    m_bounds = parallel_reduce(
+        num_triangles, AABBd{},
+        [&](std::int64_t begin, std::int64_t end) {
+            AABBd box;
+            for (std::int64_t t = begin; t < end; ++t) {
+                for (const std::int32_t v : triangles[static_cast<std::size_t>(t)]) {
+                    box.extend(positions[index(v)]);
+                }
+            }
+            return box;
+        },
+        [](const AABBd& a, const AABBd& b) { return merge(a, b); }, GEOMETRY_GRAIN);
+}
+
+std::optional<SurfaceDistance> MeshObstacle::surface_distance(const Vec3d& x,
+                                                              double max_distance) const {
+    if (!(max_distance >= 0.0) || !is_finite(x)) {
+        return std::nullopt;
+    }
+    const Vec3d* positions = m_mesh.positions.data();
+    const geometry::Triangle* triangles = m_mesh.triangles.data();
+    const std::uint32_t* primitives = m_tree.primitives().data();
+
+    // Closest triangle: least (distance, triangle index) within max_distance. The radius handed
+    // back to the traversal is the best distance so far; a tie at that distance is still visited
+    // (closed boxes), so the choice does not depend on the visit order.
+    bool found = false;
+    std::int32_t best_triangle = -1;
+    collision::PointTriangleProximity<double> best{};
+    best.distance = max_distance;
+    bvh::query_wide_nearest(
+        m_tree.nodes().data(), x, max_distance, [&](std::int32_t leaf, const AABB&) {
+            const auto t = static_cast<std::int32_t>(primitives[leaf]);
+            const geometry::Triangle& tri = triangles[t];
+            const collision::PointTriangleProximity<double> proximity =
+                collision::point_triangle_proximity(x, positions[tri[0]], positions[tri[1]],
+                                                    positions[tri[2]]);
+            if (proximity.distance < best.distance ||
+                (proximity.distance == best.distance && (!found || t < best_triangle))) {
+                best = proximity;
+                best_triangle = t;
+                found = true;
+            }
+            return best.distance;
+        });
+    if (!found) {
+        return std::nullopt;
+    }
+
+    // The pseudo-normal of the closest feature decides the side.
+    using Region = collision::PointTriangleRegion;
+    const geometry::Triangle& tri = triangles[best_triangle];
+    Vec3d pseudo_normal;
+    if (best.region == Region::FACE) {
+        pseudo_normal = m_face_normals[index(best_triangle)];
+    } else if (best.region <= Region::VERTEX_C) {
+        pseudo_normal = m_vertex_normals[index(tri[best.region - Region::VERTEX_A])];
+    } else {
+        pseudo_normal = m_edge_normals[index(m_triangle_edges[index(
+            best_triangle)][static_cast<std::size_t>(best.region - Region::EDGE_AB)])];
+    }
+    if (best.distance > 0.0) {
+        const bool inside = dot(best.normal, pseudo_normal) < 0.0;
+        return SurfaceDistance{inside ? -best.distance : best.distance,
+                               inside ? -best.normal : best.normal};
+    }
+    // On the surface: the feature's own direction (the triangle's when the pseudo-normal vanishes,
+    // e.g. on a degenerate triangle or a fin folded flat onto itself).
+    const double length = norm(pseudo_normal);
+    return SurfaceDistance{0.0, length > 0.0 ? pseudo_normal * (1.0 / length) : best.normal};
+}
+
+ContactCorrection push_out(const MeshObstacle& obstacle, Vec3d& x, double thickness,
+                           double max_depth) {
+    const std::optional<SurfaceDistance> surface =
+        obstacle.surface_distance(x, std::max(thickness, max_depth));
+    if (!surface) {
+        return {0.0, Vec3d{}};
+    }
+    const double depth = thickness - surface->distance;
+    if (!(depth > 0.0) || surface->distance < -max_depth) {
+        return {0.0, surface->normal};
+    }
+    x += surface->normal * depth;
+    return {depth, surface->normal};
+}
+
+}  // namespace pliant::cloth
