@@ -4,11 +4,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <numbers>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "output_directory.hpp"
+#include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
@@ -21,19 +22,11 @@
 namespace pliant::cli {
 namespace {
 
-// Rotation about x, then y, then z (degrees), then translation: the scene's transform.
-Vec3d transform(const Vec3d& p, const cloth::ClothScene& scene) {
-    const double to_radians = std::numbers::pi / 180.0;
-    const double ax = scene.rotate_degrees.x * to_radians;
-    const double ay = scene.rotate_degrees.y * to_radians;
-    const double az = scene.rotate_degrees.z * to_radians;
-    Vec3d q = p;
-    q = {q.x, std::cos(ax) * q.y - std::sin(ax) * q.z, std::sin(ax) * q.y + std::cos(ax) * q.z};
-    q = {std::cos(ay) * q.x + std::sin(ay) * q.z, q.y, -std::sin(ay) * q.x + std::cos(ay) * q.z};
-    q = {std::cos(az) * q.x - std::sin(az) * q.y, std::sin(az) * q.x + std::cos(az) * q.y, q.z};
-    return q + scene.translate;
+Vec3d place(const Vec3d& p, const cloth::Placement& placement) {
+    return cloth::Rotation::from_degrees(placement.rotate_degrees).apply(p) + placement.translate;
 }
 
+// The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
     geometry::TriangleMeshD mesh;
     if (scene.grid) {
@@ -43,23 +36,46 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
     } else {
         mesh = io::read_mesh(scene.mesh);
     }
+    const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     for (Vec3d& p : mesh.positions) {
-        p = transform(p, scene);
+        p = place(p, transform);
     }
-    return mesh;
+    if (scene.instances.empty()) {
+        return mesh;
+    }
+    const auto num_vertices = static_cast<std::int64_t>(mesh.positions.size());
+    if (num_vertices * static_cast<std::int64_t>(scene.instances.size()) >
+        std::numeric_limits<std::int32_t>::max()) {
+        throw InvalidInput(fmt::format(
+            "cloth: {} instances of {} vertices exceed the 2^31 - 1 vertex indices a mesh has",
+            scene.instances.size(), num_vertices));
+    }
+    geometry::TriangleMeshD copies;
+    for (std::size_t k = 0; k < scene.instances.size(); ++k) {
+        const auto offset = static_cast<std::int32_t>(k * mesh.positions.size());
+        for (const Vec3d& p : mesh.positions) {
+            copies.positions.push_back(place(p, scene.instances[k]));
+        }
+        for (const geometry::Triangle& t : mesh.triangles) {
+            copies.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        }
+    }
+    return copies;
 }
 
-std::vector<std::int32_t> pinned_vertices(const cloth::ClothScene& scene,
-                                          const geometry::TriangleMeshD& mesh) {
-    std::vector<std::int32_t> pinned = scene.pinned_vertices;
+// The vertices of a pin group: its listed indices and every vertex inside one of its regions.
+std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
+                                          const geometry::TriangleMeshD& mesh,
+                                          std::size_t group_index) {
+    std::vector<std::int32_t> pinned = group.vertices;
     for (const std::int32_t v : pinned) {
         if (static_cast<std::size_t>(v) >= mesh.positions.size()) {
             throw InvalidInput(fmt::format(
-                "{}: pins.vertices: vertex {} out of range, expected an index below {}",
-                scene.mesh.empty() ? "scene" : scene.mesh.string(), v, mesh.positions.size()));
+                "scene: pins[{}].vertices: vertex {} out of range, expected an index below {}",
+                group_index, v, mesh.positions.size()));
         }
     }
-    for (const cloth::PinRegion& region : scene.pin_regions) {
+    for (const cloth::PinRegion& region : group.regions) {
         for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
             const Vec3d& p = mesh.positions[v];
             if (p.x >= region.min.x && p.x <= region.max.x && p.y >= region.min.y &&
@@ -78,11 +94,19 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                        const std::filesystem::path& out, int frames,
                                        bool progress) {
     const geometry::TriangleMeshD mesh = load_cloth(scene);
-    cloth::ClothSolver solver(mesh, scene.material, pinned_vertices(scene, mesh));
-    for (const cloth::Obstacle& obstacle : scene.obstacles) {
-        solver.add_obstacle(obstacle);
+    cloth::ClothSolver solver(mesh, scene.material);
+    for (std::size_t g = 0; g < scene.pins.size(); ++g) {
+        solver.add_moving_pins(pinned_vertices(scene.pins[g], mesh, g), scene.pins[g].motion);
+    }
+    for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
+        if (!obstacle.mesh.empty()) {
+            throw InvalidInput(
+                fmt::format("{}: mesh obstacles are not supported yet", obstacle.mesh.string()));
+        }
+        solver.add_obstacle(obstacle.shape, obstacle.motion);
     }
     solver.set_gravity(scene.gravity);
+    solver.set_air(scene.air);
     solver.enable_self_collision(scene.self_collision);
 
     const std::filesystem::path frames_dir = out / "frames";
@@ -115,12 +139,18 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             collision::count_intersecting_pairs(solver.positions(), solver.triangles());
         nlohmann::ordered_json record = {{"frame", frame},
                                          {"ms", ms},
-                                         {"step_ms", step.ms},
+                                         {"step_ms", step.solve_ms},
+                                         {"refit_ms", step.self.refit_ms},
+                                         {"traverse_ms", step.self.traverse_ms},
+                                         {"narrow_ms", step.self.narrow_ms},
+                                         {"response_ms", step.self.response_ms},
+                                         {"solver_ms", step.ms},
                                          {"obstacle_contacts", step.obstacle_contacts},
                                          {"intersecting_pairs", intersecting},
                                          {"check_ms", check.elapsed_ms()}};
         if (step.has_self_collision) {
             record["gather_ms"] = step.self.gather_ms;
+            record["project_ms"] = step.self.project_ms;
             record["ccd_ms"] = step.self.enforce_ms;
             record["candidate_pairs"] = step.self.candidate_pairs;
             record["contacts"] = step.self.contacts;

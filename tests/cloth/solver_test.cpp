@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 #include "pliant/core/error.hpp"
@@ -169,6 +170,138 @@ TEST(ClothSolver, EverythingPinnedStaysPutAndHugeStepsStayFinite) {
     for (const Vec3d& p : free.positions()) {
         EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
     }
+}
+
+// A horizontal sheet falling through still air reaches the terminal speed of a flat plate,
+// ½ ρ C_d A v² = m g, so v = sqrt(2 ρ_A g / (ρ C_d)) with ρ_A the areal density (m / A):
+// sqrt(2 · 0.15 · 9.81 / 1.2) = 1.566 m/s for the default material. Wind blowing upward at that
+// speed holds it still.
+TEST(ClothSolver, AirDragGivesTheFlatPlateTerminalSpeed) {
+    const geometry::TriangleMeshD mesh = sheet(8, 1.0, 0.0);
+    const double expected = std::sqrt(2.0 * 0.15 * 9.81 / 1.2);
+    Air air;
+    air.density = 1.2;
+    air.drag_coefficient = 1.0;
+    ClothSolver falling(mesh, ClothMaterial{});
+    falling.set_air(air);
+    for (int f = 0; f < 48; ++f) {
+        falling.step(1.0 / 24.0, 20);
+    }
+    // Damping (0.5/s) slows it a little more: v = terminal speed of drag + damping.
+    // Solve ½ ρ C_d v² / ρ_A + damping v = g for v.
+    const double a = 0.5 * 1.2 / 0.15;
+    const double with_damping = (-0.5 + std::sqrt(0.25 + 4.0 * a * 9.81)) / (2.0 * a);
+    for (const Vec3d& v : falling.velocities()) {
+        EXPECT_NEAR(-v.z, with_damping, 1e-3 * with_damping);
+    }
+    EXPECT_LT(with_damping, expected);
+    EXPECT_GT(with_damping, 0.9 * expected);
+
+    ClothMaterial no_damping;
+    no_damping.damping = 0.0;
+    ClothSolver hovering(mesh, no_damping);
+    air.wind = {0.0, 0.0, expected};
+    hovering.set_air(air);
+    for (int f = 0; f < 24; ++f) {
+        hovering.step(1.0 / 24.0, 20);
+    }
+    for (const Vec3d& v : hovering.velocities()) {
+        EXPECT_NEAR(v.z, 0.0, 1e-9);
+    }
+    air.gust_period = 0.0;
+    EXPECT_THROW(hovering.set_air(air), InvalidInput);
+}
+
+// Pins that turn about z follow the keyframed path exactly (two turns in two seconds).
+TEST(ClothSolver, MovingPinsFollowTheirMotion) {
+    const geometry::TriangleMeshD mesh = sheet(6, 1.0, 1.0);
+    ClothSolver solver(mesh, ClothMaterial{});
+    Motion motion;
+    motion.pivot = {0.0, 0.0, 1.0};
+    motion.keyframes = {Keyframe{0.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}},
+                        Keyframe{2.0, {0.0, 0.0, 0.5}, {0.0, 0.0, 720.0}}};
+    const std::vector<std::int32_t> corner{0};
+    solver.add_moving_pins(corner, motion);
+    const Vec3d start = mesh.positions[0];
+    for (int f = 1; f <= 36; ++f) {
+        solver.step(1.0 / 24.0, 5);
+        const double t = f / 24.0;
+        const double angle = 2.0 * std::numbers::pi * t;  // 720° over 2 s
+        const Vec3d expected{std::cos(angle) * start.x - std::sin(angle) * start.y,
+                             std::sin(angle) * start.x + std::cos(angle) * start.y,
+                             start.z + 0.25 * t};
+        EXPECT_NEAR(norm(solver.positions()[0] - expected), 0.0, 1e-12) << "frame " << f;
+    }
+    EXPECT_EQ(solver.inverse_masses()[0], 0.0);
+    Motion backwards = motion;
+    backwards.keyframes[1].time = -1.0;
+    EXPECT_THROW(solver.add_moving_pins(corner, backwards), InvalidInput);
+    const std::vector<std::int32_t> out_of_range{1000};
+    EXPECT_THROW(solver.add_moving_pins(out_of_range, motion), InvalidInput);
+}
+
+// A sheet resting on a box that slides sideways at 0.2 m/s is carried along by friction
+// (static friction holds: the box's acceleration is zero after the start), and left behind
+// without friction. Boxes that would rotate are refused.
+TEST(ClothSolver, MovingObstacleCarriesTheClothByFriction) {
+    const auto run = [](double friction) {
+        const geometry::TriangleMeshD mesh = sheet(8, 0.4, 0.005);
+        ClothMaterial material;
+        material.static_friction = friction;
+        material.kinetic_friction = friction;
+        ClothSolver solver(mesh, material);
+        Motion slide;
+        slide.keyframes = {Keyframe{0.0, {0.0, 0.0, 0.0}, {}}, Keyframe{10.0, {2.0, 0.0, 0.0}, {}}};
+        solver.add_obstacle(BoxObstacle{{-1.0, -1.0, -1.0}, {1.0, 1.0, 0.0}}, slide);
+        for (int f = 0; f < 24; ++f) {
+            solver.step(1.0 / 24.0, 10);
+        }
+        double mean_x = 0.0;
+        for (const Vec3d& p : solver.positions()) {
+            mean_x += p.x;
+        }
+        return mean_x / static_cast<double>(solver.positions().size());
+    };
+    EXPECT_NEAR(run(0.5), 0.2, 0.02);  // carried 0.2 m in one second
+    EXPECT_NEAR(run(0.0), 0.0, 1e-9);  // frictionless: stays
+    ClothSolver solver(sheet(2, 1.0, 0.0), ClothMaterial{});
+    Motion spin;
+    spin.keyframes = {Keyframe{0.0, {}, {0.0, 0.0, 10.0}}};
+    EXPECT_THROW(solver.add_obstacle(BoxObstacle{}, spin), InvalidInput);
+}
+
+// A small sheet lying on a pinned sheet, with gravity tilted by atan(0.2) = 11.3°: cloth-cloth
+// static friction 0.3 > 0.2 holds it, without friction it slides off.
+TEST(ClothSolver, SelfFrictionHoldsASheetOnATiltedSheet) {
+    const auto run = [](double friction) {
+        geometry::TriangleMeshD mesh = sheet(16, 0.6, 0.0);
+        const geometry::TriangleMeshD top = sheet(6, 0.2, 0.005);
+        const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+        std::vector<std::int32_t> pinned;
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+            pinned.push_back(static_cast<std::int32_t>(v));
+        }
+        mesh.positions.insert(mesh.positions.end(), top.positions.begin(), top.positions.end());
+        for (const geometry::Triangle& t : top.triangles) {
+            mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        }
+        ClothMaterial material;
+        material.self_static_friction = friction;
+        material.self_kinetic_friction = friction;
+        ClothSolver solver(mesh, material, pinned);
+        solver.set_gravity({-0.2 * 9.81, 0.0, -9.81});
+        solver.enable_self_collision(true);
+        for (int f = 0; f < 12; ++f) {
+            solver.step(1.0 / 24.0, 20);
+        }
+        double mean_x = 0.0;
+        for (std::size_t v = static_cast<std::size_t>(offset); v < mesh.positions.size(); ++v) {
+            mean_x += solver.positions()[v].x;
+        }
+        return mean_x / static_cast<double>(top.positions.size());
+    };
+    EXPECT_GT(run(0.3), -0.005);  // held (starts at 0)
+    EXPECT_LT(run(0.0), -0.1);    // ½ · 1.96 m/s² · (0.5 s)² = 0.245 m
 }
 
 }  // namespace

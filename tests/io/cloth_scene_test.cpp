@@ -46,14 +46,16 @@ TEST(ClothScene, ReadsEveryKey) {
     EXPECT_EQ(scene.grid->quads[0], 30);
     EXPECT_DOUBLE_EQ(scene.grid->size[1], 0.5);
     EXPECT_DOUBLE_EQ(scene.rotate_degrees.x, 90.0);
-    EXPECT_EQ(scene.pinned_vertices.size(), 2u);
-    EXPECT_EQ(scene.pin_regions.size(), 1u);
+    ASSERT_EQ(scene.pins.size(), 1u);
+    EXPECT_EQ(scene.pins[0].vertices.size(), 2u);
+    EXPECT_EQ(scene.pins[0].regions.size(), 1u);
+    EXPECT_TRUE(scene.pins[0].motion.is_static());
     EXPECT_DOUBLE_EQ(scene.material.thickness, 0.002);
     EXPECT_DOUBLE_EQ(scene.material.kinetic_friction, 0.4);
     ASSERT_EQ(scene.obstacles.size(), 3u);
-    EXPECT_DOUBLE_EQ(std::get<cloth::SphereObstacle>(scene.obstacles[0]).radius, 0.5);
-    EXPECT_TRUE(std::holds_alternative<cloth::PlaneObstacle>(scene.obstacles[1]));
-    EXPECT_TRUE(std::holds_alternative<cloth::BoxObstacle>(scene.obstacles[2]));
+    EXPECT_DOUBLE_EQ(std::get<cloth::SphereObstacle>(scene.obstacles[0].shape).radius, 0.5);
+    EXPECT_TRUE(std::holds_alternative<cloth::PlaneObstacle>(scene.obstacles[1].shape));
+    EXPECT_TRUE(std::holds_alternative<cloth::BoxObstacle>(scene.obstacles[2].shape));
     EXPECT_DOUBLE_EQ(scene.gravity.z, -1.0);
     EXPECT_EQ(scene.frames, 10);
     EXPECT_EQ(scene.substeps, 5);
@@ -106,6 +108,65 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
     expect_error(R"({"cloth": {"grid": {}}, "output": {"format": "stl"}})",
                  {"output.format", "\"obj\"", "\"stl\""});
     expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})", {"not JSON", "overflow"});
+}
+
+TEST(ClothScene, InstancesPinGroupsMotionAirAndMeshObstacles) {
+    const cloth::ClothScene scene = parse(R"({
+        "cloth": {"grid": {"quads": [4, 4]},
+                  "instances": [{"translate": [0, 0, 1]}, {"rotate_degrees": [0, 0, 30]}]},
+        "pins": [{"vertices": [0]},
+                 {"regions": [{"min": [-1, -1, 0], "max": [1, 1, 0]}],
+                  "motion": {"pivot": [0, 0, 1],
+                             "keyframes": [{"time": 0},
+                                           {"time": 3, "rotate_degrees": [0, 0, 720],
+                                            "translate": [0, 0, -0.3]}]}}],
+        "obstacles": [{"mesh": {"file": "bowl.obj", "translate": [0, 0, -1]},
+                       "motion": {"keyframes": [{"time": 1, "rotate_degrees": [0, 0, 90]}]}},
+                      {"sphere": {}, "motion": {"keyframes": [{"time": 0},
+                                                              {"time": 1, "translate": [1, 0, 0]}]}}],
+        "air": {"wind": [8, 0, 0], "gust_amplitude": 0.4}
+    })");
+    ASSERT_EQ(scene.instances.size(), 2u);
+    EXPECT_DOUBLE_EQ(scene.instances[0].translate.z, 1.0);
+    EXPECT_DOUBLE_EQ(scene.instances[1].rotate_degrees.z, 30.0);
+    ASSERT_EQ(scene.pins.size(), 2u);
+    EXPECT_TRUE(scene.pins[0].motion.is_static());
+    ASSERT_EQ(scene.pins[1].motion.keyframes.size(), 2u);
+    EXPECT_DOUBLE_EQ(scene.pins[1].motion.keyframes[1].rotate_degrees.z, 720.0);
+    EXPECT_DOUBLE_EQ(scene.pins[1].motion.pivot.z, 1.0);
+    ASSERT_EQ(scene.obstacles.size(), 2u);
+    EXPECT_EQ(scene.obstacles[0].mesh, std::filesystem::path("/scenes/bowl.obj"));
+    EXPECT_DOUBLE_EQ(scene.obstacles[0].mesh_placement.translate.z, -1.0);
+    EXPECT_TRUE(scene.obstacles[0].motion.rotates());
+    EXPECT_FALSE(scene.obstacles[1].motion.rotates());
+    EXPECT_DOUBLE_EQ(scene.air.density, 1.2);  // given an "air" object, air is on
+    EXPECT_DOUBLE_EQ(scene.air.wind.x, 8.0);
+    EXPECT_DOUBLE_EQ(scene.air.gust_amplitude, 0.4);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"grid": {}}})").air.density, 0.0);
+}
+
+TEST(ClothScene, BrokenMotionAndAirNameTheKey) {
+    expect_error(R"({"cloth": {"grid": {}}, "pins": {"motion": {}}})",
+                 {"pins.motion.keyframes", "non-empty"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": [{"motion": {"keyframes": [{}]}}]})",
+                 {"pins[0].motion.keyframes[0].time", "required"});
+    expect_error(
+        R"({"cloth": {"grid": {}}, "pins": {"motion": {"keyframes": [{"time": 1}, {"time": 1}]}}})",
+        {"pins.motion.keyframes[1].time", "after the previous keyframe"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": [{"motion": {"keyframes": [{"time": 0,
+                 "spin": 1}]}}]})",
+                 {"pins[0].motion.keyframes[0].spin", "unknown key"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"box": {"min": [0, 0, 0],
+                 "max": [1, 1, 1]}, "motion": {"keyframes": [{"time": 0,
+                 "rotate_degrees": [0, 0, 5]}]}}]})",
+                 {"obstacles[0].motion", "boxes stay axis-aligned"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"mesh": {}}]})",
+                 {"obstacles[0].mesh.file", "file name"});
+    expect_error(R"({"cloth": {"grid": {}}, "air": {"gust_period": 0}})", {"air.gust_period"});
+    expect_error(R"({"cloth": {"grid": {}}, "air": {"wind": [1, 0]}})", {"air.wind"});
+    expect_error(R"({"cloth": {"grid": {}, "instances": [{"scale": 2}]}})",
+                 {"cloth.instances[0].scale", "unknown key"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": 3})", {"pins", "an object"});
 }
 
 TEST(ClothScene, MissingFile) {

@@ -25,6 +25,9 @@ struct ClothMaterial {
     // penetration).
     double static_friction = 0.4;
     double kinetic_friction = 0.3;
+    // Coulomb friction of the cloth against itself (self-collision contacts), as above.
+    double self_static_friction = 0.3;
+    double self_kinetic_friction = 0.2;
 };
 
 }  // namespace pliant::cloth

@@ -13,7 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "pliant/cloth/air.hpp"
 #include "pliant/cloth/material.hpp"
+#include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/core/vec3.hpp"
 
@@ -32,6 +34,28 @@ struct PinRegion {
     Vec3d max;
 };
 
+// Pinned vertices that move together (motion.hpp; no keyframes: they stay put).
+struct PinGroup {
+    std::vector<std::int32_t> vertices;  // indices into the cloth (all copies: see instances)
+    std::vector<PinRegion> regions;
+    Motion motion;
+};
+
+// A placement: rotate about x, then y, then z (degrees, right-handed), then translate (metres).
+struct Placement {
+    Vec3d rotate_degrees{0.0, 0.0, 0.0};
+    Vec3d translate{0.0, 0.0, 0.0};
+};
+
+// An obstacle: an analytic shape, or a triangle mesh file (OBJ/PLY; relative paths are relative
+// to the scene file) placed by mesh_placement; either moved by motion.
+struct SceneObstacle {
+    Obstacle shape;
+    std::filesystem::path mesh;  // when not empty, the obstacle is this mesh and shape is unused
+    Placement mesh_placement;
+    Motion motion;
+};
+
 struct ClothScene {
     // The cloth: a grid, or a mesh file (OBJ/PLY; relative paths are relative to the scene file).
     std::optional<GridSheet> grid;
@@ -40,14 +64,18 @@ struct ClothScene {
     // right-handed), then translate (metres).
     Vec3d rotate_degrees{0.0, 0.0, 0.0};
     Vec3d translate{0.0, 0.0, 0.0};
+    // Copies of the cloth, each placed by its own placement after the transform above; empty: one
+    // copy as is. Copy k's vertex v has index k · #V + v (pins refer to these indices); copies
+    // are one mesh, so they collide with each other through self-collision.
+    std::vector<Placement> instances;
 
-    std::vector<std::int32_t> pinned_vertices;
-    std::vector<PinRegion> pin_regions;
+    std::vector<PinGroup> pins;
 
     ClothMaterial material;
     bool self_collision = true;  // cloth/self_collision.hpp
-    std::vector<Obstacle> obstacles;
+    std::vector<SceneObstacle> obstacles;
     Vec3d gravity{0.0, 0.0, -9.81};
+    Air air;  // air.hpp; off by default
 
     double frames_per_second = 24.0;
     int frames = 72;

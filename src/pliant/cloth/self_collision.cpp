@@ -59,11 +59,20 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
         m_gather_phase.update(positions, std::span<const Vec3d>(m_predicted), m_thickness);
     m_stats.candidate_pairs =
         static_cast<std::int64_t>(candidates.vertex_face.size() + candidates.edge_edge.size());
-    m_stats.gather_ms = watch.elapsed_ms();
+    add_broad_phase_times(m_gather_phase.stats());
+    m_stats.gather_ms += watch.elapsed_ms();
+}
+
+void SelfCollision::add_broad_phase_times(const collision::BroadPhaseStats& broad) {
+    m_stats.refit_ms += broad.build_ms + broad.refit_ms;
+    m_stats.traverse_ms += broad.traverse_ms + broad.features_ms;
 }
 
 std::int64_t SelfCollision::project(std::span<Vec3d> positions,
-                                    std::span<const double> inverse_masses) {
+                                    std::span<const Vec3d> previous_positions,
+                                    std::span<const double> inverse_masses,
+                                    const ClothMaterial& material) {
+    Stopwatch watch;
     const collision::FeaturePairs& candidates = m_gather_phase.pairs();
     const auto& edges = m_gather_phase.topology().edges;
     const auto num_vf = static_cast<std::int64_t>(candidates.vertex_face.size());
@@ -122,16 +131,39 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
             return a;
         },
         PAIR_GRAIN);
+    const double narrow_ms = watch.elapsed_ms();
+    m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;
     for (const std::int64_t i : close) {
         const Proximity p = proximity(i);
-        if (p.distance < m_thickness) {
-            separate(positions, inverse_masses, p.vertices, p.weights, p.normal,
-                     m_thickness - p.distance);
-            ++contacts;
+        if (!(p.distance < m_thickness)) {
+            continue;
         }
+        const double gap = m_thickness - p.distance;
+        separate(positions, inverse_masses, p.vertices, p.weights, p.normal, gap);
+        ++contacts;
+        // Friction: the pair's relative motion over the substep (first feature minus second, at
+        // the closest points), tangential part.
+        Vec3d relative{0.0, 0.0, 0.0};
+        for (int k = 0; k < 4; ++k) {
+            const auto v = static_cast<std::size_t>(p.vertices[k]);
+            relative += (positions[v] - previous_positions[v]) * p.weights[k];
+        }
+        const Vec3d tangential = relative - p.normal * dot(relative, p.normal);
+        const double slide = norm(tangential);
+        if (!(slide > 0.0)) {
+            continue;
+        }
+        const double removed = slide <= material.self_static_friction * gap
+                                   ? slide
+                                   : std::min(slide, material.self_kinetic_friction * gap);
+        separate(positions, inverse_masses, p.vertices, p.weights, tangential * (-1.0 / slide),
+                 removed);
     }
     m_stats.contacts = contacts;
+    const double total_ms = watch.elapsed_ms();
+    m_stats.response_ms += total_ms - narrow_ms;
+    m_stats.project_ms += total_ms;
     return contacts;
 }
 
@@ -142,6 +174,7 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
     m_stats.ccd_hits = 0;
     m_stats.reverted_vertices = 0;
     m_stats.enforce_rounds = 0;
+    Stopwatch response;  // restarted before each revert pass
     std::vector<std::uint8_t> reverted(positions.size(), 0);
     // Puts v back at its start with zero velocity; true when that moved it.
     const auto revert = [&](std::size_t v) {
@@ -159,19 +192,24 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
         if (round == ENFORCE_ROUNDS) {
             // Last resort: every vertex that moved goes back; the frame's start is
             // intersection-free.
+            response.restart();
             for (std::size_t v = 0; v < positions.size(); ++v) {
                 if (positions[v] != positions_t0[v]) {
                     revert(v);
                 }
             }
+            m_stats.response_ms += response.elapsed_ms();
             break;
         }
         const collision::FeaturePairs& pairs =
             m_swept_phase.update(positions_t0, std::span<const Vec3d>(positions), 0.0);
+        add_broad_phase_times(m_swept_phase.stats());
+        Stopwatch ccd;
         const collision::NarrowPhaseResult narrow =
             collision::continuous_narrow_phase(positions_t0, std::span<const Vec3d>(positions),
                                                std::span<const geometry::Triangle>(m_triangles),
                                                std::span<const geometry::Edge>(edges), pairs);
+        m_stats.narrow_ms += ccd.elapsed_ms();
         if (round == 0) {
             m_stats.ccd_hits = narrow.vf_hits + narrow.ee_hits;
         }
@@ -179,6 +217,7 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
             break;
         }
         // The vertices of every pair the CCD cannot clear, in pair order (deterministic).
+        response.restart();
         bool moved_any = false;
         for (const collision::VertexFacePair& p : narrow.hits.vertex_face) {
             const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
@@ -193,13 +232,14 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
                 moved_any |= revert(static_cast<std::size_t>(v));
             }
         }
+        m_stats.response_ms += response.elapsed_ms();
         if (!moved_any) {
             // Every vertex of every remaining hit is already at its start: a contact at the
             // frame's start itself (touching input). Nothing more a revert can do.
             break;
         }
     }
-    m_stats.enforce_ms = watch.elapsed_ms();
+    m_stats.enforce_ms += watch.elapsed_ms();
 }
 
 }  // namespace pliant::cloth

@@ -12,7 +12,8 @@
 //   2. every substep, project: for each gathered pair closer than thickness, push the two features
 //      apart along their closest-point normal until thickness apart (a one-sided XPBD distance
 //      constraint, rigid; Bridson, Fedkiw, Anderson, "Robust Treatment of Collisions, Contact and
-//      Friction for Cloth Animation", SIGGRAPH 2002, §7.2 uses the same geometry as repulsions).
+//      Friction for Cloth Animation", SIGGRAPH 2002, §7.2 uses the same geometry as repulsions),
+//      then apply Coulomb friction to their relative tangential motion over the substep.
 //      Sequential over the pairs in their sorted order: deterministic.
 //   3. enforce, at the end of the frame: the swept broad phase from the frame's start to its end,
 //      and the conservative CCD (collision/ccd.hpp) on every pair. The vertices of every pair that
@@ -30,18 +31,26 @@
 #include <span>
 #include <vector>
 
+#include "pliant/cloth/material.hpp"
 #include "pliant/collision/self_broad_phase.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
 namespace pliant::cloth {
 
+// Over one frame (reset_stats() to the next): times in ms, summed over the frame's calls.
 struct SelfCollisionStats {
-    double gather_ms = 0.0;
-    double enforce_ms = 0.0;
-    std::int64_t candidate_pairs = 0;    // gathered VF + EE pairs
-    std::int64_t contacts = 0;           // pairs pushed apart in the last substep
-    std::int64_t ccd_hits = 0;           // pairs the CCD could not clear in the first round
+    double gather_ms = 0.0;   // step 1, all calls
+    double project_ms = 0.0;  // step 2, all calls
+    double enforce_ms = 0.0;  // step 3
+    // The same time by kind of work, over steps 1-3:
+    double refit_ms = 0.0;             // LBVH builds and refits (gather and fail-safe broad phases)
+    double traverse_ms = 0.0;          // BVH traversal, feature boxes and R-triangle feature tests
+    double narrow_ms = 0.0;            // proximity tests of the candidates (step 2), CCD (step 3)
+    double response_ms = 0.0;          // pushing contacts apart with friction (2), reverting (3)
+    std::int64_t candidate_pairs = 0;  // gathered VF + EE pairs
+    std::int64_t contacts = 0;         // pairs pushed apart in the last substep
+    std::int64_t ccd_hits = 0;         // pairs the CCD could not clear in the first round
     std::int64_t reverted_vertices = 0;  // vertices put back by the fail-safe
     int enforce_rounds = 0;
 };
@@ -57,15 +66,24 @@ public:
     // candidate_pairs describe the last call.
     void gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double dt,
                 const Vec3d& gravity);
-    // Step 2; returns the pairs pushed apart (also stats().contacts).
-    std::int64_t project(std::span<Vec3d> positions, std::span<const double> inverse_masses);
+    // Step 2; returns the pairs pushed apart (also stats().contacts). previous_positions: the
+    // positions at the start of the substep, for friction: the pair's relative tangential
+    // motion over the substep is cancelled when it is at most self_static_friction × the normal
+    // correction, else shortened by self_kinetic_friction × the correction (Coulomb, positional
+    // form: Macklin, Müller, Chentanez, Kim, "Unified Particle Physics for Real-Time
+    // Applications", SIGGRAPH 2014, §6.1).
+    std::int64_t project(std::span<Vec3d> positions, std::span<const Vec3d> previous_positions,
+                         std::span<const double> inverse_masses, const ClothMaterial& material);
     // Step 3; positions_t0: the frame's start.
     void enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
                  std::span<Vec3d> velocities);
 
     const SelfCollisionStats& stats() const { return m_stats; }
+    void reset_stats() { m_stats = {}; }
 
 private:
+    void add_broad_phase_times(const collision::BroadPhaseStats& broad);
+
     std::vector<geometry::Triangle> m_triangles;
     double m_thickness;
     collision::SelfCollisionBroadPhase<double> m_gather_phase;

@@ -35,6 +35,8 @@ void validate_material(const ClothMaterial& m) {
     check(m.thickness, "thickness");
     check(m.static_friction, "static_friction");
     check(m.kinetic_friction, "kinetic_friction");
+    check(m.self_static_friction, "self_static_friction");
+    check(m.self_kinetic_friction, "self_kinetic_friction");
 }
 
 // Wraps an angle difference into (-π, π].
@@ -49,6 +51,18 @@ double wrap_angle(double angle) {
     return angle;
 }
 
+// The obstacle at its rest placement moved by pose (boxes only translate: add_obstacle checks).
+Obstacle placed(const Obstacle& rest, const Pose& pose) {
+    if (const auto* plane = std::get_if<PlaneObstacle>(&rest)) {
+        return PlaneObstacle{pose.apply(plane->point), pose.rotation.apply(plane->normal)};
+    }
+    if (const auto* sphere = std::get_if<SphereObstacle>(&rest)) {
+        return SphereObstacle{pose.apply(sphere->center), sphere->radius};
+    }
+    const auto& box = std::get<BoxObstacle>(rest);
+    return BoxObstacle{box.min + pose.translate, box.max + pose.translate};
+}
+
 }  // namespace
 
 ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMaterial& material,
@@ -60,7 +74,8 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
       m_velocities(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 0.0}),
       m_inverse_masses(rest_mesh.positions.size(), 0.0),
       m_contact_depths(rest_mesh.positions.size(), 0.0),
-      m_contact_normals(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 1.0}) {
+      m_contact_normals(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 1.0}),
+      m_contact_velocities(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 0.0}) {
     validate_material(material);
     geometry::validate_mesh(rest_mesh, "cloth mesh");
     const std::size_t num_vertices = m_positions.size();
@@ -89,7 +104,8 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
     }
 
     // Constraints from the topology.
-    const geometry::MeshTopology topology = geometry::build_topology(m_triangles, num_vertices);
+    m_topology = geometry::build_topology(m_triangles, num_vertices);
+    const geometry::MeshTopology& topology = m_topology;
     for (const geometry::Edge& e : topology.edges) {
         m_stretch_vertices.push_back({e[0], e[1]});
         m_rest_lengths.push_back(norm(m_positions[static_cast<std::size_t>(e[1])] -
@@ -152,24 +168,77 @@ void ClothSolver::enable_self_collision(bool enabled) {
     }
 }
 
-void ClothSolver::add_obstacle(const Obstacle& obstacle) {
+void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
     if (const auto* plane = std::get_if<PlaneObstacle>(&obstacle)) {
-        if (!(squared_norm(plane->normal) > 0.0)) {
-            throw InvalidInput("cloth: a plane obstacle needs a nonzero normal");
+        if (!(squared_norm(plane->normal) > 0.0) || !is_finite(plane->normal) ||
+            !is_finite(plane->point)) {
+            throw InvalidInput("cloth: a plane obstacle needs a finite point and a nonzero normal");
         }
     }
     if (const auto* sphere = std::get_if<SphereObstacle>(&obstacle)) {
-        if (!(sphere->radius > 0.0) || !std::isfinite(sphere->radius)) {
+        if (!(sphere->radius > 0.0) || !std::isfinite(sphere->radius) ||
+            !is_finite(sphere->center)) {
             throw InvalidInput(fmt::format(
-                "cloth: a sphere obstacle needs a finite radius > 0, got {}", sphere->radius));
+                "cloth: a sphere obstacle needs a finite centre and radius > 0, got radius {}",
+                sphere->radius));
         }
     }
     if (const auto* box = std::get_if<BoxObstacle>(&obstacle)) {
-        if (!(box->min.x <= box->max.x && box->min.y <= box->max.y && box->min.z <= box->max.z)) {
-            throw InvalidInput("cloth: a box obstacle needs min <= max on every axis");
+        if (!(box->min.x <= box->max.x && box->min.y <= box->max.y && box->min.z <= box->max.z) ||
+            !is_finite(box->min) || !is_finite(box->max)) {
+            throw InvalidInput("cloth: a box obstacle needs finite min <= max on every axis");
+        }
+        if (motion.rotates()) {
+            throw InvalidInput(
+                "cloth: a box obstacle stays axis-aligned, expected a motion without rotation");
         }
     }
-    m_obstacles.push_back(obstacle);
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
+    }
+    MovingObstacle moving{obstacle, motion, obstacle, {}, {}};
+    moving.pose = motion.pose(m_time);
+    moving.previous_pose = moving.pose;
+    moving.current = placed(obstacle, moving.pose);
+    m_obstacles.push_back(moving);
+}
+
+void ClothSolver::add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: pin motion: expected finite keyframes at strictly increasing times");
+    }
+    MovingPins pins;
+    pins.motion = motion;
+    const Pose start = motion.pose(m_time);
+    for (const std::int32_t v : vertices) {
+        if (v < 0 || static_cast<std::size_t>(v) >= m_positions.size()) {
+            throw InvalidInput(
+                fmt::format("cloth: pinned vertex {} out of range, expected an index in [0, {})", v,
+                            m_positions.size()));
+        }
+        m_inverse_masses[static_cast<std::size_t>(v)] = 0.0;
+        pins.vertices.push_back(v);
+        // The rest placement that the motion's current pose maps to the vertex's position.
+        pins.rest_positions.push_back(
+            start.apply_inverse(m_positions[static_cast<std::size_t>(v)]));
+    }
+    m_moving_pins.push_back(std::move(pins));
+}
+
+void ClothSolver::set_air(const Air& air) {
+    if (!(air.density >= 0.0) || !std::isfinite(air.density) || !(air.drag_coefficient >= 0.0) ||
+        !std::isfinite(air.drag_coefficient) || !is_finite(air.wind) ||
+        !(air.gust_amplitude >= 0.0) || !std::isfinite(air.gust_amplitude) ||
+        !(air.gust_period > 0.0) || !std::isfinite(air.gust_period) ||
+        !(air.gust_wavelength > 0.0) || !std::isfinite(air.gust_wavelength)) {
+        throw InvalidInput(
+            "cloth: air: expected finite density, drag_coefficient and gust_amplitude >= 0, "
+            "gust_period and gust_wavelength > 0 and a finite wind");
+    }
+    m_air = air;
+    m_triangle_forces.assign(air.is_active() ? m_triangles.size() : 0, Vec3d{});
 }
 
 ClothStepStats ClothSolver::step(double dt, int substeps) {
@@ -184,6 +253,10 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     if (m_self_collision) {
         m_step_start = m_positions;
     }
+    const double start_time = m_time;
+    if (m_self_collision) {
+        m_self_collision->reset_stats();
+    }
     for (int s = 0; s < substeps; ++s) {
         if (m_self_collision && s % GATHER_EVERY == 0) {
             // Candidates for the next GATHER_EVERY substeps: short sweeps keep the boxes tight
@@ -191,8 +264,9 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
             const int ahead = std::min(GATHER_EVERY, substeps - s);
             m_self_collision->gather(m_positions, m_velocities, ahead * h, m_gravity);
         }
-        stats.obstacle_contacts = substep(h);
+        stats.obstacle_contacts = substep(h, start_time + (s + 1) * h, stats.solve_ms);
     }
+    m_time = start_time + dt;
     if (m_self_collision) {
         m_self_collision->enforce(m_step_start, m_positions, m_velocities);
         stats.has_self_collision = true;
@@ -202,8 +276,12 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     return stats;
 }
 
-std::int64_t ClothSolver::substep(double h) {
+std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
+    Stopwatch watch;
     const auto n = static_cast<std::int64_t>(m_positions.size());
+    if (m_air.is_active()) {
+        apply_air(h, t_end - h);
+    }
     parallel_for(
         n,
         [&](std::int64_t i) {
@@ -215,12 +293,22 @@ std::int64_t ClothSolver::substep(double h) {
             }
         },
         VERTEX_GRAIN);
+    for (const MovingPins& pins : m_moving_pins) {
+        const Pose pose = pins.motion.pose(t_end);
+        parallel_for(static_cast<std::int64_t>(pins.vertices.size()), [&](std::int64_t k) {
+            m_positions[static_cast<std::size_t>(pins.vertices[static_cast<std::size_t>(k)])] =
+                pose.apply(pins.rest_positions[static_cast<std::size_t>(k)]);
+        });
+    }
     project_stretch(h);
     project_bending(h);
+    solve_ms += watch.elapsed_ms();
     if (m_self_collision) {
-        m_self_collision->project(m_positions, m_inverse_masses);
+        m_self_collision->project(m_positions, m_previous_positions, m_inverse_masses, m_material);
     }
-    const std::int64_t contacts = resolve_obstacles();
+    watch.restart();
+    move_obstacles(t_end);
+    const std::int64_t contacts = resolve_obstacles(h);
     const double keep = std::max(0.0, 1.0 - m_material.damping * h);
     parallel_for(
         n,
@@ -228,13 +316,72 @@ std::int64_t ClothSolver::substep(double h) {
             const auto v = static_cast<std::size_t>(i);
             Vec3d velocity = (m_positions[v] - m_previous_positions[v]) * (1.0 / h);
             if (m_contact_depths[v] > 0.0) {
-                velocity = apply_friction(velocity, m_contact_normals[v], m_contact_depths[v] / h,
-                                          m_material.static_friction, m_material.kinetic_friction);
+                // Friction acts on the velocity relative to the obstacle's surface.
+                velocity = m_contact_velocities[v] +
+                           apply_friction(velocity - m_contact_velocities[v], m_contact_normals[v],
+                                          m_contact_depths[v] / h, m_material.static_friction,
+                                          m_material.kinetic_friction);
             }
             m_velocities[v] = velocity * keep;
         },
         VERTEX_GRAIN);
+    solve_ms += watch.elapsed_ms();
     return contacts;
+}
+
+void ClothSolver::apply_air(double h, double t) {
+    // Per triangle, then per vertex over its incident triangles in ascending order: no
+    // concurrent writes, the same sums for any number of threads.
+    parallel_for(
+        static_cast<std::int64_t>(m_triangles.size()),
+        [&](std::int64_t i) {
+            const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(i)];
+            const Vec3d& a = m_positions[static_cast<std::size_t>(tri[0])];
+            const Vec3d& b = m_positions[static_cast<std::size_t>(tri[1])];
+            const Vec3d& c = m_positions[static_cast<std::size_t>(tri[2])];
+            const Vec3d area_normal = cross(b - a, c - a) * 0.5;  // |.| = area
+            const double area = norm(area_normal);
+            Vec3d force{0.0, 0.0, 0.0};
+            if (area > 0.0) {
+                const Vec3d velocity = (m_velocities[static_cast<std::size_t>(tri[0])] +
+                                        m_velocities[static_cast<std::size_t>(tri[1])] +
+                                        m_velocities[static_cast<std::size_t>(tri[2])]) *
+                                       (1.0 / 3.0);
+                const Vec3d centre = (a + b + c) * (1.0 / 3.0);
+                const Vec3d normal = area_normal * (1.0 / area);
+                const double u_n = dot(velocity - m_air.wind_at(centre, t), normal);
+                force = normal * (-0.5 * m_air.density * m_air.drag_coefficient * area * u_n *
+                                  std::abs(u_n));
+            }
+            m_triangle_forces[static_cast<std::size_t>(i)] = force;
+        },
+        VERTEX_GRAIN);
+    parallel_for(
+        static_cast<std::int64_t>(m_positions.size()),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            if (!(m_inverse_masses[v] > 0.0)) {
+                return;
+            }
+            Vec3d force{0.0, 0.0, 0.0};
+            for (const std::int32_t triangle :
+                 m_topology.triangles_of_vertex(static_cast<std::int32_t>(i))) {
+                force += m_triangle_forces[static_cast<std::size_t>(triangle)];
+            }
+            m_velocities[v] += force * (m_inverse_masses[v] * h / 3.0);
+        },
+        VERTEX_GRAIN);
+}
+
+void ClothSolver::move_obstacles(double t) {
+    for (MovingObstacle& obstacle : m_obstacles) {
+        if (obstacle.motion.is_static()) {
+            continue;
+        }
+        obstacle.previous_pose = obstacle.pose;
+        obstacle.pose = obstacle.motion.pose(t);
+        obstacle.current = placed(obstacle.rest, obstacle.pose);
+    }
 }
 
 void ClothSolver::project_stretch(double h) {
@@ -303,7 +450,7 @@ void ClothSolver::project_bending(double h) {
     }
 }
 
-std::int64_t ClothSolver::resolve_obstacles() {
+std::int64_t ClothSolver::resolve_obstacles(double h) {
     if (m_obstacles.empty()) {
         return 0;
     }
@@ -317,12 +464,19 @@ std::int64_t ClothSolver::resolve_obstacles() {
                 if (!(m_inverse_masses[v] > 0.0)) {
                     continue;
                 }
-                for (const Obstacle& obstacle : m_obstacles) {
+                for (const MovingObstacle& obstacle : m_obstacles) {
                     const ContactCorrection contact =
-                        push_out(obstacle, m_positions[v], m_material.thickness);
+                        push_out(obstacle.current, m_positions[v], m_material.thickness);
                     if (contact.depth > m_contact_depths[v]) {
                         m_contact_depths[v] = contact.depth;
                         m_contact_normals[v] = contact.normal;
+                        // The surface point under x moved from where the previous pose had it.
+                        const Vec3d& x = m_positions[v];
+                        m_contact_velocities[v] = obstacle.motion.is_static()
+                                                      ? Vec3d{0.0, 0.0, 0.0}
+                                                      : (x - obstacle.previous_pose.apply(
+                                                                 obstacle.pose.apply_inverse(x))) *
+                                                            (1.0 / h);
                     }
                 }
                 contacts += m_contact_depths[v] > 0.0 ? 1 : 0;

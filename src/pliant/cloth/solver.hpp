@@ -3,19 +3,22 @@
 // Method: extended position-based dynamics (Macklin, Müller, Chentanez, "XPBD", MIG 2016) run as
 // many small substeps with one constraint iteration each (Macklin, Storey, Lu, Terdiman,
 // Chentanez, Jeschke, Müller, "Small Steps in Physics Simulation", SCA 2019). Every substep h:
-//   1. predict: v += h g; x_previous = x; x += h v (pinned vertices, inverse mass 0, stay put);
+//   1. predict: v += h (g + f_air / m); x_previous = x; x += h v (pinned vertices, inverse mass 0,
+//      stay put, or follow their motion: motion.hpp; air: air.hpp);
 //   2. stretch: C = |x_i - x_j| - L for every mesh edge, compliance α (material.hpp);
 //   3. bending: C = θ - θ_rest for every interior edge, θ the dihedral angle (dihedral.hpp);
 //      for each constraint Δλ = -C / (Σ w_k |∇C_k|² + α / h²), x_k += w_k ∇C_k Δλ (λ starts at 0
 //      every substep: one iteration per substep);
-//   4. obstacles: every vertex is pushed `thickness` away from every obstacle (obstacles.hpp);
+//   4. obstacles (placed where their motion has them at the end of the substep): every vertex is
+//      pushed `thickness` away from every obstacle (obstacles.hpp);
 //   (with self-collision: after 3, the cloth's own contacts are pushed thickness apart; before
 //   the first substep the candidate pairs are gathered and after the last the CCD fail-safe runs;
 //   self_collision.hpp)
-//   5. v = (x - x_previous) / h; Coulomb friction on the velocities of vertices in contact,
-//      bounded by their normal correction / h (obstacles.hpp: at the velocity level, friction
-//      never cancels a constraint's correction, which positional friction does, locking stretched
-//      cloth on a rough surface); then v *= max(0, 1 - damping h).
+//   5. v = (x - x_previous) / h; Coulomb friction on the velocities of vertices in contact
+//      (relative to the obstacle surface's velocity), bounded by their normal correction / h
+//      (obstacles.hpp: at the velocity level, friction never cancels a constraint's correction,
+//      which positional friction does, locking stretched cloth on a rough surface); then v *=
+//      max(0, 1 - damping h).
 // Constraints of a kind are projected colour by colour (constraint_coloring.hpp), each colour in
 // parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads.
 //
@@ -41,17 +44,21 @@
 #include <span>
 #include <vector>
 
+#include "pliant/cloth/air.hpp"
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/material.hpp"
+#include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/core/vec3.hpp"
+#include "pliant/geometry/topology.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
 namespace pliant::cloth {
 
 struct ClothStepStats {
-    double ms = 0.0;                     // wall-clock time of the step
+    double ms = 0.0;        // wall-clock time of the step
+    double solve_ms = 0.0;  // prediction, stretch, bending, air, obstacles, velocities, friction
     std::int64_t obstacle_contacts = 0;  // vertices in contact with an obstacle in the last substep
     bool has_self_collision = false;     // the fields below are filled
     SelfCollisionStats self;             // self_collision.hpp
@@ -66,8 +73,18 @@ public:
     ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMaterial& material,
                 std::span<const std::int32_t> pinned = {});
 
-    void add_obstacle(const Obstacle& obstacle);
+    // An obstacle at its rest placement, moved by `motion` (motion.hpp; time 0 is the solver's
+    // start). Moving obstacles carry the cloth along through friction (relative velocity). Boxes
+    // stay axis-aligned: a motion that rotates a box is InvalidInput. Invalid shapes (zero plane
+    // normal, radius <= 0, min > max) are InvalidInput.
+    void add_obstacle(const Obstacle& obstacle, const Motion& motion = {});
+    // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
+    // their current positions: every substep they are placed at motion.pose(t)(rest) with the
+    // velocity of that path. A vertex in several groups follows the last.
+    void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
+    void set_air(const Air& air);
     // Self-collision handling (self_collision.hpp): proximity constraints every substep and the
     // CCD fail-safe at the end of every step, so that no step ends with intersecting triangles
     // when it started without. Off by default.
@@ -77,6 +94,7 @@ public:
     // InvalidInput).
     ClothStepStats step(double dt, int substeps);
 
+    double time() const { return m_time; }  // s since the start
     std::span<const Vec3d> positions() const { return m_positions; }
     std::span<const Vec3d> velocities() const { return m_velocities; }
     std::span<const double> inverse_masses() const { return m_inverse_masses; }
@@ -86,14 +104,32 @@ public:
     std::size_t num_bending_constraints() const { return m_bending_vertices.size(); }
 
 private:
-    // One substep; returns the vertices in contact with an obstacle.
-    std::int64_t substep(double h);
+    // One substep ending at time t_end; returns the vertices in contact with an obstacle and
+    // adds the solver's own time (not self-collision's) to solve_ms.
+    std::int64_t substep(double h, double t_end, double& solve_ms);
     void project_stretch(double h);
     void project_bending(double h);
+    // Adds h · (air force at time t / mass) to the free vertices' velocities.
+    void apply_air(double h, double t);
+    // Places the obstacles at time t (the end of the substep); previous placements are kept
+    // for the obstacles' surface velocities.
+    void move_obstacles(double t);
     // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
-    // for friction; returns the vertices in contact.
-    std::int64_t resolve_obstacles();
+    // and the obstacle surface's velocity there for friction; returns the vertices in contact.
+    std::int64_t resolve_obstacles(double h);
 
+    struct MovingObstacle {
+        Obstacle rest;  // at time 0
+        Motion motion;
+        Obstacle current;  // at the end of the substep
+        Pose pose;         // current = pose(rest)
+        Pose previous_pose;
+    };
+    struct MovingPins {
+        std::vector<std::int32_t> vertices;
+        std::vector<Vec3d> rest_positions;
+        Motion motion;
+    };
     ClothMaterial m_material;
     Vec3d m_gravity{0.0, 0.0, -9.81};
     std::vector<geometry::Triangle> m_triangles;
@@ -101,11 +137,17 @@ private:
     std::vector<Vec3d> m_previous_positions;
     std::vector<Vec3d> m_velocities;
     std::vector<double> m_inverse_masses;
-    std::vector<Obstacle> m_obstacles;
+    std::vector<MovingObstacle> m_obstacles;
+    std::vector<MovingPins> m_moving_pins;
+    Air m_air;
+    double m_time = 0.0;  // s
+    geometry::MeshTopology m_topology;
+    std::vector<Vec3d> m_triangle_forces;  // air, per triangle (N)
     std::unique_ptr<SelfCollision> m_self_collision;
     std::vector<Vec3d> m_step_start;       // positions at the start of the step (self-collision)
     std::vector<double> m_contact_depths;  // this substep's obstacle correction per vertex (m)
     std::vector<Vec3d> m_contact_normals;
+    std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
 
     std::vector<std::array<std::int32_t, 2>> m_stretch_vertices;
     std::vector<double> m_rest_lengths;

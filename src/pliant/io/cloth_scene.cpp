@@ -187,11 +187,92 @@ void read_material(ObjectReader& r, cloth::ClothMaterial& m) {
     m.thickness = r.number("thickness", m.thickness, 0.0, HUGE_VALUE);
     m.static_friction = r.number("static_friction", m.static_friction, 0.0, HUGE_VALUE);
     m.kinetic_friction = r.number("kinetic_friction", m.kinetic_friction, 0.0, HUGE_VALUE);
+    m.self_static_friction =
+        r.number("self_static_friction", m.self_static_friction, 0.0, HUGE_VALUE);
+    m.self_kinetic_friction =
+        r.number("self_kinetic_friction", m.self_kinetic_friction, 0.0, HUGE_VALUE);
 }
 
-cloth::Obstacle read_obstacle(const Json& value, const std::string& name, const std::string& path) {
+cloth::Placement read_placement(ObjectReader& r) {
+    cloth::Placement placement;
+    placement.rotate_degrees = r.vector("rotate_degrees", placement.rotate_degrees);
+    placement.translate = r.vector("translate", placement.translate);
+    return placement;
+}
+
+// {"pivot": [x, y, z], "keyframes": [{"time": t, "translate": [...], "rotate_degrees": [...]}]}
+cloth::Motion read_motion(ObjectReader& r) {
+    cloth::Motion motion;
+    motion.pivot = r.vector("pivot", motion.pivot);
+    const Json* keyframes = r.array("keyframes");
+    if (keyframes == nullptr || keyframes->empty()) {
+        r.fail(r.key_path("keyframes"), "a non-empty array of keyframes",
+               keyframes == nullptr ? "nothing" : "an empty array");
+    }
+    for (std::size_t k = 0; k < keyframes->size(); ++k) {
+        const std::string where = fmt::format("{}[{}]", r.key_path("keyframes"), k);
+        ObjectReader key((*keyframes)[k], r.name(), where);
+        cloth::Keyframe keyframe;
+        if (!key.has("time")) {
+            key.fail(key.key_path("time"), "a required time in seconds", "nothing");
+        }
+        keyframe.time = key.number("time", 0.0, -HUGE_VALUE, HUGE_VALUE);
+        keyframe.translate = key.vector("translate", keyframe.translate);
+        keyframe.rotate_degrees = key.vector("rotate_degrees", keyframe.rotate_degrees);
+        key.finish();
+        if (!motion.keyframes.empty() && !(keyframe.time > motion.keyframes.back().time)) {
+            key.fail(key.key_path("time"),
+                     fmt::format("a time after the previous keyframe's {}",
+                                 motion.keyframes.back().time),
+                     fmt::format("{}", keyframe.time));
+        }
+        motion.keyframes.push_back(keyframe);
+    }
+    return motion;
+}
+
+cloth::PinGroup read_pin_group(ObjectReader& p) {
+    cloth::PinGroup group;
+    if (const Json* vertices = p.array("vertices")) {
+        for (std::size_t k = 0; k < vertices->size(); ++k) {
+            const Json& v = (*vertices)[k];
+            if (!v.is_number_integer() || v.get<std::int64_t>() < 0 ||
+                v.get<std::int64_t>() > std::numeric_limits<std::int32_t>::max()) {
+                p.fail(fmt::format("{}[{}]", p.key_path("vertices"), k),
+                       "a vertex index (integer >= 0)", v.dump());
+            }
+            group.vertices.push_back(static_cast<std::int32_t>(v.get<std::int64_t>()));
+        }
+    }
+    if (const Json* regions = p.array("regions")) {
+        for (std::size_t k = 0; k < regions->size(); ++k) {
+            ObjectReader region((*regions)[k], p.name(),
+                                fmt::format("{}[{}]", p.key_path("regions"), k));
+            cloth::PinRegion pin{region.required_vector("min"), region.required_vector("max")};
+            region.finish();
+            group.regions.push_back(pin);
+        }
+    }
+    p.object("motion", [&](ObjectReader& m) { group.motion = read_motion(m); });
+    return group;
+}
+
+cloth::Air read_air(ObjectReader& r) {
+    cloth::Air air;
+    air.density = r.number("density", 1.2, 0.0, HUGE_VALUE);
+    air.drag_coefficient = r.number("drag_coefficient", air.drag_coefficient, 0.0, HUGE_VALUE);
+    air.wind = r.vector("wind", air.wind);
+    air.gust_amplitude = r.number("gust_amplitude", air.gust_amplitude, 0.0, HUGE_VALUE);
+    air.gust_period = r.number("gust_period", air.gust_period, 1e-9, HUGE_VALUE);
+    air.gust_wavelength = r.number("gust_wavelength", air.gust_wavelength, 1e-9, HUGE_VALUE);
+    return air;
+}
+
+cloth::SceneObstacle read_obstacle(const Json& value, const std::string& name,
+                                   const std::string& path, const std::filesystem::path& base) {
     ObjectReader r(value, name, path);
-    cloth::Obstacle obstacle;
+    cloth::SceneObstacle scene_obstacle;
+    cloth::Obstacle& obstacle = scene_obstacle.shape;
     int kinds = 0;
     kinds += r.object("plane", [&](ObjectReader& o) {
         cloth::PlaneObstacle plane;
@@ -217,12 +298,28 @@ cloth::Obstacle read_obstacle(const Json& value, const std::string& name, const 
         }
         obstacle = box;
     });
+    kinds += r.object("mesh", [&](ObjectReader& o) {
+        const Json* file = o.find("file");
+        if (file == nullptr || !file->is_string() || file->get<std::string>().empty()) {
+            o.fail(o.key_path("file"), "a file name (OBJ or PLY)",
+                   file == nullptr ? "nothing" : type_name(*file));
+        }
+        const std::filesystem::path mesh_path(file->get<std::string>());
+        scene_obstacle.mesh = mesh_path.is_absolute() ? mesh_path : base / mesh_path;
+        scene_obstacle.mesh_placement = read_placement(o);
+    });
+    r.object("motion", [&](ObjectReader& m) { scene_obstacle.motion = read_motion(m); });
     r.finish();
     if (kinds != 1) {
-        r.fail(path, "exactly one of \"plane\", \"sphere\", \"box\"",
+        r.fail(path, "exactly one of \"plane\", \"sphere\", \"box\", \"mesh\"",
                fmt::format("{} of them", kinds));
     }
-    return obstacle;
+    if (std::holds_alternative<cloth::BoxObstacle>(obstacle) && scene_obstacle.mesh.empty() &&
+        scene_obstacle.motion.rotates()) {
+        r.fail(path + ".motion", "no rotation (boxes stay axis-aligned; use a mesh to turn one)",
+               "a rotating keyframe");
+    }
+    return scene_obstacle;
 }
 
 }  // namespace
@@ -281,38 +378,38 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
         }
         scene.rotate_degrees = c.vector("rotate_degrees", scene.rotate_degrees);
         scene.translate = c.vector("translate", scene.translate);
+        if (const Json* instances = c.array("instances")) {
+            for (std::size_t k = 0; k < instances->size(); ++k) {
+                ObjectReader instance((*instances)[k], c.name(),
+                                      fmt::format("{}[{}]", c.key_path("instances"), k));
+                scene.instances.push_back(read_placement(instance));
+                instance.finish();
+            }
+        }
     });
     if (!has_cloth) {
         root.fail("cloth", "a required object", "nothing");
     }
 
-    root.object("pins", [&](ObjectReader& p) {
-        if (const Json* vertices = p.array("vertices")) {
-            for (std::size_t k = 0; k < vertices->size(); ++k) {
-                const Json& v = (*vertices)[k];
-                if (!v.is_number_integer() || v.get<std::int64_t>() < 0 ||
-                    v.get<std::int64_t>() > std::numeric_limits<std::int32_t>::max()) {
-                    p.fail(fmt::format("{}[{}]", p.key_path("vertices"), k),
-                           "a vertex index (integer >= 0)", v.dump());
-                }
-                scene.pinned_vertices.push_back(static_cast<std::int32_t>(v.get<std::int64_t>()));
+    // "pins": one group (an object) or several (an array of objects).
+    if (const Json* pins = root.find("pins")) {
+        if (pins->is_array()) {
+            for (std::size_t k = 0; k < pins->size(); ++k) {
+                ObjectReader group((*pins)[k], file, fmt::format("pins[{}]", k));
+                scene.pins.push_back(read_pin_group(group));
+                group.finish();
             }
+        } else {
+            ObjectReader group(*pins, file, "pins");
+            scene.pins.push_back(read_pin_group(group));
+            group.finish();
         }
-        if (const Json* regions = p.array("regions")) {
-            for (std::size_t k = 0; k < regions->size(); ++k) {
-                ObjectReader region((*regions)[k], p.name(),
-                                    fmt::format("{}[{}]", p.key_path("regions"), k));
-                cloth::PinRegion pin{region.required_vector("min"), region.required_vector("max")};
-                region.finish();
-                scene.pin_regions.push_back(pin);
-            }
-        }
-    });
+    }
     root.object("material", [&](ObjectReader& m) { read_material(m, scene.material); });
     if (const Json* obstacles = root.array("obstacles")) {
         for (std::size_t k = 0; k < obstacles->size(); ++k) {
             scene.obstacles.push_back(
-                read_obstacle((*obstacles)[k], file, fmt::format("obstacles[{}]", k)));
+                read_obstacle((*obstacles)[k], file, fmt::format("obstacles[{}]", k), base));
         }
     }
     if (const Json* self = root.find("self_collision")) {
@@ -322,6 +419,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
         scene.self_collision = self->get<bool>();
     }
     scene.gravity = root.vector("gravity", scene.gravity);
+    root.object("air", [&](ObjectReader& a) { scene.air = read_air(a); });
     scene.frames_per_second = root.number("fps", scene.frames_per_second, 1e-3, 1e6);
     scene.frames = root.integer("frames", scene.frames, 0, 1'000'000);
     scene.substeps = root.integer("substeps", scene.substeps, 1, 100'000);
