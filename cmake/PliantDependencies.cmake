@@ -5,6 +5,9 @@ find_package(fmt CONFIG REQUIRED)
 find_package(nlohmann_json 3.11 CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 find_package(tinyobjloader CONFIG REQUIRED)
+# stb has no CMake config; libstb.so holds the implementations (define no STB_*_IMPLEMENTATION).
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
 
 if(PLIANT_BUILD_TESTS)
   find_package(GTest CONFIG REQUIRED)

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -97,6 +98,122 @@ void fold_accordion(std::span<Vec3f> positions, float panel, float gap) {
             p.z = z0 + radius - radius * std::cos(angle);
         }
     }
+}
+
+namespace {
+
+void check_finite(Vec3d v, const char* who, const char* name) {
+    if (!is_finite(v)) {
+        throw InvalidInput(
+            fmt::format("{}: {} ({}, {}, {}) must be finite", who, name, v.x, v.y, v.z));
+    }
+}
+
+}  // namespace
+
+TriangleMeshD make_uv_sphere(Vec3d center, double radius, int segments) {
+    check_finite(center, "make_uv_sphere", "center");
+    if (!(radius > 0.0) || !std::isfinite(radius)) {
+        throw InvalidInput(
+            fmt::format("make_uv_sphere: radius {}, expected a finite value > 0", radius));
+    }
+    if (segments < 3 || segments > 4096) {
+        throw InvalidInput(
+            fmt::format("make_uv_sphere: segments {}, expected 3 to 4096", segments));
+    }
+    const int stacks = std::max(2, segments / 2);
+    TriangleMeshD mesh;
+    mesh.positions.reserve(2 + static_cast<std::size_t>(stacks - 1) * segments);
+    mesh.positions.push_back(center + Vec3d{0.0, 0.0, radius});  // north pole: vertex 0
+    for (int i = 1; i < stacks; ++i) {
+        const double theta = std::numbers::pi * i / stacks;  // polar angle from +z
+        for (int j = 0; j < segments; ++j) {
+            const double phi = 2.0 * std::numbers::pi * j / segments;
+            mesh.positions.push_back(center + radius * Vec3d{std::sin(theta) * std::cos(phi),
+                                                             std::sin(theta) * std::sin(phi),
+                                                             std::cos(theta)});
+        }
+    }
+    const auto south = static_cast<std::int32_t>(mesh.positions.size());
+    mesh.positions.push_back(center - Vec3d{0.0, 0.0, radius});
+    const auto ring = [segments](int i, int j) {  // vertex j of ring i (1 … stacks − 1)
+        return static_cast<std::int32_t>(1 + (i - 1) * segments + (j % segments));
+    };
+    // Seen from outside, +phi runs to the right when +z is up, so (north, ring j, ring j+1) is
+    // counter-clockwise from outside.
+    for (int j = 0; j < segments; ++j) {
+        mesh.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
+    }
+    for (int i = 1; i + 1 < stacks; ++i) {
+        for (int j = 0; j < segments; ++j) {
+            const std::int32_t a = ring(i, j), b = ring(i, j + 1), c = ring(i + 1, j + 1),
+                               d = ring(i + 1, j);
+            mesh.triangles.push_back({a, d, c});
+            mesh.triangles.push_back({a, c, b});
+        }
+    }
+    for (int j = 0; j < segments; ++j) {
+        mesh.triangles.push_back({south, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
+    }
+    return mesh;
+}
+
+TriangleMeshD make_box(Vec3d min, Vec3d max) {
+    check_finite(min, "make_box", "min");
+    check_finite(max, "make_box", "max");
+    if (!(min.x < max.x && min.y < max.y && min.z < max.z)) {
+        throw InvalidInput(
+            fmt::format("make_box: min ({}, {}, {}) must be below max ({}, {}, {}) "
+                        "on every axis",
+                        min.x, min.y, min.z, max.x, max.y, max.z));
+    }
+    TriangleMeshD mesh;
+    // Corner k has x from bit 0, y from bit 1, z from bit 2 (0 → min, 1 → max).
+    for (int k = 0; k < 8; ++k) {
+        mesh.positions.push_back({(k & 1) != 0 ? max.x : min.x, (k & 2) != 0 ? max.y : min.y,
+                                  (k & 4) != 0 ? max.z : min.z});
+    }
+    // Each face as a quad counter-clockwise seen from outside, split along its first diagonal.
+    static constexpr std::int32_t QUADS[6][4] = {
+        {0, 4, 6, 2},  // −x
+        {1, 3, 7, 5},  // +x
+        {0, 1, 5, 4},  // −y
+        {2, 6, 7, 3},  // +y
+        {0, 2, 3, 1},  // −z
+        {4, 5, 7, 6},  // +z
+    };
+    for (const auto& q : QUADS) {
+        mesh.triangles.push_back({q[0], q[1], q[2]});
+        mesh.triangles.push_back({q[0], q[2], q[3]});
+    }
+    return mesh;
+}
+
+TriangleMeshD make_plane_square(Vec3d point, Vec3d normal, double half_size) {
+    check_finite(point, "make_plane_square", "point");
+    check_finite(normal, "make_plane_square", "normal");
+    const double length = norm(normal);
+    if (!(length > 0.0)) {
+        throw InvalidInput("make_plane_square: normal (0, 0, 0), expected a nonzero vector");
+    }
+    if (!(half_size > 0.0) || !std::isfinite(half_size)) {
+        throw InvalidInput(
+            fmt::format("make_plane_square: half_size {}, expected a finite value > 0", half_size));
+    }
+    const Vec3d n = normal / length;
+    // The coordinate axis least aligned with n gives a well-conditioned first tangent.
+    const Vec3d axis =
+        std::abs(n.x) <= std::abs(n.y) && std::abs(n.x) <= std::abs(n.z)
+            ? Vec3d{1.0, 0.0, 0.0}
+            : (std::abs(n.y) <= std::abs(n.z) ? Vec3d{0.0, 1.0, 0.0} : Vec3d{0.0, 0.0, 1.0});
+    Vec3d u = cross(axis, n);
+    u = u / norm(u);
+    const Vec3d v = cross(n, u);  // (u, v, n) right-handed
+    TriangleMeshD mesh;
+    mesh.positions = {point + half_size * (-1.0 * u - v), point + half_size * (u - v),
+                      point + half_size * (u + v), point + half_size * (v - u)};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+    return mesh;
 }
 
 }  // namespace pliant::geometry
