@@ -227,6 +227,25 @@ TEST(LBVH, NearestQueryMatchesBruteForce) {
     }
 }
 
+TEST(LBVH, QueryBoxAroundContainsTheDoubleBox) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-140, 120);
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3d p{std::ldexp(mantissa(rng), exponent(rng)),
+                      std::ldexp(mantissa(rng), exponent(rng)), i % 7 == 0 ? 0.0 : mantissa(rng)};
+        const double r = i % 5 == 0 ? 0.0 : std::ldexp(std::abs(mantissa(rng)), exponent(rng));
+        const AABB box = query_box_around(p, r);
+        for (int a = 0; a < 3; ++a) {
+            ASSERT_LE(static_cast<double>(box.lo[a]), p[a] - r) << i;
+            ASSERT_GE(static_cast<double>(box.hi[a]), p[a] + r) << i;
+        }
+    }
+    const AABB everything = query_box_around({1.0, 2.0, 3.0}, INFINITY);
+    EXPECT_EQ(everything.lo.x, -INFINITY);
+    EXPECT_EQ(everything.hi.z, INFINITY);
+}
+
 TEST(LBVH, NearestQueryKeepsLeavesAtTheRadiusAndSurvivesRounding) {
     // Boxes touching the query box's boundary (closed intervals) are visited; coordinates that
     // are not floats are rounded outward, so a box at exactly the radius from a double point is

@@ -1,4 +1,6 @@
-// Overlap queries on LBVHs: all pairs of primitives whose boxes overlap (closed intervals).
+// Overlap queries on LBVHs: all pairs of primitives whose boxes overlap (closed intervals), and
+// single queries — query_wide (leaves overlapping a box) and query_wide_nearest (closest-point
+// queries: a box around a point that shrinks to the best distance found so far).
 //
 // Self: every unordered pair {a, b}, a ≠ b, of one tree, reported exactly once. Pair: every
 // (a, b), a from tree A, b from tree B.
@@ -24,6 +26,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -128,22 +131,57 @@ PLIANT_HOST_DEVICE void query_wide(const WideNode* nodes, const AABB& query, std
     }
 }
 
-// The float box [point - r, point + r] rounded outward (r ≥ 0; r = +inf gives the whole space).
+// A float box containing [point - r, point + r] (r ≥ 0; r = +inf gives the whole space), for
+// finite points. Each bound moves outward by 2^-22 of its magnitude plus 2^-126 before rounding to
+// float, which covers the rounding (at most half a float ulp, 2^-24 relative) without the
+// nextafter calls of outward_float: a few float ulps looser, branch free.
 inline AABB query_box_around(const Vec3d& point, double radius) {
-    return outward_float(AABBd{{point.x - radius, point.y - radius, point.z - radius},
-                               {point.x + radius, point.y + radius, point.z + radius}});
+    const auto down = [](double v) {
+        return static_cast<float>(v - std::abs(v) * 0x1p-22 - 0x1p-126);
+    };
+    const auto up = [](double v) {
+        return static_cast<float>(v + std::abs(v) * 0x1p-22 + 0x1p-126);
+    };
+    return {{down(point.x - radius), down(point.y - radius), down(point.z - radius)},
+            {up(point.x + radius), up(point.y + radius), up(point.z + radius)}};
+}
+
+// Squared distances from p to the four slot boxes (infinite for unused slots), in float: an
+// ordering key, not a bound (p is rounded to float).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void slot_gaps(const WideNode& node, const Vec3f& p,
+                                                      float gap2[WIDTH]) {
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps();
+    const auto axis_gap = [&](const float* lo, const float* hi, float c) {
+        const __m128 v = _mm_set1_ps(c);
+        const __m128 g = _mm_max_ps(
+            _mm_max_ps(_mm_sub_ps(_mm_load_ps(lo), v), _mm_sub_ps(v, _mm_load_ps(hi))), zero);
+        return _mm_mul_ps(g, g);
+    };
+    _mm_storeu_ps(gap2, _mm_add_ps(_mm_add_ps(axis_gap(node.lo_x, node.hi_x, p.x),
+                                              axis_gap(node.lo_y, node.hi_y, p.y)),
+                                   axis_gap(node.lo_z, node.hi_z, p.z)));
+#else
+    for (int k = 0; k < WIDTH; ++k) {
+        const float dx = std::max(std::max(node.lo_x[k] - p.x, p.x - node.hi_x[k]), 0.0f);
+        const float dy = std::max(std::max(node.lo_y[k] - p.y, p.y - node.hi_y[k]), 0.0f);
+        const float dz = std::max(std::max(node.lo_z[k] - p.z, p.z - node.hi_z[k]), 0.0f);
+        gap2[k] = dx * dx + dy * dy + dz * dz;
+    }
+#endif
 }
 
 // Closest-point style query with a shrinking radius: visits the leaves whose boxes overlap the
 // closed box [point - r, point + r], where r starts at `radius` (world units, ≥ 0; +inf visits
-// every leaf) and becomes what on_leaf(j, box_j) returns — the caller's best distance so far, so
-// later subtrees are tested against a smaller box. A return value larger than the current radius
-// is ignored. The query box is rounded outward to float, so every leaf whose box is within r of
-// `point` along each axis is visited: a caller returning the distance of its nearest primitive
-// so far (a primitive is never farther than its box) finds every primitive at distance ≤ the
-// final r. Children are taken nearest box first (float distance from `point`, an ordering
-// heuristic only), leaves of a node before its inner children, so r shrinks early. The visit order
-// depends only on the tree, the query and on_leaf's return values. Fixed-size stack, no allocation.
+// every leaf; negative or NaN visits none) and becomes what on_leaf(j, box_j) returns — the
+// caller's best distance so far — so later slots and subtrees are tested against a smaller box.
+// A return value not below the current radius is ignored. The query box is rounded outward to
+// float, so every leaf whose box is within r of `point` along each axis is visited: a caller
+// returning the distance of its nearest primitive so far (a primitive is never farther than its
+// box) meets every primitive at distance ≤ the final r, ties included. Slots are taken nearest
+// box first (float distance from `point`, an ordering heuristic only), a node's leaves before its
+// inner children, so r shrinks early. The visit order depends only on the tree, the query and
+// on_leaf's return values. Precondition: the tree has nodes. Fixed-size stack, no allocation.
 template <typename OnLeaf>
 void query_wide_nearest(const WideNode* nodes, const Vec3d& point, double radius,
                         OnLeaf&& on_leaf) {
@@ -161,19 +199,12 @@ void query_wide_nearest(const WideNode* nodes, const Vec3d& point, double radius
         if (mask == 0) {
             continue;
         }
-        // Order the overlapping slots by squared distance from p to their boxes.
         float gap2[WIDTH];
-        for (int k = 0; k < WIDTH; ++k) {
-            const float dx = std::max(std::max(node.lo_x[k] - p.x, p.x - node.hi_x[k]), 0.0f);
-            const float dy = std::max(std::max(node.lo_y[k] - p.y, p.y - node.hi_y[k]), 0.0f);
-            const float dz = std::max(std::max(node.lo_z[k] - p.z, p.z - node.hi_z[k]), 0.0f);
-            gap2[k] = dx * dx + dy * dy + dz * dz;
-        }
-        int order[WIDTH];
+        slot_gaps(node, p, gap2);
+        int order[WIDTH];  // overlapping slots, nearest first (insertion sort of at most 4)
         int count = 0;
-        while (mask != 0) {
-            const int k = std::countr_zero(mask);
-            mask &= mask - 1;
+        for (unsigned m = mask; m != 0; m &= m - 1) {
+            const int k = std::countr_zero(m);
             int at = count++;
             while (at > 0 && gap2[order[at - 1]] > gap2[k]) {
                 order[at] = order[at - 1];
@@ -181,26 +212,25 @@ void query_wide_nearest(const WideNode* nodes, const Vec3d& point, double radius
             }
             order[at] = k;
         }
-        // Leaves nearest first, each re-tested against the box as it shrinks.
+        // Leaves nearest first; when the radius shrinks, the remaining slots are re-tested.
         for (int i = 0; i < count; ++i) {
             const int k = order[i];
             const std::int32_t c = node.child[k];
-            if (!is_leaf(c) || ((slot_mask(node, q, -1) >> k) & 1u) == 0) {
+            if (!is_leaf(c) || ((mask >> k) & 1u) == 0) {
                 continue;
             }
             const double shrunk = on_leaf(leaf_position(c), node.box(k));
             if (shrunk < radius) {
                 radius = shrunk;
                 q = QueryBox(query_box_around(point, radius));
+                mask &= slot_mask(node, q, -1);
             }
         }
-        // Inner children farthest first onto the stack, so the nearest is popped next; each is
-        // tested against the box current when it is popped.
-        const unsigned still = slot_mask(node, q, -1);
+        // Inner children farthest first onto the stack, so the nearest is popped next.
         for (int i = count - 1; i >= 0; --i) {
             const int k = order[i];
             const std::int32_t c = node.child[k];
-            if (!is_leaf(c) && ((still >> k) & 1u) != 0) {
+            if (!is_leaf(c) && ((mask >> k) & 1u) != 0) {
                 stack[top++] = c;
             }
         }

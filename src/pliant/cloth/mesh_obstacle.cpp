@@ -45,6 +45,8 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     m_vertex_normals.resize(m_mesh.positions.size());
     update_geometry();
     m_tree.build(m_boxes);
+    m_leaf_corners.resize(m_mesh.triangles.size());
+    gather_leaf_corners();
 }
 
 void MeshObstacle::set_positions(std::span<const Vec3d> positions) {
@@ -58,6 +60,21 @@ void MeshObstacle::set_positions(std::span<const Vec3d> positions) {
     std::copy(positions.begin(), positions.end(), m_mesh.positions.begin());
     update_geometry();
     m_tree.refit(m_boxes);
+    gather_leaf_corners();
+}
+
+void MeshObstacle::gather_leaf_corners() {
+    const std::span<const std::uint32_t> primitives = m_tree.primitives();
+    parallel_for(
+        static_cast<std::int64_t>(primitives.size()),
+        [&](std::int64_t j) {
+            const auto leaf = static_cast<std::size_t>(j);
+            const geometry::Triangle& tri = m_mesh.triangles[primitives[leaf]];
+            m_leaf_corners[leaf] = {m_mesh.positions[index(tri[0])],
+                                    m_mesh.positions[index(tri[1])],
+                                    m_mesh.positions[index(tri[2])]};
+        },
+        GEOMETRY_GRAIN);
 }
 
 // Three passes, each writing by index (deterministic for any number of threads): per triangle
@@ -145,8 +162,8 @@ std::optional<SurfaceDistance> MeshObstacle::surface_distance(const Vec3d& x,
     if (!(max_distance >= 0.0) || !is_finite(x)) {
         return std::nullopt;
     }
-    const Vec3d* positions = m_mesh.positions.data();
     const geometry::Triangle* triangles = m_mesh.triangles.data();
+    const std::array<Vec3d, 3>* leaf_corners = m_leaf_corners.data();
     const std::uint32_t* primitives = m_tree.primitives().data();
 
     // Closest triangle: least (distance, triangle index) within max_distance. The radius handed
@@ -158,16 +175,16 @@ std::optional<SurfaceDistance> MeshObstacle::surface_distance(const Vec3d& x,
     best.distance = max_distance;
     bvh::query_wide_nearest(
         m_tree.nodes().data(), x, max_distance, [&](std::int32_t leaf, const AABB&) {
-            const auto t = static_cast<std::int32_t>(primitives[leaf]);
-            const geometry::Triangle& tri = triangles[t];
+            const std::array<Vec3d, 3>& c = leaf_corners[leaf];
             const collision::PointTriangleProximity<double> proximity =
-                collision::point_triangle_proximity(x, positions[tri[0]], positions[tri[1]],
-                                                    positions[tri[2]]);
-            if (proximity.distance < best.distance ||
-                (proximity.distance == best.distance && (!found || t < best_triangle))) {
-                best = proximity;
-                best_triangle = t;
-                found = true;
+                collision::point_triangle_proximity(x, c[0], c[1], c[2]);
+            if (proximity.distance <= best.distance) {
+                const auto t = static_cast<std::int32_t>(primitives[leaf]);
+                if (proximity.distance < best.distance || !found || t < best_triangle) {
+                    best = proximity;
+                    best_triangle = t;
+                    found = true;
+                }
             }
             return best.distance;
         });

@@ -27,7 +27,15 @@
 // (std::nullopt), like a point farther than max_distance outside. The caller chooses the radius
 // of interest: the solver passes thickness plus a margin for the deepest penetration it repairs.
 // Cost: O(log T + k) per query for k triangles whose boxes come within the radius; a query whose
-// point is farther than max_distance from the mesh's bounds costs one 4-box SIMD test.
+// point is farther than max_distance from the mesh's bounds costs one 4-box SIMD test. Measured
+// (temporary harness, 2 vCPUs under other engineers' builds, load 3-5, process CPU time, one
+// thread; 18,225 points of a 135² grid, icosphere of 20,480 / 81,920 triangles, radius 0.5 m,
+// max_distance 1 cm): all points 1.2 m away 0.35-0.6 ms / 0.65 ms; all points within ±2 mm of
+// the surface 17 ms / 24 ms (about 12 wide nodes and 3 point-triangle tests per query); two
+// threads 12.5 ms wall for both. set_positions: 6.5 ms / 27-30 ms.
+//
+// Rigid motion (a keyframed pose) needs no set_positions: query x in the obstacle's rest frame
+// (pose.apply_inverse) and rotate the normal back; set_positions is for deforming meshes.
 //
 // Units: metres (any unit, consistently). Positions are double; the LBVH's float boxes are rounded
 // outward from them, so no triangle within the radius is missed.
@@ -86,6 +94,7 @@ public:
 
 private:
     void update_geometry();
+    void gather_leaf_corners();
 
     geometry::TriangleMeshD m_mesh;
     // Topology (fixed): edges of each triangle; triangles of each edge and vertex (CSR).
@@ -100,6 +109,9 @@ private:
     std::vector<Vec3d> m_edge_normals;
     std::vector<Vec3d> m_vertex_normals;
     std::vector<AABB> m_boxes;  // #T float boxes rounded outward, the LBVH's input
+    // The corners of the triangle at each leaf position of the LBVH (Morton order): the query
+    // reads one contiguous record per leaf instead of chasing triangle and vertex indices.
+    std::vector<std::array<Vec3d, 3>> m_leaf_corners;
     AABBd m_bounds;
     bvh::LBVH m_tree;
 };
