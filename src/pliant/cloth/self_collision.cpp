@@ -35,14 +35,117 @@ void separate(std::span<Vec3d> positions, std::span<const double> inverse_masses
     }
 }
 
+// Mean of end[v] − start[v]: a translation common to the whole cloth. Distances are the same in
+// a frame moving with it, so broad phases sweep boxes by the motion relative to it (a falling
+// sheet then sweeps nothing). Parallel sums in fixed chunks: the same for any thread count.
+Vec3d mean_displacement(std::span<const Vec3d> start, std::span<const Vec3d> end) {
+    if (start.empty()) {
+        return {0.0, 0.0, 0.0};
+    }
+    const Vec3d sum = parallel_reduce(
+        static_cast<std::int64_t>(start.size()), Vec3d{0.0, 0.0, 0.0},
+        [&](std::int64_t begin, std::int64_t finish) {
+            Vec3d partial{0.0, 0.0, 0.0};
+            for (std::int64_t i = begin; i < finish; ++i) {
+                partial += end[static_cast<std::size_t>(i)] - start[static_cast<std::size_t>(i)];
+            }
+            return partial;
+        },
+        [](Vec3d a, const Vec3d& b) { return a + b; }, 4096);
+    return sum * (1.0 / static_cast<double>(start.size()));
+}
+
+// end − shift, per vertex.
+void shifted(std::span<const Vec3d> end, const Vec3d& shift, std::vector<Vec3d>& out) {
+    out.resize(end.size());
+    parallel_for(static_cast<std::int64_t>(end.size()), [&](std::int64_t i) {
+        out[static_cast<std::size_t>(i)] = end[static_cast<std::size_t>(i)] - shift;
+    });
+}
+
+// The largest |Δ_i − Δ_j| over the pairs (i in the first feature, j in the second) of the
+// vertices' displacements Δ = end − start: for linear motion the features' distance never falls
+// below their distance at the start minus this.
+double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
+                      std::span<const std::int32_t> first, std::span<const std::int32_t> second) {
+    double sweep = 0.0;
+    for (const std::int32_t i : first) {
+        const Vec3d di = end[static_cast<std::size_t>(i)] - start[static_cast<std::size_t>(i)];
+        for (const std::int32_t j : second) {
+            const Vec3d dj = end[static_cast<std::size_t>(j)] - start[static_cast<std::size_t>(j)];
+            sweep = std::max(sweep, squared_norm(di - dj));
+        }
+    }
+    return std::sqrt(sweep);
+}
+
 }  // namespace
+
+double SelfCollision::separation_bound(const collision::FeaturePairs& pairs, std::int64_t i,
+                                       std::span<const Vec3d> start,
+                                       std::span<const Vec3d> end) const {
+    const auto& edges = m_gather_phase.topology().edges;
+    const auto at = [&](std::int32_t v) {
+        return start[static_cast<std::size_t>(v)];
+    };
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    if (i < num_vf) {
+        const collision::VertexFacePair& pair = pairs.vertex_face[static_cast<std::size_t>(i)];
+        const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(pair.face)];
+        const std::int32_t vertex[1] = {pair.vertex};
+        const double distance =
+            collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]))
+                .distance;
+        return distance - relative_sweep(start, end, vertex, f);
+    }
+    const collision::EdgeEdgePair& pair = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+    const geometry::Edge& a = edges[static_cast<std::size_t>(pair.edge_a)];
+    const geometry::Edge& b = edges[static_cast<std::size_t>(pair.edge_b)];
+    const double distance =
+        collision::segment_segment_proximity(at(a[0]), at(a[1]), at(b[0]), at(b[1])).distance;
+    return distance - relative_sweep(start, end, a, b);
+}
+
+template <typename Keep>
+collision::FeaturePairs SelfCollision::filter_pairs(const collision::FeaturePairs& pairs,
+                                                    Keep&& keep) const {
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    const auto num_ee = static_cast<std::int64_t>(pairs.edge_edge.size());
+    // Indices in pair order (VF then EE), from fixed chunks merged in order: deterministic.
+    const std::vector<std::int64_t> kept = parallel_reduce(
+        num_vf + num_ee, std::vector<std::int64_t>{},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::vector<std::int64_t> found;
+            for (std::int64_t i = begin; i < end; ++i) {
+                if (keep(i)) {
+                    found.push_back(i);
+                }
+            }
+            return found;
+        },
+        [](std::vector<std::int64_t> a, const std::vector<std::int64_t>& b) {
+            a.insert(a.end(), b.begin(), b.end());
+            return a;
+        },
+        PAIR_GRAIN);
+    collision::FeaturePairs result;
+    for (const std::int64_t i : kept) {
+        if (i < num_vf) {
+            result.vertex_face.push_back(pairs.vertex_face[static_cast<std::size_t>(i)]);
+        } else {
+            result.edge_edge.push_back(pairs.edge_edge[static_cast<std::size_t>(i - num_vf)]);
+        }
+    }
+    return result;
+}
 
 SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
                              std::size_t num_vertices, double thickness)
     : m_triangles(triangles.begin(), triangles.end()),
       m_thickness(thickness),
       m_gather_phase(triangles, num_vertices),
-      m_swept_phase(triangles, num_vertices) {}
+      m_swept_phase(triangles, num_vertices),
+      m_revert_phase(triangles, num_vertices) {}
 
 void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities,
                            double dt, const Vec3d& gravity) {
@@ -55,11 +158,22 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
         const auto v = static_cast<std::size_t>(i);
         m_predicted[v] = positions[v] + velocities[v] * dt + fall;
     });
-    const collision::FeaturePairs& candidates =
-        m_gather_phase.update(positions, std::span<const Vec3d>(m_predicted), m_thickness);
-    m_stats.candidate_pairs =
-        static_cast<std::int64_t>(candidates.vertex_face.size() + candidates.edge_edge.size());
+    // Boxes swept by the motion relative to the cloth's mean motion (the same pairs come close).
+    shifted(m_predicted, mean_displacement(positions, m_predicted), m_relative_end);
+    const collision::FeaturePairs& swept =
+        m_gather_phase.update(positions, std::span<const Vec3d>(m_relative_end), m_thickness);
     add_broad_phase_times(m_gather_phase.stats());
+    // Keep the pairs whose distance can fall below thickness + slack on the predicted motion
+    // (slack = thickness, for the difference between prediction and the solved motion; pairs
+    // that come closer anyway are the fail-safe's).
+    Stopwatch filter;
+    const std::span<const Vec3d> predicted(m_predicted);
+    m_candidates = filter_pairs(swept, [&](std::int64_t i) {
+        return separation_bound(swept, i, positions, predicted) <= 2.0 * m_thickness;
+    });
+    m_stats.narrow_ms += filter.elapsed_ms();
+    m_stats.candidate_pairs =
+        static_cast<std::int64_t>(m_candidates.vertex_face.size() + m_candidates.edge_edge.size());
     m_stats.gather_ms += watch.elapsed_ms();
 }
 
@@ -73,7 +187,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
                                     std::span<const double> inverse_masses,
                                     const ClothMaterial& material) {
     Stopwatch watch;
-    const collision::FeaturePairs& candidates = m_gather_phase.pairs();
+    const collision::FeaturePairs& candidates = m_candidates;
     const auto& edges = m_gather_phase.topology().edges;
     const auto num_vf = static_cast<std::int64_t>(candidates.vertex_face.size());
     const auto num_ee = static_cast<std::int64_t>(candidates.edge_edge.size());
@@ -174,8 +288,8 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
     m_stats.ccd_hits = 0;
     m_stats.reverted_vertices = 0;
     m_stats.enforce_rounds = 0;
-    Stopwatch response;  // restarted before each revert pass
     std::vector<std::uint8_t> reverted(positions.size(), 0);
+    std::vector<std::uint8_t> changed(positions.size(), 0);  // moved back in this round
     // Puts v back at its start with zero velocity; true when that moved it.
     const auto revert = [&](std::size_t v) {
         m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
@@ -185,31 +299,48 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
         }
         positions[v] = positions_t0[v];
         velocities[v] = {0.0, 0.0, 0.0};
+        changed[v] = 1;
         return true;
     };
+    // Round 0: every pair that can touch during the step, from boxes swept by the motion relative
+    // to the mean motion (the same pairs; boxes grown by `margin` against the rounding of the
+    // shift).
+    const double extent = parallel_reduce(
+        static_cast<std::int64_t>(positions.size()), 0.0,
+        [&](std::int64_t begin, std::int64_t end) {
+            double m = 0.0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                m = std::max({m, std::abs(positions[v].x), std::abs(positions[v].y),
+                              std::abs(positions[v].z), std::abs(positions_t0[v].x),
+                              std::abs(positions_t0[v].y), std::abs(positions_t0[v].z)});
+            }
+            return m;
+        },
+        [](double a, double b) { return std::max(a, b); }, 4096);
+    const double margin = 1e-9 * (1.0 + extent);
+    shifted(positions, mean_displacement(positions_t0, positions), m_relative_end);
+    const collision::FeaturePairs* all_pairs =
+        &m_swept_phase.update(positions_t0, std::span<const Vec3d>(m_relative_end), margin);
+    add_broad_phase_times(m_swept_phase.stats());
+    // Pairs whose distance provably stays above `margin` (start distance minus relative sweep)
+    // cannot touch: the CCD runs on the rest.
+    Stopwatch stage;
+    const auto may_touch = [&](const collision::FeaturePairs& pairs, std::int64_t i) {
+        return separation_bound(pairs, i, positions_t0, positions) <= margin;
+    };
+    collision::FeaturePairs active =
+        filter_pairs(*all_pairs, [&](std::int64_t i) { return may_touch(*all_pairs, i); });
+    m_stats.narrow_ms += stage.elapsed_ms();
+    const collision::FeaturePairs* pairs = &active;
     for (int round = 0;; ++round) {
         m_stats.enforce_rounds = round + 1;
-        if (round == ENFORCE_ROUNDS) {
-            // Last resort: every vertex that moved goes back; the frame's start is
-            // intersection-free.
-            response.restart();
-            for (std::size_t v = 0; v < positions.size(); ++v) {
-                if (positions[v] != positions_t0[v]) {
-                    revert(v);
-                }
-            }
-            m_stats.response_ms += response.elapsed_ms();
-            break;
-        }
-        const collision::FeaturePairs& pairs =
-            m_swept_phase.update(positions_t0, std::span<const Vec3d>(positions), 0.0);
-        add_broad_phase_times(m_swept_phase.stats());
-        Stopwatch ccd;
+        stage.restart();
         const collision::NarrowPhaseResult narrow =
             collision::continuous_narrow_phase(positions_t0, std::span<const Vec3d>(positions),
                                                std::span<const geometry::Triangle>(m_triangles),
-                                               std::span<const geometry::Edge>(edges), pairs);
-        m_stats.narrow_ms += ccd.elapsed_ms();
+                                               std::span<const geometry::Edge>(edges), *pairs);
+        m_stats.narrow_ms += stage.elapsed_ms();
         if (round == 0) {
             m_stats.ccd_hits = narrow.vf_hits + narrow.ee_hits;
         }
@@ -217,7 +348,7 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
             break;
         }
         // The vertices of every pair the CCD cannot clear, in pair order (deterministic).
-        response.restart();
+        stage.restart();
         bool moved_any = false;
         for (const collision::VertexFacePair& p : narrow.hits.vertex_face) {
             const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
@@ -232,14 +363,51 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
                 moved_any |= revert(static_cast<std::size_t>(v));
             }
         }
-        m_stats.response_ms += response.elapsed_ms();
         if (!moved_any) {
             // Every vertex of every remaining hit is already at its start: a contact at the
             // frame's start itself (touching input). Nothing more a revert can do.
+            m_stats.response_ms += stage.elapsed_ms();
             break;
         }
+        if (round == 0) {
+            // A vertex put back stands still, which in the frame of the mean motion is a motion
+            // outside its relative box: from now on, boxes swept in world space from the start to
+            // the positions after this round's reverts. Later reverts shrink a motion to a point
+            // inside such a box, so this broad phase holds every pair until the end.
+            all_pairs =
+                &m_revert_phase.update(positions_t0, std::span<const Vec3d>(positions), margin);
+            add_broad_phase_times(m_revert_phase.stats());
+        }
+        // Only pairs with a vertex moved back in this round can have changed their verdict: the
+        // others were cleared on the same motion.
+        active = filter_pairs(*all_pairs, [&](std::int64_t i) {
+            return touches(*all_pairs, i, changed) && may_touch(*all_pairs, i);
+        });
+        for (std::size_t v = 0; v < changed.size(); ++v) {
+            changed[v] = 0;
+        }
+        pairs = &active;
+        m_stats.response_ms += stage.elapsed_ms();
     }
     m_stats.enforce_ms += watch.elapsed_ms();
+}
+
+bool SelfCollision::touches(const collision::FeaturePairs& pairs, std::int64_t i,
+                            std::span<const std::uint8_t> marked) const {
+    const auto is_marked = [&](std::int32_t v) {
+        return marked[static_cast<std::size_t>(v)] != 0;
+    };
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    if (i < num_vf) {
+        const collision::VertexFacePair& p = pairs.vertex_face[static_cast<std::size_t>(i)];
+        const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
+        return is_marked(p.vertex) || is_marked(f[0]) || is_marked(f[1]) || is_marked(f[2]);
+    }
+    const auto& edges = m_swept_phase.topology().edges;
+    const collision::EdgeEdgePair& p = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+    const geometry::Edge& a = edges[static_cast<std::size_t>(p.edge_a)];
+    const geometry::Edge& b = edges[static_cast<std::size_t>(p.edge_b)];
+    return is_marked(a[0]) || is_marked(a[1]) || is_marked(b[0]) || is_marked(b[1]);
 }
 
 }  // namespace pliant::cloth

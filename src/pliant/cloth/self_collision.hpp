@@ -4,11 +4,11 @@
 //
 // Per frame (ClothSolver::step):
 //   1. gather (every few substeps, for the time until the next gather): the broad phase
-//   (collision/self_broad_phase.hpp: LBVH + R-triangles + orphan sets)
-//      swept from the frame's start positions x to the prediction x + dt v + ½ g dt², boxes grown
-//      by thickness: the vertex-face and edge-edge pairs that can come within thickness during the
-//      frame if it moves about as predicted, each once. Pairs that the prediction
-//      misses are caught by step 3.
+//      (collision/self_broad_phase.hpp: LBVH + R-triangles + orphan sets) swept from the positions
+//      x to the prediction x + dt v + ½ g dt² relative to the cloth's mean motion, boxes grown by
+//      thickness, then only the pairs whose distance minus relative sweep stays below twice the
+//      thickness: the vertex-face and edge-edge pairs that can come within thickness if the cloth
+//      moves about as predicted, each once. Pairs that the prediction misses are caught by step 3.
 //   2. every substep, project: for each gathered pair closer than thickness, push the two features
 //      apart along their closest-point normal until thickness apart (a one-sided XPBD distance
 //      constraint, rigid; Bridson, Fedkiw, Anderson, "Robust Treatment of Collisions, Contact and
@@ -16,13 +16,22 @@
 //      then apply Coulomb friction to their relative tangential motion over the substep.
 //      Sequential over the pairs in their sorted order: deterministic.
 //   3. enforce, at the end of the frame: the swept broad phase from the frame's start to its end,
-//      and the conservative CCD (collision/ccd.hpp) on every pair. The vertices of every pair that
-//      may touch are put back at their start positions with zero velocity, and the check repeats on
-//      the changed motion until no pair touches (after ENFORCE_ROUNDS rounds every free vertex goes
-//      back). Since the start of the frame is intersection-free, the CCD never misses a contact
-//      and reverted vertices do not move, the end of the frame is intersection-free too (the
-//      fail-safe of Bridson et al. 2002 §7.4 taken to its simplest, rigid form: a vertex that
-//      cannot move safely does not move in that frame).
+//      with boxes swept by the motion relative to the cloth's mean motion (distances do not change
+//      in a translating frame, so these are the same pairs, and a falling sheet sweeps nothing);
+//      pairs whose start distance minus the largest relative displacement of their vertices stays
+//      positive cannot touch and are dropped; the conservative CCD (collision/ccd.hpp) runs on the
+//      rest. The vertices of every pair that may touch are put back at their start positions with
+//      zero velocity, and the check repeats on the changed motion until no pair touches: after the
+//      first round a world-space swept broad phase from the start to the positions after that
+//      round's reverts (a vertex put back stands still, which is not inside its box relative to
+//      the mean motion; later reverts shrink a motion to a point inside its world-space box, so
+//      this one broad phase holds every pair until the end), and each round re-tests only the
+//      pairs with a vertex put back in that round (the others were cleared on unchanged motion).
+//      Every round puts back at least one more vertex or stops, so this ends, at worst with every
+//      vertex at its start. Since the start of the frame is intersection-free, the CCD never
+//      misses a contact and reverted vertices do not move, the end of the frame is
+//      intersection-free too (the fail-safe of Bridson et al. 2002 §7.4 taken to its simplest,
+//      rigid form: a vertex that cannot move safely does not move in that frame).
 //
 // Units: metres, seconds. Not thread safe; the kernels run in parallel inside.
 #pragma once
@@ -57,8 +66,6 @@ struct SelfCollisionStats {
 
 class SelfCollision {
 public:
-    static constexpr int ENFORCE_ROUNDS = 8;
-
     SelfCollision(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
                   double thickness);
 
@@ -83,12 +90,27 @@ public:
 
 private:
     void add_broad_phase_times(const collision::BroadPhaseStats& broad);
+    // Pairs are indexed VF first, then EE: i < #VF is vertex_face[i], else edge_edge[i − #VF].
+    // True when pair i has a vertex v with marked[v] != 0.
+    bool touches(const collision::FeaturePairs& pairs, std::int64_t i,
+                 std::span<const std::uint8_t> marked) const;
+    // A lower bound on pair i's distance over the linear motion start → end: the distance at
+    // the start minus the largest relative displacement of a vertex of one feature and a vertex
+    // of the other.
+    double separation_bound(const collision::FeaturePairs& pairs, std::int64_t i,
+                            std::span<const Vec3d> start, std::span<const Vec3d> end) const;
+    // The pairs for which keep(i) holds, in order.
+    template <typename Keep>
+    collision::FeaturePairs filter_pairs(const collision::FeaturePairs& pairs, Keep&& keep) const;
 
     std::vector<geometry::Triangle> m_triangles;
     double m_thickness;
     collision::SelfCollisionBroadPhase<double> m_gather_phase;
-    collision::SelfCollisionBroadPhase<double> m_swept_phase;
+    collision::SelfCollisionBroadPhase<double> m_swept_phase;   // fail-safe, round 0
+    collision::SelfCollisionBroadPhase<double> m_revert_phase;  // fail-safe, later rounds
     std::vector<Vec3d> m_predicted;
+    std::vector<Vec3d> m_relative_end;     // a step's end minus the mean displacement
+    collision::FeaturePairs m_candidates;  // gathered pairs that may come within thickness
     SelfCollisionStats m_stats;
 };
 
