@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <vector>
 
@@ -268,6 +269,58 @@ TEST(ClothSolver, MovingObstacleCarriesTheClothByFriction) {
     Motion spin;
     spin.keyframes = {Keyframe{0.0, {}, {0.0, 0.0, 10.0}}};
     EXPECT_THROW(solver.add_obstacle(BoxObstacle{}, spin), InvalidInput);
+}
+
+// A sheet dropped on a tessellated sphere (a mesh obstacle) rests on it like on the analytic
+// sphere: every vertex at least thickness from the mesh, i.e. beyond r·cos(π/segments) +
+// thickness from the centre, and its edges hang as low as over the analytic sphere. A mesh box
+// sliding sideways carries the cloth by friction, like the analytic box.
+TEST(ClothSolver, MeshObstaclesHoldAndCarryTheCloth) {
+    const double radius = 0.3;
+    const int segments = 48;
+    ClothSolver draped(sheet(16, 0.8, 0.4), ClothMaterial{});
+    draped.add_mesh_obstacle(std::make_shared<const MeshObstacle>(
+        geometry::make_uv_sphere({0.0, 0.0, 0.0}, radius, segments)));
+    for (int f = 0; f < 24; ++f) {
+        draped.step(1.0 / 24.0, 20);
+    }
+    const double inscribed = radius * std::cos(std::numbers::pi / segments);
+    double lowest = 1.0;
+    for (const Vec3d& p : draped.positions()) {
+        EXPECT_GT(norm(p), inscribed + 0.9 * ClothMaterial{}.thickness);
+        lowest = std::min(lowest, p.z);
+    }
+    // It draped over the sides as over the analytic sphere.
+    ClothSolver analytic(sheet(16, 0.8, 0.4), ClothMaterial{});
+    analytic.add_obstacle(SphereObstacle{{0.0, 0.0, 0.0}, radius});
+    for (int f = 0; f < 24; ++f) {
+        analytic.step(1.0 / 24.0, 20);
+    }
+    double analytic_lowest = 1.0;
+    for (const Vec3d& p : analytic.positions()) {
+        analytic_lowest = std::min(analytic_lowest, p.z);
+    }
+    EXPECT_LT(lowest, 0.2);
+    EXPECT_NEAR(lowest, analytic_lowest, 0.01);
+
+    ClothMaterial rough;
+    rough.static_friction = 0.5;
+    rough.kinetic_friction = 0.5;
+    ClothSolver carried(sheet(8, 0.4, 0.005), rough);
+    Motion slide;
+    slide.keyframes = {Keyframe{0.0, {0.0, 0.0, 0.0}, {}}, Keyframe{10.0, {2.0, 0.0, 0.0}, {}}};
+    carried.add_mesh_obstacle(std::make_shared<const MeshObstacle>(
+                                  geometry::make_box({-1.0, -1.0, -1.0}, {1.0, 1.0, 0.0})),
+                              slide);
+    for (int f = 0; f < 24; ++f) {
+        carried.step(1.0 / 24.0, 10);
+    }
+    double mean_x = 0.0;
+    for (const Vec3d& p : carried.positions()) {
+        mean_x += p.x;
+    }
+    EXPECT_NEAR(mean_x / static_cast<double>(carried.positions().size()), 0.2, 0.02);
+    EXPECT_THROW(carried.add_mesh_obstacle(nullptr), InvalidInput);
 }
 
 // A small sheet lying on a pinned sheet, with gravity tilted by atan(0.2) = 11.3°: cloth-cloth

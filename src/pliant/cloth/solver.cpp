@@ -204,6 +204,20 @@ void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
     m_obstacles.push_back(moving);
 }
 
+void ClothSolver::add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,
+                                    const Motion& motion) {
+    if (!obstacle) {
+        throw InvalidInput("cloth: a mesh obstacle needs a mesh");
+    }
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
+    }
+    MovingMesh moving{std::move(obstacle), motion, motion.pose(m_time), {}};
+    moving.previous_pose = moving.pose;
+    m_mesh_obstacles.push_back(std::move(moving));
+}
+
 void ClothSolver::add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
     if (!motion.is_valid()) {
         throw InvalidInput(
@@ -382,6 +396,12 @@ void ClothSolver::move_obstacles(double t) {
         obstacle.pose = obstacle.motion.pose(t);
         obstacle.current = placed(obstacle.rest, obstacle.pose);
     }
+    for (MovingMesh& mesh : m_mesh_obstacles) {
+        if (!mesh.motion.is_static()) {
+            mesh.previous_pose = mesh.pose;
+            mesh.pose = mesh.motion.pose(t);
+        }
+    }
 }
 
 void ClothSolver::project_stretch(double h) {
@@ -451,7 +471,7 @@ void ClothSolver::project_bending(double h) {
 }
 
 std::int64_t ClothSolver::resolve_obstacles(double h) {
-    if (m_obstacles.empty()) {
+    if (m_obstacles.empty() && m_mesh_obstacles.empty()) {
         return 0;
     }
     return parallel_reduce(
@@ -477,6 +497,28 @@ std::int64_t ClothSolver::resolve_obstacles(double h) {
                                                       : (x - obstacle.previous_pose.apply(
                                                                  obstacle.pose.apply_inverse(x))) *
                                                             (1.0 / h);
+                    }
+                }
+                for (const MovingMesh& mesh : m_mesh_obstacles) {
+                    // In the mesh's rest frame. A vertex can be as deep as its own motion plus
+                    // the surface's over the substep, plus the thickness.
+                    Vec3d& x = m_positions[v];
+                    const Vec3d swept_by_surface =
+                        x - mesh.previous_pose.apply(mesh.pose.apply_inverse(x));
+                    const double max_depth = norm(x - m_previous_positions[v]) +
+                                             norm(swept_by_surface) + 2.0 * m_material.thickness;
+                    Vec3d x_rest = mesh.pose.apply_inverse(x);
+                    const ContactCorrection contact =
+                        push_out(*mesh.mesh, x_rest, m_material.thickness, max_depth);
+                    if (contact.depth > 0.0) {
+                        x = mesh.pose.apply(x_rest);
+                    }
+                    if (contact.depth > m_contact_depths[v]) {
+                        m_contact_depths[v] = contact.depth;
+                        m_contact_normals[v] = mesh.pose.rotation.apply(contact.normal);
+                        m_contact_velocities[v] = mesh.motion.is_static()
+                                                      ? Vec3d{0.0, 0.0, 0.0}
+                                                      : swept_by_surface * (1.0 / h);
                     }
                 }
                 contacts += m_contact_depths[v] > 0.0 ? 1 : 0;

@@ -47,6 +47,7 @@
 #include "pliant/cloth/air.hpp"
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/material.hpp"
+#include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/self_collision.hpp"
@@ -81,6 +82,10 @@ public:
     // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
     // their current positions: every substep they are placed at motion.pose(t)(rest) with the
     // velocity of that path. A vertex in several groups follows the last.
+    // A triangle-mesh obstacle (mesh_obstacle.hpp), given at its rest placement and moved
+    // rigidly by `motion` (queries run in its rest frame: no refit per substep). Shared, so that
+    // several solvers can use one mesh.
+    void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle, const Motion& motion = {});
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
@@ -125,6 +130,12 @@ private:
         Pose pose;         // current = pose(rest)
         Pose previous_pose;
     };
+    struct MovingMesh {
+        std::shared_ptr<const MeshObstacle> mesh;
+        Motion motion;
+        Pose pose;
+        Pose previous_pose;
+    };
     struct MovingPins {
         std::vector<std::int32_t> vertices;
         std::vector<Vec3d> rest_positions;
@@ -138,6 +149,7 @@ private:
     std::vector<Vec3d> m_velocities;
     std::vector<double> m_inverse_masses;
     std::vector<MovingObstacle> m_obstacles;
+    std::vector<MovingMesh> m_mesh_obstacles;
     std::vector<MovingPins> m_moving_pins;
     Air m_air;
     double m_time = 0.0;  // s
