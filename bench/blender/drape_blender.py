@@ -8,8 +8,10 @@ Builds, from an empty scene, the drape scene of scenes/drape.json: a 2 m x 2 m s
 134 x 134 quads split into 35,912 triangles (the same vertex order and the same triangles as
 pliant's geometry::make_grid_sheet), 1.2 m above a sphere of radius 0.5 m at the origin, gravity
 -9.81 m/s^2 along z, 24 fps. The cloth modifier runs quality 5 with self-collision, collision
-distances 5 mm, vertex mass for 0.15 kg/m^2, and the Cotton preset otherwise (SETTINGS below
-lists every value that differs from a fresh cloth modifier, and README.md why).
+distances 5 mm, the Cotton preset (vertex mass 0.3 kg: pliant's 0.15 kg/m^2 does not drape in
+Blender, see MATCHED_VERTEX_MASS), a speed multiplier that makes a frame 1/24 s, and the sphere's
+default outer thickness of 20 mm (SETTINGS below lists every value set, bench/blender/README.md
+explains the three deviations).
 
 Timing: the frames are stepped in order with scene.frame_set(f); the cloth modifier simulates
 one frame (quality substeps) on each frame change, into its in-memory point cache. Each
