@@ -107,27 +107,27 @@ double SelfCollision::separation_bound(const collision::FeaturePairs& pairs, std
 }
 
 template <typename Keep>
+const std::vector<std::int64_t>& SelfCollision::indices_where(std::int64_t n, Keep&& keep) {
+    m_index_chunks.reset(num_chunks(n, PAIR_GRAIN));
+    parallel_for_chunks(n, PAIR_GRAIN, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+        AppendBuffer<std::int64_t>& out = m_index_chunks.chunk(c);
+        for (std::int64_t i = begin; i < end; ++i) {
+            if (keep(i)) {
+                out.push_back(i);
+            }
+        }
+    });
+    m_index_chunks.gather(m_indices);
+    return m_indices;
+}
+
+template <typename Keep>
 collision::FeaturePairs SelfCollision::filter_pairs(const collision::FeaturePairs& pairs,
-                                                    Keep&& keep) const {
+                                                    Keep&& keep) {
     const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
     const auto num_ee = static_cast<std::int64_t>(pairs.edge_edge.size());
     // Indices in pair order (VF then EE), from fixed chunks merged in order: deterministic.
-    const std::vector<std::int64_t> kept = parallel_reduce(
-        num_vf + num_ee, std::vector<std::int64_t>{},
-        [&](std::int64_t begin, std::int64_t end) {
-            std::vector<std::int64_t> found;
-            for (std::int64_t i = begin; i < end; ++i) {
-                if (keep(i)) {
-                    found.push_back(i);
-                }
-            }
-            return found;
-        },
-        [](std::vector<std::int64_t> a, const std::vector<std::int64_t>& b) {
-            a.insert(a.end(), b.begin(), b.end());
-            return a;
-        },
-        PAIR_GRAIN);
+    const std::vector<std::int64_t>& kept = indices_where(num_vf + num_ee, keep);
     collision::FeaturePairs result;
     for (const std::int64_t i : kept) {
         if (i < num_vf) {
@@ -191,17 +191,18 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     const auto& edges = m_gather_phase.topology().edges;
     const auto num_vf = static_cast<std::int64_t>(candidates.vertex_face.size());
     const auto num_ee = static_cast<std::int64_t>(candidates.edge_edge.size());
-    const auto at = [&](std::int32_t v) {
-        return positions[static_cast<std::size_t>(v)];
-    };
-    // A pair's features, weights, normal and distance at the current positions.
+    // A pair's features, weights (closest points' barycentric weights, + first feature, −
+    // second), normal and distance in a configuration.
     struct Proximity {
         std::int32_t vertices[4];
         double weights[4];
         Vec3d normal;
         double distance;
     };
-    const auto proximity = [&](std::int64_t i) {
+    const auto proximity = [&](std::int64_t i, std::span<const Vec3d> x) {
+        const auto at = [&](std::int32_t v) {
+            return x[static_cast<std::size_t>(v)];
+        };
         Proximity p{};
         if (i < num_vf) {
             const collision::VertexFacePair& pair =
@@ -227,29 +228,34 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         }
         return p;
     };
-    // In parallel, the pairs closer than thickness (in pair order); then, sequentially, push each
-    // apart with its proximity at the positions as they are by then.
-    const std::vector<std::int64_t> close = parallel_reduce(
-        num_vf + num_ee, std::vector<std::int64_t>{},
-        [&](std::int64_t begin, std::int64_t end) {
-            std::vector<std::int64_t> found;
-            for (std::int64_t i = begin; i < end; ++i) {
-                if (proximity(i).distance < m_thickness) {
-                    found.push_back(i);
-                }
+    // The contact: the closest points now, separated along the side they were on at the start
+    // of the substep. A pair that passed through each other within the substep has a negative
+    // distance along that normal and is pushed back to the side it came from (the normal of the
+    // current closest points would push it further through). Pairs touching at the start
+    // (no side to speak of) use the current normal.
+    const std::span<const Vec3d> current(positions);
+    const auto contact = [&](std::int64_t i) {
+        Proximity now = proximity(i, current);
+        const Proximity start = proximity(i, previous_positions);
+        if (start.distance > 1e-3 * m_thickness) {
+            Vec3d gap{0.0, 0.0, 0.0};
+            for (int k = 0; k < 4; ++k) {
+                gap += current[static_cast<std::size_t>(now.vertices[k])] * now.weights[k];
             }
-            return found;
-        },
-        [](std::vector<std::int64_t> a, const std::vector<std::int64_t>& b) {
-            a.insert(a.end(), b.begin(), b.end());
-            return a;
-        },
-        PAIR_GRAIN);
+            now.normal = start.normal;
+            now.distance = dot(gap, start.normal);
+        }
+        return now;
+    };
+    // In parallel, the pairs closer than thickness (in pair order); then, sequentially, push each
+    // apart with its contact at the positions as they are by then.
+    const std::vector<std::int64_t>& close = indices_where(
+        num_vf + num_ee, [&](std::int64_t i) { return contact(i).distance < m_thickness; });
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;
     for (const std::int64_t i : close) {
-        const Proximity p = proximity(i);
+        const Proximity p = contact(i);
         if (!(p.distance < m_thickness)) {
             continue;
         }

@@ -42,6 +42,7 @@
 
 #include "pliant/cloth/material.hpp"
 #include "pliant/collision/self_broad_phase.hpp"
+#include "pliant/core/chunked_buffer.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
@@ -101,7 +102,10 @@ private:
                             std::span<const Vec3d> start, std::span<const Vec3d> end) const;
     // The pairs for which keep(i) holds, in order.
     template <typename Keep>
-    collision::FeaturePairs filter_pairs(const collision::FeaturePairs& pairs, Keep&& keep) const;
+    collision::FeaturePairs filter_pairs(const collision::FeaturePairs& pairs, Keep&& keep);
+    // The i in [0, n) with keep(i), ascending (valid until the next call).
+    template <typename Keep>
+    const std::vector<std::int64_t>& indices_where(std::int64_t n, Keep&& keep);
 
     std::vector<geometry::Triangle> m_triangles;
     double m_thickness;
@@ -111,6 +115,8 @@ private:
     std::vector<Vec3d> m_predicted;
     std::vector<Vec3d> m_relative_end;     // a step's end minus the mean displacement
     collision::FeaturePairs m_candidates;  // gathered pairs that may come within thickness
+    ChunkedBuffer<std::int64_t> m_index_chunks;
+    std::vector<std::int64_t> m_indices;
     SelfCollisionStats m_stats;
 };
 

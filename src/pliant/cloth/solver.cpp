@@ -316,13 +316,16 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
     }
     project_stretch(h);
     project_bending(h);
+    move_obstacles(t_end);
+    const std::int64_t contacts = resolve_obstacles(h);
     solve_ms += watch.elapsed_ms();
+    // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
+    // may have pressed one layer into the next); a vertex pushed back into an obstacle is
+    // pushed out again next substep, while layers that pass through each other stay entangled.
     if (m_self_collision) {
         m_self_collision->project(m_positions, m_previous_positions, m_inverse_masses, m_material);
     }
     watch.restart();
-    move_obstacles(t_end);
-    const std::int64_t contacts = resolve_obstacles(h);
     const double keep = std::max(0.0, 1.0 - m_material.damping * h);
     parallel_for(
         n,

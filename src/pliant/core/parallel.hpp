@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 
 #include "pliant/core/function_ref.hpp"
 
@@ -56,7 +57,8 @@ void parallel_for(std::int64_t n, Body&& body, std::int64_t grain = DEFAULT_GRAI
 }
 
 // Deterministic reduction: partial = map(begin, end) per fixed chunk, then
-// combine(…combine(combine(identity, p0), p1)…) in chunk order.
+// combine(…combine(combine(identity, p0), p1)…) in chunk order; the running result is moved
+// into combine (a combine that appends is linear, not quadratic).
 template <typename T, typename Map, typename Combine>
 T parallel_reduce(std::int64_t n, T identity, Map&& map, Combine&& combine,
                   std::int64_t grain = DEFAULT_GRAIN) {
@@ -69,7 +71,7 @@ T parallel_reduce(std::int64_t n, T identity, Map&& map, Combine&& combine,
     });
     T result = identity;
     for (std::int64_t c = 0; c < count; ++c) {
-        result = combine(result, partials[static_cast<std::size_t>(c)]);
+        result = combine(std::move(result), partials[static_cast<std::size_t>(c)]);
     }
     return result;
 }
