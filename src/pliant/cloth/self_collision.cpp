@@ -291,9 +291,6 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
                             std::span<Vec3d> velocities) {
     Stopwatch watch;
     const auto& edges = m_swept_phase.topology().edges;
-    m_stats.ccd_hits = 0;
-    m_stats.reverted_vertices = 0;
-    m_stats.enforce_rounds = 0;
     std::vector<std::uint8_t> reverted(positions.size(), 0);
     std::vector<std::uint8_t> changed(positions.size(), 0);  // moved back in this round
     // Puts v back at its start with zero velocity; true when that moved it.
@@ -340,7 +337,7 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
     m_stats.narrow_ms += stage.elapsed_ms();
     const collision::FeaturePairs* pairs = &active;
     for (int round = 0;; ++round) {
-        m_stats.enforce_rounds = round + 1;
+        m_stats.enforce_rounds = std::max(m_stats.enforce_rounds, round + 1);
         stage.restart();
         const collision::NarrowPhaseResult narrow =
             collision::continuous_narrow_phase(positions_t0, std::span<const Vec3d>(positions),
@@ -348,7 +345,7 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
                                                std::span<const geometry::Edge>(edges), *pairs);
         m_stats.narrow_ms += stage.elapsed_ms();
         if (round == 0) {
-            m_stats.ccd_hits = narrow.vf_hits + narrow.ee_hits;
+            m_stats.ccd_hits += narrow.vf_hits + narrow.ee_hits;
         }
         if (narrow.vf_hits + narrow.ee_hits == 0) {
             break;

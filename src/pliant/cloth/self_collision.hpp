@@ -60,9 +60,9 @@ struct SelfCollisionStats {
     double response_ms = 0.0;          // pushing contacts apart with friction (2), reverting (3)
     std::int64_t candidate_pairs = 0;  // gathered VF + EE pairs
     std::int64_t contacts = 0;         // pairs pushed apart in the last substep
-    std::int64_t ccd_hits = 0;         // pairs the CCD could not clear in the first round
-    std::int64_t reverted_vertices = 0;  // vertices put back by the fail-safe
-    int enforce_rounds = 0;
+    std::int64_t ccd_hits = 0;         // pairs the CCD could not clear in the first round, summed
+    std::int64_t reverted_vertices = 0;  // vertices put back by the fail-safe, summed over calls
+    int enforce_rounds = 0;              // most rounds of one call
 };
 
 class SelfCollision {
@@ -82,7 +82,7 @@ public:
     // Applications", SIGGRAPH 2014, §6.1).
     std::int64_t project(std::span<Vec3d> positions, std::span<const Vec3d> previous_positions,
                          std::span<const double> inverse_masses, const ClothMaterial& material);
-    // Step 3; positions_t0: the frame's start.
+    // Step 3; positions_t0: the start of the motion to check (intersection-free).
     void enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
                  std::span<Vec3d> velocities);
 

@@ -264,25 +264,28 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     Stopwatch watch;
     const double h = dt / substeps;
     ClothStepStats stats;
-    if (m_self_collision) {
-        m_step_start = m_positions;
-    }
     const double start_time = m_time;
     if (m_self_collision) {
         m_self_collision->reset_stats();
     }
+    // With self-collision the step runs in windows of GATHER_EVERY substeps: candidates gathered
+    // for the window, then the fail-safe over the window's motion. A window's start-to-end line is
+    // close to the path its substeps took (a frame's is not: cloth that folds around something
+    // within a frame crosses it on the straight line between the frame's ends), and a vertex put
+    // back loses only that window's motion.
     for (int s = 0; s < substeps; ++s) {
         if (m_self_collision && s % GATHER_EVERY == 0) {
-            // Candidates for the next GATHER_EVERY substeps: short sweeps keep the boxes tight
-            // while the cloth moves fast.
+            m_window_start = m_positions;
             const int ahead = std::min(GATHER_EVERY, substeps - s);
             m_self_collision->gather(m_positions, m_velocities, ahead * h, m_gravity);
         }
         stats.obstacle_contacts = substep(h, start_time + (s + 1) * h, stats.solve_ms);
+        if (m_self_collision && (s % GATHER_EVERY == GATHER_EVERY - 1 || s == substeps - 1)) {
+            m_self_collision->enforce(m_window_start, m_positions, m_velocities);
+        }
     }
     m_time = start_time + dt;
     if (m_self_collision) {
-        m_self_collision->enforce(m_step_start, m_positions, m_velocities);
         stats.has_self_collision = true;
         stats.self = m_self_collision->stats();
     }

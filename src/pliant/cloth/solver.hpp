@@ -11,9 +11,9 @@
 //      every substep: one iteration per substep);
 //   4. obstacles (placed where their motion has them at the end of the substep): every vertex is
 //      pushed `thickness` away from every obstacle (obstacles.hpp);
-//   (with self-collision: after 3, the cloth's own contacts are pushed thickness apart; before
-//   the first substep the candidate pairs are gathered and after the last the CCD fail-safe runs;
-//   self_collision.hpp)
+//   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; every
+//   4 substeps the candidate pairs are gathered before and the CCD fail-safe runs after them, on
+//   the motion of those 4 substeps; self_collision.hpp)
 //   5. v = (x - x_previous) / h; Coulomb friction on the velocities of vertices in contact
 //      (relative to the obstacle surface's velocity), bounded by their normal correction / h
 //      (obstacles.hpp: at the velocity level, friction never cancels a constraint's correction,
@@ -156,7 +156,7 @@ private:
     geometry::MeshTopology m_topology;
     std::vector<Vec3d> m_triangle_forces;  // air, per triangle (N)
     std::unique_ptr<SelfCollision> m_self_collision;
-    std::vector<Vec3d> m_step_start;       // positions at the start of the step (self-collision)
+    std::vector<Vec3d> m_window_start;     // positions at the start of a self-collision window
     std::vector<double> m_contact_depths;  // this substep's obstacle correction per vertex (m)
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
