@@ -161,7 +161,7 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
     // Boxes swept by the motion relative to the cloth's mean motion (the same pairs come close).
     shifted(m_predicted, mean_displacement(positions, m_predicted), m_relative_end);
     const collision::FeaturePairs& swept =
-        m_gather_phase.update(positions, std::span<const Vec3d>(m_relative_end), m_thickness);
+        m_gather_phase.update(positions, std::span<const Vec3d>(m_relative_end), 0.5 * m_thickness);
     add_broad_phase_times(m_gather_phase.stats());
     // Keep the pairs whose distance can fall below thickness + slack on the predicted motion
     // (slack = thickness, for the difference between prediction and the solved motion; pairs
@@ -171,9 +171,22 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
     m_candidates = filter_pairs(swept, [&](std::int64_t i) {
         return separation_bound(swept, i, positions, predicted) <= 2.0 * m_thickness;
     });
-    m_stats.narrow_ms += filter.elapsed_ms();
-    m_stats.candidate_pairs =
+    // Each candidate's distance now, and the vertices' positions: project() skips a pair while
+    // that distance minus how far its vertices have since moved stays at least the thickness.
+    const auto num_candidates =
         static_cast<std::int64_t>(m_candidates.vertex_face.size() + m_candidates.edge_edge.size());
+    m_gather_distances.resize(static_cast<std::size_t>(num_candidates));
+    parallel_for(
+        num_candidates,
+        [&](std::int64_t i) {
+            m_gather_distances[static_cast<std::size_t>(i)] =
+                separation_bound(m_candidates, i, positions, positions);
+        },
+        PAIR_GRAIN);
+    m_gather_positions.assign(positions.begin(), positions.end());
+    m_pair_sweeps.assign(static_cast<std::size_t>(num_candidates), 0.0);
+    m_stats.narrow_ms += filter.elapsed_ms();
+    m_stats.candidate_pairs = num_candidates;
     m_stats.gather_ms += watch.elapsed_ms();
 }
 
@@ -228,11 +241,10 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         }
         return p;
     };
-    // The contact: the closest points now, separated along the side they were on at the start
-    // of the substep. A pair that passed through each other within the substep has a negative
-    // distance along that normal and is pushed back to the side it came from (the normal of the
-    // current closest points would push it further through). Pairs touching at the start
-    // (no side to speak of) use the current normal.
+    // The contact: the closest points now and their normal, except for a pair that passed
+    // through each other within the substep (the current closest points lie behind the side it
+    // was on at the substep's start): it is pushed back along the start's normal (the current
+    // normal would push it further through). Pairs touching at the start have no side to keep.
     const std::span<const Vec3d> current(positions);
     const auto contact = [&](std::int64_t i) {
         Proximity now = proximity(i, current);
@@ -242,15 +254,43 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
             for (int k = 0; k < 4; ++k) {
                 gap += current[static_cast<std::size_t>(now.vertices[k])] * now.weights[k];
             }
-            now.normal = start.normal;
-            now.distance = dot(gap, start.normal);
+            const double along_start = dot(gap, start.normal);
+            if (along_start < 0.0) {
+                now.normal = start.normal;
+                now.distance = along_start;
+            }
         }
         return now;
     };
+    // A pair's distance cannot have fallen below its distance at the gather minus the largest
+    // relative displacement since then of a vertex of one feature and a vertex of the other
+    // (straight substeps: the largest over the window so far is at a substep's end, so a running
+    // maximum per pair). Pairs for which that stays at least the thickness are neither in contact
+    // nor passed through: no proximity test.
+    const std::span<const Vec3d> gathered(m_gather_positions);
+    const auto far_apart = [&](std::int64_t i) {
+        double sweep = 0.0;
+        if (i < num_vf) {
+            const collision::VertexFacePair& pair =
+                candidates.vertex_face[static_cast<std::size_t>(i)];
+            const std::int32_t vertex[1] = {pair.vertex};
+            sweep = relative_sweep(gathered, current, vertex,
+                                   m_triangles[static_cast<std::size_t>(pair.face)]);
+        } else {
+            const collision::EdgeEdgePair& pair =
+                candidates.edge_edge[static_cast<std::size_t>(i - num_vf)];
+            sweep = relative_sweep(gathered, current, edges[static_cast<std::size_t>(pair.edge_a)],
+                                   edges[static_cast<std::size_t>(pair.edge_b)]);
+        }
+        double& largest = m_pair_sweeps[static_cast<std::size_t>(i)];
+        largest = std::max(largest, sweep);
+        return m_gather_distances[static_cast<std::size_t>(i)] - largest >= m_thickness;
+    };
     // In parallel, the pairs closer than thickness (in pair order); then, sequentially, push each
     // apart with its contact at the positions as they are by then.
-    const std::vector<std::int64_t>& close = indices_where(
-        num_vf + num_ee, [&](std::int64_t i) { return contact(i).distance < m_thickness; });
+    const std::vector<std::int64_t>& close = indices_where(num_vf + num_ee, [&](std::int64_t i) {
+        return !far_apart(i) && contact(i).distance < m_thickness;
+    });
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;

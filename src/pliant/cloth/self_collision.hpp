@@ -113,8 +113,11 @@ private:
     collision::SelfCollisionBroadPhase<double> m_swept_phase;   // fail-safe, round 0
     collision::SelfCollisionBroadPhase<double> m_revert_phase;  // fail-safe, later rounds
     std::vector<Vec3d> m_predicted;
-    std::vector<Vec3d> m_relative_end;     // a step's end minus the mean displacement
-    collision::FeaturePairs m_candidates;  // gathered pairs that may come within thickness
+    std::vector<Vec3d> m_relative_end;       // a step's end minus the mean displacement
+    collision::FeaturePairs m_candidates;    // gathered pairs that may come within thickness
+    std::vector<double> m_gather_distances;  // per candidate, its distance at the gather
+    std::vector<Vec3d> m_gather_positions;   // the positions at the gather
+    std::vector<double> m_pair_sweeps;       // per candidate, its largest relative sweep since
     ChunkedBuffer<std::int64_t> m_index_chunks;
     std::vector<std::int64_t> m_indices;
     SelfCollisionStats m_stats;
