@@ -9,11 +9,14 @@
 #include <string>
 #include <vector>
 
+#include "cloth_preview.hpp"
 #include "output_directory.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
+#include "pliant/core/aabb.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/geometry/generate.hpp"
@@ -92,52 +95,94 @@ std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
 
 nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                        const std::string& scene_name,
-                                       const std::filesystem::path& out, int frames,
-                                       bool progress) {
+                                       const std::filesystem::path& out,
+                                       const ClothRunOptions& options) {
+    const int frames = options.frames;
     const geometry::TriangleMeshD mesh = load_cloth(scene);
     cloth::ClothSolver solver(mesh, scene.material);
     for (std::size_t g = 0; g < scene.pins.size(); ++g) {
         solver.add_moving_pins(pinned_vertices(scene.pins[g], mesh, g), scene.pins[g].motion);
     }
+    // Obstacles, and their shapes for the preview (planes as squares around the cloth).
+    AABBd cloth_box;
+    for (const Vec3d& p : mesh.positions) {
+        cloth_box.extend(p);
+    }
+    const Vec3d centre = (cloth_box.lo + cloth_box.hi) * 0.5;
+    const double plane_half_size = 0.75 * norm(cloth_box.hi - cloth_box.lo) + 0.5;
+    std::vector<ObstacleShape> shapes;
     for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
-        if (!obstacle.mesh.empty()) {
-            throw InvalidInput(
-                fmt::format("{}: mesh obstacles are not supported yet", obstacle.mesh.string()));
+        if (obstacle.mesh.empty()) {
+            solver.add_obstacle(obstacle.shape, obstacle.motion);
+            shapes.push_back(preview_shape(obstacle, nullptr, centre, plane_half_size));
+            continue;
         }
-        solver.add_obstacle(obstacle.shape, obstacle.motion);
+        geometry::TriangleMeshD shape = io::read_mesh(obstacle.mesh);
+        for (Vec3d& p : shape.positions) {
+            p = place(p, obstacle.mesh_placement);
+        }
+        shapes.push_back(preview_shape(obstacle, &shape, centre, plane_half_size));
+        solver.add_mesh_obstacle(std::make_shared<const cloth::MeshObstacle>(std::move(shape)),
+                                 obstacle.motion);
     }
     solver.set_gravity(scene.gravity);
     solver.set_air(scene.air);
     solver.enable_self_collision(scene.self_collision);
 
+    // Input that already intersects itself is reported (the fail-safe keeps it from getting
+    // worse but cannot untangle it).
+    const std::int64_t initial_intersections =
+        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+    if (initial_intersections > 0) {
+        log_warning(
+            "{}: the cloth intersects itself at the start ({} pairs of triangles); the "
+            "simulation keeps those pairs from growing but does not untangle them",
+            scene_name, initial_intersections);
+    }
+
     const std::filesystem::path frames_dir = out / "frames";
     make_output_directory(frames_dir);
+    std::unique_ptr<ClothPreview> preview;
+    if (options.preview) {
+        preview = std::make_unique<ClothPreview>(out, solver.positions(), std::move(shapes),
+                                                 scene.frames_per_second, options.preview_width,
+                                                 options.preview_height);
+    }
     geometry::TriangleMeshD state{mesh.positions, mesh.triangles};
     const auto write_frame = [&](int frame) {
         state.positions.assign(solver.positions().begin(), solver.positions().end());
         io::write_mesh(frames_dir / fmt::format("frame_{:04d}.{}", frame, scene.frame_format),
                        state);
+        if (preview) {
+            preview->add_frame(solver.positions(), solver.triangles(), solver.time());
+        }
     };
     write_frame(0);
 
     const double dt = 1.0 / scene.frames_per_second;
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
     double total_ms = 0.0;
+    std::int64_t worst_intersections = 0;
     for (int frame = 1; frame <= frames; ++frame) {
         Stopwatch watch;
         const cloth::ClothStepStats step = solver.step(dt, scene.substeps);
         for (const Vec3d& p : solver.positions()) {
-            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-                throw InternalError(fmt::format("cloth: frame {}: non-finite position", frame));
+            if (!is_finite(p)) {
+                throw InternalError(
+                    fmt::format("cloth: frame {}: non-finite position; frames 0-{} are in {}",
+                                frame, frame - 1, frames_dir.string()));
             }
         }
-        write_frame(frame);
         const double ms = watch.elapsed_ms();
         total_ms += ms;
+        Stopwatch writing;
+        write_frame(frame);
+        const double write_ms = writing.elapsed_ms();
         // The independent check: exact triangle-triangle tests on the frame as written.
         Stopwatch check;
         const std::int64_t intersecting =
             collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+        worst_intersections = std::max(worst_intersections, intersecting);
         nlohmann::ordered_json record = {{"frame", frame},
                                          {"ms", ms},
                                          {"step_ms", step.solve_ms},
@@ -145,10 +190,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                          {"traverse_ms", step.self.traverse_ms},
                                          {"narrow_ms", step.self.narrow_ms},
                                          {"response_ms", step.self.response_ms},
-                                         {"solver_ms", step.ms},
                                          {"obstacle_contacts", step.obstacle_contacts},
                                          {"intersecting_pairs", intersecting},
-                                         {"check_ms", check.elapsed_ms()}};
+                                         {"check_ms", check.elapsed_ms()},
+                                         {"write_ms", write_ms}};
         if (step.has_self_collision) {
             record["gather_ms"] = step.self.gather_ms;
             record["project_ms"] = step.self.project_ms;
@@ -157,9 +202,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["contacts"] = step.self.contacts;
             record["ccd_hits"] = step.self.ccd_hits;
             record["reverted_vertices"] = step.self.reverted_vertices;
+            record["fail_safe_rounds"] = step.self.enforce_rounds;
         }
         per_frame.push_back(record);
-        if (progress) {
+        if (options.progress) {
             const int width = 40;
             const int done = width * frame / std::max(frames, 1);
             std::fprintf(stderr, "\r[%s%s] frame %d/%d  %.1f ms/frame",
@@ -168,10 +214,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             std::fflush(stderr);
         }
     }
-    if (progress) {
+    if (options.progress) {
         std::fputc('\n', stderr);
     }
-    const nlohmann::ordered_json stats = {
+    nlohmann::ordered_json stats = {
         {"scene", scene_name},
         {"vertices", mesh.positions.size()},
         {"triangles", mesh.triangles.size()},
@@ -180,9 +226,15 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"fps", scene.frames_per_second},
         {"substeps", scene.substeps},
         {"threads", num_threads()},
+        {"initial_intersecting_pairs", initial_intersections},
+        {"max_intersecting_pairs", worst_intersections},
         {"frames", per_frame},
         {"mean_ms_per_frame", frames > 0 ? total_ms / frames : 0.0},
     };
+    if (preview) {
+        stats["preview"] = preview->finish().string();
+        stats["preview_ms_per_frame"] = preview->render_ms() / (frames + 1);
+    }
     io::write_file_atomically(out / "stats.json",
                               [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
     return stats;

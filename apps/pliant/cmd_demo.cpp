@@ -188,14 +188,19 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     say(quiet, fmt::format("the drape scene (scenes/drape.json): {} frames of XPBD cloth, {} "
                            "substeps per frame, onto a sphere:\n",
                            drape_frames, drape.substeps));
+    ClothRunOptions drape_run;
+    drape_run.frames = drape_frames;
+    drape_run.progress = !quiet && ::isatty(::fileno(stderr)) != 0;
     const nlohmann::ordered_json drape_stats =
-        run_cloth_scene(drape, "scenes/drape.json", drape_dir, drape_frames,
-                        !quiet && ::isatty(::fileno(stderr)) != 0);
-    say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame; frames in {}\n  reproduce: "
+        run_cloth_scene(drape, "scenes/drape.json", drape_dir, drape_run);
+    say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame, at most {} intersecting "
+                           "triangle pairs in a frame; frames in {}, preview {}\n  reproduce: "
                            "pliant cloth scenes/drape.json --out {}\n\n",
                            thousands(drape_stats["triangles"].get<std::int64_t>()),
                            drape_stats["mean_ms_per_frame"].get<double>(),
-                           (drape_dir / "frames").string(), drape_dir.string()));
+                           drape_stats["max_intersecting_pairs"].get<std::int64_t>(),
+                           (drape_dir / "frames").string(),
+                           drape_stats["preview"].get<std::string>(), drape_dir.string()));
 
     // Step 5: the summary.
     const nlohmann::ordered_json summary = {
