@@ -70,13 +70,14 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
 // The vertices of a pin group: its listed indices and every vertex inside one of its regions.
 std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
                                           const geometry::TriangleMeshD& mesh,
-                                          std::size_t group_index) {
+                                          const std::string& scene_name) {
     std::vector<std::int32_t> pinned = group.vertices;
     for (const std::int32_t v : pinned) {
         if (static_cast<std::size_t>(v) >= mesh.positions.size()) {
             throw InvalidInput(fmt::format(
-                "scene: pins[{}].vertices: vertex {} out of range, expected an index below {}",
-                group_index, v, mesh.positions.size()));
+                "{}: {}.vertices: vertex {} out of range, expected an index below {} (the "
+                "cloth's vertices, all copies)",
+                scene_name, group.key, v, mesh.positions.size()));
         }
     }
     for (const cloth::PinRegion& region : group.regions) {
@@ -100,8 +101,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const int frames = options.frames;
     const geometry::TriangleMeshD mesh = load_cloth(scene);
     cloth::ClothSolver solver(mesh, scene.material);
-    for (std::size_t g = 0; g < scene.pins.size(); ++g) {
-        solver.add_moving_pins(pinned_vertices(scene.pins[g], mesh, g), scene.pins[g].motion);
+    for (const cloth::PinGroup& group : scene.pins) {
+        solver.add_moving_pins(pinned_vertices(group, mesh, scene_name), group.motion);
     }
     // Obstacles, and their shapes for the preview (planes as squares around the cloth).
     AABBd cloth_box;

@@ -45,13 +45,167 @@ TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
     for (const Vec3d& p : last.positions) {
         EXPECT_GE(norm(p), 0.3 + 0.005 * 0.99);
     }
-    // --frames overrides the scene.
+    EXPECT_EQ(stats.at("max_intersecting_pairs"), 0);
+    EXPECT_EQ(stats.at("initial_intersecting_pairs"), 0);
+    for (const char* key : {"step_ms", "refit_ms", "traverse_ms", "narrow_ms", "response_ms",
+                            "contacts", "ccd_hits", "intersecting_pairs"}) {
+        EXPECT_TRUE(stats.at("frames").back().contains(key)) << key;
+    }
+    // The preview: an MP4 of 31 frames (ffmpeg is a dependency; PNG frames without it).
+    ASSERT_TRUE(stats.contains("preview"));
+    const std::filesystem::path preview = stats.at("preview").get<std::string>();
+    if (preview.extension() == ".mp4") {
+        EXPECT_GT(std::filesystem::file_size(preview), 1000u);
+    } else {
+        EXPECT_TRUE(std::filesystem::exists(preview / "frame_0030.png"));
+    }
+    // --frames overrides the scene; --no-preview writes none.
     const CliResult short_run = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
-                                            quoted(scratch / "short") + " --frames 2",
+                                            quoted(scratch / "short") + " --frames 2 --no-preview",
                                         scratch);
     ASSERT_EQ(short_run.exit_code, 0) << short_run.err;
     EXPECT_TRUE(std::filesystem::exists(scratch / "short" / "frames" / "frame_0002.obj"));
     EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "frames" / "frame_0003.obj"));
+    EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "preview.mp4"));
+    EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "preview"));
+}
+
+// Every built-in scene runs (two frames, no preview) without intersections.
+TEST(ClothCommand, BuiltInScenesRun) {
+    ScratchDir scratch;
+    for (const char* name : {"drape", "twist", "pile", "flag"}) {
+        const std::filesystem::path scene =
+            std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes" / (std::string(name) + ".json");
+        const CliResult r = run_cli("--json cloth " + quoted(scene) + " --out " +
+                                        quoted(scratch / name) + " --frames 2 --no-preview",
+                                    scratch);
+        ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+        const nlohmann::json stats = nlohmann::json::parse(r.out);
+        EXPECT_EQ(stats.at("max_intersecting_pairs"), 0) << name;
+        EXPECT_EQ(stats.at("frames").size(), 2u) << name;
+    }
+}
+
+// A mesh obstacle from an OBJ file (a box, moving sideways) holds and carries the cloth.
+TEST(ClothCommand, MeshObstacleFromAFile) {
+    ScratchDir scratch;
+    write(scratch / "table.obj", R"(v -0.5 -0.5 -0.2
+v 0.5 -0.5 -0.2
+v 0.5 0.5 -0.2
+v -0.5 0.5 -0.2
+v -0.5 -0.5 0
+v 0.5 -0.5 0
+v 0.5 0.5 0
+v -0.5 0.5 0
+f 1 3 2
+f 1 4 3
+f 5 6 7
+f 5 7 8
+f 1 2 6
+f 1 6 5
+f 2 3 7
+f 2 7 6
+f 3 4 8
+f 3 8 7
+f 4 1 5
+f 4 5 8
+)");
+    write(scratch / "scene.json", R"({
+        "cloth": {"grid": {"size": [0.4, 0.4], "quads": [8, 8]}, "translate": [0, 0, 0.02]},
+        "obstacles": [{"mesh": {"file": "table.obj"},
+                       "motion": {"keyframes": [{"time": 0},
+                                                {"time": 1, "translate": [0.2, 0, 0]}]}}],
+        "material": {"static_friction": 0.6, "kinetic_friction": 0.6},
+        "frames": 24, "substeps": 10
+    })");
+    const CliResult r = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --no-preview",
+                                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const geometry::TriangleMeshD last =
+        io::read_mesh(scratch / "out" / "frames" / "frame_0024.obj");
+    double mean_x = 0.0;
+    for (const Vec3d& p : last.positions) {
+        EXPECT_GT(p.z, 0.004);  // on the table, thickness above it
+        mean_x += p.x;
+    }
+    EXPECT_NEAR(mean_x / static_cast<double>(last.positions.size()), 0.2, 0.03);
+}
+
+// Robustness: a cloth that intersects itself at the start is reported and simulated without
+// getting worse; everything pinned stays put; a 100-second step stays finite; zero-area
+// triangles are data; NaN in the input is an error naming it.
+TEST(ClothCommand, HostileInputsAreReportedOrSurvived) {
+    ScratchDir scratch;
+    // Two squares crossing at right angles: 4 intersecting pairs.
+    write(scratch / "crossing.obj", R"(v -1 -1 0
+v 1 -1 0
+v 1 1 0
+v -1 1 0
+v 0 -0.5 -1
+v 0 0.5 -1
+v 0 0.5 1
+v 0 -0.5 1
+f 1 2 3
+f 1 3 4
+f 5 6 7
+f 5 7 8
+)");
+    write(scratch / "crossing.json",
+          R"({"cloth": {"mesh": "crossing.obj"}, "frames": 4, "substeps": 5})");
+    const CliResult crossing =
+        run_cli("--json cloth " + quoted(scratch / "crossing.json") + " --out " +
+                    quoted(scratch / "crossing") + " --no-preview",
+                scratch);
+    ASSERT_EQ(crossing.exit_code, 0) << crossing.err;
+    EXPECT_NE(crossing.err.find("intersects itself at the start"), std::string::npos)
+        << crossing.err;
+    const nlohmann::json stats = nlohmann::json::parse(crossing.out);
+    EXPECT_EQ(stats.at("initial_intersecting_pairs"), 4);
+    EXPECT_LE(stats.at("max_intersecting_pairs").get<int>(), 4);
+
+    // Everything pinned, one 100 s frame: nothing moves.
+    write(scratch / "pinned.json", R"({"cloth": {"grid": {"size": [1, 1], "quads": [4, 4]}},
+        "pins": {"regions": [{"min": [-1, -1, -1], "max": [1, 1, 1]}]},
+        "fps": 0.01, "frames": 2, "substeps": 1})");
+    const CliResult pinned = run_cli("cloth " + quoted(scratch / "pinned.json") + " --out " +
+                                         quoted(scratch / "pinned") + " --no-preview",
+                                     scratch);
+    ASSERT_EQ(pinned.exit_code, 0) << pinned.err;
+    EXPECT_EQ(read_text(scratch / "pinned" / "frames" / "frame_0000.obj"),
+              read_text(scratch / "pinned" / "frames" / "frame_0002.obj"));
+
+    // Huge steps onto a sphere, a zero-area triangle in the mesh: finite output.
+    write(scratch / "sliver.obj", R"(v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+v 0.5 0 1
+f 1 2 3
+f 1 3 4
+f 1 5 2
+)");
+    write(scratch / "huge.json", R"({"cloth": {"mesh": "sliver.obj"},
+        "obstacles": [{"sphere": {"center": [0.5, 0.5, 0], "radius": 0.5}}],
+        "fps": 0.1, "frames": 3, "substeps": 1})");
+    const CliResult huge = run_cli("cloth " + quoted(scratch / "huge.json") + " --out " +
+                                       quoted(scratch / "huge") + " --no-preview",
+                                   scratch);
+    ASSERT_EQ(huge.exit_code, 0) << huge.err;
+    const geometry::TriangleMeshD last =
+        io::read_mesh(scratch / "huge" / "frames" / "frame_0003.obj");
+    for (const Vec3d& p : last.positions) {
+        EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+    }
+
+    write(scratch / "nan.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n");
+    write(scratch / "nan.json", R"({"cloth": {"mesh": "nan.obj"}})");
+    const CliResult nan = run_cli("cloth " + quoted(scratch / "nan.json") + " --out " +
+                                      quoted(scratch / "nan") + " --no-preview",
+                                  scratch);
+    EXPECT_EQ(nan.exit_code, 1);
+    EXPECT_NE(nan.err.find("pliant: error:"), std::string::npos) << nan.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "nan" / "frames" / "frame_0000.obj"));
 }
 
 TEST(ClothCommand, BadScenesNameTheKeyAndWriteNothing) {
@@ -68,7 +222,7 @@ TEST(ClothCommand, BadScenesNameTheKeyAndWriteNothing) {
     const CliResult pins = run_cli(
         "cloth " + quoted(scratch / "pins.json") + " --out " + quoted(scratch / "out"), scratch);
     EXPECT_EQ(pins.exit_code, 1);
-    EXPECT_NE(pins.err.find("pins.vertices"), std::string::npos) << pins.err;
+    EXPECT_NE(pins.err.find("pins.vertices: vertex 9 out of range"), std::string::npos) << pins.err;
     const CliResult usage = run_cli("cloth " + quoted(scratch / "pins.json"), scratch);
     EXPECT_EQ(usage.exit_code, 2);
 }

@@ -36,6 +36,7 @@ struct PinRegion {
 
 // Pinned vertices that move together (motion.hpp; no keyframes: they stay put).
 struct PinGroup {
+    std::string key = "pins";            // where it was in the scene file, for messages
     std::vector<std::int32_t> vertices;  // indices into the cloth (all copies: see instances)
     std::vector<PinRegion> regions;
     Motion motion;

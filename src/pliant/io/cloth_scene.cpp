@@ -397,6 +397,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             for (std::size_t k = 0; k < pins->size(); ++k) {
                 ObjectReader group((*pins)[k], file, fmt::format("pins[{}]", k));
                 scene.pins.push_back(read_pin_group(group));
+                scene.pins.back().key = fmt::format("pins[{}]", k);
                 group.finish();
             }
         } else {
