@@ -222,7 +222,10 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
          {{"dir", drape_dir.string()},
           {"frames", drape_frames},
           {"triangles", drape_stats["triangles"]},
-          {"mean_ms_per_frame", drape_stats["mean_ms_per_frame"]}}},
+          {"mean_ms_per_frame", drape_stats["mean_ms_per_frame"]},
+          {"max_intersecting_pairs", drape_stats["max_intersecting_pairs"]},
+          {"preview",
+           drape_stats.contains("preview") ? drape_stats["preview"] : nlohmann::ordered_json()}}},
         {"threads", num_threads()},
         {"seconds", demo_watch.elapsed_ms() / 1000.0},
     };

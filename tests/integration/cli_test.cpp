@@ -349,6 +349,8 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
     EXPECT_EQ(summary.at("drape").at("triangles"), 35912);
     EXPECT_TRUE(std::filesystem::exists(dir / "drape" / "frames" / "frame_0002.obj"));
     EXPECT_TRUE(std::filesystem::exists(dir / "drape" / "stats.json"));
+    EXPECT_EQ(summary.at("drape").at("max_intersecting_pairs"), 0);
+    EXPECT_TRUE(std::filesystem::exists(summary.at("drape").at("preview").get<std::string>()));
 
     // The written files and the printed inflation give the demo's counts exactly.
     for (const char* mode : {"static", "swept"}) {

@@ -4,7 +4,10 @@
 // of the air moving at w (wind) relative to it, u = v − w:
 //   f = −½ ρ C_d A (u·n) |u·n| n,
 // the quadratic drag of a flat plate on the normal component of the relative velocity (tangential
-// air friction is neglected), split equally among the triangle's three vertices. With no wind the
+// air friction is neglected), split equally among the triangle's three vertices. Applied
+// explicitly per substep h, its impulse is capped at the triangle's normal momentum
+// ρ_A A |u·n| (it can stop the relative motion, not reverse it), which keeps it stable at any
+// speed. With no wind the
 // same force is air resistance. Wind may gust: its speed is scaled by
 //   1 + gust_amplitude · sin(2π (t / gust_period − (x·ŵ) / gust_wavelength)),
 // a gust travelling downwind with the wind's direction ŵ, so that a flag flutters instead of

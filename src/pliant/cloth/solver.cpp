@@ -370,8 +370,12 @@ void ClothSolver::apply_air(double h, double t) {
                 const Vec3d centre = (a + b + c) * (1.0 / 3.0);
                 const Vec3d normal = area_normal * (1.0 / area);
                 const double u_n = dot(velocity - m_air.wind_at(centre, t), normal);
-                force = normal * (-0.5 * m_air.density * m_air.drag_coefficient * area * u_n *
-                                  std::abs(u_n));
+                // Drag can at most stop the relative motion within the substep: the impulse is
+                // capped at the triangle's momentum normal to it (explicit quadratic drag would
+                // overshoot and blow up once h ρ C_d |u·n| / areal_density > 2).
+                const double drag = 0.5 * m_air.density * m_air.drag_coefficient * area * u_n * u_n;
+                const double stopping = m_material.areal_density * area * std::abs(u_n) / h;
+                force = normal * (-std::copysign(std::min(drag, stopping), u_n));
             }
             m_triangle_forces[static_cast<std::size_t>(i)] = force;
         },
