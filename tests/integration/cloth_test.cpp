@@ -10,6 +10,8 @@
 
 #include "integration/run_cli.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "pliant/io/png.hpp"
+#include "pliant/render/image.hpp"
 
 namespace pliant::test {
 namespace {
@@ -68,6 +70,38 @@ TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
     EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "frames" / "frame_0003.obj"));
     EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "preview.mp4"));
     EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "preview"));
+}
+
+// Without ffmpeg on the PATH the preview is PNG frames of the requested size.
+TEST(ClothCommand, PreviewFallsBackToPngFramesWithoutFfmpeg) {
+    ScratchDir scratch;
+    write(scratch / "scene.json", R"({
+        "cloth": {"grid": {"size": [1.0, 1.0], "quads": [6, 6]}, "translate": [0, 0, 0.5]},
+        "obstacles": [{"sphere": {"radius": 0.3}}, {"plane": {"point": [0, 0, -0.3]}}],
+        "frames": 3, "substeps": 5
+    })");
+    const CliResult r = run_cli("--json cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --preview-size 64 48",
+                                scratch, "PATH=/nonexistent");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(r.out);
+    EXPECT_EQ(stats.at("preview"), (scratch / "out" / "preview").string());
+    EXPECT_FALSE(std::filesystem::exists(scratch / "out" / "preview.mp4"));
+    for (int frame = 0; frame <= 3; ++frame) {
+        const render::Image image = io::read_png(scratch / "out" / "preview" /
+                                                 ("frame_000" + std::to_string(frame) + ".png"));
+        EXPECT_EQ(image.width, 64);
+        EXPECT_EQ(image.height, 48);
+        // Not blank: the cloth's red is in the picture.
+        bool has_red = false;
+        for (int y = 0; y < image.height && !has_red; ++y) {
+            for (int x = 0; x < image.width; ++x) {
+                const render::Rgb8 c = image.at(x, y);
+                has_red |= c.r > 150 && c.g < 120 && c.b < 120;
+            }
+        }
+        EXPECT_TRUE(has_red) << "frame " << frame;
+    }
 }
 
 // Every built-in scene runs (two frames, no preview) without intersections.

@@ -73,11 +73,13 @@ inline std::string read_text(const std::filesystem::path& path) {
     return text;
 }
 
-inline CliResult run_cli(const std::string& args, const ScratchDir& scratch) {
+// environment: shell variable assignments put before the command (e.g. "PATH=/nonexistent").
+inline CliResult run_cli(const std::string& args, const ScratchDir& scratch,
+                         const std::string& environment = "") {
     const std::filesystem::path out = scratch / "stdout.txt";
     const std::filesystem::path err = scratch / "stderr.txt";
-    const std::string command =
-        quoted(PLIANT_CLI) + " " + args + " >" + quoted(out) + " 2>" + quoted(err);
+    const std::string command = environment + " " + quoted(PLIANT_CLI) + " " + args + " >" +
+                                quoted(out) + " 2>" + quoted(err);
     const int status = std::system(command.c_str());
     CliResult result;
     result.exit_code = status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
