@@ -236,12 +236,12 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         std::fputs((summary.dump(2) + "\n").c_str(), stdout);
     } else {
         say(quiet,
-            fmt::format("outputs in {}/:\n  {:<22}the folded sheet (binary PLY)\n  {:<22}its "
-                        "moved copy\n  {:<22}the drape scene's frames (OBJ) and stats.json\n"
-                        "  {:<22}every number above\n",
-                        dir.string(), sheet_path.filename().string(),
-                        sheet_t1_path.filename().string(), "drape/",
-                        summary_path.filename().string()));
+            fmt::format(
+                "outputs in {}/:\n  {:<22}the folded sheet (binary PLY)\n  {:<22}its "
+                "moved copy\n  {:<22}the drape scene's frames (OBJ), preview.mp4 and stats.json\n"
+                "  {:<22}every number above\n",
+                dir.string(), sheet_path.filename().string(), sheet_t1_path.filename().string(),
+                "drape/", summary_path.filename().string()));
     }
     if (!table.ok()) {
         std::string errors;
