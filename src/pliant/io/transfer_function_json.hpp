@@ -1,0 +1,29 @@
+// Transfer function files (JSON) → volume::TransferFunction. The format is in docs/formats.md
+// ("Transfer functions"):
+//
+//   {"name": "bone", "opacity_unit": 1.0,
+//    "color":   [{"value": 150, "rgb": [0.8, 0.45, 0.3]}, {"value": 1500, "rgb": [1, 1, 1]}],
+//    "opacity": [{"value": 150, "alpha": 0}, {"value": 1500, "alpha": 0.8}]}
+//
+//   const volume::TransferFunction tf = io::read_transfer_function("bone.json");
+//
+// Strict: text that is not JSON, an unknown key, a missing required key ("color", "opacity",
+// "value", "rgb", "alpha") or a value of the wrong type or range throws IoError
+// "<name>: <key path>: expected <x>, got <y>" (key paths like `opacity[2].alpha`); points out of
+// order are reported by TransferFunction::validate's rules, also as IoError starting with <name>.
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+#include "pliant/volume/transfer_function.hpp"
+
+namespace pliant::io {
+
+volume::TransferFunction read_transfer_function(const std::filesystem::path& path);
+
+// The same from JSON text; `name` (the file name) starts error messages and is the function's
+// name unless the JSON has one.
+volume::TransferFunction parse_transfer_function(std::string_view text, std::string_view name);
+
+}  // namespace pliant::io
