@@ -9,6 +9,19 @@ find_package(tinyobjloader CONFIG REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
 
+# NIfTI-1 (niftilib) and zlib. find_package(NIFTI CONFIG) is broken on Debian (its targets name
+# files that do not exist): find the pieces by hand (../shared/DEPENDENCIES.md). Link libniftiio
+# (NIfTI-1 API) only, never libnifti2 too: they export the same symbol names.
+find_package(ZLIB REQUIRED)
+find_path(NIFTI_INCLUDE_DIR nifti1_io.h PATH_SUFFIXES nifti REQUIRED)
+find_library(NIFTI_NIFTIIO_LIBRARY niftiio REQUIRED)
+find_library(NIFTI_ZNZ_LIBRARY znz REQUIRED)
+if(NOT TARGET nifti::niftiio)
+  add_library(nifti::niftiio INTERFACE IMPORTED)
+  target_include_directories(nifti::niftiio INTERFACE ${NIFTI_INCLUDE_DIR})
+  target_link_libraries(nifti::niftiio INTERFACE ${NIFTI_NIFTIIO_LIBRARY} ${NIFTI_ZNZ_LIBRARY} ZLIB::ZLIB m)
+endif()
+
 if(PLIANT_BUILD_TESTS)
   find_package(GTest CONFIG REQUIRED)
 endif()

@@ -1,0 +1,328 @@
+#include "pliant/io/nifti.hpp"
+
+#include <fmt/format.h>
+#include <nifti1_io.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "pliant/core/error.hpp"
+#include "pliant/io/atomic_file.hpp"
+#include "pliant/io/detail/volume_data.hpp"
+
+namespace pliant::io {
+
+namespace {
+
+using volume::VoxelType;
+
+struct ImageFree {
+    void operator()(nifti_image* nim) const { nifti_image_free(nim); }
+};
+using Image = std::unique_ptr<nifti_image, ImageFree>;
+
+[[noreturn]] void fail(const std::filesystem::path& path, const std::string& message) {
+    throw IoError(fmt::format("{}: {}", path.string(), message));
+}
+
+void quiet_niftilib() {
+    static std::once_flag once;
+    std::call_once(once, [] { nifti_set_debug_level(0); });
+}
+
+bool is_gzip_name(const std::string& name) {
+    return name.size() > 3 && (name.ends_with(".gz") || name.ends_with(".GZ"));
+}
+
+struct ZnzClose {
+    void operator()(znzptr* f) const {
+        znzFile file = f;
+        znzclose(file);
+    }
+};
+
+VoxelType voxel_type(const std::filesystem::path& path, int datatype) {
+    switch (datatype) {
+        case DT_UINT8:
+            return VoxelType::u8;
+        case DT_INT16:
+            return VoxelType::i16;
+        case DT_UINT16:
+            return VoxelType::u16;
+        case DT_FLOAT32:
+            return VoxelType::f32;
+        case DT_RGBA32:
+            return VoxelType::rgba8;
+        default:
+            throw Unsupported(fmt::format(
+                "{}: NIfTI datatype {} ({}) is not supported, expected uint8, int16, uint16, "
+                "float32 or RGBA32",
+                path.string(), nifti_datatype_string(datatype), datatype));
+    }
+}
+
+template <typename T>
+void scale_into(std::span<T> in, std::span<float> out, double slope, double inter) {
+    for (std::size_t i = 0; i < in.size(); ++i) {
+        out[i] = static_cast<float>(static_cast<double>(in[i]) * slope + inter);
+    }
+}
+
+}  // namespace
+
+volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_bytes) {
+    quiet_niftilib();
+    const std::uint64_t size = detail::file_size(path);
+    if (size == 0) {
+        fail(path, "empty file, expected a NIfTI-1 header");
+    }
+    const Image nim(nifti_image_read(path.c_str(), 0));
+    if (!nim) {
+        fail(path, "not a readable NIfTI-1 file (bad or truncated header, wrong magic, or a "
+                   "missing .img)");
+    }
+    const VoxelType stored = voxel_type(path, nim->datatype);
+
+    // Dims: 3 spatial, a trailing dim of 1 allowed.
+    if (nim->ndim < 1 || nim->ndim > 7) {
+        fail(path, fmt::format("NIfTI dim[0] out of range, expected 1 to 7, got {}", nim->ndim));
+    }
+    for (int d = 4; d <= nim->ndim; ++d) {
+        if (nim->dim[d] != 1) {
+            throw Unsupported(fmt::format(
+                "{}: NIfTI image with {} dims (dim[{}] = {}) is not supported, expected a 3D "
+                "volume",
+                path.string(), nim->ndim, d, nim->dim[d]));
+        }
+    }
+    volume::Dims dims{1, 1, 1};
+    for (int d = 1; d <= std::min(nim->ndim, 3); ++d) {
+        dims[static_cast<std::size_t>(d - 1)] = nim->dim[d];
+    }
+
+    // Scaling: identity, or the result is f32.
+    const double slope = nim->scl_slope;
+    const double inter = nim->scl_inter;
+    const bool scaled = std::isfinite(slope) && slope != 0.0 &&
+                        (slope != 1.0 || (std::isfinite(inter) && inter != 0.0));
+    if (scaled && stored == VoxelType::rgba8) {
+        throw Unsupported(fmt::format("{}: NIfTI RGBA32 with scl_slope {} / scl_inter {} is not "
+                                      "supported",
+                                      path.string(), slope, inter));
+    }
+    const VoxelType result_type = scaled ? VoxelType::f32 : stored;
+    const std::size_t stored_bytes = detail::check_declared_size(path, dims, stored, max_bytes);
+    detail::check_declared_size(path, dims, result_type, max_bytes);
+
+    // Placement.
+    std::array<double, 3> spacing{nim->dx, nim->dy, nim->dz};
+    std::array<double, 3> centre0{0, 0, 0};
+    std::array<bool, 3> flip{false, false, false};
+    const mat44* xform = nim->sform_code > 0   ? &nim->sto_xyz
+                         : nim->qform_code > 0 ? &nim->qto_xyz
+                                               : nullptr;
+    if (xform != nullptr) {
+        const char* which = xform == &nim->sto_xyz ? "sform" : "qform";
+        for (std::size_t r = 0; r < 3; ++r) {
+            for (std::size_t c = 0; c < 4; ++c) {
+                if (!std::isfinite(xform->m[r][c])) {
+                    fail(path, fmt::format("NIfTI {} has a non-finite entry [{}][{}]: {}", which,
+                                           r, c, xform->m[r][c]));
+                }
+            }
+        }
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double diag = xform->m[c][c];
+            double largest = std::abs(diag);
+            for (std::size_t r = 0; r < 3; ++r) {
+                largest = std::max(largest, static_cast<double>(std::abs(xform->m[r][c])));
+            }
+            for (std::size_t r = 0; r < 3; ++r) {
+                if (r != c && std::abs(xform->m[r][c]) > 1e-6 * largest) {
+                    throw Unsupported(fmt::format(
+                        "{}: NIfTI {} is rotated, sheared or permuted (entry [{}][{}] = {}): only "
+                        "axis-aligned volumes are supported",
+                        path.string(), which, r, c, xform->m[r][c]));
+                }
+            }
+            spacing[c] = std::abs(diag);
+            flip[c] = diag < 0;
+            centre0[c] = xform->m[c][3];
+        }
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+        if (!std::isfinite(spacing[a]) || spacing[a] <= 0) {
+            fail(path, fmt::format("NIfTI spacing of axis {} (pixdim[{}]): expected a finite "
+                                   "number > 0, got {}",
+                                   a, a + 1, spacing[a]));
+        }
+    }
+    std::array<double, 3> corner{};
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double low_centre =
+            flip[a] ? centre0[a] - static_cast<double>(dims[a] - 1) * spacing[a] : centre0[a];
+        corner[a] = low_centre - 0.5 * spacing[a];
+    }
+
+    // The image file: size check (uncompressed) before allocating.
+    const std::filesystem::path image_path = nim->iname != nullptr ? nim->iname : path.string();
+    const bool gz = is_gzip_name(image_path.string());
+    const auto offset = static_cast<std::uint64_t>(std::max(0, nim->iname_offset));
+    const std::uint64_t image_size = detail::file_size(image_path);
+    if (!gz && (image_size < offset || image_size - offset < stored_bytes)) {
+        fail(image_path, fmt::format("truncated voxel data: the header declares {} {} voxels, "
+                                     "expected {} bytes after byte offset {}, got {}",
+                                     detail::dims_text(dims), nifti_datatype_string(nim->datatype),
+                                     stored_bytes, offset,
+                                     image_size > offset ? image_size - offset : 0));
+    }
+    if (gz && image_size * detail::MAX_INFLATE_RATIO + 1024 < stored_bytes + offset) {
+        fail(image_path, fmt::format("the header declares {} bytes of voxel data but the "
+                                     "compressed file has only {} bytes: truncated or lying",
+                                     stored_bytes, image_size));
+    }
+    volume::Volume volume = volume::Volume::allocate(
+        dims, stored, {spacing[0], spacing[1], spacing[2]}, {corner[0], corner[1], corner[2]},
+        max_bytes);
+    {
+        std::unique_ptr<znzptr, ZnzClose> file(
+            znzopen(image_path.c_str(), "rb", gz ? 1 : 0));
+        if (!file) {
+            fail(image_path, "cannot open the NIfTI image data");
+        }
+        if (znzseek(file.get(), static_cast<znz_off_t>(offset), SEEK_SET) != 0) {
+            fail(image_path, fmt::format("cannot seek to the voxel data at byte {}", offset));
+        }
+        std::span<std::byte> out = volume.bytes();
+        std::size_t done = 0;
+        while (done < out.size()) {
+            const std::size_t chunk = std::min<std::size_t>(out.size() - done, std::size_t{1} << 28);
+            const std::size_t n = znzread(out.data() + done, 1, chunk, file.get());
+            if (n == 0) {
+                break;
+            }
+            done += n;
+        }
+        if (done != out.size()) {
+            fail(image_path, fmt::format("truncated voxel data, expected {} bytes, got {}",
+                                         out.size(), done));
+        }
+    }
+    if (nim->byteorder != nifti_short_order()) {
+        detail::swap_channel_bytes(volume);
+    }
+    detail::flip_axes(volume, flip);
+    if (!scaled) {
+        return volume;
+    }
+    volume::Volume result =
+        volume::Volume::allocate(dims, VoxelType::f32, volume.spacing(), volume.origin(), max_bytes);
+    std::span<float> out = result.values<VoxelType::f32>();
+    switch (stored) {
+        case VoxelType::u8:
+            scale_into(volume.values<VoxelType::u8>(), out, slope, inter);
+            break;
+        case VoxelType::i16:
+            scale_into(volume.values<VoxelType::i16>(), out, slope, inter);
+            break;
+        case VoxelType::u16:
+            scale_into(volume.values<VoxelType::u16>(), out, slope, inter);
+            break;
+        default:
+            scale_into(volume.values<VoxelType::f32>(), out, slope, inter);
+            break;
+    }
+    return result;
+}
+
+void write_nifti(const std::filesystem::path& path, const volume::Volume& volume, bool gzip) {
+    quiet_niftilib();
+    if (volume.empty()) {
+        throw InvalidInput(fmt::format("write_nifti: {}: the volume is empty", path.string()));
+    }
+    int datatype = 0;
+    switch (volume.type()) {
+        case VoxelType::u8:
+            datatype = DT_UINT8;
+            break;
+        case VoxelType::i16:
+            datatype = DT_INT16;
+            break;
+        case VoxelType::u16:
+            datatype = DT_UINT16;
+            break;
+        case VoxelType::f32:
+            datatype = DT_FLOAT32;
+            break;
+        case VoxelType::rgba8:
+            datatype = DT_RGBA32;
+            break;
+        case VoxelType::rgba32f:
+            throw Unsupported(fmt::format("{}: NIfTI-1 has no RGBA float type: write rgba32f "
+                                          "volumes as NRRD or raw + JSON",
+                                          path.string()));
+    }
+    const volume::Dims& d = volume.dims();
+    for (const std::int64_t n : d) {
+        if (n > 32767) {
+            throw Unsupported(fmt::format("{}: NIfTI-1 dims are at most 32767, got {}",
+                                          path.string(), detail::dims_text(d)));
+        }
+    }
+    const int dims[8] = {3, static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2]),
+                         1, 1, 1, 1};
+    const Image nim(nifti_make_new_nim(dims, datatype, 0));
+    if (!nim) {
+        throw InternalError("write_nifti: nifti_make_new_nim failed");
+    }
+    const Vec3d& s = volume.spacing();
+    const Vec3d& o = volume.origin();
+    const std::array<double, 3> spacing{s.x, s.y, s.z};
+    const std::array<double, 3> centre0{o.x + 0.5 * s.x, o.y + 0.5 * s.y, o.z + 0.5 * s.z};
+    nim->dx = nim->pixdim[1] = static_cast<float>(s.x);
+    nim->dy = nim->pixdim[2] = static_cast<float>(s.y);
+    nim->dz = nim->pixdim[3] = static_cast<float>(s.z);
+    nim->xyz_units = NIFTI_UNITS_MM;
+    nim->scl_slope = 0.0F;
+    nim->scl_inter = 0.0F;
+    nim->qform_code = NIFTI_XFORM_SCANNER_ANAT;
+    nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
+    nim->quatern_b = nim->quatern_c = nim->quatern_d = 0.0F;
+    nim->qfac = 1.0F;
+    nim->qoffset_x = static_cast<float>(centre0[0]);
+    nim->qoffset_y = static_cast<float>(centre0[1]);
+    nim->qoffset_z = static_cast<float>(centre0[2]);
+    for (std::size_t r = 0; r < 4; ++r) {
+        for (std::size_t c = 0; c < 4; ++c) {
+            nim->sto_xyz.m[r][c] = 0.0F;
+        }
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+        nim->sto_xyz.m[a][a] = static_cast<float>(spacing[a]);
+        nim->sto_xyz.m[a][3] = static_cast<float>(centre0[a]);
+    }
+    nim->sto_xyz.m[3][3] = 1.0F;
+    nim->nifti_type = NIFTI_FTYPE_NIFTI1_1;
+    const nifti_1_header header = nifti_convert_nim2nhdr(nim.get());
+    nifti_1_header out_header = header;
+    out_header.vox_offset = 352.0F;
+    std::string bytes(352 + volume.size_bytes(), '\0');
+    static_assert(sizeof(nifti_1_header) == 348);
+    std::memcpy(bytes.data(), &out_header, sizeof out_header);
+    // bytes 348..351: the extension flag, 0 (no extensions).
+    std::memcpy(bytes.data() + 352, volume.bytes().data(), volume.size_bytes());
+    write_file_atomically(path, [&](std::ostream& out) {
+        if (gzip) {
+            detail::write_gzip(out, std::as_bytes(std::span<const char>(bytes)));
+        } else {
+            out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        }
+    });
+}
+
+}  // namespace pliant::io

@@ -1,0 +1,55 @@
+// Volume files: read_volume / write_volume dispatch on the file name's extension.
+//
+//   .nrrd           NRRD, attached header (io/nrrd.hpp); read: raw or gzip, little or big endian
+//   .nhdr           NRRD, detached header + data file named by `data file:`
+//   .nii / .nii.gz  NIfTI-1 through niftilib (io/nifti.hpp); .hdr (+ .img) read only
+//   .json / .raw    raw voxels + JSON sidecar (io/raw_volume.hpp): name either file
+//   .inv3           InVesalius 3 project (gzip tar with main.plist + int16 matrix.dat), read only
+//
+// Conventions (docs/formats.md, "Volumes"): pliant's origin is the corner of the voxel box;
+// voxel centres are at origin + (i + 0.5) · spacing (volume/volume.hpp). NRRD `space origin` and
+// the NIfTI qform/sform translation are the first voxel's centre and are converted. Axis-aligned
+// placements only: a rotated or permuted grid is refused (Unsupported); a negative axis direction
+// is read by flipping the voxel order along that axis, so world positions are kept.
+//
+// Limits: every reader checks the declared size against ReadVolumeOptions::max_bytes and against
+// the bytes actually in the file BEFORE allocating. Errors: IoError "<path>: <what>, expected X,
+// got Y" for broken or lying files; Unsupported for valid files using features pliant does not
+// read (other voxel types, rotations, 4D series). Writes are atomic (io/atomic_file.hpp).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string_view>
+
+#include "pliant/volume/volume.hpp"
+
+namespace pliant::io {
+
+struct ReadVolumeOptions {
+    // Largest voxel data (bytes) a reader may allocate; larger declared sizes are refused.
+    std::size_t max_bytes = volume::Volume::MAX_BYTES;
+};
+
+struct WriteVolumeOptions {
+    // gzip-compress the voxel data (NRRD, raw + sidecar). NIfTI chooses by extension (.nii.gz);
+    // gzip with a .nii name is InvalidInput.
+    bool gzip = false;
+};
+
+enum class VolumeFormat { nrrd, nhdr, nifti, nifti_gz, analyze_hdr, raw_json, inv3 };
+
+// The format for a file name (case-insensitive extension); Unsupported listing the extensions
+// when none matches.
+VolumeFormat volume_format(const std::filesystem::path& path);
+std::string_view name(VolumeFormat format);
+
+volume::Volume read_volume(const std::filesystem::path& path,
+                           const ReadVolumeOptions& options = {});
+
+// Unsupported for read-only formats (.inv3, .hdr) and for voxel types a format cannot store
+// (NIfTI has no RGBA float).
+void write_volume(const std::filesystem::path& path, const volume::Volume& volume,
+                  const WriteVolumeOptions& options = {});
+
+}  // namespace pliant::io
