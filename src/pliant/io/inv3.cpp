@@ -101,8 +101,8 @@ public:
                 static_cast<std::size_t>(std::min<std::uint64_t>(size - done, 1u << 30));
             const std::size_t n = read(p + done, chunk);
             if (n == 0) {
-                fail(m_path, fmt::format("truncated tar entry, expected {} bytes, got {}", size,
-                                         done));
+                fail(m_path,
+                     fmt::format("truncated tar entry, expected {} bytes, got {}", size, done));
             }
             done += n;
         }
@@ -317,8 +317,8 @@ Inv3Matrix parse_main_plist(const std::filesystem::path& path, std::string_view 
     for (std::size_t i = 0; i < 3; ++i) {
         std::int64_t n = 0;
         if (detail::parse_integer(shape->array[i].text, n) != detail::ParseStatus::ok) {
-            fail(path, fmt::format("main.plist matrix 'shape'[{}]: expected an integer, got {}",
-                                   i, detail::quote(shape->array[i].text)));
+            fail(path, fmt::format("main.plist matrix 'shape'[{}]: expected an integer, got {}", i,
+                                   detail::quote(shape->array[i].text)));
         }
         m.dims[2 - i] = n;  // numpy C order (z, y, x) → x fastest
     }

@@ -83,8 +83,9 @@ volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_byt
     }
     const Image nim(nifti_image_read(path.c_str(), 0));
     if (!nim) {
-        fail(path, "not a readable NIfTI-1 file (bad or truncated header, wrong magic, or a "
-                   "missing .img)");
+        fail(path,
+             "not a readable NIfTI-1 file (bad or truncated header, wrong magic, or a "
+             "missing .img)");
     }
     const VoxelType stored = voxel_type(path, nim->datatype);
 
@@ -111,9 +112,10 @@ volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_byt
     const bool scaled = std::isfinite(slope) && slope != 0.0 &&
                         (slope != 1.0 || (std::isfinite(inter) && inter != 0.0));
     if (scaled && stored == VoxelType::rgba8) {
-        throw Unsupported(fmt::format("{}: NIfTI RGBA32 with scl_slope {} / scl_inter {} is not "
-                                      "supported",
-                                      path.string(), slope, inter));
+        throw Unsupported(
+            fmt::format("{}: NIfTI RGBA32 with scl_slope {} / scl_inter {} is not "
+                        "supported",
+                        path.string(), slope, inter));
     }
     const VoxelType result_type = scaled ? VoxelType::f32 : stored;
     const std::size_t stored_bytes = detail::check_declared_size(path, dims, stored, max_bytes);
@@ -131,8 +133,8 @@ volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_byt
         for (std::size_t r = 0; r < 3; ++r) {
             for (std::size_t c = 0; c < 4; ++c) {
                 if (!std::isfinite(xform->m[r][c])) {
-                    fail(path, fmt::format("NIfTI {} has a non-finite entry [{}][{}]: {}", which,
-                                           r, c, xform->m[r][c]));
+                    fail(path, fmt::format("NIfTI {} has a non-finite entry [{}][{}]: {}", which, r,
+                                           c, xform->m[r][c]));
                 }
             }
         }
@@ -175,33 +177,33 @@ volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_byt
     const auto offset = static_cast<std::uint64_t>(std::max(0, nim->iname_offset));
     const std::uint64_t image_size = detail::file_size(image_path);
     if (!gz && (image_size < offset || image_size - offset < stored_bytes)) {
-        fail(image_path, fmt::format("truncated voxel data: the header declares {} {} voxels, "
-                                     "expected {} bytes after byte offset {}, got {}",
-                                     detail::dims_text(dims), nifti_datatype_string(nim->datatype),
-                                     stored_bytes, offset,
-                                     image_size > offset ? image_size - offset : 0));
+        fail(image_path,
+             fmt::format("truncated voxel data: the header declares {} {} voxels, "
+                         "expected {} bytes after byte offset {}, got {}",
+                         detail::dims_text(dims), nifti_datatype_string(nim->datatype),
+                         stored_bytes, offset, image_size > offset ? image_size - offset : 0));
     }
     if (gz && image_size * detail::MAX_INFLATE_RATIO + 1024 < stored_bytes + offset) {
         fail(image_path, fmt::format("the header declares {} bytes of voxel data but the "
                                      "compressed file has only {} bytes: truncated or lying",
                                      stored_bytes, image_size));
     }
-    volume::Volume volume = volume::Volume::allocate(
-        dims, stored, {spacing[0], spacing[1], spacing[2]}, {corner[0], corner[1], corner[2]},
-        max_bytes);
+    volume::Volume volume =
+        volume::Volume::allocate(dims, stored, {spacing[0], spacing[1], spacing[2]},
+                                 {corner[0], corner[1], corner[2]}, max_bytes);
     {
-        std::unique_ptr<znzptr, ZnzClose> file(
-            znzopen(image_path.c_str(), "rb", gz ? 1 : 0));
+        std::unique_ptr<znzptr, ZnzClose> file(znzopen(image_path.c_str(), "rb", gz ? 1 : 0));
         if (!file) {
             fail(image_path, "cannot open the NIfTI image data");
         }
-        if (znzseek(file.get(), static_cast<znz_off_t>(offset), SEEK_SET) != 0) {
+        if (znzseek(file.get(), static_cast<znz_off_t>(offset), SEEK_SET) < 0) {  // gz: new offset
             fail(image_path, fmt::format("cannot seek to the voxel data at byte {}", offset));
         }
         std::span<std::byte> out = volume.bytes();
         std::size_t done = 0;
         while (done < out.size()) {
-            const std::size_t chunk = std::min<std::size_t>(out.size() - done, std::size_t{1} << 28);
+            const std::size_t chunk =
+                std::min<std::size_t>(out.size() - done, std::size_t{1} << 28);
             const std::size_t n = znzread(out.data() + done, 1, chunk, file.get());
             if (n == 0) {
                 break;
@@ -209,8 +211,8 @@ volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_byt
             done += n;
         }
         if (done != out.size()) {
-            fail(image_path, fmt::format("truncated voxel data, expected {} bytes, got {}",
-                                         out.size(), done));
+            fail(image_path,
+                 fmt::format("truncated voxel data, expected {} bytes, got {}", out.size(), done));
         }
     }
     if (nim->byteorder != nifti_short_order()) {
@@ -220,8 +222,8 @@ volume::Volume read_nifti(const std::filesystem::path& path, std::size_t max_byt
     if (!scaled) {
         return volume;
     }
-    volume::Volume result =
-        volume::Volume::allocate(dims, VoxelType::f32, volume.spacing(), volume.origin(), max_bytes);
+    volume::Volume result = volume::Volume::allocate(dims, VoxelType::f32, volume.spacing(),
+                                                     volume.origin(), max_bytes);
     std::span<float> out = result.values<VoxelType::f32>();
     switch (stored) {
         case VoxelType::u8:
@@ -263,9 +265,10 @@ void write_nifti(const std::filesystem::path& path, const volume::Volume& volume
             datatype = DT_RGBA32;
             break;
         case VoxelType::rgba32f:
-            throw Unsupported(fmt::format("{}: NIfTI-1 has no RGBA float type: write rgba32f "
-                                          "volumes as NRRD or raw + JSON",
-                                          path.string()));
+            throw Unsupported(
+                fmt::format("{}: NIfTI-1 has no RGBA float type: write rgba32f "
+                            "volumes as NRRD or raw + JSON",
+                            path.string()));
     }
     const volume::Dims& d = volume.dims();
     for (const std::int64_t n : d) {
@@ -274,8 +277,8 @@ void write_nifti(const std::filesystem::path& path, const volume::Volume& volume
                                           path.string(), detail::dims_text(d)));
         }
     }
-    const int dims[8] = {3, static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2]),
-                         1, 1, 1, 1};
+    const int dims[8] = {
+        3, static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2]), 1, 1, 1, 1};
     const Image nim(nifti_make_new_nim(dims, datatype, 0));
     if (!nim) {
         throw InternalError("write_nifti: nifti_make_new_nim failed");

@@ -167,7 +167,8 @@ double parse_double(const std::filesystem::path& path, const std::string& field,
                     const std::string& token) {
     double value = 0;
     if (detail::parse_real(token, value) != detail::ParseStatus::ok) {
-        fail(path, fmt::format("NRRD '{}': expected a number, got {}", field, detail::quote(token)));
+        fail(path,
+             fmt::format("NRRD '{}': expected a number, got {}", field, detail::quote(token)));
     }
     return value;
 }
@@ -271,8 +272,8 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
     }
     const std::vector<std::string> size_words = words(required(header, path, "sizes"));
     if (static_cast<std::int64_t>(size_words.size()) != dimension) {
-        fail(path, fmt::format("NRRD 'sizes': expected {} sizes (the dimension), got {}",
-                               dimension, size_words.size()));
+        fail(path, fmt::format("NRRD 'sizes': expected {} sizes (the dimension), got {}", dimension,
+                               size_words.size()));
     }
     std::vector<std::int64_t> sizes;
     for (const std::string& w : size_words) {
@@ -286,18 +287,17 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
     const std::size_t first_spatial = dimension == 4 ? 1 : 0;
     if (dimension == 4) {
         if (sizes[0] != 4) {
-            throw Unsupported(fmt::format(
-                "{}: NRRD with 4 axes needs a leading RGBA axis of size 4, got size {}",
-                path.string(), sizes[0]));
+            throw Unsupported(
+                fmt::format("{}: NRRD with 4 axes needs a leading RGBA axis of size 4, got size {}",
+                            path.string(), sizes[0]));
         }
         if (type == VoxelType::u8) {
             type = VoxelType::rgba8;
         } else if (type == VoxelType::f32) {
             type = VoxelType::rgba32f;
         } else {
-            throw Unsupported(fmt::format(
-                "{}: NRRD RGBA volumes must be uchar or float, got {}", path.string(),
-                detail::quote(type_text)));
+            throw Unsupported(fmt::format("{}: NRRD RGBA volumes must be uchar or float, got {}",
+                                          path.string(), detail::quote(type_text)));
         }
     }
     const volume::Dims dims{sizes[first_spatial], sizes[first_spatial + 1],
@@ -409,12 +409,12 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
     if (const auto it = header.fields.find("data file"); it != header.fields.end()) {
         const std::string& name = it->second;
         if (name.rfind("LIST", 0) == 0 || words(name).size() > 1) {
-            throw Unsupported(fmt::format(
-                "{}: NRRD 'data file' lists several files ({}), expected one file name",
-                path.string(), detail::quote(name)));
+            throw Unsupported(
+                fmt::format("{}: NRRD 'data file' lists several files ({}), expected one file name",
+                            path.string(), detail::quote(name)));
         }
         data_path = std::filesystem::path(name).is_absolute() ? std::filesystem::path(name)
-                                                               : path.parent_path() / name;
+                                                              : path.parent_path() / name;
         offset = 0;
         std::error_code ec;
         if (!std::filesystem::exists(data_path, ec)) {
@@ -445,8 +445,8 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
     if (byte_skip == -1) {
         const std::uint64_t size = detail::file_size(data_path);
         if (size < bytes) {
-            fail(data_path, fmt::format("truncated voxel data, expected {} bytes, got {}", bytes,
-                                        size));
+            fail(data_path,
+                 fmt::format("truncated voxel data, expected {} bytes, got {}", bytes, size));
         }
         offset = size - bytes;
     } else {
@@ -462,9 +462,8 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
                              size > offset ? size - offset : 0, offset));
         }
     }
-    volume::Volume volume =
-        volume::Volume::allocate(dims, type, {spacing[0], spacing[1], spacing[2]}, origin,
-                                 max_bytes);
+    volume::Volume volume = volume::Volume::allocate(
+        dims, type, {spacing[0], spacing[1], spacing[2]}, origin, max_bytes);
     if (gzip) {
         detail::read_gzip_data(data_path, offset, volume.bytes());
     } else {
@@ -487,7 +486,8 @@ void write_nrrd(const std::filesystem::path& path, const volume::Volume& volume,
     const Vec3d& s = volume.spacing();
     const Vec3d& o = volume.origin();
     const volume::Dims& d = volume.dims();
-    std::string header = "NRRD0004\n# written by pliant; space origin is the first voxel's centre\n";
+    std::string header =
+        "NRRD0004\n# written by pliant; space origin is the first voxel's centre\n";
     header += fmt::format("type: {}\n", nrrd_type_name(volume.type()));
     header += fmt::format("dimension: {}\n", rgba ? 4 : 3);
     header += "space dimension: 3\n";

@@ -1,7 +1,6 @@
 #include "pliant/io/raw_volume.hpp"
 
 #include <fmt/format.h>
-
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -89,9 +88,8 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     if (!doc.is_object()) {
         fail(sidecar, "expected a JSON object");
     }
-    static const std::set<std::string> KEYS = {"format", "version", "data_file", "dims",
-                                               "type",   "spacing", "origin",    "endian",
-                                               "encoding"};
+    static const std::set<std::string> KEYS = {"format",  "version", "data_file", "dims",    "type",
+                                               "spacing", "origin",  "endian",    "encoding"};
     for (const auto& item : doc.items()) {
         if (KEYS.count(item.key()) == 0) {
             fail(sidecar, fmt::format("unknown key \"{}\", expected one of format, version, "
@@ -105,19 +103,19 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     }
     const json& version = field(doc, sidecar, "version");
     if (version != 1) {
-        throw Unsupported(fmt::format("{}: \"version\": expected 1, got {}", sidecar.string(),
-                                      version.dump()));
+        throw Unsupported(
+            fmt::format("{}: \"version\": expected 1, got {}", sidecar.string(), version.dump()));
     }
     const json& dims_json = field(doc, sidecar, "dims");
     if (!dims_json.is_array() || dims_json.size() != 3) {
-        fail(sidecar, fmt::format("\"dims\": expected an array of 3 integers, got {}",
-                                  dims_json.dump()));
+        fail(sidecar,
+             fmt::format("\"dims\": expected an array of 3 integers, got {}", dims_json.dump()));
     }
     volume::Dims dims{};
     for (std::size_t i = 0; i < 3; ++i) {
         if (!dims_json[i].is_number_integer()) {
-            fail(sidecar, fmt::format("\"dims\"[{}]: expected an integer, got {}", i,
-                                      dims_json[i].dump()));
+            fail(sidecar,
+                 fmt::format("\"dims\"[{}]: expected an integer, got {}", i, dims_json[i].dump()));
         }
         dims[i] = dims_json[i].get<std::int64_t>();
     }
@@ -130,9 +128,9 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
         }
     }
     if (!type) {
-        throw Unsupported(fmt::format(
-            "{}: \"type\": expected one of u8, i16, u16, f32, rgba8, rgba32f, got {}",
-            sidecar.string(), type_json.dump()));
+        throw Unsupported(
+            fmt::format("{}: \"type\": expected one of u8, i16, u16, f32, rgba8, rgba32f, got {}",
+                        sidecar.string(), type_json.dump()));
     }
     const std::array<double, 3> spacing = triple(doc, sidecar, "spacing");
     const std::array<double, 3> origin = triple(doc, sidecar, "origin");
@@ -169,9 +167,9 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
                                         detail::dims_text(dims), volume::name(*type), bytes, size));
         }
     }
-    volume::Volume volume = volume::Volume::allocate(
-        dims, *type, {spacing[0], spacing[1], spacing[2]}, {origin[0], origin[1], origin[2]},
-        max_bytes);
+    volume::Volume volume =
+        volume::Volume::allocate(dims, *type, {spacing[0], spacing[1], spacing[2]},
+                                 {origin[0], origin[1], origin[2]}, max_bytes);
     if (gzip) {
         detail::read_gzip_data(data_path, 0, volume.bytes());
     } else {

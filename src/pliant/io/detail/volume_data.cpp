@@ -28,8 +28,8 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 File open_at(const std::filesystem::path& path, std::uint64_t offset) {
     File file(std::fopen(path.c_str(), "rb"));
     if (!file) {
-        throw IoError(fmt::format("{}: cannot open for reading: {}", path.string(),
-                                  std::strerror(errno)));
+        throw IoError(
+            fmt::format("{}: cannot open for reading: {}", path.string(), std::strerror(errno)));
     }
     if (::fseeko(file.get(), static_cast<off_t>(offset), SEEK_SET) != 0) {
         throw IoError(fmt::format("{}: cannot seek to byte {}", path.string(), offset));
@@ -47,8 +47,9 @@ std::size_t check_declared_size(const std::filesystem::path& path, const volume:
                                 volume::VoxelType type, std::size_t max_bytes) {
     for (int axis = 0; axis < 3; ++axis) {
         if (dims[axis] < 1 || dims[axis] > MAX_DIM) {
-            throw IoError(fmt::format("{}: size of axis {} is out of range, expected 1 to {}, got {}",
-                                      path.string(), axis, MAX_DIM, dims[axis]));
+            throw IoError(
+                fmt::format("{}: size of axis {} is out of range, expected 1 to {}, got {}",
+                            path.string(), axis, MAX_DIM, dims[axis]));
         }
     }
     // Multiply step by step against the limit: the product never overflows size_t.
@@ -91,14 +92,14 @@ std::uint64_t file_size(const std::filesystem::path& path) {
     return size;
 }
 
-void read_raw_data(const std::filesystem::path& path, std::uint64_t offset, std::span<std::byte> out,
-                   bool exact) {
+void read_raw_data(const std::filesystem::path& path, std::uint64_t offset,
+                   std::span<std::byte> out, bool exact) {
     const std::uint64_t size = detail::file_size(path);
     const std::uint64_t available = size > offset ? size - offset : 0;
     if (available < out.size()) {
-        throw IoError(fmt::format(
-            "{}: truncated voxel data, expected {} bytes after byte offset {}, got {}",
-            path.string(), out.size(), offset, available));
+        throw IoError(
+            fmt::format("{}: truncated voxel data, expected {} bytes after byte offset {}, got {}",
+                        path.string(), out.size(), offset, available));
     }
     if (exact && available > out.size()) {
         throw IoError(fmt::format(
@@ -117,9 +118,10 @@ void read_gzip_data(const std::filesystem::path& path, std::uint64_t offset,
     const std::uint64_t size = detail::file_size(path);
     const std::uint64_t compressed = size > offset ? size - offset : 0;
     if (compressed == 0) {
-        throw IoError(fmt::format("{}: no compressed voxel data after byte offset {}, expected {} "
-                                  "bytes once inflated",
-                                  path.string(), offset, out.size()));
+        throw IoError(
+            fmt::format("{}: no compressed voxel data after byte offset {}, expected {} "
+                        "bytes once inflated",
+                        path.string(), offset, out.size()));
     }
     if (compressed * MAX_INFLATE_RATIO + 1024 < out.size()) {
         throw IoError(fmt::format(
@@ -171,17 +173,18 @@ void read_gzip_data(const std::filesystem::path& path, std::uint64_t offset,
                 finished = true;
             } else if (status != Z_OK && status != Z_BUF_ERROR) {
                 throw IoError(fmt::format("{}: corrupt gzip data after {} bytes: {}", path.string(),
-                                          produced, stream.msg != nullptr ? stream.msg : "zlib error"));
+                                          produced,
+                                          stream.msg != nullptr ? stream.msg : "zlib error"));
             } else if (status == Z_BUF_ERROR && wrote == 0 && stream.avail_in > 0) {
-                throw IoError(fmt::format("{}: corrupt gzip data after {} bytes", path.string(),
-                                          produced));
+                throw IoError(
+                    fmt::format("{}: corrupt gzip data after {} bytes", path.string(), produced));
             }
         }
     }
     if (produced < out.size()) {
-        throw IoError(fmt::format(
-            "{}: truncated gzip voxel data, expected {} bytes once inflated, got {}",
-            path.string(), out.size(), produced));
+        throw IoError(
+            fmt::format("{}: truncated gzip voxel data, expected {} bytes once inflated, got {}",
+                        path.string(), out.size(), produced));
     }
     if (!finished) {
         throw IoError(fmt::format("{}: truncated gzip stream (no end marker after {} bytes)",

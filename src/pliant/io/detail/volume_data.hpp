@@ -31,8 +31,8 @@ std::uint64_t file_size(const std::filesystem::path& path);
 
 // Reads exactly out.size() bytes of `path` starting at `offset`. With `exact`, the file must end
 // right after them ("more data than the header declares" otherwise). Checks the file size first.
-void read_raw_data(const std::filesystem::path& path, std::uint64_t offset, std::span<std::byte> out,
-                   bool exact);
+void read_raw_data(const std::filesystem::path& path, std::uint64_t offset,
+                   std::span<std::byte> out, bool exact);
 
 // Inflates the gzip (or zlib) stream in `path` from `offset` into exactly out.size() bytes.
 // Refuses before reading when the compressed size cannot hold out.size() bytes; fails when the

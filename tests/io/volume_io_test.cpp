@@ -1,0 +1,210 @@
+#include "pliant/io/volume_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include "pliant/core/error.hpp"
+#include "test_files.hpp"
+
+namespace pliant::io {
+namespace {
+
+using test::expect_io_error;
+using test::TempDir;
+using volume::Volume;
+using volume::VoxelType;
+
+constexpr VoxelType ALL_TYPES[] = {VoxelType::u8,  VoxelType::i16,   VoxelType::u16,
+                                   VoxelType::f32, VoxelType::rgba8, VoxelType::rgba32f};
+
+// A 5×4×3 volume with distinct bytes everywhere (f32: also NaN-free random-ish patterns).
+Volume sample(VoxelType type) {
+    Volume v = Volume::allocate({5, 4, 3}, type, {0.5, 1.25, 2.0}, {-12.5, 3.0, 0.25});
+    std::span<std::byte> b = v.bytes();
+    for (std::size_t i = 0; i < b.size(); ++i) {
+        b[i] = static_cast<std::byte>((i * 37 + 11) & 0x7f);  // 0x7f: float exponents finite
+    }
+    return v;
+}
+
+void expect_same(const Volume& a, const Volume& b) {
+    EXPECT_EQ(a.dims(), b.dims());
+    EXPECT_EQ(a.type(), b.type());
+    EXPECT_EQ(a.spacing().x, b.spacing().x);
+    EXPECT_EQ(a.spacing().y, b.spacing().y);
+    EXPECT_EQ(a.spacing().z, b.spacing().z);
+    EXPECT_EQ(a.origin().x, b.origin().x);
+    EXPECT_EQ(a.origin().y, b.origin().y);
+    EXPECT_EQ(a.origin().z, b.origin().z);
+    ASSERT_EQ(a.size_bytes(), b.size_bytes());
+    EXPECT_EQ(std::memcmp(a.bytes().data(), b.bytes().data(), a.size_bytes()), 0);
+}
+
+TEST(VolumeIo, RoundTripsEveryTypeAndFormat) {
+    TempDir dir;
+    for (const VoxelType type : ALL_TYPES) {
+        for (const char* name : {"v.nrrd", "v.nhdr", "v.json", "v.nii", "v.nii.gz"}) {
+            for (const bool gzip : {false, true}) {
+                const std::string file = name;
+                const bool nifti = file.find(".nii") != std::string::npos;
+                if (nifti && gzip) {
+                    continue;
+                }
+                SCOPED_TRACE(file + " " + std::string(volume::name(type)) + (gzip ? " gzip" : ""));
+                const Volume v = sample(type);
+                if (nifti && type == VoxelType::rgba32f) {
+                    EXPECT_THROW(write_volume(dir / file, v), Unsupported);
+                    continue;
+                }
+                write_volume(dir / file, v, {.gzip = gzip});
+                expect_same(v, read_volume(dir / file));
+            }
+        }
+    }
+}
+
+TEST(VolumeIo, NrrdSpaceOriginIsTheFirstVoxelCentre) {
+    TempDir dir;
+    test::write_bytes(dir / "a.nrrd",
+                      std::string("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 1 1\n"
+                                  "space directions: (2,0,0) (0,1,0) (0,0,1)\n"
+                                  "space origin: (10,0,0)\nencoding: raw\n\n") +
+                          std::string("\x01\x02", 2));
+    const Volume v = read_volume(dir / "a.nrrd");
+    EXPECT_EQ(v.origin().x, 9.0);
+    EXPECT_EQ(v.spacing().x, 2.0);
+    EXPECT_EQ(v.voxel_center(0, 0, 0).x, 10.0);
+}
+
+TEST(VolumeIo, NrrdNegativeDirectionFlipsAndKeepsWorldPositions) {
+    TempDir dir;
+    test::write_bytes(dir / "a.nrrd",
+                      std::string("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 1 1\n"
+                                  "space directions: (-2,0,0) (0,1,0) (0,0,1)\n"
+                                  "space origin: (10,0,0)\nencoding: raw\n\n") +
+                          std::string("\x01\x02", 2));
+    const Volume v = read_volume(dir / "a.nrrd");
+    EXPECT_EQ(v.voxel_center(0, 0, 0).x, 8.0);
+    EXPECT_EQ(v.values<VoxelType::u8>()[0], 2);
+    EXPECT_EQ(v.values<VoxelType::u8>()[1], 1);
+}
+
+TEST(VolumeIo, NrrdRotationIsUnsupported) {
+    TempDir dir;
+    test::write_bytes(dir / "a.nrrd",
+                      "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\n"
+                      "space directions: (0,1,0) (1,0,0) (0,0,1)\nencoding: raw\n\nx");
+    EXPECT_THROW(read_volume(dir / "a.nrrd"), Unsupported);
+}
+
+TEST(VolumeIo, NrrdBigEndianIsSwapped) {
+    TempDir dir;
+    test::write_bytes(dir / "a.nrrd",
+                      std::string("NRRD0004\ntype: short\ndimension: 3\nsizes: 1 1 1\n"
+                                  "endian: big\nencoding: raw\n\n") +
+                          std::string("\x01\x02", 2));
+    EXPECT_EQ(read_volume(dir / "a.nrrd").values<VoxelType::i16>()[0], 0x0102);
+}
+
+std::string header(const std::string& sizes, const std::string& extra = "") {
+    return "NRRD0004\ntype: uchar\ndimension: 3\nsizes: " + sizes + "\n" + extra +
+           "encoding: raw\n\n";
+}
+
+TEST(VolumeIo, BrokenInputs) {
+    TempDir dir;
+    const auto p = dir / "b.nrrd";
+    test::write_bytes(p, header("2 2 2") + "abc");
+    expect_io_error([&] { read_volume(p); }, {"b.nrrd", "truncated", "8 bytes"});
+    test::write_bytes(p, header("2 2 2") + "abcdefghij");
+    expect_io_error([&] { read_volume(p); }, {"more voxel data", "expected 8"});
+    test::write_bytes(p, "NRRD0004\ntype: double\ndimension: 3\nsizes: 1 1 1\nencoding: raw\n\nx");
+    EXPECT_THROW(read_volume(p), Unsupported);
+    test::write_bytes(p, header("100000 100000 100000") + "x");
+    expect_io_error([&] { read_volume(p); }, {"100000×100000×100000", "memory limit"});
+    test::write_bytes(p, header("1 1 1", "spacings: nan 1 1\n") + "x");
+    expect_io_error([&] { read_volume(p); }, {"spacing of axis 0", "finite"});
+    test::write_bytes(p, header("0 1 1") + "x");
+    expect_io_error([&] { read_volume(p); }, {"size of axis 0"});
+    test::write_bytes(p, "");
+    expect_io_error([&] { read_volume(p); }, {"empty"});
+    test::write_bytes(p, std::string("\x89garbage\x00\x01", 11));
+    expect_io_error([&] { read_volume(p); }, {"not a NRRD file"});
+    // Lying gzip header: 1 GB declared in a few bytes.
+    test::write_bytes(p,
+                      "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1000 1000 1000\n"
+                      "encoding: gzip\n\nxxxx");
+    expect_io_error([&] { read_volume(p); }, {"compressed bytes cannot hold"});
+    // Missing detached data file.
+    const auto h = dir / "d.nhdr";
+    test::write_bytes(h,
+                      "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\nencoding: raw\n"
+                      "data file: nowhere.raw\n");
+    expect_io_error([&] { read_volume(h); }, {"nowhere.raw", "does not exist"});
+}
+
+TEST(VolumeIo, LimitIsConfigurable) {
+    TempDir dir;
+    write_volume(dir / "v.nrrd", sample(VoxelType::f32));
+    expect_io_error([&] { read_volume(dir / "v.nrrd", {.max_bytes = 100}); }, {"memory limit"});
+}
+
+TEST(VolumeIo, NiftiBrokenInputs) {
+    TempDir dir;
+    write_volume(dir / "v.nii", sample(VoxelType::i16));
+    std::string bytes = test::read_bytes(dir / "v.nii");
+    test::write_bytes(dir / "t.nii", bytes.substr(0, bytes.size() - 10));
+    expect_io_error([&] { read_volume(dir / "t.nii"); }, {"truncated"});
+    test::write_bytes(dir / "e.nii", "");
+    expect_io_error([&] { read_volume(dir / "e.nii"); }, {"empty"});
+    test::write_bytes(dir / "g.nii", std::string(400, 'g'));
+    expect_io_error([&] { read_volume(dir / "g.nii"); }, {"not a readable NIfTI-1"});
+}
+
+TEST(VolumeIo, RawSidecarBrokenInputs) {
+    TempDir dir;
+    write_volume(dir / "v.json", sample(VoxelType::u16));
+    test::write_bytes(dir / "v.raw", "abc");
+    expect_io_error([&] { read_volume(dir / "v.json"); }, {"v.raw", "truncated", "120 bytes"});
+    test::write_bytes(dir / "w.json", R"({"format": "pliant-raw-volume", "bogus": 1})");
+    expect_io_error([&] { read_volume(dir / "w.json"); }, {"unknown key \"bogus\""});
+}
+
+TEST(VolumeIo, UnknownExtensionIsUnsupported) {
+    EXPECT_THROW(read_volume("volume.xyz"), Unsupported);
+}
+
+TEST(VolumeIo, ReadsColin27WhenInstalled) {
+    const std::filesystem::path path = "/usr/share/mricron/templates/ch2.nii.gz";
+    if (!std::filesystem::exists(path)) {
+        GTEST_SKIP() << path << " absent (Debian mricron-data)";
+    }
+    const Volume v = read_volume(path);
+    EXPECT_EQ(v.dims(), (volume::Dims{181, 217, 181}));
+    EXPECT_EQ(v.type(), VoxelType::u8);
+    EXPECT_NEAR(v.spacing().x, 1.0, 1e-6);
+    EXPECT_NEAR(v.spacing().y, 1.0, 1e-6);
+    EXPECT_NEAR(v.spacing().z, 1.0, 1e-6);
+}
+
+TEST(VolumeIo, ReadsInvesaliusCraniumWhenInstalled) {
+    const std::filesystem::path path = "/usr/share/doc/invesalius-examples/examples/Cranium.inv3";
+    if (!std::filesystem::exists(path)) {
+        GTEST_SKIP() << path << " absent (Debian invesalius-examples)";
+    }
+    const Volume v = read_volume(path);
+    EXPECT_EQ(v.dims(), (volume::Dims{256, 256, 108}));
+    EXPECT_EQ(v.type(), VoxelType::i16);
+    EXPECT_NEAR(v.spacing().x, 0.9570312, 1e-6);
+    EXPECT_EQ(v.spacing().z, 1.5);
+    EXPECT_EQ(v.values<VoxelType::i16>()[0], -998);  // 0xfc1a, the first bytes of matrix.dat
+    expect_io_error([&] { read_volume(path, {.max_bytes = 1000}); }, {"memory limit"});
+}
+
+}  // namespace
+}  // namespace pliant::io
