@@ -79,7 +79,50 @@ double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
     return std::sqrt(sweep);
 }
 
+// The distance between the boxes of two vertex sets: a lower bound on the distance between any
+// points of their convex hulls (0 when the boxes overlap).
+double box_distance(std::span<const Vec3d> x, std::span<const std::int32_t> first,
+                    std::span<const std::int32_t> second) {
+    const auto box_of = [&](std::span<const std::int32_t> vertices) {
+        AABBd box;
+        for (const std::int32_t v : vertices) {
+            box.extend(x[static_cast<std::size_t>(v)]);
+        }
+        return box;
+    };
+    const AABBd a = box_of(first);
+    const AABBd b = box_of(second);
+    const Vec3d gap = max(max(a.lo - b.hi, b.lo - a.hi), Vec3d{0.0, 0.0, 0.0});
+    return norm(gap);
+}
+
 }  // namespace
+
+bool SelfCollision::separation_exceeds(const collision::FeaturePairs& pairs, std::int64_t i,
+                                       std::span<const Vec3d> start, std::span<const Vec3d> end,
+                                       double threshold) const {
+    // The features' vertices; the cheap bound (box distance minus sweep) first.
+    std::int32_t first[1];
+    std::span<const std::int32_t> a;
+    std::span<const std::int32_t> b;
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    if (i < num_vf) {
+        const collision::VertexFacePair& pair = pairs.vertex_face[static_cast<std::size_t>(i)];
+        first[0] = pair.vertex;
+        a = first;
+        b = m_triangles[static_cast<std::size_t>(pair.face)];
+    } else {
+        const auto& edges = m_gather_phase.topology().edges;
+        const collision::EdgeEdgePair& pair = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+        a = edges[static_cast<std::size_t>(pair.edge_a)];
+        b = edges[static_cast<std::size_t>(pair.edge_b)];
+    }
+    const double sweep = relative_sweep(start, end, a, b);
+    if (box_distance(start, a, b) - sweep > threshold) {
+        return true;
+    }
+    return separation_bound(pairs, i, start, end) > threshold;
+}
 
 double SelfCollision::separation_bound(const collision::FeaturePairs& pairs, std::int64_t i,
                                        std::span<const Vec3d> start,
@@ -169,7 +212,7 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
     Stopwatch filter;
     const std::span<const Vec3d> predicted(m_predicted);
     m_candidates = filter_pairs(swept, [&](std::int64_t i) {
-        return separation_bound(swept, i, positions, predicted) <= 2.0 * m_thickness;
+        return !separation_exceeds(swept, i, positions, predicted, 2.0 * m_thickness);
     });
     // Each candidate's distance now, and the vertices' positions: project() skips a pair while
     // that distance minus how far its vertices have since moved stays at least the thickness.
@@ -248,6 +291,16 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     const std::span<const Vec3d> current(positions);
     const auto contact = [&](std::int64_t i) {
         Proximity now = proximity(i, current);
+        // A pair that passed through each other was at distance 0 within the substep, so its
+        // distance now is at most its relative sweep over the substep.
+        const std::size_t first = i < num_vf ? 1 : 2;  // VF: the vertex; EE: edge a
+        if (now.distance >= m_thickness &&
+            now.distance >
+                relative_sweep(previous_positions, current,
+                               std::span<const std::int32_t>(now.vertices, first),
+                               std::span<const std::int32_t>(now.vertices + first, 4 - first))) {
+            return now;
+        }
         const Proximity start = proximity(i, previous_positions);
         if (start.distance > 1e-3 * m_thickness) {
             Vec3d gap{0.0, 0.0, 0.0};
@@ -370,7 +423,7 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
     // cannot touch: the CCD runs on the rest.
     Stopwatch stage;
     const auto may_touch = [&](const collision::FeaturePairs& pairs, std::int64_t i) {
-        return separation_bound(pairs, i, positions_t0, positions) <= margin;
+        return !separation_exceeds(pairs, i, positions_t0, positions, margin);
     };
     collision::FeaturePairs active =
         filter_pairs(*all_pairs, [&](std::int64_t i) { return may_touch(*all_pairs, i); });

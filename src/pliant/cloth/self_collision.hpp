@@ -100,6 +100,10 @@ private:
     // of the other.
     double separation_bound(const collision::FeaturePairs& pairs, std::int64_t i,
                             std::span<const Vec3d> start, std::span<const Vec3d> end) const;
+    // separation_bound(…) > threshold, deciding most pairs by the features' box distance first.
+    bool separation_exceeds(const collision::FeaturePairs& pairs, std::int64_t i,
+                            std::span<const Vec3d> start, std::span<const Vec3d> end,
+                            double threshold) const;
     // The pairs for which keep(i) holds, in order.
     template <typename Keep>
     collision::FeaturePairs filter_pairs(const collision::FeaturePairs& pairs, Keep&& keep);
