@@ -20,5 +20,6 @@ void register_ccd(CLI::App& app, const GlobalOptions& global);
 void register_bench(CLI::App& app, const GlobalOptions& global);
 void register_demo(CLI::App& app, const GlobalOptions& global);
 void register_cloth(CLI::App& app, const GlobalOptions& global);
+void register_volume(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace pliant::cli

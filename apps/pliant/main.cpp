@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
     cli::register_bench(app, global);
     cli::register_demo(app, global);
     cli::register_cloth(app, global);
+    cli::register_volume(app, global);
 
     try {
         app.parse(argc, argv);
