@@ -10,8 +10,9 @@
 //      every pair: hits and the earliest time of impact;
 //   3. the paper's BVH table (bench/peers/bvh_table.hpp) at 2,244, 27,030 and 35,992 triangles,
 //      3 repetitions, beside Embree and brute force;
-//   4. the standard drape scene (scenes/drape.json, built into the binary) through the XPBD cloth
-//      solver: DIR/drape/frames/frame_NNNN.obj and DIR/drape/stats.json (`pliant cloth`);
+//   4. the built-in cloth scenes (scenes/drape.json, twist.json, pile.json, flag.json, built into
+//      the binary) through `pliant cloth`: DIR/<scene>/frames/frame_NNNN.obj, preview.mp4 and
+//      stats.json;
 //   5. DIR/summary.json with every number (schema in docs/formats.md).
 // Steps 1 and 2 run on the files' own numbers (double), so `pliant collide` on the written files
 // with the printed inflation reproduces their counts exactly.
@@ -40,10 +41,10 @@
 #include "output_directory.hpp"
 #include "peers/bvh_table.hpp"
 #include "peers/bvh_workload.hpp"
+#include "pliant/built_in_scenes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
-#include "pliant/drape_scene.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/cloth_scene.hpp"
@@ -180,27 +181,37 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     const bench::BvhTableResult table = bench::run_bvh_table(table_options);
     say(quiet, bench::format_bvh_table(table) + "\n");
 
-    // Step 4: the standard drape scene (scenes/drape.json, built in).
-    const cloth::ClothScene drape =
-        io::parse_cloth_scene(DRAPE_SCENE_JSON, "scenes/drape.json (built in)", ".");
-    const int drape_frames = options.cloth_frames >= 0 ? options.cloth_frames : drape.frames;
-    const std::filesystem::path drape_dir = dir / "drape";
-    say(quiet, fmt::format("the drape scene (scenes/drape.json): {} frames of XPBD cloth, {} "
-                           "substeps per frame, onto a sphere:\n",
-                           drape_frames, drape.substeps));
-    ClothRunOptions drape_run;
-    drape_run.frames = drape_frames;
-    drape_run.progress = !quiet && ::isatty(::fileno(stderr)) != 0;
-    const nlohmann::ordered_json drape_stats =
-        run_cloth_scene(drape, "scenes/drape.json", drape_dir, drape_run);
-    say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame, at most {} intersecting "
-                           "triangle pairs in a frame; frames in {}, preview {}\n  reproduce: "
-                           "pliant cloth scenes/drape.json --out {}\n\n",
-                           thousands(drape_stats["triangles"].get<std::int64_t>()),
-                           drape_stats["mean_ms_per_frame"].get<double>(),
-                           drape_stats["max_intersecting_pairs"].get<std::int64_t>(),
-                           (drape_dir / "frames").string(),
-                           drape_stats["preview"].get<std::string>(), drape_dir.string()));
+    // Step 4: the built-in cloth scenes (scenes/*.json, built in).
+    nlohmann::ordered_json cloth_summary = nlohmann::ordered_json::object();
+    for (const BuiltInScene& built_in : BUILT_IN_SCENES) {
+        const std::string file = fmt::format("scenes/{}.json", built_in.name);
+        const cloth::ClothScene scene =
+            io::parse_cloth_scene(built_in.json, file + " (built in)", ".");
+        const int frames = options.cloth_frames >= 0 ? options.cloth_frames : scene.frames;
+        const std::filesystem::path scene_dir = dir / built_in.name;
+        say(quiet, fmt::format("{} ({}): {} frames of XPBD cloth, {} substeps per frame:\n",
+                               built_in.what, file, frames, scene.substeps));
+        ClothRunOptions run;
+        run.frames = frames;
+        run.progress = !quiet && ::isatty(::fileno(stderr)) != 0;
+        const nlohmann::ordered_json stats = run_cloth_scene(scene, file, scene_dir, run);
+        const std::string preview =
+            stats.contains("preview") ? stats["preview"].get<std::string>() : "none";
+        say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame, {} intersecting triangle "
+                               "pairs in the worst frame; preview {}\n  reproduce: pliant cloth "
+                               "{} --out {}\n\n",
+                               thousands(stats["triangles"].get<std::int64_t>()),
+                               stats["mean_ms_per_frame"].get<double>(),
+                               stats["max_intersecting_pairs"].get<std::int64_t>(), preview, file,
+                               scene_dir.string()));
+        cloth_summary[built_in.name] = {
+            {"dir", scene_dir.string()},
+            {"frames", frames},
+            {"triangles", stats["triangles"]},
+            {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
+            {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
+            {"preview", stats.contains("preview") ? stats["preview"] : nlohmann::ordered_json()}};
+    }
 
     // Step 5: the summary.
     const nlohmann::ordered_json summary = {
@@ -218,14 +229,8 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         {"static", static_result},
         {"swept", swept_result},
         {"bvh_table", bench::bvh_table_json(table)},
-        {"drape",
-         {{"dir", drape_dir.string()},
-          {"frames", drape_frames},
-          {"triangles", drape_stats["triangles"]},
-          {"mean_ms_per_frame", drape_stats["mean_ms_per_frame"]},
-          {"max_intersecting_pairs", drape_stats["max_intersecting_pairs"]},
-          {"preview",
-           drape_stats.contains("preview") ? drape_stats["preview"] : nlohmann::ordered_json()}}},
+        {"drape", cloth_summary["drape"]},
+        {"cloth", cloth_summary},
         {"threads", num_threads()},
         {"seconds", demo_watch.elapsed_ms() / 1000.0},
     };
@@ -238,10 +243,10 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         say(quiet,
             fmt::format(
                 "outputs in {}/:\n  {:<22}the folded sheet (binary PLY)\n  {:<22}its "
-                "moved copy\n  {:<22}the drape scene's frames (OBJ), preview.mp4 and stats.json\n"
-                "  {:<22}every number above\n",
+                "moved copy\n  {:<22}each cloth scene's preview.mp4 (watch these), frames (OBJ) "
+                "and stats.json\n  {:<22}every number above\n",
                 dir.string(), sheet_path.filename().string(), sheet_t1_path.filename().string(),
-                "drape/", summary_path.filename().string()));
+                "drape/ twist/ pile/ flag/", summary_path.filename().string()));
     }
     if (!table.ok()) {
         std::string errors;

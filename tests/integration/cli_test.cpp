@@ -351,6 +351,12 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
     EXPECT_TRUE(std::filesystem::exists(dir / "drape" / "stats.json"));
     EXPECT_EQ(summary.at("drape").at("max_intersecting_pairs"), 0);
     EXPECT_TRUE(std::filesystem::exists(summary.at("drape").at("preview").get<std::string>()));
+    for (const char* scene : {"drape", "twist", "pile", "flag"}) {
+        const nlohmann::json& s = summary.at("cloth").at(scene);
+        EXPECT_EQ(s.at("frames"), 2) << scene;
+        EXPECT_EQ(s.at("max_intersecting_pairs"), 0) << scene;
+        EXPECT_TRUE(std::filesystem::exists(dir / scene / "stats.json")) << scene;
+    }
 
     // The written files and the printed inflation give the demo's counts exactly.
     for (const char* mode : {"static", "swept"}) {
