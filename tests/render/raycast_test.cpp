@@ -1,0 +1,281 @@
+#include "pliant/render/raycast.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/volume/generate.hpp"
+
+namespace pliant::render {
+namespace {
+
+using volume::Dims;
+using volume::Volume;
+using volume::VoxelType;
+
+// The sphere test scene: radius R world units in a box of side 2R + 8 voxels (spacing 1), colour
+// c, opacity a per opacity unit U. The voxelized sphere (binary voxels, trilinear) differs from
+// the analytic one within about a voxel of its silhouette, where the chord L(r) = 2√(R² − r²)
+// has an infinite slope: a pixel centred exactly on the silhouette sees a chord of a few voxels
+// instead of 0 (up to 0.05 in colour at these opacities). The every-pixel comparison therefore
+// uses one pixel per voxel column (pixel centres on voxel centres, none within 0.04 voxel of the
+// silhouette) and an opacity per voxel (1 − a^(1/U)) of about 1%.
+constexpr double R = 28.0;
+constexpr std::int64_t N = 64;
+const std::array<float, 4> RGBA{0.8f, 0.6f, 0.4f, 0.5f};
+constexpr double U = 80.0;
+
+Volume sphere_volume() {
+    volume::SphereOptions o;
+    o.supersample = 1;
+    return volume::uniform_sphere({N, N, N}, R, RGBA, o);
+}
+
+// Analytic colour of pixel (i, j) of view_camera(+z) over the sphere's box: right = −x, up = +y.
+std::array<double, 3> analytic_sphere_pixel(int i, int j, int w, int h) {
+    const double x = static_cast<double>(N) * (1.0 - (i + 0.5) / w) - 0.5 * N;
+    const double y = static_cast<double>(N) * (1.0 - (j + 0.5) / h) - 0.5 * N;
+    const double r2 = x * x + y * y;
+    const double chord = r2 < R * R ? 2.0 * std::sqrt(R * R - r2) : 0.0;
+    const double a = 1.0 - std::pow(1.0 - RGBA[3], chord / U);
+    return {RGBA[0] * a, RGBA[1] * a, RGBA[2] * a};
+}
+
+double max_error_vs_analytic(const Image& image) {
+    double worst = 0.0;
+    for (int j = 0; j < image.height; ++j) {
+        for (int i = 0; i < image.width; ++i) {
+            const auto expected = analytic_sphere_pixel(i, j, image.width, image.height);
+            const Color got = to_color(image.at(i, j));
+            worst = std::max({worst, std::fabs(got.r - expected[0]), std::fabs(got.g - expected[1]),
+                              std::fabs(got.b - expected[2])});
+        }
+    }
+    return worst;
+}
+
+double mean_abs_difference(const Image& a, const Image& b) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+        sum += std::abs(static_cast<int>(a.pixels[i]) - static_cast<int>(b.pixels[i]));
+    }
+    return sum / 255.0 / static_cast<double>(a.pixels.size());
+}
+
+TEST(RayCast, AnalyticSphereEveryPixelAtTheDefaultStep) {
+    const Volume ball = sphere_volume();
+    RayCastOptions options;
+    options.opacity_unit = U;
+    options.early_termination = 1.0;
+    const Camera cam = view_camera(ball.bounds(), ViewAxis::pos_z, N, N);
+    Image image;
+    const RayCastStats stats = raycast(ball, nullptr, cam, options, image);
+    ASSERT_EQ(image.width, N);
+    ASSERT_EQ(image.height, N);
+    EXPECT_GT(stats.samples, 0);
+    EXPECT_LE(max_error_vs_analytic(image), 1e-2);
+    // The centre pixel sees the full diameter.
+    const double centre = RGBA[0] * (1.0 - std::pow(1.0 - RGBA[3], 2.0 * R / U));
+    EXPECT_NEAR(to_color(image.at(N / 2, N / 2)).r, centre, 5e-3);
+}
+
+TEST(RayCast, AnalyticSphereConvergesAsTheStepHalves) {
+    const Volume ball = sphere_volume();
+    const Camera cam = view_camera(ball.bounds(), ViewAxis::neg_y, 96, 96);
+    const auto render_at = [&](double step) {
+        RayCastOptions options;
+        options.opacity_unit = U;
+        options.step = step;
+        options.early_termination = 1.0;
+        Image image;
+        raycast(ball, nullptr, cam, options, image);
+        return image;
+    };
+    const Image reference = render_at(0.0625);
+    double previous = 1e9;
+    for (const double step : {16.0, 8.0, 4.0, 2.0}) {
+        const double error = mean_abs_difference(render_at(step), reference);
+        EXPECT_LT(error, previous) << "step " << step;
+        previous = error;
+    }
+    EXPECT_LT(previous, 2e-3);
+}
+
+TEST(RayCast, OpacityUnitMakesImagesIndependentOfTheStep) {
+    const Volume phantom = volume::shepp_logan_3d({48, 48, 48});
+    const volume::TransferFunction tf = volume::preset("mri-brain", phantom);
+    const Camera cam = frame_box(phantom.bounds(), 30.0, 20.0, 64, 64);
+    RayCastOptions coarse;
+    coarse.step = volume::smallest_spacing(phantom);
+    RayCastOptions fine = coarse;
+    fine.step = 0.5 * coarse.step;
+    Image a, b;
+    raycast(phantom, &tf, cam, coarse, a);
+    raycast(phantom, &tf, cam, fine, b);
+    EXPECT_LT(mean_abs_difference(a, b), 0.01);
+}
+
+TEST(RayCast, EmptyVolumeRendersTheBackground) {
+    const Volume zero = Volume::allocate({16, 16, 16}, VoxelType::rgba32f);
+    RayCastOptions options;
+    options.background = {0.2f, 0.4f, 0.6f};
+    const Camera cam = frame_box(zero.bounds(), 10.0, 10.0, 32, 24);
+    Image image;
+    const RayCastStats stats = raycast(zero, nullptr, cam, options, image);
+    EXPECT_EQ(image, Image(32, 24, to_rgb8(options.background)));
+    EXPECT_EQ(stats.samples, 0);  // every macro cell is empty
+}
+
+TEST(RayCast, RaysThatMissSeeTheBackground) {
+    const Volume ball = sphere_volume();
+    // Looking away from the volume, and past it.
+    const Camera away = Camera::perspective({200, 0, 0}, {400, 0, 0}, {0, 0, 1}, 40.0, 16, 16);
+    const Camera past =
+        Camera::orthographic({-50, -50, 200}, {-50, -50, 0}, {0, 1, 0}, 10.0, 16, 16);
+    RayCastOptions options;
+    options.background = {1.0f, 1.0f, 1.0f};
+    for (const Camera& cam : {away, past}) {
+        Image image;
+        const RayCastStats stats = raycast(ball, nullptr, cam, options, image);
+        EXPECT_EQ(image, Image(16, 16, Rgb8{255, 255, 255}));
+        EXPECT_EQ(stats.samples, 0);
+    }
+}
+
+TEST(RayCast, CameraInsideTheVolume) {
+    // A uniform medium filling the box: from its centre every ray travels the distance D to the
+    // box's face and renders c · (1 − (1 − a)^(D / U)) exactly.
+    const std::array<float, 4> rgba{1.0f, 1.0f, 1.0f, 0.05f};
+    volume::SphereOptions o;
+    const Volume full = volume::uniform_sphere({20, 20, 20}, 100.0, rgba, o);  // covers the box
+    const Camera cam = Camera::perspective({10, 10, 10}, {10, 10, 0}, {0, 1, 0}, 30.0, 9, 9);
+    RayCastOptions options;
+    options.early_termination = 1.0;
+    Image image;
+    raycast(full, nullptr, cam, options, image);
+    for (int j = 0; j < 9; ++j) {
+        for (int i = 0; i < 9; ++i) {
+            const Ray ray = cam.pixel_ray(i, j);
+            const double distance = 10.0 / std::fabs(ray.direction.z);  // to the z = 0 face
+            const double expected = 1.0 - std::pow(1.0 - 0.05, distance);
+            EXPECT_NEAR(to_color(image.at(i, j)).r, expected, 3e-3) << i << ", " << j;
+        }
+    }
+}
+
+TEST(RayCast, MaximumIntensityProjection) {
+    // Values i / 15 along x, plus one voxel of 2 at (3, 5, 9): looking along −z, pixel columns
+    // show the ramp and the hot voxel's column shows the maximum.
+    Volume v = Volume::allocate({16, 16, 16}, VoxelType::f32);
+    auto values = v.values<VoxelType::f32>();
+    for (std::int64_t k = 0; k < 16; ++k) {
+        for (std::int64_t j = 0; j < 16; ++j) {
+            for (std::int64_t i = 0; i < 16; ++i) {
+                values[static_cast<std::size_t>(v.index(i, j, k))] = static_cast<float>(i) / 15.0f;
+            }
+        }
+    }
+    values[static_cast<std::size_t>(v.index(3, 5, 9))] = 2.0f;
+    const volume::TransferFunction tf = volume::preset("grayscale", v);  // 0 → black, 2 → white
+    RayCastOptions options;
+    options.mode = RayCastMode::mip;
+    options.step = 1.0;  // samples at voxel centres along z
+    const Camera cam = view_camera(v.bounds(), ViewAxis::neg_z, 16, 16);  // x right, y up
+    Image image;
+    raycast(v, &tf, cam, options, image);
+    for (int i = 0; i < 16; ++i) {
+        // Row 8 (y index 7) holds voxels of j = 7: the ramp value i/15 → grey (i/15)/2 at
+        // opacity (i/15)/2.
+        const double g = (i / 15.0) / 2.0;
+        EXPECT_NEAR(to_color(image.at(i, 8)).r, g * g, 4e-3) << i;
+    }
+    EXPECT_EQ(image.at(3, 15 - 5), (Rgb8{255, 255, 255}));
+}
+
+TEST(RayCast, ViewCameraCoversTheBoxExactly) {
+    const AABBd box{{-1, 2, 3}, {3, 4, 9}};
+    // −z: x right (extent 4), y up (extent 2) at 40 × 20 pixels.
+    const Camera cam = view_camera(box, ViewAxis::neg_z, 40, 20);
+    for (int i : {0, 17, 39}) {
+        for (int j : {0, 9, 19}) {
+            const Ray ray = cam.pixel_ray(i, j);
+            EXPECT_NEAR(ray.origin.x, -1.0 + 4.0 * (i + 0.5) / 40, 1e-12);
+            EXPECT_NEAR(ray.origin.y, 4.0 - 2.0 * (j + 0.5) / 20, 1e-12);
+            EXPECT_GT(ray.origin.z, 9.0);
+            EXPECT_EQ(ray.direction, (Vec3d{0, 0, -1}));
+        }
+    }
+    // +x: right −y, up +z.
+    const Camera px = view_camera(box, ViewAxis::pos_x, 20, 60);
+    const Ray first = px.pixel_ray(0, 0);
+    EXPECT_NEAR(first.origin.y, 4.0 - 2.0 * 0.5 / 20, 1e-12);
+    EXPECT_NEAR(first.origin.z, 9.0 - 6.0 * 0.5 / 60, 1e-12);
+    EXPECT_LT(first.origin.x, -1.0);
+    EXPECT_EQ(parse_view_axis("-y"), ViewAxis::neg_y);
+    EXPECT_THROW(parse_view_axis("up"), InvalidInput);
+}
+
+TEST(RayCast, SkippingDoesNotChangeTheImage) {
+    const Volume phantom = volume::shepp_logan_3d({40, 40, 40});
+    const volume::TransferFunction tf = volume::preset("mri-brain", phantom);
+    const Camera cam = frame_box(phantom.bounds(), -50.0, 35.0, 48, 40);
+    RayCastOptions on;
+    on.shading = true;
+    RayCastOptions off = on;
+    off.empty_space_skipping = false;
+    Image a, b;
+    const RayCastStats sa = raycast(phantom, &tf, cam, on, a);
+    const RayCastStats sb = raycast(phantom, &tf, cam, off, b);
+    EXPECT_EQ(a, b);
+    EXPECT_LT(sa.samples, sb.samples);
+}
+
+TEST(RayCast, DeterministicForOneAndTwoThreads) {
+    const Volume phantom = volume::shepp_logan_3d({40, 40, 40});
+    const volume::TransferFunction tf = volume::preset("grayscale", phantom);
+    const Volume rgba = volume::rgba_test_object({32, 32, 32}, VoxelType::rgba8);
+    const Camera cam = frame_box(phantom.bounds(), 30.0, 20.0, 70, 50);
+    RayCastOptions options;
+    options.shading = true;
+    Image one, two, rgba_one, rgba_two;
+    set_num_threads(1);
+    const RayCastStats s1 = raycast(phantom, &tf, cam, options, one);
+    raycast(rgba, nullptr, cam, options, rgba_one);
+    set_num_threads(2);
+    const RayCastStats s2 = raycast(phantom, &tf, cam, options, two);
+    raycast(rgba, nullptr, cam, options, rgba_two);
+    set_num_threads(0);
+    EXPECT_EQ(one, two);
+    EXPECT_EQ(rgba_one, rgba_two);
+    EXPECT_EQ(s1.samples, s2.samples);
+}
+
+TEST(RayCast, ErrorsNameTheArgument) {
+    const Volume phantom = volume::shepp_logan_3d({8, 8, 8});
+    const Camera cam = frame_box(phantom.bounds(), 0.0, 0.0, 8, 8);
+    Image image;
+    try {
+        raycast(phantom, nullptr, cam, {}, image);
+        FAIL() << "no throw";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("transfer function"), std::string::npos);
+    }
+    RayCastOptions bad;
+    bad.step = -1.0;
+    const volume::TransferFunction tf = volume::preset("grayscale", phantom);
+    try {
+        raycast(phantom, &tf, cam, bad, image);
+        FAIL() << "no throw";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("options.step (-1)"), std::string::npos);
+    }
+    EXPECT_THROW(raycast(Volume{}, &tf, cam, {}, image), InvalidInput);
+}
+
+}  // namespace
+}  // namespace pliant::render
