@@ -1,8 +1,10 @@
 #include "cloth_run.hpp"
 
 #include <fmt/format.h>
+#include <signal.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "cloth_preview.hpp"
+#include "commands.hpp"
 #include "output_directory.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
@@ -25,6 +28,31 @@
 
 namespace pliant::cli {
 namespace {
+
+// Set by SIGINT while a scene runs: the run stops after the frame in progress.
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void on_interrupt(int /*signal*/) {
+    g_interrupted = 1;
+}
+
+// Installs on_interrupt for SIGINT for its lifetime and restores the previous handler.
+class InterruptGuard {
+public:
+    InterruptGuard() {
+        g_interrupted = 0;
+        struct sigaction action {};
+        action.sa_handler = on_interrupt;
+        sigemptyset(&action.sa_mask);
+        ::sigaction(SIGINT, &action, &m_previous);
+    }
+    ~InterruptGuard() { ::sigaction(SIGINT, &m_previous, nullptr); }
+    InterruptGuard(const InterruptGuard&) = delete;
+    InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+private:
+    struct sigaction m_previous {};
+};
 
 Vec3d place(const Vec3d& p, const cloth::Placement& placement) {
     return cloth::Rotation::from_degrees(placement.rotate_degrees).apply(p) + placement.translate;
@@ -161,10 +189,15 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     write_frame(0);
 
     const double dt = 1.0 / scene.frames_per_second;
+    const InterruptGuard interrupt_guard;
+    int frames_done = 0;
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
     double total_ms = 0.0;
     std::int64_t worst_intersections = 0;
     for (int frame = 1; frame <= frames; ++frame) {
+        if (g_interrupted != 0) {
+            break;
+        }
         Stopwatch watch;
         const cloth::ClothStepStats step = solver.step(dt, scene.substeps);
         for (const Vec3d& p : solver.positions()) {
@@ -206,6 +239,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["fail_safe_rounds"] = step.self.enforce_rounds;
         }
         per_frame.push_back(record);
+        frames_done = frame;
         if (options.progress) {
             const int width = 40;
             const int done = width * frame / std::max(frames, 1);
@@ -230,14 +264,27 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"initial_intersecting_pairs", initial_intersections},
         {"max_intersecting_pairs", worst_intersections},
         {"frames", per_frame},
-        {"mean_ms_per_frame", frames > 0 ? total_ms / frames : 0.0},
+        {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
     };
+    const bool interrupted = frames_done < frames;
+    if (interrupted) {
+        stats["interrupted"] = true;
+    }
     if (preview) {
         stats["preview"] = preview->finish().string();
-        stats["preview_ms_per_frame"] = preview->render_ms() / (frames + 1);
+        stats["preview_ms_per_frame"] = preview->render_ms() / (frames_done + 1);
     }
     io::write_file_atomically(out / "stats.json",
                               [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
+    if (interrupted) {
+        throw Interrupted(
+            fmt::format("stopped after frame {} of {}; frames 0-{} in {}, {}stats in {}",
+                        frames_done, frames, frames_done, frames_dir.string(),
+                        stats.contains("preview")
+                            ? fmt::format("preview {}, ", stats["preview"].get<std::string>())
+                            : std::string(),
+                        (out / "stats.json").string()));
+    }
     return stats;
 }
 

@@ -10,7 +10,9 @@
 //     the step's stages (`step_ms`, `refit_ms`, `traverse_ms`, `narrow_ms`, `response_ms`),
 //     `contacts`, `ccd_hits`, `intersecting_pairs` (exact count on the frame as written); and
 //     `mean_ms_per_frame` (schema in docs/formats.md). Written last, atomically.
-// A progress bar goes to stderr when it is a terminal. With --json, stdout is stats.json's
+// Ctrl-C (SIGINT) stops the run after the frame in progress: frames, preview and stats.json so
+// far are complete, stderr says where, exit code 130. A progress bar goes to stderr when it is a
+// terminal. With --json, stdout is stats.json's
 // object; otherwise a short summary.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <stdexcept>
 #include <string>
 
 namespace pliant::cli {
@@ -15,11 +16,18 @@ struct GlobalOptions {
     bool json = false;  // machine-readable result on stdout
 };
 
+// Thrown when the user interrupts a long run (SIGINT) after it stopped cleanly: main prints
+// `pliant: interrupted: <what>` (where the outputs are) and exits with 130.
+struct Interrupted : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
 void register_collide(CLI::App& app, const GlobalOptions& global);
 void register_ccd(CLI::App& app, const GlobalOptions& global);
 void register_bench(CLI::App& app, const GlobalOptions& global);
 void register_demo(CLI::App& app, const GlobalOptions& global);
 void register_cloth(CLI::App& app, const GlobalOptions& global);
 void register_volume(CLI::App& app, const GlobalOptions& global);
+void register_render(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace pliant::cli

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
     cli::register_demo(app, global);
     cli::register_cloth(app, global);
     cli::register_volume(app, global);
+    cli::register_render(app, global);
 
     try {
         app.parse(argc, argv);
@@ -45,6 +46,9 @@ int main(int argc, char** argv) {
     } catch (const Error& e) {
         std::fprintf(stderr, "pliant: error: %s\n", e.what());
         return 1;
+    } catch (const cli::Interrupted& e) {
+        std::fprintf(stderr, "pliant: interrupted: %s\n", e.what());
+        return 130;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "pliant: error: out of memory\n");
         return 1;

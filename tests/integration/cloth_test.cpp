@@ -1,9 +1,11 @@
 // `pliant cloth` end to end: frames and stats written, the physics visible in the frames, bad
 // scenes rejected with the key named and nothing written.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -102,6 +104,36 @@ TEST(ClothCommand, PreviewFallsBackToPngFramesWithoutFfmpeg) {
         }
         EXPECT_TRUE(has_red) << "frame " << frame;
     }
+}
+
+// Ctrl-C (SIGINT) during a long run: it stops after the frame in progress, keeps the frames,
+// finishes the preview, writes stats.json (interrupted: true), says where they are, exits 130.
+TEST(ClothCommand, InterruptKeepsWhatWasWritten) {
+    ScratchDir scratch;
+    write(scratch / "long.json", R"({
+        "cloth": {"grid": {"size": [1.0, 1.0], "quads": [10, 10]}, "translate": [0, 0, 1]},
+        "frames": 1000000, "substeps": 2
+    })");
+    const std::filesystem::path out = scratch / "out";
+    const std::string command =
+        quoted(PLIANT_CLI) + " cloth " + quoted(scratch / "long.json") + " --out " + quoted(out) +
+        " 2>" + quoted(scratch / "err.txt") + " & pid=$!; while [ ! -f " +
+        quoted(out / "frames" / "frame_0003.obj") + " ]; do sleep 0.02; done; kill -INT $pid; " +
+        "wait $pid; echo $? >" + quoted(scratch / "code.txt");
+    ASSERT_EQ(std::system(command.c_str()), 0);
+    EXPECT_EQ(read_text(scratch / "code.txt"), "130\n");
+    const std::string err = read_text(scratch / "err.txt");
+    EXPECT_NE(err.find("pliant: interrupted: stopped after frame"), std::string::npos) << err;
+    EXPECT_NE(err.find((out / "frames").string()), std::string::npos) << err;
+    const nlohmann::json stats = nlohmann::json::parse(read_text(out / "stats.json"));
+    EXPECT_TRUE(stats.at("interrupted").get<bool>());
+    const auto done = stats.at("frames").size();
+    EXPECT_GE(done, 3u);
+    EXPECT_TRUE(std::filesystem::exists(out / "frames" / fmt::format("frame_{:04d}.obj", done)));
+    EXPECT_FALSE(
+        std::filesystem::exists(out / "frames" / fmt::format("frame_{:04d}.obj", done + 1)));
+    ASSERT_TRUE(stats.contains("preview"));
+    EXPECT_TRUE(std::filesystem::exists(stats.at("preview").get<std::string>()));
 }
 
 // Every built-in scene runs (two frames, no preview) without intersections.

@@ -178,9 +178,16 @@ VideoWriter::VideoWriter(std::filesystem::path path, int width, int height, doub
     posix_spawn_file_actions_adddup2(&actions, sockets[1], STDIN_FILENO);
     posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
     posix_spawn_file_actions_adddup2(&actions, m_stderr_fd, STDERR_FILENO);
+    // ffmpeg gets its own process group: a Ctrl-C in the terminal (SIGINT to the foreground
+    // group) reaches pliant, which stops cleanly and finishes the video, and not ffmpeg.
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, 0);
     pid_t pid = -1;
     const int spawn_error =
-        ::posix_spawn(&pid, ffmpeg.c_str(), &actions, nullptr, argv.data(), environ);
+        ::posix_spawn(&pid, ffmpeg.c_str(), &actions, &attributes, argv.data(), environ);
+    posix_spawnattr_destroy(&attributes);
     posix_spawn_file_actions_destroy(&actions);
     ::close(sockets[1]);
     if (spawn_error != 0) {
