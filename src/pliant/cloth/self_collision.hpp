@@ -2,36 +2,40 @@
 // apart from itself, and a continuous-collision fail-safe that makes every frame end free of
 // intersections.
 //
-// Per frame (ClothSolver::step):
-//   1. gather (every few substeps, for the time until the next gather): the broad phase
-//      (collision/self_broad_phase.hpp: LBVH + R-triangles + orphan sets) swept from the positions
-//      x to the prediction x + dt v + ½ g dt² relative to the cloth's mean motion, boxes grown by
-//      thickness, then only the pairs whose distance minus relative sweep stays below twice the
-//      thickness: the vertex-face and edge-edge pairs that can come within thickness if the cloth
-//      moves about as predicted, each once. Pairs that the prediction misses are caught by step 3.
-//   2. every substep, project: for each gathered pair closer than thickness, push the two features
-//      apart along their closest-point normal until thickness apart (a one-sided XPBD distance
-//      constraint, rigid; Bridson, Fedkiw, Anderson, "Robust Treatment of Collisions, Contact and
-//      Friction for Cloth Animation", SIGGRAPH 2002, §7.2 uses the same geometry as repulsions),
-//      then apply Coulomb friction to their relative tangential motion over the substep.
-//      Sequential over the pairs in their sorted order: deterministic.
-//   3. enforce, at the end of the frame: the swept broad phase from the frame's start to its end,
+// Per window of a few substeps (ClothSolver::step runs a frame as windows of 4 substeps):
+//   1. gather, at the window's start: the broad phase (collision/self_broad_phase.hpp: LBVH +
+//      R-triangles + orphan sets) swept from the positions x to the prediction x + dt v + ½ g dt²
+//      (dt: the window) relative to the cloth's mean motion, boxes grown by half the thickness
+//      (so boxes overlap for features within the thickness), then only the pairs whose distance
+//      minus relative sweep can fall to twice the thickness: the vertex-face and edge-edge pairs
+//      that can come within thickness if the cloth moves about as predicted, each once. Pairs the
+//      prediction misses are caught by step 3.
+//   2. every substep, project: each gathered pair closer than thickness is pushed apart along
+//      its closest-point normal until thickness apart (a one-sided XPBD distance constraint,
+//      rigid; Bridson, Fedkiw, Anderson, "Robust Treatment of Collisions, Contact and Friction
+//      for Cloth Animation", SIGGRAPH 2002, §7.2 uses the same geometry as repulsions); a pair
+//      that passed through each other within the substep is pushed back along the normal it had
+//      at the substep's start; then Coulomb friction on the pair's relative tangential motion
+//      over the substep. Pairs whose distance at the gather minus their largest relative sweep
+//      since then stays at least the thickness are skipped without a proximity test. Sequential
+//      over the pairs in their sorted order: deterministic.
+//   3. enforce, at the window's end: the swept broad phase from the window's start to its end,
 //      with boxes swept by the motion relative to the cloth's mean motion (distances do not change
 //      in a translating frame, so these are the same pairs, and a falling sheet sweeps nothing);
 //      pairs whose start distance minus the largest relative displacement of their vertices stays
 //      positive cannot touch and are dropped; the conservative CCD (collision/ccd.hpp) runs on the
-//      rest. The vertices of every pair that may touch are put back at their start positions with
-//      zero velocity, and the check repeats on the changed motion until no pair touches: after the
-//      first round a world-space swept broad phase from the start to the positions after that
-//      round's reverts (a vertex put back stands still, which is not inside its box relative to
-//      the mean motion; later reverts shrink a motion to a point inside its world-space box, so
-//      this one broad phase holds every pair until the end), and each round re-tests only the
-//      pairs with a vertex put back in that round (the others were cleared on unchanged motion).
-//      Every round puts back at least one more vertex or stops, so this ends, at worst with every
-//      vertex at its start. Since the start of the frame is intersection-free, the CCD never
-//      misses a contact and reverted vertices do not move, the end of the frame is
-//      intersection-free too (the fail-safe of Bridson et al. 2002 §7.4 taken to its simplest,
-//      rigid form: a vertex that cannot move safely does not move in that frame).
+//      rest. The vertices of every pair that may touch are put back at their window-start
+//      positions with zero velocity, and the check repeats on the changed motion until no pair
+//      touches: after the first round a world-space swept broad phase from the start to the
+//      positions after that round's reverts (a vertex put back stands still, which is not inside
+//      its box relative to the mean motion; later reverts shrink a motion to a point inside its
+//      world-space box, so this one broad phase holds every pair until the end), and each round
+//      re-tests only the pairs with a vertex put back in that round (the others were cleared on
+//      unchanged motion). Every round puts back at least one more vertex or stops, so this ends,
+//      at worst with every vertex at its start. Since the window's start is intersection-free, the
+//      CCD never misses a contact and reverted vertices do not move, its end is intersection-free
+//      too (the fail-safe of Bridson et al. 2002 §7.4 taken to its simplest, rigid form: a vertex
+//      that cannot move safely does not move in that window).
 //
 // Units: metres, seconds. Not thread safe; the kernels run in parallel inside.
 #pragma once
@@ -48,11 +52,11 @@
 
 namespace pliant::cloth {
 
-// Over one frame (reset_stats() to the next): times in ms, summed over the frame's calls.
+// Over one frame (reset_stats() to the next): times in ms and counts, summed over its windows.
 struct SelfCollisionStats {
     double gather_ms = 0.0;   // step 1, all calls
     double project_ms = 0.0;  // step 2, all calls
-    double enforce_ms = 0.0;  // step 3
+    double enforce_ms = 0.0;  // step 3, all calls
     // The same time by kind of work, over steps 1-3:
     double refit_ms = 0.0;             // LBVH builds and refits (gather and fail-safe broad phases)
     double traverse_ms = 0.0;          // BVH traversal, feature boxes and R-triangle feature tests
