@@ -74,8 +74,8 @@ public:
     SelfCollision(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
                   double thickness);
 
-    // Step 1. dt: the time the candidates must cover (s); gravity (m/s²). gather_ms and
-    // candidate_pairs describe the last call.
+    // Step 1. dt: the time the candidates must cover (s); gravity (m/s²). candidate_pairs
+    // describes the last call; gather_ms sums the frame's calls.
     void gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double dt,
                 const Vec3d& gravity);
     // Step 2; returns the pairs pushed apart (also stats().contacts). previous_positions: the
