@@ -351,6 +351,11 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
     EXPECT_TRUE(std::filesystem::exists(dir / "drape" / "stats.json"));
     EXPECT_EQ(summary.at("drape").at("max_intersecting_pairs"), 0);
     EXPECT_TRUE(std::filesystem::exists(summary.at("drape").at("preview").get<std::string>()));
+    // The volume: a PNG and a turntable (MP4, or PNG frames without ffmpeg).
+    const nlohmann::json& volume = summary.at("volume");
+    EXPECT_TRUE(std::filesystem::exists(volume.at("png").get<std::string>()));
+    EXPECT_GT(volume.at("png_ms").get<double>(), 0.0);
+    EXPECT_FALSE(volume.at("source").get<std::string>().empty());
     for (const char* scene : {"drape", "twist", "pile", "flag"}) {
         const nlohmann::json& s = summary.at("cloth").at(scene);
         EXPECT_EQ(s.at("frames"), 2) << scene;
