@@ -330,9 +330,9 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     } else {
         say(quiet,
             fmt::format(
-                "outputs in {}/:\n  {:<22}the folded sheet (binary PLY)\n  {:<22}its "
-                "moved copy\n  {:<22}each cloth scene: preview.mp4 (watch these), frames (OBJ), "
-                "stats.json\n  {:<22}the ray-cast volume: volume.png, turntable.mp4\n  {:<22}every "
+                "outputs in {}/:\n  {:<27}the folded sheet (binary PLY)\n  {:<27}its "
+                "moved copy\n  {:<27}each cloth scene: preview.mp4 (watch these), frames (OBJ), "
+                "stats.json\n  {:<27}the ray-cast volume: volume.png, turntable.mp4\n  {:<27}every "
                 "number above\n",
                 dir.string(), sheet_path.filename().string(), sheet_t1_path.filename().string(),
                 "drape/ twist/ pile/ flag/", "volume/", summary_path.filename().string()));
