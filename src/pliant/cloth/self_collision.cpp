@@ -202,9 +202,10 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
         m_predicted[v] = positions[v] + velocities[v] * dt + fall;
     });
     // Boxes swept by the motion relative to the cloth's mean motion (the same pairs come close).
-    shifted(m_predicted, mean_displacement(positions, m_predicted), m_relative_end);
+    m_gather_shift = mean_displacement(positions, m_predicted);
+    shifted(m_predicted, m_gather_shift, m_gather_end);
     const collision::FeaturePairs& swept =
-        m_gather_phase.update(positions, std::span<const Vec3d>(m_relative_end), 0.5 * m_thickness);
+        m_gather_phase.update(positions, std::span<const Vec3d>(m_gather_end), 0.5 * m_thickness);
     add_broad_phase_times(m_gather_phase.stats());
     // Keep the pairs whose distance can fall below thickness + slack on the predicted motion
     // (slack = thickness, for the difference between prediction and the solved motion; pairs
@@ -415,10 +416,18 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
         },
         [](double a, double b) { return std::max(a, b); }, 4096);
     const double margin = 1e-9 * (1.0 + extent);
-    shifted(positions, mean_displacement(positions_t0, positions), m_relative_end);
-    const collision::FeaturePairs* all_pairs =
-        &m_swept_phase.update(positions_t0, std::span<const Vec3d>(m_relative_end), margin);
-    add_broad_phase_times(m_swept_phase.stats());
+    const collision::FeaturePairs* all_pairs = nullptr;
+    if (gather_boxes_hold(positions_t0, positions, margin)) {
+        // Every vertex ended inside its box of the gather (which starts at positions_t0): its
+        // motion lies in that box, so the gather's broad-phase pairs hold every pair that can
+        // touch (no second broad phase).
+        all_pairs = &m_gather_phase.pairs();
+    } else {
+        shifted(positions, mean_displacement(positions_t0, positions), m_relative_end);
+        all_pairs =
+            &m_swept_phase.update(positions_t0, std::span<const Vec3d>(m_relative_end), margin);
+        add_broad_phase_times(m_swept_phase.stats());
+    }
     // Pairs whose distance provably stays above `margin` (start distance minus relative sweep)
     // cannot touch: the CCD runs on the rest.
     Stopwatch stage;
@@ -486,6 +495,36 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
         m_stats.response_ms += stage.elapsed_ms();
     }
     m_stats.enforce_ms += watch.elapsed_ms();
+}
+
+bool SelfCollision::gather_boxes_hold(std::span<const Vec3d> positions_t0,
+                                      std::span<const Vec3d> positions, double margin) const {
+    const double grow = 0.5 * m_thickness - margin;  // the gather's inflation, less rounding
+    if (!(grow >= 0.0) || m_gather_positions.size() != positions.size() ||
+        m_gather_end.size() != positions.size()) {
+        return false;
+    }
+    const std::int64_t outside = parallel_reduce(
+        static_cast<std::int64_t>(positions.size()), std::int64_t{0},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::int64_t count = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                // The gather's boxes start where this motion starts, in the gather's frame.
+                const Vec3d& start = m_gather_positions[v];
+                const Vec3d lo = min(start, m_gather_end[v]);
+                const Vec3d hi = max(start, m_gather_end[v]);
+                const Vec3d a = positions[v] - m_gather_shift;
+                const bool same_start = positions_t0[v] == start;
+                const bool inside = a.x >= lo.x - grow && a.y >= lo.y - grow &&
+                                    a.z >= lo.z - grow && a.x <= hi.x + grow &&
+                                    a.y <= hi.y + grow && a.z <= hi.z + grow;
+                count += same_start && inside ? 0 : 1;
+            }
+            return count;
+        },
+        [](std::int64_t a, std::int64_t b) { return a + b; }, 4096);
+    return outside == 0;
 }
 
 bool SelfCollision::touches(const collision::FeaturePairs& pairs, std::int64_t i,

@@ -19,8 +19,10 @@
 //      over the substep. Pairs whose distance at the gather minus their largest relative sweep
 //      since then stays at least the thickness are skipped without a proximity test. Sequential
 //      over the pairs in their sorted order: deterministic.
-//   3. enforce, at the window's end: the swept broad phase from the window's start to its end,
-//      with boxes swept by the motion relative to the cloth's mean motion (distances do not change
+//   3. enforce, at the window's end: the gather's broad-phase pairs when every vertex ended inside
+//      its gather box (in the gather's translating frame; typical in free fall), else the swept
+//      broad phase from the window's start to its end, with boxes swept by the motion relative to
+//      the cloth's mean motion (distances do not change
 //      in a translating frame, so these are the same pairs, and a falling sheet sweeps nothing);
 //      pairs whose start distance minus the largest relative displacement of their vertices stays
 //      positive cannot touch and are dropped; the conservative CCD (collision/ccd.hpp) runs on the
@@ -95,6 +97,11 @@ public:
 
 private:
     void add_broad_phase_times(const collision::BroadPhaseStats& broad);
+    // True when the last gather started at positions_t0 and every vertex's position now, in the
+    // gather's translating frame, lies in its gather box shrunk by `margin`: then the gather's
+    // broad-phase pairs include every pair that can touch over positions_t0 → positions.
+    bool gather_boxes_hold(std::span<const Vec3d> positions_t0, std::span<const Vec3d> positions,
+                           double margin) const;
     // Pairs are indexed VF first, then EE: i < #VF is vertex_face[i], else edge_edge[i − #VF].
     // True when pair i has a vertex v with marked[v] != 0.
     bool touches(const collision::FeaturePairs& pairs, std::int64_t i,
@@ -122,6 +129,8 @@ private:
     collision::SelfCollisionBroadPhase<double> m_revert_phase;  // fail-safe, later rounds
     std::vector<Vec3d> m_predicted;
     std::vector<Vec3d> m_relative_end;       // a step's end minus the mean displacement
+    Vec3d m_gather_shift{0.0, 0.0, 0.0};     // the gather's mean displacement
+    std::vector<Vec3d> m_gather_end;         // the gather's prediction minus m_gather_shift
     collision::FeaturePairs m_candidates;    // gathered pairs that may come within thickness
     std::vector<double> m_gather_distances;  // per candidate, its distance at the gather
     std::vector<Vec3d> m_gather_positions;   // the positions at the gather
