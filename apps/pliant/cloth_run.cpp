@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -54,8 +55,12 @@ private:
     struct sigaction m_previous {};
 };
 
-Vec3d place(const Vec3d& p, const cloth::Placement& placement) {
-    return cloth::Rotation::from_degrees(placement.rotate_degrees).apply(p) + placement.translate;
+// Applies a placement (rotation, then translation) to points, the rotation built once.
+void place(std::span<Vec3d> points, const cloth::Placement& placement) {
+    const cloth::Rotation rotation = cloth::Rotation::from_degrees(placement.rotate_degrees);
+    for (Vec3d& p : points) {
+        p = rotation.apply(p) + placement.translate;
+    }
 }
 
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
@@ -69,9 +74,7 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
         mesh = io::read_mesh(scene.mesh);
     }
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
-    for (Vec3d& p : mesh.positions) {
-        p = place(p, transform);
-    }
+    place(mesh.positions, transform);
     if (scene.instances.empty()) {
         return mesh;
     }
@@ -85,9 +88,10 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
     geometry::TriangleMeshD copies;
     for (std::size_t k = 0; k < scene.instances.size(); ++k) {
         const auto offset = static_cast<std::int32_t>(k * mesh.positions.size());
-        for (const Vec3d& p : mesh.positions) {
-            copies.positions.push_back(place(p, scene.instances[k]));
-        }
+        const std::size_t first = copies.positions.size();
+        copies.positions.insert(copies.positions.end(), mesh.positions.begin(),
+                                mesh.positions.end());
+        place(std::span<Vec3d>(copies.positions).subspan(first), scene.instances[k]);
         for (const geometry::Triangle& t : mesh.triangles) {
             copies.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
         }
@@ -147,9 +151,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             continue;
         }
         geometry::TriangleMeshD shape = io::read_mesh(obstacle.mesh);
-        for (Vec3d& p : shape.positions) {
-            p = place(p, obstacle.mesh_placement);
-        }
+        place(shape.positions, obstacle.mesh_placement);
         shapes.push_back(preview_shape(obstacle, &shape, centre, plane_half_size));
         solver.add_mesh_obstacle(std::make_shared<const cloth::MeshObstacle>(std::move(shape)),
                                  obstacle.motion);

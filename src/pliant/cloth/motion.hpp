@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "pliant/core/vec3.hpp"
@@ -109,6 +110,32 @@ struct Motion {
         pose.rotation = Rotation::from_degrees(at.rotate_degrees);
         pose.translate = at.translate;
         return pose;
+    }
+};
+
+// A motion followed over time: the pose at the current time and at the previous one, from which
+// the velocity of a point on the moving body follows.
+struct MotionState {
+    Motion motion;
+    Pose pose;           // at the current time
+    Pose previous_pose;  // at the previous advance() (the same until then)
+
+    MotionState() = default;
+    MotionState(Motion m, double t)
+        : motion(std::move(m)), pose(motion.pose(t)), previous_pose(pose) {}
+
+    void advance(double t) {
+        if (!motion.is_static()) {
+            previous_pose = pose;
+            pose = motion.pose(t);
+        }
+    }
+    // How far the body's point now at x moved since the previous pose (m); 0 for a static body.
+    Vec3d surface_displacement(const Vec3d& x) const {
+        if (motion.is_static()) {
+            return {0.0, 0.0, 0.0};
+        }
+        return x - previous_pose.apply(pose.apply_inverse(x));
     }
 };
 

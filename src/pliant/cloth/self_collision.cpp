@@ -100,7 +100,7 @@ double box_distance(std::span<const Vec3d> x, std::span<const std::int32_t> firs
 
 bool SelfCollision::separation_exceeds(const collision::FeaturePairs& pairs, std::int64_t i,
                                        std::span<const Vec3d> start, std::span<const Vec3d> end,
-                                       double threshold) const {
+                                       double threshold, double* distance) const {
     // The features' vertices; the cheap bound (box distance minus sweep) first.
     std::int32_t first[1];
     std::span<const std::int32_t> a;
@@ -121,32 +121,30 @@ bool SelfCollision::separation_exceeds(const collision::FeaturePairs& pairs, std
     if (box_distance(start, a, b) - sweep > threshold) {
         return true;
     }
-    return separation_bound(pairs, i, start, end) > threshold;
+    const double exact = pair_distance(pairs, i, start);
+    if (distance != nullptr) {
+        *distance = exact;
+    }
+    return exact - sweep > threshold;
 }
 
-double SelfCollision::separation_bound(const collision::FeaturePairs& pairs, std::int64_t i,
-                                       std::span<const Vec3d> start,
-                                       std::span<const Vec3d> end) const {
-    const auto& edges = m_gather_phase.topology().edges;
+double SelfCollision::pair_distance(const collision::FeaturePairs& pairs, std::int64_t i,
+                                    std::span<const Vec3d> x) const {
     const auto at = [&](std::int32_t v) {
-        return start[static_cast<std::size_t>(v)];
+        return x[static_cast<std::size_t>(v)];
     };
     const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
     if (i < num_vf) {
         const collision::VertexFacePair& pair = pairs.vertex_face[static_cast<std::size_t>(i)];
         const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(pair.face)];
-        const std::int32_t vertex[1] = {pair.vertex};
-        const double distance =
-            collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]))
-                .distance;
-        return distance - relative_sweep(start, end, vertex, f);
+        return collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]))
+            .distance;
     }
+    const auto& edges = m_gather_phase.topology().edges;
     const collision::EdgeEdgePair& pair = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
     const geometry::Edge& a = edges[static_cast<std::size_t>(pair.edge_a)];
     const geometry::Edge& b = edges[static_cast<std::size_t>(pair.edge_b)];
-    const double distance =
-        collision::segment_segment_proximity(at(a[0]), at(a[1]), at(b[0]), at(b[1])).distance;
-    return distance - relative_sweep(start, end, a, b);
+    return collision::segment_segment_proximity(at(a[0]), at(a[1]), at(b[0]), at(b[1])).distance;
 }
 
 template <typename Keep>
@@ -210,23 +208,22 @@ void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec
     // Keep the pairs whose distance can fall below thickness + slack on the predicted motion
     // (slack = thickness, for the difference between prediction and the solved motion; pairs
     // that come closer anyway are the fail-safe's).
+    // The filter computes a kept pair's distance now (by index, no races); project() skips a pair
+    // while that distance minus how far its vertices have since moved stays at least the
+    // thickness.
     Stopwatch filter;
     const std::span<const Vec3d> predicted(m_predicted);
+    m_swept_distances.resize(swept.vertex_face.size() + swept.edge_edge.size());
     m_candidates = filter_pairs(swept, [&](std::int64_t i) {
-        return !separation_exceeds(swept, i, positions, predicted, 2.0 * m_thickness);
+        return !separation_exceeds(swept, i, positions, predicted, 2.0 * m_thickness,
+                                   &m_swept_distances[static_cast<std::size_t>(i)]);
     });
-    // Each candidate's distance now, and the vertices' positions: project() skips a pair while
-    // that distance minus how far its vertices have since moved stays at least the thickness.
-    const auto num_candidates =
-        static_cast<std::int64_t>(m_candidates.vertex_face.size() + m_candidates.edge_edge.size());
-    m_gather_distances.resize(static_cast<std::size_t>(num_candidates));
-    parallel_for(
-        num_candidates,
-        [&](std::int64_t i) {
-            m_gather_distances[static_cast<std::size_t>(i)] =
-                separation_bound(m_candidates, i, positions, positions);
-        },
-        PAIR_GRAIN);
+    // filter_pairs leaves the kept indices, in the candidates' order, in m_indices.
+    const auto num_candidates = static_cast<std::int64_t>(m_indices.size());
+    m_gather_distances.resize(m_indices.size());
+    for (std::size_t k = 0; k < m_indices.size(); ++k) {
+        m_gather_distances[k] = m_swept_distances[static_cast<std::size_t>(m_indices[k])];
+    }
     m_gather_positions.assign(positions.begin(), positions.end());
     m_pair_sweeps.assign(static_cast<std::size_t>(num_candidates), 0.0);
     m_stats.narrow_ms += filter.elapsed_ms();

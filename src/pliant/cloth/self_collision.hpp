@@ -106,16 +106,17 @@ private:
     // True when pair i has a vertex v with marked[v] != 0.
     bool touches(const collision::FeaturePairs& pairs, std::int64_t i,
                  std::span<const std::uint8_t> marked) const;
-    // A lower bound on pair i's distance over the linear motion start → end: the distance at
-    // the start minus the largest relative displacement of a vertex of one feature and a vertex
-    // of the other.
-    double separation_bound(const collision::FeaturePairs& pairs, std::int64_t i,
-                            std::span<const Vec3d> start, std::span<const Vec3d> end) const;
-    // separation_bound(…) > threshold, deciding most pairs by the features' box distance first.
+    // The distance between pair i's features at x.
+    double pair_distance(const collision::FeaturePairs& pairs, std::int64_t i,
+                         std::span<const Vec3d> x) const;
+    // Whether a lower bound on pair i's distance over the linear motion start → end exceeds
+    // threshold: the distance at the start minus the largest relative displacement of a vertex
+    // of one feature and a vertex of the other. Decides most pairs by the features' box distance
+    // first; when it computes the exact start distance, it also stores it in *distance.
     bool separation_exceeds(const collision::FeaturePairs& pairs, std::int64_t i,
                             std::span<const Vec3d> start, std::span<const Vec3d> end,
-                            double threshold) const;
-    // The pairs for which keep(i) holds, in order.
+                            double threshold, double* distance = nullptr) const;
+    // The pairs for which keep(i) holds, in order (their indices stay in m_indices).
     template <typename Keep>
     collision::FeaturePairs filter_pairs(const collision::FeaturePairs& pairs, Keep&& keep);
     // The i in [0, n) with keep(i), ascending (valid until the next call).
@@ -132,6 +133,7 @@ private:
     Vec3d m_gather_shift{0.0, 0.0, 0.0};     // the gather's mean displacement
     std::vector<Vec3d> m_gather_end;         // the gather's prediction minus m_gather_shift
     collision::FeaturePairs m_candidates;    // gathered pairs that may come within thickness
+    std::vector<double> m_swept_distances;   // per gathered broad-phase pair (kept ones set)
     std::vector<double> m_gather_distances;  // per candidate, its distance at the gather
     std::vector<Vec3d> m_gather_positions;   // the positions at the gather
     std::vector<double> m_pair_sweeps;       // per candidate, its largest relative sweep since

@@ -197,11 +197,9 @@ void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
         throw InvalidInput(
             "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
     }
-    MovingObstacle moving{obstacle, motion, obstacle, {}, {}};
-    moving.pose = motion.pose(m_time);
-    moving.previous_pose = moving.pose;
-    moving.current = placed(obstacle, moving.pose);
-    m_obstacles.push_back(moving);
+    MovingObstacle moving{obstacle, MotionState(motion, m_time), obstacle};
+    moving.current = placed(obstacle, moving.state.pose);
+    m_obstacles.push_back(std::move(moving));
 }
 
 void ClothSolver::add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,
@@ -213,9 +211,7 @@ void ClothSolver::add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle
         throw InvalidInput(
             "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
     }
-    MovingMesh moving{std::move(obstacle), motion, motion.pose(m_time), {}};
-    moving.previous_pose = moving.pose;
-    m_mesh_obstacles.push_back(std::move(moving));
+    m_mesh_obstacles.push_back({std::move(obstacle), MotionState(motion, m_time)});
 }
 
 void ClothSolver::add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
@@ -399,18 +395,13 @@ void ClothSolver::apply_air(double h, double t) {
 
 void ClothSolver::move_obstacles(double t) {
     for (MovingObstacle& obstacle : m_obstacles) {
-        if (obstacle.motion.is_static()) {
-            continue;
+        if (!obstacle.state.motion.is_static()) {
+            obstacle.state.advance(t);
+            obstacle.current = placed(obstacle.rest, obstacle.state.pose);
         }
-        obstacle.previous_pose = obstacle.pose;
-        obstacle.pose = obstacle.motion.pose(t);
-        obstacle.current = placed(obstacle.rest, obstacle.pose);
     }
     for (MovingMesh& mesh : m_mesh_obstacles) {
-        if (!mesh.motion.is_static()) {
-            mesh.previous_pose = mesh.pose;
-            mesh.pose = mesh.motion.pose(t);
-        }
+        mesh.state.advance(t);
     }
 }
 
@@ -501,34 +492,28 @@ std::int64_t ClothSolver::resolve_obstacles(double h) {
                         m_contact_depths[v] = contact.depth;
                         m_contact_normals[v] = contact.normal;
                         // The surface point under x moved from where the previous pose had it.
-                        const Vec3d& x = m_positions[v];
-                        m_contact_velocities[v] = obstacle.motion.is_static()
-                                                      ? Vec3d{0.0, 0.0, 0.0}
-                                                      : (x - obstacle.previous_pose.apply(
-                                                                 obstacle.pose.apply_inverse(x))) *
-                                                            (1.0 / h);
+                        m_contact_velocities[v] =
+                            obstacle.state.surface_displacement(m_positions[v]) * (1.0 / h);
                     }
                 }
                 for (const MovingMesh& mesh : m_mesh_obstacles) {
                     // In the mesh's rest frame. A vertex can be as deep as its own motion plus
                     // the surface's over the substep, plus the thickness.
                     Vec3d& x = m_positions[v];
-                    const Vec3d swept_by_surface =
-                        x - mesh.previous_pose.apply(mesh.pose.apply_inverse(x));
+                    const Vec3d swept_by_surface = mesh.state.surface_displacement(x);
                     const double max_depth = norm(x - m_previous_positions[v]) +
                                              norm(swept_by_surface) + 2.0 * m_material.thickness;
-                    Vec3d x_rest = mesh.pose.apply_inverse(x);
+                    const Pose& pose = mesh.state.pose;
+                    Vec3d x_rest = pose.apply_inverse(x);
                     const ContactCorrection contact =
                         push_out(*mesh.mesh, x_rest, m_material.thickness, max_depth);
                     if (contact.depth > 0.0) {
-                        x = mesh.pose.apply(x_rest);
+                        x = pose.apply(x_rest);
                     }
                     if (contact.depth > m_contact_depths[v]) {
                         m_contact_depths[v] = contact.depth;
-                        m_contact_normals[v] = mesh.pose.rotation.apply(contact.normal);
-                        m_contact_velocities[v] = mesh.motion.is_static()
-                                                      ? Vec3d{0.0, 0.0, 0.0}
-                                                      : swept_by_surface * (1.0 / h);
+                        m_contact_normals[v] = pose.rotation.apply(contact.normal);
+                        m_contact_velocities[v] = swept_by_surface * (1.0 / h);
                     }
                 }
                 contacts += m_contact_depths[v] > 0.0 ? 1 : 0;

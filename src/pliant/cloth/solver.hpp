@@ -125,16 +125,12 @@ private:
 
     struct MovingObstacle {
         Obstacle rest;  // at time 0
-        Motion motion;
-        Obstacle current;  // at the end of the substep
-        Pose pose;         // current = pose(rest)
-        Pose previous_pose;
+        MotionState state;
+        Obstacle current;  // rest placed by state.pose
     };
     struct MovingMesh {
-        std::shared_ptr<const MeshObstacle> mesh;
-        Motion motion;
-        Pose pose;
-        Pose previous_pose;
+        std::shared_ptr<const MeshObstacle> mesh;  // at its rest placement
+        MotionState state;
     };
     struct MovingPins {
         std::vector<std::int32_t> vertices;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "pliant/core/error.hpp"
+#include "pliant/io/detail/json_text.hpp"
 #include "pliant/io/detail/read_file.hpp"
 
 namespace pliant::io {
@@ -18,15 +19,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string type_name(const Json& value) {
-    if (value.is_number_integer() || value.is_number_unsigned()) {
-        return "an integer";
-    }
-    if (value.is_number()) {
-        return "a number";
-    }
-    return fmt::format("a JSON {}", value.type_name());
-}
+using detail::json_type_name;
 
 // One JSON object being read: every key must be taken exactly by one of the get functions, and
 // finish() rejects keys nobody took. Errors name the file and the key path.
@@ -35,7 +28,7 @@ public:
     ObjectReader(const Json& object, std::string name, std::string path)
         : m_object(object), m_name(std::move(name)), m_path(std::move(path)) {
         if (!object.is_object()) {
-            fail(m_path.empty() ? "the scene" : m_path, "an object", type_name(object));
+            fail(m_path.empty() ? "the scene" : m_path, "an object", json_type_name(object));
         }
     }
 
@@ -62,7 +55,7 @@ public:
             return fallback;
         }
         if (!value->is_number()) {
-            fail(key_path(key), "a number", type_name(*value));
+            fail(key_path(key), "a number", json_type_name(*value));
         }
         const double x = value->get<double>();
         if (!(x >= lo && x <= hi)) {
@@ -77,7 +70,7 @@ public:
             return fallback;
         }
         if (!value->is_number_integer() && !value->is_number_unsigned()) {
-            fail(key_path(key), "an integer", type_name(*value));
+            fail(key_path(key), "an integer", json_type_name(*value));
         }
         const auto x = value->get<std::int64_t>();
         if (x < lo || x > hi) {
@@ -105,13 +98,13 @@ public:
     Vec3d vector_value(const Json& value, const std::string& where) const {
         if (!value.is_array() || value.size() != 3) {
             fail(where, "an array of 3 numbers",
-                 type_name(value) +
+                 json_type_name(value) +
                      (value.is_array() ? fmt::format(" of {} elements", value.size()) : ""));
         }
         double c[3];
         for (std::size_t k = 0; k < 3; ++k) {
             if (!value[k].is_number() || !std::isfinite(value[k].get<double>())) {
-                fail(fmt::format("{}[{}]", where, k), "a finite number", type_name(value[k]));
+                fail(fmt::format("{}[{}]", where, k), "a finite number", json_type_name(value[k]));
             }
             c[k] = value[k].get<double>();
         }
@@ -131,7 +124,7 @@ public:
             }
             fail(key_path(key), fmt::format("one of {}", list),
                  value->is_string() ? fmt::format("\"{}\"", value->get<std::string>())
-                                    : type_name(*value));
+                                    : json_type_name(*value));
         }
         return value->get<std::string>();
     }
@@ -151,7 +144,7 @@ public:
     const Json* array(const std::string& key) {
         const Json* value = find(key);
         if (value != nullptr && !value->is_array()) {
-            fail(key_path(key), "an array", type_name(*value));
+            fail(key_path(key), "an array", json_type_name(*value));
         }
         return value;
     }
@@ -302,7 +295,7 @@ cloth::SceneObstacle read_obstacle(const Json& value, const std::string& name,
         const Json* file = o.find("file");
         if (file == nullptr || !file->is_string() || file->get<std::string>().empty()) {
             o.fail(o.key_path("file"), "a file name (OBJ or PLY)",
-                   file == nullptr ? "nothing" : type_name(*file));
+                   file == nullptr ? "nothing" : json_type_name(*file));
         }
         const std::filesystem::path mesh_path(file->get<std::string>());
         scene_obstacle.mesh = mesh_path.is_absolute() ? mesh_path : base / mesh_path;
@@ -368,7 +361,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
         const Json* mesh = c.find("mesh");
         if (mesh != nullptr) {
             if (!mesh->is_string() || mesh->get<std::string>().empty()) {
-                c.fail(c.key_path("mesh"), "a file name (OBJ or PLY)", type_name(*mesh));
+                c.fail(c.key_path("mesh"), "a file name (OBJ or PLY)", json_type_name(*mesh));
             }
             const std::filesystem::path path(mesh->get<std::string>());
             scene.mesh = path.is_absolute() ? path : base / path;
@@ -415,7 +408,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
     }
     if (const Json* self = root.find("self_collision")) {
         if (!self->is_boolean()) {
-            root.fail("self_collision", "true or false", type_name(*self));
+            root.fail("self_collision", "true or false", json_type_name(*self));
         }
         scene.self_collision = self->get<bool>();
     }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "pliant/core/error.hpp"
+#include "pliant/io/detail/json_text.hpp"
 #include "pliant/io/detail/read_file.hpp"
 
 namespace pliant::io {
@@ -15,15 +16,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string type_name(const Json& value) {
-    if (value.is_number_integer() || value.is_number_unsigned()) {
-        return "an integer";
-    }
-    if (value.is_number()) {
-        return "a number";
-    }
-    return fmt::format("a JSON {}", value.type_name());
-}
+using detail::json_type_name;
 
 class Reader {
 public:
@@ -38,7 +31,7 @@ public:
     void check_keys(const Json& object, const std::string& where,
                     std::initializer_list<const char*> known) const {
         if (!object.is_object()) {
-            fail(where, "an object", type_name(object));
+            fail(where, "an object", json_type_name(object));
         }
         for (const auto& [key, value] : object.items()) {
             bool ok = false;
@@ -67,7 +60,7 @@ public:
 
     double finite(const Json& value, const std::string& where) const {
         if (!value.is_number() || !std::isfinite(value.get<double>())) {
-            fail(where, "a finite number", type_name(value));
+            fail(where, "a finite number", json_type_name(value));
         }
         return value.get<double>();
     }
@@ -84,7 +77,7 @@ public:
         const Json& list = required(root, "", key, "array of control points");
         if (!list.is_array() || list.empty()) {
             fail(key, "a non-empty array of control points",
-                 list.is_array() ? "an empty array" : type_name(list));
+                 list.is_array() ? "an empty array" : json_type_name(list));
         }
         return list;
     }
@@ -110,7 +103,7 @@ volume::TransferFunction parse_transfer_function(std::string_view text, std::str
         throw IoError(fmt::format("{}: not valid JSON: {}", name, e.what()));
     }
     if (!root.is_object()) {
-        r.fail("the transfer function", "a JSON object", type_name(root));
+        r.fail("the transfer function", "a JSON object", json_type_name(root));
     }
     r.check_keys(root, "", {"name", "opacity_unit", "color", "opacity"});
 
@@ -118,7 +111,7 @@ volume::TransferFunction parse_transfer_function(std::string_view text, std::str
     tf.name = std::string(name);
     if (const auto it = root.find("name"); it != root.end()) {
         if (!it->is_string()) {
-            r.fail("name", "a string", type_name(*it));
+            r.fail("name", "a string", json_type_name(*it));
         }
         tf.name = it->get<std::string>();
     }
@@ -140,7 +133,7 @@ volume::TransferFunction parse_transfer_function(std::string_view text, std::str
         const Json& rgb = r.required(colors[k], where, "rgb", "[r, g, b] array");
         if (!rgb.is_array() || rgb.size() != 3) {
             r.fail(where + ".rgb", "an array of 3 numbers in [0, 1]",
-                   type_name(rgb) +
+                   json_type_name(rgb) +
                        (rgb.is_array() ? fmt::format(" of {} elements", rgb.size()) : ""));
         }
         for (std::size_t c = 0; c < 3; ++c) {

@@ -138,6 +138,26 @@ bool in_arrow(const Vec3d& p, int axis) {
 
 }  // namespace
 
+namespace {
+
+// Calls fill(i, j, k) for every voxel, in parallel over slices k (each voxel written by one
+// call: the same result for any number of threads).
+template <typename Fill>
+void for_each_voxel(const Dims& dims, Fill&& fill) {
+    parallel_for(
+        dims[2],
+        [&](std::int64_t k) {
+            for (std::int64_t j = 0; j < dims[1]; ++j) {
+                for (std::int64_t i = 0; i < dims[0]; ++i) {
+                    fill(i, j, k);
+                }
+            }
+        },
+        1);
+}
+
+}  // namespace
+
 float shepp_logan_value(const Vec3d& p, SheppLoganVariant variant) {
     const double* amplitude =
         variant == SheppLoganVariant::kak_slaney ? KAK_SLANEY_A : YU_YE_WANG_A;
@@ -153,17 +173,10 @@ float shepp_logan_value(const Vec3d& p, SheppLoganVariant variant) {
 Volume shepp_logan_3d(const Dims& dims, SheppLoganVariant variant) {
     Volume volume = unit_box_volume(dims, VoxelType::f32);
     const auto out = volume.values<VoxelType::f32>();
-    parallel_for(
-        dims[2],
-        [&](std::int64_t k) {
-            for (std::int64_t j = 0; j < dims[1]; ++j) {
-                for (std::int64_t i = 0; i < dims[0]; ++i) {
-                    out[static_cast<std::size_t>(volume.index(i, j, k))] =
-                        shepp_logan_value(volume.voxel_center(i, j, k), variant);
-                }
-            }
-        },
-        1);
+    for_each_voxel(dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        out[static_cast<std::size_t>(volume.index(i, j, k))] =
+            shepp_logan_value(volume.voxel_center(i, j, k), variant);
+    });
     return volume;
 }
 
@@ -174,19 +187,11 @@ Volume uniform_sphere(const Dims& dims, double radius, float value, const Sphere
     Volume volume = sphere_volume(dims, radius, options, VoxelType::f32);
     const Vec3d center = sphere_center(volume, options);
     const auto out = volume.values<VoxelType::f32>();
-    parallel_for(
-        dims[2],
-        [&](std::int64_t k) {
-            for (std::int64_t j = 0; j < dims[1]; ++j) {
-                for (std::int64_t i = 0; i < dims[0]; ++i) {
-                    const double f =
-                        sphere_coverage(volume, i, j, k, center, radius, options.supersample);
-                    out[static_cast<std::size_t>(volume.index(i, j, k))] =
-                        static_cast<float>(f * static_cast<double>(value));
-                }
-            }
-        },
-        1);
+    for_each_voxel(dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        const double f = sphere_coverage(volume, i, j, k, center, radius, options.supersample);
+        out[static_cast<std::size_t>(volume.index(i, j, k))] =
+            static_cast<float>(f * static_cast<double>(value));
+    });
     return volume;
 }
 
@@ -200,22 +205,14 @@ Volume uniform_sphere(const Dims& dims, double radius, const std::array<float, 4
     }
     Volume volume = sphere_volume(dims, radius, options, VoxelType::rgba32f);
     const Vec3d center = sphere_center(volume, options);
-    parallel_for(
-        dims[2],
-        [&](std::int64_t k) {
-            for (std::int64_t j = 0; j < dims[1]; ++j) {
-                for (std::int64_t i = 0; i < dims[0]; ++i) {
-                    const double f =
-                        sphere_coverage(volume, i, j, k, center, radius, options.supersample);
-                    if (f > 0.0) {
-                        store_rgba(volume, volume.index(i, j, k),
-                                   {rgba[0], rgba[1], rgba[2],
-                                    static_cast<float>(f * static_cast<double>(rgba[3]))});
-                    }
-                }
-            }
-        },
-        1);
+    for_each_voxel(dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        const double f = sphere_coverage(volume, i, j, k, center, radius, options.supersample);
+        if (f > 0.0) {
+            store_rgba(
+                volume, volume.index(i, j, k),
+                {rgba[0], rgba[1], rgba[2], static_cast<float>(f * static_cast<double>(rgba[3]))});
+        }
+    });
     return volume;
 }
 
@@ -225,34 +222,27 @@ Volume rgba_test_object(const Dims& dims, VoxelType type) {
             fmt::format("rgba_test_object: type must be rgba8 or rgba32f, got {}", name(type)));
     }
     Volume volume = unit_box_volume(dims, type);
-    parallel_for(
-        dims[2],
-        [&](std::int64_t k) {
-            for (std::int64_t j = 0; j < dims[1]; ++j) {
-                for (std::int64_t i = 0; i < dims[0]; ++i) {
-                    const Vec3d p = volume.voxel_center(i, j, k);
-                    std::array<float, 4> rgba{0.0f, 0.0f, 0.0f, 0.0f};
-                    if (p.x * p.x + p.y * p.y + p.z * p.z <= 0.25 * 0.25) {
-                        rgba = {0.5f, 0.5f, 0.5f, 0.1f};
-                    }
-                    if (in_arrow(p, 0)) {
-                        rgba = {1.0f, 0.0f, 0.0f, 0.6f};
-                    }
-                    if (in_arrow(p, 1)) {
-                        rgba = {0.0f, 1.0f, 0.0f, 0.6f};
-                    }
-                    if (in_arrow(p, 2)) {
-                        rgba = {0.0f, 0.0f, 1.0f, 0.6f};
-                    }
-                    if (std::abs(p.x + 0.6) <= 0.1 && std::abs(p.y + 0.6) <= 0.1 &&
-                        std::abs(p.z + 0.6) <= 0.1) {
-                        rgba = {1.0f, 1.0f, 0.0f, 0.6f};
-                    }
-                    store_rgba(volume, volume.index(i, j, k), rgba);
-                }
-            }
-        },
-        1);
+    for_each_voxel(dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        const Vec3d p = volume.voxel_center(i, j, k);
+        std::array<float, 4> rgba{0.0f, 0.0f, 0.0f, 0.0f};
+        if (p.x * p.x + p.y * p.y + p.z * p.z <= 0.25 * 0.25) {
+            rgba = {0.5f, 0.5f, 0.5f, 0.1f};
+        }
+        if (in_arrow(p, 0)) {
+            rgba = {1.0f, 0.0f, 0.0f, 0.6f};
+        }
+        if (in_arrow(p, 1)) {
+            rgba = {0.0f, 1.0f, 0.0f, 0.6f};
+        }
+        if (in_arrow(p, 2)) {
+            rgba = {0.0f, 0.0f, 1.0f, 0.6f};
+        }
+        if (std::abs(p.x + 0.6) <= 0.1 && std::abs(p.y + 0.6) <= 0.1 &&
+            std::abs(p.z + 0.6) <= 0.1) {
+            rgba = {1.0f, 1.0f, 0.0f, 0.6f};
+        }
+        store_rgba(volume, volume.index(i, j, k), rgba);
+    });
     return volume;
 }
 
