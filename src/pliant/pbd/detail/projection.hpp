@@ -1,0 +1,204 @@
+// The XPBD projections of one edge-distance and one tet-volume constraint (soft_body.hpp has the
+// formulas), on positions packed with the substep's inverse mass: Float4 {x, y, z, w}, so that one
+// 16-byte load fetches all a constraint needs of a vertex. Scalar kernels (any backend) and SSE
+// kernels doing 4 constraints of one colour at once (their vertices must be distinct).
+//
+// inv_k = 1 / stiffness; alpha = α_phys / h² (XPBD's α̃ without the stiffness part). A constraint
+// whose vertices all have w = 0, or whose gradient vanishes (zero-length edge, flat tet with
+// coincident vertices), is skipped: its vertices keep their bits.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "pliant/core/host_device.hpp"
+#include "pliant/geometry/tet_mesh.hpp"
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#define PLIANT_PBD_SSE 1
+#endif
+
+namespace pliant::pbd::detail {
+
+struct alignas(16) Float4 {
+    float x, y, z, w;
+};
+
+// C = |x_a − x_b| − rest_length; ∇_a C = n = (x_a − x_b) / |x_a − x_b| = −∇_b C.
+PLIANT_HOST_DEVICE inline void project_edge(Float4* x, std::int32_t a, std::int32_t b,
+                                            float rest_length, float inv_k, float alpha) {
+    const Float4 pa = x[a];
+    const Float4 pb = x[b];
+    const float w = pa.w + pb.w;
+    const float dx = pa.x - pb.x;
+    const float dy = pa.y - pb.y;
+    const float dz = pa.z - pb.z;
+    const float length = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(w > 0.0f) || !(length > 0.0f)) {
+        return;
+    }
+    const float dlambda = -(length - rest_length) / (w * inv_k + alpha);
+    const float s = dlambda / length;
+    const float sa = pa.w * s;
+    const float sb = pb.w * s;
+    x[a] = {pa.x + sa * dx, pa.y + sa * dy, pa.z + sa * dz, pa.w};
+    x[b] = {pb.x - sb * dx, pb.y - sb * dy, pb.z - sb * dz, pb.w};
+}
+
+// C = V − V0, V = e1 · (e2 × e3) / 6 with e_k = x_k − x_0; ∇_1 C = e2 × e3 / 6, ∇_2 C = e3 × e1 /
+// 6, ∇_3 C = e1 × e2 / 6, ∇_0 C = −(∇_1 + ∇_2 + ∇_3).
+PLIANT_HOST_DEVICE inline void project_tet(Float4* x, const geometry::Tet& t, float rest_volume,
+                                           float inv_k, float alpha) {
+    const Float4 p0 = x[t[0]];
+    const Float4 p1 = x[t[1]];
+    const Float4 p2 = x[t[2]];
+    const Float4 p3 = x[t[3]];
+    const float e1x = p1.x - p0.x, e1y = p1.y - p0.y, e1z = p1.z - p0.z;
+    const float e2x = p2.x - p0.x, e2y = p2.y - p0.y, e2z = p2.z - p0.z;
+    const float e3x = p3.x - p0.x, e3y = p3.y - p0.y, e3z = p3.z - p0.z;
+    constexpr float SIXTH = 1.0f / 6.0f;
+    const float g1x = (e2y * e3z - e2z * e3y) * SIXTH;
+    const float g1y = (e2z * e3x - e2x * e3z) * SIXTH;
+    const float g1z = (e2x * e3y - e2y * e3x) * SIXTH;
+    const float g2x = (e3y * e1z - e3z * e1y) * SIXTH;
+    const float g2y = (e3z * e1x - e3x * e1z) * SIXTH;
+    const float g2z = (e3x * e1y - e3y * e1x) * SIXTH;
+    const float g3x = (e1y * e2z - e1z * e2y) * SIXTH;
+    const float g3y = (e1z * e2x - e1x * e2z) * SIXTH;
+    const float g3z = (e1x * e2y - e1y * e2x) * SIXTH;
+    const float g0x = -(g1x + g2x + g3x);
+    const float g0y = -(g1y + g2y + g3y);
+    const float g0z = -(g1z + g2z + g3z);
+    const float volume = e1x * g1x + e1y * g1y + e1z * g1z;
+    const float weight =
+        p0.w * (g0x * g0x + g0y * g0y + g0z * g0z) + p1.w * (g1x * g1x + g1y * g1y + g1z * g1z) +
+        p2.w * (g2x * g2x + g2y * g2y + g2z * g2z) + p3.w * (g3x * g3x + g3y * g3y + g3z * g3z);
+    if (!(weight > 0.0f)) {
+        return;
+    }
+    const float dlambda = -(volume - rest_volume) / (weight * inv_k + alpha);
+    const float s0 = p0.w * dlambda;
+    const float s1 = p1.w * dlambda;
+    const float s2 = p2.w * dlambda;
+    const float s3 = p3.w * dlambda;
+    x[t[0]] = {p0.x + s0 * g0x, p0.y + s0 * g0y, p0.z + s0 * g0z, p0.w};
+    x[t[1]] = {p1.x + s1 * g1x, p1.y + s1 * g1y, p1.z + s1 * g1z, p1.w};
+    x[t[2]] = {p2.x + s2 * g2x, p2.y + s2 * g2y, p2.z + s2 * g2z, p2.w};
+    x[t[3]] = {p3.x + s3 * g3x, p3.y + s3 * g3y, p3.z + s3 * g3z, p3.w};
+}
+
+#if defined(PLIANT_PBD_SSE)
+
+// Loads x[i0..i3] and transposes them into lanes: (xs, ys, zs, ws).
+struct Lanes {
+    __m128 x, y, z, w;
+};
+inline Lanes load_lanes(const Float4* x, std::int32_t i0, std::int32_t i1, std::int32_t i2,
+                        std::int32_t i3) {
+    Lanes l{_mm_load_ps(&x[i0].x), _mm_load_ps(&x[i1].x), _mm_load_ps(&x[i2].x),
+            _mm_load_ps(&x[i3].x)};
+    _MM_TRANSPOSE4_PS(l.x, l.y, l.z, l.w);
+    return l;
+}
+inline void store_lanes(Float4* x, std::int32_t i0, std::int32_t i1, std::int32_t i2,
+                        std::int32_t i3, Lanes l) {
+    _MM_TRANSPOSE4_PS(l.x, l.y, l.z, l.w);
+    _mm_store_ps(&x[i0].x, l.x);
+    _mm_store_ps(&x[i1].x, l.y);
+    _mm_store_ps(&x[i2].x, l.z);
+    _mm_store_ps(&x[i3].x, l.w);
+}
+
+// Four edges e[0..3] of one colour (no shared vertex), the arithmetic of project_edge per lane.
+inline void project_edges4(Float4* x, const std::array<std::int32_t, 2>* e,
+                           const float* rest_lengths, float inv_k, float alpha) {
+    Lanes a = load_lanes(x, e[0][0], e[1][0], e[2][0], e[3][0]);
+    Lanes b = load_lanes(x, e[0][1], e[1][1], e[2][1], e[3][1]);
+    const __m128 w = _mm_add_ps(a.w, b.w);
+    const __m128 dx = _mm_sub_ps(a.x, b.x);
+    const __m128 dy = _mm_sub_ps(a.y, b.y);
+    const __m128 dz = _mm_sub_ps(a.z, b.z);
+    const __m128 length = _mm_sqrt_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 valid = _mm_and_ps(_mm_cmpgt_ps(w, zero), _mm_cmpgt_ps(length, zero));
+    const __m128 denominator = _mm_add_ps(_mm_mul_ps(w, _mm_set1_ps(inv_k)), _mm_set1_ps(alpha));
+    const __m128 violation = _mm_sub_ps(length, _mm_loadu_ps(rest_lengths));
+    const __m128 dlambda = _mm_div_ps(_mm_sub_ps(zero, violation), denominator);
+    const __m128 s = _mm_and_ps(valid, _mm_div_ps(dlambda, length));
+    const __m128 sa = _mm_mul_ps(a.w, s);
+    const __m128 sb = _mm_mul_ps(b.w, s);
+    a.x = _mm_add_ps(a.x, _mm_mul_ps(sa, dx));
+    a.y = _mm_add_ps(a.y, _mm_mul_ps(sa, dy));
+    a.z = _mm_add_ps(a.z, _mm_mul_ps(sa, dz));
+    b.x = _mm_sub_ps(b.x, _mm_mul_ps(sb, dx));
+    b.y = _mm_sub_ps(b.y, _mm_mul_ps(sb, dy));
+    b.z = _mm_sub_ps(b.z, _mm_mul_ps(sb, dz));
+    store_lanes(x, e[0][0], e[1][0], e[2][0], e[3][0], a);
+    store_lanes(x, e[0][1], e[1][1], e[2][1], e[3][1], b);
+}
+
+// Four tets t[0..3] of one colour (no shared vertex), the arithmetic of project_tet per lane.
+inline void project_tets4(Float4* x, const geometry::Tet* t, const float* rest_volumes, float inv_k,
+                          float alpha) {
+    Lanes p0 = load_lanes(x, t[0][0], t[1][0], t[2][0], t[3][0]);
+    Lanes p1 = load_lanes(x, t[0][1], t[1][1], t[2][1], t[3][1]);
+    Lanes p2 = load_lanes(x, t[0][2], t[1][2], t[2][2], t[3][2]);
+    Lanes p3 = load_lanes(x, t[0][3], t[1][3], t[2][3], t[3][3]);
+    const auto sub = [](__m128 u, __m128 v) {
+        return _mm_sub_ps(u, v);
+    };
+    const auto mul = [](__m128 u, __m128 v) {
+        return _mm_mul_ps(u, v);
+    };
+    const auto add = [](__m128 u, __m128 v) {
+        return _mm_add_ps(u, v);
+    };
+    const __m128 e1x = sub(p1.x, p0.x), e1y = sub(p1.y, p0.y), e1z = sub(p1.z, p0.z);
+    const __m128 e2x = sub(p2.x, p0.x), e2y = sub(p2.y, p0.y), e2z = sub(p2.z, p0.z);
+    const __m128 e3x = sub(p3.x, p0.x), e3y = sub(p3.y, p0.y), e3z = sub(p3.z, p0.z);
+    const __m128 sixth = _mm_set1_ps(1.0f / 6.0f);
+    const __m128 g1x = mul(sub(mul(e2y, e3z), mul(e2z, e3y)), sixth);
+    const __m128 g1y = mul(sub(mul(e2z, e3x), mul(e2x, e3z)), sixth);
+    const __m128 g1z = mul(sub(mul(e2x, e3y), mul(e2y, e3x)), sixth);
+    const __m128 g2x = mul(sub(mul(e3y, e1z), mul(e3z, e1y)), sixth);
+    const __m128 g2y = mul(sub(mul(e3z, e1x), mul(e3x, e1z)), sixth);
+    const __m128 g2z = mul(sub(mul(e3x, e1y), mul(e3y, e1x)), sixth);
+    const __m128 g3x = mul(sub(mul(e1y, e2z), mul(e1z, e2y)), sixth);
+    const __m128 g3y = mul(sub(mul(e1z, e2x), mul(e1x, e2z)), sixth);
+    const __m128 g3z = mul(sub(mul(e1x, e2y), mul(e1y, e2x)), sixth);
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 g0x = sub(zero, add(add(g1x, g2x), g3x));
+    const __m128 g0y = sub(zero, add(add(g1y, g2y), g3y));
+    const __m128 g0z = sub(zero, add(add(g1z, g2z), g3z));
+    const __m128 volume = add(add(mul(e1x, g1x), mul(e1y, g1y)), mul(e1z, g1z));
+    const auto norm2 = [&](__m128 u, __m128 v, __m128 s) {
+        return add(add(mul(u, u), mul(v, v)), mul(s, s));
+    };
+    const __m128 weight =
+        add(add(add(mul(p0.w, norm2(g0x, g0y, g0z)), mul(p1.w, norm2(g1x, g1y, g1z))),
+                mul(p2.w, norm2(g2x, g2y, g2z))),
+            mul(p3.w, norm2(g3x, g3y, g3z)));
+    const __m128 valid = _mm_cmpgt_ps(weight, zero);
+    const __m128 denominator = add(mul(weight, _mm_set1_ps(inv_k)), _mm_set1_ps(alpha));
+    const __m128 violation = sub(volume, _mm_loadu_ps(rest_volumes));
+    const __m128 dlambda = _mm_and_ps(valid, _mm_div_ps(sub(zero, violation), denominator));
+    const __m128 s0 = mul(p0.w, dlambda);
+    const __m128 s1 = mul(p1.w, dlambda);
+    const __m128 s2 = mul(p2.w, dlambda);
+    const __m128 s3 = mul(p3.w, dlambda);
+    p0.x = add(p0.x, mul(s0, g0x)), p0.y = add(p0.y, mul(s0, g0y)), p0.z = add(p0.z, mul(s0, g0z));
+    p1.x = add(p1.x, mul(s1, g1x)), p1.y = add(p1.y, mul(s1, g1y)), p1.z = add(p1.z, mul(s1, g1z));
+    p2.x = add(p2.x, mul(s2, g2x)), p2.y = add(p2.y, mul(s2, g2y)), p2.z = add(p2.z, mul(s2, g2z));
+    p3.x = add(p3.x, mul(s3, g3x)), p3.y = add(p3.y, mul(s3, g3y)), p3.z = add(p3.z, mul(s3, g3z));
+    store_lanes(x, t[0][0], t[1][0], t[2][0], t[3][0], p0);
+    store_lanes(x, t[0][1], t[1][1], t[2][1], t[3][1], p1);
+    store_lanes(x, t[0][2], t[1][2], t[2][2], t[3][2], p2);
+    store_lanes(x, t[0][3], t[1][3], t[2][3], t[3][3], p3);
+}
+
+#endif  // PLIANT_PBD_SSE
+
+}  // namespace pliant::pbd::detail

@@ -1,0 +1,685 @@
+#include "pliant/pbd/soft_body.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/pbd/detail/driver_eval.hpp"
+#include "pliant/pbd/detail/projection.hpp"
+
+namespace pliant::pbd {
+
+using detail::Float4;
+
+namespace {
+
+// Fixed chunk sizes (multiples of 4: SIMD groups never straddle a chunk).
+constexpr std::int64_t VERTEX_GRAIN = 4096;
+constexpr std::int64_t EDGE_GRAIN = 2048;
+constexpr std::int64_t TET_GRAIN = 1024;
+constexpr std::int32_t DRAG = -2;  // driven_by code of the drag
+
+void validate_options(const SoftBodyOptions& o) {
+    const auto fail = [](const char* field, double value, const char* rule) {
+        throw InvalidInput(std::string("pbd::SoftBody: options.") + field + " (" +
+                           std::to_string(value) + ") must be " + rule);
+    };
+    if (!(o.stiffness > 0.0 && o.stiffness <= 1.0)) {
+        fail("stiffness", o.stiffness, "in (0, 1]");
+    }
+    if (!(o.edge_share > 0.0 && o.edge_share <= 1.0)) {
+        fail("edge_share", o.edge_share, "in (0, 1]");
+    }
+    if (!(o.density > 0.0) || !std::isfinite(o.density)) {
+        fail("density", o.density, "finite and > 0");
+    }
+    if (!(o.damping >= 0.0) || !std::isfinite(o.damping)) {
+        fail("damping", o.damping, "finite and >= 0");
+    }
+    if (o.substeps < 1) {
+        fail("substeps", o.substeps, ">= 1");
+    }
+    if (!is_finite(o.gravity)) {
+        throw InvalidInput("pbd::SoftBody: options.gravity must be finite");
+    }
+    if (!(o.edge_compliance >= 0.0) || !std::isfinite(o.edge_compliance)) {
+        fail("edge_compliance", o.edge_compliance, "finite and >= 0");
+    }
+    if (!(o.volume_compliance >= 0.0) || !std::isfinite(o.volume_compliance)) {
+        fail("volume_compliance", o.volume_compliance, "finite and >= 0");
+    }
+}
+
+double tet_volume(std::span<const Vec3f> p, const geometry::Tet& t) {
+    return geometry::signed_volume(vec3_cast<double>(p[static_cast<std::size_t>(t[0])]),
+                                   vec3_cast<double>(p[static_cast<std::size_t>(t[1])]),
+                                   vec3_cast<double>(p[static_cast<std::size_t>(t[2])]),
+                                   vec3_cast<double>(p[static_cast<std::size_t>(t[3])]));
+}
+
+}  // namespace
+
+struct SoftBody::State {
+    detail::BodyBox box;
+    std::vector<Vec3f> rest;                         // #V
+    std::vector<geometry::Tet> tets;                 // #T, input order
+    std::vector<std::array<std::int32_t, 2>> edges;  // #E, sorted
+    ConstraintColoring edge_coloring;
+    ConstraintColoring tet_coloring;
+    // Constraint data in colour order (colour c = [offsets[c], offsets[c + 1])): the projection
+    // loops stream through them.
+    std::vector<std::array<std::int32_t, 2>> edge_vertices;
+    std::vector<float> rest_lengths0;  // at construction
+    std::vector<float> rest_lengths;   // current (rest-state drivers)
+    std::vector<geometry::Tet> tet_vertices;
+    std::vector<float> rest_volumes0;
+    std::vector<float> rest_volumes;
+    double total_rest_volume = 0.0;
+
+    // x: positions and this substep's inverse mass (0 for pinned and driven vertices).
+    std::vector<Float4> x;
+    std::vector<Vec3f> previous;
+    std::vector<Vec3f> velocities;
+    std::vector<Vec3f> positions;  // copy of x's positions after every step
+    std::vector<float> inv_masses;
+    std::vector<std::uint8_t> pinned;
+
+    std::vector<Driver> drivers;
+    bool has_rest_drivers = false;
+    bool rest_modified = false;
+    std::vector<std::int32_t> driven_vertices;  // sorted, not pinned
+    std::vector<std::int32_t> driven_by;        // per driven vertex: driver index or DRAG
+    bool kinematics_dirty = false;
+
+    std::optional<DragDriver> drag;
+    std::vector<std::int32_t> drag_vertices;
+    std::vector<Vec3f> drag_offsets;  // from the grabbed vertex, at grab time
+    Vec3f drag_from{};                // grabbed vertex at the step's start
+
+    double last_step_ms = 0.0;
+    double last_substep_ms = 0.0;
+};
+
+SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
+    : SoftBody(rest, options, nullptr) {}
+
+SoftBody::SoftBody(const TetGrid& grid, const SoftBodyOptions& options)
+    : SoftBody(grid.mesh, options, &grid) {}
+
+SoftBody::~SoftBody() = default;
+SoftBody::SoftBody(SoftBody&&) noexcept = default;
+SoftBody& SoftBody::operator=(SoftBody&&) noexcept = default;
+
+SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options,
+                   const TetGrid* grid)
+    : m_options(options), m_state(std::make_unique<State>()) {
+    validate_options(options);
+    State& s = *m_state;
+    const std::int64_t nv = static_cast<std::int64_t>(rest.positions.size());
+    const std::int64_t nt = static_cast<std::int64_t>(rest.tets.size());
+    if (nv > std::numeric_limits<std::int32_t>::max()) {
+        throw InvalidInput("pbd::SoftBody: too many vertices (" + std::to_string(nv) + ")");
+    }
+    // Step 1: validate the mesh.
+    for (std::int64_t v = 0; v < nv; ++v) {
+        if (!is_finite(rest.positions[static_cast<std::size_t>(v)])) {
+            throw InvalidInput("pbd::SoftBody: rest position " + std::to_string(v) +
+                               " is not finite");
+        }
+    }
+    for (std::int64_t t = 0; t < nt; ++t) {
+        const geometry::Tet& tet = rest.tets[static_cast<std::size_t>(t)];
+        for (int i = 0; i < 4; ++i) {
+            if (tet[static_cast<std::size_t>(i)] < 0 || tet[static_cast<std::size_t>(i)] >= nv) {
+                throw InvalidInput("pbd::SoftBody: tet " + std::to_string(t) + " vertex " +
+                                   std::to_string(tet[static_cast<std::size_t>(i)]) +
+                                   " out of range [0, " + std::to_string(nv) + ")");
+            }
+            for (int j = 0; j < i; ++j) {
+                if (tet[static_cast<std::size_t>(i)] == tet[static_cast<std::size_t>(j)]) {
+                    throw InvalidInput("pbd::SoftBody: tet " + std::to_string(t) +
+                                       " repeats vertex " +
+                                       std::to_string(tet[static_cast<std::size_t>(i)]));
+                }
+            }
+        }
+        const double volume = tet_volume(rest.positions, tet);
+        if (!(volume > 0.0)) {
+            throw InvalidInput("pbd::SoftBody: tet " + std::to_string(t) + " has rest volume " +
+                               std::to_string(volume) +
+                               " (must be > 0: degenerate or negatively oriented)");
+        }
+    }
+    if (grid != nullptr && (grid->vertex_lattice.size() != rest.positions.size() ||
+                            grid->tet_cell.size() != rest.tets.size())) {
+        throw InvalidInput("pbd::SoftBody: the grid's lattice does not match its mesh");
+    }
+    s.rest = rest.positions;
+    s.tets = rest.tets;
+
+    // Step 2: the box drivers work in.
+    if (nv > 0) {
+        Vec3d lo = vec3_cast<double>(s.rest[0]);
+        Vec3d hi = lo;
+        for (const Vec3f& p : s.rest) {
+            lo = min(lo, vec3_cast<double>(p));
+            hi = max(hi, vec3_cast<double>(p));
+        }
+        s.box.lo = lo;
+        s.box.hi = hi;
+        s.box.centre = (lo + hi) * 0.5;
+        const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+        s.box.size = size > 0.0 ? size : 1.0;
+    }
+
+    // Step 3: masses: a quarter of each tet's rest mass to each of its vertices.
+    std::vector<double> mass(static_cast<std::size_t>(nv), 0.0);
+    std::vector<double> rest_volume(static_cast<std::size_t>(nt));
+    for (std::int64_t t = 0; t < nt; ++t) {
+        const geometry::Tet& tet = s.tets[static_cast<std::size_t>(t)];
+        const double volume = tet_volume(s.rest, tet);
+        rest_volume[static_cast<std::size_t>(t)] = volume;
+        s.total_rest_volume += volume;
+        for (const std::int32_t v : tet) {
+            mass[static_cast<std::size_t>(v)] += 0.25 * options.density * volume;
+        }
+    }
+    s.inv_masses.resize(static_cast<std::size_t>(nv));
+    for (std::size_t v = 0; v < mass.size(); ++v) {
+        s.inv_masses[v] = mass[v] > 0.0 ? static_cast<float>(1.0 / mass[v]) : 0.0f;
+    }
+    s.pinned.assign(static_cast<std::size_t>(nv), 0);
+
+    // Step 4: edges, colourings, constraint data in colour order.
+    s.edges = tet_edges(s.tets, nv);
+    if (grid != nullptr) {
+        s.edge_coloring = color_grid_edges(*grid, s.edges);
+        s.tet_coloring = color_grid_tets(*grid);
+    } else {
+        s.edge_coloring =
+            color_greedy(static_cast<std::int64_t>(s.edges.size()), nv, [&](std::int64_t e) {
+                return std::span<const std::int32_t>(s.edges[static_cast<std::size_t>(e)]);
+            });
+        s.tet_coloring = color_greedy(nt, nv, [&](std::int64_t t) {
+            return std::span<const std::int32_t>(s.tets[static_cast<std::size_t>(t)]);
+        });
+    }
+    s.edge_vertices.resize(s.edges.size());
+    s.rest_lengths0.resize(s.edges.size());
+    for (std::size_t k = 0; k < s.edge_coloring.order.size(); ++k) {
+        const auto& e = s.edges[static_cast<std::size_t>(s.edge_coloring.order[k])];
+        s.edge_vertices[k] = e;
+        s.rest_lengths0[k] =
+            static_cast<float>(norm(vec3_cast<double>(s.rest[static_cast<std::size_t>(e[0])]) -
+                                    vec3_cast<double>(s.rest[static_cast<std::size_t>(e[1])])));
+    }
+    s.rest_lengths = s.rest_lengths0;
+    s.tet_vertices.resize(s.tets.size());
+    s.rest_volumes0.resize(s.tets.size());
+    for (std::size_t k = 0; k < s.tet_coloring.order.size(); ++k) {
+        const auto t = static_cast<std::size_t>(s.tet_coloring.order[k]);
+        s.tet_vertices[k] = s.tets[t];
+        s.rest_volumes0[k] = static_cast<float>(rest_volume[t]);
+    }
+    s.rest_volumes = s.rest_volumes0;
+
+    // Step 5: state.
+    s.x.resize(static_cast<std::size_t>(nv));
+    for (std::size_t v = 0; v < s.x.size(); ++v) {
+        s.x[v] = {s.rest[v].x, s.rest[v].y, s.rest[v].z, s.inv_masses[v]};
+    }
+    s.previous = s.rest;
+    s.positions = s.rest;
+    s.velocities.assign(static_cast<std::size_t>(nv), Vec3f{});
+}
+
+void SoftBody::add_driver(const Driver& driver) {
+    detail::validate_driver(driver);
+    State& s = *m_state;
+    s.drivers.push_back(driver);
+    s.has_rest_drivers = s.has_rest_drivers || std::holds_alternative<WaveDriver>(driver) ||
+                         std::holds_alternative<BubbleDriver>(driver);
+    s.kinematics_dirty = true;
+}
+
+void SoftBody::clear_drivers() {
+    State& s = *m_state;
+    s.drivers.clear();
+    s.has_rest_drivers = false;
+    s.kinematics_dirty = true;
+}
+
+void SoftBody::set_drag(std::int32_t vertex, const Vec3f& target, float radius) {
+    State& s = *m_state;
+    const auto nv = static_cast<std::int64_t>(s.rest.size());
+    if (vertex < 0 || vertex >= nv) {
+        throw InvalidInput("pbd::SoftBody::set_drag: vertex " + std::to_string(vertex) +
+                           " out of range [0, " + std::to_string(nv) + ")");
+    }
+    if (!is_finite(target)) {
+        throw InvalidInput("pbd::SoftBody::set_drag: target is not finite");
+    }
+    if (!(radius >= 0.0f) || !std::isfinite(radius)) {
+        throw InvalidInput("pbd::SoftBody::set_drag: radius (" + std::to_string(radius) +
+                           ") must be finite and >= 0");
+    }
+    if (s.drag && s.drag->vertex == vertex) {
+        s.drag->target = target;
+        return;
+    }
+    s.drag = DragDriver{vertex, target, radius};
+    // Grab: the vertices within radius of the grabbed one, with their offsets from it.
+    s.drag_vertices.clear();
+    s.drag_offsets.clear();
+    const Vec3f centre = s.positions[static_cast<std::size_t>(vertex)];
+    for (std::int64_t v = 0; v < nv; ++v) {
+        const Vec3f offset = s.positions[static_cast<std::size_t>(v)] - centre;
+        if (v == vertex || squared_norm(offset) <= radius * radius) {
+            s.drag_vertices.push_back(static_cast<std::int32_t>(v));
+            s.drag_offsets.push_back(v == vertex ? Vec3f{} : offset);
+        }
+    }
+    s.kinematics_dirty = true;
+}
+
+void SoftBody::release_drag() {
+    State& s = *m_state;
+    s.drag.reset();
+    s.drag_vertices.clear();
+    s.drag_offsets.clear();
+    s.kinematics_dirty = true;
+}
+
+std::optional<DragDriver> SoftBody::drag() const {
+    return m_state->drag;
+}
+
+void SoftBody::pin(std::span<const std::int32_t> vertices) {
+    State& s = *m_state;
+    const auto nv = static_cast<std::int64_t>(s.rest.size());
+    for (const std::int32_t v : vertices) {
+        if (v < 0 || v >= nv) {
+            throw InvalidInput("pbd::SoftBody::pin: vertex " + std::to_string(v) +
+                               " out of range [0, " + std::to_string(nv) + ")");
+        }
+    }
+    for (const std::int32_t v : vertices) {
+        const auto i = static_cast<std::size_t>(v);
+        s.pinned[i] = 1;
+        s.inv_masses[i] = 0.0f;
+        s.x[i].w = 0.0f;
+        s.velocities[i] = {};
+    }
+    s.kinematics_dirty = true;
+}
+
+void SoftBody::set_positions(std::span<const Vec3f> positions) {
+    State& s = *m_state;
+    if (positions.size() != s.rest.size()) {
+        throw InvalidInput("pbd::SoftBody::set_positions: positions.size() (" +
+                           std::to_string(positions.size()) + ") != vertices (" +
+                           std::to_string(s.rest.size()) + ")");
+    }
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        if (!is_finite(positions[v])) {
+            throw InvalidInput("pbd::SoftBody::set_positions: position " + std::to_string(v) +
+                               " is not finite");
+        }
+    }
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        s.x[v] = {positions[v].x, positions[v].y, positions[v].z, s.x[v].w};
+        s.positions[v] = positions[v];
+    }
+}
+
+void SoftBody::set_velocities(std::span<const Vec3f> velocities) {
+    State& s = *m_state;
+    if (velocities.size() != s.rest.size()) {
+        throw InvalidInput("pbd::SoftBody::set_velocities: velocities.size() (" +
+                           std::to_string(velocities.size()) + ") != vertices (" +
+                           std::to_string(s.rest.size()) + ")");
+    }
+    for (std::size_t v = 0; v < velocities.size(); ++v) {
+        if (!is_finite(velocities[v])) {
+            throw InvalidInput("pbd::SoftBody::set_velocities: velocity " + std::to_string(v) +
+                               " is not finite");
+        }
+    }
+    std::copy(velocities.begin(), velocities.end(), s.velocities.begin());
+}
+
+void SoftBody::step(double dt) {
+    if (!(dt > 0.0) || !std::isfinite(dt)) {
+        throw InvalidInput("pbd::SoftBody::step: dt (" + std::to_string(dt) +
+                           ") must be finite and > 0");
+    }
+    Stopwatch step_watch;
+    State& s = *m_state;
+    const auto nv = static_cast<std::int64_t>(s.rest.size());
+
+    // Step 1: which vertex follows which kinematic driver (the last added; drag last; pins win).
+    if (s.kinematics_dirty) {
+        std::vector<std::int32_t> by(static_cast<std::size_t>(nv), -1);
+        for (std::size_t d = 0; d < s.drivers.size(); ++d) {
+            const Driver& driver = s.drivers[d];
+            if (std::holds_alternative<RotateDriver>(driver)) {
+                std::fill(by.begin(), by.end(), static_cast<std::int32_t>(d));
+            } else if (const auto* twist = std::get_if<TwistDriver>(&driver)) {
+                const int a = static_cast<int>(twist->axis);
+                const double reach = twist->grip * s.box.size + 1e-6 * s.box.size;
+                for (std::int64_t v = 0; v < nv; ++v) {
+                    const double q = s.rest[static_cast<std::size_t>(v)][a];
+                    if (q <= s.box.lo[a] + reach || q >= s.box.hi[a] - reach) {
+                        by[static_cast<std::size_t>(v)] = static_cast<std::int32_t>(d);
+                    }
+                }
+            }
+        }
+        for (const std::int32_t v : s.drag_vertices) {
+            by[static_cast<std::size_t>(v)] = DRAG;
+        }
+        s.driven_vertices.clear();
+        s.driven_by.clear();
+        for (std::int64_t v = 0; v < nv; ++v) {
+            if (by[static_cast<std::size_t>(v)] != -1 &&
+                s.pinned[static_cast<std::size_t>(v)] == 0) {
+                s.driven_vertices.push_back(static_cast<std::int32_t>(v));
+                s.driven_by.push_back(by[static_cast<std::size_t>(v)]);
+            }
+        }
+        s.kinematics_dirty = false;
+    }
+    // Step 2: rest-state drivers at the step's end time.
+    if (s.has_rest_drivers) {
+        update_rest_state(m_time + dt);
+        s.rest_modified = true;
+    } else if (s.rest_modified) {
+        s.rest_lengths = s.rest_lengths0;
+        s.rest_volumes = s.rest_volumes0;
+        s.rest_modified = false;
+    }
+    if (s.drag && !s.drag_vertices.empty()) {
+        s.drag_from = s.positions[static_cast<std::size_t>(s.drag->vertex)];
+    }
+
+    const int n = m_options.substeps;
+    const double h = dt / n;
+    const float hf = static_cast<float>(h);
+    const Vec3f gravity_h = vec3_cast<float>(m_options.gravity * h);
+    const float keep = static_cast<float>(std::max(0.0, 1.0 - m_options.damping * h));
+    const auto inv_k = static_cast<float>(1.0 / m_options.stiffness);
+    const auto edge_inv_k = static_cast<float>(1.0 / (m_options.stiffness * m_options.edge_share));
+    const auto edge_alpha = static_cast<float>(m_options.edge_compliance / (h * h));
+    const auto volume_alpha = static_cast<float>(m_options.volume_compliance / (h * h));
+    Float4* x = s.x.data();
+    Stopwatch substeps_watch;
+    for (int sub = 0; sub < n; ++sub) {
+        const double t_end = m_time + h * (sub + 1);
+        // Step 3: predict free vertices; pinned ones stay.
+        parallel_for(
+            nv,
+            [&](std::int64_t i) {
+                const auto v = static_cast<std::size_t>(i);
+                const float w = s.inv_masses[v];
+                Float4& p = x[v];
+                s.previous[v] = {p.x, p.y, p.z};
+                if (w > 0.0f) {
+                    Vec3f& vel = s.velocities[v];
+                    vel += gravity_h;
+                    p = {p.x + hf * vel.x, p.y + hf * vel.y, p.z + hf * vel.z, w};
+                } else {
+                    p.w = 0.0f;
+                }
+            },
+            VERTEX_GRAIN);
+        // Step 4: driven vertices at their targets for t_end, inverse mass 0.
+        if (!s.driven_vertices.empty()) {
+            std::vector<std::array<double, 9>> rotations(s.drivers.size());
+            for (std::size_t d = 0; d < s.drivers.size(); ++d) {
+                if (const auto* r = std::get_if<RotateDriver>(&s.drivers[d])) {
+                    rotations[d] =
+                        detail::rotation(r->axis, r->angle * detail::ramp(t_end, r->ramp_time));
+                } else if (const auto* tw = std::get_if<TwistDriver>(&s.drivers[d])) {
+                    rotations[d] =
+                        detail::rotation(tw->axis, tw->angle * detail::ramp(t_end, tw->ramp_time));
+                }
+            }
+            const float drag_fraction = static_cast<float>(sub + 1) / static_cast<float>(n);
+            parallel_for(
+                static_cast<std::int64_t>(s.driven_vertices.size()),
+                [&](std::int64_t k) {
+                    const auto v =
+                        static_cast<std::size_t>(s.driven_vertices[static_cast<std::size_t>(k)]);
+                    const std::int32_t d = s.driven_by[static_cast<std::size_t>(k)];
+                    Vec3f target;
+                    if (d == DRAG) {
+                        // The grab set is small; its offsets are found by a scan of it.
+                        const auto it =
+                            std::lower_bound(s.drag_vertices.begin(), s.drag_vertices.end(),
+                                             static_cast<std::int32_t>(v));
+                        const Vec3f offset =
+                            s.drag_offsets[static_cast<std::size_t>(it - s.drag_vertices.begin())];
+                        target =
+                            s.drag_from + (s.drag->target - s.drag_from) * drag_fraction + offset;
+                    } else {
+                        const Vec3d rest = vec3_cast<double>(s.rest[v]);
+                        const Driver& driver = s.drivers[static_cast<std::size_t>(d)];
+                        const Vec3d c = s.box.centre;
+                        bool turns = true;
+                        if (const auto* tw = std::get_if<TwistDriver>(&driver)) {
+                            const int a = static_cast<int>(tw->axis);
+                            turns = rest[a] > c[a];
+                        }
+                        target =
+                            turns ? vec3_cast<float>(
+                                        c + detail::rotate(rotations[static_cast<std::size_t>(d)],
+                                                           rest - c))
+                                  : s.rest[v];
+                    }
+                    x[v] = {target.x, target.y, target.z, 0.0f};
+                },
+                VERTEX_GRAIN);
+        }
+        // Step 5: edges, colour by colour.
+        for (std::int32_t c = 0; c < s.edge_coloring.num_colors(); ++c) {
+            const std::int64_t begin = s.edge_coloring.offsets[static_cast<std::size_t>(c)];
+            const std::int64_t count =
+                s.edge_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+            const auto* edges = s.edge_vertices.data() + begin;
+            const float* lengths = s.rest_lengths.data() + begin;
+            parallel_for_chunks(
+                count, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                    std::int64_t i = b;
+#if defined(PLIANT_PBD_SSE)
+                    for (; i + 4 <= e; i += 4) {
+                        detail::project_edges4(x, edges + i, lengths + i, edge_inv_k, edge_alpha);
+                    }
+#endif
+                    for (; i < e; ++i) {
+                        detail::project_edge(x, edges[i][0], edges[i][1], lengths[i], edge_inv_k,
+                                             edge_alpha);
+                    }
+                });
+        }
+        // Step 6: tet volumes, colour by colour.
+        for (std::int32_t c = 0; c < s.tet_coloring.num_colors(); ++c) {
+            const std::int64_t begin = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
+            const std::int64_t count =
+                s.tet_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+            const geometry::Tet* tets = s.tet_vertices.data() + begin;
+            const float* volumes = s.rest_volumes.data() + begin;
+            parallel_for_chunks(
+                count, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                    std::int64_t i = b;
+#if defined(PLIANT_PBD_SSE)
+                    for (; i + 4 <= e; i += 4) {
+                        detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
+                    }
+#endif
+                    for (; i < e; ++i) {
+                        detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
+                    }
+                });
+        }
+        // Step 7: velocities from the motion, damped.
+        const float inv_h = 1.0f / hf;
+        parallel_for(
+            nv,
+            [&](std::int64_t i) {
+                const auto v = static_cast<std::size_t>(i);
+                if (s.pinned[v] != 0) {
+                    return;
+                }
+                const Float4& p = x[v];
+                const Vec3f& q = s.previous[v];
+                s.velocities[v] =
+                    Vec3f{(p.x - q.x) * inv_h, (p.y - q.y) * inv_h, (p.z - q.z) * inv_h} * keep;
+            },
+            VERTEX_GRAIN);
+    }
+    const double substeps_ms = substeps_watch.elapsed_ms();
+    parallel_for(
+        nv,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            s.positions[v] = {x[v].x, x[v].y, x[v].z};
+        },
+        VERTEX_GRAIN);
+    m_time += dt;
+    s.last_substep_ms = substeps_ms / n;
+    s.last_step_ms = step_watch.elapsed_ms();
+}
+
+// Waves displace the rest positions, bubbles scale; results in colour order.
+void SoftBody::update_rest_state(double t) {
+    State& s = *m_state;
+    std::vector<const WaveDriver*> waves;
+    std::vector<const BubbleDriver*> bubbles;
+    for (const Driver& d : s.drivers) {
+        if (const auto* w = std::get_if<WaveDriver>(&d)) {
+            waves.push_back(w);
+        } else if (const auto* b = std::get_if<BubbleDriver>(&d)) {
+            bubbles.push_back(b);
+        }
+    }
+    const auto nv = static_cast<std::int64_t>(s.rest.size());
+    // Displaced rest positions (double), only when a wave runs.
+    std::vector<Vec3d> shaped;
+    if (!waves.empty()) {
+        shaped.resize(static_cast<std::size_t>(nv));
+        parallel_for(
+            nv,
+            [&](std::int64_t i) {
+                const auto v = static_cast<std::size_t>(i);
+                const Vec3d rest = vec3_cast<double>(s.rest[v]);
+                Vec3d p = rest;
+                for (const WaveDriver* w : waves) {
+                    p += detail::wave_displacement(*w, s.box, rest, t);
+                }
+                shaped[v] = p;
+            },
+            VERTEX_GRAIN);
+    }
+    const auto rest_at = [&](std::int32_t v) {
+        return vec3_cast<double>(s.rest[static_cast<std::size_t>(v)]);
+    };
+    const auto bubble = [&](const Vec3d& p) {
+        double f = 1.0;
+        for (const BubbleDriver* b : bubbles) {
+            f *= detail::bubble_factor(*b, s.box, p, t);
+        }
+        return f;
+    };
+    parallel_for(
+        static_cast<std::int64_t>(s.edge_vertices.size()),
+        [&](std::int64_t k) {
+            const auto& e = s.edge_vertices[static_cast<std::size_t>(k)];
+            double length = shaped.empty() ? s.rest_lengths0[static_cast<std::size_t>(k)]
+                                           : norm(shaped[static_cast<std::size_t>(e[0])] -
+                                                  shaped[static_cast<std::size_t>(e[1])]);
+            if (!bubbles.empty()) {
+                length *= std::cbrt(bubble((rest_at(e[0]) + rest_at(e[1])) * 0.5));
+            }
+            s.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
+        },
+        EDGE_GRAIN);
+    parallel_for(
+        static_cast<std::int64_t>(s.tet_vertices.size()),
+        [&](std::int64_t k) {
+            const geometry::Tet& tet = s.tet_vertices[static_cast<std::size_t>(k)];
+            double volume = s.rest_volumes0[static_cast<std::size_t>(k)];
+            if (!shaped.empty()) {
+                volume = geometry::signed_volume(shaped[static_cast<std::size_t>(tet[0])],
+                                                 shaped[static_cast<std::size_t>(tet[1])],
+                                                 shaped[static_cast<std::size_t>(tet[2])],
+                                                 shaped[static_cast<std::size_t>(tet[3])]);
+            }
+            if (!bubbles.empty()) {
+                volume *= bubble(
+                    (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25);
+            }
+            s.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
+        },
+        TET_GRAIN);
+}
+
+std::span<const Vec3f> SoftBody::positions() const {
+    return m_state->positions;
+}
+std::span<const Vec3f> SoftBody::velocities() const {
+    return m_state->velocities;
+}
+std::span<const Vec3f> SoftBody::rest_positions() const {
+    return m_state->rest;
+}
+std::span<const float> SoftBody::inv_masses() const {
+    return m_state->inv_masses;
+}
+std::span<const geometry::Tet> SoftBody::tets() const {
+    return m_state->tets;
+}
+std::span<const std::array<std::int32_t, 2>> SoftBody::edges() const {
+    return m_state->edges;
+}
+const ConstraintColoring& SoftBody::edge_coloring() const {
+    return m_state->edge_coloring;
+}
+const ConstraintColoring& SoftBody::tet_coloring() const {
+    return m_state->tet_coloring;
+}
+
+SoftBodyStats SoftBody::stats() const {
+    const State& s = *m_state;
+    struct Sums {
+        double volume = 0.0;
+        std::int64_t inverted = 0;
+    };
+    const Sums sums = parallel_reduce(
+        static_cast<std::int64_t>(s.tets.size()), Sums{},
+        [&](std::int64_t begin, std::int64_t end) {
+            Sums part;
+            for (std::int64_t t = begin; t < end; ++t) {
+                const double v = tet_volume(s.positions, s.tets[static_cast<std::size_t>(t)]);
+                part.volume += v;
+                part.inverted += v <= 0.0 ? 1 : 0;
+            }
+            return part;
+        },
+        [](Sums a, const Sums& b) {
+            a.volume += b.volume;
+            a.inverted += b.inverted;
+            return a;
+        });
+    SoftBodyStats stats;
+    stats.volume_ratio = s.total_rest_volume > 0.0 ? sums.volume / s.total_rest_volume : 1.0;
+    stats.inverted_tets = sums.inverted;
+    stats.ms_per_substep = s.last_substep_ms;
+    stats.step_ms = s.last_step_ms;
+    return stats;
+}
+
+}  // namespace pliant::pbd
