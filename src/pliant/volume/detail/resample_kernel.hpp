@@ -1,0 +1,288 @@
+// Per-tet kernels of volume/resample.hpp, GPU-style: functions of trivially copyable data, no
+// allocation, no exceptions. Shared by the resampler and the brute-force baseline in
+// bench/resample_bench.cpp, so that both decide "voxel centre inside tet" with the same float
+// operations in the same order. Translation units that use them are compiled with
+// -ffp-contract=off: a contracted a·i + β would round differently in different call sites and
+// break the tie rule's consistency between neighbouring tets.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <type_traits>
+
+#include "pliant/core/host_device.hpp"
+#include "pliant/core/vec3.hpp"
+
+namespace pliant::volume::detail {
+
+// A grid's placement: voxel (i, j, k) centred at origin + ((i, j, k) + 0.5)·spacing.
+struct GridFrame {
+    std::int64_t n[3];
+    double origin[3];
+    double spacing[3];
+};
+
+// One deformed tet prepared for rasterization into a target grid (index space (i, j, k)).
+struct TetRaster {
+    // Inward face planes: h_f(i, j, k) = plane[f][0]·i + (plane[f][1]·j + (plane[f][2]·k +
+    // plane[f][3])), evaluated in exactly this order everywhere (inside()).
+    double plane[4][4];
+    // Tie rule: a centre with h_f = 0 is inside face f when the inward normal is
+    // lexicographically positive.
+    bool tie_inside[4];
+    // Inclusive voxel index box containing every centre the planes can accept, clipped to the
+    // grid (empty when lo > hi on an axis).
+    std::int64_t lo[3];
+    std::int64_t hi[3];
+    // Affine map from target voxel indices to source grid coordinates (voxel centres at integers):
+    // g_a = map[a][0]·i + map[a][1]·j + map[a][2]·k + map[a][3].
+    double map[3][4];
+    bool is_inverted;
+};
+static_assert(std::is_trivially_copyable_v<TetRaster>);
+
+// Inclusive index range [lo, hi] of voxel centres of an axis (n voxels, origin o, spacing s)
+// within the world interval [a, b], grown by 1e-6 voxel (more than the planes' rounding), clipped
+// to [0, n − 1]; lo > hi when empty.
+PLIANT_HOST_DEVICE inline void axis_range(double a, double b, double o, double s, std::int64_t n,
+                                          std::int64_t& lo, std::int64_t& hi) {
+    constexpr double GROW = 1e-6;
+    const double fa = std::clamp((a - o) / s - 0.5 - GROW, -1.0, static_cast<double>(n));
+    const double fb = std::clamp((b - o) / s - 0.5 + GROW, -1.0, static_cast<double>(n));
+    lo = std::max<std::int64_t>(static_cast<std::int64_t>(std::ceil(fa)), 0);
+    hi = std::min<std::int64_t>(static_cast<std::int64_t>(std::floor(fb)), n - 1);
+}
+
+// Sets out.lo/hi (always) and the planes and map (when it returns true). False for a degenerate
+// tet: zero or non-finite determinant, a face with zero normal, or a vertex on its opposite
+// face's plane as computed. p: deformed vertices, ids: their vertex indices (the canonical face
+// order), r: rest vertices; target: the output grid; source: the sampled grid.
+PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t ids[4],
+                                         const Vec3f r[4], const GridFrame& target,
+                                         const GridFrame& source, TetRaster& out) {
+    Vec3d pd[4];
+    for (int v = 0; v < 4; ++v) {
+        pd[v] = vec3_cast<double>(p[v]);
+    }
+    for (int a = 0; a < 3; ++a) {
+        const double mn = std::min(std::min(pd[0][a], pd[1][a]), std::min(pd[2][a], pd[3][a]));
+        const double mx = std::max(std::max(pd[0][a], pd[1][a]), std::max(pd[2][a], pd[3][a]));
+        axis_range(mn, mx, target.origin[a], target.spacing[a], target.n[a], out.lo[a], out.hi[a]);
+    }
+
+    // λ = T⁻¹(x − d), T = [a − d, b − d, c − d]: the rows of T⁻¹ are the cross products of T's
+    // columns over det T.
+    const Vec3d e0 = pd[0] - pd[3];
+    const Vec3d e1 = pd[1] - pd[3];
+    const Vec3d e2 = pd[2] - pd[3];
+    const Vec3d c12 = cross(e1, e2);
+    const double det = dot(e0, c12);
+    const double inv_det = 1.0 / det;
+    if (!(det != 0.0) || !std::isfinite(inv_det)) {
+        return false;
+    }
+    const Vec3d row[3] = {c12 * inv_det, cross(e2, e0) * inv_det, cross(e0, e1) * inv_det};
+    Vec3d rd[4];
+    for (int v = 0; v < 4; ++v) {
+        rd[v] = vec3_cast<double>(r[v]);
+    }
+    const Vec3d f[3] = {rd[0] - rd[3], rd[1] - rd[3], rd[2] - rd[3]};
+    const double rest_det = dot(f[0], cross(f[1], f[2]));
+    out.is_inverted = (det > 0.0 && rest_det < 0.0) || (det < 0.0 && rest_det > 0.0);
+
+    // Faces: face q is opposite vertex q. Its plane function is computed from its vertices sorted
+    // by vertex index, so the two tets sharing the face compute the same numbers; the sign σ that
+    // makes the opposite vertex positive is applied last (exact).
+    const Vec3d c0{target.origin[0] + 0.5 * target.spacing[0],
+                   target.origin[1] + 0.5 * target.spacing[1],
+                   target.origin[2] + 0.5 * target.spacing[2]};
+    for (int q = 0; q < 4; ++q) {
+        int w[3];
+        int m = 0;
+        for (int v = 0; v < 4; ++v) {
+            if (v != q) {
+                w[m++] = v;
+            }
+        }
+        // Sort the three local vertices by vertex index.
+        if (ids[w[1]] < ids[w[0]]) {
+            std::swap(w[0], w[1]);
+        }
+        if (ids[w[2]] < ids[w[1]]) {
+            std::swap(w[1], w[2]);
+        }
+        if (ids[w[1]] < ids[w[0]]) {
+            std::swap(w[0], w[1]);
+        }
+        const Vec3d& u = pd[w[0]];
+        const Vec3d n = cross(pd[w[1]] - u, pd[w[2]] - u);
+        const double side = dot(n, pd[q] - u);
+        if (!(side != 0.0)) {
+            return false;
+        }
+        const double sigma = side > 0.0 ? 1.0 : -1.0;
+        const Vec3d c = c0 - u;
+        const double delta = n.x * c.x + n.y * c.y + n.z * c.z;
+        out.plane[q][0] = sigma * (n.x * target.spacing[0]);
+        out.plane[q][1] = sigma * (n.y * target.spacing[1]);
+        out.plane[q][2] = sigma * (n.z * target.spacing[2]);
+        out.plane[q][3] = sigma * delta;
+        const Vec3d inward = n * sigma;
+        out.tie_inside[q] =
+            inward.x != 0.0 ? inward.x > 0.0 : (inward.y != 0.0 ? inward.y > 0.0 : inward.z > 0.0);
+    }
+
+    // rest(x) = r_d + F·T⁻¹(x − d), F = [r_a − r_d, r_b − r_d, r_c − r_d]; M = F·T⁻¹.
+    double mm[3][3];
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            mm[a][b] = f[0][a] * row[0][b] + f[1][a] * row[1][b] + f[2][a] * row[2][b];
+        }
+    }
+    // x(i, j, k) = c0 + (i, j, k)·spacing_t;  g = (rest − origin_s) / spacing_s − 0.5.
+    const Vec3d x0 = c0 - pd[3];
+    for (int a = 0; a < 3; ++a) {
+        const double inv_s = 1.0 / source.spacing[a];
+        for (int b = 0; b < 3; ++b) {
+            out.map[a][b] = mm[a][b] * target.spacing[b] * inv_s;
+        }
+        const double rest0 = rd[3][a] + (mm[a][0] * x0.x + mm[a][1] * x0.y + mm[a][2] * x0.z);
+        out.map[a][3] = (rest0 - source.origin[a]) * inv_s - 0.5;
+    }
+    return true;
+}
+
+// The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool face_accepts(double a, double beta, bool tie,
+                                                         std::int64_t i) {
+    const double h = a * static_cast<double>(i) + beta;
+    return h > 0.0 || (h == 0.0 && tie);
+}
+
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double face_beta(const double plane[4], std::int64_t j,
+                                                        std::int64_t k) {
+    return plane[1] * static_cast<double>(j) + (plane[2] * static_cast<double>(k) + plane[3]);
+}
+
+// Voxel centre (i, j, k) inside the tet under the tie rule (the brute-force form).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool inside(const TetRaster& t, std::int64_t i,
+                                                   std::int64_t j, std::int64_t k) {
+    for (int q = 0; q < 4; ++q) {
+        if (!face_accepts(t.plane[q][0], face_beta(t.plane[q], j, k), t.tie_inside[q], i)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The voxels [begin, end) of row (j, k) inside the tet: the same set inside() accepts within
+// [t.lo[0], t.hi[0]]. Each face bounds the row from one side (h is monotone in i, also after
+// rounding); the root −β/a is an estimate, corrected by evaluating h at the neighbours.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span(const TetRaster& t, std::int64_t j,
+                                                     std::int64_t k, std::int64_t& begin,
+                                                     std::int64_t& end) {
+    begin = t.lo[0];
+    end = t.hi[0] + 1;
+    for (int q = 0; q < 4 && begin < end; ++q) {
+        const double a = t.plane[q][0];
+        const double beta = face_beta(t.plane[q], j, k);
+        const bool tie = t.tie_inside[q];
+        if (a == 0.0) {
+            if (!(beta > 0.0 || (beta == 0.0 && tie))) {
+                end = begin;
+            }
+            continue;
+        }
+        const double root =
+            std::clamp(-beta / a, static_cast<double>(begin) - 1.0, static_cast<double>(end));
+        if (a > 0.0) {  // accepted: a suffix of the row; find its first voxel
+            std::int64_t i = std::clamp(static_cast<std::int64_t>(std::ceil(root)), begin, end);
+            while (i > begin && face_accepts(a, beta, tie, i - 1)) {
+                --i;
+            }
+            while (i < end && !face_accepts(a, beta, tie, i)) {
+                ++i;
+            }
+            begin = i;
+        } else {  // accepted: a prefix; find its end
+            std::int64_t i =
+                std::clamp(static_cast<std::int64_t>(std::floor(root)) + 1, begin, end);
+            while (i < end && face_accepts(a, beta, tie, i)) {
+                ++i;
+            }
+            while (i > begin && !face_accepts(a, beta, tie, i - 1)) {
+                --i;
+            }
+            end = i;
+        }
+    }
+    if (end < begin) {
+        end = begin;
+    }
+}
+
+// Trilinear sample of a source grid (C channels of type S per voxel, x fastest) at grid
+// coordinate g (voxel centres at integers): 0 outside [−0.5, n − 0.5] on any axis (NaN too),
+// clamped to the edge voxels within half a voxel of the box faces.
+template <typename S, int C>
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void sample_trilinear(const S* data, const std::int64_t n[3],
+                                                             double gx, double gy, double gz,
+                                                             float out[C]) {
+    if (!(gx >= -0.5 && gy >= -0.5 && gz >= -0.5 && gx <= static_cast<double>(n[0]) - 0.5 &&
+          gy <= static_cast<double>(n[1]) - 0.5 && gz <= static_cast<double>(n[2]) - 0.5)) {
+        for (int c = 0; c < C; ++c) {
+            out[c] = 0.0f;
+        }
+        return;
+    }
+    gx = std::clamp(gx, 0.0, static_cast<double>(n[0] - 1));
+    gy = std::clamp(gy, 0.0, static_cast<double>(n[1] - 1));
+    gz = std::clamp(gz, 0.0, static_cast<double>(n[2] - 1));
+    const std::int64_t ix = static_cast<std::int64_t>(gx);
+    const std::int64_t iy = static_cast<std::int64_t>(gy);
+    const std::int64_t iz = static_cast<std::int64_t>(gz);
+    const float fx = static_cast<float>(gx - static_cast<double>(ix));
+    const float fy = static_cast<float>(gy - static_cast<double>(iy));
+    const float fz = static_cast<float>(gz - static_cast<double>(iz));
+    const std::int64_t ox = ix < n[0] - 1 ? C : 0;
+    const std::int64_t oy = iy < n[1] - 1 ? C * n[0] : 0;
+    const std::int64_t oz = iz < n[2] - 1 ? C * n[0] * n[1] : 0;
+    const S* p = data + C * (ix + n[0] * (iy + n[1] * iz));
+    for (int c = 0; c < C; ++c) {
+        const float v000 = static_cast<float>(p[c]);
+        const float v100 = static_cast<float>(p[ox + c]);
+        const float v010 = static_cast<float>(p[oy + c]);
+        const float v110 = static_cast<float>(p[oy + ox + c]);
+        const float v001 = static_cast<float>(p[oz + c]);
+        const float v101 = static_cast<float>(p[oz + ox + c]);
+        const float v011 = static_cast<float>(p[oz + oy + c]);
+        const float v111 = static_cast<float>(p[oz + oy + ox + c]);
+        const float v00 = v000 + fx * (v100 - v000);
+        const float v10 = v010 + fx * (v110 - v010);
+        const float v01 = v001 + fx * (v101 - v001);
+        const float v11 = v011 + fx * (v111 - v011);
+        const float v0 = v00 + fy * (v10 - v00);
+        const float v1 = v01 + fy * (v11 - v01);
+        out[c] = v0 + fz * (v1 - v0);
+    }
+}
+
+// A sample converted to the target's channel type: floats scaled (1/255 from rgba8 to rgba32f,
+// else 1), integers rounded to nearest (halves up) and clamped to the type's range.
+template <typename D>
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE D convert_sample(float v, float scale) {
+    if constexpr (std::is_floating_point_v<D>) {
+        return static_cast<D>(v * scale);
+    } else {
+        constexpr float LO = static_cast<float>(std::numeric_limits<D>::min());
+        constexpr float HI = static_cast<float>(std::numeric_limits<D>::max());
+        // NaN → LO; shifted to be non-negative so that truncation rounds half up.
+        const float c = v > LO ? (v < HI ? v : HI) : LO;
+        return static_cast<D>(static_cast<std::int32_t>(c - LO + 0.5f) +
+                              static_cast<std::int32_t>(LO));
+    }
+}
+
+}  // namespace pliant::volume::detail
