@@ -26,6 +26,7 @@
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "progress_bar.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -243,16 +244,11 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         per_frame.push_back(record);
         frames_done = frame;
         if (options.progress) {
-            const int width = 40;
-            const int done = width * frame / std::max(frames, 1);
-            std::fprintf(stderr, "\r[%s%s] frame %d/%d  %.1f ms/frame",
-                         std::string(done, '#').c_str(), std::string(width - done, ' ').c_str(),
-                         frame, frames, total_ms / frame);
-            std::fflush(stderr);
+            print_progress(frame, frames, total_ms / frame);
         }
     }
     if (options.progress) {
-        std::fputc('\n', stderr);
+        end_progress();
     }
     nlohmann::ordered_json stats = {
         {"scene", scene_name},

@@ -29,18 +29,17 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <numbers>
 #include <string>
 
 #include "commands.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/io/png.hpp"
-#include "pliant/io/transfer_function_json.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "volume_view.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -59,40 +58,6 @@ struct RenderCommandOptions {
     std::string out;
     int orbit = 0;
 };
-
-bool has_extension(const std::string& path, const char* ext) {
-    std::string e = std::filesystem::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return e == ext;
-}
-
-// "WxH" → {W, H}, each in [1, 16384]; CLI::ValidationError (exit 2) otherwise.
-std::array<int, 2> parse_size(const std::string& text) {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 1 ||
-        h < 1 || w > 16384 || h > 16384) {
-        throw CLI::ValidationError(
-            "--size", fmt::format("expected WxH with 1 <= W, H <= 16384, got '{}'", text));
-    }
-    return {w, h};
-}
-
-render::Camera orbit_camera(const AABBd& box, double azimuth, double elevation, double distance,
-                            int width, int height) {
-    if (distance <= 0.0) {
-        return render::frame_box(box, azimuth, elevation, width, height);
-    }
-    const double az = azimuth * std::numbers::pi / 180.0;
-    const double el = elevation * std::numbers::pi / 180.0;
-    const Vec3d dir{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
-    const Vec3d up = std::fabs(std::sin(el)) > 0.999
-                         ? Vec3d{-std::cos(az) * std::sin(el), -std::sin(az) * std::sin(el), 0.0}
-                         : Vec3d{0.0, 0.0, 1.0};
-    const Vec3d center = box.center();
-    return render::Camera::perspective(center + distance * dir, center, up, 30.0, width, height);
-}
 
 void run_render(const RenderCommandOptions& options, const GlobalOptions& global) {
     // Usage checks that need several options (exit 2).
@@ -114,10 +79,7 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
     volume::TransferFunction tf;
     const bool is_rgba = volume::channels(vol.type()) == 4;
     if (!is_rgba) {
-        const auto& presets = volume::preset_names();
-        tf = std::find(presets.begin(), presets.end(), options.tf) != presets.end()
-                 ? volume::preset(options.tf, vol)
-                 : io::read_transfer_function(options.tf);
+        tf = load_transfer_function(options.tf, vol);
     }
     render::RayCastOptions ro;
     ro.step = options.step;

@@ -29,5 +29,6 @@ void register_demo(CLI::App& app, const GlobalOptions& global);
 void register_cloth(CLI::App& app, const GlobalOptions& global);
 void register_volume(CLI::App& app, const GlobalOptions& global);
 void register_render(CLI::App& app, const GlobalOptions& global);
+void register_deform(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace pliant::cli

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
     cli::register_cloth(app, global);
     cli::register_volume(app, global);
     cli::register_render(app, global);
+    cli::register_deform(app, global);
 
     try {
         app.parse(argc, argv);

@@ -1,0 +1,378 @@
+// pliant deform VOLUME --driver wave|twist|bubble|rotate [driver options]
+//               [--cells B] [--full-box] [--mesh FILE.node] [--stiffness K] [--substeps N]
+//               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
+//               [--size WxH] [--camera AZ,EL,DIST] [--max-memory MIB] [--json]
+//
+// The deformable-volume pipeline of Park & Kye 2022 on a volume file: a tet grid over it
+// (pbd::build_tet_grid: cells of B³ voxels, 5 tets each, only cells near visible voxels unless
+// --full-box; or a TetGen mesh with --mesh), deformed by the XPBD soft body (pbd::SoftBody) under
+// one driver for N frames of 1/fps seconds, then resampled back into a grid like the source
+// (volume::Resampler) and written to OUT (any writable volume format, io/volume_io.hpp). With
+// --render, every frame is resampled and ray-cast (render::RayCaster) into an MP4 at --fps.
+//
+// Drivers (pbd/drivers.hpp; lengths in box units, fractions of the volume's largest side):
+//   rotate  --axis x|y|z --angle DEG        rigid rotation about the volume centre (testing)
+//   twist   --axis x|y|z --angle DEG --grip G   the slab of the body within G of the box's max
+//           face turned against the slab at its min face (G = 0.1: the ends of a rounded body,
+//           a head, are held, not just its extreme points)
+//   wave    --axis x|y|z (propagation) --displacement-axis x|y|z --amplitude A --wavelength W
+//           --speed S (box units per second)
+//   bubble  --center X,Y,Z (box coordinates) --radius R --inflation F
+//   --ramp S  seconds over which the driver reaches full strength; default: the whole run for
+//           rotate and twist (the last frame shows the full angle), the driver's own otherwise.
+// An option of another driver is a usage error (exit 2).
+//
+// stdout: a summary, or with --json one object: output, render, driver, frames, substeps,
+// vertices, tets, active_cells, ms_per_substep, step_ms, resample_ms, render_ms, ms_per_frame
+// (means over frames), volume_ratio and inverted_tets (last frame), min_volume_ratio,
+// max_volume_ratio, max_inverted_tets (over frames), tets_skipped, voxels_written (last
+// resampling).
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "commands.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/io/tetgen.hpp"
+#include "pliant/io/video.hpp"
+#include "pliant/io/volume_io.hpp"
+#include "pliant/pbd/soft_body.hpp"
+#include "pliant/pbd/tet_grid.hpp"
+#include "pliant/render/raycast.hpp"
+#include "pliant/volume/resample.hpp"
+#include "pliant/volume/transfer_function.hpp"
+#include "progress_bar.hpp"
+#include "validators.hpp"
+#include "volume_view.hpp"
+
+namespace pliant::cli {
+namespace {
+
+struct DeformCommandOptions {
+    std::string volume;
+    std::string driver;
+    std::string axis;  // empty: z, for wave x
+    std::string displacement_axis = "z";
+    double angle = 90.0;
+    double grip = 0.1;
+    double amplitude = pbd::WaveDriver{}.amplitude;
+    double wavelength = pbd::WaveDriver{}.wavelength;
+    double speed = pbd::WaveDriver{}.speed;
+    std::array<double, 3> center{0.5, 0.5, 0.5};
+    double radius = pbd::BubbleDriver{}.radius;
+    double inflation = pbd::BubbleDriver{}.inflation;
+    double ramp = -1.0;  // < 0: the default of the driver
+    int cells = 4;
+    bool full_box = false;
+    std::string mesh;
+    double stiffness = 1.0;
+    int substeps = pbd::SoftBodyOptions{}.substeps;
+    double damping = pbd::SoftBodyOptions{}.damping;
+    int frames = 48;
+    double fps = 24.0;
+    std::string out;
+    std::string render;
+    std::string tf = "grayscale";
+    std::string size = "512x512";
+    std::array<double, 3> camera{30.0, 20.0, 0.0};
+    double max_memory_mib = 16384.0;
+
+    // The driver-specific options the user gave, for the usage check.
+    std::vector<std::pair<const CLI::Option*, std::vector<std::string>>> driver_only;
+};
+
+pbd::Axis to_axis(const std::string& name) {
+    return name == "x" ? pbd::Axis::x : (name == "y" ? pbd::Axis::y : pbd::Axis::z);
+}
+
+pbd::Driver make_driver(const DeformCommandOptions& o, double duration) {
+    const pbd::Axis axis =
+        o.axis.empty() ? (o.driver == "wave" ? pbd::Axis::x : pbd::Axis::z) : to_axis(o.axis);
+    if (o.driver == "rotate") {
+        return pbd::RotateDriver{
+            .axis = axis, .angle = o.angle, .ramp_time = o.ramp >= 0.0 ? o.ramp : duration};
+    }
+    if (o.driver == "twist") {
+        return pbd::TwistDriver{.axis = axis,
+                                .angle = o.angle,
+                                .ramp_time = o.ramp >= 0.0 ? o.ramp : duration,
+                                .grip = o.grip};
+    }
+    if (o.driver == "wave") {
+        pbd::WaveDriver wave{.direction = axis,
+                             .displacement = to_axis(o.displacement_axis),
+                             .amplitude = o.amplitude,
+                             .wavelength = o.wavelength,
+                             .speed = o.speed};
+        if (o.ramp >= 0.0) {
+            wave.ramp_time = o.ramp;
+        }
+        return wave;
+    }
+    pbd::BubbleDriver bubble{.centre = {o.center[0], o.center[1], o.center[2]},
+                             .radius = o.radius,
+                             .inflation = o.inflation};
+    if (o.ramp >= 0.0) {
+        bubble.ramp_time = o.ramp;
+    }
+    return bubble;
+}
+
+struct Running {
+    double sum = 0.0;
+    int count = 0;
+    void add(double x) {
+        sum += x;
+        ++count;
+    }
+    double mean() const { return count > 0 ? sum / count : 0.0; }
+};
+
+void run_deform(const DeformCommandOptions& options, const GlobalOptions& global) {
+    // Usage checks across options (exit 2).
+    for (const auto& [option, drivers] : options.driver_only) {
+        if (option->count() > 0 &&
+            std::find(drivers.begin(), drivers.end(), options.driver) == drivers.end()) {
+            throw CLI::ValidationError(option->get_name(),
+                                       fmt::format("applies to --driver {}, not {}",
+                                                   fmt::join(drivers, "|"), options.driver));
+        }
+    }
+    if (!options.render.empty() && !has_extension(options.render, ".mp4")) {
+        throw CLI::ValidationError("--render",
+                                   "expected an .mp4 file name, got '" + options.render + "'");
+    }
+    const std::array<int, 2> size = parse_size(options.size);
+    io::volume_format(options.out);  // an output name pliant cannot write fails before the run
+
+    io::ReadVolumeOptions read;
+    read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    const volume::Volume source = io::read_volume(options.volume, read);
+    const bool is_rgba = volume::channels(source.type()) == 4;
+    std::optional<volume::TransferFunction> tf;
+    if (!is_rgba) {
+        tf = load_transfer_function(options.tf, source);
+        tf->validate();
+    }
+    const volume::TransferFunction* visibility_tf = tf ? &*tf : nullptr;
+
+    // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.
+    std::optional<pbd::TetGrid> grid;
+    geometry::TetMesh mesh;
+    if (options.mesh.empty()) {
+        grid = pbd::build_tet_grid(
+            source,
+            {.cell_voxels = options.cells, .full_box = options.full_box, .tf = visibility_tf});
+        if (grid->mesh.tets.empty()) {
+            throw InvalidInput(fmt::format(
+                "{}: no visible voxel under the transfer function '{}', so no tet to deform "
+                "(use --full-box or another --tf)",
+                options.volume, tf ? tf->name : std::string("alpha")));
+        }
+    } else {
+        mesh = io::read_tetgen(options.mesh);
+        if (mesh.tets.empty()) {
+            throw InvalidInput(options.mesh + ": the mesh has no tets");
+        }
+    }
+    const geometry::TetMesh& rest = grid ? grid->mesh : mesh;
+    pbd::SoftBodyOptions body_options;
+    body_options.stiffness = options.stiffness;
+    body_options.substeps = options.substeps;
+    body_options.damping = options.damping;
+    pbd::SoftBody body =
+        grid ? pbd::SoftBody(*grid, body_options) : pbd::SoftBody(mesh, body_options);
+    const double dt = 1.0 / options.fps;
+    body.add_driver(make_driver(options, options.frames * dt));
+
+    const volume::Resampler resampler(source, rest.tets, rest.positions, {.tf = visibility_tf});
+    volume::Volume target = volume::Volume::allocate(source.dims(), source.type(), source.spacing(),
+                                                     source.origin(), read.max_bytes);
+
+    std::optional<io::VideoWriter> video;
+    if (!options.render.empty()) {
+        video.emplace(options.render, size[0], size[1], options.fps);
+    }
+    const render::Camera camera = orbit_camera(
+        source.bounds(), options.camera[0], options.camera[1], options.camera[2], size[0], size[1]);
+    const bool progress = ::isatty(::fileno(stderr)) != 0 && !global.json;
+
+    Running substep_ms, step_ms, resample_ms, render_ms, frame_ms;
+    double min_ratio = std::numeric_limits<double>::infinity();
+    double max_ratio = -std::numeric_limits<double>::infinity();
+    std::int64_t max_inverted = 0;
+    pbd::SoftBodyStats stats;
+    volume::ResampleStats resampled;
+    render::Image image;
+    for (int frame = 1; frame <= options.frames; ++frame) {
+        const Stopwatch frame_clock;
+        body.step(dt);
+        stats = body.stats();
+        substep_ms.add(stats.ms_per_substep);
+        step_ms.add(stats.step_ms);
+        min_ratio = std::min(min_ratio, stats.volume_ratio);
+        max_ratio = std::max(max_ratio, stats.volume_ratio);
+        max_inverted = std::max(max_inverted, stats.inverted_tets);
+        if (video || frame == options.frames) {
+            const Stopwatch clock;
+            resampled = resampler.resample(body.positions(), target);
+            resample_ms.add(clock.elapsed_ms());
+        }
+        if (video) {
+            const render::RayCaster caster(target, visibility_tf);
+            render_ms.add(caster.render(camera, image).ms + caster.prepare_ms());
+            video->write(image);
+        }
+        frame_ms.add(frame_clock.elapsed_ms());
+        if (progress) {
+            print_progress(frame, options.frames, frame_ms.mean());
+        }
+    }
+    if (progress) {
+        end_progress();
+    }
+    io::write_volume(options.out, target);
+    if (video) {
+        video->finish();
+    }
+
+    if (global.json) {
+        nlohmann::ordered_json j;
+        j["output"] = options.out;
+        j["render"] = options.render.empty() ? nlohmann::ordered_json()
+                                             : nlohmann::ordered_json(options.render);
+        j["driver"] = options.driver;
+        j["frames"] = options.frames;
+        j["substeps"] = options.substeps;
+        j["vertices"] = rest.positions.size();
+        j["tets"] = rest.tets.size();
+        j["active_cells"] = grid ? grid->num_active_cells() : 0;
+        j["ms_per_substep"] = substep_ms.mean();
+        j["step_ms"] = step_ms.mean();
+        j["resample_ms"] = resample_ms.mean();
+        j["render_ms"] = render_ms.mean();
+        j["ms_per_frame"] = frame_ms.mean();
+        j["volume_ratio"] = stats.volume_ratio;
+        j["inverted_tets"] = stats.inverted_tets;
+        j["min_volume_ratio"] = min_ratio;
+        j["max_volume_ratio"] = max_ratio;
+        j["max_inverted_tets"] = max_inverted;
+        j["tets_skipped"] = resampled.num_tets_skipped;
+        j["voxels_written"] = resampled.num_voxels_written;
+        std::fputs((j.dump(2) + "\n").c_str(), stdout);
+    } else {
+        std::printf(
+            "%s: %s, %d frames of %zu tets (%zu vertices): %.2f ms per substep, %.1f ms per "
+            "resampling, volume ratio %.4f, %lld inverted tets%s%s\n",
+            options.out.c_str(), options.driver.c_str(), options.frames, rest.tets.size(),
+            rest.positions.size(), substep_ms.mean(), resample_ms.mean(), stats.volume_ratio,
+            static_cast<long long>(stats.inverted_tets), options.render.empty() ? "" : "; video ",
+            options.render.c_str());
+    }
+}
+
+}  // namespace
+
+void register_deform(CLI::App& app, const GlobalOptions& global) {
+    auto options = std::make_shared<DeformCommandOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "deform",
+        "Deform a volume: tet grid, XPBD soft body under a driver, resampling (and a video)");
+    cmd->add_option("VOLUME", options->volume, "Volume file (NRRD, NIfTI, raw+JSON, .inv3)")
+        ->required();
+    cmd->add_option("--driver", options->driver, "Deformation driver")
+        ->required()
+        ->check(CLI::IsMember({"wave", "twist", "bubble", "rotate"}));
+    const auto only = [&](CLI::Option* option, std::vector<std::string> drivers) {
+        options->driver_only.emplace_back(option, std::move(drivers));
+    };
+    only(cmd->add_option("--axis", options->axis,
+                         "rotate/twist: axis; wave: propagation axis (default z; wave: x)")
+             ->check(CLI::IsMember({"x", "y", "z"})),
+         {"rotate", "twist", "wave"});
+    only(cmd->add_option("--displacement-axis", options->displacement_axis,
+                         "wave: displacement axis (default z)")
+             ->check(CLI::IsMember({"x", "y", "z"})),
+         {"wave"});
+    only(cmd->add_option("--angle", options->angle, "rotate/twist: angle in degrees (default 90)")
+             ->check(CLI::Range(-1e6, 1e6)),
+         {"rotate", "twist"});
+    only(cmd->add_option("--grip", options->grip,
+                         "twist: thickness of the two held slabs, box units (default 0.1)")
+             ->check(CLI::Range(0.0, 0.49)),
+         {"twist"});
+    only(cmd->add_option("--amplitude", options->amplitude, "wave: amplitude, box units")
+             ->check(finite_non_negative()),
+         {"wave"});
+    only(cmd->add_option("--wavelength", options->wavelength, "wave: wavelength, box units")
+             ->check(CLI::Range(1e-6, 1e6)),
+         {"wave"});
+    only(cmd->add_option("--speed", options->speed, "wave: speed, box units per second")
+             ->check(CLI::Range(-1e6, 1e6)),
+         {"wave"});
+    only(cmd->add_option("--center", options->center, "bubble: centre, box coordinates")
+             ->type_name("X,Y,Z")
+             ->delimiter(',')
+             ->check(CLI::Range(-1e6, 1e6)),
+         {"bubble"});
+    only(cmd->add_option("--radius", options->radius, "bubble: radius, box units")
+             ->check(CLI::Range(1e-6, 1e6)),
+         {"bubble"});
+    only(cmd->add_option("--inflation", options->inflation,
+                         "bubble: rest-volume factor at the centre (> 1 inflates)")
+             ->check(CLI::Range(1e-6, 1e6)),
+         {"bubble"});
+    cmd->add_option("--ramp", options->ramp,
+                    "Seconds to reach full strength (default: the whole run for rotate and "
+                    "twist, the driver's own otherwise)")
+        ->check(finite_non_negative());
+    CLI::Option* mesh =
+        cmd->add_option("--mesh", options->mesh,
+                        "TetGen mesh (.node/.ele) in the volume's world frame instead of a grid");
+    cmd->add_option("--cells", options->cells, "Voxels per tet-grid cell side (default 4)")
+        ->check(CLI::Range(1, 4096))
+        ->excludes(mesh);
+    cmd->add_flag("--full-box", options->full_box,
+                  "Tets over the whole box, not only near visible voxels")
+        ->excludes(mesh);
+    cmd->add_option("--stiffness", options->stiffness, "PBD stiffness in (0, 1] (default 1)")
+        ->check(CLI::Range(1e-6, 1.0));
+    cmd->add_option("--substeps", options->substeps, "XPBD substeps per frame")
+        ->check(CLI::Range(1, 10000));
+    cmd->add_option("--damping", options->damping, "Velocity damping, 1/s")
+        ->check(finite_non_negative());
+    cmd->add_option("--frames", options->frames, "Frames to simulate (default 48)")
+        ->check(CLI::Range(1, 1000000));
+    cmd->add_option("--fps", options->fps, "Frames per second (default 24)")
+        ->check(CLI::Range(1e-3, 1e4));
+    cmd->add_option("-o,--output", options->out, "Deformed volume of the last frame")->required();
+    cmd->add_option("--render", options->render, "MP4 of every frame, ray-cast");
+    cmd->add_option("--tf", options->tf,
+                    "Transfer function (preset or JSON) for scalar volumes: rendering, and which "
+                    "voxels are visible for the grid (default grayscale)");
+    cmd->add_option("--size", options->size, "Video size (default 512x512)")->type_name("WxH");
+    cmd->add_option("--camera", options->camera,
+                    "Video camera: azimuth, elevation (degrees), distance (0 = frame the box)")
+        ->type_name("AZ,EL,DIST")
+        ->delimiter(',')
+        ->check(CLI::Range(-1e6, 1e6));
+    cmd->add_option("--max-memory", options->max_memory_mib,
+                    "Largest volume to read, MiB (default 16384)")
+        ->check(CLI::Range(1.0, 1e9));
+    cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
+    cmd->callback([options, &global] { run_deform(*options, global); });
+}
+
+}  // namespace pliant::cli
