@@ -11,7 +11,7 @@
 // --render, every frame is resampled and ray-cast (render::RayCaster) into an MP4 at --fps.
 //
 // Drivers (pbd/drivers.hpp; lengths in box units, fractions of the volume's largest side):
-//   rotate  --axis x|y|z --angle DEG        rigid rotation about the volume centre (testing)
+//   rotate  --axis x|y|z --angle DEG        rigid rotation about the volume's centre (testing)
 //   twist   --axis x|y|z --angle DEG --grip G   the slab of the body within G of the box's max
 //           face turned against the slab at its min face (G = 0.1: the ends of a rounded body,
 //           a head, are held, not just its extreme points)
@@ -97,12 +97,15 @@ pbd::Axis to_axis(const std::string& name) {
     return name == "x" ? pbd::Axis::x : (name == "y" ? pbd::Axis::y : pbd::Axis::z);
 }
 
-pbd::Driver make_driver(const DeformCommandOptions& o, double duration) {
+pbd::Driver make_driver(const DeformCommandOptions& o, double duration,
+                        const Vec3d& volume_centre) {
     const pbd::Axis axis =
         o.axis.empty() ? (o.driver == "wave" ? pbd::Axis::x : pbd::Axis::z) : to_axis(o.axis);
     if (o.driver == "rotate") {
-        return pbd::RotateDriver{
-            .axis = axis, .angle = o.angle, .ramp_time = o.ramp >= 0.0 ? o.ramp : duration};
+        return pbd::RotateDriver{.axis = axis,
+                                 .angle = o.angle,
+                                 .ramp_time = o.ramp >= 0.0 ? o.ramp : duration,
+                                 .centre = volume_centre};
     }
     if (o.driver == "twist") {
         return pbd::TwistDriver{.axis = axis,
@@ -155,11 +158,11 @@ void run_deform(const DeformCommandOptions& options, const GlobalOptions& global
                                    "expected an .mp4 file name, got '" + options.render + "'");
     }
     const std::array<int, 2> size = parse_size(options.size);
-    io::volume_format(options.out);  // an output name pliant cannot write fails before the run
 
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
     const volume::Volume source = io::read_volume(options.volume, read);
+    io::check_volume_writable(options.out, source.type());  // fail before the run, not after
     const bool is_rgba = volume::channels(source.type()) == 4;
     std::optional<volume::TransferFunction> tf;
     if (!is_rgba) {
@@ -195,7 +198,7 @@ void run_deform(const DeformCommandOptions& options, const GlobalOptions& global
     pbd::SoftBody body =
         grid ? pbd::SoftBody(*grid, body_options) : pbd::SoftBody(mesh, body_options);
     const double dt = 1.0 / options.fps;
-    body.add_driver(make_driver(options, options.frames * dt));
+    body.add_driver(make_driver(options, options.frames * dt, source.bounds().center()));
 
     const volume::Resampler resampler(source, rest.tets, rest.positions, {.tf = visibility_tf});
     volume::Volume target = volume::Volume::allocate(source.dims(), source.type(), source.spacing(),

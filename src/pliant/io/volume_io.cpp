@@ -90,8 +90,24 @@ volume::Volume read_volume(const std::filesystem::path& path, const ReadVolumeOp
     throw InternalError("read_volume: unhandled format");
 }
 
+void check_volume_writable(const std::filesystem::path& path, volume::VoxelType type) {
+    const VolumeFormat format = volume_format(path);
+    if (format == VolumeFormat::analyze_hdr || format == VolumeFormat::inv3) {
+        throw Unsupported(
+            fmt::format("{}: {} is read only, expected .nrrd, .nhdr, .nii, .nii.gz or .json/.raw",
+                        path.string(), name(format)));
+    }
+    if ((format == VolumeFormat::nifti || format == VolumeFormat::nifti_gz) &&
+        type == volume::VoxelType::rgba32f) {
+        throw Unsupported(fmt::format(
+            "{}: NIfTI-1 has no RGBA float type: write rgba32f volumes as NRRD or raw + JSON",
+            path.string()));
+    }
+}
+
 void write_volume(const std::filesystem::path& path, const volume::Volume& volume,
                   const WriteVolumeOptions& options) {
+    check_volume_writable(path, volume.type());
     const VolumeFormat format = volume_format(path);
     switch (format) {
         case VolumeFormat::nrrd:
@@ -115,9 +131,7 @@ void write_volume(const std::filesystem::path& path, const volume::Volume& volum
             return;
         case VolumeFormat::analyze_hdr:
         case VolumeFormat::inv3:
-            throw Unsupported(fmt::format(
-                "{}: {} is read only, expected .nrrd, .nhdr, .nii, .nii.gz or .json/.raw",
-                path.string(), name(format)));
+            return;  // refused by check_volume_writable
     }
 }
 

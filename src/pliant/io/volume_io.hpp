@@ -52,4 +52,8 @@ volume::Volume read_volume(const std::filesystem::path& path,
 void write_volume(const std::filesystem::path& path, const volume::Volume& volume,
                   const WriteVolumeOptions& options = {});
 
+// Throws what write_volume would for the name and voxel type alone (Unsupported for read-only
+// formats and types the format cannot store), so that long runs fail before they start.
+void check_volume_writable(const std::filesystem::path& path, volume::VoxelType type);
+
 }  // namespace pliant::io

@@ -56,6 +56,11 @@ void validate_driver(const Driver& driver) {
     } else if (const auto* rotate_driver = std::get_if<RotateDriver>(&driver)) {
         const char* name = "RotateDriver";
         require_finite(name, "angle", rotate_driver->angle);
+        if (rotate_driver->centre) {
+            require_finite(name, "centre.x", rotate_driver->centre->x);
+            require_finite(name, "centre.y", rotate_driver->centre->y);
+            require_finite(name, "centre.z", rotate_driver->centre->z);
+        }
         require_finite(name, "ramp_time", rotate_driver->ramp_time);
         require(rotate_driver->ramp_time >= 0.0, name, "ramp_time", rotate_driver->ramp_time,
                 ">= 0");

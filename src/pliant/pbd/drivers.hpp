@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <variant>
 
 #include "pliant/core/vec3.hpp"
@@ -68,13 +69,16 @@ struct BubbleDriver {
 };
 
 // Rigid rotation (kinematic driver, for testing): every vertex is driven to
-//   c + R(axis, s(t) · angle) · (rest − c),  c the box's centre,
+//   c + R(axis, s(t) · angle) · (rest − c),  c = `centre` or else the box's centre,
 // so the body turns rigidly and exactly (double-precision targets rounded to float).
 // InvalidInput: values not finite, ramp_time < 0.
 struct RotateDriver {
     Axis axis = Axis::z;
     double angle = 90.0;     // degrees, right-handed about +axis
     double ramp_time = 0.0;  // s
+    // World units: the point the axis goes through (pliant deform: the volume's centre, which a
+    // grid over only the visible part need not share); none: the rest box's centre.
+    std::optional<Vec3d> centre;
 };
 
 using Driver = std::variant<WaveDriver, TwistDriver, BubbleDriver, RotateDriver>;

@@ -468,7 +468,9 @@ void SoftBody::step(double dt) {
                     } else {
                         const Vec3d rest = vec3_cast<double>(s.rest[v]);
                         const Driver& driver = s.drivers[static_cast<std::size_t>(d)];
-                        const Vec3d c = s.box.centre;
+                        const auto* rotate = std::get_if<RotateDriver>(&driver);
+                        const Vec3d c =
+                            rotate != nullptr && rotate->centre ? *rotate->centre : s.box.centre;
                         bool turns = true;
                         if (const auto* tw = std::get_if<TwistDriver>(&driver)) {
                             const int a = static_cast<int>(tw->axis);
