@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/render/detail/raycast_kernel.hpp"
 #include "pliant/volume/generate.hpp"
 
 namespace pliant::render {
@@ -222,17 +225,70 @@ TEST(RayCast, ViewCameraCoversTheBoxExactly) {
 
 TEST(RayCast, SkippingDoesNotChangeTheImage) {
     const Volume phantom = volume::shepp_logan_3d({40, 40, 40});
+    const Volume rgba = volume::rgba_test_object({36, 36, 36}, VoxelType::rgba8);
     const volume::TransferFunction tf = volume::preset("mri-brain", phantom);
-    const Camera cam = frame_box(phantom.bounds(), -50.0, 35.0, 48, 40);
-    RayCastOptions on;
-    on.shading = true;
-    RayCastOptions off = on;
-    off.empty_space_skipping = false;
-    Image a, b;
-    const RayCastStats sa = raycast(phantom, &tf, cam, on, a);
-    const RayCastStats sb = raycast(phantom, &tf, cam, off, b);
-    EXPECT_EQ(a, b);
-    EXPECT_LT(sa.samples, sb.samples);
+    // Oblique perspective views and axis views (rays parallel to the cell planes, sample
+    // midpoints on voxel centres), composite with and without shading, and MIP.
+    const std::vector<Camera> cameras = {
+        frame_box(phantom.bounds(), -50.0, 35.0, 48, 40),
+        frame_box(phantom.bounds(), 45.0, 0.0, 41, 37),
+        view_camera(phantom.bounds(), ViewAxis::neg_y, 40, 40),
+        view_camera(phantom.bounds(), ViewAxis::pos_z, 80, 80),
+    };
+    for (const RayCastMode mode : {RayCastMode::composite, RayCastMode::mip}) {
+        for (const bool shading : {false, true}) {
+            for (std::size_t c = 0; c < cameras.size(); ++c) {
+                RayCastOptions on;
+                on.mode = mode;
+                on.shading = shading;
+                RayCastOptions off = on;
+                off.empty_space_skipping = false;
+                Image a, b, ra, rb;
+                const RayCastStats sa = raycast(phantom, &tf, cameras[c], on, a);
+                const RayCastStats sb = raycast(phantom, &tf, cameras[c], off, b);
+                raycast(rgba, nullptr, cameras[c], on, ra);
+                raycast(rgba, nullptr, cameras[c], off, rb);
+                EXPECT_EQ(a, b) << "camera " << c << " shading " << shading;
+                EXPECT_EQ(ra, rb) << "RGBA, camera " << c << " shading " << shading;
+                EXPECT_LT(sa.samples, sb.samples) << "camera " << c;
+            }
+        }
+    }
+}
+
+TEST(RayCast, ChessboardDistanceMatchesBruteForce) {
+    const int cells[3] = {9, 7, 5};
+    std::vector<std::uint8_t> occupied(9 * 7 * 5, 0);
+    std::uint32_t state = 12345;
+    for (auto& o : occupied) {
+        state = state * 1664525u + 1013904223u;
+        o = (state >> 24) < 8 ? 1 : 0;  // about 3 %
+    }
+    std::vector<std::uint8_t> distance(occupied.size());
+    detail::chessboard_distance(occupied, cells, distance);
+    for (int z = 0; z < 5; ++z) {
+        for (int y = 0; y < 7; ++y) {
+            for (int x = 0; x < 9; ++x) {
+                int best = detail::MAX_DISTANCE;
+                for (int qz = 0; qz < 5; ++qz) {
+                    for (int qy = 0; qy < 7; ++qy) {
+                        for (int qx = 0; qx < 9; ++qx) {
+                            if (occupied[static_cast<std::size_t>(qx + 9 * (qy + 7 * qz))] != 0) {
+                                best = std::min(best, std::max({std::abs(qx - x), std::abs(qy - y),
+                                                                std::abs(qz - z)}));
+                            }
+                        }
+                    }
+                }
+                EXPECT_EQ(distance[static_cast<std::size_t>(x + 9 * (y + 7 * z))], best)
+                    << x << " " << y << " " << z;
+            }
+        }
+    }
+    // No occupied cell: everything at the cap.
+    std::fill(occupied.begin(), occupied.end(), 0);
+    detail::chessboard_distance(occupied, cells, distance);
+    EXPECT_EQ(*std::min_element(distance.begin(), distance.end()), detail::MAX_DISTANCE);
 }
 
 TEST(RayCast, DeterministicForOneAndTwoThreads) {

@@ -31,28 +31,35 @@
 //      stopping when A > early_termination (0.99). The pixel is C + (1 − A) · background.
 //      Consequence: a uniform medium of colour c and opacity a per unit u over a chord L renders
 //      c · (1 − (1 − a)^(L / u)) for every step (exact up to float rounding).
-//   5. Empty-space skipping: the volume is covered by macro cells of 8³ voxels; a cell is
-//      occupied when some value in its trilinear footprint (the cell grown by 2 voxels per side)
-//      has a non-zero opacity (min/max of the cell's values against a prefix count of the lookup
-//      table's non-zero entries; max α for RGBA). The ray walks the cells it crosses (exit
-//      distance per cell from the slab planes) and evaluates no sample in an empty cell. Skipped
-//      samples contribute nothing, so images are identical with or without skipping.
+//   5. Empty-space skipping: the volume is covered by macro cells of 4³ trilinear cells; macro
+//      cell c holds the samples whose lower voxel corner ⌊g⌋ is in [4c, 4c + 3] per axis, so it
+//      reads exactly the voxels [4c, 4c + 4] (its footprint). A cell is occupied when some value
+//      of its footprint has a non-zero opacity (min/max of the values against a prefix count of
+//      the lookup table's non-zero entries, widened by one entry per side for the rounding of
+//      the interpolation; max α for RGBA), and a chessboard distance transform gives every
+//      empty cell its distance d (in cells, ≤ 255) to the nearest occupied one. A sample whose
+//      cell is empty is not classified: the ray jumps to the first sample past the cube of the
+//      2d − 1 cells around it (all empty), its far planes pulled in by 1/32 voxel so that float
+//      rounding cannot carry a skipped sample out of the cube. The occupancy test of a sample
+//      uses the same integer corner its interpolation reads, and skipped samples contribute
+//      nothing, so images are identical with or without skipping.
 //   Shading (optional): the colour of a sample is scaled by 0.3 + 0.7 |n · d|, n the normalized
 //   gradient (central differences of trilinear samples one voxel apart, of the scalar value, or of
 //   α for RGBA volumes; world-space through the spacing), d the ray direction (a headlight);
 //   samples with a gradient of zero length are not shaded.
 //   MIP: the sample with the largest value (scalar volumes) or largest α (RGBA) along the chord;
 //   the pixel is c · a + (1 − a) · background with (c, a) its colour and opacity per unit
-//   (not step-corrected), zero when nothing is hit. Macro cells whose largest value does not
-//   exceed the running maximum are skipped.
+//   (not step-corrected), zero when nothing is hit. A sample in a macro cell whose largest value
+//   does not exceed the running maximum jumps to the cell's end.
 //
 // Units: step and opacity_unit in world units (those of Volume::spacing). Colours linear in
 // [0, 1], written to the 8-bit image by to_rgb8 (clamped, rounded; no gamma).
 // Parallelism: 16 × 16 pixel tiles through core/parallel (one chunk per tile); every pixel is
 // computed by the same float operations whatever the thread count, so images and statistics are
 // bitwise identical for 1 and N threads.
-// Cost: O(width · height · samples per ray); the lookup table and the macro-cell grid are built in
-// O(voxels) per call, plus a float copy of the voxels (4 bytes per voxel, 16 for RGBA).
+// Cost: O(width · height · (samples + jumps) per ray); the lookup table, the macro-cell grid and
+// its distance transform are built in O(voxels) per call, plus a float copy of the voxels (4 bytes
+// per voxel, 16 for RGBA). The kernel is in render/detail/raycast_kernel.hpp.
 #pragma once
 
 #include <array>
@@ -122,6 +129,7 @@ private:
     std::vector<float> m_lut;              // 4 per entry: r, g, b, α per step (scalar volumes)
     std::vector<float> m_lut_alpha;        // α per opacity unit, per entry (MIP)
     std::vector<std::uint8_t> m_occupied;  // per macro cell
+    std::vector<std::uint8_t> m_distance;  // per macro cell: chessboard distance to an occupied one
     std::vector<float> m_cell_max;         // per macro cell: largest value (scalar) or α (RGBA)
 };
 

@@ -1,0 +1,481 @@
+// The ray caster's per-pixel kernel (render/raycast.hpp documents the algorithm): a pure function
+// of the pixel index over a trivially copyable RayCastKernel (pointers into the RayCaster's
+// arrays), GPU-style; and the chessboard distance transform of the macro-cell occupancy that
+// drives its empty-space skipping.
+//
+// Grid coordinates: g = (p − origin) / spacing − 0.5, so voxel centre i is at g = i and the
+// volume's box is [−0.5, n − 0.5]³. A trilinear sample at g reads the voxels i0 and i0 + 1 per
+// axis, i0 = min(⌊clamp(g, 0, n − 1)⌋, n − 2) (its lower corner). Macro cell c (per axis) holds
+// the samples whose lower corner is in [CELL·c, CELL·c + CELL − 1], so its footprint, the voxels
+// those samples read, is exactly [CELL·c, CELL·c + CELL] ∩ [0, n − 1]: the occupancy test of a
+// sample is exact (the same integer corner the sample reads from), and only the jumps over
+// empty blocks of cells are geometric, kept inside the block by SKIP_MARGIN.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <type_traits>
+#include <utility>
+
+#include "pliant/core/host_device.hpp"
+#include "pliant/core/vec3.hpp"
+#include "pliant/render/image.hpp"
+
+namespace pliant::render::detail {
+
+inline constexpr int LUT_SIZE = 4096;
+inline constexpr int CELL = 4;        // macro cell edge, voxels (a power of two)
+inline constexpr int CELL_SHIFT = 2;  // log2(CELL)
+// Grid units a jump stops short of the far side of an empty block of cells: far more than the
+// float rounding of sample positions (≈ 1e-4 voxel for volumes of a few thousand voxels).
+inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
+inline constexpr int TILE = 16;  // pixels per tile edge
+inline constexpr int MAX_DISTANCE = 255;
+
+// Everything a pixel needs, trivially copyable (pointers into the RayCaster's arrays).
+struct RayCastKernel {
+    // Camera.
+    int width = 0, height = 0;
+    bool is_perspective = true;
+    Vec3f eye, forward, right, up;
+    float inv_focal = 1.0f;
+    // Grid coordinates g = world · inv_spacing + grid_offset (voxel centre i at g = i).
+    Vec3f inv_spacing, grid_offset;
+    int n[3] = {0, 0, 0};
+    float g_max[3] = {0.0f, 0.0f, 0.0f};  // n − 1 per axis (the clamp of a sample)
+    int max_i0[3] = {0, 0, 0};  // largest lower corner of a trilinear cell (n − 2, ≥ 0)
+    std::int64_t stride[3] = {0, 0, 0};  // voxel index strides (1, nx, nx·ny)
+    std::int64_t d[3] = {0, 0, 0};       // neighbour offsets in voxels (0 on axes of size 1)
+    const float* values = nullptr;       // scalar lookup coordinates, or α·rgb, α
+    const float* lut = nullptr;
+    const float* lut_alpha = nullptr;
+    // Macro cells.
+    int cells[3] = {0, 0, 0};
+    // Chessboard distance, in cells, from each cell to the nearest occupied one (0: occupied),
+    // capped at MAX_DISTANCE; every cell within distance − 1 of a cell is empty.
+    const std::uint8_t* distance = nullptr;
+    const float* cell_max = nullptr;
+    // Options.
+    float step = 1.0f;
+    float inv_step = 1.0f;
+    float step_over_unit = 1.0f;  // RGBA opacity correction exponent
+    float threshold = 0.99f;
+    bool is_mip = false;
+    bool shading = false;
+    bool skipping = true;
+    Color background;
+};
+static_assert(std::is_trivially_copyable_v<RayCastKernel>);
+
+struct PixelResult {
+    Color color;
+    std::int64_t samples = 0;
+};
+
+struct Sample {
+    float r, g, b, a;
+};
+
+PLIANT_HOST_DEVICE inline float clampf(float v, float lo, float hi) {
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+PLIANT_HOST_DEVICE inline float lerp(float a, float b, float t) {
+    return a + t * (b - a);
+}
+
+// Trilinear weights and the lower corner of grid point g (clamp to edge).
+struct Trilinear {
+    int ix, iy, iz;
+    float fx, fy, fz;
+};
+PLIANT_HOST_DEVICE inline Trilinear locate(const RayCastKernel& k, Vec3f g) {
+    const float x = clampf(g.x, 0.0f, k.g_max[0]);
+    const float y = clampf(g.y, 0.0f, k.g_max[1]);
+    const float z = clampf(g.z, 0.0f, k.g_max[2]);
+    const int ix = std::min(static_cast<int>(x), k.max_i0[0]);
+    const int iy = std::min(static_cast<int>(y), k.max_i0[1]);
+    const int iz = std::min(static_cast<int>(z), k.max_i0[2]);
+    return {ix,
+            iy,
+            iz,
+            x - static_cast<float>(ix),
+            y - static_cast<float>(iy),
+            z - static_cast<float>(iz)};
+}
+
+PLIANT_HOST_DEVICE inline std::int64_t voxel_index(const RayCastKernel& k, const Trilinear& t) {
+    return t.ix + k.stride[1] * t.iy + k.stride[2] * t.iz;
+}
+
+// The macro cell holding the sample with lower corner t.
+PLIANT_HOST_DEVICE inline std::int64_t cell_of(const RayCastKernel& k, const Trilinear& t) {
+    return (t.ix >> CELL_SHIFT) +
+           static_cast<std::int64_t>(k.cells[0]) *
+               ((t.iy >> CELL_SHIFT) +
+                static_cast<std::int64_t>(k.cells[1]) * (t.iz >> CELL_SHIFT));
+}
+
+PLIANT_HOST_DEVICE inline float interpolate_scalar(const RayCastKernel& k, const Trilinear& t) {
+    const float* p = k.values + voxel_index(k, t);
+    const std::int64_t dx = k.d[0], dy = k.d[1], dz = k.d[2];
+    const float c00 = lerp(p[0], p[dx], t.fx);
+    const float c10 = lerp(p[dy], p[dy + dx], t.fx);
+    const float c01 = lerp(p[dz], p[dz + dx], t.fx);
+    const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
+    return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+}
+
+PLIANT_HOST_DEVICE inline Sample interpolate_rgba(const RayCastKernel& k, const Trilinear& t) {
+    const float* p = k.values + 4 * voxel_index(k, t);
+    const std::int64_t dx = 4 * k.d[0], dy = 4 * k.d[1], dz = 4 * k.d[2];
+    float out[4];
+    for (int c = 0; c < 4; ++c) {
+        const float c00 = lerp(p[c], p[dx + c], t.fx);
+        const float c10 = lerp(p[dy + c], p[dy + dx + c], t.fx);
+        const float c01 = lerp(p[dz + c], p[dz + dx + c], t.fx);
+        const float c11 = lerp(p[dz + dy + c], p[dz + dy + dx + c], t.fx);
+        out[c] = lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+    }
+    return {out[0], out[1], out[2], out[3]};
+}
+
+PLIANT_HOST_DEVICE inline float sample_scalar(const RayCastKernel& k, Vec3f g) {
+    return interpolate_scalar(k, locate(k, g));
+}
+
+PLIANT_HOST_DEVICE inline Sample sample_rgba(const RayCastKernel& k, Vec3f g) {
+    return interpolate_rgba(k, locate(k, g));
+}
+
+// The value shading differentiates: the scalar, or α.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline float shading_value(const RayCastKernel& k, Vec3f g) {
+    if constexpr (IS_RGBA) {
+        return sample_rgba(k, g).a;
+    } else {
+        return sample_scalar(k, g);
+    }
+}
+
+// 0.3 + 0.7 |n · dir|, n the normalized world gradient at g; 1 when the gradient vanishes.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline float shade(const RayCastKernel& k, Vec3f g, Vec3f dir) {
+    const float gx = (shading_value<IS_RGBA>(k, {g.x + 1.0f, g.y, g.z}) -
+                      shading_value<IS_RGBA>(k, {g.x - 1.0f, g.y, g.z})) *
+                     k.inv_spacing.x;
+    const float gy = (shading_value<IS_RGBA>(k, {g.x, g.y + 1.0f, g.z}) -
+                      shading_value<IS_RGBA>(k, {g.x, g.y - 1.0f, g.z})) *
+                     k.inv_spacing.y;
+    const float gz = (shading_value<IS_RGBA>(k, {g.x, g.y, g.z + 1.0f}) -
+                      shading_value<IS_RGBA>(k, {g.x, g.y, g.z - 1.0f})) *
+                     k.inv_spacing.z;
+    const float len2 = gx * gx + gy * gy + gz * gz;
+    if (!(len2 > 1e-30f)) {
+        return 1.0f;
+    }
+    const float cosine = std::fabs(gx * dir.x + gy * dir.y + gz * dir.z) / std::sqrt(len2);
+    return 0.3f + 0.7f * cosine;
+}
+
+// Classified sample with lower corner t: straight colour and opacity for one full step.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinear& t) {
+    if constexpr (IS_RGBA) {
+        const Sample s = interpolate_rgba(k, t);
+        const float a = clampf(s.a, 0.0f, 1.0f);
+        if (!(a > 0.0f)) {
+            return {0.0f, 0.0f, 0.0f, 0.0f};
+        }
+        const float a_step = a >= 1.0f ? 1.0f : -std::expm1(k.step_over_unit * std::log1p(-a));
+        const float inv = 1.0f / s.a;
+        return {s.r * inv, s.g * inv, s.b * inv, a_step};
+    } else {
+        const int index = static_cast<int>(interpolate_scalar(k, t) + 0.5f);
+        const float* e = k.lut + 4 * index;
+        return {e[0], e[1], e[2], e[3]};
+    }
+}
+
+// The ray through pixel (i, j)'s centre, as Camera::ray computes it (in float).
+PLIANT_HOST_DEVICE inline void pixel_ray(const RayCastKernel& k, int i, int j, Vec3f& origin,
+                                         Vec3f& dir) {
+    const float cx =
+        (static_cast<float>(i) + 0.5f - 0.5f * static_cast<float>(k.width)) * k.inv_focal;
+    const float cy =
+        (0.5f * static_cast<float>(k.height) - (static_cast<float>(j) + 0.5f)) * k.inv_focal;
+    if (k.is_perspective) {
+        const Vec3f v = k.forward + cx * k.right + cy * k.up;
+        origin = k.eye;
+        dir = v / std::sqrt(dot(v, v));
+    } else {
+        origin = k.eye + cx * k.right + cy * k.up;
+        dir = k.forward;
+    }
+}
+
+// A ray in grid coordinates, t in world distance, clipped to the volume's box.
+struct GridRay {
+    Vec3f go, gd;
+    float inv_gd[3];
+    float t_near, t_far;
+};
+
+// Step 1: the ray in grid coordinates clipped to the box [−0.5, n − 0.5]³; false when it misses.
+PLIANT_HOST_DEVICE inline bool clip_ray(const RayCastKernel& k, Vec3f origin, Vec3f dir,
+                                        GridRay& r) {
+    r.go = {origin.x * k.inv_spacing.x + k.grid_offset.x,
+            origin.y * k.inv_spacing.y + k.grid_offset.y,
+            origin.z * k.inv_spacing.z + k.grid_offset.z};
+    r.gd = {dir.x * k.inv_spacing.x, dir.y * k.inv_spacing.y, dir.z * k.inv_spacing.z};
+    const float inf = std::numeric_limits<float>::infinity();
+    r.t_near = 0.0f;
+    r.t_far = inf;
+    for (int a = 0; a < 3; ++a) {
+        const float o = r.go[a];
+        const float dv = r.gd[a];
+        const float lo = -0.5f;
+        const float hi = static_cast<float>(k.n[a]) - 0.5f;
+        if (dv == 0.0f) {
+            r.inv_gd[a] = inf;
+            if (o < lo || o > hi) {
+                return false;
+            }
+            continue;
+        }
+        r.inv_gd[a] = 1.0f / dv;
+        float t0 = (lo - o) * r.inv_gd[a];
+        float t1 = (hi - o) * r.inv_gd[a];
+        if (t0 > t1) {
+            std::swap(t0, t1);
+        }
+        r.t_near = std::max(r.t_near, t0);
+        r.t_far = std::min(r.t_far, t1);
+    }
+    return r.t_near < r.t_far;
+}
+
+// Empty-space jump from sample n (lower corner t, in an empty cell): the index of the first
+// sample that may lie outside the cube of cells within chessboard `radius` of t's cell (all of
+// them empty), at least n + 1. The cube's far planes along the ray are pulled in by SKIP_MARGIN,
+// so every sample strictly between n and the result lies inside the cube despite rounding; the
+// cube's extent beyond the grid is harmless (the clamp maps samples there onto the grid's
+// border cells, which are within the cube too).
+PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRay& r,
+                                            const Trilinear& t, int radius, std::int64_t n,
+                                            std::int64_t num_full) {
+    const int c[3] = {t.ix >> CELL_SHIFT, t.iy >> CELL_SHIFT, t.iz >> CELL_SHIFT};
+    float t_exit = r.t_far;
+    for (int a = 0; a < 3; ++a) {
+        if (r.gd[a] > 0.0f) {
+            const float plane = static_cast<float>((c[a] + radius + 1) * CELL) - SKIP_MARGIN;
+            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
+        } else if (r.gd[a] < 0.0f) {
+            const float plane = static_cast<float>((c[a] - radius) * CELL) + SKIP_MARGIN;
+            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
+        }
+    }
+    // Samples m with midpoint t_near + (m + 0.5)Δs before t_exit: m < x = (t_exit − t_near)/Δs −
+    // 0.5, so the first one past is ⌈x⌉ (computed without a call to ceilf).
+    const float x = (t_exit - r.t_near) * k.inv_step - 0.5f;
+    if (!(x < static_cast<float>(num_full))) {
+        return num_full;
+    }
+    std::int64_t n_end = 0;
+    if (x > 0.0f) {
+        n_end = static_cast<std::int64_t>(x);
+        n_end += static_cast<float>(n_end) < x ? 1 : 0;
+    }
+    return std::max(n_end, n + 1);
+}
+
+// Adds a classified sample (straight colour, opacity a) behind the accumulated (c, acc).
+PLIANT_HOST_DEVICE inline void composite(const Sample& s, float a, float& cr, float& cg, float& cb,
+                                         float& acc) {
+    const float w = (1.0f - acc) * a;
+    cr += w * s.r;
+    cg += w * s.g;
+    cb += w * s.b;
+    acc += w;
+}
+
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int j) {
+    PixelResult result{k.background, 0};
+    Vec3f origin, dir;
+    pixel_ray(k, i, j, origin, dir);
+    GridRay r;
+    if (!clip_ray(k, origin, dir, r)) {
+        return result;
+    }
+    // Step 2: N segments of the step, samples at their midpoints; the last one shortened.
+    const float length = r.t_far - r.t_near;
+    const auto num_segments =
+        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(length / k.step)));
+    const std::int64_t num_full = k.is_mip ? num_segments : num_segments - 1;
+    const auto position = [&](std::int64_t m) {
+        return r.go + (r.t_near + (static_cast<float>(m) + 0.5f) * k.step) * r.gd;
+    };
+    std::int64_t samples = 0;
+    std::int64_t n = 0;
+
+    if (k.is_mip) {
+        // MIP: a sample in a cell whose largest value does not exceed the running maximum
+        // jumps to the cell's end.
+        float best = -1.0f;  // largest value (or α) so far
+        Sample best_sample{0.0f, 0.0f, 0.0f, 0.0f};
+        while (n < num_full) {
+            const Trilinear t = locate(k, position(n));
+            if (k.skipping && k.cell_max[cell_of(k, t)] <= best) {
+                n = jump(k, r, t, 0, n, num_full);
+                continue;
+            }
+            ++samples;
+            if constexpr (IS_RGBA) {
+                const Sample s = interpolate_rgba(k, t);
+                if (s.a > best) {
+                    best = s.a;
+                    best_sample = s;
+                }
+            } else {
+                const float v = interpolate_scalar(k, t);
+                best = v > best ? v : best;
+            }
+            ++n;
+        }
+        result.samples = samples;
+        if (best < 0.0f) {
+            return result;
+        }
+        Sample s{};
+        float a = 0.0f;
+        if constexpr (IS_RGBA) {
+            a = clampf(best_sample.a, 0.0f, 1.0f);
+            const float inv = best_sample.a > 0.0f ? 1.0f / best_sample.a : 0.0f;
+            s = {best_sample.r * inv, best_sample.g * inv, best_sample.b * inv, a};
+        } else {
+            const int index = static_cast<int>(best + 0.5f);
+            s = {k.lut[4 * index], k.lut[4 * index + 1], k.lut[4 * index + 2], 0.0f};
+            a = k.lut_alpha[index];
+        }
+        result.color = {s.r * a + (1.0f - a) * k.background.r,
+                        s.g * a + (1.0f - a) * k.background.g,
+                        s.b * a + (1.0f - a) * k.background.b};
+        return result;
+    }
+
+    // Steps 3–5: march the samples; one in an empty cell jumps over the cube of empty cells
+    // around it (radius from the distance transform) instead of being classified.
+    float cr = 0.0f, cg = 0.0f, cb = 0.0f, acc = 0.0f;
+    while (n < num_full) {
+        const Vec3f g = position(n);
+        const Trilinear t = locate(k, g);
+        if (k.skipping) {
+            const int dist = k.distance[cell_of(k, t)];
+            if (dist > 0) {
+                n = jump(k, r, t, dist - 1, n, num_full);
+                continue;
+            }
+        }
+        ++samples;
+        Sample s = classify<IS_RGBA>(k, t);
+        if (s.a > 0.0f) {
+            if (k.shading) {
+                const float f = shade<IS_RGBA>(k, g, dir);
+                s.r *= f;
+                s.g *= f;
+                s.b *= f;
+            }
+            composite(s, s.a, cr, cg, cb, acc);
+            if (acc > k.threshold) {
+                break;
+            }
+        }
+        ++n;
+    }
+    // The shortened last segment, of length ℓ: α = 1 − (1 − α_Δs)^(ℓ / Δs).
+    const float partial = length - static_cast<float>(num_segments - 1) * k.step;
+    if (!(acc > k.threshold) && partial > 0.0f) {
+        const float tm = r.t_near + static_cast<float>(num_segments - 1) * k.step + 0.5f * partial;
+        const Vec3f g = r.go + tm * r.gd;
+        const Trilinear t = locate(k, g);
+        if (!k.skipping || k.distance[cell_of(k, t)] == 0) {
+            ++samples;
+            Sample s = classify<IS_RGBA>(k, t);
+            if (s.a > 0.0f) {
+                if (k.shading) {
+                    const float f = shade<IS_RGBA>(k, g, dir);
+                    s.r *= f;
+                    s.g *= f;
+                    s.b *= f;
+                }
+                const float ratio = partial / k.step;
+                const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
+                composite(s, a, cr, cg, cb, acc);
+            }
+        }
+    }
+    const float rest = 1.0f - acc;
+    result.color = {cr + rest * k.background.r, cg + rest * k.background.g,
+                    cb + rest * k.background.b};
+    result.samples = samples;
+    return result;
+}
+
+// Chessboard (L∞) distance transform of `occupied` (cells[0] · cells[1] · cells[2] flags, x
+// fastest) into `distance` (same shape): the distance in cells to the nearest occupied cell, 0
+// for occupied ones, capped at MAX_DISTANCE (also when no cell is occupied). Two raster passes
+// with the 26-neighbourhood at unit weight (Rosenfeld & Pfaltz 1966), exact for L∞. Serial,
+// O(cells · 13) per pass.
+inline void chessboard_distance(std::span<const std::uint8_t> occupied, const int cells[3],
+                                std::span<std::uint8_t> distance) {
+    const std::int64_t nx = cells[0], ny = cells[1], nz = cells[2];
+    const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return static_cast<std::size_t>(x + nx * (y + ny * z));
+    };
+    for (std::size_t i = 0; i < occupied.size(); ++i) {
+        distance[i] = occupied[i] != 0 ? 0 : MAX_DISTANCE;
+    }
+    // One pass: each cell takes min(itself, neighbour + 1) over the 13 neighbours that precede
+    // it in the pass's raster order (sign −1: forward, +1: backward).
+    const auto pass = [&](int sign) {
+        for (std::int64_t zi = 0; zi < nz; ++zi) {
+            const std::int64_t z = sign < 0 ? zi : nz - 1 - zi;
+            for (std::int64_t yi = 0; yi < ny; ++yi) {
+                const std::int64_t y = sign < 0 ? yi : ny - 1 - yi;
+                for (std::int64_t xi = 0; xi < nx; ++xi) {
+                    const std::int64_t x = sign < 0 ? xi : nx - 1 - xi;
+                    int best = distance[at(x, y, z)];
+                    if (best == 0) {
+                        continue;
+                    }
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        for (int dy = -1; dy <= 1; ++dy) {
+                            for (int dx = -1; dx <= 1; ++dx) {
+                                // Preceding in raster order: (dz, dy, dx) lexicographically
+                                // before 0 for the forward pass, after it for the backward one.
+                                const int order = dz != 0 ? dz : (dy != 0 ? dy : dx);
+                                if (order != sign) {
+                                    continue;
+                                }
+                                const std::int64_t qx = x + dx, qy = y + dy, qz = z + dz;
+                                if (qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny ||
+                                    qz >= nz) {
+                                    continue;
+                                }
+                                best = std::min(best, distance[at(qx, qy, qz)] + 1);
+                            }
+                        }
+                    }
+                    distance[at(x, y, z)] = static_cast<std::uint8_t>(best);
+                }
+            }
+        }
+    };
+    pass(-1);
+    pass(+1);
+}
+
+}  // namespace pliant::render::detail
