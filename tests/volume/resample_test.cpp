@@ -49,16 +49,8 @@ Vec3d box_center(const Volume& v) {
 // tet's box with the per-voxel form of the tie rule (the brute force the row spans must equal).
 std::vector<int> brute_force_coverage(const pbd::TetGrid& g, const std::vector<Vec3f>& deformed,
                                       const Volume& grid, const Volume& source) {
-    detail::GridFrame tf{};
-    detail::GridFrame sf{};
-    for (int a = 0; a < 3; ++a) {
-        tf.n[a] = grid.dims()[static_cast<std::size_t>(a)];
-        tf.origin[a] = grid.origin()[a];
-        tf.spacing[a] = grid.spacing()[a];
-        sf.n[a] = source.dims()[static_cast<std::size_t>(a)];
-        sf.origin[a] = source.origin()[a];
-        sf.spacing[a] = source.spacing()[a];
-    }
+    const detail::GridFrame tf = detail::frame_of(grid);
+    const detail::GridFrame sf = detail::frame_of(source);
     std::vector<int> counts(static_cast<std::size_t>(grid.num_voxels()), 0);
     for (const geometry::Tet& tet : g.mesh.tets) {
         Vec3f p[4];
@@ -94,13 +86,21 @@ std::vector<int> closed_tet_counts(const std::vector<geometry::Tet>& tets,
             p[v] = vec3_cast<double>(
                 positions[static_cast<std::size_t>(t[static_cast<std::size_t>(v)])]);
         }
+        // Every voxel of the tet's box, grown by one voxel.
         std::int64_t lo[3];
         std::int64_t hi[3];
         for (int a = 0; a < 3; ++a) {
             const double mn = std::min(std::min(p[0][a], p[1][a]), std::min(p[2][a], p[3][a]));
             const double mx = std::max(std::max(p[0][a], p[1][a]), std::max(p[2][a], p[3][a]));
-            detail::axis_range(mn, mx, grid.origin()[a], grid.spacing()[a],
-                               grid.dims()[static_cast<std::size_t>(a)], lo[a], hi[a]);
+            const std::int64_t n = grid.dims()[static_cast<std::size_t>(a)];
+            lo[a] = std::clamp<std::int64_t>(
+                static_cast<std::int64_t>(std::floor((mn - grid.origin()[a]) / grid.spacing()[a])) -
+                    1,
+                0, n - 1);
+            hi[a] = std::clamp<std::int64_t>(
+                static_cast<std::int64_t>(std::floor((mx - grid.origin()[a]) / grid.spacing()[a])) +
+                    1,
+                0, n - 1);
         }
         for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
             for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {

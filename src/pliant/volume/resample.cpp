@@ -20,15 +20,7 @@ namespace {
 using detail::GridFrame;
 using detail::TetRaster;
 
-GridFrame frame_of(const Volume& v) {
-    GridFrame g{};
-    for (int a = 0; a < 3; ++a) {
-        g.n[a] = v.dims()[static_cast<std::size_t>(a)];
-        g.origin[a] = v.origin()[a];
-        g.spacing[a] = v.spacing()[a];
-    }
-    return g;
-}
+using detail::frame_of;
 
 // Bricks of the visibility mask: 1 when any voxel of the BRICK³ block is visible. A first,
 // coarse test before the exact per-voxel scan of a tet's footprint.
@@ -134,13 +126,6 @@ struct Slabs {
     std::vector<std::int32_t> tets;
 };
 
-// Inclusive z range [k0, k1] of the voxel layers the deformed tet's box overlaps (k0 > k1: none).
-void z_layers(const Vec3f p[4], const GridFrame& target, std::int64_t& k0, std::int64_t& k1) {
-    const double mn = std::min(std::min<double>(p[0].z, p[1].z), std::min<double>(p[2].z, p[3].z));
-    const double mx = std::max(std::max<double>(p[0].z, p[1].z), std::max<double>(p[2].z, p[3].z));
-    detail::axis_range(mn, mx, target.origin[2], target.spacing[2], target.n[2], k0, k1);
-}
-
 // Count → prefix sum → fill over fixed chunks of the kept tets: deterministic, tet order per slab.
 Slabs bin_tets(std::span<const std::int32_t> kept, std::span<const geometry::Tet> tets,
                std::span<const Vec3f> positions, const GridFrame& target) {
@@ -160,7 +145,7 @@ Slabs bin_tets(std::span<const std::int32_t> kept, std::span<const geometry::Tet
                             positions[static_cast<std::size_t>(tet[3])]};
         std::int64_t k0 = 0;
         std::int64_t k1 = -1;
-        z_layers(p, target, k0, k1);
+        detail::tet_axis_range(p, target, 2, k0, k1);
         s0 = k0 / slabs.height;
         s1 = k0 <= k1 ? k1 / slabs.height : s0 - 1;
     };
@@ -254,7 +239,10 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const geometr
                     const std::int64_t k0 = std::max(raster.lo[2], k_begin);
                     const std::int64_t k1 = std::min(raster.hi[2] + 1, k_end);
                     for (std::int64_t k = k0; k < k1; ++k) {
-                        for (std::int64_t j = raster.lo[1]; j <= raster.hi[1]; ++j) {
+                        std::int64_t j0 = 0;
+                        std::int64_t j1 = 0;
+                        detail::slice_rows(raster, k, j0, j1);
+                        for (std::int64_t j = j0; j < j1; ++j) {
                             std::int64_t ib = 0;
                             std::int64_t ie = 0;
                             detail::row_span(raster, j, k, ib, ie);
@@ -301,15 +289,28 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept, std::span<const ge
         const double gy = t.map[1][1] * jd + t.map[1][2] * kd + t.map[1][3];
         const double gz = t.map[2][1] * jd + t.map[2][2] * kd + t.map[2][3];
         D* out = dst + C * (ib + tf.n[0] * (j + tf.n[1] * k));
-        for (std::int64_t i = ib; i < ie; ++i) {
-            const double id = static_cast<double>(i);
-            float v[C];
-            detail::sample_trilinear<S, C>(src, sf.n, gx + t.map[0][0] * id, gy + t.map[1][0] * id,
-                                           gz + t.map[2][0] * id, v);
-            for (int c = 0; c < C; ++c) {
-                out[c] = detail::convert_sample<D>(v[c], scale);
+        // The interior sampler gives the same bits as sample_trilinear, without its bounds
+        // tests and clamps.
+        if (t.is_interior) {
+            for (std::int64_t i = ib; i < ie; ++i, out += C) {
+                const double id = static_cast<double>(i);
+                float v[C];
+                detail::sample_interior<S, C>(src, sf.n, gx + t.map[0][0] * id,
+                                              gy + t.map[1][0] * id, gz + t.map[2][0] * id, v);
+                for (int c = 0; c < C; ++c) {
+                    out[c] = detail::convert_sample<D>(v[c], scale);
+                }
             }
-            out += C;
+        } else {
+            for (std::int64_t i = ib; i < ie; ++i, out += C) {
+                const double id = static_cast<double>(i);
+                float v[C];
+                detail::sample_trilinear<S, C>(src, sf.n, gx + t.map[0][0] * id,
+                                               gy + t.map[1][0] * id, gz + t.map[2][0] * id, v);
+                for (int c = 0; c < C; ++c) {
+                    out[c] = detail::convert_sample<D>(v[c], scale);
+                }
+            }
         }
     };
     return rasterize(kept, tets, rest, deformed, tf, sf, skip_inverted, zero_slab, visit_row);

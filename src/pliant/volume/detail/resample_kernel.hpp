@@ -14,6 +14,7 @@
 
 #include "pliant/core/host_device.hpp"
 #include "pliant/core/vec3.hpp"
+#include "pliant/volume/volume.hpp"
 
 namespace pliant::volume::detail {
 
@@ -22,7 +23,19 @@ struct GridFrame {
     std::int64_t n[3];
     double origin[3];
     double spacing[3];
+    double inv_spacing[3];  // 1 / spacing
 };
+
+inline GridFrame frame_of(const Volume& v) {
+    GridFrame g{};
+    for (int a = 0; a < 3; ++a) {
+        g.n[a] = v.dims()[static_cast<std::size_t>(a)];
+        g.origin[a] = v.origin()[a];
+        g.spacing[a] = v.spacing()[a];
+        g.inv_spacing[a] = 1.0 / g.spacing[a];
+    }
+    return g;
+}
 
 // One deformed tet prepared for rasterization into a target grid (index space (i, j, k)).
 struct TetRaster {
@@ -36,23 +49,54 @@ struct TetRaster {
     // grid (empty when lo > hi on an axis).
     std::int64_t lo[3];
     std::int64_t hi[3];
+    // The vertices in index space (voxel centres at integers), for slice_rows().
+    double vertex[4][3];
     // Affine map from target voxel indices to source grid coordinates (voxel centres at integers):
     // g_a = map[a][0]·i + map[a][1]·j + map[a][2]·k + map[a][3].
     double map[3][4];
     bool is_inverted;
+    // Every sample of the tet falls at least 1e-3 voxel inside [0, n − 1) on every source axis:
+    // no bounds test or clamping needed (sample_interior).
+    bool is_interior;
 };
 static_assert(std::is_trivially_copyable_v<TetRaster>);
 
-// Inclusive index range [lo, hi] of voxel centres of an axis (n voxels, origin o, spacing s)
-// within the world interval [a, b], grown by 1e-6 voxel (more than the planes' rounding), clipped
-// to [0, n − 1]; lo > hi when empty.
-PLIANT_HOST_DEVICE inline void axis_range(double a, double b, double o, double s, std::int64_t n,
-                                          std::int64_t& lo, std::int64_t& hi) {
+// floor and ceil of a finite x with |x| < 2^62, inline (with baseline SSE2, the standard
+// floor and ceil are calls into libm).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE std::int64_t floor_to_int(double x) {
+    const auto t = static_cast<std::int64_t>(x);
+    return t - (static_cast<double>(t) > x ? 1 : 0);
+}
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE std::int64_t ceil_to_int(double x) {
+    const auto t = static_cast<std::int64_t>(x);
+    return t + (static_cast<double>(t) < x ? 1 : 0);
+}
+
+// Index-space coordinate of world coordinate x on axis a (voxel centres at integers).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double index_coord(double x, const GridFrame& g, int a) {
+    return (x - g.origin[a]) * g.inv_spacing[a] - 0.5;
+}
+
+// Inclusive range [lo, hi] of voxel indices of axis a within the index-space interval [mn, mx],
+// grown by 1e-6 voxel (far more than the face planes' rounding), clipped to [0, n − 1]; lo > hi
+// when empty. The bounding box of setup_tet and the slab binning both use this.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void axis_range(double mn, double mx, const GridFrame& g,
+                                                       int a, std::int64_t& lo, std::int64_t& hi) {
     constexpr double GROW = 1e-6;
-    const double fa = std::clamp((a - o) / s - 0.5 - GROW, -1.0, static_cast<double>(n));
-    const double fb = std::clamp((b - o) / s - 0.5 + GROW, -1.0, static_cast<double>(n));
-    lo = std::max<std::int64_t>(static_cast<std::int64_t>(std::ceil(fa)), 0);
-    hi = std::min<std::int64_t>(static_cast<std::int64_t>(std::floor(fb)), n - 1);
+    const double top = static_cast<double>(g.n[a]);
+    lo = std::max<std::int64_t>(ceil_to_int(std::clamp(mn - GROW, -1.0, top)), 0);
+    hi = std::min<std::int64_t>(floor_to_int(std::clamp(mx + GROW, -1.0, top)), g.n[a] - 1);
+}
+
+// The voxel index range of the tet with vertices p along axis a.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void tet_axis_range(const Vec3f p[4], const GridFrame& g,
+                                                           int a, std::int64_t& lo,
+                                                           std::int64_t& hi) {
+    const double mn =
+        std::min(std::min<double>(p[0][a], p[1][a]), std::min<double>(p[2][a], p[3][a]));
+    const double mx =
+        std::max(std::max<double>(p[0][a], p[1][a]), std::max<double>(p[2][a], p[3][a]));
+    axis_range(index_coord(mn, g, a), index_coord(mx, g, a), g, a, lo, hi);
 }
 
 // Sets out.lo/hi (always) and the planes and map (when it returns true). False for a degenerate
@@ -66,10 +110,13 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     for (int v = 0; v < 4; ++v) {
         pd[v] = vec3_cast<double>(p[v]);
     }
+    for (int v = 0; v < 4; ++v) {
+        for (int a = 0; a < 3; ++a) {
+            out.vertex[v][a] = index_coord(pd[v][a], target, a);
+        }
+    }
     for (int a = 0; a < 3; ++a) {
-        const double mn = std::min(std::min(pd[0][a], pd[1][a]), std::min(pd[2][a], pd[3][a]));
-        const double mx = std::max(std::max(pd[0][a], pd[1][a]), std::max(pd[2][a], pd[3][a]));
-        axis_range(mn, mx, target.origin[a], target.spacing[a], target.n[a], out.lo[a], out.hi[a]);
+        tet_axis_range(p, target, a, out.lo[a], out.hi[a]);
     }
 
     // λ = T⁻¹(x − d), T = [a − d, b − d, c − d]: the rows of T⁻¹ are the cross products of T's
@@ -98,23 +145,26 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     const Vec3d c0{target.origin[0] + 0.5 * target.spacing[0],
                    target.origin[1] + 0.5 * target.spacing[1],
                    target.origin[2] + 0.5 * target.spacing[2]};
+    // The four local vertices sorted by vertex index (a sorting network); face q's vertices in
+    // canonical order are this order without q.
+    int order[4] = {0, 1, 2, 3};
+    auto sort2 = [&](int x, int y) {
+        if (ids[order[y]] < ids[order[x]]) {
+            std::swap(order[x], order[y]);
+        }
+    };
+    sort2(0, 1);
+    sort2(2, 3);
+    sort2(0, 2);
+    sort2(1, 3);
+    sort2(1, 2);
     for (int q = 0; q < 4; ++q) {
         int w[3];
         int m = 0;
         for (int v = 0; v < 4; ++v) {
-            if (v != q) {
-                w[m++] = v;
+            if (order[v] != q) {
+                w[m++] = order[v];
             }
-        }
-        // Sort the three local vertices by vertex index.
-        if (ids[w[1]] < ids[w[0]]) {
-            std::swap(w[0], w[1]);
-        }
-        if (ids[w[2]] < ids[w[1]]) {
-            std::swap(w[1], w[2]);
-        }
-        if (ids[w[1]] < ids[w[0]]) {
-            std::swap(w[0], w[1]);
         }
         const Vec3d& u = pd[w[0]];
         const Vec3d n = cross(pd[w[1]] - u, pd[w[2]] - u);
@@ -144,14 +194,65 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     // x(i, j, k) = c0 + (i, j, k)·spacing_t;  g = (rest − origin_s) / spacing_s − 0.5.
     const Vec3d x0 = c0 - pd[3];
     for (int a = 0; a < 3; ++a) {
-        const double inv_s = 1.0 / source.spacing[a];
+        const double inv_s = source.inv_spacing[a];
         for (int b = 0; b < 3; ++b) {
             out.map[a][b] = mm[a][b] * target.spacing[b] * inv_s;
         }
         const double rest0 = rd[3][a] + (mm[a][0] * x0.x + mm[a][1] * x0.y + mm[a][2] * x0.z);
         out.map[a][3] = (rest0 - source.origin[a]) * inv_s - 0.5;
     }
+    // The samples lie in the rest tet (up to the map's rounding, far below the margin).
+    constexpr double MARGIN = 1e-3;
+    out.is_interior = true;
+    for (int a = 0; a < 3; ++a) {
+        const double g0 = index_coord(rd[0][a], source, a);
+        const double g1 = index_coord(rd[1][a], source, a);
+        const double g2 = index_coord(rd[2][a], source, a);
+        const double g3 = index_coord(rd[3][a], source, a);
+        const double mn = std::min(std::min(g0, g1), std::min(g2, g3));
+        const double mx = std::max(std::max(g0, g1), std::max(g2, g3));
+        out.is_interior =
+            out.is_interior && mn >= MARGIN && mx <= static_cast<double>(source.n[a] - 1) - MARGIN;
+    }
     return true;
+}
+
+// The rows [j_begin, j_end) of layer k that can hold centres inside the tet: the y extent of the
+// tet's cross-section with the plane of the layer (from its edges' crossings, each edge's
+// parameter clamped to [0, 1]), grown by 1e-6 voxel like the bounding box, within [lo, hi].
+// Conservative: row_span() decides the voxels; this only skips rows that cannot hold any.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void slice_rows(const TetRaster& t, std::int64_t k,
+                                                       std::int64_t& j_begin, std::int64_t& j_end) {
+    constexpr double GROW = 1e-6;
+    constexpr int EDGES[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    const double z = static_cast<double>(k);
+    double y_min = std::numeric_limits<double>::infinity();
+    double y_max = -y_min;
+    for (const auto& e : EDGES) {
+        const double* a = t.vertex[e[0]];
+        const double* b = t.vertex[e[1]];
+        const double z_lo = std::min(a[2], b[2]);
+        const double z_hi = std::max(a[2], b[2]);
+        if (z < z_lo - GROW || z > z_hi + GROW) {
+            continue;
+        }
+        // A flat edge (z_lo = z_hi) is skipped: each of its ends also ends a non-flat edge
+        // (else all four vertices would share z and the tet would be degenerate).
+        if (z_hi > z_lo) {
+            const double s = std::clamp((z - a[2]) / (b[2] - a[2]), 0.0, 1.0);
+            const double y = a[1] + s * (b[1] - a[1]);
+            y_min = std::min(y_min, y);
+            y_max = std::max(y_max, y);
+        }
+    }
+    if (!(y_min <= y_max)) {
+        j_begin = j_end = 0;
+        return;
+    }
+    const double lo = static_cast<double>(t.lo[1]);
+    const double hi = static_cast<double>(t.hi[1]);
+    j_begin = std::max(t.lo[1], ceil_to_int(std::clamp(y_min - GROW, lo - 1.0, hi + 1.0)));
+    j_end = std::min(t.hi[1], floor_to_int(std::clamp(y_max + GROW, lo - 1.0, hi + 1.0))) + 1;
 }
 
 // The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
@@ -177,50 +278,49 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool inside(const TetRaster& t, std::int6
     return true;
 }
 
-// The voxels [begin, end) of row (j, k) inside the tet: the same set inside() accepts within
-// [t.lo[0], t.hi[0]]. Each face bounds the row from one side (h is monotone in i, also after
-// rounding); the root −β/a is an estimate, corrected by evaluating h at the neighbours.
+// The voxels [begin, end) of row (j, k) inside the tet: exactly the voxels of [lo, hi] that
+// inside() accepts, without evaluating it at every voxel. h_f is monotone in i, also after
+// rounding, so a face with a > 0 accepts a suffix of the row and one with a < 0 a prefix. The
+// computed root r = −β/a differs from where the computed h_f changes sign by at most 2 ulps of
+// |r| (≤ 5e-7 voxel for |r| < 2^31; roots are clamped to [lo − ½, hi + ½]), so with
+// x_lo = max of the suffix roots and x_hi = min of the prefix roots, every i in
+// [x_lo + TOL, x_hi − TOL] is inside and every i outside [x_lo − TOL, x_hi + TOL] is not. Only
+// an integer within TOL of x_lo or x_hi (a centre on or within rounding of a face: the ties)
+// is decided by inside() itself.
 PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span(const TetRaster& t, std::int64_t j,
                                                      std::int64_t k, std::int64_t& begin,
                                                      std::int64_t& end) {
-    begin = t.lo[0];
-    end = t.hi[0] + 1;
-    for (int q = 0; q < 4 && begin < end; ++q) {
+    constexpr double TOL = 1e-6;
+    const double r_lo = static_cast<double>(t.lo[0]) - 0.5;
+    const double r_hi = static_cast<double>(t.hi[0]) + 0.5;
+    double x_lo = r_lo;
+    double x_hi = r_hi;
+    bool is_empty = false;
+    for (int q = 0; q < 4; ++q) {
         const double a = t.plane[q][0];
         const double beta = face_beta(t.plane[q], j, k);
-        const bool tie = t.tie_inside[q];
-        if (a == 0.0) {
-            if (!(beta > 0.0 || (beta == 0.0 && tie))) {
-                end = begin;
-            }
-            continue;
-        }
-        const double root =
-            std::clamp(-beta / a, static_cast<double>(begin) - 1.0, static_cast<double>(end));
-        if (a > 0.0) {  // accepted: a suffix of the row; find its first voxel
-            std::int64_t i = std::clamp(static_cast<std::int64_t>(std::ceil(root)), begin, end);
-            while (i > begin && face_accepts(a, beta, tie, i - 1)) {
-                --i;
-            }
-            while (i < end && !face_accepts(a, beta, tie, i)) {
-                ++i;
-            }
-            begin = i;
-        } else {  // accepted: a prefix; find its end
-            std::int64_t i =
-                std::clamp(static_cast<std::int64_t>(std::floor(root)) + 1, begin, end);
-            while (i < end && face_accepts(a, beta, tie, i)) {
-                ++i;
-            }
-            while (i > begin && !face_accepts(a, beta, tie, i - 1)) {
-                --i;
-            }
-            end = i;
+        if (a > 0.0) {
+            x_lo = std::max(x_lo, std::clamp(-beta / a, r_lo, r_hi));
+        } else if (a < 0.0) {
+            x_hi = std::min(x_hi, std::clamp(-beta / a, r_lo, r_hi));
+        } else {
+            is_empty = is_empty || !(beta > 0.0 || (beta == 0.0 && t.tie_inside[q]));
         }
     }
-    if (end < begin) {
-        end = begin;
+    if (is_empty || x_lo > x_hi + TOL) {
+        begin = end = t.lo[0];
+        return;
     }
+    std::int64_t b = ceil_to_int(x_lo - TOL);
+    if (static_cast<double>(b) < x_lo + TOL && !inside(t, b, j, k)) {
+        ++b;
+    }
+    std::int64_t e = floor_to_int(x_hi + TOL);
+    if (static_cast<double>(e) > x_hi - TOL && !inside(t, e, j, k)) {
+        --e;
+    }
+    begin = std::max(b, t.lo[0]);
+    end = std::max(begin, std::min(e, t.hi[0]) + 1);
 }
 
 // Trilinear sample of a source grid (C channels of type S per voxel, x fastest) at grid
@@ -249,6 +349,40 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void sample_trilinear(const S* data, cons
     const std::int64_t ox = ix < n[0] - 1 ? C : 0;
     const std::int64_t oy = iy < n[1] - 1 ? C * n[0] : 0;
     const std::int64_t oz = iz < n[2] - 1 ? C * n[0] * n[1] : 0;
+    const S* p = data + C * (ix + n[0] * (iy + n[1] * iz));
+    for (int c = 0; c < C; ++c) {
+        const float v000 = static_cast<float>(p[c]);
+        const float v100 = static_cast<float>(p[ox + c]);
+        const float v010 = static_cast<float>(p[oy + c]);
+        const float v110 = static_cast<float>(p[oy + ox + c]);
+        const float v001 = static_cast<float>(p[oz + c]);
+        const float v101 = static_cast<float>(p[oz + ox + c]);
+        const float v011 = static_cast<float>(p[oz + oy + c]);
+        const float v111 = static_cast<float>(p[oz + oy + ox + c]);
+        const float v00 = v000 + fx * (v100 - v000);
+        const float v10 = v010 + fx * (v110 - v010);
+        const float v01 = v001 + fx * (v101 - v001);
+        const float v11 = v011 + fx * (v111 - v011);
+        const float v0 = v00 + fy * (v10 - v00);
+        const float v1 = v01 + fy * (v11 - v01);
+        out[c] = v0 + fz * (v1 - v0);
+    }
+}
+
+// sample_trilinear for a coordinate known to lie in [0, n − 1) on every axis (is_interior).
+template <typename S, int C>
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void sample_interior(const S* data, const std::int64_t n[3],
+                                                            double gx, double gy, double gz,
+                                                            float out[C]) {
+    const std::int64_t ix = static_cast<std::int64_t>(gx);
+    const std::int64_t iy = static_cast<std::int64_t>(gy);
+    const std::int64_t iz = static_cast<std::int64_t>(gz);
+    const float fx = static_cast<float>(gx - static_cast<double>(ix));
+    const float fy = static_cast<float>(gy - static_cast<double>(iy));
+    const float fz = static_cast<float>(gz - static_cast<double>(iz));
+    const std::int64_t ox = C;
+    const std::int64_t oy = C * n[0];
+    const std::int64_t oz = C * n[0] * n[1];
     const S* p = data + C * (ix + n[0] * (iy + n[1] * iz));
     for (int c = 0; c < C; ++c) {
         const float v000 = static_cast<float>(p[c]);
