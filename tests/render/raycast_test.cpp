@@ -256,7 +256,7 @@ TEST(RayCast, SkippingDoesNotChangeTheImage) {
     }
 }
 
-TEST(RayCast, ChessboardDistanceMatchesBruteForce) {
+TEST(RayCast, EmptyCubesMatchBruteForce) {
     const int cells[3] = {9, 7, 5};
     std::vector<std::uint8_t> occupied(9 * 7 * 5, 0);
     std::uint32_t state = 12345;
@@ -264,31 +264,51 @@ TEST(RayCast, ChessboardDistanceMatchesBruteForce) {
         state = state * 1664525u + 1013904223u;
         o = (state >> 24) < 8 ? 1 : 0;  // about 3 %
     }
-    std::vector<std::uint8_t> distance(occupied.size());
-    detail::chessboard_distance(occupied, cells, distance);
-    for (int z = 0; z < 5; ++z) {
-        for (int y = 0; y < 7; ++y) {
-            for (int x = 0; x < 9; ++x) {
-                int best = detail::MAX_DISTANCE;
-                for (int qz = 0; qz < 5; ++qz) {
-                    for (int qy = 0; qy < 7; ++qy) {
-                        for (int qx = 0; qx < 9; ++qx) {
-                            if (occupied[static_cast<std::size_t>(qx + 9 * (qy + 7 * qz))] != 0) {
-                                best = std::min(best, std::max({std::abs(qx - x), std::abs(qy - y),
-                                                                std::abs(qz - z)}));
+    const auto is_occupied = [&](int x, int y, int z) {
+        return x >= 0 && y >= 0 && z >= 0 && x < 9 && y < 7 && z < 5 &&
+               occupied[static_cast<std::size_t>(x + 9 * (y + 7 * z))] != 0;
+    };
+    std::vector<std::uint8_t> side(occupied.size());
+    for (int octant = 0; octant < 8; ++octant) {
+        detail::empty_cubes(occupied, cells, octant, side);
+        const int dir[3] = {(octant & 1) != 0 ? -1 : 1, (octant & 2) != 0 ? -1 : 1,
+                            (octant & 4) != 0 ? -1 : 1};
+        for (int z = 0; z < 5; ++z) {
+            for (int y = 0; y < 7; ++y) {
+                for (int x = 0; x < 9; ++x) {
+                    // Grow the cube from (x, y, z) towards the octant until it holds an occupied
+                    // cell (cells outside the grid are empty); its largest empty side, ≤ 20.
+                    int expected = 0;
+                    for (int s = 1; s <= 20; ++s) {
+                        bool empty = true;
+                        for (int k = 0; k < s && empty; ++k) {
+                            for (int j = 0; j < s && empty; ++j) {
+                                for (int i = 0; i < s && empty; ++i) {
+                                    empty = !is_occupied(x + dir[0] * i, y + dir[1] * j,
+                                                         z + dir[2] * k);
+                                }
                             }
                         }
+                        if (!empty) {
+                            break;
+                        }
+                        expected = s;
+                    }
+                    const int got = side[static_cast<std::size_t>(x + 9 * (y + 7 * z))];
+                    // Cubes reaching 20 cells lie mostly outside the grid: only "at least".
+                    if (expected < 20) {
+                        EXPECT_EQ(got, expected) << octant << ": " << x << " " << y << " " << z;
+                    } else {
+                        EXPECT_GE(got, 20) << octant << ": " << x << " " << y << " " << z;
                     }
                 }
-                EXPECT_EQ(distance[static_cast<std::size_t>(x + 9 * (y + 7 * z))], best)
-                    << x << " " << y << " " << z;
             }
         }
     }
-    // No occupied cell: everything at the cap.
+    // No occupied cell: every cube at the cap.
     std::fill(occupied.begin(), occupied.end(), 0);
-    detail::chessboard_distance(occupied, cells, distance);
-    EXPECT_EQ(*std::min_element(distance.begin(), distance.end()), detail::MAX_DISTANCE);
+    detail::empty_cubes(occupied, cells, 5, side);
+    EXPECT_EQ(*std::min_element(side.begin(), side.end()), detail::MAX_CUBE);
 }
 
 TEST(RayCast, DeterministicForOneAndTwoThreads) {

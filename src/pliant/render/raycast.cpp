@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -199,9 +200,17 @@ RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* 
             m_cell_max[static_cast<std::size_t>(cell)] = vmax;
         },
         64);
-    // Step 3: the distance transform the rays jump empty blocks of cells with.
-    m_distance.resize(m_occupied.size());
-    detail::chessboard_distance(m_occupied, m_cells.data(), m_distance);
+    // Step 3: the empty cubes towards each octant, which rays jump over at once.
+    m_empty_cube.resize(8 * m_occupied.size());
+    parallel_for(
+        8,
+        [&](std::int64_t octant) {
+            const std::size_t count = m_occupied.size();
+            detail::empty_cubes(m_occupied, m_cells.data(), static_cast<int>(octant),
+                                std::span<std::uint8_t>(m_empty_cube)
+                                    .subspan(static_cast<std::size_t>(octant) * count, count));
+        },
+        1);
     m_prepare_ms = watch.elapsed_ms();
 }
 
@@ -247,7 +256,10 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     k.values = m_values.data();
     k.lut = m_lut.data();
     k.lut_alpha = m_lut_alpha.data();
-    k.distance = m_distance.data();
+    for (int octant = 0; octant < 8; ++octant) {
+        k.empty_cube[octant] =
+            m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupied.size();
+    }
     k.cell_max = m_cell_max.data();
     k.step = static_cast<float>(m_step);
     k.inv_step = 1.0f / k.step;

@@ -36,11 +36,13 @@
 //      reads exactly the voxels [4c, 4c + 4] (its footprint). A cell is occupied when some value
 //      of its footprint has a non-zero opacity (min/max of the values against a prefix count of
 //      the lookup table's non-zero entries, widened by one entry per side for the rounding of
-//      the interpolation; max α for RGBA), and a chessboard distance transform gives every
-//      empty cell its distance d (in cells, ≤ 255) to the nearest occupied one. A sample whose
-//      cell is empty is not classified: the ray jumps to the first sample past the cube of the
-//      2d − 1 cells around it (all empty), its far planes pulled in by 1/32 voxel so that float
-//      rounding cannot carry a skipped sample out of the cube. The occupancy test of a sample
+//      the interpolation; max α for RGBA). For each of the 8 octants of ray directions, every
+//      empty cell stores the side s (≤ 255 cells) of the largest cube of empty cells that has it
+//      as a corner and extends towards that octant (a largest-empty-square recurrence in 3D). A
+//      sample whose cell is empty is not classified: the ray jumps to the first sample past the
+//      cube of its octant (its far planes pulled in by 1/32 voxel so that float rounding cannot
+//      carry a skipped sample out of the cube); unlike a distance field, the cube ignores what
+//      lies behind the ray, so rays passing an object jump far. The occupancy test of a sample
 //      uses the same integer corner its interpolation reads, and skipped samples contribute
 //      nothing, so images are identical with or without skipping.
 //   Shading (optional): the colour of a sample is scaled by 0.3 + 0.7 |n · d|, n the normalized
@@ -58,7 +60,7 @@
 // computed by the same float operations whatever the thread count, so images and statistics are
 // bitwise identical for 1 and N threads.
 // Cost: O(width · height · (samples + jumps) per ray); the lookup table, the macro-cell grid and
-// its distance transform are built in O(voxels) per call, plus a float copy of the voxels (4 bytes
+// its empty cubes are built in O(voxels) per call, plus a float copy of the voxels (4 bytes
 // per voxel, 16 for RGBA). The kernel is in render/detail/raycast_kernel.hpp.
 #pragma once
 
@@ -129,8 +131,8 @@ private:
     std::vector<float> m_lut;              // 4 per entry: r, g, b, α per step (scalar volumes)
     std::vector<float> m_lut_alpha;        // α per opacity unit, per entry (MIP)
     std::vector<std::uint8_t> m_occupied;  // per macro cell
-    std::vector<std::uint8_t> m_distance;  // per macro cell: chessboard distance to an occupied one
-    std::vector<float> m_cell_max;         // per macro cell: largest value (scalar) or α (RGBA)
+    std::vector<std::uint8_t> m_empty_cube;  // 8 octants × macro cells: empty cube side, cells
+    std::vector<float> m_cell_max;           // per macro cell: largest value (scalar) or α (RGBA)
 };
 
 // One-off: RayCaster(volume, tf, options).render(camera, image); stats.ms includes the

@@ -32,8 +32,8 @@ inline constexpr int CELL_SHIFT = 2;  // log2(CELL)
 // Grid units a jump stops short of the far side of an empty block of cells: far more than the
 // float rounding of sample positions (≈ 1e-4 voxel for volumes of a few thousand voxels).
 inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
-inline constexpr int TILE = 16;  // pixels per tile edge
-inline constexpr int MAX_DISTANCE = 255;
+inline constexpr int TILE = 16;       // pixels per tile edge
+inline constexpr int MAX_CUBE = 255;  // largest stored empty-cube side, cells
 
 // Everything a pixel needs, trivially copyable (pointers into the RayCaster's arrays).
 struct RayCastKernel {
@@ -54,9 +54,10 @@ struct RayCastKernel {
     const float* lut_alpha = nullptr;
     // Macro cells.
     int cells[3] = {0, 0, 0};
-    // Chessboard distance, in cells, from each cell to the nearest occupied one (0: occupied),
-    // capped at MAX_DISTANCE; every cell within distance − 1 of a cell is empty.
-    const std::uint8_t* distance = nullptr;
+    // Per octant o of ray directions (bit a set: the direction's component a is negative), per
+    // cell: the side s (cells, ≤ MAX_CUBE) of the largest cube of empty cells with this cell as
+    // its corner, extending towards o; 0 for an occupied cell.
+    const std::uint8_t* empty_cube[8] = {};
     const float* cell_max = nullptr;
     // Options.
     float step = 1.0f;
@@ -258,22 +259,22 @@ PLIANT_HOST_DEVICE inline bool clip_ray(const RayCastKernel& k, Vec3f origin, Ve
 }
 
 // Empty-space jump from sample n (lower corner t, in an empty cell): the index of the first
-// sample that may lie outside the cube of cells within chessboard `radius` of t's cell (all of
-// them empty), at least n + 1. The cube's far planes along the ray are pulled in by SKIP_MARGIN,
-// so every sample strictly between n and the result lies inside the cube despite rounding; the
-// cube's extent beyond the grid is harmless (the clamp maps samples there onto the grid's
-// border cells, which are within the cube too).
+// sample that may lie outside the cube of `side` cells (all empty) that has t's cell as its
+// corner and extends along the ray's direction, at least n + 1. The cube's far planes along the ray
+// are pulled in by SKIP_MARGIN, so every sample strictly between n and the result lies inside the
+// cube despite rounding; the cube's extent beyond the grid is harmless (the clamp maps samples
+// there onto the grid's border cells, which are within the cube too).
 PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRay& r,
-                                            const Trilinear& t, int radius, std::int64_t n,
+                                            const Trilinear& t, int side, std::int64_t n,
                                             std::int64_t num_full) {
     const int c[3] = {t.ix >> CELL_SHIFT, t.iy >> CELL_SHIFT, t.iz >> CELL_SHIFT};
     float t_exit = r.t_far;
     for (int a = 0; a < 3; ++a) {
         if (r.gd[a] > 0.0f) {
-            const float plane = static_cast<float>((c[a] + radius + 1) * CELL) - SKIP_MARGIN;
+            const float plane = static_cast<float>((c[a] + side) * CELL) - SKIP_MARGIN;
             t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
         } else if (r.gd[a] < 0.0f) {
-            const float plane = static_cast<float>((c[a] - radius) * CELL) + SKIP_MARGIN;
+            const float plane = static_cast<float>((c[a] - side + 1) * CELL) + SKIP_MARGIN;
             t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
         }
     }
@@ -329,7 +330,7 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
         while (n < num_full) {
             const Trilinear t = locate(k, position(n));
             if (k.skipping && k.cell_max[cell_of(k, t)] <= best) {
-                n = jump(k, r, t, 0, n, num_full);
+                n = jump(k, r, t, 1, n, num_full);
                 continue;
             }
             ++samples;
@@ -367,15 +368,17 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
     }
 
     // Steps 3–5: march the samples; one in an empty cell jumps over the cube of empty cells
-    // around it (radius from the distance transform) instead of being classified.
+    // that its cell starts towards the ray's octant instead of being classified.
+    const std::uint8_t* empty_cube =
+        k.empty_cube[(r.gd.x < 0.0f ? 1 : 0) | (r.gd.y < 0.0f ? 2 : 0) | (r.gd.z < 0.0f ? 4 : 0)];
     float cr = 0.0f, cg = 0.0f, cb = 0.0f, acc = 0.0f;
     while (n < num_full) {
         const Vec3f g = position(n);
         const Trilinear t = locate(k, g);
         if (k.skipping) {
-            const int dist = k.distance[cell_of(k, t)];
-            if (dist > 0) {
-                n = jump(k, r, t, dist - 1, n, num_full);
+            const int side = empty_cube[cell_of(k, t)];
+            if (side > 0) {
+                n = jump(k, r, t, side, n, num_full);
                 continue;
             }
         }
@@ -401,7 +404,7 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
         const float tm = r.t_near + static_cast<float>(num_segments - 1) * k.step + 0.5f * partial;
         const Vec3f g = r.go + tm * r.gd;
         const Trilinear t = locate(k, g);
-        if (!k.skipping || k.distance[cell_of(k, t)] == 0) {
+        if (!k.skipping || empty_cube[cell_of(k, t)] == 0) {
             ++samples;
             Sample s = classify<IS_RGBA>(k, t);
             if (s.a > 0.0f) {
@@ -424,58 +427,45 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
     return result;
 }
 
-// Chessboard (L∞) distance transform of `occupied` (cells[0] · cells[1] · cells[2] flags, x
-// fastest) into `distance` (same shape): the distance in cells to the nearest occupied cell, 0
-// for occupied ones, capped at MAX_DISTANCE (also when no cell is occupied). Two raster passes
-// with the 26-neighbourhood at unit weight (Rosenfeld & Pfaltz 1966), exact for L∞. Serial,
-// O(cells · 13) per pass.
-inline void chessboard_distance(std::span<const std::uint8_t> occupied, const int cells[3],
-                                std::span<std::uint8_t> distance) {
-    const std::int64_t nx = cells[0], ny = cells[1], nz = cells[2];
+// The empty cubes of `occupied` (cells[0] · cells[1] · cells[2] flags, x fastest) towards
+// `octant` (bit a set: towards −a) into `side` (same shape): 0 for an occupied cell, else
+// 1 + the smallest side among the 7 neighbours c + e, e ∈ {0, 1}³ \ {0} stepped towards the octant
+// (cells outside the grid count as empty cubes of MAX_CUBE), capped at MAX_CUBE. Exact: the cube
+// of side s at c is c and the 7 cubes of side s − 1 at those neighbours (the 3D form of the
+// largest-empty-square recurrence). One serial pass in the order that visits those neighbours
+// first, O(cells · 7).
+inline void empty_cubes(std::span<const std::uint8_t> occupied, const int cells[3], int octant,
+                        std::span<std::uint8_t> side) {
+    const std::int64_t n[3] = {cells[0], cells[1], cells[2]};
+    const int dir[3] = {(octant & 1) != 0 ? -1 : 1, (octant & 2) != 0 ? -1 : 1,
+                        (octant & 4) != 0 ? -1 : 1};
     const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return static_cast<std::size_t>(x + nx * (y + ny * z));
+        return static_cast<std::size_t>(x + n[0] * (y + n[1] * z));
     };
-    for (std::size_t i = 0; i < occupied.size(); ++i) {
-        distance[i] = occupied[i] != 0 ? 0 : MAX_DISTANCE;
-    }
-    // One pass: each cell takes min(itself, neighbour + 1) over the 13 neighbours that precede
-    // it in the pass's raster order (sign −1: forward, +1: backward).
-    const auto pass = [&](int sign) {
-        for (std::int64_t zi = 0; zi < nz; ++zi) {
-            const std::int64_t z = sign < 0 ? zi : nz - 1 - zi;
-            for (std::int64_t yi = 0; yi < ny; ++yi) {
-                const std::int64_t y = sign < 0 ? yi : ny - 1 - yi;
-                for (std::int64_t xi = 0; xi < nx; ++xi) {
-                    const std::int64_t x = sign < 0 ? xi : nx - 1 - xi;
-                    int best = distance[at(x, y, z)];
-                    if (best == 0) {
-                        continue;
-                    }
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        for (int dy = -1; dy <= 1; ++dy) {
-                            for (int dx = -1; dx <= 1; ++dx) {
-                                // Preceding in raster order: (dz, dy, dx) lexicographically
-                                // before 0 for the forward pass, after it for the backward one.
-                                const int order = dz != 0 ? dz : (dy != 0 ? dy : dx);
-                                if (order != sign) {
-                                    continue;
-                                }
-                                const std::int64_t qx = x + dx, qy = y + dy, qz = z + dz;
-                                if (qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny ||
-                                    qz >= nz) {
-                                    continue;
-                                }
-                                best = std::min(best, distance[at(qx, qy, qz)] + 1);
-                            }
-                        }
-                    }
-                    distance[at(x, y, z)] = static_cast<std::uint8_t>(best);
+    for (std::int64_t zi = 0; zi < n[2]; ++zi) {
+        const std::int64_t z = dir[2] > 0 ? n[2] - 1 - zi : zi;
+        for (std::int64_t yi = 0; yi < n[1]; ++yi) {
+            const std::int64_t y = dir[1] > 0 ? n[1] - 1 - yi : yi;
+            for (std::int64_t xi = 0; xi < n[0]; ++xi) {
+                const std::int64_t x = dir[0] > 0 ? n[0] - 1 - xi : xi;
+                if (occupied[at(x, y, z)] != 0) {
+                    side[at(x, y, z)] = 0;
+                    continue;
                 }
+                int smallest = MAX_CUBE;
+                for (int e = 1; e < 8; ++e) {
+                    const std::int64_t q[3] = {x + ((e & 1) != 0 ? dir[0] : 0),
+                                               y + ((e & 2) != 0 ? dir[1] : 0),
+                                               z + ((e & 4) != 0 ? dir[2] : 0)};
+                    if (q[0] >= 0 && q[1] >= 0 && q[2] >= 0 && q[0] < n[0] && q[1] < n[1] &&
+                        q[2] < n[2]) {
+                        smallest = std::min<int>(smallest, side[at(q[0], q[1], q[2])]);
+                    }
+                }
+                side[at(x, y, z)] = static_cast<std::uint8_t>(std::min(MAX_CUBE, smallest + 1));
             }
         }
-    };
-    pass(-1);
-    pass(+1);
+    }
 }
 
 }  // namespace pliant::render::detail
