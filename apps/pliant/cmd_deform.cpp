@@ -22,11 +22,11 @@
 //           rotate and twist (the last frame shows the full angle), the driver's own otherwise.
 // An option of another driver is a usage error (exit 2).
 //
-// stdout: a summary, or with --json one object: output, render, driver, frames, substeps,
-// vertices, tets, active_cells, ms_per_substep, step_ms, resample_ms, render_ms, ms_per_frame
-// (means over frames), volume_ratio and inverted_tets (last frame), min_volume_ratio,
-// max_volume_ratio, max_inverted_tets (over frames), tets_skipped, voxels_written (last
-// resampling).
+// stdout: a summary, or with --json deform_run.hpp's object (docs/formats.md): output, render,
+// still, driver, frames, substeps, stiffness, vertices, tets, active_cells, ms_per_substep,
+// step_ms, resample_ms, render_ms, ms_per_frame (means over frames), volume_ratio and
+// inverted_tets (last frame), min_volume_ratio, max_volume_ratio, max_inverted_tets (over
+// frames), tets_skipped, voxels_written (last resampling).
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -35,7 +35,6 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,17 +42,10 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "pliant/core/error.hpp"
-#include "pliant/core/timer.hpp"
-#include "pliant/io/tetgen.hpp"
-#include "pliant/io/video.hpp"
+#include "deform_run.hpp"
 #include "pliant/io/volume_io.hpp"
-#include "pliant/pbd/soft_body.hpp"
-#include "pliant/pbd/tet_grid.hpp"
-#include "pliant/render/raycast.hpp"
-#include "pliant/volume/resample.hpp"
+#include "pliant/pbd/drivers.hpp"
 #include "pliant/volume/transfer_function.hpp"
-#include "progress_bar.hpp"
 #include "validators.hpp"
 #include "volume_view.hpp"
 
@@ -133,17 +125,7 @@ pbd::Driver make_driver(const DeformCommandOptions& o, double duration,
     return bubble;
 }
 
-struct Running {
-    double sum = 0.0;
-    int count = 0;
-    void add(double x) {
-        sum += x;
-        ++count;
-    }
-    double mean() const { return count > 0 ? sum / count : 0.0; }
-};
-
-void run_deform(const DeformCommandOptions& options, const GlobalOptions& global) {
+void run_deform_command(const DeformCommandOptions& options, const GlobalOptions& global) {
     // Usage checks across options (exit 2).
     for (const auto& [option, drivers] : options.driver_only) {
         if (option->count() > 0 &&
@@ -157,132 +139,45 @@ void run_deform(const DeformCommandOptions& options, const GlobalOptions& global
         throw CLI::ValidationError("--render",
                                    "expected an .mp4 file name, got '" + options.render + "'");
     }
-    const std::array<int, 2> size = parse_size(options.size);
+    DeformRunOptions run;
+    run.size = parse_size(options.size);
 
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
     const volume::Volume source = io::read_volume(options.volume, read);
-    io::check_volume_writable(options.out, source.type());  // fail before the run, not after
-    const bool is_rgba = volume::channels(source.type()) == 4;
     std::optional<volume::TransferFunction> tf;
-    if (!is_rgba) {
+    if (volume::channels(source.type()) != 4) {
         tf = load_transfer_function(options.tf, source);
         tf->validate();
     }
-    const volume::TransferFunction* visibility_tf = tf ? &*tf : nullptr;
 
-    // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.
-    std::optional<pbd::TetGrid> grid;
-    geometry::TetMesh mesh;
-    if (options.mesh.empty()) {
-        grid = pbd::build_tet_grid(
-            source,
-            {.cell_voxels = options.cells, .full_box = options.full_box, .tf = visibility_tf});
-        if (grid->mesh.tets.empty()) {
-            throw InvalidInput(fmt::format(
-                "{}: no visible voxel under the transfer function '{}', so no tet to deform "
-                "(use --full-box or another --tf)",
-                options.volume, tf ? tf->name : std::string("alpha")));
-        }
-    } else {
-        mesh = io::read_tetgen(options.mesh);
-        if (mesh.tets.empty()) {
-            throw InvalidInput(options.mesh + ": the mesh has no tets");
-        }
-    }
-    const geometry::TetMesh& rest = grid ? grid->mesh : mesh;
-    pbd::SoftBodyOptions body_options;
-    body_options.stiffness = options.stiffness;
-    body_options.substeps = options.substeps;
-    body_options.damping = options.damping;
-    pbd::SoftBody body =
-        grid ? pbd::SoftBody(*grid, body_options) : pbd::SoftBody(mesh, body_options);
-    const double dt = 1.0 / options.fps;
-    body.add_driver(make_driver(options, options.frames * dt, source.bounds().center()));
-
-    const volume::Resampler resampler(source, rest.tets, rest.positions, {.tf = visibility_tf});
-    volume::Volume target = volume::Volume::allocate(source.dims(), source.type(), source.spacing(),
-                                                     source.origin(), read.max_bytes);
-
-    std::optional<io::VideoWriter> video;
-    if (!options.render.empty()) {
-        video.emplace(options.render, size[0], size[1], options.fps);
-    }
-    const render::Camera camera = orbit_camera(
-        source.bounds(), options.camera[0], options.camera[1], options.camera[2], size[0], size[1]);
-    const bool progress = ::isatty(::fileno(stderr)) != 0 && !global.json;
-
-    Running substep_ms, step_ms, resample_ms, render_ms, frame_ms;
-    double min_ratio = std::numeric_limits<double>::infinity();
-    double max_ratio = -std::numeric_limits<double>::infinity();
-    std::int64_t max_inverted = 0;
-    pbd::SoftBodyStats stats;
-    volume::ResampleStats resampled;
-    render::Image image;
-    for (int frame = 1; frame <= options.frames; ++frame) {
-        const Stopwatch frame_clock;
-        body.step(dt);
-        stats = body.stats();
-        substep_ms.add(stats.ms_per_substep);
-        step_ms.add(stats.step_ms);
-        min_ratio = std::min(min_ratio, stats.volume_ratio);
-        max_ratio = std::max(max_ratio, stats.volume_ratio);
-        max_inverted = std::max(max_inverted, stats.inverted_tets);
-        if (video || frame == options.frames) {
-            const Stopwatch clock;
-            resampled = resampler.resample(body.positions(), target);
-            resample_ms.add(clock.elapsed_ms());
-        }
-        if (video) {
-            const render::RayCaster caster(target, visibility_tf);
-            render_ms.add(caster.render(camera, image).ms + caster.prepare_ms());
-            video->write(image);
-        }
-        frame_ms.add(frame_clock.elapsed_ms());
-        if (progress) {
-            print_progress(frame, options.frames, frame_ms.mean());
-        }
-    }
-    if (progress) {
-        end_progress();
-    }
-    io::write_volume(options.out, target);
-    if (video) {
-        video->finish();
-    }
+    run.driver_name = options.driver;
+    run.driver = make_driver(options, options.frames / options.fps, source.bounds().center());
+    run.grid.cell_voxels = options.cells;
+    run.grid.full_box = options.full_box;
+    run.mesh = options.mesh;
+    run.body.stiffness = options.stiffness;
+    run.body.substeps = options.substeps;
+    run.body.damping = options.damping;
+    run.frames = options.frames;
+    run.fps = options.fps;
+    run.out = options.out;
+    run.video = options.render;
+    run.camera = options.camera;
+    run.progress = ::isatty(::fileno(stderr)) != 0 && !global.json;
+    const nlohmann::ordered_json result = run_deform(source, tf ? &*tf : nullptr, run);
 
     if (global.json) {
-        nlohmann::ordered_json j;
-        j["output"] = options.out;
-        j["render"] = options.render.empty() ? nlohmann::ordered_json()
-                                             : nlohmann::ordered_json(options.render);
-        j["driver"] = options.driver;
-        j["frames"] = options.frames;
-        j["substeps"] = options.substeps;
-        j["vertices"] = rest.positions.size();
-        j["tets"] = rest.tets.size();
-        j["active_cells"] = grid ? grid->num_active_cells() : 0;
-        j["ms_per_substep"] = substep_ms.mean();
-        j["step_ms"] = step_ms.mean();
-        j["resample_ms"] = resample_ms.mean();
-        j["render_ms"] = render_ms.mean();
-        j["ms_per_frame"] = frame_ms.mean();
-        j["volume_ratio"] = stats.volume_ratio;
-        j["inverted_tets"] = stats.inverted_tets;
-        j["min_volume_ratio"] = min_ratio;
-        j["max_volume_ratio"] = max_ratio;
-        j["max_inverted_tets"] = max_inverted;
-        j["tets_skipped"] = resampled.num_tets_skipped;
-        j["voxels_written"] = resampled.num_voxels_written;
-        std::fputs((j.dump(2) + "\n").c_str(), stdout);
+        std::fputs((result.dump(2) + "\n").c_str(), stdout);
     } else {
         std::printf(
-            "%s: %s, %d frames of %zu tets (%zu vertices): %.2f ms per substep, %.1f ms per "
+            "%s: %s, %d frames of %lld tets (%lld vertices): %.2f ms per substep, %.1f ms per "
             "resampling, volume ratio %.4f, %lld inverted tets%s%s\n",
-            options.out.c_str(), options.driver.c_str(), options.frames, rest.tets.size(),
-            rest.positions.size(), substep_ms.mean(), resample_ms.mean(), stats.volume_ratio,
-            static_cast<long long>(stats.inverted_tets), options.render.empty() ? "" : "; video ",
-            options.render.c_str());
+            options.out.c_str(), options.driver.c_str(), options.frames,
+            result["tets"].get<long long>(), result["vertices"].get<long long>(),
+            result["ms_per_substep"].get<double>(), result["resample_ms"].get<double>(),
+            result["volume_ratio"].get<double>(), result["inverted_tets"].get<long long>(),
+            options.render.empty() ? "" : "; video ", options.render.c_str());
     }
 }
 
@@ -375,7 +270,7 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "Largest volume to read, MiB (default 16384)")
         ->check(CLI::Range(1.0, 1e9));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
-    cmd->callback([options, &global] { run_deform(*options, global); });
+    cmd->callback([options, &global] { run_deform_command(*options, global); });
 }
 
 }  // namespace pliant::cli

@@ -13,14 +13,18 @@
 //   4. the built-in cloth scenes (scenes/drape.json, twist.json, pile.json, flag.json, built into
 //      the binary) through `pliant cloth`: DIR/<scene>/frames/frame_NNNN.obj, preview.mp4 and
 //      stats.json;
-//   5. DIR/summary.json with every number (schema in docs/formats.md).
+//   5. a volume through the ray caster (the Colin27 brain from mricron-data, else the head CT from
+//      invesalius-examples, else a generated phantom): DIR/volume/volume.png, turntable.mp4;
+//   6. the same volume twisted by the XPBD soft body on a tet grid, resampled and ray-cast every
+//      frame (deform_run.hpp): DIR/deform/twist.mp4, twist.png, twisted.nrrd;
+//   7. DIR/summary.json with every number (schema in docs/formats.md).
 // Steps 1 and 2 run on the files' own numbers (double), so `pliant collide` on the written files
 // with the printed inflation reproduces their counts exactly.
 //
 // Human output on stdout (progress on stderr when it is a terminal); with --json, stdout is
 // summary.json's object. Throws IoError when DIR cannot be created or written, InternalError when
 // the BVH table's pair counts disagree between pliant, Embree and brute force (after writing the
-// summary). Takes a few seconds to a few tens of seconds on 2 vCPUs.
+// summary). Takes a few minutes on 2 vCPUs.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -38,6 +42,7 @@
 #include "broad_phase_report.hpp"
 #include "cloth_run.hpp"
 #include "commands.hpp"
+#include "deform_run.hpp"
 #include "output_directory.hpp"
 #include "peers/bvh_table.hpp"
 #include "peers/bvh_workload.hpp"
@@ -120,9 +125,14 @@ void say(bool quiet, const std::string& text) {
 }
 
 // The demo's volume: the first installed of the Colin27 MRI brain and the InVesalius head CT,
-// else a generated phantom; rendered to DIR/volume/volume.png (512²) and a 36-frame turntable
-// DIR/volume/turntable.mp4 (384²).
-nlohmann::ordered_json render_demo_volume(const std::filesystem::path& dir, bool quiet) {
+// else a generated phantom, with the transfer-function preset that suits it.
+struct DemoVolume {
+    volume::Volume volume;
+    std::string source = "generated: 3D Shepp-Logan phantom, 128^3";
+    std::string preset = "grayscale";
+};
+
+DemoVolume load_demo_volume() {
     struct Candidate {
         const char* path;
         const char* what;
@@ -134,20 +144,26 @@ nlohmann::ordered_json render_demo_volume(const std::filesystem::path& dir, bool
         {"/usr/share/doc/invesalius-examples/examples/Cranium.inv3",
          "the InVesalius head CT (invesalius-examples)", "ct-bone"},
     };
-    volume::Volume v;
-    std::string source = "generated: 3D Shepp-Logan phantom, 128^3";
-    std::string preset = "grayscale";
+    DemoVolume demo;
     for (const Candidate& c : candidates) {
         if (std::filesystem::exists(c.path)) {
-            v = io::read_volume(c.path);
-            source = fmt::format("{} ({})", c.what, c.path);
-            preset = c.preset;
-            break;
+            demo.volume = io::read_volume(c.path);
+            demo.source = fmt::format("{} ({})", c.what, c.path);
+            demo.preset = c.preset;
+            return demo;
         }
     }
-    if (v.empty()) {
-        v = volume::shepp_logan_3d({128, 128, 128});
-    }
+    demo.volume = volume::shepp_logan_3d({128, 128, 128});
+    return demo;
+}
+
+// The demo volume rendered to DIR/volume/volume.png (512²) and a 36-frame turntable
+// DIR/volume/turntable.mp4 (384²).
+nlohmann::ordered_json render_demo_volume(const std::filesystem::path& dir, const DemoVolume& demo,
+                                          bool quiet) {
+    const volume::Volume& v = demo.volume;
+    const std::string& source = demo.source;
+    const std::string& preset = demo.preset;
     const volume::TransferFunction tf = volume::preset(preset, v);
     render::RayCastOptions options;
     options.shading = true;
@@ -192,6 +208,42 @@ nlohmann::ordered_json render_demo_volume(const std::filesystem::path& dir, bool
             {"png_ms", still.ms},
             {"turntable", turntable},
             {"turntable_ms_per_frame", turntable_ms / TURNTABLE_FRAMES}};
+}
+
+// The demo volume twisted: the deformable-volume pipeline (tet grid, XPBD soft body, resampling,
+// ray casting) with the twist driver, the slab at +y (the face, for the Colin27 brain) turned 90
+// degrees against the slab at -y over 2 s: DIR/deform/twist.mp4 (none without ffmpeg), twist.png
+// (the last frame) and twisted.nrrd.
+nlohmann::ordered_json deform_demo_volume(const std::filesystem::path& dir, const DemoVolume& demo,
+                                          bool quiet) {
+    const std::filesystem::path out = dir / "deform";
+    make_output_directory(out);
+    const volume::TransferFunction tf = volume::preset(demo.preset, demo.volume);
+    DeformRunOptions run;
+    run.driver_name = "twist";
+    run.driver =
+        pbd::TwistDriver{.axis = pbd::Axis::y, .angle = 90.0, .ramp_time = 2.0, .grip = 0.1};
+    run.frames = 48;
+    run.fps = 24.0;
+    run.out = out / "twisted.nrrd";
+    if (io::ffmpeg_available()) {
+        run.video = out / "twist.mp4";
+    }
+    run.still = out / "twist.png";
+    run.size = {384, 384};
+    run.camera = {60.0, 20.0, 0.0};
+    run.shading = true;
+    run.progress = !quiet && ::isatty(::fileno(stderr)) != 0;
+    const nlohmann::ordered_json result = run_deform(demo.volume, &tf, run);
+    say(quiet,
+        fmt::format("the volume twisted (tet grid + XPBD + resampling + ray casting): {} tets, "
+                    "{:.1f} ms per substep, {:.1f} ms per resampling, {:.1f} ms per frame; "
+                    "volume ratio {:.4f}, {} inverted tets:\n  {}\n\n",
+                    result["tets"].get<long long>(), result["ms_per_substep"].get<double>(),
+                    result["resample_ms"].get<double>(), result["ms_per_frame"].get<double>(),
+                    result["volume_ratio"].get<double>(), result["inverted_tets"].get<long long>(),
+                    run.video.empty() ? run.still.string() : run.video.string()));
+    return result;
 }
 
 void run_demo(const DemoOptions& options, const GlobalOptions& global) {
@@ -298,9 +350,14 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     // Step 5: a volume rendered by the ray caster: the Colin27 brain (Debian mricron-data) or the
     // head CT (invesalius-examples), else the generated Shepp-Logan phantom; a PNG and a
     // turntable MP4 (PNG frames without ffmpeg).
-    const nlohmann::ordered_json volume_summary = render_demo_volume(dir, quiet);
+    const DemoVolume demo_volume = load_demo_volume();
+    const nlohmann::ordered_json volume_summary = render_demo_volume(dir, demo_volume, quiet);
 
-    // Step 6: the summary.
+    // Step 6: the same volume deformed: twisted by the XPBD soft body, resampled every frame and
+    // ray-cast into a video.
+    const nlohmann::ordered_json deform_summary = deform_demo_volume(dir, demo_volume, quiet);
+
+    // Step 7: the summary.
     const nlohmann::ordered_json summary = {
         {"sheet",
          {{"size_m", DRAPE_SIZE},
@@ -319,6 +376,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         {"drape", cloth_summary["drape"]},
         {"cloth", cloth_summary},
         {"volume", volume_summary},
+        {"deform", deform_summary},
         {"threads", num_threads()},
         {"seconds", demo_watch.elapsed_ms() / 1000.0},
     };
@@ -332,10 +390,12 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
             fmt::format(
                 "outputs in {}/:\n  {:<27}the folded sheet (binary PLY)\n  {:<27}its "
                 "moved copy\n  {:<27}each cloth scene: preview.mp4 (watch these), frames (OBJ), "
-                "stats.json\n  {:<27}the ray-cast volume: volume.png, turntable.mp4\n  {:<27}every "
+                "stats.json\n  {:<27}the ray-cast volume: volume.png, turntable.mp4\n  {:<27}the "
+                "twisted volume: twist.mp4 (watch it), twist.png, twisted.nrrd\n  {:<27}every "
                 "number above\n",
                 dir.string(), sheet_path.filename().string(), sheet_t1_path.filename().string(),
-                "drape/ twist/ pile/ flag/", "volume/", summary_path.filename().string()));
+                "drape/ twist/ pile/ flag/", "volume/", "deform/",
+                summary_path.filename().string()));
     }
     if (!table.ok()) {
         std::string errors;
