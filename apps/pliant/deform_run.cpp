@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/timer.hpp"
@@ -119,6 +121,14 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         video->finish();
     }
 
+    // How far the body moved from its rest shape (last frame), world units.
+    double max_displacement = 0.0, sum_displacement = 0.0;
+    const std::span<const Vec3f> now = body.positions();
+    for (std::size_t v = 0; v < now.size(); ++v) {
+        const double d = std::sqrt(squared_norm(vec3_cast<double>(now[v] - rest.positions[v])));
+        max_displacement = std::max(max_displacement, d);
+        sum_displacement += d;
+    }
     const auto path_or_null = [](const std::filesystem::path& p) {
         return p.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(p.string());
     };
@@ -139,6 +149,9 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             {"ms_per_frame", frame_ms.mean()},
             {"volume_ratio", stats.volume_ratio},
             {"inverted_tets", stats.inverted_tets},
+            {"max_displacement", max_displacement},
+            {"mean_displacement",
+             now.empty() ? 0.0 : sum_displacement / static_cast<double>(now.size())},
             {"min_volume_ratio", min_ratio},
             {"max_volume_ratio", max_ratio},
             {"max_inverted_tets", max_inverted},
