@@ -155,6 +155,7 @@ RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* 
     const std::int64_t total_cells = num_cells();
     m_occupied.assign(static_cast<std::size_t>(total_cells), 0);
     m_cell_max.assign(static_cast<std::size_t>(total_cells), 0.0f);
+    m_sub_occupied.assign(static_cast<std::size_t>(total_cells), 0);
     std::vector<int> nonzero_prefix(detail::LUT_SIZE + 1, 0);
     for (int e = 0; e < detail::LUT_SIZE && !m_is_rgba; ++e) {
         nonzero_prefix[e + 1] = nonzero_prefix[e] + (m_lut[4 * e + 3] > 0.0f ? 1 : 0);
@@ -168,34 +169,49 @@ RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* 
             const std::int64_t cy = (cell / m_cells[0]) % m_cells[1];
             const std::int64_t cz = cell / (static_cast<std::int64_t>(m_cells[0]) * m_cells[1]);
             const std::int64_t c[3] = {cx, cy, cz};
-            std::int64_t lo[3], hi[3];
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = c[a] * detail::CELL;
-                hi[a] = std::min<std::int64_t>(m_dims[a] - 1, (c[a] + 1) * detail::CELL);
-            }
-            float vmin = std::numeric_limits<float>::infinity();
-            float vmax = -vmin;
-            for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                    const std::int64_t row = m_dims[0] * (y + m_dims[1] * z);
-                    for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                        const float v = m_values[static_cast<std::size_t>(
-                            (row + x) * channel_stride + channel)];
-                        vmin = std::min(vmin, v);
-                        vmax = std::max(vmax, v);
+            // The 8 sub-cells (2³ trilinear cells each, footprint 3³ voxels) one by one; the
+            // cell's footprint is their union.
+            float cell_max = -std::numeric_limits<float>::infinity();
+            std::uint8_t sub_mask = 0;
+            for (int sub = 0; sub < 8; ++sub) {
+                std::int64_t lo[3], hi[3];
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = c[a] * detail::CELL + detail::SUB_CELL * ((sub >> a) & 1);
+                    hi[a] = std::min<std::int64_t>(m_dims[a] - 1, lo[a] + detail::SUB_CELL);
+                }
+                float vmin = std::numeric_limits<float>::infinity();
+                float vmax = -vmin;
+                for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                        const std::int64_t row = m_dims[0] * (y + m_dims[1] * z);
+                        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                            const float v = m_values[static_cast<std::size_t>(
+                                (row + x) * channel_stride + channel)];
+                            vmin = std::min(vmin, v);
+                            vmax = std::max(vmax, v);
+                        }
                     }
                 }
+                if (!(vmin <= vmax)) {
+                    continue;  // past the grid: no sample has its corner here
+                }
+                cell_max = std::max(cell_max, vmax);
+                bool occupied = false;
+                if (m_is_rgba) {
+                    occupied = vmax > 0.0f;
+                } else {
+                    // Interpolated values lie in [vmin, vmax] up to a rounding of the lerps,
+                    // which may move the nearest entry by one: widened by an entry per side.
+                    const int i0 = std::max(0, static_cast<int>(vmin + 0.5f) - 1);
+                    const int i1 =
+                        std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + 0.5f) + 1);
+                    occupied = nonzero_prefix[i1 + 1] - nonzero_prefix[i0] > 0;
+                }
+                sub_mask = static_cast<std::uint8_t>(sub_mask | (occupied ? 1 << sub : 0));
             }
-            bool occupied = false;
-            if (m_is_rgba) {
-                occupied = vmax > 0.0f;
-            } else {
-                // Interpolated values lie in [vmin, vmax] up to a rounding of the lerps, which
-                // may move the nearest entry by one: the range is widened by an entry per side.
-                const int i0 = std::max(0, static_cast<int>(vmin + 0.5f) - 1);
-                const int i1 = std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + 0.5f) + 1);
-                occupied = nonzero_prefix[i1 + 1] - nonzero_prefix[i0] > 0;
-            }
+            const bool occupied = sub_mask != 0;
+            const float vmax = cell_max;
+            m_sub_occupied[static_cast<std::size_t>(cell)] = sub_mask;
             m_occupied[static_cast<std::size_t>(cell)] = occupied ? 1 : 0;
             m_cell_max[static_cast<std::size_t>(cell)] = vmax;
         },
@@ -256,6 +272,7 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     k.values = m_values.data();
     k.lut = m_lut.data();
     k.lut_alpha = m_lut_alpha.data();
+    k.sub_occupied = m_sub_occupied.data();
     for (int octant = 0; octant < 8; ++octant) {
         k.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupied.size();

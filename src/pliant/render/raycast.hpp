@@ -42,7 +42,9 @@
 //      sample whose cell is empty is not classified: the ray jumps to the first sample past the
 //      cube of its octant (its far planes pulled in by 1/32 voxel so that float rounding cannot
 //      carry a skipped sample out of the cube); unlike a distance field, the cube ignores what
-//      lies behind the ray, so rays passing an object jump far. The occupancy test of a sample
+//      lies behind the ray, so rays passing an object jump far. Inside an occupied cell, each
+//      of its 8 sub-cells of 2³ trilinear cells has an occupancy bit of its own (footprint 3³
+//      voxels), and a sample in an empty sub-cell is skipped alone. The occupancy test of a sample
 //      uses the same integer corner its interpolation reads, and skipped samples contribute
 //      nothing, so images are identical with or without skipping.
 //   Shading (optional): the colour of a sample is scaled by 0.3 + 0.7 |n · d|, n the normalized
@@ -131,8 +133,9 @@ private:
     std::vector<float> m_lut;              // 4 per entry: r, g, b, α per step (scalar volumes)
     std::vector<float> m_lut_alpha;        // α per opacity unit, per entry (MIP)
     std::vector<std::uint8_t> m_occupied;  // per macro cell
-    std::vector<std::uint8_t> m_empty_cube;  // 8 octants × macro cells: empty cube side, cells
-    std::vector<float> m_cell_max;           // per macro cell: largest value (scalar) or α (RGBA)
+    std::vector<std::uint8_t> m_empty_cube;    // 8 octants × macro cells: empty cube side, cells
+    std::vector<std::uint8_t> m_sub_occupied;  // per macro cell: bit per occupied 2³ sub-cell
+    std::vector<float> m_cell_max;  // per macro cell: largest value (scalar) or α (RGBA)
 };
 
 // One-off: RayCaster(volume, tf, options).render(camera, image); stats.ms includes the

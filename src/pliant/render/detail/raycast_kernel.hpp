@@ -29,6 +29,7 @@ namespace pliant::render::detail {
 inline constexpr int LUT_SIZE = 4096;
 inline constexpr int CELL = 4;        // macro cell edge, voxels (a power of two)
 inline constexpr int CELL_SHIFT = 2;  // log2(CELL)
+inline constexpr int SUB_CELL = 2;    // sub-cell edge (an occupancy bit each), CELL / 2
 // Grid units a jump stops short of the far side of an empty block of cells: far more than the
 // float rounding of sample positions (≈ 1e-4 voxel for volumes of a few thousand voxels).
 inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
@@ -58,6 +59,9 @@ struct RayCastKernel {
     // cell: the side s (cells, ≤ MAX_CUBE) of the largest cube of empty cells with this cell as
     // its corner, extending towards o; 0 for an occupied cell.
     const std::uint8_t* empty_cube[8] = {};
+    // Per cell: bit (sx + 2 sy + 4 sz) set when the sub-cell of the samples with lower corner in
+    // [CELL·c + SUB_CELL·s, CELL·c + SUB_CELL·s + 1] (footprint: 3³ voxels) is occupied.
+    const std::uint8_t* sub_occupied = nullptr;
     const float* cell_max = nullptr;
     // Options.
     float step = 1.0f;
@@ -80,8 +84,10 @@ struct Sample {
     float r, g, b, a;
 };
 
+// min(max(v, lo), hi), branch-free (maxss/minss); NaN stays NaN.
 PLIANT_HOST_DEVICE inline float clampf(float v, float lo, float hi) {
-    return v < lo ? lo : (v > hi ? hi : v);
+    const float above = v < lo ? lo : v;
+    return hi < above ? hi : above;
 }
 PLIANT_HOST_DEVICE inline float lerp(float a, float b, float t) {
     return a + t * (b - a);
@@ -109,6 +115,11 @@ PLIANT_HOST_DEVICE inline Trilinear locate(const RayCastKernel& k, Vec3f g) {
 
 PLIANT_HOST_DEVICE inline std::int64_t voxel_index(const RayCastKernel& k, const Trilinear& t) {
     return t.ix + k.stride[1] * t.iy + k.stride[2] * t.iz;
+}
+
+// The occupancy bit of the sub-cell holding the sample with lower corner t.
+PLIANT_HOST_DEVICE inline int sub_cell_bit(const Trilinear& t) {
+    return ((t.ix >> 1) & 1) | (((t.iy >> 1) & 1) << 1) | (((t.iz >> 1) & 1) << 2);
 }
 
 // The macro cell holding the sample with lower corner t.
@@ -376,9 +387,14 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
         const Vec3f g = position(n);
         const Trilinear t = locate(k, g);
         if (k.skipping) {
-            const int side = empty_cube[cell_of(k, t)];
+            const std::int64_t cell = cell_of(k, t);
+            const int side = empty_cube[cell];
             if (side > 0) {
                 n = jump(k, r, t, side, n, num_full);
+                continue;
+            }
+            if (((k.sub_occupied[cell] >> sub_cell_bit(t)) & 1) == 0) {
+                ++n;  // an empty sub-cell of an occupied cell: this sample only
                 continue;
             }
         }
