@@ -42,7 +42,9 @@
 //      sample whose cell is empty is not classified: the ray jumps to the first sample past the
 //      cube of its octant (its far planes pulled in by 1/32 voxel so that float rounding cannot
 //      carry a skipped sample out of the cube); unlike a distance field, the cube ignores what
-//      lies behind the ray, so rays passing an object jump far. Inside an occupied cell, each
+//      lies behind the ray, so rays passing an object jump far. A ray with a zero direction
+//      component (axis views) never moves along that axis, so the cubes towards either side of
+//      it are valid too, and it jumps the largest of them. Inside an occupied cell, each
 //      of its 8 sub-cells of 2³ trilinear cells has an occupancy bit of its own (footprint 3³
 //      voxels), and a sample in an empty sub-cell is skipped alone. The occupancy test of a sample
 //      uses the same integer corner its interpolation reads, and skipped samples contribute

@@ -380,15 +380,32 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
 
     // Steps 3–5: march the samples; one in an empty cell jumps over the cube of empty cells
     // that its cell starts towards the ray's octant instead of being classified.
-    const std::uint8_t* empty_cube =
-        k.empty_cube[(r.gd.x < 0.0f ? 1 : 0) | (r.gd.y < 0.0f ? 2 : 0) | (r.gd.z < 0.0f ? 4 : 0)];
+    const int octant = (r.gd.x < 0.0f ? 1 : 0) | (r.gd.y < 0.0f ? 2 : 0) | (r.gd.z < 0.0f ? 4 : 0);
+    const std::uint8_t* empty_cube = k.empty_cube[octant];
+    // A ray with a zero direction component never moves along it, so the cubes towards either
+    // side of that axis are valid too: up to 3 more octants (axis views have two zero
+    // components), and the largest of their cubes is jumped.
+    const std::uint8_t* more_cubes[3] = {nullptr, nullptr, nullptr};
+    int num_more = 0;
+    {
+        const int zero =
+            (r.gd.x == 0.0f ? 1 : 0) | (r.gd.y == 0.0f ? 2 : 0) | (r.gd.z == 0.0f ? 4 : 0);
+        for (int flip = 1; flip < 8; ++flip) {
+            if ((flip & ~zero) == 0 && num_more < 3) {
+                more_cubes[num_more++] = k.empty_cube[octant ^ flip];
+            }
+        }
+    }
     float cr = 0.0f, cg = 0.0f, cb = 0.0f, acc = 0.0f;
     while (n < num_full) {
         const Vec3f g = position(n);
         const Trilinear t = locate(k, g);
         if (k.skipping) {
             const std::int64_t cell = cell_of(k, t);
-            const int side = empty_cube[cell];
+            int side = empty_cube[cell];
+            for (int m = 0; m < num_more && side > 0; ++m) {
+                side = std::max<int>(side, more_cubes[m][cell]);
+            }
             if (side > 0) {
                 n = jump(k, r, t, side, n, num_full);
                 continue;
