@@ -324,6 +324,10 @@ TEST(RayCast, SkippingDoesNotChangeTheImage) {
         frame_box(phantom.bounds(), 45.0, 0.0, 41, 37),
         view_camera(phantom.bounds(), ViewAxis::neg_y, 40, 40),
         view_camera(phantom.bounds(), ViewAxis::pos_z, 80, 80),
+        // Far away (7.5 × 10⁵ voxels), telephoto: positions round to ≈ 0.06 voxel, more than
+        // the fixed part of the jump margin (1/32 voxel).
+        Camera::perspective(phantom.bounds().center() + Vec3d{30000.0, 20000.0, 10000.0},
+                            phantom.bounds().center(), {0.0, 0.0, 1.0}, 0.006, 40, 40),
     };
     for (const RayCastMode mode : {RayCastMode::composite, RayCastMode::mip}) {
         for (const bool shading : {false, true}) {

@@ -9,7 +9,7 @@
 // the samples whose lower corner is in [CELL·c, CELL·c + CELL − 1], so its footprint, the voxels
 // those samples read, is exactly [CELL·c, CELL·c + CELL] ∩ [0, n − 1]: the occupancy test of a
 // sample is exact (the same integer corner the sample reads from), and only the jumps over
-// empty blocks of cells are geometric, kept inside the block by SKIP_MARGIN.
+// empty blocks of cells are geometric, kept inside the block by a margin (GridRay::margin).
 #pragma once
 
 #include <algorithm>
@@ -30,8 +30,10 @@ inline constexpr int LUT_SIZE = 4096;
 inline constexpr int CELL = 4;        // macro cell edge, voxels (a power of two)
 inline constexpr int CELL_SHIFT = 2;  // log2(CELL)
 inline constexpr int SUB_CELL = 2;    // sub-cell edge (an occupancy bit each), CELL / 2
-// Grid units a jump stops short of the far side of an empty block of cells: far more than the
-// float rounding of sample positions (≈ 1e-4 voxel for volumes of a few thousand voxels).
+// Grid units a jump stops short of the far side of an empty block of cells, at least: far more
+// than the float rounding of sample positions (≈ 1e-4 voxel for volumes of a few thousand voxels
+// seen from nearby). A ray adds 2⁻¹⁸ (32 float epsilons) of the largest coordinate magnitude it
+// computes, so a camera far from the volume keeps the margin above its rounding.
 inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
 inline constexpr int TILE = 16;       // pixels per tile edge
 inline constexpr int MAX_CUBE = 255;  // largest stored empty-cube side, cells
@@ -233,6 +235,7 @@ struct GridRay {
     Vec3f go, gd;
     float inv_gd[3];
     float t_near, t_far;
+    float margin;  // grid units a jump stops short of a block's far planes
 };
 
 // Step 1: the ray in grid coordinates clipped to the box [−0.5, n − 0.5]³; false when it misses.
@@ -266,14 +269,21 @@ PLIANT_HOST_DEVICE inline bool clip_ray(const RayCastKernel& k, Vec3f origin, Ve
         r.t_near = std::max(r.t_near, t0);
         r.t_far = std::min(r.t_far, t1);
     }
-    return r.t_near < r.t_far;
+    if (!(r.t_near < r.t_far)) {
+        return false;
+    }
+    const float magnitude =
+        std::max({std::fabs(r.go.x), std::fabs(r.go.y), std::fabs(r.go.z)}) +
+        r.t_far * std::max({std::fabs(r.gd.x), std::fabs(r.gd.y), std::fabs(r.gd.z)});
+    r.margin = SKIP_MARGIN + magnitude * (1.0f / 262144.0f);
+    return true;
 }
 
 // Empty-space jump from sample n (lower corner t, in an empty cell): the index of the first
 // sample that may lie outside the cube of `side` cells (all empty) that has t's cell as its
 // corner and extends along the ray's direction, at least n + 1. The cube's far planes along the ray
-// are pulled in by SKIP_MARGIN, so every sample strictly between n and the result lies inside the
-// cube despite rounding; the cube's extent beyond the grid is harmless (the clamp maps samples
+// are pulled in by the ray's margin, so every sample strictly between n and the result lies inside
+// the cube despite rounding; the cube's extent beyond the grid is harmless (the clamp maps samples
 // there onto the grid's border cells, which are within the cube too).
 PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRay& r,
                                             const Trilinear& t, int side, std::int64_t n,
@@ -282,10 +292,10 @@ PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRa
     float t_exit = r.t_far;
     for (int a = 0; a < 3; ++a) {
         if (r.gd[a] > 0.0f) {
-            const float plane = static_cast<float>((c[a] + side) * CELL) - SKIP_MARGIN;
+            const float plane = static_cast<float>((c[a] + side) * CELL) - r.margin;
             t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
         } else if (r.gd[a] < 0.0f) {
-            const float plane = static_cast<float>((c[a] - side + 1) * CELL) + SKIP_MARGIN;
+            const float plane = static_cast<float>((c[a] - side + 1) * CELL) + r.margin;
             t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
         }
     }
