@@ -169,26 +169,40 @@ RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* 
             const std::int64_t cy = (cell / m_cells[0]) % m_cells[1];
             const std::int64_t cz = cell / (static_cast<std::int64_t>(m_cells[0]) * m_cells[1]);
             const std::int64_t c[3] = {cx, cy, cz};
-            // The 8 sub-cells (2³ trilinear cells each, footprint 3³ voxels) one by one; the
-            // cell's footprint is their union.
+            // The cell's footprint (up to 5³ voxels, read once), then its 8 sub-cells (2³
+            // trilinear cells each, footprint 3³ voxels; the cell's footprint is their union).
+            constexpr int F = detail::CELL + 1;
+            float buf[F][F][F];
+            std::int64_t count[3];
+            for (int a = 0; a < 3; ++a) {
+                count[a] = std::min<std::int64_t>(F, m_dims[a] - c[a] * detail::CELL);
+            }
+            for (std::int64_t z = 0; z < count[2]; ++z) {
+                for (std::int64_t y = 0; y < count[1]; ++y) {
+                    const std::int64_t row =
+                        c[0] * detail::CELL + m_dims[0] * (c[1] * detail::CELL + y +
+                                                           m_dims[1] * (c[2] * detail::CELL + z));
+                    for (std::int64_t x = 0; x < count[0]; ++x) {
+                        buf[z][y][x] = m_values[static_cast<std::size_t>(
+                            (row + x) * channel_stride + channel)];
+                    }
+                }
+            }
             float cell_max = -std::numeric_limits<float>::infinity();
             std::uint8_t sub_mask = 0;
             for (int sub = 0; sub < 8; ++sub) {
                 std::int64_t lo[3], hi[3];
                 for (int a = 0; a < 3; ++a) {
-                    lo[a] = c[a] * detail::CELL + detail::SUB_CELL * ((sub >> a) & 1);
-                    hi[a] = std::min<std::int64_t>(m_dims[a] - 1, lo[a] + detail::SUB_CELL);
+                    lo[a] = detail::SUB_CELL * ((sub >> a) & 1);
+                    hi[a] = std::min<std::int64_t>(count[a] - 1, lo[a] + detail::SUB_CELL);
                 }
                 float vmin = std::numeric_limits<float>::infinity();
                 float vmax = -vmin;
                 for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
                     for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                        const std::int64_t row = m_dims[0] * (y + m_dims[1] * z);
                         for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                            const float v = m_values[static_cast<std::size_t>(
-                                (row + x) * channel_stride + channel)];
-                            vmin = std::min(vmin, v);
-                            vmax = std::max(vmax, v);
+                            vmin = std::min(vmin, buf[z][y][x]);
+                            vmax = std::max(vmax, buf[z][y][x]);
                         }
                     }
                 }

@@ -485,6 +485,7 @@ inline void empty_cubes(std::span<const std::uint8_t> occupied, const int cells[
     const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
         return static_cast<std::size_t>(x + n[0] * (y + n[1] * z));
     };
+    const std::int64_t step[3] = {dir[0], dir[1] * n[0], dir[2] * n[0] * n[1]};
     for (std::int64_t zi = 0; zi < n[2]; ++zi) {
         const std::int64_t z = dir[2] > 0 ? n[2] - 1 - zi : zi;
         for (std::int64_t yi = 0; yi < n[1]; ++yi) {
@@ -495,17 +496,25 @@ inline void empty_cubes(std::span<const std::uint8_t> occupied, const int cells[
                     side[at(x, y, z)] = 0;
                     continue;
                 }
+                // The 7 neighbours (e = 1 … 7: bit a set steps along axis a), those inside.
+                const std::size_t i = at(x, y, z);
+                const bool in[3] = {x + dir[0] >= 0 && x + dir[0] < n[0],
+                                    y + dir[1] >= 0 && y + dir[1] < n[1],
+                                    z + dir[2] >= 0 && z + dir[2] < n[2]};
                 int smallest = MAX_CUBE;
                 for (int e = 1; e < 8; ++e) {
-                    const std::int64_t q[3] = {x + ((e & 1) != 0 ? dir[0] : 0),
-                                               y + ((e & 2) != 0 ? dir[1] : 0),
-                                               z + ((e & 4) != 0 ? dir[2] : 0)};
-                    if (q[0] >= 0 && q[1] >= 0 && q[2] >= 0 && q[0] < n[0] && q[1] < n[1] &&
-                        q[2] < n[2]) {
-                        smallest = std::min<int>(smallest, side[at(q[0], q[1], q[2])]);
+                    if (((e & 1) != 0 && !in[0]) || ((e & 2) != 0 && !in[1]) ||
+                        ((e & 4) != 0 && !in[2])) {
+                        continue;
                     }
+                    const std::int64_t offset = ((e & 1) != 0 ? step[0] : 0) +
+                                                ((e & 2) != 0 ? step[1] : 0) +
+                                                ((e & 4) != 0 ? step[2] : 0);
+                    smallest = std::min<int>(
+                        smallest,
+                        side[static_cast<std::size_t>(static_cast<std::int64_t>(i) + offset)]);
                 }
-                side[at(x, y, z)] = static_cast<std::uint8_t>(std::min(MAX_CUBE, smallest + 1));
+                side[i] = static_cast<std::uint8_t>(std::min(MAX_CUBE, smallest + 1));
             }
         }
     }
