@@ -78,7 +78,7 @@ struct RotateDriver {
     double ramp_time = 0.0;  // s
     // World units: the point the axis goes through (pliant deform: the volume's centre, which a
     // grid over only the visible part need not share); none: the rest box's centre.
-    std::optional<Vec3d> centre;
+    std::optional<Vec3d> centre = std::nullopt;
 };
 
 using Driver = std::variant<WaveDriver, TwistDriver, BubbleDriver, RotateDriver>;
