@@ -163,7 +163,26 @@ TEST(VolumeIo, NiftiBrokenInputs) {
     test::write_bytes(dir / "e.nii", "");
     expect_io_error([&] { read_volume(dir / "e.nii"); }, {"empty"});
     test::write_bytes(dir / "g.nii", std::string(400, 'g'));
-    expect_io_error([&] { read_volume(dir / "g.nii"); }, {"not a readable NIfTI-1"});
+    expect_io_error([&] { read_volume(dir / "g.nii"); },
+                    {"not a NIfTI-1 file: sizeof_hdr is 1734829927, expected 348"});
+    // Header fields that lie: checked before niftilib (which would print "** ERROR" lines).
+    test::write_bytes(dir / "h.nii", bytes.substr(0, 100));
+    expect_io_error([&] { read_volume(dir / "h.nii"); },
+                    {"truncated NIfTI-1 header: expected 348 bytes, got 100"});
+    std::string bad_ndim = bytes;
+    bad_ndim[40] = 9;  // dim[0], little endian
+    bad_ndim[41] = 0;
+    test::write_bytes(dir / "n.nii", bad_ndim);
+    expect_io_error([&] { read_volume(dir / "n.nii"); },
+                    {"dim[0] out of range, expected 1 to 7, got 9"});
+    std::string zero_dim = bytes;
+    zero_dim[44] = 0;  // dim[2]
+    zero_dim[45] = 0;
+    test::write_bytes(dir / "z.nii", zero_dim);
+    expect_io_error([&] { read_volume(dir / "z.nii"); }, {"dim[2] is 0, expected at least 1"});
+    // Valid files keep reading, gzip too.
+    write_volume(dir / "v.nii.gz", sample(VoxelType::i16));
+    EXPECT_EQ(read_volume(dir / "v.nii.gz").dims(), read_volume(dir / "v.nii").dims());
 }
 
 TEST(VolumeIo, RawSidecarBrokenInputs) {

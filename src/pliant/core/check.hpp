@@ -7,33 +7,41 @@
 
 #include <fmt/format.h>
 
-#include <source_location>
 #include <string>
 
 #include "pliant/core/error.hpp"
 
 namespace pliant::detail {
 
+// Where a check sits. Not std::source_location: clang 14 with libstdc++ 12 (the fuzzing build)
+// has no <source_location>.
+struct SourceLocation {
+    const char* file;
+    int line;
+    const char* function;
+};
+
 [[noreturn]] void check_failed(const char* expression, const std::string& values,
-                               std::source_location where);
+                               SourceLocation where);
 
 template <typename A, typename B>
 [[noreturn]] void check_op_failed(const char* expression, const A& a, const B& b,
-                                  std::source_location where) {
+                                  SourceLocation where) {
     check_failed(expression, fmt::format("({} vs {})", a, b), where);
 }
 
 }  // namespace pliant::detail
 
-#define PLIANT_CHECK(cond)      \
-    ((cond)                     \
-         ? static_cast<void>(0) \
-         : ::pliant::detail::check_failed(#cond, std::string{}, std::source_location::current()))
+#define PLIANT_SOURCE_LOCATION_ (::pliant::detail::SourceLocation{__FILE__, __LINE__, __func__})
+
+#define PLIANT_CHECK(cond)         \
+    ((cond) ? static_cast<void>(0) \
+            : ::pliant::detail::check_failed(#cond, std::string{}, PLIANT_SOURCE_LOCATION_))
 
 #define PLIANT_CHECK_OP_(a, b, op)                                               \
     (((a)op(b)) ? static_cast<void>(0)                                           \
                 : ::pliant::detail::check_op_failed(#a " " #op " " #b, (a), (b), \
-                                                    std::source_location::current()))
+                                                    PLIANT_SOURCE_LOCATION_))
 
 #define PLIANT_CHECK_EQ(a, b) PLIANT_CHECK_OP_(a, b, ==)
 #define PLIANT_CHECK_NE(a, b) PLIANT_CHECK_OP_(a, b, !=)

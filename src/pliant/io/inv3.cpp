@@ -172,13 +172,16 @@ std::string base_name(const std::string& name) {
 struct PlistValue {
     enum class Kind { dict, array, string, integer, real, boolean } kind = Kind::string;
     std::string text;
-    std::vector<std::pair<std::string, PlistValue>> dict;
+    // A dict as parallel key and value lists (std::pair of an incomplete type is not allowed;
+    // std::vector of one is, since C++17).
+    std::vector<std::string> keys;
+    std::vector<PlistValue> values;
     std::vector<PlistValue> array;
 
     const PlistValue* find(const std::string& key) const {
-        for (const auto& [k, v] : dict) {
-            if (k == key) {
-                return &v;
+        for (std::size_t i = 0; i < keys.size(); ++i) {
+            if (keys[i] == key) {
+                return &values[i];
             }
         }
         return nullptr;
@@ -250,7 +253,9 @@ private:
                     fail(m_path, fmt::format("main.plist: expected <key> in a dict, got <{}>", k));
                 }
                 std::string key = text_until("</key>");
-                v.dict.emplace_back(std::move(key), value(depth + 1));
+                PlistValue item = value(depth + 1);
+                v.keys.push_back(std::move(key));
+                v.values.push_back(std::move(item));
             }
         } else if (t == "array") {
             v.kind = PlistValue::Kind::array;
