@@ -1,7 +1,7 @@
 // pliant deform VOLUME --driver wave|twist|bubble|rotate [driver options]
 //               [--cells B] [--full-box] [--mesh FILE.node] [--stiffness K] [--substeps N]
 //               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
-//               [--size WxH] [--camera AZ,EL,DIST] [--max-memory MIB] [--json]
+//               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB] [--json]
 //
 // The deformable-volume pipeline of Park & Kye 2022 on a volume file: a tet grid over it
 // (pbd::build_tet_grid: cells of B³ voxels, 5 tets each, only cells near visible voxels unless
@@ -78,6 +78,7 @@ struct DeformCommandOptions {
     std::string render;
     std::string tf = "grayscale";
     std::string size = "512x512";
+    double step = 0.0;
     std::array<double, 3> camera{30.0, 20.0, 0.0};
     double max_memory_mib = 16384.0;
 
@@ -164,6 +165,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.out = options.out;
     run.video = options.render;
     run.camera = options.camera;
+    run.step = options.step;
     run.progress = ::isatty(::fileno(stderr)) != 0 && !global.json;
     const nlohmann::ordered_json result = run_deform(source, tf ? &*tf : nullptr, run);
 
@@ -261,6 +263,9 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "Transfer function (preset or JSON) for scalar volumes: rendering, and which "
                     "voxels are visible for the grid (default grayscale)");
     cmd->add_option("--size", options->size, "Video size (default 512x512)")->type_name("WxH");
+    cmd->add_option("--step", options->step,
+                    "Video: ray-casting step, world units (default 0: half the smallest spacing)")
+        ->check(finite_non_negative());
     cmd->add_option("--camera", options->camera,
                     "Video camera: azimuth, elevation (degrees), distance (0 = frame the box)")
         ->type_name("AZ,EL,DIST")

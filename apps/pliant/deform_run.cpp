@@ -75,6 +75,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
                      options.size[0], options.size[1]);
     render::RayCastOptions ray_options;
     ray_options.shading = options.shading;
+    ray_options.step = options.step;
 
     Running substep_ms, step_ms, resample_ms, render_ms, frame_ms;
     double min_ratio = std::numeric_limits<double>::infinity();

@@ -36,6 +36,7 @@ struct DeformRunOptions {
     std::array<int, 2> size{512, 512};
     std::array<double, 3> camera{30.0, 20.0, 0.0};  // azimuth, elevation (degrees), distance
     bool shading = false;
+    double step = 0.0;      // ray-casting step, world units (0: half the smallest spacing)
     bool progress = false;  // progress bar on stderr
 };
 
