@@ -97,19 +97,15 @@ void brute_force(const Workload& w, Volume& target) {
         }
         for (std::int64_t k = t.lo[2]; k <= t.hi[2]; ++k) {
             for (std::int64_t j = t.lo[1]; j <= t.hi[1]; ++j) {
-                const double jd = static_cast<double>(j);
-                const double kd = static_cast<double>(k);
                 for (std::int64_t i = t.lo[0]; i <= t.hi[0]; ++i) {
                     if (!volume::detail::inside(t, i, j, k)) {
                         continue;
                     }
-                    const double id = static_cast<double>(i);
                     float s[C];
                     volume::detail::sample_trilinear<S, C>(
-                        src, sf.n,
-                        t.map[0][1] * jd + t.map[0][2] * kd + t.map[0][3] + t.map[0][0] * id,
-                        t.map[1][1] * jd + t.map[1][2] * kd + t.map[1][3] + t.map[1][0] * id,
-                        t.map[2][1] * jd + t.map[2][2] * kd + t.map[2][3] + t.map[2][0] * id, s);
+                        src, sf.n, volume::detail::map_coord(t.map[0], i, j, k),
+                        volume::detail::map_coord(t.map[1], i, j, k),
+                        volume::detail::map_coord(t.map[2], i, j, k), s);
                     S* out = dst + C * (i + tf.n[0] * (j + tf.n[1] * k));
                     for (int c = 0; c < C; ++c) {
                         out[c] = volume::detail::convert_sample<S>(s[c], 1.0f);

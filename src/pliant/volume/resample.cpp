@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -116,45 +117,61 @@ bool footprint_visible(const VisibilityIndex& vis, const Volume& source, const V
     return false;
 }
 
-// The tets of each slab of SLAB z layers, in increasing tet index order. The result of resample()
-// does not depend on the slab height (each voxel is decided by the same tets in the same order);
-// it trades load balance (more slabs) against tets straddling two slabs (set up twice).
+// detail::RestInfo of a kept tet in one byte: orientation + 1 in bits 0–1, is_interior in bit 2.
+std::uint8_t encode_rest(const detail::RestInfo& info) {
+    return static_cast<std::uint8_t>((info.orientation + 1) | (info.is_interior ? 4 : 0));
+}
+detail::RestInfo decode_rest(std::uint8_t code) {
+    return {static_cast<std::int8_t>((code & 3) - 1), (code & 4) != 0};
+}
+
+// The kept tets of each slab of `height` z layers, in increasing tet index order (entries are
+// positions in the kept list). The result of resample() does not depend on the slab height
+// (each voxel is decided by the same tets in the same order); it trades load balance and cache
+// footprint (more, thinner slabs) against tets straddling two slabs (set up twice).
 struct Slabs {
     std::int64_t height = 1;
     std::int64_t count = 0;
-    std::vector<std::int64_t> begin;  // count + 1 offsets into tets
-    std::vector<std::int32_t> tets;
+    std::vector<std::int64_t> begin;  // count + 1 offsets into entries
+    std::vector<std::int32_t> entries;
 };
 
-// Count → prefix sum → fill over fixed chunks of the kept tets: deterministic, tet order per slab.
+// Layers per slab: 16 at 256³ (a tet of a cell of 4 voxels straddles two slabs ~1 time in 5),
+// at least 16 slabs for load balance on small grids.
+std::int64_t slab_height(std::int64_t nz) {
+    return std::clamp<std::int64_t>(nz / 16, 1, 16);
+}
+
+// Count → prefix sum → fill over fixed chunks of the kept tets: deterministic, tet order per
+// slab. The count pass records each tet's slab range for the fill pass.
 Slabs bin_tets(std::span<const std::int32_t> kept, std::span<const geometry::Tet> tets,
                std::span<const Vec3f> positions, const GridFrame& target) {
     Slabs slabs;
     const std::int64_t nz = target.n[2];
-    slabs.height = std::clamp<std::int64_t>((nz + 31) / 32, 1, 8);
+    slabs.height = slab_height(nz);
     slabs.count = (nz + slabs.height - 1) / slabs.height;
     const std::int64_t num = static_cast<std::int64_t>(kept.size());
     constexpr std::int64_t GRAIN = 16384;
     const std::int64_t num_chunks_ = num_chunks(num, GRAIN);
     std::vector<std::int64_t> counts(static_cast<std::size_t>(num_chunks_ * slabs.count), 0);
-    auto slab_range = [&](std::int32_t t, std::int64_t& s0, std::int64_t& s1) {
-        const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-        const Vec3f p[4] = {positions[static_cast<std::size_t>(tet[0])],
-                            positions[static_cast<std::size_t>(tet[1])],
-                            positions[static_cast<std::size_t>(tet[2])],
-                            positions[static_cast<std::size_t>(tet[3])]};
-        std::int64_t k0 = 0;
-        std::int64_t k1 = -1;
-        detail::tet_axis_range(p, target, 2, k0, k1);
-        s0 = k0 / slabs.height;
-        s1 = k0 <= k1 ? k1 / slabs.height : s0 - 1;
-    };
+    // Per kept tet: first and last slab (last < first when its box holds no layer).
+    std::vector<std::array<std::int32_t, 2>> ranges(static_cast<std::size_t>(num));
     parallel_for_chunks(num, GRAIN, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
         std::int64_t* row = counts.data() + c * slabs.count;
         for (std::int64_t t = b; t < e; ++t) {
-            std::int64_t s0 = 0;
-            std::int64_t s1 = 0;
-            slab_range(kept[static_cast<std::size_t>(t)], s0, s1);
+            const geometry::Tet& tet =
+                tets[static_cast<std::size_t>(kept[static_cast<std::size_t>(t)])];
+            const Vec3f p[4] = {positions[static_cast<std::size_t>(tet[0])],
+                                positions[static_cast<std::size_t>(tet[1])],
+                                positions[static_cast<std::size_t>(tet[2])],
+                                positions[static_cast<std::size_t>(tet[3])]};
+            std::int64_t k0 = 0;
+            std::int64_t k1 = -1;
+            detail::tet_axis_range(p, target, 2, k0, k1);
+            const std::int64_t s0 = k0 / slabs.height;
+            const std::int64_t s1 = k0 <= k1 ? k1 / slabs.height : s0 - 1;
+            ranges[static_cast<std::size_t>(t)] = {static_cast<std::int32_t>(s0),
+                                                   static_cast<std::int32_t>(s1)};
             for (std::int64_t s = s0; s <= s1; ++s) {
                 ++row[s];
             }
@@ -174,16 +191,13 @@ Slabs bin_tets(std::span<const std::int32_t> kept, std::span<const geometry::Tet
         }
     }
     slabs.begin[static_cast<std::size_t>(slabs.count)] = total;
-    slabs.tets.resize(static_cast<std::size_t>(total));
+    slabs.entries.resize(static_cast<std::size_t>(total));
     parallel_for_chunks(num, GRAIN, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
         std::int64_t* next = offsets.data() + c * slabs.count;
         for (std::int64_t t = b; t < e; ++t) {
-            const std::int32_t tet = kept[static_cast<std::size_t>(t)];
-            std::int64_t s0 = 0;
-            std::int64_t s1 = 0;
-            slab_range(tet, s0, s1);
+            const auto [s0, s1] = ranges[static_cast<std::size_t>(t)];
             for (std::int64_t s = s0; s <= s1; ++s) {
-                slabs.tets[static_cast<std::size_t>(next[s]++)] = tet;
+                slabs.entries[static_cast<std::size_t>(next[s]++)] = static_cast<std::int32_t>(t);
             }
         }
     });
@@ -200,10 +214,11 @@ struct SlabCounts {
 // every row (j, k) of it inside the slab, visit_row(tet, j, k, i_begin, i_end) over the voxels the
 // tie rule gives the tet. Degenerate and inverted tets are counted in the first slab they overlap.
 template <typename ZeroSlab, typename VisitRow>
-SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const geometry::Tet> tets,
-                     std::span<const Vec3f> rest, std::span<const Vec3f> deformed,
-                     const GridFrame& target, const GridFrame& source, bool skip_inverted,
-                     ZeroSlab&& zero_slab, VisitRow&& visit_row) {
+SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::uint8_t> rest_codes,
+                     std::span<const geometry::Tet> tets, std::span<const Vec3f> rest,
+                     std::span<const Vec3f> deformed, const GridFrame& target,
+                     const GridFrame& source, bool skip_inverted, ZeroSlab&& zero_slab,
+                     VisitRow&& visit_row) {
     const Slabs slabs = bin_tets(kept, tets, deformed, target);
     return parallel_reduce(
         slabs.count, SlabCounts{},
@@ -215,7 +230,8 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const geometr
                 zero_slab(k_begin, k_end);
                 for (std::int64_t e = slabs.begin[static_cast<std::size_t>(s)];
                      e < slabs.begin[static_cast<std::size_t>(s + 1)]; ++e) {
-                    const std::int32_t t = slabs.tets[static_cast<std::size_t>(e)];
+                    const std::int32_t at = slabs.entries[static_cast<std::size_t>(e)];
+                    const std::int32_t t = kept[static_cast<std::size_t>(at)];
                     const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
                     Vec3f p[4];
                     Vec3f r[4];
@@ -224,7 +240,9 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const geometr
                         r[v] = rest[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
                     }
                     TetRaster raster;
-                    const bool ok = detail::setup_tet(p, tet.data(), r, target, source, raster);
+                    const bool ok = detail::setup_tet(
+                        p, tet.data(), r, decode_rest(rest_codes[static_cast<std::size_t>(at)]),
+                        target, source, raster);
                     const bool is_first_slab = raster.lo[2] >= k_begin;
                     if (!ok) {
                         counts.num_degenerate += is_first_slab ? 1 : 0;
@@ -236,22 +254,11 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const geometr
                             continue;
                         }
                     }
-                    const std::int64_t k0 = std::max(raster.lo[2], k_begin);
-                    const std::int64_t k1 = std::min(raster.hi[2] + 1, k_end);
-                    for (std::int64_t k = k0; k < k1; ++k) {
-                        std::int64_t j0 = 0;
-                        std::int64_t j1 = 0;
-                        detail::slice_rows(raster, k, j0, j1);
-                        for (std::int64_t j = j0; j < j1; ++j) {
-                            std::int64_t ib = 0;
-                            std::int64_t ie = 0;
-                            detail::row_span(raster, j, k, ib, ie);
-                            if (ib < ie) {
-                                visit_row(raster, j, k, ib, ie);
-                                counts.num_voxels_written += ie - ib;
-                            }
-                        }
-                    }
+                    counts.num_voxels_written += detail::for_each_span(
+                        raster, k_begin, k_end,
+                        [&](std::int64_t j, std::int64_t k, std::int64_t ib, std::int64_t ie) {
+                            visit_row(raster, j, k, ib, ie);
+                        });
                 }
             }
             return counts;
@@ -267,9 +274,11 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const geometr
 
 // Samples of a row: g = map·(i, j, k), trilinear from the source, converted and stored.
 template <typename S, int C, typename D>
-SlabCounts resample_typed(std::span<const std::int32_t> kept, std::span<const geometry::Tet> tets,
-                          std::span<const Vec3f> rest, std::span<const Vec3f> deformed,
-                          const Volume& source, Volume& target, bool skip_inverted) {
+SlabCounts resample_typed(std::span<const std::int32_t> kept,
+                          std::span<const std::uint8_t> rest_codes,
+                          std::span<const geometry::Tet> tets, std::span<const Vec3f> rest,
+                          std::span<const Vec3f> deformed, const Volume& source, Volume& target,
+                          bool skip_inverted) {
     const GridFrame tf = frame_of(target);
     const GridFrame sf = frame_of(source);
     const S* src = reinterpret_cast<const S*>(source.bytes().data());
@@ -283,11 +292,10 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept, std::span<const ge
     };
     auto visit_row = [&](const TetRaster& t, std::int64_t j, std::int64_t k, std::int64_t ib,
                          std::int64_t ie) {
-        const double jd = static_cast<double>(j);
-        const double kd = static_cast<double>(k);
-        const double gx = t.map[0][1] * jd + t.map[0][2] * kd + t.map[0][3];
-        const double gy = t.map[1][1] * jd + t.map[1][2] * kd + t.map[1][3];
-        const double gz = t.map[2][1] * jd + t.map[2][2] * kd + t.map[2][3];
+        // map_coord's order: the row's start per axis, then + map[a][0]·i per voxel.
+        const double gx = detail::map_coord(t.map[0], 0, j, k);
+        const double gy = detail::map_coord(t.map[1], 0, j, k);
+        const double gz = detail::map_coord(t.map[2], 0, j, k);
         D* out = dst + C * (ib + tf.n[0] * (j + tf.n[1] * k));
         // The interior sampler gives the same bits as sample_trilinear, without its bounds
         // tests and clamps.
@@ -313,7 +321,8 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept, std::span<const ge
             }
         }
     };
-    return rasterize(kept, tets, rest, deformed, tf, sf, skip_inverted, zero_slab, visit_row);
+    return rasterize(kept, rest_codes, tets, rest, deformed, tf, sf, skip_inverted, zero_slab,
+                     visit_row);
 }
 
 void check_positions(std::span<const Vec3f> positions, const char* what) {
@@ -416,6 +425,21 @@ Resampler::Resampler(const Volume& source, std::span<const geometry::Tet> tets,
             m_kept.push_back(static_cast<std::int32_t>(t));
         }
     }
+    // What every frame's setup needs of the rest tets (orientation, samples in the interior).
+    const GridFrame sf = frame_of(source);
+    m_rest_codes.resize(m_kept.size());
+    parallel_for(
+        static_cast<std::int64_t>(m_kept.size()),
+        [&](std::int64_t at) {
+            const geometry::Tet& tet =
+                tets[static_cast<std::size_t>(m_kept[static_cast<std::size_t>(at)])];
+            const Vec3f r[4] = {rest_positions[static_cast<std::size_t>(tet[0])],
+                                rest_positions[static_cast<std::size_t>(tet[1])],
+                                rest_positions[static_cast<std::size_t>(tet[2])],
+                                rest_positions[static_cast<std::size_t>(tet[3])]};
+            m_rest_codes[static_cast<std::size_t>(at)] = encode_rest(detail::rest_info(r, sf));
+        },
+        4096);
 }
 
 ResampleStats Resampler::resample(std::span<const Vec3f> deformed_positions, Volume& target) const {
@@ -446,8 +470,8 @@ ResampleStats Resampler::resample(std::span<const Vec3f> deformed_positions, Vol
     const bool skip = m_options.skip_inverted;
     SlabCounts counts;
     auto run = [&]<typename S, int C, typename D>() {
-        counts = resample_typed<S, C, D>(m_kept, m_tets, m_rest, deformed_positions, *m_source,
-                                         target, skip);
+        counts = resample_typed<S, C, D>(m_kept, m_rest_codes, m_tets, m_rest, deformed_positions,
+                                         *m_source, target, skip);
     };
     switch (st) {
         case VoxelType::u8:
@@ -499,7 +523,7 @@ void Resampler::count_coverage(std::span<const Vec3f> deformed_positions, const 
     const GridFrame tf = frame_of(grid);
     const std::int64_t layer = tf.n[0] * tf.n[1];
     rasterize(
-        m_kept, m_tets, m_rest, deformed_positions, tf, frame_of(*m_source),
+        m_kept, m_rest_codes, m_tets, m_rest, deformed_positions, tf, frame_of(*m_source),
         m_options.skip_inverted,
         [&](std::int64_t k0, std::int64_t k1) {
             std::memset(counts.data() + k0 * layer, 0, static_cast<std::size_t>((k1 - k0) * layer));

@@ -131,6 +131,9 @@ private:
     std::span<const Vec3f> m_rest;
     ResampleOptions m_options;
     std::vector<std::int32_t> m_kept;
+    // Per kept tet: its rest orientation and whether its samples stay inside the source
+    // (detail::RestInfo in one byte), computed once.
+    std::vector<std::uint8_t> m_rest_codes;
 };
 
 // One-off: Resampler(source, tets, rest_positions, options).resample(deformed_positions, target).

@@ -49,10 +49,23 @@ struct TetRaster {
     // grid (empty when lo > hi on an axis).
     std::int64_t lo[3];
     std::int64_t hi[3];
-    // The vertices in index space (voxel centres at integers), for slice_rows().
-    double vertex[4][3];
+    // Row spans (row_span_fast()): per face, −1/plane[f][0], and the bounds that route its root
+    // to the lower (a > 0: cap = +∞, floor = +∞) or the upper end (a < 0: cap = −∞,
+    // floor = −∞) of the span without a branch. is_fast: every −1/a is finite and non-zero
+    // (else row_span() handles the tet).
+    double neg_inv_a[4];
+    double root_cap[4];
+    double root_floor[4];
+    bool is_fast;
+    // Cross-sections (slice_rows()): per edge, its z range in index space (empty for an edge
+    // parallel to the layers), an end (y0, z0) and dy/dz.
+    double edge_z_lo[6];
+    double edge_z_hi[6];
+    double edge_y0[6];
+    double edge_z0[6];
+    double edge_slope[6];
     // Affine map from target voxel indices to source grid coordinates (voxel centres at integers):
-    // g_a = map[a][0]·i + map[a][1]·j + map[a][2]·k + map[a][3].
+    // g_a = ((map[a][3] + map[a][2]·k) + map[a][1]·j) + map[a][0]·i, in this order (map_coord()).
     double map[3][4];
     bool is_inverted;
     // Every sample of the tet falls at least 1e-3 voxel inside [0, n − 1) on every source axis:
@@ -99,20 +112,55 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void tet_axis_range(const Vec3f p[4], con
     axis_range(index_coord(mn, g, a), index_coord(mx, g, a), g, a, lo, hi);
 }
 
-// Sets out.lo/hi (always) and the planes and map (when it returns true). False for a degenerate
+// What setup_tet needs of the rest tet, which does not change between frames (the Resampler
+// computes it once per kept tet): the sign of its orientation (−1, 0, 1) and whether every
+// sample falls at least 1e-3 voxel inside [0, n − 1) of the source on every axis.
+struct RestInfo {
+    std::int8_t orientation;
+    bool is_interior;
+};
+
+PLIANT_HOST_DEVICE inline RestInfo rest_info(const Vec3f r[4], const GridFrame& source) {
+    Vec3d rd[4];
+    for (int v = 0; v < 4; ++v) {
+        rd[v] = vec3_cast<double>(r[v]);
+    }
+    const Vec3d f[3] = {rd[0] - rd[3], rd[1] - rd[3], rd[2] - rd[3]};
+    const double rest_det = dot(f[0], cross(f[1], f[2]));
+    RestInfo info{};
+    info.orientation = static_cast<std::int8_t>(rest_det > 0.0 ? 1 : (rest_det < 0.0 ? -1 : 0));
+    // The samples lie in the rest tet (up to the map's rounding, far below the margin).
+    constexpr double MARGIN = 1e-3;
+    info.is_interior = true;
+    for (int a = 0; a < 3; ++a) {
+        const double g0 = index_coord(rd[0][a], source, a);
+        const double g1 = index_coord(rd[1][a], source, a);
+        const double g2 = index_coord(rd[2][a], source, a);
+        const double g3 = index_coord(rd[3][a], source, a);
+        const double mn = std::min(std::min(g0, g1), std::min(g2, g3));
+        const double mx = std::max(std::max(g0, g1), std::max(g2, g3));
+        info.is_interior =
+            info.is_interior && mn >= MARGIN && mx <= static_cast<double>(source.n[a] - 1) - MARGIN;
+    }
+    return info;
+}
+
+// Sets out.lo/hi (always) and the rest of out (when it returns true). False for a degenerate
 // tet: zero or non-finite determinant, a face with zero normal, or a vertex on its opposite
 // face's plane as computed. p: deformed vertices, ids: their vertex indices (the canonical face
-// order), r: rest vertices; target: the output grid; source: the sampled grid.
+// order), r: rest vertices, rest: rest_info(r, source); target: the output grid; source: the
+// sampled grid.
 PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t ids[4],
-                                         const Vec3f r[4], const GridFrame& target,
+                                         const Vec3f r[4], RestInfo rest, const GridFrame& target,
                                          const GridFrame& source, TetRaster& out) {
     Vec3d pd[4];
     for (int v = 0; v < 4; ++v) {
         pd[v] = vec3_cast<double>(p[v]);
     }
+    double vertex[4][3];
     for (int v = 0; v < 4; ++v) {
         for (int a = 0; a < 3; ++a) {
-            out.vertex[v][a] = index_coord(pd[v][a], target, a);
+            vertex[v][a] = index_coord(pd[v][a], target, a);
         }
     }
     for (int a = 0; a < 3; ++a) {
@@ -130,14 +178,8 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     if (!(det != 0.0) || !std::isfinite(inv_det)) {
         return false;
     }
-    const Vec3d row[3] = {c12 * inv_det, cross(e2, e0) * inv_det, cross(e0, e1) * inv_det};
-    Vec3d rd[4];
-    for (int v = 0; v < 4; ++v) {
-        rd[v] = vec3_cast<double>(r[v]);
-    }
-    const Vec3d f[3] = {rd[0] - rd[3], rd[1] - rd[3], rd[2] - rd[3]};
-    const double rest_det = dot(f[0], cross(f[1], f[2]));
-    out.is_inverted = (det > 0.0 && rest_det < 0.0) || (det < 0.0 && rest_det > 0.0);
+    out.is_inverted = (det > 0.0 && rest.orientation < 0) || (det < 0.0 && rest.orientation > 0);
+    out.is_interior = rest.is_interior;
 
     // Faces: face q is opposite vertex q. Its plane function is computed from its vertices sorted
     // by vertex index, so the two tets sharing the face compute the same numbers; the sign σ that
@@ -145,33 +187,34 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     const Vec3d c0{target.origin[0] + 0.5 * target.spacing[0],
                    target.origin[1] + 0.5 * target.spacing[1],
                    target.origin[2] + 0.5 * target.spacing[2]};
-    // The four local vertices sorted by vertex index (a sorting network); face q's vertices in
-    // canonical order are this order without q.
+    // The four local vertices sorted by vertex index (a sorting network with conditional moves,
+    // not branches: the order is data); face q's vertices in canonical order are this order
+    // without q.
     int order[4] = {0, 1, 2, 3};
     auto sort2 = [&](int x, int y) {
-        if (ids[order[y]] < ids[order[x]]) {
-            std::swap(order[x], order[y]);
-        }
+        const int ox = order[x];
+        const int oy = order[y];
+        const bool swap = ids[oy] < ids[ox];
+        order[x] = swap ? oy : ox;
+        order[y] = swap ? ox : oy;
     };
     sort2(0, 1);
     sort2(2, 3);
     sort2(0, 2);
     sort2(1, 3);
     sort2(1, 2);
+    int position[4];
+    for (int v = 0; v < 4; ++v) {
+        position[order[v]] = v;
+    }
+    constexpr int OTHERS[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    double side_of[4];
     for (int q = 0; q < 4; ++q) {
-        int w[3];
-        int m = 0;
-        for (int v = 0; v < 4; ++v) {
-            if (order[v] != q) {
-                w[m++] = order[v];
-            }
-        }
-        const Vec3d& u = pd[w[0]];
-        const Vec3d n = cross(pd[w[1]] - u, pd[w[2]] - u);
+        const int* others = OTHERS[position[q]];
+        const Vec3d& u = pd[order[others[0]]];
+        const Vec3d n = cross(pd[order[others[1]]] - u, pd[order[others[2]]] - u);
         const double side = dot(n, pd[q] - u);
-        if (!(side != 0.0)) {
-            return false;
-        }
+        side_of[q] = side;
         const double sigma = side > 0.0 ? 1.0 : -1.0;
         const Vec3d c = c0 - u;
         const double delta = n.x * c.x + n.y * c.y + n.z * c.z;
@@ -183,7 +226,46 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
         out.tie_inside[q] =
             inward.x != 0.0 ? inward.x > 0.0 : (inward.y != 0.0 ? inward.y > 0.0 : inward.z > 0.0);
     }
+    if (!(side_of[0] != 0.0 && side_of[1] != 0.0 && side_of[2] != 0.0 && side_of[3] != 0.0)) {
+        return false;
+    }
 
+    // Row spans: the root of face q along a row is β·(−1/a).
+    out.is_fast = true;
+    for (int q = 0; q < 4; ++q) {
+        const double a = out.plane[q][0];
+        const double m = -1.0 / a;
+        out.neg_inv_a[q] = m;
+        out.is_fast = out.is_fast && a != 0.0 && std::isfinite(m) && m != 0.0;
+        const double bound = a > 0.0 ? std::numeric_limits<double>::infinity()
+                                     : -std::numeric_limits<double>::infinity();
+        out.root_cap[q] = bound;
+        out.root_floor[q] = bound;
+    }
+    // Cross-sections: the edges in index space.
+    constexpr int EDGES[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    for (int e = 0; e < 6; ++e) {
+        const double* va = vertex[EDGES[e][0]];
+        const double* vb = vertex[EDGES[e][1]];
+        const double dz = vb[2] - va[2];
+        // A flat edge (z_lo = z_hi) is left out (empty range): each of its ends also ends a
+        // non-flat edge (else all four vertices would share z and the tet would be degenerate).
+        const bool is_flat = !(dz != 0.0);
+        out.edge_z_lo[e] =
+            is_flat ? std::numeric_limits<double>::infinity() : std::min(va[2], vb[2]);
+        out.edge_z_hi[e] =
+            is_flat ? -std::numeric_limits<double>::infinity() : std::max(va[2], vb[2]);
+        out.edge_y0[e] = va[1];
+        out.edge_z0[e] = va[2];
+        out.edge_slope[e] = is_flat ? 0.0 : (vb[1] - va[1]) / dz;
+    }
+
+    const Vec3d row[3] = {c12 * inv_det, cross(e2, e0) * inv_det, cross(e0, e1) * inv_det};
+    Vec3d rd[4];
+    for (int v = 0; v < 4; ++v) {
+        rd[v] = vec3_cast<double>(r[v]);
+    }
+    const Vec3d f[3] = {rd[0] - rd[3], rd[1] - rd[3], rd[2] - rd[3]};
     // rest(x) = r_d + F·T⁻¹(x − d), F = [r_a − r_d, r_b − r_d, r_c − r_d]; M = F·T⁻¹.
     double mm[3][3];
     for (int a = 0; a < 3; ++a) {
@@ -201,49 +283,40 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
         const double rest0 = rd[3][a] + (mm[a][0] * x0.x + mm[a][1] * x0.y + mm[a][2] * x0.z);
         out.map[a][3] = (rest0 - source.origin[a]) * inv_s - 0.5;
     }
-    // The samples lie in the rest tet (up to the map's rounding, far below the margin).
-    constexpr double MARGIN = 1e-3;
-    out.is_interior = true;
-    for (int a = 0; a < 3; ++a) {
-        const double g0 = index_coord(rd[0][a], source, a);
-        const double g1 = index_coord(rd[1][a], source, a);
-        const double g2 = index_coord(rd[2][a], source, a);
-        const double g3 = index_coord(rd[3][a], source, a);
-        const double mn = std::min(std::min(g0, g1), std::min(g2, g3));
-        const double mx = std::max(std::max(g0, g1), std::max(g2, g3));
-        out.is_interior =
-            out.is_interior && mn >= MARGIN && mx <= static_cast<double>(source.n[a] - 1) - MARGIN;
-    }
     return true;
 }
 
+// setup_tet computing the rest information itself (for one-off uses: the brute force).
+PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t ids[4],
+                                         const Vec3f r[4], const GridFrame& target,
+                                         const GridFrame& source, TetRaster& out) {
+    return setup_tet(p, ids, r, rest_info(r, source), target, source, out);
+}
+
+// Source grid coordinate of target voxel (i, j, k) on the axis of map row m, in the order
+// every caller uses (per layer, then per row, then per voxel).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double map_coord(const double m[4], std::int64_t i,
+                                                        std::int64_t j, std::int64_t k) {
+    return ((m[3] + m[2] * static_cast<double>(k)) + m[1] * static_cast<double>(j)) +
+           m[0] * static_cast<double>(i);
+}
+
 // The rows [j_begin, j_end) of layer k that can hold centres inside the tet: the y extent of the
-// tet's cross-section with the plane of the layer (from its edges' crossings, each edge's
-// parameter clamped to [0, 1]), grown by 1e-6 voxel like the bounding box, within [lo, hi].
+// tet's cross-section with the plane of the layer (from its edges' crossings, each edge's z
+// clamped to its range), grown by 1e-6 voxel like the bounding box, within [lo, hi].
 // Conservative: row_span() decides the voxels; this only skips rows that cannot hold any.
 PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void slice_rows(const TetRaster& t, std::int64_t k,
                                                        std::int64_t& j_begin, std::int64_t& j_end) {
     constexpr double GROW = 1e-6;
-    constexpr int EDGES[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     const double z = static_cast<double>(k);
     double y_min = std::numeric_limits<double>::infinity();
     double y_max = -y_min;
-    for (const auto& e : EDGES) {
-        const double* a = t.vertex[e[0]];
-        const double* b = t.vertex[e[1]];
-        const double z_lo = std::min(a[2], b[2]);
-        const double z_hi = std::max(a[2], b[2]);
-        if (z < z_lo - GROW || z > z_hi + GROW) {
-            continue;
-        }
-        // A flat edge (z_lo = z_hi) is skipped: each of its ends also ends a non-flat edge
-        // (else all four vertices would share z and the tet would be degenerate).
-        if (z_hi > z_lo) {
-            const double s = std::clamp((z - a[2]) / (b[2] - a[2]), 0.0, 1.0);
-            const double y = a[1] + s * (b[1] - a[1]);
-            y_min = std::min(y_min, y);
-            y_max = std::max(y_max, y);
-        }
+    for (int e = 0; e < 6; ++e) {
+        const bool is_crossed = z >= t.edge_z_lo[e] - GROW && z <= t.edge_z_hi[e] + GROW;
+        const double zc = std::min(std::max(z, t.edge_z_lo[e]), t.edge_z_hi[e]);
+        const double y = t.edge_y0[e] + (zc - t.edge_z0[e]) * t.edge_slope[e];
+        y_min = is_crossed ? std::min(y_min, y) : y_min;
+        y_max = is_crossed ? std::max(y_max, y) : y_max;
     }
     if (!(y_min <= y_max)) {
         j_begin = j_end = 0;
@@ -321,6 +394,85 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span(const TetRaster& t, std::in
     }
     begin = std::max(b, t.lo[0]);
     end = std::max(begin, std::min(e, t.hi[0]) + 1);
+}
+
+// row_span() for a tet with is_fast (no face parallel to the rows), given the layer's
+// gamma[q] = plane[q][2]·k + plane[q][3]: the same voxels. The roots are β·(−1/a) instead of
+// −β/a (one more rounding: within 3 ulps of |r| of where the computed h_f changes sign, still
+// ≤ 7e-7 voxel for |r| < 2^31), routed to the lower or upper end by min/max with the per-face
+// caps and floors instead of branches.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span_fast(const TetRaster& t, const double gamma[4],
+                                                          std::int64_t j, std::int64_t k,
+                                                          std::int64_t& begin, std::int64_t& end) {
+    constexpr double TOL = 1e-6;
+    const double r_lo = static_cast<double>(t.lo[0]) - 0.5;
+    const double r_hi = static_cast<double>(t.hi[0]) + 0.5;
+    const double jd = static_cast<double>(j);
+    double x_lo = r_lo;
+    double x_hi = r_hi;
+    for (int q = 0; q < 4; ++q) {
+        const double beta = t.plane[q][1] * jd + gamma[q];
+        const double root = beta * t.neg_inv_a[q];
+        x_lo = std::max(x_lo, std::min(root, t.root_cap[q]));
+        x_hi = std::min(x_hi, std::max(root, t.root_floor[q]));
+    }
+    // x_lo > r_hi or x_hi < r_lo (a root far outside the box) ends here too.
+    if (x_lo > x_hi + TOL) {
+        begin = end = t.lo[0];
+        return;
+    }
+    std::int64_t b = ceil_to_int(x_lo - TOL);
+    if (static_cast<double>(b) < x_lo + TOL && !inside(t, b, j, k)) {
+        ++b;
+    }
+    std::int64_t e = floor_to_int(x_hi + TOL);
+    if (static_cast<double>(e) > x_hi - TOL && !inside(t, e, j, k)) {
+        --e;
+    }
+    begin = std::max(b, t.lo[0]);
+    end = std::max(begin, std::min(e, t.hi[0]) + 1);
+}
+
+// visit(j, k, i_begin, i_end) for every non-empty row span of the tet in layers
+// [k_begin, k_end) (clipped to its box), rows increasing within a layer; returns the number of
+// voxels visited.
+template <typename Visit>
+PLIANT_FORCE_INLINE std::int64_t for_each_span(const TetRaster& t, std::int64_t k_begin,
+                                               std::int64_t k_end, Visit&& visit) {
+    std::int64_t num_voxels = 0;
+    const std::int64_t k0 = std::max(t.lo[2], k_begin);
+    const std::int64_t k1 = std::min(t.hi[2] + 1, k_end);
+    for (std::int64_t k = k0; k < k1; ++k) {
+        std::int64_t j0 = 0;
+        std::int64_t j1 = 0;
+        slice_rows(t, k, j0, j1);
+        if (t.is_fast) {
+            const double kd = static_cast<double>(k);
+            const double gamma[4] = {
+                t.plane[0][2] * kd + t.plane[0][3], t.plane[1][2] * kd + t.plane[1][3],
+                t.plane[2][2] * kd + t.plane[2][3], t.plane[3][2] * kd + t.plane[3][3]};
+            for (std::int64_t j = j0; j < j1; ++j) {
+                std::int64_t ib = 0;
+                std::int64_t ie = 0;
+                row_span_fast(t, gamma, j, k, ib, ie);
+                if (ib < ie) {
+                    visit(j, k, ib, ie);
+                    num_voxels += ie - ib;
+                }
+            }
+        } else {
+            for (std::int64_t j = j0; j < j1; ++j) {
+                std::int64_t ib = 0;
+                std::int64_t ie = 0;
+                row_span(t, j, k, ib, ie);
+                if (ib < ie) {
+                    visit(j, k, ib, ie);
+                    num_voxels += ie - ib;
+                }
+            }
+        }
+    }
+    return num_voxels;
 }
 
 // Trilinear sample of a source grid (C channels of type S per voxel, x fastest) at grid
