@@ -11,6 +11,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::pbd {
@@ -251,6 +252,26 @@ TEST(SoftBody, OneAndTwoThreadsAreBitwiseIdentical) {
         std::size_t differing = 0;
         for (std::size_t i = 0; i < one.size(); ++i) {
             differing += std::memcmp(&one[i], &two[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+        }
+        EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring");
+    }
+}
+
+TEST(SoftBody, AVX2AndSSEKernelsAreBitwiseIdentical) {
+    // The kernels are chosen at run time for speed only (projection_avx2.hpp). Without AVX2 on
+    // the machine both runs take the SSE kernels.
+    if (!detail::has_avx2()) {
+        std::printf("no AVX2 on this machine: both runs use the SSE kernels\n");
+    }
+    for (const bool use_grid : {true, false}) {
+        const std::vector<Vec3f> with = run_threads(2, use_grid);
+        detail::allow_avx2(false);
+        const std::vector<Vec3f> without = run_threads(2, use_grid);
+        detail::allow_avx2(true);
+        ASSERT_EQ(with.size(), without.size());
+        std::size_t differing = 0;
+        for (std::size_t i = 0; i < with.size(); ++i) {
+            differing += std::memcmp(&with[i], &without[i], sizeof(Vec3f)) != 0 ? 1 : 0;
         }
         EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring");
     }

@@ -10,6 +10,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
 #include "pliant/pbd/detail/projection.hpp"
+#include "pliant/pbd/detail/projection_avx2.hpp"
 
 namespace pliant::pbd {
 
@@ -17,7 +18,7 @@ using detail::Float4;
 
 namespace {
 
-// Fixed chunk sizes (multiples of 4: SIMD groups never straddle a chunk).
+// Fixed chunk sizes (multiples of 8: SIMD groups never straddle a chunk).
 constexpr std::int64_t VERTEX_GRAIN = 4096;
 constexpr std::int64_t EDGE_GRAIN = 2048;
 constexpr std::int64_t TET_GRAIN = 1024;
@@ -61,6 +62,16 @@ double tet_volume(std::span<const Vec3f> p, const geometry::Tet& t) {
                                    vec3_cast<double>(p[static_cast<std::size_t>(t[3])]));
 }
 
+// The tets of one colour of a full-box TetGrid, whose vertex index is the lattice index: cells of
+// one parity class in lattice order, tet q of the colour in cell (i0 + 2 a, j0 + 2 b, k0 + 2 c)
+// with q = a + ni (b + nj c), its vertices the cell's base index + offsets[m]. The AVX2 kernel
+// derives the vertices from the base instead of loading them.
+struct TetRun {
+    std::array<std::int32_t, 4> offsets{};
+    std::int64_t i0 = 0, j0 = 0, k0 = 0;
+    std::int64_t ni = 0, nj = 0, nk = 0;
+};
+
 }  // namespace
 
 struct SoftBody::State {
@@ -79,6 +90,10 @@ struct SoftBody::State {
     std::vector<float> rest_volumes0;
     std::vector<float> rest_volumes;
     double total_rest_volume = 0.0;
+    // Per tet colour of a full-box TetGrid (TetRun); empty for other meshes.
+    std::vector<TetRun> tet_runs;
+    std::int64_t lattice_x = 0;   // lattice vertices along x
+    std::int64_t lattice_xy = 0;  // … in one z layer
 
     // x: positions and this substep's inverse mass (0 for pinned and driven vertices).
     std::vector<Float4> x;
@@ -103,6 +118,61 @@ struct SoftBody::State {
     double last_step_ms = 0.0;
     double last_substep_ms = 0.0;
 };
+
+namespace {
+
+// The runs of every tet colour (tet_vertices in colour order) when the grid keeps every lattice
+// vertex (full box) and every colour is the run its lattice predicts, checked tet by tet; empty
+// otherwise.
+std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring& coloring,
+                                  std::span<const geometry::Tet> tet_vertices,
+                                  std::int64_t num_vertices) {
+    const std::int64_t nx = grid.cells[0];
+    const std::int64_t ny = grid.cells[1];
+    const std::int64_t nz = grid.cells[2];
+    const std::int64_t lx = nx + 1;
+    const std::int64_t lxy = lx * (ny + 1);
+    if (num_vertices != lxy * (nz + 1) || tet_vertices.empty()) {
+        return {};
+    }
+    std::vector<TetRun> runs(static_cast<std::size_t>(coloring.num_colors()));
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t count = coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+        const std::int64_t cell = grid.tet_cell[static_cast<std::size_t>(
+            coloring.order[static_cast<std::size_t>(begin)])];
+        TetRun& r = runs[static_cast<std::size_t>(c)];
+        r.i0 = cell % nx;
+        r.j0 = (cell / nx) % ny;
+        r.k0 = cell / (nx * ny);
+        r.ni = (nx - r.i0 + 1) / 2;
+        r.nj = (ny - r.j0 + 1) / 2;
+        r.nk = (nz - r.k0 + 1) / 2;
+        if (r.i0 > 1 || r.j0 > 1 || r.k0 > 1 || r.ni * r.nj * r.nk != count) {
+            return {};
+        }
+        const std::int64_t base0 = r.i0 + lx * r.j0 + lxy * r.k0;
+        const geometry::Tet& first = tet_vertices[static_cast<std::size_t>(begin)];
+        for (std::size_t m = 0; m < 4; ++m) {
+            r.offsets[m] = static_cast<std::int32_t>(first[m] - base0);
+        }
+        for (std::int64_t q = 0; q < count; ++q) {
+            const std::int64_t a = q % r.ni;
+            const std::int64_t b = (q / r.ni) % r.nj;
+            const std::int64_t k = q / (r.ni * r.nj);
+            const std::int64_t base = r.i0 + 2 * a + lx * (r.j0 + 2 * b) + lxy * (r.k0 + 2 * k);
+            const geometry::Tet& t = tet_vertices[static_cast<std::size_t>(begin + q)];
+            for (std::size_t m = 0; m < 4; ++m) {
+                if (t[m] != base + r.offsets[m]) {
+                    return {};
+                }
+            }
+        }
+    }
+    return runs;
+}
+
+}  // namespace
 
 SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
     : SoftBody(rest, options, nullptr) {}
@@ -226,6 +296,11 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
         s.rest_volumes0[k] = static_cast<float>(rest_volume[t]);
     }
     s.rest_volumes = s.rest_volumes0;
+    if (grid != nullptr) {
+        s.tet_runs = find_tet_runs(*grid, s.tet_coloring, s.tet_vertices, nv);
+        s.lattice_x = std::int64_t{grid->cells[0]} + 1;
+        s.lattice_xy = s.lattice_x * (std::int64_t{grid->cells[1]} + 1);
+    }
 
     // Step 5: state.
     s.x.resize(static_cast<std::size_t>(nv));
@@ -416,26 +491,42 @@ void SoftBody::step(double dt) {
     const auto edge_alpha = static_cast<float>(m_options.edge_compliance / (h * h));
     const auto volume_alpha = static_cast<float>(m_options.volume_compliance / (h * h));
     Float4* x = s.x.data();
+    // The kernels give the same bits (projection_avx2.hpp): the choice is for speed only.
+    const bool use_avx2 = detail::has_avx2();
+    const float inv_h = 1.0f / hf;
+    // Step 7's velocity of vertex v (not pinned) from its motion over the substep.
+    const auto motion = [&](std::size_t v) {
+        const Float4& p = x[v];
+        const Vec3f& q = s.previous[v];
+        return Vec3f{(p.x - q.x) * inv_h, (p.y - q.y) * inv_h, (p.z - q.z) * inv_h} * keep;
+    };
+    // Step 3 on vertex v with velocity vel (updated for a free vertex).
+    const auto predict = [&](std::size_t v, Vec3f& vel) {
+        const float w = s.inv_masses[v];
+        Float4& p = x[v];
+        s.previous[v] = {p.x, p.y, p.z};
+        if (w > 0.0f) {
+            vel += gravity_h;
+            p = {p.x + hf * vel.x, p.y + hf * vel.y, p.z + hf * vel.z, w};
+        } else {
+            p.w = 0.0f;
+        }
+    };
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
         const double t_end = m_time + h * (sub + 1);
-        // Step 3: predict free vertices; pinned ones stay.
-        parallel_for(
-            nv,
-            [&](std::int64_t i) {
-                const auto v = static_cast<std::size_t>(i);
-                const float w = s.inv_masses[v];
-                Float4& p = x[v];
-                s.previous[v] = {p.x, p.y, p.z};
-                if (w > 0.0f) {
-                    Vec3f& vel = s.velocities[v];
-                    vel += gravity_h;
-                    p = {p.x + hf * vel.x, p.y + hf * vel.y, p.z + hf * vel.z, w};
-                } else {
-                    p.w = 0.0f;
-                }
-            },
-            VERTEX_GRAIN);
+        // Step 3: predict free vertices; pinned ones stay. After the first substep this ran
+        // fused with the previous substep's step 7.
+        if (sub == 0) {
+            parallel_for(
+                nv,
+                [&](std::int64_t i) {
+                    const auto v = static_cast<std::size_t>(i);
+                    Vec3f vel = s.velocities[v];  // step 7 of the last substep overwrites it
+                    predict(v, vel);
+                },
+                VERTEX_GRAIN);
+        }
         // Step 4: driven vertices at their targets for t_end, inverse mass 0.
         if (!s.driven_vertices.empty()) {
             std::vector<std::array<double, 9>> rotations(s.drivers.size());
@@ -496,6 +587,10 @@ void SoftBody::step(double dt) {
             parallel_for_chunks(
                 count, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     std::int64_t i = b;
+                    if (use_avx2) {
+                        i += detail::project_edges_avx2(x, edges + i, lengths + i, e - i,
+                                                        edge_inv_k, edge_alpha);
+                    }
 #if defined(PLIANT_PBD_SSE)
                     for (; i + 4 <= e; i += 4) {
                         detail::project_edges4(x, edges + i, lengths + i, edge_inv_k, edge_alpha);
@@ -514,9 +609,36 @@ void SoftBody::step(double dt) {
                 s.tet_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
             const geometry::Tet* tets = s.tet_vertices.data() + begin;
             const float* volumes = s.rest_volumes.data() + begin;
+            if (use_avx2 && !s.tet_runs.empty()) {
+                // Rows of cells along x; within a row the tets' vertices follow from the base.
+                const TetRun& r = s.tet_runs[static_cast<std::size_t>(c)];
+                parallel_for_chunks(
+                    count, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                        for (std::int64_t q = b; q < e;) {
+                            const std::int64_t row = q / r.ni;
+                            const std::int64_t a = q - row * r.ni;
+                            const std::int64_t base = r.i0 + 2 * a +
+                                                      s.lattice_x * (r.j0 + 2 * (row % r.nj)) +
+                                                      s.lattice_xy * (r.k0 + 2 * (row / r.nj));
+                            const std::int64_t run = std::min(e - q, r.ni - a);
+                            std::int64_t i =
+                                q + detail::project_tet_run_avx2(x, base, r.offsets, volumes + q,
+                                                                 run, inv_k, volume_alpha);
+                            for (; i < q + run; ++i) {
+                                detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
+                            }
+                            q += run;
+                        }
+                    });
+                continue;
+            }
             parallel_for_chunks(
                 count, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     std::int64_t i = b;
+                    if (use_avx2) {
+                        i += detail::project_tets_avx2(x, tets + i, volumes + i, e - i, inv_k,
+                                                       volume_alpha);
+                    }
 #if defined(PLIANT_PBD_SSE)
                     for (; i + 4 <= e; i += 4) {
                         detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
@@ -527,30 +649,33 @@ void SoftBody::step(double dt) {
                     }
                 });
         }
-        // Step 7: velocities from the motion, damped.
-        const float inv_h = 1.0f / hf;
-        parallel_for(
-            nv,
-            [&](std::int64_t i) {
-                const auto v = static_cast<std::size_t>(i);
-                if (s.pinned[v] != 0) {
-                    return;
-                }
-                const Float4& p = x[v];
-                const Vec3f& q = s.previous[v];
-                s.velocities[v] =
-                    Vec3f{(p.x - q.x) * inv_h, (p.y - q.y) * inv_h, (p.z - q.z) * inv_h} * keep;
-            },
-            VERTEX_GRAIN);
+        // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
+        // velocities need not be stored) or, after the last substep, with the copy of the
+        // positions.
+        if (sub + 1 < n) {
+            parallel_for(
+                nv,
+                [&](std::int64_t i) {
+                    const auto v = static_cast<std::size_t>(i);
+                    // Only free vertices use vel; pinned ones keep velocity 0.
+                    Vec3f vel = s.pinned[v] != 0 ? Vec3f{} : motion(v);
+                    predict(v, vel);
+                },
+                VERTEX_GRAIN);
+        } else {
+            parallel_for(
+                nv,
+                [&](std::int64_t i) {
+                    const auto v = static_cast<std::size_t>(i);
+                    if (s.pinned[v] == 0) {
+                        s.velocities[v] = motion(v);
+                    }
+                    s.positions[v] = {x[v].x, x[v].y, x[v].z};
+                },
+                VERTEX_GRAIN);
+        }
     }
     const double substeps_ms = substeps_watch.elapsed_ms();
-    parallel_for(
-        nv,
-        [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(i);
-            s.positions[v] = {x[v].x, x[v].y, x[v].z};
-        },
-        VERTEX_GRAIN);
     m_time += dt;
     s.last_substep_ms = substeps_ms / n;
     s.last_step_ms = step_watch.elapsed_ms();

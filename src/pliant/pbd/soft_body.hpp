@@ -35,8 +35,8 @@
 // Parallelism: constraints are coloured so that no two of a colour share a vertex
 // (constraint_coloring.hpp: analytically on a TetGrid — 18 edge colours, 40 tet colours — greedily
 // otherwise); colours run one after the other (Gauss–Seidel across colours), the constraints of
-// a colour in parallel, 4 at a time in SIMD where available. Results are bitwise identical for any
-// number of threads.
+// a colour in parallel, 4 (SSE) or 8 (AVX2, chosen at run time) at a time. Results are bitwise
+// identical for any number of threads and for either SIMD width (the same arithmetic, no FMA).
 //
 //   const TetGrid grid = build_tet_grid(volume, {.cell_voxels = 4});
 //   SoftBody body(grid, {.stiffness = 0.8});

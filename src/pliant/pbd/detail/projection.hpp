@@ -39,7 +39,8 @@ PLIANT_HOST_DEVICE inline void project_edge(Float4* x, std::int32_t a, std::int3
     if (!(w > 0.0f) || !(length > 0.0f)) {
         return;
     }
-    const float dlambda = -(length - rest_length) / (w * inv_k + alpha);
+    // 0 − a rather than −a, here and below: the SIMD kernels' arithmetic, to the sign of a zero.
+    const float dlambda = (0.0f - (length - rest_length)) / (w * inv_k + alpha);
     const float s = dlambda / length;
     const float sa = pa.w * s;
     const float sb = pb.w * s;
@@ -68,9 +69,9 @@ PLIANT_HOST_DEVICE inline void project_tet(Float4* x, const geometry::Tet& t, fl
     const float g3x = (e1y * e2z - e1z * e2y) * SIXTH;
     const float g3y = (e1z * e2x - e1x * e2z) * SIXTH;
     const float g3z = (e1x * e2y - e1y * e2x) * SIXTH;
-    const float g0x = -(g1x + g2x + g3x);
-    const float g0y = -(g1y + g2y + g3y);
-    const float g0z = -(g1z + g2z + g3z);
+    const float g0x = 0.0f - (g1x + g2x + g3x);
+    const float g0y = 0.0f - (g1y + g2y + g3y);
+    const float g0z = 0.0f - (g1z + g2z + g3z);
     const float volume = e1x * g1x + e1y * g1y + e1z * g1z;
     const float weight =
         p0.w * (g0x * g0x + g0y * g0y + g0z * g0z) + p1.w * (g1x * g1x + g1y * g1y + g1z * g1z) +
@@ -78,7 +79,7 @@ PLIANT_HOST_DEVICE inline void project_tet(Float4* x, const geometry::Tet& t, fl
     if (!(weight > 0.0f)) {
         return;
     }
-    const float dlambda = -(volume - rest_volume) / (weight * inv_k + alpha);
+    const float dlambda = (0.0f - (volume - rest_volume)) / (weight * inv_k + alpha);
     const float s0 = p0.w * dlambda;
     const float s1 = p1.w * dlambda;
     const float s2 = p2.w * dlambda;

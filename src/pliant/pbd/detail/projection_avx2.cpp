@@ -1,0 +1,252 @@
+#include "pliant/pbd/detail/projection_avx2.hpp"
+
+#include <atomic>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define PLIANT_PBD_AVX2 1
+// "avx2" only, not "fma": the compiler must not contract a · b + c, which would round differently
+// from the SSE and scalar kernels.
+#define PLIANT_AVX2_FN __attribute__((target("avx2")))
+#define PLIANT_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
+#endif
+
+namespace pliant::pbd::detail {
+
+namespace {
+std::atomic<bool> g_avx2_allowed{true};
+}  // namespace
+
+void allow_avx2(bool allowed) {
+    g_avx2_allowed.store(allowed, std::memory_order_relaxed);
+}
+
+#if defined(PLIANT_PBD_AVX2)
+
+bool has_avx2() {
+    static const bool cpu_has = __builtin_cpu_supports("avx2") != 0;
+    return cpu_has && g_avx2_allowed.load(std::memory_order_relaxed);
+}
+
+namespace {
+
+// x, y, z, w of 8 vertices, lane k = vertex k.
+struct Lanes8 {
+    __m256 x, y, z, w;
+};
+
+// Rows r0 = [v0 | v4], r1 = [v1 | v5], r2 = [v2 | v6], r3 = [v3 | v7] of Float4s, transposed per
+// 128-bit half into x = [x0 x1 x2 x3 | x4 x5 x6 x7] and likewise y, z, w.
+PLIANT_AVX2_INLINE __m256 row(const Float4& lo, const Float4& hi) {
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(&lo.x)), _mm_load_ps(&hi.x), 1);
+}
+PLIANT_AVX2_INLINE Lanes8 load8(const Float4* x, const std::int32_t* i) {
+    const __m256 r0 = row(x[i[0]], x[i[4]]);
+    const __m256 r1 = row(x[i[1]], x[i[5]]);
+    const __m256 r2 = row(x[i[2]], x[i[6]]);
+    const __m256 r3 = row(x[i[3]], x[i[7]]);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);  // x0 x1 y0 y1
+    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);  // x2 x3 y2 y3
+    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);  // z0 z1 w0 w1
+    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);  // z2 z3 w2 w3
+    return {_mm256_shuffle_ps(t0, t1, 0x44), _mm256_shuffle_ps(t0, t1, 0xEE),
+            _mm256_shuffle_ps(t2, t3, 0x44), _mm256_shuffle_ps(t2, t3, 0xEE)};
+}
+
+PLIANT_AVX2_INLINE void store8(Float4* x, const std::int32_t* i, const Lanes8& l) {
+    const __m256 t0 = _mm256_unpacklo_ps(l.x, l.y);  // x0 y0 x1 y1
+    const __m256 t1 = _mm256_unpacklo_ps(l.z, l.w);  // z0 w0 z1 w1
+    const __m256 t2 = _mm256_unpackhi_ps(l.x, l.y);  // x2 y2 x3 y3
+    const __m256 t3 = _mm256_unpackhi_ps(l.z, l.w);  // z2 w2 z3 w3
+    const __m256 r0 = _mm256_shuffle_ps(t0, t1, 0x44);
+    const __m256 r1 = _mm256_shuffle_ps(t0, t1, 0xEE);
+    const __m256 r2 = _mm256_shuffle_ps(t2, t3, 0x44);
+    const __m256 r3 = _mm256_shuffle_ps(t2, t3, 0xEE);
+    _mm_store_ps(&x[i[0]].x, _mm256_castps256_ps128(r0));
+    _mm_store_ps(&x[i[1]].x, _mm256_castps256_ps128(r1));
+    _mm_store_ps(&x[i[2]].x, _mm256_castps256_ps128(r2));
+    _mm_store_ps(&x[i[3]].x, _mm256_castps256_ps128(r3));
+    _mm_store_ps(&x[i[4]].x, _mm256_extractf128_ps(r0, 1));
+    _mm_store_ps(&x[i[5]].x, _mm256_extractf128_ps(r1, 1));
+    _mm_store_ps(&x[i[6]].x, _mm256_extractf128_ps(r2, 1));
+    _mm_store_ps(&x[i[7]].x, _mm256_extractf128_ps(r3, 1));
+}
+
+PLIANT_AVX2_INLINE __m256 add(__m256 u, __m256 v) {
+    return _mm256_add_ps(u, v);
+}
+PLIANT_AVX2_INLINE __m256 sub(__m256 u, __m256 v) {
+    return _mm256_sub_ps(u, v);
+}
+PLIANT_AVX2_INLINE __m256 mul(__m256 u, __m256 v) {
+    return _mm256_mul_ps(u, v);
+}
+// u·u + v·v + s·s, summed left to right as the scalar kernels do.
+PLIANT_AVX2_INLINE __m256 norm2(__m256 u, __m256 v, __m256 s) {
+    return add(add(mul(u, u), mul(v, v)), mul(s, s));
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN std::int64_t project_edges_avx2(Float4* x, const std::array<std::int32_t, 2>* e,
+                                               const float* rest_lengths, std::int64_t count,
+                                               float inv_k, float alpha) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        std::int32_t ia[8];
+        std::int32_t ib[8];
+        for (int l = 0; l < 8; ++l) {
+            ia[l] = e[k + l][0];
+            ib[l] = e[k + l][1];
+        }
+        Lanes8 a = load8(x, ia);
+        Lanes8 b = load8(x, ib);
+        const __m256 w = add(a.w, b.w);
+        const __m256 dx = sub(a.x, b.x);
+        const __m256 dy = sub(a.y, b.y);
+        const __m256 dz = sub(a.z, b.z);
+        const __m256 length = _mm256_sqrt_ps(norm2(dx, dy, dz));
+        const __m256 valid = _mm256_and_ps(_mm256_cmp_ps(w, zero, _CMP_GT_OQ),
+                                           _mm256_cmp_ps(length, zero, _CMP_GT_OQ));
+        const __m256 denominator = add(mul(w, inv_k8), alpha8);
+        const __m256 violation = sub(length, _mm256_loadu_ps(rest_lengths + k));
+        const __m256 dlambda = _mm256_div_ps(sub(zero, violation), denominator);
+        const __m256 s = _mm256_and_ps(valid, _mm256_div_ps(dlambda, length));
+        const __m256 sa = mul(a.w, s);
+        const __m256 sb = mul(b.w, s);
+        a.x = add(a.x, mul(sa, dx));
+        a.y = add(a.y, mul(sa, dy));
+        a.z = add(a.z, mul(sa, dz));
+        b.x = sub(b.x, mul(sb, dx));
+        b.y = sub(b.y, mul(sb, dy));
+        b.z = sub(b.z, mul(sb, dz));
+        store8(x, ia, a);
+        store8(x, ib, b);
+    }
+    return k;
+}
+
+namespace {
+
+// The projection of 8 tets whose vertices p0..p3 are loaded; updates their positions in place.
+PLIANT_AVX2_INLINE void project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8& p3,
+                                      const float* rest_volumes, __m256 inv_k8, __m256 alpha8) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 sixth = _mm256_set1_ps(1.0f / 6.0f);
+    const __m256 e1x = sub(p1.x, p0.x), e1y = sub(p1.y, p0.y), e1z = sub(p1.z, p0.z);
+    const __m256 e2x = sub(p2.x, p0.x), e2y = sub(p2.y, p0.y), e2z = sub(p2.z, p0.z);
+    const __m256 e3x = sub(p3.x, p0.x), e3y = sub(p3.y, p0.y), e3z = sub(p3.z, p0.z);
+    const __m256 g1x = mul(sub(mul(e2y, e3z), mul(e2z, e3y)), sixth);
+    const __m256 g1y = mul(sub(mul(e2z, e3x), mul(e2x, e3z)), sixth);
+    const __m256 g1z = mul(sub(mul(e2x, e3y), mul(e2y, e3x)), sixth);
+    const __m256 g2x = mul(sub(mul(e3y, e1z), mul(e3z, e1y)), sixth);
+    const __m256 g2y = mul(sub(mul(e3z, e1x), mul(e3x, e1z)), sixth);
+    const __m256 g2z = mul(sub(mul(e3x, e1y), mul(e3y, e1x)), sixth);
+    const __m256 g3x = mul(sub(mul(e1y, e2z), mul(e1z, e2y)), sixth);
+    const __m256 g3y = mul(sub(mul(e1z, e2x), mul(e1x, e2z)), sixth);
+    const __m256 g3z = mul(sub(mul(e1x, e2y), mul(e1y, e2x)), sixth);
+    const __m256 g0x = sub(zero, add(add(g1x, g2x), g3x));
+    const __m256 g0y = sub(zero, add(add(g1y, g2y), g3y));
+    const __m256 g0z = sub(zero, add(add(g1z, g2z), g3z));
+    const __m256 volume = add(add(mul(e1x, g1x), mul(e1y, g1y)), mul(e1z, g1z));
+    const __m256 weight =
+        add(add(add(mul(p0.w, norm2(g0x, g0y, g0z)), mul(p1.w, norm2(g1x, g1y, g1z))),
+                mul(p2.w, norm2(g2x, g2y, g2z))),
+            mul(p3.w, norm2(g3x, g3y, g3z)));
+    const __m256 valid = _mm256_cmp_ps(weight, zero, _CMP_GT_OQ);
+    const __m256 denominator = add(mul(weight, inv_k8), alpha8);
+    const __m256 violation = sub(volume, _mm256_loadu_ps(rest_volumes));
+    const __m256 dlambda = _mm256_and_ps(valid, _mm256_div_ps(sub(zero, violation), denominator));
+    const __m256 s0 = mul(p0.w, dlambda);
+    const __m256 s1 = mul(p1.w, dlambda);
+    const __m256 s2 = mul(p2.w, dlambda);
+    const __m256 s3 = mul(p3.w, dlambda);
+    p0.x = add(p0.x, mul(s0, g0x)), p0.y = add(p0.y, mul(s0, g0y));
+    p0.z = add(p0.z, mul(s0, g0z));
+    p1.x = add(p1.x, mul(s1, g1x)), p1.y = add(p1.y, mul(s1, g1y));
+    p1.z = add(p1.z, mul(s1, g1z));
+    p2.x = add(p2.x, mul(s2, g2x)), p2.y = add(p2.y, mul(s2, g2y));
+    p2.z = add(p2.z, mul(s2, g2z));
+    p3.x = add(p3.x, mul(s3, g3x)), p3.y = add(p3.y, mul(s3, g3y));
+    p3.z = add(p3.z, mul(s3, g3z));
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t,
+                                              const float* rest_volumes, std::int64_t count,
+                                              float inv_k, float alpha) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        std::int32_t i[4][8];
+        for (int l = 0; l < 8; ++l) {
+            for (int m = 0; m < 4; ++m) {
+                i[m][l] = t[k + l][static_cast<std::size_t>(m)];
+            }
+        }
+        Lanes8 p0 = load8(x, i[0]);
+        Lanes8 p1 = load8(x, i[1]);
+        Lanes8 p2 = load8(x, i[2]);
+        Lanes8 p3 = load8(x, i[3]);
+        project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8);
+        store8(x, i[0], p0);
+        store8(x, i[1], p1);
+        store8(x, i[2], p2);
+        store8(x, i[3], p3);
+    }
+    return k;
+}
+
+PLIANT_AVX2_FN std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
+                                                 const std::array<std::int32_t, 4>& offsets,
+                                                 const float* rest_volumes, std::int64_t count,
+                                                 float inv_k, float alpha) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    // Lane l is tet base + 2 l: constant displacements from one pointer per corner.
+    static constexpr std::int32_t LANES[8] = {0, 2, 4, 6, 8, 10, 12, 14};
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        Float4* c0 = x + base + 2 * k + offsets[0];
+        Float4* c1 = x + base + 2 * k + offsets[1];
+        Float4* c2 = x + base + 2 * k + offsets[2];
+        Float4* c3 = x + base + 2 * k + offsets[3];
+        Lanes8 p0 = load8(c0, LANES);
+        Lanes8 p1 = load8(c1, LANES);
+        Lanes8 p2 = load8(c2, LANES);
+        Lanes8 p3 = load8(c3, LANES);
+        project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8);
+        store8(c0, LANES, p0);
+        store8(c1, LANES, p1);
+        store8(c2, LANES, p2);
+        store8(c3, LANES, p3);
+    }
+    return k;
+}
+
+#else  // no AVX2 on this target
+
+bool has_avx2() {
+    return false;
+}
+std::int64_t project_edges_avx2(Float4*, const std::array<std::int32_t, 2>*, const float*,
+                                std::int64_t, float, float) {
+    return 0;
+}
+std::int64_t project_tets_avx2(Float4*, const geometry::Tet*, const float*, std::int64_t, float,
+                               float) {
+    return 0;
+}
+std::int64_t project_tet_run_avx2(Float4*, std::int64_t, const std::array<std::int32_t, 4>&,
+                                  const float*, std::int64_t, float, float) {
+    return 0;
+}
+
+#endif
+
+}  // namespace pliant::pbd::detail

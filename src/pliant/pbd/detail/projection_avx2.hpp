@@ -1,0 +1,40 @@
+// AVX2 versions of the SSE kernels of projection.hpp: 8 constraints of one colour at a time (their
+// vertices distinct), compiled for AVX2 with a function attribute and chosen at run time
+// (has_avx2()). The arithmetic is that of project_edge / project_tet lane by lane, in the same
+// order and without FMA contraction: results are bitwise those of the SSE and scalar kernels, so
+// the choice of kernel never changes a result (on any machine, for any number of threads).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "pliant/geometry/tet_mesh.hpp"
+#include "pliant/pbd/detail/projection.hpp"
+
+namespace pliant::pbd::detail {
+
+// Whether the CPU runs AVX2 and the AVX2 kernels are allowed (allow_avx2).
+bool has_avx2();
+// Tests compare the kernels: false makes has_avx2() false until called with true. Not to be
+// called while a step runs.
+void allow_avx2(bool allowed);
+
+// Edges e[0 .. count) of one colour, `rest_lengths` parallel to them; projects the first
+// count − count mod 8 and returns that number (the caller projects the rest).
+std::int64_t project_edges_avx2(Float4* x, const std::array<std::int32_t, 2>* e,
+                                const float* rest_lengths, std::int64_t count, float inv_k,
+                                float alpha);
+
+// Tets t[0 .. count) of one colour, the same way.
+std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t, const float* rest_volumes,
+                               std::int64_t count, float inv_k, float alpha);
+
+// Tets of a regular lattice (TetGrid full box, vertex index = lattice index): tet q of the run has
+// vertices base + 2 q + offsets[m] (every other cell along x), `rest_volumes` parallel to them.
+// Projects the first count − count mod 8 and returns that number, as above.
+std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
+                                  const std::array<std::int32_t, 4>& offsets,
+                                  const float* rest_volumes, std::int64_t count, float inv_k,
+                                  float alpha);
+
+}  // namespace pliant::pbd::detail
