@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -210,20 +211,22 @@ struct SlabCounts {
     std::int64_t num_voxels_written = 0;
 };
 
-// Runs, per slab in parallel: zero_slab(k0, k1), then for every tet of the slab in tet order and
-// every row (j, k) of it inside the slab, visit_row(tet, j, k, i_begin, i_end) over the voxels the
-// tie rule gives the tet. Degenerate and inverted tets are counted in the first slab they overlap.
-template <typename ZeroSlab, typename VisitRow>
+// Runs, per slab in parallel: zero_slab(k0, k1), then for every tet of the slab in tet order,
+// visit_batch(tet, batch) over batches of the voxels the tie rule gives the tet inside the slab
+// (detail::batch_spans). Degenerate and inverted tets are counted in the first slab they overlap.
+template <typename ZeroSlab, typename VisitBatch>
 SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::uint8_t> rest_codes,
                      std::span<const geometry::Tet> tets, std::span<const Vec3f> rest,
                      std::span<const Vec3f> deformed, const GridFrame& target,
                      const GridFrame& source, bool skip_inverted, ZeroSlab&& zero_slab,
-                     VisitRow&& visit_row) {
+                     VisitBatch&& visit_batch) {
     const Slabs slabs = bin_tets(kept, tets, deformed, target);
     return parallel_reduce(
         slabs.count, SlabCounts{},
         [&](std::int64_t s_begin, std::int64_t s_end) {
             SlabCounts counts;
+            // One batch buffer per task (not per tet).
+            const auto batch = std::make_unique<detail::SpanBatch>();
             for (std::int64_t s = s_begin; s < s_end; ++s) {
                 const std::int64_t k_begin = s * slabs.height;
                 const std::int64_t k_end = std::min(k_begin + slabs.height, target.n[2]);
@@ -254,11 +257,9 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
                             continue;
                         }
                     }
-                    counts.num_voxels_written += detail::for_each_span(
-                        raster, k_begin, k_end,
-                        [&](std::int64_t j, std::int64_t k, std::int64_t ib, std::int64_t ie) {
-                            visit_row(raster, j, k, ib, ie);
-                        });
+                    counts.num_voxels_written += detail::batch_spans(
+                        raster, k_begin, k_end, target.n[0], target.n[0] * target.n[1], *batch,
+                        [&](const detail::SpanBatch& b) { visit_batch(raster, b); });
                 }
             }
             return counts;
@@ -290,39 +291,43 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept,
     auto zero_slab = [&](std::int64_t k0, std::int64_t k1) {
         std::memset(dst + k0 * layer, 0, static_cast<std::size_t>((k1 - k0) * layer) * sizeof(D));
     };
-    auto visit_row = [&](const TetRaster& t, std::int64_t j, std::int64_t k, std::int64_t ib,
-                         std::int64_t ie) {
-        // map_coord's order: the row's start per axis, then + map[a][0]·i per voxel.
-        const double gx = detail::map_coord(t.map[0], 0, j, k);
-        const double gy = detail::map_coord(t.map[1], 0, j, k);
-        const double gz = detail::map_coord(t.map[2], 0, j, k);
-        D* out = dst + C * (ib + tf.n[0] * (j + tf.n[1] * k));
+    // One loop over the batch: g = row start + map[a][0]·i (map_coord's order).
+    auto visit_batch = [&](const TetRaster& t, const detail::SpanBatch& batch) {
+        const double mx = t.map[0][0];
+        const double my = t.map[1][0];
+        const double mz = t.map[2][0];
         // The interior sampler gives the same bits as sample_trilinear, without its bounds
         // tests and clamps.
         if (t.is_interior) {
-            for (std::int64_t i = ib; i < ie; ++i, out += C) {
-                const double id = static_cast<double>(i);
-                float v[C];
-                detail::sample_interior<S, C>(src, sf.n, gx + t.map[0][0] * id,
-                                              gy + t.map[1][0] * id, gz + t.map[2][0] * id, v);
+            for (int e = 0; e < batch.num_voxels; ++e) {
+                const detail::SpanVoxel v = batch.voxels[e];
+                const detail::SpanRow& r = batch.rows[v.row];
+                const double id = static_cast<double>(v.i);
+                float sample[C];
+                detail::sample_interior<S, C>(src, sf.n, r.g[0] + mx * id, r.g[1] + my * id,
+                                              r.g[2] + mz * id, sample);
+                D* out = dst + C * (r.base + v.i);
                 for (int c = 0; c < C; ++c) {
-                    out[c] = detail::convert_sample<D>(v[c], scale);
+                    out[c] = detail::convert_sample<D>(sample[c], scale);
                 }
             }
         } else {
-            for (std::int64_t i = ib; i < ie; ++i, out += C) {
-                const double id = static_cast<double>(i);
-                float v[C];
-                detail::sample_trilinear<S, C>(src, sf.n, gx + t.map[0][0] * id,
-                                               gy + t.map[1][0] * id, gz + t.map[2][0] * id, v);
+            for (int e = 0; e < batch.num_voxels; ++e) {
+                const detail::SpanVoxel v = batch.voxels[e];
+                const detail::SpanRow& r = batch.rows[v.row];
+                const double id = static_cast<double>(v.i);
+                float sample[C];
+                detail::sample_trilinear<S, C>(src, sf.n, r.g[0] + mx * id, r.g[1] + my * id,
+                                               r.g[2] + mz * id, sample);
+                D* out = dst + C * (r.base + v.i);
                 for (int c = 0; c < C; ++c) {
-                    out[c] = detail::convert_sample<D>(v[c], scale);
+                    out[c] = detail::convert_sample<D>(sample[c], scale);
                 }
             }
         }
     };
     return rasterize(kept, rest_codes, tets, rest, deformed, tf, sf, skip_inverted, zero_slab,
-                     visit_row);
+                     visit_batch);
 }
 
 void check_positions(std::span<const Vec3f> positions, const char* what) {
@@ -528,10 +533,11 @@ void Resampler::count_coverage(std::span<const Vec3f> deformed_positions, const 
         [&](std::int64_t k0, std::int64_t k1) {
             std::memset(counts.data() + k0 * layer, 0, static_cast<std::size_t>((k1 - k0) * layer));
         },
-        [&](const TetRaster&, std::int64_t j, std::int64_t k, std::int64_t ib, std::int64_t ie) {
-            std::uint8_t* c = counts.data() + grid.index(0, j, k);
-            for (std::int64_t i = ib; i < ie; ++i) {
-                c[i] = c[i] == 255 ? c[i] : static_cast<std::uint8_t>(c[i] + 1);
+        [&](const TetRaster&, const detail::SpanBatch& batch) {
+            for (int e = 0; e < batch.num_voxels; ++e) {
+                const detail::SpanVoxel v = batch.voxels[e];
+                std::uint8_t& c = counts[static_cast<std::size_t>(batch.rows[v.row].base + v.i)];
+                c = c == 255 ? c : static_cast<std::uint8_t>(c + 1);
             }
         });
 }
