@@ -72,6 +72,15 @@ struct TetRun {
     std::int64_t ni = 0, nj = 0, nk = 0;
 };
 
+// A run of edges of one colour: edge q ∈ [begin, next run's begin) joins first + stride (q − begin)
+// and that + span (stride 1 or 2). On a TetGrid nearly every edge lies in a run of a lattice row.
+struct EdgeRun {
+    std::int64_t begin = 0;
+    std::int32_t first = 0;
+    std::int32_t stride = 1;
+    std::int32_t span = 0;
+};
+
 }  // namespace
 
 struct SoftBody::State {
@@ -90,6 +99,11 @@ struct SoftBody::State {
     std::vector<float> rest_volumes0;
     std::vector<float> rest_volumes;
     double total_rest_volume = 0.0;
+    // On a TetGrid: the runs of edge_vertices, those of colour c at
+    // edge_runs[edge_run_offsets[c] .. edge_run_offsets[c + 1]); empty for other meshes.
+    std::vector<EdgeRun> edge_runs;
+    std::vector<std::int64_t> edge_run_begins;  // edge_runs[r].begin
+    std::vector<std::int64_t> edge_run_offsets;
     // Per tet colour of a full-box TetGrid (TetRun); empty for other meshes.
     std::vector<TetRun> tet_runs;
     std::int64_t lattice_x = 0;   // lattice vertices along x
@@ -170,6 +184,58 @@ std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring&
         }
     }
     return runs;
+}
+
+// Within each colour, orders the edges (and their rest lengths) by direction b − a, then by a
+// (the order within a colour does not change a result: its edges share no vertex), and cuts them
+// into runs of equal direction and equal steps of a.
+void sort_edges_into_runs(const ConstraintColoring& coloring,
+                          std::vector<std::array<std::int32_t, 2>>& edges,
+                          std::vector<float>& rest_lengths, std::vector<EdgeRun>& runs,
+                          std::vector<std::int64_t>& run_offsets) {
+    std::vector<std::int64_t> perm;
+    std::vector<std::array<std::int32_t, 2>> sorted_edges;
+    std::vector<float> sorted_lengths;
+    run_offsets.assign(1, 0);
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
+        perm.resize(static_cast<std::size_t>(end - begin));
+        for (std::int64_t q = begin; q < end; ++q) {
+            perm[static_cast<std::size_t>(q - begin)] = q;
+        }
+        const auto edge = [&](std::int64_t q) -> const std::array<std::int32_t, 2>& {
+            return edges[static_cast<std::size_t>(q)];
+        };
+        std::stable_sort(perm.begin(), perm.end(), [&](std::int64_t p, std::int64_t q) {
+            return edge(p)[1] - edge(p)[0] < edge(q)[1] - edge(q)[0];
+        });
+        sorted_edges.clear();
+        sorted_lengths.clear();
+        for (const std::int64_t q : perm) {
+            sorted_edges.push_back(edge(q));
+            sorted_lengths.push_back(rest_lengths[static_cast<std::size_t>(q)]);
+        }
+        std::copy(sorted_edges.begin(), sorted_edges.end(),
+                  edges.begin() + static_cast<std::ptrdiff_t>(begin));
+        std::copy(sorted_lengths.begin(), sorted_lengths.end(),
+                  rest_lengths.begin() + static_cast<std::ptrdiff_t>(begin));
+        for (std::int64_t q = begin; q < end;) {
+            EdgeRun run{q, edge(q)[0], 1, edge(q)[1] - edge(q)[0]};
+            std::int64_t next = q + 1;
+            if (next < end && edge(next)[1] - edge(next)[0] == run.span &&
+                (edge(next)[0] - run.first == 1 || edge(next)[0] - run.first == 2)) {
+                run.stride = edge(next)[0] - run.first;
+                while (next < end && edge(next)[1] - edge(next)[0] == run.span &&
+                       edge(next)[0] == run.first + run.stride * (next - q)) {
+                    ++next;
+                }
+            }
+            runs.push_back(run);
+            q = next;
+        }
+        run_offsets.push_back(static_cast<std::int64_t>(runs.size()));
+    }
 }
 
 }  // namespace
@@ -286,6 +352,13 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
         s.rest_lengths0[k] =
             static_cast<float>(norm(vec3_cast<double>(s.rest[static_cast<std::size_t>(e[0])]) -
                                     vec3_cast<double>(s.rest[static_cast<std::size_t>(e[1])])));
+    }
+    if (grid != nullptr) {
+        sort_edges_into_runs(s.edge_coloring, s.edge_vertices, s.rest_lengths0, s.edge_runs,
+                             s.edge_run_offsets);
+        for (const EdgeRun& r : s.edge_runs) {
+            s.edge_run_begins.push_back(r.begin);
+        }
     }
     s.rest_lengths = s.rest_lengths0;
     s.tet_vertices.resize(s.tets.size());
@@ -584,6 +657,39 @@ void SoftBody::step(double dt) {
                 s.edge_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
             const auto* edges = s.edge_vertices.data() + begin;
             const float* lengths = s.rest_lengths.data() + begin;
+            if (use_avx2 && !s.edge_runs.empty()) {
+                // Runs: the edges' vertices follow from the run's first vertex.
+                const std::int64_t* run_begins =
+                    s.edge_run_begins.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
+                const std::int64_t num_runs = s.edge_run_offsets[static_cast<std::size_t>(c) + 1] -
+                                              s.edge_run_offsets[static_cast<std::size_t>(c)];
+                const EdgeRun* runs =
+                    s.edge_runs.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
+                parallel_for_chunks(
+                    count, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                        // The run holding edge b (its begin is the last ≤ begin + b).
+                        std::int64_t r =
+                            std::upper_bound(run_begins, run_begins + num_runs, begin + b) -
+                            run_begins - 1;
+                        for (std::int64_t q = b; q < e; ++r) {
+                            const EdgeRun& run = runs[r];
+                            const std::int64_t run_end =
+                                r + 1 < num_runs ? run_begins[r + 1] - begin : count;
+                            const std::int64_t n_run = std::min(e, run_end) - q;
+                            std::int64_t i =
+                                q + detail::project_edge_run_avx2(
+                                        x, run.first + run.stride * (begin + q - run.begin),
+                                        run.stride, run.span, lengths + q, n_run, edge_inv_k,
+                                        edge_alpha);
+                            for (; i < q + n_run; ++i) {
+                                detail::project_edge(x, edges[i][0], edges[i][1], lengths[i],
+                                                     edge_inv_k, edge_alpha);
+                            }
+                            q += n_run;
+                        }
+                    });
+                continue;
+            }
             parallel_for_chunks(
                 count, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     std::int64_t i = b;

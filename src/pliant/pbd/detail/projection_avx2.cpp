@@ -88,10 +88,58 @@ PLIANT_AVX2_INLINE __m256 norm2(__m256 u, __m256 v, __m256 s) {
 
 }  // namespace
 
+namespace {
+
+// The projection of 8 edges whose vertices a, b are loaded; updates them in place.
+PLIANT_AVX2_INLINE void project_edges8(Lanes8& a, Lanes8& b, const float* rest_lengths,
+                                       __m256 inv_k8, __m256 alpha8) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 w = add(a.w, b.w);
+    const __m256 dx = sub(a.x, b.x);
+    const __m256 dy = sub(a.y, b.y);
+    const __m256 dz = sub(a.z, b.z);
+    const __m256 length = _mm256_sqrt_ps(norm2(dx, dy, dz));
+    const __m256 valid =
+        _mm256_and_ps(_mm256_cmp_ps(w, zero, _CMP_GT_OQ), _mm256_cmp_ps(length, zero, _CMP_GT_OQ));
+    const __m256 denominator = add(mul(w, inv_k8), alpha8);
+    const __m256 violation = sub(length, _mm256_loadu_ps(rest_lengths));
+    const __m256 dlambda = _mm256_div_ps(sub(zero, violation), denominator);
+    const __m256 s = _mm256_and_ps(valid, _mm256_div_ps(dlambda, length));
+    const __m256 sa = mul(a.w, s);
+    const __m256 sb = mul(b.w, s);
+    a.x = add(a.x, mul(sa, dx));
+    a.y = add(a.y, mul(sa, dy));
+    a.z = add(a.z, mul(sa, dz));
+    b.x = sub(b.x, mul(sb, dx));
+    b.y = sub(b.y, mul(sb, dy));
+    b.z = sub(b.z, mul(sb, dz));
+}
+
+// Edge run with a constant stride: lane l at pa[STRIDE l] and pa[STRIDE l + span].
+template <int STRIDE>
+PLIANT_AVX2_INLINE std::int64_t edge_run(Float4* x, std::int64_t first, std::int32_t span,
+                                         const float* rest_lengths, std::int64_t count,
+                                         __m256 inv_k8, __m256 alpha8) {
+    static constexpr std::int32_t LANES[8] = {0,          STRIDE,     2 * STRIDE, 3 * STRIDE,
+                                              4 * STRIDE, 5 * STRIDE, 6 * STRIDE, 7 * STRIDE};
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        Float4* pa = x + first + STRIDE * k;
+        Float4* pb = pa + span;
+        Lanes8 a = load8(pa, LANES);
+        Lanes8 b = load8(pb, LANES);
+        project_edges8(a, b, rest_lengths + k, inv_k8, alpha8);
+        store8(pa, LANES, a);
+        store8(pb, LANES, b);
+    }
+    return k;
+}
+
+}  // namespace
+
 PLIANT_AVX2_FN std::int64_t project_edges_avx2(Float4* x, const std::array<std::int32_t, 2>* e,
                                                const float* rest_lengths, std::int64_t count,
                                                float inv_k, float alpha) {
-    const __m256 zero = _mm256_setzero_ps();
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
     const __m256 alpha8 = _mm256_set1_ps(alpha);
     std::int64_t k = 0;
@@ -104,29 +152,21 @@ PLIANT_AVX2_FN std::int64_t project_edges_avx2(Float4* x, const std::array<std::
         }
         Lanes8 a = load8(x, ia);
         Lanes8 b = load8(x, ib);
-        const __m256 w = add(a.w, b.w);
-        const __m256 dx = sub(a.x, b.x);
-        const __m256 dy = sub(a.y, b.y);
-        const __m256 dz = sub(a.z, b.z);
-        const __m256 length = _mm256_sqrt_ps(norm2(dx, dy, dz));
-        const __m256 valid = _mm256_and_ps(_mm256_cmp_ps(w, zero, _CMP_GT_OQ),
-                                           _mm256_cmp_ps(length, zero, _CMP_GT_OQ));
-        const __m256 denominator = add(mul(w, inv_k8), alpha8);
-        const __m256 violation = sub(length, _mm256_loadu_ps(rest_lengths + k));
-        const __m256 dlambda = _mm256_div_ps(sub(zero, violation), denominator);
-        const __m256 s = _mm256_and_ps(valid, _mm256_div_ps(dlambda, length));
-        const __m256 sa = mul(a.w, s);
-        const __m256 sb = mul(b.w, s);
-        a.x = add(a.x, mul(sa, dx));
-        a.y = add(a.y, mul(sa, dy));
-        a.z = add(a.z, mul(sa, dz));
-        b.x = sub(b.x, mul(sb, dx));
-        b.y = sub(b.y, mul(sb, dy));
-        b.z = sub(b.z, mul(sb, dz));
+        project_edges8(a, b, rest_lengths + k, inv_k8, alpha8);
         store8(x, ia, a);
         store8(x, ib, b);
     }
     return k;
+}
+
+PLIANT_AVX2_FN std::int64_t project_edge_run_avx2(Float4* x, std::int64_t first,
+                                                  std::int32_t stride, std::int32_t span,
+                                                  const float* rest_lengths, std::int64_t count,
+                                                  float inv_k, float alpha) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    return stride == 2 ? edge_run<2>(x, first, span, rest_lengths, count, inv_k8, alpha8)
+                       : edge_run<1>(x, first, span, rest_lengths, count, inv_k8, alpha8);
 }
 
 namespace {
@@ -244,6 +284,10 @@ std::int64_t project_tets_avx2(Float4*, const geometry::Tet*, const float*, std:
 }
 std::int64_t project_tet_run_avx2(Float4*, std::int64_t, const std::array<std::int32_t, 4>&,
                                   const float*, std::int64_t, float, float) {
+    return 0;
+}
+std::int64_t project_edge_run_avx2(Float4*, std::int64_t, std::int32_t, std::int32_t, const float*,
+                                   std::int64_t, float, float) {
     return 0;
 }
 

@@ -29,6 +29,12 @@ std::int64_t project_edges_avx2(Float4* x, const std::array<std::int32_t, 2>* e,
 std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t, const float* rest_volumes,
                                std::int64_t count, float inv_k, float alpha);
 
+// A run of edges: edge q joins first + stride q and first + stride q + span (stride 1 or 2),
+// `rest_lengths` parallel to them. Projects the first count − count mod 8 and returns that number.
+std::int64_t project_edge_run_avx2(Float4* x, std::int64_t first, std::int32_t stride,
+                                   std::int32_t span, const float* rest_lengths, std::int64_t count,
+                                   float inv_k, float alpha);
+
 // Tets of a regular lattice (TetGrid full box, vertex index = lattice index): tet q of the run has
 // vertices base + 2 q + offsets[m] (every other cell along x), `rest_volumes` parallel to them.
 // Projects the first count − count mod 8 and returns that number, as above.
