@@ -1,4 +1,4 @@
-// One XPBD soft-body substep (pbd::SoftBody: edges + tet volumes, coloured, SSE, parallel) on
+// One XPBD soft-body substep (pbd::SoftBody: edges + tet volumes, coloured, SIMD, parallel) on
 // full-box tet grids of 32³ and 64³ cells (cells of 4 voxels over 128³ and 256³ volumes; 64³
 // cells = 1,310,720 tets, the size), beside a naive baseline in the same binary: the same
 // constraints projected one after the other in index order (sequential Gauss–Seidel), Vec3f
@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "pliant/core/parallel.hpp"
+#include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/volume/volume.hpp"
 
@@ -31,10 +32,12 @@ const pbd::TetGrid& grid_of(int cells) {
     return *g;
 }
 
-// args: cells, threads, analytic (1) or greedy (0) colouring.
+// args: cells, threads, analytic (1) or greedy (0) colouring, widest SIMD kernels allowed (4: SSE,
+// 8: AVX2 when the CPU has it; both give the same bits).
 void BM_SoftBodySubstep(benchmark::State& state) {
     const int cells = static_cast<int>(state.range(0));
     set_num_threads(static_cast<int>(state.range(1)));
+    pbd::detail::allow_avx2(state.range(3) >= 8);
     const pbd::TetGrid& grid = grid_of(cells);
     pbd::SoftBody body = state.range(2) != 0 ? pbd::SoftBody(grid, {.substeps = 1})
                                              : pbd::SoftBody(grid.mesh, {.substeps = 1});
@@ -47,15 +50,18 @@ void BM_SoftBodySubstep(benchmark::State& state) {
     state.counters["edge_colors"] = body.edge_coloring().num_colors();
     state.counters["tet_colors"] = body.tet_coloring().num_colors();
     state.counters["inverted"] = static_cast<double>(body.stats().inverted_tets);
+    state.counters["lanes"] = pbd::detail::has_avx2() ? 8 : 4;
     set_num_threads(0);
+    pbd::detail::allow_avx2(true);
 }
 BENCHMARK(BM_SoftBodySubstep)
-    ->ArgNames({"cells", "threads", "analytic"})
-    ->Args({32, 1, 1})
-    ->Args({32, 2, 1})
-    ->Args({64, 1, 1})
-    ->Args({64, 2, 1})
-    ->Args({64, 2, 0})
+    ->ArgNames({"cells", "threads", "analytic", "simd"})
+    ->Args({32, 1, 1, 8})
+    ->Args({32, 2, 1, 8})
+    ->Args({64, 1, 1, 4})
+    ->Args({64, 1, 1, 8})
+    ->Args({64, 2, 1, 8})
+    ->Args({64, 2, 0, 8})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
