@@ -23,6 +23,9 @@ constexpr std::int64_t VERTEX_GRAIN = 4096;
 constexpr std::int64_t EDGE_GRAIN = 2048;
 constexpr std::int64_t TET_GRAIN = 1024;
 constexpr std::int32_t DRAG = -2;  // driven_by code of the drag
+// Lattice layers per slab of the blocked sweep (LayerBlocking): enough constraints per colour for
+// a few chunks, few enough that a slab's vertices stay in the L2 cache.
+constexpr std::int64_t LAYERS_PER_SLAB = 4;
 
 void validate_options(const SoftBodyOptions& o) {
     const auto fail = [](const char* field, double value, const char* rule) {
@@ -81,6 +84,25 @@ struct EdgeRun {
     std::int32_t span = 0;
 };
 
+// Layer blocking of a grid's colour sweep, for cache reuse. Every constraint has a layer key z
+// (its lowest lattice z; a tet, its cell's), every vertex it holds lies in layer z or z + 1, and a
+// colour's constraints are sorted by key. The sweep runs slab after slab; in slab t colour c
+// projects its constraints of layers [t − skew[c], t − skew[c] + LAYERS_PER_SLAB). The skews are
+// the smallest with skew[c'] − skew[c] ≥ z − z' for every two constraints of colours c < c' (z,
+// z' their keys) that share a vertex: such a pair then lands in slabs t ≤ t', and colours run in
+// order within a slab, so every two constraints sharing a vertex are projected in the order of
+// their colours, as in the plain colour-by-colour sweep (constraints sharing no vertex commute):
+// the results are bitwise those of the plain sweep. A slab touches LAYERS_PER_SLAB + max_skew + 1
+// vertex layers rather than the whole body per colour.
+struct LayerBlocking {
+    std::int64_t num_layers = 0;  // 0: no blocking (plain sweep)
+    std::int64_t max_skew = 0;
+    std::vector<std::int64_t> skew;  // per colour
+    // Per colour c, at c · (num_layers + 1) + z: the first constraint of the colour (index within
+    // the colour) with key ≥ z.
+    std::vector<std::int64_t> layer_begin;
+};
+
 }  // namespace
 
 struct SoftBody::State {
@@ -104,6 +126,8 @@ struct SoftBody::State {
     std::vector<EdgeRun> edge_runs;
     std::vector<std::int64_t> edge_run_begins;  // edge_runs[r].begin
     std::vector<std::int64_t> edge_run_offsets;
+    LayerBlocking edge_blocking;  // on a TetGrid; none otherwise
+    LayerBlocking tet_blocking;
     // Per tet colour of a full-box TetGrid (TetRun); empty for other meshes.
     std::vector<TetRun> tet_runs;
     std::int64_t lattice_x = 0;   // lattice vertices along x
@@ -186,10 +210,82 @@ std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring&
     return runs;
 }
 
-// Within each colour, orders the edges (and their rest lengths) by direction b − a, then by a
-// (the order within a colour does not change a result: its edges share no vertex), and cuts them
-// into runs of equal direction and equal steps of a.
+// The blocking of constraints (in colour order, sorted by key within each colour; vertex_z:
+// lattice z per vertex); none when a key is out of order or a vertex lies outside layers z, z + 1
+// of a constraint holding it, or for more than 64 colours.
+template <std::size_t K>
+LayerBlocking block_layers(const ConstraintColoring& coloring,
+                           const std::vector<std::array<std::int32_t, K>>& constraints,
+                           const std::vector<std::int32_t>& keys, std::int64_t num_layers,
+                           const std::vector<std::int32_t>& vertex_z) {
+    const std::int32_t num_colors = coloring.num_colors();
+    if (num_colors > 64 || num_layers <= 0) {
+        return {};
+    }
+    LayerBlocking blocking;
+    blocking.num_layers = num_layers;
+    blocking.layer_begin.resize(static_cast<std::size_t>(num_colors * (num_layers + 1)));
+    // Per vertex: bit c of `below` when colour c holds it in a constraint of key z_v − 1, of
+    // `level` of key z_v.
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(vertex_z.size(), {0, 0});
+    for (std::int32_t c = 0; c < num_colors; ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
+        const auto* first = keys.data() + begin;
+        const auto* last = keys.data() + end;
+        if (!std::is_sorted(first, last) || *first < 0 || *(last - 1) >= num_layers) {
+            return {};
+        }
+        for (std::int64_t z = 0; z <= num_layers; ++z) {
+            blocking.layer_begin[static_cast<std::size_t>(c * (num_layers + 1) + z)] =
+                std::lower_bound(first, last, z) - first;
+        }
+        const std::uint64_t bit = std::uint64_t{1} << c;
+        for (std::int64_t q = begin; q < end; ++q) {
+            for (const std::int32_t v : constraints[static_cast<std::size_t>(q)]) {
+                const std::int32_t offset =
+                    keys[static_cast<std::size_t>(q)] - vertex_z[static_cast<std::size_t>(v)];
+                if (offset == -1) {
+                    masks[static_cast<std::size_t>(v)].first |= bit;
+                } else if (offset == 0) {
+                    masks[static_cast<std::size_t>(v)].second |= bit;
+                } else {
+                    return {};
+                }
+            }
+        }
+    }
+    std::sort(masks.begin(), masks.end());
+    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
+    // Colours in order: every bound on skew[c'] comes from colours c < c', already final.
+    blocking.skew.assign(static_cast<std::size_t>(num_colors), 0);
+    for (std::int32_t later = 0; later < num_colors; ++later) {
+        for (const auto& [below, level] : masks) {
+            if (((below | level) >> later & 1) == 0) {
+                continue;
+            }
+            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
+            for (std::int32_t c = 0; c < later; ++c) {
+                if (((below | level) >> c & 1) != 0) {
+                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
+                    auto& skew = blocking.skew[static_cast<std::size_t>(later)];
+                    skew = std::max(
+                        skew, blocking.skew[static_cast<std::size_t>(c)] + offset - later_offset);
+                }
+            }
+        }
+        blocking.max_skew =
+            std::max(blocking.max_skew, blocking.skew[static_cast<std::size_t>(later)]);
+    }
+    return blocking;
+}
+
+// Within each colour, orders the edges (and their rest lengths) by layer (the lower lattice z of
+// their vertices), then direction b − a, then a (the order within a colour does not change a
+// result: its edges share no vertex), and cuts them into runs of equal direction and equal steps
+// of a.
 void sort_edges_into_runs(const ConstraintColoring& coloring,
+                          const std::vector<std::int32_t>& vertex_z,
                           std::vector<std::array<std::int32_t, 2>>& edges,
                           std::vector<float>& rest_lengths, std::vector<EdgeRun>& runs,
                           std::vector<std::int64_t>& run_offsets) {
@@ -207,8 +303,13 @@ void sort_edges_into_runs(const ConstraintColoring& coloring,
         const auto edge = [&](std::int64_t q) -> const std::array<std::int32_t, 2>& {
             return edges[static_cast<std::size_t>(q)];
         };
+        const auto layer = [&](std::int64_t q) {
+            return std::min(vertex_z[static_cast<std::size_t>(edge(q)[0])],
+                            vertex_z[static_cast<std::size_t>(edge(q)[1])]);
+        };
         std::stable_sort(perm.begin(), perm.end(), [&](std::int64_t p, std::int64_t q) {
-            return edge(p)[1] - edge(p)[0] < edge(q)[1] - edge(q)[0];
+            return std::pair(layer(p), edge(p)[1] - edge(p)[0]) <
+                   std::pair(layer(q), edge(q)[1] - edge(q)[0]);
         });
         sorted_edges.clear();
         sorted_lengths.clear();
@@ -353,9 +454,14 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
             static_cast<float>(norm(vec3_cast<double>(s.rest[static_cast<std::size_t>(e[0])]) -
                                     vec3_cast<double>(s.rest[static_cast<std::size_t>(e[1])])));
     }
+    std::vector<std::int32_t> vertex_z;  // lattice z per vertex (grid)
     if (grid != nullptr) {
-        sort_edges_into_runs(s.edge_coloring, s.edge_vertices, s.rest_lengths0, s.edge_runs,
-                             s.edge_run_offsets);
+        vertex_z.reserve(grid->vertex_lattice.size());
+        for (const auto& lattice : grid->vertex_lattice) {
+            vertex_z.push_back(lattice[2]);
+        }
+        sort_edges_into_runs(s.edge_coloring, vertex_z, s.edge_vertices, s.rest_lengths0,
+                             s.edge_runs, s.edge_run_offsets);
         for (const EdgeRun& r : s.edge_runs) {
             s.edge_run_begins.push_back(r.begin);
         }
@@ -370,6 +476,22 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
     }
     s.rest_volumes = s.rest_volumes0;
     if (grid != nullptr) {
+        // Step 4b: layer blocking of both sweeps.
+        std::vector<std::int32_t> keys(s.edge_vertices.size());
+        for (std::size_t k = 0; k < keys.size(); ++k) {
+            keys[k] = std::min(vertex_z[static_cast<std::size_t>(s.edge_vertices[k][0])],
+                               vertex_z[static_cast<std::size_t>(s.edge_vertices[k][1])]);
+        }
+        s.edge_blocking = block_layers(s.edge_coloring, s.edge_vertices, keys,
+                                       std::int64_t{grid->cells[2]} + 1, vertex_z);
+        std::vector<std::int32_t> tet_keys(s.tet_vertices.size());
+        const std::int64_t cells_xy = std::int64_t{grid->cells[0]} * grid->cells[1];
+        for (std::size_t k = 0; k < tet_keys.size(); ++k) {
+            tet_keys[k] = static_cast<std::int32_t>(
+                grid->tet_cell[static_cast<std::size_t>(s.tet_coloring.order[k])] / cells_xy);
+        }
+        s.tet_blocking =
+            block_layers(s.tet_coloring, s.tet_vertices, tet_keys, grid->cells[2], vertex_z);
         s.tet_runs = find_tet_runs(*grid, s.tet_coloring, s.tet_vertices, nv);
         s.lattice_x = std::int64_t{grid->cells[0]} + 1;
         s.lattice_xy = s.lattice_x * (std::int64_t{grid->cells[1]} + 1);
@@ -585,6 +707,139 @@ void SoftBody::step(double dt) {
             p.w = 0.0f;
         }
     };
+    // Edges [lo, hi) of colour c (indices within the colour), in fixed chunks of the range.
+    const auto project_edge_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
+        const std::int64_t begin = s.edge_coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t count = s.edge_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+        const auto* edges = s.edge_vertices.data() + begin;
+        const float* lengths = s.rest_lengths.data() + begin;
+        if (use_avx2 && !s.edge_runs.empty()) {
+            // Runs: the edges' vertices follow from the run's first vertex.
+            const std::int64_t* run_begins =
+                s.edge_run_begins.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
+            const std::int64_t num_runs = s.edge_run_offsets[static_cast<std::size_t>(c) + 1] -
+                                          s.edge_run_offsets[static_cast<std::size_t>(c)];
+            const EdgeRun* runs =
+                s.edge_runs.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
+            parallel_for_chunks(
+                hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                    b += lo;
+                    e += lo;
+                    // The run holding edge b (its begin is the last ≤ begin + b).
+                    std::int64_t r =
+                        std::upper_bound(run_begins, run_begins + num_runs, begin + b) -
+                        run_begins - 1;
+                    for (std::int64_t q = b; q < e; ++r) {
+                        const EdgeRun& run = runs[r];
+                        const std::int64_t run_end =
+                            r + 1 < num_runs ? run_begins[r + 1] - begin : count;
+                        const std::int64_t n_run = std::min(e, run_end) - q;
+                        std::int64_t i =
+                            q + detail::project_edge_run_avx2(
+                                    x, run.first + run.stride * (begin + q - run.begin), run.stride,
+                                    run.span, lengths + q, n_run, edge_inv_k, edge_alpha);
+                        for (; i < q + n_run; ++i) {
+                            detail::project_edge(x, edges[i][0], edges[i][1], lengths[i],
+                                                 edge_inv_k, edge_alpha);
+                        }
+                        q += n_run;
+                    }
+                });
+            return;
+        }
+        parallel_for_chunks(hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+            std::int64_t i = lo + b;
+            e += lo;
+            if (use_avx2) {
+                i += detail::project_edges_avx2(x, edges + i, lengths + i, e - i, edge_inv_k,
+                                                edge_alpha);
+            }
+#if defined(PLIANT_PBD_SSE)
+            for (; i + 4 <= e; i += 4) {
+                detail::project_edges4(x, edges + i, lengths + i, edge_inv_k, edge_alpha);
+            }
+#endif
+            for (; i < e; ++i) {
+                detail::project_edge(x, edges[i][0], edges[i][1], lengths[i], edge_inv_k,
+                                     edge_alpha);
+            }
+        });
+    };
+    // Tets [lo, hi) of colour c, the same way.
+    const auto project_tet_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
+        const std::int64_t begin = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
+        const geometry::Tet* tets = s.tet_vertices.data() + begin;
+        const float* volumes = s.rest_volumes.data() + begin;
+        if (use_avx2 && !s.tet_runs.empty()) {
+            // Rows of cells along x; within a row the tets' vertices follow from the base.
+            const TetRun& r = s.tet_runs[static_cast<std::size_t>(c)];
+            parallel_for_chunks(
+                hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                    b += lo;
+                    e += lo;
+                    for (std::int64_t q = b; q < e;) {
+                        const std::int64_t row = q / r.ni;
+                        const std::int64_t a = q - row * r.ni;
+                        const std::int64_t base = r.i0 + 2 * a +
+                                                  s.lattice_x * (r.j0 + 2 * (row % r.nj)) +
+                                                  s.lattice_xy * (r.k0 + 2 * (row / r.nj));
+                        const std::int64_t run = std::min(e - q, r.ni - a);
+                        std::int64_t i =
+                            q + detail::project_tet_run_avx2(x, base, r.offsets, volumes + q, run,
+                                                             inv_k, volume_alpha);
+                        for (; i < q + run; ++i) {
+                            detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
+                        }
+                        q += run;
+                    }
+                });
+            return;
+        }
+        parallel_for_chunks(hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+            std::int64_t i = lo + b;
+            e += lo;
+            if (use_avx2) {
+                i +=
+                    detail::project_tets_avx2(x, tets + i, volumes + i, e - i, inv_k, volume_alpha);
+            }
+#if defined(PLIANT_PBD_SSE)
+            for (; i + 4 <= e; i += 4) {
+                detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
+            }
+#endif
+            for (; i < e; ++i) {
+                detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
+            }
+        });
+    };
+    // Every constraint of a colouring, colour after colour; with a blocking, slab after slab of
+    // LAYERS_PER_SLAB layers, colour c shifted back by its skew (LayerBlocking).
+    const auto sweep = [&](const LayerBlocking& blocking, const ConstraintColoring& coloring,
+                           const auto& project_range) {
+        const std::int32_t num_colors = coloring.num_colors();
+        if (blocking.num_layers == 0) {
+            for (std::int32_t c = 0; c < num_colors; ++c) {
+                project_range(c, 0,
+                              coloring.offsets[static_cast<std::size_t>(c) + 1] -
+                                  coloring.offsets[static_cast<std::size_t>(c)]);
+            }
+            return;
+        }
+        const std::int64_t layers = blocking.num_layers;
+        for (std::int64_t t = 0; t < layers + blocking.max_skew; t += LAYERS_PER_SLAB) {
+            for (std::int32_t c = 0; c < num_colors; ++c) {
+                const std::int64_t skew = blocking.skew[static_cast<std::size_t>(c)];
+                const std::int64_t z0 = std::clamp<std::int64_t>(t - skew, 0, layers);
+                const std::int64_t z1 =
+                    std::clamp<std::int64_t>(t - skew + LAYERS_PER_SLAB, 0, layers);
+                const std::int64_t* layer_begin =
+                    blocking.layer_begin.data() + static_cast<std::size_t>(c) * (layers + 1);
+                if (layer_begin[z0] < layer_begin[z1]) {
+                    project_range(c, layer_begin[z0], layer_begin[z1]);
+                }
+            }
+        }
+    };
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
         const double t_end = m_time + h * (sub + 1);
@@ -650,111 +905,11 @@ void SoftBody::step(double dt) {
                 },
                 VERTEX_GRAIN);
         }
-        // Step 5: edges, colour by colour.
-        for (std::int32_t c = 0; c < s.edge_coloring.num_colors(); ++c) {
-            const std::int64_t begin = s.edge_coloring.offsets[static_cast<std::size_t>(c)];
-            const std::int64_t count =
-                s.edge_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-            const auto* edges = s.edge_vertices.data() + begin;
-            const float* lengths = s.rest_lengths.data() + begin;
-            if (use_avx2 && !s.edge_runs.empty()) {
-                // Runs: the edges' vertices follow from the run's first vertex.
-                const std::int64_t* run_begins =
-                    s.edge_run_begins.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
-                const std::int64_t num_runs = s.edge_run_offsets[static_cast<std::size_t>(c) + 1] -
-                                              s.edge_run_offsets[static_cast<std::size_t>(c)];
-                const EdgeRun* runs =
-                    s.edge_runs.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
-                parallel_for_chunks(
-                    count, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                        // The run holding edge b (its begin is the last ≤ begin + b).
-                        std::int64_t r =
-                            std::upper_bound(run_begins, run_begins + num_runs, begin + b) -
-                            run_begins - 1;
-                        for (std::int64_t q = b; q < e; ++r) {
-                            const EdgeRun& run = runs[r];
-                            const std::int64_t run_end =
-                                r + 1 < num_runs ? run_begins[r + 1] - begin : count;
-                            const std::int64_t n_run = std::min(e, run_end) - q;
-                            std::int64_t i =
-                                q + detail::project_edge_run_avx2(
-                                        x, run.first + run.stride * (begin + q - run.begin),
-                                        run.stride, run.span, lengths + q, n_run, edge_inv_k,
-                                        edge_alpha);
-                            for (; i < q + n_run; ++i) {
-                                detail::project_edge(x, edges[i][0], edges[i][1], lengths[i],
-                                                     edge_inv_k, edge_alpha);
-                            }
-                            q += n_run;
-                        }
-                    });
-                continue;
-            }
-            parallel_for_chunks(
-                count, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    std::int64_t i = b;
-                    if (use_avx2) {
-                        i += detail::project_edges_avx2(x, edges + i, lengths + i, e - i,
-                                                        edge_inv_k, edge_alpha);
-                    }
-#if defined(PLIANT_PBD_SSE)
-                    for (; i + 4 <= e; i += 4) {
-                        detail::project_edges4(x, edges + i, lengths + i, edge_inv_k, edge_alpha);
-                    }
-#endif
-                    for (; i < e; ++i) {
-                        detail::project_edge(x, edges[i][0], edges[i][1], lengths[i], edge_inv_k,
-                                             edge_alpha);
-                    }
-                });
-        }
+        // Step 5: edges, colour by colour (layer-blocked on a grid: the same order where it
+        // matters, LayerBlocking).
+        sweep(s.edge_blocking, s.edge_coloring, project_edge_range);
         // Step 6: tet volumes, colour by colour.
-        for (std::int32_t c = 0; c < s.tet_coloring.num_colors(); ++c) {
-            const std::int64_t begin = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
-            const std::int64_t count =
-                s.tet_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-            const geometry::Tet* tets = s.tet_vertices.data() + begin;
-            const float* volumes = s.rest_volumes.data() + begin;
-            if (use_avx2 && !s.tet_runs.empty()) {
-                // Rows of cells along x; within a row the tets' vertices follow from the base.
-                const TetRun& r = s.tet_runs[static_cast<std::size_t>(c)];
-                parallel_for_chunks(
-                    count, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                        for (std::int64_t q = b; q < e;) {
-                            const std::int64_t row = q / r.ni;
-                            const std::int64_t a = q - row * r.ni;
-                            const std::int64_t base = r.i0 + 2 * a +
-                                                      s.lattice_x * (r.j0 + 2 * (row % r.nj)) +
-                                                      s.lattice_xy * (r.k0 + 2 * (row / r.nj));
-                            const std::int64_t run = std::min(e - q, r.ni - a);
-                            std::int64_t i =
-                                q + detail::project_tet_run_avx2(x, base, r.offsets, volumes + q,
-                                                                 run, inv_k, volume_alpha);
-                            for (; i < q + run; ++i) {
-                                detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
-                            }
-                            q += run;
-                        }
-                    });
-                continue;
-            }
-            parallel_for_chunks(
-                count, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    std::int64_t i = b;
-                    if (use_avx2) {
-                        i += detail::project_tets_avx2(x, tets + i, volumes + i, e - i, inv_k,
-                                                       volume_alpha);
-                    }
-#if defined(PLIANT_PBD_SSE)
-                    for (; i + 4 <= e; i += 4) {
-                        detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
-                    }
-#endif
-                    for (; i < e; ++i) {
-                        detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
-                    }
-                });
-        }
+        sweep(s.tet_blocking, s.tet_coloring, project_tet_range);
         // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
         // velocities need not be stored) or, after the last substep, with the copy of the
         // positions.
