@@ -113,7 +113,8 @@ struct SoftBody::State {
     ConstraintColoring edge_coloring;
     ConstraintColoring tet_coloring;
     // Constraint data in colour order (colour c = [offsets[c], offsets[c + 1])): the projection
-    // loops stream through them.
+    // loops stream through them. On a grid the edges of a colour are reordered by layer and
+    // direction (sort_edges_into_runs), the tets keep the colouring's order.
     std::vector<std::array<std::int32_t, 2>> edge_vertices;
     std::vector<float> rest_lengths0;  // at construction
     std::vector<float> rest_lengths;   // current (rest-state drivers)

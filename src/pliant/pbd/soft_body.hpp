@@ -35,8 +35,11 @@
 // Parallelism: constraints are coloured so that no two of a colour share a vertex
 // (constraint_coloring.hpp: analytically on a TetGrid — 18 edge colours, 40 tet colours — greedily
 // otherwise); colours run one after the other (Gauss–Seidel across colours), the constraints of
-// a colour in parallel, 4 (SSE) or 8 (AVX2, chosen at run time) at a time. Results are bitwise
-// identical for any number of threads and for either SIMD width (the same arithmetic, no FMA).
+// a colour in parallel, 4 (SSE) or 8 (AVX2, chosen at run time) at a time. On a TetGrid the sweep
+// is blocked in slabs of lattice layers for cache reuse, with the results of the colour-by-colour
+// order (two constraints sharing a vertex are projected in the order of their colours). Results
+// are bitwise identical for any number of threads and for either SIMD width (the same
+// arithmetic, no FMA).
 //
 //   const TetGrid grid = build_tet_grid(volume, {.cell_voxels = 4});
 //   SoftBody body(grid, {.stiffness = 0.8});

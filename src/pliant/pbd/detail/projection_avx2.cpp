@@ -86,10 +86,6 @@ PLIANT_AVX2_INLINE __m256 norm2(__m256 u, __m256 v, __m256 s) {
     return add(add(mul(u, u), mul(v, v)), mul(s, s));
 }
 
-}  // namespace
-
-namespace {
-
 // The projection of 8 edges whose vertices a, b are loaded; updates them in place.
 PLIANT_AVX2_INLINE void project_edges8(Lanes8& a, Lanes8& b, const float* rest_lengths,
                                        __m256 inv_k8, __m256 alpha8) {
