@@ -30,5 +30,7 @@ void register_cloth(CLI::App& app, const GlobalOptions& global);
 void register_volume(CLI::App& app, const GlobalOptions& global);
 void register_render(CLI::App& app, const GlobalOptions& global);
 void register_deform(CLI::App& app, const GlobalOptions& global);
+void register_dataset(CLI::App& app, const GlobalOptions& global);
+void register_nerf(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace pliant::cli

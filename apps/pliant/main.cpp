@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
     cli::register_volume(app, global);
     cli::register_render(app, global);
     cli::register_deform(app, global);
+    cli::register_dataset(app, global);
+    cli::register_nerf(app, global);
 
     try {
         app.parse(argc, argv);

@@ -1,0 +1,327 @@
+// pliant nerf train TRANSFORMS.json -o VOLUME [--minutes M | --iterations N] [--resolution R]
+//                   [--stages S] [--batch B] [--export-resolution E] [--type rgba8|rgba32f]
+//                   [--threshold T] [--normalize none|max|range] [--background R,G,B] [--seed S]
+// pliant nerf eval TRANSFORMS.json VOLUME [--background R,G,B] [--images DIR]   [--json]
+//
+// train: reconstructs a voxel radiance field (nerf/trainer.hpp) from a posed-image dataset
+// (io/nerf_dataset.hpp) and writes it as an RGBA volume (nerf/export.hpp: E voxels along the
+// box's longest side, default 256), optionally cleaned (volume/clean.hpp: --threshold T on the
+// 0–255 alpha scale, then --normalize; default none, which keeps what the training views show).
+// A progress bar (iteration, grid resolution, batch loss and PSNR) goes to stderr when it is a
+// terminal. Ctrl-C (SIGINT) stops after the iteration in progress: the volume so far is exported
+// and written, stderr says where, exit code 130.
+// stdout: a summary, or with --json: output, iterations, seconds, train_psnr (last batch),
+// resolution, grid_dims, occupied_cells, volume_dims, volume_spacing, peak_rss_bytes,
+// interrupted.
+//
+// eval: renders the RGBA VOLUME with the ray caster (render::RayCaster, its defaults: step half
+// the smallest spacing, opacity per smallest spacing, early termination at 0.99) from every view
+// of the dataset (nerf::camera_from_view: square pixels and a centred principal point) over the
+// dataset's background, and compares with the dataset's images: PSNR and SSIM (nerf/metrics.hpp)
+// per view and their means. --images DIR writes the renders as DIR/<i>.png.
+// stdout: a table, or with --json: psnr, ssim (means), views [{file_path, psnr, ssim}].
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/io/nerf_dataset.hpp"
+#include "pliant/io/png.hpp"
+#include "pliant/io/volume_io.hpp"
+#include "pliant/nerf/export.hpp"
+#include "pliant/nerf/metrics.hpp"
+#include "pliant/nerf/trainer.hpp"
+#include "pliant/render/raycast.hpp"
+#include "pliant/volume/clean.hpp"
+
+namespace pliant::cli {
+namespace {
+
+// Set by SIGINT while training runs: training stops after the iteration in progress.
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void on_nerf_interrupt(int /*signal*/) {
+    g_interrupted = 1;
+}
+
+// Installs on_nerf_interrupt for SIGINT for its lifetime and restores the previous handler.
+class InterruptGuard {
+public:
+    InterruptGuard() {
+        g_interrupted = 0;
+        struct sigaction action {};
+        action.sa_handler = on_nerf_interrupt;
+        sigemptyset(&action.sa_mask);
+        ::sigaction(SIGINT, &action, &m_previous);
+    }
+    ~InterruptGuard() { ::sigaction(SIGINT, &m_previous, nullptr); }
+    InterruptGuard(const InterruptGuard&) = delete;
+    InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+private:
+    struct sigaction m_previous {};
+};
+
+std::int64_t peak_rss_bytes() {
+    struct rusage usage {};
+    ::getrusage(RUSAGE_SELF, &usage);
+    return static_cast<std::int64_t>(usage.ru_maxrss) * 1024;  // Linux: kilobytes
+}
+
+struct TrainCommandOptions {
+    std::string transforms;
+    std::string out;
+    double minutes = 0.0;
+    std::int64_t iterations = 0;
+    int resolution = 128;
+    int stages = 3;
+    int batch = 4096;
+    int export_resolution = 256;
+    std::string type = "rgba8";
+    double threshold = 0.0;
+    std::string normalize = "none";
+    std::array<float, 3> background{0.0f, 0.0f, 0.0f};
+    std::uint64_t seed = 1;
+    float tv_density = nerf::TrainOptions{}.tv_density;
+    float tv_color = nerf::TrainOptions{}.tv_color;
+    float lr = nerf::TrainOptions{}.lr_density;
+};
+
+void run_train(const TrainCommandOptions& options, const GlobalOptions& global) {
+    const volume::VoxelType type =
+        options.type == "rgba32f" ? volume::VoxelType::rgba32f : volume::VoxelType::rgba8;
+    io::check_volume_writable(options.out, type);  // fail before a long run
+    io::ReadNerfDatasetOptions ro;
+    ro.background = {options.background[0], options.background[1], options.background[2]};
+    const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
+
+    nerf::TrainOptions to;
+    to.resolution = options.resolution;
+    to.stages = options.stages;
+    to.batch_rays = options.batch;
+    to.seed = options.seed;
+    to.tv_density = options.tv_density;
+    to.tv_color = options.tv_color;
+    to.lr_density = to.lr_color = options.lr;
+    if (options.iterations > 0) {
+        to.iterations = options.iterations;
+    } else {
+        to.seconds = 60.0 * (options.minutes > 0.0 ? options.minutes : 2.0);
+    }
+
+    const bool bar = ::isatty(STDERR_FILENO) != 0;
+    nerf::TrainResult result;
+    {
+        const InterruptGuard guard;
+        double last_print = -1e9;
+        result = nerf::train(dataset, to, [&](const nerf::TrainProgress& p) {
+            if (bar && p.elapsed_ms - last_print > 250.0) {
+                last_print = p.elapsed_ms;
+                const int width = 30;
+                const int filled = std::clamp(static_cast<int>(width * p.progress), 0, width);
+                std::fprintf(
+                    stderr, "\r[%s%s] %3.0f%%  it %lld  grid %d  loss %.5f  PSNR %.2f dB  %.0f s ",
+                    std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(),
+                    100.0 * p.progress, static_cast<long long>(p.iteration), p.resolution, p.loss,
+                    p.psnr, p.elapsed_ms / 1000.0);
+                std::fflush(stderr);
+            }
+            return g_interrupted == 0;
+        });
+        if (bar) {
+            std::fputc('\n', stderr);
+        }
+    }
+
+    nerf::ExportOptions eo;
+    eo.resolution = options.export_resolution;
+    eo.type = type;
+    volume::Volume vol = nerf::export_volume(result.grid, eo);
+    if (options.threshold > 0.0 || options.normalize != "none") {
+        volume::CleanOptions co;
+        co.threshold_255 = options.threshold;
+        co.normalization = options.normalize == "max" ? volume::AlphaNormalization::max
+                           : options.normalize == "range"
+                               ? volume::AlphaNormalization::threshold_range
+                               : volume::AlphaNormalization::none;
+        volume::clean(vol, co);
+    }
+    io::write_volume(options.out, vol);
+
+    const double train_psnr =
+        result.final_loss > 0.0 ? -10.0 * std::log10(result.final_loss) : 99.0;
+    const auto& gd = result.grid.dims();
+    if (global.json) {
+        nlohmann::ordered_json j;
+        j["output"] = options.out;
+        j["iterations"] = result.iterations;
+        j["seconds"] = result.elapsed_ms / 1000.0;
+        j["train_psnr"] = train_psnr;
+        j["resolution"] = result.grid.resolution();
+        j["grid_dims"] = {gd[0], gd[1], gd[2]};
+        j["occupied_cells"] = result.grid.num_occupied();
+        j["volume_dims"] = vol.dims();
+        j["volume_spacing"] = {vol.spacing().x, vol.spacing().y, vol.spacing().z};
+        j["peak_rss_bytes"] = peak_rss_bytes();
+        j["interrupted"] = result.stopped;
+        std::fputs((j.dump(2) + "\n").c_str(), stdout);
+    } else {
+        std::printf(
+            "%s: %lld iterations in %.1f s, grid %dx%dx%d, last batch PSNR %.2f dB, volume "
+            "%lldx%lldx%lld, peak memory %.0f MiB\n",
+            options.out.c_str(), static_cast<long long>(result.iterations),
+            result.elapsed_ms / 1000.0, gd[0], gd[1], gd[2], train_psnr,
+            static_cast<long long>(vol.dims()[0]), static_cast<long long>(vol.dims()[1]),
+            static_cast<long long>(vol.dims()[2]), peak_rss_bytes() / 1048576.0);
+    }
+    if (result.stopped) {
+        throw Interrupted(
+            fmt::format("training stopped after {} iterations; the volume so far "
+                        "is in {}",
+                        result.iterations, options.out));
+    }
+}
+
+struct EvalCommandOptions {
+    std::string transforms;
+    std::string volume;
+    std::array<float, 3> background{0.0f, 0.0f, 0.0f};
+    std::string images;
+};
+
+void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
+    io::ReadNerfDatasetOptions ro;
+    ro.background = {options.background[0], options.background[1], options.background[2]};
+    const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
+    const volume::Volume vol = io::read_volume(options.volume);
+    if (volume::channels(vol.type()) != 4) {
+        throw InvalidInput(fmt::format("{}: a {} volume; nerf eval needs an RGBA volume",
+                                       options.volume, volume::name(vol.type())));
+    }
+    render::RayCastOptions rco;
+    rco.background = ro.background;
+    const render::RayCaster caster(vol, nullptr, rco);
+    if (!options.images.empty()) {
+        std::filesystem::create_directories(options.images);
+    }
+    nlohmann::ordered_json views = nlohmann::ordered_json::array();
+    double sum_psnr = 0.0, sum_ssim = 0.0;
+    render::Image image;
+    for (std::size_t i = 0; i < dataset.views.size(); ++i) {
+        const nerf::View& v = dataset.views[i];
+        caster.render(nerf::camera_from_view(dataset.intrinsics, v.camera_to_world), image);
+        const std::vector<float> rgb = nerf::from_image(image);
+        const double p = nerf::psnr(rgb, v.rgb);
+        const double s = nerf::ssim(rgb, v.rgb, image.width, image.height);
+        sum_psnr += p;
+        sum_ssim += s;
+        nlohmann::ordered_json e;
+        e["file_path"] = v.name;
+        e["psnr"] = p;
+        e["ssim"] = s;
+        views.push_back(e);
+        if (!options.images.empty()) {
+            io::write_png(std::filesystem::path(options.images) / fmt::format("{}.png", i), image);
+        }
+    }
+    const double n = static_cast<double>(dataset.views.size());
+    if (global.json) {
+        nlohmann::ordered_json j;
+        j["psnr"] = sum_psnr / n;
+        j["ssim"] = sum_ssim / n;
+        j["views"] = views;
+        std::fputs((j.dump(2) + "\n").c_str(), stdout);
+    } else {
+        for (const auto& e : views) {
+            std::printf("%-28s PSNR %6.2f dB  SSIM %.4f\n",
+                        e["file_path"].get<std::string>().c_str(), e["psnr"].get<double>(),
+                        e["ssim"].get<double>());
+        }
+        std::printf("mean over %zu views: PSNR %.2f dB, SSIM %.4f\n", dataset.views.size(),
+                    sum_psnr / n, sum_ssim / n);
+    }
+}
+
+}  // namespace
+
+void register_nerf(CLI::App& app, const GlobalOptions& global) {
+    CLI::App* nerf = app.add_subcommand(
+        "nerf", "Radiance fields: reconstruct an RGBA volume from posed images, evaluate it");
+    nerf->require_subcommand(1);
+
+    auto t = std::make_shared<TrainCommandOptions>();
+    CLI::App* train = nerf->add_subcommand(
+        "train", "Train a voxel radiance field on transforms.json and export an RGBA volume");
+    train->add_option("TRANSFORMS", t->transforms, "transforms_train.json")->required();
+    train->add_option("-o,--output", t->out, "Output volume (.nrrd, .nii, .nii.gz, .json)")
+        ->required();
+    CLI::Option* minutes =
+        train->add_option("--minutes", t->minutes, "Wall-clock budget in minutes (default 2)")
+            ->check(CLI::Range(0.0, 1e6));
+    train
+        ->add_option("--iterations", t->iterations,
+                     "A fixed number of iterations instead of a time budget (reproducible)")
+        ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40))
+        ->excludes(minutes);
+    train
+        ->add_option("--resolution", t->resolution,
+                     "Final grid: voxels along the scene box's longest side")
+        ->check(CLI::Range(4, 1024));
+    train->add_option("--stages", t->stages, "Coarse-to-fine stages (each halves the grid)")
+        ->check(CLI::Range(1, 6));
+    train->add_option("--batch", t->batch, "Rays per iteration")->check(CLI::Range(1, 1 << 22));
+    train
+        ->add_option("--export-resolution", t->export_resolution,
+                     "Exported volume: voxels along the longest side")
+        ->check(CLI::Range(1, 2048));
+    train->add_option("--type", t->type, "Exported voxel type")
+        ->check(CLI::IsMember({"rgba8", "rgba32f"}));
+    train
+        ->add_option("--threshold", t->threshold,
+                     "volume::clean threshold on the 0-255 alpha scale (the paper: 5, 20, 35)")
+        ->check(CLI::Range(0.0, 255.0));
+    train->add_option("--normalize", t->normalize, "Alpha normalization after the threshold")
+        ->check(CLI::IsMember({"none", "max", "range"}));
+    train
+        ->add_option("--background", t->background,
+                     "Colour transparent image pixels are composited over, each in [0, 1]")
+        ->type_name("R,G,B")
+        ->delimiter(',')
+        ->check(CLI::Range(0.0, 1.0));
+    train->add_option("--seed", t->seed, "Seed of the ray batches");
+    train->add_option("--tv-density", t->tv_density, "Total-variation weight on density")
+        ->check(CLI::Range(0.0, 1e9));
+    train->add_option("--tv-color", t->tv_color, "Total-variation weight on colour")
+        ->check(CLI::Range(0.0, 1e9));
+    train->add_option("--lr", t->lr, "Adam learning rate (raw density and colour)")
+        ->check(CLI::Range(0.0, 100.0));
+    train->footer("Global options --threads N and --json (see pliant --help) apply here too.");
+    train->callback([t, &global] { run_train(*t, global); });
+
+    auto e = std::make_shared<EvalCommandOptions>();
+    CLI::App* eval = nerf->add_subcommand(
+        "eval", "PSNR and SSIM of an RGBA volume's ray-cast renders against a dataset's views");
+    eval->add_option("TRANSFORMS", e->transforms, "transforms_test.json")->required();
+    eval->add_option("VOLUME", e->volume, "RGBA volume (from nerf train)")->required();
+    eval->add_option("--background", e->background, "Background colour, each in [0, 1]")
+        ->type_name("R,G,B")
+        ->delimiter(',')
+        ->check(CLI::Range(0.0, 1.0));
+    eval->add_option("--images", e->images, "Write the renders to this directory");
+    eval->footer("Global options --threads N and --json (see pliant --help) apply here too.");
+    eval->callback([e, &global] { run_eval(*e, global); });
+}
+
+}  // namespace pliant::cli

@@ -1,0 +1,31 @@
+// Export of a radiance field as an RGBA volume for the volume pipeline (clean → tet grid → PBD →
+// resampling → ray casting).
+//
+// The volume covers the grid's box with `resolution` voxels along its longest side (dims_a =
+// max(1, round(resolution · extent_a / largest extent)), spacing_a = extent_a / dims_a, origin =
+// box.lo). At each voxel centre the field is evaluated as in training (trilinear raw parameters,
+// then activation): σ (per world unit) = softplus(s) · DENSITY_SCALE / scale, and
+//   α_u = 1 − exp(−σ u),  u = the smallest spacing of the exported volume,
+// the opacity per opacity unit u that render::raycast assumes by default (opacity per unit
+// distance, volume/transfer_function.hpp), so that a ray of length L through a uniform region
+// absorbs 1 − exp(−σ L) in both renderers. Colour: sigmoid of the raw colour, straight. Cells the
+// occupancy grid skips export α = 0 (the trained model renders them as empty). rgba8 stores
+// round(255 x); rgba32f the floats. Parallel over z; bitwise identical for any thread count.
+//
+// volume::clean (threshold 5/20/35, alpha normalization) is applied by the caller afterwards.
+#pragma once
+
+#include "pliant/nerf/radiance_grid.hpp"
+#include "pliant/volume/volume.hpp"
+
+namespace pliant::nerf {
+
+struct ExportOptions {
+    int resolution = 256;                               // voxels along the longest side, [1, 2048]
+    volume::VoxelType type = volume::VoxelType::rgba8;  // rgba8 or rgba32f
+};
+
+// InvalidInput for a resolution out of range or a scalar voxel type.
+volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& options = {});
+
+}  // namespace pliant::nerf

@@ -1,0 +1,357 @@
+#include "pliant/nerf/trainer.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+
+namespace pliant::nerf {
+
+namespace {
+
+constexpr int NUM_CHUNKS = 4;
+constexpr float BETA1 = 0.9f;
+constexpr float BETA2 = 0.99f;
+constexpr float EPSILON = 1e-15f;
+
+std::uint64_t splitmix64(std::uint64_t x) {
+    x += 0x9e3779b97f4a7c15ULL;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+}
+
+// One chunk's gradient: a dense buffer (4 per voxel), a touched flag per voxel and the list of
+// touched voxels (in first-touch order).
+struct GradientChunk {
+    std::vector<float> grad;
+    std::vector<std::uint8_t> touched;
+    std::vector<std::int32_t> list;
+    std::vector<detail::SampleRecord> samples;  // scratch: one ray's records
+    double loss = 0.0;
+    std::int64_t num_samples = 0;
+
+    void resize(std::int64_t voxels) {
+        grad.assign(static_cast<std::size_t>(4 * voxels), 0.0f);
+        touched.assign(static_cast<std::size_t>(voxels), 0);
+        list.clear();
+    }
+    void add(std::int32_t v, const float d[4]) {
+        if (touched[v] == 0) {
+            touched[v] = 1;
+            list.push_back(v);
+        }
+        float* g = grad.data() + 4 * static_cast<std::int64_t>(v);
+        g[0] += d[0];
+        g[1] += d[1];
+        g[2] += d[2];
+        g[3] += d[3];
+    }
+};
+
+class Trainer {
+public:
+    Trainer(const Dataset& dataset, const TrainOptions& options)
+        : m_dataset(dataset), m_options(options), m_box(scene_box(dataset)) {
+        const float threshold = -std::log1p(-options.occupancy_alpha) * detail::DENSITY_SCALE;
+        m_sigma_threshold = std::max(threshold, 1e-12f);
+        m_grid = RadianceGrid(m_box, stage_resolution(0), options.density_init, options.color_init);
+        allocate();
+        const Intrinsics& in = dataset.intrinsics;
+        m_pixels_per_view = static_cast<std::uint64_t>(in.width) * in.height;
+        m_num_pixels = m_pixels_per_view * dataset.views.size();
+    }
+
+    int stage_resolution(int stage) const {
+        return std::max(4, m_options.resolution >> (m_options.stages - 1 - stage));
+    }
+    int stage_for(double p) const {
+        int s = 0;
+        for (int k = 1; k < m_options.stages; ++k) {
+            if (p >= 0.3 * k / (m_options.stages - 1)) {
+                s = k;
+            }
+        }
+        return s;
+    }
+
+    void allocate() {
+        const std::int64_t n = m_grid.num_voxels();
+        m_m.assign(static_cast<std::size_t>(4 * n), 0.0f);
+        m_v.assign(static_cast<std::size_t>(4 * n), 0.0f);
+        m_mark.assign(static_cast<std::size_t>(n), 0);
+        for (GradientChunk& c : m_chunks) {
+            c.resize(n);
+        }
+        m_stage_iteration = 0;
+    }
+
+    // One iteration at progress p; returns the batch's MSE.
+    TrainProgress step(double p) {
+        // Stage change: coarse to fine.
+        const int stage = stage_for(p);
+        if (stage != m_stage) {
+            m_stage = stage;
+            m_grid = m_grid.resampled(stage_resolution(stage), m_sigma_threshold);
+            allocate();
+        }
+        ++m_stage_iteration;
+        const bool warm = m_iteration >= m_options.warmup_iterations;
+        if (!warm) {
+            m_grid.set_all_occupied();
+        } else if (m_iteration % m_options.occupancy_interval == 0 ||
+                   m_iteration == m_options.warmup_iterations || m_stage_iteration == 1) {
+            m_grid.update_occupancy(m_sigma_threshold);
+        }
+
+        // Forward and backward over the batch in fixed chunks.
+        const int batch = m_options.batch_rays;
+        const std::int64_t grain = (batch + NUM_CHUNKS - 1) / NUM_CHUNKS;
+        const detail::GridView g = m_grid.view(m_options.render.use_occupancy);
+        const float step_length = m_options.render.step_voxels * m_grid.voxel_size();
+        const render::Color bgc = m_dataset.background;
+        const float bg[3] = {bgc.r, bgc.g, bgc.b};
+        const double norm = 1.0 / (3.0 * batch);
+        const Intrinsics& in = m_dataset.intrinsics;
+        const std::uint64_t base = static_cast<std::uint64_t>(m_iteration) * batch;
+        parallel_for_chunks(
+            batch, grain, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+                GradientChunk& chunk = m_chunks[static_cast<std::size_t>(c)];
+                chunk.loss = 0.0;
+                chunk.num_samples = 0;
+                for (std::int64_t r = begin; r < end; ++r) {
+                    const std::uint64_t h =
+                        splitmix64(m_options.seed * 0x632be59bd9b4e019ULL + base + r);
+                    const std::uint64_t pixel = h % m_num_pixels;
+                    const View& view = m_dataset.views[pixel / m_pixels_per_view];
+                    const std::uint64_t local = pixel % m_pixels_per_view;
+                    const int x = static_cast<int>(local % in.width);
+                    const int y = static_cast<int>(local / in.width);
+                    const NormalizedRay ray =
+                        normalize_ray(m_grid, view_ray(in, view.camera_to_world, x + 0.5, y + 0.5));
+                    chunk.samples.clear();
+                    const detail::RayOutput out = detail::march(
+                        g, ray.origin, ray.direction, step_length, bg,
+                        m_options.render.min_transmittance,
+                        [&](const detail::SampleRecord& s) { chunk.samples.push_back(s); });
+                    chunk.num_samples += out.samples;
+                    const float* target = view.rgb.data() + 3 * local;
+                    float gc[3];
+                    for (int k = 0; k < 3; ++k) {
+                        const double e = static_cast<double>(out.rgb[k]) - target[k];
+                        chunk.loss += e * e * norm;
+                        gc[k] = static_cast<float>(2.0 * e * norm);
+                    }
+                    detail::backward(g, chunk.samples.data(),
+                                     static_cast<int>(chunk.samples.size()), out.rgb, gc,
+                                     [&](std::int32_t v, const float d[4]) { chunk.add(v, d); });
+                }
+            });
+        double loss = 0.0;
+        std::int64_t samples = 0;
+        for (const GradientChunk& c : m_chunks) {
+            loss += c.loss;
+            samples += c.num_samples;
+        }
+
+        // The union of touched voxels, in chunk order then first-touch order.
+        m_union.clear();
+        for (GradientChunk& c : m_chunks) {
+            for (const std::int32_t v : c.list) {
+                if (m_mark[v] == 0) {
+                    m_mark[v] = 1;
+                    m_union.push_back(v);
+                }
+            }
+            c.list.clear();
+        }
+        update(p);
+
+        TrainProgress progress;
+        progress.iteration = ++m_iteration;
+        progress.progress = p;
+        progress.loss = loss;
+        progress.psnr = loss > 0.0 ? -10.0 * std::log10(loss) : 99.0;
+        progress.resolution = m_grid.resolution();
+        progress.samples = samples;
+        m_last_loss = loss;
+        return progress;
+    }
+
+    // Pass 1: total gradient (chunks summed in chunk order) + TV, into chunk 0's buffer; reads
+    // parameters only. Pass 2: Adam on the touched voxels, clears the buffers and flags.
+    void update(double p) {
+        const std::int64_t count = static_cast<std::int64_t>(m_union.size());
+        float* params = m_grid.params().data();
+        const auto& dims = m_grid.dims();
+        const std::int64_t sy = dims[0], sz = static_cast<std::int64_t>(dims[0]) * dims[1];
+        // TV as a mean over voxels (Plenoxels): λ / num_voxels per unit difference.
+        const float inv_n = 1.0f / static_cast<float>(m_grid.num_voxels());
+        const float tv[4] = {m_options.tv_density * inv_n, m_options.tv_color * inv_n,
+                             m_options.tv_color * inv_n, m_options.tv_color * inv_n};
+        parallel_for(
+            count,
+            [&](std::int64_t u) {
+                const std::int32_t v = m_union[u];
+                float total[4] = {0, 0, 0, 0};
+                for (GradientChunk& c : m_chunks) {
+                    if (c.touched[v] != 0) {
+                        float* gv = c.grad.data() + 4 * static_cast<std::int64_t>(v);
+                        for (int k = 0; k < 4; ++k) {
+                            total[k] += gv[k];
+                            gv[k] = 0.0f;
+                        }
+                        c.touched[v] = 0;
+                    }
+                }
+                const std::int64_t i = v % dims[0];
+                const std::int64_t j = (v / sy) % dims[1];
+                const std::int64_t k = v / sz;
+                const float* x = params + 4 * static_cast<std::int64_t>(v);
+                const auto neighbour = [&](std::int64_t offset) {
+                    const float* xn = params + 4 * (v + offset);
+                    for (int q = 0; q < 4; ++q) {
+                        total[q] += tv[q] * (x[q] - xn[q]);
+                    }
+                };
+                if (i > 0)
+                    neighbour(-1);
+                if (i + 1 < dims[0])
+                    neighbour(1);
+                if (j > 0)
+                    neighbour(-sy);
+                if (j + 1 < dims[1])
+                    neighbour(sy);
+                if (k > 0)
+                    neighbour(-sz);
+                if (k + 1 < dims[2])
+                    neighbour(sz);
+                float* g0 = m_chunks[0].grad.data() + 4 * static_cast<std::int64_t>(v);
+                for (int q = 0; q < 4; ++q) {
+                    g0[q] = total[q];
+                }
+            },
+            1024);
+
+        const float decay = std::pow(m_options.lr_final_factor, static_cast<float>(p));
+        const float lr[4] = {m_options.lr_density * decay, m_options.lr_color * decay,
+                             m_options.lr_color * decay, m_options.lr_color * decay};
+        const float t = static_cast<float>(m_stage_iteration);
+        const float correction1 = 1.0f - std::pow(BETA1, t);
+        const float correction2 = 1.0f - std::pow(BETA2, t);
+        parallel_for(
+            count,
+            [&](std::int64_t u) {
+                const std::int64_t v = m_union[u];
+                float* g0 = m_chunks[0].grad.data() + 4 * v;
+                for (int q = 0; q < 4; ++q) {
+                    const std::int64_t a = 4 * v + q;
+                    const float gq = g0[q];
+                    m_m[a] = BETA1 * m_m[a] + (1.0f - BETA1) * gq;
+                    m_v[a] = BETA2 * m_v[a] + (1.0f - BETA2) * gq * gq;
+                    const float mh = m_m[a] / correction1;
+                    const float vh = m_v[a] / correction2;
+                    params[a] -= lr[q] * mh / (std::sqrt(vh) + EPSILON);
+                    g0[q] = 0.0f;
+                }
+                m_mark[v] = 0;
+            },
+            1024);
+    }
+
+    RadianceGrid& grid() { return m_grid; }
+    std::int64_t iteration() const { return m_iteration; }
+    double last_loss() const { return m_last_loss; }
+
+private:
+    const Dataset& m_dataset;
+    TrainOptions m_options;
+    AABBd m_box;
+    float m_sigma_threshold = 0.0f;
+    RadianceGrid m_grid;
+    std::vector<float> m_m, m_v;
+    std::vector<std::uint8_t> m_mark;
+    std::vector<std::int32_t> m_union;
+    std::array<GradientChunk, NUM_CHUNKS> m_chunks;
+    std::uint64_t m_pixels_per_view = 0;
+    std::uint64_t m_num_pixels = 0;
+    int m_stage = 0;
+    std::int64_t m_iteration = 0;
+    std::int64_t m_stage_iteration = 0;
+    double m_last_loss = 0.0;
+};
+
+}  // namespace
+
+void TrainOptions::validate() const {
+    const auto fail = [](const char* name, auto value, const char* expected) {
+        throw InvalidInput(
+            fmt::format("nerf::TrainOptions: {} {}, expected {}", name, value, expected));
+    };
+    if (resolution < 4 || resolution > 1024)
+        fail("resolution", resolution, "[4, 1024]");
+    if (stages < 1 || stages > 6)
+        fail("stages", stages, "[1, 6]");
+    if (seconds < 0.0 || !std::isfinite(seconds))
+        fail("seconds", seconds, "a finite value >= 0");
+    if (seconds == 0.0 && iterations < 1)
+        fail("iterations", iterations, ">= 1 (or seconds > 0)");
+    if (batch_rays < 1 || batch_rays > (1 << 22))
+        fail("batch_rays", batch_rays, "[1, 4194304]");
+    if (!(lr_density >= 0.0f) || !(lr_color >= 0.0f))
+        fail("lr", lr_density, ">= 0");
+    if (!(lr_final_factor > 0.0f && lr_final_factor <= 1.0f))
+        fail("lr_final_factor", lr_final_factor, "(0, 1]");
+    if (!(tv_density >= 0.0f) || !(tv_color >= 0.0f))
+        fail("tv", tv_density, ">= 0");
+    if (!std::isfinite(density_init) || !std::isfinite(color_init))
+        fail("density_init", density_init, "finite initial values");
+    if (!(occupancy_alpha >= 0.0f && occupancy_alpha < 1.0f))
+        fail("occupancy_alpha", occupancy_alpha, "[0, 1)");
+    if (occupancy_interval < 1)
+        fail("occupancy_interval", occupancy_interval, ">= 1");
+    if (warmup_iterations < 0)
+        fail("warmup_iterations", warmup_iterations, ">= 0");
+    if (!(render.step_voxels > 0.0f) || !std::isfinite(render.step_voxels))
+        fail("render.step_voxels", render.step_voxels, "> 0");
+    if (!(render.min_transmittance >= 0.0f && render.min_transmittance < 1.0f))
+        fail("render.min_transmittance", render.min_transmittance, "[0, 1)");
+}
+
+TrainResult train(const Dataset& dataset, const TrainOptions& options,
+                  FunctionRef<bool(const TrainProgress&)> on_iteration) {
+    options.validate();
+    validate(dataset);
+    Trainer trainer(dataset, options);
+    const Stopwatch watch;
+    TrainResult result;
+    for (;;) {
+        const double elapsed = watch.elapsed_ms();
+        const double p = options.seconds > 0.0 ? elapsed / (1000.0 * options.seconds)
+                                               : static_cast<double>(trainer.iteration()) /
+                                                     static_cast<double>(options.iterations);
+        if (p >= 1.0) {
+            break;
+        }
+        TrainProgress progress = trainer.step(p);
+        progress.elapsed_ms = watch.elapsed_ms();
+        progress.occupied_cells = trainer.grid().num_occupied();
+        if (!on_iteration(progress)) {
+            result.stopped = true;
+            break;
+        }
+    }
+    result.iterations = trainer.iteration();
+    result.elapsed_ms = watch.elapsed_ms();
+    result.final_loss = trainer.last_loss();
+    result.grid = std::move(trainer.grid());
+    return result;
+}
+
+}  // namespace pliant::nerf
