@@ -1,0 +1,198 @@
+// `pliant view volume`: the library's ray caster shown live (viewer.hpp).
+//
+// Per frame: events → camera gestures and (with --deform) dragging → one VolumeSession::step
+// (deforming and not paused) → ray casting when the image would change, at 1 / preview_divisor
+// of the resolution while the user interacts and at full resolution otherwise → the image drawn
+// over the window → screenshot (last frame) → overlay → swap. A view that does not change is not
+// ray-cast again, and an idle window waits for events.
+#include <algorithm>
+#include <array>
+#include <optional>
+
+#include "camera_json.hpp"
+#include "frame_clock.hpp"
+#include "gl.hpp"
+#include "image_drawer.hpp"
+#include "mouse.hpp"
+#include "orbit_controller.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/io/volume_io.hpp"
+#include "screenshot.hpp"
+#include "viewer.hpp"
+#include "volume_panel.hpp"
+#include "volume_session.hpp"
+#include "window.hpp"
+
+namespace pliant::viewer {
+namespace {
+
+// Seconds after the last wheel notch during which frames are still previews.
+constexpr double SCROLL_PREVIEW_SECONDS = 0.25;
+
+}  // namespace
+
+nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
+                                       const VolumeViewOptions& options) {
+    if (options.preview_divisor < 1) {
+        throw InvalidInput("viewer: the preview divisor must be >= 1");
+    }
+    io::ReadVolumeOptions read;
+    read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    VolumeSession session(io::read_volume(volume_path, read), options.session);
+    const ViewRunOptions& run = options.run;
+    Window window("pliant view volume: " + volume_path.string(), run.window);
+
+    ImageDrawer drawer;
+    int width = 0, height = 0;
+    window.framebuffer_size(width, height);
+    const AABBd box = session.source().bounds();
+    OrbitController controller(box, run.azimuth, run.elevation, run.distance, width, height);
+
+    VolumeViewState state;
+    state.paused = run.paused;
+    state.title = volume_path.filename().string();
+    state.renderer = window.gl_renderer();
+    if (options.session.clip) {
+        clip_fields_from_plane(*options.session.clip, box, state);
+    } else {
+        state.clip_azimuth = 0.0f;  // default plane when enabled: normal +x through the centre
+    }
+    MouseTracker mouse_tracker;
+    KeyTracker key_tracker;
+    FrameClock clock;
+    Stopwatch since_scroll;
+    bool scrolled = false;
+    Mean step_ms, resample_ms, prepare_ms, render_ms;
+    std::int64_t full_frames = 0, preview_frames = 0;
+    bool dragging = false;
+    render::Image image;
+    // What the current image shows: session and view generations, size, divisor.
+    std::array<unsigned long long, 5> shown{~0ull, ~0ull, 0, 0, 0};
+    std::optional<render::Camera> last_camera;
+    bool rendered = true;
+
+    for (int frame = 0; !window.should_close() && (run.frames <= 0 || frame < run.frames);
+         ++frame) {
+        const bool animating = session.is_deformable() && !state.paused;
+        const bool idle =
+            run.frames <= 0 && !animating && !dragging && !rendered &&
+            !(scrolled && since_scroll.elapsed_ms() < 1000.0 * SCROLL_PREVIEW_SECONDS);
+        window.poll_events(idle ? SCROLL_PREVIEW_SECONDS : 0.0);
+        window.framebuffer_size(width, height);
+        if (width < 1 || height < 1) {
+            continue;
+        }
+        const MouseFrame mouse = mouse_tracker.update(window);
+        const KeyFrame keys = key_tracker.update(window);
+        if (keys.escape) {
+            window.request_close();
+        }
+        if (mouse.scroll != 0.0) {
+            scrolled = true;
+            since_scroll.restart();
+        }
+        const render::Camera before = controller.camera(width, height);
+        if (session.is_deformable()) {
+            state.paused = keys.space ? !state.paused : state.paused;
+            state.step_requested = state.step_requested || keys.n;
+            if (keys.r) {
+                session.reset_deformation();
+            }
+            if (mouse.pressed[0] && !mouse.shift) {
+                dragging = session.begin_drag(before, mouse.x, mouse.y);
+            }
+            if (dragging && (mouse.released[0] || !mouse.held[0])) {
+                session.end_drag();
+                dragging = false;
+            }
+        }
+        apply_camera_gestures(mouse, !dragging, height, controller);
+        if (keys.c || state.reset_camera) {
+            controller.reset();
+            state.reset_camera = false;
+        }
+        if (dragging) {
+            session.drag(controller.camera(width, height), mouse.x, mouse.y);
+        }
+        if (session.is_deformable() && (!state.paused || state.step_requested)) {
+            session.step();
+            state.step_requested = false;
+            step_ms.add(session.stats().step_ms);
+            resample_ms.add(session.stats().resample_ms);
+        }
+
+        // Ray casting, when the image would change.
+        const bool interacting =
+            mouse.any_held() || window.ui_is_active() ||
+            (scrolled && since_scroll.elapsed_ms() < 1000.0 * SCROLL_PREVIEW_SECONDS);
+        const int divisor = interacting ? options.preview_divisor : 1;
+        const int w = std::max(1, width / divisor), h = std::max(1, height / divisor);
+        const std::array<unsigned long long, 5> wanted{
+            session.generation(), controller.generation(), static_cast<unsigned long long>(w),
+            static_cast<unsigned long long>(h), static_cast<unsigned long long>(divisor)};
+        rendered = wanted != shown;
+        if (rendered) {
+            const render::Camera camera = controller.camera(w, h);
+            session.render(camera, image);
+            drawer.upload(image);
+            shown = wanted;
+            render_ms.add(session.stats().render_ms);
+            if (session.stats().prepared) {
+                prepare_ms.add(session.stats().prepare_ms);
+            }
+            (divisor == 1 ? full_frames : preview_frames) += 1;
+            state.image_width = w;
+            state.image_height = h;
+            state.preview = divisor > 1;
+            if (divisor == 1) {
+                last_camera = camera;
+            }
+        }
+        glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+        glClear(GL_COLOR_BUFFER_BIT);
+        drawer.draw(width, height);
+        const bool last = run.frames > 0 && frame + 1 == run.frames;
+        if (last && !run.screenshot.empty()) {
+            save_screenshot(run.screenshot, width, height);
+        }
+        if (window.has_ui()) {
+            window.begin_ui_frame();
+            draw_volume_panel(session, state, clock);
+            window.end_ui_frame();
+        }
+        check_gl("volume frame");
+        window.swap_buffers();
+        clock.tick();
+    }
+
+    nlohmann::ordered_json result;
+    result["view"] = "volume";
+    result["volume"] = volume_path.string();
+    const volume::Dims& dims = session.source().dims();
+    result["dims"] = {dims[0], dims[1], dims[2]};
+    result["deform"] = session.is_deformable();
+    result["driver"] = driver_kind_name(session.settings().driver.kind);
+    if (const pbd::SoftBody* body = session.body()) {
+        result["tets"] = body->tets().size();
+        result["vertices"] = body->positions().size();
+        result["simulated_seconds"] = body->time();
+    }
+    result["frames"] = clock.frames();
+    result["full_resolution_images"] = full_frames;
+    result["preview_images"] = preview_frames;
+    result["mean_frame_ms"] = clock.mean_ms();
+    result["fps"] = clock.mean_ms() > 0.0 ? 1000.0 / clock.mean_ms() : 0.0;
+    result["mean_step_ms"] = step_ms.value();
+    result["mean_resample_ms"] = resample_ms.value();
+    result["mean_prepare_ms"] = prepare_ms.value();
+    result["mean_render_ms"] = render_ms.value();
+    result["screenshot"] = run.screenshot.empty() ? nlohmann::ordered_json()
+                                                  : nlohmann::ordered_json(run.screenshot.string());
+    result["camera"] = last_camera ? camera_json(*last_camera) : nlohmann::ordered_json();
+    result["gl_renderer"] = window.gl_renderer();
+    result["gl_version"] = window.gl_version();
+    return result;
+}
+
+}  // namespace pliant::viewer
