@@ -52,24 +52,24 @@ const char* driver_kind_name(DriverKind kind);
 
 struct DriverSettings {
     DriverKind kind = DriverKind::none;
-    pbd::WaveDriver wave;
+    pbd::WaveDriver wave{};
     pbd::TwistDriver twist{.axis = pbd::Axis::z, .angle = 90.0, .ramp_time = 1.0, .grip = 0.1};
-    pbd::BubbleDriver bubble;
+    pbd::BubbleDriver bubble{};
 };
 
 struct VolumeSessionOptions {
     std::string tf = "grayscale";  // preset or JSON file (scalar volumes)
     double opacity_scale = 1.0;    // > 0
     double threshold = 0.0;        // [0, 255]
-    std::optional<render::ClipPlane> clip;
+    std::optional<render::ClipPlane> clip = std::nullopt;
     bool shading = false;
     double step = 0.0;  // ray-casting step, world units (0: half the smallest spacing)
     render::Color background{0.0f, 0.0f, 0.0f};
     // Deformation.
     bool deform = false;
     pbd::TetGridOptions grid{.cell_voxels = 4};
-    pbd::SoftBodyOptions body;
-    DriverSettings driver;
+    pbd::SoftBodyOptions body{};
+    DriverSettings driver{};
     double fps = 24.0;          // a frame simulates 1 / fps seconds
     double drag_radius = 0.05;  // box units (fraction of the volume's largest side)
 };
