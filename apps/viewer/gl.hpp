@@ -5,5 +5,4 @@
 #ifndef GL_GLEXT_PROTOTYPES
 #define GL_GLEXT_PROTOTYPES 1
 #endif
-#include <GL/glext.h>
 #include <GLFW/glfw3.h>
