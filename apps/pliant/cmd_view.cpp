@@ -72,8 +72,10 @@ void add_view_options(CLI::App* cmd, ViewCommandOptions& o, viewer::ViewRunOptio
         ->needs(frames);
     cmd->add_flag("--no-ui", o.no_ui, "Hide the overlay (stats and controls)");
     cmd->add_flag("--paused", run.paused, "Start with the simulation paused");
-    cmd->add_option("--msaa", run.window.msaa_samples, "Multisample anti-aliasing samples (0: off)")
-        ->check(CLI::Range(0, 16));
+    cmd->add_option("--msaa", run.window.msaa_samples,
+                    "Multisample anti-aliasing samples (0: off; -1: 4 on hardware OpenGL, off "
+                    "on software renderers such as Mesa llvmpipe; cloth default -1, volume 0)")
+        ->check(CLI::Range(-1, 16));
 }
 
 // After parsing: the size, camera, overlay and vsync into run; usage errors exit with 2.
@@ -189,6 +191,7 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
     // pliant view volume
     auto volume_o = std::make_shared<ViewCommandOptions>();
     auto volume_options = std::make_shared<viewer::VolumeViewOptions>();
+    volume_options->run.window.msaa_samples = 0;  // an image on a quad: nothing to anti-alias
     CLI::App* vol = view->add_subcommand(
         "volume", "Ray-cast a volume live; --deform: deform it (drivers, mouse drag)");
     vol->add_option("VOLUME", volume_o->input, "Volume file (NRRD, NIfTI, raw+JSON, .inv3)")

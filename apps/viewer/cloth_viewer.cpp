@@ -170,7 +170,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["camera"] = last_camera ? camera_json(*last_camera) : nlohmann::ordered_json();
     result["gl_renderer"] = window.gl_renderer();
     result["gl_version"] = window.gl_version();
-    result["msaa_samples"] = run.window.msaa_samples;
+    result["msaa_samples"] = window.msaa_samples();
     return result;
 }
 

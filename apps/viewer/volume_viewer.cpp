@@ -192,6 +192,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     result["camera"] = last_camera ? camera_json(*last_camera) : nlohmann::ordered_json();
     result["gl_renderer"] = window.gl_renderer();
     result["gl_version"] = window.gl_version();
+    result["msaa_samples"] = window.msaa_samples();
     return result;
 }
 

@@ -44,9 +44,11 @@ extern "C" void on_scroll(GLFWwindow* window, double /*x*/, double y) {
 
 Window::Window(const std::string& title, const WindowOptions& options) {
     if (options.width < 1 || options.height < 1 || options.width > 16384 ||
-        options.height > 16384 || options.msaa_samples < 0 || options.msaa_samples > 16) {
+        options.height > 16384 || options.msaa_samples < WindowOptions::AUTO_MSAA ||
+        options.msaa_samples > 16) {
         throw InvalidInput(fmt::format(
-            "viewer: window {}x{} with {} samples, expected sizes in [1, 16384] and 0-16 samples",
+            "viewer: window {}x{} with {} samples, expected sizes in [1, 16384] and 0-16 samples "
+            "(-1: automatic)",
             options.width, options.height, options.msaa_samples));
     }
     g_last_error.clear();
@@ -54,17 +56,15 @@ Window::Window(const std::string& title, const WindowOptions& options) {
     if (glfwInit() != GLFW_TRUE) {
         fail("cannot initialise GLFW");
     }
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-    glfwWindowHint(GLFW_SAMPLES, options.msaa_samples);
-    m_window = glfwCreateWindow(options.width, options.height, title.c_str(), nullptr, nullptr);
-    if (m_window == nullptr) {
-        glfwTerminate();
-        fail("cannot open an OpenGL 3.3 core window");
+    const bool automatic = options.msaa_samples == WindowOptions::AUTO_MSAA;
+    open(title, options, automatic ? 4 : options.msaa_samples);
+    if (automatic && is_software_renderer(gl_renderer())) {
+        // Software rasterizers pay per sample: reopen without multisampling.
+        glfwDestroyWindow(m_window);
+        m_window = nullptr;
+        open(title, options, 0);
     }
-    glfwMakeContextCurrent(m_window);
+    glGetIntegerv(GL_SAMPLES, &m_samples);
     glfwSwapInterval(options.vsync ? 1 : 0);
     glfwSetWindowUserPointer(m_window, &m_scroll);
     glfwSetScrollCallback(m_window, on_scroll);
@@ -79,6 +79,30 @@ Window::Window(const std::string& title, const WindowOptions& options) {
         ImGui_ImplOpenGL3_Init("#version 330 core");
         m_has_ui = true;
     }
+}
+
+void Window::open(const std::string& title, const WindowOptions& options, int samples) {
+    glfwDefaultWindowHints();
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_SAMPLES, samples);
+    m_window = glfwCreateWindow(options.width, options.height, title.c_str(), nullptr, nullptr);
+    if (m_window == nullptr) {
+        glfwTerminate();
+        fail("cannot open an OpenGL 3.3 core window");
+    }
+    glfwMakeContextCurrent(m_window);
+}
+
+bool is_software_renderer(const std::string& renderer) {
+    for (const char* name : {"llvmpipe", "softpipe", "swrast", "Software Rasterizer"}) {
+        if (renderer.find(name) != std::string::npos) {
+            return true;
+        }
+    }
+    return false;
 }
 
 Window::~Window() {
