@@ -1,4 +1,5 @@
-// pliant view cloth SCENE.json  [view options] [--substeps-per-frame S] [--check-every N]
+// pliant view cloth SCENE.json  [view options] [--substeps-per-frame S] [--sync]
+//                               [--check-every N]
 // pliant view volume VOLUME      [view options] [--tf PRESET|FILE] [--opacity-scale S]
 //                                [--threshold T] [--clip PX,PY,PZ,NX,NY,NZ] [--shading] [--step S]
 //                                [--preview-divisor D] [--deform [--driver none|wave|twist|bubble]
@@ -20,8 +21,11 @@
 //                 --screenshot FILE.png the last frame is saved without the overlay (works under
 //                 xvfb-run with Mesa).
 // Errors: no display or no OpenGL 3.3 (exit 1, the message names the reason); a build without
-// the viewer says so (exit 1). stdout: a summary line, or with --json the run's object
-// (docs/formats.md): frames, mean_frame_ms, fps, stage means, camera, gl_renderer.
+// the viewer says so (exit 1).
+// Cloth frames are simulated in the background (the view shows the latest one and stays smooth
+// however slow a step is); --sync locks each displayed frame to one simulated frame. stdout: a
+// summary line, or with --json the run's object (docs/formats.md): frames, mean_frame_ms, fps,
+// stage means, camera, gl_renderer.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -179,6 +183,9 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                      "Solver substeps per displayed frame (the speed; default 4, one "
                      "self-collision window)")
         ->check(CLI::Range(1, 1000));
+    cloth->add_flag("--sync", cloth_options->sync,
+                    "Lock step: every displayed frame waits for one simulated frame (default: the "
+                    "simulation runs in the background and the view shows its latest frame)");
     cloth
         ->add_option("--check-every", cloth_options->session.check_every,
                      "Frames between exact intersecting-pair counts (default 10)")

@@ -14,14 +14,14 @@ void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameC
     ImGui::TextDisabled("%s", state.renderer.c_str());
     ImGui::Separator();
     const double frame_ms = clock.recent_ms();
-    ImGui::Text("%.1f fps (%.1f ms per frame)", clock.recent_fps(), frame_ms);
+    ImGui::Text("display %.1f fps (%.1f ms per frame)", clock.recent_fps(), frame_ms);
     const double simulated_per_frame = session.substeps_per_frame() * session.substep();
     ImGui::Text("t = %.3f s, frame %lld%s", session.time(), static_cast<long long>(session.frame()),
                 state.paused ? " (paused)" : "");
-    if (!state.paused && frame_ms > 0.0) {
-        ImGui::Text("speed %.2fx real time", 1000.0 * simulated_per_frame / frame_ms);
+    if (!state.paused) {
+        ImGui::Text("simulation %.1f frames/s, %.2fx real time", state.simulation_fps,
+                    state.simulation_fps * simulated_per_frame);
     }
-
     const ClothFrameStats& stats = session.stats();
     const cloth::ClothStepStats& step = stats.step;
     if (ImGui::BeginTable("stages", 2, ImGuiTableFlags_SizingStretchProp)) {

@@ -17,9 +17,10 @@ struct ClothViewState {
     bool step_requested = false;  // one frame while paused
     bool reset_requested = false;
     bool reset_camera = false;
-    double draw_ms = 0.0;  // CPU time of the last frame's upload and draw calls
-    std::string title;     // scene name
-    std::string renderer;  // GL_RENDERER
+    double draw_ms = 0.0;         // CPU time of the last frame's upload and draw calls
+    double simulation_fps = 0.0;  // simulated frames published per second (recent)
+    std::string title;            // scene name
+    std::string renderer;         // GL_RENDERER
 };
 
 // Builds the panel (between Window::begin_ui_frame and end_ui_frame).

@@ -34,10 +34,16 @@ ClothSession::ClothSession(cloth::ClothScene scene, std::string scene_name,
 }
 
 void ClothSession::reset() {
+    if (m_task.is_started()) {
+        m_task.wait();  // the frame in flight is dropped
+    }
     m_solver = cli::make_solver(m_scene, m_setup);
-    m_frame = 0;
-    m_stats = {};
+    m_solver_frame = 0;
+    m_solver_stats = {};
+    m_grab_vertex = -1;
+    m_grab_changed = false;
     count_intersections();
+    publish();
 }
 
 void ClothSession::set_substeps_per_frame(int substeps) {
@@ -45,20 +51,57 @@ void ClothSession::set_substeps_per_frame(int substeps) {
 }
 
 void ClothSession::advance() {
-    const int n = m_options.substeps_per_frame;
-    m_stats.step = m_solver->step(n * m_substep, n);
-    ++m_frame;
-    if (m_frame == 1 || m_frame % m_options.check_every == 0) {
+    start_advance();
+    finish_advance(true);
+}
+
+bool ClothSession::start_advance() {
+    if (m_task.is_started()) {
+        return false;
+    }
+    if (m_grab_changed) {
+        if (m_grab_vertex >= 0) {
+            m_solver->grab(m_grab_vertex, m_grab_target);
+        } else {
+            m_solver->release_grab();
+        }
+        m_grab_changed = false;
+    }
+    const int substeps = m_options.substeps_per_frame;
+    m_task.start([this, substeps] { run_frame(substeps); });
+    return true;
+}
+
+bool ClothSession::finish_advance(bool block) {
+    if (!m_task.is_started() || (!block && !m_task.is_done())) {
+        return false;
+    }
+    m_task.wait();
+    publish();
+    return true;
+}
+
+void ClothSession::run_frame(int substeps) {
+    m_solver_stats.step = m_solver->step(substeps * m_substep, substeps);
+    ++m_solver_frame;
+    if (m_solver_frame == 1 || m_solver_frame % m_options.check_every == 0) {
         count_intersections();
     }
 }
 
 void ClothSession::count_intersections() {
     const Stopwatch watch;
-    m_stats.intersecting_pairs =
+    m_solver_stats.intersecting_pairs =
         collision::count_intersecting_pairs(m_solver->positions(), m_solver->triangles());
-    m_stats.checked_frame = m_frame;
-    m_stats.check_ms = watch.elapsed_ms();
+    m_solver_stats.checked_frame = m_solver_frame;
+    m_solver_stats.check_ms = watch.elapsed_ms();
+}
+
+void ClothSession::publish() {
+    m_positions.assign(m_solver->positions().begin(), m_solver->positions().end());
+    m_time = m_solver->time();
+    m_frame = m_solver_frame;
+    m_stats = m_solver_stats;
 }
 
 bool ClothSession::begin_grab(const render::Camera& camera, double x, double y) {
@@ -67,20 +110,25 @@ bool ClothSession::begin_grab(const render::Camera& camera, double x, double y) 
     if (vertex < 0) {
         return false;
     }
-    m_grab_anchor = positions()[static_cast<std::size_t>(vertex)];
-    m_solver->grab(vertex, m_grab_anchor);
+    m_grab_vertex = vertex;
+    m_grab_anchor = m_positions[static_cast<std::size_t>(vertex)];
+    m_grab_target = m_grab_anchor;
+    m_grab_changed = true;
     return true;
 }
 
 void ClothSession::drag(const render::Camera& camera, double x, double y) {
-    const std::int32_t vertex = m_solver->grabbed_vertex();
-    if (vertex >= 0) {
-        m_solver->grab(vertex, drag_target(camera, x, y, m_grab_anchor));
+    if (m_grab_vertex >= 0) {
+        m_grab_target = drag_target(camera, x, y, m_grab_anchor);
+        m_grab_changed = true;
     }
 }
 
 void ClothSession::end_grab() {
-    m_solver->release_grab();
+    if (m_grab_vertex >= 0) {
+        m_grab_vertex = -1;
+        m_grab_changed = true;
+    }
 }
 
 }  // namespace pliant::viewer

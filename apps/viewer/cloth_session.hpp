@@ -8,18 +8,26 @@
 // deterministic); with a divisor of it (the default, 4: one self-collision window) the states at
 // whole scene frames are the same too, the windows falling on the same substeps.
 //
-// Not thread safe; the solver parallelises internally.
+// Frames can run in the background (core/parallel_task.hpp): start_advance() returns at once and
+// finish_advance() publishes the new state when the step is done, so a viewer keeps drawing the
+// last published state (positions(), time(), stats()) while the next one is computed; advance()
+// does both in one call. Grabbing picks on the published state and reaches the solver at the
+// next start_advance(), so it never waits for a step in flight; reset() does wait.
+//
+// Not thread safe: one thread calls every member; the solver parallelises internally.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "cloth_setup.hpp"
 #include "pliant/cloth/scene.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/core/aabb.hpp"
+#include "pliant/core/parallel_task.hpp"
 #include "pliant/render/camera.hpp"
 
 namespace pliant::viewer {
@@ -46,49 +54,71 @@ public:
                  const ClothSessionOptions& options = {});
 
     // One frame: substeps_per_frame substeps; the exact count every check_every frames (and
-    // after the first frame).
+    // after the first frame). advance() = start_advance() + finish_advance(true).
     void advance();
-    // Back to the scene's start (the grab is released).
+    // Starts the next frame in the background (returns false, doing nothing, while one is in
+    // flight); pending grab changes reach the solver first.
+    bool start_advance();
+    // Publishes the frame in flight when it is done (block: waits for it); returns whether a new
+    // state was published. Rethrows what the step threw.
+    bool finish_advance(bool block);
+    bool is_advancing() const { return m_task.is_started(); }
+    // Back to the scene's start (waits for a frame in flight; the grab is released).
     void reset();
-    void set_substeps_per_frame(int substeps);  // clamped to [1, 1000]
+    // Clamped to [1, 1000]; used from the next frame on.
+    void set_substeps_per_frame(int substeps);
     int substeps_per_frame() const { return m_options.substeps_per_frame; }
 
-    // Grabbing: begin_grab picks the cloth vertex under pixel (x, y) (the nearest corner of the
-    // nearest triangle the pixel's ray hits) and returns whether one was hit; drag moves it to
-    // the cursor in the view plane at the depth it was grabbed at (ClothSolver::grab, applied
-    // over the next frame); end_grab lets go.
+    // Grabbing: begin_grab picks the cloth vertex under pixel (x, y) of the published state (the
+    // nearest corner of the nearest triangle the pixel's ray hits) and returns whether one was
+    // hit; drag moves it to the cursor in the view plane at the depth it was grabbed at
+    // (ClothSolver::grab, applied over the next frame); end_grab lets go.
     bool begin_grab(const render::Camera& camera, double x, double y);
     void drag(const render::Camera& camera, double x, double y);
     void end_grab();
-    std::int32_t grabbed_vertex() const { return m_solver->grabbed_vertex(); }
+    std::int32_t grabbed_vertex() const { return m_grab_vertex; }
 
     const cloth::ClothScene& scene() const { return m_scene; }
     const cli::ClothSetup& setup() const { return m_setup; }
-    const cloth::ClothSolver& solver() const { return *m_solver; }
-    std::span<const Vec3d> positions() const { return m_solver->positions(); }
-    std::span<const geometry::Triangle> triangles() const { return m_solver->triangles(); }
-    double time() const { return m_solver->time(); }  // simulated seconds
-    double substep() const { return m_substep; }      // h, seconds
-    std::int64_t frame() const { return m_frame; }    // frames advanced since the start
+    // The published state.
+    std::span<const Vec3d> positions() const { return m_positions; }
+    std::span<const geometry::Triangle> triangles() const { return m_setup.mesh.triangles; }
+    double time() const { return m_time; }          // simulated seconds
+    std::int64_t frame() const { return m_frame; }  // frames advanced since the start
     const ClothFrameStats& stats() const { return m_stats; }
+    double substep() const { return m_substep; }  // h, seconds
     // The cloth at the start and the bounded obstacles (what the default camera frames).
     const AABBd& framing_box() const { return m_framing_box; }
     // A box around everything drawn, planes included (depth range).
     const AABBd& scene_box() const { return m_scene_box; }
 
 private:
-    void count_intersections();
+    // The step itself (in the background): solver step, frame count, exact count.
+    void run_frame(int substeps);
+    void count_intersections();  // of the solver's state, into m_solver_stats
+    void publish();
 
     cloth::ClothScene m_scene;
     std::string m_scene_name;
     ClothSessionOptions m_options;
     cli::ClothSetup m_setup;
     std::unique_ptr<cloth::ClothSolver> m_solver;
+    BackgroundTask m_task;
     double m_substep = 0.0;
+    AABBd m_framing_box, m_scene_box;
+    // Written by the frame in flight, published by finish_advance.
+    std::int64_t m_solver_frame = 0;
+    ClothFrameStats m_solver_stats;
+    // The published state.
+    std::vector<Vec3d> m_positions;
+    double m_time = 0.0;
     std::int64_t m_frame = 0;
     ClothFrameStats m_stats;
-    AABBd m_framing_box, m_scene_box;
+    // The grab as the user leaves it; the solver gets it at the next start.
+    std::int32_t m_grab_vertex = -1;
     Vec3d m_grab_anchor;  // the grabbed vertex where it was grabbed
+    Vec3d m_grab_target;
+    bool m_grab_changed = false;
 };
 
 }  // namespace pliant::viewer

@@ -1,8 +1,14 @@
 // `pliant view cloth`: the cloth simulation live, drawn with OpenGL (viewer.hpp).
 //
-// Per frame: events → camera gestures and grabbing → one ClothSession::advance (unless paused)
-// → draw obstacles at their pose and the cloth with fresh normals (mesh_drawer.hpp) →
-// screenshot (last frame) → overlay → swap.
+// Per frame: events → camera gestures and grabbing → the simulation (below) → draw obstacles at
+// their pose and the cloth with fresh normals (mesh_drawer.hpp) → screenshot (last frame) →
+// overlay → swap.
+//
+// The simulation runs a frame ahead in the background (ClothSession::start_advance): while the
+// user moves the camera or the cloth the window is redrawn at once with the latest simulated
+// frame, whatever a step costs; without input a frame waits for the next simulated frame (the
+// waiting thread helps compute it), so the drawing of frame k overlaps the simulation of frame
+// k + 1. --sync instead simulates one frame per drawn frame, in turn.
 #include <algorithm>
 #include <optional>
 #include <vector>
@@ -55,12 +61,15 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     Mean step_ms, draw_ms, solve_ms, refit_ms, traverse_ms, narrow_ms, response_ms;
     std::int64_t max_intersections = 0;
     bool grabbing = false;
+    bool cloth_changed = true;
+    FrameClock sim_clock;  // ticks when a simulated frame is published
     std::optional<render::Camera> last_camera;
+    const Stopwatch run_clock;
 
     for (int frame = 0; !window.should_close() && (run.frames <= 0 || frame < run.frames);
          ++frame) {
         // Events: an idle, paused view waits for them instead of spinning.
-        const bool idle = run.frames <= 0 && state.paused && !grabbing;
+        const bool idle = run.frames <= 0 && state.paused && !grabbing && !session.is_advancing();
         window.poll_events(idle ? 0.1 : 0.0);
         window.framebuffer_size(width, height);
         if (width < 1 || height < 1) {
@@ -99,10 +108,11 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
             session.reset();
             grabbing = false;
             state.reset_requested = false;
+            cloth_changed = true;
         }
-        if (!state.paused || state.step_requested) {
-            session.advance();
-            state.step_requested = false;
+        // The simulation: the frame in flight is published when done (with --sync: waited
+        // for), then the next one starts, so drawing never waits for a slow step.
+        const auto on_published = [&] {
             const cloth::ClothStepStats& step = session.stats().step;
             step_ms.add(step.ms);
             solve_ms.add(step.solve_ms);
@@ -111,6 +121,26 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
             narrow_ms.add(step.self.narrow_ms);
             response_ms.add(step.self.response_ms);
             max_intersections = std::max(max_intersections, session.stats().intersecting_pairs);
+            sim_clock.tick();
+            state.simulation_fps = sim_clock.recent_fps();
+            cloth_changed = true;
+        };
+        // Without input there is nothing new to draw before the next simulated frame: wait for
+        // it (and help compute it) rather than draw the same image again. With input, draw at
+        // once and let the frame finish beside the drawing.
+        const bool input = mouse.dx != 0.0 || mouse.dy != 0.0 || mouse.any_held() ||
+                           mouse.released[0] || mouse.released[1] || mouse.released[2] ||
+                           mouse.scroll != 0.0 || keys.any() || window.ui_is_active();
+        if (session.is_advancing() &&
+            session.finish_advance(options.sync || (!input && !state.paused))) {
+            on_published();
+        }
+        if (!session.is_advancing() && (!state.paused || state.step_requested)) {
+            session.start_advance();
+            state.step_requested = false;
+            if (options.sync && session.finish_advance(true)) {
+                on_published();
+            }
         }
 
         // Drawing.
@@ -125,7 +155,10 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
             }
             drawer.draw(obstacle_buffers[k], cli::OBSTACLE_COLOR, model);
         }
-        cloth_buffers.upload(session.positions(), session.triangles(), true);
+        if (cloth_changed) {  // new normals and upload only for a new state
+            cloth_buffers.upload(session.positions(), session.triangles(), true);
+            cloth_changed = false;
+        }
         drawer.draw(cloth_buffers, cli::CLOTH_COLOR, identity_matrix());
         state.draw_ms = draw_watch.elapsed_ms();
         draw_ms.add(state.draw_ms);
@@ -153,6 +186,10 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["substeps_per_frame"] = session.substeps_per_frame();
     result["simulated_frames"] = session.frame();
     result["simulated_seconds"] = session.time();
+    result["sync"] = options.sync;
+    const double wall_seconds = run_clock.elapsed_ms() / 1000.0;
+    result["simulated_frames_per_second"] =
+        wall_seconds > 0.0 ? static_cast<double>(session.frame()) / wall_seconds : 0.0;
     result["mean_frame_ms"] = clock.mean_ms();
     result["fps"] = clock.mean_ms() > 0.0 ? 1000.0 / clock.mean_ms() : 0.0;
     result["mean_step_ms"] = step_ms.value();

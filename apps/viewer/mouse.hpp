@@ -37,6 +37,7 @@ private:
 // Escape closes the window, Space pauses, N steps once, R resets, C resets the camera.
 struct KeyFrame {
     bool escape = false, space = false, n = false, r = false, c = false;
+    bool any() const { return escape || space || n || r || c; }
 };
 
 class KeyTracker {

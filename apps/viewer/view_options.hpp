@@ -26,6 +26,10 @@ struct ViewRunOptions {
 struct ClothViewOptions {
     ViewRunOptions run;
     ClothSessionOptions session;
+    // false: the simulation runs in the background and the window shows its latest frame, so
+    // the camera stays smooth however slow a step is; true: every displayed frame waits for one
+    // simulated frame (lock step: reproducible screenshots after --frames N).
+    bool sync = false;
 };
 
 struct VolumeViewOptions {

@@ -195,7 +195,7 @@ TEST(ViewCli, ClothScreenshotMatchesTheMeshRasterizer) {
     for (const std::string msaa : {"", " --msaa 4"}) {
         const std::filesystem::path shot = scratch / "cloth.png";
         const CliResult r = run_headless("--json view cloth " + quoted(scene) +
-                                             " --frames 3 --substeps-per-frame 20 --no-ui "
+                                             " --frames 3 --substeps-per-frame 20 --sync --no-ui "
                                              "--size 480x360 --screenshot " +
                                              quoted(shot) + msaa,
                                          scratch);
@@ -226,6 +226,30 @@ TEST(ViewCli, ClothScreenshotMatchesTheMeshRasterizer) {
         }
         EXPECT_GT(cloth_pixels, 2000);
     }
+}
+
+// Without --sync the simulation runs beside the drawing: frames are drawn whether or not a new
+// simulated frame is ready; paused, nothing is simulated.
+TEST(ViewCli, ClothSimulatesInTheBackground) {
+    if (!has_xvfb()) {
+        GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb xauth)";
+    }
+    const ScratchDir scratch;
+    const std::string scene = quoted(write_scene(scratch));
+    CliResult r =
+        run_headless("--json view cloth " + scene + " --frames 20 --size 320x240", scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto j = nlohmann::json::parse(r.out);
+    EXPECT_FALSE(j["sync"].get<bool>());
+    EXPECT_EQ(j["frames"].get<int>(), 20);
+    EXPECT_GE(j["simulated_frames"].get<int>(), 1);
+    EXPECT_LE(j["simulated_frames"].get<int>(), 20);
+    EXPECT_GT(j["simulated_frames_per_second"].get<double>(), 0.0);
+    r = run_headless("--json view cloth " + scene + " --frames 5 --size 320x240 --paused", scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["simulated_frames"].get<int>(), 0);
+    EXPECT_EQ(j["intersecting_pairs_frame"].get<int>(), 0);  // the start was counted
 }
 
 TEST(ViewCli, VolumeScreenshotMatchesPliantRender) {
@@ -272,7 +296,7 @@ TEST(ViewCli, ScreenshotsNeverShowTheOverlay) {
     const std::string volume = quoted(write_phantom(scratch));
     // Cloth with 4× multisampling asked for explicitly (resolved by the read).
     const std::string common = " --frames 2 --size 400x300 --msaa 4 --screenshot ";
-    for (const std::string& view : {"view cloth " + scene, "view volume " + volume}) {
+    for (const std::string& view : {"view cloth --sync " + scene, "view volume " + volume}) {
         const CliResult with = run_headless(view + common + quoted(scratch / "ui.png"), scratch);
         ASSERT_EQ(with.exit_code, 0) << with.err;
         EXPECT_NE(with.out.find("2 frames"), std::string::npos) << with.out;

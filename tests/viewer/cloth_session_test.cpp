@@ -56,6 +56,36 @@ TEST(ClothSession, WindowFramesLandOnTheScenesFrames) {
     EXPECT_TRUE(same_positions(session.positions(), reference->positions()));
 }
 
+// In the background: the published state stays the last one until the frame in flight is
+// published, one frame at a time, and the states are those of advance().
+TEST(ClothSession, BackgroundFramesPublishTheSameStates) {
+    ClothSession background(small_scene(), "small");
+    ClothSession foreground(small_scene(), "small");
+    for (int f = 1; f <= 5; ++f) {
+        const std::vector<Vec3d> before(background.positions().begin(),
+                                        background.positions().end());
+        ASSERT_TRUE(background.start_advance());
+        EXPECT_TRUE(background.is_advancing());
+        EXPECT_FALSE(background.start_advance());  // one frame in flight at a time
+        EXPECT_TRUE(same_positions(background.positions(), before));
+        EXPECT_EQ(background.frame(), f - 1);
+        while (!background.finish_advance(false)) {
+        }
+        EXPECT_FALSE(background.is_advancing());
+        EXPECT_FALSE(background.finish_advance(true));  // nothing in flight
+        foreground.advance();
+        EXPECT_EQ(background.frame(), f);
+        EXPECT_TRUE(same_positions(background.positions(), foreground.positions()));
+    }
+    // reset() waits for a frame in flight and drops it.
+    const ClothSession fresh(small_scene(), "small");
+    background.start_advance();
+    background.reset();
+    EXPECT_FALSE(background.is_advancing());
+    EXPECT_EQ(background.frame(), 0);
+    EXPECT_TRUE(same_positions(background.positions(), fresh.positions()));
+}
+
 TEST(ClothSession, GrabDragsTheVertexUnderTheCursorAndResetRestores) {
     ClothSession session(small_scene(), "small");
     const std::vector<Vec3d> start(session.positions().begin(), session.positions().end());
