@@ -6,8 +6,7 @@ namespace pliant::viewer {
 
 void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameClock& clock) {
     ImGui::SetNextWindowPos(ImVec2(10.0f, 10.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(370.0f, 0.0f), ImGuiCond_FirstUseEver);
-    ImGui::Begin("pliant view cloth");
+    ImGui::Begin("pliant view cloth", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::TextUnformatted(state.title.c_str());
     ImGui::Text("%zu triangles, %zu vertices", session.triangles().size(),
                 session.positions().size());
@@ -53,7 +52,7 @@ void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameC
     }
     if (stats.intersecting_pairs >= 0) {
         ImGui::Text("intersecting pairs: %lld", static_cast<long long>(stats.intersecting_pairs));
-        ImGui::TextDisabled("exact count, every few frames; of frame %lld (%.1f ms)",
+        ImGui::TextDisabled("(exact; counted every few frames: frame %lld, %.1f ms)",
                             static_cast<long long>(stats.checked_frame), stats.check_ms);
     }
     ImGui::Separator();
@@ -76,8 +75,8 @@ void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameC
     if (ImGui::SliderInt("substeps/frame", &substeps, 1, 4 * session.scene().substeps)) {
         session.set_substeps_per_frame(substeps);
     }
-    ImGui::TextDisabled("speed: simulated time per frame; the scene has %d per 1/%g s",
-                        session.scene().substeps, session.scene().frames_per_second);
+    ImGui::TextDisabled("(the scene: %d substeps per 1/%g s)", session.scene().substeps,
+                        session.scene().frames_per_second);
     if (ImGui::CollapsingHeader("Mouse and keys")) {
         ImGui::TextUnformatted(
             "left drag on the cloth: grab a vertex\n"

@@ -164,7 +164,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
         draw_ms.add(state.draw_ms);
         const bool last = run.frames > 0 && frame + 1 == run.frames;
         if (last && !run.screenshot.empty()) {
-            save_screenshot(run.screenshot, width, height);
+            save_screenshot(run.screenshot, 0, 0, width, height);
         }
         if (window.has_ui()) {
             window.begin_ui_frame();

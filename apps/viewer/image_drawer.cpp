@@ -46,8 +46,8 @@ void ImageDrawer::upload(const render::Image& image) {
     glBindTexture(GL_TEXTURE_2D, 0);
 }
 
-void ImageDrawer::draw(int width, int height) const {
-    glViewport(0, 0, width, height);
+void ImageDrawer::draw(int x, int y, int width, int height) const {
+    glViewport(x, y, width, height);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_BLEND);
     glUseProgram(m_program.id());

@@ -14,9 +14,9 @@ public:
     ImageDrawer();
     // Uploads `image` (top-left origin, RGB8) into the texture.
     void upload(const render::Image& image);
-    // Draws the texture over a viewport of width × height pixels; nearest filtering when the
-    // texture has that size, linear otherwise.
-    void draw(int width, int height) const;
+    // Draws the texture over the viewport of width × height pixels whose bottom-left corner is
+    // (x, y); nearest filtering when the texture has that size, linear otherwise.
+    void draw(int x, int y, int width, int height) const;
 
 private:
     ShaderProgram m_program;

@@ -10,9 +10,10 @@
 
 namespace pliant::viewer {
 
-// The width × height pixels at the bottom-left of the back buffer.
-render::Image read_back_buffer(int width, int height);
+// The width × height pixels of the back buffer whose bottom-left corner is (x, y) (OpenGL
+// window coordinates, y upwards): the view's viewport.
+render::Image read_back_buffer(int x, int y, int width, int height);
 
-void save_screenshot(const std::filesystem::path& path, int width, int height);
+void save_screenshot(const std::filesystem::path& path, int x, int y, int width, int height);
 
 }  // namespace pliant::viewer

@@ -99,10 +99,15 @@ render::ClipPlane plane_from_clip_fields(const VolumeViewState& state, const AAB
     return {box.center() + n * (state.clip_position * half_extent(box, n)), n};
 }
 
-void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const FrameClock& clock) {
-    ImGui::SetNextWindowPos(ImVec2(10.0f, 10.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(360.0f, 0.0f), ImGuiCond_FirstUseEver);
-    ImGui::Begin("pliant view volume");
+void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const FrameClock& clock,
+                       int height) {
+    ImGui::SetNextWindowPos(ImVec2(0.0f, 0.0f), ImGuiCond_Always);
+    ImGui::SetNextWindowSize(
+        ImVec2(static_cast<float>(VOLUME_PANEL_WIDTH), static_cast<float>(height)),
+        ImGuiCond_Always);
+    ImGui::Begin("pliant view volume", nullptr,
+                 ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+    ImGui::PushItemWidth(-120.0f);  // room for the labels
     const volume::Volume& source = session.source();
     ImGui::TextUnformatted(state.title.c_str());
     const std::string type(volume::name(source.type()));
@@ -232,6 +237,7 @@ void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const Fra
                                    : "left drag: orbit, right or middle drag: pan,\n"
                                      "wheel: zoom, C: reset camera, Esc: quit");
     }
+    ImGui::PopItemWidth();
     ImGui::End();
 }
 

@@ -35,6 +35,11 @@ void clip_fields_from_plane(const render::ClipPlane& plane, const AABBd& box,
                             VolumeViewState& state);
 render::ClipPlane plane_from_clip_fields(const VolumeViewState& state, const AABBd& box);
 
-void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const FrameClock& clock);
+// The panel's width in pixels: it is docked at the window's left, over the full height, beside
+// the image.
+inline constexpr int VOLUME_PANEL_WIDTH = 330;
+
+void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const FrameClock& clock,
+                       int height);
 
 }  // namespace pliant::viewer

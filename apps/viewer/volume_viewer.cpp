@@ -41,11 +41,17 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
     VolumeSession session(io::read_volume(volume_path, read), options.session);
     const ViewRunOptions& run = options.run;
-    Window window("pliant view volume: " + volume_path.string(), run.window);
+    // The overlay is a panel docked at the window's left; the image has the requested size
+    // beside it.
+    const int panel = run.window.show_ui ? VOLUME_PANEL_WIDTH : 0;
+    WindowOptions window_options = run.window;
+    window_options.width += panel;
+    Window window("pliant view volume: " + volume_path.string(), window_options);
 
     ImageDrawer drawer;
-    int width = 0, height = 0;
-    window.framebuffer_size(width, height);
+    int window_width = 0, height = 0;
+    window.framebuffer_size(window_width, height);
+    int width = std::max(1, window_width - panel);  // the image's viewport
     const AABBd box = session.source().bounds();
     OrbitController controller(box, run.azimuth, run.elevation, run.distance, width, height);
 
@@ -79,11 +85,13 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
             run.frames <= 0 && !animating && !dragging && !rendered &&
             !(scrolled && since_scroll.elapsed_ms() < 1000.0 * SCROLL_PREVIEW_SECONDS);
         window.poll_events(idle ? SCROLL_PREVIEW_SECONDS : 0.0);
-        window.framebuffer_size(width, height);
+        window.framebuffer_size(window_width, height);
+        width = window_width - panel;
         if (width < 1 || height < 1) {
             continue;
         }
-        const MouseFrame mouse = mouse_tracker.update(window);
+        MouseFrame mouse = mouse_tracker.update(window);
+        mouse.x -= panel;  // viewport coordinates
         const KeyFrame keys = key_tracker.update(window);
         if (keys.escape) {
             window.request_close();
@@ -149,16 +157,17 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
                 last_camera = camera;
             }
         }
+        glViewport(0, 0, window_width, height);
         glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
         glClear(GL_COLOR_BUFFER_BIT);
-        drawer.draw(width, height);
+        drawer.draw(panel, 0, width, height);
         const bool last = run.frames > 0 && frame + 1 == run.frames;
         if (last && !run.screenshot.empty()) {
-            save_screenshot(run.screenshot, width, height);
+            save_screenshot(run.screenshot, panel, 0, width, height);
         }
         if (window.has_ui()) {
             window.begin_ui_frame();
-            draw_volume_panel(session, state, clock);
+            draw_volume_panel(session, state, clock, height);
             window.end_ui_frame();
         }
         check_gl("volume frame");
