@@ -1,12 +1,11 @@
-// pliant view cloth SCENE.json  [view options] [--substeps-per-frame S] [--sync]
-//                               [--check-every N]
+// pliant view cloth SCENE.json  [view options] [--substeps-per-frame S] [--check-every N]
 // pliant view volume VOLUME      [view options] [--tf PRESET|FILE] [--opacity-scale S]
 //                                [--threshold T] [--clip PX,PY,PZ,NX,NY,NZ] [--shading] [--step S]
 //                                [--preview-divisor D] [--deform [--driver none|wave|twist|bubble]
 //                                [--stiffness K] [--cells B] [--substeps N] [--fps F]
 //                                [--drag-radius R]] [--max-memory MIB]
 // view options: [--size WxH] [--camera AZ,EL,DIST] [--frames N [--screenshot FILE.png]]
-//               [--no-ui] [--paused] [--msaa N]
+//               [--no-ui] [--paused] [--sync] [--msaa N]
 //
 // The interactive viewer (apps/viewer, GLFW + OpenGL 3.3 + Dear ImGui). `cloth` simulates a scene
 // live as `pliant cloth` does (the same scene loading and solver) and draws the cloth and its
@@ -22,9 +21,9 @@
 //                 xvfb-run with Mesa).
 // Errors: no display or no OpenGL 3.3 (exit 1, the message names the reason); a build without
 // the viewer says so (exit 1).
-// Cloth frames are simulated in the background (the view shows the latest one and stays smooth
-// however slow a step is); --sync locks each displayed frame to one simulated frame. stdout: a
-// summary line, or with --json the run's object (docs/formats.md): frames, mean_frame_ms, fps,
+// Frames are simulated a frame ahead in the background (the view shows the latest one and stays
+// smooth however slow a step is); --sync locks each displayed frame to one simulated frame. stdout:
+// a summary line, or with --json the run's object (docs/formats.md): frames, mean_frame_ms, fps,
 // stage means, camera, gl_renderer.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -76,6 +75,10 @@ void add_view_options(CLI::App* cmd, ViewCommandOptions& o, viewer::ViewRunOptio
         ->needs(frames);
     cmd->add_flag("--no-ui", o.no_ui, "Hide the overlay (stats and controls)");
     cmd->add_flag("--paused", run.paused, "Start with the simulation paused");
+    cmd->add_flag("--sync", run.sync,
+                  "Lock step: every displayed frame waits for one simulated frame (default: the "
+                  "simulation runs a frame ahead in the background, the view shows its latest "
+                  "frame)");
     cmd->add_option("--msaa", run.window.msaa_samples,
                     "Multisample anti-aliasing samples (0: off; -1: 4 on hardware OpenGL, off "
                     "on software renderers such as Mesa llvmpipe; cloth default -1, volume 0)")
@@ -183,9 +186,6 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                      "Solver substeps per displayed frame (the speed; default 4, one "
                      "self-collision window)")
         ->check(CLI::Range(1, 1000));
-    cloth->add_flag("--sync", cloth_options->sync,
-                    "Lock step: every displayed frame waits for one simulated frame (default: the "
-                    "simulation runs in the background and the view shows its latest frame)");
     cloth
         ->add_option("--check-every", cloth_options->session.check_every,
                      "Frames between exact intersecting-pair counts (default 10)")

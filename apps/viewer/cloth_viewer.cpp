@@ -132,13 +132,13 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
                            mouse.released[0] || mouse.released[1] || mouse.released[2] ||
                            mouse.scroll != 0.0 || keys.any() || window.ui_is_active();
         if (session.is_advancing() &&
-            session.finish_advance(options.sync || (!input && !state.paused))) {
+            session.finish_advance(run.sync || (!input && !state.paused))) {
             on_published();
         }
         if (!session.is_advancing() && (!state.paused || state.step_requested)) {
             session.start_advance();
             state.step_requested = false;
-            if (options.sync && session.finish_advance(true)) {
+            if (run.sync && session.finish_advance(true)) {
                 on_published();
             }
         }
@@ -186,7 +186,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["substeps_per_frame"] = session.substeps_per_frame();
     result["simulated_frames"] = session.frame();
     result["simulated_seconds"] = session.time();
-    result["sync"] = options.sync;
+    result["sync"] = run.sync;
     const double wall_seconds = run_clock.elapsed_ms() / 1000.0;
     result["simulated_frames_per_second"] =
         wall_seconds > 0.0 ? static_cast<double>(session.frame()) / wall_seconds : 0.0;

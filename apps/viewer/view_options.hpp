@@ -21,15 +21,15 @@ struct ViewRunOptions {
     int frames = 0;                    // > 0: stop after this many frames (headless runs)
     std::filesystem::path screenshot;  // the last frame as PNG (empty: none)
     bool paused = false;               // start with the simulation paused
+    // false: the simulation runs a frame ahead in the background and the window shows its latest
+    // frame, so the camera stays smooth however slow a step is; true: every displayed frame
+    // waits for one simulated frame (lock step: reproducible screenshots after --frames N).
+    bool sync = false;
 };
 
 struct ClothViewOptions {
     ViewRunOptions run;
     ClothSessionOptions session;
-    // false: the simulation runs in the background and the window shows its latest frame, so
-    // the camera stays smooth however slow a step is; true: every displayed frame waits for one
-    // simulated frame (lock step: reproducible screenshots after --frames N).
-    bool sync = false;
 };
 
 struct VolumeViewOptions {

@@ -104,19 +104,58 @@ void VolumeSession::update_render_tf() {
 }
 
 void VolumeSession::build_deformable() {
+    settle();
     m_deformable.reset();
     m_drag_vertex = -1;
+    m_drag_changed = false;
     m_visibility_tf = m_base_tf;
     m_deformable = std::make_unique<cli::DeformableVolume>(
         m_source, m_is_rgba ? nullptr : &m_visibility_tf, m_options.grid, std::filesystem::path(),
         m_options.body);
-    m_target = m_deformable->target_like();
+    m_targets[0] = m_deformable->target_like();
+    m_targets[1] = m_deformable->target_like();
+    m_front = 0;
     apply_driver();
+    resample_front();
+}
+
+void VolumeSession::resample_front() {
     const Stopwatch watch;
-    m_deformable->resample(m_target);
-    m_stats.resample_ms = watch.elapsed_ms();
+    m_deformable->resample(m_targets[m_front]);
+    m_solver_stats.resample_ms = watch.elapsed_ms();
+    publish();
+}
+
+void VolumeSession::publish() {
+    const pbd::SoftBody& body = m_deformable->body();
+    m_positions.assign(body.positions().begin(), body.positions().end());
+    m_time = body.time();
+    m_stats.step_ms = m_solver_stats.step_ms;
+    m_stats.resample_ms = m_solver_stats.resample_ms;
+    m_stats.volume_ratio = m_solver_stats.volume_ratio;
+    m_stats.inverted_tets = m_solver_stats.inverted_tets;
     m_caster_dirty = true;
     ++m_generation;
+}
+
+void VolumeSession::settle() {
+    if (m_task.is_started()) {
+        finish_step(true);
+    }
+}
+
+void VolumeSession::apply_pending_drag() {
+    if (!m_drag_changed || m_task.is_started()) {
+        return;
+    }
+    pbd::SoftBody& body = m_deformable->body();
+    if (m_drag_vertex >= 0) {
+        body.set_drag(m_drag_vertex, vec3_cast<float>(m_drag_target),
+                      static_cast<float>(m_drag_radius));
+    } else {
+        body.release_drag();
+    }
+    m_drag_changed = false;
 }
 
 void VolumeSession::apply_driver() {
@@ -167,6 +206,7 @@ void VolumeSession::set_threshold(double threshold) {
     check_threshold(threshold);
     m_options.threshold = threshold;
     if (m_is_rgba) {
+        settle();  // the resampler of a frame in flight reads m_source
         // In place: the resampler refers to m_source.
         std::copy(m_original.bytes().begin(), m_original.bytes().end(), m_source.bytes().begin());
         if (threshold > 0.0) {
@@ -198,14 +238,15 @@ const pbd::SoftBody* VolumeSession::body() const {
     return m_deformable ? &m_deformable->body() : nullptr;
 }
 
-double VolumeSession::time() const {
-    return m_deformable ? m_deformable->body().time() : 0.0;
+void VolumeSession::require_deformable(const char* what) const {
+    if (!m_deformable) {
+        throw InvalidInput(fmt::format("viewer: {} needs a deformable volume (--deform)", what));
+    }
 }
 
 void VolumeSession::set_driver(const DriverSettings& driver) {
-    if (!m_deformable) {
-        throw InvalidInput("viewer: drivers need a deformable volume (--deform)");
-    }
+    require_deformable("a driver");
+    settle();
     const bool restart = driver.kind != m_options.driver.kind;
     const DriverSettings previous = m_options.driver;
     m_options.driver = driver;
@@ -213,6 +254,7 @@ void VolumeSession::set_driver(const DriverSettings& driver) {
         if (restart) {
             m_deformable->reset_body();
             m_drag_vertex = -1;
+            m_drag_changed = false;
         }
         apply_driver();
     } catch (const InvalidInput&) {
@@ -220,12 +262,14 @@ void VolumeSession::set_driver(const DriverSettings& driver) {
         apply_driver();
         throw;
     }
+    if (restart) {
+        resample_front();
+    }
 }
 
 void VolumeSession::set_stiffness(double stiffness) {
-    if (!m_deformable) {
-        throw InvalidInput("viewer: stiffness needs a deformable volume (--deform)");
-    }
+    require_deformable("stiffness");
+    settle();
     m_deformable->body().set_stiffness(stiffness);
     m_options.body.stiffness = stiffness;
 }
@@ -239,49 +283,69 @@ void VolumeSession::set_drag_radius(double box_units) {
 }
 
 void VolumeSession::step() {
-    if (!m_deformable) {
-        throw InvalidInput("viewer: stepping needs a deformable volume (--deform)");
+    start_step();
+    finish_step(true);
+}
+
+bool VolumeSession::start_step() {
+    require_deformable("stepping");
+    if (m_task.is_started()) {
+        return false;
     }
-    pbd::SoftBody& body = m_deformable->body();
-    body.step(1.0 / m_options.fps);
-    const pbd::SoftBodyStats stats = body.stats();
-    m_stats.step_ms = stats.step_ms;
-    m_stats.volume_ratio = stats.volume_ratio;
-    m_stats.inverted_tets = stats.inverted_tets;
-    const Stopwatch watch;
-    m_deformable->resample(m_target);
-    m_stats.resample_ms = watch.elapsed_ms();
-    m_caster_dirty = true;
-    ++m_generation;
+    apply_pending_drag();
+    const double dt = 1.0 / m_options.fps;
+    volume::Volume& back = m_targets[1 - m_front];
+    m_task.start([this, dt, &back] {
+        pbd::SoftBody& body = m_deformable->body();
+        body.step(dt);
+        const pbd::SoftBodyStats stats = body.stats();
+        m_solver_stats.step_ms = stats.step_ms;
+        m_solver_stats.volume_ratio = stats.volume_ratio;
+        m_solver_stats.inverted_tets = stats.inverted_tets;
+        const Stopwatch watch;
+        m_deformable->resample(back);
+        m_solver_stats.resample_ms = watch.elapsed_ms();
+    });
+    return true;
+}
+
+bool VolumeSession::finish_step(bool block) {
+    if (!m_task.is_started() || (!block && !m_task.is_done())) {
+        return false;
+    }
+    m_task.wait();
+    m_front = 1 - m_front;
+    publish();
+    apply_pending_drag();
+    return true;
 }
 
 void VolumeSession::reset_deformation() {
-    if (!m_deformable) {
-        throw InvalidInput("viewer: reset needs a deformable volume (--deform)");
-    }
+    require_deformable("reset");
+    settle();
     m_deformable->reset_body();
     m_drag_vertex = -1;
+    m_drag_changed = false;
     apply_driver();
-    m_deformable->resample(m_target);
-    m_caster_dirty = true;
-    ++m_generation;
+    resample_front();
 }
 
 bool VolumeSession::begin_drag(const render::Camera& camera, double x, double y) {
     if (!m_deformable) {
         return false;
     }
-    pbd::SoftBody& body = m_deformable->body();
     const std::int32_t vertex =
-        pick_point(camera, body.positions(), x, y, DRAG_PICK_PIXELS, m_options.clip);
+        pick_point(camera, m_positions, x, y, DRAG_PICK_PIXELS, m_options.clip);
     if (vertex < 0) {
         return false;
     }
     m_drag_vertex = vertex;
-    m_drag_anchor = vec3_cast<double>(body.positions()[static_cast<std::size_t>(vertex)]);
+    m_drag_anchor = vec3_cast<double>(m_positions[static_cast<std::size_t>(vertex)]);
+    m_drag_target = m_drag_anchor;
     const Vec3d extent = m_source.bounds().extent();
-    const double radius = m_options.drag_radius * std::max({extent.x, extent.y, extent.z});
-    body.set_drag(vertex, vec3_cast<float>(m_drag_anchor), static_cast<float>(radius));
+    m_drag_radius = m_options.drag_radius * std::max({extent.x, extent.y, extent.z});
+    m_drag_changed = true;
+    apply_pending_drag();
     return true;
 }
 
@@ -289,15 +353,17 @@ void VolumeSession::drag(const render::Camera& camera, double x, double y) {
     if (m_drag_vertex < 0) {
         return;
     }
-    const Vec3d target = drag_target(camera, x, y, m_drag_anchor);
-    m_deformable->body().set_drag(m_drag_vertex, vec3_cast<float>(target));
+    m_drag_target = drag_target(camera, x, y, m_drag_anchor);
+    m_drag_changed = true;
+    apply_pending_drag();
 }
 
 void VolumeSession::end_drag() {
-    if (m_deformable) {
-        m_deformable->body().release_drag();
+    if (m_drag_vertex >= 0) {
+        m_drag_vertex = -1;
+        m_drag_changed = true;
+        apply_pending_drag();
     }
-    m_drag_vertex = -1;
 }
 
 void VolumeSession::prepare_caster() {
@@ -310,7 +376,7 @@ void VolumeSession::prepare_caster() {
         if (m_is_rgba) {
             options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;
         }
-        const volume::Volume& shown = m_deformable ? m_target : m_source;
+        const volume::Volume& shown = m_deformable ? m_targets[m_front] : m_source;
         m_caster =
             std::make_unique<render::RayCaster>(shown, m_is_rgba ? nullptr : &m_render_tf, options);
         m_stats.prepare_ms = m_caster->prepare_ms();

@@ -27,12 +27,15 @@
 // parallelise internally and stay deterministic.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "deformable_volume.hpp"
+#include "pliant/core/parallel_task.hpp"
 #include "pliant/pbd/drivers.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
@@ -103,17 +106,29 @@ public:
 
     bool is_deformable() const { return m_deformable != nullptr; }
     // The calls below need --deform (InvalidInput otherwise).
+    // Settings of the body wait for a frame in flight first.
     void set_driver(const DriverSettings& driver);
     void set_stiffness(double stiffness);
     void set_drag_radius(double box_units);
-    void step();               // one frame: 1 / fps seconds, then resampling
+    // One frame: 1 / fps seconds of the soft body, then resampling. step() = start_step() +
+    // finish_step(true). In the background (core/parallel_task.hpp): start_step returns at once
+    // (false, doing nothing, while a frame is in flight) and finish_step publishes the frame when
+    // it is done (block: waits) — the resampled volume is double-buffered, so the current one
+    // can be ray-cast meanwhile. Rethrows what the frame threw.
+    void step();
+    bool start_step();
+    bool finish_step(bool block);
+    bool is_stepping() const { return m_task.is_started(); }
     void reset_deformation();  // back to rest, time 0, the driver ramping in again
+    // Dragging picks on the published vertices; the body gets the drag now, or at the next
+    // start_step while a frame is in flight.
     bool begin_drag(const render::Camera& camera, double x, double y);
     void drag(const render::Camera& camera, double x, double y);
     void end_drag();
     bool is_dragging() const { return m_drag_vertex >= 0; }
+    // The soft body (null without --deform); not to be used while a frame is in flight.
     const pbd::SoftBody* body() const;
-    double time() const;  // simulated seconds (0 without --deform)
+    double time() const { return m_time; }  // simulated seconds of the published frame
 
     // Ray-casts the current state with `camera` (any size) into `image`.
     render::RayCastStats render(const render::Camera& camera, render::Image& image);
@@ -130,6 +145,12 @@ private:
     void apply_driver();
     // The RayCaster for the current state (built when something it prepares changed).
     void prepare_caster();
+    // Waits for a frame in flight and publishes it.
+    void settle();
+    void publish();
+    void resample_front();  // the body as it is, into the shown buffer, published
+    void apply_pending_drag();
+    void require_deformable(const char* what) const;
 
     volume::Volume m_original;  // as read (RGBA: before the threshold)
     volume::Volume m_source;    // what is deformed and shown (RGBA: thresholded copy)
@@ -139,13 +160,25 @@ private:
     volume::TransferFunction m_visibility_tf;  // the tet grid's (scalar volumes with --deform)
     volume::TransferFunction m_render_tf;      // threshold and opacity scale applied
     std::unique_ptr<cli::DeformableVolume> m_deformable;
-    volume::Volume m_target;  // the resampled volume (--deform)
+    // Resampled volumes (--deform): m_targets[m_front] is shown, the other one is filled by the
+    // frame in flight.
+    std::array<volume::Volume, 2> m_targets;
+    int m_front = 0;
     std::unique_ptr<render::RayCaster> m_caster;
     bool m_caster_dirty = true;
+    // The published frame.
+    std::vector<Vec3f> m_positions;
+    double m_time = 0.0;
+    VolumeFrameStats m_stats;
+    VolumeFrameStats m_solver_stats;  // written by the frame in flight
+    // The drag as the user leaves it; the body gets it when no frame is in flight.
     std::int32_t m_drag_vertex = -1;
     Vec3d m_drag_anchor;
-    VolumeFrameStats m_stats;
+    Vec3d m_drag_target;
+    double m_drag_radius = 0.0;  // world units
+    bool m_drag_changed = false;
     unsigned long long m_generation = 0;
+    BackgroundTask m_task;  // last: destroyed first, waiting for a frame in flight
 };
 
 }  // namespace pliant::viewer

@@ -1,7 +1,7 @@
 // `pliant view volume`: the library's ray caster shown live (viewer.hpp).
 //
-// Per frame: events → camera gestures and (with --deform) dragging → one VolumeSession::step
-// (deforming and not paused) → ray casting when the image would change, at 1 / preview_divisor
+// Per frame: events → camera gestures and (with --deform) dragging → the deformation (a frame
+// ahead in the background, below) → ray casting when the image would change, at 1 / preview_divisor
 // of the resolution while the user interacts and at full resolution otherwise → the image drawn
 // over the window → screenshot (last frame) → overlay → swap. A view that does not change is not
 // ray-cast again, and an idle window waits for events.
@@ -80,7 +80,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
 
     for (int frame = 0; !window.should_close() && (run.frames <= 0 || frame < run.frames);
          ++frame) {
-        const bool animating = session.is_deformable() && !state.paused;
+        const bool animating = session.is_deformable() && (!state.paused || session.is_stepping());
         const bool idle =
             run.frames <= 0 && !animating && !dragging && !rendered &&
             !(scrolled && since_scroll.elapsed_ms() < 1000.0 * SCROLL_PREVIEW_SECONDS);
@@ -123,11 +123,28 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
         if (dragging) {
             session.drag(controller.camera(width, height), mouse.x, mouse.y);
         }
-        if (session.is_deformable() && (!state.paused || state.step_requested)) {
-            session.step();
-            state.step_requested = false;
-            step_ms.add(session.stats().step_ms);
-            resample_ms.add(session.stats().resample_ms);
+        // The deformation runs a frame ahead in the background (as the cloth view's): without
+        // input a frame waits for (and helps compute) the next deformed volume, with input the
+        // view is redrawn at once; --sync: one deformed frame per drawn frame, in turn.
+        if (session.is_deformable()) {
+            const bool input = mouse.dx != 0.0 || mouse.dy != 0.0 || mouse.any_held() ||
+                               mouse.released[0] || mouse.released[1] || mouse.released[2] ||
+                               mouse.scroll != 0.0 || keys.any() || window.ui_is_active();
+            const auto on_published = [&] {
+                step_ms.add(session.stats().step_ms);
+                resample_ms.add(session.stats().resample_ms);
+            };
+            if (session.is_stepping() &&
+                session.finish_step(run.sync || (!input && !state.paused))) {
+                on_published();
+            }
+            if (!session.is_stepping() && (!state.paused || state.step_requested)) {
+                session.start_step();
+                state.step_requested = false;
+                if (run.sync && session.finish_step(true)) {
+                    on_published();
+                }
+            }
         }
 
         // Ray casting, when the image would change.
@@ -183,9 +200,10 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     result["deform"] = session.is_deformable();
     result["driver"] = driver_kind_name(session.settings().driver.kind);
     if (const pbd::SoftBody* body = session.body()) {
-        result["tets"] = body->tets().size();
-        result["vertices"] = body->positions().size();
-        result["simulated_seconds"] = body->time();
+        result["tets"] = body->tets().size();  // fixed topology: safe during a frame in flight
+        result["vertices"] = body->rest_positions().size();
+        result["simulated_seconds"] = session.time();  // of the last frame shown
+        result["sync"] = run.sync;
     }
     result["frames"] = clock.frames();
     result["full_resolution_images"] = full_frames;

@@ -318,10 +318,11 @@ TEST(ViewCli, DeformingVolumeRunsAndChanges) {
         "view volume " + volume + " --frames 1 --deform" + common + quoted(scratch / "rest.png"),
         scratch);
     ASSERT_EQ(rest.exit_code, 0) << rest.err;
-    const CliResult r = run_headless("--json view volume " + volume +
-                                         " --frames 12 --deform --driver twist --stiffness 0.8" +
-                                         common + quoted(scratch / "twist.png"),
-                                     scratch);
+    const CliResult r =
+        run_headless("--json view volume " + volume +
+                         " --frames 12 --sync --deform --driver twist --stiffness 0.8" + common +
+                         quoted(scratch / "twist.png"),
+                     scratch);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_TRUE(j["deform"].get<bool>());

@@ -167,6 +167,41 @@ TEST(VolumeSession, DeformsWithDriversAndDrag) {
     EXPECT_EQ(session.time(), 0.0);
 }
 
+// In the background: while a frame is in flight the published volume is rendered (double
+// buffering), and the published frames are those of step().
+TEST(VolumeSession, BackgroundFramesPublishTheSameVolumes) {
+    const Volume phantom = volume::shepp_logan_3d(DIMS);
+    const render::Camera camera = camera_for(phantom, 64, 64);
+    VolumeSessionOptions options{.tf = "mri-brain", .deform = true};
+    options.driver.kind = DriverKind::twist;
+    options.driver.twist.ramp_time = 0.2;
+    VolumeSession background(phantom, options);
+    VolumeSession foreground(phantom, options);
+    render::Image before, during, after, expected;
+    for (int f = 1; f <= 4; ++f) {
+        background.render(camera, before);
+        ASSERT_TRUE(background.start_step());
+        EXPECT_TRUE(background.is_stepping());
+        EXPECT_FALSE(background.start_step());
+        background.render(camera, during);
+        EXPECT_EQ(during, before);  // the frame in flight fills the other buffer
+        while (!background.finish_step(false)) {
+        }
+        EXPECT_FALSE(background.is_stepping());
+        foreground.step();
+        background.render(camera, after);
+        foreground.render(camera, expected);
+        EXPECT_EQ(after, expected) << "frame " << f;
+        EXPECT_EQ(background.time(), foreground.time());
+    }
+    EXPECT_NE(after, before);
+    // Settings wait for a frame in flight.
+    background.start_step();
+    background.set_stiffness(0.9);
+    EXPECT_FALSE(background.is_stepping());
+    EXPECT_NEAR(background.time(), 5.0 / 24.0, 1e-12);
+}
+
 TEST(VolumeSession, ErrorsNameTheProblem) {
     const Volume phantom = volume::shepp_logan_3d({8, 8, 8});
     EXPECT_THROW(VolumeSession(phantom, {.opacity_scale = 0.0}), InvalidInput);
