@@ -2,6 +2,8 @@
 
 #include <imgui.h>
 
+#include "panel_widgets.hpp"
+
 namespace pliant::viewer {
 
 void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameClock& clock) {
@@ -24,13 +26,7 @@ void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameC
     const ClothFrameStats& stats = session.stats();
     const cloth::ClothStepStats& step = stats.step;
     if (ImGui::BeginTable("stages", 2, ImGuiTableFlags_SizingStretchProp)) {
-        const auto row = [](const char* name, double ms) {
-            ImGui::TableNextRow();
-            ImGui::TableNextColumn();
-            ImGui::TextUnformatted(name);
-            ImGui::TableNextColumn();
-            ImGui::Text("%8.2f ms", ms);
-        };
+        const auto row = stage_row;
         row("step (whole)", step.ms);
         row("  solve (XPBD, obstacles)", step.solve_ms);
         if (step.has_self_collision) {
@@ -56,15 +52,7 @@ void draw_cloth_panel(ClothSession& session, ClothViewState& state, const FrameC
                             static_cast<long long>(stats.checked_frame), stats.check_ms);
     }
     ImGui::Separator();
-    if (ImGui::Button(state.paused ? "Run" : "Pause")) {
-        state.paused = !state.paused;
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Step")) {
-        state.step_requested = true;
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Reset")) {
+    if (run_controls(state.paused, state.step_requested)) {
         state.reset_requested = true;
     }
     ImGui::SameLine();

@@ -13,7 +13,6 @@
 #include <optional>
 #include <vector>
 
-#include "camera_json.hpp"
 #include "cloth_look.hpp"
 #include "cloth_panel.hpp"
 #include "cloth_session.hpp"
@@ -24,6 +23,7 @@
 #include "orbit_controller.hpp"
 #include "pliant/core/timer.hpp"
 #include "screenshot.hpp"
+#include "view_summary.hpp"
 #include "viewer.hpp"
 #include "window.hpp"
 
@@ -128,9 +128,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
         // Without input there is nothing new to draw before the next simulated frame: wait for
         // it (and help compute it) rather than draw the same image again. With input, draw at
         // once and let the frame finish beside the drawing.
-        const bool input = mouse.dx != 0.0 || mouse.dy != 0.0 || mouse.any_held() ||
-                           mouse.released[0] || mouse.released[1] || mouse.released[2] ||
-                           mouse.scroll != 0.0 || keys.any() || window.ui_is_active();
+        const bool input = mouse.any_activity() || keys.any() || window.ui_is_active();
         if (session.is_advancing() &&
             session.finish_advance(run.sync || (!input && !state.paused))) {
             on_published();
@@ -182,7 +180,6 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["scene"] = scene_name;
     result["triangles"] = session.triangles().size();
     result["vertices"] = session.positions().size();
-    result["frames"] = clock.frames();
     result["substeps_per_frame"] = session.substeps_per_frame();
     result["simulated_frames"] = session.frame();
     result["simulated_seconds"] = session.time();
@@ -190,8 +187,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     const double wall_seconds = run_clock.elapsed_ms() / 1000.0;
     result["simulated_frames_per_second"] =
         wall_seconds > 0.0 ? static_cast<double>(session.frame()) / wall_seconds : 0.0;
-    result["mean_frame_ms"] = clock.mean_ms();
-    result["fps"] = clock.mean_ms() > 0.0 ? 1000.0 / clock.mean_ms() : 0.0;
+    add_run_summary(result, clock, run, window, last_camera);
     result["mean_step_ms"] = step_ms.value();
     result["mean_solve_ms"] = solve_ms.value();
     result["mean_refit_ms"] = refit_ms.value();
@@ -202,12 +198,6 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["intersecting_pairs"] = session.stats().intersecting_pairs;
     result["intersecting_pairs_frame"] = session.stats().checked_frame;
     result["max_intersecting_pairs"] = max_intersections;
-    result["screenshot"] = run.screenshot.empty() ? nlohmann::ordered_json()
-                                                  : nlohmann::ordered_json(run.screenshot.string());
-    result["camera"] = last_camera ? camera_json(*last_camera) : nlohmann::ordered_json();
-    result["gl_renderer"] = window.gl_renderer();
-    result["gl_version"] = window.gl_version();
-    result["msaa_samples"] = window.msaa_samples();
     return result;
 }
 

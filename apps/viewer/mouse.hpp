@@ -20,6 +20,11 @@ struct MouseFrame {
     bool shift = false, ctrl = false, alt = false;
     double scroll = 0.0;  // wheel notches over the scene (0 over the overlay)
     bool any_held() const { return held[0] || held[1] || held[2]; }
+    // Any motion, button or wheel activity this frame.
+    bool any_activity() const {
+        return dx != 0.0 || dy != 0.0 || any_held() || released[0] || released[1] || released[2] ||
+               scroll != 0.0;
+    }
 };
 
 class MouseTracker {

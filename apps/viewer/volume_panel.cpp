@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "panel_widgets.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/volume/transfer_function.hpp"
 
@@ -121,13 +122,7 @@ void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const Fra
                 state.preview ? " (preview while interacting)" : "");
     const VolumeFrameStats& stats = session.stats();
     if (ImGui::BeginTable("stages", 2, ImGuiTableFlags_SizingStretchProp)) {
-        const auto row = [](const char* name, double ms) {
-            ImGui::TableNextRow();
-            ImGui::TableNextColumn();
-            ImGui::TextUnformatted(name);
-            ImGui::TableNextColumn();
-            ImGui::Text("%8.2f ms", ms);
-        };
+        const auto row = stage_row;
         if (session.is_deformable()) {
             row("soft body step (XPBD)", stats.step_ms);
             row("resample", stats.resample_ms);
@@ -209,15 +204,7 @@ void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const Fra
         if (ImGui::SliderFloat("drag radius", &radius, 0.0f, 0.3f, "%.2f")) {
             apply([&] { session.set_drag_radius(radius); });
         }
-        if (ImGui::Button(state.paused ? "Run" : "Pause")) {
-            state.paused = !state.paused;
-        }
-        ImGui::SameLine();
-        if (ImGui::Button("Step")) {
-            state.step_requested = true;
-        }
-        ImGui::SameLine();
-        if (ImGui::Button("Reset")) {
+        if (run_controls(state.paused, state.step_requested)) {
             apply([&] { session.reset_deformation(); });
         }
     }

@@ -9,7 +9,6 @@
 #include <array>
 #include <optional>
 
-#include "camera_json.hpp"
 #include "frame_clock.hpp"
 #include "gl.hpp"
 #include "image_drawer.hpp"
@@ -19,6 +18,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "screenshot.hpp"
+#include "view_summary.hpp"
 #include "viewer.hpp"
 #include "volume_panel.hpp"
 #include "volume_session.hpp"
@@ -127,9 +127,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
         // input a frame waits for (and helps compute) the next deformed volume, with input the
         // view is redrawn at once; --sync: one deformed frame per drawn frame, in turn.
         if (session.is_deformable()) {
-            const bool input = mouse.dx != 0.0 || mouse.dy != 0.0 || mouse.any_held() ||
-                               mouse.released[0] || mouse.released[1] || mouse.released[2] ||
-                               mouse.scroll != 0.0 || keys.any() || window.ui_is_active();
+            const bool input = mouse.any_activity() || keys.any() || window.ui_is_active();
             const auto on_published = [&] {
                 step_ms.add(session.stats().step_ms);
                 resample_ms.add(session.stats().resample_ms);
@@ -205,21 +203,13 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
         result["simulated_seconds"] = session.time();  // of the last frame shown
         result["sync"] = run.sync;
     }
-    result["frames"] = clock.frames();
     result["full_resolution_images"] = full_frames;
     result["preview_images"] = preview_frames;
-    result["mean_frame_ms"] = clock.mean_ms();
-    result["fps"] = clock.mean_ms() > 0.0 ? 1000.0 / clock.mean_ms() : 0.0;
+    add_run_summary(result, clock, run, window, last_camera);
     result["mean_step_ms"] = step_ms.value();
     result["mean_resample_ms"] = resample_ms.value();
     result["mean_prepare_ms"] = prepare_ms.value();
     result["mean_render_ms"] = render_ms.value();
-    result["screenshot"] = run.screenshot.empty() ? nlohmann::ordered_json()
-                                                  : nlohmann::ordered_json(run.screenshot.string());
-    result["camera"] = last_camera ? camera_json(*last_camera) : nlohmann::ordered_json();
-    result["gl_renderer"] = window.gl_renderer();
-    result["gl_version"] = window.gl_version();
-    result["msaa_samples"] = window.msaa_samples();
     return result;
 }
 
