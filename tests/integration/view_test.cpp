@@ -30,19 +30,12 @@
 namespace pliant::test {
 namespace {
 
-// 33 × 34 quads (2,244 triangles, the seed paper's smallest size) dropped onto a sphere above a
-// floor.
-constexpr const char* GRID_SCENE = R"({
-  "cloth": {"grid": {"size": [1.0, 1.0], "quads": [33, 34]}, "translate": [0, 0, 0.6]},
-  "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.35}},
-                {"plane": {"point": [0, 0, -0.4], "normal": [0, 0, 1]}}],
-  "material": {"thickness": 0.004},
-  "fps": 24, "frames": 48, "substeps": 20
-})";
-
+// scenes/sheet2244.json: 33 × 34 quads (2,244 triangles, the seed paper's smallest size)
+// dropped onto a sphere above a floor, copied into the scratch directory.
 std::filesystem::path write_scene(const ScratchDir& scratch) {
     const std::filesystem::path path = scratch / "grid.json";
-    std::ofstream(path) << GRID_SCENE;
+    std::filesystem::copy_file(
+        std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes" / "sheet2244.json", path);
     return path;
 }
 
