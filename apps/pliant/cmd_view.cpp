@@ -105,6 +105,7 @@ void finish_view_options(const CLI::App* cmd, const ViewCommandOptions& o,
     run.window.vsync = run.frames <= 0;  // measurements and headless runs as fast as they go
 }
 
+#ifdef PLIANT_HAS_VIEWER
 void print_summary(const nlohmann::ordered_json& result, const GlobalOptions& global) {
     if (global.json) {
         std::fputs((result.dump(2) + "\n").c_str(), stdout);
@@ -118,6 +119,7 @@ void print_summary(const nlohmann::ordered_json& result, const GlobalOptions& gl
         result["screenshot"].is_null() ? "" : ", screenshot ",
         result["screenshot"].is_null() ? "" : result["screenshot"].get<std::string>().c_str());
 }
+#endif
 
 #ifndef PLIANT_HAS_VIEWER
 [[noreturn]] void no_viewer() {

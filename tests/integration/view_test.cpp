@@ -45,37 +45,6 @@ std::filesystem::path write_phantom(const ScratchDir& scratch) {
     return path;
 }
 
-bool has_xvfb() {
-    return std::system("command -v xvfb-run >/dev/null 2>&1") == 0;
-}
-
-// The viewer under a virtual X server (a free server number per run, so tests run in parallel).
-CliResult run_headless(const std::string& args, const ScratchDir& scratch) {
-    return run_cli(args, scratch, "xvfb-run -a");
-}
-
-std::vector<float> to_floats(const render::Image& image) {
-    std::vector<float> out(image.pixels.size());
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        out[i] = static_cast<float>(image.pixels[i]) / 255.0f;
-    }
-    return out;
-}
-
-double psnr(const render::Image& a, const render::Image& b) {
-    return nerf::psnr(to_floats(a), to_floats(b));
-}
-
-Vec3d vec3(const nlohmann::json& j) {
-    return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-}
-
-render::Camera camera_from_json(const nlohmann::json& c) {
-    return render::Camera::perspective(vec3(c["eye"]), vec3(c["target"]), vec3(c["up"]),
-                                       c["fov_y_degrees"].get<double>(), c["width"].get<int>(),
-                                       c["height"].get<int>());
-}
-
 TEST(ViewCli, HelpListsTheViewsAndOptions) {
     const ScratchDir scratch;
     const CliResult r = run_cli("view --help", scratch);
@@ -159,6 +128,37 @@ TEST(ViewCli, NoDisplayIsAClearError) {
 }
 
 #if PLIANT_HAS_VIEWER
+
+bool has_xvfb() {
+    return std::system("command -v xvfb-run >/dev/null 2>&1") == 0;
+}
+
+// The viewer under a virtual X server (a free server number per run, so tests run in parallel).
+CliResult run_headless(const std::string& args, const ScratchDir& scratch) {
+    return run_cli(args, scratch, "xvfb-run -a");
+}
+
+std::vector<float> to_floats(const render::Image& image) {
+    std::vector<float> out(image.pixels.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        out[i] = static_cast<float>(image.pixels[i]) / 255.0f;
+    }
+    return out;
+}
+
+double psnr(const render::Image& a, const render::Image& b) {
+    return nerf::psnr(to_floats(a), to_floats(b));
+}
+
+Vec3d vec3(const nlohmann::json& j) {
+    return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
+render::Camera camera_from_json(const nlohmann::json& c) {
+    return render::Camera::perspective(vec3(c["eye"]), vec3(c["target"]), vec3(c["up"]),
+                                       c["fov_y_degrees"].get<double>(), c["width"].get<int>(),
+                                       c["height"].get<int>());
+}
 
 // The viewer's frame 3 (20 substeps per frame: frames of `pliant cloth`) against the mesh
 // rasterizer on the frame `pliant cloth` wrote, with the viewer's camera and the preview's look.
