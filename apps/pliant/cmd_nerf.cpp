@@ -1,7 +1,9 @@
 // pliant nerf train TRANSFORMS.json -o VOLUME [--minutes M | --iterations N] [--resolution R]
 //                   [--stages S] [--batch B] [--export-resolution E] [--type rgba8|rgba32f]
 //                   [--threshold T] [--normalize none|max|range] [--background R,G,B] [--seed S]
-// pliant nerf eval TRANSFORMS.json VOLUME [--background R,G,B] [--images DIR]   [--json]
+//                   [--max-memory MIB]
+// pliant nerf eval TRANSFORMS.json VOLUME [--background R,G,B] [--images DIR] [--max-memory MIB]
+//                  [--json]
 //
 // train: reconstructs a voxel radiance field (nerf/trainer.hpp) from a posed-image dataset
 // (io/nerf_dataset.hpp) and writes it as an RGBA volume (nerf/export.hpp: E voxels along the
@@ -83,7 +85,12 @@ struct TrainCommandOptions {
     float tv_density = nerf::TrainOptions{}.tv_density;
     float tv_color = nerf::TrainOptions{}.tv_color;
     float lr = nerf::TrainOptions{}.lr_density;
+    double max_memory_mib = 16384.0;
 };
+
+std::size_t to_bytes(double mib) {
+    return static_cast<std::size_t>(mib * 1024.0 * 1024.0);
+}
 
 void run_train(const TrainCommandOptions& options, const GlobalOptions& global) {
     const volume::VoxelType type =
@@ -91,10 +98,13 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     io::check_volume_writable(options.out, type);  // fail before a long run
     io::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
+    ro.max_bytes = to_bytes(options.max_memory_mib);
     const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
 
     TrainRunOptions run;
     nerf::TrainOptions& to = run.train;
+    to.max_bytes = to_bytes(options.max_memory_mib);
+    run.exported.max_bytes = to.max_bytes;
     to.resolution = options.resolution;
     to.stages = options.stages;
     to.batch_rays = options.batch;
@@ -157,13 +167,17 @@ struct EvalCommandOptions {
     std::string volume;
     std::array<float, 3> background{0.0f, 0.0f, 0.0f};
     std::string images;
+    double max_memory_mib = 16384.0;
 };
 
 void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
     io::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
+    ro.max_bytes = to_bytes(options.max_memory_mib);
     const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
-    const volume::Volume vol = io::read_volume(options.volume);
+    io::ReadVolumeOptions rv;
+    rv.max_bytes = ro.max_bytes;
+    const volume::Volume vol = io::read_volume(options.volume, rv);
     if (volume::channels(vol.type()) != 4) {
         throw InvalidInput(fmt::format("{}: a {} volume; nerf eval needs an RGBA volume",
                                        options.volume, volume::name(vol.type())));
@@ -236,6 +250,12 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::Range(0.0, 1e9));
     train->add_option("--lr", t->lr, "Adam learning rate (raw density and colour)")
         ->check(CLI::Range(0.0, 100.0));
+    train
+        ->add_option("--max-memory", t->max_memory_mib,
+                     "Refuse datasets and grids that would need more than this (MiB; default "
+                     "16384), before allocating")
+        ->type_name("MIB")
+        ->check(CLI::Range(1e-6, 1e9));
     train->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     train->callback([t, &global] { run_train(*t, global); });
 
@@ -249,6 +269,11 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->delimiter(',')
         ->check(CLI::Range(0.0, 1.0));
     eval->add_option("--images", e->images, "Write the renders to this directory");
+    eval->add_option("--max-memory", e->max_memory_mib,
+                     "Refuse datasets and volumes that would need more than this (MiB; default "
+                     "16384), before allocating")
+        ->type_name("MIB")
+        ->check(CLI::Range(1e-6, 1e9));
     eval->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     eval->callback([e, &global] { run_eval(*e, global); });
 }

@@ -84,6 +84,17 @@ nlohmann::ordered_json render_dataset(const volume::Volume& source,
 
 TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions& options,
                             FunctionRef<bool()> keep_going) {
+    // The output's size, checked before a long run (the grid's is checked by nerf::train).
+    const AABBd box = nerf::scene_box(dataset);
+    const std::size_t out_bytes = nerf::export_bytes(box, options.exported);
+    if (out_bytes > options.exported.max_bytes) {
+        const volume::Dims d = nerf::export_dims(box, options.exported.resolution);
+        throw InvalidInput(fmt::format(
+            "nerf train: the exported {} x {} x {} {} volume would need {:.0f} MiB, more than the "
+            "memory limit of {:.0f} MiB (lower --export-resolution)",
+            d[0], d[1], d[2], volume::name(options.exported.type), out_bytes / 1048576.0,
+            options.exported.max_bytes / 1048576.0));
+    }
     double last_print = -1e9;
     const nerf::TrainResult result =
         nerf::train(dataset, options.train, [&](const nerf::TrainProgress& p) {

@@ -60,7 +60,8 @@ struct TrainRunResult {
 };
 
 // Trains a field on `dataset` (nerf::train) and exports it. keep_going is asked after every
-// iteration; false stops training and the field so far is exported.
+// iteration; false stops training and the field so far is exported. InvalidInput before training
+// when the exported volume would exceed options.exported.max_bytes.
 TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions& options,
                             FunctionRef<bool()> keep_going);
 
