@@ -211,9 +211,9 @@ struct SlabCounts {
     std::int64_t num_voxels_written = 0;
 };
 
-// Runs, per slab in parallel: zero_slab(k0, k1), then for every tet of the slab in tet order,
-// visit_batch(tet, batch) over batches of the voxels the tie rule gives the tet inside the slab
-// (detail::batch_spans). Degenerate and inverted tets are counted in the first slab they overlap.
+// Runs, per slab in parallel: zero_slab(k0, k1), then visit_batch(batch) over batches of the
+// voxels the tie rule gives the slab's tets inside the slab, in tet order (detail::append_spans).
+// Degenerate and inverted tets are counted in the first slab they overlap.
 template <typename ZeroSlab, typename VisitBatch>
 SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::uint8_t> rest_codes,
                      std::span<const geometry::Tet> tets, std::span<const Vec3f> rest,
@@ -227,6 +227,9 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
             SlabCounts counts;
             // One batch buffer per task (not per tet).
             const auto batch = std::make_unique<detail::SpanBatch>();
+            auto flush = [&](const detail::SpanBatch& b) {
+                visit_batch(b);
+            };
             for (std::int64_t s = s_begin; s < s_end; ++s) {
                 const std::int64_t k_begin = s * slabs.height;
                 const std::int64_t k_end = std::min(k_begin + slabs.height, target.n[2]);
@@ -257,10 +260,15 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
                             continue;
                         }
                     }
-                    counts.num_voxels_written += detail::batch_spans(
-                        raster, k_begin, k_end, target.n[0], target.n[0] * target.n[1], *batch,
-                        [&](const detail::SpanBatch& b) { visit_batch(raster, b); });
+                    counts.num_voxels_written +=
+                        detail::append_spans(raster, k_begin, k_end, target.n[0],
+                                             target.n[0] * target.n[1], *batch, flush);
                 }
+                if (batch->num_voxels > 0) {
+                    flush(*batch);
+                }
+                batch->num_voxels = 0;
+                batch->is_interior = true;
             }
             return counts;
         },
@@ -291,35 +299,26 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept,
     auto zero_slab = [&](std::int64_t k0, std::int64_t k1) {
         std::memset(dst + k0 * layer, 0, static_cast<std::size_t>((k1 - k0) * layer) * sizeof(D));
     };
-    // One loop over the batch: g = row start + map[a][0]·i (map_coord's order).
-    auto visit_batch = [&](const TetRaster& t, const detail::SpanBatch& batch) {
-        const double mx = t.map[0][0];
-        const double my = t.map[1][0];
-        const double mz = t.map[2][0];
+    // One loop over the batch.
+    auto visit_batch = [&](const detail::SpanBatch& batch) {
         // The interior sampler gives the same bits as sample_trilinear, without its bounds
         // tests and clamps.
-        if (t.is_interior) {
+        if (batch.is_interior) {
             for (int e = 0; e < batch.num_voxels; ++e) {
-                const detail::SpanVoxel v = batch.voxels[e];
-                const detail::SpanRow& r = batch.rows[v.row];
-                const double id = static_cast<double>(v.i);
                 float sample[C];
-                detail::sample_interior<S, C>(src, sf.n, r.g[0] + mx * id, r.g[1] + my * id,
-                                              r.g[2] + mz * id, sample);
-                D* out = dst + C * (r.base + v.i);
+                detail::sample_interior<S, C>(src, sf.n, batch.g[0][e], batch.g[1][e],
+                                              batch.g[2][e], sample);
+                D* out = dst + C * batch.index[e];
                 for (int c = 0; c < C; ++c) {
                     out[c] = detail::convert_sample<D>(sample[c], scale);
                 }
             }
         } else {
             for (int e = 0; e < batch.num_voxels; ++e) {
-                const detail::SpanVoxel v = batch.voxels[e];
-                const detail::SpanRow& r = batch.rows[v.row];
-                const double id = static_cast<double>(v.i);
                 float sample[C];
-                detail::sample_trilinear<S, C>(src, sf.n, r.g[0] + mx * id, r.g[1] + my * id,
-                                               r.g[2] + mz * id, sample);
-                D* out = dst + C * (r.base + v.i);
+                detail::sample_trilinear<S, C>(src, sf.n, batch.g[0][e], batch.g[1][e],
+                                               batch.g[2][e], sample);
+                D* out = dst + C * batch.index[e];
                 for (int c = 0; c < C; ++c) {
                     out[c] = detail::convert_sample<D>(sample[c], scale);
                 }
@@ -533,10 +532,9 @@ void Resampler::count_coverage(std::span<const Vec3f> deformed_positions, const 
         [&](std::int64_t k0, std::int64_t k1) {
             std::memset(counts.data() + k0 * layer, 0, static_cast<std::size_t>((k1 - k0) * layer));
         },
-        [&](const TetRaster&, const detail::SpanBatch& batch) {
+        [&](const detail::SpanBatch& batch) {
             for (int e = 0; e < batch.num_voxels; ++e) {
-                const detail::SpanVoxel v = batch.voxels[e];
-                std::uint8_t& c = counts[static_cast<std::size_t>(batch.rows[v.row].base + v.i)];
+                std::uint8_t& c = counts[static_cast<std::size_t>(batch.index[e])];
                 c = c == 255 ? c : static_cast<std::uint8_t>(c + 1);
             }
         });
