@@ -13,6 +13,7 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/exact_predicates.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "pliant/volume/detail/resample_avx2.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/generate.hpp"
 
@@ -412,6 +413,51 @@ TEST(Resample, OneAndManyThreadsAreBitwiseIdenticalEvenWithFolds) {
     }
     set_num_threads(saved);
     EXPECT_GT(s1.num_inverted, 0);
+}
+
+TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
+    if (!detail::has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    // f32 → f32 takes the AVX2 sampler; tets up to 8 voxels wide the AVX2 rows.
+    const Volume source = shepp_logan_3d({48, 44, 40});
+    const pbd::TetGrid g = full_grid(source, 4);
+    const Resampler resampler(source, g.mesh.tets, g.mesh.positions);
+    const Vec3d c = box_center(source);
+    const AABBd box = source.bounds();
+    const double a = 30.0 * std::numbers::pi / 180.0;
+    const double rot[3][3] = {
+        {std::cos(a), -std::sin(a), 0}, {std::sin(a), std::cos(a), 0}, {0, 0, 1}};
+    const double stretch[3][3] = {{2.5, 0, 0}, {0, 0.7, 0}, {0, 0, 1.2}};  // tets > 8 wide
+    std::vector<std::vector<Vec3f>> deformations = {
+        g.mesh.positions,                           // ties on faces, edges, vertices
+        transformed(g.mesh.positions, c, rot),      // faces parallel to the rows
+        transformed(g.mesh.positions, c, stretch),  // wide tets: both kernels in one run
+        transformed(g.mesh.positions, c, rot, (box.hi - box.lo) * 0.15)};  // partly outside
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> jitter(-2.0f, 2.0f);  // folds, inverted tets
+    deformations.push_back(transformed(g.mesh.positions, c, rot));
+    for (Vec3f& p : deformations.back()) {
+        p += Vec3f{jitter(rng), jitter(rng), jitter(rng)};
+    }
+    for (std::size_t d = 0; d < deformations.size(); ++d) {
+        Volume fast = like(source, VoxelType::f32);
+        Volume plain = like(source, VoxelType::f32);
+        std::vector<std::uint8_t> fast_counts(static_cast<std::size_t>(source.num_voxels()));
+        std::vector<std::uint8_t> plain_counts(fast_counts.size());
+        const ResampleStats s_fast = resampler.resample(deformations[d], fast);
+        resampler.count_coverage(deformations[d], source, fast_counts);
+        detail::allow_avx2(false);
+        const ResampleStats s_plain = resampler.resample(deformations[d], plain);
+        resampler.count_coverage(deformations[d], source, plain_counts);
+        detail::allow_avx2(true);
+        EXPECT_GT(s_fast.num_voxels_written, 0) << d;
+        EXPECT_EQ(s_fast.num_voxels_written, s_plain.num_voxels_written) << d;
+        EXPECT_EQ(s_fast.num_inverted, s_plain.num_inverted) << d;
+        EXPECT_EQ(std::memcmp(fast.bytes().data(), plain.bytes().data(), fast.size_bytes()), 0)
+            << "deformation " << d;
+        EXPECT_EQ(fast_counts, plain_counts) << "deformation " << d;
+    }
 }
 
 TEST(Resample, EmptySourceGivesZerosAndSkipsEveryTet) {

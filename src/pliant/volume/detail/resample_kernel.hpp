@@ -61,12 +61,13 @@ struct TetRaster {
     bool is_fast;
     std::uint8_t flat_faces;  // bit f: plane[f][0] == 0
     // Cross-sections (slice_rows()): per edge, its z range in index space (empty for an edge
-    // parallel to the layers), an end (y0, z0) and dy/dz.
-    double edge_z_lo[6];
-    double edge_z_hi[6];
-    double edge_y0[6];
-    double edge_z0[6];
-    double edge_slope[6];
+    // parallel to the layers), an end (y0, z0) and dy/dz. Entries 6 and 7 pad the arrays for
+    // SIMD (empty ranges, never crossed).
+    double edge_z_lo[8];
+    double edge_z_hi[8];
+    double edge_y0[8];
+    double edge_z0[8];
+    double edge_slope[8];
     // Affine map from target voxel indices to source grid coordinates (voxel centres at integers):
     // g_a = ((map[a][3] + map[a][2]·k) + map[a][1]·j) + map[a][0]·i, in this order (map_coord()).
     double map[3][4];
@@ -265,6 +266,13 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
         out.edge_z0[e] = va[2];
         out.edge_slope[e] = is_flat ? 0.0 : (vb[1] - va[1]) / dz;
     }
+    for (int e = 6; e < 8; ++e) {
+        out.edge_z_lo[e] = std::numeric_limits<double>::infinity();
+        out.edge_z_hi[e] = -std::numeric_limits<double>::infinity();
+        out.edge_y0[e] = 0.0;
+        out.edge_z0[e] = 0.0;
+        out.edge_slope[e] = 0.0;
+    }
 
     const Vec3d row[3] = {c12 * inv_det, cross(e2, e0) * inv_det, cross(e0, e1) * inv_det};
     Vec3d rd[4];
@@ -307,6 +315,22 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double map_coord(const double m[4], std::
            m[0] * static_cast<double>(i);
 }
 
+// The rows [j_begin, j_end) of a cross-section whose y extent is [y_min, y_max] (empty when not
+// y_min ≤ y_max), grown by 1e-6 voxel like the bounding box, within [lo, hi].
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void rows_of_extent(const TetRaster& t, double y_min,
+                                                           double y_max, std::int64_t& j_begin,
+                                                           std::int64_t& j_end) {
+    constexpr double GROW = 1e-6;
+    if (!(y_min <= y_max)) {
+        j_begin = j_end = 0;
+        return;
+    }
+    const double lo = static_cast<double>(t.lo[1]);
+    const double hi = static_cast<double>(t.hi[1]);
+    j_begin = std::max(t.lo[1], ceil_to_int(std::clamp(y_min - GROW, lo - 1.0, hi + 1.0)));
+    j_end = std::min(t.hi[1], floor_to_int(std::clamp(y_max + GROW, lo - 1.0, hi + 1.0))) + 1;
+}
+
 // The rows [j_begin, j_end) of layer k that can hold centres inside the tet: the y extent of the
 // tet's cross-section with the plane of the layer (from its edges' crossings, each edge's z
 // clamped to its range), grown by 1e-6 voxel like the bounding box, within [lo, hi].
@@ -324,14 +348,7 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void slice_rows(const TetRaster& t, std::
         y_min = is_crossed ? std::min(y_min, y) : y_min;
         y_max = is_crossed ? std::max(y_max, y) : y_max;
     }
-    if (!(y_min <= y_max)) {
-        j_begin = j_end = 0;
-        return;
-    }
-    const double lo = static_cast<double>(t.lo[1]);
-    const double hi = static_cast<double>(t.hi[1]);
-    j_begin = std::max(t.lo[1], ceil_to_int(std::clamp(y_min - GROW, lo - 1.0, hi + 1.0)));
-    j_end = std::min(t.hi[1], floor_to_int(std::clamp(y_max + GROW, lo - 1.0, hi + 1.0))) + 1;
+    rows_of_extent(t, y_min, y_max, j_begin, j_end);
 }
 
 // The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
