@@ -92,6 +92,19 @@ PLIANT_AVX2_INLINE void slice_rows4(const TetRaster& t, std::int64_t k, std::int
     rows_of_extent(t, min4(y_min), max4(y_max), j_begin, j_end);
 }
 
+// lo[l] = src[at[l] + offset], hi[l] = src[at[l] + offset + 1] for the 4 lanes l.
+PLIANT_AVX2_INLINE void pairs(const float* src, const std::int32_t at[4], std::int32_t offset,
+                              __m128& lo, __m128& hi) {
+    const auto* p0 = reinterpret_cast<const __m64*>(src + at[0] + offset);
+    const auto* p1 = reinterpret_cast<const __m64*>(src + at[1] + offset);
+    const auto* p2 = reinterpret_cast<const __m64*>(src + at[2] + offset);
+    const auto* p3 = reinterpret_cast<const __m64*>(src + at[3] + offset);
+    const __m128 l01 = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), p0), p1);  // a0 b0 a1 b1
+    const __m128 l23 = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), p2), p3);  // a2 b2 a3 b3
+    lo = _mm_shuffle_ps(l01, l23, _MM_SHUFFLE(2, 0, 2, 0));
+    hi = _mm_shuffle_ps(l01, l23, _MM_SHUFFLE(3, 1, 3, 1));
+}
+
 template <bool INTERIOR>
 PLIANT_AVX2_INLINE int sample_f32(const float* src, const std::int64_t n[3], const SpanBatch& batch,
                                   float scale, float* dst) {
@@ -134,15 +147,27 @@ PLIANT_AVX2_INLINE int sample_f32(const float* src, const std::int64_t n[3], con
                 nx4, _mm_add_epi32(ay.index,
                                    _mm_mullo_epi32(_mm_set1_epi32(static_cast<std::int32_t>(n[1])),
                                                    az.index))));
-        const __m128i pz = _mm_add_epi32(p, oz);
-        const __m128 v000 = _mm_i32gather_ps(src, p, 4);
-        const __m128 v100 = _mm_i32gather_ps(src, _mm_add_epi32(p, ox), 4);
-        const __m128 v010 = _mm_i32gather_ps(src, _mm_add_epi32(p, oy), 4);
-        const __m128 v110 = _mm_i32gather_ps(src, _mm_add_epi32(_mm_add_epi32(p, oy), ox), 4);
-        const __m128 v001 = _mm_i32gather_ps(src, pz, 4);
-        const __m128 v101 = _mm_i32gather_ps(src, _mm_add_epi32(pz, ox), 4);
-        const __m128 v011 = _mm_i32gather_ps(src, _mm_add_epi32(pz, oy), 4);
-        const __m128 v111 = _mm_i32gather_ps(src, _mm_add_epi32(_mm_add_epi32(pz, oy), ox), 4);
+        __m128 v000, v100, v010, v110, v001, v101, v011, v111;
+        if constexpr (INTERIOR) {
+            // The x neighbours are adjacent: one 8-byte load per pair (gathers are slow on some
+            // CPUs, e.g. Zen 4).
+            alignas(16) std::int32_t at[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(at), p);
+            pairs(src, at, 0, v000, v100);
+            pairs(src, at, nx, v010, v110);
+            pairs(src, at, nxy, v001, v101);
+            pairs(src, at, nx + nxy, v011, v111);
+        } else {
+            const __m128i pz = _mm_add_epi32(p, oz);
+            v000 = _mm_i32gather_ps(src, p, 4);
+            v100 = _mm_i32gather_ps(src, _mm_add_epi32(p, ox), 4);
+            v010 = _mm_i32gather_ps(src, _mm_add_epi32(p, oy), 4);
+            v110 = _mm_i32gather_ps(src, _mm_add_epi32(_mm_add_epi32(p, oy), ox), 4);
+            v001 = _mm_i32gather_ps(src, pz, 4);
+            v101 = _mm_i32gather_ps(src, _mm_add_epi32(pz, ox), 4);
+            v011 = _mm_i32gather_ps(src, _mm_add_epi32(pz, oy), 4);
+            v111 = _mm_i32gather_ps(src, _mm_add_epi32(_mm_add_epi32(pz, oy), ox), 4);
+        }
         const __m128 v00 = lerp(v000, v100, ax.fraction);
         const __m128 v10 = lerp(v010, v110, ax.fraction);
         const __m128 v01 = lerp(v001, v101, ax.fraction);
