@@ -235,8 +235,8 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
         map_i[a] = _mm256_set1_pd(t.map[a][0]);
         map_j[a] = _mm256_set1_pd(t.map[a][1]);
     }
-    const std::int64_t k0 = std::max(t.lo[2], k);
-    const std::int64_t k1 = std::min(t.hi[2] + 1, k_end);
+    const std::int64_t k0 = std::max(t.k_lo, k);
+    const std::int64_t k1 = std::min(t.k_hi + 1, k_end);
     batch.is_interior = batch.is_interior && t.is_interior;
     for (k = k0; k < k1; ++k) {
         std::int64_t j0 = 0;

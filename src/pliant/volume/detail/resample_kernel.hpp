@@ -40,7 +40,8 @@ inline GridFrame frame_of(const Volume& v) {
 // One deformed tet prepared for rasterization into a target grid (index space (i, j, k)).
 struct TetRaster {
     // Inward face planes: h_f(i, j, k) = plane[f][0]·i + (plane[f][1]·j + (plane[f][2]·k +
-    // plane[f][3])), evaluated in exactly this order everywhere (inside()).
+    // plane[f][3])), evaluated in exactly this order everywhere (inside()). Face f is opposite
+    // the tet's f-th vertex in vertex-index order (no consumer depends on the order of faces).
     double plane[4][4];
     // Tie rule: a centre with h_f = 0 is inside face f when the inward normal is
     // lexicographically positive.
@@ -52,14 +53,18 @@ struct TetRaster {
     // Row spans (row_span_fast()): per face, −1/plane[f][0], and the bounds that route its root
     // to the lower (a > 0: cap = +∞, floor = +∞) or the upper end (a < 0: cap = −∞,
     // floor = −∞) of the span without a branch. A face parallel to the rows (a = 0, "flat")
-    // accepts a whole row or none of it: it restricts the rows of a layer (flat_rows()), and in
-    // the span it is neutral (−1/a stored as 0, cap = −∞, floor = +∞). is_fast: every other
-    // face's −1/a is finite and non-zero (else row_span() handles the tet).
+    // accepts a whole row or none of it: it restricts the rows of a layer (flat_rows()), or,
+    // parallel to the layers too (a = b = 0), the layers [k_lo, k_hi]; in the span it is
+    // neutral (−1/a stored as 0, cap = −∞, floor = +∞). is_fast: every other face's −1/a is
+    // finite and non-zero (else row_span() handles the tet).
     double neg_inv_a[4];
     double root_cap[4];
     double root_floor[4];
     bool is_fast;
-    std::uint8_t flat_faces;  // bit f: plane[f][0] == 0
+    std::uint8_t flat_faces;  // bit f: plane[f][0] == 0 and plane[f][1] != 0
+    // The layers holding centres: [lo[2], hi[2]] narrowed by the faces with a = b = 0.
+    std::int64_t k_lo;
+    std::int64_t k_hi;
     // Cross-sections (slice_rows()): per edge, its z range in index space (empty for an edge
     // parallel to the layers), an end (y0, z0) and dy/dz. Entries 6 and 7 pad the arrays for
     // SIMD (empty ranges, never crossed).
@@ -116,6 +121,47 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void tet_axis_range(const Vec3f p[4], con
     axis_range(index_coord(mn, g, a), index_coord(mx, g, a), g, a, lo, hi);
 }
 
+// The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool face_accepts(double a, double beta, bool tie,
+                                                         std::int64_t i) {
+    const double h = a * static_cast<double>(i) + beta;
+    return h > 0.0 || (h == 0.0 && tie);
+}
+
+// Narrows [lo, end) to the integers x with accepts(x), where accepts is monotone: true on a
+// suffix (is_increasing) or a prefix. guess approximates the boundary (any value, NaN too); the
+// exact test corrects it, stepping from the guess.
+template <typename Accepts>
+PLIANT_HOST_DEVICE inline void narrow_monotone(std::int64_t& lo, std::int64_t& end,
+                                               bool is_increasing, double guess,
+                                               Accepts&& accepts) {
+    if (lo >= end) {
+        return;
+    }
+    const double r = guess == guess ? std::clamp(guess, static_cast<double>(lo) - 1.0,
+                                                 static_cast<double>(end) + 1.0)
+                                    : static_cast<double>(lo);
+    if (is_increasing) {
+        std::int64_t c = std::clamp(ceil_to_int(r), lo, end);
+        while (c > lo && accepts(c - 1)) {
+            --c;
+        }
+        while (c < end && !accepts(c)) {
+            ++c;
+        }
+        lo = c;
+    } else {
+        std::int64_t c = std::clamp(floor_to_int(r) + 1, lo, end);
+        while (c < end && accepts(c)) {
+            ++c;
+        }
+        while (c > lo && !accepts(c - 1)) {
+            --c;
+        }
+        end = c;
+    }
+}
+
 // What setup_tet needs of the rest tet, which does not change between frames (the Resampler
 // computes it once per kept tet): the sign of its orientation (−1, 0, 1) and whether every
 // sample falls at least 1e-3 voxel inside [0, n − 1) of the source on every axis.
@@ -167,8 +213,13 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
             vertex[v][a] = index_coord(pd[v][a], target, a);
         }
     }
+    // The box: index_coord is monotone, so this is tet_axis_range() (which bin_tets uses).
     for (int a = 0; a < 3; ++a) {
-        tet_axis_range(p, target, a, out.lo[a], out.hi[a]);
+        const double mn =
+            std::min(std::min(vertex[0][a], vertex[1][a]), std::min(vertex[2][a], vertex[3][a]));
+        const double mx =
+            std::max(std::max(vertex[0][a], vertex[1][a]), std::max(vertex[2][a], vertex[3][a]));
+        axis_range(mn, mx, target, a, out.lo[a], out.hi[a]);
     }
 
     // λ = T⁻¹(x − d), T = [a − d, b − d, c − d]: the rows of T⁻¹ are the cross products of T's
@@ -185,49 +236,48 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     out.is_inverted = (det > 0.0 && rest.orientation < 0) || (det < 0.0 && rest.orientation > 0);
     out.is_interior = rest.is_interior;
 
-    // Faces: face q is opposite vertex q. Its plane function is computed from its vertices sorted
-    // by vertex index, so the two tets sharing the face compute the same numbers; the sign σ that
-    // makes the opposite vertex positive is applied last (exact).
+    // Faces: face m is opposite the m-th vertex in vertex-index order. Its plane function is
+    // computed from its vertices in that order, so the two tets sharing the face compute the same
+    // numbers; the sign σ that makes the opposite vertex positive is applied last (exact).
     const Vec3d c0{target.origin[0] + 0.5 * target.spacing[0],
                    target.origin[1] + 0.5 * target.spacing[1],
                    target.origin[2] + 0.5 * target.spacing[2]};
-    // The four local vertices sorted by vertex index (a sorting network with conditional moves,
-    // not branches: the order is data); face q's vertices in canonical order are this order
-    // without q.
-    int order[4] = {0, 1, 2, 3};
+    // The four vertices sorted by vertex index (a sorting network; the order is data).
+    Vec3d sorted[4] = {pd[0], pd[1], pd[2], pd[3]};
+    std::int32_t sorted_ids[4] = {ids[0], ids[1], ids[2], ids[3]};
     auto sort2 = [&](int x, int y) {
-        const int ox = order[x];
-        const int oy = order[y];
-        const bool swap = ids[oy] < ids[ox];
-        order[x] = swap ? oy : ox;
-        order[y] = swap ? ox : oy;
+        const bool swap = sorted_ids[y] < sorted_ids[x];
+        const Vec3d vx = sorted[x];
+        const Vec3d vy = sorted[y];
+        const std::int32_t ix = sorted_ids[x];
+        const std::int32_t iy = sorted_ids[y];
+        sorted[x] = swap ? vy : vx;
+        sorted[y] = swap ? vx : vy;
+        sorted_ids[x] = swap ? iy : ix;
+        sorted_ids[y] = swap ? ix : iy;
     };
     sort2(0, 1);
     sort2(2, 3);
     sort2(0, 2);
     sort2(1, 3);
     sort2(1, 2);
-    int position[4];
-    for (int v = 0; v < 4; ++v) {
-        position[order[v]] = v;
-    }
     constexpr int OTHERS[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
     double side_of[4];
-    for (int q = 0; q < 4; ++q) {
-        const int* others = OTHERS[position[q]];
-        const Vec3d& u = pd[order[others[0]]];
-        const Vec3d n = cross(pd[order[others[1]]] - u, pd[order[others[2]]] - u);
-        const double side = dot(n, pd[q] - u);
-        side_of[q] = side;
+    for (int m = 0; m < 4; ++m) {
+        const int* others = OTHERS[m];
+        const Vec3d& u = sorted[others[0]];
+        const Vec3d n = cross(sorted[others[1]] - u, sorted[others[2]] - u);
+        const double side = dot(n, sorted[m] - u);
+        side_of[m] = side;
         const double sigma = side > 0.0 ? 1.0 : -1.0;
         const Vec3d c = c0 - u;
         const double delta = n.x * c.x + n.y * c.y + n.z * c.z;
-        out.plane[q][0] = sigma * (n.x * target.spacing[0]);
-        out.plane[q][1] = sigma * (n.y * target.spacing[1]);
-        out.plane[q][2] = sigma * (n.z * target.spacing[2]);
-        out.plane[q][3] = sigma * delta;
+        out.plane[m][0] = sigma * (n.x * target.spacing[0]);
+        out.plane[m][1] = sigma * (n.y * target.spacing[1]);
+        out.plane[m][2] = sigma * (n.z * target.spacing[2]);
+        out.plane[m][3] = sigma * delta;
         const Vec3d inward = n * sigma;
-        out.tie_inside[q] =
+        out.tie_inside[m] =
             inward.x != 0.0 ? inward.x > 0.0 : (inward.y != 0.0 ? inward.y > 0.0 : inward.z > 0.0);
     }
     if (!(side_of[0] != 0.0 && side_of[1] != 0.0 && side_of[2] != 0.0 && side_of[3] != 0.0)) {
@@ -239,15 +289,29 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     constexpr double INF = std::numeric_limits<double>::infinity();
     out.is_fast = true;
     out.flat_faces = 0;
+    out.k_lo = out.lo[2];
+    out.k_hi = out.hi[2];
     for (int q = 0; q < 4; ++q) {
         const double a = out.plane[q][0];
         const bool is_flat = a == 0.0;
         const double m = is_flat ? 0.0 : -1.0 / a;
         out.neg_inv_a[q] = m;
         out.is_fast = out.is_fast && (is_flat || (std::isfinite(m) && m != 0.0));
-        out.flat_faces = static_cast<std::uint8_t>(out.flat_faces | (is_flat ? 1 << q : 0));
         out.root_cap[q] = is_flat ? -INF : (a > 0.0 ? INF : -INF);
         out.root_floor[q] = is_flat ? INF : (a > 0.0 ? INF : -INF);
+        if (is_flat && out.plane[q][1] != 0.0) {
+            out.flat_faces = static_cast<std::uint8_t>(out.flat_faces | (1 << q));
+        } else if (is_flat) {
+            // h = ±0 + (±0 + γ(k)), γ = c·k + d as face_beta computes it: whole layers.
+            const double* plane = out.plane[q];
+            const bool tie = out.tie_inside[q];
+            std::int64_t k_end = out.k_hi + 1;
+            narrow_monotone(
+                out.k_lo, k_end, plane[2] > 0.0, -plane[3] / plane[2], [&](std::int64_t k) {
+                    return face_accepts(0.0, plane[2] * static_cast<double>(k) + plane[3], tie, 0);
+                });
+            out.k_hi = k_end - 1;
+        }
     }
     // Cross-sections: the edges in index space.
     constexpr int EDGES[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
@@ -351,13 +415,6 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void slice_rows(const TetRaster& t, std::
     rows_of_extent(t, y_min, y_max, j_begin, j_end);
 }
 
-// The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
-PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool face_accepts(double a, double beta, bool tie,
-                                                         std::int64_t i) {
-    const double h = a * static_cast<double>(i) + beta;
-    return h > 0.0 || (h == 0.0 && tie);
-}
-
 PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double face_beta(const double plane[4], std::int64_t j,
                                                         std::int64_t k) {
     return plane[1] * static_cast<double>(j) + (plane[2] * static_cast<double>(k) + plane[3]);
@@ -374,52 +431,27 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool inside(const TetRaster& t, std::int6
     return true;
 }
 
-// Narrows the rows [j_begin, j_end) of layer k to those the tet's flat faces (a = 0) accept. On
-// such a face h_f(i, j, k) = a·i + β(j) is ±0 + β(j) for every i, so it accepts a whole row or
-// none of it; β(j) = b·j + γ (face_beta's order) is monotone in j also after rounding, so the
-// accepted rows are a suffix (b > 0), a prefix (b < 0), or all or none (b = 0). The boundary
-// −γ/b is only a first guess, corrected by the exact test: the result is exactly the rows
-// inside() accepts on these faces.
+// Narrows the rows [j_begin, j_end) of layer k to those the tet's flat faces (a = 0, b ≠ 0)
+// accept. On such a face h_f(i, j, k) = a·i + β(j) is ±0 + β(j) for every i, so it accepts a
+// whole row or none of it; β(j) = b·j + γ (face_beta's order) is monotone in j also after
+// rounding, so the accepted rows are a suffix (b > 0) or a prefix (b < 0). The boundary −γ/b is
+// only a first guess, corrected by the exact test: the result is exactly the rows inside()
+// accepts on these faces. (Faces with a = b = 0 accept whole layers: setup_tet narrows
+// [k_lo, k_hi] the same way.)
 PLIANT_HOST_DEVICE inline void flat_rows(const TetRaster& t, std::int64_t k, std::int64_t& j_begin,
                                          std::int64_t& j_end) {
     const double kd = static_cast<double>(k);
     for (int q = 0; q < 4; ++q) {
-        if (((t.flat_faces >> q) & 1) == 0 || j_begin >= j_end) {
+        if (((t.flat_faces >> q) & 1) == 0) {
             continue;
         }
         const double* plane = t.plane[q];
         const double gamma = plane[2] * kd + plane[3];
         const double b = plane[1];
         const bool tie = t.tie_inside[q];
-        auto accepts = [&](std::int64_t j) {
+        narrow_monotone(j_begin, j_end, b > 0.0, -gamma / b, [&](std::int64_t j) {
             return face_accepts(plane[0], b * static_cast<double>(j) + gamma, tie, 0);
-        };
-        if (b == 0.0) {
-            j_end = accepts(j_begin) ? j_end : j_begin;
-            continue;
-        }
-        double r = -gamma / b;
-        r = r == r ? std::clamp(r, static_cast<double>(j_begin), static_cast<double>(j_end))
-                   : static_cast<double>(j_begin);
-        if (b > 0.0) {
-            std::int64_t c = ceil_to_int(r);
-            while (c > j_begin && accepts(c - 1)) {
-                --c;
-            }
-            while (c < j_end && !accepts(c)) {
-                ++c;
-            }
-            j_begin = c;
-        } else {
-            std::int64_t c = std::min(floor_to_int(r) + 1, j_end);
-            while (c < j_end && accepts(c)) {
-                ++c;
-            }
-            while (c > j_begin && !accepts(c - 1)) {
-                --c;
-            }
-            j_end = c;
-        }
+        });
     }
 }
 
@@ -578,8 +610,8 @@ PLIANT_FORCE_INLINE std::int64_t append_spans(const TetRaster& t, std::int64_t k
             batch.index[v] = base + i;
         }
     };
-    const std::int64_t k0 = std::max(t.lo[2], k_begin);
-    const std::int64_t k1 = std::min(t.hi[2] + 1, k_end);
+    const std::int64_t k0 = std::max(t.k_lo, k_begin);
+    const std::int64_t k1 = std::min(t.k_hi + 1, k_end);
     for (std::int64_t k = k0; k < k1; ++k) {
         std::int64_t j0 = 0;
         std::int64_t j1 = 0;
