@@ -460,6 +460,78 @@ TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
     }
 }
 
+TEST(Resample, Avx2SetupOfFourTetsEqualsTheScalarSetup) {
+    if (!detail::has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    const Volume target =
+        Volume::allocate({40, 36, 32}, VoxelType::f32, {0.5, 0.25, 1.0}, {-3.0, 1.0, 2.0});
+    const Volume source =
+        Volume::allocate({20, 24, 28}, VoxelType::f32, {1.0, 0.5, 0.75}, {-2.0, 0.5, 1.5});
+    const detail::GridFrame tf = detail::frame_of(target);
+    const detail::GridFrame sf = detail::frame_of(source);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> coord(-4.0f, 30.0f);
+    std::uniform_int_distribution<int> kind(0, 5);
+    std::uniform_int_distribution<std::int32_t> vertex_id(0, 50);
+    int num_ok = 0;
+    int num_degenerate = 0;
+    int num_flat_layers = 0;
+    for (int round = 0; round < 2000; ++round) {
+        Vec3f p[4][4];
+        Vec3f r[4][4];
+        std::int32_t ids[4][4];
+        detail::RestInfo rest[4];
+        for (int l = 0; l < 4; ++l) {
+            const int k = kind(rng);
+            for (int v = 0; v < 4; ++v) {
+                p[l][v] = {coord(rng), coord(rng), coord(rng)};
+                r[l][v] = {coord(rng), coord(rng), coord(rng)};
+                ids[l][v] = vertex_id(rng);
+            }
+            if (k == 0) {  // a face in a layer plane (a = b = 0), through layer centres
+                const float z =
+                    static_cast<float>(target.origin().z) + std::round(p[l][0].z) + 0.5f;
+                p[l][0].z = z;
+                p[l][1].z = z;
+                p[l][2].z = z;
+            } else if (k == 1) {  // a face parallel to the rows (a = 0)
+                p[l][1].x = p[l][0].x;
+                p[l][2].x = p[l][0].x;
+            } else if (k == 2) {  // degenerate: coplanar, or two vertices equal
+                p[l][3] = p[l][(round & 1) == 0 ? 2 : 0];
+            } else if (k == 3) {  // vertices on the lattice of the target's voxel corners
+                for (int v = 0; v < 4; ++v) {
+                    p[l][v] = {std::round(p[l][v].x), std::round(p[l][v].y), std::round(p[l][v].z)};
+                }
+            }
+            rest[l] = detail::rest_info(r[l], sf);
+        }
+        detail::TetRaster fast[4]{};
+        const int ok = detail::setup_tets_avx2(p, ids, r, rest, tf, sf, fast);
+        for (int l = 0; l < 4; ++l) {
+            detail::TetRaster plain{};
+            const bool is_ok = detail::setup_tet(p[l], ids[l], r[l], rest[l], tf, sf, plain);
+            ASSERT_EQ(((ok >> l) & 1) != 0, is_ok) << "round " << round << " lane " << l;
+            for (int a = 0; a < 3; ++a) {
+                ASSERT_EQ(fast[l].lo[a], plain.lo[a]);
+                ASSERT_EQ(fast[l].hi[a], plain.hi[a]);
+            }
+            if (!is_ok) {
+                ++num_degenerate;
+                continue;
+            }
+            ++num_ok;
+            num_flat_layers += plain.k_hi - plain.k_lo != plain.hi[2] - plain.lo[2] ? 1 : 0;
+            ASSERT_EQ(std::memcmp(&fast[l], &plain, sizeof(plain)), 0)
+                << "round " << round << " lane " << l;
+        }
+    }
+    EXPECT_GT(num_ok, 5000);
+    EXPECT_GT(num_degenerate, 100);
+    EXPECT_GT(num_flat_layers, 10);
+}
+
 TEST(Resample, EmptySourceGivesZerosAndSkipsEveryTet) {
     const Volume source = Volume::allocate({16, 16, 16}, VoxelType::f32);
     const pbd::TetGrid g = full_grid(source, 4);

@@ -232,38 +232,25 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
             auto flush = [&](const detail::SpanBatch& b) {
                 visit_batch(b);
             };
+            const std::int64_t nx = target.n[0];
+            const std::int64_t nxy = target.n[0] * target.n[1];
             for (std::int64_t s = s_begin; s < s_end; ++s) {
                 const std::int64_t k_begin = s * slabs.height;
                 const std::int64_t k_end = std::min(k_begin + slabs.height, target.n[2]);
                 zero_slab(k_begin, k_end);
-                for (std::int64_t e = slabs.begin[static_cast<std::size_t>(s)];
-                     e < slabs.begin[static_cast<std::size_t>(s + 1)]; ++e) {
-                    const std::int32_t at = slabs.entries[static_cast<std::size_t>(e)];
-                    const std::int32_t t = kept[static_cast<std::size_t>(at)];
-                    const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-                    Vec3f p[4];
-                    Vec3f r[4];
-                    for (int v = 0; v < 4; ++v) {
-                        p[v] = deformed[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
-                        r[v] = rest[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
-                    }
-                    TetRaster raster;
-                    const bool ok = detail::setup_tet(
-                        p, tet.data(), r, decode_rest(rest_codes[static_cast<std::size_t>(at)]),
-                        target, source, raster);
+                // One set-up tet: counted, rasterized into the slab's batches.
+                auto rasterize_tet = [&](const TetRaster& raster, bool ok) {
                     const bool is_first_slab = raster.lo[2] >= k_begin;
                     if (!ok) {
                         counts.num_degenerate += is_first_slab ? 1 : 0;
-                        continue;
+                        return;
                     }
                     if (raster.is_inverted) {
                         counts.num_inverted += is_first_slab ? 1 : 0;
                         if (skip_inverted) {
-                            continue;
+                            return;
                         }
                     }
-                    const std::int64_t nx = target.n[0];
-                    const std::int64_t nxy = target.n[0] * target.n[1];
                     if (use_avx2 && detail::avx2_layers_fit(raster)) {
                         std::int64_t k = k_begin;
                         while ((k = detail::append_layers_avx2(raster, k, k_end, nx, nxy, *batch,
@@ -277,6 +264,53 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
                         counts.num_voxels_written +=
                             detail::append_spans(raster, k_begin, k_end, nx, nxy, *batch, flush);
                     }
+                };
+                // The slab's tets in order, 4 set up at a time with AVX2.
+                const std::int64_t e_begin = slabs.begin[static_cast<std::size_t>(s)];
+                const std::int64_t e_end = slabs.begin[static_cast<std::size_t>(s + 1)];
+                std::int64_t e = e_begin;
+                if (use_avx2) {
+                    for (; e + 4 <= e_end; e += 4) {
+                        Vec3f p[4][4];
+                        Vec3f r[4][4];
+                        std::int32_t ids[4][4];
+                        detail::RestInfo infos[4];
+                        for (int l = 0; l < 4; ++l) {
+                            const std::int32_t at = slabs.entries[static_cast<std::size_t>(e + l)];
+                            const geometry::Tet& tet =
+                                tets[static_cast<std::size_t>(kept[static_cast<std::size_t>(at)])];
+                            for (int v = 0; v < 4; ++v) {
+                                const auto vertex =
+                                    static_cast<std::size_t>(tet[static_cast<std::size_t>(v)]);
+                                p[l][v] = deformed[vertex];
+                                r[l][v] = rest[vertex];
+                                ids[l][v] = tet[static_cast<std::size_t>(v)];
+                            }
+                            infos[l] = decode_rest(rest_codes[static_cast<std::size_t>(at)]);
+                        }
+                        TetRaster rasters[4];
+                        const int ok =
+                            detail::setup_tets_avx2(p, ids, r, infos, target, source, rasters);
+                        for (int l = 0; l < 4; ++l) {
+                            rasterize_tet(rasters[l], ((ok >> l) & 1) != 0);
+                        }
+                    }
+                }
+                for (; e < e_end; ++e) {
+                    const std::int32_t at = slabs.entries[static_cast<std::size_t>(e)];
+                    const std::int32_t t = kept[static_cast<std::size_t>(at)];
+                    const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
+                    Vec3f p[4];
+                    Vec3f r[4];
+                    for (int v = 0; v < 4; ++v) {
+                        p[v] = deformed[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
+                        r[v] = rest[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
+                    }
+                    TetRaster raster;
+                    const bool ok = detail::setup_tet(
+                        p, tet.data(), r, decode_rest(rest_codes[static_cast<std::size_t>(at)]),
+                        target, source, raster);
+                    rasterize_tet(raster, ok);
                 }
                 if (batch->num_voxels > 0) {
                     flush(*batch);

@@ -198,7 +198,311 @@ PLIANT_AVX2_INLINE int sample_f32(const float* src, const std::int64_t n[3], con
     return count;
 }
 
+// Four lanes of doubles: one per tet.
+using V = __m256d;
+struct V3 {
+    V x, y, z;
+};
+PLIANT_AVX2_INLINE V add(V a, V b) {
+    return _mm256_add_pd(a, b);
+}
+PLIANT_AVX2_INLINE V sub(V a, V b) {
+    return _mm256_sub_pd(a, b);
+}
+PLIANT_AVX2_INLINE V mul(V a, V b) {
+    return _mm256_mul_pd(a, b);
+}
+PLIANT_AVX2_INLINE V set1(double x) {
+    return _mm256_set1_pd(x);
+}
+// std::min(a, b) and std::max(a, b), NaN and signed zeros included.
+PLIANT_AVX2_INLINE V std_min(V a, V b) {
+    return _mm256_min_pd(b, a);
+}
+PLIANT_AVX2_INLINE V std_max(V a, V b) {
+    return _mm256_max_pd(b, a);
+}
+// c ? a : b per lane (c a compare mask).
+PLIANT_AVX2_INLINE V select(V c, V a, V b) {
+    return _mm256_blendv_pd(b, a, c);
+}
+PLIANT_AVX2_INLINE V3 sub(const V3& a, const V3& b) {
+    return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
+}
+PLIANT_AVX2_INLINE V3 scale(const V3& a, V s) {
+    return {mul(a.x, s), mul(a.y, s), mul(a.z, s)};
+}
+// cross() and dot() of core/vec3.hpp, the same operations.
+PLIANT_AVX2_INLINE V3 cross(const V3& a, const V3& b) {
+    return {sub(mul(a.y, b.z), mul(a.z, b.y)), sub(mul(a.z, b.x), mul(a.x, b.z)),
+            sub(mul(a.x, b.y), mul(a.y, b.x))};
+}
+PLIANT_AVX2_INLINE V dot(const V3& a, const V3& b) {
+    return add(add(mul(a.x, b.x), mul(a.y, b.y)), mul(a.z, b.z));
+}
+PLIANT_AVX2_INLINE V is_finite(V x) {
+    const V abs = _mm256_andnot_pd(set1(-0.0), x);
+    return _mm256_cmp_pd(abs, set1(std::numeric_limits<double>::infinity()), _CMP_LT_OQ);
+}
+PLIANT_AVX2_INLINE V component(const V3& v, int a) {
+    return a == 0 ? v.x : (a == 1 ? v.y : v.z);
+}
+// setup_tet()'s compare-exchange of sorted vertices x < y by vertex index, per lane.
+PLIANT_AVX2_INLINE void sort2(V3 sorted[4], V sorted_id[4], int x, int y) {
+    const V swap = _mm256_cmp_pd(sorted_id[y], sorted_id[x], _CMP_LT_OQ);
+    const V3 vx = sorted[x];
+    const V3 vy = sorted[y];
+    sorted[x] = {select(swap, vy.x, vx.x), select(swap, vy.y, vx.y), select(swap, vy.z, vx.z)};
+    sorted[y] = {select(swap, vx.x, vy.x), select(swap, vx.y, vy.y), select(swap, vx.z, vy.z)};
+    const V ix = sorted_id[x];
+    sorted_id[x] = select(swap, sorted_id[y], ix);
+    sorted_id[y] = select(swap, ix, sorted_id[y]);
+}
+// Lane l of v[0 .. 4) as 4 consecutive doubles at out[l] (a 4 × 4 transpose).
+PLIANT_AVX2_INLINE void store_transposed(const V v[4], double* out0, double* out1, double* out2,
+                                         double* out3) {
+    const V t0 = _mm256_unpacklo_pd(v[0], v[1]);  // v0[0] v1[0] v0[2] v1[2]
+    const V t1 = _mm256_unpackhi_pd(v[0], v[1]);  // v0[1] v1[1] v0[3] v1[3]
+    const V t2 = _mm256_unpacklo_pd(v[2], v[3]);
+    const V t3 = _mm256_unpackhi_pd(v[2], v[3]);
+    _mm256_storeu_pd(out0, _mm256_permute2f128_pd(t0, t2, 0x20));
+    _mm256_storeu_pd(out1, _mm256_permute2f128_pd(t1, t3, 0x20));
+    _mm256_storeu_pd(out2, _mm256_permute2f128_pd(t0, t2, 0x31));
+    _mm256_storeu_pd(out3, _mm256_permute2f128_pd(t1, t3, 0x31));
+}
+
 }  // namespace
+
+PLIANT_AVX2_FN int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4][4],
+                                   const Vec3f r[4][4], const RestInfo rest[4],
+                                   const GridFrame& target, const GridFrame& source,
+                                   TetRaster out[4]) {
+    constexpr double INF = std::numeric_limits<double>::infinity();
+    constexpr double GROW = 1e-6;
+    const V inf = set1(INF);
+    const V neg_inf = set1(-INF);
+    const V zero = _mm256_setzero_pd();
+    // Vertices (float → double is exact).
+    V3 pd[4];
+    V3 rd[4];
+    V id[4];
+    for (int v = 0; v < 4; ++v) {
+        pd[v] = {_mm256_setr_pd(p[0][v].x, p[1][v].x, p[2][v].x, p[3][v].x),
+                 _mm256_setr_pd(p[0][v].y, p[1][v].y, p[2][v].y, p[3][v].y),
+                 _mm256_setr_pd(p[0][v].z, p[1][v].z, p[2][v].z, p[3][v].z)};
+        rd[v] = {_mm256_setr_pd(r[0][v].x, r[1][v].x, r[2][v].x, r[3][v].x),
+                 _mm256_setr_pd(r[0][v].y, r[1][v].y, r[2][v].y, r[3][v].y),
+                 _mm256_setr_pd(r[0][v].z, r[1][v].z, r[2][v].z, r[3][v].z)};
+        id[v] = _mm256_setr_pd(ids[0][v], ids[1][v], ids[2][v], ids[3][v]);  // exact
+    }
+    // Index coordinates and the box (axis_range).
+    V vertex[4][3];
+    for (int v = 0; v < 4; ++v) {
+        const V c[3] = {pd[v].x, pd[v].y, pd[v].z};
+        for (int a = 0; a < 3; ++a) {
+            vertex[v][a] =
+                sub(mul(sub(c[a], set1(target.origin[a])), set1(target.inv_spacing[a])), set1(0.5));
+        }
+    }
+    alignas(32) double box_lo[3][4];
+    alignas(32) double box_hi[3][4];
+    for (int a = 0; a < 3; ++a) {
+        const V mn =
+            std_min(std_min(vertex[0][a], vertex[1][a]), std_min(vertex[2][a], vertex[3][a]));
+        const V mx =
+            std_max(std_max(vertex[0][a], vertex[1][a]), std_max(vertex[2][a], vertex[3][a]));
+        const V top = set1(static_cast<double>(target.n[a]));
+        const V minus_one = set1(-1.0);
+        const V lo =
+            _mm256_ceil_pd(_mm256_min_pd(_mm256_max_pd(sub(mn, set1(GROW)), minus_one), top));
+        const V hi =
+            _mm256_floor_pd(_mm256_min_pd(_mm256_max_pd(add(mx, set1(GROW)), minus_one), top));
+        _mm256_store_pd(box_lo[a], _mm256_max_pd(lo, zero));
+        _mm256_store_pd(box_hi[a], _mm256_min_pd(hi, set1(static_cast<double>(target.n[a] - 1))));
+    }
+    for (int l = 0; l < 4; ++l) {
+        for (int a = 0; a < 3; ++a) {
+            out[l].lo[a] = static_cast<std::int64_t>(box_lo[a][l]);
+            out[l].hi[a] = static_cast<std::int64_t>(box_hi[a][l]);
+        }
+    }
+
+    // T, det T, T⁻¹.
+    const V3 e0 = sub(pd[0], pd[3]);
+    const V3 e1 = sub(pd[1], pd[3]);
+    const V3 e2 = sub(pd[2], pd[3]);
+    const V3 c12 = cross(e1, e2);
+    const V det = dot(e0, c12);
+    const V inv_det = _mm256_div_pd(set1(1.0), det);
+    V ok = _mm256_and_pd(_mm256_cmp_pd(det, zero, _CMP_NEQ_UQ), is_finite(inv_det));
+
+    // Faces, from the vertices sorted by vertex index.
+    const V3 c0{set1(target.origin[0] + 0.5 * target.spacing[0]),
+                set1(target.origin[1] + 0.5 * target.spacing[1]),
+                set1(target.origin[2] + 0.5 * target.spacing[2])};
+    V3 sorted[4] = {pd[0], pd[1], pd[2], pd[3]};
+    V sorted_id[4] = {id[0], id[1], id[2], id[3]};
+    sort2(sorted, sorted_id, 0, 1);
+    sort2(sorted, sorted_id, 2, 3);
+    sort2(sorted, sorted_id, 0, 2);
+    sort2(sorted, sorted_id, 1, 3);
+    sort2(sorted, sorted_id, 1, 2);
+    constexpr int OTHERS[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    V plane[4][4];
+    V tie[4];
+    for (int m = 0; m < 4; ++m) {
+        const V3& u = sorted[OTHERS[m][0]];
+        const V3 n = cross(sub(sorted[OTHERS[m][1]], u), sub(sorted[OTHERS[m][2]], u));
+        const V side = dot(n, sub(sorted[m], u));
+        ok = _mm256_and_pd(ok, _mm256_cmp_pd(side, zero, _CMP_NEQ_UQ));
+        const V sigma = select(_mm256_cmp_pd(side, zero, _CMP_GT_OQ), set1(1.0), set1(-1.0));
+        const V3 c = sub(c0, u);
+        const V delta = add(add(mul(n.x, c.x), mul(n.y, c.y)), mul(n.z, c.z));
+        plane[m][0] = mul(sigma, mul(n.x, set1(target.spacing[0])));
+        plane[m][1] = mul(sigma, mul(n.y, set1(target.spacing[1])));
+        plane[m][2] = mul(sigma, mul(n.z, set1(target.spacing[2])));
+        plane[m][3] = mul(sigma, delta);
+        // Lexicographically positive inward normal (NaN components are not positive).
+        const V3 inward = scale(n, sigma);
+        const V x_pos = _mm256_cmp_pd(inward.x, zero, _CMP_GT_OQ);
+        const V x_zero = _mm256_cmp_pd(inward.x, zero, _CMP_EQ_OQ);
+        const V y_pos = _mm256_cmp_pd(inward.y, zero, _CMP_GT_OQ);
+        const V y_zero = _mm256_cmp_pd(inward.y, zero, _CMP_EQ_OQ);
+        const V z_pos = _mm256_cmp_pd(inward.z, zero, _CMP_GT_OQ);
+        tie[m] = _mm256_or_pd(
+            x_pos, _mm256_and_pd(x_zero, _mm256_or_pd(y_pos, _mm256_and_pd(y_zero, z_pos))));
+    }
+    const int ok_mask = _mm256_movemask_pd(ok);
+
+    // Row spans: per face −1/a (0 for a = 0), caps and floors.
+    V neg_inv_a[4];
+    V cap[4];
+    V floor[4];
+    V is_fast = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    V flat[4];
+    for (int m = 0; m < 4; ++m) {
+        const V a = plane[m][0];
+        flat[m] = _mm256_cmp_pd(a, zero, _CMP_EQ_OQ);
+        const V root = _mm256_div_pd(set1(-1.0), a);
+        neg_inv_a[m] = select(flat[m], zero, root);
+        is_fast = _mm256_and_pd(
+            is_fast, _mm256_or_pd(flat[m], _mm256_and_pd(is_finite(root),
+                                                         _mm256_cmp_pd(root, zero, _CMP_NEQ_UQ))));
+        const V signed_inf = select(_mm256_cmp_pd(a, zero, _CMP_GT_OQ), inf, neg_inf);
+        cap[m] = select(flat[m], neg_inf, signed_inf);
+        floor[m] = select(flat[m], inf, signed_inf);
+    }
+
+    // Cross-sections: the edges in index space (entries 6 and 7: padding).
+    constexpr int EDGES[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    V edge_z_lo[8];
+    V edge_z_hi[8];
+    V edge_y0[8];
+    V edge_z0[8];
+    V edge_slope[8];
+    for (int e = 0; e < 6; ++e) {
+        const V* va = vertex[EDGES[e][0]];
+        const V* vb = vertex[EDGES[e][1]];
+        const V dz = sub(vb[2], va[2]);
+        const V is_flat = _mm256_cmp_pd(dz, zero, _CMP_EQ_OQ);
+        edge_z_lo[e] = select(is_flat, inf, std_min(va[2], vb[2]));
+        edge_z_hi[e] = select(is_flat, neg_inf, std_max(va[2], vb[2]));
+        edge_y0[e] = va[1];
+        edge_z0[e] = va[2];
+        edge_slope[e] = select(is_flat, zero, _mm256_div_pd(sub(vb[1], va[1]), dz));
+    }
+    for (int e = 6; e < 8; ++e) {
+        edge_z_lo[e] = inf;
+        edge_z_hi[e] = neg_inf;
+        edge_y0[e] = zero;
+        edge_z0[e] = zero;
+        edge_slope[e] = zero;
+    }
+
+    // The affine map target index → source grid coordinate.
+    const V3 row[3] = {scale(c12, inv_det), scale(cross(e2, e0), inv_det),
+                       scale(cross(e0, e1), inv_det)};
+    const V3 f[3] = {sub(rd[0], rd[3]), sub(rd[1], rd[3]), sub(rd[2], rd[3])};
+    const V3 x0 = sub(c0, pd[3]);
+    V map[3][4];
+    for (int a = 0; a < 3; ++a) {
+        V mm[3];
+        for (int b = 0; b < 3; ++b) {
+            mm[b] = add(add(mul(component(f[0], a), component(row[0], b)),
+                            mul(component(f[1], a), component(row[1], b))),
+                        mul(component(f[2], a), component(row[2], b)));
+        }
+        const V inv_s = set1(source.inv_spacing[a]);
+        for (int b = 0; b < 3; ++b) {
+            map[a][b] = mul(mul(mm[b], set1(target.spacing[b])), inv_s);
+        }
+        const V rest0 = add(component(rd[3], a),
+                            add(add(mul(mm[0], x0.x), mul(mm[1], x0.y)), mul(mm[2], x0.z)));
+        map[a][3] = sub(mul(sub(rest0, set1(source.origin[a])), inv_s), set1(0.5));
+    }
+
+    // Out, lane by lane.
+    for (int m = 0; m < 4; ++m) {
+        store_transposed(plane[m], out[0].plane[m], out[1].plane[m], out[2].plane[m],
+                         out[3].plane[m]);
+    }
+    store_transposed(neg_inv_a, out[0].neg_inv_a, out[1].neg_inv_a, out[2].neg_inv_a,
+                     out[3].neg_inv_a);
+    store_transposed(cap, out[0].root_cap, out[1].root_cap, out[2].root_cap, out[3].root_cap);
+    store_transposed(floor, out[0].root_floor, out[1].root_floor, out[2].root_floor,
+                     out[3].root_floor);
+    for (int h = 0; h < 8; h += 4) {
+        store_transposed(edge_z_lo + h, out[0].edge_z_lo + h, out[1].edge_z_lo + h,
+                         out[2].edge_z_lo + h, out[3].edge_z_lo + h);
+        store_transposed(edge_z_hi + h, out[0].edge_z_hi + h, out[1].edge_z_hi + h,
+                         out[2].edge_z_hi + h, out[3].edge_z_hi + h);
+        store_transposed(edge_y0 + h, out[0].edge_y0 + h, out[1].edge_y0 + h, out[2].edge_y0 + h,
+                         out[3].edge_y0 + h);
+        store_transposed(edge_z0 + h, out[0].edge_z0 + h, out[1].edge_z0 + h, out[2].edge_z0 + h,
+                         out[3].edge_z0 + h);
+        store_transposed(edge_slope + h, out[0].edge_slope + h, out[1].edge_slope + h,
+                         out[2].edge_slope + h, out[3].edge_slope + h);
+    }
+    for (int a = 0; a < 3; ++a) {
+        store_transposed(map[a], out[0].map[a], out[1].map[a], out[2].map[a], out[3].map[a]);
+    }
+    alignas(32) double det_l[4];
+    _mm256_store_pd(det_l, det);
+    int tie_bits[4];
+    int flat_bits[4];
+    for (int m = 0; m < 4; ++m) {
+        tie_bits[m] = _mm256_movemask_pd(tie[m]);
+        flat_bits[m] = _mm256_movemask_pd(flat[m]);
+    }
+    const int fast_bits = _mm256_movemask_pd(is_fast);
+    for (int l = 0; l < 4; ++l) {
+        TetRaster& t = out[l];
+        t.is_inverted = (det_l[l] > 0.0 && rest[l].orientation < 0) ||
+                        (det_l[l] < 0.0 && rest[l].orientation > 0);
+        t.is_interior = rest[l].is_interior;
+        t.is_fast = ((fast_bits >> l) & 1) != 0;
+        t.flat_faces = 0;
+        t.k_lo = t.lo[2];
+        t.k_hi = t.hi[2];
+        for (int m = 0; m < 4; ++m) {
+            t.tie_inside[m] = ((tie_bits[m] >> l) & 1) != 0;
+        }
+        if (((ok_mask >> l) & 1) == 0) {
+            continue;
+        }
+        for (int m = 0; m < 4; ++m) {
+            if (((flat_bits[m] >> l) & 1) == 0) {
+                continue;
+            }
+            if (t.plane[m][1] != 0.0) {
+                t.flat_faces = static_cast<std::uint8_t>(t.flat_faces | (1 << m));
+            } else {
+                narrow_flat_layers(t, m);
+            }
+        }
+    }
+    return ok_mask;
+}
 
 PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t k,
                                                std::int64_t k_end, std::int64_t nx,
@@ -352,6 +656,10 @@ PLIANT_AVX2_FN int sample_f32_avx2(const float* src, const std::int64_t n[3],
 
 bool has_avx2() {
     return false;
+}
+int setup_tets_avx2(const Vec3f[4][4], const std::int32_t[4][4], const Vec3f[4][4],
+                    const RestInfo[4], const GridFrame&, const GridFrame&, TetRaster[4]) {
+    return 0;
 }
 std::int64_t append_layers_avx2(const TetRaster&, std::int64_t k, std::int64_t, std::int64_t,
                                 std::int64_t, SpanBatch&, std::int64_t&) {

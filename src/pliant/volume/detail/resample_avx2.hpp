@@ -16,6 +16,14 @@ bool has_avx2();
 // called while a resample runs.
 void allow_avx2(bool allowed);
 
+// setup_tet() of 4 tets at once (lane l: vertices p[l], vertex indices ids[l], rest vertices
+// r[l], rest[l]): out[l] gets what setup_tet(p[l], ids[l], r[l], rest[l], target, source, out[l])
+// writes, bit for bit (out[l].lo/hi always; the rest when bit l of the result is set, i.e. when
+// setup_tet returns true).
+int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4][4], const Vec3f r[4][4],
+                    const RestInfo rest[4], const GridFrame& target, const GridFrame& source,
+                    TetRaster out[4]);
+
 // Whether append_layers_avx2() takes the tet: is_fast, at most 8 voxels wide and 48 rows high
 // (so that a layer fits into an empty batch).
 inline bool avx2_layers_fit(const TetRaster& t) {

@@ -162,6 +162,18 @@ PLIANT_HOST_DEVICE inline void narrow_monotone(std::int64_t& lo, std::int64_t& e
     }
 }
 
+// Narrows [t.k_lo, t.k_hi] to the layers face q accepts, for a face with a = b = 0: on it
+// h = ±0 + (±0 + γ(k)), γ = c·k + d as face_beta computes it, monotone in k.
+PLIANT_HOST_DEVICE inline void narrow_flat_layers(TetRaster& t, int q) {
+    const double* plane = t.plane[q];
+    const bool tie = t.tie_inside[q];
+    std::int64_t k_end = t.k_hi + 1;
+    narrow_monotone(t.k_lo, k_end, plane[2] > 0.0, -plane[3] / plane[2], [&](std::int64_t k) {
+        return face_accepts(0.0, plane[2] * static_cast<double>(k) + plane[3], tie, 0);
+    });
+    t.k_hi = k_end - 1;
+}
+
 // What setup_tet needs of the rest tet, which does not change between frames (the Resampler
 // computes it once per kept tet): the sign of its orientation (−1, 0, 1) and whether every
 // sample falls at least 1e-3 voxel inside [0, n − 1) of the source on every axis.
@@ -302,15 +314,7 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
         if (is_flat && out.plane[q][1] != 0.0) {
             out.flat_faces = static_cast<std::uint8_t>(out.flat_faces | (1 << q));
         } else if (is_flat) {
-            // h = ±0 + (±0 + γ(k)), γ = c·k + d as face_beta computes it: whole layers.
-            const double* plane = out.plane[q];
-            const bool tie = out.tie_inside[q];
-            std::int64_t k_end = out.k_hi + 1;
-            narrow_monotone(
-                out.k_lo, k_end, plane[2] > 0.0, -plane[3] / plane[2], [&](std::int64_t k) {
-                    return face_accepts(0.0, plane[2] * static_cast<double>(k) + plane[3], tie, 0);
-                });
-            out.k_hi = k_end - 1;
+            narrow_flat_layers(out, q);
         }
     }
     // Cross-sections: the edges in index space.
