@@ -57,39 +57,50 @@ PLIANT_AVX2_INLINE Axis axis(__m256d g, __m256d top) {
     return {i, _mm256_cvtpd_ps(_mm256_sub_pd(c, _mm256_cvtepi32_pd(i)))};
 }
 
-PLIANT_AVX2_INLINE double min4(__m256d v) {
-    const __m128d m = _mm_min_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
-    return _mm_cvtsd_f64(_mm_min_sd(m, _mm_unpackhi_pd(m, m)));
-}
-PLIANT_AVX2_INLINE double max4(__m256d v) {
-    const __m128d m = _mm_max_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
-    return _mm_cvtsd_f64(_mm_max_sd(m, _mm_unpackhi_pd(m, m)));
-}
-
-// slice_rows() with the edges 4 at a time (the 8 entries of the edge arrays, 2 of them padding).
-PLIANT_AVX2_INLINE void slice_rows4(const TetRaster& t, std::int64_t k, std::int64_t& j_begin,
-                                    std::int64_t& j_end) {
-    const __m256d z = _mm256_set1_pd(static_cast<double>(k));
-    const __m256d grow = _mm256_set1_pd(1e-6);
+// slice_rows() of layers k … k + 3 at once (a layer per lane; the same rows): rows
+// [begin[l], end[l]) of layer k + l, as doubles.
+PLIANT_AVX2_INLINE void slice_rows_of_layers(const TetRaster& t, std::int64_t k, double* begin,
+                                             double* end) {
+    constexpr double GROW = 1e-6;
+    const __m256d z =
+        _mm256_add_pd(_mm256_set1_pd(static_cast<double>(k)), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+    const __m256d grow = _mm256_set1_pd(GROW);
     const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
     const __m256d neg_inf = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
     __m256d y_min = inf;
     __m256d y_max = neg_inf;
-    for (int h = 0; h < 8; h += 4) {
-        const __m256d z_lo = _mm256_loadu_pd(t.edge_z_lo + h);
-        const __m256d z_hi = _mm256_loadu_pd(t.edge_z_hi + h);
+    for (int e = 0; e < 6; ++e) {
+        const __m256d z_lo = _mm256_set1_pd(t.edge_z_lo[e]);
+        const __m256d z_hi = _mm256_set1_pd(t.edge_z_hi[e]);
         const __m256d is_crossed =
             _mm256_and_pd(_mm256_cmp_pd(z, _mm256_sub_pd(z_lo, grow), _CMP_GE_OQ),
                           _mm256_cmp_pd(z, _mm256_add_pd(z_hi, grow), _CMP_LE_OQ));
-        const __m256d zc = _mm256_min_pd(_mm256_max_pd(z, z_lo), z_hi);
+        // std::min(std::max(z, z_lo), z_hi)
+        const __m256d zc = _mm256_min_pd(z_hi, _mm256_max_pd(z_lo, z));
         const __m256d y =
-            _mm256_add_pd(_mm256_loadu_pd(t.edge_y0 + h),
-                          _mm256_mul_pd(_mm256_sub_pd(zc, _mm256_loadu_pd(t.edge_z0 + h)),
-                                        _mm256_loadu_pd(t.edge_slope + h)));
-        y_min = _mm256_min_pd(y_min, _mm256_blendv_pd(inf, y, is_crossed));
-        y_max = _mm256_max_pd(y_max, _mm256_blendv_pd(neg_inf, y, is_crossed));
+            _mm256_add_pd(_mm256_set1_pd(t.edge_y0[e]),
+                          _mm256_mul_pd(_mm256_sub_pd(zc, _mm256_set1_pd(t.edge_z0[e])),
+                                        _mm256_set1_pd(t.edge_slope[e])));
+        y_min = _mm256_min_pd(_mm256_blendv_pd(inf, y, is_crossed), y_min);
+        y_max = _mm256_max_pd(_mm256_blendv_pd(neg_inf, y, is_crossed), y_max);
     }
-    rows_of_extent(t, min4(y_min), max4(y_max), j_begin, j_end);
+    // rows_of_extent() per lane.
+    const __m256d lo = _mm256_set1_pd(static_cast<double>(t.lo[1]));
+    const __m256d hi = _mm256_set1_pd(static_cast<double>(t.hi[1]));
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d lo_1 = _mm256_sub_pd(lo, one);
+    const __m256d hi_1 = _mm256_add_pd(hi, one);
+    const __m256d is_empty = _mm256_cmp_pd(y_min, y_max, _CMP_NLE_UQ);
+    const __m256d b = _mm256_max_pd(
+        _mm256_ceil_pd(_mm256_min_pd(_mm256_max_pd(_mm256_sub_pd(y_min, grow), lo_1), hi_1)), lo);
+    const __m256d e = _mm256_add_pd(
+        _mm256_min_pd(
+            _mm256_floor_pd(_mm256_min_pd(_mm256_max_pd(_mm256_add_pd(y_max, grow), lo_1), hi_1)),
+            hi),
+        one);
+    const __m256d zero = _mm256_setzero_pd();
+    _mm256_store_pd(begin, _mm256_blendv_pd(b, zero, is_empty));
+    _mm256_store_pd(end, _mm256_blendv_pd(e, zero, is_empty));
 }
 
 // lo[l] = src[at[l] + offset], hi[l] = src[at[l] + offset + 1] for the 4 lanes l.
@@ -542,10 +553,14 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
     const std::int64_t k0 = std::max(t.k_lo, k);
     const std::int64_t k1 = std::min(t.k_hi + 1, k_end);
     batch.is_interior = batch.is_interior && t.is_interior;
+    alignas(32) double rows_begin[4];
+    alignas(32) double rows_end[4];
     for (k = k0; k < k1; ++k) {
-        std::int64_t j0 = 0;
-        std::int64_t j1 = 0;
-        slice_rows4(t, k, j0, j1);
+        if (((k - k0) & 3) == 0) {
+            slice_rows_of_layers(t, k, rows_begin, rows_end);
+        }
+        std::int64_t j0 = static_cast<std::int64_t>(rows_begin[(k - k0) & 3]);
+        std::int64_t j1 = static_cast<std::int64_t>(rows_end[(k - k0) & 3]);
         if (t.flat_faces != 0) {
             flat_rows(t, k, j0, j1);
         }
