@@ -50,9 +50,11 @@ struct Axis {
     __m128i index;
     __m128 fraction;
 };
+template <bool INTERIOR>
 PLIANT_AVX2_INLINE Axis axis(__m256d g, __m256d top) {
-    // std::clamp(g, 0, n − 1); max_pd returns its second operand for NaN (masked out later).
-    const __m256d c = _mm256_min_pd(_mm256_max_pd(g, _mm256_setzero_pd()), top);
+    // std::clamp(g, 0, n − 1) (a no-op inside); max_pd returns its second operand for NaN
+    // (masked out later).
+    const __m256d c = INTERIOR ? g : _mm256_min_pd(_mm256_max_pd(g, _mm256_setzero_pd()), top);
     const __m128i i = _mm256_cvttpd_epi32(c);
     return {i, _mm256_cvtpd_ps(_mm256_sub_pd(c, _mm256_cvtepi32_pd(i)))};
 }
@@ -140,9 +142,9 @@ PLIANT_AVX2_INLINE int sample_f32(const float* src, const std::int64_t n[3], con
         const __m256d gx = _mm256_load_pd(batch.g[0] + e);
         const __m256d gy = _mm256_load_pd(batch.g[1] + e);
         const __m256d gz = _mm256_load_pd(batch.g[2] + e);
-        const Axis ax = axis(gx, top_x);
-        const Axis ay = axis(gy, top_y);
-        const Axis az = axis(gz, top_z);
+        const Axis ax = axis<INTERIOR>(gx, top_x);
+        const Axis ay = axis<INTERIOR>(gy, top_y);
+        const Axis az = axis<INTERIOR>(gz, top_z);
         // Offsets to the upper neighbours: 0 on the last voxel of an axis (clamped samples).
         __m128i ox = one;
         __m128i oy = nx4;
@@ -553,6 +555,7 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
     const std::int64_t k0 = std::max(t.k_lo, k);
     const std::int64_t k1 = std::min(t.k_hi + 1, k_end);
     batch.is_interior = batch.is_interior && t.is_interior;
+    int filled = batch.num_voxels;  // kept in a register, stored on return
     alignas(32) double rows_begin[4];
     alignas(32) double rows_end[4];
     for (k = k0; k < k1; ++k) {
@@ -565,7 +568,9 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
             flat_rows(t, k, j0, j1);
         }
         // Each row writes at most 8 entries (the tet is at most 8 voxels wide).
-        if (batch.num_voxels + (j1 - j0) * 8 > SpanBatch::CAPACITY) {
+        if (filled + (j1 - j0) * 8 > SpanBatch::CAPACITY) {
+            num_voxels += filled - batch.num_voxels;
+            batch.num_voxels = filled;
             return k;
         }
         const double kd = static_cast<double>(k);
@@ -632,7 +637,7 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
             }
             // The rows' voxels: 4 entries each whatever its length (8 when longer).
             for (int r = 0; r < rows; ++r) {
-                const int at = batch.num_voxels;
+                const int at = filled;
                 const __m256d id = _mm256_add_pd(_mm256_set1_pd(begins[r]), lane);
                 const std::int64_t base =
                     layer_base + (j + r) * nx + static_cast<std::int64_t>(begins[r]);
@@ -653,11 +658,12 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
                     _mm256_storeu_si256(reinterpret_cast<__m256i*>(batch.index + at + 4),
                                         _mm256_add_epi64(index, _mm256_set1_epi64x(4)));
                 }
-                batch.num_voxels += n;
-                num_voxels += n;
+                filled += n;
             }
         }
     }
+    num_voxels += filled - batch.num_voxels;
+    batch.num_voxels = filled;
     return k_end;
 }
 
