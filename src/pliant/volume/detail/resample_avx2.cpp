@@ -517,6 +517,15 @@ PLIANT_AVX2_FN int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4
     return ok_mask;
 }
 
+// Per lane, v[l] of the lane's layer l: v[0], v[1] where in1, v[2] where in2, v[3] where in3
+// (nested masks).
+PLIANT_AVX2_INLINE __m256d by_layer(const double v[4], __m256d in1, __m256d in2, __m256d in3) {
+    __m256d r = _mm256_blendv_pd(_mm256_set1_pd(v[0]), _mm256_set1_pd(v[1]), in1);
+    r = _mm256_blendv_pd(r, _mm256_set1_pd(v[2]), in2);
+    return _mm256_blendv_pd(r, _mm256_set1_pd(v[3]), in3);
+}
+constexpr double LAYER[4] = {0.0, 1.0, 2.0, 3.0};
+
 PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t k,
                                                std::int64_t k_end, std::int64_t nx,
                                                std::int64_t nxy, SpanBatch& batch,
@@ -536,69 +545,74 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
     const __m256d hi_floor = _mm256_set1_pd(r_lo - 1.0);
     const __m256d box_lo = _mm256_set1_pd(static_cast<double>(t.lo[0]));
     const __m256d box_hi = _mm256_set1_pd(static_cast<double>(t.hi[0]));
-    __m256d plane_j[4];
-    __m256d neg_inv_a[4];
-    __m256d cap[4];
-    __m256d root_floor[4];
-    for (int q = 0; q < 4; ++q) {
-        plane_j[q] = _mm256_set1_pd(t.plane[q][1]);
-        neg_inv_a[q] = _mm256_set1_pd(t.neg_inv_a[q]);
-        cap[q] = _mm256_set1_pd(t.root_cap[q]);
-        root_floor[q] = _mm256_set1_pd(t.root_floor[q]);
-    }
-    __m256d map_i[3];
-    __m256d map_j[3];
-    for (int a = 0; a < 3; ++a) {
-        map_i[a] = _mm256_set1_pd(t.map[a][0]);
-        map_j[a] = _mm256_set1_pd(t.map[a][1]);
-    }
+    const __m256d row_size = _mm256_set1_pd(static_cast<double>(nx));
+    const __m256d layer_size = _mm256_set1_pd(static_cast<double>(nxy));
     const std::int64_t k0 = std::max(t.k_lo, k);
     const std::int64_t k1 = std::min(t.k_hi + 1, k_end);
     batch.is_interior = batch.is_interior && t.is_interior;
     int filled = batch.num_voxels;  // kept in a register, stored on return
-    alignas(32) double rows_begin[4];
-    alignas(32) double rows_end[4];
-    for (k = k0; k < k1; ++k) {
-        if (((k - k0) & 3) == 0) {
-            slice_rows_of_layers(t, k, rows_begin, rows_end);
-        }
-        std::int64_t j0 = static_cast<std::int64_t>(rows_begin[(k - k0) & 3]);
-        std::int64_t j1 = static_cast<std::int64_t>(rows_end[(k - k0) & 3]);
+    // Chunks of up to 4 layers; their rows, layer by layer, fill the lanes 4 at a time.
+    for (std::int64_t kc = k0; kc < k1; kc += 4) {
+        alignas(32) double rows_begin[4];
+        alignas(32) double rows_end[4];
+        slice_rows_of_layers(t, kc, rows_begin, rows_end);
+        const int layers = static_cast<int>(std::min<std::int64_t>(4, k1 - kc));
         if (t.flat_faces != 0) {
-            flat_rows(t, k, j0, j1);
+            for (int l = 0; l < layers; ++l) {
+                auto j0 = static_cast<std::int64_t>(rows_begin[l]);
+                auto j1 = static_cast<std::int64_t>(rows_end[l]);
+                flat_rows(t, kc + l, j0, j1);
+                rows_begin[l] = static_cast<double>(j0);
+                rows_end[l] = static_cast<double>(j1);
+            }
         }
+        // offsets[l]: the rows of the chunk before layer l.
+        double offsets[4];
+        double total = 0.0;
+        for (int l = 0; l < 4; ++l) {
+            offsets[l] = total;
+            total += l < layers ? std::max(rows_end[l] - rows_begin[l], 0.0) : 0.0;
+        }
+        const auto num_rows = static_cast<std::int64_t>(total);
         // Each row writes at most 8 entries (the tet is at most 8 voxels wide).
-        if (filled + (j1 - j0) * 8 > SpanBatch::CAPACITY) {
+        if (filled + num_rows * 8 > SpanBatch::CAPACITY) {
             num_voxels += filled - batch.num_voxels;
             batch.num_voxels = filled;
-            return k;
+            return kc;
         }
-        const double kd = static_cast<double>(k);
-        __m256d gamma[4];
-        for (int q = 0; q < 4; ++q) {
-            gamma[q] = _mm256_set1_pd(t.plane[q][2] * kd + t.plane[q][3]);
-        }
-        __m256d g_k[3];
-        for (int a = 0; a < 3; ++a) {
-            g_k[a] = _mm256_set1_pd(t.map[a][3] + t.map[a][2] * kd);
-        }
-        const std::int64_t layer_base = k * nxy;
-        for (std::int64_t j = j0; j < j1; j += 4) {
-            // Rows j … j + 3 in the lanes: row_span_fast() lane by lane.
-            const __m256d jd = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(j)), lane);
+        const __m256d offset1 = _mm256_set1_pd(offsets[1]);
+        const __m256d offset2 = _mm256_set1_pd(offsets[2]);
+        const __m256d offset3 = _mm256_set1_pd(offsets[3]);
+        for (std::int64_t first = 0; first < num_rows; first += 4) {
+            // Lane: the chunk's row `first + lane`, in layer l (the last layer whose offset it
+            // reaches; the masks are nested since the offsets increase).
+            const __m256d index = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(first)), lane);
+            const __m256d in1 = _mm256_cmp_pd(index, offset1, _CMP_GE_OQ);
+            const __m256d in2 = _mm256_cmp_pd(index, offset2, _CMP_GE_OQ);
+            const __m256d in3 = _mm256_cmp_pd(index, offset3, _CMP_GE_OQ);
+            const __m256d jd =
+                _mm256_add_pd(by_layer(rows_begin, in1, in2, in3),
+                              _mm256_sub_pd(index, by_layer(offsets, in1, in2, in3)));
+            const double kcd = static_cast<double>(kc);
+            const __m256d kd = _mm256_add_pd(_mm256_set1_pd(kcd), by_layer(LAYER, in1, in2, in3));
+            // row_span_fast() lane by lane.
             __m256d x_lo = x_lo0;
             __m256d x_hi = x_hi0;
             for (int q = 0; q < 4; ++q) {
-                const __m256d beta = _mm256_add_pd(_mm256_mul_pd(plane_j[q], jd), gamma[q]);
-                const __m256d root = _mm256_mul_pd(beta, neg_inv_a[q]);
-                x_lo = _mm256_max_pd(x_lo, _mm256_min_pd(root, cap[q]));
-                x_hi = _mm256_min_pd(x_hi, _mm256_max_pd(root, root_floor[q]));
+                const __m256d gamma =
+                    _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(t.plane[q][2]), kd),
+                                  _mm256_set1_pd(t.plane[q][3]));
+                const __m256d beta =
+                    _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(t.plane[q][1]), jd), gamma);
+                const __m256d root = _mm256_mul_pd(beta, _mm256_set1_pd(t.neg_inv_a[q]));
+                x_lo = _mm256_max_pd(x_lo, _mm256_min_pd(root, _mm256_set1_pd(t.root_cap[q])));
+                x_hi = _mm256_min_pd(x_hi, _mm256_max_pd(root, _mm256_set1_pd(t.root_floor[q])));
             }
             x_lo = _mm256_min_pd(x_lo, lo_cap);
             x_hi = _mm256_max_pd(x_hi, hi_floor);
             __m256d b = _mm256_ceil_pd(_mm256_sub_pd(x_lo, tol));
             __m256d e = _mm256_floor_pd(_mm256_add_pd(x_hi, tol));
-            const int rows = static_cast<int>(std::min<std::int64_t>(4, j1 - j));
+            const int rows = static_cast<int>(std::min<std::int64_t>(4, num_rows - first));
             const __m256d is_near =
                 _mm256_or_pd(_mm256_cmp_pd(b, _mm256_add_pd(x_lo, tol), _CMP_LT_OQ),
                              _mm256_cmp_pd(e, _mm256_sub_pd(x_hi, tol), _CMP_GT_OQ));
@@ -608,17 +622,23 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
                 alignas(32) double es[4];
                 alignas(32) double lo[4];
                 alignas(32) double hi[4];
+                alignas(32) double js[4];
+                alignas(32) double ks[4];
                 _mm256_store_pd(bs, b);
                 _mm256_store_pd(es, e);
                 _mm256_store_pd(lo, x_lo);
                 _mm256_store_pd(hi, x_hi);
+                _mm256_store_pd(js, jd);
+                _mm256_store_pd(ks, kd);
                 for (int r = 0; r < rows; ++r) {
+                    const auto j = static_cast<std::int64_t>(js[r]);
+                    const auto kr = static_cast<std::int64_t>(ks[r]);
                     if (bs[r] < lo[r] + TOL &&
-                        !inside(t, static_cast<std::int64_t>(bs[r]), j + r, k)) {
+                        !inside(t, static_cast<std::int64_t>(bs[r]), j, kr)) {
                         bs[r] += 1.0;
                     }
                     if (es[r] > hi[r] - TOL &&
-                        !inside(t, static_cast<std::int64_t>(es[r]), j + r, k)) {
+                        !inside(t, static_cast<std::int64_t>(es[r]), j, kr)) {
                         es[r] -= 1.0;
                     }
                 }
@@ -629,34 +649,44 @@ PLIANT_AVX2_FN std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t 
             const __m256d end = _mm256_max_pd(begin, _mm256_add_pd(_mm256_min_pd(e, box_hi), one));
             alignas(32) double begins[4];
             alignas(32) double counts[4];
+            alignas(32) double bases[4];
             alignas(32) double g_row[3][4];
             _mm256_store_pd(begins, begin);
             _mm256_store_pd(counts, _mm256_sub_pd(end, begin));
+            // Linear index of voxel (begin, j, k) (exact in doubles).
+            _mm256_store_pd(bases, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(kd, layer_size),
+                                                               _mm256_mul_pd(jd, row_size)),
+                                                 begin));
             for (int a = 0; a < 3; ++a) {
-                _mm256_store_pd(g_row[a], _mm256_add_pd(g_k[a], _mm256_mul_pd(map_j[a], jd)));
+                // (map[a][3] + map[a][2]·k) + map[a][1]·j, append_spans()'s order.
+                const __m256d g_k = _mm256_add_pd(_mm256_set1_pd(t.map[a][3]),
+                                                  _mm256_mul_pd(_mm256_set1_pd(t.map[a][2]), kd));
+                _mm256_store_pd(g_row[a],
+                                _mm256_add_pd(g_k, _mm256_mul_pd(_mm256_set1_pd(t.map[a][1]), jd)));
             }
             // The rows' voxels: 4 entries each whatever its length (8 when longer).
             for (int r = 0; r < rows; ++r) {
                 const int at = filled;
                 const __m256d id = _mm256_add_pd(_mm256_set1_pd(begins[r]), lane);
-                const std::int64_t base =
-                    layer_base + (j + r) * nx + static_cast<std::int64_t>(begins[r]);
-                const __m256i index = _mm256_add_epi64(_mm256_set1_epi64x(base), lane64);
+                const __m256i index64 = _mm256_add_epi64(
+                    _mm256_set1_epi64x(static_cast<std::int64_t>(bases[r])), lane64);
                 for (int a = 0; a < 3; ++a) {
-                    _mm256_storeu_pd(batch.g[a] + at, _mm256_add_pd(_mm256_set1_pd(g_row[a][r]),
-                                                                    _mm256_mul_pd(map_i[a], id)));
+                    _mm256_storeu_pd(batch.g[a] + at,
+                                     _mm256_add_pd(_mm256_set1_pd(g_row[a][r]),
+                                                   _mm256_mul_pd(_mm256_set1_pd(t.map[a][0]), id)));
                 }
-                _mm256_storeu_si256(reinterpret_cast<__m256i*>(batch.index + at), index);
+                _mm256_storeu_si256(reinterpret_cast<__m256i*>(batch.index + at), index64);
                 const int n = static_cast<int>(counts[r]);
                 if (n > 4) {
                     const __m256d id4 = _mm256_add_pd(id, four);
                     for (int a = 0; a < 3; ++a) {
-                        _mm256_storeu_pd(batch.g[a] + at + 4,
-                                         _mm256_add_pd(_mm256_set1_pd(g_row[a][r]),
-                                                       _mm256_mul_pd(map_i[a], id4)));
+                        _mm256_storeu_pd(
+                            batch.g[a] + at + 4,
+                            _mm256_add_pd(_mm256_set1_pd(g_row[a][r]),
+                                          _mm256_mul_pd(_mm256_set1_pd(t.map[a][0]), id4)));
                     }
                     _mm256_storeu_si256(reinterpret_cast<__m256i*>(batch.index + at + 4),
-                                        _mm256_add_epi64(index, _mm256_set1_epi64x(4)));
+                                        _mm256_add_epi64(index64, _mm256_set1_epi64x(4)));
                 }
                 filled += n;
             }

@@ -24,16 +24,16 @@ int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4][4], const Vec
                     const RestInfo rest[4], const GridFrame& target, const GridFrame& source,
                     TetRaster out[4]);
 
-// Whether append_layers_avx2() takes the tet: is_fast, at most 8 voxels wide and 48 rows high
-// (so that a layer fits into an empty batch).
+// Whether append_layers_avx2() takes the tet: is_fast, at most 8 voxels wide and 16 rows high
+// (so that the rows of 4 layers fit into an empty batch).
 inline bool avx2_layers_fit(const TetRaster& t) {
-    return t.is_fast && t.hi[0] - t.lo[0] < 8 && t.hi[1] - t.lo[1] < 48;
+    return t.is_fast && t.hi[0] - t.lo[0] < 8 && t.hi[1] - t.lo[1] < 16;
 }
 
-// append_spans() for a tet with avx2_layers_fit(), 4 rows at a time, the same voxels in the same
-// order with the same coordinates, without a flush: appends layers [k, k_end) (clipped to the
-// tet's box) while the batch has room for a whole layer and returns the first layer it did not
-// append (k_end when done: else the caller flushes the batch and calls again from there).
+// append_spans() for a tet with avx2_layers_fit(), 4 rows at a time (rows of up to 4 layers
+// share a vector), the same voxels in the same order with the same coordinates, without a
+// flush: appends layers [k, k_end) (clipped to the tet's box) while the batch has room for 4
+// whole layers and returns the first layer it did not append (k_end when done: else the caller flushes the batch and calls again from there).
 // Adds the number of voxels appended to num_voxels.
 std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t k, std::int64_t k_end,
                                 std::int64_t nx, std::int64_t nxy, SpanBatch& batch,
