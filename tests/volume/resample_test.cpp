@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -473,42 +475,61 @@ TEST(Resample, Avx2SetupOfFourTetsEqualsTheScalarSetup) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> coord(-4.0f, 30.0f);
     std::uniform_int_distribution<int> kind(0, 5);
-    std::uniform_int_distribution<std::int32_t> vertex_id(0, 50);
     int num_ok = 0;
     int num_degenerate = 0;
     int num_flat_layers = 0;
+    std::uniform_int_distribution<int> slot(0, 7);
     for (int round = 0; round < 2000; ++round) {
+        // Lane l uses vertices 8l … 8l + 7 (random, possibly repeated, in random order).
+        std::vector<Vec3f> deformed(32);
+        std::vector<Vec3f> rest_positions(32);
+        for (std::size_t v = 0; v < deformed.size(); ++v) {
+            deformed[v] = {coord(rng), coord(rng), coord(rng)};
+            rest_positions[v] = {coord(rng), coord(rng), coord(rng)};
+        }
         Vec3f p[4][4];
         Vec3f r[4][4];
         std::int32_t ids[4][4];
         detail::RestInfo rest[4];
         for (int l = 0; l < 4; ++l) {
             const int k = kind(rng);
+            std::array<std::int32_t, 8> order{0, 1, 2, 3, 4, 5, 6, 7};
+            std::shuffle(order.begin(), order.end(), rng);
             for (int v = 0; v < 4; ++v) {
-                p[l][v] = {coord(rng), coord(rng), coord(rng)};
-                r[l][v] = {coord(rng), coord(rng), coord(rng)};
-                ids[l][v] = vertex_id(rng);
+                ids[l][v] = 8 * l + order[static_cast<std::size_t>(v)];
             }
+            if (k == 4) {  // a repeated vertex index (degenerate)
+                ids[l][3] = ids[l][slot(rng) % 3];
+            }
+            auto at = [&](int v) -> Vec3f& {
+                return deformed[static_cast<std::size_t>(ids[l][v])];
+            };
             if (k == 0) {  // a face in a layer plane (a = b = 0), through layer centres
-                const float z =
-                    static_cast<float>(target.origin().z) + std::round(p[l][0].z) + 0.5f;
-                p[l][0].z = z;
-                p[l][1].z = z;
-                p[l][2].z = z;
+                const float z = static_cast<float>(target.origin().z) + std::round(at(0).z) + 0.5f;
+                at(0).z = z;
+                at(1).z = z;
+                at(2).z = z;
             } else if (k == 1) {  // a face parallel to the rows (a = 0)
-                p[l][1].x = p[l][0].x;
-                p[l][2].x = p[l][0].x;
+                at(1).x = at(0).x;
+                at(2).x = at(0).x;
             } else if (k == 2) {  // degenerate: coplanar, or two vertices equal
-                p[l][3] = p[l][(round & 1) == 0 ? 2 : 0];
+                at(3) = at((round & 1) == 0 ? 2 : 0);
             } else if (k == 3) {  // vertices on the lattice of the target's voxel corners
                 for (int v = 0; v < 4; ++v) {
-                    p[l][v] = {std::round(p[l][v].x), std::round(p[l][v].y), std::round(p[l][v].z)};
+                    at(v) = {std::round(at(v).x), std::round(at(v).y), std::round(at(v).z)};
                 }
+            }
+        }
+        for (int l = 0; l < 4; ++l) {
+            for (int v = 0; v < 4; ++v) {
+                p[l][v] = deformed[static_cast<std::size_t>(ids[l][v])];
+                r[l][v] = rest_positions[static_cast<std::size_t>(ids[l][v])];
             }
             rest[l] = detail::rest_info(r[l], sf);
         }
         detail::TetRaster fast[4]{};
-        const int ok = detail::setup_tets_avx2(p, ids, r, rest, tf, sf, fast);
+        const int ok = detail::setup_tets_avx2(deformed.data(), rest_positions.data(), ids, rest,
+                                               tf, sf, fast);
         for (int l = 0; l < 4; ++l) {
             detail::TetRaster plain{};
             const bool is_ok = detail::setup_tet(p[l], ids[l], r[l], rest[l], tf, sf, plain);

@@ -271,8 +271,6 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
                 std::int64_t e = e_begin;
                 if (use_avx2) {
                     for (; e + 4 <= e_end; e += 4) {
-                        Vec3f p[4][4];
-                        Vec3f r[4][4];
                         std::int32_t ids[4][4];
                         detail::RestInfo infos[4];
                         for (int l = 0; l < 4; ++l) {
@@ -280,17 +278,13 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
                             const geometry::Tet& tet =
                                 tets[static_cast<std::size_t>(kept[static_cast<std::size_t>(at)])];
                             for (int v = 0; v < 4; ++v) {
-                                const auto vertex =
-                                    static_cast<std::size_t>(tet[static_cast<std::size_t>(v)]);
-                                p[l][v] = deformed[vertex];
-                                r[l][v] = rest[vertex];
                                 ids[l][v] = tet[static_cast<std::size_t>(v)];
                             }
                             infos[l] = decode_rest(rest_codes[static_cast<std::size_t>(at)]);
                         }
                         TetRaster rasters[4];
-                        const int ok =
-                            detail::setup_tets_avx2(p, ids, r, infos, target, source, rasters);
+                        const int ok = detail::setup_tets_avx2(deformed.data(), rest.data(), ids,
+                                                               infos, target, source, rasters);
                         for (int l = 0; l < 4; ++l) {
                             rasterize_tet(rasters[l], ((ok >> l) & 1) != 0);
                         }

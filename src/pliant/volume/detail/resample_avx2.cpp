@@ -286,8 +286,8 @@ PLIANT_AVX2_INLINE void store_transposed(const V v[4], double* out0, double* out
 
 }  // namespace
 
-PLIANT_AVX2_FN int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4][4],
-                                   const Vec3f r[4][4], const RestInfo rest[4],
+PLIANT_AVX2_FN int setup_tets_avx2(const Vec3f* deformed, const Vec3f* rest_positions,
+                                   const std::int32_t ids[4][4], const RestInfo rest[4],
                                    const GridFrame& target, const GridFrame& source,
                                    TetRaster out[4]) {
     constexpr double INF = std::numeric_limits<double>::infinity();
@@ -300,13 +300,21 @@ PLIANT_AVX2_FN int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4
     V3 rd[4];
     V id[4];
     for (int v = 0; v < 4; ++v) {
-        pd[v] = {_mm256_setr_pd(p[0][v].x, p[1][v].x, p[2][v].x, p[3][v].x),
-                 _mm256_setr_pd(p[0][v].y, p[1][v].y, p[2][v].y, p[3][v].y),
-                 _mm256_setr_pd(p[0][v].z, p[1][v].z, p[2][v].z, p[3][v].z)};
-        rd[v] = {_mm256_setr_pd(r[0][v].x, r[1][v].x, r[2][v].x, r[3][v].x),
-                 _mm256_setr_pd(r[0][v].y, r[1][v].y, r[2][v].y, r[3][v].y),
-                 _mm256_setr_pd(r[0][v].z, r[1][v].z, r[2][v].z, r[3][v].z)};
-        id[v] = _mm256_setr_pd(ids[0][v], ids[1][v], ids[2][v], ids[3][v]);  // exact
+        const Vec3f& p0 = deformed[ids[0][v]];
+        const Vec3f& p1 = deformed[ids[1][v]];
+        const Vec3f& p2 = deformed[ids[2][v]];
+        const Vec3f& p3 = deformed[ids[3][v]];
+        const Vec3f& r0 = rest_positions[ids[0][v]];
+        const Vec3f& r1 = rest_positions[ids[1][v]];
+        const Vec3f& r2 = rest_positions[ids[2][v]];
+        const Vec3f& r3 = rest_positions[ids[3][v]];
+        pd[v] = {_mm256_cvtps_pd(_mm_setr_ps(p0.x, p1.x, p2.x, p3.x)),
+                 _mm256_cvtps_pd(_mm_setr_ps(p0.y, p1.y, p2.y, p3.y)),
+                 _mm256_cvtps_pd(_mm_setr_ps(p0.z, p1.z, p2.z, p3.z))};
+        rd[v] = {_mm256_cvtps_pd(_mm_setr_ps(r0.x, r1.x, r2.x, r3.x)),
+                 _mm256_cvtps_pd(_mm_setr_ps(r0.y, r1.y, r2.y, r3.y)),
+                 _mm256_cvtps_pd(_mm_setr_ps(r0.z, r1.z, r2.z, r3.z))};
+        id[v] = _mm256_cvtepi32_pd(_mm_setr_epi32(ids[0][v], ids[1][v], ids[2][v], ids[3][v]));
     }
     // Index coordinates and the box (axis_range).
     V vertex[4][3];
@@ -708,8 +716,8 @@ PLIANT_AVX2_FN int sample_f32_avx2(const float* src, const std::int64_t n[3],
 bool has_avx2() {
     return false;
 }
-int setup_tets_avx2(const Vec3f[4][4], const std::int32_t[4][4], const Vec3f[4][4],
-                    const RestInfo[4], const GridFrame&, const GridFrame&, TetRaster[4]) {
+int setup_tets_avx2(const Vec3f*, const Vec3f*, const std::int32_t[4][4], const RestInfo[4],
+                    const GridFrame&, const GridFrame&, TetRaster[4]) {
     return 0;
 }
 std::int64_t append_layers_avx2(const TetRaster&, std::int64_t k, std::int64_t, std::int64_t,

@@ -16,13 +16,14 @@ bool has_avx2();
 // called while a resample runs.
 void allow_avx2(bool allowed);
 
-// setup_tet() of 4 tets at once (lane l: vertices p[l], vertex indices ids[l], rest vertices
-// r[l], rest[l]): out[l] gets what setup_tet(p[l], ids[l], r[l], rest[l], target, source, out[l])
-// writes, bit for bit (out[l].lo/hi always; the rest when bit l of the result is set, i.e. when
-// setup_tet returns true).
-int setup_tets_avx2(const Vec3f p[4][4], const std::int32_t ids[4][4], const Vec3f r[4][4],
-                    const RestInfo rest[4], const GridFrame& target, const GridFrame& source,
-                    TetRaster out[4]);
+// setup_tet() of 4 tets at once: tet l has vertex indices ids[l] into the deformed and rest
+// positions, and rest information rest[l]. out[l] gets what setup_tet(p, ids[l], r, rest[l],
+// target, source, out[l]) writes for p[v] = deformed[ids[l][v]], r[v] = rest_positions[ids[l][v]],
+// bit for bit (out[l].lo/hi always; the rest when bit l of the result is set, i.e. when setup_tet
+// returns true).
+int setup_tets_avx2(const Vec3f* deformed, const Vec3f* rest_positions,
+                    const std::int32_t ids[4][4], const RestInfo rest[4], const GridFrame& target,
+                    const GridFrame& source, TetRaster out[4]);
 
 // Whether append_layers_avx2() takes the tet: is_fast, at most 8 voxels wide and 16 rows high
 // (so that the rows of 4 layers fit into an empty batch).
@@ -33,8 +34,8 @@ inline bool avx2_layers_fit(const TetRaster& t) {
 // append_spans() for a tet with avx2_layers_fit(), 4 rows at a time (rows of up to 4 layers
 // share a vector), the same voxels in the same order with the same coordinates, without a
 // flush: appends layers [k, k_end) (clipped to the tet's box) while the batch has room for 4
-// whole layers and returns the first layer it did not append (k_end when done: else the caller flushes the batch and calls again from there).
-// Adds the number of voxels appended to num_voxels.
+// whole layers and returns the first layer it did not append (k_end when done: else the caller
+// flushes the batch and calls again from there). Adds the number of voxels appended to num_voxels.
 std::int64_t append_layers_avx2(const TetRaster& t, std::int64_t k, std::int64_t k_end,
                                 std::int64_t nx, std::int64_t nxy, SpanBatch& batch,
                                 std::int64_t& num_voxels);
