@@ -13,6 +13,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/geometry/exact_predicates.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/volume/detail/resample_avx2.hpp"
@@ -418,7 +419,7 @@ TEST(Resample, OneAndManyThreadsAreBitwiseIdenticalEvenWithFolds) {
 }
 
 TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
-    if (!detail::has_avx2()) {
+    if (!pliant::has_avx2()) {
         GTEST_SKIP() << "the CPU has no AVX2";
     }
     // f32 → f32 takes the AVX2 sampler; tets up to 8 voxels wide the AVX2 rows.
@@ -449,10 +450,10 @@ TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
         std::vector<std::uint8_t> plain_counts(fast_counts.size());
         const ResampleStats s_fast = resampler.resample(deformations[d], fast);
         resampler.count_coverage(deformations[d], source, fast_counts);
-        detail::allow_avx2(false);
+        pliant::allow_avx2(false);
         const ResampleStats s_plain = resampler.resample(deformations[d], plain);
         resampler.count_coverage(deformations[d], source, plain_counts);
-        detail::allow_avx2(true);
+        pliant::allow_avx2(true);
         EXPECT_GT(s_fast.num_voxels_written, 0) << d;
         EXPECT_EQ(s_fast.num_voxels_written, s_plain.num_voxels_written) << d;
         EXPECT_EQ(s_fast.num_inverted, s_plain.num_inverted) << d;
@@ -463,7 +464,7 @@ TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
 }
 
 TEST(Resample, Avx2SetupOfFourTetsEqualsTheScalarSetup) {
-    if (!detail::has_avx2()) {
+    if (!pliant::has_avx2()) {
         GTEST_SKIP() << "the CPU has no AVX2";
     }
     const Volume target =

@@ -11,6 +11,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/volume/detail/resample_avx2.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/visibility.hpp"
@@ -222,7 +223,7 @@ SlabCounts rasterize(std::span<const std::int32_t> kept, std::span<const std::ui
                      const GridFrame& source, bool skip_inverted, ZeroSlab&& zero_slab,
                      VisitBatch&& visit_batch) {
     const Slabs slabs = bin_tets(kept, tets, deformed, target);
-    const bool use_avx2 = detail::has_avx2();
+    const bool use_avx2 = pliant::has_avx2();
     return parallel_reduce(
         slabs.count, SlabCounts{},
         [&](std::int64_t s_begin, std::int64_t s_end) {
@@ -343,7 +344,7 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept,
     };
     // f32 → f32: 4 voxels at a time with AVX2 when the CPU has it (the same bits).
     const bool use_avx2 = std::is_same_v<S, float> && C == 1 && std::is_same_v<D, float> &&
-                          detail::has_avx2() &&
+                          pliant::has_avx2() &&
                           source.num_voxels() <= std::numeric_limits<std::int32_t>::max();
     // One loop over the batch.
     auto visit_batch = [&](const detail::SpanBatch& batch) {

@@ -1,34 +1,17 @@
 #include "pliant/volume/detail/resample_avx2.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <limits>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include "pliant/core/simd_dispatch.hpp"
+
+#if defined(PLIANT_HAS_AVX2_TARGET)
 #include <immintrin.h>
-#define PLIANT_VOLUME_AVX2 1
-// "avx2" only, not "fma": the compiler must not contract a · b + c, which would round differently
-// from the scalar kernels.
-#define PLIANT_AVX2_FN __attribute__((target("avx2")))
-#define PLIANT_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
 #endif
 
 namespace pliant::volume::detail {
 
-namespace {
-std::atomic<bool> g_avx2_allowed{true};
-}  // namespace
-
-void allow_avx2(bool allowed) {
-    g_avx2_allowed.store(allowed, std::memory_order_relaxed);
-}
-
-#if defined(PLIANT_VOLUME_AVX2)
-
-bool has_avx2() {
-    static const bool cpu_has = __builtin_cpu_supports("avx2") != 0;
-    return cpu_has && g_avx2_allowed.load(std::memory_order_relaxed);
-}
+#if defined(PLIANT_HAS_AVX2_TARGET)
 
 namespace {
 
@@ -712,10 +695,6 @@ PLIANT_AVX2_FN int sample_f32_avx2(const float* src, const std::int64_t n[3],
 }
 
 #else  // no AVX2 on this target
-
-bool has_avx2() {
-    return false;
-}
 int setup_tets_avx2(const Vec3f*, const Vec3f*, const std::int32_t[4][4], const RestInfo[4],
                     const GridFrame&, const GridFrame&, TetRaster[4]) {
     return 0;

@@ -1,7 +1,8 @@
 // AVX2 kernels of the resampler (volume/resample.hpp), compiled for AVX2 with a function
-// attribute and chosen at run time (has_avx2()). Each lane does the IEEE operations of the
-// scalar kernels of detail/resample_kernel.hpp in the same order, without FMA contraction: the
-// results are bitwise those of the scalar kernels, so the choice never changes an output.
+// attribute and chosen at run time (pliant::has_avx2(), core/simd_dispatch.hpp). Each lane does the
+// IEEE operations of the scalar kernels of detail/resample_kernel.hpp in the same order, without
+// FMA contraction: the results are bitwise those of the scalar kernels, so the choice never changes
+// an output.
 #pragma once
 
 #include <cstdint>
@@ -9,12 +10,6 @@
 #include "pliant/volume/detail/resample_kernel.hpp"
 
 namespace pliant::volume::detail {
-
-// Whether the CPU runs AVX2 and the AVX2 kernels are allowed (allow_avx2).
-bool has_avx2();
-// Tests compare the kernels: false makes has_avx2() false until called with true. Not to be
-// called while a resample runs.
-void allow_avx2(bool allowed);
 
 // setup_tet() of 4 tets at once: tet l has vertex indices ids[l] into the deformed and rest
 // positions, and rest information rest[l]. out[l] gets what setup_tet(p, ids[l], r, rest[l],
