@@ -44,6 +44,7 @@
 #include <span>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "broad_phase_report.hpp"
@@ -226,20 +227,20 @@ nlohmann::ordered_json render_demo_volume(const std::filesystem::path& dir, cons
             {"turntable_ms_per_frame", turntable_ms / TURNTABLE_FRAMES}};
 }
 
-// The demo volume twisted: the deformable-volume pipeline (tet grid, XPBD soft body, resampling,
-// ray casting) with the twist driver, the slab at +y (the face, for the Colin27 brain) turned 90
-// degrees against the slab at -y over 2 s: DIR/deform/twist.mp4 (none without ffmpeg), twist.png
-// (the last frame) and twisted.nrrd.
-nlohmann::ordered_json deform_demo_volume(const std::filesystem::path& dir, const DemoVolume& demo,
-                                          const DemoOptions& options, bool quiet) {
-    const std::filesystem::path out = dir / "deform";
-    make_output_directory(out);
-    const volume::TransferFunction tf = volume::preset(demo.preset, demo.volume);
+// The deformable-volume pipeline (tet grid, XPBD soft body, resampling, ray casting) on `source`
+// with the twist driver, the slab at +y (the face, for the Colin27 brain) turned 90 degrees
+// against the slab at -y over 2 s: OUT/twist.mp4 (none without ffmpeg), twist.png (the last
+// frame) and twisted.nrrd. tf: for a scalar source, nullptr for RGBA. Returns run_deform's JSON
+// and the file to watch.
+std::pair<nlohmann::ordered_json, std::string> twist_volume(const volume::Volume& source,
+                                                            const volume::TransferFunction* tf,
+                                                            const std::filesystem::path& out,
+                                                            int frames, bool progress) {
     DeformRunOptions run;
     run.driver_name = "twist";
     run.driver =
         pbd::TwistDriver{.axis = pbd::Axis::y, .angle = 90.0, .ramp_time = 2.0, .grip = 0.1};
-    run.frames = options.deform_frames;
+    run.frames = frames;
     run.fps = 24.0;
     run.out = out / "twisted.nrrd";
     if (io::ffmpeg_available()) {
@@ -249,8 +250,19 @@ nlohmann::ordered_json deform_demo_volume(const std::filesystem::path& dir, cons
     run.size = {384, 384};
     run.camera = {60.0, 20.0, 0.0};
     run.shading = true;
-    run.progress = !quiet && ::isatty(::fileno(stderr)) != 0;
-    const nlohmann::ordered_json result = run_deform(demo.volume, &tf, run);
+    run.progress = progress;
+    return {run_deform(source, tf, run),
+            run.video.empty() ? run.still.string() : run.video.string()};
+}
+
+// Step 6: the demo volume twisted (twist_volume) into DIR/deform.
+nlohmann::ordered_json deform_demo_volume(const std::filesystem::path& dir, const DemoVolume& demo,
+                                          const DemoOptions& options, bool quiet) {
+    const std::filesystem::path out = dir / "deform";
+    make_output_directory(out);
+    const volume::TransferFunction tf = volume::preset(demo.preset, demo.volume);
+    const auto [result, watch] = twist_volume(demo.volume, &tf, out, options.deform_frames,
+                                              !quiet && ::isatty(::fileno(stderr)) != 0);
     say(quiet,
         fmt::format("the volume twisted (tet grid + XPBD + resampling + ray casting): {} tets, "
                     "{:.1f} ms per substep, {:.1f} ms per resampling, {:.1f} ms per frame; "
@@ -258,7 +270,7 @@ nlohmann::ordered_json deform_demo_volume(const std::filesystem::path& dir, cons
                     result["tets"].get<long long>(), result["ms_per_substep"].get<double>(),
                     result["resample_ms"].get<double>(), result["ms_per_frame"].get<double>(),
                     result["volume_ratio"].get<double>(), result["inverted_tets"].get<long long>(),
-                    run.video.empty() ? run.still.string() : run.video.string()));
+                    watch));
     return result;
 }
 
@@ -319,22 +331,8 @@ nlohmann::ordered_json reconstruct_demo_volume(const std::filesystem::path& dir,
     }
     io::write_png(out / "compare.png", render::side_by_side(row, 4, {255, 255, 255}));
 
-    DeformRunOptions run;
-    run.driver_name = "twist";
-    run.driver =
-        pbd::TwistDriver{.axis = pbd::Axis::y, .angle = 90.0, .ramp_time = 2.0, .grip = 0.1};
-    run.frames = options.deform_frames;
-    run.fps = 24.0;
-    run.out = out / "twisted.nrrd";
-    if (io::ffmpeg_available()) {
-        run.video = out / "twist.mp4";
-    }
-    run.still = out / "twist.png";
-    run.size = {384, 384};
-    run.camera = {60.0, 20.0, 0.0};
-    run.shading = true;
-    run.progress = progress;
-    const nlohmann::ordered_json deform = run_deform(cleaned, nullptr, run);
+    const auto [deform, watch] =
+        twist_volume(cleaned, nullptr, out, options.deform_frames, progress);
 
     say(quiet,
         fmt::format(
@@ -351,8 +349,7 @@ nlohmann::ordered_json reconstruct_demo_volume(const std::filesystem::path& dir,
             trained.volume.dims()[1], trained.volume.dims()[2], eval["psnr"].get<double>(),
             eval["ssim"].get<double>(), trained.json["peak_rss_bytes"].get<double>() / 1048576.0,
             eval_cleaned["psnr"].get<double>(), deform["ms_per_frame"].get<double>(),
-            deform["volume_ratio"].get<double>(), deform["inverted_tets"].get<long long>(),
-            run.video.empty() ? run.still.string() : run.video.string()));
+            deform["volume_ratio"].get<double>(), deform["inverted_tets"].get<long long>(), watch));
     nlohmann::ordered_json j;
     j["dataset"] = dataset_json;
     j["train"] = trained.json;

@@ -212,28 +212,23 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
                                           i, ds.views[i].name, file));
             }
             int w = 0, h = 0, n = 0;
+            const auto check = [&](bool decoded) {
+                if (!decoded) {
+                    throw IoError(fmt::format("{}: frames[{}]: {}: cannot decode the image ({})",
+                                              path.string(), i, file, stbi_failure_reason()));
+                }
+                if (w != in_.width || h != in_.height) {
+                    throw IoError(fmt::format(
+                        "{}: frames[{}]: {}: image is {} x {}, expected {} x {} like the dataset",
+                        path.string(), i, file, w, h, in_.width, in_.height));
+                }
+            };
             // The size from the header first: an image that claims another size is refused
             // before stb allocates for it.
-            if (stbi_info(file.c_str(), &w, &h, &n) == 0) {
-                throw IoError(fmt::format("{}: frames[{}]: {}: cannot decode the image ({})",
-                                          path.string(), i, file, stbi_failure_reason()));
-            }
-            if (w != in_.width || h != in_.height) {
-                throw IoError(fmt::format(
-                    "{}: frames[{}]: {}: image is {} x {}, expected {} x {} like the dataset",
-                    path.string(), i, file, w, h, in_.width, in_.height));
-            }
+            check(stbi_info(file.c_str(), &w, &h, &n) != 0);
             const std::unique_ptr<unsigned char, void (*)(void*)> pixels(
                 stbi_load(file.c_str(), &w, &h, &n, 4), stbi_image_free);
-            if (!pixels) {
-                throw IoError(fmt::format("{}: frames[{}]: {}: cannot decode the image ({})",
-                                          path.string(), i, file, stbi_failure_reason()));
-            }
-            if (w != in_.width || h != in_.height) {
-                throw IoError(fmt::format(
-                    "{}: frames[{}]: {}: image is {} x {}, expected {} x {} like the dataset",
-                    path.string(), i, file, w, h, in_.width, in_.height));
-            }
+            check(pixels != nullptr);
             std::vector<float>& rgb = ds.views[i].rgb;
             rgb.resize(3 * static_cast<std::size_t>(w) * h);
             const unsigned char* p = pixels.get();
