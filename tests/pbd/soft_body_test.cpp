@@ -11,6 +11,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/volume/volume.hpp"
@@ -261,12 +262,12 @@ TEST(SoftBody, OneAndTwoThreadsAreBitwiseIdentical) {
 TEST(SoftBody, AVX2AndSSEKernelsAreBitwiseIdentical) {
     // The kernels are chosen at run time for speed only (projection_avx2.hpp): AVX2 runs and
     // indices, SSE, scalar. Without AVX2 on the machine both runs take the SSE kernels.
-    std::printf("AVX2: %s\n", detail::has_avx2() ? "yes" : "no");
+    std::printf("AVX2: %s\n", pliant::has_avx2() ? "yes" : "no");
     for (const bool use_grid : {true, false}) {
         const std::vector<Vec3f> avx2 = run_threads(2, use_grid);
-        detail::allow_avx2(false);
+        pliant::allow_avx2(false);
         const std::vector<Vec3f> sse = run_threads(2, use_grid);
-        detail::allow_avx2(true);
+        pliant::allow_avx2(true);
         ASSERT_EQ(avx2.size(), sse.size());
         std::size_t differing = 0;
         for (std::size_t i = 0; i < avx2.size(); ++i) {
