@@ -420,6 +420,37 @@ TEST(SoftBody, DragBringsTheVertexToItsTargetAndReleases) {
     EXPECT_LT(mean_edge_strain(body), 1e-3);  // back to its rest shape, wherever it went
 }
 
+// set_stiffness: a body switched to k = 0.8 after some frames continues bitwise as one built
+// with k = 0.8 from the same state (positions and velocities carried over).
+TEST(SoftBody, SetStiffnessActsLikeBuildingWithIt) {
+    const TetGrid grid = box_grid(4);
+    SoftBody changed(grid, {.stiffness = 1.0});
+    changed.add_driver(TwistDriver{.axis = Axis::z, .angle = 60.0, .ramp_time = 0.5});
+    for (int f = 0; f < 6; ++f) {
+        changed.step(1.0 / FPS);
+    }
+    SoftBody built(grid, {.stiffness = 0.8});
+    built.add_driver(TwistDriver{.axis = Axis::z, .angle = 60.0, .ramp_time = 0.5});
+    for (int f = 0; f < 6; ++f) {
+        built.step(1.0 / FPS);  // the clock, and the driver's ramp, reach the same time
+    }
+    built.set_positions(changed.positions());
+    built.set_velocities(changed.velocities());
+    changed.set_stiffness(0.8);
+    EXPECT_EQ(changed.options().stiffness, 0.8);
+    for (int f = 0; f < 6; ++f) {
+        changed.step(1.0 / FPS);
+        built.step(1.0 / FPS);
+    }
+    ASSERT_EQ(changed.positions().size(), built.positions().size());
+    EXPECT_EQ(std::memcmp(changed.positions().data(), built.positions().data(),
+                          changed.positions().size() * sizeof(Vec3f)),
+              0);
+    EXPECT_THROW(changed.set_stiffness(0.0), InvalidInput);
+    EXPECT_THROW(changed.set_stiffness(1.5), InvalidInput);
+    EXPECT_EQ(changed.options().stiffness, 0.8);
+}
+
 template <typename F>
 void expect_invalid(F&& f, const std::string& needle) {
     try {

@@ -566,6 +566,13 @@ void SoftBody::release_drag() {
     s.kinematics_dirty = true;
 }
 
+void SoftBody::set_stiffness(double stiffness) {
+    SoftBodyOptions options = m_options;
+    options.stiffness = stiffness;
+    validate_options(options);
+    m_options.stiffness = stiffness;
+}
+
 std::optional<DragDriver> SoftBody::drag() const {
     return m_state->drag;
 }
