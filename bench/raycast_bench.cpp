@@ -13,6 +13,7 @@
 
 #include <memory>
 
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/transfer_function.hpp"
@@ -42,14 +43,18 @@ const Scene& scene() {
     return *s;
 }
 
+// The last argument of each benchmark: 1 lets the AVX2 kernel run (when the CPU has AVX2), 0 forces
+// the scalar kernel (the same image, bit for bit).
 void run(benchmark::State& state, const render::Camera& camera) {
     const Scene& s = scene();
     render::Image image;
     render::RayCastStats stats;
+    allow_avx2(state.range(1) != 0);
     for (auto _ : state) {
         stats = s.caster->render(camera, image);
         benchmark::DoNotOptimize(image);
     }
+    allow_avx2(true);
     state.SetItemsProcessed(state.iterations() * camera.width() * camera.height());
     state.counters["samples"] = static_cast<double>(stats.samples);
 }
@@ -59,7 +64,11 @@ void BM_Perspective(benchmark::State& state) {
     run(state, render::frame_box(s.phantom.bounds(), static_cast<double>(state.range(0)), 20.0,
                                  SIZE, SIZE));
 }
-BENCHMARK(BM_Perspective)->Arg(30)->Arg(75)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Perspective)
+    ->ArgNames({"az", "simd"})
+    ->ArgsProduct({{30, 75}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_Orthographic(benchmark::State& state) {
     const Scene& s = scene();
@@ -67,8 +76,10 @@ void BM_Orthographic(benchmark::State& state) {
     run(state, render::view_camera(s.phantom.bounds(), axis, SIZE, SIZE));
 }
 BENCHMARK(BM_Orthographic)
-    ->Arg(static_cast<int>(render::ViewAxis::neg_y))
-    ->Arg(static_cast<int>(render::ViewAxis::neg_z))
+    ->ArgNames({"axis", "simd"})
+    ->ArgsProduct({{static_cast<int>(render::ViewAxis::neg_y),
+                    static_cast<int>(render::ViewAxis::neg_z)},
+                   {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

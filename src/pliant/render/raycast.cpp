@@ -15,6 +15,7 @@
 #include "pliant/core/host_device.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/render/detail/raycast_avx2.hpp"
 #include "pliant/render/detail/raycast_kernel.hpp"
 
 namespace pliant::render {
@@ -330,6 +331,8 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     const std::int64_t num_tiles = static_cast<std::int64_t>(tiles_x) * tiles_y;
     std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_is_rgba;
+    // The AVX2 march gives the scalar kernel's bits (detail/raycast_avx2.hpp): for speed only.
+    const bool use_avx2 = !is_rgba && detail::composite_avx2_fits(k);
     parallel_for(
         num_tiles,
         [&](std::int64_t tile) {
@@ -338,12 +341,23 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
             const int x1 = std::min(x0 + detail::TILE, k.width);
             const int y1 = std::min(y0 + detail::TILE, k.height);
             std::int64_t samples = 0;
-            for (int y = y0; y < y1; ++y) {
-                for (int x = x0; x < x1; ++x) {
-                    const detail::PixelResult p = is_rgba ? detail::raycast_pixel<true>(k, x, y)
+            if (use_avx2) {
+                Color colors[detail::TILE * detail::TILE];
+                samples = detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
+                for (int y = y0; y < y1; ++y) {
+                    for (int x = x0; x < x1; ++x) {
+                        image.set(x, y, to_rgb8(colors[(y - y0) * (x1 - x0) + (x - x0)]));
+                    }
+                }
+            } else {
+                for (int y = y0; y < y1; ++y) {
+                    for (int x = x0; x < x1; ++x) {
+                        const detail::PixelResult p = is_rgba
+                                                          ? detail::raycast_pixel<true>(k, x, y)
                                                           : detail::raycast_pixel<false>(k, x, y);
-                    image.set(x, y, to_rgb8(p.color));
-                    samples += p.samples;
+                        image.set(x, y, to_rgb8(p.color));
+                        samples += p.samples;
+                    }
                 }
             }
             tile_samples[static_cast<std::size_t>(tile)] = samples;

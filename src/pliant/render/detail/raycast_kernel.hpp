@@ -339,23 +339,155 @@ PLIANT_HOST_DEVICE inline void composite(const Sample& s, float a, float& cr, fl
     acc += w;
 }
 
+// Steps 1–2 of a pixel: its ray, clipped, and the segments of the clipped chord.
+struct PixelRay {
+    Vec3f dir;  // world direction of the ray (unit)
+    GridRay r;
+    float length = 0.0f;  // the clipped chord, world units
+    std::int64_t num_segments = 0;
+    std::int64_t num_full = 0;  // samples marched: every segment for MIP, all but the last else
+};
+
+// Step 1 and 2 for pixel (i, j): false when its ray misses the box (or the kept half-space).
+PLIANT_HOST_DEVICE inline bool begin_pixel(const RayCastKernel& k, int i, int j, PixelRay& p) {
+    Vec3f origin;
+    pixel_ray(k, i, j, origin, p.dir);
+    if (!clip_ray(k, origin, p.dir, p.r)) {
+        return false;
+    }
+    // N segments of the step, samples at their midpoints; the last one shortened.
+    p.length = p.r.t_far - p.r.t_near;
+    p.num_segments =
+        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(p.length / k.step)));
+    p.num_full = k.is_mip ? p.num_segments : p.num_segments - 1;
+    return true;
+}
+
+// Grid position of sample m (the midpoint of segment m).
+PLIANT_HOST_DEVICE inline Vec3f sample_position(const RayCastKernel& k, const GridRay& r,
+                                                std::int64_t m) {
+    return r.go + (r.t_near + (static_cast<float>(m) + 0.5f) * k.step) * r.gd;
+}
+
+// What a composite march has accumulated: opacity-weighted colour and opacity.
+struct Accumulated {
+    float r = 0.0f, g = 0.0f, b = 0.0f, a = 0.0f;
+};
+
+// The end of a composite ray after its march of p.num_full samples (or its early termination):
+// the shortened last segment, of length ℓ, with α = 1 − (1 − α_Δs)^(ℓ / Δs), then the background
+// behind. Adds the last sample, when classified, to `samples`.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Color end_composite(const RayCastKernel& k, const PixelRay& p,
+                                              Accumulated c, std::int64_t& samples) {
+    const GridRay& r = p.r;
+    const float partial = p.length - static_cast<float>(p.num_segments - 1) * k.step;
+    if (!(c.a > k.threshold) && partial > 0.0f) {
+        const float tm =
+            r.t_near + static_cast<float>(p.num_segments - 1) * k.step + 0.5f * partial;
+        const Vec3f g = r.go + tm * r.gd;
+        const Trilinear t = locate(k, g);
+        // A cell's cube is empty (non-zero) towards every octant alike: octant 0 decides.
+        if (!k.skipping || k.empty_cube[0][cell_of(k, t)] == 0) {
+            ++samples;
+            Sample s = classify<IS_RGBA>(k, t);
+            if (s.a > 0.0f) {
+                if (k.shading) {
+                    const float f = shade<IS_RGBA>(k, g, p.dir);
+                    s.r *= f;
+                    s.g *= f;
+                    s.b *= f;
+                }
+                const float ratio = partial / k.step;
+                const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
+                composite(s, a, c.r, c.g, c.b, c.a);
+            }
+        }
+    }
+    const float rest = 1.0f - c.a;
+    return {c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b};
+}
+
+// The octant of a ray's direction (bit a set: component a negative) and its zero components
+// (bit a set: component a is zero).
+PLIANT_HOST_DEVICE inline int octant_of(const GridRay& r) {
+    return (r.gd.x < 0.0f ? 1 : 0) | (r.gd.y < 0.0f ? 2 : 0) | (r.gd.z < 0.0f ? 4 : 0);
+}
+PLIANT_HOST_DEVICE inline int zero_axes_of(const GridRay& r) {
+    return (r.gd.x == 0.0f ? 1 : 0) | (r.gd.y == 0.0f ? 2 : 0) | (r.gd.z == 0.0f ? 4 : 0);
+}
+
+// Steps 3–5 of a composite ray: march its p.num_full samples front to back from the first;
+// one in an empty cell jumps over the cube of empty cells that its cell starts towards the ray's
+// octant instead of being classified. Returns what was accumulated (the march stops when the
+// opacity exceeds the threshold) and adds the classified samples to `samples`.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Accumulated march_composite(const RayCastKernel& k, const PixelRay& p,
+                                                      std::int64_t& samples) {
+    const GridRay& r = p.r;
+    const int octant = octant_of(r);
+    const std::uint8_t* empty_cube = k.empty_cube[octant];
+    // A ray with a zero direction component never moves along it, so the cubes towards either
+    // side of that axis are valid too: up to 3 more octants (axis views have two zero
+    // components), and the largest of their cubes is jumped.
+    const std::uint8_t* more_cubes[3] = {nullptr, nullptr, nullptr};
+    int num_more = 0;
+    {
+        const int zero = zero_axes_of(r);
+        for (int flip = 1; flip < 8; ++flip) {
+            if ((flip & ~zero) == 0 && num_more < 3) {
+                more_cubes[num_more++] = k.empty_cube[octant ^ flip];
+            }
+        }
+    }
+    Accumulated c;
+    std::int64_t n = 0;
+    while (n < p.num_full) {
+        const Vec3f g = sample_position(k, r, n);
+        const Trilinear t = locate(k, g);
+        if (k.skipping) {
+            const std::int64_t cell = cell_of(k, t);
+            int side = empty_cube[cell];
+            for (int m = 0; m < num_more && side > 0; ++m) {
+                side = std::max<int>(side, more_cubes[m][cell]);
+            }
+            if (side > 0) {
+                n = jump(k, r, t, side, n, p.num_full);
+                continue;
+            }
+            if (((k.sub_occupied[cell] >> sub_cell_bit(t)) & 1) == 0) {
+                ++n;  // an empty sub-cell of an occupied cell: this sample only
+                continue;
+            }
+        }
+        ++samples;
+        Sample s = classify<IS_RGBA>(k, t);
+        if (s.a > 0.0f) {
+            if (k.shading) {
+                const float f = shade<IS_RGBA>(k, g, p.dir);
+                s.r *= f;
+                s.g *= f;
+                s.b *= f;
+            }
+            composite(s, s.a, c.r, c.g, c.b, c.a);
+            if (c.a > k.threshold) {
+                break;
+            }
+        }
+        ++n;
+    }
+    return c;
+}
+
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int j) {
     PixelResult result{k.background, 0};
-    Vec3f origin, dir;
-    pixel_ray(k, i, j, origin, dir);
-    GridRay r;
-    if (!clip_ray(k, origin, dir, r)) {
+    PixelRay p;
+    if (!begin_pixel(k, i, j, p)) {
         return result;
     }
-    // Step 2: N segments of the step, samples at their midpoints; the last one shortened.
-    const float length = r.t_far - r.t_near;
-    const auto num_segments =
-        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(length / k.step)));
-    const std::int64_t num_full = k.is_mip ? num_segments : num_segments - 1;
-    const auto position = [&](std::int64_t m) {
-        return r.go + (r.t_near + (static_cast<float>(m) + 0.5f) * k.step) * r.gd;
-    };
+    const GridRay& r = p.r;
+    const std::int64_t num_full = p.num_full;
     std::int64_t samples = 0;
     std::int64_t n = 0;
 
@@ -365,7 +497,7 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
         float best = -1.0f;  // largest value (or α) so far
         Sample best_sample{0.0f, 0.0f, 0.0f, 0.0f};
         while (n < num_full) {
-            const Trilinear t = locate(k, position(n));
+            const Trilinear t = locate(k, sample_position(k, r, n));
             if (k.skipping && k.cell_max[cell_of(k, t)] <= best) {
                 n = jump(k, r, t, 1, n, num_full);
                 continue;
@@ -404,84 +536,8 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
         return result;
     }
 
-    // Steps 3–5: march the samples; one in an empty cell jumps over the cube of empty cells
-    // that its cell starts towards the ray's octant instead of being classified.
-    const int octant = (r.gd.x < 0.0f ? 1 : 0) | (r.gd.y < 0.0f ? 2 : 0) | (r.gd.z < 0.0f ? 4 : 0);
-    const std::uint8_t* empty_cube = k.empty_cube[octant];
-    // A ray with a zero direction component never moves along it, so the cubes towards either
-    // side of that axis are valid too: up to 3 more octants (axis views have two zero
-    // components), and the largest of their cubes is jumped.
-    const std::uint8_t* more_cubes[3] = {nullptr, nullptr, nullptr};
-    int num_more = 0;
-    {
-        const int zero =
-            (r.gd.x == 0.0f ? 1 : 0) | (r.gd.y == 0.0f ? 2 : 0) | (r.gd.z == 0.0f ? 4 : 0);
-        for (int flip = 1; flip < 8; ++flip) {
-            if ((flip & ~zero) == 0 && num_more < 3) {
-                more_cubes[num_more++] = k.empty_cube[octant ^ flip];
-            }
-        }
-    }
-    float cr = 0.0f, cg = 0.0f, cb = 0.0f, acc = 0.0f;
-    while (n < num_full) {
-        const Vec3f g = position(n);
-        const Trilinear t = locate(k, g);
-        if (k.skipping) {
-            const std::int64_t cell = cell_of(k, t);
-            int side = empty_cube[cell];
-            for (int m = 0; m < num_more && side > 0; ++m) {
-                side = std::max<int>(side, more_cubes[m][cell]);
-            }
-            if (side > 0) {
-                n = jump(k, r, t, side, n, num_full);
-                continue;
-            }
-            if (((k.sub_occupied[cell] >> sub_cell_bit(t)) & 1) == 0) {
-                ++n;  // an empty sub-cell of an occupied cell: this sample only
-                continue;
-            }
-        }
-        ++samples;
-        Sample s = classify<IS_RGBA>(k, t);
-        if (s.a > 0.0f) {
-            if (k.shading) {
-                const float f = shade<IS_RGBA>(k, g, dir);
-                s.r *= f;
-                s.g *= f;
-                s.b *= f;
-            }
-            composite(s, s.a, cr, cg, cb, acc);
-            if (acc > k.threshold) {
-                break;
-            }
-        }
-        ++n;
-    }
-    // The shortened last segment, of length ℓ: α = 1 − (1 − α_Δs)^(ℓ / Δs).
-    const float partial = length - static_cast<float>(num_segments - 1) * k.step;
-    if (!(acc > k.threshold) && partial > 0.0f) {
-        const float tm = r.t_near + static_cast<float>(num_segments - 1) * k.step + 0.5f * partial;
-        const Vec3f g = r.go + tm * r.gd;
-        const Trilinear t = locate(k, g);
-        if (!k.skipping || empty_cube[cell_of(k, t)] == 0) {
-            ++samples;
-            Sample s = classify<IS_RGBA>(k, t);
-            if (s.a > 0.0f) {
-                if (k.shading) {
-                    const float f = shade<IS_RGBA>(k, g, dir);
-                    s.r *= f;
-                    s.g *= f;
-                    s.b *= f;
-                }
-                const float ratio = partial / k.step;
-                const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
-                composite(s, a, cr, cg, cb, acc);
-            }
-        }
-    }
-    const float rest = 1.0f - acc;
-    result.color = {cr + rest * k.background.r, cg + rest * k.background.g,
-                    cb + rest * k.background.b};
+    const Accumulated c = march_composite<IS_RGBA>(k, p, samples);
+    result.color = end_composite<IS_RGBA>(k, p, c, samples);
     result.samples = samples;
     return result;
 }

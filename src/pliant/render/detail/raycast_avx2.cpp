@@ -1,0 +1,578 @@
+#include "pliant/render/detail/raycast_avx2.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+#include "pliant/core/simd_dispatch.hpp"
+
+#if defined(PLIANT_HAS_AVX2_TARGET)
+#include <immintrin.h>
+#endif
+
+namespace pliant::render::detail {
+
+#if defined(PLIANT_HAS_AVX2_TARGET)
+
+namespace {
+
+constexpr int LANES = 8;
+constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
+
+// The march state of 8 rays, one per lane (structure of arrays, reloaded every iteration: a lane
+// is refilled by scalar stores).
+struct alignas(32) Lanes {
+    float go[3][LANES];
+    float gd[3][LANES];
+    float inv_gd[3][LANES];
+    float t_near[LANES], t_far[LANES], margin[LANES];
+    float cr[LANES], cg[LANES], cb[LANES], acc[LANES];
+    std::int32_t n[LANES], num_full[LANES], samples[LANES];
+    // Index of the lane's empty-cube byte for cell 0 in k.empty_cube[0] (octant · cells), and of
+    // the up to 3 more octants of a ray with zero direction components (the octant's own when
+    // there are fewer).
+    std::int32_t cube[LANES];
+    std::int32_t more[3][LANES];
+};
+
+// The rays of a tile's pixels (begin_pixel's results, by pixel index in the tile; 8 entries of
+// slack for the last group of a row), and the pixels whose rays have samples to march, in order.
+constexpr int MAX_PIXELS = TILE * TILE;
+struct alignas(32) TileRays {
+    float dir[3][MAX_PIXELS + LANES];
+    float go[3][MAX_PIXELS + LANES];
+    float gd[3][MAX_PIXELS + LANES];
+    float inv_gd[3][MAX_PIXELS + LANES];
+    float t_near[MAX_PIXELS + LANES], t_far[MAX_PIXELS + LANES], margin[MAX_PIXELS + LANES];
+    float length[MAX_PIXELS + LANES];
+    std::int32_t num_segments[MAX_PIXELS + LANES];
+    std::int32_t marched[MAX_PIXELS];  // pixels with num_full = num_segments − 1 ≥ 1
+    int num_marched = 0;
+};
+
+// Pixel `pixel`'s ray as begin_pixel() returned it.
+PixelRay pixel_ray_of(const TileRays& t, int pixel) {
+    PixelRay p;
+    for (int a = 0; a < 3; ++a) {
+        p.dir[a] = t.dir[a][pixel];
+        p.r.go[a] = t.go[a][pixel];
+        p.r.gd[a] = t.gd[a][pixel];
+        p.r.inv_gd[a] = t.inv_gd[a][pixel];
+    }
+    p.r.t_near = t.t_near[pixel];
+    p.r.t_far = t.t_far[pixel];
+    p.r.margin = t.margin[pixel];
+    p.length = t.length[pixel];
+    p.num_segments = t.num_segments[pixel];
+    p.num_full = p.num_segments - 1;
+    return p;
+}
+
+PLIANT_AVX2_INLINE __m256 load(const float* p) {
+    return _mm256_load_ps(p);
+}
+PLIANT_AVX2_INLINE __m256i load(const std::int32_t* p) {
+    return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
+}
+PLIANT_AVX2_INLINE void store(float* p, __m256 v) {
+    _mm256_store_ps(p, v);
+}
+PLIANT_AVX2_INLINE void store(std::int32_t* p, __m256i v) {
+    _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
+}
+PLIANT_AVX2_INLINE __m256 lerp(__m256 a, __m256 b, __m256 t) {
+    return _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a)));
+}
+// Per-lane loads instead of AVX2 gathers: on AMD Zen a gather of 8 floats costs as much as about
+// 20 scalar loads even from L1, and x-adjacent voxels are loaded in pairs.
+
+// base[index[l]] per lane l (bytes).
+PLIANT_AVX2_INLINE __m256i load_bytes(const std::uint8_t* base, const std::int32_t* index) {
+    return _mm256_setr_epi32(base[index[0]], base[index[1]], base[index[2]], base[index[3]],
+                             base[index[4]], base[index[5]], base[index[6]], base[index[7]]);
+}
+
+// (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
+PLIANT_AVX2_INLINE __m128 two_pairs(const float* v, std::int32_t i0, std::int32_t i1) {
+    const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + i0)));
+    return _mm_loadh_pi(low, reinterpret_cast<const __m64*>(v + i1));
+}
+
+// The pairs (v[index[l]], v[index[l] + 1]) of the 8 lanes as the vectors of their first and
+// second elements.
+PLIANT_AVX2_INLINE void load_pairs(const float* v, const std::int32_t* index, __m256& first,
+                                   __m256& second) {
+    // a = x0 y0 x1 y1 | x4 y4 x5 y5, b = x2 y2 x3 y3 | x6 y6 x7 y7.
+    const __m256 a =
+        _mm256_set_m128(two_pairs(v, index[4], index[5]), two_pairs(v, index[0], index[1]));
+    const __m256 b =
+        _mm256_set_m128(two_pairs(v, index[6], index[7]), two_pairs(v, index[2], index[3]));
+    first = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
+    second = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
+}
+
+// The 4 floats at lut + offset[l] per lane, transposed: out[c] holds component c of the 8 lanes.
+PLIANT_AVX2_INLINE __m256 entry_row(const float* lut, const std::int32_t* offset, int l) {
+    return _mm256_set_m128(_mm_loadu_ps(lut + offset[l + 4]), _mm_loadu_ps(lut + offset[l]));
+}
+PLIANT_AVX2_INLINE void load_entries(const float* lut, const std::int32_t* offset, __m256 out[4]) {
+    const __m256 r0 = entry_row(lut, offset, 0);  // lanes 0 | 4
+    const __m256 r1 = entry_row(lut, offset, 1);
+    const __m256 r2 = entry_row(lut, offset, 2);
+    const __m256 r3 = entry_row(lut, offset, 3);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);
+    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);
+    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);
+    out[0] = _mm256_shuffle_ps(t0, t1, 0x44);
+    out[1] = _mm256_shuffle_ps(t0, t1, 0xEE);
+    out[2] = _mm256_shuffle_ps(t2, t3, 0x44);
+    out[3] = _mm256_shuffle_ps(t2, t3, 0xEE);
+}
+
+PLIANT_AVX2_INLINE __m256 as_float(__m256i m) {
+    return _mm256_castsi256_ps(m);
+}
+PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
+    return _mm256_castps_si256(m);
+}
+
+// Puts the ray of pixel `pixel` (marched from its first sample) into lane l.
+void fill_lane(const TileRays& t, int pixel, std::int32_t num_cells, Lanes& s, int l) {
+    for (int a = 0; a < 3; ++a) {
+        s.go[a][l] = t.go[a][pixel];
+        s.gd[a][l] = t.gd[a][pixel];
+        s.inv_gd[a][l] = t.inv_gd[a][pixel];
+    }
+    s.t_near[l] = t.t_near[pixel];
+    s.t_far[l] = t.t_far[pixel];
+    s.margin[l] = t.margin[pixel];
+    s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
+    s.n[l] = 0;
+    s.num_full[l] = t.num_segments[pixel] - 1;
+    s.samples[l] = 0;
+    const float gd[3] = {t.gd[0][pixel], t.gd[1][pixel], t.gd[2][pixel]};
+    const int octant = (gd[0] < 0.0f ? 1 : 0) | (gd[1] < 0.0f ? 2 : 0) | (gd[2] < 0.0f ? 4 : 0);
+    const int zero = (gd[0] == 0.0f ? 1 : 0) | (gd[1] == 0.0f ? 2 : 0) | (gd[2] == 0.0f ? 4 : 0);
+    s.cube[l] = octant * num_cells;
+    int num_more = 0;
+    for (int flip = 1; flip < 8; ++flip) {
+        if ((flip & ~zero) == 0 && num_more < 3) {
+            s.more[num_more++][l] = (octant ^ flip) * num_cells;
+        }
+    }
+    for (int m = num_more; m < 3; ++m) {
+        s.more[m][l] = s.cube[l];
+    }
+}
+
+// An idle lane: a ray at the grid's corner that marches nothing (its loads stay in bounds).
+void clear_lane(Lanes& s, int l) {
+    for (int a = 0; a < 3; ++a) {
+        s.go[a][l] = 0.0f;
+        s.gd[a][l] = 1.0f;
+        s.inv_gd[a][l] = 1.0f;
+    }
+    s.t_near[l] = s.t_far[l] = s.margin[l] = 0.0f;
+    s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
+    s.n[l] = s.num_full[l] = s.samples[l] = 0;
+    s.cube[l] = 0;
+    for (int m = 0; m < 3; ++m) {
+        s.more[m][l] = 0;
+    }
+}
+
+// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7, lane by lane in the same operations, into
+// entry first + l of t. Returns bit l set when lane l's ray hits the box with fewer than 2^30
+// segments, bit 8 + l when it hits with more (for the scalar code), neither when it misses.
+PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first, TileRays& t) {
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    const __m256 inv_focal = _mm256_set1_ps(k.inv_focal);
+    // pixel_ray(): (i + 0.5 − 0.5·width)·inv_focal, (0.5·height − (j + 0.5))·inv_focal.
+    const __m256 fi = _mm256_cvtepi32_ps(
+        _mm256_add_epi32(_mm256_set1_epi32(x), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+    const __m256 cx = _mm256_mul_ps(
+        _mm256_sub_ps(_mm256_add_ps(fi, half), _mm256_set1_ps(0.5f * static_cast<float>(k.width))),
+        inv_focal);
+    const __m256 cy =
+        _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(0.5f * static_cast<float>(k.height)),
+                                    _mm256_add_ps(_mm256_set1_ps(static_cast<float>(y)), half)),
+                      inv_focal);
+    __m256 origin[3], dir[3];
+    if (k.is_perspective) {
+        __m256 v[3];
+        for (int a = 0; a < 3; ++a) {
+            v[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.forward[a]),
+                                               _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
+                                 _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
+        }
+        const __m256 length = _mm256_sqrt_ps(
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(v[0], v[0]), _mm256_mul_ps(v[1], v[1])),
+                          _mm256_mul_ps(v[2], v[2])));
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = _mm256_set1_ps(k.eye[a]);
+            dir[a] = _mm256_div_ps(v[a], length);
+        }
+    } else {
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.eye[a]),
+                                                    _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
+                                      _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
+            dir[a] = _mm256_set1_ps(k.forward[a]);
+        }
+    }
+    // clip_ray(): the slab test per axis, then the clipping plane.
+    __m256 go[3], gd[3];
+    __m256 t_near = zero;
+    __m256 t_far = inf;
+    __m256 miss = zero;
+    for (int a = 0; a < 3; ++a) {
+        const __m256 inv_spacing = _mm256_set1_ps(k.inv_spacing[a]);
+        go[a] =
+            _mm256_add_ps(_mm256_mul_ps(origin[a], inv_spacing), _mm256_set1_ps(k.grid_offset[a]));
+        gd[a] = _mm256_mul_ps(dir[a], inv_spacing);
+        const __m256 lo = _mm256_set1_ps(-0.5f);
+        const __m256 hi = _mm256_set1_ps(static_cast<float>(k.n[a]) - 0.5f);
+        const __m256 is_zero = _mm256_cmp_ps(gd[a], zero, _CMP_EQ_OQ);
+        const __m256 outside = _mm256_or_ps(_mm256_cmp_ps(go[a], lo, _CMP_LT_OQ),
+                                            _mm256_cmp_ps(go[a], hi, _CMP_GT_OQ));
+        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, outside));
+        const __m256 inv =
+            _mm256_blendv_ps(_mm256_div_ps(_mm256_set1_ps(1.0f), gd[a]), inf, is_zero);
+        _mm256_storeu_ps(t.inv_gd[a] + first, inv);
+        const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(lo, go[a]), inv);
+        const __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(hi, go[a]), inv);
+        const __m256 swap = _mm256_cmp_ps(t0, t1, _CMP_GT_OQ);
+        const __m256 t_lo = _mm256_blendv_ps(t0, t1, swap);
+        const __m256 t_hi = _mm256_blendv_ps(t1, t0, swap);
+        // std::max(t_near, t_lo) and std::min(t_far, t_hi), on the lanes with a non-zero component.
+        t_near = _mm256_blendv_ps(_mm256_max_ps(t_lo, t_near), t_near, is_zero);
+        t_far = _mm256_blendv_ps(_mm256_min_ps(t_hi, t_far), t_far, is_zero);
+    }
+    if (k.has_clip) {
+        const __m256 n[3] = {_mm256_set1_ps(k.clip_normal.x), _mm256_set1_ps(k.clip_normal.y),
+                             _mm256_set1_ps(k.clip_normal.z)};
+        const __m256 a = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], origin[0]),
+                                                                   _mm256_mul_ps(n[1], origin[1])),
+                                                     _mm256_mul_ps(n[2], origin[2])),
+                                       _mm256_set1_ps(k.clip_offset));
+        const __m256 s =
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], dir[0]), _mm256_mul_ps(n[1], dir[1])),
+                          _mm256_mul_ps(n[2], dir[2]));
+        const __m256 crossing = _mm256_div_ps(_mm256_xor_ps(a, _mm256_set1_ps(-0.0f)), s);
+        const __m256 is_pos = _mm256_cmp_ps(s, zero, _CMP_GT_OQ);
+        const __m256 is_neg = _mm256_cmp_ps(s, zero, _CMP_LT_OQ);
+        t_near = _mm256_blendv_ps(t_near, _mm256_max_ps(crossing, t_near), is_pos);
+        t_far = _mm256_blendv_ps(t_far, _mm256_min_ps(crossing, t_far), is_neg);
+        const __m256 is_zero = _mm256_cmp_ps(s, zero, _CMP_EQ_OQ);
+        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, _mm256_cmp_ps(a, zero, _CMP_LT_OQ)));
+    }
+    const __m256 hit = _mm256_andnot_ps(miss, _mm256_cmp_ps(t_near, t_far, _CMP_LT_OQ));
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    const __m256 magnitude = _mm256_add_ps(
+        _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(go[0], abs_mask), _mm256_and_ps(go[1], abs_mask)),
+                      _mm256_and_ps(go[2], abs_mask)),
+        _mm256_mul_ps(t_far, _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(gd[0], abs_mask),
+                                                         _mm256_and_ps(gd[1], abs_mask)),
+                                           _mm256_and_ps(gd[2], abs_mask))));
+    const __m256 margin = _mm256_add_ps(_mm256_set1_ps(SKIP_MARGIN),
+                                        _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
+    // begin_pixel(): N = max(1, ⌈length / Δs⌉) segments.
+    const __m256 length = _mm256_sub_ps(t_far, t_near);
+    const __m256 segments = _mm256_ceil_ps(_mm256_div_ps(length, _mm256_set1_ps(k.step)));
+    const __m256 fits = _mm256_cmp_ps(segments, _mm256_set1_ps(1073741824.0f), _CMP_LT_OQ);
+    const __m256i num_segments =
+        _mm256_max_epi32(_mm256_cvttps_epi32(_mm256_and_ps(segments, fits)), _mm256_set1_epi32(1));
+    for (int a = 0; a < 3; ++a) {
+        _mm256_storeu_ps(t.dir[a] + first, dir[a]);
+        _mm256_storeu_ps(t.go[a] + first, go[a]);
+        _mm256_storeu_ps(t.gd[a] + first, gd[a]);
+    }
+    _mm256_storeu_ps(t.t_near + first, t_near);
+    _mm256_storeu_ps(t.t_far + first, t_far);
+    _mm256_storeu_ps(t.margin + first, margin);
+    _mm256_storeu_ps(t.length + first, length);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(t.num_segments + first), num_segments);
+    return _mm256_movemask_ps(_mm256_and_ps(hit, fits)) |
+           (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
+}
+
+}  // namespace
+
+bool composite_avx2_fits(const RayCastKernel& k) {
+    if (!has_avx2() || k.is_mip || k.shading || k.lut == nullptr) {
+        return false;
+    }
+    const std::int64_t num_voxels = static_cast<std::int64_t>(k.n[0]) * k.n[1] * k.n[2];
+    const std::int64_t num_cells = static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2];
+    for (int o = 0; o < 8; ++o) {
+        if (k.empty_cube[o] != k.empty_cube[0] + o * num_cells) {
+            return false;
+        }
+    }
+    // Voxel pairs along x are loaded together: dx = 1 (an x extent of at least 2 voxels).
+    return k.d[0] == 1 && num_voxels < INDEX_LIMIT / 2 && 8 * num_cells < INDEX_LIMIT;
+}
+
+PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1,
+                                                int y1, Color* colors) {
+    const int tile_width = x1 - x0;
+    const auto num_cells =
+        static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
+    std::int64_t samples = 0;
+
+    // The tile's rays, 8 at a time; those with samples to march are queued for the lanes.
+    TileRays t;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; x += LANES) {
+            const int first = (y - y0) * tile_width + (x - x0);
+            const int bits = setup_rays(k, x, y, first, t);
+            const int count = std::min(LANES, x1 - x);
+            for (int l = 0; l < count; ++l) {
+                const int pixel = first + l;
+                if ((bits >> l & 1) != 0) {
+                    if (t.num_segments[pixel] > 1) {
+                        t.marched[t.num_marched++] = pixel;
+                    } else {
+                        colors[pixel] =
+                            end_composite<false>(k, pixel_ray_of(t, pixel), Accumulated{}, samples);
+                    }
+                } else if ((bits >> (LANES + l) & 1) != 0) {
+                    PixelRay p;  // too many samples for a lane's counters: the scalar kernel
+                    begin_pixel(k, x + l, y, p);
+                    const Accumulated c = march_composite<false>(k, p, samples);
+                    colors[pixel] = end_composite<false>(k, p, c, samples);
+                } else {
+                    colors[pixel] = k.background;
+                }
+            }
+        }
+    }
+
+    Lanes s;
+    int pixel_of[LANES];
+    int num_live = 0;    // lanes with a ray
+    int live_mask = 0;   // bit l: lane l has a ray
+    int more_count = 0;  // live lanes whose rays have zero direction components
+    int more_mask = 0;   // bit l: lane l's ray has zero direction components
+    int next = 0;        // next entry of t.marched
+    // Ends the pixel of lane l (its march done) and writes its colour.
+    const auto end_lane = [&](int l) {
+        std::int64_t lane_samples = s.samples[l];
+        const Accumulated c{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
+        colors[pixel_of[l]] =
+            end_composite<false>(k, pixel_ray_of(t, pixel_of[l]), c, lane_samples);
+        samples += lane_samples;
+    };
+    // Gives lane l the next queued ray, or clears it when none is left.
+    const auto refill = [&](int l) {
+        if (next < t.num_marched) {
+            const int pixel = t.marched[next++];
+            fill_lane(t, pixel, num_cells, s, l);
+            pixel_of[l] = pixel;
+            live_mask |= 1 << l;
+            ++num_live;
+            const bool has_more = s.more[0][l] != s.cube[l];
+            more_mask = has_more ? more_mask | (1 << l) : more_mask & ~(1 << l);
+            more_count += has_more ? 1 : 0;
+            return;
+        }
+        clear_lane(s, l);
+    };
+    for (int l = 0; l < LANES; ++l) {
+        refill(l);
+    }
+
+    const __m256 step = _mm256_set1_ps(k.step);
+    const __m256 inv_step = _mm256_set1_ps(k.inv_step);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 threshold = _mm256_set1_ps(k.threshold);
+    const __m256 g_max[3] = {_mm256_set1_ps(k.g_max[0]), _mm256_set1_ps(k.g_max[1]),
+                             _mm256_set1_ps(k.g_max[2])};
+    const __m256i max_i0[3] = {_mm256_set1_epi32(k.max_i0[0]), _mm256_set1_epi32(k.max_i0[1]),
+                               _mm256_set1_epi32(k.max_i0[2])};
+    const __m256i cells_x = _mm256_set1_epi32(k.cells[0]);
+    const __m256i cells_y = _mm256_set1_epi32(k.cells[1]);
+    const __m256i stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[1]));
+    const __m256i stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[2]));
+    const __m256i one_i = _mm256_set1_epi32(1);
+    const auto dy = static_cast<std::int32_t>(k.d[1]);
+    const auto dz = static_cast<std::int32_t>(k.d[2]);
+    const float* v = k.values;
+    const float* lut = k.lut;
+
+    while (num_live > 0) {
+        const __m256i live =
+            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
+                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                               _mm256_setzero_si256());
+        const __m256i n = load(s.n);
+        const __m256i num_full = load(s.num_full);
+        // sample_position: go + (t_near + (n + 0.5)·Δs)·gd.
+        const __m256 t_near = load(s.t_near);
+        const __m256 tm =
+            _mm256_add_ps(t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), half), step));
+        // locate: clamp to [0, n − 1], lower corner min(⌊·⌋, n − 2), fractions.
+        __m256i corner[3];
+        __m256 fraction[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m256 g = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
+            const __m256 c = _mm256_min_ps(g_max[a], _mm256_max_ps(zero, g));
+            corner[a] = _mm256_min_epi32(_mm256_cvttps_epi32(c), max_i0[a]);
+            fraction[a] = _mm256_sub_ps(c, _mm256_cvtepi32_ps(corner[a]));
+        }
+        __m256i n_next = _mm256_add_epi32(n, one_i);
+        __m256i classified = live;
+        if (k.skipping) {
+            const __m256i cell_coord[3] = {_mm256_srli_epi32(corner[0], CELL_SHIFT),
+                                           _mm256_srli_epi32(corner[1], CELL_SHIFT),
+                                           _mm256_srli_epi32(corner[2], CELL_SHIFT)};
+            const __m256i cell = _mm256_add_epi32(
+                cell_coord[0],
+                _mm256_mullo_epi32(
+                    cells_x,
+                    _mm256_add_epi32(cell_coord[1], _mm256_mullo_epi32(cells_y, cell_coord[2]))));
+            alignas(32) std::int32_t at[LANES];
+            store(at, _mm256_add_epi32(load(s.cube), cell));
+            __m256i side = load_bytes(k.empty_cube[0], at);
+            if (more_count > 0) {
+                for (int m = 0; m < 3; ++m) {
+                    store(at, _mm256_add_epi32(load(s.more[m]), cell));
+                    side = _mm256_max_epi32(side, load_bytes(k.empty_cube[0], at));
+                }
+            }
+            const __m256i jumps =
+                _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
+            if (_mm256_movemask_ps(as_float(jumps)) != 0) {
+                // jump(): the first sample past the cube's far planes (pulled in by the margin).
+                __m256 t_exit = load(s.t_far);
+                const __m256 margin = load(s.margin);
+                for (int a = 0; a < 3; ++a) {
+                    const __m256 gd = load(s.gd[a]);
+                    const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
+                    const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
+                    const __m256 plane_pos =
+                        _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_slli_epi32(
+                                          _mm256_add_epi32(cell_coord[a], side), CELL_SHIFT)),
+                                      margin);
+                    const __m256 plane_neg = _mm256_add_ps(
+                        _mm256_cvtepi32_ps(_mm256_slli_epi32(
+                            _mm256_add_epi32(_mm256_sub_epi32(cell_coord[a], side), one_i),
+                            CELL_SHIFT)),
+                        margin);
+                    const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
+                    const __m256 candidate =
+                        _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
+                    t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
+                                              _mm256_or_ps(is_pos, is_neg));
+                }
+                const __m256 x =
+                    _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), half);
+                const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
+                __m256i n_end = _mm256_cvttps_epi32(x);
+                // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
+                n_end = _mm256_sub_epi32(
+                    n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
+                n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
+                n_end = _mm256_max_epi32(n_end, n_next);
+                n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
+                n_next =
+                    as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
+            }
+            // The sub-cell's occupancy bit, for the samples that do not jump.
+            const __m256i bit = _mm256_or_si256(
+                _mm256_and_si256(_mm256_srli_epi32(corner[0], 1), one_i),
+                _mm256_or_si256(
+                    _mm256_slli_epi32(_mm256_and_si256(_mm256_srli_epi32(corner[1], 1), one_i), 1),
+                    _mm256_slli_epi32(_mm256_and_si256(_mm256_srli_epi32(corner[2], 1), one_i),
+                                      2)));
+            store(at, cell);
+            const __m256i sub = load_bytes(k.sub_occupied, at);
+            const __m256i occupied = _mm256_cmpgt_epi32(
+                _mm256_and_si256(_mm256_srlv_epi32(sub, bit), one_i), _mm256_setzero_si256());
+            classified = _mm256_andnot_si256(jumps, _mm256_and_si256(live, occupied));
+        }
+        __m256i terminated = _mm256_setzero_si256();
+        if (_mm256_movemask_ps(as_float(classified)) != 0) {
+            // interpolate_scalar → lookup-table entry → composite().
+            const __m256i index = _mm256_add_epi32(
+                corner[0], _mm256_add_epi32(_mm256_mullo_epi32(stride_y, corner[1]),
+                                            _mm256_mullo_epi32(stride_z, corner[2])));
+            // The 4 rows of x-adjacent pairs (dx = 1) at offsets 0, dy, dz, dz + dy.
+            alignas(32) std::int32_t at[LANES];
+            __m256 p000, p100, p010, p110, p001, p101, p011, p111;
+            store(at, index);
+            load_pairs(v, at, p000, p100);
+            store(at, _mm256_add_epi32(index, _mm256_set1_epi32(dy)));
+            load_pairs(v, at, p010, p110);
+            store(at, _mm256_add_epi32(index, _mm256_set1_epi32(dz)));
+            load_pairs(v, at, p001, p101);
+            store(at, _mm256_add_epi32(index, _mm256_set1_epi32(dz + dy)));
+            load_pairs(v, at, p011, p111);
+            const __m256 c00 = lerp(p000, p100, fraction[0]);
+            const __m256 c10 = lerp(p010, p110, fraction[0]);
+            const __m256 c01 = lerp(p001, p101, fraction[0]);
+            const __m256 c11 = lerp(p011, p111, fraction[0]);
+            const __m256 value =
+                lerp(lerp(c00, c10, fraction[1]), lerp(c01, c11, fraction[1]), fraction[2]);
+            const __m256i entry =
+                _mm256_slli_epi32(_mm256_cvttps_epi32(_mm256_add_ps(value, half)), 2);  // 4·index
+            store(at, entry);
+            __m256 rgba[4];
+            load_entries(lut, at, rgba);
+            const __m256 alpha = rgba[3];
+            const __m256 blend =
+                _mm256_and_ps(as_float(classified), _mm256_cmp_ps(alpha, zero, _CMP_GT_OQ));
+            const __m256 acc = load(s.acc);
+            const __m256 w = _mm256_mul_ps(_mm256_sub_ps(one, acc), alpha);
+            const __m256 cr = load(s.cr);
+            const __m256 cg = load(s.cg);
+            const __m256 cb = load(s.cb);
+            store(s.cr, _mm256_blendv_ps(cr, _mm256_add_ps(cr, _mm256_mul_ps(w, rgba[0])), blend));
+            store(s.cg, _mm256_blendv_ps(cg, _mm256_add_ps(cg, _mm256_mul_ps(w, rgba[1])), blend));
+            store(s.cb, _mm256_blendv_ps(cb, _mm256_add_ps(cb, _mm256_mul_ps(w, rgba[2])), blend));
+            const __m256 acc_next = _mm256_blendv_ps(acc, _mm256_add_ps(acc, w), blend);
+            store(s.acc, acc_next);
+            terminated =
+                as_int(_mm256_and_ps(blend, _mm256_cmp_ps(acc_next, threshold, _CMP_GT_OQ)));
+            store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
+        }
+        store(s.n, n_next);
+        // Done: opaque (accumulated opacity above the threshold), or no sample left.
+        const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);
+        const __m256i done =
+            _mm256_andnot_si256(_mm256_andnot_si256(terminated, more_to_march), live);
+        int done_mask = _mm256_movemask_ps(as_float(done));
+        while (done_mask != 0) {
+            const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
+            done_mask &= done_mask - 1;
+            end_lane(l);
+            live_mask &= ~(1 << l);
+            --num_live;
+            if ((more_mask & (1 << l)) != 0) {
+                more_mask &= ~(1 << l);
+                --more_count;
+            }
+            refill(l);
+        }
+    }
+    return samples;
+}
+
+#else
+
+bool composite_avx2_fits(const RayCastKernel&) {
+    return false;
+}
+
+std::int64_t composite_tile_avx2(const RayCastKernel&, int, int, int, int, Color*) {
+    return 0;
+}
+
+#endif
+
+}  // namespace pliant::render::detail

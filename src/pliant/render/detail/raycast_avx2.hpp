@@ -1,0 +1,32 @@
+// The ray caster's composite march in AVX2, eight rays at a time (render/raycast.hpp documents the
+// algorithm, render/detail/raycast_kernel.hpp has the scalar kernel). Compiled for AVX2 with a
+// function attribute and chosen at run time (pliant::has_avx2(), core/simd_dispatch.hpp).
+//
+// Each of the 8 lanes marches its own ray and does, lane by lane, the IEEE operations of
+// march_composite() in the same order, without FMA: sample position, clamp and lower corner,
+// cell, empty cube (and its jump), sub-cell bit, trilinear value, lookup-table entry and
+// front-to-back compositing. Rays are set up (begin_pixel) and ended (end_composite) by the scalar
+// code, so every pixel and sample count is bitwise what raycast_pixel<false> computes. A lane whose
+// ray ends takes the tile's next ray at once, so lanes stay busy whatever their rays' lengths. The
+// arithmetic runs 8 wide; the loads stay per lane (AVX2 gathers are slow on AMD Zen), voxels in
+// x-adjacent pairs.
+#pragma once
+
+#include <cstdint>
+
+#include "pliant/render/detail/raycast_kernel.hpp"
+
+namespace pliant::render::detail {
+
+// Whether composite_tile_avx2() can render with k: composite mode without shading (scalar volumes:
+// the caller's part), voxel indices below 2^31 and the 8 octants' cube indices too, and a CPU
+// that runs AVX2 (has_avx2()).
+bool composite_avx2_fits(const RayCastKernel& k);
+
+// raycast_pixel<false>(k, x, y) for every pixel (x, y) of the tile [x0, x1) × [y0, y1): its colour
+// into colors[(y − y0)·(x1 − x0) + (x − x0)], bit for bit; returns the sum of the pixels' samples.
+// Preconditions: composite_avx2_fits(k), a scalar volume (k.lut set).
+std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1, int y1,
+                                 Color* colors);
+
+}  // namespace pliant::render::detail
