@@ -308,6 +308,28 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupied.size();
     }
     k.cell_max = m_cell_max.data();
+    // An orthographic axis view: the cubes of its octants merged once per frame (O(cells), a
+    // fraction of a millisecond at 64³ cells) instead of 2 or 4 lookups per jump.
+    std::vector<std::uint8_t> axis_cube;
+    if (!k.is_perspective && m_options.empty_space_skipping) {
+        const Vec3f gd{k.forward.x * k.inv_spacing.x, k.forward.y * k.inv_spacing.y,
+                       k.forward.z * k.inv_spacing.z};
+        const int octant = (gd.x < 0.0f ? 1 : 0) | (gd.y < 0.0f ? 2 : 0) | (gd.z < 0.0f ? 4 : 0);
+        const int zero = (gd.x == 0.0f ? 1 : 0) | (gd.y == 0.0f ? 2 : 0) | (gd.z == 0.0f ? 4 : 0);
+        if (zero != 0) {
+            const std::size_t count = m_occupied.size();
+            axis_cube.assign(k.empty_cube[octant], k.empty_cube[octant] + count);
+            for (int flip = 1; flip < 8; ++flip) {
+                if ((flip & ~zero) == 0) {
+                    const std::uint8_t* other = k.empty_cube[octant ^ flip];
+                    for (std::size_t c = 0; c < count; ++c) {
+                        axis_cube[c] = std::max(axis_cube[c], other[c]);
+                    }
+                }
+            }
+            k.axis_cube = axis_cube.data();
+        }
+    }
     k.step = static_cast<float>(m_step);
     k.inv_step = 1.0f / k.step;
     k.step_over_unit = static_cast<float>(m_step / m_opacity_unit);

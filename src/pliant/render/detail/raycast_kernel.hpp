@@ -61,6 +61,10 @@ struct RayCastKernel {
     // cell: the side s (cells, ≤ MAX_CUBE) of the largest cube of empty cells with this cell as
     // its corner, extending towards o; 0 for an occupied cell.
     const std::uint8_t* empty_cube[8] = {};
+    // Or null: for an orthographic camera whose direction has zero components (axis views), per
+    // cell the largest of the cubes of the octants its rays may jump towards (all its rays share
+    // the direction): what the march would take as the maximum over those octants, read once.
+    const std::uint8_t* axis_cube = nullptr;
     // Per cell: bit (sx + 2 sy + 4 sz) set when the sub-cell of the samples with lower corner in
     // [CELL·c + SUB_CELL·s, CELL·c + SUB_CELL·s + 1] (footprint: 3³ voxels) is occupied.
     const std::uint8_t* sub_occupied = nullptr;
@@ -426,13 +430,13 @@ PLIANT_HOST_DEVICE inline Accumulated march_composite(const RayCastKernel& k, co
                                                       std::int64_t& samples) {
     const GridRay& r = p.r;
     const int octant = octant_of(r);
-    const std::uint8_t* empty_cube = k.empty_cube[octant];
+    const std::uint8_t* empty_cube = k.axis_cube != nullptr ? k.axis_cube : k.empty_cube[octant];
     // A ray with a zero direction component never moves along it, so the cubes towards either
     // side of that axis are valid too: up to 3 more octants (axis views have two zero
-    // components), and the largest of their cubes is jumped.
+    // components), and the largest of their cubes is jumped (k.axis_cube has it already).
     const std::uint8_t* more_cubes[3] = {nullptr, nullptr, nullptr};
     int num_more = 0;
-    {
+    if (k.axis_cube == nullptr) {
         const int zero = zero_axes_of(r);
         for (int flip = 1; flip < 8; ++flip) {
             if ((flip & ~zero) == 0 && num_more < 3) {
