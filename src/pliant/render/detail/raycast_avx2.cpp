@@ -97,6 +97,14 @@ PLIANT_AVX2_INLINE __m256i load_bytes(const std::uint8_t* base, const std::int32
                              base[index[4]], base[index[5]], base[index[6]], base[index[7]]);
 }
 
+// The 4 rows of voxel pairs a sample with lower corner p reads (p, p + dy, p + dz, p + dz + dy).
+PLIANT_AVX2_INLINE void prefetch_rows(const float* p, std::int32_t dy, std::int32_t dz) {
+    _mm_prefetch(reinterpret_cast<const char*>(p), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(p + dy), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(p + dz), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(p + dz + dy), _MM_HINT_T0);
+}
+
 // (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
 PLIANT_AVX2_INLINE __m128 two_pairs(const float* v, std::int32_t i0, std::int32_t i1) {
     const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + i0)));
@@ -506,12 +514,9 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
             __m256 p000, p100, p010, p110, p001, p101, p011, p111;
             store(at, index);
             load_pairs(v, at, p000, p100);
-            store(at, _mm256_add_epi32(index, _mm256_set1_epi32(dy)));
-            load_pairs(v, at, p010, p110);
-            store(at, _mm256_add_epi32(index, _mm256_set1_epi32(dz)));
-            load_pairs(v, at, p001, p101);
-            store(at, _mm256_add_epi32(index, _mm256_set1_epi32(dz + dy)));
-            load_pairs(v, at, p011, p111);
+            load_pairs(v + dy, at, p010, p110);
+            load_pairs(v + dz, at, p001, p101);
+            load_pairs(v + dz + dy, at, p011, p111);
             const __m256 c00 = lerp(p000, p100, fraction[0]);
             const __m256 c10 = lerp(p010, p110, fraction[0]);
             const __m256 c01 = lerp(p001, p101, fraction[0]);
@@ -541,6 +546,29 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
             store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
         }
         store(s.n, n_next);
+        if constexpr (!REACH) {
+            // Prefetches the voxel rows of each lane's sample after next (n_next + 1).
+            const __m256 t_ahead = _mm256_add_ps(
+                t_near,
+                _mm256_mul_ps(
+                    _mm256_add_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(n_next, one_i)), half),
+                    step));
+            __m256i ahead[3];
+            for (int a = 0; a < 3; ++a) {
+                const __m256 g =
+                    _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(t_ahead, load(s.gd[a])));
+                ahead[a] = _mm256_min_epi32(
+                    _mm256_cvttps_epi32(_mm256_min_ps(g_max[a], _mm256_max_ps(zero, g))),
+                    max_i0[a]);
+            }
+            alignas(32) std::int32_t index[LANES];
+            store(index, _mm256_add_epi32(
+                             ahead[0], _mm256_add_epi32(_mm256_mullo_epi32(stride_y, ahead[1]),
+                                                        _mm256_mullo_epi32(stride_z, ahead[2]))));
+            for (int l = 0; l < LANES; ++l) {
+                prefetch_rows(v + index[l], dy, dz);
+            }
+        }
         const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);
         if constexpr (REACH) {
             // A lane ends its reach at a sample to classify, or at its ray's end.
@@ -559,11 +587,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                     const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
                     done_mask &= done_mask - 1;
                     if ((to_classify >> l & 1) != 0) {
-                        const float* p = v + index[l];
-                        _mm_prefetch(reinterpret_cast<const char*>(p), _MM_HINT_T0);
-                        _mm_prefetch(reinterpret_cast<const char*>(p + dy), _MM_HINT_T0);
-                        _mm_prefetch(reinterpret_cast<const char*>(p + dz), _MM_HINT_T0);
-                        _mm_prefetch(reinterpret_cast<const char*>(p + dz + dy), _MM_HINT_T0);
+                        prefetch_rows(v + index[l], dy, dz);
                         t.start[pixel_of[l]] = first[l];
                         reached[num_reached++] = pixel_of[l];
                     } else {
