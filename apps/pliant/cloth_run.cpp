@@ -16,6 +16,7 @@
 #include "cloth_setup.hpp"
 #include "commands.hpp"
 #include "output_directory.hpp"
+#include "pliant/cloth/edge_strain.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
@@ -80,6 +81,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             scene_name, initial_intersections);
     }
 
+    // The second independent check: edge strain against the starting shape (the rest shape).
+    const cloth::EdgeStrain edge_strain(solver.positions(), solver.triangles());
+
     const std::filesystem::path frames_dir = out / "frames";
     make_output_directory(frames_dir);
     std::unique_ptr<ClothPreview> preview;
@@ -105,6 +109,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
     double total_ms = 0.0;
     std::int64_t worst_intersections = 0;
+    double worst_strain = 0.0;
+    double worst_strain_p99 = 0.0;
     for (int frame = 1; frame <= frames; ++frame) {
         if (g_interrupted != 0) {
             break;
@@ -128,6 +134,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         const std::int64_t intersecting =
             collision::count_intersecting_pairs(solver.positions(), solver.triangles());
         worst_intersections = std::max(worst_intersections, intersecting);
+        const cloth::StrainStats strain = edge_strain.measure(solver.positions());
+        worst_strain = std::max(worst_strain, strain.max);
+        worst_strain_p99 = std::max(worst_strain_p99, strain.p99);
         nlohmann::ordered_json record = {{"frame", frame},
                                          {"ms", ms},
                                          {"step_ms", step.solve_ms},
@@ -137,6 +146,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                          {"response_ms", step.self.response_ms},
                                          {"obstacle_contacts", step.obstacle_contacts},
                                          {"intersecting_pairs", intersecting},
+                                         {"strain_p90", strain.p90},
+                                         {"strain_p99", strain.p99},
+                                         {"strain_max", strain.max},
+                                         {"edges_over_10_percent", strain.over_10_percent},
                                          {"check_ms", check.elapsed_ms()},
                                          {"write_ms", write_ms}};
         if (step.has_self_collision) {
@@ -169,6 +182,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
         {"max_intersecting_pairs", worst_intersections},
+        {"max_strain_p99", worst_strain_p99},
+        {"max_strain", worst_strain},
         {"frames", per_frame},
         {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
     };

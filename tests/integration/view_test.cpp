@@ -160,8 +160,9 @@ render::Camera camera_from_json(const nlohmann::json& c) {
                                        c["height"].get<int>());
 }
 
-// The viewer's frame 3 (20 substeps per frame: frames of `pliant cloth`) against the mesh
-// rasterizer on the frame `pliant cloth` wrote, with the viewer's camera and the preview's look.
+// The viewer's frame 3 (40 substeps per frame, the scene's: frames of `pliant cloth`) against
+// the mesh rasterizer on the frame `pliant cloth` wrote, with the viewer's camera and the
+// preview's look.
 TEST(ViewCli, ClothScreenshotMatchesTheMeshRasterizer) {
     if (!has_xvfb()) {
         GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb xauth)";
@@ -188,7 +189,7 @@ TEST(ViewCli, ClothScreenshotMatchesTheMeshRasterizer) {
     for (const std::string msaa : {"", " --msaa 4"}) {
         const std::filesystem::path shot = scratch / "cloth.png";
         const CliResult r = run_headless("--json view cloth " + quoted(scene) +
-                                             " --frames 3 --substeps-per-frame 20 --sync --no-ui "
+                                             " --frames 3 --substeps-per-frame 40 --sync --no-ui "
                                              "--size 480x360 --screenshot " +
                                              quoted(shot) + msaa,
                                          scratch);
