@@ -6,12 +6,15 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/simd_dispatch.hpp"
+#include "pliant/render/detail/raycast_avx2.hpp"
 #include "pliant/render/detail/raycast_kernel.hpp"
 #include "pliant/volume/generate.hpp"
 
@@ -499,6 +502,47 @@ TEST(RayCast, Avx2MarchMatchesTheScalarKernel) {
             }
         }
     }
+}
+
+// The AVX2 conversion of voxels to lookup coordinates (the ray caster's preparation) gives the
+// scalar formula's floats bit for bit for every scalar voxel type: values below, inside and above
+// the range, the range's ends, ±0, ±∞ and NaN, lengths that are not a multiple of 4.
+template <typename T>
+void expect_lookup_coordinates_match(const std::vector<T>& in, double lo, double hi) {
+    const double scale = (detail::LUT_SIZE - 1) / (hi - lo);
+    for (std::size_t count = 0; count <= in.size(); ++count) {
+        std::vector<float> out(count, -7.0f);
+        const std::int64_t done = detail::lookup_coordinates_avx2(
+            in.data(), static_cast<std::int64_t>(count), lo, scale, out.data());
+        ASSERT_EQ(done, static_cast<std::int64_t>(count - count % 4));
+        for (std::int64_t i = 0; i < done; ++i) {
+            const float expected = detail::lookup_coordinate(
+                static_cast<double>(in[static_cast<std::size_t>(i)]), lo, scale);
+            std::uint32_t a = 0, b = 0;
+            std::memcpy(&a, &out[static_cast<std::size_t>(i)], 4);
+            std::memcpy(&b, &expected, 4);
+            EXPECT_EQ(a, b) << "value " << static_cast<double>(in[static_cast<std::size_t>(i)]);
+        }
+    }
+}
+
+TEST(RayCast, Avx2LookupCoordinatesMatchTheScalarFormula) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    expect_lookup_coordinates_match<std::uint8_t>(
+        {0, 1, 2, 17, 100, 127, 128, 200, 254, 255, 3, 9, 77}, 2.0, 254.0);
+    expect_lookup_coordinates_match<std::int16_t>(
+        {-32768, -1000, -1, 0, 1, 999, 1000, 1001, 32767, 12345, -7, 42, 5}, -1000.0, 1000.0);
+    expect_lookup_coordinates_match<std::uint16_t>({0, 1, 4095, 4096, 65535, 300, 2048, 7, 11}, 1.0,
+                                                   4096.0);
+    const float inf = std::numeric_limits<float>::infinity();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    expect_lookup_coordinates_match<float>(
+        {-1.0f, -0.0f, 0.0f, 1.0f, 0.5f, 1.5f, -2.0f, inf, -inf, nan, 1e30f, -1e30f, 0.123456f,
+         0.999999f, std::numeric_limits<float>::denorm_min(), 0.3f, 0.7f},
+        -1.0, 1.0);
+    expect_lookup_coordinates_match<float>({-0.0f, 0.0f, 0.25f, 1.0f, 3.0f}, 0.0, 1.0);
 }
 
 // A uniform RGBA cube (every voxel the same, so every sample inside the box is exact) seen

@@ -1,6 +1,9 @@
 #include "pliant/render/raycast.hpp"
 
 #include <fmt/format.h>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +17,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/host_device.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/render/detail/raycast_avx2.hpp"
 #include "pliant/render/detail/raycast_kernel.hpp"
@@ -58,18 +62,96 @@ void check_options(const RayCastOptions& o) {
     }
 }
 
-template <volume::VoxelType T>
-void to_lookup_coordinates(const volume::Volume& v, double lo, double scale,
-                           std::vector<float>& out) {
-    const auto values = v.values<T>();
-    out.resize(values.size());
-    parallel_for(static_cast<std::int64_t>(values.size()), [&](std::int64_t i) {
-        const double x = static_cast<double>(values[static_cast<std::size_t>(i)]);
-        const double s = (x - lo) * scale;
-        out[static_cast<std::size_t>(i)] =
-            std::isfinite(s) ? static_cast<float>(std::clamp(s, 0.0, double{detail::LUT_SIZE - 1}))
-                             : 0.0f;
-    });
+// One row of voxels (x = 0 … nx − 1 at (y, z)) as the kernel's floats: lookup coordinates
+// (x − lo) · scale clamped to the table, 0 for non-finite values; or for RGBA volumes the
+// opacity-weighted colour and α (4 floats per voxel), channels clamped to [0, 1].
+class RowConverter {
+public:
+    RowConverter(const volume::Volume& v, double lo, double scale)
+        : m_volume(&v), m_lo(lo), m_scale(scale), m_avx2(has_avx2()) {}
+
+    void convert(std::int64_t y, std::int64_t z, float* out) const {
+        using volume::VoxelType;
+        const volume::Dims& n = m_volume->dims();
+        const std::int64_t first = n[0] * (y + n[1] * z);
+        switch (m_volume->type()) {
+            case VoxelType::u8:
+                scalar_row(m_volume->values<VoxelType::u8>().data() + first, n[0], out);
+                break;
+            case VoxelType::i16:
+                scalar_row(m_volume->values<VoxelType::i16>().data() + first, n[0], out);
+                break;
+            case VoxelType::u16:
+                scalar_row(m_volume->values<VoxelType::u16>().data() + first, n[0], out);
+                break;
+            case VoxelType::f32:
+                scalar_row(m_volume->values<VoxelType::f32>().data() + first, n[0], out);
+                break;
+            case VoxelType::rgba8:
+                rgba_row(m_volume->values<VoxelType::rgba8>().data() + 4 * first, n[0], out);
+                break;
+            case VoxelType::rgba32f:
+                rgba_row(m_volume->values<VoxelType::rgba32f>().data() + 4 * first, n[0], out);
+                break;
+        }
+    }
+
+private:
+    template <typename T>
+    void scalar_row(const T* in, std::int64_t count, float* out) const {
+        std::int64_t i =
+            m_avx2 ? detail::lookup_coordinates_avx2(in, count, m_lo, m_scale, out) : 0;
+        for (; i < count; ++i) {
+            out[i] = detail::lookup_coordinate(static_cast<double>(in[i]), m_lo, m_scale);
+        }
+    }
+    template <typename T>
+    static void rgba_row(const T* in, std::int64_t count, float* out) {
+        for (std::int64_t v = 0; v < count; ++v) {
+            float c[4];
+            for (int ch = 0; ch < 4; ++ch) {
+                const float x = std::is_same_v<T, std::uint8_t>
+                                    ? static_cast<float>(in[4 * v + ch]) / 255.0f
+                                    : static_cast<float>(in[4 * v + ch]);
+                c[ch] = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;
+            }
+            out[4 * v] = c[0] * c[3];
+            out[4 * v + 1] = c[1] * c[3];
+            out[4 * v + 2] = c[2] * c[3];
+            out[4 * v + 3] = c[3];
+        }
+    }
+
+    const volume::Volume* m_volume;
+    double m_lo, m_scale;
+    bool m_avx2;
+};
+
+// For j = 0, 1, … while whole footprints fit (2j + 2 ≤ nx − 1) and j < num_j, 4 at a time (SSE2,
+// the x86-64 baseline; one at a time elsewhere): min and max of row[2j], row[2j + 1], row[2j + 2]
+// into mn[j], mx[j]. Returns the number of j done. Exact (min and max do not round; the values are
+// finite lookup coordinates).
+std::int64_t row_min_max(const float* row, std::int64_t nx, std::int64_t num_j, float* mn,
+                         float* mx) {
+    std::int64_t j = 0;
+#if defined(__SSE2__)
+    for (; j + 3 < num_j && 2 * j + 8 <= nx - 1; j += 4) {
+        const __m128 v0 = _mm_loadu_ps(row + 2 * j);                          // r0 r1 r2 r3
+        const __m128 v1 = _mm_loadu_ps(row + 2 * j + 4);                      // r4 r5 r6 r7
+        const __m128 even = _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(2, 0, 2, 0));  // r0 r2 r4 r6
+        const __m128 odd = _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(3, 1, 3, 1));   // r1 r3 r5 r7
+        const __m128 t = _mm_move_ss(even, _mm_load_ss(row + 2 * j + 8));     // r8 r2 r4 r6
+        const __m128 next = _mm_shuffle_ps(t, t, _MM_SHUFFLE(0, 3, 2, 1));    // r2 r4 r6 r8
+        _mm_storeu_ps(mn + j, _mm_min_ps(even, _mm_min_ps(odd, next)));
+        _mm_storeu_ps(mx + j, _mm_max_ps(even, _mm_max_ps(odd, next)));
+    }
+#endif
+    for (; j < num_j && 2 * j + 2 <= nx - 1; ++j) {
+        const float a = row[2 * j], b = row[2 * j + 1], c = row[2 * j + 2];
+        mn[j] = std::min(a, std::min(b, c));
+        mx[j] = std::max(a, std::max(b, c));
+    }
+    return j;
 }
 
 }  // namespace
@@ -78,71 +160,45 @@ double default_step(const volume::Volume& volume, const RayCastOptions& options)
     return options.step > 0.0 ? options.step : 0.5 * smallest(volume.spacing());
 }
 
-RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* tf,
+RayCaster::RayCaster(const volume::Volume& volume, const volume::TransferFunction* tf,
                      const RayCastOptions& options)
     : m_options(options) {
-    const Stopwatch watch;
     check_options(options);
+    prepare(volume, tf);
+}
+
+void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunction* tf) {
+    const Stopwatch watch;
     if (vol.empty()) {
         throw InvalidInput("raycast: the volume is empty (no voxels)");
     }
-    using volume::VoxelType;
-    m_is_rgba = volume::channels(vol.type()) == 4;
-    if (!m_is_rgba && tf == nullptr) {
+    const bool is_rgba = volume::channels(vol.type()) == 4;
+    if (!is_rgba && tf == nullptr) {
         throw InvalidInput(
             fmt::format("raycast: a scalar volume ({}) needs a transfer function (got none)",
                         volume::name(vol.type())));
     }
+    if (!is_rgba) {
+        tf->validate();
+    }
+    m_is_rgba = is_rgba;
     m_dims = vol.dims();
     m_spacing = vol.spacing();
     m_origin = vol.origin();
-    m_step = default_step(vol, options);
-    m_opacity_unit = options.opacity_unit > 0.0 ? options.opacity_unit : smallest(m_spacing);
-    const std::int64_t num_voxels = vol.num_voxels();
+    m_step = default_step(vol, m_options);
+    m_opacity_unit = m_options.opacity_unit > 0.0 ? m_options.opacity_unit : smallest(m_spacing);
 
-    // Step 1: voxels as floats (lookup coordinates, or opacity-weighted colour and α) and the
-    // lookup table.
-    if (m_is_rgba) {
-        m_values.resize(static_cast<std::size_t>(4 * num_voxels));
-        const bool is_u8 = vol.type() == VoxelType::rgba8;
-        const std::uint8_t* u8 = is_u8 ? vol.values<VoxelType::rgba8>().data() : nullptr;
-        const float* f32 = is_u8 ? nullptr : vol.values<VoxelType::rgba32f>().data();
-        parallel_for(num_voxels, [&](std::int64_t v) {
-            float c[4];
-            for (int ch = 0; ch < 4; ++ch) {
-                const auto idx = static_cast<std::size_t>(4 * v + ch);
-                const float x = is_u8 ? static_cast<float>(u8[idx]) / 255.0f : f32[idx];
-                c[ch] = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;
-            }
-            const auto o = static_cast<std::size_t>(4 * v);
-            m_values[o] = c[0] * c[3];
-            m_values[o + 1] = c[1] * c[3];
-            m_values[o + 2] = c[2] * c[3];
-            m_values[o + 3] = c[3];
-        });
-    } else {
-        tf->validate();
+    // Step 1: the lookup table (scalar volumes) over the volume's value range [lo, hi].
+    double lo = 0.0, scale = 1.0;
+    if (!m_is_rgba) {
         const double tf_unit = tf->opacity_unit > 0.0 ? tf->opacity_unit : m_opacity_unit;
         m_opacity_unit = tf_unit;
         std::array<double, 2> range = volume::value_range(vol);
         if (!(range[1] > range[0])) {
             range[1] = range[0] + 1.0;
         }
-        const double scale = (detail::LUT_SIZE - 1) / (range[1] - range[0]);
-        switch (vol.type()) {
-            case VoxelType::u8:
-                to_lookup_coordinates<VoxelType::u8>(vol, range[0], scale, m_values);
-                break;
-            case VoxelType::i16:
-                to_lookup_coordinates<VoxelType::i16>(vol, range[0], scale, m_values);
-                break;
-            case VoxelType::u16:
-                to_lookup_coordinates<VoxelType::u16>(vol, range[0], scale, m_values);
-                break;
-            default:
-                to_lookup_coordinates<VoxelType::f32>(vol, range[0], scale, m_values);
-                break;
-        }
+        lo = range[0];
+        scale = (detail::LUT_SIZE - 1) / (range[1] - range[0]);
         m_lut.resize(4 * detail::LUT_SIZE);
         m_lut_alpha.resize(detail::LUT_SIZE);
         for (int e = 0; e < detail::LUT_SIZE; ++e) {
@@ -155,90 +211,138 @@ RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* 
         }
     }
 
-    // Step 2: macro cells, min/max over each cell's footprint (raycast_kernel.hpp: the samples
-    // with lower corner in [CELL·c, CELL·c + CELL − 1] read the voxels [CELL·c, CELL·c + CELL]).
+    // Step 2, one parallel pass over slabs of a cell layer (4 voxel layers): the voxels as floats
+    // (lookup coordinates, or opacity-weighted colour and α) and the macro cells' sub-cell
+    // occupancy and largest value (raycast_kernel.hpp: the samples with lower corner in
+    // [CELL·c, CELL·c + CELL − 1] read the voxels [CELL·c, CELL·c + CELL]; sub-cell j of an
+    // axis reads [2j, 2j + 2], clipped to the grid, and exists when 2j ≤ n − 1).
+    const std::int64_t n[3] = {m_dims[0], m_dims[1], m_dims[2]};
     for (int a = 0; a < 3; ++a) {
-        const std::int64_t max_i0 = std::max<std::int64_t>(0, m_dims[a] - 2);
+        const std::int64_t max_i0 = std::max<std::int64_t>(0, n[a] - 2);
         m_cells[a] = static_cast<int>(max_i0 / detail::CELL + 1);
     }
+    const int channels = m_is_rgba ? 4 : 1;
     const std::int64_t total_cells = num_cells();
-    m_occupied.assign(static_cast<std::size_t>(total_cells), 0);
-    m_cell_max.assign(static_cast<std::size_t>(total_cells), 0.0f);
-    m_sub_occupied.assign(static_cast<std::size_t>(total_cells), 0);
-    std::vector<int> nonzero_prefix(detail::LUT_SIZE + 1, 0);
+    m_values.resize(static_cast<std::size_t>(channels * vol.num_voxels()));
+    m_occupied.resize(static_cast<std::size_t>(total_cells));
+    m_cell_max.resize(static_cast<std::size_t>(total_cells));
+    m_sub_occupied.resize(static_cast<std::size_t>(total_cells));
+    std::array<int, detail::LUT_SIZE + 1> nonzero_prefix{};
     for (int e = 0; e < detail::LUT_SIZE && !m_is_rgba; ++e) {
         nonzero_prefix[e + 1] = nonzero_prefix[e] + (m_lut[4 * e + 3] > 0.0f ? 1 : 0);
     }
-    const int channel_stride = m_is_rgba ? 4 : 1;
-    const int channel = m_is_rgba ? 3 : 0;
+    const RowConverter converter(vol, lo, scale);
+    const int num_sub_x = 2 * m_cells[0];
     parallel_for(
-        total_cells,
-        [&](std::int64_t cell) {
-            const std::int64_t cx = cell % m_cells[0];
-            const std::int64_t cy = (cell / m_cells[0]) % m_cells[1];
-            const std::int64_t cz = cell / (static_cast<std::int64_t>(m_cells[0]) * m_cells[1]);
-            const std::int64_t c[3] = {cx, cy, cz};
-            // The cell's footprint (up to 5³ voxels, read once), then its 8 sub-cells (2³
-            // trilinear cells each, footprint 3³ voxels; the cell's footprint is their union).
-            constexpr int F = detail::CELL + 1;
-            float buf[F][F][F];
-            std::int64_t count[3];
-            for (int a = 0; a < 3; ++a) {
-                count[a] = std::min<std::int64_t>(F, m_dims[a] - c[a] * detail::CELL);
-            }
-            for (std::int64_t z = 0; z < count[2]; ++z) {
-                for (std::int64_t y = 0; y < count[1]; ++y) {
-                    const std::int64_t row =
-                        c[0] * detail::CELL + m_dims[0] * (c[1] * detail::CELL + y +
-                                                           m_dims[1] * (c[2] * detail::CELL + z));
-                    for (std::int64_t x = 0; x < count[0]; ++x) {
-                        buf[z][y][x] = m_values[static_cast<std::size_t>(
-                            (row + x) * channel_stride + channel)];
-                    }
+        m_cells[2],
+        [&](std::int64_t cz) {
+            const std::int64_t z0 = detail::CELL * cz;
+            // Layers [z0, own_end) are this slab's to write; its footprint reaches z_last.
+            const std::int64_t own_end = cz + 1 == m_cells[2] ? n[2] : z0 + detail::CELL;
+            const std::int64_t z_last = std::min(n[2] - 1, z0 + detail::CELL);
+            const auto row_of = [&](std::int64_t y, std::int64_t z) {
+                return m_values.data() + channels * (n[0] * (y + n[1] * z));
+            };
+            for (std::int64_t z = z0; z < own_end; ++z) {
+                for (std::int64_t y = 0; y < n[1]; ++y) {
+                    converter.convert(y, z, row_of(y, z));
                 }
             }
-            float cell_max = -std::numeric_limits<float>::infinity();
-            std::uint8_t sub_mask = 0;
-            for (int sub = 0; sub < 8; ++sub) {
-                std::int64_t lo[3], hi[3];
-                for (int a = 0; a < 3; ++a) {
-                    lo[a] = detail::SUB_CELL * ((sub >> a) & 1);
-                    hi[a] = std::min<std::int64_t>(count[a] - 1, lo[a] + detail::SUB_CELL);
-                }
-                float vmin = std::numeric_limits<float>::infinity();
-                float vmax = -vmin;
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                            vmin = std::min(vmin, buf[z][y][x]);
-                            vmax = std::max(vmax, buf[z][y][x]);
+            // Per cell row: min/max of each sub-cell (sz, sy, x sub-cell j), accumulated from
+            // the min/max of the rows' x sub-cells.
+            std::vector<float> boundary(static_cast<std::size_t>(channels * n[0]));
+            std::vector<float> sub_min(static_cast<std::size_t>(4 * num_sub_x));
+            std::vector<float> sub_max(static_cast<std::size_t>(4 * num_sub_x));
+            std::vector<float> row_min(static_cast<std::size_t>(num_sub_x));
+            std::vector<float> row_max(static_cast<std::size_t>(num_sub_x));
+            // x sub-cells that exist (2j ≤ nx − 1); the others keep +∞ / −∞ (empty).
+            const std::int64_t num_rows_x = std::min<std::int64_t>(num_sub_x, (n[0] - 1) / 2 + 1);
+            const int channel = m_is_rgba ? 3 : 0;
+            for (std::int64_t cy = 0; cy < m_cells[1]; ++cy) {
+                std::fill(sub_min.begin(), sub_min.end(), std::numeric_limits<float>::infinity());
+                std::fill(sub_max.begin(), sub_max.end(), -std::numeric_limits<float>::infinity());
+                const std::int64_t y0 = detail::CELL * cy;
+                const std::int64_t y_last = std::min(n[1] - 1, y0 + detail::CELL);
+                for (std::int64_t z = z0; z <= z_last; ++z) {
+                    for (std::int64_t y = y0; y <= y_last; ++y) {
+                        const float* row = row_of(y, z);
+                        if (z >= own_end) {  // the next slab's layer: converted again here
+                            converter.convert(y, z, boundary.data());
+                            row = boundary.data();
+                        }
+                        // The min/max of the row's x sub-cells j: voxels [2j, min(2j + 2, nx − 1)].
+                        const auto at = [&](std::int64_t x) {
+                            return row[channels * x + channel];
+                        };
+                        std::int64_t j = 0;
+                        if (channels == 1) {
+                            j = row_min_max(row, n[0], num_rows_x, row_min.data(), row_max.data());
+                        }
+                        for (; j < num_rows_x; ++j) {
+                            const std::int64_t x_last = std::min(n[0] - 1, 2 * j + 2);
+                            float lo_v = at(2 * j), hi_v = lo_v;
+                            for (std::int64_t x = 2 * j + 1; x <= x_last; ++x) {
+                                lo_v = std::min(lo_v, at(x));
+                                hi_v = std::max(hi_v, at(x));
+                            }
+                            row_min[j] = lo_v;
+                            row_max[j] = hi_v;
+                        }
+                        // Into the (sz, sy) sub-cells the row belongs to: layer zl = z − z0 is in
+                        // sz = 0 for zl ≤ 2, in sz = 1 for zl ≥ 2 (likewise rows in sy).
+                        const std::int64_t zl = z - z0, yl = y - y0;
+                        for (int sz = 0; sz < 2; ++sz) {
+                            for (int sy = 0; sy < 2; ++sy) {
+                                if (zl < 2 * sz || zl > 2 * sz + 2 || yl < 2 * sy ||
+                                    yl > 2 * sy + 2) {
+                                    continue;
+                                }
+                                float* dst_min = sub_min.data() + (2 * sz + sy) * num_sub_x;
+                                float* dst_max = sub_max.data() + (2 * sz + sy) * num_sub_x;
+                                for (std::int64_t i = 0; i < num_rows_x; ++i) {
+                                    dst_min[i] = std::min(dst_min[i], row_min[i]);
+                                    dst_max[i] = std::max(dst_max[i], row_max[i]);
+                                }
+                            }
                         }
                     }
                 }
-                if (!(vmin <= vmax)) {
-                    continue;  // past the grid: no sample has its corner here
+                for (std::int64_t cx = 0; cx < m_cells[0]; ++cx) {
+                    float cell_max = -std::numeric_limits<float>::infinity();
+                    std::uint8_t sub_mask = 0;
+                    for (int sub = 0; sub < 8; ++sub) {
+                        const std::int64_t j = 2 * cx + (sub & 1);
+                        const int plane = 2 * ((sub >> 2) & 1) + ((sub >> 1) & 1);
+                        const float vmin = sub_min[static_cast<std::size_t>(plane * num_sub_x + j)];
+                        const float vmax = sub_max[static_cast<std::size_t>(plane * num_sub_x + j)];
+                        if (!(vmin <= vmax)) {
+                            continue;  // past the grid: no sample has its corner here
+                        }
+                        cell_max = std::max(cell_max, vmax);
+                        bool occupied = false;
+                        if (m_is_rgba) {
+                            occupied = vmax > 0.0f;
+                        } else {
+                            // Interpolated values lie in [vmin, vmax] up to a rounding of the
+                            // lerps, which may move the nearest entry by one: widened by an entry
+                            // per side.
+                            const int i0 = std::max(0, static_cast<int>(vmin + 0.5f) - 1);
+                            const int i1 =
+                                std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + 0.5f) + 1);
+                            occupied = nonzero_prefix[i1 + 1] - nonzero_prefix[i0] > 0;
+                        }
+                        sub_mask = static_cast<std::uint8_t>(sub_mask | (occupied ? 1 << sub : 0));
+                    }
+                    const auto cell = static_cast<std::size_t>(
+                        cx + m_cells[0] * (cy + static_cast<std::int64_t>(m_cells[1]) * cz));
+                    m_sub_occupied[cell] = sub_mask;
+                    m_occupied[cell] = sub_mask != 0 ? 1 : 0;
+                    m_cell_max[cell] = cell_max;
                 }
-                cell_max = std::max(cell_max, vmax);
-                bool occupied = false;
-                if (m_is_rgba) {
-                    occupied = vmax > 0.0f;
-                } else {
-                    // Interpolated values lie in [vmin, vmax] up to a rounding of the lerps,
-                    // which may move the nearest entry by one: widened by an entry per side.
-                    const int i0 = std::max(0, static_cast<int>(vmin + 0.5f) - 1);
-                    const int i1 =
-                        std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + 0.5f) + 1);
-                    occupied = nonzero_prefix[i1 + 1] - nonzero_prefix[i0] > 0;
-                }
-                sub_mask = static_cast<std::uint8_t>(sub_mask | (occupied ? 1 << sub : 0));
             }
-            const bool occupied = sub_mask != 0;
-            const float vmax = cell_max;
-            m_sub_occupied[static_cast<std::size_t>(cell)] = sub_mask;
-            m_occupied[static_cast<std::size_t>(cell)] = occupied ? 1 : 0;
-            m_cell_max[static_cast<std::size_t>(cell)] = vmax;
         },
-        64);
+        1);
+
     // Step 3: the empty cubes towards each octant, which rays jump over at once.
     m_empty_cube.resize(8 * m_occupied.size());
     parallel_for(

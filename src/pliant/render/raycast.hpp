@@ -139,6 +139,10 @@ public:
     std::int64_t num_occupied_cells() const;                // macro cells with some opacity
 
 private:
+    // The constructor's work: validation, then the float copy, lookup table, macro cells and
+    // empty cubes.
+    void prepare(const volume::Volume& volume, const volume::TransferFunction* tf);
+
     RayCastOptions m_options;
     volume::Dims m_dims{0, 0, 0};
     Vec3d m_spacing, m_origin;

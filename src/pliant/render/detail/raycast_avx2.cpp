@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "pliant/core/simd_dispatch.hpp"
@@ -694,7 +695,79 @@ PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, 
     return samples;
 }
 
+namespace {
+
+// 4 values as doubles.
+PLIANT_AVX2_INLINE __m256d four(const std::uint8_t* in) {
+    std::int32_t word;
+    std::memcpy(&word, in, 4);
+    return _mm256_cvtepi32_pd(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(word)));
+}
+PLIANT_AVX2_INLINE __m256d four(const std::int16_t* in) {
+    return _mm256_cvtepi32_pd(
+        _mm_cvtepi16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(in))));
+}
+PLIANT_AVX2_INLINE __m256d four(const std::uint16_t* in) {
+    return _mm256_cvtepi32_pd(
+        _mm_cvtepu16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(in))));
+}
+PLIANT_AVX2_INLINE __m256d four(const float* in) {
+    return _mm256_cvtps_pd(_mm_loadu_ps(in));
+}
+
+template <typename T>
+PLIANT_AVX2_FN std::int64_t lookup_coordinates(const T* in, std::int64_t count, double lo,
+                                               double scale, float* out) {
+    const __m256d lo_v = _mm256_set1_pd(lo);
+    const __m256d scale_v = _mm256_set1_pd(scale);
+    const __m256d zero = _mm256_setzero_pd();
+    const __m256d top = _mm256_set1_pd(double{LUT_SIZE - 1});
+    const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFF));
+    const std::int64_t end = count - count % 4;
+    for (std::int64_t i = 0; i < end; i += 4) {
+        const __m256d s = _mm256_mul_pd(_mm256_sub_pd(four(in + i), lo_v), scale_v);
+        // std::clamp(s, 0, top) = top < max(0, s) ? top : …, for finite s; 0 otherwise.
+        const __m256d clamped = _mm256_min_pd(top, _mm256_max_pd(zero, s));
+        const __m256d finite = _mm256_cmp_pd(_mm256_and_pd(s, abs_mask), inf, _CMP_LT_OQ);
+        _mm_storeu_ps(out + i, _mm256_cvtpd_ps(_mm256_and_pd(clamped, finite)));
+    }
+    return end;
+}
+
+}  // namespace
+
+std::int64_t lookup_coordinates_avx2(const std::uint8_t* in, std::int64_t count, double lo,
+                                     double scale, float* out) {
+    return lookup_coordinates(in, count, lo, scale, out);
+}
+std::int64_t lookup_coordinates_avx2(const std::int16_t* in, std::int64_t count, double lo,
+                                     double scale, float* out) {
+    return lookup_coordinates(in, count, lo, scale, out);
+}
+std::int64_t lookup_coordinates_avx2(const std::uint16_t* in, std::int64_t count, double lo,
+                                     double scale, float* out) {
+    return lookup_coordinates(in, count, lo, scale, out);
+}
+std::int64_t lookup_coordinates_avx2(const float* in, std::int64_t count, double lo, double scale,
+                                     float* out) {
+    return lookup_coordinates(in, count, lo, scale, out);
+}
+
 #else
+
+std::int64_t lookup_coordinates_avx2(const std::uint8_t*, std::int64_t, double, double, float*) {
+    return 0;
+}
+std::int64_t lookup_coordinates_avx2(const std::int16_t*, std::int64_t, double, double, float*) {
+    return 0;
+}
+std::int64_t lookup_coordinates_avx2(const std::uint16_t*, std::int64_t, double, double, float*) {
+    return 0;
+}
+std::int64_t lookup_coordinates_avx2(const float*, std::int64_t, double, double, float*) {
+    return 0;
+}
 
 bool composite_avx2_fits(const RayCastKernel&) {
     return false;

@@ -19,6 +19,7 @@
 #include <span>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "pliant/core/host_device.hpp"
 #include "pliant/core/vec3.hpp"
@@ -37,6 +38,13 @@ inline constexpr int SUB_CELL = 2;    // sub-cell edge (an occupancy bit each), 
 inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
 inline constexpr int TILE = 16;       // pixels per tile edge
 inline constexpr int MAX_CUBE = 255;  // largest stored empty-cube side, cells
+
+// The lookup coordinate of a scalar voxel value x: (x − lo) · scale clamped to the table
+// [0, LUT_SIZE − 1], 0 when not finite (scale = (LUT_SIZE − 1) / (hi − lo)).
+inline float lookup_coordinate(double x, double lo, double scale) {
+    const double s = (x - lo) * scale;
+    return std::isfinite(s) ? static_cast<float>(std::clamp(s, 0.0, double{LUT_SIZE - 1})) : 0.0f;
+}
 
 // Everything a pixel needs, trivially copyable (pointers into the RayCaster's arrays).
 struct RayCastKernel {
@@ -552,45 +560,56 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
 // (cells outside the grid count as empty cubes of MAX_CUBE), capped at MAX_CUBE. Exact: the cube
 // of side s at c is c and the 7 cubes of side s − 1 at those neighbours (the 3D form of the
 // largest-empty-square recurrence). One serial pass in the order that visits those neighbours
-// first, O(cells · 7).
+// first, row by row: the 6 neighbours in the previous row and layer first (a loop the compiler
+// vectorizes), then the one along the row. O(cells · 7).
 inline void empty_cubes(std::span<const std::uint8_t> occupied, const int cells[3], int octant,
                         std::span<std::uint8_t> side) {
     const std::int64_t n[3] = {cells[0], cells[1], cells[2]};
     const int dir[3] = {(octant & 1) != 0 ? -1 : 1, (octant & 2) != 0 ? -1 : 1,
                         (octant & 4) != 0 ? -1 : 1};
-    const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return static_cast<std::size_t>(x + n[0] * (y + n[1] * z));
+    const auto row_of = [&](std::int64_t y, std::int64_t z) {
+        return static_cast<std::size_t>(n[0] * (y + n[1] * z));
     };
-    const std::int64_t step[3] = {dir[0], dir[1] * n[0], dir[2] * n[0] * n[1]};
+    // A row of MAX_CUBE for neighbours outside the grid, and the row minimum of the 6 neighbours
+    // off the row (with x and x + dir[0]), both over x ∈ [0, n[0]).
+    std::vector<std::uint8_t> outside(static_cast<std::size_t>(n[0]), MAX_CUBE);
+    std::vector<std::uint8_t> off_row(static_cast<std::size_t>(n[0]));
+    const std::int64_t nx = n[0];
     for (std::int64_t zi = 0; zi < n[2]; ++zi) {
         const std::int64_t z = dir[2] > 0 ? n[2] - 1 - zi : zi;
+        const bool has_z = z + dir[2] >= 0 && z + dir[2] < n[2];
         for (std::int64_t yi = 0; yi < n[1]; ++yi) {
             const std::int64_t y = dir[1] > 0 ? n[1] - 1 - yi : yi;
-            for (std::int64_t xi = 0; xi < n[0]; ++xi) {
-                const std::int64_t x = dir[0] > 0 ? n[0] - 1 - xi : xi;
-                if (occupied[at(x, y, z)] != 0) {
-                    side[at(x, y, z)] = 0;
-                    continue;
+            const bool has_y = y + dir[1] >= 0 && y + dir[1] < n[1];
+            const std::uint8_t* p = has_y ? &side[row_of(y + dir[1], z)] : outside.data();
+            const std::uint8_t* q = has_z ? &side[row_of(y, z + dir[2])] : outside.data();
+            const std::uint8_t* r =
+                has_y && has_z ? &side[row_of(y + dir[1], z + dir[2])] : outside.data();
+            // Neighbours at x, then at x + dir[0] (none past the row's end): each entry read
+            // before it is overwritten.
+            std::uint8_t* m = off_row.data();
+            for (std::int64_t x = 0; x < nx; ++x) {
+                m[x] = std::min({p[x], q[x], r[x]});
+            }
+            if (dir[0] > 0) {
+                for (std::int64_t x = 0; x + 1 < nx; ++x) {
+                    m[x] = std::min(m[x], m[x + 1]);
                 }
-                // The 7 neighbours (e = 1 … 7: bit a set steps along axis a), those inside.
-                const std::size_t i = at(x, y, z);
-                const bool in[3] = {x + dir[0] >= 0 && x + dir[0] < n[0],
-                                    y + dir[1] >= 0 && y + dir[1] < n[1],
-                                    z + dir[2] >= 0 && z + dir[2] < n[2]};
-                int smallest = MAX_CUBE;
-                for (int e = 1; e < 8; ++e) {
-                    if (((e & 1) != 0 && !in[0]) || ((e & 2) != 0 && !in[1]) ||
-                        ((e & 4) != 0 && !in[2])) {
-                        continue;
-                    }
-                    const std::int64_t offset = ((e & 1) != 0 ? step[0] : 0) +
-                                                ((e & 2) != 0 ? step[1] : 0) +
-                                                ((e & 4) != 0 ? step[2] : 0);
-                    smallest = std::min<int>(
-                        smallest,
-                        side[static_cast<std::size_t>(static_cast<std::int64_t>(i) + offset)]);
+            } else {
+                for (std::int64_t x = nx - 1; x >= 1; --x) {
+                    m[x] = std::min(m[x], m[x - 1]);
                 }
-                side[i] = static_cast<std::uint8_t>(std::min(MAX_CUBE, smallest + 1));
+            }
+            // Along the row, towards −dir[0]: each cell after its neighbour at x + dir[0].
+            std::uint8_t* out = &side[row_of(y, z)];
+            const std::uint8_t* occ = &occupied[row_of(y, z)];
+            int previous = MAX_CUBE;  // the cube at x + dir[0], MAX_CUBE outside
+            for (std::int64_t xi = 0; xi < nx; ++xi) {
+                const std::int64_t x = dir[0] > 0 ? nx - 1 - xi : xi;
+                const int smallest = std::min<int>(previous, m[x]);
+                const int value = occ[x] != 0 ? 0 : std::min(MAX_CUBE, smallest + 1);
+                out[x] = static_cast<std::uint8_t>(value);
+                previous = value;
             }
         }
     }
