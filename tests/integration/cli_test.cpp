@@ -334,6 +334,28 @@ TEST(Collide, UnsupportedExtensionIsIoError) {
     EXPECT_NE(r.err.find(".stl"), std::string::npos) << r.err;
 }
 
+// The paper's table on small rows: pliant's pairs equal the brute force's (and Embree's, when
+// built with it); the 2,244 row carries the paper's numbers.
+TEST(BenchCommand, BvhTableAgreesWithTheBruteForce) {
+    ScratchDir scratch;
+    const nlohmann::json table =
+        parse_json(run_cli("--json bench bvh --sizes 2244,800 --repeat 1", scratch));
+    EXPECT_TRUE(table.at("ok").get<bool>());
+    ASSERT_EQ(table.at("rows").size(), 2u);
+    for (const nlohmann::json& row : table.at("rows")) {
+        const std::int64_t pairs = row.at("pliant").at("pairs").get<std::int64_t>();
+        EXPECT_GT(pairs, 0);
+        EXPECT_EQ(row.at("brute_force").at("pairs").get<std::int64_t>(), pairs);
+        if (!row.at("embree").is_null()) {
+            EXPECT_EQ(row.at("embree").at("pairs").get<std::int64_t>(), pairs);
+        }
+    }
+    EXPECT_EQ(table.at("rows")[0].at("paper").at("triangles"), 2244);
+    EXPECT_TRUE(table.at("rows")[1].at("paper").is_null());
+    const CliResult bad = run_cli("bench bvh --repeat 0", scratch);
+    EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
 TEST(Demo, WritesOutputsThatCollideReproduces) {
     ScratchDir scratch;
     const auto dir = scratch / "demo";
