@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iterator>
 #include <random>
 
 #include "pliant/collision/incidence.hpp"
@@ -250,6 +251,49 @@ TEST(SelfBroadPhase, PartialUpdateFindsThePairsOfTheChangedVertices) {
                  InvalidInput);
     const std::vector<std::int32_t> bad{static_cast<std::int32_t>(mesh.num_vertices())};
     EXPECT_THROW(broad.update_vertices(mesh.positions, p1, inflation, bad), InvalidInput);
+}
+
+TEST(SelfBroadPhase, TrianglePairFilterDropsTheRTrianglePairsItRejects) {
+    TriangleMesh mesh = geometry::make_grid_sheet(20, 12, 1.0f, 0.6f);
+    geometry::fold_accordion(mesh.positions, 0.2f, 0.04f);
+    const float inflation = 0.01f;
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    const FeaturePairs expected = brute_force(mesh, mesh.positions, mesh.positions, inflation);
+    // Accepting everything changes nothing.
+    const auto all = [](std::int32_t, std::int32_t) {
+        return true;
+    };
+    const SelfCollisionBroadPhase<float>::TrianglePairFilter accept(all);
+    const FeaturePairs with_all = broad.update(mesh.positions, mesh.positions, inflation, &accept);
+    EXPECT_EQ(sorted(with_all.vertex_face), expected.vertex_face);
+    EXPECT_EQ(sorted(with_all.edge_edge), expected.edge_edge);
+    // Rejecting every pair leaves the orphan pairs (triangles sharing a vertex) alone, in full
+    // and partial updates.
+    const auto none = [](std::int32_t, std::int32_t) {
+        return false;
+    };
+    const SelfCollisionBroadPhase<float>::TrianglePairFilter reject(none);
+    const FeaturePairs only_orphans =
+        broad.update(mesh.positions, mesh.positions, inflation, &reject);
+    const auto orphans_vf = sorted(broad.orphans().vertex_face);
+    const auto orphans_ee = sorted(broad.orphans().edge_edge);
+    std::vector<VertexFacePair> vf;
+    std::vector<EdgeEdgePair> ee;
+    std::set_intersection(expected.vertex_face.begin(), expected.vertex_face.end(),
+                          orphans_vf.begin(), orphans_vf.end(), std::back_inserter(vf));
+    std::set_intersection(expected.edge_edge.begin(), expected.edge_edge.end(), orphans_ee.begin(),
+                          orphans_ee.end(), std::back_inserter(ee));
+    EXPECT_EQ(sorted(only_orphans.vertex_face), vf);
+    EXPECT_EQ(sorted(only_orphans.edge_edge), ee);
+    EXPECT_LT(vf.size() + ee.size(), expected.vertex_face.size() + expected.edge_edge.size());
+    const std::vector<std::int32_t> changed{0, 5, 77, 150};
+    const FeaturePairs partial =
+        broad.update_vertices(mesh.positions, mesh.positions, inflation, changed, &reject);
+    const auto partial_vf = sorted(partial.vertex_face);
+    const auto partial_ee = sorted(partial.edge_edge);
+    EXPECT_TRUE(std::includes(vf.begin(), vf.end(), partial_vf.begin(), partial_vf.end()));
+    EXPECT_TRUE(std::includes(ee.begin(), ee.end(), partial_ee.begin(), partial_ee.end()));
+    EXPECT_GT(partial_vf.size() + partial_ee.size(), 0u);
 }
 
 TEST(SelfBroadPhase, InexactDoubleIsASupersetOfExact) {

@@ -242,6 +242,19 @@ void ClothSolver::add_moving_pins(std::span<const std::int32_t> vertices, const 
     m_moving_pins.push_back(std::move(pins));
 }
 
+void ClothSolver::set_velocities(std::span<const Vec3d> velocities) {
+    if (velocities.size() != m_velocities.size()) {
+        throw InvalidInput(fmt::format("cloth: velocities.size() ({}) != the vertex count ({})",
+                                       velocities.size(), m_velocities.size()));
+    }
+    for (const Vec3d& v : velocities) {
+        if (!is_finite(v)) {
+            throw InvalidInput("cloth: velocities must be finite");
+        }
+    }
+    m_velocities.assign(velocities.begin(), velocities.end());
+}
+
 void ClothSolver::set_air(const Air& air) {
     if (!(air.density >= 0.0) || !std::isfinite(air.density) || !(air.drag_coefficient >= 0.0) ||
         !std::isfinite(air.drag_coefficient) || !is_finite(air.wind) ||
@@ -277,12 +290,14 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     for (int s = 0; s < substeps; ++s) {
         if (m_self_collision && s % GATHER_EVERY == 0) {
             m_window_start = m_positions;
-            const int ahead = std::min(GATHER_EVERY, substeps - s);
-            m_self_collision->gather(m_positions, m_velocities, ahead * h, m_gravity);
+            m_self_collision->prepare(m_positions, m_velocities, start_time + s * h,
+                                      GATHER_EVERY * h);
+            m_window_start_time = start_time + s * h;
         }
         stats.obstacle_contacts = substep(h, start_time + (s + 1) * h, stats.solve_ms);
         if (m_self_collision && (s % GATHER_EVERY == GATHER_EVERY - 1 || s == substeps - 1)) {
-            m_self_collision->enforce(m_window_start, m_positions, m_velocities);
+            m_self_collision->enforce(m_window_start, m_positions, m_velocities,
+                                      m_window_start_time, start_time + (s + 1) * h);
         }
     }
     m_time = start_time + dt;
@@ -326,7 +341,8 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
     // may have pressed one layer into the next); a vertex pushed back into an obstacle is
     // pushed out again next substep, while layers that pass through each other stay entangled.
     if (m_self_collision) {
-        m_self_collision->project(m_positions, m_previous_positions, m_inverse_masses, m_material);
+        m_self_collision->project(m_positions, m_previous_positions, m_inverse_masses, m_material,
+                                  t_end, h);
     }
     watch.restart();
     const double keep = std::max(0.0, 1.0 - m_material.damping * h);

@@ -91,6 +91,9 @@ public:
     void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle, const Motion& motion = {});
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    // Replaces the velocities (m/s, #V, finite; else InvalidInput), e.g. an initial motion or a
+    // kick between steps. Pinned vertices keep following their pins.
+    void set_velocities(std::span<const Vec3d> velocities);
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
     void set_air(const Air& air);
     // Self-collision handling (self_collision.hpp): proximity constraints every substep and the
@@ -156,6 +159,7 @@ private:
     std::vector<Vec3d> m_triangle_forces;  // air, per triangle (N)
     std::unique_ptr<SelfCollision> m_self_collision;
     std::vector<Vec3d> m_window_start;     // positions at the start of a self-collision window
+    double m_window_start_time = 0.0;      // s
     std::vector<double> m_contact_depths;  // this substep's obstacle correction per vertex (m)
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact

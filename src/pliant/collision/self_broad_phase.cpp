@@ -140,7 +140,7 @@ void SelfCollisionBroadPhase<Real>::compute_boxes(std::span<const Vec> positions
 }
 
 template <typename Real>
-void SelfCollisionBroadPhase<Real>::traverse() {
+void SelfCollisionBroadPhase<Real>::traverse(const TrianglePairFilter* keep) {
     m_triangle_pair_chunks.reset(bvh::num_overlap_chunks(m_bvh));
     const geometry::Triangle* triangles = m_triangles.data();
     bvh::for_each_self_overlap(m_bvh, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
@@ -149,7 +149,7 @@ void SelfCollisionBroadPhase<Real>::traverse() {
         }
         const auto ia = static_cast<std::int32_t>(a);
         const auto ib = static_cast<std::int32_t>(b);
-        if (overlaps_exact_tt(ia, ib)) {
+        if (overlaps_exact_tt(ia, ib) && (keep == nullptr || (*keep)(ia, ib))) {
             m_triangle_pair_chunks.chunk(chunk).emplace_back(ia, ib);
         }
     });
@@ -283,7 +283,8 @@ void SelfCollisionBroadPhase<Real>::test_features() {
 template <typename Real>
 const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> positions_t0,
                                                           std::span<const Vec> positions_t1,
-                                                          Real inflation) {
+                                                          Real inflation,
+                                                          const TrianglePairFilter* keep) {
     if (positions_t0.size() != m_num_vertices || positions_t1.size() != m_num_vertices) {
         throw InvalidInput(
             fmt::format("SelfCollisionBroadPhase::update: positions_t0.size() ({}) and "
@@ -311,7 +312,7 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> p
     }
 
     watch.restart();
-    traverse();
+    traverse(keep);
     m_stats.traverse_ms = watch.elapsed_ms();
 
     watch.restart();
@@ -369,7 +370,7 @@ void SelfCollisionBroadPhase<Real>::index_orphans() {
 template <typename Real>
 const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
     std::span<const Vec> positions_t0, std::span<const Vec> positions_t1, Real inflation,
-    std::span<const std::int32_t> changed) {
+    std::span<const std::int32_t> changed, const TrianglePairFilter* keep) {
     if (!m_has_boxes) {
         throw InvalidInput("SelfCollisionBroadPhase::update_vertices: no full update yet");
     }
@@ -477,7 +478,8 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
                                         if (other == t ||
                                             share_vertex(tri, m_triangles[prims[j]]) ||
                                             (m_triangle_marks[prims[j]] != 0 && other < t) ||
-                                            !overlaps_exact_tt(t, other)) {
+                                            !overlaps_exact_tt(t, other) ||
+                                            (keep != nullptr && !(*keep)(t, other))) {
                                             return;
                                         }
                                         ++count;

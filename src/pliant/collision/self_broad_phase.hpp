@@ -33,6 +33,7 @@
 #include "pliant/collision/representative_triangles.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/core/chunked_buffer.hpp"
+#include "pliant/core/function_ref.hpp"
 #include "pliant/geometry/topology.hpp"
 
 namespace pliant::collision {
@@ -59,8 +60,13 @@ public:
     // Runs the four stages for a step from positions_t0 to positions_t1 (#V each; pass the same
     // span twice for a static query). inflation ≥ 0, world units. Returns the pairs, valid until
     // the next update.
+    //
+    // keep (optional): a triangle-pair filter called (from several threads) for every
+    // non-adjacent pair of triangles whose boxes overlap; pairs it rejects yield no feature pair
+    // (a caller's tighter bound, e.g. on relative motion). Orphan pairs are not filtered.
+    using TrianglePairFilter = FunctionRef<bool(std::int32_t, std::int32_t)>;
     const FeaturePairs& update(std::span<const Vec> positions_t0, std::span<const Vec> positions_t1,
-                               Real inflation);
+                               Real inflation, const TrianglePairFilter* keep = nullptr);
 
     // A partial update after a full one: the vertices in `changed` (ascending, no duplicates)
     // get new boxes from positions_t0 / positions_t1 (#V each; only the changed vertices are
@@ -71,9 +77,11 @@ public:
     // once, in a deterministic order. Cost: about one BVH query per triangle around the changed
     // vertices. Valid until the next update; pairs() keeps the last full update's pairs. Throws
     // InvalidInput before any full update, for wrong sizes or out-of-range vertices.
+    // keep: as for update().
     const FeaturePairs& update_vertices(std::span<const Vec> positions_t0,
                                         std::span<const Vec> positions_t1, Real inflation,
-                                        std::span<const std::int32_t> changed);
+                                        std::span<const std::int32_t> changed,
+                                        const TrianglePairFilter* keep = nullptr);
 
     // With exact = false (double input only), pairs are kept on the float boxes alone (rounded
     // outward): a superset of the exact answer, for callers that filter the pairs further anyway,
@@ -104,7 +112,7 @@ private:
                             AppendBuffer<EdgeEdgePair>& ee) const;
     // Orphan pairs by vertex (CSR over the orphan set's VF then EE indices), built on first use.
     void index_orphans();
-    void traverse();
+    void traverse(const TrianglePairFilter* keep);
     void test_features();
 
     std::vector<geometry::Triangle> m_triangles;
