@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/volume/volume.hpp"
@@ -37,7 +38,7 @@ const pbd::TetGrid& grid_of(int cells) {
 void BM_SoftBodySubstep(benchmark::State& state) {
     const int cells = static_cast<int>(state.range(0));
     set_num_threads(static_cast<int>(state.range(1)));
-    pbd::detail::allow_avx2(state.range(3) >= 8);
+    pliant::allow_avx2(state.range(3) >= 8);
     const pbd::TetGrid& grid = grid_of(cells);
     pbd::SoftBody body = state.range(2) != 0 ? pbd::SoftBody(grid, {.substeps = 1})
                                              : pbd::SoftBody(grid.mesh, {.substeps = 1});
@@ -50,9 +51,9 @@ void BM_SoftBodySubstep(benchmark::State& state) {
     state.counters["edge_colors"] = body.edge_coloring().num_colors();
     state.counters["tet_colors"] = body.tet_coloring().num_colors();
     state.counters["inverted"] = static_cast<double>(body.stats().inverted_tets);
-    state.counters["lanes"] = pbd::detail::has_avx2() ? 8 : 4;
+    state.counters["lanes"] = pliant::has_avx2() ? 8 : 4;
     set_num_threads(0);
-    pbd::detail::allow_avx2(true);
+    pliant::allow_avx2(true);
 }
 BENCHMARK(BM_SoftBodySubstep)
     ->ArgNames({"cells", "threads", "analytic", "simd"})

@@ -11,8 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "pliant/cloth/motion.hpp"
-#include "pliant/cloth/scene.hpp"
+#include "cloth_setup.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/video.hpp"
@@ -21,14 +20,6 @@
 #include "pliant/render/mesh_rasterizer.hpp"
 
 namespace pliant::cli {
-
-// An obstacle as drawn: its triangles at the rest placement and its motion.
-struct ObstacleShape {
-    geometry::TriangleMeshD rest;
-    cloth::Motion motion;
-    bool smooth = true;   // false for boxes and planes (flat shading)
-    bool bounded = true;  // false for planes: left out of the camera's framing
-};
 
 class ClothPreview {
 public:
@@ -61,12 +52,5 @@ private:
     int m_frame = 0;
     double m_render_ms = 0.0;
 };
-
-// The shapes of a scene's obstacles for the preview: spheres, boxes, plane squares (half size
-// `plane_half_size`, centred at the point of the plane closest to `centre`), and mesh obstacles as
-// given (already placed by their mesh placement).
-ObstacleShape preview_shape(const cloth::SceneObstacle& obstacle,
-                            const geometry::TriangleMeshD* mesh, const Vec3d& centre,
-                            double plane_half_size);
 
 }  // namespace pliant::cli

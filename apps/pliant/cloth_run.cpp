@@ -13,8 +13,10 @@
 #include <vector>
 
 #include "cloth_preview.hpp"
+#include "cloth_setup.hpp"
 #include "commands.hpp"
 #include "output_directory.hpp"
+#include "pliant/cloth/edge_strain.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
@@ -56,75 +58,6 @@ private:
     struct sigaction m_previous {};
 };
 
-// Applies a placement (rotation, then translation) to points, the rotation built once.
-void place(std::span<Vec3d> points, const cloth::Placement& placement) {
-    const cloth::Rotation rotation = cloth::Rotation::from_degrees(placement.rotate_degrees);
-    for (Vec3d& p : points) {
-        p = rotation.apply(p) + placement.translate;
-    }
-}
-
-// The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
-geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
-    geometry::TriangleMeshD mesh;
-    if (scene.grid) {
-        mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(
-            scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
-            static_cast<float>(scene.grid->size[1])));
-    } else {
-        mesh = io::read_mesh(scene.mesh);
-    }
-    const cloth::Placement transform{scene.rotate_degrees, scene.translate};
-    place(mesh.positions, transform);
-    if (scene.instances.empty()) {
-        return mesh;
-    }
-    const auto num_vertices = static_cast<std::int64_t>(mesh.positions.size());
-    if (num_vertices * static_cast<std::int64_t>(scene.instances.size()) >
-        std::numeric_limits<std::int32_t>::max()) {
-        throw InvalidInput(fmt::format(
-            "cloth: {} instances of {} vertices exceed the 2^31 - 1 vertex indices a mesh has",
-            scene.instances.size(), num_vertices));
-    }
-    geometry::TriangleMeshD copies;
-    for (std::size_t k = 0; k < scene.instances.size(); ++k) {
-        const auto offset = static_cast<std::int32_t>(k * mesh.positions.size());
-        const std::size_t first = copies.positions.size();
-        copies.positions.insert(copies.positions.end(), mesh.positions.begin(),
-                                mesh.positions.end());
-        place(std::span<Vec3d>(copies.positions).subspan(first), scene.instances[k]);
-        for (const geometry::Triangle& t : mesh.triangles) {
-            copies.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-        }
-    }
-    return copies;
-}
-
-// The vertices of a pin group: its listed indices and every vertex inside one of its regions.
-std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
-                                          const geometry::TriangleMeshD& mesh,
-                                          const std::string& scene_name) {
-    std::vector<std::int32_t> pinned = group.vertices;
-    for (const std::int32_t v : pinned) {
-        if (static_cast<std::size_t>(v) >= mesh.positions.size()) {
-            throw InvalidInput(fmt::format(
-                "{}: {}.vertices: vertex {} out of range, expected an index below {} (the "
-                "cloth's vertices, all copies)",
-                scene_name, group.key, v, mesh.positions.size()));
-        }
-    }
-    for (const cloth::PinRegion& region : group.regions) {
-        for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-            const Vec3d& p = mesh.positions[v];
-            if (p.x >= region.min.x && p.x <= region.max.x && p.y >= region.min.y &&
-                p.y <= region.max.y && p.z >= region.min.z && p.z <= region.max.z) {
-                pinned.push_back(static_cast<std::int32_t>(v));
-            }
-        }
-    }
-    return pinned;
-}
-
 }  // namespace
 
 nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
@@ -132,34 +65,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                        const std::filesystem::path& out,
                                        const ClothRunOptions& options) {
     const int frames = options.frames;
-    const geometry::TriangleMeshD mesh = load_cloth(scene);
-    cloth::ClothSolver solver(mesh, scene.material);
-    for (const cloth::PinGroup& group : scene.pins) {
-        solver.add_moving_pins(pinned_vertices(group, mesh, scene_name), group.motion);
-    }
-    // Obstacles, and their shapes for the preview (planes as squares around the cloth).
-    AABBd cloth_box;
-    for (const Vec3d& p : mesh.positions) {
-        cloth_box.extend(p);
-    }
-    const Vec3d centre = (cloth_box.lo + cloth_box.hi) * 0.5;
-    const double plane_half_size = 0.75 * norm(cloth_box.hi - cloth_box.lo) + 0.5;
-    std::vector<ObstacleShape> shapes;
-    for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
-        if (obstacle.mesh.empty()) {
-            solver.add_obstacle(obstacle.shape, obstacle.motion);
-            shapes.push_back(preview_shape(obstacle, nullptr, centre, plane_half_size));
-            continue;
-        }
-        geometry::TriangleMeshD shape = io::read_mesh(obstacle.mesh);
-        place(shape.positions, obstacle.mesh_placement);
-        shapes.push_back(preview_shape(obstacle, &shape, centre, plane_half_size));
-        solver.add_mesh_obstacle(std::make_shared<const cloth::MeshObstacle>(std::move(shape)),
-                                 obstacle.motion);
-    }
-    solver.set_gravity(scene.gravity);
-    solver.set_air(scene.air);
-    solver.enable_self_collision(scene.self_collision);
+    const ClothSetup setup = load_cloth_setup(scene, scene_name);
+    const geometry::TriangleMeshD& mesh = setup.mesh;
+    const std::unique_ptr<cloth::ClothSolver> solver_owner = make_solver(scene, setup);
+    cloth::ClothSolver& solver = *solver_owner;
 
     // Input that already intersects itself is reported (the fail-safe keeps it from getting
     // worse but cannot untangle it).
@@ -172,11 +81,14 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             scene_name, initial_intersections);
     }
 
+    // The second independent check: edge strain against the starting shape (the rest shape).
+    const cloth::EdgeStrain edge_strain(solver.positions(), solver.triangles());
+
     const std::filesystem::path frames_dir = out / "frames";
     make_output_directory(frames_dir);
     std::unique_ptr<ClothPreview> preview;
     if (options.preview) {
-        preview = std::make_unique<ClothPreview>(out, solver.positions(), std::move(shapes),
+        preview = std::make_unique<ClothPreview>(out, solver.positions(), setup.shapes,
                                                  scene.frames_per_second, options.preview_width,
                                                  options.preview_height);
     }
@@ -197,6 +109,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
     double total_ms = 0.0;
     std::int64_t worst_intersections = 0;
+    double worst_strain = 0.0;
+    double worst_strain_p99 = 0.0;
     for (int frame = 1; frame <= frames; ++frame) {
         if (g_interrupted != 0) {
             break;
@@ -220,6 +134,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         const std::int64_t intersecting =
             collision::count_intersecting_pairs(solver.positions(), solver.triangles());
         worst_intersections = std::max(worst_intersections, intersecting);
+        const cloth::StrainStats strain = edge_strain.measure(solver.positions());
+        worst_strain = std::max(worst_strain, strain.max);
+        worst_strain_p99 = std::max(worst_strain_p99, strain.p99);
         nlohmann::ordered_json record = {{"frame", frame},
                                          {"ms", ms},
                                          {"step_ms", step.solve_ms},
@@ -229,6 +146,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                          {"response_ms", step.self.response_ms},
                                          {"obstacle_contacts", step.obstacle_contacts},
                                          {"intersecting_pairs", intersecting},
+                                         {"strain_p90", strain.p90},
+                                         {"strain_p99", strain.p99},
+                                         {"strain_max", strain.max},
+                                         {"edges_over_10_percent", strain.over_10_percent},
                                          {"check_ms", check.elapsed_ms()},
                                          {"write_ms", write_ms}};
         if (step.has_self_collision) {
@@ -264,6 +185,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
         {"max_intersecting_pairs", worst_intersections},
+        {"max_strain_p99", worst_strain_p99},
+        {"max_strain", worst_strain},
         {"frames", per_frame},
         {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
     };

@@ -18,22 +18,13 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
-#include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
-#include <numbers>
 #include <string>
-#include <vector>
 
 #include "commands.hpp"
-#include "pliant/core/error.hpp"
-#include "pliant/core/timer.hpp"
-#include "pliant/io/nerf_dataset.hpp"
-#include "pliant/io/png.hpp"
+#include "nerf_run.hpp"
 #include "pliant/io/volume_io.hpp"
-#include "pliant/nerf/dataset.hpp"
-#include "pliant/render/raycast.hpp"
 #include "volume_view.hpp"
 
 namespace pliant::cli {
@@ -52,68 +43,26 @@ struct DatasetCommandOptions {
 };
 
 void run_dataset(const DatasetCommandOptions& options, const GlobalOptions& global) {
-    const std::array<int, 2> size = parse_size(options.size);
-    const Stopwatch watch;
     const volume::Volume vol = io::read_volume(options.volume);
     const bool is_rgba = volume::channels(vol.type()) == 4;
     volume::TransferFunction tf;
     if (!is_rgba) {
         tf = load_transfer_function(options.tf, vol);
     }
-    render::RayCastOptions ro;
-    ro.step = options.step;
-    ro.background = {options.background[0], options.background[1], options.background[2]};
-    const render::RayCaster caster(vol, is_rgba ? nullptr : &tf, ro);
-
-    const std::filesystem::path dir = options.out;
-    std::error_code ec;
-    std::filesystem::create_directories(dir / "train", ec);
-    std::filesystem::create_directories(dir / "test", ec);
-    if (!std::filesystem::is_directory(dir / "train") ||
-        !std::filesystem::is_directory(dir / "test")) {
-        throw IoError(fmt::format("{}: cannot create the output directories", dir.string()));
-    }
-
-    const AABBd box = vol.bounds();
-    render::FramingOptions framing;
-    framing.fov_y_degrees = options.fov;
-    std::vector<std::string> names[2];
-    std::vector<nerf::Pose> poses[2];
-    nerf::Intrinsics intrinsics;
-    render::Image image;
-    const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));  // 137.508°
-    for (int i = 0; i < options.views; ++i) {
-        const double z = 1.0 - (2.0 * i + 1.0) / options.views;
-        const double azimuth =
-            std::fmod(i * golden, 2.0 * std::numbers::pi) * 180.0 / std::numbers::pi;
-        const double elevation = std::asin(z) * 180.0 / std::numbers::pi;
-        const render::Camera camera =
-            render::frame_box(box, azimuth, elevation, size[0], size[1], framing);
-        caster.render(camera, image);
-        const int split = i % options.test_every == 0 ? 1 : 0;
-        const std::string name = fmt::format("{}/r_{}", split == 1 ? "test" : "train", i);
-        io::write_png(dir / (name + ".png"), image);
-        names[split].push_back("./" + name);
-        poses[split].push_back(nerf::pose_from_camera(camera));
-        intrinsics = nerf::intrinsics_from_camera(camera);
-    }
-    io::write_transforms(dir / "transforms_train.json", intrinsics, names[0], poses[0], box);
-    io::write_transforms(dir / "transforms_test.json", intrinsics, names[1], poses[1], box);
-    const double ms = watch.elapsed_ms();
-
+    DatasetRunOptions run;
+    run.views = options.views;
+    run.size = parse_size(options.size);
+    run.fov = options.fov;
+    run.test_every = options.test_every;
+    run.background = options.background;
+    run.step = options.step;
+    const nlohmann::ordered_json j = render_dataset(vol, is_rgba ? nullptr : &tf, run, options.out);
     if (global.json) {
-        nlohmann::ordered_json j;
-        j["output"] = options.out;
-        j["views"] = options.views;
-        j["train"] = names[0].size();
-        j["test"] = names[1].size();
-        j["width"] = size[0];
-        j["height"] = size[1];
-        j["ms"] = ms;
         std::fputs((j.dump(2) + "\n").c_str(), stdout);
     } else {
         std::printf("%s: %d views of %dx%d (%zu train, %zu test) in %.0f ms\n", options.out.c_str(),
-                    options.views, size[0], size[1], names[0].size(), names[1].size(), ms);
+                    options.views, run.size[0], run.size[1], j["train"].get<std::size_t>(),
+                    j["test"].get<std::size_t>(), j["ms"].get<double>());
     }
 }
 

@@ -1,7 +1,9 @@
 // pliant nerf train TRANSFORMS.json -o VOLUME [--minutes M | --iterations N] [--resolution R]
 //                   [--stages S] [--batch B] [--export-resolution E] [--type rgba8|rgba32f]
 //                   [--threshold T] [--normalize none|max|range] [--background R,G,B] [--seed S]
-// pliant nerf eval TRANSFORMS.json VOLUME [--background R,G,B] [--images DIR]   [--json]
+//                   [--max-memory MIB]
+// pliant nerf eval TRANSFORMS.json VOLUME [--background R,G,B] [--images DIR] [--max-memory MIB]
+//                  [--json]
 //
 // train: reconstructs a voxel radiance field (nerf/trainer.hpp) from a posed-image dataset
 // (io/nerf_dataset.hpp) and writes it as an RGBA volume (nerf/export.hpp: E voxels along the
@@ -24,27 +26,19 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <signal.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <array>
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
+#include "nerf_run.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/io/nerf_dataset.hpp"
-#include "pliant/io/png.hpp"
 #include "pliant/io/volume_io.hpp"
-#include "pliant/nerf/export.hpp"
-#include "pliant/nerf/metrics.hpp"
-#include "pliant/nerf/trainer.hpp"
-#include "pliant/render/raycast.hpp"
-#include "pliant/volume/clean.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -74,12 +68,6 @@ private:
     struct sigaction m_previous {};
 };
 
-std::int64_t peak_rss_bytes() {
-    struct rusage usage {};
-    ::getrusage(RUSAGE_SELF, &usage);
-    return static_cast<std::int64_t>(usage.ru_maxrss) * 1024;  // Linux: kilobytes
-}
-
 struct TrainCommandOptions {
     std::string transforms;
     std::string out;
@@ -97,7 +85,12 @@ struct TrainCommandOptions {
     float tv_density = nerf::TrainOptions{}.tv_density;
     float tv_color = nerf::TrainOptions{}.tv_color;
     float lr = nerf::TrainOptions{}.lr_density;
+    double max_memory_mib = 16384.0;
 };
+
+std::size_t to_bytes(double mib) {
+    return static_cast<std::size_t>(mib * 1024.0 * 1024.0);
+}
 
 void run_train(const TrainCommandOptions& options, const GlobalOptions& global) {
     const volume::VoxelType type =
@@ -105,9 +98,13 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     io::check_volume_writable(options.out, type);  // fail before a long run
     io::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
+    ro.max_bytes = to_bytes(options.max_memory_mib);
     const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
 
-    nerf::TrainOptions to;
+    TrainRunOptions run;
+    nerf::TrainOptions& to = run.train;
+    to.max_bytes = to_bytes(options.max_memory_mib);
+    run.exported.max_bytes = to.max_bytes;
     to.resolution = options.resolution;
     to.stages = options.stages;
     to.batch_rays = options.batch;
@@ -120,35 +117,8 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     } else {
         to.seconds = 60.0 * (options.minutes > 0.0 ? options.minutes : 2.0);
     }
-
-    const bool bar = ::isatty(STDERR_FILENO) != 0;
-    nerf::TrainResult result;
-    {
-        const InterruptGuard guard;
-        double last_print = -1e9;
-        result = nerf::train(dataset, to, [&](const nerf::TrainProgress& p) {
-            if (bar && p.elapsed_ms - last_print > 250.0) {
-                last_print = p.elapsed_ms;
-                const int width = 30;
-                const int filled = std::clamp(static_cast<int>(width * p.progress), 0, width);
-                std::fprintf(
-                    stderr, "\r[%s%s] %3.0f%%  it %lld  grid %d  loss %.5f  PSNR %.2f dB  %.0f s ",
-                    std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(),
-                    100.0 * p.progress, static_cast<long long>(p.iteration), p.resolution, p.loss,
-                    p.psnr, p.elapsed_ms / 1000.0);
-                std::fflush(stderr);
-            }
-            return g_interrupted == 0;
-        });
-        if (bar) {
-            std::fputc('\n', stderr);
-        }
-    }
-
-    nerf::ExportOptions eo;
-    eo.resolution = options.export_resolution;
-    eo.type = type;
-    volume::Volume vol = nerf::export_volume(result.grid, eo);
+    run.exported.resolution = options.export_resolution;
+    run.exported.type = type;
     if (options.threshold > 0.0 || options.normalize != "none") {
         volume::CleanOptions co;
         co.threshold_255 = options.threshold;
@@ -156,41 +126,39 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
                            : options.normalize == "range"
                                ? volume::AlphaNormalization::threshold_range
                                : volume::AlphaNormalization::none;
-        volume::clean(vol, co);
+        run.clean = co;
     }
-    io::write_volume(options.out, vol);
+    run.progress = ::isatty(STDERR_FILENO) != 0;
 
-    const double train_psnr =
-        result.final_loss > 0.0 ? -10.0 * std::log10(result.final_loss) : 99.0;
-    const auto& gd = result.grid.dims();
+    TrainRunResult result;
+    {
+        const InterruptGuard guard;
+        result = train_volume(dataset, run, [] { return g_interrupted == 0; });
+    }
+    io::write_volume(options.out, result.volume);
+
     if (global.json) {
         nlohmann::ordered_json j;
         j["output"] = options.out;
-        j["iterations"] = result.iterations;
-        j["seconds"] = result.elapsed_ms / 1000.0;
-        j["train_psnr"] = train_psnr;
-        j["resolution"] = result.grid.resolution();
-        j["grid_dims"] = {gd[0], gd[1], gd[2]};
-        j["occupied_cells"] = result.grid.num_occupied();
-        j["volume_dims"] = vol.dims();
-        j["volume_spacing"] = {vol.spacing().x, vol.spacing().y, vol.spacing().z};
-        j["peak_rss_bytes"] = peak_rss_bytes();
-        j["interrupted"] = result.stopped;
+        j.update(result.json);
         std::fputs((j.dump(2) + "\n").c_str(), stdout);
     } else {
+        const nlohmann::ordered_json& r = result.json;
+        const auto& vd = result.volume.dims();
         std::printf(
             "%s: %lld iterations in %.1f s, grid %dx%dx%d, last batch PSNR %.2f dB, volume "
             "%lldx%lldx%lld, peak memory %.0f MiB\n",
-            options.out.c_str(), static_cast<long long>(result.iterations),
-            result.elapsed_ms / 1000.0, gd[0], gd[1], gd[2], train_psnr,
-            static_cast<long long>(vol.dims()[0]), static_cast<long long>(vol.dims()[1]),
-            static_cast<long long>(vol.dims()[2]), peak_rss_bytes() / 1048576.0);
+            options.out.c_str(), r["iterations"].get<long long>(), r["seconds"].get<double>(),
+            r["grid_dims"][0].get<int>(), r["grid_dims"][1].get<int>(),
+            r["grid_dims"][2].get<int>(), r["train_psnr"].get<double>(),
+            static_cast<long long>(vd[0]), static_cast<long long>(vd[1]),
+            static_cast<long long>(vd[2]), peak_rss_bytes() / 1048576.0);
     }
     if (result.stopped) {
         throw Interrupted(
             fmt::format("training stopped after {} iterations; the volume so far "
                         "is in {}",
-                        result.iterations, options.out));
+                        result.json["iterations"].get<long long>(), options.out));
     }
 }
 
@@ -199,58 +167,33 @@ struct EvalCommandOptions {
     std::string volume;
     std::array<float, 3> background{0.0f, 0.0f, 0.0f};
     std::string images;
+    double max_memory_mib = 16384.0;
 };
 
 void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
     io::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
+    ro.max_bytes = to_bytes(options.max_memory_mib);
     const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
-    const volume::Volume vol = io::read_volume(options.volume);
+    io::ReadVolumeOptions rv;
+    rv.max_bytes = ro.max_bytes;
+    const volume::Volume vol = io::read_volume(options.volume, rv);
     if (volume::channels(vol.type()) != 4) {
         throw InvalidInput(fmt::format("{}: a {} volume; nerf eval needs an RGBA volume",
                                        options.volume, volume::name(vol.type())));
     }
-    render::RayCastOptions rco;
-    rco.background = ro.background;
-    const render::RayCaster caster(vol, nullptr, rco);
-    if (!options.images.empty()) {
-        std::filesystem::create_directories(options.images);
-    }
-    nlohmann::ordered_json views = nlohmann::ordered_json::array();
-    double sum_psnr = 0.0, sum_ssim = 0.0;
-    render::Image image;
-    for (std::size_t i = 0; i < dataset.views.size(); ++i) {
-        const nerf::View& v = dataset.views[i];
-        caster.render(nerf::camera_from_view(dataset.intrinsics, v.camera_to_world), image);
-        const std::vector<float> rgb = nerf::from_image(image);
-        const double p = nerf::psnr(rgb, v.rgb);
-        const double s = nerf::ssim(rgb, v.rgb, image.width, image.height);
-        sum_psnr += p;
-        sum_ssim += s;
-        nlohmann::ordered_json e;
-        e["file_path"] = v.name;
-        e["psnr"] = p;
-        e["ssim"] = s;
-        views.push_back(e);
-        if (!options.images.empty()) {
-            io::write_png(std::filesystem::path(options.images) / fmt::format("{}.png", i), image);
-        }
-    }
-    const double n = static_cast<double>(dataset.views.size());
+    const nlohmann::ordered_json j =
+        evaluate_volume(dataset, vol, options.background, options.images);
     if (global.json) {
-        nlohmann::ordered_json j;
-        j["psnr"] = sum_psnr / n;
-        j["ssim"] = sum_ssim / n;
-        j["views"] = views;
         std::fputs((j.dump(2) + "\n").c_str(), stdout);
     } else {
-        for (const auto& e : views) {
+        for (const auto& e : j["views"]) {
             std::printf("%-28s PSNR %6.2f dB  SSIM %.4f\n",
                         e["file_path"].get<std::string>().c_str(), e["psnr"].get<double>(),
                         e["ssim"].get<double>());
         }
         std::printf("mean over %zu views: PSNR %.2f dB, SSIM %.4f\n", dataset.views.size(),
-                    sum_psnr / n, sum_ssim / n);
+                    j["psnr"].get<double>(), j["ssim"].get<double>());
     }
 }
 
@@ -307,6 +250,12 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::Range(0.0, 1e9));
     train->add_option("--lr", t->lr, "Adam learning rate (raw density and colour)")
         ->check(CLI::Range(0.0, 100.0));
+    train
+        ->add_option("--max-memory", t->max_memory_mib,
+                     "Refuse datasets and grids that would need more than this (MiB; default "
+                     "16384), before allocating")
+        ->type_name("MIB")
+        ->check(CLI::Range(1e-6, 1e9));
     train->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     train->callback([t, &global] { run_train(*t, global); });
 
@@ -320,6 +269,11 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->delimiter(',')
         ->check(CLI::Range(0.0, 1.0));
     eval->add_option("--images", e->images, "Write the renders to this directory");
+    eval->add_option("--max-memory", e->max_memory_mib,
+                     "Refuse datasets and volumes that would need more than this (MiB; default "
+                     "16384), before allocating")
+        ->type_name("MIB")
+        ->check(CLI::Range(1e-6, 1e9));
     eval->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     eval->callback([e, &global] { run_eval(*e, global); });
 }

@@ -1,5 +1,6 @@
 // pliant render VOLUME [--tf FILE|PRESET] [--view AXIS | --camera AZ,EL,DIST] [--size WxH]
 //               [--step S] [--opacity-unit U] [--background R,G,B] [--mip] [--shading]
+//               [--clip PX,PY,PZ,NX,NY,NZ]
 //               -o OUT.png | --orbit N -o OUT.mp4   [--json]
 //
 // Ray-casts a volume file (io/volume_io.hpp: NRRD, NIfTI, raw + JSON, .inv3) with
@@ -16,6 +17,8 @@
 //   --step        sampling step in world units (default: half the smallest spacing).
 //   --opacity-unit  world units RGBA opacities and unit-less transfer functions are per
 //                 (default: the smallest spacing).
+//   --clip PX,PY,PZ,NX,NY,NZ  a clipping plane through the point with the normal (world units):
+//                 only the normal's side is rendered (render::ClipPlane).
 // stdout: a one-line summary, or with --json one object: output, width, height, frames, step,
 // opacity_unit, prepare_ms, ms_per_frame (mean time of RayCaster::render), samples (per frame,
 // mean over frames).
@@ -55,6 +58,8 @@ struct RenderCommandOptions {
     std::array<float, 3> background{0.0f, 0.0f, 0.0f};
     bool mip = false;
     bool shading = false;
+    std::array<double, 6> clip{};
+    bool has_clip = false;
     std::string out;
     int orbit = 0;
 };
@@ -87,6 +92,10 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
     ro.mode = options.mip ? render::RayCastMode::mip : render::RayCastMode::composite;
     ro.shading = options.shading;
     ro.background = {options.background[0], options.background[1], options.background[2]};
+    if (options.has_clip) {
+        const auto& c = options.clip;
+        ro.clip = render::ClipPlane{{c[0], c[1], c[2]}, {c[3], c[4], c[5]}};
+    }
     const render::RayCaster caster(vol, is_rgba ? nullptr : &tf, ro);
 
     const AABBd box = vol.bounds();
@@ -187,6 +196,13 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_flag("--mip", options->mip, "Maximum intensity projection instead of compositing");
     cmd->add_flag("--shading", options->shading, "Gradient (headlight) shading");
+    cmd->add_option("--clip", options->clip,
+                    "Clipping plane through (PX,PY,PZ) with normal (NX,NY,NZ), world units: the "
+                    "normal's side is rendered")
+        ->type_name("PX,PY,PZ,NX,NY,NZ")
+        ->delimiter(',')
+        ->check(CLI::Range(-1e12, 1e12))
+        ->each([options](const std::string&) { options->has_clip = true; });
     cmd->add_option("-o,--output", options->out, "Output PNG (or MP4 with --orbit)")->required();
     cmd->add_option("--orbit", options->orbit, "Turntable of N frames around +z (MP4)")
         ->check(CLI::Range(1, 100000))

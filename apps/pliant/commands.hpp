@@ -32,5 +32,6 @@ void register_render(CLI::App& app, const GlobalOptions& global);
 void register_deform(CLI::App& app, const GlobalOptions& global);
 void register_dataset(CLI::App& app, const GlobalOptions& global);
 void register_nerf(CLI::App& app, const GlobalOptions& global);
+void register_view(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace pliant::cli

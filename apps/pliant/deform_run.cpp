@@ -8,14 +8,13 @@
 #include <optional>
 #include <span>
 
+#include "deformable_volume.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/io/png.hpp"
-#include "pliant/io/tetgen.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/render/raycast.hpp"
-#include "pliant/volume/resample.hpp"
 #include "progress_bar.hpp"
 #include "volume_view.hpp"
 
@@ -39,33 +38,13 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     io::check_volume_writable(options.out, source.type());  // fail before the run, not after
 
     // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.
-    std::optional<pbd::TetGrid> grid;
-    geometry::TetMesh mesh;
-    if (options.mesh.empty()) {
-        pbd::TetGridOptions grid_options = options.grid;
-        grid_options.tf = tf;
-        grid = pbd::build_tet_grid(source, grid_options);
-        if (grid->mesh.tets.empty()) {
-            throw InvalidInput(fmt::format(
-                "no visible voxel under the transfer function '{}', so no tet to deform (use "
-                "--full-box or another --tf)",
-                tf != nullptr ? tf->name : std::string("alpha > 0")));
-        }
-    } else {
-        mesh = io::read_tetgen(options.mesh);
-        if (mesh.tets.empty()) {
-            throw InvalidInput(options.mesh.string() + ": the mesh has no tets");
-        }
-    }
-    const geometry::TetMesh& rest = grid ? grid->mesh : mesh;
-    pbd::SoftBody body =
-        grid ? pbd::SoftBody(*grid, options.body) : pbd::SoftBody(mesh, options.body);
+    DeformableVolume deformable(source, tf, options.grid, options.mesh, options.body);
+    pbd::SoftBody& body = deformable.body();
+    const geometry::TetMesh& rest = deformable.rest();
+    const pbd::TetGrid* grid = deformable.grid();
     body.add_driver(options.driver);
     const double dt = 1.0 / options.fps;
-
-    const volume::Resampler resampler(source, rest.tets, rest.positions, {.tf = tf});
-    volume::Volume target =
-        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
+    volume::Volume target = deformable.target_like();
     std::optional<io::VideoWriter> video;
     if (!options.video.empty()) {
         video.emplace(options.video, options.size[0], options.size[1], options.fps);
@@ -96,7 +75,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         const bool last = frame == options.frames;
         if (video || last) {
             const Stopwatch clock;
-            resampled = resampler.resample(body.positions(), target);
+            resampled = deformable.resample(target);
             resample_ms.add(clock.elapsed_ms());
         }
         if (video || (last && !options.still.empty())) {

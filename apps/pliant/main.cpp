@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
     cli::register_deform(app, global);
     cli::register_dataset(app, global);
     cli::register_nerf(app, global);
+    cli::register_view(app, global);
 
     try {
         app.parse(argc, argv);

@@ -20,6 +20,13 @@ std::array<int, 2> parse_size(const std::string& text, const std::string& option
 render::Camera orbit_camera(const AABBd& box, double azimuth, double elevation, double distance,
                             int width, int height);
 
+// The same around any point: eye = target + distance · (cos el cos az, cos el sin az, sin el),
+// vertical field of view ORBIT_FOV_DEGREES, up hint +z (at elevation ±90° the horizontal
+// direction away from the azimuth). distance > 0.
+inline constexpr double ORBIT_FOV_DEGREES = 30.0;
+render::Camera orbit_camera_at(const Vec3d& target, double azimuth, double elevation,
+                               double distance, int width, int height);
+
 // `name_or_file`: a preset (volume::preset_names) computed for `volume`, else a transfer
 // function JSON file (io::read_transfer_function; IoError when missing or broken).
 volume::TransferFunction load_transfer_function(const std::string& name_or_file,

@@ -280,6 +280,64 @@ TEST(ClothSolver, MovingPinsFollowTheirMotion) {
     EXPECT_THROW(solver.add_moving_pins(out_of_range, motion), InvalidInput);
 }
 
+// A grabbed vertex follows the straight line to its target over one step and stays there; the
+// sheet follows it; releasing gives the vertex its mass back; grabbing a pinned vertex moves it
+// and leaves it pinned where it was left.
+TEST(ClothSolver, GrabMovesAVertexAndReleaseRestoresIt) {
+    const geometry::TriangleMeshD mesh = sheet(8, 1.0, 1.0);
+    ClothMaterial material;
+    material.damping = 2.0;
+    const std::vector<std::int32_t> pinned{80};  // the corner (+x, +y)
+    ClothSolver solver(mesh, material, pinned);
+    solver.set_gravity({0.0, 0.0, 0.0});
+    EXPECT_EQ(solver.grabbed_vertex(), -1);
+    const std::int32_t centre = 40;
+    const double mass_inverse = solver.inverse_masses()[40];
+    ASSERT_GT(mass_inverse, 0.0);
+    const Vec3d start = mesh.positions[40];
+    const Vec3d target = start + Vec3d{0.0, 0.0, 0.3};
+    solver.grab(centre, target);
+    EXPECT_EQ(solver.grabbed_vertex(), centre);
+    EXPECT_EQ(solver.inverse_masses()[40], 0.0);
+    solver.step(1.0 / 24.0, 10);
+    EXPECT_NEAR(norm(solver.positions()[40] - target), 0.0, 1e-12);
+    // The path's velocity: 0.3 m in 1/24 s.
+    EXPECT_NEAR(solver.velocities()[40].z, 0.3 * 24.0 * (1.0 - 2.0 / 240.0), 1e-9);
+    for (int f = 0; f < 12; ++f) {
+        solver.step(1.0 / 24.0, 10);
+    }
+    EXPECT_NEAR(norm(solver.positions()[40] - target), 0.0, 1e-12);
+    EXPECT_GT(solver.positions()[31].z, 1.05);  // a neighbour was pulled up
+    // Moving the target; then release.
+    const Vec3d second = target + Vec3d{0.1, 0.0, 0.0};
+    solver.grab(centre, second);
+    solver.step(1.0 / 24.0, 10);
+    EXPECT_NEAR(norm(solver.positions()[40] - second), 0.0, 1e-12);
+    solver.release_grab();
+    EXPECT_EQ(solver.grabbed_vertex(), -1);
+    EXPECT_EQ(solver.inverse_masses()[40], mass_inverse);
+    solver.step(1.0 / 24.0, 10);
+    EXPECT_GT(norm(solver.positions()[40] - second), 1e-4);  // free again: the sheet pulls it
+    solver.release_grab();                                   // no grab: no-op
+
+    // A pinned vertex: moved by the grab, pinned again where it was left.
+    const Vec3d moved = mesh.positions[80] + Vec3d{0.0, 0.2, 0.0};
+    solver.grab(80, moved);
+    solver.step(1.0 / 24.0, 10);
+    solver.grab(40, solver.positions()[40]);  // another vertex: releases 80
+    EXPECT_EQ(solver.inverse_masses()[80], 0.0);
+    solver.release_grab();
+    for (int f = 0; f < 5; ++f) {
+        solver.step(1.0 / 24.0, 10);
+    }
+    EXPECT_NEAR(norm(solver.positions()[80] - moved), 0.0, 1e-12);
+
+    EXPECT_THROW(solver.grab(81, target), InvalidInput);
+    EXPECT_THROW(solver.grab(-1, target), InvalidInput);
+    EXPECT_THROW(solver.grab(3, {0.0, std::numeric_limits<double>::quiet_NaN(), 0.0}),
+                 InvalidInput);
+}
+
 // A sheet resting on a box that slides sideways at 0.2 m/s is carried along by friction
 // (static friction holds: the box's acceleration is zero after the start), and left behind
 // without friction. Boxes that would rotate are refused.

@@ -122,5 +122,41 @@ TEST(NerfCli, ErrorsExitOneAndUsageErrorsTwo) {
     EXPECT_EQ(no_views.exit_code, 2);
 }
 
+TEST(NerfCli, MemoryLimitsRefuseBeforeTrainingAndWriteNothing) {
+    const ScratchDir scratch;
+    const auto volume = scratch / "ball.nrrd";
+    ASSERT_EQ(
+        run_cli("volume generate rgba-test " + quoted(volume) + " --dims 16", scratch).exit_code,
+        0);
+    const auto ds = scratch / "ds";
+    ASSERT_EQ(run_cli("dataset " + quoted(volume) + " --views 4 --size 16x16 --test-every 2 -o " +
+                          quoted(ds),
+                      scratch)
+                  .exit_code,
+              0);
+    const auto out = scratch / "v.nrrd";
+    const std::string train = "nerf train " + quoted(ds / "transforms_train.json") + " -o " +
+                              quoted(out) + " --iterations 5";
+    // The images: 2 views of 16 x 16 need 6 KiB decoded.
+    const CliResult images = run_cli(train + " --max-memory 0.001", scratch);
+    EXPECT_EQ(images.exit_code, 1);
+    EXPECT_NE(images.err.find("memory limit"), std::string::npos) << images.err;
+    // The grid: 1024^3 voxels of training state.
+    const CliResult grid = run_cli(train + " --resolution 1024", scratch);
+    EXPECT_EQ(grid.exit_code, 1);
+    EXPECT_NE(grid.err.find("1024 x 1024 x 1024"), std::string::npos) << grid.err;
+    // The exported volume: 2048^3 rgba32f is 128 GiB.
+    const CliResult exported = run_cli(train + " --export-resolution 2048 --type rgba32f", scratch);
+    EXPECT_EQ(exported.exit_code, 1);
+    EXPECT_NE(exported.err.find("--export-resolution"), std::string::npos) << exported.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    // eval refuses the volume the same way.
+    const CliResult eval = run_cli("nerf eval " + quoted(ds / "transforms_test.json") + " " +
+                                       quoted(volume) + " --max-memory 0.01",
+                                   scratch);
+    EXPECT_EQ(eval.exit_code, 1);
+    EXPECT_NE(eval.err.find("memory limit"), std::string::npos) << eval.err;
+}
+
 }  // namespace
 }  // namespace pliant::test

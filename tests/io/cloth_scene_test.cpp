@@ -68,7 +68,7 @@ TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     EXPECT_FALSE(scene.grid.has_value());
     EXPECT_EQ(scene.mesh, std::filesystem::path("/scenes/shirt.obj"));
     EXPECT_EQ(scene.frames, 72);
-    EXPECT_EQ(scene.substeps, 20);
+    EXPECT_EQ(scene.substeps, 40);
     EXPECT_DOUBLE_EQ(scene.gravity.z, -9.81);
     EXPECT_EQ(scene.frame_format, "obj");
     EXPECT_DOUBLE_EQ(scene.material.thickness, cloth::ClothMaterial{}.thickness);

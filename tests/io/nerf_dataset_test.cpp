@@ -171,6 +171,42 @@ TEST(NerfDataset, BrokenDatasetsGiveClearErrors) {
     EXPECT_THROW(read(), Unsupported);
 }
 
+TEST(NerfDataset, AbsurdSizesAreRefusedBeforeDecoding) {
+    const TempDir dir;
+    std::filesystem::create_directories(dir / "train");
+    write_rgba_png(dir / "train/r_0.png");
+    const auto json = dir / "t.json";
+    const auto with_size = [&](const std::string& w, const std::string& h) {
+        write_bytes(json, R"({"camera_angle_x": 0.7, "w": )" + w + R"(, "h": )" + h +
+                              R"(, "frames": [{"file_path": "./train/r_0", "transform_matrix": )" +
+                              std::string(IDENTITY) + "}]}");
+    };
+    const auto read = [&] {
+        return read_nerf_dataset(json);
+    };
+    // Sizes that are not whole pixel counts in [1, 65536] (1e30 would overflow an int).
+    for (const auto& [w, h] : {std::pair{"1e30", "3"}, std::pair{"-4", "3"}, std::pair{"4", "2.5"},
+                               std::pair{"4", "0"}, std::pair{"70000", "3"}}) {
+        with_size(w, h);
+        test::expect_io_error(read, {"t.json", "whole number of pixels"});
+    }
+    // A declared size the image does not have: refused from the image's header.
+    with_size("8", "3");
+    test::expect_io_error(read, {"frames[0]", "4 x 3", "expected 8 x 3"});
+    // More decoded pixels than the memory limit: refused before any image is decoded.
+    with_size("4", "3");
+    ReadNerfDatasetOptions options;
+    options.max_bytes = 12 * 4 * 3 - 1;
+    try {
+        read_nerf_dataset(json, options);
+        FAIL() << "expected InvalidInput";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("memory limit"), std::string::npos) << e.what();
+    }
+    options.max_bytes = 12 * 4 * 3;
+    EXPECT_EQ(read_nerf_dataset(json, options).views.size(), 1u);
+}
+
 TEST(NerfDataset, DerivesASceneBoxFromTheCameras) {
     // Four cameras on a circle of radius 4 around (1, 2, 3), looking at it.
     nerf::Dataset ds;

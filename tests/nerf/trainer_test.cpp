@@ -135,5 +135,26 @@ TEST(Trainer, RejectsBadOptions) {
     }
 }
 
+TEST(Trainer, RefusesAGridAboveTheMemoryLimitBeforeAllocating) {
+    const RadianceGrid truth = ball_field(8);
+    const Dataset ds = make_dataset(truth, 2, 8, 0.0);
+    TrainOptions o = tiny_options();
+    o.resolution = 1024;  // 1024^3 voxels: about 134 GiB of training state
+    o.max_bytes = std::size_t{1} << 30;
+    EXPECT_EQ(estimated_training_bytes(ds.box.value(), o),
+              TRAIN_BYTES_PER_VOXEL * std::size_t{1024} * 1024 * 1024);
+    try {
+        train(ds, o, [](const TrainProgress&) { return true; });
+        FAIL() << "expected InvalidInput";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("1024 x 1024 x 1024"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("memory limit"), std::string::npos) << e.what();
+    }
+    // Within the limit, the same resolution's smaller cousin trains.
+    o.resolution = 24;
+    o.iterations = 2;
+    EXPECT_EQ(train(ds, o, [](const TrainProgress&) { return true; }).iterations, 2);
+}
+
 }  // namespace
 }  // namespace pliant::nerf

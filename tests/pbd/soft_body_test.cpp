@@ -11,6 +11,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/volume/volume.hpp"
@@ -261,12 +262,12 @@ TEST(SoftBody, OneAndTwoThreadsAreBitwiseIdentical) {
 TEST(SoftBody, AVX2AndSSEKernelsAreBitwiseIdentical) {
     // The kernels are chosen at run time for speed only (projection_avx2.hpp): AVX2 runs and
     // indices, SSE, scalar. Without AVX2 on the machine both runs take the SSE kernels.
-    std::printf("AVX2: %s\n", detail::has_avx2() ? "yes" : "no");
+    std::printf("AVX2: %s\n", pliant::has_avx2() ? "yes" : "no");
     for (const bool use_grid : {true, false}) {
         const std::vector<Vec3f> avx2 = run_threads(2, use_grid);
-        detail::allow_avx2(false);
+        pliant::allow_avx2(false);
         const std::vector<Vec3f> sse = run_threads(2, use_grid);
-        detail::allow_avx2(true);
+        pliant::allow_avx2(true);
         ASSERT_EQ(avx2.size(), sse.size());
         std::size_t differing = 0;
         for (std::size_t i = 0; i < avx2.size(); ++i) {
@@ -417,6 +418,37 @@ TEST(SoftBody, DragBringsTheVertexToItsTargetAndReleases) {
         body.step(1.0 / FPS);
     }
     EXPECT_LT(mean_edge_strain(body), 1e-3);  // back to its rest shape, wherever it went
+}
+
+// set_stiffness: a body switched to k = 0.8 after some frames continues bitwise as one built
+// with k = 0.8 from the same state (positions and velocities carried over).
+TEST(SoftBody, SetStiffnessActsLikeBuildingWithIt) {
+    const TetGrid grid = box_grid(4);
+    SoftBody changed(grid, {.stiffness = 1.0});
+    changed.add_driver(TwistDriver{.axis = Axis::z, .angle = 60.0, .ramp_time = 0.5});
+    for (int f = 0; f < 6; ++f) {
+        changed.step(1.0 / FPS);
+    }
+    SoftBody built(grid, {.stiffness = 0.8});
+    built.add_driver(TwistDriver{.axis = Axis::z, .angle = 60.0, .ramp_time = 0.5});
+    for (int f = 0; f < 6; ++f) {
+        built.step(1.0 / FPS);  // the clock, and the driver's ramp, reach the same time
+    }
+    built.set_positions(changed.positions());
+    built.set_velocities(changed.velocities());
+    changed.set_stiffness(0.8);
+    EXPECT_EQ(changed.options().stiffness, 0.8);
+    for (int f = 0; f < 6; ++f) {
+        changed.step(1.0 / FPS);
+        built.step(1.0 / FPS);
+    }
+    ASSERT_EQ(changed.positions().size(), built.positions().size());
+    EXPECT_EQ(std::memcmp(changed.positions().data(), built.positions().data(),
+                          changed.positions().size() * sizeof(Vec3f)),
+              0);
+    EXPECT_THROW(changed.set_stiffness(0.0), InvalidInput);
+    EXPECT_THROW(changed.set_stiffness(1.5), InvalidInput);
+    EXPECT_EQ(changed.options().stiffness, 0.8);
 }
 
 template <typename F>

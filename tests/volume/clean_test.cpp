@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <random>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -112,6 +114,72 @@ TEST(Clean, BitwiseIdenticalForOneAndTwoThreads) {
     const Volume two = run(2);
     set_num_threads(0);
     EXPECT_EQ(std::memcmp(one.bytes().data(), two.bytes().data(), one.size_bytes()), 0);
+}
+
+// The threshold on a transfer function agrees with thresholding its classification value by
+// value: on random curves (rising, falling, flat and step segments), sampled densely, everywhere
+// except within rounding of a crossing.
+TEST(Clean, TransferFunctionThresholdMatchesThresholdingEveryValue) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int trial = 0; trial < 50; ++trial) {
+        TransferFunction tf;
+        tf.name = "random";
+        tf.color = {{0.0, {0.2f, 0.4f, 0.6f}}};
+        double value = -1.0;
+        for (int k = 0; k < 8; ++k) {
+            value += unit(rng) < 0.15 ? 0.0 : unit(rng);  // some steps (equal values)
+            tf.opacity.push_back({value, static_cast<float>(unit(rng) < 0.2 ? 0.0 : unit(rng))});
+        }
+        const double threshold = 255.0 * unit(rng);
+        const TransferFunction cut = threshold_alpha(tf, threshold);
+        ASSERT_NO_THROW(cut.validate());
+        EXPECT_EQ(cut.color.size(), tf.color.size());
+        const double t = threshold / 255.0;
+        int checked = 0;
+        for (int s = 0; s <= 4000; ++s) {
+            const double v = -1.5 + (value + 2.0) * s / 4000.0;
+            const float a = tf.evaluate(v)[3];
+            if (std::fabs(a - t) < 1e-5) {
+                continue;  // at a crossing
+            }
+            const float expected = 255.0 * a < threshold ? 0.0f : a;
+            ASSERT_NEAR(cut.evaluate(v)[3], expected, 1e-5f)
+                << "trial " << trial << " value " << v << " threshold " << threshold;
+            ++checked;
+        }
+        EXPECT_GT(checked, 3900);
+    }
+}
+
+TEST(Clean, TransferFunctionThresholdEdgeCases) {
+    TransferFunction tf;
+    tf.name = "ramp";
+    tf.color = {{0.0, {1.0f, 1.0f, 1.0f}}};
+    tf.opacity = {{0.0, 0.0f}, {100.0, 1.0f}};
+    // T = 0: unchanged.
+    const TransferFunction same = threshold_alpha(tf, 0.0);
+    ASSERT_EQ(same.opacity.size(), 2u);
+    EXPECT_EQ(same.opacity[1].alpha, 1.0f);
+    // T = 51 (t = 0.2): a ramp crossing at value 20, a step there.
+    const TransferFunction cut = threshold_alpha(tf, 51.0);
+    EXPECT_EQ(cut.evaluate(19.9)[3], 0.0f);
+    EXPECT_NEAR(cut.evaluate(20.0)[3], 0.2f, 1e-6f);
+    EXPECT_NEAR(cut.evaluate(60.0)[3], 0.6f, 1e-6f);
+    // T = 255: only full opacity stays.
+    const TransferFunction top = threshold_alpha(tf, 255.0);
+    EXPECT_EQ(top.evaluate(99.0)[3], 0.0f);
+    EXPECT_EQ(top.evaluate(100.0)[3], 1.0f);
+    EXPECT_THROW(threshold_alpha(tf, 256.0), InvalidInput);
+    try {
+        threshold_alpha(tf, -2.0);
+        ADD_FAILURE() << "no error";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("-2"), std::string::npos) << e.what();
+    }
+    TransferFunction broken = tf;
+    broken.opacity.clear();
+    EXPECT_THROW(threshold_alpha(broken, 10.0), InvalidInput);
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -11,8 +13,10 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/geometry/exact_predicates.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "pliant/volume/detail/resample_avx2.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/generate.hpp"
 
@@ -412,6 +416,142 @@ TEST(Resample, OneAndManyThreadsAreBitwiseIdenticalEvenWithFolds) {
     }
     set_num_threads(saved);
     EXPECT_GT(s1.num_inverted, 0);
+}
+
+TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
+    if (!pliant::has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    // f32 → f32 takes the AVX2 sampler; tets up to 8 voxels wide the AVX2 rows.
+    const Volume source = shepp_logan_3d({48, 44, 40});
+    const pbd::TetGrid g = full_grid(source, 4);
+    const Resampler resampler(source, g.mesh.tets, g.mesh.positions);
+    const Vec3d c = box_center(source);
+    const AABBd box = source.bounds();
+    const double a = 30.0 * std::numbers::pi / 180.0;
+    const double rot[3][3] = {
+        {std::cos(a), -std::sin(a), 0}, {std::sin(a), std::cos(a), 0}, {0, 0, 1}};
+    const double stretch[3][3] = {{2.5, 0, 0}, {0, 0.7, 0}, {0, 0, 1.2}};  // tets > 8 wide
+    std::vector<std::vector<Vec3f>> deformations = {
+        g.mesh.positions,                           // ties on faces, edges, vertices
+        transformed(g.mesh.positions, c, rot),      // faces parallel to the rows
+        transformed(g.mesh.positions, c, stretch),  // wide tets: both kernels in one run
+        transformed(g.mesh.positions, c, rot, (box.hi - box.lo) * 0.15)};  // partly outside
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> jitter(-2.0f, 2.0f);  // folds, inverted tets
+    deformations.push_back(transformed(g.mesh.positions, c, rot));
+    for (Vec3f& p : deformations.back()) {
+        p += Vec3f{jitter(rng), jitter(rng), jitter(rng)};
+    }
+    for (std::size_t d = 0; d < deformations.size(); ++d) {
+        Volume fast = like(source, VoxelType::f32);
+        Volume plain = like(source, VoxelType::f32);
+        std::vector<std::uint8_t> fast_counts(static_cast<std::size_t>(source.num_voxels()));
+        std::vector<std::uint8_t> plain_counts(fast_counts.size());
+        const ResampleStats s_fast = resampler.resample(deformations[d], fast);
+        resampler.count_coverage(deformations[d], source, fast_counts);
+        pliant::allow_avx2(false);
+        const ResampleStats s_plain = resampler.resample(deformations[d], plain);
+        resampler.count_coverage(deformations[d], source, plain_counts);
+        pliant::allow_avx2(true);
+        EXPECT_GT(s_fast.num_voxels_written, 0) << d;
+        EXPECT_EQ(s_fast.num_voxels_written, s_plain.num_voxels_written) << d;
+        EXPECT_EQ(s_fast.num_inverted, s_plain.num_inverted) << d;
+        EXPECT_EQ(std::memcmp(fast.bytes().data(), plain.bytes().data(), fast.size_bytes()), 0)
+            << "deformation " << d;
+        EXPECT_EQ(fast_counts, plain_counts) << "deformation " << d;
+    }
+}
+
+TEST(Resample, Avx2SetupOfFourTetsEqualsTheScalarSetup) {
+    if (!pliant::has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    const Volume target =
+        Volume::allocate({40, 36, 32}, VoxelType::f32, {0.5, 0.25, 1.0}, {-3.0, 1.0, 2.0});
+    const Volume source =
+        Volume::allocate({20, 24, 28}, VoxelType::f32, {1.0, 0.5, 0.75}, {-2.0, 0.5, 1.5});
+    const detail::GridFrame tf = detail::frame_of(target);
+    const detail::GridFrame sf = detail::frame_of(source);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> coord(-4.0f, 30.0f);
+    std::uniform_int_distribution<int> kind(0, 5);
+    int num_ok = 0;
+    int num_degenerate = 0;
+    int num_flat_layers = 0;
+    std::uniform_int_distribution<int> slot(0, 7);
+    for (int round = 0; round < 2000; ++round) {
+        // Lane l uses vertices 8l … 8l + 7 (random, possibly repeated, in random order).
+        std::vector<Vec3f> deformed(32);
+        std::vector<Vec3f> rest_positions(32);
+        for (std::size_t v = 0; v < deformed.size(); ++v) {
+            deformed[v] = {coord(rng), coord(rng), coord(rng)};
+            rest_positions[v] = {coord(rng), coord(rng), coord(rng)};
+        }
+        Vec3f p[4][4];
+        Vec3f r[4][4];
+        std::int32_t ids[4][4];
+        detail::RestInfo rest[4];
+        for (int l = 0; l < 4; ++l) {
+            const int k = kind(rng);
+            std::array<std::int32_t, 8> order{0, 1, 2, 3, 4, 5, 6, 7};
+            std::shuffle(order.begin(), order.end(), rng);
+            for (int v = 0; v < 4; ++v) {
+                ids[l][v] = 8 * l + order[static_cast<std::size_t>(v)];
+            }
+            if (k == 4) {  // a repeated vertex index (degenerate)
+                ids[l][3] = ids[l][slot(rng) % 3];
+            }
+            auto at = [&](int v) -> Vec3f& {
+                return deformed[static_cast<std::size_t>(ids[l][v])];
+            };
+            if (k == 0) {  // a face in a layer plane (a = b = 0), through layer centres
+                const float z = static_cast<float>(target.origin().z) + std::round(at(0).z) + 0.5f;
+                at(0).z = z;
+                at(1).z = z;
+                at(2).z = z;
+            } else if (k == 1) {  // a face parallel to the rows (a = 0)
+                at(1).x = at(0).x;
+                at(2).x = at(0).x;
+            } else if (k == 2) {  // degenerate: coplanar, or two vertices equal
+                at(3) = at((round & 1) == 0 ? 2 : 0);
+            } else if (k == 3) {  // vertices on the lattice of the target's voxel corners
+                for (int v = 0; v < 4; ++v) {
+                    at(v) = {std::round(at(v).x), std::round(at(v).y), std::round(at(v).z)};
+                }
+            }
+        }
+        for (int l = 0; l < 4; ++l) {
+            for (int v = 0; v < 4; ++v) {
+                p[l][v] = deformed[static_cast<std::size_t>(ids[l][v])];
+                r[l][v] = rest_positions[static_cast<std::size_t>(ids[l][v])];
+            }
+            rest[l] = detail::rest_info(r[l], sf);
+        }
+        detail::TetRaster fast[4]{};
+        const int ok = detail::setup_tets_avx2(deformed.data(), rest_positions.data(), ids, rest,
+                                               tf, sf, fast);
+        for (int l = 0; l < 4; ++l) {
+            detail::TetRaster plain{};
+            const bool is_ok = detail::setup_tet(p[l], ids[l], r[l], rest[l], tf, sf, plain);
+            ASSERT_EQ(((ok >> l) & 1) != 0, is_ok) << "round " << round << " lane " << l;
+            for (int a = 0; a < 3; ++a) {
+                ASSERT_EQ(fast[l].lo[a], plain.lo[a]);
+                ASSERT_EQ(fast[l].hi[a], plain.hi[a]);
+            }
+            if (!is_ok) {
+                ++num_degenerate;
+                continue;
+            }
+            ++num_ok;
+            num_flat_layers += plain.k_hi - plain.k_lo != plain.hi[2] - plain.lo[2] ? 1 : 0;
+            ASSERT_EQ(std::memcmp(&fast[l], &plain, sizeof(plain)), 0)
+                << "round " << round << " lane " << l;
+        }
+    }
+    EXPECT_GT(num_ok, 5000);
+    EXPECT_GT(num_degenerate, 100);
+    EXPECT_GT(num_flat_layers, 10);
 }
 
 TEST(Resample, EmptySourceGivesZerosAndSkipsEveryTet) {

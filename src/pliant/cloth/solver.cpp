@@ -255,6 +255,34 @@ void ClothSolver::set_velocities(std::span<const Vec3d> velocities) {
     m_velocities.assign(velocities.begin(), velocities.end());
 }
 
+void ClothSolver::grab(std::int32_t vertex, const Vec3d& target) {
+    if (vertex < 0 || static_cast<std::size_t>(vertex) >= m_positions.size()) {
+        throw InvalidInput(
+            fmt::format("cloth: grabbed vertex {} out of range, expected an index in [0, {})",
+                        vertex, m_positions.size()));
+    }
+    if (!is_finite(target)) {
+        throw InvalidInput(fmt::format("cloth: grab target ({}, {}, {}) is not finite", target.x,
+                                       target.y, target.z));
+    }
+    if (m_grab && m_grab->vertex != vertex) {
+        release_grab();
+    }
+    if (!m_grab) {
+        const auto v = static_cast<std::size_t>(vertex);
+        m_grab = Grab{vertex, m_positions[v], target, m_inverse_masses[v]};
+        m_inverse_masses[v] = 0.0;
+    }
+    m_grab->target = target;
+}
+
+void ClothSolver::release_grab() {
+    if (m_grab) {
+        m_inverse_masses[static_cast<std::size_t>(m_grab->vertex)] = m_grab->inverse_mass;
+        m_grab.reset();
+    }
+}
+
 void ClothSolver::set_air(const Air& air) {
     if (!(air.density >= 0.0) || !std::isfinite(air.density) || !(air.drag_coefficient >= 0.0) ||
         !std::isfinite(air.drag_coefficient) || !is_finite(air.wind) ||
@@ -287,6 +315,11 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     // close to the path its substeps took (a frame's is not: cloth that folds around something
     // within a frame crosses it on the straight line between the frame's ends), and a vertex put
     // back loses only that window's motion.
+    m_step_start = start_time;
+    m_step_dt = dt;
+    if (m_grab) {
+        m_grab->start = m_positions[static_cast<std::size_t>(m_grab->vertex)];
+    }
     for (int s = 0; s < substeps; ++s) {
         if (m_self_collision && s % GATHER_EVERY == 0) {
             m_window_start = m_positions;
@@ -332,6 +365,11 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
             m_positions[static_cast<std::size_t>(pins.vertices[static_cast<std::size_t>(k)])] =
                 pose.apply(pins.rest_positions[static_cast<std::size_t>(k)]);
         });
+    }
+    if (m_grab) {
+        const double f = std::min(1.0, (t_end - m_step_start) / m_step_dt);
+        m_positions[static_cast<std::size_t>(m_grab->vertex)] =
+            m_grab->start + (m_grab->target - m_grab->start) * f;
     }
     project_constraints(h);
     move_obstacles(t_end);

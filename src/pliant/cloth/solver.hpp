@@ -43,6 +43,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -101,6 +102,20 @@ public:
     // when it started without. Off by default.
     void enable_self_collision(bool enabled);
 
+    // Interactive dragging: `vertex` becomes kinematic (inverse mass 0) and, over the substeps of
+    // the next step, moves on the straight line from where it is to `target` (metres) with that
+    // path's velocity; it stays at the target in later steps until the target moves. Calling
+    // again with the same vertex moves the target; with another vertex releases the first. The
+    // grab overrides a pin's motion while it lasts, and the self-collision fail-safe may still
+    // put the vertex back like any other (the cloth stays intersection-free). InvalidInput:
+    // vertex out of range, target not finite.
+    void grab(std::int32_t vertex, const Vec3d& target);
+    // Ends the grab (no-op without one): the vertex gets its inverse mass back and keeps its
+    // velocity (a pinned vertex stays pinned where it was left; a moving pin resumes its motion).
+    void release_grab();
+    // The grabbed vertex, or -1.
+    std::int32_t grabbed_vertex() const { return m_grab ? m_grab->vertex : -1; }
+
     // Advances the cloth by dt seconds in `substeps` equal substeps (dt > 0, substeps >= 1; else
     // InvalidInput).
     ClothStepStats step(double dt, int substeps);
@@ -143,6 +158,16 @@ private:
         std::vector<Vec3d> rest_positions;
         Motion motion;
     };
+    struct Grab {
+        std::int32_t vertex = -1;
+        Vec3d start;                // where the current step's path starts
+        Vec3d target;               // where it ends
+        double inverse_mass = 0.0;  // the vertex's own, restored on release
+    };
+    std::optional<Grab> m_grab;
+    double m_step_start = 0.0;  // time and length of the step in progress (grab paths), s
+    double m_step_dt = 1.0;
+
     ClothMaterial m_material;
     Vec3d m_gravity{0.0, 0.0, -9.81};
     std::vector<geometry::Triangle> m_triangles;

@@ -125,6 +125,16 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
     // Image size: w, h, else the first image.
     nerf::Intrinsics& in_ = ds.intrinsics;
     if (j.contains("w") && j.contains("h")) {
+        constexpr double MAX_SIDE = 65536.0;
+        for (const char* key : {"w", "h"}) {
+            const double v = number(j, key, path);
+            if (!(v >= 1.0 && v <= MAX_SIDE) || v != std::floor(v)) {
+                throw IoError(
+                    fmt::format("{}: `{}` must be a whole number of pixels in [1, {}], "
+                                "got {}",
+                                path.string(), key, MAX_SIDE, j[key].dump()));
+            }
+        }
         in_.width = static_cast<int>(number(j, "w", path));
         in_.height = static_cast<int>(number(j, "h", path));
     } else {
@@ -185,6 +195,15 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
     }
 
     if (options.load_images) {
+        const double bytes = 12.0 * static_cast<double>(in_.width) *
+                             static_cast<double>(in_.height) * static_cast<double>(ds.views.size());
+        if (bytes > static_cast<double>(options.max_bytes)) {
+            throw InvalidInput(fmt::format(
+                "{}: {} images of {} x {} need {:.0f} MiB decoded (12 bytes per pixel), more than "
+                "the memory limit of {:.0f} MiB",
+                path.string(), ds.views.size(), in_.width, in_.height, bytes / 1048576.0,
+                options.max_bytes / 1048576.0));
+        }
         const render::Color bg = options.background;
         for (std::size_t i = 0; i < ds.views.size(); ++i) {
             const std::string file = images[i].string();
@@ -193,17 +212,23 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
                                           i, ds.views[i].name, file));
             }
             int w = 0, h = 0, n = 0;
+            const auto check = [&](bool decoded) {
+                if (!decoded) {
+                    throw IoError(fmt::format("{}: frames[{}]: {}: cannot decode the image ({})",
+                                              path.string(), i, file, stbi_failure_reason()));
+                }
+                if (w != in_.width || h != in_.height) {
+                    throw IoError(fmt::format(
+                        "{}: frames[{}]: {}: image is {} x {}, expected {} x {} like the dataset",
+                        path.string(), i, file, w, h, in_.width, in_.height));
+                }
+            };
+            // The size from the header first: an image that claims another size is refused
+            // before stb allocates for it.
+            check(stbi_info(file.c_str(), &w, &h, &n) != 0);
             const std::unique_ptr<unsigned char, void (*)(void*)> pixels(
                 stbi_load(file.c_str(), &w, &h, &n, 4), stbi_image_free);
-            if (!pixels) {
-                throw IoError(fmt::format("{}: frames[{}]: {}: cannot decode the image ({})",
-                                          path.string(), i, file, stbi_failure_reason()));
-            }
-            if (w != in_.width || h != in_.height) {
-                throw IoError(fmt::format(
-                    "{}: frames[{}]: {}: image is {} x {}, expected {} x {} like the dataset",
-                    path.string(), i, file, w, h, in_.width, in_.height));
-            }
+            check(pixels != nullptr);
             std::vector<float>& rgb = ds.views[i].rgb;
             rgb.resize(3 * static_cast<std::size_t>(w) * h);
             const unsigned char* p = pixels.get();

@@ -16,8 +16,10 @@
 //     or `offset` differ from 1 and 0: they would move the scene).
 // Errors: IoError "<json>: …" for a missing or unparsable file, missing keys, non-numeric or
 // wrongly shaped matrices, "frames[i]: …" for a missing or undecodable image ("<resolved path>:
-// no such file") or one whose size differs from w × h; InvalidInput (nerf::validate) for singular
-// matrices and non-positive intrinsics.
+// no such file") or one whose size differs from w × h (checked from the image's header, before it
+// is decoded), `w` / `h` outside [1, 65536]; InvalidInput (nerf::validate) for singular matrices
+// and non-positive intrinsics, and, before any image is decoded, when the decoded images (12
+// bytes per pixel) would need more than ReadNerfDatasetOptions::max_bytes.
 //
 // Write: write_transforms() writes `camera_angle_x`, `camera_angle_y`, `fl_x`, `fl_y`, `cx`, `cy`,
 // `w`, `h`, `aabb` (when given) and `frames` (`file_path` without extension, as the Blender
@@ -36,6 +38,7 @@ namespace pliant::io {
 struct ReadNerfDatasetOptions {
     render::Color background{0.0f, 0.0f, 0.0f};  // what transparent pixels are composited over
     bool load_images = true;  // false: intrinsics and poses only (views' rgb left empty)
+    std::size_t max_bytes = std::size_t{16} << 30;  // limit on the decoded images (bytes)
 };
 
 nerf::Dataset read_nerf_dataset(const std::filesystem::path& transforms_json,

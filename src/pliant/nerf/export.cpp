@@ -10,6 +10,22 @@
 
 namespace pliant::nerf {
 
+volume::Dims export_dims(const AABBd& box, int resolution) {
+    const Vec3d e = box.extent();
+    const double largest = std::max({e.x, e.y, e.z});
+    volume::Dims dims{};
+    for (int a = 0; a < 3; ++a) {
+        dims[a] = std::max<std::int64_t>(1, std::lround(resolution * e[a] / largest));
+    }
+    return dims;
+}
+
+std::size_t export_bytes(const AABBd& box, const ExportOptions& options) {
+    const volume::Dims d = export_dims(box, options.resolution);
+    return static_cast<std::size_t>(d[0]) * static_cast<std::size_t>(d[1]) *
+           static_cast<std::size_t>(d[2]) * volume::bytes_per_voxel(options.type);
+}
+
 volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& options) {
     if (options.resolution < 1 || options.resolution > 2048) {
         throw InvalidInput(
@@ -23,14 +39,13 @@ volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& opti
     }
     const AABBd& box = grid.box();
     const Vec3d e = box.extent();
-    const double largest = std::max({e.x, e.y, e.z});
-    volume::Dims dims{};
+    const volume::Dims dims = export_dims(box, options.resolution);
     Vec3d spacing;
     for (int a = 0; a < 3; ++a) {
-        dims[a] = std::max<std::int64_t>(1, std::lround(options.resolution * e[a] / largest));
         spacing[a] = e[a] / static_cast<double>(dims[a]);
     }
-    volume::Volume out = volume::Volume::allocate(dims, options.type, spacing, box.lo);
+    volume::Volume out =
+        volume::Volume::allocate(dims, options.type, spacing, box.lo, options.max_bytes);
     const double unit = std::min({spacing.x, spacing.y, spacing.z});
     // σ_world · u = softplus(s) · DENSITY_SCALE · u / scale.
     const double optical_per_softplus = detail::DENSITY_SCALE * unit / grid.scale();

@@ -23,9 +23,16 @@ namespace pliant::nerf {
 struct ExportOptions {
     int resolution = 256;                               // voxels along the longest side, [1, 2048]
     volume::VoxelType type = volume::VoxelType::rgba8;  // rgba8 or rgba32f
+    std::size_t max_bytes = volume::Volume::MAX_BYTES;  // memory limit of the exported volume
 };
 
-// InvalidInput for a resolution out of range or a scalar voxel type.
+// The exported volume's dims over `box` (see above) and its voxel bytes; for checking a run's
+// output before training. Precondition: a valid box and resolution.
+volume::Dims export_dims(const AABBd& box, int resolution);
+std::size_t export_bytes(const AABBd& box, const ExportOptions& options);
+
+// InvalidInput for a resolution out of range, a scalar voxel type or a volume larger than
+// options.max_bytes.
 volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& options = {});
 
 }  // namespace pliant::nerf

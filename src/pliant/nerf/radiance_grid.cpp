@@ -25,9 +25,7 @@ RadianceGrid::RadianceGrid(const AABBd& box, int resolution, float density_raw, 
             "nerf::RadianceGrid: resolution {}, expected a value in [2, 2048]", resolution));
     }
     m_scale = std::max({e.x, e.y, e.z});
-    for (int a = 0; a < 3; ++a) {
-        m_dims[a] = std::max(2, static_cast<int>(std::lround(resolution * e[a] / m_scale)));
-    }
+    m_dims = dims_for(box, resolution);
     const std::int64_t n = num_voxels();
     m_params.resize(static_cast<std::size_t>(4 * n));
     for (std::int64_t v = 0; v < n; ++v) {
@@ -37,6 +35,16 @@ RadianceGrid::RadianceGrid(const AABBd& box, int resolution, float density_raw, 
         m_params[4 * v + 3] = color_raw;
     }
     m_occupied.assign(static_cast<std::size_t>(n), 1);
+}
+
+std::array<int, 3> RadianceGrid::dims_for(const AABBd& box, int resolution) {
+    const Vec3d e = box.extent();
+    const double scale = std::max({e.x, e.y, e.z});
+    std::array<int, 3> dims{};
+    for (int a = 0; a < 3; ++a) {
+        dims[a] = std::max(2, static_cast<int>(std::lround(resolution * e[a] / scale)));
+    }
+    return dims;
 }
 
 detail::GridView RadianceGrid::view(bool with_occupancy) const {

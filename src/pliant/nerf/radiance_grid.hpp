@@ -30,6 +30,10 @@ public:
     // empty or non-finite box, a side of zero length, or resolution outside [2, 2048].
     RadianceGrid(const AABBd& box, int resolution, float density_raw, float color_raw);
 
+    // dims_a = max(2, round(resolution · extent_a / largest extent)). Precondition: the box and
+    // resolution are valid as the constructor requires.
+    static std::array<int, 3> dims_for(const AABBd& box, int resolution);
+
     const AABBd& box() const { return m_box; }
     int resolution() const { return m_resolution; }
     const std::array<int, 3>& dims() const { return m_dims; }

@@ -324,10 +324,26 @@ void TrainOptions::validate() const {
         fail("render.min_transmittance", render.min_transmittance, "[0, 1)");
 }
 
+std::size_t estimated_training_bytes(const AABBd& box, const TrainOptions& options) {
+    const std::array<int, 3> d = RadianceGrid::dims_for(box, options.resolution);
+    return TRAIN_BYTES_PER_VOXEL * static_cast<std::size_t>(d[0]) * static_cast<std::size_t>(d[1]) *
+           static_cast<std::size_t>(d[2]);
+}
+
 TrainResult train(const Dataset& dataset, const TrainOptions& options,
                   FunctionRef<bool(const TrainProgress&)> on_iteration) {
     options.validate();
     validate(dataset);
+    const AABBd box = scene_box(dataset);
+    const std::size_t bytes = estimated_training_bytes(box, options);
+    if (bytes > options.max_bytes) {
+        const std::array<int, 3> d = RadianceGrid::dims_for(box, options.resolution);
+        throw InvalidInput(fmt::format(
+            "nerf::train: resolution {} gives a {} x {} x {} grid whose training state needs "
+            "about {:.0f} MiB ({} bytes per voxel), more than the memory limit of {:.0f} MiB",
+            options.resolution, d[0], d[1], d[2], bytes / 1048576.0, TRAIN_BYTES_PER_VOXEL,
+            options.max_bytes / 1048576.0));
+    }
     Trainer trainer(dataset, options);
     const Stopwatch watch;
     TrainResult result;

@@ -24,8 +24,10 @@
 //     order. Results are bitwise identical for 1 and N threads (with a fixed iteration count;
 //     a time budget makes the schedule depend on the machine's speed).
 //
-// Memory: per voxel 16 bytes of parameters, 32 of Adam moments, 4 · 17 of chunk gradients and
-// flags, 2 of occupancy and marks: 118 bytes (128³: 236 MiB, 256³: 1.9 GiB), plus the images.
+// Memory: per voxel 16 bytes of parameters, 32 of Adam moments, 4 · 21 of chunk gradients, flags
+// and touched lists (at most), 2 of occupancy and marks: at most TRAIN_BYTES_PER_VOXEL = 134
+// bytes (128³: 268 MiB, 256³: 2.1 GiB), plus the images. train() refuses, before allocating, a
+// final grid that would need more than TrainOptions::max_bytes.
 // Progress: on_iteration is called after every iteration; returning false stops training (the
 // grid so far is returned). The kernels never print.
 #pragma once
@@ -57,6 +59,7 @@ struct TrainOptions {
     int warmup_iterations = 128;     // iterations (over all stages) before the first refresh
     FieldRenderOptions render;       // step and early termination while training
     std::uint64_t seed = 1;
+    std::size_t max_bytes = std::size_t{16} << 30;  // memory limit of the final grid (bytes)
 
     // InvalidInput naming the option and its value when one is out of range.
     void validate() const;
@@ -81,7 +84,14 @@ struct TrainResult {
     bool stopped = false;     // on_iteration returned false
 };
 
-// Trains a field on `dataset` (validated first; its scene box from nerf::scene_box).
+inline constexpr std::size_t TRAIN_BYTES_PER_VOXEL = 134;
+
+// The training state's bytes at the final resolution over `box` (TRAIN_BYTES_PER_VOXEL per
+// voxel of RadianceGrid::dims_for(box, options.resolution)).
+std::size_t estimated_training_bytes(const AABBd& box, const TrainOptions& options);
+
+// Trains a field on `dataset` (validated first; its scene box from nerf::scene_box). InvalidInput
+// when the final grid would need more than options.max_bytes.
 TrainResult train(const Dataset& dataset, const TrainOptions& options,
                   FunctionRef<bool(const TrainProgress&)> on_iteration);
 

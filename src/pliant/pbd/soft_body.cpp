@@ -7,6 +7,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
 #include "pliant/pbd/detail/projection.hpp"
@@ -565,6 +566,13 @@ void SoftBody::release_drag() {
     s.kinematics_dirty = true;
 }
 
+void SoftBody::set_stiffness(double stiffness) {
+    SoftBodyOptions options = m_options;
+    options.stiffness = stiffness;
+    validate_options(options);
+    m_options.stiffness = stiffness;
+}
+
 std::optional<DragDriver> SoftBody::drag() const {
     return m_state->drag;
 }
@@ -688,7 +696,7 @@ void SoftBody::step(double dt) {
     const auto volume_alpha = static_cast<float>(m_options.volume_compliance / (h * h));
     Float4* x = s.x.data();
     // The kernels give the same bits (projection_avx2.hpp): the choice is for speed only.
-    const bool use_avx2 = detail::has_avx2();
+    const bool use_avx2 = pliant::has_avx2();
     const float inv_h = 1.0f / hf;
     // Step 7's velocity of vertex v (not pinned) from its motion over the substep.
     const auto motion = [&](std::size_t v) {

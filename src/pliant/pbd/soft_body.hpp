@@ -119,6 +119,10 @@ public:
     void release_drag();
     std::optional<DragDriver> drag() const;
 
+    // Changes the PBD stiffness k ∈ (0, 1] (else InvalidInput) from the next step on, as if the
+    // body had been built with it (interactive stiffness controls; the state is kept).
+    void set_stiffness(double stiffness);
+
     // Pins vertices: inverse mass 0, never moved (InvalidInput when out of range).
     void pin(std::span<const std::int32_t> vertices);
     // Replaces the current positions / velocities (#V, finite; else InvalidInput); rest state

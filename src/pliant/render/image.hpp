@@ -6,8 +6,11 @@
 // Color: a linear colour with float components, nominally in [0, 1]; to_rgb8 clamps and rounds.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <span>
 #include <vector>
 
 namespace pliant::render {
@@ -81,5 +84,28 @@ struct Image {
     }
     friend bool operator==(const Image&, const Image&) = default;
 };
+
+// The images side by side, left to right, `gap` pixels of `fill` between them, top-aligned; the
+// result is as tall as the tallest and `fill` below the shorter ones. Precondition: every image
+// is_consistent(), gap ≥ 0.
+inline Image side_by_side(std::span<const Image> images, int gap = 0, Rgb8 fill = {}) {
+    int width = 0;
+    int height = 0;
+    for (const Image& image : images) {
+        width += image.width;
+        height = std::max(height, image.height);
+    }
+    width += images.empty() ? 0 : gap * static_cast<int>(images.size() - 1);
+    Image out(width, height, fill);
+    int x0 = 0;
+    for (const Image& image : images) {
+        for (int y = 0; image.width > 0 && y < image.height; ++y) {
+            std::memcpy(&out.pixels[out.offset(x0, y)], &image.pixels[image.offset(0, y)],
+                        3 * static_cast<std::size_t>(image.width));
+        }
+        x0 += image.width + gap;
+    }
+    return out;
+}
 
 }  // namespace pliant::render

@@ -9,6 +9,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/geometry/normals.hpp"
 #include "pliant/geometry/validate.hpp"
 
 namespace pliant::render {
@@ -225,11 +226,6 @@ void validate_options(const RasterOptions& o) {
     }
 }
 
-Vec3f normalized_or(Vec3d v, Vec3f fallback) {
-    const double n = norm(v);
-    return n > 0.0 ? vec3_cast<float>(v / n) : fallback;
-}
-
 }  // namespace
 
 MeshRasterizer::Source MeshRasterizer::source_of(std::uint32_t drawn) const {
@@ -299,20 +295,7 @@ void MeshRasterizer::render(const Camera& camera, std::span<const RenderMesh> me
         std::vector<Vec3f>& normals = m_normals[m];
         normals.clear();
         if (meshes[m].smooth) {
-            std::vector<Vec3d> sums(positions.size(), Vec3d{});
-            for (const geometry::Triangle& t : tris) {
-                const Vec3d a = positions[static_cast<std::size_t>(t[0])];
-                const Vec3d n = cross(positions[static_cast<std::size_t>(t[1])] - a,
-                                      positions[static_cast<std::size_t>(t[2])] - a);
-                for (int k = 0; k < 3; ++k) {
-                    sums[static_cast<std::size_t>(t[k])] += n;
-                }
-            }
-            normals.resize(positions.size());
-            parallel_for(static_cast<std::int64_t>(positions.size()), [&](std::int64_t v) {
-                normals[static_cast<std::size_t>(v)] =
-                    normalized_or(sums[static_cast<std::size_t>(v)], Vec3f{0.0f, 0.0f, 0.0f});
-            });
+            geometry::vertex_normals(positions, tris, normals, m_normal_sums);
         }
 
         // Step 3a: vertices to screen space (by index).

@@ -110,6 +110,7 @@ private:
     std::vector<float> m_sample_depth;
     std::vector<std::uint32_t> m_sample_id;
     std::vector<std::vector<Vec3f>> m_normals;  // per mesh, per vertex
+    std::vector<Vec3d> m_normal_sums;           // scratch of geometry::vertex_normals
     std::vector<detail::ScreenVertex> m_vertices;
     ChunkedBuffer<detail::RasterTriangle> m_chunk_triangles;
     std::vector<detail::RasterTriangle> m_mesh_triangles;

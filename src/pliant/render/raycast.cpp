@@ -39,6 +39,14 @@ void check_options(const RayCastOptions& o) {
         throw InvalidInput(fmt::format("raycast: options.early_termination ({}) must be in (0, 1]",
                                        o.early_termination));
     }
+    if (o.clip && (!is_finite(o.clip->point) || !is_finite(o.clip->normal) ||
+                   !(norm(o.clip->normal) > 0.0))) {
+        const ClipPlane& c = *o.clip;
+        throw InvalidInput(fmt::format(
+            "raycast: options.clip: point ({}, {}, {}) must be finite and normal ({}, {}, {}) "
+            "finite and nonzero",
+            c.point.x, c.point.y, c.point.z, c.normal.x, c.normal.y, c.normal.z));
+    }
     const Color& b = o.background;
     for (const float v : {b.r, b.g, b.b}) {
         if (!(v >= 0.0f && v <= 1.0f)) {
@@ -244,6 +252,13 @@ RayCaster::RayCaster(const volume::Volume& vol, const volume::TransferFunction* 
     m_prepare_ms = watch.elapsed_ms();
 }
 
+void RayCaster::set_clip(const std::optional<ClipPlane>& clip) {
+    RayCastOptions options = m_options;
+    options.clip = clip;
+    check_options(options);
+    m_options.clip = clip;
+}
+
 std::int64_t RayCaster::num_cells() const {
     return static_cast<std::int64_t>(m_cells[0]) * m_cells[1] * m_cells[2];
 }
@@ -301,6 +316,13 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     k.skipping = m_options.empty_space_skipping;
     k.background = m_options.background;
     k.grid_offset = {-0.5f, -0.5f, -0.5f};
+    if (m_options.clip) {
+        // In the kernel's frame (world relative to the volume's origin), unit normal.
+        const Vec3d n = m_options.clip->normal / norm(m_options.clip->normal);
+        k.has_clip = true;
+        k.clip_normal = vec3_cast<float>(n);
+        k.clip_offset = static_cast<float>(dot(n, m_options.clip->point - m_origin));
+    }
 
     image = Image(k.width, k.height);
     const int tiles_x = (k.width + detail::TILE - 1) / detail::TILE;

@@ -49,6 +49,11 @@
 //      voxels), and a sample in an empty sub-cell is skipped alone. The occupancy test of a sample
 //      uses the same integer corner its interpolation reads, and skipped samples contribute
 //      nothing, so images are identical with or without skipping.
+//   Clipping plane (optional): the half-space (p − point) · normal ≥ 0 is kept: step 1 also cuts
+//   the ray to it (t ≥ or ≤ the plane's crossing; a ray parallel to the plane is kept whole or
+//   missed), so the chord of step 2 is the kept part and a uniform medium renders
+//   c · (1 − (1 − a)^(L / u)) with L the clipped chord. Skipping and shading are unchanged
+//   (gradients still read the voxels beyond the plane).
 //   Shading (optional): the colour of a sample is scaled by 0.3 + 0.7 |n · d|, n the normalized
 //   gradient (central differences of trilinear samples one voxel apart, of the scalar value, or of
 //   α for RGBA volumes; world-space through the spacing), d the ray direction (a headlight);
@@ -70,6 +75,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "pliant/render/camera.hpp"
@@ -80,6 +86,12 @@
 namespace pliant::render {
 
 enum class RayCastMode { composite, mip };
+
+// Keeps the half-space (p − point) · normal ≥ 0 (world units); the other side is cut away.
+struct ClipPlane {
+    Vec3d point{0.0, 0.0, 0.0};
+    Vec3d normal{0.0, 0.0, 1.0};  // need not be unit; finite and nonzero
+};
 
 struct RayCastOptions {
     // Distance between samples along a ray, world units (> 0), or 0: half the volume's smallest
@@ -95,6 +107,7 @@ struct RayCastOptions {
     bool shading = false;  // gradient (headlight) shading; composite mode only
     Color background{0.0f, 0.0f, 0.0f};
     bool empty_space_skipping = true;  // off: every sample evaluated (for tests and benchmarks)
+    std::optional<ClipPlane> clip;     // none: the whole volume
 };
 
 struct RayCastStats {
@@ -115,6 +128,9 @@ public:
     RayCaster(const volume::Volume& volume, const volume::TransferFunction* tf,
               const RayCastOptions& options = {});
     RayCastStats render(const Camera& camera, Image& image) const;
+    // Changes the clipping plane of later renders (none: the whole volume) without preparing the
+    // volume again; InvalidInput as in the constructor. Not to be called during a render.
+    void set_clip(const std::optional<ClipPlane>& clip);
 
     double step() const { return m_step; }                  // world units
     double opacity_unit() const { return m_opacity_unit; }  // world units

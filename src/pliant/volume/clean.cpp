@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -163,6 +164,46 @@ void clean(Volume& volume, const CleanOptions& options) {
             normalize_alpha_range(volume, options.threshold_255);
             break;
     }
+}
+
+TransferFunction threshold_alpha(const TransferFunction& tf, double threshold_255) {
+    check_threshold(threshold_255, "threshold_alpha");
+    tf.validate();
+    TransferFunction out = tf;
+    if (threshold_255 == 0.0) {
+        return out;
+    }
+    const auto below = [threshold_255](double alpha) {
+        return 255.0 * alpha < threshold_255;
+    };
+    const double t = threshold_255 / 255.0;
+    const std::vector<OpacityPoint>& in = tf.opacity;
+    out.opacity.clear();
+    for (std::size_t i = 0; i < in.size(); ++i) {
+        const OpacityPoint& p = in[i];
+        out.opacity.push_back({p.value, below(p.alpha) ? 0.0f : p.alpha});
+        if (i + 1 == in.size() || !(in[i + 1].value > p.value)) {
+            continue;  // the last point, or a step: nothing lies between the two points
+        }
+        const OpacityPoint& q = in[i + 1];
+        const bool p_below = below(p.alpha);
+        if (p_below == below(q.alpha)) {
+            continue;  // the segment does not cross the threshold
+        }
+        // The crossing α = t, clamped into the segment against rounding.
+        const double f = (t - static_cast<double>(p.alpha)) /
+                         (static_cast<double>(q.alpha) - static_cast<double>(p.alpha));
+        const double v = std::clamp(p.value + f * (q.value - p.value), p.value, q.value);
+        const auto at = static_cast<float>(t);
+        if (p_below) {  // rising: 0 up to the crossing, then the curve
+            out.opacity.push_back({v, 0.0f});
+            out.opacity.push_back({v, at});
+        } else {  // falling: the curve down to the crossing, then 0
+            out.opacity.push_back({v, at});
+            out.opacity.push_back({v, 0.0f});
+        }
+    }
+    return out;
 }
 
 }  // namespace pliant::volume

@@ -23,6 +23,7 @@
 // message names the argument and the value). NaN opacities (rgba32f) are left as they are.
 #pragma once
 
+#include "pliant/volume/transfer_function.hpp"
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::volume {
@@ -48,5 +49,15 @@ struct CleanOptions {
 
 // Threshold, then the chosen normalization.
 void clean(Volume& volume, const CleanOptions& options);
+
+// The same threshold on a scalar volume's classification, for volumes that are shown through a
+// transfer function rather than stored as RGBA: the transfer function whose opacity is
+//   α'(v) = 0 where 255 · α(v) < threshold_255, else α(v),
+// colours unchanged. Exact as a piecewise-linear function: where the opacity curve crosses
+// t = threshold_255 / 255 inside a segment, a step point pair is inserted at the crossing
+// (value rounded to double; at the crossing value of a falling segment itself α' is 0 rather
+// than t, as a step takes the last of its points). threshold_255 = 0 returns tf unchanged.
+// Validates tf; InvalidInput for a T outside [0, 255].
+TransferFunction threshold_alpha(const TransferFunction& tf, double threshold_255);
 
 }  // namespace pliant::volume

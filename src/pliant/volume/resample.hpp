@@ -21,9 +21,16 @@
 // the row from below or above: root = β·(−1/a), routed to the lower or upper bound by min/max,
 // no branch), and only the voxels of that interval are sampled; the bounding box is never tested
 // voxel by voxel. Centres within 1e-6 voxel of a root are decided by the per-voxel tie rule
-// itself, so the interval is exactly the set the brute force accepts. With cells of a few
-// voxels a row holds ~1.3 voxels, so the spans of a tet are first collected into a batch
-// (rows written branch-free, 4 entries at a time) and then sampled in one loop.
+// itself, so the interval is exactly the set the brute force accepts. A face parallel to the rows
+// (a = 0) accepts whole rows: it narrows the rows of a layer, or (b = 0 too) the tet's layers,
+// exactly. With cells of a few voxels a row holds ~1.3 voxels, so the voxels of a slab's tets are
+// collected, in order, into a batch of per-voxel source coordinates and target indices (rows
+// written branch-free, 4 entries at a time) and sampled in one loop when it is full.
+//
+// SIMD: with AVX2 (chosen at run time, detail/resample_avx2.hpp) 4 tets are set up at once, the
+// rows of a tet are spanned 4 at a time and f32 sources are sampled 4 voxels at a time; each lane
+// does the scalar kernel's operations in the same order (no FMA), so the output is bitwise the
+// same on every CPU.
 //
 // Tie rule (which tet owns a voxel centre on a shared face, edge or vertex): a face's plane
 // function h(x) is computed from the face's three vertices sorted by vertex index, identically

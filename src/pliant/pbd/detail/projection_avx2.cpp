@@ -1,32 +1,14 @@
 #include "pliant/pbd/detail/projection_avx2.hpp"
 
-#include <atomic>
+#include "pliant/core/simd_dispatch.hpp"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if defined(PLIANT_HAS_AVX2_TARGET)
 #include <immintrin.h>
-#define PLIANT_PBD_AVX2 1
-// "avx2" only, not "fma": the compiler must not contract a · b + c, which would round differently
-// from the SSE and scalar kernels.
-#define PLIANT_AVX2_FN __attribute__((target("avx2")))
-#define PLIANT_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
 #endif
 
 namespace pliant::pbd::detail {
 
-namespace {
-std::atomic<bool> g_avx2_allowed{true};
-}  // namespace
-
-void allow_avx2(bool allowed) {
-    g_avx2_allowed.store(allowed, std::memory_order_relaxed);
-}
-
-#if defined(PLIANT_PBD_AVX2)
-
-bool has_avx2() {
-    static const bool cpu_has = __builtin_cpu_supports("avx2") != 0;
-    return cpu_has && g_avx2_allowed.load(std::memory_order_relaxed);
-}
+#if defined(PLIANT_HAS_AVX2_TARGET)
 
 namespace {
 
@@ -266,10 +248,6 @@ PLIANT_AVX2_FN std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
 }
 
 #else  // no AVX2 on this target
-
-bool has_avx2() {
-    return false;
-}
 std::int64_t project_edges_avx2(Float4*, const std::array<std::int32_t, 2>*, const float*,
                                 std::int64_t, float, float) {
     return 0;

@@ -1,8 +1,9 @@
 // AVX2 versions of the SSE kernels of projection.hpp: 8 constraints of one colour at a time (their
 // vertices distinct), compiled for AVX2 with a function attribute and chosen at run time
-// (has_avx2()). The arithmetic is that of project_edge / project_tet lane by lane, in the same
-// order and without FMA contraction: results are bitwise those of the SSE and scalar kernels, so
-// the choice of kernel never changes a result (on any machine, for any number of threads).
+// (pliant::has_avx2(), core/simd_dispatch.hpp). The arithmetic is that of project_edge /
+// project_tet lane by lane, in the same order and without FMA contraction: results are bitwise
+// those of the SSE and scalar kernels, so the choice of kernel never changes a result (on any
+// machine, for any number of threads).
 #pragma once
 
 #include <array>
@@ -12,12 +13,6 @@
 #include "pliant/pbd/detail/projection.hpp"
 
 namespace pliant::pbd::detail {
-
-// Whether the CPU runs AVX2 and the AVX2 kernels are allowed (allow_avx2).
-bool has_avx2();
-// Tests compare the kernels: false makes has_avx2() false until called with true. Not to be
-// called while a step runs.
-void allow_avx2(bool allowed);
 
 // Edges e[0 .. count) of one colour, `rest_lengths` parallel to them; projects the first
 // count − count mod 8 and returns that number (the caller projects the rest).

@@ -74,6 +74,10 @@ struct RayCastKernel {
     bool shading = false;
     bool skipping = true;
     Color background;
+    // Clipping plane in the kernel's frame: kept where dot(clip_normal, p) ≥ clip_offset.
+    bool has_clip = false;
+    Vec3f clip_normal;
+    float clip_offset = 0.0f;
 };
 static_assert(std::is_trivially_copyable_v<RayCastKernel>);
 
@@ -268,6 +272,18 @@ PLIANT_HOST_DEVICE inline bool clip_ray(const RayCastKernel& k, Vec3f origin, Ve
         }
         r.t_near = std::max(r.t_near, t0);
         r.t_far = std::min(r.t_far, t1);
+    }
+    if (k.has_clip) {
+        // a + t·s ≥ 0 along the ray: a lower bound on t when s > 0, an upper bound when s < 0.
+        const float a = dot(k.clip_normal, origin) - k.clip_offset;
+        const float s = dot(k.clip_normal, dir);
+        if (s > 0.0f) {
+            r.t_near = std::max(r.t_near, -a / s);
+        } else if (s < 0.0f) {
+            r.t_far = std::min(r.t_far, -a / s);
+        } else if (a < 0.0f) {
+            return false;
+        }
     }
     if (!(r.t_near < r.t_far)) {
         return false;

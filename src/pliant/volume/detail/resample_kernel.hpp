@@ -40,7 +40,8 @@ inline GridFrame frame_of(const Volume& v) {
 // One deformed tet prepared for rasterization into a target grid (index space (i, j, k)).
 struct TetRaster {
     // Inward face planes: h_f(i, j, k) = plane[f][0]·i + (plane[f][1]·j + (plane[f][2]·k +
-    // plane[f][3])), evaluated in exactly this order everywhere (inside()).
+    // plane[f][3])), evaluated in exactly this order everywhere (inside()). Face f is opposite
+    // the tet's f-th vertex in vertex-index order (no consumer depends on the order of faces).
     double plane[4][4];
     // Tie rule: a centre with h_f = 0 is inside face f when the inward normal is
     // lexicographically positive.
@@ -51,19 +52,27 @@ struct TetRaster {
     std::int64_t hi[3];
     // Row spans (row_span_fast()): per face, −1/plane[f][0], and the bounds that route its root
     // to the lower (a > 0: cap = +∞, floor = +∞) or the upper end (a < 0: cap = −∞,
-    // floor = −∞) of the span without a branch. is_fast: every −1/a is finite and non-zero
-    // (else row_span() handles the tet).
+    // floor = −∞) of the span without a branch. A face parallel to the rows (a = 0, "flat")
+    // accepts a whole row or none of it: it restricts the rows of a layer (flat_rows()), or,
+    // parallel to the layers too (a = b = 0), the layers [k_lo, k_hi]; in the span it is
+    // neutral (−1/a stored as 0, cap = −∞, floor = +∞). is_fast: every other face's −1/a is
+    // finite and non-zero (else row_span() handles the tet).
     double neg_inv_a[4];
     double root_cap[4];
     double root_floor[4];
     bool is_fast;
+    std::uint8_t flat_faces;  // bit f: plane[f][0] == 0 and plane[f][1] != 0
+    // The layers holding centres: [lo[2], hi[2]] narrowed by the faces with a = b = 0.
+    std::int64_t k_lo;
+    std::int64_t k_hi;
     // Cross-sections (slice_rows()): per edge, its z range in index space (empty for an edge
-    // parallel to the layers), an end (y0, z0) and dy/dz.
-    double edge_z_lo[6];
-    double edge_z_hi[6];
-    double edge_y0[6];
-    double edge_z0[6];
-    double edge_slope[6];
+    // parallel to the layers), an end (y0, z0) and dy/dz. Entries 6 and 7 pad the arrays for
+    // SIMD (empty ranges, never crossed).
+    double edge_z_lo[8];
+    double edge_z_hi[8];
+    double edge_y0[8];
+    double edge_z0[8];
+    double edge_slope[8];
     // Affine map from target voxel indices to source grid coordinates (voxel centres at integers):
     // g_a = ((map[a][3] + map[a][2]·k) + map[a][1]·j) + map[a][0]·i, in this order (map_coord()).
     double map[3][4];
@@ -110,6 +119,59 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void tet_axis_range(const Vec3f p[4], con
     const double mx =
         std::max(std::max<double>(p[0][a], p[1][a]), std::max<double>(p[2][a], p[3][a]));
     axis_range(index_coord(mn, g, a), index_coord(mx, g, a), g, a, lo, hi);
+}
+
+// The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool face_accepts(double a, double beta, bool tie,
+                                                         std::int64_t i) {
+    const double h = a * static_cast<double>(i) + beta;
+    return h > 0.0 || (h == 0.0 && tie);
+}
+
+// Narrows [lo, end) to the integers x with accepts(x), where accepts is monotone: true on a
+// suffix (is_increasing) or a prefix. guess approximates the boundary (any value, NaN too); the
+// exact test corrects it, stepping from the guess.
+template <typename Accepts>
+PLIANT_HOST_DEVICE inline void narrow_monotone(std::int64_t& lo, std::int64_t& end,
+                                               bool is_increasing, double guess,
+                                               Accepts&& accepts) {
+    if (lo >= end) {
+        return;
+    }
+    const double r = guess == guess ? std::clamp(guess, static_cast<double>(lo) - 1.0,
+                                                 static_cast<double>(end) + 1.0)
+                                    : static_cast<double>(lo);
+    if (is_increasing) {
+        std::int64_t c = std::clamp(ceil_to_int(r), lo, end);
+        while (c > lo && accepts(c - 1)) {
+            --c;
+        }
+        while (c < end && !accepts(c)) {
+            ++c;
+        }
+        lo = c;
+    } else {
+        std::int64_t c = std::clamp(floor_to_int(r) + 1, lo, end);
+        while (c < end && accepts(c)) {
+            ++c;
+        }
+        while (c > lo && !accepts(c - 1)) {
+            --c;
+        }
+        end = c;
+    }
+}
+
+// Narrows [t.k_lo, t.k_hi] to the layers face q accepts, for a face with a = b = 0: on it
+// h = ±0 + (±0 + γ(k)), γ = c·k + d as face_beta computes it, monotone in k.
+PLIANT_HOST_DEVICE inline void narrow_flat_layers(TetRaster& t, int q) {
+    const double* plane = t.plane[q];
+    const bool tie = t.tie_inside[q];
+    std::int64_t k_end = t.k_hi + 1;
+    narrow_monotone(t.k_lo, k_end, plane[2] > 0.0, -plane[3] / plane[2], [&](std::int64_t k) {
+        return face_accepts(0.0, plane[2] * static_cast<double>(k) + plane[3], tie, 0);
+    });
+    t.k_hi = k_end - 1;
 }
 
 // What setup_tet needs of the rest tet, which does not change between frames (the Resampler
@@ -163,8 +225,13 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
             vertex[v][a] = index_coord(pd[v][a], target, a);
         }
     }
+    // The box: index_coord is monotone, so this is tet_axis_range() (which bin_tets uses).
     for (int a = 0; a < 3; ++a) {
-        tet_axis_range(p, target, a, out.lo[a], out.hi[a]);
+        const double mn =
+            std::min(std::min(vertex[0][a], vertex[1][a]), std::min(vertex[2][a], vertex[3][a]));
+        const double mx =
+            std::max(std::max(vertex[0][a], vertex[1][a]), std::max(vertex[2][a], vertex[3][a]));
+        axis_range(mn, mx, target, a, out.lo[a], out.hi[a]);
     }
 
     // λ = T⁻¹(x − d), T = [a − d, b − d, c − d]: the rows of T⁻¹ are the cross products of T's
@@ -181,66 +248,74 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
     out.is_inverted = (det > 0.0 && rest.orientation < 0) || (det < 0.0 && rest.orientation > 0);
     out.is_interior = rest.is_interior;
 
-    // Faces: face q is opposite vertex q. Its plane function is computed from its vertices sorted
-    // by vertex index, so the two tets sharing the face compute the same numbers; the sign σ that
-    // makes the opposite vertex positive is applied last (exact).
+    // Faces: face m is opposite the m-th vertex in vertex-index order. Its plane function is
+    // computed from its vertices in that order, so the two tets sharing the face compute the same
+    // numbers; the sign σ that makes the opposite vertex positive is applied last (exact).
     const Vec3d c0{target.origin[0] + 0.5 * target.spacing[0],
                    target.origin[1] + 0.5 * target.spacing[1],
                    target.origin[2] + 0.5 * target.spacing[2]};
-    // The four local vertices sorted by vertex index (a sorting network with conditional moves,
-    // not branches: the order is data); face q's vertices in canonical order are this order
-    // without q.
-    int order[4] = {0, 1, 2, 3};
+    // The four vertices sorted by vertex index (a sorting network; the order is data).
+    Vec3d sorted[4] = {pd[0], pd[1], pd[2], pd[3]};
+    std::int32_t sorted_ids[4] = {ids[0], ids[1], ids[2], ids[3]};
     auto sort2 = [&](int x, int y) {
-        const int ox = order[x];
-        const int oy = order[y];
-        const bool swap = ids[oy] < ids[ox];
-        order[x] = swap ? oy : ox;
-        order[y] = swap ? ox : oy;
+        const bool swap = sorted_ids[y] < sorted_ids[x];
+        const Vec3d vx = sorted[x];
+        const Vec3d vy = sorted[y];
+        const std::int32_t ix = sorted_ids[x];
+        const std::int32_t iy = sorted_ids[y];
+        sorted[x] = swap ? vy : vx;
+        sorted[y] = swap ? vx : vy;
+        sorted_ids[x] = swap ? iy : ix;
+        sorted_ids[y] = swap ? ix : iy;
     };
     sort2(0, 1);
     sort2(2, 3);
     sort2(0, 2);
     sort2(1, 3);
     sort2(1, 2);
-    int position[4];
-    for (int v = 0; v < 4; ++v) {
-        position[order[v]] = v;
-    }
     constexpr int OTHERS[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
     double side_of[4];
-    for (int q = 0; q < 4; ++q) {
-        const int* others = OTHERS[position[q]];
-        const Vec3d& u = pd[order[others[0]]];
-        const Vec3d n = cross(pd[order[others[1]]] - u, pd[order[others[2]]] - u);
-        const double side = dot(n, pd[q] - u);
-        side_of[q] = side;
+    for (int m = 0; m < 4; ++m) {
+        const int* others = OTHERS[m];
+        const Vec3d& u = sorted[others[0]];
+        const Vec3d n = cross(sorted[others[1]] - u, sorted[others[2]] - u);
+        const double side = dot(n, sorted[m] - u);
+        side_of[m] = side;
         const double sigma = side > 0.0 ? 1.0 : -1.0;
         const Vec3d c = c0 - u;
         const double delta = n.x * c.x + n.y * c.y + n.z * c.z;
-        out.plane[q][0] = sigma * (n.x * target.spacing[0]);
-        out.plane[q][1] = sigma * (n.y * target.spacing[1]);
-        out.plane[q][2] = sigma * (n.z * target.spacing[2]);
-        out.plane[q][3] = sigma * delta;
+        out.plane[m][0] = sigma * (n.x * target.spacing[0]);
+        out.plane[m][1] = sigma * (n.y * target.spacing[1]);
+        out.plane[m][2] = sigma * (n.z * target.spacing[2]);
+        out.plane[m][3] = sigma * delta;
         const Vec3d inward = n * sigma;
-        out.tie_inside[q] =
+        out.tie_inside[m] =
             inward.x != 0.0 ? inward.x > 0.0 : (inward.y != 0.0 ? inward.y > 0.0 : inward.z > 0.0);
     }
     if (!(side_of[0] != 0.0 && side_of[1] != 0.0 && side_of[2] != 0.0 && side_of[3] != 0.0)) {
         return false;
     }
 
-    // Row spans: the root of face q along a row is β·(−1/a).
+    // Row spans: the root of face q along a row is β·(−1/a); flat faces (a = 0) are neutral in
+    // the span and restrict the rows instead.
+    constexpr double INF = std::numeric_limits<double>::infinity();
     out.is_fast = true;
+    out.flat_faces = 0;
+    out.k_lo = out.lo[2];
+    out.k_hi = out.hi[2];
     for (int q = 0; q < 4; ++q) {
         const double a = out.plane[q][0];
-        const double m = -1.0 / a;
+        const bool is_flat = a == 0.0;
+        const double m = is_flat ? 0.0 : -1.0 / a;
         out.neg_inv_a[q] = m;
-        out.is_fast = out.is_fast && a != 0.0 && std::isfinite(m) && m != 0.0;
-        const double bound = a > 0.0 ? std::numeric_limits<double>::infinity()
-                                     : -std::numeric_limits<double>::infinity();
-        out.root_cap[q] = bound;
-        out.root_floor[q] = bound;
+        out.is_fast = out.is_fast && (is_flat || (std::isfinite(m) && m != 0.0));
+        out.root_cap[q] = is_flat ? -INF : (a > 0.0 ? INF : -INF);
+        out.root_floor[q] = is_flat ? INF : (a > 0.0 ? INF : -INF);
+        if (is_flat && out.plane[q][1] != 0.0) {
+            out.flat_faces = static_cast<std::uint8_t>(out.flat_faces | (1 << q));
+        } else if (is_flat) {
+            narrow_flat_layers(out, q);
+        }
     }
     // Cross-sections: the edges in index space.
     constexpr int EDGES[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
@@ -258,6 +333,13 @@ PLIANT_HOST_DEVICE inline bool setup_tet(const Vec3f p[4], const std::int32_t id
         out.edge_y0[e] = va[1];
         out.edge_z0[e] = va[2];
         out.edge_slope[e] = is_flat ? 0.0 : (vb[1] - va[1]) / dz;
+    }
+    for (int e = 6; e < 8; ++e) {
+        out.edge_z_lo[e] = std::numeric_limits<double>::infinity();
+        out.edge_z_hi[e] = -std::numeric_limits<double>::infinity();
+        out.edge_y0[e] = 0.0;
+        out.edge_z0[e] = 0.0;
+        out.edge_slope[e] = 0.0;
     }
 
     const Vec3d row[3] = {c12 * inv_det, cross(e2, e0) * inv_det, cross(e0, e1) * inv_det};
@@ -301,6 +383,22 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double map_coord(const double m[4], std::
            m[0] * static_cast<double>(i);
 }
 
+// The rows [j_begin, j_end) of a cross-section whose y extent is [y_min, y_max] (empty when not
+// y_min ≤ y_max), grown by 1e-6 voxel like the bounding box, within [lo, hi].
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void rows_of_extent(const TetRaster& t, double y_min,
+                                                           double y_max, std::int64_t& j_begin,
+                                                           std::int64_t& j_end) {
+    constexpr double GROW = 1e-6;
+    if (!(y_min <= y_max)) {
+        j_begin = j_end = 0;
+        return;
+    }
+    const double lo = static_cast<double>(t.lo[1]);
+    const double hi = static_cast<double>(t.hi[1]);
+    j_begin = std::max(t.lo[1], ceil_to_int(std::clamp(y_min - GROW, lo - 1.0, hi + 1.0)));
+    j_end = std::min(t.hi[1], floor_to_int(std::clamp(y_max + GROW, lo - 1.0, hi + 1.0))) + 1;
+}
+
 // The rows [j_begin, j_end) of layer k that can hold centres inside the tet: the y extent of the
 // tet's cross-section with the plane of the layer (from its edges' crossings, each edge's z
 // clamped to its range), grown by 1e-6 voxel like the bounding box, within [lo, hi].
@@ -318,21 +416,7 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void slice_rows(const TetRaster& t, std::
         y_min = is_crossed ? std::min(y_min, y) : y_min;
         y_max = is_crossed ? std::max(y_max, y) : y_max;
     }
-    if (!(y_min <= y_max)) {
-        j_begin = j_end = 0;
-        return;
-    }
-    const double lo = static_cast<double>(t.lo[1]);
-    const double hi = static_cast<double>(t.hi[1]);
-    j_begin = std::max(t.lo[1], ceil_to_int(std::clamp(y_min - GROW, lo - 1.0, hi + 1.0)));
-    j_end = std::min(t.hi[1], floor_to_int(std::clamp(y_max + GROW, lo - 1.0, hi + 1.0))) + 1;
-}
-
-// The tie-rule inside test of one face at voxel (i, j, k), given β = h_f(0, j, k).
-PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool face_accepts(double a, double beta, bool tie,
-                                                         std::int64_t i) {
-    const double h = a * static_cast<double>(i) + beta;
-    return h > 0.0 || (h == 0.0 && tie);
+    rows_of_extent(t, y_min, y_max, j_begin, j_end);
 }
 
 PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE double face_beta(const double plane[4], std::int64_t j,
@@ -349,6 +433,30 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE bool inside(const TetRaster& t, std::int6
         }
     }
     return true;
+}
+
+// Narrows the rows [j_begin, j_end) of layer k to those the tet's flat faces (a = 0, b ≠ 0)
+// accept. On such a face h_f(i, j, k) = a·i + β(j) is ±0 + β(j) for every i, so it accepts a
+// whole row or none of it; β(j) = b·j + γ (face_beta's order) is monotone in j also after
+// rounding, so the accepted rows are a suffix (b > 0) or a prefix (b < 0). The boundary −γ/b is
+// only a first guess, corrected by the exact test: the result is exactly the rows inside()
+// accepts on these faces. (Faces with a = b = 0 accept whole layers: setup_tet narrows
+// [k_lo, k_hi] the same way.)
+PLIANT_HOST_DEVICE inline void flat_rows(const TetRaster& t, std::int64_t k, std::int64_t& j_begin,
+                                         std::int64_t& j_end) {
+    const double kd = static_cast<double>(k);
+    for (int q = 0; q < 4; ++q) {
+        if (((t.flat_faces >> q) & 1) == 0) {
+            continue;
+        }
+        const double* plane = t.plane[q];
+        const double gamma = plane[2] * kd + plane[3];
+        const double b = plane[1];
+        const bool tie = t.tie_inside[q];
+        narrow_monotone(j_begin, j_end, b > 0.0, -gamma / b, [&](std::int64_t j) {
+            return face_accepts(plane[0], b * static_cast<double>(j) + gamma, tie, 0);
+        });
+    }
 }
 
 // The voxels [begin, end) of row (j, k) inside the tet: exactly the voxels of [lo, hi] that
@@ -396,10 +504,10 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span(const TetRaster& t, std::in
     end = std::max(begin, std::min(e, t.hi[0]) + 1);
 }
 
-// row_span() for a tet with is_fast (no face parallel to the rows), given the layer's
-// gamma[q] = plane[q][2]·k + plane[q][3]: the same voxels. The roots are β·(−1/a) instead of
-// −β/a (one more rounding: within 3 ulps of |r| of where the computed h_f changes sign, still
-// ≤ 7e-7 voxel for |r| < 2^31), routed to the lower or upper end by min/max with the per-face
+// row_span() for a tet with is_fast, given the layer's gamma[q] = plane[q][2]·k + plane[q][3],
+// on a row that its flat faces accept (flat_rows()): the same voxels. The roots are β·(−1/a)
+// instead of −β/a (one more rounding: within 3 ulps of |r| of where the computed h_f changes sign,
+// still ≤ 7e-7 voxel for |r| < 2^31), routed to the lower or upper end by min/max with the per-face
 // caps and floors instead of branches.
 PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span_fast(const TetRaster& t, const double gamma[4],
                                                           std::int64_t j, std::int64_t k,
@@ -433,177 +541,109 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void row_span_fast(const TetRaster& t, co
     end = std::max(begin, std::min(e, t.hi[0]) + 1);
 }
 
-// visit(j, k, i_begin, i_end) for every non-empty row span of the tet in layers
-// [k_begin, k_end) (clipped to its box), rows increasing within a layer; returns the number of
-// voxels visited.
-template <typename Visit>
-PLIANT_FORCE_INLINE std::int64_t for_each_span(const TetRaster& t, std::int64_t k_begin,
-                                               std::int64_t k_end, Visit&& visit) {
-    std::int64_t num_voxels = 0;
-    const std::int64_t k0 = std::max(t.lo[2], k_begin);
-    const std::int64_t k1 = std::min(t.hi[2] + 1, k_end);
-    for (std::int64_t k = k0; k < k1; ++k) {
-        std::int64_t j0 = 0;
-        std::int64_t j1 = 0;
-        slice_rows(t, k, j0, j1);
-        if (t.is_fast) {
-            const double kd = static_cast<double>(k);
-            const double gamma[4] = {
-                t.plane[0][2] * kd + t.plane[0][3], t.plane[1][2] * kd + t.plane[1][3],
-                t.plane[2][2] * kd + t.plane[2][3], t.plane[3][2] * kd + t.plane[3][3]};
-            for (std::int64_t j = j0; j < j1; ++j) {
-                std::int64_t ib = 0;
-                std::int64_t ie = 0;
-                row_span_fast(t, gamma, j, k, ib, ie);
-                if (ib < ie) {
-                    visit(j, k, ib, ie);
-                    num_voxels += ie - ib;
-                }
-            }
-        } else {
-            for (std::int64_t j = j0; j < j1; ++j) {
-                std::int64_t ib = 0;
-                std::int64_t ie = 0;
-                row_span(t, j, k, ib, ie);
-                if (ib < ie) {
-                    visit(j, k, ib, ie);
-                    num_voxels += ie - ib;
-                }
-            }
-        }
-    }
-    return num_voxels;
-}
-
-// A batch of voxels of one tet, filled by batch_spans(): its rows (the row's source coordinate
-// at i = 0 per axis, ((map[a][3] + map[a][2]·k) + map[a][1]·j), and the linear index of voxel
-// (0, j, k)) and its voxels (row, i). Sampling a batch is one loop with one exit, not a loop per
-// row of ~1.3 voxels with an unpredictable trip count.
-struct SpanRow {
-    double g[3];
-    std::int64_t base;
-};
-struct SpanVoxel {
-    std::int32_t row;
-    std::int32_t i;
-};
+// A batch of voxels to sample, in the order they are written (tet order, then layer, row, i):
+// per voxel its source grid coordinate per axis and its linear index in the target. Filled
+// across tets by append_spans(), so that sampling is one flat loop over independent voxels (a
+// row of a tet holds ~1.3 voxels with cells of 4 voxels: a loop per row would have an
+// unpredictable trip count).
 struct SpanBatch {
-    static constexpr int MAX_ROWS = 512;
-    static constexpr int MAX_VOXELS = 2048;
-    // A fast row is written 4 voxels at a time, whatever its length; rows up to WIDE voxels
-    // wide take the branchless path.
+    static constexpr int CAPACITY = 512;
+    // A row is written SLACK voxels at a time, whatever its length (branch-free).
     static constexpr int SLACK = 4;
-    static constexpr std::int64_t WIDE = 64;
-    int num_rows = 0;
     int num_voxels = 0;
-    SpanRow rows[MAX_ROWS];
-    SpanVoxel voxels[MAX_VOXELS + SLACK];
+    // Every voxel's tet has is_interior (its samples need no bounds test).
+    bool is_interior = true;
+    alignas(32) double g[3][CAPACITY + SLACK];
+    alignas(32) std::int64_t index[CAPACITY + SLACK];
 };
 
-// The voxels of the tet in layers [k_begin, k_end) (clipped to its box), layer by layer, rows
-// increasing, i increasing: exactly those of for_each_span(), passed to flush(batch) in batches
-// (flush must consume them; the batch is reset after each call). nx, nxy: target row and layer
-// sizes. Returns the number of voxels.
+// Appends the voxels of the tet in layers [k_begin, k_end) (clipped to its box) to the batch,
+// layer by layer, rows increasing, i increasing: exactly the voxels inside() accepts. When the
+// batch is full it is passed to flush(batch), which must consume it (the batch is reset after
+// the call); the caller flushes what is left at the end. Source coordinates are
+// ((map[a][3] + map[a][2]·k) + map[a][1]·j) + map[a][0]·i, map_coord()'s order. nx, nxy: target
+// row and layer sizes. Returns the number of voxels appended.
 template <typename Flush>
-PLIANT_FORCE_INLINE std::int64_t batch_spans(const TetRaster& t, std::int64_t k_begin,
-                                             std::int64_t k_end, std::int64_t nx, std::int64_t nxy,
-                                             SpanBatch& batch, Flush&& flush) {
+PLIANT_FORCE_INLINE std::int64_t append_spans(const TetRaster& t, std::int64_t k_begin,
+                                              std::int64_t k_end, std::int64_t nx, std::int64_t nxy,
+                                              SpanBatch& batch, Flush&& flush) {
     std::int64_t num_voxels = 0;
     auto drain = [&] {
         if (batch.num_voxels > 0) {
             flush(static_cast<const SpanBatch&>(batch));
-            num_voxels += batch.num_voxels;
         }
-        batch.num_rows = 0;
         batch.num_voxels = 0;
+        batch.is_interior = true;
     };
-    auto start_row = [&](double gk0, double gk1, double gk2, std::int64_t j,
-                         std::int64_t layer_base) -> SpanRow& {
-        SpanRow& r = batch.rows[batch.num_rows];
-        const double jd = static_cast<double>(j);
-        r.g[0] = gk0 + t.map[0][1] * jd;
-        r.g[1] = gk1 + t.map[1][1] * jd;
-        r.g[2] = gk2 + t.map[2][1] * jd;
-        r.base = layer_base + j * nx;
-        return r;
-    };
-    // Any row, any length: in chunks, draining when full.
-    auto emit_row = [&](double gk0, double gk1, double gk2, std::int64_t j, std::int64_t layer_base,
-                        std::int64_t ib, std::int64_t ie) {
-        while (ib < ie) {
-            if (batch.num_rows == SpanBatch::MAX_ROWS ||
-                batch.num_voxels == SpanBatch::MAX_VOXELS) {
-                drain();
-            }
-            start_row(gk0, gk1, gk2, j, layer_base);
-            const std::int64_t n =
-                std::min<std::int64_t>(ie - ib, SpanBatch::MAX_VOXELS - batch.num_voxels);
-            SpanVoxel* v = batch.voxels + batch.num_voxels;
-            for (std::int64_t w = 0; w < n; ++w) {
-                v[w] = {batch.num_rows, static_cast<std::int32_t>(ib + w)};
-            }
+    const double m0 = t.map[0][0];
+    const double m1 = t.map[1][0];
+    const double m2 = t.map[2][0];
+    // The voxels [ib, ie) of a row whose coordinates at i = 0 are g0, g1, g2.
+    auto emit_row = [&](double g0, double g1, double g2, std::int64_t base, std::int64_t ib,
+                        std::int64_t ie) {
+        if (batch.num_voxels > SpanBatch::CAPACITY - SpanBatch::SLACK) {
+            drain();
+        }
+        batch.is_interior = batch.is_interior && t.is_interior;
+        // SLACK entries unconditionally, then the rest of a longer row (rare).
+        const int at = batch.num_voxels;
+        for (int w = 0; w < SpanBatch::SLACK; ++w) {
+            const double id = static_cast<double>(ib + w);
+            batch.g[0][at + w] = g0 + m0 * id;
+            batch.g[1][at + w] = g1 + m1 * id;
+            batch.g[2][at + w] = g2 + m2 * id;
+            batch.index[at + w] = base + ib + w;
+        }
+        const std::int64_t n = ie - ib;
+        num_voxels += n;
+        if (n <= SpanBatch::SLACK) {
             batch.num_voxels += static_cast<int>(n);
-            ++batch.num_rows;
-            ib += n;
+            return;
+        }
+        batch.num_voxels += SpanBatch::SLACK;
+        for (std::int64_t i = ib + SpanBatch::SLACK; i < ie; ++i) {
+            if (batch.num_voxels == SpanBatch::CAPACITY) {
+                drain();
+                batch.is_interior = t.is_interior;
+            }
+            const double id = static_cast<double>(i);
+            const int v = batch.num_voxels++;
+            batch.g[0][v] = g0 + m0 * id;
+            batch.g[1][v] = g1 + m1 * id;
+            batch.g[2][v] = g2 + m2 * id;
+            batch.index[v] = base + i;
         }
     };
-    const std::int64_t k0 = std::max(t.lo[2], k_begin);
-    const std::int64_t k1 = std::min(t.hi[2] + 1, k_end);
-    const bool is_narrow = t.hi[0] - t.lo[0] < SpanBatch::WIDE;
+    const std::int64_t k0 = std::max(t.k_lo, k_begin);
+    const std::int64_t k1 = std::min(t.k_hi + 1, k_end);
     for (std::int64_t k = k0; k < k1; ++k) {
         std::int64_t j0 = 0;
         std::int64_t j1 = 0;
         slice_rows(t, k, j0, j1);
+        if (t.is_fast && t.flat_faces != 0) {
+            flat_rows(t, k, j0, j1);
+        }
         const double kd = static_cast<double>(k);
         const double gk0 = t.map[0][3] + t.map[0][2] * kd;
         const double gk1 = t.map[1][3] + t.map[1][2] * kd;
         const double gk2 = t.map[2][3] + t.map[2][2] * kd;
         const std::int64_t layer_base = k * nxy;
-        if (t.is_fast && is_narrow) {
-            const double gamma[4] = {
-                t.plane[0][2] * kd + t.plane[0][3], t.plane[1][2] * kd + t.plane[1][3],
-                t.plane[2][2] * kd + t.plane[2][3], t.plane[3][2] * kd + t.plane[3][3]};
-            for (std::int64_t j = j0; j < j1; ++j) {
-                if (batch.num_rows == SpanBatch::MAX_ROWS ||
-                    batch.num_voxels > SpanBatch::MAX_VOXELS - SpanBatch::WIDE) {
-                    drain();
-                }
-                std::int64_t ib = 0;
-                std::int64_t ie = 0;
+        const double gamma[4] = {
+            t.plane[0][2] * kd + t.plane[0][3], t.plane[1][2] * kd + t.plane[1][3],
+            t.plane[2][2] * kd + t.plane[2][3], t.plane[3][2] * kd + t.plane[3][3]};
+        for (std::int64_t j = j0; j < j1; ++j) {
+            std::int64_t ib = 0;
+            std::int64_t ie = 0;
+            if (t.is_fast) {
                 row_span_fast(t, gamma, j, k, ib, ie);
-                start_row(gk0, gk1, gk2, j, layer_base);
-                // Branchless for rows of up to SLACK voxels: write SLACK entries, keep ie − ib.
-                const std::int32_t row = batch.num_rows;
-                SpanVoxel* v = batch.voxels + batch.num_voxels;
-                const auto i0 = static_cast<std::int32_t>(ib);
-                v[0] = {row, i0};
-                v[1] = {row, i0 + 1};
-                v[2] = {row, i0 + 2};
-                v[3] = {row, i0 + 3};
-                const std::int64_t n = ie - ib;
-                for (std::int64_t w = SpanBatch::SLACK; w < n; ++w) {
-                    v[w] = {row, static_cast<std::int32_t>(ib + w)};
-                }
-                batch.num_voxels += static_cast<int>(n);
-                batch.num_rows += n > 0 ? 1 : 0;
+            } else {
+                row_span(t, j, k, ib, ie);
             }
-        } else {
-            for (std::int64_t j = j0; j < j1; ++j) {
-                std::int64_t ib = 0;
-                std::int64_t ie = 0;
-                if (t.is_fast) {
-                    const double gamma[4] = {
-                        t.plane[0][2] * kd + t.plane[0][3], t.plane[1][2] * kd + t.plane[1][3],
-                        t.plane[2][2] * kd + t.plane[2][3], t.plane[3][2] * kd + t.plane[3][3]};
-                    row_span_fast(t, gamma, j, k, ib, ie);
-                } else {
-                    row_span(t, j, k, ib, ie);
-                }
-                emit_row(gk0, gk1, gk2, j, layer_base, ib, ie);
-            }
+            const double jd = static_cast<double>(j);
+            emit_row(gk0 + t.map[0][1] * jd, gk1 + t.map[1][1] * jd, gk2 + t.map[2][1] * jd,
+                     layer_base + j * nx, ib, ie);
         }
     }
-    drain();
     return num_voxels;
 }
 

@@ -1,0 +1,177 @@
+#include "cloth_setup.hpp"
+
+#include <fmt/format.h>
+
+#include <limits>
+#include <span>
+#include <utility>
+#include <variant>
+
+#include "pliant/core/error.hpp"
+#include "pliant/geometry/generate.hpp"
+#include "pliant/io/mesh_io.hpp"
+
+namespace pliant::cli {
+namespace {
+
+constexpr int SPHERE_SEGMENTS = 48;
+
+// Applies a placement (rotation, then translation) to points, the rotation built once.
+void place(std::span<Vec3d> points, const cloth::Placement& placement) {
+    const cloth::Rotation rotation = cloth::Rotation::from_degrees(placement.rotate_degrees);
+    for (Vec3d& p : points) {
+        p = rotation.apply(p) + placement.translate;
+    }
+}
+
+// The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
+geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
+    geometry::TriangleMeshD mesh;
+    if (scene.grid) {
+        mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(
+            scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
+            static_cast<float>(scene.grid->size[1])));
+    } else {
+        mesh = io::read_mesh(scene.mesh);
+    }
+    const cloth::Placement transform{scene.rotate_degrees, scene.translate};
+    place(mesh.positions, transform);
+    if (scene.instances.empty()) {
+        return mesh;
+    }
+    const auto num_vertices = static_cast<std::int64_t>(mesh.positions.size());
+    if (num_vertices * static_cast<std::int64_t>(scene.instances.size()) >
+        std::numeric_limits<std::int32_t>::max()) {
+        throw InvalidInput(fmt::format(
+            "cloth: {} instances of {} vertices exceed the 2^31 - 1 vertex indices a mesh has",
+            scene.instances.size(), num_vertices));
+    }
+    geometry::TriangleMeshD copies;
+    for (std::size_t k = 0; k < scene.instances.size(); ++k) {
+        const auto offset = static_cast<std::int32_t>(k * mesh.positions.size());
+        const std::size_t first = copies.positions.size();
+        copies.positions.insert(copies.positions.end(), mesh.positions.begin(),
+                                mesh.positions.end());
+        place(std::span<Vec3d>(copies.positions).subspan(first), scene.instances[k]);
+        for (const geometry::Triangle& t : mesh.triangles) {
+            copies.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        }
+    }
+    return copies;
+}
+
+// The vertices of a pin group: its listed indices and every vertex inside one of its regions.
+std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
+                                          const geometry::TriangleMeshD& mesh,
+                                          const std::string& scene_name) {
+    std::vector<std::int32_t> pinned = group.vertices;
+    for (const std::int32_t v : pinned) {
+        if (static_cast<std::size_t>(v) >= mesh.positions.size()) {
+            throw InvalidInput(fmt::format(
+                "{}: {}.vertices: vertex {} out of range, expected an index below {} (the "
+                "cloth's vertices, all copies)",
+                scene_name, group.key, v, mesh.positions.size()));
+        }
+    }
+    for (const cloth::PinRegion& region : group.regions) {
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+            const Vec3d& p = mesh.positions[v];
+            if (p.x >= region.min.x && p.x <= region.max.x && p.y >= region.min.y &&
+                p.y <= region.max.y && p.z >= region.min.z && p.z <= region.max.z) {
+                pinned.push_back(static_cast<std::int32_t>(v));
+            }
+        }
+    }
+    return pinned;
+}
+
+}  // namespace
+
+ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name) {
+    ClothSetup setup;
+    setup.mesh = load_cloth(scene);
+    for (const cloth::PinGroup& group : scene.pins) {
+        setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
+    }
+    // Obstacles, and their shapes (planes as squares around the cloth).
+    AABBd cloth_box;
+    for (const Vec3d& p : setup.mesh.positions) {
+        cloth_box.extend(p);
+    }
+    const Vec3d centre = (cloth_box.lo + cloth_box.hi) * 0.5;
+    const double plane_half_size = 0.75 * norm(cloth_box.hi - cloth_box.lo) + 0.5;
+    for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
+        if (obstacle.mesh.empty()) {
+            setup.mesh_obstacles.push_back(nullptr);
+            setup.shapes.push_back(obstacle_shape(obstacle, nullptr, centre, plane_half_size));
+            continue;
+        }
+        geometry::TriangleMeshD shape = io::read_mesh(obstacle.mesh);
+        place(shape.positions, obstacle.mesh_placement);
+        setup.shapes.push_back(obstacle_shape(obstacle, &shape, centre, plane_half_size));
+        setup.mesh_obstacles.push_back(
+            std::make_shared<const cloth::MeshObstacle>(std::move(shape)));
+    }
+    return setup;
+}
+
+std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
+                                                const ClothSetup& setup) {
+    auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, scene.material);
+    for (std::size_t g = 0; g < scene.pins.size(); ++g) {
+        solver->add_moving_pins(setup.pins[g], scene.pins[g].motion);
+    }
+    for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+        const cloth::SceneObstacle& obstacle = scene.obstacles[k];
+        if (setup.mesh_obstacles[k]) {
+            solver->add_mesh_obstacle(setup.mesh_obstacles[k], obstacle.motion);
+        } else {
+            solver->add_obstacle(obstacle.shape, obstacle.motion);
+        }
+    }
+    solver->set_gravity(scene.gravity);
+    solver->set_air(scene.air);
+    solver->enable_self_collision(scene.self_collision);
+    return solver;
+}
+
+AABBd framing_box(std::span<const Vec3d> cloth, const std::vector<ObstacleShape>& obstacles) {
+    AABBd box;
+    for (const Vec3d& p : cloth) {
+        box.extend(p);
+    }
+    for (const ObstacleShape& shape : obstacles) {
+        if (shape.bounded) {
+            for (const Vec3d& p : shape.rest.positions) {
+                box.extend(p);
+            }
+        }
+    }
+    return box;
+}
+
+ObstacleShape obstacle_shape(const cloth::SceneObstacle& obstacle,
+                             const geometry::TriangleMeshD* mesh, const Vec3d& centre,
+                             double plane_half_size) {
+    ObstacleShape shape;
+    shape.motion = obstacle.motion;
+    if (mesh != nullptr) {
+        shape.rest = *mesh;
+        shape.smooth = false;
+    } else if (const auto* sphere = std::get_if<cloth::SphereObstacle>(&obstacle.shape)) {
+        shape.rest = geometry::make_uv_sphere(sphere->center, sphere->radius, SPHERE_SEGMENTS);
+    } else if (const auto* box = std::get_if<cloth::BoxObstacle>(&obstacle.shape)) {
+        shape.rest = geometry::make_box(box->min, box->max);
+        shape.smooth = false;
+    } else {
+        const auto& plane = std::get<cloth::PlaneObstacle>(obstacle.shape);
+        const Vec3d n = plane.normal * (1.0 / norm(plane.normal));
+        const Vec3d foot = centre - n * dot(centre - plane.point, n);
+        shape.rest = geometry::make_plane_square(foot, n, plane_half_size);
+        shape.smooth = false;
+        shape.bounded = false;
+    }
+    return shape;
+}
+
+}  // namespace pliant::cli

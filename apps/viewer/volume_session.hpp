@@ -1,0 +1,184 @@
+// The state behind `pliant view volume`, without any drawing: a volume shown through the
+// library's ray caster (render::RayCaster) with a transfer function, an opacity scale, the
+// paper's cleaning threshold and a clipping plane, and with --deform the deformable-volume
+// pipeline (cli::DeformableVolume: tet grid, XPBD soft body, resampling) under a driver and
+// mouse drag.
+//
+// Controls and what they change:
+//   transfer function (scalar volumes): a preset (volume::preset_names) or a JSON file; with
+//     --deform the tet grid is rebuilt over what the new function shows (the deformation
+//     restarts). RGBA volumes use their own colour and opacity.
+//   opacity scale s > 0: opacities are per opacity unit u / s (a denser or thinner medium; s = 1
+//     renders as `pliant render`).
+//   threshold T ∈ [0, 255]: the paper's cleaning, α' = 0 where 255 α < T (volume/clean.hpp):
+//     on the voxels of RGBA volumes, on the classification of scalar volumes (the transfer
+//     function's opacity curve cut at T / 255).
+//   clipping plane: render::ClipPlane (the half-space (p − point) · normal ≥ 0 is shown).
+//   driver (with --deform): none, wave, twist or bubble (pbd/drivers.hpp); choosing another kind
+//     restarts the body from rest so the new driver ramps in; changing a parameter replaces the
+//     driver at the current time. Stiffness: SoftBody::set_stiffness.
+//   drag (with --deform): the tet-mesh vertex under the cursor (nearest to the camera within a
+//     few pixels, on the visible side of the clipping plane) and the vertices within the drag
+//     radius follow the cursor in the view plane (SoftBody::set_drag).
+//
+// Every frame of a deforming volume: SoftBody::step(1 / fps), resampling into a grid like the
+// source, a new RayCaster over it, one render. Static volumes prepare the RayCaster only when
+// the transfer function, opacity or threshold change. Not thread safe; the library calls
+// parallelise internally and stay deterministic.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "deformable_volume.hpp"
+#include "pliant/core/parallel_task.hpp"
+#include "pliant/pbd/drivers.hpp"
+#include "pliant/pbd/soft_body.hpp"
+#include "pliant/pbd/tet_grid.hpp"
+#include "pliant/render/camera.hpp"
+#include "pliant/render/image.hpp"
+#include "pliant/render/raycast.hpp"
+#include "pliant/volume/transfer_function.hpp"
+#include "pliant/volume/volume.hpp"
+
+namespace pliant::viewer {
+
+enum class DriverKind { none, wave, twist, bubble };
+
+// "none", "wave", "twist", "bubble"; InvalidInput listing them otherwise.
+DriverKind parse_driver_kind(const std::string& name);
+const char* driver_kind_name(DriverKind kind);
+
+struct DriverSettings {
+    DriverKind kind = DriverKind::none;
+    pbd::WaveDriver wave{};
+    pbd::TwistDriver twist{.axis = pbd::Axis::z, .angle = 90.0, .ramp_time = 1.0, .grip = 0.1};
+    pbd::BubbleDriver bubble{};
+};
+
+struct VolumeSessionOptions {
+    std::string tf = "grayscale";  // preset or JSON file (scalar volumes)
+    double opacity_scale = 1.0;    // > 0
+    double threshold = 0.0;        // [0, 255]
+    std::optional<render::ClipPlane> clip = std::nullopt;
+    bool shading = false;
+    double step = 0.0;  // ray-casting step, world units (0: half the smallest spacing)
+    render::Color background{0.0f, 0.0f, 0.0f};
+    // Deformation.
+    bool deform = false;
+    pbd::TetGridOptions grid{.cell_voxels = 4};
+    pbd::SoftBodyOptions body{};
+    DriverSettings driver{};
+    double fps = 24.0;          // a frame simulates 1 / fps seconds
+    double drag_radius = 0.05;  // box units (fraction of the volume's largest side)
+};
+
+struct VolumeFrameStats {
+    double step_ms = 0.0;      // soft body, last frame
+    double resample_ms = 0.0;  // last resampling
+    double prepare_ms = 0.0;   // last RayCaster preparation
+    bool prepared = false;     // the last render() prepared a RayCaster
+    double render_ms = 0.0;    // last render
+    std::int64_t samples = 0;  // of the last render
+    double volume_ratio = 1.0;
+    std::int64_t inverted_tets = 0;
+};
+
+class VolumeSession {
+public:
+    // Throws InvalidInput for options out of range or nothing to deform, IoError for a transfer
+    // function file that cannot be read.
+    VolumeSession(volume::Volume source, const VolumeSessionOptions& options);
+    ~VolumeSession();
+    VolumeSession(const VolumeSession&) = delete;
+    VolumeSession& operator=(const VolumeSession&) = delete;
+
+    void set_transfer_function(const std::string& name_or_file);
+    void set_opacity_scale(double scale);  // InvalidInput unless finite and > 0
+    void set_threshold(double threshold);  // InvalidInput outside [0, 255]
+    void set_clip(const std::optional<render::ClipPlane>& clip);
+    void set_shading(bool shading);
+    const VolumeSessionOptions& settings() const { return m_options; }
+
+    bool is_deformable() const { return m_deformable != nullptr; }
+    // The calls below need --deform (InvalidInput otherwise).
+    // Settings of the body wait for a frame in flight first.
+    void set_driver(const DriverSettings& driver);
+    void set_stiffness(double stiffness);
+    void set_drag_radius(double box_units);
+    // One frame: 1 / fps seconds of the soft body, then resampling. step() = start_step() +
+    // finish_step(true). In the background (core/parallel_task.hpp): start_step returns at once
+    // (false, doing nothing, while a frame is in flight) and finish_step publishes the frame when
+    // it is done (block: waits) — the resampled volume is double-buffered, so the current one
+    // can be ray-cast meanwhile. Rethrows what the frame threw.
+    void step();
+    bool start_step();
+    bool finish_step(bool block);
+    bool is_stepping() const { return m_task.is_started(); }
+    void reset_deformation();  // back to rest, time 0, the driver ramping in again
+    // Dragging picks on the published vertices; the body gets the drag now, or at the next
+    // start_step while a frame is in flight.
+    bool begin_drag(const render::Camera& camera, double x, double y);
+    void drag(const render::Camera& camera, double x, double y);
+    void end_drag();
+    bool is_dragging() const { return m_drag_vertex >= 0; }
+    // The soft body (null without --deform); not to be used while a frame is in flight.
+    const pbd::SoftBody* body() const;
+    double time() const { return m_time; }  // simulated seconds of the published frame
+
+    // Ray-casts the current state with `camera` (any size) into `image`.
+    render::RayCastStats render(const render::Camera& camera, render::Image& image);
+
+    const volume::Volume& source() const { return m_source; }
+    bool is_rgba() const { return m_is_rgba; }
+    const VolumeFrameStats& stats() const { return m_stats; }
+    // Changes whenever the rendered image would (for caching).
+    unsigned long long generation() const { return m_generation; }
+
+private:
+    void update_render_tf();
+    void build_deformable();
+    void apply_driver();
+    // The RayCaster for the current state (built when something it prepares changed).
+    void prepare_caster();
+    // Waits for a frame in flight and publishes it.
+    void settle();
+    void publish();
+    void resample_front();  // the body as it is, into the shown buffer, published
+    void apply_pending_drag();
+    void require_deformable(const char* what) const;
+
+    volume::Volume m_original;  // as read (RGBA: before the threshold)
+    volume::Volume m_source;    // what is deformed and shown (RGBA: thresholded copy)
+    bool m_is_rgba = false;
+    VolumeSessionOptions m_options;
+    volume::TransferFunction m_base_tf;        // as chosen (scalar volumes)
+    volume::TransferFunction m_visibility_tf;  // the tet grid's (scalar volumes with --deform)
+    volume::TransferFunction m_render_tf;      // threshold and opacity scale applied
+    std::unique_ptr<cli::DeformableVolume> m_deformable;
+    // Resampled volumes (--deform): m_targets[m_front] is shown, the other one is filled by the
+    // frame in flight.
+    std::array<volume::Volume, 2> m_targets;
+    int m_front = 0;
+    std::unique_ptr<render::RayCaster> m_caster;
+    bool m_caster_dirty = true;
+    // The published frame.
+    std::vector<Vec3f> m_positions;
+    double m_time = 0.0;
+    VolumeFrameStats m_stats;
+    VolumeFrameStats m_solver_stats;  // written by the frame in flight
+    // The drag as the user leaves it; the body gets it when no frame is in flight.
+    std::int32_t m_drag_vertex = -1;
+    Vec3d m_drag_anchor;
+    Vec3d m_drag_target;
+    double m_drag_radius = 0.0;  // world units
+    bool m_drag_changed = false;
+    unsigned long long m_generation = 0;
+    BackgroundTask m_task;  // last: destroyed first, waiting for a frame in flight
+};
+
+}  // namespace pliant::viewer

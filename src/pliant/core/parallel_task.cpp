@@ -1,0 +1,116 @@
+#include "pliant/core/parallel_task.hpp"
+
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <utility>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+
+#if defined(PLIANT_PARALLEL_STD_THREADS)
+#include <thread>
+#else
+#include <oneapi/tbb/task_arena.h>
+#include <oneapi/tbb/task_group.h>
+#endif
+
+namespace pliant {
+
+struct BackgroundTask::State {
+    std::mutex mutex;
+    std::condition_variable finished;
+    std::atomic<bool> done{true};
+    bool started = false;
+    std::exception_ptr error;
+#if defined(PLIANT_PARALLEL_STD_THREADS)
+    // The ThreadSanitizer build: a plain thread (parallel.cpp explains why).
+    std::thread thread;
+#else
+    // An arena of its own: the work and its parallel loops run on its workers, and a caller
+    // that waits joins it and helps (its reserved slot); outside wait() the caller never
+    // executes the work's chunks, nor the work the caller's.
+    std::unique_ptr<tbb::task_arena> arena;
+    tbb::task_group group;
+#endif
+};
+
+BackgroundTask::BackgroundTask() : m_state(std::make_unique<State>()) {}
+
+BackgroundTask::~BackgroundTask() {
+    try {
+        wait();
+    } catch (...) {
+        // The work's exception is dropped when nobody waited for it.
+    }
+}
+
+void BackgroundTask::start(std::function<void()> work) {
+    State& s = *m_state;
+    if (s.started) {
+        throw InvalidInput("BackgroundTask::start: the previous work was not waited for");
+    }
+    s.started = true;
+    s.error = nullptr;
+    s.done.store(false);
+    auto run = [&s, work = std::move(work)] {
+        try {
+            work();
+        } catch (...) {
+            s.error = std::current_exception();
+        }
+        {
+            const std::lock_guard lock(s.mutex);
+            s.done.store(true);
+        }
+        s.finished.notify_all();
+    };
+    if (num_threads() == 1) {
+        run();  // no second thread allowed
+        return;
+    }
+#if defined(PLIANT_PARALLEL_STD_THREADS)
+    s.thread = std::thread(std::move(run));
+#else
+    if (!s.arena) {
+        s.arena = std::make_unique<tbb::task_arena>(num_threads(), 1);
+    }
+    s.arena->execute([&s, &run] { s.group.run(std::move(run)); });
+#endif
+}
+
+bool BackgroundTask::is_done() const {
+    return m_state->done.load();
+}
+
+bool BackgroundTask::is_started() const {
+    return m_state->started;
+}
+
+void BackgroundTask::wait() {
+    State& s = *m_state;
+    if (!s.started) {
+        return;
+    }
+#if defined(PLIANT_PARALLEL_STD_THREADS)
+    {
+        std::unique_lock lock(s.mutex);
+        s.finished.wait(lock, [&s] { return s.done.load(); });
+    }
+    if (s.thread.joinable()) {
+        s.thread.join();
+    }
+#else
+    if (s.arena) {
+        s.arena->execute([&s] { s.group.wait(); });  // helps with the work's parallel loops
+    }
+#endif
+    s.started = false;
+    if (s.error) {
+        std::exception_ptr error = std::exchange(s.error, nullptr);
+        std::rethrow_exception(error);
+    }
+}
+
+}  // namespace pliant

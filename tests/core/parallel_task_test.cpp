@@ -1,0 +1,122 @@
+#include "pliant/core/parallel_task.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+
+namespace pliant {
+namespace {
+
+class BackgroundTaskTest : public ::testing::Test {
+protected:
+    void TearDown() override { set_num_threads(0); }
+};
+
+// The work runs while the caller goes on: it waits for a flag only the caller sets after
+// start() returned (a work run inside start() would give up after its time limit), and it runs
+// without the caller waiting for it (a work run only inside wait() would never set `running`).
+TEST_F(BackgroundTaskTest, RunsConcurrentlyWithTheCaller) {
+    set_num_threads(2);
+    std::atomic<bool> go{false};
+    std::atomic<bool> running{false};
+    std::atomic<bool> saw_go{false};
+    BackgroundTask task;
+    task.start([&] {
+        running = true;
+        const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+        while (!go.load() && std::chrono::steady_clock::now() < limit) {
+            std::this_thread::yield();
+        }
+        saw_go = go.load();
+    });
+    EXPECT_TRUE(task.is_started());
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (!running.load() && std::chrono::steady_clock::now() < limit) {
+        std::this_thread::yield();
+    }
+    EXPECT_TRUE(running.load());
+    EXPECT_FALSE(task.is_done());
+    go = true;
+    task.wait();
+    EXPECT_TRUE(saw_go.load());
+    EXPECT_TRUE(task.is_done());
+    EXPECT_FALSE(task.is_started());
+}
+
+TEST_F(BackgroundTaskTest, OneThreadRunsTheWorkInStart) {
+    set_num_threads(1);
+    BackgroundTask task;
+    int value = 0;
+    task.start([&] { value = 42; });
+    EXPECT_TRUE(task.is_done());
+    EXPECT_EQ(value, 42);
+    task.wait();
+}
+
+// Parallel loops inside the work give the results they give on the caller's thread.
+TEST_F(BackgroundTaskTest, ParallelLoopsInsideAreDeterministic) {
+    set_num_threads(2);
+    std::vector<float> values(200000);
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        values[i] = std::sin(static_cast<float>(i)) * 1e3f;
+    }
+    const auto sum = [&] {
+        return parallel_reduce(
+            static_cast<std::int64_t>(values.size()), 0.0f,
+            [&](std::int64_t b, std::int64_t e) {
+                float s = 0.0f;
+                for (std::int64_t i = b; i < e; ++i) {
+                    s += values[static_cast<std::size_t>(i)];
+                }
+                return s;
+            },
+            [](float a, float b) { return a + b; }, 1000);
+    };
+    const float here = sum();
+    float there = 0.0f;
+    BackgroundTask task;
+    for (int round = 0; round < 3; ++round) {
+        task.start([&] { there = sum(); });
+        task.wait();
+        EXPECT_EQ(std::memcmp(&here, &there, sizeof(float)), 0) << "round " << round;
+    }
+}
+
+TEST_F(BackgroundTaskTest, ExceptionsAndMisuse) {
+    set_num_threads(2);
+    BackgroundTask task;
+    task.wait();  // nothing started: no-op
+    task.start([] { throw InvalidInput("bad frame"); });
+    EXPECT_THROW(task.start([] {}), InvalidInput);  // the previous work was not waited for
+    try {
+        task.wait();
+        FAIL() << "no rethrow";
+    } catch (const InvalidInput& e) {
+        EXPECT_STREQ(e.what(), "bad frame");
+    }
+    // Usable again; the destructor waits for unfinished work.
+    std::atomic<int> runs{0};
+    {
+        BackgroundTask scoped;
+        scoped.start([&] {
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+            ++runs;
+        });
+    }
+    EXPECT_EQ(runs.load(), 1);
+    task.start([&] { ++runs; });
+    task.wait();
+    EXPECT_EQ(runs.load(), 2);
+}
+
+}  // namespace
+}  // namespace pliant
