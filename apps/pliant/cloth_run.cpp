@@ -161,6 +161,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["ccd_hits"] = step.self.ccd_hits;
             record["reverted_vertices"] = step.self.reverted_vertices;
             record["fail_safe_rounds"] = step.self.enforce_rounds;
+            record["gathers"] = step.self.gathers;
+            record["path_updates"] = step.self.path_updates;
+            record["new_paths"] = step.self.new_paths;
         }
         per_frame.push_back(record);
         frames_done = frame;

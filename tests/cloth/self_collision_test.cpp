@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
 #include <vector>
 
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
+#include "pliant/core/parallel.hpp"
 #include "pliant/geometry/generate.hpp"
 
 namespace pliant::cloth {
@@ -45,6 +48,103 @@ TEST(SelfCollision, NoFrameIntersectsWhereThePlainSolverDoes) {
     for (int f = 0; f < FRAMES; ++f) {
         EXPECT_EQ(with[static_cast<std::size_t>(f)], 0) << "frame " << f + 1;
     }
+}
+
+TEST(SelfCollision, RandomViolentMotionNeverIntersects) {
+    // A crumpled sheet thrown together by random velocities (several m/s per vertex, with 4
+    // substeps per frame several times the thickness per substep): paths fail all the time,
+    // vertices escape, pairs are searched again and the fail-safe reverts; every frame must stay
+    // intersection-free.
+    geometry::TriangleMeshD mesh =
+        geometry::convert_precision<double>(geometry::make_grid_sheet(16, 16, 0.4f, 0.4f));
+    for (Vec3d& p : mesh.positions) {
+        p.z = 0.5 + 0.05 * std::sin(20.0 * p.x) * std::cos(17.0 * p.y);
+    }
+    ClothSolver solver(mesh, ClothMaterial{});
+    solver.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+    solver.enable_self_collision(true);
+    ASSERT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()), 0);
+    std::int64_t hits = 0;
+    std::int64_t searched = 0;
+    for (int f = 0; f < 8; ++f) {
+        const ClothStepStats stats = solver.step(1.0 / 24.0, 4);
+        hits += stats.self.ccd_hits;
+        searched += stats.self.new_paths;
+        ASSERT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()), 0)
+            << "frame " << f + 1;
+        if (f % 3 == 0) {
+            // Kick: random velocities towards and away from the middle, folding the sheet.
+            std::mt19937_64 random(static_cast<std::uint64_t>(f));
+            std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+            std::vector<Vec3d> kicked(solver.velocities().begin(), solver.velocities().end());
+            for (std::size_t v = 0; v < kicked.size(); ++v) {
+                const Vec3d& p = solver.positions()[v];
+                kicked[v] = Vec3d{-10.0 * p.x, -10.0 * p.y, 3.0 * uniform(random)} +
+                            Vec3d{uniform(random), uniform(random), uniform(random)} * 2.0;
+            }
+            solver.set_velocities(kicked);
+        }
+    }
+    EXPECT_GT(searched, 0) << "no path was ever renewed: the test proves nothing";
+    EXPECT_GT(hits, 0) << "the fail-safe never had to act: the test proves nothing";
+}
+
+TEST(SelfCollision, StackedSheetsLandAThicknessApart) {
+    // Two sheets 15 mm apart fall onto the ground, the upper one onto the lower: slow, coherent
+    // motion in which paths hold for many windows, so every contact has to come from the
+    // candidates. The upper sheet must end a thickness above the lower one, nowhere through it.
+    const geometry::TriangleMeshD sheet =
+        geometry::convert_precision<double>(geometry::make_grid_sheet(12, 12, 0.3f, 0.3f));
+    geometry::TriangleMeshD mesh;
+    for (int layer = 0; layer < 2; ++layer) {
+        const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+        for (Vec3d p : sheet.positions) {
+            p.z = 0.02 + 0.015 * layer;
+            p.x += 0.01 * layer;  // vertices of one layer above faces of the other
+            mesh.positions.push_back(p);
+        }
+        for (const geometry::Triangle& t : sheet.triangles) {
+            mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        }
+    }
+    ClothMaterial material;
+    ClothSolver solver(mesh, material);
+    solver.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+    solver.enable_self_collision(true);
+    for (int f = 0; f < 24; ++f) {
+        solver.step(1.0 / 24.0, 20);
+        ASSERT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()), 0)
+            << "frame " << f + 1;
+    }
+    const std::size_t n = sheet.positions.size();
+    double lowest_gap = 1.0;
+    for (std::size_t v = 0; v < n; ++v) {
+        lowest_gap = std::min(lowest_gap, solver.positions()[n + v].z - solver.positions()[v].z);
+    }
+    // Both rest: the lower at the thickness above the ground, the upper a thickness above it.
+    EXPECT_NEAR(solver.positions()[n / 2].z, material.thickness, 1e-3);
+    EXPECT_GT(lowest_gap, 0.9 * material.thickness);
+    EXPECT_LT(lowest_gap, 1.5 * material.thickness);
+}
+
+TEST(SelfCollision, BitwiseIdenticalForOneAndTwoThreads) {
+    const auto run = [](int threads) {
+        set_num_threads(threads);
+        geometry::TriangleMeshD mesh =
+            geometry::convert_precision<double>(geometry::make_grid_sheet(30, 30, 1.5f, 1.5f));
+        for (Vec3d& p : mesh.positions) {
+            p.z = 0.8;
+        }
+        ClothSolver solver(mesh, ClothMaterial{});
+        solver.add_obstacle(SphereObstacle{{0.0, 0.0, 0.0}, 0.4});
+        solver.enable_self_collision(true);
+        for (int f = 0; f < 18; ++f) {
+            solver.step(1.0 / 24.0, 20);
+        }
+        set_num_threads(0);
+        return std::vector<Vec3d>(solver.positions().begin(), solver.positions().end());
+    };
+    EXPECT_EQ(run(1), run(2));
 }
 
 TEST(SelfCollision, FailSafeRevertsAPairMovingThroughEachOther) {

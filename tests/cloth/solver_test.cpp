@@ -135,6 +135,28 @@ TEST(ClothSolver, BitwiseIdenticalForOneAndTwoThreads) {
     EXPECT_EQ(run(1), run(2));
 }
 
+TEST(ClothSolver, SetVelocitiesStartsABallisticMotion) {
+    // No damping, no gravity, nothing to hit: a sheet given one velocity translates rigidly.
+    ClothMaterial material;
+    material.damping = 0.0;
+    const geometry::TriangleMeshD mesh = sheet(4, 1.0, 2.0);
+    ClothSolver solver(mesh, material);
+    solver.set_gravity({0.0, 0.0, 0.0});
+    const Vec3d velocity{0.5, -1.0, 2.0};
+    solver.set_velocities(std::vector<Vec3d>(mesh.positions.size(), velocity));
+    solver.step(0.1, 10);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        const Vec3d expected = mesh.positions[v] + velocity * 0.1;
+        EXPECT_NEAR(solver.positions()[v].x, expected.x, 1e-12);
+        EXPECT_NEAR(solver.positions()[v].y, expected.y, 1e-12);
+        EXPECT_NEAR(solver.positions()[v].z, expected.z, 1e-12);
+    }
+    EXPECT_THROW(solver.set_velocities(std::vector<Vec3d>(3, velocity)), InvalidInput);
+    std::vector<Vec3d> bad(mesh.positions.size(), velocity);
+    bad[2].y = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(solver.set_velocities(bad), InvalidInput);
+}
+
 TEST(ClothSolver, RejectsBadInput) {
     const geometry::TriangleMeshD mesh = sheet(2, 1.0, 0.0);
     ClothMaterial negative;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iterator>
 #include <random>
 
 #include "pliant/collision/incidence.hpp"
@@ -168,6 +169,156 @@ TEST(SelfBroadPhase, DoubleMatchesFloatAndThreadsDoNotMatter) {
     EXPECT_EQ(one.vertex_face, many.vertex_face);  // identical order, not just sets
     EXPECT_EQ(one.edge_edge, many.edge_edge);
     EXPECT_GT(one.edge_edge.size(), 1000u);
+}
+
+// The pairs of `pairs` with a vertex in `changed` (marks by vertex).
+FeaturePairs involving(const FeaturePairs& pairs, const TriangleMesh& mesh,
+                       const geometry::MeshTopology& topo, const std::vector<bool>& changed) {
+    FeaturePairs out;
+    for (const VertexFacePair& p : pairs.vertex_face) {
+        const auto& t = mesh.triangles[static_cast<std::size_t>(p.face)];
+        if (changed[static_cast<std::size_t>(p.vertex)] ||
+            changed[static_cast<std::size_t>(t[0])] || changed[static_cast<std::size_t>(t[1])] ||
+            changed[static_cast<std::size_t>(t[2])]) {
+            out.vertex_face.push_back(p);
+        }
+    }
+    for (const EdgeEdgePair& p : pairs.edge_edge) {
+        const auto& a = topo.edges[static_cast<std::size_t>(p.edge_a)];
+        const auto& b = topo.edges[static_cast<std::size_t>(p.edge_b)];
+        if (changed[static_cast<std::size_t>(a[0])] || changed[static_cast<std::size_t>(a[1])] ||
+            changed[static_cast<std::size_t>(b[0])] || changed[static_cast<std::size_t>(b[1])]) {
+            out.edge_edge.push_back(p);
+        }
+    }
+    return out;
+}
+
+TEST(SelfBroadPhase, PartialUpdateFindsThePairsOfTheChangedVertices) {
+    // A crumpled sheet; then some vertices move (their boxes change, a few of them far), and the
+    // partial update must return exactly the brute-force pairs that involve them, each once.
+    TriangleMesh mesh = test::jittered_sheet(24, 18, 0.4f, 0.08f, 23);
+    std::vector<Vec3f> p1 = mesh.positions;
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    const float inflation = 0.01f;
+    broad.update(mesh.positions, p1, inflation);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-0.05f, 0.05f);
+    std::vector<bool> changed(mesh.num_vertices(), false);
+    std::vector<std::int32_t> list;
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(mesh.num_vertices()); v += 7) {
+        changed[static_cast<std::size_t>(v)] = true;
+        list.push_back(v);
+        p1[static_cast<std::size_t>(v)] += Vec3f{u(rng), u(rng), 4.0f * u(rng)};
+    }
+    // Neighbours changed together (pairs of two changed vertices are reported once).
+    for (std::int32_t v = 1; v < static_cast<std::int32_t>(mesh.num_vertices()); v += 7) {
+        changed[static_cast<std::size_t>(v)] = true;
+        list.push_back(v);
+        p1[static_cast<std::size_t>(v)] += Vec3f{0.3f, 0.0f, 0.0f};
+    }
+    std::sort(list.begin(), list.end());
+    const FeaturePairs got = broad.update_vertices(mesh.positions, p1, inflation, list);
+    const auto topo = geometry::build_topology(mesh.triangles, mesh.num_vertices());
+    const FeaturePairs expected =
+        involving(brute_force(mesh, mesh.positions, p1, inflation), mesh, topo, changed);
+    const auto vf = sorted(got.vertex_face);
+    const auto ee = sorted(got.edge_edge);
+    EXPECT_EQ(std::adjacent_find(vf.begin(), vf.end()), vf.end()) << "duplicate VF pair";
+    EXPECT_EQ(std::adjacent_find(ee.begin(), ee.end()), ee.end()) << "duplicate EE pair";
+    EXPECT_EQ(vf, expected.vertex_face);
+    EXPECT_EQ(ee, expected.edge_edge);
+    EXPECT_GT(expected.vertex_face.size(), 0u) << "vacuous case";
+    EXPECT_GT(expected.edge_edge.size(), 0u) << "vacuous case";
+    // A full update on the same boxes agrees with the brute force on all pairs.
+    const FeaturePairs& full = broad.update(mesh.positions, p1, inflation);
+    EXPECT_EQ(sorted(full.edge_edge), brute_force(mesh, mesh.positions, p1, inflation).edge_edge);
+    // Threads do not change the partial result's order.
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        SelfCollisionBroadPhase<float> b(mesh.triangles, mesh.num_vertices());
+        b.update(mesh.positions, mesh.positions, inflation);
+        const FeaturePairs r = b.update_vertices(mesh.positions, p1, inflation, list);
+        set_num_threads(0);
+        return r;
+    };
+    const FeaturePairs one = run(1);
+    const FeaturePairs many = run(4);
+    EXPECT_EQ(one.vertex_face, many.vertex_face);
+    EXPECT_EQ(one.edge_edge, many.edge_edge);
+    EXPECT_THROW(SelfCollisionBroadPhase<float>(mesh.triangles, mesh.num_vertices())
+                     .update_vertices(mesh.positions, p1, inflation, list),
+                 InvalidInput);
+    const std::vector<std::int32_t> bad{static_cast<std::int32_t>(mesh.num_vertices())};
+    EXPECT_THROW(broad.update_vertices(mesh.positions, p1, inflation, bad), InvalidInput);
+}
+
+TEST(SelfBroadPhase, TrianglePairFilterDropsTheRTrianglePairsItRejects) {
+    TriangleMesh mesh = geometry::make_grid_sheet(20, 12, 1.0f, 0.6f);
+    geometry::fold_accordion(mesh.positions, 0.2f, 0.04f);
+    const float inflation = 0.01f;
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    const FeaturePairs expected = brute_force(mesh, mesh.positions, mesh.positions, inflation);
+    // Accepting everything changes nothing.
+    const auto all = [](std::int32_t, std::int32_t) {
+        return true;
+    };
+    const SelfCollisionBroadPhase<float>::TrianglePairFilter accept(all);
+    const FeaturePairs with_all = broad.update(mesh.positions, mesh.positions, inflation, &accept);
+    EXPECT_EQ(sorted(with_all.vertex_face), expected.vertex_face);
+    EXPECT_EQ(sorted(with_all.edge_edge), expected.edge_edge);
+    // Rejecting every pair leaves the orphan pairs (triangles sharing a vertex) alone, in full
+    // and partial updates.
+    const auto none = [](std::int32_t, std::int32_t) {
+        return false;
+    };
+    const SelfCollisionBroadPhase<float>::TrianglePairFilter reject(none);
+    const FeaturePairs only_orphans =
+        broad.update(mesh.positions, mesh.positions, inflation, &reject);
+    const auto orphans_vf = sorted(broad.orphans().vertex_face);
+    const auto orphans_ee = sorted(broad.orphans().edge_edge);
+    std::vector<VertexFacePair> vf;
+    std::vector<EdgeEdgePair> ee;
+    std::set_intersection(expected.vertex_face.begin(), expected.vertex_face.end(),
+                          orphans_vf.begin(), orphans_vf.end(), std::back_inserter(vf));
+    std::set_intersection(expected.edge_edge.begin(), expected.edge_edge.end(), orphans_ee.begin(),
+                          orphans_ee.end(), std::back_inserter(ee));
+    EXPECT_EQ(sorted(only_orphans.vertex_face), vf);
+    EXPECT_EQ(sorted(only_orphans.edge_edge), ee);
+    EXPECT_LT(vf.size() + ee.size(), expected.vertex_face.size() + expected.edge_edge.size());
+    const std::vector<std::int32_t> changed{0, 5, 77, 150};
+    const FeaturePairs partial =
+        broad.update_vertices(mesh.positions, mesh.positions, inflation, changed, &reject);
+    const auto partial_vf = sorted(partial.vertex_face);
+    const auto partial_ee = sorted(partial.edge_edge);
+    EXPECT_TRUE(std::includes(vf.begin(), vf.end(), partial_vf.begin(), partial_vf.end()));
+    EXPECT_TRUE(std::includes(ee.begin(), ee.end(), partial_ee.begin(), partial_ee.end()));
+    EXPECT_GT(partial_vf.size() + partial_ee.size(), 0u);
+}
+
+TEST(SelfBroadPhase, InexactDoubleIsASupersetOfExact) {
+    TriangleMesh mesh = geometry::make_grid_sheet(30, 20, 1.0f, 0.6f);
+    geometry::fold_accordion(mesh.positions, 0.2f, 0.03f);
+    std::vector<Vec3d> p0(mesh.positions.size());
+    std::vector<Vec3d> p1(mesh.positions.size());
+    for (std::size_t v = 0; v < p0.size(); ++v) {
+        p0[v] = vec3_cast<double>(mesh.positions[v]);
+        p1[v] = p0[v] + Vec3d{0.0, 0.0, 1e-3 * std::sin(7.0 * p0[v].x)};
+    }
+    SelfCollisionBroadPhase<double> exact(mesh.triangles, mesh.num_vertices());
+    SelfCollisionBroadPhase<double> loose(mesh.triangles, mesh.num_vertices());
+    loose.set_exact(false);
+    const auto e = exact.update(p0, p1, 0.002);
+    const auto l = loose.update(p0, p1, 0.002);
+    const auto e_vf = sorted(e.vertex_face);
+    const auto l_vf = sorted(l.vertex_face);
+    const auto e_ee = sorted(e.edge_edge);
+    const auto l_ee = sorted(l.edge_edge);
+    EXPECT_TRUE(std::includes(l_vf.begin(), l_vf.end(), e_vf.begin(), e_vf.end()));
+    EXPECT_TRUE(std::includes(l_ee.begin(), l_ee.end(), e_ee.begin(), e_ee.end()));
+    EXPECT_GT(e_ee.size(), 100u);
+    // A float box is at most a few float ulps larger: hardly any extra pair.
+    EXPECT_LT(l_ee.size() + l_vf.size(), (e_ee.size() + e_vf.size()) * 101 / 100);
 }
 
 TEST(SelfBroadPhase, RejectsBadArguments) {

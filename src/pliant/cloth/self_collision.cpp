@@ -13,6 +13,19 @@ namespace pliant::cloth {
 namespace {
 
 constexpr std::int64_t PAIR_GRAIN = 512;
+constexpr std::int64_t VERTEX_GRAIN = 4096;
+
+// A vertex's slack around its path (× thickness): boxes grow by it, and a vertex that leaves it
+// gets a new path. Smaller slacks give fewer candidates and more new paths (on the drape scene
+// 0.1-0.3 cost about the same, 0.5 more).
+constexpr double SLACK = 0.2;
+// A path lasts until the vertex would have moved this far along it (× thickness), at least one
+// window and at most MAX_PATH_WINDOWS: short paths keep the boxes small.
+constexpr double PATH_LENGTH = 0.5;
+constexpr int MAX_PATH_WINDOWS = 64;
+// When more than this fraction of the vertices needs new paths or escapes at once, a full
+// broad phase is cheaper than queries around each of them.
+constexpr double FULL_FRACTION = 0.25;
 
 // Pushes the features apart along normal so that their distance grows by `gap`, weighted by the
 // inverse masses w[k] and the closest point's barycentric weights b[k] (signed: + for the first
@@ -35,32 +48,27 @@ void separate(std::span<Vec3d> positions, std::span<const double> inverse_masses
     }
 }
 
-// Mean of end[v] − start[v]: a translation common to the whole cloth. Distances are the same in
-// a frame moving with it, so broad phases sweep boxes by the motion relative to it (a falling
-// sheet then sweeps nothing). Parallel sums in fixed chunks: the same for any thread count.
-Vec3d mean_displacement(std::span<const Vec3d> start, std::span<const Vec3d> end) {
-    if (start.empty()) {
-        return {0.0, 0.0, 0.0};
-    }
-    const Vec3d sum = parallel_reduce(
-        static_cast<std::int64_t>(start.size()), Vec3d{0.0, 0.0, 0.0},
-        [&](std::int64_t begin, std::int64_t finish) {
-            Vec3d partial{0.0, 0.0, 0.0};
-            for (std::int64_t i = begin; i < finish; ++i) {
-                partial += end[static_cast<std::size_t>(i)] - start[static_cast<std::size_t>(i)];
-            }
-            return partial;
-        },
-        [](Vec3d a, const Vec3d& b) { return a + b; }, 4096);
-    return sum * (1.0 / static_cast<double>(start.size()));
+double component(const Vec3d& v, int axis) {
+    return axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
+}
+double& component(Vec3d& v, int axis) {
+    return axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
 }
 
-// end − shift, per vertex.
-void shifted(std::span<const Vec3d> end, const Vec3d& shift, std::vector<Vec3d>& out) {
-    out.resize(end.size());
-    parallel_for(static_cast<std::int64_t>(end.size()), [&](std::int64_t i) {
-        out[static_cast<std::size_t>(i)] = end[static_cast<std::size_t>(i)] - shift;
-    });
+// The largest |coordinate| of x and y: the scale of the rounding margins.
+double largest_coordinate(std::span<const Vec3d> x, std::span<const Vec3d> y) {
+    return parallel_reduce(
+        static_cast<std::int64_t>(x.size()), 0.0,
+        [&](std::int64_t begin, std::int64_t end) {
+            double m = 0.0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                m = std::max({m, std::abs(x[v].x), std::abs(x[v].y), std::abs(x[v].z),
+                              std::abs(y[v].x), std::abs(y[v].y), std::abs(y[v].z)});
+            }
+            return m;
+        },
+        [](double a, double b) { return std::max(a, b); }, VERTEX_GRAIN);
 }
 
 // The largest |Δ_i − Δ_j| over the pairs (i in the first feature, j in the second) of the
@@ -79,72 +87,128 @@ double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
     return std::sqrt(sweep);
 }
 
-// The distance between the boxes of two vertex sets: a lower bound on the distance between any
-// points of their convex hulls (0 when the boxes overlap).
-double box_distance(std::span<const Vec3d> x, std::span<const std::int32_t> first,
-                    std::span<const std::int32_t> second) {
-    const auto box_of = [&](std::span<const std::int32_t> vertices) {
-        AABBd box;
-        for (const std::int32_t v : vertices) {
-            box.extend(x[static_cast<std::size_t>(v)]);
+// The largest |u_i − u_j| over i in the first feature and j in the second.
+double largest_difference(std::span<const Vec3d> u, std::span<const std::int32_t> first,
+                          std::span<const std::int32_t> second) {
+    double largest = 0.0;
+    for (const std::int32_t i : first) {
+        for (const std::int32_t j : second) {
+            largest = std::max(largest, squared_norm(u[static_cast<std::size_t>(i)] -
+                                                     u[static_cast<std::size_t>(j)]));
         }
-        return box;
-    };
-    const AABBd a = box_of(first);
-    const AABBd b = box_of(second);
-    const Vec3d gap = max(max(a.lo - b.hi, b.lo - a.hi), Vec3d{0.0, 0.0, 0.0});
-    return norm(gap);
+    }
+    return std::sqrt(largest);
+}
+
+// The distance between the boxes of a pair's two vertex sets at x (first: 1 or 2 vertices,
+// second: 3 or 2): a lower bound on the features' distance.
+double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<const Vec3d> x) {
+    const Vec3d& p0 = x[static_cast<std::size_t>(v[0])];
+    const Vec3d& p1 = x[static_cast<std::size_t>(v[1])];
+    const Vec3d& p2 = x[static_cast<std::size_t>(v[2])];
+    const Vec3d& p3 = x[static_cast<std::size_t>(v[3])];
+    Vec3d a_lo = p0;
+    Vec3d a_hi = p0;
+    Vec3d b_lo = min(p2, p3);
+    Vec3d b_hi = max(p2, p3);
+    if (num_first == 2) {
+        a_lo = min(a_lo, p1);
+        a_hi = max(a_hi, p1);
+    } else {
+        b_lo = min(b_lo, p1);
+        b_hi = max(b_hi, p1);
+    }
+    const Vec3d gap = max(max(a_lo - b_hi, b_lo - a_hi), Vec3d{0.0, 0.0, 0.0});
+    return std::sqrt(dot(gap, gap));
+}
+
+// The largest |Δ_i − Δ_j| (i in the first set, j in the second) of per-vertex displacements Δ.
+double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
+                                 std::span<const Vec3d> motion) {
+    const Vec3d& d0 = motion[static_cast<std::size_t>(v[0])];
+    const Vec3d& d1 = motion[static_cast<std::size_t>(v[1])];
+    const Vec3d& d2 = motion[static_cast<std::size_t>(v[2])];
+    const Vec3d& d3 = motion[static_cast<std::size_t>(v[3])];
+    double m = 0.0;
+    if (num_first == 1) {
+        m = std::max({squared_norm(d0 - d1), squared_norm(d0 - d2), squared_norm(d0 - d3)});
+    } else {
+        m = std::max({squared_norm(d0 - d2), squared_norm(d0 - d3), squared_norm(d1 - d2),
+                      squared_norm(d1 - d3)});
+    }
+    return std::sqrt(m);
 }
 
 }  // namespace
 
-bool SelfCollision::separation_exceeds(const collision::FeaturePairs& pairs, std::int64_t i,
-                                       std::span<const Vec3d> start, std::span<const Vec3d> end,
-                                       double threshold, double* distance) const {
-    // The features' vertices; the cheap bound (box distance minus sweep) first.
-    std::int32_t first[1];
-    std::span<const std::int32_t> a;
-    std::span<const std::int32_t> b;
-    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
-    if (i < num_vf) {
-        const collision::VertexFacePair& pair = pairs.vertex_face[static_cast<std::size_t>(i)];
-        first[0] = pair.vertex;
-        a = first;
-        b = m_triangles[static_cast<std::size_t>(pair.face)];
-    } else {
-        const auto& edges = m_gather_phase.topology().edges;
-        const collision::EdgeEdgePair& pair = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
-        a = edges[static_cast<std::size_t>(pair.edge_a)];
-        b = edges[static_cast<std::size_t>(pair.edge_b)];
-    }
-    const double sweep = relative_sweep(start, end, a, b);
-    if (box_distance(start, a, b) - sweep > threshold) {
-        return true;
-    }
-    const double exact = pair_distance(pairs, i, start);
-    if (distance != nullptr) {
-        *distance = exact;
-    }
-    return exact - sweep > threshold;
+SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
+                             std::size_t num_vertices, double thickness)
+    : m_triangles(triangles.begin(), triangles.end()),
+      m_num_vertices(num_vertices),
+      m_thickness(thickness),
+      m_broad_phase(triangles, num_vertices),
+      m_edges(&m_broad_phase.topology().edges) {
+    // Every pair is filtered further on exact distances: the float boxes are enough.
+    m_broad_phase.set_exact(false);
 }
 
-double SelfCollision::pair_distance(const collision::FeaturePairs& pairs, std::int64_t i,
-                                    std::span<const Vec3d> x) const {
-    const auto at = [&](std::int32_t v) {
-        return x[static_cast<std::size_t>(v)];
-    };
+SelfCollision::FeatureVertices SelfCollision::feature_vertices(const collision::FeaturePairs& pairs,
+                                                               std::int64_t i) const {
+    FeatureVertices f{};
     const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
     if (i < num_vf) {
         const collision::VertexFacePair& pair = pairs.vertex_face[static_cast<std::size_t>(i)];
-        const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(pair.face)];
-        return collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]))
-            .distance;
+        const geometry::Triangle& t = m_triangles[static_cast<std::size_t>(pair.face)];
+        f.v[0] = pair.vertex;
+        f.v[1] = t[0];
+        f.v[2] = t[1];
+        f.v[3] = t[2];
+        f.num_first = 1;
+    } else {
+        const collision::EdgeEdgePair& pair = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+        const geometry::Edge& a = (*m_edges)[static_cast<std::size_t>(pair.edge_a)];
+        const geometry::Edge& b = (*m_edges)[static_cast<std::size_t>(pair.edge_b)];
+        f.v[0] = a[0];
+        f.v[1] = a[1];
+        f.v[2] = b[0];
+        f.v[3] = b[1];
+        f.num_first = 2;
     }
-    const auto& edges = m_gather_phase.topology().edges;
-    const collision::EdgeEdgePair& pair = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
-    const geometry::Edge& a = edges[static_cast<std::size_t>(pair.edge_a)];
-    const geometry::Edge& b = edges[static_cast<std::size_t>(pair.edge_b)];
-    return collision::segment_segment_proximity(at(a[0]), at(a[1]), at(b[0]), at(b[1])).distance;
+    return f;
+}
+
+double SelfCollision::feature_sum(const FeatureVertices& f, std::span<const double> per_vertex) {
+    const auto at = [&](int k) {
+        return per_vertex[static_cast<std::size_t>(f.v[k])];
+    };
+    if (f.num_first == 1) {
+        return at(0) + std::max({at(1), at(2), at(3)});
+    }
+    return std::max(at(0), at(1)) + std::max(at(2), at(3));
+}
+
+double SelfCollision::bound(const Candidate& c, std::span<const double> deviations, double time) {
+    return c.distance - c.offset - feature_sum(feature_vertices(c), deviations) -
+           c.spread * (time - c.time);
+}
+
+double SelfCollision::features_distance(const FeatureVertices& f, std::span<const Vec3d> x) {
+    const auto at = [&](int k) {
+        return x[static_cast<std::size_t>(f.v[k])];
+    };
+    if (f.num_first == 1) {
+        return collision::point_triangle_proximity(at(0), at(1), at(2), at(3)).distance;
+    }
+    return collision::segment_segment_proximity(at(0), at(1), at(2), at(3)).distance;
+}
+
+bool SelfCollision::separation_exceeds(const FeatureVertices& f, std::span<const Vec3d> start,
+                                       std::span<const Vec3d> motion, double threshold) {
+    const double sweep = largest_motion_difference(f.v, f.num_first, motion);
+    if (box_gap(f.v, f.num_first, start) - sweep > threshold) {
+        return true;
+    }
+    return features_distance(f, start) - sweep > threshold;
 }
 
 template <typename Keep>
@@ -162,89 +226,354 @@ const std::vector<std::int64_t>& SelfCollision::indices_where(std::int64_t n, Ke
     return m_indices;
 }
 
-template <typename Keep>
-collision::FeaturePairs SelfCollision::filter_pairs(const collision::FeaturePairs& pairs,
-                                                    Keep&& keep) {
-    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
-    const auto num_ee = static_cast<std::int64_t>(pairs.edge_edge.size());
-    // Indices in pair order (VF then EE), from fixed chunks merged in order: deterministic.
-    const std::vector<std::int64_t>& kept = indices_where(num_vf + num_ee, keep);
-    collision::FeaturePairs result;
-    for (const std::int64_t i : kept) {
-        if (i < num_vf) {
-            result.vertex_face.push_back(pairs.vertex_face[static_cast<std::size_t>(i)]);
-        } else {
-            result.edge_edge.push_back(pairs.edge_edge[static_cast<std::size_t>(i - num_vf)]);
-        }
-    }
-    return result;
-}
-
-SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
-                             std::size_t num_vertices, double thickness)
-    : m_triangles(triangles.begin(), triangles.end()),
-      m_thickness(thickness),
-      m_gather_phase(triangles, num_vertices),
-      m_swept_phase(triangles, num_vertices),
-      m_revert_phase(triangles, num_vertices) {}
-
-void SelfCollision::gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities,
-                           double dt, const Vec3d& gravity) {
-    Stopwatch watch;
-    // The predicted end of the step, x + dt v + ½ g dt² (exact for free flight); boxes swept from
-    // here to there and grown by the thickness.
-    m_predicted.resize(positions.size());
-    const Vec3d fall = gravity * (0.5 * dt * dt);
-    parallel_for(static_cast<std::int64_t>(positions.size()), [&](std::int64_t i) {
-        const auto v = static_cast<std::size_t>(i);
-        m_predicted[v] = positions[v] + velocities[v] * dt + fall;
-    });
-    // Boxes swept by the motion relative to the cloth's mean motion (the same pairs come close).
-    m_gather_shift = mean_displacement(positions, m_predicted);
-    shifted(m_predicted, m_gather_shift, m_gather_end);
-    const collision::FeaturePairs& swept =
-        m_gather_phase.update(positions, std::span<const Vec3d>(m_gather_end), 0.5 * m_thickness);
-    add_broad_phase_times(m_gather_phase.stats());
-    // Keep the pairs whose distance can fall below thickness + slack on the predicted motion
-    // (slack = thickness, for the difference between prediction and the solved motion; pairs
-    // that come closer anyway are the fail-safe's).
-    // The filter computes a kept pair's distance now (by index, no races); project() skips a pair
-    // while that distance minus how far its vertices have since moved stays at least the
-    // thickness.
-    Stopwatch filter;
-    const std::span<const Vec3d> predicted(m_predicted);
-    m_swept_distances.resize(swept.vertex_face.size() + swept.edge_edge.size());
-    m_candidates = filter_pairs(swept, [&](std::int64_t i) {
-        return !separation_exceeds(swept, i, positions, predicted, 2.0 * m_thickness,
-                                   &m_swept_distances[static_cast<std::size_t>(i)]);
-    });
-    // filter_pairs leaves the kept indices, in the candidates' order, in m_indices.
-    const auto num_candidates = static_cast<std::int64_t>(m_indices.size());
-    m_gather_distances.resize(m_indices.size());
-    for (std::size_t k = 0; k < m_indices.size(); ++k) {
-        m_gather_distances[k] = m_swept_distances[static_cast<std::size_t>(m_indices[k])];
-    }
-    m_gather_positions.assign(positions.begin(), positions.end());
-    m_pair_sweeps.assign(static_cast<std::size_t>(num_candidates), 0.0);
-    m_stats.narrow_ms += filter.elapsed_ms();
-    m_stats.candidate_pairs = num_candidates;
-    m_stats.gather_ms += watch.elapsed_ms();
-}
-
 void SelfCollision::add_broad_phase_times(const collision::BroadPhaseStats& broad) {
     m_stats.refit_ms += broad.build_ms + broad.refit_ms;
     m_stats.traverse_ms += broad.traverse_ms + broad.features_ms;
 }
 
+Vec3d SelfCollision::median_of(std::span<const Vec3d> x, bool from_origin) const {
+    // Componentwise median over the sample vertices (the lower middle for an even count).
+    const std::size_t n = m_frame_samples.size();
+    if (n == 0) {
+        return {0.0, 0.0, 0.0};
+    }
+    std::vector<double>& values = m_median_scratch;
+    values.resize(n);
+    Vec3d median{};
+    for (int axis = 0; axis < 3; ++axis) {
+        for (std::size_t k = 0; k < n; ++k) {
+            const Vec3d& p = x[static_cast<std::size_t>(m_frame_samples[k])];
+            const double origin = from_origin ? component(m_frame_origin[k], axis) : 0.0;
+            values[k] = component(p, axis) - origin;
+        }
+        const auto mid = values.begin() + static_cast<std::ptrdiff_t>(n / 2);
+        std::nth_element(values.begin(), mid, values.end());
+        component(median, axis) = *mid;
+    }
+    return median;
+}
+
+Vec3d SelfCollision::shift_of(std::span<const Vec3d> x) const {
+    return median_of(x, true);
+}
+
+void SelfCollision::reset_frame(std::span<const Vec3d> x) {
+    m_frame_samples.clear();
+    for (std::size_t v = 0; v < m_num_vertices; v += FRAME_SAMPLE_STRIDE) {
+        m_frame_samples.push_back(static_cast<std::int32_t>(v));
+    }
+    m_frame_origin.resize(m_frame_samples.size());
+    for (std::size_t k = 0; k < m_frame_samples.size(); ++k) {
+        m_frame_origin[k] = x[static_cast<std::size_t>(m_frame_samples[k])];
+    }
+}
+
+bool SelfCollision::within_path(const Vec3d& x, const Vec3d& shift, double time, std::size_t v,
+                                double margin) const {
+    // For the CCD the boxes' half-thickness growth counts too: a vertex within slack + th/2 of
+    // its path is inside its grown box, and pairs whose grown boxes do not overlap cannot touch.
+    const double slop = 1e-6 * m_window_dt;
+    return time >= m_anchor_times[v] - slop && time <= m_path_ends[v] + slop &&
+           deviation(x, shift, time, v) <= m_slacks[v] + 0.5 * m_thickness - margin;
+}
+
+void SelfCollision::set_path(std::size_t v, const Vec3d& anchor, const Vec3d& velocity,
+                             double time) {
+    // As long as the path stays short (its box small), within [1, max_windows] windows.
+    const double speed = norm(velocity);
+    const double longest = MAX_PATH_WINDOWS * m_window_dt;
+    const double length = PATH_LENGTH * m_thickness;
+    const double duration =
+        std::max(m_window_dt, speed * longest > length ? length / speed : longest);
+    m_anchors[v] = anchor;
+    m_path_velocities[v] = velocity;
+    m_anchor_times[v] = time;
+    m_path_ends[v] = time + duration;
+    m_slacks[v] = SLACK * m_thickness;
+    // The box of the path over [τ_v − slop, end + slop] grown by the slack (within_path allows
+    // the slop for rounding of the times).
+    const double slop = 1e-6 * m_window_dt;
+    const Vec3d early = anchor - velocity * slop;
+    const Vec3d late = anchor + velocity * (duration + slop);
+    const Vec3d grow{m_slacks[v], m_slacks[v], m_slacks[v]};
+    m_box_lo[v] = min(early, late) - grow;
+    m_box_hi[v] = max(early, late) + grow;
+}
+
+void SelfCollision::add_candidates(const collision::FeaturePairs& pairs, std::span<const Vec3d> x,
+                                   const Vec3d& shift, double time,
+                                   std::span<const std::uint8_t> involving) {
+    // The deviations at `time` (the vertices' offsets from their paths, for the bounds).
+    // Also each vertex's reach: deviation + slack + |u| (path end − time), so that a pair's
+    // reach is at most the sum of its features' largest (|u_i − u_j| ≤ |u_i| + |u_j|, and the
+    // pair's paths end no later than either's).
+    m_deviations.resize(m_num_vertices);
+    m_reaches.resize(m_num_vertices);
+    parallel_for(
+        static_cast<std::int64_t>(m_num_vertices),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_deviations[v] = deviation(x[v], shift, time, v);
+            m_reaches[v] = m_deviations[v] + m_slacks[v] +
+                           norm(m_path_velocities[v]) * std::max(0.0, m_path_ends[v] - time);
+        },
+        VERTEX_GRAIN);
+    const std::span<const double> deviations(m_deviations);
+    const std::span<const double> reaches(m_reaches);
+    const std::span<const double> slacks(m_slacks);
+    const std::span<const Vec3d> velocities(m_path_velocities);
+    const double margin = 1e-9 * (1.0 + largest_coordinate(x, m_box_hi));
+    const double keep_below = m_thickness + margin;
+    const auto num_pairs =
+        static_cast<std::int64_t>(pairs.vertex_face.size() + pairs.edge_edge.size());
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    m_candidate_chunks.reset(num_chunks(num_pairs, PAIR_GRAIN));
+    parallel_for_chunks(
+        num_pairs, PAIR_GRAIN, [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
+            AppendBuffer<Candidate>& out = m_candidate_chunks.chunk(chunk);
+            for (std::int64_t i = begin; i < end; ++i) {
+                const FeatureVertices f = feature_vertices(pairs, i);
+                if (!involving.empty() && (involving[static_cast<std::size_t>(f.v[0])] |
+                                           involving[static_cast<std::size_t>(f.v[1])] |
+                                           involving[static_cast<std::size_t>(f.v[2])] |
+                                           involving[static_cast<std::size_t>(f.v[3])]) == 0) {
+                    continue;
+                }
+                // Quick reject on the boxes at x and the per-vertex reaches.
+                const double gap = box_gap(f.v, f.num_first, x);
+                if (gap - feature_sum(f, reaches) - margin >= keep_below) {
+                    continue;
+                }
+                // The largest displacement relative to the distance now while every vertex stays
+                // within its slack, until the first of the paths ends.
+                double path_end = m_path_ends[static_cast<std::size_t>(f.v[0])];
+                for (int k = 1; k < 4; ++k) {
+                    path_end = std::min(path_end, m_path_ends[static_cast<std::size_t>(f.v[k])]);
+                }
+                const double spread = largest_difference(velocities, f.first(), f.second());
+                const double offset = feature_sum(f, deviations);
+                const double reach = offset + feature_sum(f, slacks) +
+                                     spread * std::max(0.0, path_end - time) + margin;
+                if (gap - reach >= keep_below) {
+                    continue;
+                }
+                const double distance = features_distance(f, x);
+                if (distance - reach >= keep_below) {
+                    continue;
+                }
+                Candidate c{};
+                if (i < num_vf) {
+                    const collision::VertexFacePair& p =
+                        pairs.vertex_face[static_cast<std::size_t>(i)];
+                    c.feature_a = p.vertex;
+                    c.feature_b = p.face;
+                    c.is_edge_edge = 0;
+                } else {
+                    const collision::EdgeEdgePair& p =
+                        pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+                    c.feature_a = p.edge_a;
+                    c.feature_b = p.edge_b;
+                    c.is_edge_edge = 1;
+                }
+                for (int k = 0; k < 4; ++k) {
+                    c.vertices[k] = f.v[k];
+                }
+                c.distance = distance;
+                c.offset = offset;
+                c.spread = spread;
+                c.time = time;
+                out.push_back(c);
+            }
+        });
+    // Appended in pair order (chunks merged in order): deterministic.
+    const std::size_t old_size = m_candidates.size();
+    std::vector<Candidate> added;
+    m_candidate_chunks.gather(added);
+    m_candidates.resize(old_size + added.size());
+    std::copy(added.begin(), added.end(),
+              m_candidates.begin() + static_cast<std::ptrdiff_t>(old_size));
+}
+
+void SelfCollision::compute_triangle_motions(double time) {
+    // Per triangle: the box of its vertices' path positions at `time` (frame coordinates), the
+    // box of their path velocities, their largest slack and the time to the last path end.
+    m_triangle_motions.resize(m_triangles.size());
+    parallel_for(
+        static_cast<std::int64_t>(m_triangles.size()),
+        [&](std::int64_t t) {
+            const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(t)];
+            TriangleMotion m{};
+            for (int k = 0; k < 3; ++k) {
+                const auto v = static_cast<std::size_t>(tri[static_cast<std::size_t>(k)]);
+                const Vec3d p = m_anchors[v] + m_path_velocities[v] * (time - m_anchor_times[v]);
+                const Vec3d& u = m_path_velocities[v];
+                m.p_lo = k == 0 ? p : min(m.p_lo, p);
+                m.p_hi = k == 0 ? p : max(m.p_hi, p);
+                m.u_lo = k == 0 ? u : min(m.u_lo, u);
+                m.u_hi = k == 0 ? u : max(m.u_hi, u);
+                m.slack = std::max(m.slack, m_slacks[v]);
+                m.duration = std::max(m.duration, m_path_ends[v] - time);
+            }
+            m_triangle_motions[static_cast<std::size_t>(t)] = m;
+        },
+        VERTEX_GRAIN);
+}
+
+bool SelfCollision::may_come_close(std::int32_t a, std::int32_t b) const {
+    // Within [time, time + duration] each vertex is within its slack of its path, which moves
+    // with its velocity: the triangles' distance is at least the gap between their path boxes
+    // now, minus both slacks, minus the largest relative speed of their vertices times the
+    // duration. Pairs for which that stays at least the thickness (plus the rounding margin)
+    // need no feature tests: none of their features comes within the thickness.
+    const TriangleMotion& p = m_triangle_motions[static_cast<std::size_t>(a)];
+    const TriangleMotion& q = m_triangle_motions[static_cast<std::size_t>(b)];
+    const Vec3d zero{0.0, 0.0, 0.0};
+    const Vec3d gap = max(max(p.p_lo - q.p_hi, q.p_lo - p.p_hi), zero);
+    const Vec3d speed = max(max(p.u_hi - q.u_lo, q.u_hi - p.u_lo), zero);
+    const double reach = p.slack + q.slack + norm(speed) * std::max(p.duration, q.duration);
+    return norm(gap) - reach < m_thickness + m_filter_margin;
+}
+
+void SelfCollision::gather(std::span<const Vec3d> x, std::span<const Vec3d> u, double time,
+                           double window_dt) {
+    Stopwatch watch;
+    const std::size_t n = m_num_vertices;
+    m_window_dt = window_dt;
+    reset_frame(x);
+    m_anchors.resize(n);
+    m_path_velocities.resize(n);
+    m_anchor_times.resize(n);
+    m_path_ends.resize(n);
+    m_slacks.resize(n);
+    m_box_lo.resize(n);
+    m_box_hi.resize(n);
+    m_needs_path.assign(n, 0);
+    parallel_for(
+        static_cast<std::int64_t>(n),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            set_path(v, x[v], u[v], time);
+        },
+        VERTEX_GRAIN);
+    m_inflation = 0.5 * m_thickness;
+    compute_triangle_motions(time);
+    m_filter_margin = 1e-9 * (1.0 + largest_coordinate(x, m_box_hi));
+    const auto close = [this](std::int32_t a, std::int32_t b) {
+        return may_come_close(a, b);
+    };
+    const collision::SelfCollisionBroadPhase<double>::TrianglePairFilter keep(close);
+    const collision::FeaturePairs& pairs = m_broad_phase.update(
+        std::span<const Vec3d>(m_box_lo), std::span<const Vec3d>(m_box_hi), m_inflation, &keep);
+    m_broad_phase_ready = true;
+    add_broad_phase_times(m_broad_phase.stats());
+    ++m_stats.gathers;
+    Stopwatch filter;
+    m_candidates.clear();
+    add_candidates(pairs, x, Vec3d{0.0, 0.0, 0.0}, time, {});
+    m_stats.narrow_ms += filter.elapsed_ms();
+    m_has_gather = true;
+    m_stats.candidate_pairs = static_cast<std::int64_t>(m_candidates.size());
+    m_stats.gather_ms += watch.elapsed_ms();
+}
+
+void SelfCollision::renew_paths(std::span<const Vec3d> x, const Vec3d& shift,
+                                std::span<const Vec3d> u, double time) {
+    if (m_new_path_vertices.empty()) {
+        return;
+    }
+    Stopwatch watch;
+    m_marks.assign(m_num_vertices, 0);
+    for (const std::int32_t v : m_new_path_vertices) {
+        const auto k = static_cast<std::size_t>(v);
+        m_marks[k] = 1;
+        m_needs_path[k] = 0;
+        set_path(k, x[k] - shift, u[k], time);
+    }
+    // Drop the old candidates of the renewed vertices (their bounds assumed the old paths).
+    const std::vector<std::int64_t>& kept =
+        indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
+            const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
+            return (m_marks[static_cast<std::size_t>(c.vertices[0])] |
+                    m_marks[static_cast<std::size_t>(c.vertices[1])] |
+                    m_marks[static_cast<std::size_t>(c.vertices[2])] |
+                    m_marks[static_cast<std::size_t>(c.vertices[3])]) == 0;
+        });
+    m_scratch_candidates.resize(kept.size());
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+        m_scratch_candidates[k] = m_candidates[static_cast<std::size_t>(kept[k])];
+    }
+    std::swap(m_candidates, m_scratch_candidates);
+    // The pairs that involve a renewed vertex: a partial broad phase, or for many vertices a
+    // full one (cheaper then) of which only those pairs are kept.
+    const collision::FeaturePairs* found = nullptr;
+    const std::span<const Vec3d> lo(m_box_lo);
+    const std::span<const Vec3d> hi(m_box_hi);
+    const bool full = static_cast<double>(m_new_path_vertices.size()) >
+                      FULL_FRACTION * static_cast<double>(m_num_vertices);
+    compute_triangle_motions(time);
+    m_filter_margin = 1e-9 * (1.0 + largest_coordinate(x, m_box_hi));
+    const auto close = [this](std::int32_t a, std::int32_t b) {
+        return may_come_close(a, b);
+    };
+    const collision::SelfCollisionBroadPhase<double>::TrianglePairFilter keep(close);
+    if (full || m_inflation != 0.5 * m_thickness) {
+        m_inflation = 0.5 * m_thickness;
+        found = &m_broad_phase.update(lo, hi, m_inflation, &keep);
+        ++m_stats.gathers;
+    } else {
+        found = &m_broad_phase.update_vertices(lo, hi, m_inflation, m_new_path_vertices, &keep);
+        ++m_stats.path_updates;
+    }
+    add_broad_phase_times(m_broad_phase.stats());
+    m_stats.new_paths += static_cast<std::int64_t>(m_new_path_vertices.size());
+    Stopwatch filter;
+    add_candidates(*found, x, shift, time, m_marks);
+    m_stats.narrow_ms += filter.elapsed_ms();
+    m_stats.candidate_pairs = static_cast<std::int64_t>(m_candidates.size());
+    m_stats.gather_ms += watch.elapsed_ms();
+}
+
+void SelfCollision::prepare(std::span<const Vec3d> positions, std::span<const Vec3d> velocities,
+                            double time, double window_dt) {
+    const Vec3d mean_velocity = median_of(velocities, false);
+    m_new_velocities.resize(m_num_vertices);
+    parallel_for(
+        static_cast<std::int64_t>(m_num_vertices),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_new_velocities[v] = velocities[v] - mean_velocity;
+        },
+        VERTEX_GRAIN);
+    const std::span<const Vec3d> u(m_new_velocities);
+    if (!m_has_gather || window_dt != m_window_dt) {
+        gather(positions, u, time, window_dt);
+        return;
+    }
+    // New paths for the vertices that escaped in the last window, whose path ends within this
+    // one or that are predicted to leave their slack in it (their deviation grows at most by
+    // their velocity's difference from the path's, over the window).
+    const Vec3d shift = shift_of(positions);
+    const double end = time + window_dt * (1.0 - 1e-6);
+    m_new_path_vertices.clear();
+    for (std::size_t v = 0; v < m_num_vertices; ++v) {
+        const double growth = norm(m_new_velocities[v] - m_path_velocities[v]) * window_dt;
+        if (m_needs_path[v] != 0 || m_path_ends[v] < end || time < m_anchor_times[v] ||
+            deviation(positions[v], shift, time, v) + growth > m_slacks[v]) {
+            m_new_path_vertices.push_back(static_cast<std::int32_t>(v));
+        }
+    }
+    renew_paths(positions, shift, u, time);
+}
+
 std::int64_t SelfCollision::project(std::span<Vec3d> positions,
                                     std::span<const Vec3d> previous_positions,
                                     std::span<const double> inverse_masses,
-                                    const ClothMaterial& material) {
+                                    const ClothMaterial& material, double time, double h) {
+    m_stats.contacts = 0;
+    if (!m_has_gather || positions.size() != m_num_vertices) {
+        return 0;
+    }
     Stopwatch watch;
-    const collision::FeaturePairs& candidates = m_candidates;
-    const auto& edges = m_gather_phase.topology().edges;
-    const auto num_vf = static_cast<std::int64_t>(candidates.vertex_face.size());
-    const auto num_ee = static_cast<std::int64_t>(candidates.edge_edge.size());
     // A pair's features, weights (closest points' barycentric weights, + first feature, −
     // second), normal and distance in a configuration.
     struct Proximity {
@@ -253,32 +582,29 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         Vec3d normal;
         double distance;
     };
-    const auto proximity = [&](std::int64_t i, std::span<const Vec3d> x) {
-        const auto at = [&](std::int32_t v) {
-            return x[static_cast<std::size_t>(v)];
+    const auto proximity = [&](const auto& c, std::span<const Vec3d> x) {
+        const auto at = [&](int k) {
+            return x[static_cast<std::size_t>(c.vertices[k])];
         };
-        Proximity p{};
-        if (i < num_vf) {
-            const collision::VertexFacePair& pair =
-                candidates.vertex_face[static_cast<std::size_t>(i)];
-            const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(pair.face)];
+        Proximity p{{c.vertices[0], c.vertices[1], c.vertices[2], c.vertices[3]}, {}, {}, 0.0};
+        if (c.is_edge_edge == 0) {
             const collision::PointTriangleProximity<double> q =
-                collision::point_triangle_proximity(at(pair.vertex), at(f[0]), at(f[1]), at(f[2]));
-            p = {{pair.vertex, f[0], f[1], f[2]},
-                 {1.0, -q.barycentric.x, -q.barycentric.y, -q.barycentric.z},
-                 q.normal,
-                 q.distance};
+                collision::point_triangle_proximity(at(0), at(1), at(2), at(3));
+            p.weights[0] = 1.0;
+            p.weights[1] = -q.barycentric.x;
+            p.weights[2] = -q.barycentric.y;
+            p.weights[3] = -q.barycentric.z;
+            p.normal = q.normal;
+            p.distance = q.distance;
         } else {
-            const collision::EdgeEdgePair& pair =
-                candidates.edge_edge[static_cast<std::size_t>(i - num_vf)];
-            const geometry::Edge& a = edges[static_cast<std::size_t>(pair.edge_a)];
-            const geometry::Edge& b = edges[static_cast<std::size_t>(pair.edge_b)];
             const collision::SegmentSegmentProximity<double> q =
-                collision::segment_segment_proximity(at(a[0]), at(a[1]), at(b[0]), at(b[1]));
-            p = {{a[0], a[1], b[0], b[1]},
-                 {1.0 - q.s, q.s, -(1.0 - q.t), -q.t},
-                 q.normal,
-                 q.distance};
+                collision::segment_segment_proximity(at(0), at(1), at(2), at(3));
+            p.weights[0] = 1.0 - q.s;
+            p.weights[1] = q.s;
+            p.weights[2] = -(1.0 - q.t);
+            p.weights[3] = -q.t;
+            p.normal = q.normal;
+            p.distance = q.distance;
         }
         return p;
     };
@@ -287,11 +613,11 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     // was on at the substep's start): it is pushed back along the start's normal (the current
     // normal would push it further through). Pairs touching at the start have no side to keep.
     const std::span<const Vec3d> current(positions);
-    const auto contact = [&](std::int64_t i) {
-        Proximity now = proximity(i, current);
+    const auto contact = [&](const auto& c) {
+        Proximity now = proximity(c, current);
         // A pair that passed through each other was at distance 0 within the substep, so its
         // distance now is at most its relative sweep over the substep.
-        const std::size_t first = i < num_vf ? 1 : 2;  // VF: the vertex; EE: edge a
+        const std::size_t first = c.is_edge_edge != 0 ? 2 : 1;
         if (now.distance >= m_thickness &&
             now.distance >
                 relative_sweep(previous_positions, current,
@@ -299,7 +625,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
                                std::span<const std::int32_t>(now.vertices + first, 4 - first))) {
             return now;
         }
-        const Proximity start = proximity(i, previous_positions);
+        const Proximity start = proximity(c, previous_positions);
         if (start.distance > 1e-3 * m_thickness) {
             Vec3d gap{0.0, 0.0, 0.0};
             for (int k = 0; k < 4; ++k) {
@@ -313,40 +639,33 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         }
         return now;
     };
-    // A pair's distance cannot have fallen below its distance at the gather minus the largest
-    // relative displacement since then of a vertex of one feature and a vertex of the other
-    // (straight substeps: the largest over the window so far is at a substep's end, so a running
-    // maximum per pair). Pairs for which that stays at least the thickness are neither in contact
-    // nor passed through: no proximity test.
-    const std::span<const Vec3d> gathered(m_gather_positions);
-    const auto far_apart = [&](std::int64_t i) {
-        double sweep = 0.0;
-        if (i < num_vf) {
-            const collision::VertexFacePair& pair =
-                candidates.vertex_face[static_cast<std::size_t>(i)];
-            const std::int32_t vertex[1] = {pair.vertex};
-            sweep = relative_sweep(gathered, current, vertex,
-                                   m_triangles[static_cast<std::size_t>(pair.face)]);
-        } else {
-            const collision::EdgeEdgePair& pair =
-                candidates.edge_edge[static_cast<std::size_t>(i - num_vf)];
-            sweep = relative_sweep(gathered, current, edges[static_cast<std::size_t>(pair.edge_a)],
-                                   edges[static_cast<std::size_t>(pair.edge_b)]);
-        }
-        double& largest = m_pair_sweeps[static_cast<std::size_t>(i)];
-        largest = std::max(largest, sweep);
-        return m_gather_distances[static_cast<std::size_t>(i)] - largest >= m_thickness;
-    };
+    // Deviations over the straight substep are at most the larger of their values at its ends:
+    // candidates whose bound stays at least the thickness over it are neither in contact nor
+    // passed through, with no proximity test.
+    const Vec3d shift_now = shift_of(current);
+    const Vec3d shift_before = shift_of(previous_positions);
+    m_deviations.resize(m_num_vertices);
+    parallel_for(
+        static_cast<std::int64_t>(m_num_vertices),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_deviations[v] = std::max(deviation(previous_positions[v], shift_before, time - h, v),
+                                       deviation(current[v], shift_now, time, v));
+        },
+        VERTEX_GRAIN);
+    const std::span<const double> deviations(m_deviations);
     // In parallel, the pairs closer than thickness (in pair order); then, sequentially, push each
     // apart with its contact at the positions as they are by then.
-    const std::vector<std::int64_t>& close = indices_where(num_vf + num_ee, [&](std::int64_t i) {
-        return !far_apart(i) && contact(i).distance < m_thickness;
-    });
+    const std::vector<std::int64_t>& close =
+        indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
+            const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
+            return bound(c, deviations, time) < m_thickness && contact(c).distance < m_thickness;
+        });
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;
     for (const std::int64_t i : close) {
-        const Proximity p = contact(i);
+        const Proximity p = contact(m_candidates[static_cast<std::size_t>(i)]);
         if (!(p.distance < m_thickness)) {
             continue;
         }
@@ -378,70 +697,206 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     return contacts;
 }
 
+void SelfCollision::search_escaped(std::span<const Vec3d> positions_t0,
+                                   std::span<const Vec3d> positions, const Vec3d& shift_t0,
+                                   const Vec3d& shift, double margin) {
+    if (m_escaped_now.empty()) {
+        return;
+    }
+    // Many escaped (or no broad phase yet): every vertex is searched on its motion over the
+    // window, with boxes grown by the rounding margin only (as thin as the CCD allows; the next
+    // step 1 gathers again with the half-thickness growth).
+    const bool all =
+        !m_broad_phase_ready || static_cast<double>(m_escaped_now.size()) >
+                                    FULL_FRACTION * static_cast<double>(m_num_vertices);
+    if (all) {
+        m_escaped_now.resize(m_num_vertices);
+        for (std::size_t v = 0; v < m_num_vertices; ++v) {
+            m_escaped_now[v] = static_cast<std::int32_t>(v);
+        }
+        m_escape_pairs.vertex_face.clear();
+        m_escape_pairs.edge_edge.clear();
+    }
+    // Boxes around each escaped vertex's motion over the window in the frame: from x_t0 − s_t0
+    // to x − s (for a vertex put back, x = x_t0).
+    for (const std::int32_t v : m_escaped_now) {
+        const auto k = static_cast<std::size_t>(v);
+        const Vec3d a = positions_t0[k] - shift_t0;
+        const Vec3d b = positions[k] - shift;
+        m_box_lo[k] = min(a, b);
+        m_box_hi[k] = max(a, b);
+        m_escaped[k] = 1;
+        m_needs_path[k] = 1;
+    }
+    const std::span<const Vec3d> lo(m_box_lo);
+    const std::span<const Vec3d> hi(m_box_hi);
+    const collision::FeaturePairs* found = nullptr;
+    if (all) {
+        m_inflation = margin;
+        found = &m_broad_phase.update(lo, hi, m_inflation);
+        m_broad_phase_ready = true;
+        ++m_stats.gathers;
+    } else {
+        found = &m_broad_phase.update_vertices(lo, hi, m_inflation, m_escaped_now);
+        ++m_stats.path_updates;
+    }
+    add_broad_phase_times(m_broad_phase.stats());
+    // The pairs that involve an escaped vertex (the others are the candidates' business).
+    Stopwatch stage;
+    const collision::FeaturePairs& pairs = *found;
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    const std::vector<std::int64_t>& kept = indices_where(
+        num_vf + static_cast<std::int64_t>(pairs.edge_edge.size()), [&](std::int64_t i) {
+            const FeatureVertices f = feature_vertices(pairs, i);
+            return (m_escaped[static_cast<std::size_t>(f.v[0])] |
+                    m_escaped[static_cast<std::size_t>(f.v[1])] |
+                    m_escaped[static_cast<std::size_t>(f.v[2])] |
+                    m_escaped[static_cast<std::size_t>(f.v[3])]) != 0;
+        });
+    for (const std::int64_t i : kept) {
+        if (i < num_vf) {
+            m_escape_pairs.vertex_face.push_back(pairs.vertex_face[static_cast<std::size_t>(i)]);
+        } else {
+            m_escape_pairs.edge_edge.push_back(
+                pairs.edge_edge[static_cast<std::size_t>(i - num_vf)]);
+        }
+    }
+    m_stats.new_paths += static_cast<std::int64_t>(m_escaped_now.size());
+    m_stats.narrow_ms += stage.elapsed_ms();
+}
+
 void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
-                            std::span<Vec3d> velocities) {
+                            std::span<Vec3d> velocities, double time_t0, double time) {
     Stopwatch watch;
-    const auto& edges = m_swept_phase.topology().edges;
-    std::vector<std::uint8_t> reverted(positions.size(), 0);
-    std::vector<std::uint8_t> changed(positions.size(), 0);  // moved back in this round
+    const std::span<const Vec3d> end(positions);
+    const std::size_t n = m_num_vertices;
+    // Rounding margin: pairs are cleared only when they provably stay this far apart.
+    const double margin = 1e-9 * (1.0 + largest_coordinate(positions_t0, end));
+    if (!m_has_gather) {
+        // Without paths (no step 1): every vertex's motion is searched.
+        reset_frame(positions_t0);
+        m_box_lo.resize(n);
+        m_box_hi.resize(n);
+        m_needs_path.assign(n, 1);
+        m_candidates.clear();
+    }
+    const Vec3d shift_t0 = shift_of(positions_t0);
+    const Vec3d shift = shift_of(end);
+    // Escaped: vertices whose motion over the window is not within their path's slack (or that
+    // have no path). Their pairs are searched on their actual motion; the others' motion lies
+    // within their slacks (convex: the deviation along the straight motion, the frame's
+    // translation interpolated, is at most the larger of its ends'), so inside their boxes.
+    Stopwatch stage;
+    m_escaped.assign(n, 0);
+    m_escaped_now.clear();
+    m_escape_pairs.vertex_face.clear();
+    m_escape_pairs.edge_edge.clear();
+    m_deviations.resize(n);
+    for (std::size_t v = 0; v < n; ++v) {
+        if (!m_has_gather || m_needs_path[v] != 0 ||
+            !within_path(positions_t0[v], shift_t0, time_t0, v, margin) ||
+            !within_path(end[v], shift, time, v, margin)) {
+            m_escaped_now.push_back(static_cast<std::int32_t>(v));
+            m_deviations[v] = 0.0;
+        } else {
+            m_deviations[v] = std::max(deviation(positions_t0[v], shift_t0, time_t0, v),
+                                       deviation(end[v], shift, time, v));
+        }
+    }
+    m_stats.narrow_ms += stage.elapsed_ms();
+    search_escaped(positions_t0, end, shift_t0, shift, margin);
+    // Pairs that are not candidates and involve no escaped vertex stay thickness apart; a
+    // candidate can only touch when its bound over the window is not above the margin and
+    // neither is its start distance minus its relative sweep.
+    run_fail_safe(positions_t0, positions, velocities, shift_t0, shift, time, margin);
+    m_stats.candidate_pairs = static_cast<std::int64_t>(m_candidates.size());
+    m_stats.enforce_ms += watch.elapsed_ms();
+}
+
+void SelfCollision::run_fail_safe(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                                  std::span<Vec3d> velocities, const Vec3d& shift_t0,
+                                  const Vec3d& shift, double time, double margin) {
+    const auto& edges = *m_edges;
+    const std::span<const Vec3d> end(positions);
+    m_reverted.assign(m_num_vertices, 0);
+    m_changed.assign(m_num_vertices, 0);
+    // Each vertex's motion over the window (zero once put back).
+    m_window_motion.resize(m_num_vertices);
+    parallel_for(
+        static_cast<std::int64_t>(m_num_vertices),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_window_motion[v] = end[v] - positions_t0[v];
+        },
+        VERTEX_GRAIN);
+    const std::span<const Vec3d> motion(m_window_motion);
     // Puts v back at its start with zero velocity; true when that moved it.
     const auto revert = [&](std::size_t v) {
-        m_stats.reverted_vertices += reverted[v] == 0 ? 1 : 0;
-        reverted[v] = 1;
+        m_stats.reverted_vertices += m_reverted[v] == 0 ? 1 : 0;
+        m_reverted[v] = 1;
         if (positions[v] == positions_t0[v]) {
             return false;
         }
         positions[v] = positions_t0[v];
         velocities[v] = {0.0, 0.0, 0.0};
-        changed[v] = 1;
+        m_window_motion[v] = {0.0, 0.0, 0.0};
+        m_changed[v] = 1;
         return true;
     };
-    // Round 0: every pair that can touch during the step, from boxes swept by the motion relative
-    // to the mean motion (the same pairs; boxes grown by `margin` against the rounding of the
-    // shift).
-    const double extent = parallel_reduce(
-        static_cast<std::int64_t>(positions.size()), 0.0,
-        [&](std::int64_t begin, std::int64_t end) {
-            double m = 0.0;
-            for (std::int64_t i = begin; i < end; ++i) {
-                const auto v = static_cast<std::size_t>(i);
-                m = std::max({m, std::abs(positions[v].x), std::abs(positions[v].y),
-                              std::abs(positions[v].z), std::abs(positions_t0[v].x),
-                              std::abs(positions_t0[v].y), std::abs(positions_t0[v].z)});
-            }
-            return m;
-        },
-        [](double a, double b) { return std::max(a, b); }, 4096);
-    const double margin = 1e-9 * (1.0 + extent);
-    const collision::FeaturePairs* all_pairs = nullptr;
-    if (gather_boxes_hold(positions_t0, positions, margin)) {
-        // Every vertex ended inside its box of the gather (which starts at positions_t0): its
-        // motion lies in that box, so the gather's broad-phase pairs hold every pair that can
-        // touch (no second broad phase).
-        all_pairs = &m_gather_phase.pairs();
-    } else {
-        shifted(positions, mean_displacement(positions_t0, positions), m_relative_end);
-        all_pairs =
-            &m_swept_phase.update(positions_t0, std::span<const Vec3d>(m_relative_end), margin);
-        add_broad_phase_times(m_swept_phase.stats());
-    }
-    // Pairs whose distance provably stays above `margin` (start distance minus relative sweep)
-    // cannot touch: the CCD runs on the rest.
-    Stopwatch stage;
-    const auto may_touch = [&](const collision::FeaturePairs& pairs, std::int64_t i) {
-        return !separation_exceeds(pairs, i, positions_t0, positions, margin);
+    const auto marked = [](std::span<const std::uint8_t> marks, const FeatureVertices& f) {
+        return (marks[static_cast<std::size_t>(f.v[0])] | marks[static_cast<std::size_t>(f.v[1])] |
+                marks[static_cast<std::size_t>(f.v[2])] |
+                marks[static_cast<std::size_t>(f.v[3])]) != 0;
     };
-    collision::FeaturePairs active =
-        filter_pairs(*all_pairs, [&](std::int64_t i) { return may_touch(*all_pairs, i); });
+    // The pairs that may touch, as feature pairs for the CCD: candidates without an escaped
+    // vertex whose bound allows it, and pairs of escaped vertices; both only when the start
+    // distance minus the relative sweep allows it too. With only_changed, just the pairs with a
+    // vertex put back in the last round (the others were cleared on the same motion).
+    collision::FeaturePairs active;
+    const auto collect = [&](bool only_changed) {
+        active.vertex_face.clear();
+        active.edge_edge.clear();
+        const std::vector<std::int64_t>& from_candidates =
+            indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
+                const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
+                const FeatureVertices f = feature_vertices(c);
+                return !marked(m_escaped, f) && (!only_changed || marked(m_changed, f)) &&
+                       bound(c, m_deviations, time) <= margin &&
+                       !separation_exceeds(f, positions_t0, motion, margin);
+            });
+        for (const std::int64_t i : from_candidates) {
+            const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
+            if (c.is_edge_edge == 0) {
+                active.vertex_face.push_back({c.feature_a, c.feature_b});
+            } else {
+                active.edge_edge.push_back({c.feature_a, c.feature_b});
+            }
+        }
+        const collision::FeaturePairs& pairs = m_escape_pairs;
+        const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+        const std::vector<std::int64_t>& from_escaped = indices_where(
+            num_vf + static_cast<std::int64_t>(pairs.edge_edge.size()), [&](std::int64_t i) {
+                const FeatureVertices f = feature_vertices(pairs, i);
+                return (!only_changed || marked(m_changed, f)) &&
+                       !separation_exceeds(f, positions_t0, motion, margin);
+            });
+        for (const std::int64_t i : from_escaped) {
+            if (i < num_vf) {
+                active.vertex_face.push_back(pairs.vertex_face[static_cast<std::size_t>(i)]);
+            } else {
+                active.edge_edge.push_back(pairs.edge_edge[static_cast<std::size_t>(i - num_vf)]);
+            }
+        }
+    };
+    Stopwatch stage;
+    collect(false);
     m_stats.narrow_ms += stage.elapsed_ms();
-    const collision::FeaturePairs* pairs = &active;
     for (int round = 0;; ++round) {
         m_stats.enforce_rounds = std::max(m_stats.enforce_rounds, round + 1);
         stage.restart();
-        const collision::NarrowPhaseResult narrow =
-            collision::continuous_narrow_phase(positions_t0, std::span<const Vec3d>(positions),
-                                               std::span<const geometry::Triangle>(m_triangles),
-                                               std::span<const geometry::Edge>(edges), *pairs);
+        const collision::NarrowPhaseResult narrow = collision::continuous_narrow_phase(
+            positions_t0, end, std::span<const geometry::Triangle>(m_triangles),
+            std::span<const geometry::Edge>(edges), active);
         m_stats.narrow_ms += stage.elapsed_ms();
         if (round == 0) {
             m_stats.ccd_hits += narrow.vf_hits + narrow.ee_hits;
@@ -467,79 +922,41 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
         }
         if (!moved_any) {
             // Every vertex of every remaining hit is already at its start: a contact at the
-            // frame's start itself (touching input). Nothing more a revert can do.
+            // window's start itself (touching input). Nothing more a revert can do.
             m_stats.response_ms += stage.elapsed_ms();
             break;
         }
-        if (round == 0) {
-            // A vertex put back stands still, which in the frame of the mean motion is a motion
-            // outside its relative box: from now on, boxes swept in world space from the start to
-            // the positions after this round's reverts. Later reverts shrink a motion to a point
-            // inside such a box, so this broad phase holds every pair until the end.
-            all_pairs =
-                &m_revert_phase.update(positions_t0, std::span<const Vec3d>(positions), margin);
-            add_broad_phase_times(m_revert_phase.stats());
+        // A vertex put back stands still: in the frame it moves from x_t0 − s(τ_t0) to
+        // x_t0 − s(τ). An escaped one's box holds that already; another that leaves its slack
+        // so escapes now, and its pairs are searched.
+        m_escaped_now.clear();
+        const double grow = m_inflation - margin;
+        for (std::size_t v = 0; v < m_num_vertices; ++v) {
+            if (m_changed[v] == 0) {
+                continue;
+            }
+            if (m_escaped[v] != 0) {
+                // Its box holds its start; it must hold the end it now has as well.
+                const Vec3d p = end[v] - shift;
+                const Vec3d& lo = m_box_lo[v];
+                const Vec3d& hi = m_box_hi[v];
+                if (!(p.x >= lo.x - grow && p.y >= lo.y - grow && p.z >= lo.z - grow &&
+                      p.x <= hi.x + grow && p.y <= hi.y + grow && p.z <= hi.z + grow)) {
+                    m_escaped_now.push_back(static_cast<std::int32_t>(v));
+                }
+                continue;
+            }
+            if (within_path(end[v], shift, time, v, margin)) {
+                m_deviations[v] = std::max(m_deviations[v], deviation(end[v], shift, time, v));
+            } else {
+                m_escaped_now.push_back(static_cast<std::int32_t>(v));
+            }
         }
-        // Only pairs with a vertex moved back in this round can have changed their verdict: the
-        // others were cleared on the same motion.
-        active = filter_pairs(*all_pairs, [&](std::int64_t i) {
-            return touches(*all_pairs, i, changed) && may_touch(*all_pairs, i);
-        });
-        for (std::size_t v = 0; v < changed.size(); ++v) {
-            changed[v] = 0;
-        }
-        pairs = &active;
+        search_escaped(positions_t0, end, shift_t0, shift, margin);
+        collect(true);
+        std::fill(m_changed.begin(), m_changed.end(), std::uint8_t{0});
         m_stats.response_ms += stage.elapsed_ms();
     }
-    m_stats.enforce_ms += watch.elapsed_ms();
-}
-
-bool SelfCollision::gather_boxes_hold(std::span<const Vec3d> positions_t0,
-                                      std::span<const Vec3d> positions, double margin) const {
-    const double grow = 0.5 * m_thickness - margin;  // the gather's inflation, less rounding
-    if (!(grow >= 0.0) || m_gather_positions.size() != positions.size() ||
-        m_gather_end.size() != positions.size()) {
-        return false;
-    }
-    const std::int64_t outside = parallel_reduce(
-        static_cast<std::int64_t>(positions.size()), std::int64_t{0},
-        [&](std::int64_t begin, std::int64_t end) {
-            std::int64_t count = 0;
-            for (std::int64_t i = begin; i < end; ++i) {
-                const auto v = static_cast<std::size_t>(i);
-                // The gather's boxes start where this motion starts, in the gather's frame.
-                const Vec3d& start = m_gather_positions[v];
-                const Vec3d lo = min(start, m_gather_end[v]);
-                const Vec3d hi = max(start, m_gather_end[v]);
-                const Vec3d a = positions[v] - m_gather_shift;
-                const bool same_start = positions_t0[v] == start;
-                const bool inside = a.x >= lo.x - grow && a.y >= lo.y - grow &&
-                                    a.z >= lo.z - grow && a.x <= hi.x + grow &&
-                                    a.y <= hi.y + grow && a.z <= hi.z + grow;
-                count += same_start && inside ? 0 : 1;
-            }
-            return count;
-        },
-        [](std::int64_t a, std::int64_t b) { return a + b; }, 4096);
-    return outside == 0;
-}
-
-bool SelfCollision::touches(const collision::FeaturePairs& pairs, std::int64_t i,
-                            std::span<const std::uint8_t> marked) const {
-    const auto is_marked = [&](std::int32_t v) {
-        return marked[static_cast<std::size_t>(v)] != 0;
-    };
-    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
-    if (i < num_vf) {
-        const collision::VertexFacePair& p = pairs.vertex_face[static_cast<std::size_t>(i)];
-        const geometry::Triangle& f = m_triangles[static_cast<std::size_t>(p.face)];
-        return is_marked(p.vertex) || is_marked(f[0]) || is_marked(f[1]) || is_marked(f[2]);
-    }
-    const auto& edges = m_swept_phase.topology().edges;
-    const collision::EdgeEdgePair& p = pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
-    const geometry::Edge& a = edges[static_cast<std::size_t>(p.edge_a)];
-    const geometry::Edge& b = edges[static_cast<std::size_t>(p.edge_b)];
-    return is_marked(a[0]) || is_marked(a[1]) || is_marked(b[0]) || is_marked(b[1]);
 }
 
 }  // namespace pliant::cloth

@@ -2,42 +2,77 @@
 // apart from itself, and a continuous-collision fail-safe that makes every frame end free of
 // intersections.
 //
-// Per window of a few substeps (ClothSolver::step runs a frame as windows of 4 substeps):
-//   1. gather, at the window's start: the broad phase (collision/self_broad_phase.hpp: LBVH +
-//      R-triangles + orphan sets) swept from the positions x to the prediction x + dt v + ½ g dt²
-//      (dt: the window) relative to the cloth's mean motion, boxes grown by half the thickness
-//      (so boxes overlap for features within the thickness), then only the pairs whose distance
-//      minus relative sweep can fall to twice the thickness: the vertex-face and edge-edge pairs
-//      that can come within thickness if the cloth moves about as predicted, each once. Pairs the
-//      prediction misses are caught by step 3.
-//   2. every substep, project: each gathered pair closer than thickness is pushed apart along
-//      its closest-point normal until thickness apart (a one-sided XPBD distance constraint,
-//      rigid; Bridson, Fedkiw, Anderson, "Robust Treatment of Collisions, Contact and Friction
-//      for Cloth Animation", SIGGRAPH 2002, §7.2 uses the same geometry as repulsions); a pair
-//      that passed through each other within the substep is pushed back along the normal it had
-//      at the substep's start; then Coulomb friction on the pair's relative tangential motion
-//      over the substep. Pairs whose distance at the gather minus their largest relative sweep
-//      since then stays at least the thickness are skipped without a proximity test. Sequential
-//      over the pairs in their sorted order: deterministic.
-//   3. enforce, at the window's end: the gather's broad-phase pairs when every vertex ended inside
-//      its gather box (in the gather's translating frame; typical in free fall), else the swept
-//      broad phase from the window's start to its end, with boxes swept by the motion relative to
-//      the cloth's mean motion (distances do not change
-//      in a translating frame, so these are the same pairs, and a falling sheet sweeps nothing);
-//      pairs whose start distance minus the largest relative displacement of their vertices stays
-//      positive cannot touch and are dropped; the conservative CCD (collision/ccd.hpp) runs on the
-//      rest. The vertices of every pair that may touch are put back at their window-start
-//      positions with zero velocity, and the check repeats on the changed motion until no pair
-//      touches: after the first round a world-space swept broad phase from the start to the
-//      positions after that round's reverts (a vertex put back stands still, which is not inside
-//      its box relative to the mean motion; later reverts shrink a motion to a point inside its
-//      world-space box, so this one broad phase holds every pair until the end), and each round
-//      re-tests only the pairs with a vertex put back in that round (the others were cleared on
-//      unchanged motion). Every round puts back at least one more vertex or stops, so this ends,
-//      at worst with every vertex at its start. Since the window's start is intersection-free, the
-//      CCD never misses a contact and reverted vertices do not move, its end is intersection-free
-//      too (the fail-safe of Bridson et al. 2002 §7.4 taken to its simplest, rigid form: a vertex
-//      that cannot move safely does not move in that window).
+// ClothSolver::step runs a frame as windows of a few substeps. The candidate pairs persist across
+// windows (a kinetic candidate set): each vertex follows a predicted path, and the broad phase's
+// boxes hold every point within a slack of those paths, so the candidates stay valid as long as
+// every vertex stays within its slack; a vertex that leaves it (or reaches the end of its path)
+// gets a new path, and only its pairs are searched again. A falling sheet keeps its paths for
+// the whole fall (one broad phase); a draping one renews the paths of its moving parts.
+//
+//   frame. Positions are compared in a frame translating with the cloth: s(τ) is the
+//      componentwise median, over every 16th vertex, of the displacement since the last full
+//      gather (distances are the same in any translating frame; a falling sheet does not move in
+//      this one, and a sheet resting on an obstacle while a part of it swings does not either).
+//      Any translation works as long as each check uses one value of s(τ) for all vertices.
+//   paths. Vertex v has an anchor a_v (its position in the frame at time τ_v), a velocity u_v
+//      (its velocity relative to the frame's) and a slack g_v = 0.2 thickness; its path is
+//      a_v + u_v (τ − τ_v) for τ in [τ_v, τ_v + duration] (as long as it moves at most half a
+//      thickness, one window to 64 windows); its deviation at τ is
+//      e_v = |x_v − s(τ) − a_v − u_v (τ − τ_v)|.
+//   boxes. The broad phase (collision/self_broad_phase.hpp: LBVH + R-triangles + orphan sets) runs
+//      over the boxes of the paths grown by their slacks, grown by half the thickness more: a
+//      pair it does not report stays more than thickness apart while its vertices are within
+//      their slacks, and does not touch while they are within slack + half the thickness.
+//   candidates. Of the reported pairs, those whose distance can fall below the thickness: a
+//      pair's displacement relative to its distance d at time τ_0 is at most
+//      |Δ_i − Δ_j| ≤ e_i(τ) + e_i(τ_0) + e_j(τ) + e_j(τ_0) + |u_i − u_j| (τ − τ_0), for i a vertex
+//      of one feature and j of the other, so a pair is a candidate when d minus that bound (every
+//      e at most its slack, τ up to the paths' end) can fall below the thickness. Each candidate
+//      keeps d, τ_0, the deviations at τ_0 and the largest |u_i − u_j|, so its distance bound at
+//      any later τ costs a few loads. The broad phase skips triangle pairs whose path boxes, less
+//      the slacks and the largest relative speed of their vertices over the paths' duration, stay
+//      thickness apart (coherent motion: a falling flap's neighbours move together), before any
+//      feature test.
+//
+// Per window:
+//   1. prepare, at the window's start: the first window gathers (every vertex gets a path, a full
+//      broad phase); later windows give new paths to the vertices that escaped in the last
+//      window, whose path ends within this one or that are predicted to leave their slack in it
+//      (their velocity's difference from the path's), drop their candidates and search their
+//      pairs again (SelfCollisionBroadPhase::update_vertices; a full broad phase for more than a
+//      quarter of the vertices).
+//   2. every substep, project: each candidate closer than thickness is pushed apart along its
+//      closest-point normal until thickness apart (a one-sided XPBD distance constraint, rigid;
+//      Bridson, Fedkiw, Anderson, "Robust Treatment of Collisions, Contact and Friction for Cloth
+//      Animation", SIGGRAPH 2002, §7.2 uses the same geometry as repulsions); a pair that passed
+//      through each other within the substep is pushed back along the normal it had at the
+//      substep's start; then Coulomb friction on the pair's relative tangential motion over the
+//      substep. Candidates whose distance bound stays at least the thickness over the substep
+//      are skipped without a proximity test. Sequential over the candidates in their order:
+//      deterministic.
+//   3. enforce, at the window's end: a vertex whose deviation at the window's start or end exceeds
+//      its slack + half the thickness has escaped: its motion over the window (in the frame) is
+//      its box and its pairs are searched (partial broad phase; for more than a quarter of the
+//      vertices, every vertex's motion with boxes grown by the rounding margin only, as thin as
+//      the CCD allows). Every other vertex's motion lies within its slack + half the thickness
+//      (convex: the deviation along the straight motion, the frame's translation interpolated,
+//      is at most the larger of its ends'), so inside its grown box; then every pair that can
+//      touch is a candidate whose distance bound over the window is not positive, or a pair of
+//      an escaped vertex — in both cases only when its start distance minus its relative sweep
+//      over the window is not positive either; the conservative CCD (collision/ccd.hpp) runs on
+//      those. The vertices of every pair that may touch are put back at their window-start
+//      positions with zero velocity, and the check repeats on the changed motion (only pairs
+//      with a vertex just put back; a vertex put back stands still, which in the translating
+//      frame is a motion of its own: if that leaves its slack or box, it escapes and its pairs
+//      are searched) until no pair touches. Every round puts back at least one more vertex or
+//      stops, so this ends, at worst with every vertex at its start. Since the window's start is
+//      intersection-free, the CCD never misses a contact and reverted vertices do not move, its
+//      end is intersection-free too (the fail-safe of Bridson et al. 2002 §7.4 taken to its
+//      simplest, rigid form: a vertex that cannot move safely does not move in that window).
+//      Escaped vertices get new paths in the next step 1.
+//
+// Rounding: every test that clears a pair for the CCD keeps a margin of 1e-9 (1 + the largest
+// coordinate); the broad phase's float boxes are rounded outward.
 //
 // Units: metres, seconds. Not thread safe; the kernels run in parallel inside.
 #pragma once
@@ -60,15 +95,18 @@ struct SelfCollisionStats {
     double project_ms = 0.0;  // step 2, all calls
     double enforce_ms = 0.0;  // step 3, all calls
     // The same time by kind of work, over steps 1-3:
-    double refit_ms = 0.0;             // LBVH builds and refits (gather and fail-safe broad phases)
+    double refit_ms = 0.0;             // LBVH builds and refits
     double traverse_ms = 0.0;          // BVH traversal, feature boxes and R-triangle feature tests
-    double narrow_ms = 0.0;            // proximity tests of the candidates (step 2), CCD (step 3)
+    double narrow_ms = 0.0;            // candidate filters, proximity tests (step 2), CCD (step 3)
     double response_ms = 0.0;          // pushing contacts apart with friction (2), reverting (3)
-    std::int64_t candidate_pairs = 0;  // gathered VF + EE pairs
+    std::int64_t candidate_pairs = 0;  // candidates at the end of the last call
     std::int64_t contacts = 0;         // pairs pushed apart in the last substep
     std::int64_t ccd_hits = 0;         // pairs the CCD could not clear in the first round, summed
     std::int64_t reverted_vertices = 0;  // vertices put back by the fail-safe, summed over calls
     int enforce_rounds = 0;              // most rounds of one call
+    std::int64_t gathers = 0;            // full broad phases
+    std::int64_t path_updates = 0;       // partial broad phases (vertices given new paths)
+    std::int64_t new_paths = 0;          // vertices given new paths by them, summed
 };
 
 class SelfCollision {
@@ -76,67 +114,166 @@ public:
     SelfCollision(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
                   double thickness);
 
-    // Step 1. dt: the time the candidates must cover (s); gravity (m/s²). candidate_pairs
-    // describes the last call; gather_ms sums the frame's calls.
-    void gather(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double dt,
-                const Vec3d& gravity);
-    // Step 2; returns the pairs pushed apart (also stats().contacts). previous_positions: the
-    // positions at the start of the substep, for friction: the pair's relative tangential
-    // motion over the substep is cancelled when it is at most self_static_friction × the normal
-    // correction, else shortened by self_kinetic_friction × the correction (Coulomb, positional
-    // form: Macklin, Müller, Chentanez, Kim, "Unified Particle Physics for Real-Time
-    // Applications", SIGGRAPH 2014, §6.1).
+    // Step 1 for the window starting at `time` (s) and lasting window_dt (s).
+    void prepare(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double time,
+                 double window_dt);
+    // Step 2 for the substep of length h ending at `time` (s); returns the pairs pushed apart
+    // (also stats().contacts). previous_positions: the positions at the start of the substep, also
+    // for friction: the pair's relative tangential motion over the substep is cancelled when it
+    // is at most self_static_friction × the normal correction, else shortened by
+    // self_kinetic_friction × the correction (Coulomb, positional form: Macklin, Müller,
+    // Chentanez, Kim, "Unified Particle Physics for Real-Time Applications", SIGGRAPH 2014, §6.1).
     std::int64_t project(std::span<Vec3d> positions, std::span<const Vec3d> previous_positions,
-                         std::span<const double> inverse_masses, const ClothMaterial& material);
-    // Step 3; positions_t0: the start of the motion to check (intersection-free).
+                         std::span<const double> inverse_masses, const ClothMaterial& material,
+                         double time, double h);
+    // Step 3 over the window time_t0 → time (s, time > time_t0); positions_t0: its start
+    // (intersection-free), positions: its end, velocities: at its end (reverted vertices get
+    // zero). Works without step 1 (it then gathers on the window's motion).
     void enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
-                 std::span<Vec3d> velocities);
+                 std::span<Vec3d> velocities, double time_t0 = 0.0, double time = 1.0);
 
     const SelfCollisionStats& stats() const { return m_stats; }
     void reset_stats() { m_stats = {}; }
 
 private:
-    void add_broad_phase_times(const collision::BroadPhaseStats& broad);
-    // True when the last gather started at positions_t0 and every vertex's position now, in the
-    // gather's translating frame, lies in its gather box shrunk by `margin`: then the gather's
-    // broad-phase pairs include every pair that can touch over positions_t0 → positions.
-    bool gather_boxes_hold(std::span<const Vec3d> positions_t0, std::span<const Vec3d> positions,
-                           double margin) const;
+    // A candidate pair: its features (VF: vertex, face; EE: the two edges), their vertices (VF:
+    // the vertex, then the face's; EE: edge a's, then edge b's), and its distance bound: at time
+    // τ, distance − offset − (largest deviation of the first feature's vertices) − (of the
+    // second's) − spread · (τ − time).
+    struct Candidate {
+        std::int32_t feature_a;
+        std::int32_t feature_b;
+        std::int32_t vertices[4];
+        std::int32_t is_edge_edge;
+        double distance;  // at `time`
+        double offset;    // the deviations at `time`, summed as above
+        double spread;    // largest |u_i − u_j|, m/s
+        double time;      // s
+    };
+    // The vertices of a pair's two features: v[0 .. num_first) the first, v[num_first .. 4) the
+    // second.
+    struct FeatureVertices {
+        std::int32_t v[4];
+        std::size_t num_first;
+        std::span<const std::int32_t> first() const { return {v, num_first}; }
+        std::span<const std::int32_t> second() const { return {v + num_first, 4 - num_first}; }
+    };
     // Pairs are indexed VF first, then EE: i < #VF is vertex_face[i], else edge_edge[i − #VF].
-    // True when pair i has a vertex v with marked[v] != 0.
-    bool touches(const collision::FeaturePairs& pairs, std::int64_t i,
-                 std::span<const std::uint8_t> marked) const;
+    FeatureVertices feature_vertices(const collision::FeaturePairs& pairs, std::int64_t i) const;
+    static FeatureVertices feature_vertices(const Candidate& c) {
+        return {{c.vertices[0], c.vertices[1], c.vertices[2], c.vertices[3]},
+                c.is_edge_edge != 0 ? 2u : 1u};
+    }
+
+    // The frame's translation at x: the componentwise median over sample vertices of their
+    // displacement since the last gather (a falling sheet's motion; zero for a sheet that rests
+    // while a part of it swings).
+    Vec3d shift_of(std::span<const Vec3d> x) const;
+    // Componentwise median of x[v] (minus the sample's position at the last gather when
+    // from_origin) over the sample vertices.
+    Vec3d median_of(std::span<const Vec3d> x, bool from_origin) const;
+    // The sample vertices and their positions at x become the frame's origin.
+    void reset_frame(std::span<const Vec3d> x);
+    // Vertex v's deviation from its path at time τ (s) and position x, the frame at `shift`.
+    double deviation(const Vec3d& x, const Vec3d& shift, double time, std::size_t v) const {
+        return norm(x - shift - m_anchors[v] - m_path_velocities[v] * (time - m_anchor_times[v]));
+    }
+    // Whether v's path covers time τ and its deviation there is at most its slack less margin.
+    bool within_path(const Vec3d& x, const Vec3d& shift, double time, std::size_t v,
+                     double margin) const;
+    // A candidate's distance bound at time τ given per-vertex deviations.
+    static double bound(const Candidate& c, std::span<const double> deviations, double time);
+    // Largest per_vertex value over the first feature plus the largest over the second.
+    static double feature_sum(const FeatureVertices& f, std::span<const double> per_vertex);
+
+    // Every vertex gets a path anchored at x (time τ, frame reset so that s(τ) = 0) with
+    // velocity u[v]; full broad phase; the candidates are rebuilt.
+    void gather(std::span<const Vec3d> x, std::span<const Vec3d> u, double time, double window_dt);
+    // The vertices in m_new_path_vertices (ascending) get paths anchored at x (time τ, frame
+    // translation `shift`) with velocities u[v]; their pairs are searched again and replace their
+    // old candidates (for more than a quarter of the vertices, found by a full broad phase).
+    void renew_paths(std::span<const Vec3d> x, const Vec3d& shift, std::span<const Vec3d> u,
+                     double time);
+    // Sets vertex v's path and box.
+    void set_path(std::size_t v, const Vec3d& anchor, const Vec3d& velocity, double time);
+    // Appends the pairs of `pairs` (a broad phase's, boxes at x / time τ / frame `shift`) that
+    // can come within thickness as candidates; with `involving` non-empty, only pairs with a
+    // vertex v where involving[v] != 0.
+    void add_candidates(const collision::FeaturePairs& pairs, std::span<const Vec3d> x,
+                        const Vec3d& shift, double time, std::span<const std::uint8_t> involving);
+    // The vertices in m_escaped_now get boxes around their motion over the window (and around
+    // it put back) and are marked escaped (and needing a path); the pairs that involve them are
+    // searched (a partial broad phase, or a full one for many) and appended to m_escape_pairs.
+    void search_escaped(std::span<const Vec3d> positions_t0, std::span<const Vec3d> positions,
+                        const Vec3d& shift_t0, const Vec3d& shift, double margin);
+    // Per triangle, its vertices' paths at `time` as boxes (m_triangle_motions).
+    void compute_triangle_motions(double time);
+    // The broad phase's triangle-pair filter: false when no feature of triangles a and b can come
+    // within thickness while their vertices follow their paths within their slacks.
+    bool may_come_close(std::int32_t a, std::int32_t b) const;
+    // The CCD rounds of step 3.
+    void run_fail_safe(std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                       std::span<Vec3d> velocities, const Vec3d& shift_t0, const Vec3d& shift,
+                       double time, double margin);
+
     // The distance between pair i's features at x.
-    double pair_distance(const collision::FeaturePairs& pairs, std::int64_t i,
-                         std::span<const Vec3d> x) const;
-    // Whether a lower bound on pair i's distance over the linear motion start → end exceeds
-    // threshold: the distance at the start minus the largest relative displacement of a vertex
-    // of one feature and a vertex of the other. Decides most pairs by the features' box distance
-    // first; when it computes the exact start distance, it also stores it in *distance.
-    bool separation_exceeds(const collision::FeaturePairs& pairs, std::int64_t i,
-                            std::span<const Vec3d> start, std::span<const Vec3d> end,
-                            double threshold, double* distance = nullptr) const;
-    // The pairs for which keep(i) holds, in order (their indices stay in m_indices).
-    template <typename Keep>
-    collision::FeaturePairs filter_pairs(const collision::FeaturePairs& pairs, Keep&& keep);
+    static double features_distance(const FeatureVertices& f, std::span<const Vec3d> x);
+    // Whether the distance at `start` minus the largest relative displacement (motion: per vertex,
+    // end − start) of a vertex of one feature and one of the other exceeds threshold (box
+    // distance first).
+    static bool separation_exceeds(const FeatureVertices& f, std::span<const Vec3d> start,
+                                   std::span<const Vec3d> motion, double threshold);
     // The i in [0, n) with keep(i), ascending (valid until the next call).
     template <typename Keep>
     const std::vector<std::int64_t>& indices_where(std::int64_t n, Keep&& keep);
+    void add_broad_phase_times(const collision::BroadPhaseStats& broad);
 
     std::vector<geometry::Triangle> m_triangles;
+    std::size_t m_num_vertices;
     double m_thickness;
-    collision::SelfCollisionBroadPhase<double> m_gather_phase;
-    collision::SelfCollisionBroadPhase<double> m_swept_phase;   // fail-safe, round 0
-    collision::SelfCollisionBroadPhase<double> m_revert_phase;  // fail-safe, later rounds
-    std::vector<Vec3d> m_predicted;
-    std::vector<Vec3d> m_relative_end;       // a step's end minus the mean displacement
-    Vec3d m_gather_shift{0.0, 0.0, 0.0};     // the gather's mean displacement
-    std::vector<Vec3d> m_gather_end;         // the gather's prediction minus m_gather_shift
-    collision::FeaturePairs m_candidates;    // gathered pairs that may come within thickness
-    std::vector<double> m_swept_distances;   // per gathered broad-phase pair (kept ones set)
-    std::vector<double> m_gather_distances;  // per candidate, its distance at the gather
-    std::vector<Vec3d> m_gather_positions;   // the positions at the gather
-    std::vector<double> m_pair_sweeps;       // per candidate, its largest relative sweep since
+    collision::SelfCollisionBroadPhase<double> m_broad_phase;
+    const std::vector<geometry::Edge>* m_edges;  // m_broad_phase's topology
+
+    bool m_has_gather = false;
+    bool m_broad_phase_ready = false;                       // a full update ran
+    double m_inflation = 0.0;                               // of the broad phase's boxes (m)
+    double m_window_dt = 0.0;                               // s
+    static constexpr std::size_t FRAME_SAMPLE_STRIDE = 16;  // every 16th vertex is a sample
+    std::vector<std::int32_t> m_frame_samples;
+    std::vector<Vec3d> m_frame_origin;  // the samples' positions at the last gather
+    mutable std::vector<double> m_median_scratch;
+    // Paths, per vertex (see the header comment).
+    std::vector<Vec3d> m_anchors;
+    std::vector<Vec3d> m_path_velocities;
+    std::vector<double> m_anchor_times;  // s
+    std::vector<double> m_path_ends;     // s
+    std::vector<double> m_slacks;        // m
+    std::vector<Vec3d> m_box_lo;         // the path's box grown by the slack, in the frame
+    std::vector<Vec3d> m_box_hi;
+    struct TriangleMotion {
+        Vec3d p_lo, p_hi;  // path positions at the time of the last compute_triangle_motions
+        Vec3d u_lo, u_hi;  // path velocities
+        double slack;      // largest slack, m
+        double duration;   // time to the last path end, s
+    };
+    std::vector<TriangleMotion> m_triangle_motions;
+    double m_filter_margin = 0.0;
+    std::vector<Candidate> m_candidates;
+    std::vector<Candidate> m_scratch_candidates;
+    ChunkedBuffer<Candidate> m_candidate_chunks;
+
+    std::vector<double> m_deviations;    // per vertex, over a substep or a window
+    std::vector<double> m_reaches;       // per vertex, for add_candidates
+    std::vector<Vec3d> m_window_motion;  // per vertex, end − start of the window
+    std::vector<Vec3d> m_new_velocities;
+    std::vector<std::int32_t> m_new_path_vertices;
+    std::vector<std::uint8_t> m_marks;       // per vertex, scratch
+    std::vector<std::uint8_t> m_needs_path;  // per vertex: escaped since its path was set
+    std::vector<std::uint8_t> m_escaped;     // per vertex: escaped in the current window
+    std::vector<std::int32_t> m_escaped_now;
+    collision::FeaturePairs m_escape_pairs;  // pairs that involve an escaped vertex
+    std::vector<std::uint8_t> m_reverted;
+    std::vector<std::uint8_t> m_changed;
     ChunkedBuffer<std::int64_t> m_index_chunks;
     std::vector<std::int64_t> m_indices;
     SelfCollisionStats m_stats;

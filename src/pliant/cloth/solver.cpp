@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -37,18 +38,6 @@ void validate_material(const ClothMaterial& m) {
     check(m.kinetic_friction, "kinetic_friction");
     check(m.self_static_friction, "self_static_friction");
     check(m.self_kinetic_friction, "self_kinetic_friction");
-}
-
-// Wraps an angle difference into (-π, π].
-double wrap_angle(double angle) {
-    constexpr double TWO_PI = 2.0 * std::numbers::pi;
-    while (angle > std::numbers::pi) {
-        angle -= TWO_PI;
-    }
-    while (angle <= -std::numbers::pi) {
-        angle += TWO_PI;
-    }
-    return angle;
 }
 
 // The obstacle at its rest placement moved by pose (boxes only translate: add_obstacle checks).
@@ -157,6 +146,22 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
             return std::span<const std::int32_t>(m_bending_vertices[static_cast<std::size_t>(i)]);
         });
+    // The kernels' columns, in colour order.
+    for (const std::int32_t i : m_stretch_colors.order) {
+        const auto k = static_cast<std::size_t>(i);
+        m_stretch_p.push_back(m_stretch_vertices[k][0]);
+        m_stretch_q.push_back(m_stretch_vertices[k][1]);
+        m_stretch_rest.push_back(m_rest_lengths[k]);
+    }
+    for (const std::int32_t i : m_bending_colors.order) {
+        const auto k = static_cast<std::size_t>(i);
+        m_bending_v0.push_back(m_bending_vertices[k][0]);
+        m_bending_v1.push_back(m_bending_vertices[k][1]);
+        m_bending_v2.push_back(m_bending_vertices[k][2]);
+        m_bending_v3.push_back(m_bending_vertices[k][3]);
+        m_bending_rest.push_back(m_rest_angles[k]);
+    }
+    m_packed.resize(num_vertices);
 }
 
 void ClothSolver::enable_self_collision(bool enabled) {
@@ -237,6 +242,19 @@ void ClothSolver::add_moving_pins(std::span<const std::int32_t> vertices, const 
     m_moving_pins.push_back(std::move(pins));
 }
 
+void ClothSolver::set_velocities(std::span<const Vec3d> velocities) {
+    if (velocities.size() != m_velocities.size()) {
+        throw InvalidInput(fmt::format("cloth: velocities.size() ({}) != the vertex count ({})",
+                                       velocities.size(), m_velocities.size()));
+    }
+    for (const Vec3d& v : velocities) {
+        if (!is_finite(v)) {
+            throw InvalidInput("cloth: velocities must be finite");
+        }
+    }
+    m_velocities.assign(velocities.begin(), velocities.end());
+}
+
 void ClothSolver::grab(std::int32_t vertex, const Vec3d& target) {
     if (vertex < 0 || static_cast<std::size_t>(vertex) >= m_positions.size()) {
         throw InvalidInput(
@@ -305,12 +323,14 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     for (int s = 0; s < substeps; ++s) {
         if (m_self_collision && s % GATHER_EVERY == 0) {
             m_window_start = m_positions;
-            const int ahead = std::min(GATHER_EVERY, substeps - s);
-            m_self_collision->gather(m_positions, m_velocities, ahead * h, m_gravity);
+            m_self_collision->prepare(m_positions, m_velocities, start_time + s * h,
+                                      GATHER_EVERY * h);
+            m_window_start_time = start_time + s * h;
         }
         stats.obstacle_contacts = substep(h, start_time + (s + 1) * h, stats.solve_ms);
         if (m_self_collision && (s % GATHER_EVERY == GATHER_EVERY - 1 || s == substeps - 1)) {
-            m_self_collision->enforce(m_window_start, m_positions, m_velocities);
+            m_self_collision->enforce(m_window_start, m_positions, m_velocities,
+                                      m_window_start_time, start_time + (s + 1) * h);
         }
     }
     m_time = start_time + dt;
@@ -351,8 +371,7 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
         m_positions[static_cast<std::size_t>(m_grab->vertex)] =
             m_grab->start + (m_grab->target - m_grab->start) * f;
     }
-    project_stretch(h);
-    project_bending(h);
+    project_constraints(h);
     move_obstacles(t_end);
     const std::int64_t contacts = resolve_obstacles(h);
     solve_ms += watch.elapsed_ms();
@@ -360,7 +379,8 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
     // may have pressed one layer into the next); a vertex pushed back into an obstacle is
     // pushed out again next substep, while layers that pass through each other stay entangled.
     if (m_self_collision) {
-        m_self_collision->project(m_positions, m_previous_positions, m_inverse_masses, m_material);
+        m_self_collision->project(m_positions, m_previous_positions, m_inverse_masses, m_material,
+                                  t_end, h);
     }
     watch.restart();
     const double keep = std::max(0.0, 1.0 - m_material.damping * h);
@@ -443,70 +463,53 @@ void ClothSolver::move_obstacles(double t) {
     }
 }
 
-void ClothSolver::project_stretch(double h) {
-    const double alpha = m_material.stretch_compliance / (h * h);
+void ClothSolver::project_constraints(double h) {
+    // Positions and inverse masses packed for the kernels (detail/constraint_kernels.hpp), then
+    // stretch and bending colour by colour, each colour in parallel over fixed chunks.
+    const auto n = static_cast<std::int64_t>(m_positions.size());
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_packed[v] = {m_positions[v].x, m_positions[v].y, m_positions[v].z,
+                           m_inverse_masses[v]};
+        },
+        VERTEX_GRAIN);
+    detail::PackedVertex* x = m_packed.data();
+    const double stretch_alpha = m_material.stretch_compliance / (h * h);
     for (std::int32_t c = 0; c < m_stretch_colors.num_colors(); ++c) {
-        const std::span<const std::int32_t> color = m_stretch_colors.color(c);
-        parallel_for(
-            static_cast<std::int64_t>(color.size()),
-            [&](std::int64_t k) {
-                const auto i = static_cast<std::size_t>(color[static_cast<std::size_t>(k)]);
-                const auto [p, q] = m_stretch_vertices[i];
-                const double w_p = m_inverse_masses[static_cast<std::size_t>(p)];
-                const double w_q = m_inverse_masses[static_cast<std::size_t>(q)];
-                const double w = w_p + w_q;
-                Vec3d& x_p = m_positions[static_cast<std::size_t>(p)];
-                Vec3d& x_q = m_positions[static_cast<std::size_t>(q)];
-                const Vec3d d = x_p - x_q;
-                const double length = norm(d);
-                if (!(w > 0.0) || !(length > 0.0)) {
-                    return;
-                }
-                const double lambda = -(length - m_rest_lengths[i]) / (w + alpha);
-                const Vec3d gradient = d * (1.0 / length);
-                x_p += gradient * (w_p * lambda);
-                x_q -= gradient * (w_q * lambda);
-            },
-            CONSTRAINT_GRAIN);
+        const auto offset =
+            static_cast<std::size_t>(m_stretch_colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::StretchColumns columns{m_stretch_p.data() + offset,
+                                             m_stretch_q.data() + offset,
+                                             m_stretch_rest.data() + offset};
+        parallel_for_chunks(static_cast<std::int64_t>(m_stretch_colors.color(c).size()),
+                            CONSTRAINT_GRAIN,
+                            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                detail::project_stretch(x, columns, begin, end, stretch_alpha);
+                            });
     }
-}
-
-void ClothSolver::project_bending(double h) {
-    const double alpha = m_material.bend_compliance / (h * h);
+    const double bend_alpha = m_material.bend_compliance / (h * h);
     for (std::int32_t c = 0; c < m_bending_colors.num_colors(); ++c) {
-        const std::span<const std::int32_t> color = m_bending_colors.color(c);
-        parallel_for(
-            static_cast<std::int64_t>(color.size()),
-            [&](std::int64_t k) {
-                const auto i = static_cast<std::size_t>(color[static_cast<std::size_t>(k)]);
-                const std::array<std::int32_t, 4>& vertices = m_bending_vertices[i];
-                Vec3d* x[4];
-                double w[4];
-                double weight = 0.0;
-                for (int j = 0; j < 4; ++j) {
-                    x[j] = &m_positions[static_cast<std::size_t>(
-                        vertices[static_cast<std::size_t>(j)])];
-                    w[j] = m_inverse_masses[static_cast<std::size_t>(
-                        vertices[static_cast<std::size_t>(j)])];
-                }
-                const DihedralAngle angle = dihedral_angle(*x[0], *x[1], *x[2], *x[3]);
-                if (!angle.is_valid) {
-                    return;
-                }
-                for (int j = 0; j < 4; ++j) {
-                    weight += w[j] * squared_norm(angle.gradient[static_cast<std::size_t>(j)]);
-                }
-                if (!(weight > 0.0)) {
-                    return;
-                }
-                const double constraint = wrap_angle(angle.angle - m_rest_angles[i]);
-                const double lambda = -constraint / (weight + alpha);
-                for (int j = 0; j < 4; ++j) {
-                    *x[j] += angle.gradient[static_cast<std::size_t>(j)] * (w[j] * lambda);
-                }
-            },
-            CONSTRAINT_GRAIN);
+        const auto offset =
+            static_cast<std::size_t>(m_bending_colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::BendingColumns columns{
+            m_bending_v0.data() + offset, m_bending_v1.data() + offset,
+            m_bending_v2.data() + offset, m_bending_v3.data() + offset,
+            m_bending_rest.data() + offset};
+        parallel_for_chunks(static_cast<std::int64_t>(m_bending_colors.color(c).size()),
+                            CONSTRAINT_GRAIN,
+                            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                detail::project_bending(x, columns, begin, end, bend_alpha);
+                            });
     }
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_positions[v] = {m_packed[v].x, m_packed[v].y, m_packed[v].z};
+        },
+        VERTEX_GRAIN);
 }
 
 std::int64_t ClothSolver::resolve_obstacles(double h) {

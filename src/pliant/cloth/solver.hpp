@@ -20,7 +20,9 @@
 //      which positional friction does, locking stretched cloth on a rough surface); then v *=
 //      max(0, 1 - damping h).
 // Constraints of a kind are projected colour by colour (constraint_coloring.hpp), each colour in
-// parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads.
+// parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads. The
+// projections are the kernels of detail/constraint_kernels.hpp (four constraints at a time with
+// AVX2 where the CPU has it, the same bits as their scalar versions).
 //
 // Convergence: one iteration per substep makes stiff constraints as stiff as the substeps allow,
 // so strain under load falls with the substep count: a 1.2 m sheet of 24 × 24 quads resting over
@@ -47,6 +49,7 @@
 
 #include "pliant/cloth/air.hpp"
 #include "pliant/cloth/constraint_coloring.hpp"
+#include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/material.hpp"
 #include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/motion.hpp"
@@ -89,6 +92,9 @@ public:
     void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle, const Motion& motion = {});
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    // Replaces the velocities (m/s, #V, finite; else InvalidInput), e.g. an initial motion or a
+    // kick between steps. Pinned vertices keep following their pins.
+    void set_velocities(std::span<const Vec3d> velocities);
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
     void set_air(const Air& air);
     // Self-collision handling (self_collision.hpp): proximity constraints every substep and the
@@ -127,8 +133,8 @@ private:
     // One substep ending at time t_end; returns the vertices in contact with an obstacle and
     // adds the solver's own time (not self-collision's) to solve_ms.
     std::int64_t substep(double h, double t_end, double& solve_ms);
-    void project_stretch(double h);
-    void project_bending(double h);
+    // Stretch, then bending, colour by colour (detail/constraint_kernels.hpp).
+    void project_constraints(double h);
     // Adds h · (air force at time t / mass) to the free vertices' velocities.
     void apply_air(double h, double t);
     // Places the obstacles at time t (the end of the substep); previous placements are kept
@@ -178,6 +184,7 @@ private:
     std::vector<Vec3d> m_triangle_forces;  // air, per triangle (N)
     std::unique_ptr<SelfCollision> m_self_collision;
     std::vector<Vec3d> m_window_start;     // positions at the start of a self-collision window
+    double m_window_start_time = 0.0;      // s
     std::vector<double> m_contact_depths;  // this substep's obstacle correction per vertex (m)
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
@@ -189,6 +196,16 @@ private:
     std::vector<std::array<std::int32_t, 4>> m_bending_vertices;
     std::vector<double> m_rest_angles;
     ConstraintColoring m_bending_colors;
+    // The constraints as the kernels' columns, in colour order.
+    std::vector<std::int32_t> m_stretch_p;
+    std::vector<std::int32_t> m_stretch_q;
+    std::vector<double> m_stretch_rest;
+    std::vector<std::int32_t> m_bending_v0;
+    std::vector<std::int32_t> m_bending_v1;
+    std::vector<std::int32_t> m_bending_v2;
+    std::vector<std::int32_t> m_bending_v3;
+    std::vector<double> m_bending_rest;
+    std::vector<detail::PackedVertex> m_packed;  // positions and inverse masses, per substep
 };
 
 }  // namespace pliant::cloth

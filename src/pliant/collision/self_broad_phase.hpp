@@ -11,6 +11,10 @@
 //      plus the orphan set for triangles that share a vertex (orphan_set.hpp); a pair is kept when
 //      its feature boxes overlap (closed intervals).
 //
+// update_vertices() redoes stages 1-4 for a few vertices only (after a full update): their boxes,
+// a refit, BVH queries for the triangles around them, their orphan pairs; it returns the pairs
+// that involve them.
+//
 // Real is the precision of the positions (float for simulation, double for files with double
 // coordinates). All filtering runs on float boxes (half the memory traffic of double); for double
 // input they are rounded outward, so no pair is lost, and every pair that passes is confirmed on
@@ -29,6 +33,7 @@
 #include "pliant/collision/representative_triangles.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/core/chunked_buffer.hpp"
+#include "pliant/core/function_ref.hpp"
 #include "pliant/geometry/topology.hpp"
 
 namespace pliant::collision {
@@ -55,8 +60,34 @@ public:
     // Runs the four stages for a step from positions_t0 to positions_t1 (#V each; pass the same
     // span twice for a static query). inflation ≥ 0, world units. Returns the pairs, valid until
     // the next update.
+    //
+    // keep (optional): a triangle-pair filter called (from several threads) for every
+    // non-adjacent pair of triangles whose boxes overlap; pairs it rejects yield no feature pair
+    // (a caller's tighter bound, e.g. on relative motion). Orphan pairs are not filtered.
+    using TrianglePairFilter = FunctionRef<bool(std::int32_t, std::int32_t)>;
     const FeaturePairs& update(std::span<const Vec> positions_t0, std::span<const Vec> positions_t1,
-                               Real inflation);
+                               Real inflation, const TrianglePairFilter* keep = nullptr);
+
+    // A partial update after a full one: the vertices in `changed` (ascending, no duplicates)
+    // get new boxes from positions_t0 / positions_t1 (#V each; only the changed vertices are
+    // read) grown by `inflation` (the last update's), the edge and triangle boxes that contain
+    // them are recomputed and the BVH refitted. Returns the VF and EE pairs that involve a changed
+    // vertex (as the vertex, or a corner of the face or edge) and whose boxes overlap: exactly the
+    // pairs a full update with the same boxes would report that involve a changed vertex, each
+    // once, in a deterministic order. Cost: about one BVH query per triangle around the changed
+    // vertices. Valid until the next update; pairs() keeps the last full update's pairs. Throws
+    // InvalidInput before any full update, for wrong sizes or out-of-range vertices.
+    // keep: as for update().
+    const FeaturePairs& update_vertices(std::span<const Vec> positions_t0,
+                                        std::span<const Vec> positions_t1, Real inflation,
+                                        std::span<const std::int32_t> changed,
+                                        const TrianglePairFilter* keep = nullptr);
+
+    // With exact = false (double input only), pairs are kept on the float boxes alone (rounded
+    // outward): a superset of the exact answer, for callers that filter the pairs further anyway,
+    // without the confirmation on double boxes. Default true. Set before an update; the partial
+    // updates that follow use the same setting.
+    void set_exact(bool exact) { m_confirm_exact = exact; }
 
     // The next update builds the BVH from scratch instead of refitting (after large motion).
     void request_rebuild() { m_needs_build = true; }
@@ -73,7 +104,15 @@ public:
 private:
     void compute_boxes(std::span<const Vec> positions_t0, std::span<const Vec> positions_t1,
                        Real inflation);
-    void traverse();
+    void set_vertex_box(std::size_t v, const Vec& p0, const Vec& p1, Real inflation);
+    // Appends the owned-feature pairs of the non-adjacent triangles a and b whose boxes overlap
+    // (with PARTIAL, only those with a vertex marked in m_vertex_marks).
+    template <bool PARTIAL>
+    void emit_feature_pairs(std::int32_t a, std::int32_t b, AppendBuffer<VertexFacePair>& vf,
+                            AppendBuffer<EdgeEdgePair>& ee) const;
+    // Orphan pairs by vertex (CSR over the orphan set's VF then EE indices), built on first use.
+    void index_orphans();
+    void traverse(const TrianglePairFilter* keep);
     void test_features();
 
     std::vector<geometry::Triangle> m_triangles;
@@ -101,6 +140,17 @@ private:
     ChunkedBuffer<EdgeEdgePair> m_ee_chunks;
     FeaturePairs m_pairs;
     BroadPhaseStats m_stats;
+    bool m_has_boxes = false;
+    bool m_confirm_exact = true;
+    // Partial updates.
+    std::vector<std::uint8_t> m_vertex_marks;    // #V: changed in the current partial update
+    std::vector<std::uint8_t> m_triangle_marks;  // #T: contains a changed vertex
+    std::vector<std::int32_t> m_affected_triangles;
+    std::vector<std::int32_t> m_affected_edges;
+    std::vector<std::int32_t> m_orphan_offsets;  // #V + 1
+    std::vector<std::int32_t> m_orphan_indices;  // VF index, or #VF + EE index
+    std::vector<std::int32_t> m_affected_orphans;
+    FeaturePairs m_partial_pairs;
 };
 
 extern template class SelfCollisionBroadPhase<float>;

@@ -1,0 +1,452 @@
+#include "pliant/cloth/detail/constraint_kernels.hpp"
+
+#include <atomic>
+#include <cmath>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define PLIANT_CLOTH_AVX2 1
+// "avx2" only, not "fma": the compiler must not contract a · b + c, which would round differently
+// from the scalar kernels (this file is also compiled with -ffp-contract=off).
+#define PLIANT_AVX2_FN __attribute__((target("avx2")))
+#define PLIANT_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
+#endif
+
+namespace pliant::cloth::detail {
+namespace {
+
+std::atomic<bool> g_avx2_allowed{true};
+
+// Cephes' atan (S. L. Moshier): atan(t) = t + t z P(z) / Q(z), z = t², for |t| ≤ 0.66.
+constexpr double P0 = -8.750608600031904122785E-1;
+constexpr double P1 = -1.615753718733365076637E1;
+constexpr double P2 = -7.500855792314704667340E1;
+constexpr double P3 = -1.228866684490136173410E2;
+constexpr double P4 = -6.485021904942025371773E1;
+constexpr double Q0 = 2.485846490142306297962E1;
+constexpr double Q1 = 1.650270098316988542046E2;
+constexpr double Q2 = 4.328810604912902668951E2;
+constexpr double Q3 = 4.853903996359136964868E2;
+constexpr double Q4 = 1.945506571482613964425E2;
+constexpr double MOREBITS = 6.123233995736765886130E-17;  // π/2 − PI_2 (the double)
+constexpr double PI_4 = 7.85398163397448309616E-1;
+constexpr double PI_2 = 1.57079632679489661923E0;
+constexpr double PI = 3.14159265358979323846E0;
+constexpr double REDUCE = 0.66;
+constexpr double TWO_PI = 2.0 * PI;
+
+// C = angle − rest wrapped into (−π, π] (both in (−π, π], so one turn at most).
+inline double wrap(double c) {
+    c = c > PI ? c - TWO_PI : c;
+    return c <= -PI ? c + TWO_PI : c;
+}
+
+struct Vec {
+    double x, y, z;
+};
+inline Vec sub(const Vec& a, const Vec& b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline Vec cross(const Vec& a, const Vec& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double dot(const Vec& a, const Vec& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline Vec scale(const Vec& a, double s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+inline Vec load(const PackedVertex& v) {
+    return {v.x, v.y, v.z};
+}
+
+void stretch_scalar(PackedVertex* x, const StretchColumns& c, std::int64_t k, double alpha) {
+    PackedVertex& a = x[c.p[k]];
+    PackedVertex& b = x[c.q[k]];
+    const double w = a.inverse_mass + b.inverse_mass;
+    const double dx = a.x - b.x;
+    const double dy = a.y - b.y;
+    const double dz = a.z - b.z;
+    const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(w > 0.0) || !(length > 0.0)) {
+        return;
+    }
+    const double lambda = -(length - c.rest_length[k]) / (w + alpha);
+    const double inverse_length = 1.0 / length;
+    const double gx = dx * inverse_length;
+    const double gy = dy * inverse_length;
+    const double gz = dz * inverse_length;
+    const double sa = a.inverse_mass * lambda;
+    const double sb = b.inverse_mass * lambda;
+    a.x = a.x + gx * sa;
+    a.y = a.y + gy * sa;
+    a.z = a.z + gz * sa;
+    b.x = b.x - gx * sb;
+    b.y = b.y - gy * sb;
+    b.z = b.z - gz * sb;
+}
+
+void bending_scalar(PackedVertex* x, const BendingColumns& c, std::int64_t k, double alpha) {
+    PackedVertex& p0 = x[c.v0[k]];
+    PackedVertex& p1 = x[c.v1[k]];
+    PackedVertex& p2 = x[c.v2[k]];
+    PackedVertex& p3 = x[c.v3[k]];
+    const Vec x0 = load(p0);
+    const Vec x1 = load(p1);
+    const Vec x2 = load(p2);
+    const Vec x3 = load(p3);
+    const Vec e = sub(x3, x2);
+    const Vec a0 = sub(x2, x0);
+    const Vec a1 = sub(x3, x0);
+    const Vec b0 = sub(x3, x1);
+    const Vec b1 = sub(x2, x1);
+    const Vec n_a = cross(a0, a1);
+    const Vec n_b = cross(b0, b1);
+    const double e2 = dot(e, e);
+    const double na2 = dot(n_a, n_a);
+    const double nb2 = dot(n_b, n_b);
+    if (!(e2 > 0.0) || !(na2 > 0.0) || !(nb2 > 0.0)) {
+        return;
+    }
+    const double length = std::sqrt(e2);
+    const double inverse_length = 1.0 / length;
+    // sin θ |n_a| |n_b| = (n_a × n_b) · ê, cos θ |n_a| |n_b| = n_a · n_b.
+    const double sine = dot(cross(n_a, n_b), e) * inverse_length;
+    const double cosine = dot(n_a, n_b);
+    const double constraint = wrap(detail::atan2(sine, cosine) - c.rest_angle[k]);
+    // ∇θ (dihedral.hpp): n_a / |n_a|² and n_b / |n_b|² times edge-length terms.
+    const Vec sa = scale(n_a, 1.0 / na2);
+    const Vec sb = scale(n_b, 1.0 / nb2);
+    const double a0e = dot(a0, e) * inverse_length;
+    const double a1e = dot(a1, e) * inverse_length;
+    const double b0e = dot(b0, e) * inverse_length;
+    const double b1e = dot(b1, e) * inverse_length;
+    const double minus_length = -length;
+    const Vec g0 = scale(sa, minus_length);
+    const Vec g1 = scale(sb, minus_length);
+    const Vec g2 = {sa.x * a1e + sb.x * b0e, sa.y * a1e + sb.y * b0e, sa.z * a1e + sb.z * b0e};
+    const Vec g3 = {-(sa.x * a0e + sb.x * b1e), -(sa.y * a0e + sb.y * b1e),
+                    -(sa.z * a0e + sb.z * b1e)};
+    const double weight = p0.inverse_mass * dot(g0, g0) + p1.inverse_mass * dot(g1, g1) +
+                          p2.inverse_mass * dot(g2, g2) + p3.inverse_mass * dot(g3, g3);
+    if (!(weight > 0.0)) {
+        return;
+    }
+    const double lambda = -constraint / (weight + alpha);
+    const auto move = [lambda](PackedVertex& p, const Vec& g) {
+        const double s = p.inverse_mass * lambda;
+        p.x = p.x + g.x * s;
+        p.y = p.y + g.y * s;
+        p.z = p.z + g.z * s;
+    };
+    move(p0, g0);
+    move(p1, g1);
+    move(p2, g2);
+    move(p3, g3);
+}
+
+#if defined(PLIANT_CLOTH_AVX2)
+
+using V = __m256d;
+
+PLIANT_AVX2_INLINE V add(V a, V b) {
+    return _mm256_add_pd(a, b);
+}
+PLIANT_AVX2_INLINE V sub(V a, V b) {
+    return _mm256_sub_pd(a, b);
+}
+PLIANT_AVX2_INLINE V mul(V a, V b) {
+    return _mm256_mul_pd(a, b);
+}
+PLIANT_AVX2_INLINE V div(V a, V b) {
+    return _mm256_div_pd(a, b);
+}
+PLIANT_AVX2_INLINE V set1(double v) {
+    return _mm256_set1_pd(v);
+}
+// mask ? a : b
+PLIANT_AVX2_INLINE V select(V mask, V a, V b) {
+    return _mm256_blendv_pd(b, a, mask);
+}
+PLIANT_AVX2_INLINE V greater(V a, V b) {
+    return _mm256_cmp_pd(a, b, _CMP_GT_OQ);
+}
+PLIANT_AVX2_INLINE V less_equal(V a, V b) {
+    return _mm256_cmp_pd(a, b, _CMP_LE_OQ);
+}
+PLIANT_AVX2_INLINE V absolute(V a) {
+    return _mm256_andnot_pd(set1(-0.0), a);
+}
+// −a exactly as the scalar unary minus (0 − a would turn −0 into +0).
+PLIANT_AVX2_INLINE V negate(V a) {
+    return _mm256_xor_pd(set1(-0.0), a);
+}
+
+// x, y, z, inverse mass of four vertices, lane k = vertex k.
+struct Lanes {
+    V x, y, z, w;
+};
+struct Vec4 {
+    V x, y, z;
+};
+
+// Rows r_k = vertex k, transposed into columns.
+PLIANT_AVX2_INLINE Lanes load4(const PackedVertex* x, const std::int32_t* i) {
+    const V r0 = _mm256_load_pd(&x[i[0]].x);
+    const V r1 = _mm256_load_pd(&x[i[1]].x);
+    const V r2 = _mm256_load_pd(&x[i[2]].x);
+    const V r3 = _mm256_load_pd(&x[i[3]].x);
+    const V t0 = _mm256_unpacklo_pd(r0, r1);  // x0 x1 z0 z1
+    const V t1 = _mm256_unpackhi_pd(r0, r1);  // y0 y1 w0 w1
+    const V t2 = _mm256_unpacklo_pd(r2, r3);  // x2 x3 z2 z3
+    const V t3 = _mm256_unpackhi_pd(r2, r3);  // y2 y3 w2 w3
+    return {_mm256_permute2f128_pd(t0, t2, 0x20), _mm256_permute2f128_pd(t1, t3, 0x20),
+            _mm256_permute2f128_pd(t0, t2, 0x31), _mm256_permute2f128_pd(t1, t3, 0x31)};
+}
+
+// Writes x, y, z of lanes whose bit is set in `mask` (the inverse masses are unchanged).
+PLIANT_AVX2_INLINE void store4(PackedVertex* x, const std::int32_t* i, const Lanes& l, int mask) {
+    const V t0 = _mm256_unpacklo_pd(l.x, l.y);  // x0 y0 x2 y2
+    const V t1 = _mm256_unpackhi_pd(l.x, l.y);  // x1 y1 x3 y3
+    const V t2 = _mm256_unpacklo_pd(l.z, l.w);  // z0 w0 z2 w2
+    const V t3 = _mm256_unpackhi_pd(l.z, l.w);  // z1 w1 z3 w3
+    const V rows[4] = {_mm256_permute2f128_pd(t0, t2, 0x20), _mm256_permute2f128_pd(t1, t3, 0x20),
+                       _mm256_permute2f128_pd(t0, t2, 0x31), _mm256_permute2f128_pd(t1, t3, 0x31)};
+    for (int k = 0; k < 4; ++k) {
+        if ((mask >> k) & 1) {
+            _mm256_store_pd(&x[i[k]].x, rows[k]);
+        }
+    }
+}
+
+PLIANT_AVX2_INLINE Vec4 sub(const Lanes& a, const Lanes& b) {
+    return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
+}
+PLIANT_AVX2_INLINE Vec4 sub(const Vec4& a, const Vec4& b) {
+    return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
+}
+PLIANT_AVX2_INLINE Vec4 cross(const Vec4& a, const Vec4& b) {
+    return {sub(mul(a.y, b.z), mul(a.z, b.y)), sub(mul(a.z, b.x), mul(a.x, b.z)),
+            sub(mul(a.x, b.y), mul(a.y, b.x))};
+}
+PLIANT_AVX2_INLINE V dot(const Vec4& a, const Vec4& b) {
+    return add(add(mul(a.x, b.x), mul(a.y, b.y)), mul(a.z, b.z));
+}
+PLIANT_AVX2_INLINE Vec4 scale(const Vec4& a, V s) {
+    return {mul(a.x, s), mul(a.y, s), mul(a.z, s)};
+}
+PLIANT_AVX2_INLINE Vec4 position(const Lanes& l) {
+    return {l.x, l.y, l.z};
+}
+
+// detail::atan2, lane by lane.
+PLIANT_AVX2_INLINE V atan2_4(V y, V x) {
+    const V zero = _mm256_setzero_pd();
+    const V ax = absolute(x);
+    const V ay = absolute(y);
+    const V swap = greater(ay, ax);
+    const V num = select(swap, ax, ay);
+    const V den = select(swap, ay, ax);
+    const V t = select(greater(den, zero), div(num, den), zero);
+    const V big = greater(t, set1(REDUCE));
+    const V one = set1(1.0);
+    const V t2 = select(big, div(sub(t, one), add(t, one)), t);
+    const V z = mul(t2, t2);
+    const V p =
+        add(mul(add(mul(add(mul(add(mul(set1(P0), z), set1(P1)), z), set1(P2)), z), set1(P3)), z),
+            set1(P4));
+    const V q = add(
+        mul(add(mul(add(mul(add(mul(add(z, set1(Q0)), z), set1(Q1)), z), set1(Q2)), z), set1(Q3)),
+            z),
+        set1(Q4));
+    V r = add(mul(t2, div(mul(z, p), q)), t2);
+    r = select(big, add(r, set1(0.5 * MOREBITS)), r);
+    V a = add(select(big, set1(PI_4), zero), r);
+    a = select(swap, add(sub(set1(PI_2), a), set1(MOREBITS)), a);
+    a = select(_mm256_cmp_pd(x, zero, _CMP_LT_OQ), add(sub(set1(PI), a), set1(2.0 * MOREBITS)), a);
+    return select(_mm256_cmp_pd(y, zero, _CMP_LT_OQ), sub(zero, a), a);
+}
+
+// p += g · (w λ), the scalar kernel's order.
+PLIANT_AVX2_INLINE void move(Lanes& p, const Vec4& g, V lambda) {
+    const V s = mul(p.w, lambda);
+    p.x = add(p.x, mul(g.x, s));
+    p.y = add(p.y, mul(g.y, s));
+    p.z = add(p.z, mul(g.z, s));
+}
+
+PLIANT_AVX2_INLINE V wrap4(V c) {
+    c = select(greater(c, set1(PI)), sub(c, set1(TWO_PI)), c);
+    return select(less_equal(c, set1(-PI)), add(c, set1(TWO_PI)), c);
+}
+
+PLIANT_AVX2_FN void stretch_avx2(PackedVertex* x, const StretchColumns& c, std::int64_t k,
+                                 V alpha) {
+    Lanes a = load4(x, c.p + k);
+    Lanes b = load4(x, c.q + k);
+    const V zero = _mm256_setzero_pd();
+    const V w = add(a.w, b.w);
+    const V dx = sub(a.x, b.x);
+    const V dy = sub(a.y, b.y);
+    const V dz = sub(a.z, b.z);
+    const V length = _mm256_sqrt_pd(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
+    const int valid = _mm256_movemask_pd(_mm256_and_pd(greater(w, zero), greater(length, zero)));
+    const V lambda = div(negate(sub(length, _mm256_loadu_pd(c.rest_length + k))), add(w, alpha));
+    const V inverse_length = div(set1(1.0), length);
+    const V gx = mul(dx, inverse_length);
+    const V gy = mul(dy, inverse_length);
+    const V gz = mul(dz, inverse_length);
+    const V sa = mul(a.w, lambda);
+    const V sb = mul(b.w, lambda);
+    a.x = add(a.x, mul(gx, sa));
+    a.y = add(a.y, mul(gy, sa));
+    a.z = add(a.z, mul(gz, sa));
+    b.x = sub(b.x, mul(gx, sb));
+    b.y = sub(b.y, mul(gy, sb));
+    b.z = sub(b.z, mul(gz, sb));
+    store4(x, c.p + k, a, valid);
+    store4(x, c.q + k, b, valid);
+}
+
+PLIANT_AVX2_FN void bending_avx2(PackedVertex* x, const BendingColumns& c, std::int64_t k,
+                                 V alpha) {
+    Lanes p0 = load4(x, c.v0 + k);
+    Lanes p1 = load4(x, c.v1 + k);
+    Lanes p2 = load4(x, c.v2 + k);
+    Lanes p3 = load4(x, c.v3 + k);
+    const V zero = _mm256_setzero_pd();
+    const Vec4 e = sub(p3, p2);
+    const Vec4 a0 = sub(p2, p0);
+    const Vec4 a1 = sub(p3, p0);
+    const Vec4 b0 = sub(p3, p1);
+    const Vec4 b1 = sub(p2, p1);
+    const Vec4 n_a = cross(a0, a1);
+    const Vec4 n_b = cross(b0, b1);
+    const V e2 = dot(e, e);
+    const V na2 = dot(n_a, n_a);
+    const V nb2 = dot(n_b, n_b);
+    const V shape_ok =
+        _mm256_and_pd(_mm256_and_pd(greater(e2, zero), greater(na2, zero)), greater(nb2, zero));
+    const V length = _mm256_sqrt_pd(e2);
+    const V inverse_length = div(set1(1.0), length);
+    const V sine = mul(dot(cross(n_a, n_b), e), inverse_length);
+    const V cosine = dot(n_a, n_b);
+    const V constraint = wrap4(sub(atan2_4(sine, cosine), _mm256_loadu_pd(c.rest_angle + k)));
+    const Vec4 sa = scale(n_a, div(set1(1.0), na2));
+    const Vec4 sb = scale(n_b, div(set1(1.0), nb2));
+    const V a0e = mul(dot(a0, e), inverse_length);
+    const V a1e = mul(dot(a1, e), inverse_length);
+    const V b0e = mul(dot(b0, e), inverse_length);
+    const V b1e = mul(dot(b1, e), inverse_length);
+    const V minus_length = negate(length);
+    const Vec4 g0 = scale(sa, minus_length);
+    const Vec4 g1 = scale(sb, minus_length);
+    const Vec4 g2 = {add(mul(sa.x, a1e), mul(sb.x, b0e)), add(mul(sa.y, a1e), mul(sb.y, b0e)),
+                     add(mul(sa.z, a1e), mul(sb.z, b0e))};
+    const Vec4 g3 = {negate(add(mul(sa.x, a0e), mul(sb.x, b1e))),
+                     negate(add(mul(sa.y, a0e), mul(sb.y, b1e))),
+                     negate(add(mul(sa.z, a0e), mul(sb.z, b1e)))};
+    const V weight =
+        add(add(add(mul(p0.w, dot(g0, g0)), mul(p1.w, dot(g1, g1))), mul(p2.w, dot(g2, g2))),
+            mul(p3.w, dot(g3, g3)));
+    const int valid = _mm256_movemask_pd(_mm256_and_pd(shape_ok, greater(weight, zero)));
+    if (valid == 0) {
+        return;
+    }
+    const V lambda = div(negate(constraint), add(weight, alpha));
+    move(p0, g0, lambda);
+    move(p1, g1, lambda);
+    move(p2, g2, lambda);
+    move(p3, g3, lambda);
+    store4(x, c.v0 + k, p0, valid);
+    store4(x, c.v1 + k, p1, valid);
+    store4(x, c.v2 + k, p2, valid);
+    store4(x, c.v3 + k, p3, valid);
+}
+
+PLIANT_AVX2_FN std::int64_t project_stretch_avx2(PackedVertex* x, const StretchColumns& c,
+                                                 std::int64_t begin, std::int64_t end,
+                                                 double alpha) {
+    const V alpha4 = set1(alpha);
+    std::int64_t k = begin;
+    for (; k + 4 <= end; k += 4) {
+        stretch_avx2(x, c, k, alpha4);
+    }
+    return k;
+}
+
+PLIANT_AVX2_FN std::int64_t project_bending_avx2(PackedVertex* x, const BendingColumns& c,
+                                                 std::int64_t begin, std::int64_t end,
+                                                 double alpha) {
+    const V alpha4 = set1(alpha);
+    std::int64_t k = begin;
+    for (; k + 4 <= end; k += 4) {
+        bending_avx2(x, c, k, alpha4);
+    }
+    return k;
+}
+
+#endif  // PLIANT_CLOTH_AVX2
+
+}  // namespace
+
+double atan2(double y, double x) {
+    const double ax = std::fabs(x);
+    const double ay = std::fabs(y);
+    const bool swap = ay > ax;
+    const double num = swap ? ax : ay;
+    const double den = swap ? ay : ax;
+    const double t = den > 0.0 ? num / den : 0.0;
+    const bool big = t > REDUCE;
+    const double t2 = big ? (t - 1.0) / (t + 1.0) : t;
+    const double z = t2 * t2;
+    const double p = (((P0 * z + P1) * z + P2) * z + P3) * z + P4;
+    const double q = ((((z + Q0) * z + Q1) * z + Q2) * z + Q3) * z + Q4;
+    double r = t2 * (z * p / q) + t2;
+    r = big ? r + 0.5 * MOREBITS : r;
+    double a = (big ? PI_4 : 0.0) + r;
+    a = swap ? (PI_2 - a) + MOREBITS : a;
+    a = x < 0.0 ? (PI - a) + 2.0 * MOREBITS : a;
+    return y < 0.0 ? 0.0 - a : a;
+}
+
+bool uses_avx2() {
+#if defined(PLIANT_CLOTH_AVX2)
+    static const bool cpu_has = __builtin_cpu_supports("avx2") != 0;
+    return cpu_has && g_avx2_allowed.load(std::memory_order_relaxed);
+#else
+    return false;
+#endif
+}
+
+void allow_avx2(bool allowed) {
+    g_avx2_allowed.store(allowed, std::memory_order_relaxed);
+}
+
+void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begin, std::int64_t end,
+                     double alpha) {
+    std::int64_t k = begin;
+#if defined(PLIANT_CLOTH_AVX2)
+    if (uses_avx2()) {
+        k = project_stretch_avx2(x, c, begin, end, alpha);
+    }
+#endif
+    for (; k < end; ++k) {
+        stretch_scalar(x, c, k, alpha);
+    }
+}
+
+void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begin, std::int64_t end,
+                     double alpha) {
+    std::int64_t k = begin;
+#if defined(PLIANT_CLOTH_AVX2)
+    if (uses_avx2()) {
+        k = project_bending_avx2(x, c, begin, end, alpha);
+    }
+#endif
+    for (; k < end; ++k) {
+        bending_scalar(x, c, k, alpha);
+    }
+}
+
+}  // namespace pliant::cloth::detail

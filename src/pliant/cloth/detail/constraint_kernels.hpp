@@ -1,0 +1,73 @@
+// The cloth solver's constraint projections (solver.hpp), as kernels over the constraints of one
+// colour: a scalar kernel per constraint, and AVX2 kernels that project four constraints at a
+// time (double precision, four lanes), chosen at run time. The AVX2 kernels do the scalar
+// kernel's arithmetic lane by lane, in the same order and without contracting a · b + c into an
+// fma (this file's .cpp is compiled with -ffp-contract=off and only "avx2" is enabled): the
+// results are bitwise those of the scalar kernel, so the choice never changes a result, on any
+// machine, for any number of threads.
+//
+// Vertices are PackedVertex: position and inverse mass in one 32-byte record, so that four
+// vertices load and store as four 256-bit rows (transposed in registers) instead of gathers.
+//
+// Stretch (one edge p-q, rest length L): C = |x_p − x_q| − L, XPBD with one iteration:
+//   λ = −C / (w_p + w_q + α̃),  x_p += w_p λ n,  x_q −= w_q λ n,  n = (x_p − x_q) / |x_p − x_q|;
+// skipped when w_p + w_q = 0 or the edge has zero length.
+//
+// Bending (dihedral angle θ of the triangles (x0, x2, x3) and (x1, x3, x2) around the edge
+// x2-x3, rest angle θ_0; dihedral.hpp has the angle and gradient): C = θ − θ_0 wrapped into
+// (−π, π], λ = −C / (Σ w_k |∇_k θ|² + α̃), x_k += w_k λ ∇_k θ; skipped for a degenerate pair (zero
+// area or edge length) or when Σ w_k |∇_k θ|² = 0. The angle is atan2 of unnormalized sine and
+// cosine terms (atan2 is invariant to scaling both), evaluated by detail::atan2 below (a rational
+// approximation to 1e-16, the same operations in the scalar and vector kernels).
+//
+// Per-element kernels: no allocation, no exceptions; the constraints of one call must not share
+// vertices (a colour), and calls on disjoint ranges of a colour may run in parallel.
+#pragma once
+
+#include <cstdint>
+
+namespace pliant::cloth::detail {
+
+struct alignas(32) PackedVertex {
+    double x;
+    double y;
+    double z;
+    double inverse_mass;
+};
+
+// Constraints of one colour as columns (structure of arrays), in the colour's order.
+struct StretchColumns {
+    const std::int32_t* p;
+    const std::int32_t* q;
+    const double* rest_length;
+};
+struct BendingColumns {
+    const std::int32_t* v0;
+    const std::int32_t* v1;
+    const std::int32_t* v2;  // the shared edge is v2-v3
+    const std::int32_t* v3;
+    const double* rest_angle;
+};
+
+// Projects constraints [begin, end) of a colour; alpha = compliance / h². The AVX2 kernels take
+// the constraints in groups of four from `begin`; ranges that start at a multiple of four give
+// the same grouping for any split of a colour into ranges (not that grouping matters: every
+// lane computes the scalar kernel's bits).
+void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begin, std::int64_t end,
+                     double alpha);
+void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begin, std::int64_t end,
+                     double alpha);
+
+// Whether the AVX2 kernels run (the CPU has AVX2 and allow_avx2 did not turn them off).
+bool uses_avx2();
+// For tests: false makes every call use the scalar kernel until called with true. Not to be
+// called while a projection runs.
+void allow_avx2(bool allowed);
+
+// atan2(y, x) in (−π, π] from +, −, ×, ÷ and comparisons only (the vector kernels evaluate the
+// same operations): the octant reduction |y| ≤ |x| → t = |y| / |x| ∈ [0, 1], t > 0.66 → (t − 1) /
+// (t + 1) + π/4, then Cephes' rational approximation of atan on [−0.2, 0.66]. Within 2e-16 of
+// the correctly rounded value (relative, away from 0); atan2(0, 0) = 0, atan2(0, −x) = π.
+double atan2(double y, double x);
+
+}  // namespace pliant::cloth::detail
