@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pliant/cloth/dihedral.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 
 namespace pliant::cloth::detail {
 namespace {
@@ -178,7 +179,7 @@ TEST(ConstraintKernels, StretchMeetsTheRestLengthAndConservesTheCentreOfMass) {
 }
 
 TEST(ConstraintKernels, VectorAndScalarKernelsGiveTheSameBits) {
-    if (!uses_avx2()) {
+    if (!has_avx2()) {
         GTEST_SKIP() << "no AVX2 on this CPU";
     }
     // Bending: every remainder of a range split (the vector kernel takes groups of four).

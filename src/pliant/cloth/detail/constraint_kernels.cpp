@@ -1,21 +1,19 @@
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 
-#include <atomic>
 #include <cmath>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include "pliant/core/simd_dispatch.hpp"
+
+// The AVX2 kernels: "avx2" only, not "fma" (core/simd_dispatch.hpp); this file is also compiled
+// with -ffp-contract=off, so no a · b + c is contracted in the scalar kernels either.
+#if defined(PLIANT_HAS_AVX2_TARGET)
 #include <immintrin.h>
-#define PLIANT_CLOTH_AVX2 1
-// "avx2" only, not "fma": the compiler must not contract a · b + c, which would round differently
-// from the scalar kernels (this file is also compiled with -ffp-contract=off).
-#define PLIANT_AVX2_FN __attribute__((target("avx2")))
-#define PLIANT_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
+
+#include "pliant/core/simd_avx2.hpp"
 #endif
 
 namespace pliant::cloth::detail {
 namespace {
-
-std::atomic<bool> g_avx2_allowed{true};
 
 // Cephes' atan (S. L. Moshier): atan(t) = t + t z P(z) / Q(z), z = t², for |t| ≤ 0.66.
 constexpr double P0 = -8.750608600031904122785E-1;
@@ -145,29 +143,17 @@ void bending_scalar(PackedVertex* x, const BendingColumns& c, std::int64_t k, do
     move(p3, g3);
 }
 
-#if defined(PLIANT_CLOTH_AVX2)
+#if defined(PLIANT_HAS_AVX2_TARGET)
 
 using V = __m256d;
 
-PLIANT_AVX2_INLINE V add(V a, V b) {
-    return _mm256_add_pd(a, b);
-}
-PLIANT_AVX2_INLINE V sub(V a, V b) {
-    return _mm256_sub_pd(a, b);
-}
-PLIANT_AVX2_INLINE V mul(V a, V b) {
-    return _mm256_mul_pd(a, b);
-}
-PLIANT_AVX2_INLINE V div(V a, V b) {
-    return _mm256_div_pd(a, b);
-}
-PLIANT_AVX2_INLINE V set1(double v) {
-    return _mm256_set1_pd(v);
-}
-// mask ? a : b
-PLIANT_AVX2_INLINE V select(V mask, V a, V b) {
-    return _mm256_blendv_pd(b, a, mask);
-}
+using simd::add;
+using simd::div;
+using simd::mul;
+using simd::select;
+using simd::set1;
+using simd::sub;
+
 PLIANT_AVX2_INLINE V greater(V a, V b) {
     return _mm256_cmp_pd(a, b, _CMP_GT_OQ);
 }
@@ -386,7 +372,7 @@ PLIANT_AVX2_FN std::int64_t project_bending_avx2(PackedVertex* x, const BendingC
     return k;
 }
 
-#endif  // PLIANT_CLOTH_AVX2
+#endif  // PLIANT_HAS_AVX2_TARGET
 
 }  // namespace
 
@@ -410,24 +396,11 @@ double atan2(double y, double x) {
     return y < 0.0 ? 0.0 - a : a;
 }
 
-bool uses_avx2() {
-#if defined(PLIANT_CLOTH_AVX2)
-    static const bool cpu_has = __builtin_cpu_supports("avx2") != 0;
-    return cpu_has && g_avx2_allowed.load(std::memory_order_relaxed);
-#else
-    return false;
-#endif
-}
-
-void allow_avx2(bool allowed) {
-    g_avx2_allowed.store(allowed, std::memory_order_relaxed);
-}
-
 void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begin, std::int64_t end,
                      double alpha) {
     std::int64_t k = begin;
-#if defined(PLIANT_CLOTH_AVX2)
-    if (uses_avx2()) {
+#if defined(PLIANT_HAS_AVX2_TARGET)
+    if (has_avx2()) {
         k = project_stretch_avx2(x, c, begin, end, alpha);
     }
 #endif
@@ -439,8 +412,8 @@ void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begi
 void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begin, std::int64_t end,
                      double alpha) {
     std::int64_t k = begin;
-#if defined(PLIANT_CLOTH_AVX2)
-    if (uses_avx2()) {
+#if defined(PLIANT_HAS_AVX2_TARGET)
+    if (has_avx2()) {
         k = project_bending_avx2(x, c, begin, end, alpha);
     }
 #endif

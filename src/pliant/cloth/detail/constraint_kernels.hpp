@@ -58,12 +58,6 @@ void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begi
 void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begin, std::int64_t end,
                      double alpha);
 
-// Whether the AVX2 kernels run (the CPU has AVX2 and allow_avx2 did not turn them off).
-bool uses_avx2();
-// For tests: false makes every call use the scalar kernel until called with true. Not to be
-// called while a projection runs.
-void allow_avx2(bool allowed);
-
 // atan2(y, x) in (−π, π] from +, −, ×, ÷ and comparisons only (the vector kernels evaluate the
 // same operations): the octant reduction |y| ≤ |x| → t = |y| / |x| ∈ [0, 1], t > 0.66 → (t − 1) /
 // (t + 1) + π/4, then Cephes' rational approximation of atan on [−0.2, 0.66]. Within 2e-16 of

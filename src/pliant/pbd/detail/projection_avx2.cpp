@@ -4,6 +4,8 @@
 
 #if defined(PLIANT_HAS_AVX2_TARGET)
 #include <immintrin.h>
+
+#include "pliant/core/simd_avx2.hpp"
 #endif
 
 namespace pliant::pbd::detail {
@@ -54,15 +56,10 @@ PLIANT_AVX2_INLINE void store8(Float4* x, const std::int32_t* i, const Lanes8& l
     _mm_store_ps(&x[i[7]].x, _mm256_extractf128_ps(r3, 1));
 }
 
-PLIANT_AVX2_INLINE __m256 add(__m256 u, __m256 v) {
-    return _mm256_add_ps(u, v);
-}
-PLIANT_AVX2_INLINE __m256 sub(__m256 u, __m256 v) {
-    return _mm256_sub_ps(u, v);
-}
-PLIANT_AVX2_INLINE __m256 mul(__m256 u, __m256 v) {
-    return _mm256_mul_ps(u, v);
-}
+using simd::add;
+using simd::mul;
+using simd::sub;
+
 // u·u + v·v + s·s, summed left to right as the scalar kernels do.
 PLIANT_AVX2_INLINE __m256 norm2(__m256 u, __m256 v, __m256 s) {
     return add(add(mul(u, u), mul(v, v)), mul(s, s));

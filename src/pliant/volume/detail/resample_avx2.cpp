@@ -7,6 +7,8 @@
 
 #if defined(PLIANT_HAS_AVX2_TARGET)
 #include <immintrin.h>
+
+#include "pliant/core/simd_avx2.hpp"
 #endif
 
 namespace pliant::volume::detail {
@@ -196,31 +198,20 @@ PLIANT_AVX2_INLINE int sample_f32(const float* src, const std::int64_t n[3], con
 
 // Four lanes of doubles: one per tet.
 using V = __m256d;
+using simd::add;
+using simd::mul;
+using simd::select;
+using simd::set1;
+using simd::sub;
 struct V3 {
     V x, y, z;
 };
-PLIANT_AVX2_INLINE V add(V a, V b) {
-    return _mm256_add_pd(a, b);
-}
-PLIANT_AVX2_INLINE V sub(V a, V b) {
-    return _mm256_sub_pd(a, b);
-}
-PLIANT_AVX2_INLINE V mul(V a, V b) {
-    return _mm256_mul_pd(a, b);
-}
-PLIANT_AVX2_INLINE V set1(double x) {
-    return _mm256_set1_pd(x);
-}
 // std::min(a, b) and std::max(a, b), NaN and signed zeros included.
 PLIANT_AVX2_INLINE V std_min(V a, V b) {
     return _mm256_min_pd(b, a);
 }
 PLIANT_AVX2_INLINE V std_max(V a, V b) {
     return _mm256_max_pd(b, a);
-}
-// c ? a : b per lane (c a compare mask).
-PLIANT_AVX2_INLINE V select(V c, V a, V b) {
-    return _mm256_blendv_pd(b, a, c);
 }
 PLIANT_AVX2_INLINE V3 sub(const V3& a, const V3& b) {
     return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
