@@ -388,6 +388,16 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
         }
         clear_lane(s, l);
     };
+    // Frees lane l (its ray reached its first sample or ended) and refills it.
+    const auto release = [&](int l) {
+        live_mask &= ~(1 << l);
+        --num_live;
+        if ((more_mask & (1 << l)) != 0) {
+            more_mask &= ~(1 << l);
+            --more_count;
+        }
+        refill(l);
+    };
     for (int l = 0; l < LANES; ++l) {
         refill(l);
     }
@@ -594,13 +604,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                     } else {
                         end_lane(l);
                     }
-                    live_mask &= ~(1 << l);
-                    --num_live;
-                    if ((more_mask & (1 << l)) != 0) {
-                        more_mask &= ~(1 << l);
-                        --more_count;
-                    }
-                    refill(l);
+                    release(l);
                 }
             }
         } else {
@@ -612,13 +616,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                 const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
                 done_mask &= done_mask - 1;
                 end_lane(l);
-                live_mask &= ~(1 << l);
-                --num_live;
-                if ((more_mask & (1 << l)) != 0) {
-                    more_mask &= ~(1 << l);
-                    --more_count;
-                }
-                refill(l);
+                release(l);
             }
         }
     }
