@@ -229,6 +229,21 @@ PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinea
     }
 }
 
+// classify() at world point g, its colour shaded for a ray along dir when shading is on (only
+// samples with opacity are shaded: the gradient costs six more lookups).
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Sample classify_shaded(const RayCastKernel& k, const Trilinear& t,
+                                                 Vec3f g, Vec3f dir) {
+    Sample s = classify<IS_RGBA>(k, t);
+    if (s.a > 0.0f && k.shading) {
+        const float f = shade<IS_RGBA>(k, g, dir);
+        s.r *= f;
+        s.g *= f;
+        s.b *= f;
+    }
+    return s;
+}
+
 // The ray through pixel (i, j)'s centre, as Camera::ray computes it (in float).
 PLIANT_HOST_DEVICE inline void pixel_ray(const RayCastKernel& k, int i, int j, Vec3f& origin,
                                          Vec3f& dir) {
@@ -402,14 +417,8 @@ PLIANT_HOST_DEVICE inline Color end_composite(const RayCastKernel& k, const Pixe
         // A cell's cube is empty (non-zero) towards every octant alike: octant 0 decides.
         if (!k.skipping || k.empty_cube[0][cell_of(k, t)] == 0) {
             ++samples;
-            Sample s = classify<IS_RGBA>(k, t);
+            const Sample s = classify_shaded<IS_RGBA>(k, t, g, p.dir);
             if (s.a > 0.0f) {
-                if (k.shading) {
-                    const float f = shade<IS_RGBA>(k, g, p.dir);
-                    s.r *= f;
-                    s.g *= f;
-                    s.b *= f;
-                }
                 const float ratio = partial / k.step;
                 const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
                 composite(s, a, c.r, c.g, c.b, c.a);
@@ -473,14 +482,8 @@ PLIANT_HOST_DEVICE inline Accumulated march_composite(const RayCastKernel& k, co
             }
         }
         ++samples;
-        Sample s = classify<IS_RGBA>(k, t);
+        const Sample s = classify_shaded<IS_RGBA>(k, t, g, p.dir);
         if (s.a > 0.0f) {
-            if (k.shading) {
-                const float f = shade<IS_RGBA>(k, g, p.dir);
-                s.r *= f;
-                s.g *= f;
-                s.b *= f;
-            }
             composite(s, s.a, c.r, c.g, c.b, c.a);
             if (c.a > k.threshold) {
                 break;
