@@ -60,17 +60,23 @@ std::vector<T> sorted(std::vector<T> v) {
     return v;
 }
 
-void expect_matches_brute_force(const TriangleMesh& mesh, const std::vector<Vec3f>& p1,
-                                float inflation) {
-    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
-    const FeaturePairs& got = broad.update(mesh.positions, p1, inflation);
-    const FeaturePairs expected = brute_force(mesh, mesh.positions, p1, inflation);
+// got holds every pair of expected (sorted, as brute_force returns them) exactly once, in any
+// order, and no other.
+void expect_same_pairs(const FeaturePairs& got, const FeaturePairs& expected) {
     const auto vf = sorted(got.vertex_face);
     const auto ee = sorted(got.edge_edge);
     EXPECT_EQ(std::adjacent_find(vf.begin(), vf.end()), vf.end()) << "duplicate VF pair";
     EXPECT_EQ(std::adjacent_find(ee.begin(), ee.end()), ee.end()) << "duplicate EE pair";
     EXPECT_EQ(vf, expected.vertex_face);
     EXPECT_EQ(ee, expected.edge_edge);
+}
+
+void expect_matches_brute_force(const TriangleMesh& mesh, const std::vector<Vec3f>& p1,
+                                float inflation) {
+    SelfCollisionBroadPhase<float> broad(mesh.triangles, mesh.num_vertices());
+    const FeaturePairs& got = broad.update(mesh.positions, p1, inflation);
+    const FeaturePairs expected = brute_force(mesh, mesh.positions, p1, inflation);
+    expect_same_pairs(got, expected);
     EXPECT_GT(expected.vertex_face.size() + expected.edge_edge.size(), 0u) << "vacuous case";
 }
 
@@ -222,12 +228,7 @@ TEST(SelfBroadPhase, PartialUpdateFindsThePairsOfTheChangedVertices) {
     const auto topo = geometry::build_topology(mesh.triangles, mesh.num_vertices());
     const FeaturePairs expected =
         involving(brute_force(mesh, mesh.positions, p1, inflation), mesh, topo, changed);
-    const auto vf = sorted(got.vertex_face);
-    const auto ee = sorted(got.edge_edge);
-    EXPECT_EQ(std::adjacent_find(vf.begin(), vf.end()), vf.end()) << "duplicate VF pair";
-    EXPECT_EQ(std::adjacent_find(ee.begin(), ee.end()), ee.end()) << "duplicate EE pair";
-    EXPECT_EQ(vf, expected.vertex_face);
-    EXPECT_EQ(ee, expected.edge_edge);
+    expect_same_pairs(got, expected);
     EXPECT_GT(expected.vertex_face.size(), 0u) << "vacuous case";
     EXPECT_GT(expected.edge_edge.size(), 0u) << "vacuous case";
     // A full update on the same boxes agrees with the brute force on all pairs.
