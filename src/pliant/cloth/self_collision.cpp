@@ -533,6 +533,15 @@ void SelfCollision::renew_paths(std::span<const Vec3d> x, const Vec3d& shift,
     m_stats.gather_ms += watch.elapsed_ms();
 }
 
+int SelfCollision::windows_for_next_gather() {
+    // Hysteresis on the candidate count (drape, 18,225 vertices: 1-12k candidates while draped
+    // with two windows, 35-300k at the impact, where one window is 1.3-2.5x cheaper).
+    const auto candidates = static_cast<double>(m_candidates.size());
+    const auto vertices = static_cast<double>(m_num_vertices);
+    m_dense_contact = m_dense_contact ? candidates > vertices / 8.0 : candidates > vertices;
+    return m_dense_contact ? 1 : 2;
+}
+
 void SelfCollision::prepare(std::span<const Vec3d> positions, std::span<const Vec3d> velocities,
                             double time, double window_dt) {
     const Vec3d mean_velocity = median_of(velocities, false);
@@ -545,10 +554,13 @@ void SelfCollision::prepare(std::span<const Vec3d> positions, std::span<const Ve
         },
         VERTEX_GRAIN);
     const std::span<const Vec3d> u(m_new_velocities);
-    if (!m_has_gather || window_dt != m_window_dt) {
+    if (!m_has_gather) {
         gather(positions, u, time, window_dt);
         return;
     }
+    // A different window length (windows_for_next_gather, or another step length) needs no full
+    // gather: the paths that end within the window are renewed below.
+    m_window_dt = window_dt;
     // New paths for the vertices that escaped in the last window, whose path ends within this
     // one or that are predicted to leave their slack in it (their deviation grows at most by
     // their velocity's difference from the path's, over the window).

@@ -114,7 +114,14 @@ public:
     SelfCollision(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
                   double thickness);
 
-    // Step 1 for the window starting at `time` (s) and lasting window_dt (s).
+    // How many of the caller's fail-safe windows the next step 1 should cover: 2 while the
+    // candidate pairs are few (fewer than the vertices, or after a dense phase fewer than an eighth
+    // of them), which halves the broad phases of a draping sheet; 1 while contact is dense, where
+    // a longer window's candidates (every pair that can close the gap over it) would cost more
+    // in steps 2 and 3 than the broad phase saved. Decided on counts only: deterministic.
+    int windows_for_next_gather();
+    // Step 1 for the window starting at `time` (s) and lasting window_dt (s) (one or several of
+    // the fail-safe's windows: enforce() may run several times within it).
     void prepare(std::span<const Vec3d> positions, std::span<const Vec3d> velocities, double time,
                  double window_dt);
     // Step 2 for the substep of length h ending at `time` (s); returns the pairs pushed apart
@@ -235,6 +242,7 @@ private:
     const std::vector<geometry::Edge>* m_edges;  // m_broad_phase's topology
 
     bool m_has_gather = false;
+    bool m_dense_contact = false;  // windows_for_next_gather's state
     bool m_broad_phase_ready = false;                       // a full update ran
     double m_inflation = 0.0;                               // of the broad phase's boxes (m)
     double m_window_dt = 0.0;                               // s

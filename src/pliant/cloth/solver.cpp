@@ -19,8 +19,9 @@ namespace {
 
 constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
 constexpr std::int64_t VERTEX_GRAIN = 2048;
-// Self-collision candidates are gathered again every this many substeps.
-constexpr int GATHER_EVERY = 4;
+// The self-collision fail-safe checks the motion of every this many substeps (a window); the
+// candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
+constexpr int FAIL_SAFE_WINDOW = 4;
 
 void validate_material(const ClothMaterial& m) {
     const auto check = [](double value, const char* name) {
@@ -310,25 +311,32 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     if (m_self_collision) {
         m_self_collision->reset_stats();
     }
-    // With self-collision the step runs in windows of GATHER_EVERY substeps: candidates gathered
-    // for the window, then the fail-safe over the window's motion. A window's start-to-end line is
-    // close to the path its substeps took (a frame's is not: cloth that folds around something
-    // within a frame crosses it on the straight line between the frame's ends), and a vertex put
-    // back loses only that window's motion.
+    // With self-collision the step runs in windows of FAIL_SAFE_WINDOW substeps, each ending with
+    // the fail-safe over the window's motion; candidates are gathered at the start of a window for
+    // it and, while contact is sparse, the next one too. A window's start-to-end line is close to
+    // the path its substeps took (a frame's is not: cloth that folds around something within a
+    // frame crosses it on the straight line between the frame's ends), and a vertex put back loses
+    // only that window's motion.
     m_step_start = start_time;
     m_step_dt = dt;
     if (m_grab) {
         m_grab->start = m_positions[static_cast<std::size_t>(m_grab->vertex)];
     }
+    int gather_end = 0;  // the substep at which the last gather's windows end
     for (int s = 0; s < substeps; ++s) {
-        if (m_self_collision && s % GATHER_EVERY == 0) {
+        if (m_self_collision && s % FAIL_SAFE_WINDOW == 0) {
+            if (s >= gather_end) {
+                const int windows = m_self_collision->windows_for_next_gather();
+                m_self_collision->prepare(m_positions, m_velocities, start_time + s * h,
+                                          windows * FAIL_SAFE_WINDOW * h);
+                gather_end = s + windows * FAIL_SAFE_WINDOW;
+            }
             m_window_start = m_positions;
-            m_self_collision->prepare(m_positions, m_velocities, start_time + s * h,
-                                      GATHER_EVERY * h);
             m_window_start_time = start_time + s * h;
         }
         stats.obstacle_contacts = substep(h, start_time + (s + 1) * h, stats.solve_ms);
-        if (m_self_collision && (s % GATHER_EVERY == GATHER_EVERY - 1 || s == substeps - 1)) {
+        if (m_self_collision &&
+            (s % FAIL_SAFE_WINDOW == FAIL_SAFE_WINDOW - 1 || s == substeps - 1)) {
             m_self_collision->enforce(m_window_start, m_positions, m_velocities,
                                       m_window_start_time, start_time + (s + 1) * h);
         }

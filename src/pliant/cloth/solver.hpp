@@ -11,9 +11,9 @@
 //      every substep: one iteration per substep);
 //   4. obstacles (placed where their motion has them at the end of the substep): every vertex is
 //      pushed `thickness` away from every obstacle (obstacles.hpp);
-//   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; every
-//   4 substeps the candidate pairs are gathered before and the CCD fail-safe runs after them, on
-//   the motion of those 4 substeps; self_collision.hpp)
+//   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; the CCD
+//   fail-safe runs after every 4 substeps on the motion of those 4 substeps, and the candidate
+//   pairs are gathered before every 4 or, while contact is sparse, every 8; self_collision.hpp)
 //   5. v = (x - x_previous) / h; Coulomb friction on the velocities of vertices in contact
 //      (relative to the obstacle surface's velocity), bounded by their normal correction / h
 //      (obstacles.hpp: at the velocity level, friction never cancels a constraint's correction,
