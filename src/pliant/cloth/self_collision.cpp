@@ -122,6 +122,32 @@ double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<cons
     return std::sqrt(dot(gap, gap));
 }
 
+// The gap between the projections of a pair's two vertex sets at x (as in box_gap) on the line
+// through their centroids: a separating-axis lower bound on the features' distance, tight where
+// box_gap is not (neighbouring features of a sheet that lies diagonally to the axes). About a
+// tenth of an exact distance's cost.
+double centroid_axis_gap(const std::int32_t (&v)[4], std::size_t num_first,
+                         std::span<const Vec3d> x) {
+    const Vec3d& p0 = x[static_cast<std::size_t>(v[0])];
+    const Vec3d& p1 = x[static_cast<std::size_t>(v[1])];
+    const Vec3d& p2 = x[static_cast<std::size_t>(v[2])];
+    const Vec3d& p3 = x[static_cast<std::size_t>(v[3])];
+    double first_max = 0.0;
+    double second_min = 0.0;
+    Vec3d axis{};
+    if (num_first == 1) {
+        axis = p0 - (p1 + p2 + p3) * (1.0 / 3.0);
+        first_max = std::max({dot(p1, axis), dot(p2, axis), dot(p3, axis)});
+        second_min = dot(p0, axis);
+    } else {
+        axis = (p2 + p3) - (p0 + p1);
+        first_max = std::max(dot(p0, axis), dot(p1, axis));
+        second_min = std::min(dot(p2, axis), dot(p3, axis));
+    }
+    const double length = norm(axis);
+    return second_min > first_max && length > 0.0 ? (second_min - first_max) / length : 0.0;
+}
+
 // The largest |Δ_i − Δ_j| (i in the first set, j in the second) of per-vertex displacements Δ.
 double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
                                  std::span<const Vec3d> motion) {
@@ -354,7 +380,8 @@ void SelfCollision::add_candidates(const collision::FeaturePairs& pairs, std::sp
                 const double offset = feature_sum(f, deviations);
                 const double reach = offset + feature_sum(f, slacks) +
                                      spread * std::max(0.0, path_end - time) + margin;
-                if (gap - reach >= keep_below) {
+                if (gap - reach >= keep_below ||
+                    centroid_axis_gap(f.v, f.num_first, x) - reach >= keep_below) {
                     continue;
                 }
                 const double distance = features_distance(f, x);
@@ -407,6 +434,7 @@ void SelfCollision::compute_triangle_motions(double time) {
                 const auto v = static_cast<std::size_t>(tri[static_cast<std::size_t>(k)]);
                 const Vec3d p = m_anchors[v] + m_path_velocities[v] * (time - m_anchor_times[v]);
                 const Vec3d& u = m_path_velocities[v];
+                m.p[k] = p;
                 m.p_lo = k == 0 ? p : min(m.p_lo, p);
                 m.p_hi = k == 0 ? p : max(m.p_hi, p);
                 m.u_lo = k == 0 ? u : min(m.u_lo, u);
@@ -431,7 +459,18 @@ bool SelfCollision::may_come_close(std::int32_t a, std::int32_t b) const {
     const Vec3d gap = max(max(p.p_lo - q.p_hi, q.p_lo - p.p_hi), zero);
     const Vec3d speed = max(max(p.u_hi - q.u_lo, q.u_hi - p.u_lo), zero);
     const double reach = p.slack + q.slack + norm(speed) * std::max(p.duration, q.duration);
-    return norm(gap) - reach < m_thickness + m_filter_margin;
+    const double keep_below = m_thickness + m_filter_margin;
+    if (norm(gap) - reach >= keep_below) {
+        return false;
+    }
+    // The same with the gap along the line through the triangles' centroids (a separating axis:
+    // the speed box's norm bounds the relative speed along it too).
+    const Vec3d axis = (q.p[0] + q.p[1] + q.p[2]) - (p.p[0] + p.p[1] + p.p[2]);
+    const double p_max = std::max({dot(p.p[0], axis), dot(p.p[1], axis), dot(p.p[2], axis)});
+    const double q_min = std::min({dot(q.p[0], axis), dot(q.p[1], axis), dot(q.p[2], axis)});
+    const double length = norm(axis);
+    const double axis_gap = q_min > p_max && length > 0.0 ? (q_min - p_max) / length : 0.0;
+    return axis_gap - reach < keep_below;
 }
 
 void SelfCollision::gather(std::span<const Vec3d> x, std::span<const Vec3d> u, double time,

@@ -259,7 +259,9 @@ private:
     std::vector<Vec3d> m_box_lo;         // the path's box grown by the slack, in the frame
     std::vector<Vec3d> m_box_hi;
     struct TriangleMotion {
-        Vec3d p_lo, p_hi;  // path positions at the time of the last compute_triangle_motions
+        Vec3d p[3];        // its vertices' path positions at the time of the last
+                           // compute_triangle_motions
+        Vec3d p_lo, p_hi;  // their box
         Vec3d u_lo, u_hi;  // path velocities
         double slack;      // largest slack, m
         double duration;   // time to the last path end, s
