@@ -203,21 +203,6 @@ SelfCollision::FeatureVertices SelfCollision::feature_vertices(const collision::
     return f;
 }
 
-double SelfCollision::feature_sum(const FeatureVertices& f, std::span<const double> per_vertex) {
-    const auto at = [&](int k) {
-        return per_vertex[static_cast<std::size_t>(f.v[k])];
-    };
-    if (f.num_first == 1) {
-        return at(0) + std::max({at(1), at(2), at(3)});
-    }
-    return std::max(at(0), at(1)) + std::max(at(2), at(3));
-}
-
-double SelfCollision::bound(const Candidate& c, std::span<const double> deviations, double time) {
-    return c.distance - c.offset - feature_sum(feature_vertices(c), deviations) -
-           c.spread * (time - c.time);
-}
-
 double SelfCollision::features_distance(const FeatureVertices& f, std::span<const Vec3d> x) {
     const auto at = [&](int k) {
         return x[static_cast<std::size_t>(f.v[k])];
@@ -695,23 +680,33 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     // passed through, with no proximity test.
     const Vec3d shift_now = shift_of(current);
     const Vec3d shift_before = shift_of(previous_positions);
-    m_deviations.resize(m_num_vertices);
-    parallel_for(
-        static_cast<std::int64_t>(m_num_vertices),
-        [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(i);
-            m_deviations[v] = std::max(deviation(previous_positions[v], shift_before, time - h, v),
-                                       deviation(current[v], shift_now, time, v));
-        },
-        VERTEX_GRAIN);
-    const std::span<const double> deviations(m_deviations);
+    const auto substep_deviation = [&](std::size_t v) {
+        return std::max(deviation(previous_positions[v], shift_before, time - h, v),
+                        deviation(current[v], shift_now, time, v));
+    };
     // In parallel, the pairs closer than thickness (in pair order); then, sequentially, push each
-    // apart with its contact at the positions as they are by then.
-    const std::vector<std::int64_t>& close =
-        indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
+    // apart with its contact at the positions as they are by then. The deviations are computed
+    // per vertex first when the candidates' vertices outnumber the vertices, else per use.
+    const auto closer = [&](const auto& deviations) -> const std::vector<std::int64_t>& {
+        return indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
             const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
             return bound(c, deviations, time) < m_thickness && contact(c).distance < m_thickness;
         });
+    };
+    const bool per_vertex = 4 * m_candidates.size() > m_num_vertices;
+    if (per_vertex) {
+        m_deviations.resize(m_num_vertices);
+        parallel_for(
+            static_cast<std::int64_t>(m_num_vertices),
+            [&](std::int64_t i) {
+                const auto v = static_cast<std::size_t>(i);
+                m_deviations[v] = substep_deviation(v);
+            },
+            VERTEX_GRAIN);
+    }
+    const std::vector<std::int64_t>& close = per_vertex
+                                                 ? closer(std::span<const double>(m_deviations))
+                                                 : closer(substep_deviation);
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;
@@ -839,21 +834,23 @@ void SelfCollision::enforce(std::span<const Vec3d> positions_t0, std::span<Vec3d
     // translation interpolated, is at most the larger of its ends'), so inside their boxes.
     Stopwatch stage;
     m_escaped.assign(n, 0);
-    m_escaped_now.clear();
     m_escape_pairs.vertex_face.clear();
     m_escape_pairs.edge_edge.clear();
     m_deviations.resize(n);
-    for (std::size_t v = 0; v < n; ++v) {
-        if (!m_has_gather || m_needs_path[v] != 0 ||
-            !within_path(positions_t0[v], shift_t0, time_t0, v, margin) ||
-            !within_path(end[v], shift, time, v, margin)) {
-            m_escaped_now.push_back(static_cast<std::int32_t>(v));
-            m_deviations[v] = 0.0;
-        } else {
-            m_deviations[v] = std::max(deviation(positions_t0[v], shift_t0, time_t0, v),
-                                       deviation(end[v], shift, time, v));
-        }
-    }
+    const std::vector<std::int64_t>& escaped =
+        indices_where(static_cast<std::int64_t>(n), [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            const bool out = !m_has_gather || m_needs_path[v] != 0 ||
+                             !within_path(positions_t0[v], shift_t0, time_t0, v, margin) ||
+                             !within_path(end[v], shift, time, v, margin);
+            m_deviations[v] = out ? 0.0
+                                  : std::max(deviation(positions_t0[v], shift_t0, time_t0, v),
+                                             deviation(end[v], shift, time, v));
+            return out;
+        });
+    m_escaped_now.resize(escaped.size());
+    std::transform(escaped.begin(), escaped.end(), m_escaped_now.begin(),
+                   [](std::int64_t v) { return static_cast<std::int32_t>(v); });
     m_stats.narrow_ms += stage.elapsed_ms();
     search_escaped(positions_t0, end, shift_t0, shift, margin);
     // Pairs that are not candidates and involve no escaped vertex stay thickness apart; a

@@ -77,8 +77,10 @@
 // Units: metres, seconds. Not thread safe; the kernels run in parallel inside.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "pliant/cloth/material.hpp"
@@ -188,10 +190,30 @@ private:
     // Whether v's path covers time τ and its deviation there is at most its slack less margin.
     bool within_path(const Vec3d& x, const Vec3d& shift, double time, std::size_t v,
                      double margin) const;
-    // A candidate's distance bound at time τ given per-vertex deviations.
-    static double bound(const Candidate& c, std::span<const double> deviations, double time);
-    // Largest per_vertex value over the first feature plus the largest over the second.
-    static double feature_sum(const FeatureVertices& f, std::span<const double> per_vertex);
+    // A candidate's distance bound at time τ given per-vertex deviations (a span, or a callable
+    // from vertex index to deviation).
+    template <typename Deviations>
+    static double bound(const Candidate& c, const Deviations& deviations, double time) {
+        return c.distance - c.offset - feature_sum(feature_vertices(c), deviations) -
+               c.spread * (time - c.time);
+    }
+    // Largest per_vertex value over the first feature plus the largest over the second
+    // (per_vertex: a span, or a callable from vertex index to value).
+    template <typename PerVertex>
+    static double feature_sum(const FeatureVertices& f, const PerVertex& per_vertex) {
+        const auto at = [&](int k) {
+            const auto v = static_cast<std::size_t>(f.v[k]);
+            if constexpr (std::is_invocable_v<const PerVertex&, std::size_t>) {
+                return static_cast<double>(per_vertex(v));
+            } else {
+                return static_cast<double>(per_vertex[v]);
+            }
+        };
+        if (f.num_first == 1) {
+            return at(0) + std::max({at(1), at(2), at(3)});
+        }
+        return std::max(at(0), at(1)) + std::max(at(2), at(3));
+    }
 
     // Every vertex gets a path anchored at x (time τ, frame reset so that s(τ) = 0) with
     // velocity u[v]; full broad phase; the candidates are rebuilt.
