@@ -87,31 +87,18 @@ double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
     return std::sqrt(sweep);
 }
 
-// The largest |u_i − u_j| over i in the first feature and j in the second.
-double largest_difference(std::span<const Vec3d> u, std::span<const std::int32_t> first,
-                          std::span<const std::int32_t> second) {
-    double largest = 0.0;
-    for (const std::int32_t i : first) {
-        for (const std::int32_t j : second) {
-            largest = std::max(largest, squared_norm(u[static_cast<std::size_t>(i)] -
-                                                     u[static_cast<std::size_t>(j)]));
-        }
-    }
-    return std::sqrt(largest);
-}
+// Pair kernels on the four vertex values of a feature pair: the first feature is p0 (vertex-face)
+// or p0, p1 (edge-edge), the second the rest. EDGE_EDGE selects the split at compile time; the
+// functions after these take vertex indices and select it at run time.
 
-// The distance between the boxes of a pair's two vertex sets at x (first: 1 or 2 vertices,
-// second: 3 or 2): a lower bound on the features' distance.
-double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<const Vec3d> x) {
-    const Vec3d& p0 = x[static_cast<std::size_t>(v[0])];
-    const Vec3d& p1 = x[static_cast<std::size_t>(v[1])];
-    const Vec3d& p2 = x[static_cast<std::size_t>(v[2])];
-    const Vec3d& p3 = x[static_cast<std::size_t>(v[3])];
+// The distance between the boxes of the two features' vertices: a lower bound on their distance.
+template <bool EDGE_EDGE>
+inline double box_gap(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, const Vec3d& p3) {
     Vec3d a_lo = p0;
     Vec3d a_hi = p0;
     Vec3d b_lo = min(p2, p3);
     Vec3d b_hi = max(p2, p3);
-    if (num_first == 2) {
+    if constexpr (EDGE_EDGE) {
         a_lo = min(a_lo, p1);
         a_hi = max(a_hi, p1);
     } else {
@@ -122,47 +109,77 @@ double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<cons
     return std::sqrt(dot(gap, gap));
 }
 
-// The gap between the projections of a pair's two vertex sets at x (as in box_gap) on the line
-// through their centroids: a separating-axis lower bound on the features' distance, tight where
-// box_gap is not (neighbouring features of a sheet that lies diagonally to the axes). About a
-// tenth of an exact distance's cost.
-double centroid_axis_gap(const std::int32_t (&v)[4], std::size_t num_first,
-                         std::span<const Vec3d> x) {
-    const Vec3d& p0 = x[static_cast<std::size_t>(v[0])];
-    const Vec3d& p1 = x[static_cast<std::size_t>(v[1])];
-    const Vec3d& p2 = x[static_cast<std::size_t>(v[2])];
-    const Vec3d& p3 = x[static_cast<std::size_t>(v[3])];
+// The gap between the projections of the two features' vertices on the line through their
+// centroids: a separating-axis lower bound on their distance, tight where box_gap is not
+// (neighbouring features of a sheet that lies diagonally to the axes). About a tenth of an exact
+// distance's cost.
+template <bool EDGE_EDGE>
+inline double centroid_axis_gap(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2,
+                                const Vec3d& p3) {
     double first_max = 0.0;
     double second_min = 0.0;
     Vec3d axis{};
-    if (num_first == 1) {
-        axis = p0 - (p1 + p2 + p3) * (1.0 / 3.0);
-        first_max = std::max({dot(p1, axis), dot(p2, axis), dot(p3, axis)});
-        second_min = dot(p0, axis);
-    } else {
+    if constexpr (EDGE_EDGE) {
         axis = (p2 + p3) - (p0 + p1);
         first_max = std::max(dot(p0, axis), dot(p1, axis));
         second_min = std::min(dot(p2, axis), dot(p3, axis));
+    } else {
+        axis = p0 - (p1 + p2 + p3) * (1.0 / 3.0);
+        first_max = std::max({dot(p1, axis), dot(p2, axis), dot(p3, axis)});
+        second_min = dot(p0, axis);
     }
     const double length = norm(axis);
     return second_min > first_max && length > 0.0 ? (second_min - first_max) / length : 0.0;
 }
 
-// The largest |Δ_i − Δ_j| (i in the first set, j in the second) of per-vertex displacements Δ.
-double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
-                                 std::span<const Vec3d> motion) {
-    const Vec3d& d0 = motion[static_cast<std::size_t>(v[0])];
-    const Vec3d& d1 = motion[static_cast<std::size_t>(v[1])];
-    const Vec3d& d2 = motion[static_cast<std::size_t>(v[2])];
-    const Vec3d& d3 = motion[static_cast<std::size_t>(v[3])];
+// The largest |d_i − d_j| over i in the first feature and j in the second (of velocities or
+// displacements).
+template <bool EDGE_EDGE>
+inline double largest_pair_difference(const Vec3d& d0, const Vec3d& d1, const Vec3d& d2,
+                                      const Vec3d& d3) {
     double m = 0.0;
-    if (num_first == 1) {
-        m = std::max({squared_norm(d0 - d1), squared_norm(d0 - d2), squared_norm(d0 - d3)});
-    } else {
+    if constexpr (EDGE_EDGE) {
         m = std::max({squared_norm(d0 - d2), squared_norm(d0 - d3), squared_norm(d1 - d2),
                       squared_norm(d1 - d3)});
+    } else {
+        m = std::max({squared_norm(d0 - d1), squared_norm(d0 - d2), squared_norm(d0 - d3)});
     }
     return std::sqrt(m);
+}
+
+// kernel<EDGE_EDGE>(value[v0], ..., value[v3]) for vertices v (first feature: num_first of them).
+template <typename Kernel>
+inline double on_pair(const std::int32_t (&v)[4], std::size_t num_first,
+                      std::span<const Vec3d> value, Kernel&& kernel) {
+    const Vec3d& p0 = value[static_cast<std::size_t>(v[0])];
+    const Vec3d& p1 = value[static_cast<std::size_t>(v[1])];
+    const Vec3d& p2 = value[static_cast<std::size_t>(v[2])];
+    const Vec3d& p3 = value[static_cast<std::size_t>(v[3])];
+    return num_first == 2 ? kernel.template operator()<true>(p0, p1, p2, p3)
+                          : kernel.template operator()<false>(p0, p1, p2, p3);
+}
+
+double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<const Vec3d> x) {
+    return on_pair(v, num_first, x,
+                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+                       return box_gap<EE>(a, b, c, d);
+                   });
+}
+
+double centroid_axis_gap(const std::int32_t (&v)[4], std::size_t num_first,
+                         std::span<const Vec3d> x) {
+    return on_pair(v, num_first, x,
+                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+                       return centroid_axis_gap<EE>(a, b, c, d);
+                   });
+}
+
+double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
+                                 std::span<const Vec3d> motion) {
+    return on_pair(v, num_first, motion,
+                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+                       return largest_pair_difference<EE>(a, b, c, d);
+                   });
 }
 
 }  // namespace
@@ -216,7 +233,8 @@ double SelfCollision::features_distance(const FeatureVertices& f, std::span<cons
 bool SelfCollision::separation_exceeds(const FeatureVertices& f, std::span<const Vec3d> start,
                                        std::span<const Vec3d> motion, double threshold) {
     const double sweep = largest_motion_difference(f.v, f.num_first, motion);
-    if (box_gap(f.v, f.num_first, start) - sweep > threshold) {
+    if (box_gap(f.v, f.num_first, start) - sweep > threshold ||
+        centroid_axis_gap(f.v, f.num_first, start) - sweep > threshold) {
         return true;
     }
     return features_distance(f, start) - sweep > threshold;
@@ -314,89 +332,89 @@ void SelfCollision::set_path(std::size_t v, const Vec3d& anchor, const Vec3d& ve
 void SelfCollision::add_candidates(const collision::FeaturePairs& pairs, std::span<const Vec3d> x,
                                    const Vec3d& shift, double time,
                                    std::span<const std::uint8_t> involving) {
-    // The deviations at `time` (the vertices' offsets from their paths, for the bounds).
-    // Also each vertex's reach: deviation + slack + |u| (path end − time), so that a pair's
-    // reach is at most the sum of its features' largest (|u_i − u_j| ≤ |u_i| + |u_j|, and the
-    // pair's paths end no later than either's).
-    m_deviations.resize(m_num_vertices);
-    m_reaches.resize(m_num_vertices);
+    // Per vertex, what the filter reads of it, in one cache line: its position, its deviation
+    // from its path at `time` (for the bounds), its path velocity and the time left on its path.
+    m_filter_vertices.resize(m_num_vertices);
     parallel_for(
         static_cast<std::int64_t>(m_num_vertices),
         [&](std::int64_t i) {
             const auto v = static_cast<std::size_t>(i);
-            m_deviations[v] = deviation(x[v], shift, time, v);
-            m_reaches[v] = m_deviations[v] + m_slacks[v] +
-                           norm(m_path_velocities[v]) * std::max(0.0, m_path_ends[v] - time);
+            m_filter_vertices[v] = {x[v], deviation(x[v], shift, time, v), m_path_velocities[v],
+                                    m_path_ends[v] - time};
         },
         VERTEX_GRAIN);
-    const std::span<const double> deviations(m_deviations);
-    const std::span<const double> reaches(m_reaches);
+    const FilterVertex* vertices = m_filter_vertices.data();
     const std::span<const double> slacks(m_slacks);
-    const std::span<const Vec3d> velocities(m_path_velocities);
     const double margin = 1e-9 * (1.0 + largest_coordinate(x, m_box_hi));
     const double keep_below = m_thickness + margin;
-    const auto num_pairs =
-        static_cast<std::int64_t>(pairs.vertex_face.size() + pairs.edge_edge.size());
     const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    const auto num_pairs = num_vf + static_cast<std::int64_t>(pairs.edge_edge.size());
+    // Pair i becomes a candidate when its distance at x, less the most its features can approach
+    // each other while every vertex stays within its slack until the first of their paths ends,
+    // is below the thickness: the lower bounds first (boxes, the centroids' line), the exact
+    // distance for the pairs they leave.
+    const auto filter = [&]<bool EDGE_EDGE>(std::int64_t i, AppendBuffer<Candidate>& out) {
+        const FeatureVertices f = feature_vertices(pairs, i);
+        if (!involving.empty() && (involving[static_cast<std::size_t>(f.v[0])] |
+                                   involving[static_cast<std::size_t>(f.v[1])] |
+                                   involving[static_cast<std::size_t>(f.v[2])] |
+                                   involving[static_cast<std::size_t>(f.v[3])]) == 0) {
+            return;
+        }
+        const FilterVertex& a = vertices[f.v[0]];
+        const FilterVertex& b = vertices[f.v[1]];
+        const FilterVertex& c = vertices[f.v[2]];
+        const FilterVertex& d = vertices[f.v[3]];
+        const double remaining = std::min({a.remaining, b.remaining, c.remaining, d.remaining});
+        const double spread =
+            largest_pair_difference<EDGE_EDGE>(a.velocity, b.velocity, c.velocity, d.velocity);
+        const double offset =
+            EDGE_EDGE ? std::max(a.deviation, b.deviation) + std::max(c.deviation, d.deviation)
+                      : a.deviation + std::max({b.deviation, c.deviation, d.deviation});
+        const double reach =
+            offset + feature_sum(f, slacks) + spread * std::max(0.0, remaining) + margin;
+        if (box_gap<EDGE_EDGE>(a.x, b.x, c.x, d.x) - reach >= keep_below ||
+            centroid_axis_gap<EDGE_EDGE>(a.x, b.x, c.x, d.x) - reach >= keep_below) {
+            return;
+        }
+        const double distance = features_distance(f, x);
+        if (distance - reach >= keep_below) {
+            return;
+        }
+        Candidate candidate{};
+        if constexpr (EDGE_EDGE) {
+            const collision::EdgeEdgePair& p =
+                pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
+            candidate.feature_a = p.edge_a;
+            candidate.feature_b = p.edge_b;
+            candidate.is_edge_edge = 1;
+        } else {
+            const collision::VertexFacePair& p = pairs.vertex_face[static_cast<std::size_t>(i)];
+            candidate.feature_a = p.vertex;
+            candidate.feature_b = p.face;
+            candidate.is_edge_edge = 0;
+        }
+        for (int k = 0; k < 4; ++k) {
+            candidate.vertices[k] = f.v[k];
+        }
+        candidate.distance = distance;
+        candidate.offset = offset;
+        candidate.spread = spread;
+        candidate.time = time;
+        out.push_back(candidate);
+    };
     m_candidate_chunks.reset(num_chunks(num_pairs, PAIR_GRAIN));
-    parallel_for_chunks(
-        num_pairs, PAIR_GRAIN, [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
-            AppendBuffer<Candidate>& out = m_candidate_chunks.chunk(chunk);
-            for (std::int64_t i = begin; i < end; ++i) {
-                const FeatureVertices f = feature_vertices(pairs, i);
-                if (!involving.empty() && (involving[static_cast<std::size_t>(f.v[0])] |
-                                           involving[static_cast<std::size_t>(f.v[1])] |
-                                           involving[static_cast<std::size_t>(f.v[2])] |
-                                           involving[static_cast<std::size_t>(f.v[3])]) == 0) {
-                    continue;
-                }
-                // Quick reject on the boxes at x and the per-vertex reaches.
-                const double gap = box_gap(f.v, f.num_first, x);
-                if (gap - feature_sum(f, reaches) - margin >= keep_below) {
-                    continue;
-                }
-                // The largest displacement relative to the distance now while every vertex stays
-                // within its slack, until the first of the paths ends.
-                double path_end = m_path_ends[static_cast<std::size_t>(f.v[0])];
-                for (int k = 1; k < 4; ++k) {
-                    path_end = std::min(path_end, m_path_ends[static_cast<std::size_t>(f.v[k])]);
-                }
-                const double spread = largest_difference(velocities, f.first(), f.second());
-                const double offset = feature_sum(f, deviations);
-                const double reach = offset + feature_sum(f, slacks) +
-                                     spread * std::max(0.0, path_end - time) + margin;
-                if (gap - reach >= keep_below ||
-                    centroid_axis_gap(f.v, f.num_first, x) - reach >= keep_below) {
-                    continue;
-                }
-                const double distance = features_distance(f, x);
-                if (distance - reach >= keep_below) {
-                    continue;
-                }
-                Candidate c{};
-                if (i < num_vf) {
-                    const collision::VertexFacePair& p =
-                        pairs.vertex_face[static_cast<std::size_t>(i)];
-                    c.feature_a = p.vertex;
-                    c.feature_b = p.face;
-                    c.is_edge_edge = 0;
-                } else {
-                    const collision::EdgeEdgePair& p =
-                        pairs.edge_edge[static_cast<std::size_t>(i - num_vf)];
-                    c.feature_a = p.edge_a;
-                    c.feature_b = p.edge_b;
-                    c.is_edge_edge = 1;
-                }
-                for (int k = 0; k < 4; ++k) {
-                    c.vertices[k] = f.v[k];
-                }
-                c.distance = distance;
-                c.offset = offset;
-                c.spread = spread;
-                c.time = time;
-                out.push_back(c);
-            }
-        });
+    parallel_for_chunks(num_pairs, PAIR_GRAIN,
+                        [&](std::int64_t chunk, std::int64_t begin, std::int64_t end) {
+                            AppendBuffer<Candidate>& out = m_candidate_chunks.chunk(chunk);
+                            const std::int64_t split = std::clamp(num_vf, begin, end);
+                            for (std::int64_t i = begin; i < split; ++i) {
+                                filter.template operator()<false>(i, out);
+                            }
+                            for (std::int64_t i = split; i < end; ++i) {
+                                filter.template operator()<true>(i, out);
+                            }
+                        });
     // Appended in pair order (chunks merged in order): deterministic.
     const std::size_t old_size = m_candidates.size();
     std::vector<Candidate> added;
@@ -675,6 +693,17 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         }
         return now;
     };
+    // Pairs whose distance now provably exceeds both the thickness (less the rounding margin)
+    // and their relative sweep over the substep: contact() would return their distance now,
+    // so they are no contacts; decided on lower bounds, without the exact proximity.
+    const auto clearly_apart = [&](const Candidate& c) {
+        const FeatureVertices f = feature_vertices(c);
+        const double lower = std::max(box_gap(f.v, f.num_first, current),
+                                      centroid_axis_gap(f.v, f.num_first, current)) -
+                             m_filter_margin;
+        return lower >= m_thickness &&
+               lower > relative_sweep(previous_positions, current, f.first(), f.second());
+    };
     // Deviations over the straight substep are at most the larger of their values at its ends:
     // candidates whose bound stays at least the thickness over it are neither in contact nor
     // passed through, with no proximity test.
@@ -690,7 +719,8 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     const auto closer = [&](const auto& deviations) -> const std::vector<std::int64_t>& {
         return indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
             const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
-            return bound(c, deviations, time) < m_thickness && contact(c).distance < m_thickness;
+            return bound(c, deviations, time) < m_thickness && !clearly_apart(c) &&
+                   contact(c).distance < m_thickness;
         });
     };
     const bool per_vertex = 4 * m_candidates.size() > m_num_vertices;
@@ -704,9 +734,8 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
             },
             VERTEX_GRAIN);
     }
-    const std::vector<std::int64_t>& close = per_vertex
-                                                 ? closer(std::span<const double>(m_deviations))
-                                                 : closer(substep_deviation);
+    const std::vector<std::int64_t>& close =
+        per_vertex ? closer(std::span<const double>(m_deviations)) : closer(substep_deviation);
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;

@@ -264,7 +264,7 @@ private:
     const std::vector<geometry::Edge>* m_edges;  // m_broad_phase's topology
 
     bool m_has_gather = false;
-    bool m_dense_contact = false;  // windows_for_next_gather's state
+    bool m_dense_contact = false;                           // windows_for_next_gather's state
     bool m_broad_phase_ready = false;                       // a full update ran
     double m_inflation = 0.0;                               // of the broad phase's boxes (m)
     double m_window_dt = 0.0;                               // s
@@ -294,8 +294,15 @@ private:
     std::vector<Candidate> m_scratch_candidates;
     ChunkedBuffer<Candidate> m_candidate_chunks;
 
-    std::vector<double> m_deviations;    // per vertex, over a substep or a window
-    std::vector<double> m_reaches;       // per vertex, for add_candidates
+    std::vector<double> m_deviations;  // per vertex, over a substep or a window
+    // Per vertex, what add_candidates reads of it (one cache line).
+    struct FilterVertex {
+        Vec3d x;           // position, m
+        double deviation;  // from its path, m
+        Vec3d velocity;    // its path's, m/s
+        double remaining;  // time left on its path, s (negative when it has ended)
+    };
+    std::vector<FilterVertex> m_filter_vertices;
     std::vector<Vec3d> m_window_motion;  // per vertex, end − start of the window
     std::vector<Vec3d> m_new_velocities;
     std::vector<std::int32_t> m_new_path_vertices;
