@@ -29,15 +29,18 @@
 //      of one feature and j of the other, so a pair is a candidate when d minus that bound (every
 //      e at most its slack, τ up to the paths' end) can fall below the thickness. Each candidate
 //      keeps d, τ_0, the deviations at τ_0 and the largest |u_i − u_j|, so its distance bound at
-//      any later τ costs a few loads. The broad phase skips triangle pairs whose path boxes, less
-//      the slacks and the largest relative speed of their vertices over the paths' duration, stay
+//      any later τ costs a few loads. The broad phase skips triangle pairs whose path boxes, or
+//      whose projections on the line through their centroids (a separating axis), less the
+//      slacks and the largest relative speed of their vertices over the paths' duration, stay
 //      thickness apart (coherent motion: a falling flap's neighbours move together), before any
-//      feature test.
+//      feature test; feature pairs go through the same two lower bounds before their exact
+//      distance.
 //
 // Per window:
-//   1. prepare, at the window's start: the first window gathers (every vertex gets a path, a full
-//      broad phase); later windows give new paths to the vertices that escaped in the last
-//      window, whose path ends within this one or that are predicted to leave their slack in it
+//   1. prepare, at the start of one window, or of two while contact is sparse
+//      (windows_for_next_gather): the first gathers (every vertex gets a path, a full broad
+//      phase); later ones give new paths to the vertices that escaped in the last window, whose
+//      path ends within the coming window(s) or that are predicted to leave their slack in it
 //      (their velocity's difference from the path's), drop their candidates and search their
 //      pairs again (SelfCollisionBroadPhase::update_vertices; a full broad phase for more than a
 //      quarter of the vertices).
