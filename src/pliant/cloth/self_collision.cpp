@@ -667,8 +667,11 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     // was on at the substep's start): it is pushed back along the start's normal (the current
     // normal would push it further through). Pairs touching at the start have no side to keep.
     const std::span<const Vec3d> current(positions);
-    const auto contact = [&](const auto& c) {
+    const auto contact = [&](const auto& c, double* now_distance = nullptr) {
         Proximity now = proximity(c, current);
+        if (now_distance != nullptr) {
+            *now_distance = now.distance;
+        }
         // A pair that passed through each other was at distance 0 within the substep, so its
         // distance now is at most its relative sweep over the substep.
         const std::size_t first = c.is_edge_edge != 0 ? 2 : 1;
@@ -704,6 +707,23 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         return lower >= m_thickness &&
                lower > relative_sweep(previous_positions, current, f.first(), f.second());
     };
+    // The same with the distance the last call measured, less the pair's relative displacement
+    // since (features' distance is 1-Lipschitz in max |Δ_i − Δ_j|): a pair resting a little
+    // farther apart than the thickness needs no proximity test every substep.
+    const std::int32_t call = m_project_calls++;
+    const bool has_measured = m_has_measured && m_measured_positions.size() == m_num_vertices;
+    const std::span<const Vec3d> measured(m_measured_positions);
+    const auto still_apart = [&](const Candidate& c) {
+        if (!has_measured || c.measured_call != call - 1) {
+            return false;
+        }
+        const FeatureVertices f = feature_vertices(c);
+        const double lower = c.measured_distance -
+                             relative_sweep(measured, current, f.first(), f.second()) -
+                             m_filter_margin;
+        return lower >= m_thickness &&
+               lower > relative_sweep(previous_positions, current, f.first(), f.second());
+    };
     // Deviations over the straight substep are at most the larger of their values at its ends:
     // candidates whose bound stays at least the thickness over it are neither in contact nor
     // passed through, with no proximity test.
@@ -718,9 +738,13 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     // per vertex first when the candidates' vertices outnumber the vertices, else per use.
     const auto closer = [&](const auto& deviations) -> const std::vector<std::int64_t>& {
         return indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
-            const Candidate& c = m_candidates[static_cast<std::size_t>(i)];
-            return bound(c, deviations, time) < m_thickness && !clearly_apart(c) &&
-                   contact(c).distance < m_thickness;
+            Candidate& c = m_candidates[static_cast<std::size_t>(i)];
+            if (!(bound(c, deviations, time) < m_thickness) || clearly_apart(c) || still_apart(c)) {
+                return false;
+            }
+            const bool touching = contact(c, &c.measured_distance).distance < m_thickness;
+            c.measured_call = call;
+            return touching;
         });
     };
     const bool per_vertex = 4 * m_candidates.size() > m_num_vertices;
@@ -736,6 +760,8 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     }
     const std::vector<std::int64_t>& close =
         per_vertex ? closer(std::span<const double>(m_deviations)) : closer(substep_deviation);
+    m_measured_positions.assign(current.begin(), current.end());
+    m_has_measured = true;
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;

@@ -157,10 +157,12 @@ private:
         std::int32_t feature_b;
         std::int32_t vertices[4];
         std::int32_t is_edge_edge;
-        double distance;  // at `time`
-        double offset;    // the deviations at `time`, summed as above
-        double spread;    // largest |u_i − u_j|, m/s
-        double time;      // s
+        std::int32_t measured_call = -1;  // the project() call that measured measured_distance
+        double distance;                  // at `time`
+        double offset;                    // the deviations at `time`, summed as above
+        double spread;                    // largest |u_i − u_j|, m/s
+        double time;                      // s
+        double measured_distance;         // at that call's positions before its pushes, m
     };
     // The vertices of a pair's two features: v[0 .. num_first) the first, v[num_first .. 4) the
     // second.
@@ -294,6 +296,11 @@ private:
     std::vector<TriangleMotion> m_triangle_motions;
     double m_filter_margin = 0.0;
     std::vector<Candidate> m_candidates;
+    std::int32_t m_project_calls = 0;  // project() calls so far
+    // The positions at the last project() call before its pushes (call m_project_calls − 1 when
+    // m_has_measured).
+    std::vector<Vec3d> m_measured_positions;
+    bool m_has_measured = false;
     std::vector<Candidate> m_scratch_candidates;
     ChunkedBuffer<Candidate> m_candidate_chunks;
 
