@@ -710,7 +710,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     // The same with the distance the last call measured, less the pair's relative displacement
     // since (features' distance is 1-Lipschitz in max |Δ_i − Δ_j|): a pair resting a little
     // farther apart than the thickness needs no proximity test every substep.
-    const std::int32_t call = m_project_calls++;
+    const std::int64_t call = m_project_calls++;
     const bool has_measured = m_has_measured && m_measured_positions.size() == m_num_vertices;
     const std::span<const Vec3d> measured(m_measured_positions);
     const auto still_apart = [&](const Candidate& c) {

@@ -51,7 +51,9 @@
 //      through each other within the substep is pushed back along the normal it had at the
 //      substep's start; then Coulomb friction on the pair's relative tangential motion over the
 //      substep. Candidates whose distance bound stays at least the thickness over the substep
-//      are skipped without a proximity test. Sequential over the candidates in their order:
+//      are skipped without a proximity test, and so are those whose lower bounds now (box gap,
+//      gap along the centroids' line, or the distance the last substep measured less their
+//      relative displacement since) exceed both the thickness and their sweep over the substep. Sequential over the candidates in their order:
 //      deterministic.
 //   3. enforce, at the window's end: a vertex whose deviation at the window's start or end exceeds
 //      its slack + half the thickness has escaped: its motion over the window (in the frame) is
@@ -157,7 +159,7 @@ private:
         std::int32_t feature_b;
         std::int32_t vertices[4];
         std::int32_t is_edge_edge;
-        std::int32_t measured_call = -1;  // the project() call that measured measured_distance
+        std::int64_t measured_call = -1;  // the project() call that measured measured_distance
         double distance;                  // at `time`
         double offset;                    // the deviations at `time`, summed as above
         double spread;                    // largest |u_i − u_j|, m/s
@@ -296,7 +298,7 @@ private:
     std::vector<TriangleMotion> m_triangle_motions;
     double m_filter_margin = 0.0;
     std::vector<Candidate> m_candidates;
-    std::int32_t m_project_calls = 0;  // project() calls so far
+    std::int64_t m_project_calls = 0;  // project() calls so far
     // The positions at the last project() call before its pushes (call m_project_calls − 1 when
     // m_has_measured).
     std::vector<Vec3d> m_measured_positions;
