@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pliant/cloth/detail/pair_bounds.hpp"
 #include "pliant/collision/narrow_phase.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/collision/segment_segment.hpp"
@@ -87,66 +88,6 @@ double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
     return std::sqrt(sweep);
 }
 
-// Pair kernels on the four vertex values of a feature pair: the first feature is p0 (vertex-face)
-// or p0, p1 (edge-edge), the second the rest. EDGE_EDGE selects the split at compile time; the
-// functions after these take vertex indices and select it at run time.
-
-// The distance between the boxes of the two features' vertices: a lower bound on their distance.
-template <bool EDGE_EDGE>
-inline double box_gap(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, const Vec3d& p3) {
-    Vec3d a_lo = p0;
-    Vec3d a_hi = p0;
-    Vec3d b_lo = min(p2, p3);
-    Vec3d b_hi = max(p2, p3);
-    if constexpr (EDGE_EDGE) {
-        a_lo = min(a_lo, p1);
-        a_hi = max(a_hi, p1);
-    } else {
-        b_lo = min(b_lo, p1);
-        b_hi = max(b_hi, p1);
-    }
-    const Vec3d gap = max(max(a_lo - b_hi, b_lo - a_hi), Vec3d{0.0, 0.0, 0.0});
-    return std::sqrt(dot(gap, gap));
-}
-
-// The gap between the projections of the two features' vertices on the line through their
-// centroids: a separating-axis lower bound on their distance, tight where box_gap is not
-// (neighbouring features of a sheet that lies diagonally to the axes). About a tenth of an exact
-// distance's cost.
-template <bool EDGE_EDGE>
-inline double centroid_axis_gap(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2,
-                                const Vec3d& p3) {
-    double first_max = 0.0;
-    double second_min = 0.0;
-    Vec3d axis{};
-    if constexpr (EDGE_EDGE) {
-        axis = (p2 + p3) - (p0 + p1);
-        first_max = std::max(dot(p0, axis), dot(p1, axis));
-        second_min = std::min(dot(p2, axis), dot(p3, axis));
-    } else {
-        axis = p0 - (p1 + p2 + p3) * (1.0 / 3.0);
-        first_max = std::max({dot(p1, axis), dot(p2, axis), dot(p3, axis)});
-        second_min = dot(p0, axis);
-    }
-    const double length = norm(axis);
-    return second_min > first_max && length > 0.0 ? (second_min - first_max) / length : 0.0;
-}
-
-// The largest |d_i − d_j| over i in the first feature and j in the second (of velocities or
-// displacements).
-template <bool EDGE_EDGE>
-inline double largest_pair_difference(const Vec3d& d0, const Vec3d& d1, const Vec3d& d2,
-                                      const Vec3d& d3) {
-    double m = 0.0;
-    if constexpr (EDGE_EDGE) {
-        m = std::max({squared_norm(d0 - d2), squared_norm(d0 - d3), squared_norm(d1 - d2),
-                      squared_norm(d1 - d3)});
-    } else {
-        m = std::max({squared_norm(d0 - d1), squared_norm(d0 - d2), squared_norm(d0 - d3)});
-    }
-    return std::sqrt(m);
-}
-
 // kernel<EDGE_EDGE>(value[v0], ..., value[v3]) for vertices v (first feature: num_first of them).
 template <typename Kernel>
 inline double on_pair(const std::int32_t (&v)[4], std::size_t num_first,
@@ -162,7 +103,7 @@ inline double on_pair(const std::int32_t (&v)[4], std::size_t num_first,
 double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<const Vec3d> x) {
     return on_pair(v, num_first, x,
                    []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-                       return box_gap<EE>(a, b, c, d);
+                       return detail::box_gap<EE>(a, b, c, d);
                    });
 }
 
@@ -170,7 +111,7 @@ double centroid_axis_gap(const std::int32_t (&v)[4], std::size_t num_first,
                          std::span<const Vec3d> x) {
     return on_pair(v, num_first, x,
                    []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-                       return centroid_axis_gap<EE>(a, b, c, d);
+                       return detail::centroid_axis_gap<EE>(a, b, c, d);
                    });
 }
 
@@ -178,7 +119,7 @@ double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_fir
                                  std::span<const Vec3d> motion) {
     return on_pair(v, num_first, motion,
                    []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-                       return largest_pair_difference<EE>(a, b, c, d);
+                       return detail::largest_pair_difference<EE>(a, b, c, d);
                    });
 }
 
@@ -366,15 +307,15 @@ void SelfCollision::add_candidates(const collision::FeaturePairs& pairs, std::sp
         const FilterVertex& c = vertices[f.v[2]];
         const FilterVertex& d = vertices[f.v[3]];
         const double remaining = std::min({a.remaining, b.remaining, c.remaining, d.remaining});
-        const double spread =
-            largest_pair_difference<EDGE_EDGE>(a.velocity, b.velocity, c.velocity, d.velocity);
+        const double spread = detail::largest_pair_difference<EDGE_EDGE>(a.velocity, b.velocity,
+                                                                         c.velocity, d.velocity);
         const double offset =
             EDGE_EDGE ? std::max(a.deviation, b.deviation) + std::max(c.deviation, d.deviation)
                       : a.deviation + std::max({b.deviation, c.deviation, d.deviation});
         const double reach =
             offset + feature_sum(f, slacks) + spread * std::max(0.0, remaining) + margin;
-        if (box_gap<EDGE_EDGE>(a.x, b.x, c.x, d.x) - reach >= keep_below ||
-            centroid_axis_gap<EDGE_EDGE>(a.x, b.x, c.x, d.x) - reach >= keep_below) {
+        if (detail::box_gap<EDGE_EDGE>(a.x, b.x, c.x, d.x) - reach >= keep_below ||
+            detail::centroid_axis_gap<EDGE_EDGE>(a.x, b.x, c.x, d.x) - reach >= keep_below) {
             return;
         }
         const double distance = features_distance(f, x);
