@@ -33,8 +33,8 @@
 //      whose projections on the line through their centroids (a separating axis), less the
 //      slacks and the largest relative speed of their vertices over the paths' duration, stay
 //      thickness apart (coherent motion: a falling flap's neighbours move together), before any
-//      feature test; feature pairs go through the same two lower bounds before their exact
-//      distance.
+//      feature test; feature pairs go through the same two lower bounds (detail/pair_bounds.hpp)
+//      before their exact distance.
 //
 // Per window:
 //   1. prepare, at the start of one window, or of two while contact is sparse
