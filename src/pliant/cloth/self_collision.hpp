@@ -53,8 +53,8 @@
 //      substep. Candidates whose distance bound stays at least the thickness over the substep
 //      are skipped without a proximity test, and so are those whose lower bounds now (box gap,
 //      gap along the centroids' line, or the distance the last substep measured less their
-//      relative displacement since) exceed both the thickness and their sweep over the substep. Sequential over the candidates in their order:
-//      deterministic.
+//      relative displacement since) exceed both the thickness and their sweep over the substep.
+//      Sequential over the candidates in their order: deterministic.
 //   3. enforce, at the window's end: a vertex whose deviation at the window's start or end exceeds
 //      its slack + half the thickness has escaped: its motion over the window (in the frame) is
 //      its box and its pairs are searched (partial broad phase; for more than a quarter of the
