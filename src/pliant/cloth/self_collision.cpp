@@ -72,22 +72,6 @@ double largest_coordinate(std::span<const Vec3d> x, std::span<const Vec3d> y) {
         [](double a, double b) { return std::max(a, b); }, VERTEX_GRAIN);
 }
 
-// The largest |Δ_i − Δ_j| over the pairs (i in the first feature, j in the second) of the
-// vertices' displacements Δ = end − start: for linear motion the features' distance never falls
-// below their distance at the start minus this.
-double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
-                      std::span<const std::int32_t> first, std::span<const std::int32_t> second) {
-    double sweep = 0.0;
-    for (const std::int32_t i : first) {
-        const Vec3d di = end[static_cast<std::size_t>(i)] - start[static_cast<std::size_t>(i)];
-        for (const std::int32_t j : second) {
-            const Vec3d dj = end[static_cast<std::size_t>(j)] - start[static_cast<std::size_t>(j)];
-            sweep = std::max(sweep, squared_norm(di - dj));
-        }
-    }
-    return std::sqrt(sweep);
-}
-
 // kernel<EDGE_EDGE>(value[v0], ..., value[v3]) for vertices v (first feature: num_first of them).
 template <typename Kernel>
 inline double on_pair(const std::int32_t (&v)[4], std::size_t num_first,
@@ -121,6 +105,24 @@ double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_fir
                    []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
                        return detail::largest_pair_difference<EE>(a, b, c, d);
                    });
+}
+
+// The largest |Δ_i − Δ_j| over the pairs (i in the first feature, j in the second) of the
+// vertices' displacements Δ = end − start: for linear motion the features' distance never falls
+// below their distance at the start minus this (nor, for any motion, their distance at the end
+// below their distance at the start minus this).
+double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
+                      const std::int32_t (&v)[4], std::size_t num_first) {
+    const auto displacement = [&](int k) {
+        const auto i = static_cast<std::size_t>(v[k]);
+        return end[i] - start[i];
+    };
+    const Vec3d d0 = displacement(0);
+    const Vec3d d1 = displacement(1);
+    const Vec3d d2 = displacement(2);
+    const Vec3d d3 = displacement(3);
+    return num_first == 2 ? detail::largest_pair_difference<true>(d0, d1, d2, d3)
+                          : detail::largest_pair_difference<false>(d0, d1, d2, d3);
 }
 
 }  // namespace
@@ -617,10 +619,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         // distance now is at most its relative sweep over the substep.
         const std::size_t first = c.is_edge_edge != 0 ? 2 : 1;
         if (now.distance >= m_thickness &&
-            now.distance >
-                relative_sweep(previous_positions, current,
-                               std::span<const std::int32_t>(now.vertices, first),
-                               std::span<const std::int32_t>(now.vertices + first, 4 - first))) {
+            now.distance > relative_sweep(previous_positions, current, now.vertices, first)) {
             return now;
         }
         const Proximity start = proximity(c, previous_positions);
@@ -646,7 +645,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
                                       centroid_axis_gap(f.v, f.num_first, current)) -
                              m_filter_margin;
         return lower >= m_thickness &&
-               lower > relative_sweep(previous_positions, current, f.first(), f.second());
+               lower > relative_sweep(previous_positions, current, f.v, f.num_first);
     };
     // The same with the distance the last call measured, less the pair's relative displacement
     // since (features' distance is 1-Lipschitz in max |Δ_i − Δ_j|): a pair resting a little
@@ -660,10 +659,9 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         }
         const FeatureVertices f = feature_vertices(c);
         const double lower = c.measured_distance -
-                             relative_sweep(measured, current, f.first(), f.second()) -
-                             m_filter_margin;
+                             relative_sweep(measured, current, f.v, f.num_first) - m_filter_margin;
         return lower >= m_thickness &&
-               lower > relative_sweep(previous_positions, current, f.first(), f.second());
+               lower > relative_sweep(previous_positions, current, f.v, f.num_first);
     };
     // Deviations over the straight substep are at most the larger of their values at its ends:
     // candidates whose bound stays at least the thickness over it are neither in contact nor
