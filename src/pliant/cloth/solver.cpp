@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "pliant/cloth/detail/constraint_kernels.hpp"
@@ -171,6 +172,7 @@ void ClothSolver::enable_self_collision(bool enabled) {
     } else if (!m_self_collision) {
         m_self_collision =
             std::make_unique<SelfCollision>(m_triangles, m_positions.size(), m_material.thickness);
+        m_gather_end_time = -std::numeric_limits<double>::infinity();
     }
 }
 
@@ -322,17 +324,23 @@ ClothStepStats ClothSolver::step(double dt, int substeps) {
     if (m_grab) {
         m_grab->start = m_positions[static_cast<std::size_t>(m_grab->vertex)];
     }
-    int gather_end = 0;  // the substep at which the last gather's windows end
     for (int s = 0; s < substeps; ++s) {
         if (m_self_collision && s % FAIL_SAFE_WINDOW == 0) {
-            if (s >= gather_end) {
+            // A new gather unless the last one's span covers this window (times compared to a
+            // millionth of a substep: steps sum their times differently).
+            const double window_start = start_time + s * h;
+            const double window_end = start_time + std::min(s + FAIL_SAFE_WINDOW, substeps) * h;
+            const double slop = 1e-6 * h;
+            if (window_start < m_gather_start_time - slop ||
+                window_end > m_gather_end_time + slop) {
                 const int windows = m_self_collision->windows_for_next_gather();
-                m_self_collision->prepare(m_positions, m_velocities, start_time + s * h,
-                                          windows * FAIL_SAFE_WINDOW * h);
-                gather_end = s + windows * FAIL_SAFE_WINDOW;
+                const double span = windows * FAIL_SAFE_WINDOW * h;
+                m_self_collision->prepare(m_positions, m_velocities, window_start, span);
+                m_gather_start_time = window_start;
+                m_gather_end_time = window_start + span;
             }
             m_window_start = m_positions;
-            m_window_start_time = start_time + s * h;
+            m_window_start_time = window_start;
         }
         stats.obstacle_contacts = substep(h, start_time + (s + 1) * h, stats.solve_ms);
         if (m_self_collision &&

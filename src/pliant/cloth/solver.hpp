@@ -42,6 +42,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -183,8 +184,12 @@ private:
     geometry::MeshTopology m_topology;
     std::vector<Vec3d> m_triangle_forces;  // air, per triangle (N)
     std::unique_ptr<SelfCollision> m_self_collision;
-    std::vector<Vec3d> m_window_start;     // positions at the start of a self-collision window
-    double m_window_start_time = 0.0;      // s
+    std::vector<Vec3d> m_window_start;  // positions at the start of a self-collision window
+    double m_window_start_time = 0.0;   // s
+    // The span [start, end] (s) the last self-collision gather covers; it outlives a step, so
+    // that steps of one window each gather at the same substeps as longer steps.
+    double m_gather_start_time = 0.0;
+    double m_gather_end_time = -std::numeric_limits<double>::infinity();  // none yet
     std::vector<double> m_contact_depths;  // this substep's obstacle correction per vertex (m)
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
