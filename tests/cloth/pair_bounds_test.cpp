@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "pliant/collision/point_triangle.hpp"
@@ -96,6 +98,45 @@ TEST(PairBounds, CentroidAxisSeparatesDiagonalNeighbours) {
     }
     EXPECT_NEAR(centroid_axis_gap<false>(turned[0], turned[1], turned[2], turned[3]),
                 e / std::sqrt(2.0), 1e-15);
+}
+
+// The point-set overloads on two triangles (the triangle-pair filter): never above the
+// triangles' distance, the least of their 6 vertex-face and 9 edge-edge distances.
+TEST(PairBounds, TrianglePairBoundsNeverExceedTheTrianglesDistance) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    double tightest = 0.0;
+    for (int trial = 0; trial < 5000; ++trial) {
+        const double spread = std::pow(10.0, 2.0 * unit(rng));
+        const Vec3d offset{spread * unit(rng), spread * unit(rng), spread * unit(rng)};
+        Vec3d a[3];
+        Vec3d b[3];
+        for (int k = 0; k < 3; ++k) {
+            a[k] = {unit(rng), unit(rng), unit(rng)};
+            b[k] = Vec3d{unit(rng), unit(rng), unit(rng)} + offset;
+        }
+        double exact = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < 3; ++k) {
+            exact = std::min(exact,
+                             collision::point_triangle_proximity(a[k], b[0], b[1], b[2]).distance);
+            exact = std::min(exact,
+                             collision::point_triangle_proximity(b[k], a[0], a[1], a[2]).distance);
+            for (int l = 0; l < 3; ++l) {
+                exact = std::min(exact, collision::segment_segment_proximity(a[k], a[(k + 1) % 3],
+                                                                             b[l], b[(l + 1) % 3])
+                                            .distance);
+            }
+        }
+        const double tolerance = 1e-12 * (1.0 + exact);
+        const double box = box_gap(a, b);
+        const double axis = centroid_axis_gap(a, b);
+        EXPECT_LE(box, exact + tolerance);
+        EXPECT_LE(axis, exact + tolerance);
+        if (exact > 0.0) {
+            tightest = std::max(tightest, std::max(box, axis) / exact);
+        }
+    }
+    EXPECT_GT(tightest, 0.9);
 }
 
 TEST(PairBounds, LargestPairDifferenceIsTheBruteForceMaximum) {

@@ -72,39 +72,34 @@ double largest_coordinate(std::span<const Vec3d> x, std::span<const Vec3d> y) {
         [](double a, double b) { return std::max(a, b); }, VERTEX_GRAIN);
 }
 
-// kernel<EDGE_EDGE>(value[v0], ..., value[v3]) for vertices v (first feature: num_first of them).
-template <typename Kernel>
-inline double on_pair(const std::int32_t (&v)[4], std::size_t num_first,
-                      std::span<const Vec3d> value, Kernel&& kernel) {
-    const Vec3d& p0 = value[static_cast<std::size_t>(v[0])];
-    const Vec3d& p1 = value[static_cast<std::size_t>(v[1])];
-    const Vec3d& p2 = value[static_cast<std::size_t>(v[2])];
-    const Vec3d& p3 = value[static_cast<std::size_t>(v[3])];
+// kernel<EDGE_EDGE>(value(v[0]), ..., value(v[3])) for the vertices v of a feature pair (first
+// feature: num_first of them); value maps a vertex index to a Vec3d.
+template <typename Value, typename Kernel>
+inline double on_pair(const std::int32_t (&v)[4], std::size_t num_first, Value&& value,
+                      Kernel&& kernel) {
+    const Vec3d p0 = value(static_cast<std::size_t>(v[0]));
+    const Vec3d p1 = value(static_cast<std::size_t>(v[1]));
+    const Vec3d p2 = value(static_cast<std::size_t>(v[2]));
+    const Vec3d p3 = value(static_cast<std::size_t>(v[3]));
     return num_first == 2 ? kernel.template operator()<true>(p0, p1, p2, p3)
                           : kernel.template operator()<false>(p0, p1, p2, p3);
 }
 
 double box_gap(const std::int32_t (&v)[4], std::size_t num_first, std::span<const Vec3d> x) {
-    return on_pair(v, num_first, x,
-                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-                       return detail::box_gap<EE>(a, b, c, d);
-                   });
+    return on_pair(
+        v, num_first, [&](std::size_t i) { return x[i]; },
+        []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+            return detail::box_gap<EE>(a, b, c, d);
+        });
 }
 
 double centroid_axis_gap(const std::int32_t (&v)[4], std::size_t num_first,
                          std::span<const Vec3d> x) {
-    return on_pair(v, num_first, x,
-                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-                       return detail::centroid_axis_gap<EE>(a, b, c, d);
-                   });
-}
-
-double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
-                                 std::span<const Vec3d> motion) {
-    return on_pair(v, num_first, motion,
-                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-                       return detail::largest_pair_difference<EE>(a, b, c, d);
-                   });
+    return on_pair(
+        v, num_first, [&](std::size_t i) { return x[i]; },
+        []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+            return detail::centroid_axis_gap<EE>(a, b, c, d);
+        });
 }
 
 // The largest |Δ_i − Δ_j| over the pairs (i in the first feature, j in the second) of the
@@ -113,16 +108,21 @@ double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_fir
 // below their distance at the start minus this).
 double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
                       const std::int32_t (&v)[4], std::size_t num_first) {
-    const auto displacement = [&](int k) {
-        const auto i = static_cast<std::size_t>(v[k]);
-        return end[i] - start[i];
-    };
-    const Vec3d d0 = displacement(0);
-    const Vec3d d1 = displacement(1);
-    const Vec3d d2 = displacement(2);
-    const Vec3d d3 = displacement(3);
-    return num_first == 2 ? detail::largest_pair_difference<true>(d0, d1, d2, d3)
-                          : detail::largest_pair_difference<false>(d0, d1, d2, d3);
+    return on_pair(
+        v, num_first, [&](std::size_t i) { return end[i] - start[i]; },
+        []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+            return detail::largest_pair_difference<EE>(a, b, c, d);
+        });
+}
+
+// The same for displacements already computed (motion = end − start per vertex).
+double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
+                                 std::span<const Vec3d> motion) {
+    return on_pair(
+        v, num_first, [&](std::size_t i) { return motion[i]; },
+        []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+            return detail::largest_pair_difference<EE>(a, b, c, d);
+        });
 }
 
 }  // namespace
@@ -368,8 +368,8 @@ void SelfCollision::add_candidates(const collision::FeaturePairs& pairs, std::sp
 }
 
 void SelfCollision::compute_triangle_motions(double time) {
-    // Per triangle: the box of its vertices' path positions at `time` (frame coordinates), the
-    // box of their path velocities, their largest slack and the time to the last path end.
+    // Per triangle: its vertices' path positions at `time` (frame coordinates), the box of their
+    // path velocities, their largest slack and the time to the last path end.
     m_triangle_motions.resize(m_triangles.size());
     parallel_for(
         static_cast<std::int64_t>(m_triangles.size()),
@@ -381,8 +381,6 @@ void SelfCollision::compute_triangle_motions(double time) {
                 const Vec3d p = m_anchors[v] + m_path_velocities[v] * (time - m_anchor_times[v]);
                 const Vec3d& u = m_path_velocities[v];
                 m.p[k] = p;
-                m.p_lo = k == 0 ? p : min(m.p_lo, p);
-                m.p_hi = k == 0 ? p : max(m.p_hi, p);
                 m.u_lo = k == 0 ? u : min(m.u_lo, u);
                 m.u_hi = k == 0 ? u : max(m.u_hi, u);
                 m.slack = std::max(m.slack, m_slacks[v]);
@@ -402,21 +400,13 @@ bool SelfCollision::may_come_close(std::int32_t a, std::int32_t b) const {
     const TriangleMotion& p = m_triangle_motions[static_cast<std::size_t>(a)];
     const TriangleMotion& q = m_triangle_motions[static_cast<std::size_t>(b)];
     const Vec3d zero{0.0, 0.0, 0.0};
-    const Vec3d gap = max(max(p.p_lo - q.p_hi, q.p_lo - p.p_hi), zero);
     const Vec3d speed = max(max(p.u_hi - q.u_lo, q.u_hi - p.u_lo), zero);
     const double reach = p.slack + q.slack + norm(speed) * std::max(p.duration, q.duration);
     const double keep_below = m_thickness + m_filter_margin;
-    if (norm(gap) - reach >= keep_below) {
-        return false;
-    }
     // The same with the gap along the line through the triangles' centroids (a separating axis:
     // the speed box's norm bounds the relative speed along it too).
-    const Vec3d axis = (q.p[0] + q.p[1] + q.p[2]) - (p.p[0] + p.p[1] + p.p[2]);
-    const double p_max = std::max({dot(p.p[0], axis), dot(p.p[1], axis), dot(p.p[2], axis)});
-    const double q_min = std::min({dot(q.p[0], axis), dot(q.p[1], axis), dot(q.p[2], axis)});
-    const double length = norm(axis);
-    const double axis_gap = q_min > p_max && length > 0.0 ? (q_min - p_max) / length : 0.0;
-    return axis_gap - reach < keep_below;
+    return !(detail::box_gap(p.p, q.p) - reach >= keep_below ||
+             detail::centroid_axis_gap(p.p, q.p) - reach >= keep_below);
 }
 
 void SelfCollision::gather(std::span<const Vec3d> x, std::span<const Vec3d> u, double time,
@@ -610,16 +600,21 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     // was on at the substep's start): it is pushed back along the start's normal (the current
     // normal would push it further through). Pairs touching at the start have no side to keep.
     const std::span<const Vec3d> current(positions);
+    // contact() returns a pair's distance now when that is at least the thickness and beyond the
+    // pair's relative sweep over the substep (a pair that passed through each other was at
+    // distance 0 within the substep, so its distance now is at most that sweep); a lower bound
+    // on the distance that passes this test proves the pair no contact.
+    const auto beyond_contact = [&](double distance, const std::int32_t(&v)[4],
+                                    std::size_t num_first) {
+        return distance >= m_thickness &&
+               distance > relative_sweep(previous_positions, current, v, num_first);
+    };
     const auto contact = [&](const auto& c, double* now_distance = nullptr) {
         Proximity now = proximity(c, current);
         if (now_distance != nullptr) {
             *now_distance = now.distance;
         }
-        // A pair that passed through each other was at distance 0 within the substep, so its
-        // distance now is at most its relative sweep over the substep.
-        const std::size_t first = c.is_edge_edge != 0 ? 2 : 1;
-        if (now.distance >= m_thickness &&
-            now.distance > relative_sweep(previous_positions, current, now.vertices, first)) {
+        if (beyond_contact(now.distance, now.vertices, c.is_edge_edge != 0 ? 2 : 1)) {
             return now;
         }
         const Proximity start = proximity(c, previous_positions);
@@ -636,32 +631,26 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
         }
         return now;
     };
-    // Pairs whose distance now provably exceeds both the thickness (less the rounding margin)
-    // and their relative sweep over the substep: contact() would return their distance now,
-    // so they are no contacts; decided on lower bounds, without the exact proximity.
-    const auto clearly_apart = [&](const Candidate& c) {
-        const FeatureVertices f = feature_vertices(c);
-        const double lower = std::max(box_gap(f.v, f.num_first, current),
-                                      centroid_axis_gap(f.v, f.num_first, current)) -
-                             m_filter_margin;
-        return lower >= m_thickness &&
-               lower > relative_sweep(previous_positions, current, f.v, f.num_first);
-    };
-    // The same with the distance the last call measured, less the pair's relative displacement
-    // since (features' distance is 1-Lipschitz in max |Δ_i − Δ_j|): a pair resting a little
-    // farther apart than the thickness needs no proximity test every substep.
+    // Candidates that are no contacts, decided on lower bounds of their distance now without the
+    // exact proximity: their box gap or gap along the centroids' line, or the distance the last
+    // call measured less their relative displacement since (features' distance is 1-Lipschitz
+    // in max |Δ_i − Δ_j|), which skips pairs resting a little farther apart than the thickness.
     const std::int64_t call = m_project_calls++;
-    const bool has_measured = m_has_measured && m_measured_positions.size() == m_num_vertices;
+    const bool has_measured = m_measured_positions.size() == m_num_vertices;
     const std::span<const Vec3d> measured(m_measured_positions);
-    const auto still_apart = [&](const Candidate& c) {
-        if (!has_measured || c.measured_call != call - 1) {
-            return false;
-        }
+    const auto no_contact = [&](const Candidate& c) {
         const FeatureVertices f = feature_vertices(c);
-        const double lower = c.measured_distance -
-                             relative_sweep(measured, current, f.v, f.num_first) - m_filter_margin;
-        return lower >= m_thickness &&
-               lower > relative_sweep(previous_positions, current, f.v, f.num_first);
+        if (beyond_contact(std::max(box_gap(f.v, f.num_first, current),
+                                    centroid_axis_gap(f.v, f.num_first, current)) -
+                               m_filter_margin,
+                           f.v, f.num_first)) {
+            return true;
+        }
+        return has_measured && c.measured_call == call - 1 &&
+               beyond_contact(c.measured_distance -
+                                  relative_sweep(measured, current, f.v, f.num_first) -
+                                  m_filter_margin,
+                              f.v, f.num_first);
     };
     // Deviations over the straight substep are at most the larger of their values at its ends:
     // candidates whose bound stays at least the thickness over it are neither in contact nor
@@ -678,7 +667,7 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     const auto closer = [&](const auto& deviations) -> const std::vector<std::int64_t>& {
         return indices_where(static_cast<std::int64_t>(m_candidates.size()), [&](std::int64_t i) {
             Candidate& c = m_candidates[static_cast<std::size_t>(i)];
-            if (!(bound(c, deviations, time) < m_thickness) || clearly_apart(c) || still_apart(c)) {
+            if (!(bound(c, deviations, time) < m_thickness) || no_contact(c)) {
                 return false;
             }
             const bool touching = contact(c, &c.measured_distance).distance < m_thickness;
@@ -700,7 +689,6 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     const std::vector<std::int64_t>& close =
         per_vertex ? closer(std::span<const double>(m_deviations)) : closer(substep_deviation);
     m_measured_positions.assign(current.begin(), current.end());
-    m_has_measured = true;
     const double narrow_ms = watch.elapsed_ms();
     m_stats.narrow_ms += narrow_ms;
     std::int64_t contacts = 0;

@@ -171,8 +171,6 @@ private:
     struct FeatureVertices {
         std::int32_t v[4];
         std::size_t num_first;
-        std::span<const std::int32_t> first() const { return {v, num_first}; }
-        std::span<const std::int32_t> second() const { return {v + num_first, 4 - num_first}; }
     };
     // Pairs are indexed VF first, then EE: i < #VF is vertex_face[i], else edge_edge[i − #VF].
     FeatureVertices feature_vertices(const collision::FeaturePairs& pairs, std::int64_t i) const;
@@ -242,7 +240,8 @@ private:
     // searched (a partial broad phase, or a full one for many) and appended to m_escape_pairs.
     void search_escaped(std::span<const Vec3d> positions_t0, std::span<const Vec3d> positions,
                         const Vec3d& shift_t0, const Vec3d& shift, double margin);
-    // Per triangle, its vertices' paths at `time` as boxes (m_triangle_motions).
+    // Per triangle, its vertices' path positions at `time` and the box of their path velocities
+    // (m_triangle_motions).
     void compute_triangle_motions(double time);
     // The broad phase's triangle-pair filter: false when no feature of triangles a and b can come
     // within thickness while their vertices follow their paths within their slacks.
@@ -290,7 +289,6 @@ private:
     struct TriangleMotion {
         Vec3d p[3];        // its vertices' path positions at the time of the last
                            // compute_triangle_motions
-        Vec3d p_lo, p_hi;  // their box
         Vec3d u_lo, u_hi;  // path velocities
         double slack;      // largest slack, m
         double duration;   // time to the last path end, s
@@ -299,10 +297,9 @@ private:
     double m_filter_margin = 0.0;
     std::vector<Candidate> m_candidates;
     std::int64_t m_project_calls = 0;  // project() calls so far
-    // The positions at the last project() call before its pushes (call m_project_calls − 1 when
-    // m_has_measured).
+    // The positions at the last project() call before its pushes (call m_project_calls − 1;
+    // empty before the first).
     std::vector<Vec3d> m_measured_positions;
-    bool m_has_measured = false;
     std::vector<Candidate> m_scratch_candidates;
     ChunkedBuffer<Candidate> m_candidate_chunks;
 
