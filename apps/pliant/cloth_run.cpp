@@ -70,19 +70,37 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const std::unique_ptr<cloth::ClothSolver> solver_owner = make_solver(scene, setup);
     cloth::ClothSolver& solver = *solver_owner;
 
-    // Input that already intersects itself is reported (the fail-safe keeps it from getting
-    // worse but cannot untangle it).
-    const std::int64_t initial_intersections =
-        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
-    if (initial_intersections > 0) {
-        log_warning(
-            "{}: the cloth intersects itself at the start ({} pairs of triangles); the "
-            "simulation keeps those pairs from growing but does not untangle them",
-            scene_name, initial_intersections);
-    }
-
     // The second independent check: edge strain against the starting shape (the rest shape).
     const cloth::EdgeStrain edge_strain(solver.positions(), solver.triangles());
+
+    // Input that already intersects itself is reported and untangled before the first frame
+    // (cloth/untangle.hpp; the fail-safe keeps cloth intersection-free only once it is).
+    const std::int64_t initial_intersections =
+        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+    nlohmann::ordered_json untangle_stats;
+    if (initial_intersections > 0) {
+        log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
+                    scene_name, initial_intersections);
+        if (scene.untangle) {
+            const cloth::UntangleResult untangled = solver.untangle();
+            untangle_stats = {{"iterations", untangled.iterations},
+                              {"pairs_left", untangled.final_pairs},
+                              {"max_displacement_m", untangled.max_displacement},
+                              {"ms", untangled.ms}};
+            if (untangled.final_pairs == 0) {
+                log_info(
+                    "{}: untangled in {} iterations ({:.1f} ms), no vertex moved more than "
+                    "{:.2f} mm",
+                    scene_name, untangled.iterations, untangled.ms,
+                    untangled.max_displacement * 1e3);
+            } else {
+                log_warning(
+                    "{}: untangling left {} of {} pairs after {} iterations; the "
+                    "simulation keeps those from growing but does not undo them",
+                    scene_name, untangled.final_pairs, initial_intersections, untangled.iterations);
+            }
+        }
+    }
 
     const std::filesystem::path frames_dir = out / "frames";
     make_output_directory(frames_dir);
@@ -184,6 +202,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"substeps", scene.substeps},
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
+        {"untangle", untangle_stats},
         {"max_intersecting_pairs", worst_intersections},
         {"max_strain_p99", worst_strain_p99},
         {"max_strain", worst_strain},

@@ -3,7 +3,8 @@
 // Writes DIR/frames/frame_0000.<format> (the initial state) … frame_NNNN, the preview
 // (DIR/preview.mp4, or DIR/preview/frame_NNNN.png without ffmpeg) and DIR/stats.json (schema in
 // docs/formats.md), each atomically; returns stats.json's object. A cloth that intersects itself
-// at the start is reported as a warning and in stats.json (initial_intersecting_pairs). Throws
+// at the start is reported as a warning and in stats.json (initial_intersecting_pairs) and, unless
+// the scene says "untangle": false, untangled before frame 0 (stats.json's untangle). Throws
 // InvalidInput or IoError for a scene that cannot be built (before anything is written) and IoError
 // when DIR cannot be written. progress: a progress bar on stderr.
 #pragma once

@@ -12,6 +12,8 @@
 #include <string>
 
 #include "integration/run_cli.hpp"
+#include "pliant/collision/intersecting_pairs.hpp"
+#include "pliant/geometry/generate.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/render/image.hpp"
@@ -65,10 +67,10 @@ TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
         for (int k = 0; k < 3; ++k) {
             const auto a = static_cast<std::size_t>(t[static_cast<std::size_t>(k)]);
             const auto b = static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)]);
-            last_strain = std::max(last_strain, norm(last.positions[a] - last.positions[b]) /
-                                                        norm(first.positions[a] -
-                                                             first.positions[b]) -
-                                                    1.0);
+            last_strain =
+                std::max(last_strain, norm(last.positions[a] - last.positions[b]) /
+                                              norm(first.positions[a] - first.positions[b]) -
+                                          1.0);
         }
     }
     EXPECT_NEAR(stats.at("frames").back().at("strain_max").get<double>(), last_strain, 1e-5);
@@ -218,6 +220,51 @@ f 4 5 8
     EXPECT_NEAR(mean_x / static_cast<double>(last.positions.size()), 0.2, 0.03);
 }
 
+// A sheet with a dent pushed through another sheet below it (one mesh) is untangled before the
+// first frame and stays apart; with "untangle": false it is only reported.
+TEST(ClothCommand, ClothThatStartsIntersectingIsUntangled) {
+    ScratchDir scratch;
+    const geometry::TriangleMeshD lower =
+        geometry::convert_precision<double>(geometry::make_grid_sheet(12, 12, 1.0f, 1.0f));
+    geometry::TriangleMeshD mesh = lower;
+    const auto offset = static_cast<std::int32_t>(lower.positions.size());
+    for (Vec3d p : lower.positions) {
+        const double r = std::sqrt(p.x * p.x + p.y * p.y);
+        p.z = 0.02 - (r < 0.3 ? 0.03 * (1.0 + std::cos(M_PI * r / 0.3)) : 0.0);
+        mesh.positions.push_back(p);
+    }
+    for (const geometry::Triangle& t : lower.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    io::write_mesh(scratch / "dent.obj", mesh);
+    for (const bool untangle : {true, false}) {
+        write(scratch / "dent.json",
+              fmt::format(R"({{"cloth": {{"mesh": "dent.obj"}}, "frames": 3, "substeps": 10,
+                  "gravity": [0, 0, 0], "untangle": {}}})",
+                          untangle));
+        const std::filesystem::path out = scratch / (untangle ? "untangled" : "reported");
+        const CliResult run = run_cli("--json cloth " + quoted(scratch / "dent.json") + " --out " +
+                                          quoted(out) + " --no-preview",
+                                      scratch);
+        ASSERT_EQ(run.exit_code, 0) << run.err;
+        EXPECT_NE(run.err.find("intersects itself at the start"), std::string::npos) << run.err;
+        const nlohmann::json stats = nlohmann::json::parse(run.out);
+        EXPECT_GT(stats.at("initial_intersecting_pairs").get<int>(), 10);
+        if (untangle) {
+            EXPECT_NE(run.err.find("untangled in"), std::string::npos) << run.err;
+            EXPECT_EQ(stats.at("untangle").at("pairs_left"), 0);
+            EXPECT_LT(stats.at("untangle").at("max_displacement_m").get<double>(), 0.1);
+            EXPECT_EQ(stats.at("max_intersecting_pairs"), 0);
+            // The first frame written is the untangled state.
+            const geometry::TriangleMeshD first = io::read_mesh(out / "frames" / "frame_0000.obj");
+            EXPECT_EQ(collision::count_intersecting_pairs(first.positions, first.triangles), 0);
+        } else {
+            EXPECT_TRUE(stats.at("untangle").is_null());
+            EXPECT_GT(stats.at("max_intersecting_pairs").get<int>(), 0);
+        }
+    }
+}
+
 // Robustness: a cloth that intersects itself at the start is reported and simulated without
 // getting worse; everything pinned stays put; a 100-second step stays finite; zero-area
 // triangles are data; NaN in the input is an error naming it.
@@ -249,6 +296,9 @@ f 5 7 8
     const nlohmann::json stats = nlohmann::json::parse(crossing.out);
     EXPECT_EQ(stats.at("initial_intersecting_pairs"), 4);
     EXPECT_LE(stats.at("max_intersecting_pairs").get<int>(), 4);
+    // Crossing from edge to edge: untangling is tried and its result reported.
+    EXPECT_LE(stats.at("untangle").at("pairs_left").get<int>(), 4);
+    EXPECT_GT(stats.at("untangle").at("iterations").get<int>(), 0);
 
     // Everything pinned, one 100 s frame: nothing moves.
     write(scratch / "pinned.json", R"({"cloth": {"grid": {"size": [1, 1], "quads": [4, 4]}},

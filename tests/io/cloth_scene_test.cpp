@@ -40,6 +40,7 @@ TEST(ClothScene, ReadsEveryKey) {
                       {"plane": {"point": [0, 0, -1], "normal": [0, 0, 1]}},
                       {"box": {"min": [-1, -1, -1], "max": [1, 1, 0]}}],
         "gravity": [0, 0, -1], "fps": 30, "frames": 10, "substeps": 5,
+        "self_collision": false, "untangle": false,
         "output": {"format": "ply"}
     })");
     ASSERT_TRUE(scene.grid.has_value());
@@ -61,6 +62,8 @@ TEST(ClothScene, ReadsEveryKey) {
     EXPECT_EQ(scene.substeps, 5);
     EXPECT_DOUBLE_EQ(scene.frames_per_second, 30.0);
     EXPECT_EQ(scene.frame_format, "ply");
+    EXPECT_FALSE(scene.self_collision);
+    EXPECT_FALSE(scene.untangle);
 }
 
 TEST(ClothScene, DefaultsAndRelativeMeshPath) {
@@ -71,6 +74,8 @@ TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     EXPECT_EQ(scene.substeps, 40);
     EXPECT_DOUBLE_EQ(scene.gravity.z, -9.81);
     EXPECT_EQ(scene.frame_format, "obj");
+    EXPECT_TRUE(scene.self_collision);
+    EXPECT_TRUE(scene.untangle);
     EXPECT_DOUBLE_EQ(scene.material.thickness, cloth::ClothMaterial{}.thickness);
 }
 
@@ -93,6 +98,10 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
                  {"gravity", "3 numbers", "2 elements"});
     expect_error(R"({"cloth": {"grid": {}}, "frames": 1.5})", {"frames", "an integer"});
     expect_error(R"({"cloth": {"grid": {}}, "substeps": 0})", {"substeps"});
+    expect_error(R"({"cloth": {"grid": {}}, "untangle": "yes"})",
+                 {"untangle", "true or false", "string"});
+    expect_error(R"({"cloth": {"grid": {}}, "self_collision": 1})",
+                 {"self_collision", "true or false"});
     expect_error(R"({"cloth": {"grid": {}}, "obstacles": {}})", {"obstacles", "an array"});
     expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"cone": {}}]})",
                  {"obstacles[0].cone", "unknown key"});

@@ -74,6 +74,8 @@ struct ClothScene {
 
     ClothMaterial material;
     bool self_collision = true;  // cloth/self_collision.hpp
+    // Cloth that starts intersecting itself is untangled before the first frame (untangle.hpp).
+    bool untangle = true;
     std::vector<SceneObstacle> obstacles;
     Vec3d gravity{0.0, 0.0, -9.81};
     Air air;  // air.hpp; off by default

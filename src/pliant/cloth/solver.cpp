@@ -176,6 +176,17 @@ void ClothSolver::enable_self_collision(bool enabled) {
     }
 }
 
+UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
+    const UntangleResult result =
+        cloth::untangle(m_positions, m_triangles, m_inverse_masses, options);
+    if (m_self_collision && result.iterations > 0) {
+        // Its paths and candidates describe positions that are gone.
+        m_self_collision.reset();
+        enable_self_collision(true);
+    }
+    return result;
+}
+
 void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
     if (const auto* plane = std::get_if<PlaneObstacle>(&obstacle)) {
         if (!(squared_norm(plane->normal) > 0.0) || !is_finite(plane->normal) ||

@@ -56,6 +56,7 @@
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/self_collision.hpp"
+#include "pliant/cloth/untangle.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/topology.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
@@ -102,6 +103,11 @@ public:
     // CCD fail-safe at the end of every step, so that no step ends with intersecting triangles
     // when it started without. Off by default.
     void enable_self_collision(bool enabled);
+
+    // Moves the cloth out of its own intersections (untangle.hpp; pinned vertices stay): for
+    // input that intersects itself, before the first step (the fail-safe keeps cloth
+    // intersection-free only once it is). Velocities are kept; self-collision starts over.
+    UntangleResult untangle(const UntangleOptions& options = {});
 
     // Interactive dragging: `vertex` becomes kinematic (inverse mass 0) and, over the substeps of
     // the next step, moves on the straight line from where it is to `target` (metres) with that

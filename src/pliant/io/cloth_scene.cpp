@@ -406,11 +406,14 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
                 read_obstacle((*obstacles)[k], file, fmt::format("obstacles[{}]", k), base));
         }
     }
-    if (const Json* self = root.find("self_collision")) {
-        if (!self->is_boolean()) {
-            root.fail("self_collision", "true or false", json_type_name(*self));
+    for (const auto& [key, flag] : {std::pair{"self_collision", &scene.self_collision},
+                                    std::pair{"untangle", &scene.untangle}}) {
+        if (const Json* value = root.find(key)) {
+            if (!value->is_boolean()) {
+                root.fail(key, "true or false", json_type_name(*value));
+            }
+            *flag = value->get<bool>();
         }
-        scene.self_collision = self->get<bool>();
     }
     scene.gravity = root.vector("gravity", scene.gravity);
     root.object("air", [&](ObjectReader& a) { scene.air = read_air(a); });

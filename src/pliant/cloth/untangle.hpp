@@ -1,0 +1,77 @@
+// Untangling cloth that starts out intersecting itself, by intersection contour minimization
+// (P. Volino, N. Magnenat-Thalmann, "Resolving Surface Collisions through Intersection Contour
+// Minimization", SIGGRAPH 2006): where two parts of the cloth pass through each other, their
+// intersection is a set of curves (contours); moving the vertices down the gradient of the
+// contours' total length shrinks each closed contour until it vanishes, and the two parts come
+// apart without having to decide which side of the other each region belongs to.
+//
+// The self-collision fail-safe (self_collision.hpp) keeps cloth that starts intersection-free
+// intersection-free, but cannot undo an intersection it is given; untangle() runs before the
+// simulation, on positions only.
+//
+// Per iteration:
+//   1. the intersecting pairs of triangles that share no vertex, exactly
+//      (collision/intersecting_pairs.hpp); none: done;
+//   2. for each pair, its intersection segment: its two ends are where an edge of one triangle
+//      crosses the other (exact orient3d signs decide which edges cross); the segment's length L
+//      moves with the vertices as follows (X an end, where edge p → q, d = q − p, crosses the plane
+//      of triangle t with unit normal n, at edge parameter s and barycentric weights b_k in t):
+//      moving the edge's points by δ_E = (1 − s) δ_p + s δ_q and the triangle's by
+//      δ_T = Σ b_k δ_tk moves X by δX = δ_E + d (n · (δ_T − δ_E)) / (n · d) (X stays on both),
+//      so with c = ∂L/∂X (the segment's unit direction, signed) and k = (c · d) / (n · d):
+//        ∂L/∂x_p = (1 − s)(c − k n),  ∂L/∂x_q = s (c − k n),  ∂L/∂x_tk = b_k k n.
+//      |n · d| is clamped below at a tenth of |d| (an edge grazing the plane would otherwise get
+//      an unbounded push). Pairs whose intersection is not a segment with two distinct ends
+//      (touching at a point or an edge, coplanar overlap) get a push along the line between the
+//      triangles' centroids instead (along the second's normal when those coincide);
+//   3. the gradient, zero at pinned vertices (inverse mass 0), is spread over `smoothing` rings
+//      of mesh neighbours (Jacobi averaging) so that regions move rather than single vertices,
+//      then scaled so that the largest move is `step`; the positions move down it;
+//   4. `shape_iterations` Gauss-Seidel sweeps over the edges pull each back towards its length at
+//      the start (a distance constraint, weighted by the inverse masses), so the cloth moves
+//      rather than shrinks.
+// The positions with the fewest intersecting pairs seen are the result (a failed run does not
+// leave the cloth worse than it found it).
+//
+// A closed contour (a fold pushed through another layer, a sheet poking through another) shrinks
+// and vanishes. A contour that cuts across the whole of a part (two sheets crossing like an X from
+// edge to edge) only shortens towards a boundary and may not vanish within max_iterations: the
+// result then reports the pairs left.
+//
+// Units: metres. Deterministic (pairs in sorted order, sequential accumulation; the intersection
+// search is identical for any number of threads).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "pliant/core/vec3.hpp"
+#include "pliant/geometry/triangle_mesh.hpp"
+
+namespace pliant::cloth {
+
+struct UntangleOptions {
+    int max_iterations = 400;
+    double step = 0.0;  // largest vertex move per iteration, m; 0: an eighth of the mean edge
+    int smoothing = 3;  // rings of neighbours each push is spread over
+    // Gauss-Seidel sweeps per iteration that pull every edge back towards its starting length
+    // (the cloth keeps its shape; a contour that only squeezing would remove stays).
+    int shape_iterations = 4;
+};
+
+struct UntangleResult {
+    std::int64_t initial_pairs = 0;  // intersecting pairs before
+    std::int64_t final_pairs = 0;    // after (0: untangled)
+    int iterations = 0;              // gradient steps taken
+    double max_displacement = 0.0;   // largest distance of a vertex from its start, m
+    double ms = 0.0;                 // wall-clock time
+};
+
+// Moves `positions` (#V, finite) towards a state without intersecting pairs of triangles that
+// share no vertex. inverse_masses: #V, vertices with 0 do not move. Throws InvalidInput for
+// sizes that do not match, indices out of range, non-finite positions or negative options.
+UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Triangle> triangles,
+                        std::span<const double> inverse_masses,
+                        const UntangleOptions& options = {});
+
+}  // namespace pliant::cloth

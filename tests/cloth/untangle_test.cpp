@@ -1,0 +1,186 @@
+#include "pliant/cloth/untangle.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "pliant/cloth/solver.hpp"
+#include "pliant/collision/intersecting_pairs.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/geometry/generate.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+geometry::TriangleMeshD sheet(int quads, double size) {
+    return geometry::convert_precision<double>(geometry::make_grid_sheet(
+        quads, quads, static_cast<float>(size), static_cast<float>(size)));
+}
+
+// Two 1 m sheets of 24 × 24 quads, 2 cm apart, one mesh; the upper one has a smooth dent
+// `depth` deep (a cosine bump of radius 0.25 m) that pokes through the lower one: a closed
+// contour.
+geometry::TriangleMeshD dent_through_sheet(double depth) {
+    geometry::TriangleMeshD lower = sheet(24, 1.0);
+    geometry::TriangleMeshD mesh = lower;
+    const auto offset = static_cast<std::int32_t>(lower.positions.size());
+    for (Vec3d p : lower.positions) {
+        const double r = std::sqrt(p.x * p.x + p.y * p.y);
+        p.z = 0.02 - (r < 0.25 ? depth * 0.5 * (1.0 + std::cos(M_PI * r / 0.25)) : 0.0);
+        mesh.positions.push_back(p);
+    }
+    for (const geometry::Triangle& t : lower.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    return mesh;
+}
+
+double largest_move(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
+    double m = 0.0;
+    for (std::size_t v = 0; v < a.size(); ++v) {
+        m = std::max(m, norm(a[v] - b[v]));
+    }
+    return m;
+}
+
+TEST(Untangle, ADentThroughAnotherSheetComesOut) {
+    geometry::TriangleMeshD mesh = dent_through_sheet(0.06);
+    const std::vector<Vec3d> start = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    ASSERT_GT(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 20);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_GT(result.initial_pairs, 20);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
+    EXPECT_GT(result.iterations, 0);
+    // The dent pokes 4 cm through: getting out takes about that much motion, not a scramble.
+    EXPECT_NEAR(result.max_displacement, largest_move(mesh.positions, start), 1e-12);
+    EXPECT_LT(result.max_displacement, 0.1);
+    for (const Vec3d& p : mesh.positions) {
+        ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+    }
+    // The sheets moved apart rather than crumpled: every edge within 5 % of its length.
+    for (const geometry::Triangle& t : mesh.triangles) {
+        for (int k = 0; k < 3; ++k) {
+            const auto a = static_cast<std::size_t>(t[static_cast<std::size_t>(k)]);
+            const auto b = static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)]);
+            const double before = norm(start[b] - start[a]);
+            ASSERT_NEAR(norm(mesh.positions[b] - mesh.positions[a]), before, 0.05 * before);
+        }
+    }
+}
+
+TEST(Untangle, PinnedVerticesStayAndTheRestMoves) {
+    geometry::TriangleMeshD mesh = dent_through_sheet(0.06);
+    const std::vector<Vec3d> start = mesh.positions;
+    // The whole lower sheet is pinned: only the dented sheet can move out.
+    std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const std::size_t lower = mesh.positions.size() / 2;
+    std::fill(inverse_masses.begin(), inverse_masses.begin() + static_cast<std::ptrdiff_t>(lower),
+              0.0);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_EQ(result.final_pairs, 0);
+    for (std::size_t v = 0; v < lower; ++v) {
+        ASSERT_EQ(mesh.positions[v].x, start[v].x);
+        ASSERT_EQ(mesh.positions[v].y, start[v].y);
+        ASSERT_EQ(mesh.positions[v].z, start[v].z);
+    }
+}
+
+TEST(Untangle, ClothThatFellThroughItselfIsUntangled) {
+    // Without self-collision, a 40 × 40 sheet dropped on a sphere folds through itself (see
+    // self_collision_test.cpp); the untangled state then simulates on without intersections.
+    geometry::TriangleMeshD mesh = sheet(40, 2.0);
+    for (Vec3d& p : mesh.positions) {
+        p.z = 1.2;
+    }
+    ClothSolver plain(mesh, ClothMaterial{});
+    plain.add_obstacle(SphereObstacle{{0.0, 0.0, 0.0}, 0.5});
+    // The first frame with intersections (around frame 17).
+    for (int f = 0;
+         f < 40 && collision::count_intersecting_pairs(plain.positions(), plain.triangles()) == 0;
+         ++f) {
+        plain.step(1.0 / 24.0, 20);
+    }
+    geometry::TriangleMeshD tangled{{plain.positions().begin(), plain.positions().end()},
+                                    mesh.triangles};
+    const std::int64_t before =
+        collision::count_intersecting_pairs(tangled.positions, tangled.triangles);
+    ASSERT_GT(before, 0);
+    const std::vector<double> inverse_masses(tangled.positions.size(), 1.0);
+    const UntangleResult result = untangle(tangled.positions, tangled.triangles, inverse_masses);
+    EXPECT_EQ(result.initial_pairs, before);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(tangled.positions, tangled.triangles), 0);
+
+    // From there the solver with self-collision keeps it apart.
+    ClothSolver solver(tangled, ClothMaterial{});
+    solver.add_obstacle(SphereObstacle{{0.0, 0.0, 0.0}, 0.5});
+    solver.enable_self_collision(true);
+    for (int f = 0; f < 6; ++f) {
+        solver.step(1.0 / 24.0, 20);
+        ASSERT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()), 0)
+            << "frame " << f;
+    }
+}
+
+TEST(Untangle, NeverLeavesMorePairsThanItFound) {
+    // Two sheets crossing like an X from edge to edge: the contour runs across both, and
+    // shortening it need not remove it; whatever happens, the result is no worse than the start.
+    geometry::TriangleMeshD a = sheet(12, 1.0);
+    geometry::TriangleMeshD mesh = a;
+    const auto offset = static_cast<std::int32_t>(a.positions.size());
+    for (Vec3d p : a.positions) {
+        mesh.positions.push_back({p.x, 0.0, p.y});  // the second sheet stands in the x-z plane
+    }
+    for (const geometry::Triangle& t : a.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    // Tilt both slightly so that no triangle is exactly coplanar with an edge.
+    for (Vec3d& p : mesh.positions) {
+        p.z += 0.013 * p.x + 0.007 * p.y;
+    }
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    UntangleOptions options;
+    options.max_iterations = 40;
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses, options);
+    EXPECT_GT(result.initial_pairs, 0);
+    EXPECT_LE(result.final_pairs, result.initial_pairs);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles),
+              result.final_pairs);
+    EXPECT_LE(result.iterations, 40);
+}
+
+TEST(Untangle, IntersectionFreeInputIsLeftAlone) {
+    geometry::TriangleMeshD mesh = sheet(10, 1.0);
+    const std::vector<Vec3d> start = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_EQ(result.initial_pairs, 0);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(result.iterations, 0);
+    EXPECT_EQ(largest_move(mesh.positions, start), 0.0);
+}
+
+TEST(Untangle, BadInputIsAnError) {
+    geometry::TriangleMeshD mesh = dent_through_sheet(0.06);
+    std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    std::vector<double> short_masses(3, 1.0);
+    EXPECT_THROW(untangle(mesh.positions, mesh.triangles, short_masses), InvalidInput);
+    UntangleOptions negative;
+    negative.step = -1.0;
+    EXPECT_THROW(untangle(mesh.positions, mesh.triangles, inverse_masses, negative), InvalidInput);
+    negative = {};
+    negative.max_iterations = -1;
+    EXPECT_THROW(untangle(mesh.positions, mesh.triangles, inverse_masses, negative), InvalidInput);
+    geometry::TriangleMeshD broken = mesh;
+    broken.positions[5].y = std::nan("");
+    EXPECT_THROW(untangle(broken.positions, broken.triangles, inverse_masses), InvalidInput);
+    broken = mesh;
+    broken.triangles[3][1] = static_cast<std::int32_t>(broken.positions.size());
+    EXPECT_THROW(untangle(broken.positions, broken.triangles, inverse_masses), InvalidInput);
+}
+
+}  // namespace
+}  // namespace pliant::cloth
