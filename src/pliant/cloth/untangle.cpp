@@ -60,7 +60,8 @@ void add_crossing(std::span<const Vec3d> x, std::int32_t p, std::int32_t q,
     const Vec3d normal = n * (1.0 / length);
     const double dp = dot(normal, at(p) - a);
     const double dq = dot(normal, at(q) - a);
-    const double s = std::clamp(dp / (dp - dq), 0.0, 1.0);
+    // dp and dq have opposite signs (exactly); rounding can leave both 0 for a tiny crossing.
+    const double s = dp != dq ? std::clamp(dp / (dp - dq), 0.0, 1.0) : 0.5;
     Crossing crossing{};
     crossing.point = at(p) + (at(q) - at(p)) * s;
     crossing.edge[0] = p;
