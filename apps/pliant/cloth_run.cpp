@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -75,29 +76,35 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
 
     // Input that already intersects itself is reported and untangled before the first frame
     // (cloth/untangle.hpp; the fail-safe keeps cloth intersection-free only once it is).
+    // untangle() starts with the same exact search, so the pairs are searched once either way.
+    std::optional<cloth::UntangleResult> untangled;
+    if (scene.untangle) {
+        untangled = solver.untangle();
+    }
     const std::int64_t initial_intersections =
-        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+        untangled ? untangled->initial_pairs
+                  : collision::count_intersecting_pairs(solver.positions(), solver.triangles());
     nlohmann::ordered_json untangle_stats;
     if (initial_intersections > 0) {
         log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
                     scene_name, initial_intersections);
-        if (scene.untangle) {
-            const cloth::UntangleResult untangled = solver.untangle();
-            untangle_stats = {{"iterations", untangled.iterations},
-                              {"pairs_left", untangled.final_pairs},
-                              {"max_displacement_m", untangled.max_displacement},
-                              {"ms", untangled.ms}};
-            if (untangled.final_pairs == 0) {
+        if (untangled) {
+            untangle_stats = {{"iterations", untangled->iterations},
+                              {"pairs_left", untangled->final_pairs},
+                              {"max_displacement_m", untangled->max_displacement},
+                              {"ms", untangled->ms}};
+            if (untangled->final_pairs == 0) {
                 log_info(
                     "{}: untangled in {} iterations ({:.1f} ms), no vertex moved more than "
                     "{:.2f} mm",
-                    scene_name, untangled.iterations, untangled.ms,
-                    untangled.max_displacement * 1e3);
+                    scene_name, untangled->iterations, untangled->ms,
+                    untangled->max_displacement * 1e3);
             } else {
                 log_warning(
                     "{}: untangling left {} of {} pairs after {} iterations; the "
                     "simulation keeps those from growing but does not undo them",
-                    scene_name, untangled.final_pairs, initial_intersections, untangled.iterations);
+                    scene_name, untangled->final_pairs, initial_intersections,
+                    untangled->iterations);
             }
         }
     }
