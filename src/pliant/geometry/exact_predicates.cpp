@@ -7,7 +7,8 @@
 
 // The error-free transformations below are exact only if every + - * is rounded once, to nearest,
 // in binary64: no fast-math reassociation, no x87 extended precision, no contraction of a * b + c
-// into an fma (CMake compiles this file with -ffp-contract=off; GCC's default for C++ is "fast").
+// into an fma (pliant compiles everything with -ffp-contract=off, cmake/PliantCodegen.cmake; GCC's default
+// for C++ is "fast").
 #if defined(__FAST_MATH__)
 #error "exact_predicates.cpp must not be compiled with -ffast-math"
 #endif

@@ -27,7 +27,8 @@
 // does).
 //
 // Requires IEEE 754 binary64 with round-to-nearest (the default mode), no -ffast-math, and no
-// floating-point contraction in exact_predicates.cpp (compiled with -ffp-contract=off).
+// floating-point contraction in exact_predicates.cpp (pliant compiles with -ffp-contract=off,
+// cmake/PliantCodegen.cmake).
 // Thread safe, no allocation, no exceptions; the exact path uses about 5 KiB of stack.
 #pragma once
 

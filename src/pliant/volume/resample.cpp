@@ -16,7 +16,7 @@
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/visibility.hpp"
 
-// Compiled with -ffp-contract=off (CMakeLists.txt): see detail/resample_kernel.hpp.
+// Compiled with -ffp-contract=off (cmake/PliantCodegen.cmake): see detail/resample_kernel.hpp.
 
 namespace pliant::volume {
 namespace {

@@ -1,8 +1,8 @@
 // Per-tet kernels of volume/resample.hpp, GPU-style: functions of trivially copyable data, no
 // allocation, no exceptions. Shared by the resampler and the brute-force baseline in
 // bench/resample_bench.cpp, so that both decide "voxel centre inside tet" with the same float
-// operations in the same order. Translation units that use them are compiled with
-// -ffp-contract=off: a contracted a·i + β would round differently in different call sites and
+// operations in the same order. pliant is compiled with -ffp-contract=off
+// (cmake/PliantCodegen.cmake): a contracted a·i + β would round differently in different call sites and
 // break the tie rule's consistency between neighbouring tets.
 #pragma once
 
