@@ -14,6 +14,11 @@
 //   4. the built-in cloth scenes (scenes/drape.json, twist.json, pile.json, flag.json, built into
 //      the binary) through `pliant cloth`: DIR/<scene>/frames/frame_NNNN.obj, preview.mp4 and
 //      stats.json;
+//   4b. untangling: the drape without self-collision, 16 frames (it falls through itself,
+//      DIR/untangle/fall/); its last frame is the cloth of DIR/untangle/scene.json, which
+//      `pliant cloth` untangles before frame 0 and drapes on with self-collision (24 frames, at
+//      most --cloth-frames)
+//      (DIR/untangle/: preview.mp4, frames, stats.json with the untangle report);
 //   5. a volume through the ray caster (the Colin27 brain from mricron-data, else the head CT from
 //      invesalius-examples, else a generated phantom): DIR/volume/volume.png, turntable.mp4;
 //   6. the same volume twisted by the XPBD soft body on a tet grid, resampled and ray-cast every
@@ -36,6 +41,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstdio>
@@ -43,6 +49,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <utility>
 #include <vector>
@@ -363,6 +370,81 @@ nlohmann::ordered_json reconstruct_demo_volume(const std::filesystem::path& dir,
     return j;
 }
 
+// Step 4b: the drape scene (drape_json) without self-collision for UNTANGLE_FALL_FRAMES frames
+// into DIR/untangle/fall (the sheet falls through itself); a scene whose cloth is that run's last
+// frame, DIR/untangle/scene.json (the drape's other keys, UNTANGLE_FRAMES frames), run through
+// `pliant cloth` into DIR/untangle: untangled before frame 0, then draped with self-collision
+// for `frames` frames.
+nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const char* drape_json,
+                                     int frames, bool quiet) {
+    // At frame 16 the sheet has fallen through itself where its skirt folds (hundreds of pairs).
+    constexpr int UNTANGLE_FALL_FRAMES = 16;
+    const std::filesystem::path out = dir / "untangle";
+    const std::filesystem::path fall_dir = out / "fall";
+    make_output_directory(out);
+    const bool progress = !quiet && ::isatty(::fileno(stderr)) != 0;
+
+    cloth::ClothScene fall = io::parse_cloth_scene(drape_json, "scenes/drape.json (built in)", ".");
+    fall.self_collision = false;
+    ClothRunOptions fall_run;
+    fall_run.frames = UNTANGLE_FALL_FRAMES;
+    fall_run.progress = progress;
+    const nlohmann::ordered_json fall_stats =
+        run_cloth_scene(fall, "scenes/drape.json without self-collision", fall_dir, fall_run);
+    const std::int64_t fall_pairs = fall_stats["frames"].back()["intersecting_pairs"];
+
+    nlohmann::ordered_json scene_json = nlohmann::ordered_json::parse(drape_json);
+    scene_json["cloth"] = {
+        {"mesh", fmt::format("fall/frames/frame_{:04d}.obj", UNTANGLE_FALL_FRAMES)}};
+    scene_json["frames"] = frames;
+    const std::filesystem::path scene_path = out / "scene.json";
+    io::write_file_atomically(scene_path,
+                              [&](std::ostream& o) { o << scene_json.dump(2) << '\n'; });
+    const cloth::ClothScene scene = io::read_cloth_scene(scene_path);
+    ClothRunOptions run;
+    run.frames = frames;
+    run.progress = progress;
+    const nlohmann::ordered_json stats = run_cloth_scene(scene, scene_path.string(), out, run);
+    const nlohmann::ordered_json& untangled = stats["untangle"];
+    const auto preview = [](const nlohmann::ordered_json& s) {
+        return s.contains("preview") ? s["preview"] : nlohmann::ordered_json();
+    };
+    const auto shown = [](const nlohmann::ordered_json& p) {
+        return p.is_null() ? std::string("none") : p.get<std::string>();
+    };
+    std::string what = "not run (the cloth did not intersect itself)";
+    if (!untangled.is_null()) {
+        what = fmt::format(
+            "{} iterations, {:.0f} ms, {} pairs left, no vertex moved more than "
+            "{:.1f} mm",
+            untangled["iterations"].get<int>(), untangled["ms"].get<double>(),
+            untangled["pairs_left"].get<std::int64_t>(),
+            untangled["max_displacement_m"].get<double>() * 1e3);
+    }
+    say(quiet,
+        fmt::format("untangling: the drape without self-collision falls through itself ({} "
+                    "intersecting triangle pairs at frame {}; preview {});\n  that frame "
+                    "untangled ({}), then {} frames with self-collision: {} intersecting pairs in "
+                    "the worst frame, {:.1f} ms per frame; preview {}\n  reproduce: pliant cloth "
+                    "{} --out {}\n\n",
+                    fall_pairs, UNTANGLE_FALL_FRAMES, shown(preview(fall_stats)), what, frames,
+                    stats["max_intersecting_pairs"].get<std::int64_t>(),
+                    stats["mean_ms_per_frame"].get<double>(), shown(preview(stats)),
+                    scene_path.string(), out.string()));
+    return {{"fall_dir", fall_dir.string()},
+            {"fall_frames", UNTANGLE_FALL_FRAMES},
+            {"fall_intersecting_pairs", fall_pairs},
+            {"fall_preview", preview(fall_stats)},
+            {"scene", scene_path.string()},
+            {"dir", out.string()},
+            {"frames", frames},
+            {"initial_intersecting_pairs", stats["initial_intersecting_pairs"]},
+            {"untangle", untangled},
+            {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
+            {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
+            {"preview", preview(stats)}};
+}
+
 void run_demo(const DemoOptions& options, const GlobalOptions& global) {
     const bool quiet = global.json;  // --json: stdout carries only the summary object
     const std::filesystem::path dir(options.out);
@@ -464,6 +546,20 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
             {"preview", stats.contains("preview") ? stats["preview"] : nlohmann::ordered_json()}};
     }
 
+    // Step 4b: untangling the drape after it fell through itself without self-collision.
+    const char* drape_json = nullptr;
+    for (const BuiltInScene& built_in : BUILT_IN_SCENES) {
+        if (std::string_view(built_in.name) == "drape") {
+            drape_json = built_in.json;
+        }
+    }
+    constexpr int UNTANGLE_FRAMES = 24;
+    const nlohmann::ordered_json untangle_summary =
+        untangle_demo(dir, drape_json,
+                      options.cloth_frames >= 0 ? std::min(options.cloth_frames, UNTANGLE_FRAMES)
+                                                : UNTANGLE_FRAMES,
+                      quiet);
+
     // Step 5: a volume rendered by the ray caster: the Colin27 brain (Debian mricron-data) or the
     // head CT (invesalius-examples), else the generated Shepp-Logan phantom; a PNG and a
     // turntable MP4 (PNG frames without ffmpeg).
@@ -498,6 +594,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         {"bvh_table", bench::bvh_table_json(table)},
         {"drape", cloth_summary["drape"]},
         {"cloth", cloth_summary},
+        {"untangle", untangle_summary},
         {"volume", volume_summary},
         {"deform", deform_summary},
         {"nerf", nerf_summary},
@@ -514,12 +611,14 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
             fmt::format(
                 "outputs in {}/:\n  {:<27}the folded sheet (binary PLY)\n  {:<27}its "
                 "moved copy\n  {:<27}each cloth scene: preview.mp4 (watch these), frames (OBJ), "
-                "stats.json\n  {:<27}the ray-cast volume: volume.png, turntable.mp4\n  {:<27}the "
+                "stats.json\n  {:<27}the drape untangled after falling through itself: preview.mp4 "
+                "(watch it), fall/preview.mp4 (the fall), scene.json, stats.json\n  {:<27}the "
+                "ray-cast volume: volume.png, turntable.mp4\n  {:<27}the "
                 "twisted volume: twist.mp4 (watch it), twist.png, twisted.nrrd\n  {:<27}from "
                 "images: dataset/, reconstructed.nrrd, compare.png (look at it), cleaned.nrrd, "
                 "twist.mp4 (watch it)\n  {:<27}every number above\n",
                 dir.string(), sheet_path.filename().string(), sheet_t1_path.filename().string(),
-                "drape/ twist/ pile/ flag/", "volume/", "deform/", "nerf/",
+                "drape/ twist/ pile/ flag/", "untangle/", "volume/", "deform/", "nerf/",
                 summary_path.filename().string()));
     }
     if (!table.ok()) {
@@ -539,12 +638,15 @@ void register_demo(CLI::App& app, const GlobalOptions& global) {
         "demo",
         "Everything pliant does today, end to end, on embedded and installed data: self-collision "
         "broad and narrow phase on a folded sheet, the paper's BVH table, the four cloth scenes, "
-        "a volume ray-cast and twisted, and the paper's pipeline from images (dataset, radiance "
+        "untangling a sheet that fell through itself, a volume ray-cast and twisted, and the "
+        "paper's pipeline from images (dataset, radiance "
         "field, cleaning, deformation); writes everything under --out and summary.json");
     cmd->add_option("--out", options->out, "Output directory (created if missing)")
         ->type_name("DIR");
-    cmd->add_option("--cloth-frames", options->cloth_frames,
-                    "Frames of the drape scene (default: the scene's 72)")
+    cmd->add_option(
+           "--cloth-frames", options->cloth_frames,
+           "Frames of each cloth scene (default: the scene's own; the untangling step runs at "
+           "most 24)")
         ->check(CLI::Range(0, 100'000));
     cmd->add_option("--deform-frames", options->deform_frames,
                     "Frames of the twisted volumes' animations (default 48)")

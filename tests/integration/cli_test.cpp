@@ -405,6 +405,25 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
         EXPECT_EQ(s.at("max_intersecting_pairs"), 0) << scene;
         EXPECT_TRUE(std::filesystem::exists(dir / scene / "stats.json")) << scene;
     }
+    // Untangling: the drape without self-collision falls through itself; the untangled run
+    // starts from its last frame, intersection-free, and `pliant cloth` on the written scene
+    // file reproduces it.
+    const nlohmann::json& untangle = summary.at("untangle");
+    EXPECT_GT(untangle.at("fall_intersecting_pairs").get<std::int64_t>(), 0);
+    EXPECT_EQ(untangle.at("initial_intersecting_pairs"), untangle.at("fall_intersecting_pairs"));
+    EXPECT_EQ(untangle.at("untangle").at("pairs_left"), 0);
+    EXPECT_EQ(untangle.at("max_intersecting_pairs"), 0);
+    EXPECT_EQ(untangle.at("frames"), 2);
+    EXPECT_TRUE(std::filesystem::exists(dir / "untangle" / "frames" / "frame_0002.obj"));
+    const nlohmann::json again = parse_json(run_cli(
+        "--json cloth " + quoted(std::filesystem::path(untangle.at("scene").get<std::string>())) +
+            " --out " + quoted(scratch / "untangle_again") + " --no-preview",
+        scratch));
+    for (const char* key : {"iterations", "pairs_left", "max_displacement_m"}) {
+        EXPECT_EQ(again.at("untangle").at(key), untangle.at("untangle").at(key)) << key;
+    }
+    EXPECT_EQ(read_text(scratch / "untangle_again" / "frames" / "frame_0002.obj"),
+              read_text(dir / "untangle" / "frames" / "frame_0002.obj"));
 
     // The written files and the printed inflation give the demo's counts exactly.
     for (const char* mode : {"static", "swept"}) {
