@@ -16,9 +16,9 @@
 //      stats.json;
 //   4b. untangling: the drape without self-collision, 16 frames (it falls through itself,
 //      DIR/untangle/fall/); its last frame is the cloth of DIR/untangle/scene.json, which
-//      `pliant cloth` untangles before frame 0 and drapes on with self-collision (24 frames, at
-//      most --cloth-frames)
-//      (DIR/untangle/: preview.mp4, frames, stats.json with the untangle report);
+//      `pliant cloth` untangles before frame 0 and drapes on with self-collision for 24 frames
+//      (at most --cloth-frames): DIR/untangle/preview.mp4, frames, stats.json (its untangle
+//      report);
 //   5. a volume through the ray caster (the Colin27 brain from mricron-data, else the head CT from
 //      invesalius-examples, else a generated phantom): DIR/volume/volume.png, turntable.mp4;
 //   6. the same volume twisted by the XPBD soft body on a tet grid, resampled and ray-cast every
@@ -372,9 +372,8 @@ nlohmann::ordered_json reconstruct_demo_volume(const std::filesystem::path& dir,
 
 // Step 4b: the drape scene (drape_json) without self-collision for UNTANGLE_FALL_FRAMES frames
 // into DIR/untangle/fall (the sheet falls through itself); a scene whose cloth is that run's last
-// frame, DIR/untangle/scene.json (the drape's other keys, UNTANGLE_FRAMES frames), run through
-// `pliant cloth` into DIR/untangle: untangled before frame 0, then draped with self-collision
-// for `frames` frames.
+// frame, DIR/untangle/scene.json (the drape's other keys, `frames` frames), run through
+// `pliant cloth` into DIR/untangle: untangled before frame 0, then draped with self-collision.
 nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const char* drape_json,
                                      int frames, bool quiet) {
     // At frame 16 the sheet has fallen through itself where its skirt folds (hundreds of pairs).
