@@ -175,14 +175,9 @@ void write_obj_impl(const std::filesystem::path& path,
         fmt::format_to(std::back_inserter(buffer),
                        "# written by pliant: {} vertices, {} triangles\n", mesh.num_vertices(),
                        mesh.num_triangles());
+        // The shortest text that reads back to the same float or double (fmt's "{}").
         for (const Vec3<Real>& p : mesh.positions) {
-            if constexpr (std::is_same_v<Real, float>) {
-                fmt::format_to(std::back_inserter(buffer), "v {:.9g} {:.9g} {:.9g}\n", p.x, p.y,
-                               p.z);
-            } else {
-                fmt::format_to(std::back_inserter(buffer), "v {:.17g} {:.17g} {:.17g}\n", p.x, p.y,
-                               p.z);
-            }
+            fmt::format_to(std::back_inserter(buffer), "v {} {} {}\n", p.x, p.y, p.z);
             flush_if_full(false);
         }
         for (const geometry::Triangle& t : mesh.triangles) {

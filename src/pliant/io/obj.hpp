@@ -15,8 +15,8 @@
 // repeats a vertex (geometry::validate_mesh).
 // Cost: one bulk read; the text is scanned twice (validation, tinyobjloader).
 //
-// write_obj(path, mesh) writes `v x y z` (9 significant digits for float, 17 for double, so the
-// numbers read back bit for bit) and `f a b c` (1-based). The file is replaced atomically (see
+// write_obj(path, mesh) writes `v x y z` (each number the shortest text that reads back to the
+// same float, or double, bit for bit) and `f a b c` (1-based). The file is replaced atomically (see
 // atomic_file.hpp). Throws InvalidInput (before touching the file) when the mesh fails
 // geometry::validate_mesh, and IoError "<path>: …" when the file cannot be written.
 #pragma once
