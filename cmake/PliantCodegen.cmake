@@ -9,8 +9,8 @@
 # tests compute themselves. No code relies on contraction.
 add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-ffp-contract=off>)
 
-# PLIANT_NATIVE (default ON): compile for the build machine's CPU (AVX2, AVX-512, fma where it
-# has them), about 1.25x faster cloth on the drape scene. Without contraction and without
+# PLIANT_NATIVE (default ON): compile for the build machine's CPU (the compiler may then use AVX2
+# and AVX-512 anywhere), about 1.25x faster cloth on the drape scene. Without contraction and without
 # -ffast-math the compiler keeps every floating-point operation and its order, so the results are
 # the portable build's, bit for bit (docs/performance.md). Turn it OFF for a binary that must run
 # on any x86-64.
