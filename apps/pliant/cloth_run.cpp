@@ -133,7 +133,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     int frames_done = 0;
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
     double total_ms = 0.0;
-    std::int64_t worst_intersections = 0;
+    // Frame 0 as written: the input, or what untangling left of its intersections.
+    std::int64_t worst_intersections = untangled ? untangled->final_pairs : initial_intersections;
     double worst_strain = 0.0;
     double worst_strain_p99 = 0.0;
     for (int frame = 1; frame <= frames; ++frame) {

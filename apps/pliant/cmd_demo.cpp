@@ -14,11 +14,11 @@
 //   4. the built-in cloth scenes (scenes/drape.json, twist.json, pile.json, flag.json, built into
 //      the binary) through `pliant cloth`: DIR/<scene>/frames/frame_NNNN.obj, preview.mp4 and
 //      stats.json;
-//   4b. untangling: the drape without self-collision, 16 frames (it falls through itself,
-//      DIR/untangle/fall/); its last frame is the cloth of DIR/untangle/scene.json, which
-//      `pliant cloth` untangles before frame 0 and drapes on with self-collision for 24 frames
-//      (at most --cloth-frames): DIR/untangle/preview.mp4, frames, stats.json (its untangle
-//      report);
+//   4b. untangling: the drape without self-collision, 16 frames (DIR/untangle/fall/scene.json;
+//      it falls through itself, DIR/untangle/fall/); its last frame is the cloth of
+//      DIR/untangle/scene.json (a new cloth whose rest shape is that frame), which `pliant cloth`
+//      untangles before frame 0 and simulates with self-collision for 24 frames (at most
+//      --cloth-frames): DIR/untangle/preview.mp4, frames, stats.json (its untangle report);
 //   5. a volume through the ray caster (the Colin27 brain from mricron-data, else the head CT from
 //      invesalius-examples, else a generated phantom): DIR/volume/volume.png, turntable.mp4;
 //   6. the same volume twisted by the XPBD soft body on a tet grid, resampled and ray-cast every
@@ -91,7 +91,7 @@ constexpr int TABLE_REPEATS = 3;
 
 struct DemoOptions {
     std::string out = "out/demo";
-    int cloth_frames = -1;             // -1: the drape scene's 72
+    int cloth_frames = -1;             // -1: each cloth scene's own
     int deform_frames = 48;            // frames of the twist animations (steps 6 and 7)
     double nerf_minutes = 2.0;         // the radiance field's training budget
     std::int64_t nerf_iterations = 0;  // > 0: a fixed iteration count instead (reproducible)
@@ -370,10 +370,12 @@ nlohmann::ordered_json reconstruct_demo_volume(const std::filesystem::path& dir,
     return j;
 }
 
-// Step 4b: the drape scene (drape_json) without self-collision for UNTANGLE_FALL_FRAMES frames
-// into DIR/untangle/fall (the sheet falls through itself); a scene whose cloth is that run's last
-// frame, DIR/untangle/scene.json (the drape's other keys, `frames` frames), run through
-// `pliant cloth` into DIR/untangle: untangled before frame 0, then draped with self-collision.
+// Step 4b: the drape scene (drape_json) without self-collision for UNTANGLE_FALL_FRAMES frames,
+// DIR/untangle/fall/scene.json run into DIR/untangle/fall (the sheet falls through itself); a
+// scene whose cloth is that run's last frame, DIR/untangle/scene.json (the drape's other keys,
+// `frames` frames; the frame is the new cloth's rest shape: its masses, edge lengths and fold
+// angles), run through `pliant cloth` into DIR/untangle: untangled before frame 0, then simulated
+// with self-collision.
 nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const char* drape_json,
                                      int frames, bool quiet) {
     // At frame 16 the sheet has fallen through itself where its skirt folds (hundreds of pairs).
@@ -383,23 +385,31 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
     make_output_directory(out);
     const bool progress = !quiet && ::isatty(::fileno(stderr)) != 0;
 
-    cloth::ClothScene fall = io::parse_cloth_scene(drape_json, "scenes/drape.json (built in)", ".");
-    fall.self_collision = false;
+    // Both scenes are written as files and read back: the printed commands reproduce them.
+    const auto write_scene = [](const std::filesystem::path& path,
+                                const nlohmann::ordered_json& json) {
+        io::write_file_atomically(path, [&](std::ostream& o) { o << json.dump(2) << '\n'; });
+        return io::read_cloth_scene(path);
+    };
+    make_output_directory(fall_dir);
+    nlohmann::ordered_json fall_json = nlohmann::ordered_json::parse(drape_json);
+    fall_json["self_collision"] = false;
+    fall_json["frames"] = UNTANGLE_FALL_FRAMES;
+    const std::filesystem::path fall_path = fall_dir / "scene.json";
+    const cloth::ClothScene fall = write_scene(fall_path, fall_json);
     ClothRunOptions fall_run;
     fall_run.frames = UNTANGLE_FALL_FRAMES;
     fall_run.progress = progress;
     const nlohmann::ordered_json fall_stats =
-        run_cloth_scene(fall, "scenes/drape.json without self-collision", fall_dir, fall_run);
+        run_cloth_scene(fall, fall_path.string(), fall_dir, fall_run);
     const std::int64_t fall_pairs = fall_stats["frames"].back()["intersecting_pairs"];
 
     nlohmann::ordered_json scene_json = nlohmann::ordered_json::parse(drape_json);
-    scene_json["cloth"] = {
-        {"mesh", fmt::format("fall/frames/frame_{:04d}.obj", UNTANGLE_FALL_FRAMES)}};
+    scene_json["cloth"] = {{"mesh", fmt::format("fall/frames/frame_{:04d}.{}", UNTANGLE_FALL_FRAMES,
+                                                fall.frame_format)}};
     scene_json["frames"] = frames;
     const std::filesystem::path scene_path = out / "scene.json";
-    io::write_file_atomically(scene_path,
-                              [&](std::ostream& o) { o << scene_json.dump(2) << '\n'; });
-    const cloth::ClothScene scene = io::read_cloth_scene(scene_path);
+    const cloth::ClothScene scene = write_scene(scene_path, scene_json);
     ClothRunOptions run;
     run.frames = frames;
     run.progress = progress;
@@ -422,15 +432,18 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
     }
     say(quiet,
         fmt::format("untangling: the drape without self-collision falls through itself ({} "
-                    "intersecting triangle pairs at frame {}; preview {});\n  that frame "
-                    "untangled ({}), then {} frames with self-collision: {} intersecting pairs in "
-                    "the worst frame, {:.1f} ms per frame; preview {}\n  reproduce: pliant cloth "
-                    "{} --out {}\n\n",
-                    fall_pairs, UNTANGLE_FALL_FRAMES, shown(preview(fall_stats)), what, frames,
+                    "intersecting triangle pairs at frame {}; preview {});\n  reproduce: pliant "
+                    "cloth {} --out {}\n  that frame as a new cloth (its rest shape), untangled "
+                    "({}), then {} frames with self-collision: {} intersecting pairs in the worst "
+                    "frame, {:.1f} ms per frame; preview {}\n  reproduce: pliant cloth {} --out "
+                    "{}\n\n",
+                    fall_pairs, UNTANGLE_FALL_FRAMES, shown(preview(fall_stats)),
+                    fall_path.string(), fall_dir.string(), what, frames,
                     stats["max_intersecting_pairs"].get<std::int64_t>(),
                     stats["mean_ms_per_frame"].get<double>(), shown(preview(stats)),
                     scene_path.string(), out.string()));
-    return {{"fall_dir", fall_dir.string()},
+    return {{"fall_scene", fall_path.string()},
+            {"fall_dir", fall_dir.string()},
             {"fall_frames", UNTANGLE_FALL_FRAMES},
             {"fall_intersecting_pairs", fall_pairs},
             {"fall_preview", preview(fall_stats)},
@@ -551,6 +564,9 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         if (std::string_view(built_in.name) == "drape") {
             drape_json = built_in.json;
         }
+    }
+    if (drape_json == nullptr) {
+        throw InternalError("demo: the built-in scenes have no drape scene");
     }
     constexpr int UNTANGLE_FRAMES = 24;
     const nlohmann::ordered_json untangle_summary =

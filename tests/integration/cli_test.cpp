@@ -409,6 +409,7 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
     // starts from its last frame, intersection-free, and `pliant cloth` on the written scene
     // file reproduces it.
     const nlohmann::json& untangle = summary.at("untangle");
+    EXPECT_TRUE(std::filesystem::exists(untangle.at("fall_scene").get<std::string>()));
     EXPECT_GT(untangle.at("fall_intersecting_pairs").get<std::int64_t>(), 0);
     EXPECT_EQ(untangle.at("initial_intersecting_pairs"), untangle.at("fall_intersecting_pairs"));
     EXPECT_EQ(untangle.at("untangle").at("pairs_left"), 0);

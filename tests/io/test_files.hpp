@@ -181,8 +181,9 @@ void expect_bitwise_equal(const geometry::BasicTriangleMesh<Real>& written,
     ASSERT_EQ(read.triangles, written.triangles);
 }
 
-// For text written from floats at 9 significant digits and read at double precision: the
-// decimals read back are not the floats' exact values, but each rounds to the float written.
+// For text written from floats (the shortest decimals that round back to them, or 9 significant
+// digits) and read at double precision: the decimals read back are not the floats' exact values,
+// but each rounds to the float written.
 inline void expect_rounds_to(const geometry::TriangleMesh& written,
                              const geometry::TriangleMeshD& read) {
     ASSERT_EQ(read.num_vertices(), written.num_vertices());

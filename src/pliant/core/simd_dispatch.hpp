@@ -1,9 +1,11 @@
-// Run-time choice of SIMD kernels. The library is compiled for baseline x86-64 (SSE2); kernels
-// that use AVX2 are compiled for it with a function attribute (PLIANT_AVX2_FN) in files of their
-// own and called only when has_avx2() says the CPU runs them. Such kernels do the IEEE operations
-// of their scalar twins lane by lane in the same order and never use FMA (the attribute names
-// "avx2" only, so the compiler cannot contract a · b + c): the choice never changes a bit of an
-// output, and tests compare the two paths by switching AVX2 off with allow_avx2(false).
+// Run-time choice of SIMD kernels. Kernels that use AVX2 are compiled for it with a function
+// attribute (PLIANT_AVX2_FN) in files of their own, so that a portable build (PLIANT_NATIVE=OFF,
+// baseline x86-64) has them too, and are called only when has_avx2() says the CPU runs them.
+// Such kernels do the IEEE operations of their scalar twins lane by lane in the same order and
+// never use FMA (-ffp-contract=off for every file, cmake/PliantCodegen.cmake; under -march=native
+// GCC 12 can still fuse a vectorized a·b − c·d, e·f + g·h pair into fmaddsub, which these kernels
+// do not contain): the choice never changes a bit of an output, and tests compare the two paths by
+// switching AVX2 off with allow_avx2(false), in the build that runs them.
 //
 // PLIANT_HAS_AVX2_TARGET is defined where the compiler can build such kernels (x86-64, g++ or
 // clang); elsewhere the AVX2 files compile to stubs and has_avx2() is false.

@@ -4,8 +4,8 @@
 
 #include "pliant/core/simd_dispatch.hpp"
 
-// The AVX2 kernels: "avx2" only, not "fma" (core/simd_dispatch.hpp); pliant is compiled with
-// -ffp-contract=off (cmake/PliantCodegen.cmake), so no a · b + c is contracted in the scalar kernels either.
+// The AVX2 kernels use no fma (core/simd_dispatch.hpp); pliant is compiled with -ffp-contract=off
+// (cmake/PliantCodegen.cmake), so no a · b + c is contracted in the scalar kernels either.
 #if defined(PLIANT_HAS_AVX2_TARGET)
 #include <immintrin.h>
 

@@ -2,7 +2,7 @@
 // colour: a scalar kernel per constraint, and AVX2 kernels that project four constraints at a
 // time (double precision, four lanes), chosen at run time. The AVX2 kernels do the scalar
 // kernel's arithmetic lane by lane, in the same order and without contracting a · b + c into an
-// fma (pliant is compiled with -ffp-contract=off and only "avx2" is enabled here): the
+// fma (pliant is compiled with -ffp-contract=off; core/simd_dispatch.hpp): the
 // results are bitwise those of the scalar kernel, so the choice never changes a result, on any
 // machine, for any number of threads.
 //

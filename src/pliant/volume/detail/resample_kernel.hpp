@@ -2,8 +2,8 @@
 // allocation, no exceptions. Shared by the resampler and the brute-force baseline in
 // bench/resample_bench.cpp, so that both decide "voxel centre inside tet" with the same float
 // operations in the same order. pliant is compiled with -ffp-contract=off
-// (cmake/PliantCodegen.cmake): a contracted a·i + β would round differently in different call sites and
-// break the tie rule's consistency between neighbouring tets.
+// (cmake/PliantCodegen.cmake): a contracted a·i + β would round differently in different call
+// sites and break the tie rule's consistency between neighbouring tets.
 #pragma once
 
 #include <algorithm>
