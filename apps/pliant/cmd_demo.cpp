@@ -370,6 +370,16 @@ nlohmann::ordered_json reconstruct_demo_volume(const std::filesystem::path& dir,
     return j;
 }
 
+// A `pliant cloth` run's preview (its stats.json object): the path, or null when none was made.
+nlohmann::ordered_json preview_of(const nlohmann::ordered_json& stats) {
+    return stats.contains("preview") ? stats["preview"] : nlohmann::ordered_json();
+}
+
+// The same for printing: "none" when none was made.
+std::string shown_preview(const nlohmann::ordered_json& stats) {
+    return stats.contains("preview") ? stats["preview"].get<std::string>() : "none";
+}
+
 // Step 4b: the drape scene (drape_json) without self-collision for UNTANGLE_FALL_FRAMES frames,
 // DIR/untangle/fall/scene.json run into DIR/untangle/fall (the sheet falls through itself); a
 // scene whose cloth is that run's last frame, DIR/untangle/scene.json (the drape's other keys,
@@ -382,45 +392,37 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
     constexpr int UNTANGLE_FALL_FRAMES = 16;
     const std::filesystem::path out = dir / "untangle";
     const std::filesystem::path fall_dir = out / "fall";
-    make_output_directory(out);
     const bool progress = !quiet && ::isatty(::fileno(stderr)) != 0;
 
-    // Both scenes are written as files and read back: the printed commands reproduce them.
-    const auto write_scene = [](const std::filesystem::path& path,
-                                const nlohmann::ordered_json& json) {
+    // Each scene is written to SCENE_DIR/scene.json and read back from there, so the printed
+    // command reproduces its run into SCENE_DIR.
+    const auto run_written = [progress](const std::filesystem::path& scene_dir,
+                                        const nlohmann::ordered_json& json) {
+        make_output_directory(scene_dir);
+        const std::filesystem::path path = scene_dir / "scene.json";
         io::write_file_atomically(path, [&](std::ostream& o) { o << json.dump(2) << '\n'; });
-        return io::read_cloth_scene(path);
+        std::pair<cloth::ClothScene, nlohmann::ordered_json> result{io::read_cloth_scene(path),
+                                                                    nullptr};
+        ClothRunOptions run;
+        run.frames = json["frames"].get<int>();
+        run.progress = progress;
+        result.second = run_cloth_scene(result.first, path.string(), scene_dir, run);
+        return result;
     };
-    make_output_directory(fall_dir);
     nlohmann::ordered_json fall_json = nlohmann::ordered_json::parse(drape_json);
     fall_json["self_collision"] = false;
     fall_json["frames"] = UNTANGLE_FALL_FRAMES;
-    const std::filesystem::path fall_path = fall_dir / "scene.json";
-    const cloth::ClothScene fall = write_scene(fall_path, fall_json);
-    ClothRunOptions fall_run;
-    fall_run.frames = UNTANGLE_FALL_FRAMES;
-    fall_run.progress = progress;
-    const nlohmann::ordered_json fall_stats =
-        run_cloth_scene(fall, fall_path.string(), fall_dir, fall_run);
+    const auto [fall, fall_stats] = run_written(fall_dir, fall_json);
     const std::int64_t fall_pairs = fall_stats["frames"].back()["intersecting_pairs"];
 
     nlohmann::ordered_json scene_json = nlohmann::ordered_json::parse(drape_json);
     scene_json["cloth"] = {{"mesh", fmt::format("fall/frames/frame_{:04d}.{}", UNTANGLE_FALL_FRAMES,
                                                 fall.frame_format)}};
     scene_json["frames"] = frames;
+    const nlohmann::ordered_json stats = run_written(out, scene_json).second;
+    const std::filesystem::path fall_path = fall_dir / "scene.json";
     const std::filesystem::path scene_path = out / "scene.json";
-    const cloth::ClothScene scene = write_scene(scene_path, scene_json);
-    ClothRunOptions run;
-    run.frames = frames;
-    run.progress = progress;
-    const nlohmann::ordered_json stats = run_cloth_scene(scene, scene_path.string(), out, run);
     const nlohmann::ordered_json& untangled = stats["untangle"];
-    const auto preview = [](const nlohmann::ordered_json& s) {
-        return s.contains("preview") ? s["preview"] : nlohmann::ordered_json();
-    };
-    const auto shown = [](const nlohmann::ordered_json& p) {
-        return p.is_null() ? std::string("none") : p.get<std::string>();
-    };
     std::string what = "not run (the cloth did not intersect itself)";
     if (!untangled.is_null()) {
         what = fmt::format(
@@ -437,16 +439,16 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
                     "({}), then {} frames with self-collision: {} intersecting pairs in the worst "
                     "frame, {:.1f} ms per frame; preview {}\n  reproduce: pliant cloth {} --out "
                     "{}\n\n",
-                    fall_pairs, UNTANGLE_FALL_FRAMES, shown(preview(fall_stats)),
-                    fall_path.string(), fall_dir.string(), what, frames,
+                    fall_pairs, UNTANGLE_FALL_FRAMES, shown_preview(fall_stats), fall_path.string(),
+                    fall_dir.string(), what, frames,
                     stats["max_intersecting_pairs"].get<std::int64_t>(),
-                    stats["mean_ms_per_frame"].get<double>(), shown(preview(stats)),
+                    stats["mean_ms_per_frame"].get<double>(), shown_preview(stats),
                     scene_path.string(), out.string()));
     return {{"fall_scene", fall_path.string()},
             {"fall_dir", fall_dir.string()},
             {"fall_frames", UNTANGLE_FALL_FRAMES},
             {"fall_intersecting_pairs", fall_pairs},
-            {"fall_preview", preview(fall_stats)},
+            {"fall_preview", preview_of(fall_stats)},
             {"scene", scene_path.string()},
             {"dir", out.string()},
             {"frames", frames},
@@ -454,7 +456,7 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
             {"untangle", untangled},
             {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
             {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
-            {"preview", preview(stats)}};
+            {"preview", preview_of(stats)}};
 }
 
 void run_demo(const DemoOptions& options, const GlobalOptions& global) {
@@ -540,22 +542,20 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         run.frames = frames;
         run.progress = !quiet && ::isatty(::fileno(stderr)) != 0;
         const nlohmann::ordered_json stats = run_cloth_scene(scene, file, scene_dir, run);
-        const std::string preview =
-            stats.contains("preview") ? stats["preview"].get<std::string>() : "none";
+
         say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame, {} intersecting triangle "
                                "pairs in the worst frame; preview {}\n  reproduce: pliant cloth "
                                "{} --out {}\n\n",
                                thousands(stats["triangles"].get<std::int64_t>()),
                                stats["mean_ms_per_frame"].get<double>(),
-                               stats["max_intersecting_pairs"].get<std::int64_t>(), preview, file,
-                               scene_dir.string()));
-        cloth_summary[built_in.name] = {
-            {"dir", scene_dir.string()},
-            {"frames", frames},
-            {"triangles", stats["triangles"]},
-            {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
-            {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
-            {"preview", stats.contains("preview") ? stats["preview"] : nlohmann::ordered_json()}};
+                               stats["max_intersecting_pairs"].get<std::int64_t>(),
+                               shown_preview(stats), file, scene_dir.string()));
+        cloth_summary[built_in.name] = {{"dir", scene_dir.string()},
+                                        {"frames", frames},
+                                        {"triangles", stats["triangles"]},
+                                        {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
+                                        {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
+                                        {"preview", preview_of(stats)}};
     }
 
     // Step 4b: untangling the drape after it fell through itself without self-collision.

@@ -102,27 +102,22 @@ double centroid_axis_gap(const std::int32_t (&v)[4], std::size_t num_first,
         });
 }
 
-// The largest |Δ_i − Δ_j| over the pairs (i in the first feature, j in the second) of the
-// vertices' displacements Δ = end − start: for linear motion the features' distance never falls
-// below their distance at the start minus this (nor, for any motion, their distance at the end
-// below their distance at the start minus this).
-double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
-                      const std::int32_t (&v)[4], std::size_t num_first) {
-    return on_pair(
-        v, num_first, [&](std::size_t i) { return end[i] - start[i]; },
-        []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-            return detail::largest_pair_difference<EE>(a, b, c, d);
-        });
+// The largest |d_i − d_j| over the pairs (i in the first feature, j in the second) of the
+// vertices' values d = value(vertex): displacements or velocities.
+template <typename Value>
+double largest_difference(const std::int32_t (&v)[4], std::size_t num_first, Value&& value) {
+    return on_pair(v, num_first, value,
+                   []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+                       return detail::largest_pair_difference<EE>(a, b, c, d);
+                   });
 }
 
-// The same for displacements already computed (motion = end − start per vertex).
-double largest_motion_difference(const std::int32_t (&v)[4], std::size_t num_first,
-                                 std::span<const Vec3d> motion) {
-    return on_pair(
-        v, num_first, [&](std::size_t i) { return motion[i]; },
-        []<bool EE>(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-            return detail::largest_pair_difference<EE>(a, b, c, d);
-        });
+// The largest difference of the vertices' displacements Δ = end − start: for linear motion the
+// features' distance never falls below their distance at the start minus this (nor, for any
+// motion, their distance at the end below their distance at the start minus this).
+double relative_sweep(std::span<const Vec3d> start, std::span<const Vec3d> end,
+                      const std::int32_t (&v)[4], std::size_t num_first) {
+    return largest_difference(v, num_first, [&](std::size_t i) { return end[i] - start[i]; });
 }
 
 }  // namespace
@@ -175,7 +170,8 @@ double SelfCollision::features_distance(const FeatureVertices& f, std::span<cons
 
 bool SelfCollision::separation_exceeds(const FeatureVertices& f, std::span<const Vec3d> start,
                                        std::span<const Vec3d> motion, double threshold) {
-    const double sweep = largest_motion_difference(f.v, f.num_first, motion);
+    const double sweep =
+        largest_difference(f.v, f.num_first, [&](std::size_t i) { return motion[i]; });
     if (box_gap(f.v, f.num_first, start) - sweep > threshold ||
         centroid_axis_gap(f.v, f.num_first, start) - sweep > threshold) {
         return true;
