@@ -7,6 +7,8 @@
 // the substeps converge) and larger values are softer.
 #pragma once
 
+#include <limits>
+
 namespace pliant::cloth {
 
 struct ClothMaterial {
@@ -16,6 +18,13 @@ struct ClothMaterial {
     double stretch_compliance = 1e-7;
     // rad²/J = 1/(N·m), per interior edge, for C = dihedral angle - rest angle (radians).
     double bend_compliance = 1.0;
+    // Unitless: no path across the cloth gets longer than (1 + strain_limit) times its rest
+    // length (multi-resolution strain limiting, strain_hierarchy.hpp), however slowly the edges'
+    // own stretch constraints converge; single edges can still stretch by their compliance.
+    // Infinity (the default): no limit. Measured on the built-in scenes (docs/performance.md):
+    // 0.05 halves the flag's and the drape's impact strain; the twist, whose pinned edge imposes
+    // its strain, runs slower with it.
+    double strain_limit = std::numeric_limits<double>::infinity();
     // 1/s: velocities lose the fraction damping · h of themselves every substep h.
     double damping = 0.5;
     // m: the distance the cloth keeps from obstacles (and, with self-collision, from itself).

@@ -34,6 +34,11 @@ void validate_material(const ClothMaterial& m) {
     check(m.areal_density, "areal_density");
     check(m.stretch_compliance, "stretch_compliance");
     check(m.bend_compliance, "bend_compliance");
+    if (!(m.strain_limit >= 0.0)) {
+        throw InvalidInput(fmt::format(
+            "cloth material: strain_limit must be a number >= 0 (infinity: none), got {}",
+            m.strain_limit));
+    }
     check(m.damping, "damping");
     check(m.thickness, "thickness");
     check(m.static_friction, "static_friction");
@@ -164,6 +169,10 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         m_bending_rest.push_back(m_rest_angles[k]);
     }
     m_packed.resize(num_vertices);
+    if (std::isfinite(material.strain_limit)) {
+        m_strain_hierarchy = StrainHierarchy(static_cast<std::int64_t>(num_vertices),
+                                             topology.edges, m_rest_lengths);
+    }
 }
 
 void ClothSolver::enable_self_collision(bool enabled) {
@@ -503,6 +512,9 @@ void ClothSolver::project_constraints(double h) {
         },
         VERTEX_GRAIN);
     detail::PackedVertex* x = m_packed.data();
+    if (std::isfinite(m_material.strain_limit)) {
+        m_strain_hierarchy.project(x, m_material.strain_limit);
+    }
     const double stretch_alpha = m_material.stretch_compliance / (h * h);
     for (std::int32_t c = 0; c < m_stretch_colors.num_colors(); ++c) {
         const auto offset =

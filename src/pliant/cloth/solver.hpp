@@ -56,6 +56,7 @@
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/self_collision.hpp"
+#include "pliant/cloth/strain_hierarchy.hpp"
 #include "pliant/cloth/untangle.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -134,6 +135,8 @@ public:
     std::span<const geometry::Triangle> triangles() const { return m_triangles; }
     const ClothMaterial& material() const { return m_material; }
     std::size_t num_stretch_constraints() const { return m_stretch_vertices.size(); }
+    // Coarse strain limits (0 unless material.strain_limit is finite; strain_hierarchy.hpp).
+    std::size_t num_strain_limits() const { return m_strain_hierarchy.num_limits(); }
     std::size_t num_bending_constraints() const { return m_bending_vertices.size(); }
 
 private:
@@ -217,6 +220,7 @@ private:
     std::vector<std::int32_t> m_bending_v3;
     std::vector<double> m_bending_rest;
     std::vector<detail::PackedVertex> m_packed;  // positions and inverse masses, per substep
+    StrainHierarchy m_strain_hierarchy;  // coarse strain limits (material.strain_limit)
 };
 
 }  // namespace pliant::cloth

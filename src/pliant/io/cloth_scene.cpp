@@ -64,6 +64,16 @@ public:
         return x;
     }
 
+    // As number(), and `null` gives if_null.
+    double nullable_number(const std::string& key, double fallback, double lo, double hi,
+                           double if_null) {
+        const Json* value = find(key);
+        if (value != nullptr && value->is_null()) {
+            return if_null;
+        }
+        return number(key, fallback, lo, hi);
+    }
+
     int integer(const std::string& key, int fallback, int lo, int hi) {
         const Json* value = find(key);
         if (value == nullptr) {
@@ -176,6 +186,8 @@ void read_material(ObjectReader& r, cloth::ClothMaterial& m) {
     m.areal_density = r.number("areal_density", m.areal_density, 1e-9, HUGE_VALUE);
     m.stretch_compliance = r.number("stretch_compliance", m.stretch_compliance, 0.0, HUGE_VALUE);
     m.bend_compliance = r.number("bend_compliance", m.bend_compliance, 0.0, HUGE_VALUE);
+    m.strain_limit = r.nullable_number("strain_limit", m.strain_limit, 0.0, HUGE_VALUE,
+                                       std::numeric_limits<double>::infinity());
     m.damping = r.number("damping", m.damping, 0.0, HUGE_VALUE);
     m.thickness = r.number("thickness", m.thickness, 0.0, HUGE_VALUE);
     m.static_friction = r.number("static_friction", m.static_friction, 0.0, HUGE_VALUE);

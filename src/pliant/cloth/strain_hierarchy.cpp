@@ -1,0 +1,262 @@
+#include "pliant/cloth/strain_hierarchy.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <tuple>
+
+#include "pliant/core/host_device.hpp"
+#include "pliant/core/parallel.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t LIMIT_GRAIN = 1024;
+constexpr std::int64_t CHILD_GRAIN = 2048;
+// The colouring allows 63 constraints of a colour class per vertex; a level whose vertices reach
+// this many limits ends the hierarchy instead (it happens only around vertices of huge valence).
+constexpr std::int64_t MAX_LIMITS_PER_VERTEX = 48;
+// A level that keeps more than this fraction of the finer level's vertices ends the hierarchy:
+// it would cost a pass without carrying corrections much further.
+constexpr double MAX_KEPT_FRACTION = 0.75;
+
+struct Link {
+    std::int32_t p;
+    std::int32_t q;
+    double rest;
+};
+
+// Unilateral limit: p and q are pulled together along their line, split by inverse mass, by
+// RELAXATION times their excess over max_length; nothing when they are closer or both are fixed.
+PLIANT_HOST_DEVICE inline void limit_stretch(detail::PackedVertex* x, std::int32_t p,
+                                             std::int32_t q, double max_length) {
+    detail::PackedVertex& a = x[p];
+    detail::PackedVertex& b = x[q];
+    const double w = a.inverse_mass + b.inverse_mass;
+    if (!(w > 0.0)) {
+        return;
+    }
+    const double dx = a.x - b.x;
+    const double dy = a.y - b.y;
+    const double dz = a.z - b.z;
+    const double length_squared = dx * dx + dy * dy + dz * dz;
+    if (!(length_squared > max_length * max_length)) {
+        return;
+    }
+    const double length = std::sqrt(length_squared);
+    const double s = StrainHierarchy::RELAXATION * (length - max_length) / (length * w);
+    const double sa = a.inverse_mass * s;
+    const double sb = b.inverse_mass * s;
+    a.x -= dx * sa;
+    a.y -= dy * sa;
+    a.z -= dz * sa;
+    b.x += dx * sb;
+    b.y += dy * sb;
+    b.z += dz * sb;
+}
+
+// Neighbours of every vertex over `links`, as CSR on mesh indices.
+struct Adjacency {
+    std::vector<std::int32_t> offsets;
+    std::vector<std::int32_t> neighbours;
+    std::vector<double> lengths;
+
+    Adjacency(std::int64_t num_vertices, const std::vector<Link>& links)
+        : offsets(static_cast<std::size_t>(num_vertices) + 1, 0) {
+        for (const Link& link : links) {
+            ++offsets[static_cast<std::size_t>(link.p) + 1];
+            ++offsets[static_cast<std::size_t>(link.q) + 1];
+        }
+        for (std::size_t v = 1; v < offsets.size(); ++v) {
+            offsets[v] += offsets[v - 1];
+        }
+        neighbours.resize(static_cast<std::size_t>(offsets.back()));
+        lengths.resize(neighbours.size());
+        std::vector<std::int32_t> fill(offsets.begin(), offsets.end() - 1);
+        for (const Link& link : links) {
+            const auto put = [&](std::int32_t from, std::int32_t to) {
+                const auto slot = static_cast<std::size_t>(fill[static_cast<std::size_t>(from)]++);
+                neighbours[slot] = to;
+                lengths[slot] = link.rest;
+            };
+            put(link.p, link.q);
+            put(link.q, link.p);
+        }
+    }
+
+    std::size_t begin(std::int32_t v) const {
+        return static_cast<std::size_t>(offsets[static_cast<std::size_t>(v)]);
+    }
+    std::size_t end(std::int32_t v) const {
+        return static_cast<std::size_t>(offsets[static_cast<std::size_t>(v) + 1]);
+    }
+};
+
+}  // namespace
+
+StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geometry::Edge> edges,
+                                 std::span<const double> rest_lengths) {
+    std::vector<std::int32_t> vertices(static_cast<std::size_t>(num_vertices));
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+        vertices[v] = static_cast<std::int32_t>(v);
+    }
+    std::vector<Link> links;
+    links.reserve(edges.size());
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+        links.push_back({std::min(edges[e][0], edges[e][1]), std::max(edges[e][0], edges[e][1]),
+                         rest_lengths[e]});
+    }
+    enum : std::uint8_t { UNDECIDED, KEPT, DROPPED };
+    std::vector<std::uint8_t> state(static_cast<std::size_t>(num_vertices));
+    while (m_levels.size() < static_cast<std::size_t>(MAX_LEVELS) &&
+           static_cast<std::int64_t>(vertices.size()) >= MIN_VERTICES && !links.empty()) {
+        const Adjacency adjacency(num_vertices, links);
+        // Maximal independent set, greedy in ascending order.
+        Level level;
+        for (const std::int32_t v : vertices) {
+            state[static_cast<std::size_t>(v)] = UNDECIDED;
+        }
+        for (const std::int32_t v : vertices) {
+            if (state[static_cast<std::size_t>(v)] != UNDECIDED) {
+                level.children.push_back(v);
+                continue;
+            }
+            state[static_cast<std::size_t>(v)] = KEPT;
+            level.vertices.push_back(v);
+            for (std::size_t k = adjacency.begin(v); k < adjacency.end(v); ++k) {
+                state[static_cast<std::size_t>(adjacency.neighbours[k])] = DROPPED;
+            }
+        }
+        if (static_cast<double>(level.vertices.size()) >
+            MAX_KEPT_FRACTION * static_cast<double>(vertices.size())) {
+            break;
+        }
+        // Parents, weights, and the coarse links: for every two parents of a child, the
+        // two-link path through it.
+        std::vector<Link> coarse;
+        level.parent_offsets.push_back(0);
+        std::vector<double> lengths;  // rest length child–parent, per parent of the child
+        for (const std::int32_t c : level.children) {
+            const std::size_t first = level.parents.size();
+            lengths.clear();
+            for (std::size_t k = adjacency.begin(c); k < adjacency.end(c); ++k) {
+                const std::int32_t p = adjacency.neighbours[k];
+                if (state[static_cast<std::size_t>(p)] == KEPT) {
+                    level.parents.push_back(p);
+                    lengths.push_back(adjacency.lengths[k]);
+                }
+            }
+            // Inverse rest distance weights (equal ones when a parent sits on the child).
+            const bool zero_length =
+                std::any_of(lengths.begin(), lengths.end(), [](double l) { return !(l > 0.0); });
+            double total = 0.0;
+            for (const double length : lengths) {
+                total += zero_length ? 1.0 : 1.0 / length;
+            }
+            for (const double length : lengths) {
+                level.weights.push_back((zero_length ? 1.0 : 1.0 / length) / total);
+            }
+            for (std::size_t i = 0; i < lengths.size(); ++i) {
+                for (std::size_t j = i + 1; j < lengths.size(); ++j) {
+                    const std::int32_t a = level.parents[first + i];
+                    const std::int32_t b = level.parents[first + j];
+                    coarse.push_back({std::min(a, b), std::max(a, b), lengths[i] + lengths[j]});
+                }
+            }
+            level.parent_offsets.push_back(static_cast<std::int32_t>(level.parents.size()));
+        }
+        std::sort(coarse.begin(), coarse.end(), [](const Link& a, const Link& b) {
+            return std::tie(a.p, a.q, a.rest) < std::tie(b.p, b.q, b.rest);
+        });
+        coarse.erase(std::unique(coarse.begin(), coarse.end(),
+                                 [](const Link& a, const Link& b) {
+                                     return a.p == b.p && a.q == b.q;
+                                 }),
+                     coarse.end());
+        if (coarse.empty()) {
+            break;
+        }
+        const Adjacency coarse_adjacency(num_vertices, coarse);
+        bool too_many = false;
+        for (const std::int32_t v : level.vertices) {
+            too_many = too_many || static_cast<std::int64_t>(coarse_adjacency.end(v) -
+                                                             coarse_adjacency.begin(v)) >
+                                       MAX_LIMITS_PER_VERTEX;
+        }
+        if (too_many) {
+            break;
+        }
+        level.colors = color_constraints(
+            static_cast<std::int64_t>(coarse.size()), num_vertices, [&](std::int64_t i) {
+                return std::span<const std::int32_t>(&coarse[static_cast<std::size_t>(i)].p, 2);
+            });
+        for (const std::int32_t i : level.colors.order) {
+            const Link& link = coarse[static_cast<std::size_t>(i)];
+            level.p.push_back(link.p);
+            level.q.push_back(link.q);
+            level.rest.push_back(link.rest);
+        }
+        vertices = level.vertices;
+        links = std::move(coarse);
+        m_levels.push_back(std::move(level));
+    }
+    m_start.resize(static_cast<std::size_t>(num_vertices));
+}
+
+std::size_t StrainHierarchy::num_limits() const {
+    std::size_t count = 0;
+    for (const Level& level : m_levels) {
+        count += level.p.size();
+    }
+    return count;
+}
+
+void StrainHierarchy::project(detail::PackedVertex* x, double max_strain) {
+    if (m_levels.empty()) {
+        return;
+    }
+    const std::vector<std::int32_t>& kept = m_levels.front().vertices;
+    parallel_for(
+        static_cast<std::int64_t>(kept.size()),
+        [&](std::int64_t k) {
+            const auto v = static_cast<std::size_t>(kept[static_cast<std::size_t>(k)]);
+            m_start[v] = {x[v].x, x[v].y, x[v].z};
+        },
+        CHILD_GRAIN);
+    const double scale = 1.0 + max_strain;
+    for (auto level = m_levels.rbegin(); level != m_levels.rend(); ++level) {
+        const Level& l = *level;
+        for (std::int32_t c = 0; c < l.colors.num_colors(); ++c) {
+            const std::int64_t offset = l.colors.offsets[static_cast<std::size_t>(c)];
+            parallel_for_chunks(
+                static_cast<std::int64_t>(l.colors.color(c).size()), LIMIT_GRAIN,
+                [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                    for (std::int64_t k = offset + begin; k < offset + end; ++k) {
+                        const auto i = static_cast<std::size_t>(k);
+                        limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i]);
+                    }
+                });
+        }
+        parallel_for(
+            static_cast<std::int64_t>(l.children.size()),
+            [&](std::int64_t k) {
+                const auto child = static_cast<std::size_t>(l.children[static_cast<std::size_t>(k)]);
+                if (!(x[child].inverse_mass > 0.0)) {
+                    return;
+                }
+                Vec3d move{0.0, 0.0, 0.0};
+                for (auto i = static_cast<std::size_t>(l.parent_offsets[static_cast<std::size_t>(k)]);
+                     i < static_cast<std::size_t>(l.parent_offsets[static_cast<std::size_t>(k) + 1]);
+                     ++i) {
+                    const auto p = static_cast<std::size_t>(l.parents[i]);
+                    move += (Vec3d{x[p].x, x[p].y, x[p].z} - m_start[p]) * l.weights[i];
+                }
+                x[child].x += move.x;
+                x[child].y += move.y;
+                x[child].z += move.z;
+            },
+            CHILD_GRAIN);
+    }
+}
+
+}  // namespace pliant::cloth

@@ -1,0 +1,283 @@
+#include "pliant/cloth/strain_hierarchy.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "pliant/cloth/solver.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/geometry/generate.hpp"
+#include "pliant/geometry/topology.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+struct Mesh {
+    std::vector<Vec3d> positions;
+    std::vector<geometry::Triangle> triangles;
+    std::vector<geometry::Edge> edges;
+    std::vector<double> rest;
+};
+
+// n × n quads over a side of `size` metres, optionally folded like an accordion (a rest shape
+// that is not flat, so straight distances are shorter than paths along the cloth).
+Mesh grid(int n, double size, bool folded = false) {
+    const geometry::TriangleMesh flat =
+        geometry::make_grid_sheet(n, n, static_cast<float>(size), static_cast<float>(size));
+    Mesh m;
+    for (const Vec3f& p : flat.positions) {
+        Vec3d q = vec3_cast<double>(p);
+        if (folded) {
+            q.z = 0.2 * size * std::sin(12.0 * q.x / size);
+        }
+        m.positions.push_back(q);
+    }
+    m.triangles = flat.triangles;
+    m.edges = geometry::build_topology(m.triangles, m.positions.size()).edges;
+    for (const geometry::Edge& e : m.edges) {
+        m.rest.push_back(norm(m.positions[static_cast<std::size_t>(e[1])] -
+                              m.positions[static_cast<std::size_t>(e[0])]));
+    }
+    return m;
+}
+
+StrainHierarchy hierarchy_of(const Mesh& m) {
+    return StrainHierarchy(static_cast<std::int64_t>(m.positions.size()), m.edges, m.rest);
+}
+
+std::vector<detail::PackedVertex> packed(const std::vector<Vec3d>& positions) {
+    std::vector<detail::PackedVertex> x;
+    for (const Vec3d& p : positions) {
+        x.push_back({p.x, p.y, p.z, 1.0});
+    }
+    return x;
+}
+
+double length(const std::vector<detail::PackedVertex>& x, std::int32_t p, std::int32_t q) {
+    const detail::PackedVertex& a = x[static_cast<std::size_t>(p)];
+    const detail::PackedVertex& b = x[static_cast<std::size_t>(q)];
+    return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
+                     (a.z - b.z) * (a.z - b.z));
+}
+
+TEST(StrainHierarchy, LevelsAreMaximalIndependentSetsWithShortestTwoLinkPaths) {
+    for (const bool folded : {false, true}) {
+        const Mesh m = grid(24, 1.0, folded);
+        const StrainHierarchy h = hierarchy_of(m);
+        ASSERT_GE(h.num_levels(), 3u);
+        // The finer level's vertices and links (rest lengths by vertex pair), starting with the
+        // mesh; checked against each coarse level by brute force.
+        std::vector<std::int32_t> finer(m.positions.size());
+        for (std::size_t v = 0; v < finer.size(); ++v) {
+            finer[v] = static_cast<std::int32_t>(v);
+        }
+        std::map<std::pair<std::int32_t, std::int32_t>, double> links;
+        for (std::size_t e = 0; e < m.edges.size(); ++e) {
+            links[{std::min(m.edges[e][0], m.edges[e][1]), std::max(m.edges[e][0], m.edges[e][1])}] =
+                m.rest[e];
+        }
+        const auto rest_of = [&](std::int32_t a, std::int32_t b) {
+            const auto it = links.find({std::min(a, b), std::max(a, b)});
+            return it == links.end() ? -1.0 : it->second;
+        };
+        for (std::size_t l = 1; l <= h.num_levels(); ++l) {
+            const StrainHierarchy::Level& level = h.level(l);
+            const std::set<std::int32_t> kept(level.vertices.begin(), level.vertices.end());
+            // Kept and children partition the finer level.
+            std::vector<std::int32_t> all = level.vertices;
+            all.insert(all.end(), level.children.begin(), level.children.end());
+            std::sort(all.begin(), all.end());
+            EXPECT_EQ(all, finer) << "level " << l;
+            // Independent: no finer link joins two kept vertices.
+            for (const auto& [pair, rest] : links) {
+                EXPECT_FALSE(kept.count(pair.first) && kept.count(pair.second)) << "level " << l;
+            }
+            // Maximal, and each child's parents are exactly its kept finer neighbours, with
+            // inverse-distance weights summing to 1.
+            std::map<std::pair<std::int32_t, std::int32_t>, double> expected_limits;
+            for (std::size_t k = 0; k < level.children.size(); ++k) {
+                const std::int32_t c = level.children[k];
+                std::vector<std::int32_t> expected_parents;
+                for (const std::int32_t p : level.vertices) {
+                    if (rest_of(c, p) >= 0.0) {
+                        expected_parents.push_back(p);
+                    }
+                }
+                ASSERT_FALSE(expected_parents.empty()) << "child " << c << " at level " << l;
+                std::vector<std::int32_t> parents(
+                    level.parents.begin() + level.parent_offsets[k],
+                    level.parents.begin() + level.parent_offsets[k + 1]);
+                std::sort(parents.begin(), parents.end());
+                EXPECT_EQ(parents, expected_parents);
+                double sum = 0.0;
+                for (auto i = level.parent_offsets[k]; i < level.parent_offsets[k + 1]; ++i) {
+                    sum += level.weights[static_cast<std::size_t>(i)];
+                }
+                EXPECT_NEAR(sum, 1.0, 1e-12);
+                for (std::size_t i = 0; i < expected_parents.size(); ++i) {
+                    for (std::size_t j = i + 1; j < expected_parents.size(); ++j) {
+                        const std::int32_t a = expected_parents[i];
+                        const std::int32_t b = expected_parents[j];
+                        const double path = rest_of(a, c) + rest_of(c, b);
+                        auto [it, inserted] = expected_limits.insert({{a, b}, path});
+                        if (!inserted) {
+                            it->second = std::min(it->second, path);
+                        }
+                    }
+                }
+            }
+            // The limits: every pair of parents of a common child once, with the shortest path.
+            ASSERT_EQ(level.p.size(), expected_limits.size()) << "level " << l;
+            std::map<std::pair<std::int32_t, std::int32_t>, double> built;
+            for (std::size_t k = 0; k < level.p.size(); ++k) {
+                built[{level.p[k], level.q[k]}] = level.rest[k];
+                // A path is never shorter than the straight rest distance.
+                EXPECT_GE(level.rest[k] * (1.0 + 1e-12),
+                          norm(m.positions[static_cast<std::size_t>(level.p[k])] -
+                               m.positions[static_cast<std::size_t>(level.q[k])]));
+            }
+            EXPECT_EQ(built, expected_limits) << "level " << l;
+            // No two limits of one colour share a vertex.
+            for (std::int32_t colour = 0; colour < level.colors.num_colors(); ++colour) {
+                std::set<std::int32_t> used;
+                for (auto k = level.colors.offsets[static_cast<std::size_t>(colour)];
+                     k < level.colors.offsets[static_cast<std::size_t>(colour) + 1]; ++k) {
+                    EXPECT_TRUE(used.insert(level.p[static_cast<std::size_t>(k)]).second);
+                    EXPECT_TRUE(used.insert(level.q[static_cast<std::size_t>(k)]).second);
+                }
+            }
+            finer = level.vertices;
+            links = built;
+        }
+    }
+}
+
+TEST(StrainHierarchy, LeavesUnstretchedClothBitwiseAlone) {
+    // At rest, compressed, or folded without stretching, no limit is active: nothing moves.
+    const Mesh m = grid(16, 1.0, true);
+    StrainHierarchy h = hierarchy_of(m);
+    std::vector<Vec3d> squeezed = m.positions;
+    for (Vec3d& p : squeezed) {
+        p = p * 0.7;
+    }
+    for (const std::vector<Vec3d>& shape : {m.positions, squeezed}) {
+        std::vector<detail::PackedVertex> x = packed(shape);
+        const std::vector<detail::PackedVertex> before = x;
+        h.project(x.data(), 0.0);
+        EXPECT_EQ(std::memcmp(x.data(), before.data(), x.size() * sizeof(x[0])), 0);
+    }
+}
+
+TEST(StrainHierarchy, RepeatedProjectionsBringEveryLimitWithinTheStrainAndKeepPinsFixed) {
+    const Mesh m = grid(20, 1.0);
+    StrainHierarchy h = hierarchy_of(m);
+    // Stretched to 1.6 × along x and 1.3 × along y, plus noise; one corner pinned.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> noise(-0.01, 0.01);
+    std::vector<Vec3d> stretched = m.positions;
+    for (Vec3d& p : stretched) {
+        p = {1.6 * p.x + noise(rng), 1.3 * p.y + noise(rng), noise(rng)};
+    }
+    std::vector<detail::PackedVertex> x = packed(stretched);
+    x[0].inverse_mass = 0.0;
+    const detail::PackedVertex pinned = x[0];
+    const double max_strain = 0.05;
+    double worst_before = 0.0;
+    for (std::size_t l = 1; l <= h.num_levels(); ++l) {
+        const auto& level = h.level(l);
+        for (std::size_t k = 0; k < level.p.size(); ++k) {
+            worst_before = std::max(worst_before, length(x, level.p[k], level.q[k]) / level.rest[k]);
+        }
+    }
+    EXPECT_GT(worst_before, 1.25);
+    for (int i = 0; i < 400; ++i) {
+        h.project(x.data(), max_strain);
+    }
+    for (std::size_t l = 1; l <= h.num_levels(); ++l) {
+        const auto& level = h.level(l);
+        for (std::size_t k = 0; k < level.p.size(); ++k) {
+            EXPECT_LE(length(x, level.p[k], level.q[k]), (1.0 + max_strain) * level.rest[k] * 1.01)
+                << "level " << l << " limit " << k;
+        }
+    }
+    EXPECT_EQ(std::memcmp(&x[0], &pinned, sizeof(pinned)), 0);
+}
+
+TEST(StrainHierarchy, BitwiseIdenticalForOneAndTwoThreads) {
+    const Mesh m = grid(60, 1.0);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> noise(-0.02, 0.02);
+    std::vector<Vec3d> stretched = m.positions;
+    for (Vec3d& p : stretched) {
+        p = {1.4 * p.x + noise(rng), 1.2 * p.y + noise(rng), noise(rng)};
+    }
+    std::vector<std::vector<detail::PackedVertex>> results;
+    for (const int threads : {1, 2}) {
+        set_num_threads(threads);
+        StrainHierarchy h = hierarchy_of(m);
+        std::vector<detail::PackedVertex> x = packed(stretched);
+        for (int i = 0; i < 5; ++i) {
+            h.project(x.data(), 0.02);
+        }
+        results.push_back(x);
+    }
+    set_num_threads(0);
+    EXPECT_EQ(std::memcmp(results[0].data(), results[1].data(),
+                          results[0].size() * sizeof(results[0][0])),
+              0);
+}
+
+TEST(StrainHierarchy, AHangingStripStretchesLessWithALimit) {
+    // A 0.1 m × 1 m strip of 2 × 40 quads hanging from its top row, 12 substeps per frame: one
+    // Gauss-Seidel sweep per substep leaves the 40-edge chains stretched; with strain_limit
+    // 0.03 the strip's hanging length stays within 3 % (plus what single edges add).
+    geometry::TriangleMeshD strip = geometry::convert_precision<double>(
+        geometry::make_grid_sheet(2, 40, 0.1f, 1.0f));
+    std::vector<std::int32_t> top;
+    double top_y = -std::numeric_limits<double>::infinity();
+    for (const Vec3d& p : strip.positions) {
+        top_y = std::max(top_y, p.y);
+    }
+    for (std::size_t v = 0; v < strip.positions.size(); ++v) {
+        // Stand the strip up: y becomes height.
+        strip.positions[v] = {strip.positions[v].x, 0.0, strip.positions[v].y};
+        if (strip.positions[v].z == top_y) {
+            top.push_back(static_cast<std::int32_t>(v));
+        }
+    }
+    ASSERT_EQ(top.size(), 3u);
+    double rest_bottom = std::numeric_limits<double>::infinity();
+    for (const Vec3d& p : strip.positions) {
+        rest_bottom = std::min(rest_bottom, p.z);
+    }
+    const auto hanging_length = [&](double strain_limit) {
+        ClothMaterial material;
+        material.strain_limit = strain_limit;
+        material.areal_density = 2.0;  // heavy: a long chain under its own weight
+        ClothSolver solver(strip, material, top);
+        for (int frame = 0; frame < 48; ++frame) {
+            solver.step(1.0 / 24.0, 12);
+        }
+        double bottom = std::numeric_limits<double>::infinity();
+        for (const Vec3d& p : solver.positions()) {
+            bottom = std::min(bottom, p.z);
+        }
+        return (top_y - bottom) / (top_y - rest_bottom);
+    };
+    const double free = hanging_length(std::numeric_limits<double>::infinity());
+    const double limited = hanging_length(0.03);
+    EXPECT_GT(free, 1.06);
+    EXPECT_LT(limited, 1.045);
+    EXPECT_GE(limited, 0.99);
+}
+
+}  // namespace
+}  // namespace pliant::cloth
