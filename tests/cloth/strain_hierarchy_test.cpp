@@ -20,6 +20,8 @@
 namespace pliant::cloth {
 namespace {
 
+constexpr double INF = std::numeric_limits<double>::infinity();
+
 struct Mesh {
     std::vector<Vec3d> positions;
     std::vector<geometry::Triangle> triangles;
@@ -171,7 +173,7 @@ TEST(StrainHierarchy, LeavesUnstretchedClothBitwiseAlone) {
     for (const std::vector<Vec3d>& shape : {m.positions, squeezed}) {
         std::vector<detail::PackedVertex> x = packed(shape);
         const std::vector<detail::PackedVertex> before = x;
-        h.project(x.data(), 0.0);
+        h.project(x.data(), 0.0, INF);
         EXPECT_EQ(std::memcmp(x.data(), before.data(), x.size() * sizeof(x[0])), 0);
     }
 }
@@ -199,7 +201,7 @@ TEST(StrainHierarchy, RepeatedProjectionsBringEveryLimitWithinTheStrainAndKeepPi
     }
     EXPECT_GT(worst_before, 1.25);
     for (int i = 0; i < 400; ++i) {
-        h.project(x.data(), max_strain);
+        h.project(x.data(), max_strain, INF);
     }
     for (std::size_t l = 1; l <= h.num_levels(); ++l) {
         const auto& level = h.level(l);
@@ -209,6 +211,42 @@ TEST(StrainHierarchy, RepeatedProjectionsBringEveryLimitWithinTheStrainAndKeepPi
         }
     }
     EXPECT_EQ(std::memcmp(&x[0], &pinned, sizeof(pinned)), 0);
+}
+
+TEST(StrainHierarchy, CappedMovesStayWithinTheCap) {
+    // A limit moves its vertices by at most max_move per call; a vertex moves by its own limits at
+    // its coarsest level and below, plus the parents' mean it follows: at most the sum over the
+    // levels of (limits per vertex) × max_move. Uncapped, the same call moves much further.
+    const Mesh m = grid(20, 1.0);
+    std::vector<Vec3d> stretched = m.positions;
+    for (Vec3d& p : stretched) {
+        p = {2.0 * p.x, 2.0 * p.y, 0.0};
+    }
+    StrainHierarchy h = hierarchy_of(m);
+    double bound = 0.0;
+    const double cap = 1e-4;
+    for (std::size_t l = 1; l <= h.num_levels(); ++l) {
+        const auto& level = h.level(l);
+        std::map<std::int32_t, int> degree;
+        int most = 0;
+        for (std::size_t k = 0; k < level.p.size(); ++k) {
+            most = std::max({most, ++degree[level.p[k]], ++degree[level.q[k]]});
+        }
+        bound += most * cap;
+    }
+    const auto largest_move = [&](double max_move) {
+        std::vector<detail::PackedVertex> x = packed(stretched);
+        h.project(x.data(), 0.0, max_move);
+        double largest = 0.0;
+        for (std::size_t v = 0; v < x.size(); ++v) {
+            largest = std::max(largest, norm(Vec3d{x[v].x, x[v].y, x[v].z} - stretched[v]));
+        }
+        return largest;
+    };
+    const double capped = largest_move(cap);
+    EXPECT_GT(capped, 0.0);
+    EXPECT_LE(capped, bound * (1.0 + 1e-9));
+    EXPECT_GT(largest_move(INF), 10.0 * bound);
 }
 
 TEST(StrainHierarchy, BitwiseIdenticalForOneAndTwoThreads) {
@@ -225,7 +263,7 @@ TEST(StrainHierarchy, BitwiseIdenticalForOneAndTwoThreads) {
         StrainHierarchy h = hierarchy_of(m);
         std::vector<detail::PackedVertex> x = packed(stretched);
         for (int i = 0; i < 5; ++i) {
-            h.project(x.data(), 0.02);
+            h.project(x.data(), 0.02, INF);
         }
         results.push_back(x);
     }

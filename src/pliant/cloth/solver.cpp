@@ -23,6 +23,10 @@ constexpr std::int64_t VERTEX_GRAIN = 2048;
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
 constexpr int FAIL_SAFE_WINDOW = 4;
+// A strain limit moves its two vertices by at most this fraction of the thickness per substep
+// (strain_hierarchy.hpp). Larger moves outran the self-collision's proximity constraints: at half
+// the thickness the twist scene had 56 CCD hits in 36 frames, at a tenth none (docs/performance.md).
+constexpr double STRAIN_LIMIT_MOVE = 0.1;
 
 void validate_material(const ClothMaterial& m) {
     const auto check = [](double value, const char* name) {
@@ -513,7 +517,10 @@ void ClothSolver::project_constraints(double h) {
         VERTEX_GRAIN);
     detail::PackedVertex* x = m_packed.data();
     if (std::isfinite(m_material.strain_limit)) {
-        m_strain_hierarchy.project(x, m_material.strain_limit);
+        m_strain_hierarchy.project(x, m_material.strain_limit,
+                                   m_material.thickness > 0.0
+                                       ? STRAIN_LIMIT_MOVE * m_material.thickness
+                                       : std::numeric_limits<double>::infinity());
     }
     const double stretch_alpha = m_material.stretch_compliance / (h * h);
     for (std::int32_t c = 0; c < m_stretch_colors.num_colors(); ++c) {

@@ -29,7 +29,8 @@ struct Link {
 // Unilateral limit: p and q are pulled together along their line, split by inverse mass, by
 // RELAXATION times their excess over max_length; nothing when they are closer or both are fixed.
 PLIANT_HOST_DEVICE inline void limit_stretch(detail::PackedVertex* x, std::int32_t p,
-                                             std::int32_t q, double max_length) {
+                                             std::int32_t q, double max_length,
+                                             double max_move) {
     detail::PackedVertex& a = x[p];
     detail::PackedVertex& b = x[q];
     const double w = a.inverse_mass + b.inverse_mass;
@@ -44,7 +45,8 @@ PLIANT_HOST_DEVICE inline void limit_stretch(detail::PackedVertex* x, std::int32
         return;
     }
     const double length = std::sqrt(length_squared);
-    const double s = StrainHierarchy::RELAXATION * (length - max_length) / (length * w);
+    const double s =
+        std::min(StrainHierarchy::RELAXATION * (length - max_length), max_move) / (length * w);
     const double sa = a.inverse_mass * s;
     const double sb = b.inverse_mass * s;
     a.x -= dx * sa;
@@ -211,7 +213,7 @@ std::size_t StrainHierarchy::num_limits() const {
     return count;
 }
 
-void StrainHierarchy::project(detail::PackedVertex* x, double max_strain) {
+void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double max_move) {
     if (m_levels.empty()) {
         return;
     }
@@ -233,7 +235,7 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain) {
                 [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                     for (std::int64_t k = offset + begin; k < offset + end; ++k) {
                         const auto i = static_cast<std::size_t>(k);
-                        limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i]);
+                        limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i], max_move);
                     }
                 });
         }

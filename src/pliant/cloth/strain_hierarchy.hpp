@@ -19,8 +19,10 @@
 //
 // Limits. Unilateral: a limit p–q with rest length L projects only when |x_p − x_q| >
 // (1 + max_strain) L, moving p and q along their line by the inverse-mass split of RELAXATION
-// times the excess (PBD, no compliance: a limit, not an elastic force), and never when
-// compressed (cloth buckles). Pinned vertices (inverse mass 0) do not move.
+// times the excess, capped at max_move (PBD, no compliance: a limit, not an elastic force), and
+// never when compressed (cloth buckles). Pinned vertices (inverse mass 0) do not move. Where the
+// limit cannot be met (strain imposed by moving pins, as in the twist scene) it keeps pulling
+// every substep: the cap keeps those pulls within what the self-collision handles.
 //
 // One project() call, coarsest level first: project the level's limits (colour by colour, each
 // colour in parallel; constraint_coloring.hpp), then move each of its children by the
@@ -48,7 +50,7 @@ public:
     // excess into a jump of centimetres within one substep, i.e. metres per second: after the
     // self-collision fail-safe has put vertices back (self_collision.hpp), such jumps cascaded
     // into more put-backs (the drape: 6,328 CCD hits in one frame, strain up to 570 %); a fifth
-    // per substep still removes 99.9 % of an excess within 32 substeps, under a frame.
+    // per substep removes 99.9 % of a small excess within 32 substeps, under a frame.
     static constexpr double RELAXATION = 0.2;
 
     // One coarse level: its limits between kept vertices and how its children (the finer level's
@@ -76,9 +78,10 @@ public:
                     std::span<const double> rest_lengths);
 
     // Projects every level's limits at strain max_strain (≥ 0), coarsest first, and prolongs the
-    // corrections down to the mesh's vertices. x: the mesh's vertices, packed (inverse mass 0 =
-    // fixed). No-op without levels.
-    void project(detail::PackedVertex* x, double max_strain);
+    // corrections down to the mesh's vertices. A limit closes RELAXATION times its excess, but at
+    // most max_move (metres; infinity: no cap) of it per call. x: the mesh's vertices, packed
+    // (inverse mass 0 = fixed). No-op without levels.
+    void project(detail::PackedVertex* x, double max_strain, double max_move);
 
     std::size_t num_levels() const { return m_levels.size(); }
     // Level 1 … num_levels(): m_levels[l − 1].
