@@ -18,9 +18,10 @@ struct ClothMaterial {
     double stretch_compliance = 1e-7;
     // rad²/J = 1/(N·m), per interior edge, for C = dihedral angle - rest angle (radians).
     double bend_compliance = 1.0;
-    // Unitless: no path across the cloth gets longer than (1 + strain_limit) times its rest
-    // length (multi-resolution strain limiting, strain_hierarchy.hpp), however slowly the edges'
-    // own stretch constraints converge; single edges can still stretch by their compliance.
+    // Unitless: paths across the cloth longer than (1 + strain_limit) times their rest length
+    // are pulled back every substep, by a fifth of the excess and at most a tenth of the
+    // thickness (multi-resolution strain limiting, strain_hierarchy.hpp), however slowly the
+    // edges' own stretch constraints converge; single edges can still stretch by their compliance.
     // Infinity (the default): no limit. Measured on the built-in scenes (docs/performance.md):
     // 0.05 halves the flag's and the drape's impact strain; the twist, whose pinned edge imposes
     // its strain, runs slower with it.

@@ -30,8 +30,9 @@
 // so strain under load falls with the substep count: a 1.2 m sheet of 24 × 24 quads resting over
 // a sphere with friction keeps every edge within 7 % of its rest length at 40 substeps per frame
 // (24 frames per second; tests/cloth/solver_test.cpp), and stretches more at fewer substeps.
-// material.strain_limit bounds the stretch of long paths regardless (a hanging 1 m strip at 12
-// substeps: 12.5 % longer without, 3.3 % with a limit of 0.03; tests/cloth/strain_hierarchy_test.cpp).
+// material.strain_limit bounds the stretch of long paths regardless (a heavy 1 m strip, 2 kg/m²,
+// hanging at 12 substeps: 12.5 % longer without, 3.3 % with a limit of 0.03;
+// tests/cloth/strain_hierarchy_test.cpp).
 //
 // Masses: each vertex gets a third of the rest area of each of its triangles times
 // areal_density; pinned vertices and vertices with no area get inverse mass 0.
