@@ -82,7 +82,7 @@ TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     EXPECT_TRUE(std::isinf(scene.material.strain_limit));
 }
 
-TEST(ClothScene, NullStrainLimitIsNoLimit) {
+TEST(ClothScene, NullStrainLimitIsAcceptedAsNoLimit) {
     const cloth::ClothScene scene =
         parse(R"({"cloth": {"grid": {}}, "material": {"strain_limit": null}})");
     EXPECT_TRUE(std::isinf(scene.material.strain_limit));

@@ -24,8 +24,9 @@ constexpr std::int64_t VERTEX_GRAIN = 2048;
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
 constexpr int FAIL_SAFE_WINDOW = 4;
 // A strain limit moves its two vertices by at most this fraction of the thickness per substep
-// (strain_hierarchy.hpp). Larger moves outran the self-collision's proximity constraints: at half
-// the thickness the twist scene had 56 CCD hits in 36 frames, at a tenth none (docs/performance.md).
+// (per limit: a vertex in several limits can move several times that; strain_hierarchy.hpp).
+// Larger moves outran the self-collision's proximity constraints: at half the thickness the
+// twist scene had 56 CCD hits in 36 frames, at a tenth none (docs/performance.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
 
 void validate_material(const ClothMaterial& m) {
@@ -505,7 +506,8 @@ void ClothSolver::move_obstacles(double t) {
 
 void ClothSolver::project_constraints(double h) {
     // Positions and inverse masses packed for the kernels (detail/constraint_kernels.hpp), then
-    // stretch and bending colour by colour, each colour in parallel over fixed chunks.
+    // the strain limits (with material.strain_limit; strain_hierarchy.hpp), stretch and bending
+    // colour by colour, each colour in parallel over fixed chunks.
     const auto n = static_cast<std::int64_t>(m_positions.size());
     parallel_for(
         n,

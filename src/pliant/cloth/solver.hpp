@@ -30,7 +30,7 @@
 // so strain under load falls with the substep count: a 1.2 m sheet of 24 × 24 quads resting over
 // a sphere with friction keeps every edge within 7 % of its rest length at 40 substeps per frame
 // (24 frames per second; tests/cloth/solver_test.cpp), and stretches more at fewer substeps.
-// material.strain_limit bounds the stretch of long paths regardless (a heavy 1 m strip, 2 kg/m²,
+// material.strain_limit reduces the stretch of long paths (a heavy 1 m strip, 2 kg/m²,
 // hanging at 12 substeps: 12.5 % longer without, 3.3 % with a limit of 0.03;
 // tests/cloth/strain_hierarchy_test.cpp).
 //

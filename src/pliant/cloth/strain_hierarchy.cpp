@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
 #include <tuple>
+#include <utility>
 
 #include "pliant/core/host_device.hpp"
 #include "pliant/core/parallel.hpp"
@@ -13,9 +17,10 @@ namespace {
 
 constexpr std::int64_t LIMIT_GRAIN = 1024;
 constexpr std::int64_t CHILD_GRAIN = 2048;
-// The colouring allows 63 constraints of a colour class per vertex; a level whose vertices reach
-// this many limits ends the hierarchy instead (it happens only around vertices of huge valence).
-constexpr std::int64_t MAX_LIMITS_PER_VERTEX = 48;
+// The greedy colouring gives a limit p–q the smallest colour unused at p and q; with at most 32
+// limits per vertex that is one of the first 63 (the colouring allows 64). A level with more
+// ends the hierarchy instead (it happens only around vertices of huge valence).
+constexpr std::int64_t MAX_LIMITS_PER_VERTEX = 32;
 // A level that keeps more than this fraction of the finer level's vertices ends the hierarchy:
 // it would cost a pass without carrying corrections much further.
 constexpr double MAX_KEPT_FRACTION = 0.75;
@@ -25,37 +30,6 @@ struct Link {
     std::int32_t q;
     double rest;
 };
-
-// Unilateral limit: p and q are pulled together along their line, split by inverse mass, by
-// RELAXATION times their excess over max_length; nothing when they are closer or both are fixed.
-PLIANT_HOST_DEVICE inline void limit_stretch(detail::PackedVertex* x, std::int32_t p,
-                                             std::int32_t q, double max_length,
-                                             double max_move) {
-    detail::PackedVertex& a = x[p];
-    detail::PackedVertex& b = x[q];
-    const double w = a.inverse_mass + b.inverse_mass;
-    if (!(w > 0.0)) {
-        return;
-    }
-    const double dx = a.x - b.x;
-    const double dy = a.y - b.y;
-    const double dz = a.z - b.z;
-    const double length_squared = dx * dx + dy * dy + dz * dz;
-    if (!(length_squared > max_length * max_length)) {
-        return;
-    }
-    const double length = std::sqrt(length_squared);
-    const double s =
-        std::min(StrainHierarchy::RELAXATION * (length - max_length), max_move) / (length * w);
-    const double sa = a.inverse_mass * s;
-    const double sb = b.inverse_mass * s;
-    a.x -= dx * sa;
-    a.y -= dy * sa;
-    a.z -= dz * sa;
-    b.x += dx * sb;
-    b.y += dy * sb;
-    b.z += dz * sb;
-}
 
 // Neighbours of every vertex over `links`, as CSR on mesh indices.
 struct Adjacency {
@@ -94,24 +68,82 @@ struct Adjacency {
     }
 };
 
+// Dijkstra over the rest mesh's edges, reusing its arrays between searches (only the vertices a
+// search touched are reset).
+class ShortestPaths {
+public:
+    explicit ShortestPaths(std::int64_t num_vertices)
+        : m_distance(static_cast<std::size_t>(num_vertices),
+                     std::numeric_limits<double>::infinity()) {}
+
+    // Distances from source until `targets` vertices for which is_target(v) holds are settled
+    // (or everything reachable is).
+    template <typename IsTarget>
+    void search(const Adjacency& mesh, std::int32_t source, IsTarget&& is_target,
+                std::size_t targets) {
+        for (const std::int32_t v : m_touched) {
+            m_distance[static_cast<std::size_t>(v)] = std::numeric_limits<double>::infinity();
+        }
+        m_touched.clear();
+        using Entry = std::pair<double, std::int32_t>;
+        std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+        m_distance[static_cast<std::size_t>(source)] = 0.0;
+        m_touched.push_back(source);
+        queue.push({0.0, source});
+        while (!queue.empty() && targets > 0) {
+            const auto [d, v] = queue.top();
+            queue.pop();
+            if (d > m_distance[static_cast<std::size_t>(v)]) {
+                continue;  // a stale entry
+            }
+            if (is_target(v)) {
+                --targets;
+            }
+            for (std::size_t k = mesh.begin(v); k < mesh.end(v); ++k) {
+                const std::int32_t w = mesh.neighbours[k];
+                const double through = d + mesh.lengths[k];
+                double& best = m_distance[static_cast<std::size_t>(w)];
+                if (through < best) {
+                    if (std::isinf(best)) {
+                        m_touched.push_back(w);
+                    }
+                    best = through;
+                    queue.push({through, w});
+                }
+            }
+        }
+    }
+
+    double distance(std::int32_t v) const { return m_distance[static_cast<std::size_t>(v)]; }
+
+private:
+    std::vector<double> m_distance;
+    std::vector<std::int32_t> m_touched;
+};
+
 }  // namespace
 
 StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geometry::Edge> edges,
                                  std::span<const double> rest_lengths) {
-    std::vector<std::int32_t> vertices(static_cast<std::size_t>(num_vertices));
-    for (std::size_t v = 0; v < vertices.size(); ++v) {
-        vertices[v] = static_cast<std::int32_t>(v);
-    }
     std::vector<Link> links;
     links.reserve(edges.size());
     for (std::size_t e = 0; e < edges.size(); ++e) {
         links.push_back({std::min(edges[e][0], edges[e][1]), std::max(edges[e][0], edges[e][1]),
                          rest_lengths[e]});
     }
+    const Adjacency mesh(num_vertices, links);
+    ShortestPaths paths(num_vertices);
+    // The finer level's vertices that have a link (isolated ones take no part).
+    std::vector<std::int32_t> vertices;
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(num_vertices); ++v) {
+        if (mesh.end(v) > mesh.begin(v)) {
+            vertices.push_back(v);
+        }
+    }
     enum : std::uint8_t { UNDECIDED, KEPT, DROPPED };
     std::vector<std::uint8_t> state(static_cast<std::size_t>(num_vertices));
     while (m_levels.size() < static_cast<std::size_t>(MAX_LEVELS) &&
-           static_cast<std::int64_t>(vertices.size()) >= MIN_VERTICES && !links.empty()) {
+           static_cast<std::int64_t>(vertices.size()) >= MIN_VERTICES) {
         const Adjacency adjacency(num_vertices, links);
         // Maximal independent set, greedy in ascending order.
         Level level;
@@ -133,8 +165,7 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
             MAX_KEPT_FRACTION * static_cast<double>(vertices.size())) {
             break;
         }
-        // Parents, weights, and the coarse links: for every two parents of a child, the
-        // two-link path through it.
+        // Parents and weights; every two parents of a child become a coarse pair.
         std::vector<Link> coarse;
         level.parent_offsets.push_back(0);
         std::vector<double> lengths;  // rest length child–parent, per parent of the child
@@ -148,27 +179,29 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
                     lengths.push_back(adjacency.lengths[k]);
                 }
             }
-            // Inverse rest distance weights (equal ones when a parent sits on the child).
-            const bool zero_length =
+            // Inverse rest distance weights; a parent on the child (rest distance 0) takes all.
+            const bool coincident =
                 std::any_of(lengths.begin(), lengths.end(), [](double l) { return !(l > 0.0); });
+            const auto weight = [&](double l) {
+                return coincident ? (l > 0.0 ? 0.0 : 1.0) : 1.0 / l;
+            };
             double total = 0.0;
-            for (const double length : lengths) {
-                total += zero_length ? 1.0 : 1.0 / length;
+            for (const double l : lengths) {
+                total += weight(l);
             }
-            for (const double length : lengths) {
-                level.weights.push_back((zero_length ? 1.0 : 1.0 / length) / total);
+            for (const double l : lengths) {
+                level.weights.push_back(weight(l) / total);
             }
-            for (std::size_t i = 0; i < lengths.size(); ++i) {
-                for (std::size_t j = i + 1; j < lengths.size(); ++j) {
-                    const std::int32_t a = level.parents[first + i];
-                    const std::int32_t b = level.parents[first + j];
-                    coarse.push_back({std::min(a, b), std::max(a, b), lengths[i] + lengths[j]});
+            for (std::size_t i = first; i < level.parents.size(); ++i) {
+                for (std::size_t j = i + 1; j < level.parents.size(); ++j) {
+                    coarse.push_back({std::min(level.parents[i], level.parents[j]),
+                                      std::max(level.parents[i], level.parents[j]), 0.0});
                 }
             }
             level.parent_offsets.push_back(static_cast<std::int32_t>(level.parents.size()));
         }
         std::sort(coarse.begin(), coarse.end(), [](const Link& a, const Link& b) {
-            return std::tie(a.p, a.q, a.rest) < std::tie(b.p, b.q, b.rest);
+            return std::tie(a.p, a.q) < std::tie(b.p, b.q);
         });
         coarse.erase(std::unique(coarse.begin(), coarse.end(),
                                  [](const Link& a, const Link& b) {
@@ -188,6 +221,23 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
         if (too_many) {
             break;
         }
+        // Rest lengths: the shortest paths along the mesh's edges (pairs sorted by p: one search
+        // from each p reaches all its q).
+        for (std::size_t first = 0; first < coarse.size();) {
+            std::size_t last = first;
+            while (last < coarse.size() && coarse[last].p == coarse[first].p) {
+                ++last;
+            }
+            paths.search(mesh, coarse[first].p, [&](std::int32_t v) {
+                return std::any_of(coarse.begin() + static_cast<std::ptrdiff_t>(first),
+                                   coarse.begin() + static_cast<std::ptrdiff_t>(last),
+                                   [&](const Link& l) { return l.q == v; });
+            }, last - first);
+            for (std::size_t k = first; k < last; ++k) {
+                coarse[k].rest = paths.distance(coarse[k].q);
+            }
+            first = last;
+        }
         level.colors = color_constraints(
             static_cast<std::int64_t>(coarse.size()), num_vertices, [&](std::int64_t i) {
                 return std::span<const std::int32_t>(&coarse[static_cast<std::size_t>(i)].p, 2);
@@ -198,11 +248,18 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
             level.q.push_back(link.q);
             level.rest.push_back(link.rest);
         }
-        vertices = level.vertices;
+        vertices.clear();
+        for (const std::int32_t v : level.vertices) {
+            if (coarse_adjacency.end(v) > coarse_adjacency.begin(v)) {
+                vertices.push_back(v);
+            }
+        }
         links = std::move(coarse);
         m_levels.push_back(std::move(level));
     }
-    m_start.resize(static_cast<std::size_t>(num_vertices));
+    if (!m_levels.empty()) {
+        m_start.resize(static_cast<std::size_t>(num_vertices));
+    }
 }
 
 std::size_t StrainHierarchy::num_limits() const {
@@ -235,7 +292,8 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double
                 [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                     for (std::int64_t k = offset + begin; k < offset + end; ++k) {
                         const auto i = static_cast<std::size_t>(k);
-                        limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i], max_move);
+                        detail::limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i], RELAXATION,
+                                              max_move);
                     }
                 });
         }

@@ -10,19 +10,25 @@
 // Levels. Level 0 is the mesh (its edges are the solver's stretch constraints). Level l + 1 keeps
 // a maximal independent set of level l's vertices (greedy in ascending vertex order: a vertex is
 // kept unless a neighbour was kept before it), so every dropped vertex (a child) has at least one
-// kept neighbour (a parent). Two parents of one child are joined by a level-(l + 1) limit whose
-// rest length is the shortest two-link path through a common child, p–c–q, summed from level l's
-// rest lengths: a path's rest length, at least the straight rest distance, so a limit never
-// asks for less than the cloth can give without stretching an edge, whatever the rest shape
-// (flat or folded). Levels are built until one has fewer than MIN_VERTICES vertices or no
-// limits, at most MAX_LEVELS.
+// kept neighbour (a parent). Every two parents of one child are joined by a level-(l + 1) limit
+// whose rest length is the shortest path between them along the rest mesh's edges (Dijkstra): if
+// no edge is longer than at rest, no two vertices are farther apart than that, whatever the rest
+// shape (flat or folded), so a limit never asks for less than the cloth can give. (An edge path
+// is longer than the straight distance where no edge runs that way: up to √2 × across the
+// diagonals of a grid's quads.) Vertices left without a limit take no further part. Levels are built until one
+// would have fewer than MIN_VERTICES vertices, keep more than MAX_KEPT_FRACTION of the finer
+// level's, have no limit, or give a vertex more than MAX_LIMITS_PER_VERTEX limits (the colouring's
+// bound), at most MAX_LEVELS; a mesh of fewer than MIN_VERTICES linked vertices has no level and
+// no limit.
 //
-// Limits. Unilateral: a limit p–q with rest length L projects only when |x_p − x_q| >
-// (1 + max_strain) L, moving p and q along their line by the inverse-mass split of RELAXATION
-// times the excess, capped at max_move (PBD, no compliance: a limit, not an elastic force), and
-// never when compressed (cloth buckles). Pinned vertices (inverse mass 0) do not move. Where the
-// limit cannot be met (strain imposed by moving pins, as in the twist scene) it keeps pulling
-// every substep: the cap keeps those pulls within what the self-collision handles.
+// Limits. Unilateral: a limit p–q with rest length L acts only when |x_p − x_q| > (1 +
+// max_strain) L, moving p and q along their line by the inverse-mass split of RELAXATION times
+// the excess, at most max_move per limit and call (a vertex in several limits, on several
+// levels, can move several times that) (PBD, no compliance: a limit, not an elastic force), and
+// never when they are closer (cloth buckles). Pinned vertices (inverse mass 0) do not move. Only
+// the limits' ends are measured: strain between them is left to the finer levels and, at level
+// 0, to the edges' own constraints. Where a limit cannot be met (strain imposed by moving pins,
+// as in the twist scene) it keeps pulling every substep.
 //
 // One project() call, coarsest level first: project the level's limits (colour by colour, each
 // colour in parallel; constraint_coloring.hpp), then move each of its children by the
@@ -31,16 +37,54 @@
 // every substep (solver.hpp). Deterministic and bitwise identical for 1 and N threads.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/core/host_device.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
 namespace pliant::cloth {
+
+namespace detail {
+
+// One limit: p and q are pulled together along their line, split by inverse mass, by
+// `relaxation` times their excess over max_length but at most max_move (metres); nothing when
+// they are at most max_length apart or both fixed (inverse mass 0).
+PLIANT_HOST_DEVICE inline void limit_stretch(PackedVertex* x, std::int32_t p, std::int32_t q,
+                                             double max_length, double relaxation,
+                                             double max_move) {
+    PackedVertex& a = x[p];
+    PackedVertex& b = x[q];
+    const double w = a.inverse_mass + b.inverse_mass;
+    if (!(w > 0.0)) {
+        return;
+    }
+    const double dx = a.x - b.x;
+    const double dy = a.y - b.y;
+    const double dz = a.z - b.z;
+    const double length_squared = dx * dx + dy * dy + dz * dz;
+    if (!(length_squared > max_length * max_length)) {
+        return;
+    }
+    const double length = std::sqrt(length_squared);
+    const double excess = relaxation * (length - max_length);
+    const double s = (excess < max_move ? excess : max_move) / (length * w);
+    const double sa = a.inverse_mass * s;
+    const double sb = b.inverse_mass * s;
+    a.x -= dx * sa;
+    a.y -= dy * sa;
+    a.z -= dz * sa;
+    b.x += dx * sb;
+    b.y += dy * sb;
+    b.z += dz * sb;
+}
+
+}  // namespace detail
 
 class StrainHierarchy {
 public:
@@ -49,8 +93,9 @@ public:
     // The fraction of a limit's excess one projection removes. A stiff limit (1) turns a large
     // excess into a jump of centimetres within one substep, i.e. metres per second: after the
     // self-collision fail-safe has put vertices back (self_collision.hpp), such jumps cascaded
-    // into more put-backs (the drape: 6,328 CCD hits in one frame, strain up to 570 %); a fifth
-    // per substep removes 99.9 % of a small excess within 32 substeps, under a frame.
+    // into more put-backs (the drape: 6,328 CCD hits at frame 15, 797 k at frame 22, strain up
+    // to 702 %; docs/performance.md). A fifth per substep leaves 0.8^32 < 0.1 % of an excess
+    // after 32 substeps while max_move does not bind.
     static constexpr double RELAXATION = 0.2;
 
     // One coarse level: its limits between kept vertices and how its children (the finer level's
