@@ -106,8 +106,8 @@ TEST(StrainHierarchy, LevelsAreMaximalIndependentSetsWithShortestPathRestLengths
         }
         std::map<std::pair<std::int32_t, std::int32_t>, double> links;
         for (std::size_t e = 0; e < m.edges.size(); ++e) {
-            links[{std::min(m.edges[e][0], m.edges[e][1]), std::max(m.edges[e][0], m.edges[e][1])}] =
-                m.rest[e];
+            links[{std::min(m.edges[e][0], m.edges[e][1]),
+                   std::max(m.edges[e][0], m.edges[e][1])}] = m.rest[e];
         }
         const auto rest_of = [&](std::int32_t a, std::int32_t b) {
             const auto it = links.find({std::min(a, b), std::max(a, b)});
@@ -310,7 +310,8 @@ TEST(StrainHierarchy, RepeatedProjectionsBringEveryLimitWithinTheStrainAndKeepPi
     for (std::size_t l = 1; l <= h.num_levels(); ++l) {
         const auto& level = h.level(l);
         for (std::size_t k = 0; k < level.p.size(); ++k) {
-            worst_before = std::max(worst_before, length(x, level.p[k], level.q[k]) / level.rest[k]);
+            worst_before =
+                std::max(worst_before, length(x, level.p[k], level.q[k]) / level.rest[k]);
         }
     }
     EXPECT_GT(worst_before, 1.25);
@@ -394,8 +395,8 @@ TEST(StrainHierarchy, AHangingStripStretchesLessWithALimit) {
     // A 0.1 m × 1 m strip of 2 × 40 quads hanging from its top row, 12 substeps per frame: one
     // Gauss-Seidel sweep per substep leaves the 40-edge chains stretched; with strain_limit
     // 0.03 the strip's hanging length stays within 3 % (plus what single edges add).
-    geometry::TriangleMeshD strip = geometry::convert_precision<double>(
-        geometry::make_grid_sheet(2, 40, 0.1f, 1.0f));
+    geometry::TriangleMeshD strip =
+        geometry::convert_precision<double>(geometry::make_grid_sheet(2, 40, 0.1f, 1.0f));
     std::vector<std::int32_t> top;
     double top_y = -std::numeric_limits<double>::infinity();
     for (const Vec3d& p : strip.positions) {

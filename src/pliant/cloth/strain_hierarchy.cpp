@@ -203,20 +203,19 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
         std::sort(coarse.begin(), coarse.end(), [](const Link& a, const Link& b) {
             return std::tie(a.p, a.q) < std::tie(b.p, b.q);
         });
-        coarse.erase(std::unique(coarse.begin(), coarse.end(),
-                                 [](const Link& a, const Link& b) {
-                                     return a.p == b.p && a.q == b.q;
-                                 }),
-                     coarse.end());
+        coarse.erase(
+            std::unique(coarse.begin(), coarse.end(),
+                        [](const Link& a, const Link& b) { return a.p == b.p && a.q == b.q; }),
+            coarse.end());
         if (coarse.empty()) {
             break;
         }
         const Adjacency coarse_adjacency(num_vertices, coarse);
         bool too_many = false;
         for (const std::int32_t v : level.vertices) {
-            too_many = too_many || static_cast<std::int64_t>(coarse_adjacency.end(v) -
-                                                             coarse_adjacency.begin(v)) >
-                                       MAX_LIMITS_PER_VERTEX;
+            too_many = too_many ||
+                       static_cast<std::int64_t>(coarse_adjacency.end(v) -
+                                                 coarse_adjacency.begin(v)) > MAX_LIMITS_PER_VERTEX;
         }
         if (too_many) {
             break;
@@ -228,11 +227,14 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
             while (last < coarse.size() && coarse[last].p == coarse[first].p) {
                 ++last;
             }
-            paths.search(mesh, coarse[first].p, [&](std::int32_t v) {
-                return std::any_of(coarse.begin() + static_cast<std::ptrdiff_t>(first),
-                                   coarse.begin() + static_cast<std::ptrdiff_t>(last),
-                                   [&](const Link& l) { return l.q == v; });
-            }, last - first);
+            paths.search(
+                mesh, coarse[first].p,
+                [&](std::int32_t v) {
+                    return std::any_of(coarse.begin() + static_cast<std::ptrdiff_t>(first),
+                                       coarse.begin() + static_cast<std::ptrdiff_t>(last),
+                                       [&](const Link& l) { return l.q == v; });
+                },
+                last - first);
             for (std::size_t k = first; k < last; ++k) {
                 coarse[k].rest = paths.distance(coarse[k].q);
             }
@@ -287,26 +289,28 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double
         const Level& l = *level;
         for (std::int32_t c = 0; c < l.colors.num_colors(); ++c) {
             const std::int64_t offset = l.colors.offsets[static_cast<std::size_t>(c)];
-            parallel_for_chunks(
-                static_cast<std::int64_t>(l.colors.color(c).size()), LIMIT_GRAIN,
-                [&](std::int64_t, std::int64_t begin, std::int64_t end) {
-                    for (std::int64_t k = offset + begin; k < offset + end; ++k) {
-                        const auto i = static_cast<std::size_t>(k);
-                        detail::limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i], RELAXATION,
-                                              max_move);
-                    }
-                });
+            parallel_for_chunks(static_cast<std::int64_t>(l.colors.color(c).size()), LIMIT_GRAIN,
+                                [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                    for (std::int64_t k = offset + begin; k < offset + end; ++k) {
+                                        const auto i = static_cast<std::size_t>(k);
+                                        detail::limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i],
+                                                              RELAXATION, max_move);
+                                    }
+                                });
         }
         parallel_for(
             static_cast<std::int64_t>(l.children.size()),
             [&](std::int64_t k) {
-                const auto child = static_cast<std::size_t>(l.children[static_cast<std::size_t>(k)]);
+                const auto child =
+                    static_cast<std::size_t>(l.children[static_cast<std::size_t>(k)]);
                 if (!(x[child].inverse_mass > 0.0)) {
                     return;
                 }
                 Vec3d move{0.0, 0.0, 0.0};
-                for (auto i = static_cast<std::size_t>(l.parent_offsets[static_cast<std::size_t>(k)]);
-                     i < static_cast<std::size_t>(l.parent_offsets[static_cast<std::size_t>(k) + 1]);
+                for (auto i =
+                         static_cast<std::size_t>(l.parent_offsets[static_cast<std::size_t>(k)]);
+                     i <
+                     static_cast<std::size_t>(l.parent_offsets[static_cast<std::size_t>(k) + 1]);
                      ++i) {
                     const auto p = static_cast<std::size_t>(l.parents[i]);
                     move += (Vec3d{x[p].x, x[p].y, x[p].z} - m_start[p]) * l.weights[i];

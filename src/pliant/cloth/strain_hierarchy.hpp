@@ -15,11 +15,11 @@
 // no edge is longer than at rest, no two vertices are farther apart than that, whatever the rest
 // shape (flat or folded), so a limit never asks for less than the cloth can give. (An edge path
 // is longer than the straight distance where no edge runs that way: up to √2 × across the
-// diagonals of a grid's quads.) Vertices left without a limit take no further part. Levels are built until one
-// would have fewer than MIN_VERTICES vertices, keep more than MAX_KEPT_FRACTION of the finer
-// level's, have no limit, or give a vertex more than MAX_LIMITS_PER_VERTEX limits (the colouring's
-// bound), at most MAX_LEVELS; a mesh of fewer than MIN_VERTICES linked vertices has no level and
-// no limit.
+// diagonals of a grid's quads.) Vertices left without a limit take no further part. Levels are
+// built until one would have fewer than MIN_VERTICES vertices, keep more than MAX_KEPT_FRACTION of
+// the finer level's, have no limit, or give a vertex more than MAX_LIMITS_PER_VERTEX limits (the
+// colouring's bound), at most MAX_LEVELS; a mesh of fewer than MIN_VERTICES linked vertices has no
+// level and no limit. (MAX_KEPT_FRACTION and MAX_LIMITS_PER_VERTEX: strain_hierarchy.cpp.)
 //
 // Limits. Unilateral: a limit p–q with rest length L acts only when |x_p − x_q| > (1 +
 // max_strain) L, moving p and q along their line by the inverse-mass split of RELAXATION times
