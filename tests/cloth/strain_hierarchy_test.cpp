@@ -158,26 +158,27 @@ TEST(StrainHierarchy, LevelsAreMaximalIndependentSetsWithShortestPathRestLengths
             // The limits: every pair of parents of a common child once, at the shortest edge
             // path's length (never shorter than the straight rest distance).
             std::map<std::pair<std::int32_t, std::int32_t>, double> built;
-            for (std::size_t k = 0; k < level.p.size(); ++k) {
-                built[{level.p[k], level.q[k]}] = level.rest[k];
-                const auto p = static_cast<std::size_t>(level.p[k]);
-                const auto q = static_cast<std::size_t>(level.q[k]);
-                EXPECT_NEAR(level.rest[k], shortest[p][q], 1e-12);
-                EXPECT_GE(level.rest[k] * (1.0 + 1e-12), norm(m.positions[p] - m.positions[q]));
+            for (std::size_t k = 0; k < level.limits.p.size(); ++k) {
+                built[{level.limits.p[k], level.limits.q[k]}] = level.limits.rest[k];
+                const auto p = static_cast<std::size_t>(level.limits.p[k]);
+                const auto q = static_cast<std::size_t>(level.limits.q[k]);
+                EXPECT_NEAR(level.limits.rest[k], shortest[p][q], 1e-12);
+                EXPECT_GE(level.limits.rest[k] * (1.0 + 1e-12),
+                          norm(m.positions[p] - m.positions[q]));
             }
-            ASSERT_EQ(built.size(), level.p.size()) << "a limit twice at level " << l;
+            ASSERT_EQ(built.size(), level.limits.p.size()) << "a limit twice at level " << l;
             std::set<std::pair<std::int32_t, std::int32_t>> pairs;
             for (const auto& [pair, rest] : built) {
                 pairs.insert(pair);
             }
             EXPECT_EQ(pairs, expected_limits) << "level " << l;
             // No two limits of one colour share a vertex.
-            for (std::int32_t colour = 0; colour < level.colors.num_colors(); ++colour) {
+            for (std::int32_t colour = 0; colour < level.limits.colors.num_colors(); ++colour) {
                 std::set<std::int32_t> used;
-                for (auto k = level.colors.offsets[static_cast<std::size_t>(colour)];
-                     k < level.colors.offsets[static_cast<std::size_t>(colour) + 1]; ++k) {
-                    EXPECT_TRUE(used.insert(level.p[static_cast<std::size_t>(k)]).second);
-                    EXPECT_TRUE(used.insert(level.q[static_cast<std::size_t>(k)]).second);
+                for (auto k = level.limits.colors.offsets[static_cast<std::size_t>(colour)];
+                     k < level.limits.colors.offsets[static_cast<std::size_t>(colour) + 1]; ++k) {
+                    EXPECT_TRUE(used.insert(level.limits.p[static_cast<std::size_t>(k)]).second);
+                    EXPECT_TRUE(used.insert(level.limits.q[static_cast<std::size_t>(k)]).second);
                 }
             }
             finer.clear();
@@ -222,10 +223,10 @@ TEST(StrainHierarchy, EngagesInAnyVertexOrderAndIgnoresIsolatedVertices) {
         for (std::size_t l = 1; l <= h.num_levels(); ++l) {
             const auto& level = h.level(l);
             std::vector<double> ratios;
-            for (std::size_t k = 0; k < level.p.size(); ++k) {
-                ratios.push_back(level.rest[k] /
-                                 norm(m->positions[static_cast<std::size_t>(level.p[k])] -
-                                      m->positions[static_cast<std::size_t>(level.q[k])]));
+            for (std::size_t k = 0; k < level.limits.p.size(); ++k) {
+                ratios.push_back(level.limits.rest[k] /
+                                 norm(m->positions[static_cast<std::size_t>(level.limits.p[k])] -
+                                      m->positions[static_cast<std::size_t>(level.limits.q[k])]));
             }
             std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
             EXPECT_LT(ratios[ratios.size() / 2], 1.1) << "level " << l;
@@ -309,9 +310,9 @@ TEST(StrainHierarchy, RepeatedProjectionsBringEveryLimitWithinTheStrainAndKeepPi
     double worst_before = 0.0;
     for (std::size_t l = 1; l <= h.num_levels(); ++l) {
         const auto& level = h.level(l);
-        for (std::size_t k = 0; k < level.p.size(); ++k) {
-            worst_before =
-                std::max(worst_before, length(x, level.p[k], level.q[k]) / level.rest[k]);
+        for (std::size_t k = 0; k < level.limits.p.size(); ++k) {
+            worst_before = std::max(worst_before, length(x, level.limits.p[k], level.limits.q[k]) /
+                                                      level.limits.rest[k]);
         }
     }
     EXPECT_GT(worst_before, 1.25);
@@ -320,8 +321,9 @@ TEST(StrainHierarchy, RepeatedProjectionsBringEveryLimitWithinTheStrainAndKeepPi
     }
     for (std::size_t l = 1; l <= h.num_levels(); ++l) {
         const auto& level = h.level(l);
-        for (std::size_t k = 0; k < level.p.size(); ++k) {
-            EXPECT_LE(length(x, level.p[k], level.q[k]), (1.0 + max_strain) * level.rest[k] * 1.01)
+        for (std::size_t k = 0; k < level.limits.p.size(); ++k) {
+            EXPECT_LE(length(x, level.limits.p[k], level.limits.q[k]),
+                      (1.0 + max_strain) * level.limits.rest[k] * 1.01)
                 << "level " << l << " limit " << k;
         }
     }
@@ -345,8 +347,8 @@ TEST(StrainHierarchy, CappedMovesStayWithinTheCapPerLimit) {
         const auto& level = h.level(l);
         std::map<std::int32_t, int> degree;
         int most = 0;
-        for (std::size_t k = 0; k < level.p.size(); ++k) {
-            most = std::max({most, ++degree[level.p[k]], ++degree[level.q[k]]});
+        for (std::size_t k = 0; k < level.limits.p.size(); ++k) {
+            most = std::max({most, ++degree[level.limits.p[k]], ++degree[level.limits.q[k]]});
         }
         bound += most * cap;
     }
@@ -368,7 +370,7 @@ TEST(StrainHierarchy, CappedMovesStayWithinTheCapPerLimit) {
 TEST(StrainHierarchy, BitwiseIdenticalForOneAndTwoThreads) {
     const Mesh m = grid(134, 1.0);
     // Level 1's colours span several of the kernel's fixed chunks (LIMIT_GRAIN = 1,024 limits).
-    ASSERT_GT(hierarchy_of(m).level(1).colors.color(0).size(), 2048u);
+    ASSERT_GT(hierarchy_of(m).level(1).limits.colors.color(0).size(), 2048u);
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> noise(-0.02, 0.02);
     std::vector<Vec3d> stretched = m.positions;

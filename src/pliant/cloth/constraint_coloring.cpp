@@ -50,4 +50,20 @@ ConstraintColoring color_constraints(
     return coloring;
 }
 
+ColoredEdges color_edges(std::span<const std::array<std::int32_t, 2>> edges,
+                         std::span<const double> rest, std::int64_t num_vertices) {
+    ColoredEdges colored;
+    colored.colors = color_constraints(
+        static_cast<std::int64_t>(edges.size()), num_vertices, [&](std::int64_t i) {
+            return std::span<const std::int32_t>(edges[static_cast<std::size_t>(i)]);
+        });
+    for (const std::int32_t i : colored.colors.order) {
+        const auto k = static_cast<std::size_t>(i);
+        colored.p.push_back(edges[k][0]);
+        colored.q.push_back(edges[k][1]);
+        colored.rest.push_back(rest[k]);
+    }
+    return colored;
+}
+
 }  // namespace pliant::cloth

@@ -10,6 +10,7 @@
 // same kind throws InvalidInput). Cost O(constraints × vertices per constraint).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -36,5 +37,19 @@ struct ConstraintColoring {
 ConstraintColoring color_constraints(
     std::int64_t num_constraints, std::int64_t num_vertices,
     FunctionRef<std::span<const std::int32_t>(std::int64_t)> vertices_of);
+
+// Two-vertex constraints (p–q with a rest length: the solver's stretch constraints, the strain
+// limits) coloured, and laid out as the kernels read them: columns in colour order, colour c
+// in [colors.offsets[c], colors.offsets[c + 1]).
+struct ColoredEdges {
+    ConstraintColoring colors;
+    std::vector<std::int32_t> p;
+    std::vector<std::int32_t> q;
+    std::vector<double> rest;
+};
+
+// edges[i] with rest length rest[i] (same size), coloured by color_constraints.
+ColoredEdges color_edges(std::span<const std::array<std::int32_t, 2>> edges,
+                         std::span<const double> rest, std::int64_t num_vertices);
 
 }  // namespace pliant::cloth

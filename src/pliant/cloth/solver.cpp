@@ -148,23 +148,14 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         m_rest_angles.push_back(dihedral_angle_value(at(vertices[0]), at(vertices[1]),
                                                      at(vertices[2]), at(vertices[3])));
     }
-    m_stretch_colors = color_constraints(
-        static_cast<std::int64_t>(m_stretch_vertices.size()),
-        static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
-            return std::span<const std::int32_t>(m_stretch_vertices[static_cast<std::size_t>(i)]);
-        });
+    m_stretch =
+        color_edges(m_stretch_vertices, m_rest_lengths, static_cast<std::int64_t>(num_vertices));
     m_bending_colors = color_constraints(
         static_cast<std::int64_t>(m_bending_vertices.size()),
         static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
             return std::span<const std::int32_t>(m_bending_vertices[static_cast<std::size_t>(i)]);
         });
     // The kernels' columns, in colour order.
-    for (const std::int32_t i : m_stretch_colors.order) {
-        const auto k = static_cast<std::size_t>(i);
-        m_stretch_p.push_back(m_stretch_vertices[k][0]);
-        m_stretch_q.push_back(m_stretch_vertices[k][1]);
-        m_stretch_rest.push_back(m_rest_lengths[k]);
-    }
     for (const std::int32_t i : m_bending_colors.order) {
         const auto k = static_cast<std::size_t>(i);
         m_bending_v0.push_back(m_bending_vertices[k][0]);
@@ -525,13 +516,13 @@ void ClothSolver::project_constraints(double h) {
                                        : std::numeric_limits<double>::infinity());
     }
     const double stretch_alpha = m_material.stretch_compliance / (h * h);
-    for (std::int32_t c = 0; c < m_stretch_colors.num_colors(); ++c) {
+    for (std::int32_t c = 0; c < m_stretch.colors.num_colors(); ++c) {
         const auto offset =
-            static_cast<std::size_t>(m_stretch_colors.offsets[static_cast<std::size_t>(c)]);
-        const detail::StretchColumns columns{m_stretch_p.data() + offset,
-                                             m_stretch_q.data() + offset,
-                                             m_stretch_rest.data() + offset};
-        parallel_for_chunks(static_cast<std::int64_t>(m_stretch_colors.color(c).size()),
+            static_cast<std::size_t>(m_stretch.colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::StretchColumns columns{m_stretch.p.data() + offset,
+                                             m_stretch.q.data() + offset,
+                                             m_stretch.rest.data() + offset};
+        parallel_for_chunks(static_cast<std::int64_t>(m_stretch.colors.color(c).size()),
                             CONSTRAINT_GRAIN,
                             [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                                 detail::project_stretch(x, columns, begin, end, stretch_alpha);

@@ -210,22 +210,19 @@ private:
 
     std::vector<std::array<std::int32_t, 2>> m_stretch_vertices;
     std::vector<double> m_rest_lengths;
-    ConstraintColoring m_stretch_colors;
+    ColoredEdges m_stretch;  // the stretch constraints as the kernels' columns, in colour order
     // (x0, x1, x2, x3) as in dihedral.hpp: x2-x3 the shared edge.
     std::vector<std::array<std::int32_t, 4>> m_bending_vertices;
     std::vector<double> m_rest_angles;
     ConstraintColoring m_bending_colors;
-    // The constraints as the kernels' columns, in colour order.
-    std::vector<std::int32_t> m_stretch_p;
-    std::vector<std::int32_t> m_stretch_q;
-    std::vector<double> m_stretch_rest;
+    // The bending constraints as the kernels' columns, in colour order.
     std::vector<std::int32_t> m_bending_v0;
     std::vector<std::int32_t> m_bending_v1;
     std::vector<std::int32_t> m_bending_v2;
     std::vector<std::int32_t> m_bending_v3;
     std::vector<double> m_bending_rest;
     std::vector<detail::PackedVertex> m_packed;  // positions and inverse masses, per substep
-    StrainHierarchy m_strain_hierarchy;  // coarse strain limits (material.strain_limit)
+    StrainHierarchy m_strain_hierarchy;          // coarse strain limits (material.strain_limit)
 };
 
 }  // namespace pliant::cloth

@@ -240,16 +240,13 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
             }
             first = last;
         }
-        level.colors = color_constraints(
-            static_cast<std::int64_t>(coarse.size()), num_vertices, [&](std::int64_t i) {
-                return std::span<const std::int32_t>(&coarse[static_cast<std::size_t>(i)].p, 2);
-            });
-        for (const std::int32_t i : level.colors.order) {
-            const Link& link = coarse[static_cast<std::size_t>(i)];
-            level.p.push_back(link.p);
-            level.q.push_back(link.q);
-            level.rest.push_back(link.rest);
+        std::vector<std::array<std::int32_t, 2>> ends;
+        std::vector<double> rest;
+        for (const Link& link : coarse) {
+            ends.push_back({link.p, link.q});
+            rest.push_back(link.rest);
         }
+        level.limits = color_edges(ends, rest, num_vertices);
         vertices.clear();
         for (const std::int32_t v : level.vertices) {
             if (coarse_adjacency.end(v) > coarse_adjacency.begin(v)) {
@@ -267,7 +264,7 @@ StrainHierarchy::StrainHierarchy(std::int64_t num_vertices, std::span<const geom
 std::size_t StrainHierarchy::num_limits() const {
     std::size_t count = 0;
     for (const Level& level : m_levels) {
-        count += level.p.size();
+        count += level.limits.p.size();
     }
     return count;
 }
@@ -287,16 +284,18 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double
     const double scale = 1.0 + max_strain;
     for (auto level = m_levels.rbegin(); level != m_levels.rend(); ++level) {
         const Level& l = *level;
-        for (std::int32_t c = 0; c < l.colors.num_colors(); ++c) {
-            const std::int64_t offset = l.colors.offsets[static_cast<std::size_t>(c)];
-            parallel_for_chunks(static_cast<std::int64_t>(l.colors.color(c).size()), LIMIT_GRAIN,
-                                [&](std::int64_t, std::int64_t begin, std::int64_t end) {
-                                    for (std::int64_t k = offset + begin; k < offset + end; ++k) {
-                                        const auto i = static_cast<std::size_t>(k);
-                                        detail::limit_stretch(x, l.p[i], l.q[i], scale * l.rest[i],
-                                                              RELAXATION, max_move);
-                                    }
-                                });
+        const ColoredEdges& limits = l.limits;
+        for (std::int32_t c = 0; c < limits.colors.num_colors(); ++c) {
+            const std::int64_t offset = limits.colors.offsets[static_cast<std::size_t>(c)];
+            parallel_for_chunks(
+                static_cast<std::int64_t>(limits.colors.color(c).size()), LIMIT_GRAIN,
+                [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                    for (std::int64_t k = offset + begin; k < offset + end; ++k) {
+                        const auto i = static_cast<std::size_t>(k);
+                        detail::limit_stretch(x, limits.p[i], limits.q[i], scale * limits.rest[i],
+                                              RELAXATION, max_move);
+                    }
+                });
         }
         parallel_for(
             static_cast<std::int64_t>(l.children.size()),

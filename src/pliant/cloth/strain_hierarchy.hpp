@@ -102,12 +102,8 @@ public:
     // vertices it dropped) follow their parents.
     struct Level {
         std::vector<std::int32_t> vertices;  // kept vertices (mesh indices), ascending
-        // Limits in colour order: p[k]–q[k], rest length rest[k] (metres); colours.offsets
-        // delimit the colours.
-        ConstraintColoring colors;
-        std::vector<std::int32_t> p;
-        std::vector<std::int32_t> q;
-        std::vector<double> rest;
+        // The limits p–q with their rest lengths (metres), coloured, in colour order.
+        ColoredEdges limits;
         // Children (mesh indices, ascending) and their parents: child k's parents are
         // parents[parent_offsets[k] .. parent_offsets[k + 1]), with weights summing to 1.
         std::vector<std::int32_t> children;
