@@ -1,8 +1,9 @@
 #include "pliant/cloth/edge_strain.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 #include "pliant/core/error.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -39,7 +40,7 @@ StrainStats EdgeStrain::measure(std::span<const Vec3d> positions) const {
     for (std::size_t i = 0; i < m_edges.size(); ++i) {
         const geometry::Edge& e = m_edges[i];
         const double length = norm(positions[static_cast<std::size_t>(e[1])] -
-                                    positions[static_cast<std::size_t>(e[0])]);
+                                   positions[static_cast<std::size_t>(e[0])]);
         strain[i] = length / m_rest_lengths[i] - 1.0;
         stats.over_10_percent += strain[i] > 0.1 ? 1 : 0;
         stats.over_100_percent += strain[i] > 1.0 ? 1 : 0;

@@ -11,8 +11,8 @@
 #include <span>
 #include <vector>
 
-#include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/core/vec3.hpp"
+#include "pliant/geometry/triangle_mesh.hpp"
 
 namespace pliant::cloth {
 
@@ -29,7 +29,8 @@ class EdgeStrain {
 public:
     // The unique edges of `triangles` and their lengths in `rest_positions` (metres).
     // Precondition: triangles validated against rest_positions.size().
-    EdgeStrain(std::span<const Vec3d> rest_positions, std::span<const geometry::Triangle> triangles);
+    EdgeStrain(std::span<const Vec3d> rest_positions,
+               std::span<const geometry::Triangle> triangles);
 
     // Strain of every edge at `positions` (same vertex count as the rest shape; else
     // InvalidInput). Deterministic; O(E) plus two selections.

@@ -9,6 +9,7 @@
 
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/dihedral.hpp"
+#include "pliant/cloth/isometric_bending.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -141,10 +142,18 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         if (vertices[0] == vertices[1]) {
             continue;  // two triangles on the same three vertices
         }
-        m_bending_vertices.push_back(vertices);
         const auto at = [&](std::int32_t v) {
             return m_positions[static_cast<std::size_t>(v)];
         };
+        if (material.bending == BendingModel::isometric) {
+            if (const auto stencil = isometric_bending_stencil(at(vertices[0]), at(vertices[1]),
+                                                               at(vertices[2]), at(vertices[3]))) {
+                m_isometric_vertices.push_back(vertices);
+                m_isometric_stencils.push_back(*stencil);
+                continue;
+            }
+        }
+        m_bending_vertices.push_back(vertices);
         m_rest_angles.push_back(dihedral_angle_value(at(vertices[0]), at(vertices[1]),
                                                      at(vertices[2]), at(vertices[3])));
     }
@@ -163,6 +172,17 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         m_bending_v2.push_back(m_bending_vertices[k][2]);
         m_bending_v3.push_back(m_bending_vertices[k][3]);
         m_bending_rest.push_back(m_rest_angles[k]);
+    }
+    m_isometric_colors = color_constraints(
+        static_cast<std::int64_t>(m_isometric_vertices.size()),
+        static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
+            return std::span<const std::int32_t>(m_isometric_vertices[static_cast<std::size_t>(i)]);
+        });
+    for (const std::int32_t i : m_isometric_colors.order) {
+        for (std::size_t k = 0; k < 4; ++k) {
+            m_isometric_v[k].push_back(m_isometric_vertices[static_cast<std::size_t>(i)][k]);
+            m_isometric_k[k].push_back(m_isometric_stencils[static_cast<std::size_t>(i)][k]);
+        }
     }
     m_packed.resize(num_vertices);
     if (std::isfinite(material.strain_limit)) {
@@ -541,6 +561,20 @@ void ClothSolver::project_constraints(double h) {
                             [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                                 detail::project_bending(x, columns, begin, end, bend_alpha);
                             });
+    }
+    for (std::int32_t c = 0; c < m_isometric_colors.num_colors(); ++c) {
+        const auto offset =
+            static_cast<std::size_t>(m_isometric_colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::IsometricBendingColumns columns{
+            m_isometric_v[0].data() + offset, m_isometric_v[1].data() + offset,
+            m_isometric_v[2].data() + offset, m_isometric_v[3].data() + offset,
+            m_isometric_k[0].data() + offset, m_isometric_k[1].data() + offset,
+            m_isometric_k[2].data() + offset, m_isometric_k[3].data() + offset};
+        parallel_for_chunks(
+            static_cast<std::int64_t>(m_isometric_colors.color(c).size()), CONSTRAINT_GRAIN,
+            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                detail::project_isometric_bending(x, columns, begin, end, bend_alpha);
+            });
     }
     parallel_for(
         n,

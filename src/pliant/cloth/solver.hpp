@@ -8,9 +8,11 @@
 //   2. stretch: with material.strain_limit, first the coarse strain limits, coarsest level first,
 //      carried down to every vertex (strain_hierarchy.hpp); then C = |x_i - x_j| - L for every
 //      mesh edge, compliance α (material.hpp);
-//   3. bending: C = θ - θ_rest for every interior edge, θ the dihedral angle (dihedral.hpp);
-//      for each constraint Δλ = -C / (Σ w_k |∇C_k|² + α / h²), x_k += w_k ∇C_k Δλ (λ starts at 0
-//      every substep: one iteration per substep);
+//   3. bending, per interior edge (hinge): with material.bending = isometric, on
+//      hinges flat at rest the normal part of the isometric model's linear C = Σ K_k x_k
+//      (isometric_bending.hpp), on the others C = θ - θ_rest, θ the dihedral angle
+//      (dihedral.hpp); for each constraint Δλ = -C / (Σ w_k |∇C_k|² + α / h²), x_k += w_k ∇C_k Δλ
+//      (λ starts at 0 every substep: one iteration per substep);
 //   4. obstacles (placed where their motion has them at the end of the substep): every vertex is
 //      pushed `thickness` away from every obstacle (obstacles.hpp);
 //   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; the CCD
@@ -142,13 +144,18 @@ public:
     std::size_t num_stretch_constraints() const { return m_stretch_vertices.size(); }
     // Coarse strain limits (0 unless material.strain_limit is finite; strain_hierarchy.hpp).
     std::size_t num_strain_limits() const { return m_strain_hierarchy.num_limits(); }
-    std::size_t num_bending_constraints() const { return m_bending_vertices.size(); }
+    // Bending constraints: dihedral plus isometric (material.bending).
+    std::size_t num_bending_constraints() const {
+        return m_bending_vertices.size() + m_isometric_vertices.size();
+    }
+    std::size_t num_isometric_bending_constraints() const { return m_isometric_vertices.size(); }
 
 private:
     // One substep ending at time t_end; returns the vertices in contact with an obstacle and
     // adds the solver's own time (not self-collision's) to solve_ms.
     std::int64_t substep(double h, double t_end, double& solve_ms);
-    // Stretch, then bending, colour by colour (detail/constraint_kernels.hpp).
+    // Strain limits, stretch, then bending (dihedral, then isometric), colour by colour
+    // (detail/constraint_kernels.hpp).
     void project_constraints(double h);
     // Adds h · (air force at time t / mass) to the free vertices' velocities.
     void apply_air(double h, double t);
@@ -221,6 +228,12 @@ private:
     std::vector<std::int32_t> m_bending_v2;
     std::vector<std::int32_t> m_bending_v3;
     std::vector<double> m_bending_rest;
+    // The isometric bending constraints (material.bending; isometric_bending.hpp), likewise.
+    std::vector<std::array<std::int32_t, 4>> m_isometric_vertices;
+    std::vector<std::array<double, 4>> m_isometric_stencils;
+    ConstraintColoring m_isometric_colors;
+    std::vector<std::int32_t> m_isometric_v[4];
+    std::vector<double> m_isometric_k[4];
     std::vector<detail::PackedVertex> m_packed;  // positions and inverse masses, per substep
     StrainHierarchy m_strain_hierarchy;          // coarse strain limits (material.strain_limit)
 };

@@ -186,6 +186,11 @@ void read_material(ObjectReader& r, cloth::ClothMaterial& m) {
     m.areal_density = r.number("areal_density", m.areal_density, 1e-9, HUGE_VALUE);
     m.stretch_compliance = r.number("stretch_compliance", m.stretch_compliance, 0.0, HUGE_VALUE);
     m.bend_compliance = r.number("bend_compliance", m.bend_compliance, 0.0, HUGE_VALUE);
+    const bool dihedral = m.bending == cloth::BendingModel::dihedral;
+    m.bending = r.text("bending", dihedral ? "dihedral" : "isometric", {"dihedral", "isometric"}) ==
+                        "dihedral"
+                    ? cloth::BendingModel::dihedral
+                    : cloth::BendingModel::isometric;
     m.strain_limit = r.nullable_number("strain_limit", m.strain_limit, 0.0, HUGE_VALUE,
                                        std::numeric_limits<double>::infinity());
     m.damping = r.number("damping", m.damping, 0.0, HUGE_VALUE);

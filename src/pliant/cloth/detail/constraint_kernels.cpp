@@ -143,6 +143,47 @@ void bending_scalar(PackedVertex* x, const BendingColumns& c, std::int64_t k, do
     move(p3, g3);
 }
 
+void isometric_scalar(PackedVertex* x, const IsometricBendingColumns& c, std::int64_t k,
+                      double alpha) {
+    PackedVertex& p0 = x[c.v0[k]];
+    PackedVertex& p1 = x[c.v1[k]];
+    PackedVertex& p2 = x[c.v2[k]];
+    PackedVertex& p3 = x[c.v3[k]];
+    const double k0 = c.k0[k];
+    const double k1 = c.k1[k];
+    const double k2 = c.k2[k];
+    const double k3 = c.k3[k];
+    const Vec x2 = load(p2);
+    const Vec d0 = sub(load(p0), x2);
+    const Vec d1 = sub(load(p1), x2);
+    const Vec d3 = sub(load(p3), x2);
+    const Vec bend = {k0 * d0.x + k1 * d1.x + k3 * d3.x, k0 * d0.y + k1 * d1.y + k3 * d3.y,
+                      k0 * d0.z + k1 * d1.z + k3 * d3.z};
+    // n = n_A + n_B: n_A = (x2 − x0) × (x3 − x0) = d3 × d0, n_B = (x3 − x1) × (x2 − x1) = d1 × d3.
+    const Vec n_a = cross(d3, d0);
+    const Vec n_b = cross(d1, d3);
+    const Vec n = {n_a.x + n_b.x, n_a.y + n_b.y, n_a.z + n_b.z};
+    const double n2 = dot(n, n);
+    const double weight = p0.inverse_mass * (k0 * k0) + p1.inverse_mass * (k1 * k1) +
+                          p2.inverse_mass * (k2 * k2) + p3.inverse_mass * (k3 * k3);
+    if (!(weight > 0.0) || !(n2 > 0.0)) {
+        return;
+    }
+    // C = n̂ · bend, ∇_k C = K_k n̂: x_k += w_k K_k n̂ Δλ, Δλ = −C / (weight + α̃), so
+    // n̂ Δλ = n · (−(n · bend) / (|n|² (weight + α̃))).
+    const Vec lambda = scale(n, -dot(n, bend) / (n2 * (weight + alpha)));
+    const auto move = [&lambda](PackedVertex& p, double stencil) {
+        const double s = p.inverse_mass * stencil;
+        p.x = p.x + lambda.x * s;
+        p.y = p.y + lambda.y * s;
+        p.z = p.z + lambda.z * s;
+    };
+    move(p0, k0);
+    move(p1, k1);
+    move(p2, k2);
+    move(p3, k3);
+}
+
 #if defined(PLIANT_HAS_AVX2_TARGET)
 
 using V = __m256d;
@@ -361,6 +402,65 @@ PLIANT_AVX2_FN std::int64_t project_stretch_avx2(PackedVertex* x, const StretchC
     return k;
 }
 
+PLIANT_AVX2_FN void isometric_avx2(PackedVertex* x, const IsometricBendingColumns& c,
+                                   std::int64_t k, V alpha) {
+    Lanes p0 = load4(x, c.v0 + k);
+    Lanes p1 = load4(x, c.v1 + k);
+    Lanes p2 = load4(x, c.v2 + k);
+    Lanes p3 = load4(x, c.v3 + k);
+    const V k0 = _mm256_loadu_pd(c.k0 + k);
+    const V k1 = _mm256_loadu_pd(c.k1 + k);
+    const V k2 = _mm256_loadu_pd(c.k2 + k);
+    const V k3 = _mm256_loadu_pd(c.k3 + k);
+    const Vec4 d0 = sub(p0, p2);
+    const Vec4 d1 = sub(p1, p2);
+    const Vec4 d3 = sub(p3, p2);
+    const auto component = [&](V a, V b, V d) {
+        return add(add(mul(k0, a), mul(k1, b)), mul(k3, d));
+    };
+    const Vec4 bend = {component(d0.x, d1.x, d3.x), component(d0.y, d1.y, d3.y),
+                       component(d0.z, d1.z, d3.z)};
+    const Vec4 n_a = cross(d3, d0);
+    const Vec4 n_b = cross(d1, d3);
+    const Vec4 n = {add(n_a.x, n_b.x), add(n_a.y, n_b.y), add(n_a.z, n_b.z)};
+    const V n2 = dot(n, n);
+    const V weight =
+        add(add(add(mul(p0.w, mul(k0, k0)), mul(p1.w, mul(k1, k1))), mul(p2.w, mul(k2, k2))),
+            mul(p3.w, mul(k3, k3)));
+    const V zero = _mm256_setzero_pd();
+    const int valid = _mm256_movemask_pd(_mm256_and_pd(greater(weight, zero), greater(n2, zero)));
+    if (valid == 0) {
+        return;
+    }
+    const Vec4 lambda = scale(n, div(negate(dot(n, bend)), mul(n2, add(weight, alpha))));
+    const auto move = [&lambda](Lanes& p, V stencil) {
+        const V s = mul(p.w, stencil);
+        p.x = add(p.x, mul(lambda.x, s));
+        p.y = add(p.y, mul(lambda.y, s));
+        p.z = add(p.z, mul(lambda.z, s));
+    };
+    move(p0, k0);
+    move(p1, k1);
+    move(p2, k2);
+    move(p3, k3);
+    store4(x, c.v0 + k, p0, valid);
+    store4(x, c.v1 + k, p1, valid);
+    store4(x, c.v2 + k, p2, valid);
+    store4(x, c.v3 + k, p3, valid);
+}
+
+PLIANT_AVX2_FN std::int64_t project_isometric_avx2(PackedVertex* x,
+                                                   const IsometricBendingColumns& c,
+                                                   std::int64_t begin, std::int64_t end,
+                                                   double alpha) {
+    const V alpha4 = set1(alpha);
+    std::int64_t k = begin;
+    for (; k + 4 <= end; k += 4) {
+        isometric_avx2(x, c, k, alpha4);
+    }
+    return k;
+}
+
 PLIANT_AVX2_FN std::int64_t project_bending_avx2(PackedVertex* x, const BendingColumns& c,
                                                  std::int64_t begin, std::int64_t end,
                                                  double alpha) {
@@ -419,6 +519,19 @@ void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begi
 #endif
     for (; k < end; ++k) {
         bending_scalar(x, c, k, alpha);
+    }
+}
+
+void project_isometric_bending(PackedVertex* x, const IsometricBendingColumns& c,
+                               std::int64_t begin, std::int64_t end, double alpha) {
+    std::int64_t k = begin;
+#if defined(PLIANT_HAS_AVX2_TARGET)
+    if (has_avx2()) {
+        k = project_isometric_avx2(x, c, begin, end, alpha);
+    }
+#endif
+    for (; k < end; ++k) {
+        isometric_scalar(x, c, k, alpha);
     }
 }
 

@@ -20,6 +20,13 @@
 // cosine terms (atan2 is invariant to scaling both), evaluated by detail::atan2 below (a rational
 // approximation to 1e-16, the same operations in the scalar and vector kernels).
 //
+// Isometric bending (a hinge flat at rest, stencil K of isometric_bending.hpp): with
+// b = K_0 (x0 − x2) + K_1 (x1 − x2) + K_3 (x3 − x2) (= Σ K_k x_k) and the hinge normal
+// n = n_A + n_B (n_A = (x2 − x0) × (x3 − x0), n_B = (x3 − x1) × (x2 − x1)), C = n̂ · b, XPBD with
+// one iteration and n̂ held fixed: Δλ = −C / (Σ w_k K_k² + α̃), x_k += w_k K_k n̂ Δλ, evaluated
+// as n · (−(n · b) / (|n|² (Σ w_k K_k² + α̃))); skipped when Σ w_k K_k² = 0 or n = 0. No square
+// root, one division.
+//
 // Per-element kernels: no allocation, no exceptions; the constraints of one call must not share
 // vertices (a colour), and calls on disjoint ranges of a colour may run in parallel.
 #pragma once
@@ -49,6 +56,17 @@ struct BendingColumns {
     const double* rest_angle;
 };
 
+struct IsometricBendingColumns {
+    const std::int32_t* v0;
+    const std::int32_t* v1;
+    const std::int32_t* v2;  // the shared edge is v2-v3
+    const std::int32_t* v3;
+    const double* k0;  // the stencil, 1/m
+    const double* k1;
+    const double* k2;
+    const double* k3;
+};
+
 // Projects constraints [begin, end) of a colour; alpha = compliance / h². The AVX2 kernels take
 // the constraints in groups of four from `begin`; ranges that start at a multiple of four give
 // the same grouping for any split of a colour into ranges (not that grouping matters: every
@@ -57,6 +75,8 @@ void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begi
                      double alpha);
 void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begin, std::int64_t end,
                      double alpha);
+void project_isometric_bending(PackedVertex* x, const IsometricBendingColumns& c,
+                               std::int64_t begin, std::int64_t end, double alpha);
 
 // atan2(y, x) in (−π, π] from +, −, ×, ÷ and comparisons only (the vector kernels evaluate the
 // same operations): the octant reduction |y| ≤ |x| → t = |y| / |x| ∈ [0, 1], t > 0.66 → (t − 1) /
