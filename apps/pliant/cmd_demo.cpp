@@ -17,9 +17,9 @@
 //   4b. untangling: the drape without self-collision and with dihedral bending, 16 frames
 //      (DIR/untangle/fall/scene.json; it falls through itself, DIR/untangle/fall/); its last frame
 //      is the cloth of DIR/untangle/scene.json (a new cloth whose rest shape is that frame), which
-//      `pliant cloth` untangles before frame 0 and simulates with self-collision for 24 frames (at
-//      most
-//      --cloth-frames): DIR/untangle/preview.mp4, frames, stats.json (its untangle report);
+//      `pliant cloth` untangles before frame 0 and simulates with self-collision for 24 frames
+//      (at most --cloth-frames): DIR/untangle/preview.mp4, frames, stats.json (its untangle
+//      report);
 //   5. a volume through the ray caster (the Colin27 brain from mricron-data, else the head CT from
 //      invesalius-examples, else a generated phantom): DIR/volume/volume.png, turntable.mp4;
 //   6. the same volume twisted by the XPBD soft body on a tet grid, resampled and ray-cast every
@@ -413,9 +413,10 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
     nlohmann::ordered_json fall_json = nlohmann::ordered_json::parse(drape_json);
     fall_json["self_collision"] = false;
     fall_json["frames"] = UNTANGLE_FALL_FRAMES;
-    // The dihedral bending model: with the default isometric one the skirt, softer in sharp
-    // folds, falls deeper through itself (1,043 pairs at frame 16 against 693), more than the
-    // untangler clears in its 400 iterations (334 left; docs/performance.md).
+    // The dihedral bending model: with the isometric one that scenes/drape.json chooses, the
+    // skirt, softer in sharp folds, falls deeper through itself (1,157 pairs at frame 16
+    // against 693), more than the untangler clears in its 400 iterations (491 left;
+    // docs/performance.md, "isometric bending").
     fall_json["material"]["bending"] = "dihedral";
     const auto [fall, fall_stats] = run_written(fall_dir, fall_json);
     const std::int64_t fall_pairs = fall_stats["frames"].back()["intersecting_pairs"];

@@ -38,6 +38,10 @@ TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const nlohmann::json stats = nlohmann::json::parse(r.out);
     EXPECT_EQ(stats.at("triangles"), 288);
+    // 12 × 12 quads: 12 · 13 · 2 + 144 edges, of which 2 · 12 · 11 + 144 interior (hinges); the
+    // default bending model is dihedral.
+    EXPECT_EQ(stats.at("bending_constraints"), 408);
+    EXPECT_EQ(stats.at("isometric_bending_constraints"), 0);
     EXPECT_EQ(stats.at("frames").size(), 30u);
     EXPECT_EQ(nlohmann::json::parse(read_text(scratch / "out" / "stats.json")), stats);
     EXPECT_GT(stats.at("frames").back().at("obstacle_contacts").get<int>(), 0);

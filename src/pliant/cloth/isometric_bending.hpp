@@ -17,14 +17,20 @@
 // wings: |b| = θ for small angles, 2 at a full fold.
 //
 // The solver's constraint (material.bending = isometric; detail/constraint_kernels.hpp) is b's
-// component along the hinge's normal, C = n̂ · b with n = n_A + n_B, gradient K_k n̂ (n̂ held
-// fixed within a projection). Bergou et al. keep all of b because their cloth is inextensible;
+// component along the hinge's normal, C = n̂ · b with n = K_0 n_A + K_1 n_B (at rest both terms
+// have length |e|, so n bisects the wings as b does, whatever their sizes), gradient K_k n̂ (n̂
+// held fixed within a projection). Bergou et al. keep all of b because their cloth is inextensible;
 // this cloth stretches and shears to wrap doubly curved shapes, and b's in-plane part would
 // resist that in-plane distortion as stiffly as bending (a 1.2 m sheet of 24 × 24 quads dropped on
 // a 0.3 m sphere had slid 0.15 m off its top after 2 s with the whole vector, 0.10 m with its
-// normal part, 0.07 m with the dihedral constraint). For a pure fold C = |b| = 2 sin(θ/2): as stiff
+// normal part, 0.07 m with the dihedral constraint). For a fold of one wing C = |b| = 2 sin(θ/2)
+// (the normal's weights matter here: with n = n_A + n_B a hinge whose wings differ in height had
+// C fall back to 0 near a full fold, a second rest state). As stiff
 // as the dihedral constraint C = θ − 0 for small angles, softer towards a full fold, and cheap: no
 // square root or arctangent, one division.
+//
+// A hinge within ISOMETRIC_FLAT_ANGLE of flat at rest counts as flat: its b at rest, up to that
+// angle, is pulled to 0 as if the rest shape were flat.
 //
 // Units: K in 1/m, b and C in radians (to first order).
 #pragma once

@@ -18,10 +18,12 @@ enum class BendingModel {
     // The quadratic isometric model (isometric_bending.hpp; Bergou et al. 2006) on hinges flat at
     // rest, the dihedral constraint on the others: as stiff as the dihedral one for small angles,
     // softer towards a full fold (2 sin(θ/2) instead of θ), and linear in the positions, so its
-    // projection costs no square root or arctangent: the solver's step takes about half the time.
-    // Sharp folds bend more easily, so cloth in heavy self-contact folds tighter (the twist scene:
-    // 809 CCD hits in 72 frames against 0, 20-30 % slower); draping and flapping cloth runs 10-15 %
-    // faster in all (docs/performance.md).
+    // projection costs no square root or arctangent: about a third of the dihedral kernel's time,
+    // the drape's solver step 42 → 25 ms per frame on the machine of docs/performance.md. Sharp
+    // folds bend more easily, so cloth in heavy self-contact folds tighter (the twist scene:
+    // 500-800
+    // CCD hits in 72 frames against 0, 10-30 % slower); the drape and the flag run 12-13 % faster
+    // in all (docs/performance.md, "isometric bending").
     isometric,
 };
 
@@ -30,7 +32,8 @@ struct ClothMaterial {
     double areal_density = 0.15;
     // m/N, per edge, for C = |x_i - x_j| - rest length (metres). 0: inextensible.
     double stretch_compliance = 1e-7;
-    // rad²/J = 1/(N·m), per interior edge, for C = dihedral angle - rest angle (radians).
+    // rad²/J = 1/(N·m), per interior edge, for the bending constraint in radians: C = dihedral
+    // angle - rest angle, or the isometric model's C (to first order the same angle).
     double bend_compliance = 1.0;
     BendingModel bending = BendingModel::dihedral;
     // Unitless: multi-resolution strain limiting (strain_hierarchy.hpp). Coarse vertices farther

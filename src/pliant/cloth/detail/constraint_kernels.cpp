@@ -159,19 +159,20 @@ void isometric_scalar(PackedVertex* x, const IsometricBendingColumns& c, std::in
     const Vec d3 = sub(load(p3), x2);
     const Vec bend = {k0 * d0.x + k1 * d1.x + k3 * d3.x, k0 * d0.y + k1 * d1.y + k3 * d3.y,
                       k0 * d0.z + k1 * d1.z + k3 * d3.z};
-    // n = n_A + n_B: n_A = (x2 − x0) × (x3 − x0) = d3 × d0, n_B = (x3 − x1) × (x2 − x1) = d1 × d3.
+    // n = K_0 n_A + K_1 n_B: n_A = (x2 − x0) × (x3 − x0) = d3 × d0,
+    // n_B = (x3 − x1) × (x2 − x1) = d1 × d3.
     const Vec n_a = cross(d3, d0);
     const Vec n_b = cross(d1, d3);
-    const Vec n = {n_a.x + n_b.x, n_a.y + n_b.y, n_a.z + n_b.z};
-    const double n2 = dot(n, n);
+    const Vec n = {k0 * n_a.x + k1 * n_b.x, k0 * n_a.y + k1 * n_b.y, k0 * n_a.z + k1 * n_b.z};
     const double weight = p0.inverse_mass * (k0 * k0) + p1.inverse_mass * (k1 * k1) +
                           p2.inverse_mass * (k2 * k2) + p3.inverse_mass * (k3 * k3);
-    if (!(weight > 0.0) || !(n2 > 0.0)) {
+    const double denominator = dot(n, n) * (weight + alpha);
+    if (!(weight > 0.0) || !(denominator > 0.0)) {
         return;
     }
     // C = n̂ · bend, ∇_k C = K_k n̂: x_k += w_k K_k n̂ Δλ, Δλ = −C / (weight + α̃), so
     // n̂ Δλ = n · (−(n · bend) / (|n|² (weight + α̃))).
-    const Vec lambda = scale(n, -dot(n, bend) / (n2 * (weight + alpha)));
+    const Vec lambda = scale(n, -dot(n, bend) / denominator);
     const auto move = [&lambda](PackedVertex& p, double stencil) {
         const double s = p.inverse_mass * stencil;
         p.x = p.x + lambda.x * s;
@@ -422,17 +423,19 @@ PLIANT_AVX2_FN void isometric_avx2(PackedVertex* x, const IsometricBendingColumn
                        component(d0.z, d1.z, d3.z)};
     const Vec4 n_a = cross(d3, d0);
     const Vec4 n_b = cross(d1, d3);
-    const Vec4 n = {add(n_a.x, n_b.x), add(n_a.y, n_b.y), add(n_a.z, n_b.z)};
-    const V n2 = dot(n, n);
+    const Vec4 n = {add(mul(k0, n_a.x), mul(k1, n_b.x)), add(mul(k0, n_a.y), mul(k1, n_b.y)),
+                    add(mul(k0, n_a.z), mul(k1, n_b.z))};
     const V weight =
         add(add(add(mul(p0.w, mul(k0, k0)), mul(p1.w, mul(k1, k1))), mul(p2.w, mul(k2, k2))),
             mul(p3.w, mul(k3, k3)));
+    const V denominator = mul(dot(n, n), add(weight, alpha));
     const V zero = _mm256_setzero_pd();
-    const int valid = _mm256_movemask_pd(_mm256_and_pd(greater(weight, zero), greater(n2, zero)));
+    const int valid =
+        _mm256_movemask_pd(_mm256_and_pd(greater(weight, zero), greater(denominator, zero)));
     if (valid == 0) {
         return;
     }
-    const Vec4 lambda = scale(n, div(negate(dot(n, bend)), mul(n2, add(weight, alpha))));
+    const Vec4 lambda = scale(n, div(negate(dot(n, bend)), denominator));
     const auto move = [&lambda](Lanes& p, V stencil) {
         const V s = mul(p.w, stencil);
         p.x = add(p.x, mul(lambda.x, s));

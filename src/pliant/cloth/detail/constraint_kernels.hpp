@@ -22,10 +22,11 @@
 //
 // Isometric bending (a hinge flat at rest, stencil K of isometric_bending.hpp): with
 // b = K_0 (x0 − x2) + K_1 (x1 − x2) + K_3 (x3 − x2) (= Σ K_k x_k) and the hinge normal
-// n = n_A + n_B (n_A = (x2 − x0) × (x3 − x0), n_B = (x3 − x1) × (x2 − x1)), C = n̂ · b, XPBD with
+// n = K_0 n_A + K_1 n_B (n_A = (x2 − x0) × (x3 − x0), n_B = (x3 − x1) × (x2 − x1); the weights
+// make the two terms as long at rest, so n bisects the wings as b does), C = n̂ · b, XPBD with
 // one iteration and n̂ held fixed: Δλ = −C / (Σ w_k K_k² + α̃), x_k += w_k K_k n̂ Δλ, evaluated
-// as n · (−(n · b) / (|n|² (Σ w_k K_k² + α̃))); skipped when Σ w_k K_k² = 0 or n = 0. No square
-// root, one division.
+// as n · (−(n · b) / (|n|² (Σ w_k K_k² + α̃))); skipped when Σ w_k K_k² = 0 or that denominator
+// is not positive (n = 0, or its square underflows). No square root, one division.
 //
 // Per-element kernels: no allocation, no exceptions; the constraints of one call must not share
 // vertices (a colour), and calls on disjoint ranges of a colour may run in parallel.
