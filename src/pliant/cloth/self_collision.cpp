@@ -133,8 +133,8 @@ SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
     m_broad_phase.set_exact(false);
 }
 
-SelfCollision::FeatureVertices SelfCollision::feature_vertices(const collision::FeaturePairs& pairs,
-                                                               std::int64_t i) const {
+inline SelfCollision::FeatureVertices SelfCollision::feature_vertices(
+    const collision::FeaturePairs& pairs, std::int64_t i) const {
     FeatureVertices f{};
     const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
     if (i < num_vf) {
@@ -292,7 +292,11 @@ void SelfCollision::add_candidates(const collision::FeaturePairs& pairs, std::sp
     // each other while every vertex stays within its slack until the first of their paths ends,
     // is below the thickness: the lower bounds first (boxes, the centroids' line), the exact
     // distance for the pairs they leave.
-    const auto filter = [&]<bool EDGE_EDGE>(std::int64_t i, AppendBuffer<Candidate>& out) {
+    // Inlined into the loops below: a call per pair cost about 4 % of the drape's CPU time.
+    // clang-format off
+    const auto filter = [&]<bool EDGE_EDGE>(std::int64_t i, AppendBuffer<Candidate>& out)
+                            __attribute__((always_inline)) {
+        // clang-format on
         const FeatureVertices f = feature_vertices(pairs, i);
         if (!involving.empty() && (involving[static_cast<std::size_t>(f.v[0])] |
                                    involving[static_cast<std::size_t>(f.v[1])] |
