@@ -25,9 +25,9 @@
 // a 0.3 m sphere had slid 0.15 m off its top after 2 s with the whole vector, 0.10 m with its
 // normal part, 0.07 m with the dihedral constraint). For a fold of one wing C = |b| = 2 sin(θ/2)
 // (the normal's weights matter here: with n = n_A + n_B a hinge whose wings differ in height had
-// C fall back to 0 near a full fold, a second rest state). As stiff
-// as the dihedral constraint C = θ − 0 for small angles, softer towards a full fold, and cheap: no
-// square root or arctangent, one division.
+// C fall back to 0 near a full fold, a second rest state). As stiff as the dihedral constraint
+// C = θ − 0 for small angles, softer towards a full fold, and cheap: no square root or
+// arctangent, one division.
 //
 // A hinge within ISOMETRIC_FLAT_ANGLE of flat at rest counts as flat: its b at rest, up to that
 // angle, is pulled to 0 as if the rest shape were flat.
