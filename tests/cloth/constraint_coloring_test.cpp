@@ -50,6 +50,48 @@ TEST(ConstraintColoring, ColoursShareNoVertexAndCoverEveryConstraintOnce) {
     EXPECT_EQ(again.offsets, coloring.offsets);
 }
 
+TEST(ConstraintColoring, ColumnsLayOutEachConstraintInColourOrder) {
+    // color_edges and color_hinges: column j holds constraint order[j] (vertices and, for edges,
+    // the rest length), and the constraints of a colour share no vertex.
+    std::mt19937 rng(12);
+    std::uniform_int_distribution<std::int32_t> vertex(0, 199);
+    std::vector<std::array<std::int32_t, 4>> hinges(500);
+    std::vector<std::array<std::int32_t, 2>> edges(500);
+    std::vector<double> rest(500);
+    for (std::size_t i = 0; i < hinges.size(); ++i) {
+        std::set<std::int32_t> distinct;
+        while (distinct.size() < 4) {
+            distinct.insert(vertex(rng));
+        }
+        std::copy(distinct.begin(), distinct.end(), hinges[i].begin());
+        edges[i] = {hinges[i][0], hinges[i][3]};
+        rest[i] = 0.5 + static_cast<double>(i);
+    }
+    const ColoredHinges h = color_hinges(hinges, 200);
+    const ColoredEdges e = color_edges(edges, rest, 200);
+    ASSERT_EQ(h.size(), hinges.size());
+    ASSERT_EQ(e.p.size(), edges.size());
+    for (std::size_t j = 0; j < hinges.size(); ++j) {
+        const auto i = static_cast<std::size_t>(h.colors.order[j]);
+        for (std::size_t k = 0; k < 4; ++k) {
+            ASSERT_EQ(h.v[k][j], hinges[i][k]);
+        }
+        const auto ie = static_cast<std::size_t>(e.colors.order[j]);
+        ASSERT_EQ(e.p[j], edges[ie][0]);
+        ASSERT_EQ(e.q[j], edges[ie][1]);
+        ASSERT_EQ(e.rest[j], rest[ie]);
+    }
+    for (std::int32_t c = 0; c < h.colors.num_colors(); ++c) {
+        std::set<std::int32_t> used;
+        for (auto j = h.colors.offsets[static_cast<std::size_t>(c)];
+             j < h.colors.offsets[static_cast<std::size_t>(c) + 1]; ++j) {
+            for (std::size_t k = 0; k < 4; ++k) {
+                ASSERT_TRUE(used.insert(h.v[k][static_cast<std::size_t>(j)]).second);
+            }
+        }
+    }
+}
+
 TEST(ConstraintColoring, EmptyAndTooManyColours) {
     const ConstraintColoring empty =
         color_constraints(0, 5, [](std::int64_t) { return std::span<const std::int32_t>(); });

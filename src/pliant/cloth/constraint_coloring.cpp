@@ -66,4 +66,19 @@ ColoredEdges color_edges(std::span<const std::array<std::int32_t, 2>> edges,
     return colored;
 }
 
+ColoredHinges color_hinges(std::span<const std::array<std::int32_t, 4>> hinges,
+                           std::int64_t num_vertices) {
+    ColoredHinges colored;
+    colored.colors = color_constraints(
+        static_cast<std::int64_t>(hinges.size()), num_vertices, [&](std::int64_t i) {
+            return std::span<const std::int32_t>(hinges[static_cast<std::size_t>(i)]);
+        });
+    for (const std::int32_t i : colored.colors.order) {
+        for (std::size_t k = 0; k < 4; ++k) {
+            colored.v[k].push_back(hinges[static_cast<std::size_t>(i)][k]);
+        }
+    }
+    return colored;
+}
+
 }  // namespace pliant::cloth

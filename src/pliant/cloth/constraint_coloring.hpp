@@ -52,4 +52,16 @@ struct ColoredEdges {
 ColoredEdges color_edges(std::span<const std::array<std::int32_t, 2>> edges,
                          std::span<const double> rest, std::int64_t num_vertices);
 
+// Four-vertex constraints (hinges: x0, x1, then the shared edge x2-x3, as in dihedral.hpp)
+// coloured, their vertices laid out as four columns in colour order; a caller lays out its own
+// per-hinge data by colors.order likewise.
+struct ColoredHinges {
+    ConstraintColoring colors;
+    std::array<std::vector<std::int32_t>, 4> v;
+    std::size_t size() const { return colors.order.size(); }
+};
+
+ColoredHinges color_hinges(std::span<const std::array<std::int32_t, 4>> hinges,
+                           std::int64_t num_vertices);
+
 }  // namespace pliant::cloth

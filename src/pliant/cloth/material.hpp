@@ -21,9 +21,8 @@ enum class BendingModel {
     // projection costs no square root or arctangent: about a third of the dihedral kernel's time,
     // the drape's solver step 42 → 25 ms per frame on the machine of docs/performance.md. Sharp
     // folds bend more easily, so cloth in heavy self-contact folds tighter (the twist scene:
-    // 500-800
-    // CCD hits in 72 frames against 0, 10-30 % slower); the drape and the flag run 12-13 % faster
-    // in all (docs/performance.md, "isometric bending").
+    // 500-800 CCD hits in 72 frames against 0, 10-30 % slower); the drape and the flag run
+    // 12-13 % faster in all (docs/performance.md, "isometric bending").
     isometric,
 };
 

@@ -113,6 +113,12 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         m_rest_lengths.push_back(norm(m_positions[static_cast<std::size_t>(e[1])] -
                                       m_positions[static_cast<std::size_t>(e[0])]));
     }
+    // Hinges (x0, x1, x2, x3) as in dihedral.hpp, x2-x3 the shared edge, with their rest angles
+    // (dihedral) or stencils (isometric).
+    std::vector<std::array<std::int32_t, 4>> dihedral_hinges;
+    std::vector<double> rest_angles;
+    std::vector<std::array<std::int32_t, 4>> isometric_hinges;
+    std::vector<std::array<double, 4>> stencils;
     for (std::int32_t e = 0; e < static_cast<std::int32_t>(topology.num_edges()); ++e) {
         const std::span<const std::int32_t> faces = topology.triangles_of_edge(e);
         if (faces.size() != 2) {
@@ -148,40 +154,26 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         if (material.bending == BendingModel::isometric) {
             if (const auto stencil = isometric_bending_stencil(at(vertices[0]), at(vertices[1]),
                                                                at(vertices[2]), at(vertices[3]))) {
-                m_isometric_vertices.push_back(vertices);
-                m_isometric_stencils.push_back(*stencil);
+                isometric_hinges.push_back(vertices);
+                stencils.push_back(*stencil);
                 continue;
             }
         }
-        m_bending_vertices.push_back(vertices);
-        m_rest_angles.push_back(dihedral_angle_value(at(vertices[0]), at(vertices[1]),
-                                                     at(vertices[2]), at(vertices[3])));
+        dihedral_hinges.push_back(vertices);
+        rest_angles.push_back(dihedral_angle_value(at(vertices[0]), at(vertices[1]),
+                                                   at(vertices[2]), at(vertices[3])));
     }
     m_stretch =
         color_edges(m_stretch_vertices, m_rest_lengths, static_cast<std::int64_t>(num_vertices));
-    m_bending_colors = color_constraints(
-        static_cast<std::int64_t>(m_bending_vertices.size()),
-        static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
-            return std::span<const std::int32_t>(m_bending_vertices[static_cast<std::size_t>(i)]);
-        });
     // The kernels' columns, in colour order.
-    for (const std::int32_t i : m_bending_colors.order) {
-        const auto k = static_cast<std::size_t>(i);
-        m_bending_v0.push_back(m_bending_vertices[k][0]);
-        m_bending_v1.push_back(m_bending_vertices[k][1]);
-        m_bending_v2.push_back(m_bending_vertices[k][2]);
-        m_bending_v3.push_back(m_bending_vertices[k][3]);
-        m_bending_rest.push_back(m_rest_angles[k]);
+    m_dihedral = color_hinges(dihedral_hinges, static_cast<std::int64_t>(num_vertices));
+    for (const std::int32_t i : m_dihedral.colors.order) {
+        m_dihedral_rest.push_back(rest_angles[static_cast<std::size_t>(i)]);
     }
-    m_isometric_colors = color_constraints(
-        static_cast<std::int64_t>(m_isometric_vertices.size()),
-        static_cast<std::int64_t>(num_vertices), [&](std::int64_t i) {
-            return std::span<const std::int32_t>(m_isometric_vertices[static_cast<std::size_t>(i)]);
-        });
-    for (const std::int32_t i : m_isometric_colors.order) {
+    m_isometric = color_hinges(isometric_hinges, static_cast<std::int64_t>(num_vertices));
+    for (const std::int32_t i : m_isometric.colors.order) {
         for (std::size_t k = 0; k < 4; ++k) {
-            m_isometric_v[k].push_back(m_isometric_vertices[static_cast<std::size_t>(i)][k]);
-            m_isometric_k[k].push_back(m_isometric_stencils[static_cast<std::size_t>(i)][k]);
+            m_isometric_k[k].push_back(stencils[static_cast<std::size_t>(i)][k]);
         }
     }
     m_packed.resize(num_vertices);
@@ -549,29 +541,29 @@ void ClothSolver::project_constraints(double h) {
                             });
     }
     const double bend_alpha = m_material.bend_compliance / (h * h);
-    for (std::int32_t c = 0; c < m_bending_colors.num_colors(); ++c) {
+    for (std::int32_t c = 0; c < m_dihedral.colors.num_colors(); ++c) {
         const auto offset =
-            static_cast<std::size_t>(m_bending_colors.offsets[static_cast<std::size_t>(c)]);
+            static_cast<std::size_t>(m_dihedral.colors.offsets[static_cast<std::size_t>(c)]);
         const detail::BendingColumns columns{
-            m_bending_v0.data() + offset, m_bending_v1.data() + offset,
-            m_bending_v2.data() + offset, m_bending_v3.data() + offset,
-            m_bending_rest.data() + offset};
-        parallel_for_chunks(static_cast<std::int64_t>(m_bending_colors.color(c).size()),
+            m_dihedral.v[0].data() + offset, m_dihedral.v[1].data() + offset,
+            m_dihedral.v[2].data() + offset, m_dihedral.v[3].data() + offset,
+            m_dihedral_rest.data() + offset};
+        parallel_for_chunks(static_cast<std::int64_t>(m_dihedral.colors.color(c).size()),
                             CONSTRAINT_GRAIN,
                             [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                                 detail::project_bending(x, columns, begin, end, bend_alpha);
                             });
     }
-    for (std::int32_t c = 0; c < m_isometric_colors.num_colors(); ++c) {
+    for (std::int32_t c = 0; c < m_isometric.colors.num_colors(); ++c) {
         const auto offset =
-            static_cast<std::size_t>(m_isometric_colors.offsets[static_cast<std::size_t>(c)]);
+            static_cast<std::size_t>(m_isometric.colors.offsets[static_cast<std::size_t>(c)]);
         const detail::IsometricBendingColumns columns{
-            m_isometric_v[0].data() + offset, m_isometric_v[1].data() + offset,
-            m_isometric_v[2].data() + offset, m_isometric_v[3].data() + offset,
+            m_isometric.v[0].data() + offset, m_isometric.v[1].data() + offset,
+            m_isometric.v[2].data() + offset, m_isometric.v[3].data() + offset,
             m_isometric_k[0].data() + offset, m_isometric_k[1].data() + offset,
             m_isometric_k[2].data() + offset, m_isometric_k[3].data() + offset};
         parallel_for_chunks(
-            static_cast<std::int64_t>(m_isometric_colors.color(c).size()), CONSTRAINT_GRAIN,
+            static_cast<std::int64_t>(m_isometric.colors.color(c).size()), CONSTRAINT_GRAIN,
             [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                 detail::project_isometric_bending(x, columns, begin, end, bend_alpha);
             });

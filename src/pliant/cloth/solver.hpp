@@ -145,10 +145,8 @@ public:
     // Coarse strain limits (0 unless material.strain_limit is finite; strain_hierarchy.hpp).
     std::size_t num_strain_limits() const { return m_strain_hierarchy.num_limits(); }
     // Bending constraints: dihedral plus isometric (material.bending).
-    std::size_t num_bending_constraints() const {
-        return m_bending_vertices.size() + m_isometric_vertices.size();
-    }
-    std::size_t num_isometric_bending_constraints() const { return m_isometric_vertices.size(); }
+    std::size_t num_bending_constraints() const { return m_dihedral.size() + m_isometric.size(); }
+    std::size_t num_isometric_bending_constraints() const { return m_isometric.size(); }
 
 private:
     // One substep ending at time t_end; returns the vertices in contact with an obstacle and
@@ -218,22 +216,13 @@ private:
     std::vector<std::array<std::int32_t, 2>> m_stretch_vertices;
     std::vector<double> m_rest_lengths;
     ColoredEdges m_stretch;  // the stretch constraints as the kernels' columns, in colour order
-    // (x0, x1, x2, x3) as in dihedral.hpp: x2-x3 the shared edge.
-    std::vector<std::array<std::int32_t, 4>> m_bending_vertices;
-    std::vector<double> m_rest_angles;
-    ConstraintColoring m_bending_colors;
-    // The bending constraints as the kernels' columns, in colour order.
-    std::vector<std::int32_t> m_bending_v0;
-    std::vector<std::int32_t> m_bending_v1;
-    std::vector<std::int32_t> m_bending_v2;
-    std::vector<std::int32_t> m_bending_v3;
-    std::vector<double> m_bending_rest;
-    // The isometric bending constraints (material.bending; isometric_bending.hpp), likewise.
-    std::vector<std::array<std::int32_t, 4>> m_isometric_vertices;
-    std::vector<std::array<double, 4>> m_isometric_stencils;
-    ConstraintColoring m_isometric_colors;
-    std::vector<std::int32_t> m_isometric_v[4];
-    std::vector<double> m_isometric_k[4];
+    // The bending constraints as the kernels' columns, in colour order: the dihedral ones with
+    // their rest angles, the isometric ones (material.bending; isometric_bending.hpp) with their
+    // stencils.
+    ColoredHinges m_dihedral;
+    std::vector<double> m_dihedral_rest;
+    ColoredHinges m_isometric;
+    std::array<std::vector<double>, 4> m_isometric_k;
     std::vector<detail::PackedVertex> m_packed;  // positions and inverse masses, per substep
     StrainHierarchy m_strain_hierarchy;          // coarse strain limits (material.strain_limit)
 };
