@@ -403,6 +403,20 @@ PLIANT_AVX2_FN std::int64_t project_stretch_avx2(PackedVertex* x, const StretchC
     return k;
 }
 
+// Helpers of isometric_avx2 as functions, not lambdas: a lambda does not inherit its enclosing
+// function's target attribute, and without -march it would be compiled without AVX.
+// k0 a + k1 b + k3 d, in the scalar kernel's order.
+PLIANT_AVX2_INLINE V stencil_sum(V k0, V a, V k1, V b, V k3, V d) {
+    return add(add(mul(k0, a), mul(k1, b)), mul(k3, d));
+}
+// p += λ (w stencil), λ a vector (the scalar kernel's order).
+PLIANT_AVX2_INLINE void move_by_stencil(Lanes& p, const Vec4& lambda, V stencil) {
+    const V s = mul(p.w, stencil);
+    p.x = add(p.x, mul(lambda.x, s));
+    p.y = add(p.y, mul(lambda.y, s));
+    p.z = add(p.z, mul(lambda.z, s));
+}
+
 PLIANT_AVX2_FN void isometric_avx2(PackedVertex* x, const IsometricBendingColumns& c,
                                    std::int64_t k, V alpha) {
     Lanes p0 = load4(x, c.v0 + k);
@@ -416,11 +430,9 @@ PLIANT_AVX2_FN void isometric_avx2(PackedVertex* x, const IsometricBendingColumn
     const Vec4 d0 = sub(p0, p2);
     const Vec4 d1 = sub(p1, p2);
     const Vec4 d3 = sub(p3, p2);
-    const auto component = [&](V a, V b, V d) {
-        return add(add(mul(k0, a), mul(k1, b)), mul(k3, d));
-    };
-    const Vec4 bend = {component(d0.x, d1.x, d3.x), component(d0.y, d1.y, d3.y),
-                       component(d0.z, d1.z, d3.z)};
+    const Vec4 bend = {stencil_sum(k0, d0.x, k1, d1.x, k3, d3.x),
+                       stencil_sum(k0, d0.y, k1, d1.y, k3, d3.y),
+                       stencil_sum(k0, d0.z, k1, d1.z, k3, d3.z)};
     const Vec4 n_a = cross(d3, d0);
     const Vec4 n_b = cross(d1, d3);
     const Vec4 n = {add(mul(k0, n_a.x), mul(k1, n_b.x)), add(mul(k0, n_a.y), mul(k1, n_b.y)),
@@ -436,16 +448,10 @@ PLIANT_AVX2_FN void isometric_avx2(PackedVertex* x, const IsometricBendingColumn
         return;
     }
     const Vec4 lambda = scale(n, div(negate(dot(n, bend)), denominator));
-    const auto move = [&lambda](Lanes& p, V stencil) {
-        const V s = mul(p.w, stencil);
-        p.x = add(p.x, mul(lambda.x, s));
-        p.y = add(p.y, mul(lambda.y, s));
-        p.z = add(p.z, mul(lambda.z, s));
-    };
-    move(p0, k0);
-    move(p1, k1);
-    move(p2, k2);
-    move(p3, k3);
+    move_by_stencil(p0, lambda, k0);
+    move_by_stencil(p1, lambda, k1);
+    move_by_stencil(p2, lambda, k2);
+    move_by_stencil(p3, lambda, k3);
     store4(x, c.v0 + k, p0, valid);
     store4(x, c.v1 + k, p1, valid);
     store4(x, c.v2 + k, p2, valid);
