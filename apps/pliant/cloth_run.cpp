@@ -220,9 +220,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
     };
     const bool interrupted = frames_done < frames;
-    if (interrupted) {
-        stats["interrupted"] = true;
-    }
+    stats["interrupted"] = interrupted;
     if (preview) {
         stats["preview"] = preview->finish().string();
         stats["preview_ms_per_frame"] = preview->render_ms() / (frames_done + 1);

@@ -167,7 +167,7 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
 void register_render(CLI::App& app, const GlobalOptions& global) {
     auto options = std::make_shared<RenderCommandOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "render", "Ray-cast a volume (NRRD, NIfTI, raw+JSON) to a PNG, or an MP4 turntable");
+        "render", "Ray-cast a volume (NRRD, NIfTI, raw+JSON, .inv3) to a PNG, or an MP4 turntable");
     cmd->add_option("VOLUME", options->volume, "Volume file")->required();
     cmd->add_option("--tf", options->tf,
                     "Transfer function: a preset (ct-bone, ct-skin, mri-brain, grayscale) or a "

@@ -58,9 +58,21 @@ struct ViewCommandOptions {
     bool no_ui = false;
 };
 
+// A view's window size and camera when the options are not given (shown in its --help).
+struct ViewDefaults {
+    std::array<double, 3> camera;  // azimuth, elevation (degrees), distance (0: frame the scene)
+    std::array<int, 2> size;       // pixels
+};
+constexpr ViewDefaults CLOTH_VIEW_DEFAULTS{{-60.0, 25.0, 0.0}, {1280, 720}};
+constexpr ViewDefaults VOLUME_VIEW_DEFAULTS{{30.0, 20.0, 0.0}, {512, 512}};
+
 // The options both views take; fills run (size, camera, frames, screenshot, overlay, msaa).
-void add_view_options(CLI::App* cmd, ViewCommandOptions& o, viewer::ViewRunOptions& run) {
-    cmd->add_option("--size", o.size, "Window size in pixels")->type_name("WxH");
+void add_view_options(CLI::App* cmd, ViewCommandOptions& o, viewer::ViewRunOptions& run,
+                      const ViewDefaults& defaults) {
+    o.camera = defaults.camera;
+    cmd->add_option("--size", o.size, "Window size in pixels")
+        ->type_name("WxH")
+        ->default_str(std::to_string(defaults.size[0]) + "x" + std::to_string(defaults.size[1]));
     cmd->add_option("--camera", o.camera,
                     "Camera: azimuth, elevation (degrees), distance from the target (0 = frame "
                     "the scene)")
@@ -86,16 +98,14 @@ void add_view_options(CLI::App* cmd, ViewCommandOptions& o, viewer::ViewRunOptio
 }
 
 // After parsing: the size, camera, overlay and vsync into run; usage errors exit with 2.
-void finish_view_options(const CLI::App* cmd, const ViewCommandOptions& o,
-                         const std::array<double, 3>& default_camera,
-                         std::array<int, 2> default_size, viewer::ViewRunOptions& run) {
-    const std::array<int, 2> size = o.size.empty() ? default_size : parse_size(o.size);
+void finish_view_options(const ViewCommandOptions& o, const ViewDefaults& defaults,
+                         viewer::ViewRunOptions& run) {
+    const std::array<int, 2> size = o.size.empty() ? defaults.size : parse_size(o.size);
     run.window.width = size[0];
     run.window.height = size[1];
-    const std::array<double, 3> camera = cmd->count("--camera") > 0 ? o.camera : default_camera;
-    run.azimuth = camera[0];
-    run.elevation = camera[1];
-    run.distance = camera[2];
+    run.azimuth = o.camera[0];
+    run.elevation = o.camera[1];
+    run.distance = o.camera[2];
     if (!o.screenshot.empty() && !has_extension(o.screenshot, ".png")) {
         throw CLI::ValidationError("--screenshot",
                                    "expected a .png file name, got '" + o.screenshot + "'");
@@ -131,8 +141,8 @@ void print_summary(const nlohmann::ordered_json& result, const GlobalOptions& gl
 #endif
 
 void run_view_cloth(const ViewCommandOptions& o, viewer::ClothViewOptions options,
-                    const CLI::App* cmd, const GlobalOptions& global) {
-    finish_view_options(cmd, o, {-60.0, 25.0, 0.0}, {1280, 720}, options.run);
+                    const GlobalOptions& global) {
+    finish_view_options(o, CLOTH_VIEW_DEFAULTS, options.run);
     const cloth::ClothScene scene = io::read_cloth_scene(o.input);
 #ifdef PLIANT_HAS_VIEWER
     print_summary(viewer::run_cloth_view(scene, o.input, options), global);
@@ -145,7 +155,7 @@ void run_view_cloth(const ViewCommandOptions& o, viewer::ClothViewOptions option
 
 void run_view_volume(const ViewCommandOptions& o, viewer::VolumeViewOptions options,
                      const CLI::App* cmd, const GlobalOptions& global) {
-    finish_view_options(cmd, o, {30.0, 20.0, 0.0}, {512, 512}, options.run);
+    finish_view_options(o, VOLUME_VIEW_DEFAULTS, options.run);
     if (cmd->count("--clip") > 0) {
         options.session.clip =
             render::ClipPlane{{o.clip[0], o.clip[1], o.clip[2]}, {o.clip[3], o.clip[4], o.clip[5]}};
@@ -182,7 +192,7 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
         "cloth", "Simulate a cloth scene live; grab the cloth with the left button");
     cloth->add_option("SCENE", cloth_o->input, "Scene file (JSON, see docs/formats.md)")
         ->required();
-    add_view_options(cloth, *cloth_o, cloth_options->run);
+    add_view_options(cloth, *cloth_o, cloth_options->run, CLOTH_VIEW_DEFAULTS);
     cloth
         ->add_option("--substeps-per-frame", cloth_options->session.substeps_per_frame,
                      "Solver substeps per displayed frame (the speed; default 4, one "
@@ -194,7 +204,7 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::Range(1, 1'000'000));
     cloth->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cloth->callback([cloth_o, cloth_options, cloth, &global] {
-        run_view_cloth(*cloth_o, *cloth_options, cloth, global);
+        run_view_cloth(*cloth_o, *cloth_options, global);
     });
 
     // pliant view volume
@@ -205,7 +215,7 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
         "volume", "Ray-cast a volume live; --deform: deform it (drivers, mouse drag)");
     vol->add_option("VOLUME", volume_o->input, "Volume file (NRRD, NIfTI, raw+JSON, .inv3)")
         ->required();
-    add_view_options(vol, *volume_o, volume_options->run);
+    add_view_options(vol, *volume_o, volume_options->run, VOLUME_VIEW_DEFAULTS);
     viewer::VolumeSessionOptions& s = volume_options->session;
     vol->add_option("--tf", s.tf,
                     "Transfer function: a preset (ct-bone, ct-skin, mri-brain, grayscale) or a "

@@ -199,7 +199,8 @@ void register_volume(CLI::App& app, const GlobalOptions& global) {
     cmd->require_subcommand(1);
 
     CLI::App* info = cmd->add_subcommand("info", "Dims, type, spacing, box and value ranges");
-    info->add_option("VOLUME", options->input, "Volume file (.nrrd .nhdr .nii .nii.gz .json .inv3)")
+    info->add_option("VOLUME", options->input,
+                     "Volume file (.nrrd .nhdr .nii .nii.gz .hdr .json .raw .raw.gz .inv3)")
         ->required();
     add_memory_option(info, *options);
     info->callback([options, &global] { run_info(*options, global); });

@@ -43,6 +43,7 @@ TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
     EXPECT_EQ(stats.at("bending_constraints"), 408);
     EXPECT_EQ(stats.at("isometric_bending_constraints"), 0);
     EXPECT_EQ(stats.at("frames").size(), 30u);
+    EXPECT_FALSE(stats.at("interrupted").get<bool>());
     EXPECT_EQ(nlohmann::json::parse(read_text(scratch / "out" / "stats.json")), stats);
     EXPECT_GT(stats.at("frames").back().at("obstacle_contacts").get<int>(), 0);
     // Frame 0 is the input; frame 30 rests on the sphere, thickness away from it.

@@ -63,6 +63,11 @@ TEST(ViewCli, HelpListsTheViewsAndOptions) {
                                "--driver", "--stiffness", "--preview-divisor"}) {
         EXPECT_NE(v.out.find(option), std::string::npos) << option;
     }
+    // Each view's own defaults, as run when the options are not given.
+    EXPECT_NE(c.out.find("=[-60,25,0]"), std::string::npos) << c.out;
+    EXPECT_NE(c.out.find("=1280x720"), std::string::npos) << c.out;
+    EXPECT_NE(v.out.find("=[30,20,0]"), std::string::npos) << v.out;
+    EXPECT_NE(v.out.find("=512x512"), std::string::npos) << v.out;
 }
 
 TEST(ViewCli, UsageErrorsExitTwo) {

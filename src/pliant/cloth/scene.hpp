@@ -83,7 +83,8 @@ struct ClothScene {
     double frames_per_second = 24.0;
     int frames = 72;
     // Per frame. 40 at 24 fps (h ≈ 1 ms) keeps a cloth falling at 4 m/s moving less than its
-    // 5 mm thickness per substep and the stretch within ~15 % (docs/formats.md, "substeps").
+    // 5 mm thickness per substep; the drape's edge strain p99 stays at most 34 % at the impact
+    // and 16 % once draped (docs/formats.md, "substeps").
     int substeps = 40;
 
     std::string frame_format = "obj";  // "obj" or "ply"
