@@ -6,6 +6,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -36,6 +37,14 @@ namespace {
 
 // Set by SIGINT while a scene runs: the run stops after the frame in progress.
 volatile std::sig_atomic_t g_interrupted = 0;
+
+// Substeps longer than this (ms) get a warning (docs/formats.md, "Choosing substeps").
+constexpr double MAX_QUIET_SUBSTEP_MS = 5.0;
+// A vertex farther than this from the origin (m; NaN included) means the simulation diverged:
+// scene coordinates are at most 1e6 (io/cloth_scene.hpp), and the checks run on float boxes.
+constexpr double MAX_COORDINATE = 1e9;
+// Input cloth with more intersecting pairs than this per triangle (on average) is refused.
+constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
 
 extern "C" void on_interrupt(int /*signal*/) {
     g_interrupted = 1;
@@ -76,14 +85,25 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
 
     // Input that already intersects itself is reported and untangled before the first frame
     // (cloth/untangle.hpp; the fail-safe keeps cloth intersection-free only once it is).
-    // untangle() starts with the same exact search, so the pairs are searched once either way.
+    // untangle() starts with the same exact search again: twice only for tangled input.
+    // Layers laid on each other (two identical instances: about 6 pairs per triangle) cannot be
+    // untangled, and simulating them costs minutes and gigabytes per frame: an error.
+    const std::int64_t initial_intersections =
+        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+    const auto num_triangles = static_cast<std::int64_t>(solver.triangles().size());
+    if (initial_intersections > MAX_INITIAL_PAIRS_PER_TRIANGLE * num_triangles) {
+        throw InvalidInput(fmt::format(
+            "{}: the cloth intersects itself in {} pairs of triangles ({:.1f} per triangle, more "
+            "than {}): layers lie on or through each other, which cannot be untangled; check "
+            "the mesh and the scene's instances",
+            scene_name, initial_intersections,
+            static_cast<double>(initial_intersections) / static_cast<double>(num_triangles),
+            MAX_INITIAL_PAIRS_PER_TRIANGLE));
+    }
     std::optional<cloth::UntangleResult> untangled;
-    if (scene.untangle) {
+    if (scene.untangle && initial_intersections > 0) {
         untangled = solver.untangle();
     }
-    const std::int64_t initial_intersections =
-        untangled ? untangled->initial_pairs
-                  : collision::count_intersecting_pairs(solver.positions(), solver.triangles());
     nlohmann::ordered_json untangle_stats;
     if (initial_intersections > 0) {
         log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
@@ -129,6 +149,15 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     write_frame(0);
 
     const double dt = 1.0 / scene.frames_per_second;
+    // One constraint iteration per substep: long substeps make cloth stretch and can make it
+    // diverge (a 2 m sheet of 2 cm edges at 25 ms), whatever the scene.
+    const double substep_ms = 1e3 * dt / scene.substeps;
+    if (substep_ms > MAX_QUIET_SUBSTEP_MS) {
+        log_warning(
+            "{}: substeps of {:.3g} ms (fps {} x {} substeps): above about {} ms cloth stretches "
+            "far and can diverge; raise substeps (the built-in scenes use about 1 ms)",
+            scene_name, substep_ms, scene.frames_per_second, scene.substeps, MAX_QUIET_SUBSTEP_MS);
+    }
     const InterruptGuard interrupt_guard;
     int frames_done = 0;
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
@@ -137,18 +166,34 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     std::int64_t worst_intersections = untangled ? untangled->final_pairs : initial_intersections;
     double worst_strain = 0.0;
     double worst_strain_p99 = 0.0;
+    // A frame that fails (the simulation diverged, or a guard such as self-collision's pair limit
+    // tripped) ends the run like an interrupt: the frames before it and stats.json (with
+    // "error") are written, then the error is reported.
+    std::exception_ptr failure;
+    nlohmann::ordered_json failure_json;
     for (int frame = 1; frame <= frames; ++frame) {
         if (g_interrupted != 0) {
             break;
         }
         Stopwatch watch;
-        const cloth::ClothStepStats step = solver.step(dt, scene.substeps);
-        for (const Vec3d& p : solver.positions()) {
-            if (!is_finite(p)) {
-                throw InternalError(
-                    fmt::format("cloth: frame {}: non-finite position; frames 0-{} are in {}",
-                                frame, frame - 1, frames_dir.string()));
+        cloth::ClothStepStats step;
+        try {
+            step = solver.step(dt, scene.substeps);
+            for (const Vec3d& p : solver.positions()) {
+                if (!(std::abs(p.x) <= MAX_COORDINATE && std::abs(p.y) <= MAX_COORDINATE &&
+                      std::abs(p.z) <= MAX_COORDINATE)) {
+                    throw InvalidInput(fmt::format(
+                        "cloth: frame {}: the simulation diverged (a vertex at ({:.3g}, {:.3g}, "
+                        "{:.3g}) m) "
+                        "with substeps of {:.3g} ms; raise substeps (the built-in scenes use "
+                        "about 1 ms)",
+                        frame, p.x, p.y, p.z, substep_ms));
+                }
             }
+        } catch (const Error& e) {
+            failure = std::current_exception();
+            failure_json = {{"frame", frame}, {"message", e.what()}};
+            break;
         }
         const double ms = watch.elapsed_ms();
         total_ms += ms;
@@ -219,14 +264,20 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"frames", per_frame},
         {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
     };
-    const bool interrupted = frames_done < frames;
+    const bool interrupted = frames_done < frames && !failure;
     stats["interrupted"] = interrupted;
+    stats["error"] = failure_json;  // null after a complete run
     if (preview) {
         stats["preview"] = preview->finish().string();
         stats["preview_ms_per_frame"] = preview->render_ms() / (frames_done + 1);
     }
     io::write_file_atomically(out / "stats.json",
                               [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
+    if (failure) {
+        log_info("frames 0-{} (before the failure) are in {}, stats in {}", frames_done,
+                 frames_dir.string(), (out / "stats.json").string());
+        std::rethrow_exception(failure);
+    }
     if (interrupted) {
         throw Interrupted(
             fmt::format("stopped after frame {} of {}; frames 0-{} in {}, {}stats in {}",

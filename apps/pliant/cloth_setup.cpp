@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <limits>
 #include <span>
+#include <string>
 #include <utility>
 #include <variant>
 
@@ -25,14 +27,27 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
 }
 
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
-geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene) {
+// A mesh file's triangles, or an error naming the scene key when it has none.
+geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
+                                           const std::string& scene_name, const std::string& key) {
+    geometry::TriangleMeshD mesh = io::read_mesh(file);
+    if (mesh.triangles.empty()) {
+        throw InvalidInput(
+            fmt::format("{}: {}: {}: expected a mesh with at least one triangle, "
+                        "got {} vertices and no triangles",
+                        scene_name, key, file.string(), mesh.positions.size()));
+    }
+    return mesh;
+}
+
+geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name) {
     geometry::TriangleMeshD mesh;
     if (scene.grid) {
         mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(
             scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
             static_cast<float>(scene.grid->size[1])));
     } else {
-        mesh = io::read_mesh(scene.mesh);
+        mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
     }
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);
@@ -89,7 +104,7 @@ std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
 
 ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name) {
     ClothSetup setup;
-    setup.mesh = load_cloth(scene);
+    setup.mesh = load_cloth(scene, scene_name);
     for (const cloth::PinGroup& group : scene.pins) {
         setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
     }
@@ -100,13 +115,15 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
     }
     const Vec3d centre = (cloth_box.lo + cloth_box.hi) * 0.5;
     const double plane_half_size = 0.75 * norm(cloth_box.hi - cloth_box.lo) + 0.5;
-    for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
+    for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+        const cloth::SceneObstacle& obstacle = scene.obstacles[k];
         if (obstacle.mesh.empty()) {
             setup.mesh_obstacles.push_back(nullptr);
             setup.shapes.push_back(obstacle_shape(obstacle, nullptr, centre, plane_half_size));
             continue;
         }
-        geometry::TriangleMeshD shape = io::read_mesh(obstacle.mesh);
+        geometry::TriangleMeshD shape = read_nonempty_mesh(
+            obstacle.mesh, scene_name, fmt::format("obstacles[{}].mesh.file", k));
         place(shape.positions, obstacle.mesh_placement);
         setup.shapes.push_back(obstacle_shape(obstacle, &shape, centre, plane_half_size));
         setup.mesh_obstacles.push_back(

@@ -37,6 +37,7 @@
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/cloth_scene.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -83,7 +84,9 @@ void register_cloth(CLI::App& app, const GlobalOptions& global) {
     CLI::App* cmd = app.add_subcommand(
         "cloth", "XPBD cloth simulation of a scene file: mesh frames and per-frame statistics");
     cmd->add_option("SCENE", options->scene, "Scene file (JSON, see docs/formats.md)")->required();
-    cmd->add_option("--out", options->out, "Output directory (created if missing)")->required();
+    cmd->add_option("--out", options->out, "Output directory (created if missing)")
+        ->required()
+        ->check(non_empty_path());
     cmd->add_option("--frames", options->frames, "Frames to simulate (default: the scene's)")
         ->check(CLI::Range(0, 1'000'000));
     cmd->add_flag("--no-preview", options->no_preview,

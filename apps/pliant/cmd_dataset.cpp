@@ -25,6 +25,7 @@
 #include "commands.hpp"
 #include "nerf_run.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "validators.hpp"
 #include "volume_view.hpp"
 
 namespace pliant::cli {
@@ -92,7 +93,9 @@ void register_dataset(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--step", options->step,
                     "Ray-casting step, world units (default 0: half the smallest spacing)")
         ->check(CLI::Range(0.0, 1e30));
-    cmd->add_option("-o,--output", options->out, "Output directory")->required();
+    cmd->add_option("-o,--output", options->out, "Output directory")
+        ->required()
+        ->check(non_empty_path());
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_dataset(*options, global); });
 }

@@ -257,7 +257,9 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::Range(1, 1000000));
     cmd->add_option("--fps", options->fps, "Frames per second (default 24)")
         ->check(CLI::Range(1e-3, 1e4));
-    cmd->add_option("-o,--output", options->out, "Deformed volume of the last frame")->required();
+    cmd->add_option("-o,--output", options->out, "Deformed volume of the last frame")
+        ->required()
+        ->check(non_empty_path());
     cmd->add_option("--render", options->render, "MP4 of every frame, ray-cast");
     cmd->add_option("--tf", options->tf,
                     "Transfer function (preset or JSON) for scalar volumes: rendering, and which "

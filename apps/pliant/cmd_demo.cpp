@@ -81,6 +81,7 @@
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -663,7 +664,8 @@ void register_demo(CLI::App& app, const GlobalOptions& global) {
         "paper's pipeline from images (dataset, radiance "
         "field, cleaning, deformation); writes everything under --out and summary.json");
     cmd->add_option("--out", options->out, "Output directory (created if missing)")
-        ->type_name("DIR");
+        ->type_name("DIR")
+        ->check(non_empty_path());
     cmd->add_option(
            "--cloth-frames", options->cloth_frames,
            "Frames of each cloth scene (default: the scene's own; the untangling step runs at "

@@ -39,6 +39,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/io/nerf_dataset.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -209,7 +210,8 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         "train", "Train a voxel radiance field on transforms.json and export an RGBA volume");
     train->add_option("TRANSFORMS", t->transforms, "transforms_train.json")->required();
     train->add_option("-o,--output", t->out, "Output volume (.nrrd, .nii, .nii.gz, .json)")
-        ->required();
+        ->required()
+        ->check(non_empty_path());
     CLI::Option* minutes =
         train->add_option("--minutes", t->minutes, "Wall-clock budget in minutes (default 2)")
             ->check(CLI::Range(0.0, 1e6));

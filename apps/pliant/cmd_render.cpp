@@ -42,6 +42,7 @@
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "validators.hpp"
 #include "volume_view.hpp"
 
 namespace pliant::cli {
@@ -203,7 +204,9 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
         ->delimiter(',')
         ->check(CLI::Range(-1e12, 1e12))
         ->each([options](const std::string&) { options->has_clip = true; });
-    cmd->add_option("-o,--output", options->out, "Output PNG (or MP4 with --orbit)")->required();
+    cmd->add_option("-o,--output", options->out, "Output PNG (or MP4 with --orbit)")
+        ->required()
+        ->check(non_empty_path());
     cmd->add_option("--orbit", options->orbit, "Turntable of N frames around +z (MP4)")
         ->check(CLI::Range(1, 100000))
         ->excludes(view);

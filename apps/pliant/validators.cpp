@@ -23,4 +23,14 @@ const CLI::Validator& finite_non_negative() {
     return validator;
 }
 
+const CLI::Validator& non_empty_path() {
+    static const CLI::Validator validator(
+        [](std::string& text) -> std::string {
+            return text.empty() ? std::string("must be a path, got an empty string")
+                                : std::string();
+        },
+        "", "NON_EMPTY_PATH");
+    return validator;
+}
+
 }  // namespace pliant::cli

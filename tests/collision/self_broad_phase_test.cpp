@@ -254,6 +254,53 @@ TEST(SelfBroadPhase, PartialUpdateFindsThePairsOfTheChangedVertices) {
     EXPECT_THROW(broad.update_vertices(mesh.positions, p1, inflation, bad), InvalidInput);
 }
 
+// The memory guard: 40 coincident copies of a sheet (every triangle overlaps hundreds of others).
+// Under the limit the pairs are those of an unlimited update; above it the update stops keeping
+// pairs, reports it and returns none; the next update within the limit clears the flag.
+TEST(SelfBroadPhase, PairLimitStopsAnOverlapTooDenseToHold) {
+    const TriangleMesh sheet = geometry::make_grid_sheet(4, 4, 1.0f, 1.0f);
+    TriangleMesh mesh;
+    const int copies = 40;
+    for (int c = 0; c < copies; ++c) {
+        const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+        mesh.positions.insert(mesh.positions.end(), sheet.positions.begin(), sheet.positions.end());
+        for (const geometry::Triangle& t : sheet.triangles) {
+            mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        }
+    }
+    const float inflation = 0.01f;
+    SelfCollisionBroadPhase<float> unlimited(mesh.triangles, mesh.num_vertices());
+    const FeaturePairs all = unlimited.update(mesh.positions, mesh.positions, inflation);
+    const std::int64_t triangle_pairs = unlimited.stats().triangle_pairs;
+    ASSERT_GT(triangle_pairs, 100 * static_cast<std::int64_t>(mesh.num_triangles()));
+    EXPECT_FALSE(unlimited.pair_limit_exceeded());
+
+    SelfCollisionBroadPhase<float> roomy(mesh.triangles, mesh.num_vertices());
+    roomy.set_pair_limit(1000);
+    const FeaturePairs within = roomy.update(mesh.positions, mesh.positions, inflation);
+    EXPECT_FALSE(roomy.pair_limit_exceeded());
+    EXPECT_EQ(within.vertex_face, all.vertex_face);
+    EXPECT_EQ(within.edge_edge, all.edge_edge);
+
+    SelfCollisionBroadPhase<float> tight(mesh.triangles, mesh.num_vertices());
+    tight.set_pair_limit(10);
+    const FeaturePairs& cut = tight.update(mesh.positions, mesh.positions, inflation);
+    EXPECT_TRUE(tight.pair_limit_exceeded());
+    EXPECT_TRUE(cut.vertex_face.empty() && cut.edge_edge.empty());
+    EXPECT_LT(tight.stats().triangle_pairs, triangle_pairs / 2);  // stopped early
+    // Partial updates keep the limit per block of query triangles.
+    std::vector<std::int32_t> changed(mesh.num_vertices());
+    for (std::size_t v = 0; v < changed.size(); ++v) {
+        changed[v] = static_cast<std::int32_t>(v);
+    }
+    tight.update_vertices(mesh.positions, mesh.positions, inflation, changed);
+    EXPECT_TRUE(tight.pair_limit_exceeded());
+    tight.set_pair_limit(0);
+    const FeaturePairs& again = tight.update(mesh.positions, mesh.positions, inflation);
+    EXPECT_FALSE(tight.pair_limit_exceeded());
+    EXPECT_EQ(again.edge_edge, all.edge_edge);
+}
+
 TEST(SelfBroadPhase, TrianglePairFilterDropsTheRTrianglePairsItRejects) {
     TriangleMesh mesh = geometry::make_grid_sheet(20, 12, 1.0f, 0.6f);
     geometry::fold_accordion(mesh.positions, 0.2f, 0.04f);

@@ -349,6 +349,92 @@ f 1 5 2
     EXPECT_FALSE(std::filesystem::exists(scratch / "nan" / "frames" / "frame_0000.obj"));
 }
 
+// A run that cannot go on stops like an interrupt: the frames before the failure, stats.json
+// with "error" (the frame and the message), and a clear error (exit 1). Two causes: substeps far
+// too long for the cloth (it diverges; a warning says so up front), and 400 layers of a sheet
+// stacked 10 µm apart under a 5 mm thickness (the self-collision's pair limit, instead of
+// gigabytes of pairs).
+TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
+    ScratchDir scratch;
+    write(scratch / "diverge.json", R"({"cloth": {"grid": {"size": [2, 2], "quads": [20, 20]}},
+        "air": {"wind": [0, -20, 0]}, "fps": 0.5, "substeps": 2, "self_collision": false,
+        "frames": 10})");
+    const CliResult diverge = run_cli("cloth " + quoted(scratch / "diverge.json") + " --out " +
+                                          quoted(scratch / "diverge") + " --no-preview",
+                                      scratch);
+    EXPECT_EQ(diverge.exit_code, 1);
+    EXPECT_NE(diverge.err.find("substeps of 1e+03 ms"), std::string::npos) << diverge.err;
+    EXPECT_NE(diverge.err.find("pliant: error: cloth: frame"), std::string::npos) << diverge.err;
+    EXPECT_NE(diverge.err.find("the simulation diverged"), std::string::npos) << diverge.err;
+    const nlohmann::json stats =
+        nlohmann::json::parse(read_text(scratch / "diverge" / "stats.json"));
+    const int failed = stats.at("error").at("frame").get<int>();
+    EXPECT_GT(failed, 1);
+    EXPECT_EQ(stats.at("frames").size(), static_cast<std::size_t>(failed - 1));
+    EXPECT_FALSE(stats.at("interrupted").get<bool>());
+    for (int frame = 0; frame < failed; ++frame) {
+        const geometry::TriangleMeshD mesh =
+            io::read_mesh(scratch / "diverge" / "frames" / fmt::format("frame_{:04d}.obj", frame));
+        for (const Vec3d& p : mesh.positions) {
+            EXPECT_TRUE(std::abs(p.x) <= 1e9 && std::abs(p.y) <= 1e9 && std::abs(p.z) <= 1e9);
+        }
+    }
+    EXPECT_FALSE(std::filesystem::exists(scratch / "diverge" / "frames" /
+                                         fmt::format("frame_{:04d}.obj", failed)));
+
+    std::string instances;
+    for (int k = 0; k < 400; ++k) {
+        instances += fmt::format("{}{{\"translate\": [0, 0, {}]}}", k > 0 ? ", " : "", k * 1e-5);
+    }
+    write(scratch / "stack.json",
+          R"({"cloth": {"grid": {"size": [0.1, 0.1], "quads": [2, 2]}, "instances": [)" +
+              instances + R"(]}, "frames": 1})");
+    const CliResult stack = run_cli("cloth " + quoted(scratch / "stack.json") + " --out " +
+                                        quoted(scratch / "stack") + " --no-preview",
+                                    scratch);
+    EXPECT_EQ(stack.exit_code, 1);
+    EXPECT_NE(stack.err.find("more than 1024 pairs of triangles"), std::string::npos) << stack.err;
+    const nlohmann::json stack_stats =
+        nlohmann::json::parse(read_text(scratch / "stack" / "stats.json"));
+    EXPECT_EQ(stack_stats.at("error").at("frame"), 1);
+    EXPECT_TRUE(std::filesystem::exists(scratch / "stack" / "frames" / "frame_0000.obj"));
+
+    // Two identical instances lie through each other everywhere (6.4 intersecting pairs per
+    // triangle): refused before anything is written, untangling or not.
+    write(scratch / "same.json",
+          R"({"cloth": {"grid": {"size": [1, 1], "quads": [8, 8]}, "instances": [{}, {}]}})");
+    const CliResult same = run_cli("cloth " + quoted(scratch / "same.json") + " --out " +
+                                       quoted(scratch / "same") + " --no-preview",
+                                   scratch);
+    EXPECT_EQ(same.exit_code, 1);
+    EXPECT_NE(same.err.find("1648 pairs of triangles"), std::string::npos) << same.err;
+    EXPECT_NE(same.err.find("cannot be untangled"), std::string::npos) << same.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "same"));
+
+    // An empty mesh as the cloth or an obstacle names the key; --out "" is a usage error.
+    write(scratch / "empty.obj", "");
+    write(scratch / "empty.json", R"({"cloth": {"mesh": "empty.obj"}})");
+    const CliResult empty = run_cli("cloth " + quoted(scratch / "empty.json") + " --out " +
+                                        quoted(scratch / "empty") + " --no-preview",
+                                    scratch);
+    EXPECT_EQ(empty.exit_code, 1);
+    EXPECT_NE(empty.err.find("cloth.mesh"), std::string::npos) << empty.err;
+    EXPECT_NE(empty.err.find("at least one triangle"), std::string::npos) << empty.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "empty"));
+    write(
+        scratch / "empty_obstacle.json",
+        R"({"cloth": {"grid": {"quads": [2, 2]}}, "obstacles": [{"mesh": {"file": "empty.obj"}}]})");
+    const CliResult obstacle = run_cli("cloth " + quoted(scratch / "empty_obstacle.json") +
+                                           " --out " + quoted(scratch / "obstacle"),
+                                       scratch);
+    EXPECT_EQ(obstacle.exit_code, 1);
+    EXPECT_NE(obstacle.err.find("obstacles[0].mesh.file"), std::string::npos) << obstacle.err;
+    const CliResult no_out =
+        run_cli("cloth " + quoted(scratch / "empty.json") + " --out \"\"", scratch);
+    EXPECT_EQ(no_out.exit_code, 2);
+    EXPECT_NE(no_out.err.find("--out"), std::string::npos) << no_out.err;
+}
+
 TEST(ClothCommand, BadScenesNameTheKeyAndWriteNothing) {
     ScratchDir scratch;
     write(scratch / "bad.json", R"({"cloth": {"grid": {}}, "material": {"thicknes": 0.01}})");

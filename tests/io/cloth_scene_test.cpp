@@ -141,6 +141,41 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
     expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})", {"not JSON", "overflow"});
 }
 
+// Numbers a JSON parser accepts but the simulation cannot use: integers beyond 64 bits or whose
+// product overflows, grids beyond make_grid_sheet's sides, vectors outside [1e-30, 1e6] in
+// magnitude (gravity 1e300 left the exact predicates' domain mid-run), flat boxes. Each is an
+// error naming the key and the value as written.
+TEST(ClothScene, HostileNumbersNameTheKeyAndTheValue) {
+    expect_error(R"({"cloth": {"grid": {"quads": [4294967296, 4294967296]}}})",
+                 {"cloth.grid.quads", "[1, 16384]", "4294967296"});
+    expect_error(R"({"cloth": {"grid": {"quads": [4611686018427387912, 4]}}})",
+                 {"cloth.grid.quads", "4611686018427387912"});
+    expect_error(R"({"cloth": {"grid": {"quads": [1, 20000]}}})",
+                 {"cloth.grid.quads", "[1,20000]"});
+    expect_error(R"({"cloth": {"grid": {"quads": [10000, 10000]}}})",
+                 {"cloth.grid.quads", "50,000,000"});
+    expect_error(R"({"cloth": {"grid": {"size": [1e-300, 1e-300]}}})",
+                 {"cloth.grid.size", "[1e-6, 1e6]"});
+    expect_error(R"({"cloth": {"grid": {}}, "frames": 18446744073709551615})",
+                 {"frames", "[0, 1000000]", "18446744073709551615"});
+    expect_error(R"({"cloth": {"grid": {}}, "substeps": 9223372036854775808})",
+                 {"substeps", "9223372036854775808"});
+    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, -1e300]})",
+                 {"gravity[2]", "0 or a magnitude in [1e-30, 1000000]", "-1e+300"});
+    expect_error(R"({"cloth": {"grid": {}, "translate": [1e-100, 0, 0.5]}})",
+                 {"cloth.translate[0]", "1e-100"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"plane": {"normal": [0, 0, 1e200]}}]})",
+                 {"obstacles[0].plane.normal[2]"});
+    expect_error(
+        R"({"cloth": {"grid": {}}, "obstacles": [{"box": {"min": [-1, -1, 0], "max": [1, 1, 0]}}]})",
+        {"obstacles[0].box.max", "max > min on every axis", "max (1, 1, 0)"});
+    // The bounds themselves are accepted.
+    const cloth::ClothScene edge = parse(R"({"cloth": {"grid": {"quads": [16384, 2]}},
+                                             "gravity": [1e-30, 0, -1e6]})");
+    EXPECT_EQ(edge.grid->quads[0], 16384);
+    EXPECT_EQ(edge.gravity.z, -1e6);
+}
+
 TEST(ClothScene, InstancesPinGroupsMotionAirAndMeshObstacles) {
     const cloth::ClothScene scene = parse(R"({
         "cloth": {"grid": {"quads": [4, 4]},

@@ -1,5 +1,7 @@
 #include "pliant/cloth/self_collision.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,6 +9,7 @@
 #include "pliant/collision/narrow_phase.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/collision/segment_segment.hpp"
+#include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
 
@@ -27,6 +30,10 @@ constexpr int MAX_PATH_WINDOWS = 64;
 // When more than this fraction of the vertices needs new paths or escapes at once, a full
 // broad phase is cheaper than queries around each of them.
 constexpr double FULL_FRACTION = 0.25;
+// Memory guard: a broad phase that finds more triangle pairs than this per triangle (cloth that
+// diverged, or layers packed far denser than their thickness) is an error, not gigabytes of
+// pairs. Cloth in heavy contact has tens per triangle.
+constexpr std::int64_t MAX_TRIANGLE_PAIRS_PER_TRIANGLE = 1024;
 
 // Pushes the features apart along normal so that their distance grows by `gap`, weighted by the
 // inverse masses w[k] and the closest point's barycentric weights b[k] (signed: + for the first
@@ -131,6 +138,17 @@ SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
       m_edges(&m_broad_phase.topology().edges) {
     // Every pair is filtered further on exact distances: the float boxes are enough.
     m_broad_phase.set_exact(false);
+    m_broad_phase.set_pair_limit(MAX_TRIANGLE_PAIRS_PER_TRIANGLE);
+}
+
+void SelfCollision::check_pair_limit() const {
+    if (m_broad_phase.pair_limit_exceeded()) {
+        throw InvalidInput(fmt::format(
+            "cloth self-collision: more than {} pairs of triangles within reach of one triangle "
+            "(thickness {} m): the simulation diverged (substeps too long for the cloth: raise "
+            "substeps) or layers of cloth are packed far closer than their thickness",
+            MAX_TRIANGLE_PAIRS_PER_TRIANGLE, m_thickness));
+    }
 }
 
 inline SelfCollision::FeatureVertices SelfCollision::feature_vertices(
@@ -439,6 +457,7 @@ void SelfCollision::gather(std::span<const Vec3d> x, std::span<const Vec3d> u, d
     const collision::SelfCollisionBroadPhase<double>::TrianglePairFilter keep(close);
     const collision::FeaturePairs& pairs = m_broad_phase.update(
         std::span<const Vec3d>(m_box_lo), std::span<const Vec3d>(m_box_hi), m_inflation, &keep);
+    check_pair_limit();
     m_broad_phase_ready = true;
     add_broad_phase_times(m_broad_phase.stats());
     ++m_stats.gathers;
@@ -499,6 +518,7 @@ void SelfCollision::renew_paths(std::span<const Vec3d> x, const Vec3d& shift,
         found = &m_broad_phase.update_vertices(lo, hi, m_inflation, m_new_path_vertices, &keep);
         ++m_stats.path_updates;
     }
+    check_pair_limit();
     add_broad_phase_times(m_broad_phase.stats());
     m_stats.new_paths += static_cast<std::int64_t>(m_new_path_vertices.size());
     Stopwatch filter;
@@ -768,6 +788,7 @@ void SelfCollision::search_escaped(std::span<const Vec3d> positions_t0,
         found = &m_broad_phase.update_vertices(lo, hi, m_inflation, m_escaped_now);
         ++m_stats.path_updates;
     }
+    check_pair_limit();
     add_broad_phase_times(m_broad_phase.stats());
     // The pairs that involve an escaped vertex (the others are the candidates' business).
     Stopwatch stage;

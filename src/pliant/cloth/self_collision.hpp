@@ -179,6 +179,8 @@ private:
                 c.is_edge_edge != 0 ? 2u : 1u};
     }
 
+    // Throws InvalidInput when the last broad phase hit its pair limit (MAX_TRIANGLE_PAIRS_...).
+    void check_pair_limit() const;
     // The frame's translation at x: the componentwise median over sample vertices of their
     // displacement since the last gather (a falling sheet's motion; zero for a sheet that rests
     // while a part of it swings).

@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
+#include <climits>
+#include <cstdint>
 
 #include "pliant/bvh/traversal.hpp"
 #include "pliant/collision/incidence.hpp"
@@ -143,6 +146,11 @@ template <typename Real>
 void SelfCollisionBroadPhase<Real>::traverse(const TrianglePairFilter* keep) {
     m_triangle_pair_chunks.reset(bvh::num_overlap_chunks(m_bvh));
     const geometry::Triangle* triangles = m_triangles.data();
+    // A chunk holds the query clusters of CLUSTER_GRAIN wide nodes, at most 4 triangles each.
+    const std::size_t chunk_limit =
+        m_pair_limit > 0 ? static_cast<std::size_t>(m_pair_limit) * bvh::CLUSTER_GRAIN * 4
+                         : SIZE_MAX;
+    std::atomic<bool> exceeded{false};
     bvh::for_each_self_overlap(m_bvh, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
         if (share_vertex(triangles[a], triangles[b])) {
             return;
@@ -150,9 +158,16 @@ void SelfCollisionBroadPhase<Real>::traverse(const TrianglePairFilter* keep) {
         const auto ia = static_cast<std::int32_t>(a);
         const auto ib = static_cast<std::int32_t>(b);
         if (overlaps_exact_tt(ia, ib) && (keep == nullptr || (*keep)(ia, ib))) {
-            m_triangle_pair_chunks.chunk(chunk).emplace_back(ia, ib);
+            AppendBuffer<std::pair<std::int32_t, std::int32_t>>& out =
+                m_triangle_pair_chunks.chunk(chunk);
+            if (out.size() >= chunk_limit) {
+                exceeded.store(true, std::memory_order_relaxed);
+                return;
+            }
+            out.emplace_back(ia, ib);
         }
     });
+    m_pair_limit_exceeded = exceeded.load();
     m_triangle_pair_chunks.gather(m_triangle_pairs);
     m_stats.triangle_pairs = static_cast<std::int64_t>(m_triangle_pairs.size());
 }
@@ -314,6 +329,12 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> p
     watch.restart();
     traverse(keep);
     m_stats.traverse_ms = watch.elapsed_ms();
+    if (m_pair_limit_exceeded) {  // incomplete: no feature pairs
+        m_pairs.vertex_face.clear();
+        m_pairs.edge_edge.clear();
+        m_has_boxes = true;
+        return m_pairs;
+    }
 
     watch.restart();
     test_features();
@@ -461,6 +482,7 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
     const bvh::WideNode* nodes = m_bvh.nodes().data();
     const std::uint32_t* prims = m_bvh.primitives().data();
     std::int64_t triangle_pairs = 0;
+    std::atomic<bool> exceeded{false};
     if (m_bvh.has_nodes()) {
         triangle_pairs = parallel_reduce(
             num_affected, std::int64_t{0},
@@ -469,6 +491,8 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
                 auto& vf = m_vf_chunks.chunk(c);
                 auto& ee = m_ee_chunks.chunk(c);
                 std::int64_t count = 0;
+                const std::int64_t limit =
+                    m_pair_limit > 0 ? m_pair_limit * (end - begin) : INT64_MAX;
                 for (std::int64_t i = begin; i < end; ++i) {
                     const std::int32_t t = m_affected_triangles[static_cast<std::size_t>(i)];
                     const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(t)];
@@ -480,6 +504,10 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
                                             (m_triangle_marks[prims[j]] != 0 && other < t) ||
                                             !overlaps_exact_tt(t, other) ||
                                             (keep != nullptr && !(*keep)(t, other))) {
+                                            return;
+                                        }
+                                        if (count >= limit) {
+                                            exceeded.store(true, std::memory_order_relaxed);
                                             return;
                                         }
                                         ++count;
@@ -515,6 +543,7 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
                 }
             }
         });
+    m_pair_limit_exceeded = exceeded.load();
     m_vf_chunks.gather(m_partial_pairs.vertex_face);
     m_ee_chunks.gather(m_partial_pairs.edge_edge);
     m_stats.traverse_ms = watch.elapsed_ms();

@@ -89,6 +89,14 @@ public:
     // updates that follow use the same setting.
     void set_exact(bool exact) { m_confirm_exact = exact; }
 
+    // A memory guard for callers that cannot bound the overlap (a simulation that diverged, or
+    // hostile input): with a limit L > 0, an update stops keeping triangle pairs once a block of
+    // the traversal (at most 512 query triangles, or 64 in update_vertices) has kept L per
+    // query triangle, and pair_limit_exceeded() is true until the next update; its pairs are then
+    // incomplete and must not be used. 0 (the default): no limit.
+    void set_pair_limit(std::int64_t pairs_per_triangle) { m_pair_limit = pairs_per_triangle; }
+    bool pair_limit_exceeded() const { return m_pair_limit_exceeded; }
+
     // The next update builds the BVH from scratch instead of refitting (after large motion).
     void request_rebuild() { m_needs_build = true; }
 
@@ -142,6 +150,8 @@ private:
     BroadPhaseStats m_stats;
     bool m_has_boxes = false;
     bool m_confirm_exact = true;
+    std::int64_t m_pair_limit = 0;
+    bool m_pair_limit_exceeded = false;
     // Partial updates.
     std::vector<std::uint8_t> m_vertex_marks;    // #V: changed in the current partial update
     std::vector<std::uint8_t> m_triangle_marks;  // #T: contains a changed vertex

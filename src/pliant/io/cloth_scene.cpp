@@ -23,6 +23,12 @@ using detail::json_type_name;
 
 // One JSON object being read: every key must be taken exactly by one of the get functions, and
 // finish() rejects keys nobody took. Errors name the file and the key path.
+// Bounds on the magnitude of a scene vector's nonzero components (see vector_value).
+constexpr double MIN_VECTOR_COMPONENT = 1e-30;
+constexpr double MAX_VECTOR_COMPONENT = 1e6;
+// make_grid_sheet's limit per side (geometry/generate.hpp).
+constexpr std::int64_t MAX_GRID_QUADS_PER_SIDE = 16384;
+
 class ObjectReader {
 public:
     ObjectReader(const Json& object, std::string name, std::string path)
@@ -82,10 +88,12 @@ public:
         if (!value->is_number_integer() && !value->is_number_unsigned()) {
             fail(key_path(key), "an integer", json_type_name(*value));
         }
-        const auto x = value->get<std::int64_t>();
+        // Unsigned values above INT64_MAX would wrap in get<std::int64_t>().
+        const bool too_large = value->is_number_unsigned() &&
+                               value->get<std::uint64_t>() > static_cast<std::uint64_t>(hi);
+        const auto x = too_large ? std::int64_t{hi} + 1 : value->get<std::int64_t>();
         if (x < lo || x > hi) {
-            fail(key_path(key), fmt::format("an integer in [{}, {}]", lo, hi),
-                 fmt::format("{}", x));
+            fail(key_path(key), fmt::format("an integer in [{}, {}]", lo, hi), value->dump());
         }
         return static_cast<int>(x);
     }
@@ -117,6 +125,17 @@ public:
                 fail(fmt::format("{}[{}]", where, k), "a finite number", json_type_name(value[k]));
             }
             c[k] = value[k].get<double>();
+            // Scene vectors are positions (m), velocities, accelerations and angles: beyond
+            // these bounds they are mistakes, and the exact predicates' domain (below 1e-90 or
+            // above 1e90) is left in the first steps.
+            const double magnitude = std::abs(c[k]);
+            if (magnitude != 0.0 &&
+                !(magnitude >= MIN_VECTOR_COMPONENT && magnitude <= MAX_VECTOR_COMPONENT)) {
+                fail(fmt::format("{}[{}]", where, k),
+                     fmt::format("0 or a magnitude in [{}, {}]", MIN_VECTOR_COMPONENT,
+                                 MAX_VECTOR_COMPONENT),
+                     value[k].dump());
+            }
         }
         return {c[0], c[1], c[2]};
     }
@@ -303,8 +322,10 @@ cloth::SceneObstacle read_obstacle(const Json& value, const std::string& name,
         cloth::BoxObstacle box;
         box.min = o.required_vector("min");
         box.max = o.required_vector("max");
-        if (!(box.min.x <= box.max.x && box.min.y <= box.max.y && box.min.z <= box.max.z)) {
-            o.fail(o.key_path("max"), "max >= min on every axis", "a smaller value");
+        if (!(box.min.x < box.max.x && box.min.y < box.max.y && box.min.z < box.max.z)) {
+            o.fail(o.key_path("max"), "max > min on every axis",
+                   fmt::format("min ({}, {}, {}), max ({}, {}, {})", box.min.x, box.min.y,
+                               box.min.z, box.max.x, box.max.y, box.max.z));
         }
         obstacle = box;
     });
@@ -352,26 +373,40 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             const Json* size = g.find("size");
             if (size != nullptr) {
                 if (!size->is_array() || size->size() != 2 || !(*size)[0].is_number() ||
-                    !(*size)[1].is_number() || !((*size)[0].get<double>() > 0.0) ||
-                    !((*size)[1].get<double>() > 0.0) || !((*size)[0].get<double>() < 1e6) ||
-                    !((*size)[1].get<double>() < 1e6)) {
-                    g.fail(g.key_path("size"), "[width, height] in metres, each in (0, 1e6)",
+                    !(*size)[1].is_number() || !((*size)[0].get<double>() >= 1e-6) ||
+                    !((*size)[1].get<double>() >= 1e-6) || !((*size)[0].get<double>() <= 1e6) ||
+                    !((*size)[1].get<double>() <= 1e6)) {
+                    g.fail(g.key_path("size"), "[width, height] in metres, each in [1e-6, 1e6]",
                            size->dump());
                 }
                 grid.size = {(*size)[0].get<double>(), (*size)[1].get<double>()};
             }
             const Json* quads = g.find("quads");
             if (quads != nullptr) {
-                if (!quads->is_array() || quads->size() != 2 || !(*quads)[0].is_number_integer() ||
-                    !(*quads)[1].is_number_integer() || (*quads)[0].get<std::int64_t>() < 1 ||
-                    (*quads)[1].get<std::int64_t>() < 1 ||
-                    (*quads)[0].get<std::int64_t>() * (*quads)[1].get<std::int64_t>() >
-                        50'000'000) {
+                // Each side in [1, MAX_GRID_QUADS_PER_SIDE] (0 when not; unsigned values
+                // above INT64_MAX would wrap), then the product, which cannot overflow.
+                const auto side = [](const Json& v) -> std::int64_t {
+                    if (v.is_number_unsigned()) {
+                        const auto u = v.get<std::uint64_t>();
+                        return u >= 1 && u <= MAX_GRID_QUADS_PER_SIDE ? static_cast<std::int64_t>(u)
+                                                                      : 0;
+                    }
+                    if (v.is_number_integer()) {
+                        const auto i = v.get<std::int64_t>();
+                        return i >= 1 && i <= MAX_GRID_QUADS_PER_SIDE ? i : 0;
+                    }
+                    return 0;
+                };
+                const bool pair = quads->is_array() && quads->size() == 2;
+                const std::int64_t nx = pair ? side((*quads)[0]) : 0;
+                const std::int64_t ny = pair ? side((*quads)[1]) : 0;
+                if (nx == 0 || ny == 0 || nx * ny > 50'000'000) {
                     g.fail(g.key_path("quads"),
-                           "[nx, ny], integers >= 1 with nx * ny <= 50,000,000", quads->dump());
+                           fmt::format("[nx, ny], integers in [1, {}] with nx * ny <= 50,000,000",
+                                       MAX_GRID_QUADS_PER_SIDE),
+                           quads->dump());
                 }
-                grid.quads = {static_cast<int>((*quads)[0].get<std::int64_t>()),
-                              static_cast<int>((*quads)[1].get<std::int64_t>())};
+                grid.quads = {static_cast<int>(nx), static_cast<int>(ny)};
             }
             scene.grid = grid;
         });
