@@ -169,6 +169,9 @@ TEST(ClothScene, HostileNumbersNameTheKeyAndTheValue) {
     expect_error(
         R"({"cloth": {"grid": {}}, "obstacles": [{"box": {"min": [-1, -1, 0], "max": [1, 1, 0]}}]})",
         {"obstacles[0].box.max", "max > min on every axis", "max (1, 1, 0)"});
+    // A key with a NUL in it is printed escaped, not cut short.
+    expect_error("{\"cloth\": {\"grid\": {}}, \"f\\u0000ps\": 24}",
+                 {"\"f\\u0000ps\"", "unknown key"});
     // The bounds themselves are accepted.
     const cloth::ClothScene edge = parse(R"({"cloth": {"grid": {"quads": [16384, 2]}},
                                              "gravity": [1e-30, 0, -1e6]})");

@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <set>
@@ -180,6 +182,15 @@ public:
 
     const std::string& name() const { return m_name; }
 
+    // A key as it can be printed: JSON-escaped and quoted when it holds control characters (a
+    // NUL would cut the error message short).
+    static std::string printable_key(const std::string& key) {
+        const bool plain = std::none_of(key.begin(), key.end(), [](char c) {
+            return static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+        });
+        return plain ? key : Json(key).dump(-1, ' ', false, Json::error_handler_t::replace);
+    }
+
     void finish() const {
         for (const auto& [key, value] : m_object.items()) {
             if (m_known.count(key) == 0) {
@@ -187,7 +198,8 @@ public:
                 for (const std::string& k : m_known) {
                     list += fmt::format("{}{}", list.empty() ? "" : ", ", k);
                 }
-                fail(key_path(key), fmt::format("a known key ({})", list), "an unknown key");
+                fail(key_path(printable_key(key)), fmt::format("a known key ({})", list),
+                     "an unknown key");
             }
         }
     }
