@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -45,6 +47,28 @@ constexpr double MAX_QUIET_SUBSTEP_MS = 5.0;
 constexpr double MAX_COORDINATE = 1e9;
 // Input cloth with more intersecting pairs than this per triangle (on average) is refused.
 constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
+
+// Removes the frame files of an earlier run into the same directory that this run did not
+// replace: frame_NNNN.obj / .ply numbered above last_frame, or in the other format. Called once
+// this run's frames are written, so frames/ holds exactly the frames stats.json describes.
+void remove_stale_frames(const std::filesystem::path& frames_dir, int last_frame,
+                         const std::string& format) {
+    for (const std::filesystem::directory_entry& entry :
+         std::filesystem::directory_iterator(frames_dir)) {
+        const std::string name = entry.path().filename().string();
+        const std::string extension = entry.path().extension().string();
+        const std::string digits = entry.path().stem().string().substr(
+            std::min<std::size_t>(6, entry.path().stem().string().size()));
+        const bool ours = name.rfind("frame_", 0) == 0 && digits.size() >= 4 &&
+                          std::all_of(digits.begin(), digits.end(),
+                                      [](char c) { return c >= '0' && c <= '9'; }) &&
+                          (extension == ".obj" || extension == ".ply") && entry.is_regular_file();
+        if (ours &&
+            (extension != "." + format || digits.size() > 9 || std::stoi(digits) > last_frame)) {
+            std::filesystem::remove(entry.path());
+        }
+    }
+}
 
 extern "C" void on_interrupt(int /*signal*/) {
     g_interrupted = 1;
@@ -264,6 +288,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"frames", per_frame},
         {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
     };
+    remove_stale_frames(frames_dir, frames_done, scene.frame_format);
     const bool interrupted = frames_done < frames && !failure;
     stats["interrupted"] = interrupted;
     stats["error"] = failure_json;  // null after a complete run

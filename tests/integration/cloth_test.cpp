@@ -435,6 +435,28 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
     EXPECT_NE(no_out.err.find("--out"), std::string::npos) << no_out.err;
 }
 
+// A second run into the same directory leaves frames/ holding exactly its own frames: the
+// earlier run's later frames, and those in the other format, are removed once it is done; other
+// files stay.
+TEST(ClothCommand, RerunLeavesOnlyItsOwnFrames) {
+    ScratchDir scratch;
+    write(scratch / "s.json",
+          R"({"cloth": {"grid": {"size": [1, 1], "quads": [4, 4]}}, "substeps": 2})");
+    const std::string run = "cloth " + quoted(scratch / "s.json") + " --out " +
+                            quoted(scratch / "out") + " --no-preview --frames ";
+    ASSERT_EQ(run_cli(run + "3", scratch).exit_code, 0);
+    const std::filesystem::path frames = scratch / "out" / "frames";
+    write(frames / "frame_0002.ply", "not ours to keep");
+    write(frames / "notes.txt", "mine");
+    ASSERT_EQ(run_cli(run + "1", scratch).exit_code, 0);
+    std::vector<std::string> names;
+    for (const auto& entry : std::filesystem::directory_iterator(frames)) {
+        names.push_back(entry.path().filename().string());
+    }
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"frame_0000.obj", "frame_0001.obj", "notes.txt"}));
+}
+
 TEST(ClothCommand, BadScenesNameTheKeyAndWriteNothing) {
     ScratchDir scratch;
     write(scratch / "bad.json", R"({"cloth": {"grid": {}}, "material": {"thicknes": 0.01}})");
