@@ -70,6 +70,23 @@ void remove_stale_frames(const std::filesystem::path& frames_dir, int last_frame
     }
 }
 
+// Throws the exception in `failure` again, of the same type, with `context` before its message.
+[[noreturn]] void rethrow_with_context(const std::exception_ptr& failure,
+                                       const std::string& context) {
+    try {
+        std::rethrow_exception(failure);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(context + e.what());
+    } catch (const IoError& e) {
+        throw IoError(context + e.what());
+    } catch (const Unsupported& e) {
+        throw Unsupported(context + e.what());
+    } catch (const InternalError& e) {
+        throw InternalError(context + e.what());
+    }
+    std::rethrow_exception(failure);  // another type: unchanged (not reached: caught above)
+}
+
 extern "C" void on_interrupt(int /*signal*/) {
     g_interrupted = 1;
 }
@@ -178,7 +195,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const double substep_ms = 1e3 * dt / scene.substeps;
     if (substep_ms > MAX_QUIET_SUBSTEP_MS) {
         log_warning(
-            "{}: substeps of {:.3g} ms (fps {} x {} substeps): above about {} ms cloth stretches "
+            "{}: substeps of {:.4g} ms (fps {} x {} substeps): above about {} ms cloth stretches "
             "far and can diverge; raise substeps (the built-in scenes use about 1 ms)",
             scene_name, substep_ms, scene.frames_per_second, scene.substeps, MAX_QUIET_SUBSTEP_MS);
     }
@@ -207,11 +224,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                 if (!(std::abs(p.x) <= MAX_COORDINATE && std::abs(p.y) <= MAX_COORDINATE &&
                       std::abs(p.z) <= MAX_COORDINATE)) {
                     throw InvalidInput(fmt::format(
-                        "cloth: frame {}: the simulation diverged (a vertex at ({:.3g}, {:.3g}, "
-                        "{:.3g}) m) "
-                        "with substeps of {:.3g} ms; raise substeps (the built-in scenes use "
-                        "about 1 ms)",
-                        frame, p.x, p.y, p.z, substep_ms));
+                        "the simulation diverged: a vertex at ({:.3g}, {:.3g}, {:.3g}) m, "
+                        "expected finite coordinates within {:g} m, with substeps of {:.4g} ms; "
+                        "raise substeps (the built-in scenes use about 1 ms)",
+                        p.x, p.y, p.z, MAX_COORDINATE, substep_ms));
                 }
             }
         } catch (const Error& e) {
@@ -301,7 +317,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     if (failure) {
         log_info("frames 0-{} (before the failure) are in {}, stats in {}", frames_done,
                  frames_dir.string(), (out / "stats.json").string());
-        std::rethrow_exception(failure);
+        rethrow_with_context(failure, fmt::format("{}: frame {}: ", scene_name, frames_done + 1));
     }
     if (interrupted) {
         throw Interrupted(

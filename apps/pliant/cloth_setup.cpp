@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <span>
@@ -27,7 +28,8 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
 }
 
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
-// A mesh file's triangles, or an error naming the scene key when it has none.
+// A mesh file's triangles, or an error naming the scene key when it has none or a coordinate
+// beyond 1e6 m.
 geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
                                            const std::string& scene_name, const std::string& key) {
     geometry::TriangleMeshD mesh = io::read_mesh(file);
@@ -36,6 +38,18 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
             fmt::format("{}: {}: {}: expected a mesh with at least one triangle, "
                         "got {} vertices and no triangles",
                         scene_name, key, file.string(), mesh.positions.size()));
+    }
+    // The scene's own bound on positions (io/cloth_scene.hpp): beyond it a run would end as
+    // "diverged" at its first frame.
+    constexpr double MAX_MESH_COORDINATE = 1e6;
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        const Vec3d& p = mesh.positions[v];
+        if (!(std::abs(p.x) <= MAX_MESH_COORDINATE && std::abs(p.y) <= MAX_MESH_COORDINATE &&
+              std::abs(p.z) <= MAX_MESH_COORDINATE)) {
+            throw InvalidInput(fmt::format(
+                "{}: {}: {}: vertex {} at ({}, {}, {}): expected coordinates within {:g} m",
+                scene_name, key, file.string(), v, p.x, p.y, p.z, MAX_MESH_COORDINATE));
+        }
     }
     return mesh;
 }

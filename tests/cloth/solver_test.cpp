@@ -224,6 +224,29 @@ TEST(ClothSolver, EverythingPinnedStaysPutAndHugeStepsStayFinite) {
     }
 }
 
+// Self-collision with a thickness of more than 4 median edge lengths is refused (every triangle
+// would be within reach of hundreds of others); 4 is accepted. A 20 × 20 grid of 10 cm: edges of
+// 5 mm (sides) and 7.1 mm (diagonals), median 5 mm.
+TEST(ClothSolver, ThicknessAboveFourEdgeLengthsIsRefused) {
+    const geometry::TriangleMeshD mesh = sheet(20, 0.1, 0.0);
+    ClothMaterial thick;
+    thick.thickness = 0.0201;
+    ClothSolver refused(mesh, thick);
+    try {
+        refused.enable_self_collision(true);
+        ADD_FAILURE() << "a thickness of 4.02 edge lengths was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("4.0 times the median edge length (0.005 m)"),
+                  std::string::npos)
+            << e.what();
+    }
+    ClothMaterial limit;
+    limit.thickness = 0.0199;
+    ClothSolver accepted(mesh, limit);
+    EXPECT_NO_THROW(accepted.enable_self_collision(true));
+    EXPECT_NO_THROW(refused.enable_self_collision(false));  // without it, any thickness
+}
+
 // A horizontal sheet falling through still air reaches the terminal speed of a flat plate,
 // ½ ρ C_d A v² = m g, so v = sqrt(2 ρ_A g / (ρ C_d)) with ρ_A the areal density (m / A):
 // sqrt(2 · 0.15 · 9.81 / 1.2) = 1.566 m/s for the default material. Wind blowing upward at that

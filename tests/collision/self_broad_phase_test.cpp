@@ -256,7 +256,8 @@ TEST(SelfBroadPhase, PartialUpdateFindsThePairsOfTheChangedVertices) {
 
 // The memory guard: 40 coincident copies of a sheet (every triangle overlaps hundreds of others).
 // Under the limit the pairs are those of an unlimited update; above it the update stops keeping
-// pairs, reports it and returns none; the next update within the limit clears the flag.
+// pairs, reports it, returns none and allows no partial update on it; the next update within the
+// limit clears the flag.
 TEST(SelfBroadPhase, PairLimitStopsAnOverlapTooDenseToHold) {
     const TriangleMesh sheet = geometry::make_grid_sheet(4, 4, 1.0f, 1.0f);
     TriangleMesh mesh;
@@ -287,18 +288,22 @@ TEST(SelfBroadPhase, PairLimitStopsAnOverlapTooDenseToHold) {
     const FeaturePairs& cut = tight.update(mesh.positions, mesh.positions, inflation);
     EXPECT_TRUE(tight.pair_limit_exceeded());
     EXPECT_TRUE(cut.vertex_face.empty() && cut.edge_edge.empty());
-    EXPECT_LT(tight.stats().triangle_pairs, triangle_pairs / 2);  // stopped early
-    // Partial updates keep the limit per block of query triangles.
+    EXPECT_EQ(tight.stats().triangle_pairs, 0);  // none kept
+    // No partial update on an incomplete full one.
     std::vector<std::int32_t> changed(mesh.num_vertices());
     for (std::size_t v = 0; v < changed.size(); ++v) {
         changed[v] = static_cast<std::int32_t>(v);
     }
-    tight.update_vertices(mesh.positions, mesh.positions, inflation, changed);
-    EXPECT_TRUE(tight.pair_limit_exceeded());
+    EXPECT_THROW(tight.update_vertices(mesh.positions, mesh.positions, inflation, changed),
+                 InvalidInput);
     tight.set_pair_limit(0);
     const FeaturePairs& again = tight.update(mesh.positions, mesh.positions, inflation);
     EXPECT_FALSE(tight.pair_limit_exceeded());
     EXPECT_EQ(again.edge_edge, all.edge_edge);
+    // Partial updates keep the limit per block of changed triangles.
+    tight.set_pair_limit(10);
+    tight.update_vertices(mesh.positions, mesh.positions, inflation, changed);
+    EXPECT_TRUE(tight.pair_limit_exceeded());
 }
 
 TEST(SelfBroadPhase, TrianglePairFilterDropsTheRTrianglePairsItRejects) {

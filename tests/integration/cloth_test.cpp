@@ -351,8 +351,8 @@ f 1 5 2
 
 // A run that cannot go on stops like an interrupt: the frames before the failure, stats.json
 // with "error" (the frame and the message), and a clear error (exit 1). Two causes: substeps far
-// too long for the cloth (it diverges; a warning says so up front), and 400 layers of a sheet
-// stacked 10 µm apart under a 5 mm thickness (the self-collision's pair limit, instead of
+// too long for the cloth (it diverges; a warning says so up front), and 800 layers of a sheet
+// stacked 5 µm apart under a 5 mm thickness (the self-collision's pair limit, instead of
 // gigabytes of pairs).
 TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
     ScratchDir scratch;
@@ -363,8 +363,10 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
                                           quoted(scratch / "diverge") + " --no-preview",
                                       scratch);
     EXPECT_EQ(diverge.exit_code, 1);
-    EXPECT_NE(diverge.err.find("substeps of 1e+03 ms"), std::string::npos) << diverge.err;
-    EXPECT_NE(diverge.err.find("pliant: error: cloth: frame"), std::string::npos) << diverge.err;
+    EXPECT_NE(diverge.err.find("substeps of 1000 ms"), std::string::npos) << diverge.err;
+    EXPECT_NE(diverge.err.find("pliant: error: " + (scratch / "diverge.json").string() + ": frame"),
+              std::string::npos)
+        << diverge.err;
     EXPECT_NE(diverge.err.find("the simulation diverged"), std::string::npos) << diverge.err;
     const nlohmann::json stats =
         nlohmann::json::parse(read_text(scratch / "diverge" / "stats.json"));
@@ -383,8 +385,8 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
                                          fmt::format("frame_{:04d}.obj", failed)));
 
     std::string instances;
-    for (int k = 0; k < 400; ++k) {
-        instances += fmt::format("{}{{\"translate\": [0, 0, {}]}}", k > 0 ? ", " : "", k * 1e-5);
+    for (int k = 0; k < 800; ++k) {
+        instances += fmt::format("{}{{\"translate\": [0, 0, {}]}}", k > 0 ? ", " : "", k * 5e-6);
     }
     write(scratch / "stack.json",
           R"({"cloth": {"grid": {"size": [0.1, 0.1], "quads": [2, 2]}, "instances": [)" +
@@ -393,7 +395,9 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
                                         quoted(scratch / "stack") + " --no-preview",
                                     scratch);
     EXPECT_EQ(stack.exit_code, 1);
-    EXPECT_NE(stack.err.find("more than 1024 pairs of triangles"), std::string::npos) << stack.err;
+    EXPECT_NE(stack.err.find("more than 64 pairs of triangles or 256 pairs of features"),
+              std::string::npos)
+        << stack.err;
     const nlohmann::json stack_stats =
         nlohmann::json::parse(read_text(scratch / "stack" / "stats.json"));
     EXPECT_EQ(stack_stats.at("error").at("frame"), 1);
@@ -429,6 +433,15 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
                                        scratch);
     EXPECT_EQ(obstacle.exit_code, 1);
     EXPECT_NE(obstacle.err.find("obstacles[0].mesh.file"), std::string::npos) << obstacle.err;
+    write(scratch / "far.obj", "v 0 0 0\nv 1e7 0 0\nv 0 1 0\nf 1 2 3\n");
+    write(scratch / "far.json", R"({"cloth": {"mesh": "far.obj"}})");
+    const CliResult far = run_cli(
+        "cloth " + quoted(scratch / "far.json") + " --out " + quoted(scratch / "far"), scratch);
+    EXPECT_EQ(far.exit_code, 1);
+    EXPECT_NE(far.err.find("cloth.mesh"), std::string::npos) << far.err;
+    EXPECT_NE(far.err.find("vertex 1 at (10000000, 0, 0): expected coordinates within 1e+06 m"),
+              std::string::npos)
+        << far.err;
     const CliResult no_out =
         run_cli("cloth " + quoted(scratch / "empty.json") + " --out \"\"", scratch);
     EXPECT_EQ(no_out.exit_code, 2);

@@ -30,10 +30,21 @@ constexpr int MAX_PATH_WINDOWS = 64;
 // When more than this fraction of the vertices needs new paths or escapes at once, a full
 // broad phase is cheaper than queries around each of them.
 constexpr double FULL_FRACTION = 0.25;
-// Memory guard: a broad phase that finds more triangle pairs than this per triangle (cloth that
-// diverged, or layers packed far denser than their thickness) is an error, not gigabytes of
-// pairs. Cloth in heavy contact has tens per triangle.
-constexpr std::int64_t MAX_TRIANGLE_PAIRS_PER_TRIANGLE = 1024;
+// Memory guards: a broad phase that keeps more triangle pairs than this per triangle of the
+// mesh, or returns more feature pairs, is an error (cloth that diverged, or layers packed far
+// closer than their thickness), not gigabytes of pairs and candidates. The built-in scenes'
+// worst broad phases: 14 triangle pairs and 23 feature pairs per triangle (the pile's impact).
+// Small meshes may have every pair within reach (violent motion): below MIN_PAIR_BUDGET pairs
+// (tens of MB) there is no limit.
+constexpr std::int64_t MAX_TRIANGLE_PAIRS_PER_TRIANGLE = 64;
+constexpr std::int64_t MAX_FEATURE_PAIRS_PER_TRIANGLE = 256;
+constexpr std::int64_t MIN_PAIR_BUDGET = std::int64_t{1} << 22;
+
+// The pair limits for a mesh of `triangles` triangles: per triangle, or MIN_PAIR_BUDGET in all.
+std::int64_t pair_limit_per_triangle(std::int64_t per_triangle, std::int64_t triangles) {
+    return std::max(per_triangle,
+                    (MIN_PAIR_BUDGET + triangles - 1) / std::max<std::int64_t>(triangles, 1));
+}
 
 // Pushes the features apart along normal so that their distance grows by `gap`, weighted by the
 // inverse masses w[k] and the closest point's barycentric weights b[k] (signed: + for the first
@@ -138,16 +149,27 @@ SelfCollision::SelfCollision(std::span<const geometry::Triangle> triangles,
       m_edges(&m_broad_phase.topology().edges) {
     // Every pair is filtered further on exact distances: the float boxes are enough.
     m_broad_phase.set_exact(false);
-    m_broad_phase.set_pair_limit(MAX_TRIANGLE_PAIRS_PER_TRIANGLE);
+    m_broad_phase.set_pair_limit(pair_limit_per_triangle(
+        MAX_TRIANGLE_PAIRS_PER_TRIANGLE, static_cast<std::int64_t>(triangles.size())));
 }
 
-void SelfCollision::check_pair_limit() const {
-    if (m_broad_phase.pair_limit_exceeded()) {
+void SelfCollision::check_pair_limit(const collision::FeaturePairs& found) {
+    const auto triangles = static_cast<std::int64_t>(m_triangles.size());
+    const auto feature_pairs =
+        static_cast<std::int64_t>(found.vertex_face.size() + found.edge_edge.size());
+    if (m_broad_phase.pair_limit_exceeded() ||
+        feature_pairs >
+            pair_limit_per_triangle(MAX_FEATURE_PAIRS_PER_TRIANGLE, triangles) * triangles) {
+        // Paths and candidates are half renewed: the next call starts over.
+        m_has_gather = false;
+        m_broad_phase_ready = false;
+        m_candidates.clear();
         throw InvalidInput(fmt::format(
-            "cloth self-collision: more than {} pairs of triangles within reach of one triangle "
-            "(thickness {} m): the simulation diverged (substeps too long for the cloth: raise "
-            "substeps) or layers of cloth are packed far closer than their thickness",
-            MAX_TRIANGLE_PAIRS_PER_TRIANGLE, m_thickness));
+            "cloth self-collision: more than {} pairs of triangles or {} pairs of features per "
+            "triangle within reach of each other (thickness {} m): the simulation diverged "
+            "(substeps too long for the cloth: raise substeps) or layers of cloth are packed far "
+            "closer than their thickness",
+            MAX_TRIANGLE_PAIRS_PER_TRIANGLE, MAX_FEATURE_PAIRS_PER_TRIANGLE, m_thickness));
     }
 }
 
@@ -457,7 +479,7 @@ void SelfCollision::gather(std::span<const Vec3d> x, std::span<const Vec3d> u, d
     const collision::SelfCollisionBroadPhase<double>::TrianglePairFilter keep(close);
     const collision::FeaturePairs& pairs = m_broad_phase.update(
         std::span<const Vec3d>(m_box_lo), std::span<const Vec3d>(m_box_hi), m_inflation, &keep);
-    check_pair_limit();
+    check_pair_limit(pairs);
     m_broad_phase_ready = true;
     add_broad_phase_times(m_broad_phase.stats());
     ++m_stats.gathers;
@@ -518,7 +540,7 @@ void SelfCollision::renew_paths(std::span<const Vec3d> x, const Vec3d& shift,
         found = &m_broad_phase.update_vertices(lo, hi, m_inflation, m_new_path_vertices, &keep);
         ++m_stats.path_updates;
     }
-    check_pair_limit();
+    check_pair_limit(*found);
     add_broad_phase_times(m_broad_phase.stats());
     m_stats.new_paths += static_cast<std::int64_t>(m_new_path_vertices.size());
     Stopwatch filter;
@@ -788,7 +810,7 @@ void SelfCollision::search_escaped(std::span<const Vec3d> positions_t0,
         found = &m_broad_phase.update_vertices(lo, hi, m_inflation, m_escaped_now);
         ++m_stats.path_updates;
     }
-    check_pair_limit();
+    check_pair_limit(*found);
     add_broad_phase_times(m_broad_phase.stats());
     // The pairs that involve an escaped vertex (the others are the candidates' business).
     Stopwatch stage;

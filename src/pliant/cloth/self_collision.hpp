@@ -179,8 +179,10 @@ private:
                 c.is_edge_edge != 0 ? 2u : 1u};
     }
 
-    // Throws InvalidInput when the last broad phase hit its pair limit (MAX_TRIANGLE_PAIRS_...).
-    void check_pair_limit() const;
+    // Throws InvalidInput when the last broad phase hit its pair limit or found more feature
+    // pairs than MAX_FEATURE_PAIRS_PER_TRIANGLE per triangle (found: its pairs); the next
+    // prepare() or enforce() then starts over with a full gather.
+    void check_pair_limit(const collision::FeaturePairs& found);
     // The frame's translation at x: the componentwise median over sample vertices of their
     // displacement since the last gather (a falling sheet's motion; zero for a sheet that rests
     // while a part of it swings).

@@ -24,6 +24,10 @@ constexpr std::int64_t VERTEX_GRAIN = 2048;
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
 constexpr int FAIL_SAFE_WINDOW = 4;
+// Self-collision needs a thickness of at most this many median edge lengths: with more, every
+// triangle is within reach of hundreds of others (in a flat sheet about 2π (thickness / edge)²),
+// and a broad phase costs gigabytes (a 5 cm sheet of 134 × 134 quads under 5 mm: 24 GB).
+constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
 // A strain limit moves its two vertices by at most this fraction of the thickness per substep
 // (per limit: a vertex in several limits can move several times that; strain_hierarchy.hpp).
 // Larger moves outran the self-collision's proximity constraints: at half the thickness the
@@ -187,6 +191,20 @@ void ClothSolver::enable_self_collision(bool enabled) {
     if (!enabled) {
         m_self_collision.reset();
     } else if (!m_self_collision) {
+        if (!m_rest_lengths.empty()) {
+            std::vector<double> lengths = m_rest_lengths;
+            const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+            std::nth_element(lengths.begin(), middle, lengths.end());
+            if (m_material.thickness > MAX_THICKNESS_IN_EDGES * *middle) {
+                throw InvalidInput(fmt::format(
+                    "cloth: self-collision: material.thickness ({} m) is {:.1f} times the "
+                    "median edge length ({:.3g} m), expected at most {}: every triangle would be "
+                    "within reach of hundreds of others; use a smaller thickness or a coarser "
+                    "mesh, or turn self_collision off",
+                    m_material.thickness, m_material.thickness / *middle, *middle,
+                    MAX_THICKNESS_IN_EDGES));
+            }
+        }
         m_self_collision =
             std::make_unique<SelfCollision>(m_triangles, m_positions.size(), m_material.thickness);
         m_gather_end_time = -std::numeric_limits<double>::infinity();

@@ -146,13 +146,15 @@ template <typename Real>
 void SelfCollisionBroadPhase<Real>::traverse(const TrianglePairFilter* keep) {
     m_triangle_pair_chunks.reset(bvh::num_overlap_chunks(m_bvh));
     const geometry::Triangle* triangles = m_triangles.data();
-    // A chunk holds the query clusters of CLUSTER_GRAIN wide nodes, at most 4 triangles each.
-    const std::size_t chunk_limit =
-        m_pair_limit > 0 ? static_cast<std::size_t>(m_pair_limit) * bvh::CLUSTER_GRAIN * 4
-                         : SIZE_MAX;
+    // The limit on all kept pairs, counted in steps of PAIR_LIMIT_STEP per chunk (so it may be
+    // passed by less than a step per chunk).
+    constexpr std::size_t PAIR_LIMIT_STEP = 256;
+    const std::int64_t budget =
+        m_pair_limit > 0 ? m_pair_limit * static_cast<std::int64_t>(m_triangles.size()) : INT64_MAX;
+    std::atomic<std::int64_t> kept{0};
     std::atomic<bool> exceeded{false};
     bvh::for_each_self_overlap(m_bvh, [&](std::int64_t chunk, std::uint32_t a, std::uint32_t b) {
-        if (share_vertex(triangles[a], triangles[b])) {
+        if (exceeded.load(std::memory_order_relaxed) || share_vertex(triangles[a], triangles[b])) {
             return;
         }
         const auto ia = static_cast<std::int32_t>(a);
@@ -160,14 +162,21 @@ void SelfCollisionBroadPhase<Real>::traverse(const TrianglePairFilter* keep) {
         if (overlaps_exact_tt(ia, ib) && (keep == nullptr || (*keep)(ia, ib))) {
             AppendBuffer<std::pair<std::int32_t, std::int32_t>>& out =
                 m_triangle_pair_chunks.chunk(chunk);
-            if (out.size() >= chunk_limit) {
-                exceeded.store(true, std::memory_order_relaxed);
-                return;
-            }
             out.emplace_back(ia, ib);
+            if (out.size() % PAIR_LIMIT_STEP == 0 &&
+                kept.fetch_add(PAIR_LIMIT_STEP, std::memory_order_relaxed) +
+                        static_cast<std::int64_t>(PAIR_LIMIT_STEP) >
+                    budget) {
+                exceeded.store(true, std::memory_order_relaxed);
+            }
         }
     });
     m_pair_limit_exceeded = exceeded.load();
+    if (m_pair_limit_exceeded) {  // incomplete: not gathered (the copy would double the peak)
+        m_triangle_pairs.clear();
+        m_stats.triangle_pairs = 0;
+        return;
+    }
     m_triangle_pair_chunks.gather(m_triangle_pairs);
     m_stats.triangle_pairs = static_cast<std::int64_t>(m_triangle_pairs.size());
 }
@@ -329,10 +338,10 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update(std::span<const Vec> p
     watch.restart();
     traverse(keep);
     m_stats.traverse_ms = watch.elapsed_ms();
-    if (m_pair_limit_exceeded) {  // incomplete: no feature pairs
+    if (m_pair_limit_exceeded) {  // incomplete: no feature pairs, no partial updates on it
         m_pairs.vertex_face.clear();
         m_pairs.edge_edge.clear();
-        m_has_boxes = true;
+        m_has_boxes = false;
         return m_pairs;
     }
 

@@ -90,10 +90,12 @@ public:
     void set_exact(bool exact) { m_confirm_exact = exact; }
 
     // A memory guard for callers that cannot bound the overlap (a simulation that diverged, or
-    // hostile input): with a limit L > 0, an update stops keeping triangle pairs once a block of
-    // the traversal (at most 512 query triangles, or 64 in update_vertices) has kept L per
-    // query triangle, and pair_limit_exceeded() is true until the next update; its pairs are then
-    // incomplete and must not be used. 0 (the default): no limit.
+    // hostile input): with a limit L > 0, update() stops keeping triangle pairs once it has kept
+    // about L per triangle of the mesh (L · #T, counted in steps of 256 per block of the
+    // traversal), and update_vertices() once a block of 64 changed triangles has kept L per
+    // triangle; pair_limit_exceeded() is then true until the next update (full or partial), and
+    // that update's pairs are incomplete and must not be used (update() returns none). 0 (the
+    // default): no limit.
     void set_pair_limit(std::int64_t pairs_per_triangle) { m_pair_limit = pairs_per_triangle; }
     bool pair_limit_exceeded() const { return m_pair_limit_exceeded; }
 
