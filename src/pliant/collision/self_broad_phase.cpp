@@ -491,6 +491,11 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
     const bvh::WideNode* nodes = m_bvh.nodes().data();
     const std::uint32_t* prims = m_bvh.primitives().data();
     std::int64_t triangle_pairs = 0;
+    // The limit: 2 L per changed triangle in all (checked as each block ends; each pair counts
+    // for both of its triangles here, for the lower one in update()), and 4 L per triangle
+    // within a block (contact is local: a block's triangles may all be in the densest spot).
+    const std::int64_t budget = m_pair_limit > 0 ? 2 * m_pair_limit * num_affected : INT64_MAX;
+    std::atomic<std::int64_t> kept{0};
     std::atomic<bool> exceeded{false};
     if (m_bvh.has_nodes()) {
         triangle_pairs = parallel_reduce(
@@ -500,8 +505,11 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
                 auto& vf = m_vf_chunks.chunk(c);
                 auto& ee = m_ee_chunks.chunk(c);
                 std::int64_t count = 0;
+                if (exceeded.load(std::memory_order_relaxed)) {
+                    return count;
+                }
                 const std::int64_t limit =
-                    m_pair_limit > 0 ? m_pair_limit * (end - begin) : INT64_MAX;
+                    m_pair_limit > 0 ? 4 * m_pair_limit * (end - begin) : INT64_MAX;
                 for (std::int64_t i = begin; i < end; ++i) {
                     const std::int32_t t = m_affected_triangles[static_cast<std::size_t>(i)];
                     const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(t)];
@@ -522,6 +530,9 @@ const FeaturePairs& SelfCollisionBroadPhase<Real>::update_vertices(
                                         ++count;
                                         emit_feature_pairs<true>(t, other, vf, ee);
                                     });
+                }
+                if (kept.fetch_add(count, std::memory_order_relaxed) + count > budget) {
+                    exceeded.store(true, std::memory_order_relaxed);
                 }
                 return count;
             },

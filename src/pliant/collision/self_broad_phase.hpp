@@ -92,10 +92,10 @@ public:
     // A memory guard for callers that cannot bound the overlap (a simulation that diverged, or
     // hostile input): with a limit L > 0, update() stops keeping triangle pairs once it has kept
     // about L per triangle of the mesh (L · #T, counted in steps of 256 per block of the
-    // traversal), and update_vertices() once a block of 64 changed triangles has kept L per
-    // triangle; pair_limit_exceeded() is then true until the next update (full or partial), and
-    // that update's pairs are incomplete and must not be used (update() returns none). 0 (the
-    // default): no limit.
+    // traversal), and update_vertices() once it has kept 2 L per changed triangle (counted per
+    // block of 64 of them; it reports a pair for both its triangles) or a block 4 L per triangle;
+    // pair_limit_exceeded() is then true until the next update (full or partial), and that update's
+    // pairs are incomplete and must not be used (update() returns none). 0 (the default): no limit.
     void set_pair_limit(std::int64_t pairs_per_triangle) { m_pair_limit = pairs_per_triangle; }
     bool pair_limit_exceeded() const { return m_pair_limit_exceeded; }
 
