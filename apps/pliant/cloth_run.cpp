@@ -4,6 +4,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "cloth_preview.hpp"
@@ -43,7 +45,7 @@ volatile std::sig_atomic_t g_interrupted = 0;
 // Substeps longer than this (ms) get a warning (docs/formats.md, "Choosing substeps").
 constexpr double MAX_QUIET_SUBSTEP_MS = 5.0;
 // A vertex farther than this from the origin (m; NaN included) means the simulation diverged:
-// scene coordinates are at most 1e6 (io/cloth_scene.hpp), and the checks run on float boxes.
+// scene coordinates are at most io::MAX_SCENE_COORDINATE, and the checks run on float boxes.
 constexpr double MAX_COORDINATE = 1e9;
 // Input cloth with more intersecting pairs than this per triangle (on average) is refused.
 constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
@@ -55,16 +57,19 @@ void remove_stale_frames(const std::filesystem::path& frames_dir, int last_frame
                          const std::string& format) {
     for (const std::filesystem::directory_entry& entry :
          std::filesystem::directory_iterator(frames_dir)) {
-        const std::string name = entry.path().filename().string();
+        const std::string stem = entry.path().stem().string();
         const std::string extension = entry.path().extension().string();
-        const std::string digits = entry.path().stem().string().substr(
-            std::min<std::size_t>(6, entry.path().stem().string().size()));
-        const bool ours = name.rfind("frame_", 0) == 0 && digits.size() >= 4 &&
-                          std::all_of(digits.begin(), digits.end(),
-                                      [](char c) { return c >= '0' && c <= '9'; }) &&
-                          (extension == ".obj" || extension == ".ply") && entry.is_regular_file();
-        if (ours &&
-            (extension != "." + format || digits.size() > 9 || std::stoi(digits) > last_frame)) {
+        if (!entry.is_regular_file() || stem.rfind("frame_", 0) != 0 ||
+            (extension != ".obj" && extension != ".ply")) {
+            continue;
+        }
+        // frame_ and at least 4 digits, nothing else (a number too large for int is not ours).
+        const char* digits = stem.data() + 6;
+        const char* end = stem.data() + stem.size();
+        int number = 0;
+        const auto [stop, error] = std::from_chars(digits, end, number);
+        const bool ours = end - digits >= 4 && error == std::errc() && stop == end && number >= 0;
+        if (ours && (extension != "." + format || number > last_frame)) {
             std::filesystem::remove(entry.path());
         }
     }
@@ -221,8 +226,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         try {
             step = solver.step(dt, scene.substeps);
             for (const Vec3d& p : solver.positions()) {
-                if (!(std::abs(p.x) <= MAX_COORDINATE && std::abs(p.y) <= MAX_COORDINATE &&
-                      std::abs(p.z) <= MAX_COORDINATE)) {
+                if (!within_cube(p, MAX_COORDINATE)) {
                     throw InvalidInput(fmt::format(
                         "the simulation diverged: a vertex at ({:.3g}, {:.3g}, {:.3g}) m, "
                         "expected finite coordinates within {:g} m, with substeps of {:.4g} ms; "

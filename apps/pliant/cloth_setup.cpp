@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <span>
@@ -12,6 +11,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/geometry/generate.hpp"
+#include "pliant/io/cloth_scene.hpp"
 #include "pliant/io/mesh_io.hpp"
 
 namespace pliant::cli {
@@ -27,9 +27,8 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
     }
 }
 
-// The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 // A mesh file's triangles, or an error naming the scene key when it has none or a coordinate
-// beyond 1e6 m.
+// beyond io::MAX_SCENE_COORDINATE (a run would end as "diverged" at its first frame).
 geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
                                            const std::string& scene_name, const std::string& key) {
     geometry::TriangleMeshD mesh = io::read_mesh(file);
@@ -39,21 +38,18 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
                         "got {} vertices and no triangles",
                         scene_name, key, file.string(), mesh.positions.size()));
     }
-    // The scene's own bound on positions (io/cloth_scene.hpp): beyond it a run would end as
-    // "diverged" at its first frame.
-    constexpr double MAX_MESH_COORDINATE = 1e6;
     for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
         const Vec3d& p = mesh.positions[v];
-        if (!(std::abs(p.x) <= MAX_MESH_COORDINATE && std::abs(p.y) <= MAX_MESH_COORDINATE &&
-              std::abs(p.z) <= MAX_MESH_COORDINATE)) {
+        if (!within_cube(p, io::MAX_SCENE_COORDINATE)) {
             throw InvalidInput(fmt::format(
                 "{}: {}: {}: vertex {} at ({}, {}, {}): expected coordinates within {:g} m",
-                scene_name, key, file.string(), v, p.x, p.y, p.z, MAX_MESH_COORDINATE));
+                scene_name, key, file.string(), v, p.x, p.y, p.z, io::MAX_SCENE_COORDINATE));
         }
     }
     return mesh;
 }
 
+// The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name) {
     geometry::TriangleMeshD mesh;
     if (scene.grid) {

@@ -25,6 +25,15 @@ void write(const std::filesystem::path& path, const std::string& text) {
     std::ofstream(path) << text;
 }
 
+// Writes `scene` to scratch/NAME.json and runs `pliant cloth` on it into scratch/NAME.
+CliResult run_scene(const ScratchDir& scratch, const std::string& name, const std::string& scene,
+                    const std::string& options = " --no-preview") {
+    write(scratch / (name + ".json"), scene);
+    return run_cli("cloth " + quoted(scratch / (name + ".json")) + " --out " +
+                       quoted(scratch / name) + options,
+                   scratch);
+}
+
 TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
     ScratchDir scratch;
     write(scratch / "scene.json", R"({
@@ -356,12 +365,10 @@ f 1 5 2
 // gigabytes of pairs).
 TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
     ScratchDir scratch;
-    write(scratch / "diverge.json", R"({"cloth": {"grid": {"size": [2, 2], "quads": [20, 20]}},
-        "air": {"wind": [0, -20, 0]}, "fps": 0.5, "substeps": 2, "self_collision": false,
-        "frames": 10})");
-    const CliResult diverge = run_cli("cloth " + quoted(scratch / "diverge.json") + " --out " +
-                                          quoted(scratch / "diverge") + " --no-preview",
-                                      scratch);
+    const CliResult diverge =
+        run_scene(scratch, "diverge", R"({"cloth": {"grid": {"size": [2, 2], "quads": [20, 20]}},
+            "air": {"wind": [0, -20, 0]}, "fps": 0.5, "substeps": 2, "self_collision": false,
+            "frames": 10})");
     EXPECT_EQ(diverge.exit_code, 1);
     EXPECT_NE(diverge.err.find("substeps of 1000 ms"), std::string::npos) << diverge.err;
     EXPECT_NE(diverge.err.find("pliant: error: " + (scratch / "diverge.json").string() + ": frame"),
@@ -378,7 +385,7 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
         const geometry::TriangleMeshD mesh =
             io::read_mesh(scratch / "diverge" / "frames" / fmt::format("frame_{:04d}.obj", frame));
         for (const Vec3d& p : mesh.positions) {
-            EXPECT_TRUE(std::abs(p.x) <= 1e9 && std::abs(p.y) <= 1e9 && std::abs(p.z) <= 1e9);
+            EXPECT_TRUE(within_cube(p, 1e9));
         }
     }
     EXPECT_FALSE(std::filesystem::exists(scratch / "diverge" / "frames" /
@@ -388,12 +395,10 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
     for (int k = 0; k < 800; ++k) {
         instances += fmt::format("{}{{\"translate\": [0, 0, {}]}}", k > 0 ? ", " : "", k * 5e-6);
     }
-    write(scratch / "stack.json",
-          R"({"cloth": {"grid": {"size": [0.1, 0.1], "quads": [2, 2]}, "instances": [)" +
-              instances + R"(]}, "frames": 1})");
-    const CliResult stack = run_cli("cloth " + quoted(scratch / "stack.json") + " --out " +
-                                        quoted(scratch / "stack") + " --no-preview",
-                                    scratch);
+    const CliResult stack =
+        run_scene(scratch, "stack",
+                  R"({"cloth": {"grid": {"size": [0.1, 0.1], "quads": [2, 2]}, "instances": [)" +
+                      instances + R"(]}, "frames": 1})");
     EXPECT_EQ(stack.exit_code, 1);
     EXPECT_NE(stack.err.find("more than 64 pairs of triangles or 256 pairs of features"),
               std::string::npos)
@@ -405,11 +410,9 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
 
     // Two identical instances lie through each other everywhere (6.4 intersecting pairs per
     // triangle): refused before anything is written, untangling or not.
-    write(scratch / "same.json",
-          R"({"cloth": {"grid": {"size": [1, 1], "quads": [8, 8]}, "instances": [{}, {}]}})");
-    const CliResult same = run_cli("cloth " + quoted(scratch / "same.json") + " --out " +
-                                       quoted(scratch / "same") + " --no-preview",
-                                   scratch);
+    const CliResult same = run_scene(
+        scratch, "same",
+        R"({"cloth": {"grid": {"size": [1, 1], "quads": [8, 8]}, "instances": [{}, {}]}})");
     EXPECT_EQ(same.exit_code, 1);
     EXPECT_NE(same.err.find("1648 pairs of triangles"), std::string::npos) << same.err;
     EXPECT_NE(same.err.find("cannot be untangled"), std::string::npos) << same.err;
@@ -417,26 +420,19 @@ TEST(ClothCommand, DivergenceAndOverfullContactStopWithStatsAndAClearError) {
 
     // An empty mesh as the cloth or an obstacle names the key; --out "" is a usage error.
     write(scratch / "empty.obj", "");
-    write(scratch / "empty.json", R"({"cloth": {"mesh": "empty.obj"}})");
-    const CliResult empty = run_cli("cloth " + quoted(scratch / "empty.json") + " --out " +
-                                        quoted(scratch / "empty") + " --no-preview",
-                                    scratch);
+    const CliResult empty = run_scene(scratch, "empty", R"({"cloth": {"mesh": "empty.obj"}})");
     EXPECT_EQ(empty.exit_code, 1);
     EXPECT_NE(empty.err.find("cloth.mesh"), std::string::npos) << empty.err;
     EXPECT_NE(empty.err.find("at least one triangle"), std::string::npos) << empty.err;
     EXPECT_FALSE(std::filesystem::exists(scratch / "empty"));
-    write(
-        scratch / "empty_obstacle.json",
-        R"({"cloth": {"grid": {"quads": [2, 2]}}, "obstacles": [{"mesh": {"file": "empty.obj"}}]})");
-    const CliResult obstacle = run_cli("cloth " + quoted(scratch / "empty_obstacle.json") +
-                                           " --out " + quoted(scratch / "obstacle"),
-                                       scratch);
+    const CliResult obstacle = run_scene(
+        scratch, "obstacle",
+        R"({"cloth": {"grid": {"quads": [2, 2]}}, "obstacles": [{"mesh": {"file": "empty.obj"}}]})",
+        "");
     EXPECT_EQ(obstacle.exit_code, 1);
     EXPECT_NE(obstacle.err.find("obstacles[0].mesh.file"), std::string::npos) << obstacle.err;
     write(scratch / "far.obj", "v 0 0 0\nv 1e7 0 0\nv 0 1 0\nf 1 2 3\n");
-    write(scratch / "far.json", R"({"cloth": {"mesh": "far.obj"}})");
-    const CliResult far = run_cli(
-        "cloth " + quoted(scratch / "far.json") + " --out " + quoted(scratch / "far"), scratch);
+    const CliResult far = run_scene(scratch, "far", R"({"cloth": {"mesh": "far.obj"}})", "");
     EXPECT_EQ(far.exit_code, 1);
     EXPECT_NE(far.err.find("cloth.mesh"), std::string::npos) << far.err;
     EXPECT_NE(far.err.find("vertex 1 at (10000000, 0, 0): expected coordinates within 1e+06 m"),

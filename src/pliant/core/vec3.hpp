@@ -93,6 +93,11 @@ template <typename T>
 PLIANT_HOST_DEVICE inline bool is_finite(Vec3<T> a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
+// Whether every coordinate of a lies in [−half_side, half_side] (false for NaN).
+template <typename T>
+PLIANT_HOST_DEVICE inline bool within_cube(Vec3<T> a, T half_side) {
+    return std::abs(a.x) <= half_side && std::abs(a.y) <= half_side && std::abs(a.z) <= half_side;
+}
 template <typename To, typename From>
 PLIANT_HOST_DEVICE constexpr Vec3<To> vec3_cast(Vec3<From> a) {
     return {static_cast<To>(a.x), static_cast<To>(a.y), static_cast<To>(a.z)};

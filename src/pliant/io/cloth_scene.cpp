@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <set>
 #include <string>
 
@@ -27,9 +28,27 @@ using detail::json_type_name;
 // finish() rejects keys nobody took. Errors name the file and the key path.
 // Bounds on the magnitude of a scene vector's nonzero components (see vector_value).
 constexpr double MIN_VECTOR_COMPONENT = 1e-30;
-constexpr double MAX_VECTOR_COMPONENT = 1e6;
+constexpr double MAX_VECTOR_COMPONENT = MAX_SCENE_COORDINATE;
 // make_grid_sheet's limit per side (geometry/generate.hpp).
 constexpr std::int64_t MAX_GRID_QUADS_PER_SIDE = 16384;
+
+// v as an integer when it is a JSON integer within [lo, hi], else nothing. Unsigned values above
+// INT64_MAX are compared as they are, not wrapped by get<std::int64_t>().
+std::optional<std::int64_t> integer_in(const Json& v, std::int64_t lo, std::int64_t hi) {
+    if (v.is_number_unsigned()) {
+        const auto u = v.get<std::uint64_t>();
+        if (hi < 0 || u > static_cast<std::uint64_t>(hi)) {
+            return std::nullopt;
+        }
+        const auto x = static_cast<std::int64_t>(u);
+        return x >= lo ? std::optional<std::int64_t>(x) : std::nullopt;
+    }
+    if (v.is_number_integer()) {
+        const auto x = v.get<std::int64_t>();
+        return x >= lo && x <= hi ? std::optional<std::int64_t>(x) : std::nullopt;
+    }
+    return std::nullopt;
+}
 
 class ObjectReader {
 public:
@@ -87,17 +106,14 @@ public:
         if (value == nullptr) {
             return fallback;
         }
-        if (!value->is_number_integer() && !value->is_number_unsigned()) {
+        if (!value->is_number_integer()) {  // true for unsigned values too
             fail(key_path(key), "an integer", json_type_name(*value));
         }
-        // Unsigned values above INT64_MAX would wrap in get<std::int64_t>().
-        const bool too_large = value->is_number_unsigned() &&
-                               value->get<std::uint64_t>() > static_cast<std::uint64_t>(hi);
-        const auto x = too_large ? std::int64_t{hi} + 1 : value->get<std::int64_t>();
-        if (x < lo || x > hi) {
+        const std::optional<std::int64_t> x = integer_in(*value, lo, hi);
+        if (!x) {
             fail(key_path(key), fmt::format("an integer in [{}, {}]", lo, hi), value->dump());
         }
-        return static_cast<int>(x);
+        return static_cast<int>(*x);
     }
 
     Vec3d vector(const std::string& key, const Vec3d& fallback) {
@@ -277,12 +293,13 @@ cloth::PinGroup read_pin_group(ObjectReader& p) {
     if (const Json* vertices = p.array("vertices")) {
         for (std::size_t k = 0; k < vertices->size(); ++k) {
             const Json& v = (*vertices)[k];
-            if (!v.is_number_integer() || v.get<std::int64_t>() < 0 ||
-                v.get<std::int64_t>() > std::numeric_limits<std::int32_t>::max()) {
+            const std::optional<std::int64_t> index =
+                integer_in(v, 0, std::numeric_limits<std::int32_t>::max());
+            if (!index) {
                 p.fail(fmt::format("{}[{}]", p.key_path("vertices"), k),
                        "a vertex index (integer >= 0)", v.dump());
             }
-            group.vertices.push_back(static_cast<std::int32_t>(v.get<std::int64_t>()));
+            group.vertices.push_back(static_cast<std::int32_t>(*index));
         }
     }
     if (const Json* regions = p.array("regions")) {
@@ -395,19 +412,10 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             }
             const Json* quads = g.find("quads");
             if (quads != nullptr) {
-                // Each side in [1, MAX_GRID_QUADS_PER_SIDE] (0 when not; unsigned values
-                // above INT64_MAX would wrap), then the product, which cannot overflow.
-                const auto side = [](const Json& v) -> std::int64_t {
-                    if (v.is_number_unsigned()) {
-                        const auto u = v.get<std::uint64_t>();
-                        return u >= 1 && u <= MAX_GRID_QUADS_PER_SIDE ? static_cast<std::int64_t>(u)
-                                                                      : 0;
-                    }
-                    if (v.is_number_integer()) {
-                        const auto i = v.get<std::int64_t>();
-                        return i >= 1 && i <= MAX_GRID_QUADS_PER_SIDE ? i : 0;
-                    }
-                    return 0;
+                // Each side in [1, MAX_GRID_QUADS_PER_SIDE] (0 when not), then the product,
+                // which cannot overflow.
+                const auto side = [](const Json& v) {
+                    return integer_in(v, 1, MAX_GRID_QUADS_PER_SIDE).value_or(0);
                 };
                 const bool pair = quads->is_array() && quads->size() == 2;
                 const std::int64_t nx = pair ? side((*quads)[0]) : 0;
