@@ -50,6 +50,21 @@ constexpr double MAX_COORDINATE = 1e9;
 // Input cloth with more intersecting pairs than this per triangle (on average) is refused.
 constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
 
+// The number N of a frame file name frame_NNNN.obj / .ply (at least 4 digits, nothing else), or
+// -1 for any other name (a number too large for int is not ours).
+int frame_number(const std::filesystem::path& file) {
+    const std::string stem = file.stem().string();
+    const std::string extension = file.extension().string();
+    if (stem.rfind("frame_", 0) != 0 || (extension != ".obj" && extension != ".ply")) {
+        return -1;
+    }
+    const char* digits = stem.data() + 6;
+    const char* end = stem.data() + stem.size();
+    int number = 0;
+    const auto [stop, error] = std::from_chars(digits, end, number);
+    return end - digits >= 4 && error == std::errc() && stop == end && number >= 0 ? number : -1;
+}
+
 // Removes the frame files of an earlier run into the same directory that this run did not
 // replace: frame_NNNN.obj / .ply numbered above last_frame, or in the other format. Called once
 // this run's frames are written, so frames/ holds exactly the frames stats.json describes.
@@ -57,20 +72,31 @@ void remove_stale_frames(const std::filesystem::path& frames_dir, int last_frame
                          const std::string& format) {
     for (const std::filesystem::directory_entry& entry :
          std::filesystem::directory_iterator(frames_dir)) {
-        const std::string stem = entry.path().stem().string();
-        const std::string extension = entry.path().extension().string();
-        if (!entry.is_regular_file() || stem.rfind("frame_", 0) != 0 ||
-            (extension != ".obj" && extension != ".ply")) {
-            continue;
-        }
-        // frame_ and at least 4 digits, nothing else (a number too large for int is not ours).
-        const char* digits = stem.data() + 6;
-        const char* end = stem.data() + stem.size();
-        int number = 0;
-        const auto [stop, error] = std::from_chars(digits, end, number);
-        const bool ours = end - digits >= 4 && error == std::errc() && stop == end && number >= 0;
-        if (ours && (extension != "." + format || number > last_frame)) {
+        const int number = frame_number(entry.path());
+        if (entry.is_regular_file() && number >= 0 &&
+            (entry.path().extension().string() != "." + format || number > last_frame)) {
             std::filesystem::remove(entry.path());
+        }
+    }
+}
+
+// Throws IoError, before anything is written, when a directory stands where the run would write
+// a file: stats.json, preview.mp4, or frames/frame_NNNN.<format> for a frame it writes. (The
+// preview's PNG frames, written without ffmpeg, go to preview/, which make_output_directory
+// checks.)
+void require_output_files_writable(const std::filesystem::path& out, int frames,
+                                   const std::string& format) {
+    require_no_directory_at(out / "stats.json");
+    require_no_directory_at(out / "preview.mp4");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(out / "frames", ec)) {
+        return;
+    }
+    for (const std::filesystem::directory_entry& entry :
+         std::filesystem::directory_iterator(out / "frames")) {
+        const int number = frame_number(entry.path());
+        if (number >= 0 && number <= frames && entry.path().extension().string() == "." + format) {
+            require_no_directory_at(entry.path());
         }
     }
 }
@@ -121,6 +147,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                        const std::filesystem::path& out,
                                        const ClothRunOptions& options) {
     const int frames = options.frames;
+    require_output_files_writable(out, frames, scene.frame_format);
     const ClothSetup setup = load_cloth_setup(scene, scene_name);
     const geometry::TriangleMeshD& mesh = setup.mesh;
     const std::unique_ptr<cloth::ClothSolver> solver_owner = make_solver(scene, setup);

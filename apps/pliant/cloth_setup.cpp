@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <span>
@@ -9,6 +11,7 @@
 #include <utility>
 #include <variant>
 
+#include "memory_budget.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/cloth_scene.hpp"
@@ -52,12 +55,26 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name) {
     geometry::TriangleMeshD mesh;
+    const std::uint64_t copies_of_the_cloth = std::max<std::size_t>(scene.instances.size(), 1);
+    const std::string instances =
+        scene.instances.empty() ? "" : fmt::format(" in {} instances", scene.instances.size());
     if (scene.grid) {
+        // Checked before the grid is generated (the reader allows up to 50 million quads).
+        require_cloth_fits_in_memory(
+            fmt::format("{}: cloth.grid of {} x {} quads{}", scene_name, scene.grid->quads[0],
+                        scene.grid->quads[1], instances),
+            2 * static_cast<std::uint64_t>(scene.grid->quads[0]) *
+                static_cast<std::uint64_t>(scene.grid->quads[1]) * copies_of_the_cloth,
+            scene.self_collision, physical_memory_bytes());
         mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(
             scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
             static_cast<float>(scene.grid->size[1])));
     } else {
         mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
+        require_cloth_fits_in_memory(
+            fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
+            mesh.triangles.size() * copies_of_the_cloth, scene.self_collision,
+            physical_memory_bytes());
     }
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);

@@ -17,4 +17,13 @@ void make_output_directory(const std::filesystem::path& dir) {
     }
 }
 
+void require_no_directory_at(const std::filesystem::path& file) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(file, ec)) {
+        throw IoError(
+            fmt::format("{}: cannot write the output file: a directory of that name is in the way",
+                        file.string()));
+    }
+}
+
 }  // namespace pliant::cli

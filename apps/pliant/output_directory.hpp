@@ -9,4 +9,9 @@ namespace pliant::cli {
 // created or exists as something other than a directory.
 void make_output_directory(const std::filesystem::path& dir);
 
+// Throws IoError "<file>: cannot write the output file: a directory of that name is in the way"
+// when `file` exists as a directory (or a link to one): checked before a command starts writing,
+// so that it does not fail after its other outputs are written.
+void require_no_directory_at(const std::filesystem::path& file);
+
 }  // namespace pliant::cli

@@ -466,6 +466,51 @@ TEST(ClothCommand, RerunLeavesOnlyItsOwnFrames) {
     EXPECT_EQ(names, (std::vector<std::string>{"frame_0000.obj", "frame_0001.obj", "notes.txt"}));
 }
 
+TEST(ClothCommand, ADirectoryInTheWayOfAnOutputFileIsAnErrorBeforeAnythingIsWritten) {
+    ScratchDir scratch;
+    write(scratch / "s.json",
+          R"({"cloth": {"grid": {"size": [1, 1], "quads": [4, 4]}}, "substeps": 2})");
+    const std::string run = "cloth " + quoted(scratch / "s.json") + " --out " +
+                            quoted(scratch / "out") + " --no-preview --frames 3";
+    for (const char* blocked : {"stats.json", "preview.mp4", "frames/frame_0003.obj"}) {
+        std::filesystem::remove_all(scratch / "out");
+        std::filesystem::create_directories(scratch / "out" / blocked);
+        const CliResult r = run_cli(run, scratch);
+        EXPECT_EQ(r.exit_code, 1) << blocked;
+        EXPECT_NE(r.err.find(std::string(blocked) +
+                             ": cannot write the output file: a directory of that name is in "
+                             "the way"),
+                  std::string::npos)
+            << r.err;
+        EXPECT_FALSE(std::filesystem::exists(scratch / "out" / "frames" / "frame_0000.obj"))
+            << blocked;
+    }
+    // A directory named like a frame this run does not write is not in the way.
+    std::filesystem::remove_all(scratch / "out");
+    std::filesystem::create_directories(scratch / "out" / "frames" / "frame_0004.obj");
+    EXPECT_EQ(run_cli(run, scratch).exit_code, 0);
+}
+
+TEST(ClothCommand, AClothTooLargeForTheMachinesMemoryIsRefusedBeforeItIsGenerated) {
+    ScratchDir scratch;
+    // 100 copies of 4,000 x 4,000 quads: 3.2 billion triangles, terabytes.
+    std::string instances;
+    for (int k = 0; k < 100; ++k) {
+        instances += fmt::format("{}{{\"translate\": [0, 0, {}]}}", k == 0 ? "" : ", ", k);
+    }
+    write(scratch / "huge.json",
+          R"({"cloth": {"grid": {"quads": [4000, 4000]}, "instances": [)" + instances + "]}}");
+    const CliResult r = run_cli(
+        "cloth " + quoted(scratch / "huge.json") + " --out " + quoted(scratch / "out"), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(
+        r.err.find("cloth.grid of 4000 x 4000 quads in 100 instances: 3200000000 triangles need "
+                   "at least 4160.0 GB to simulate"),
+        std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "out" / "frames"));
+}
+
 TEST(ClothCommand, BadScenesNameTheKeyAndWriteNothing) {
     ScratchDir scratch;
     write(scratch / "bad.json", R"({"cloth": {"grid": {}}, "material": {"thicknes": 0.01}})");
