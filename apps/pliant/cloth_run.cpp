@@ -183,6 +183,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                     scene_name, initial_intersections);
         if (untangled) {
             untangle_stats = {{"iterations", untangled->iterations},
+                              {"region_flips", untangled->flips},
                               {"pairs_left", untangled->final_pairs},
                               {"max_displacement_m", untangled->max_displacement},
                               {"ms", untangled->ms}};

@@ -152,6 +152,84 @@ TEST(Untangle, NeverLeavesMorePairsThanItFound) {
     EXPECT_LE(result.iterations, 40);
 }
 
+// Every edge of `mesh` within `tolerance` (relative) of its length in `start`.
+void expect_edge_lengths_kept(const geometry::TriangleMeshD& mesh, const std::vector<Vec3d>& start,
+                              double tolerance) {
+    for (const geometry::Triangle& t : mesh.triangles) {
+        for (int k = 0; k < 3; ++k) {
+            const auto a = static_cast<std::size_t>(t[static_cast<std::size_t>(k)]);
+            const auto b = static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)]);
+            const double before = norm(start[b] - start[a]);
+            ASSERT_NEAR(norm(mesh.positions[b] - mesh.positions[a]), before, tolerance * before);
+        }
+    }
+}
+
+TEST(Untangle, SeparateSheetsCrossingFromEdgeToEdgeComeApart) {
+    // Two 1 m sheets of 24 x 24 quads crossing like an X: the second is tilted by 20 degrees
+    // about x (and shifted off the first's grid lines), so the contour runs straight across both
+    // from edge to edge. Contour minimization alone left 115 of 238 pairs after 400 iterations;
+    // the region flip moves one whole sheet along the other's normal, out of it.
+    geometry::TriangleMeshD a = sheet(24, 1.0);
+    geometry::TriangleMeshD mesh = a;
+    const auto offset = static_cast<std::int32_t>(a.positions.size());
+    const double c = std::cos(20.0 * M_PI / 180.0);
+    const double s = std::sin(20.0 * M_PI / 180.0);
+    for (const Vec3d& p : a.positions) {
+        mesh.positions.push_back({p.x + 0.0123, c * p.y + 0.0171, s * p.y});
+    }
+    for (const geometry::Triangle& t : a.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    const std::vector<Vec3d> start = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_GT(result.initial_pairs, 40);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
+    EXPECT_GE(result.flips, 1);
+    // A sheet moved by about its depth through the other (sin 20 degrees x 0.5 m = 0.17 m),
+    // keeping its shape.
+    EXPECT_LT(result.max_displacement, 0.25);
+    expect_edge_lengths_kept(mesh, start, 0.05);
+}
+
+TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {
+    // A strip 0.5 m wide: flat for 1 m, a half-turn fold of radius 0.15 m widening it to 0.6 m,
+    // then back over itself falling 0.6 m per metre, through the flat part along a line across
+    // it: the contour cuts the flat part's first half metre off from the rest (the region that
+    // flips), while on the wider part it ends inside.
+    const int across = 12;
+    const int along = 64;
+    const double fold = M_PI * 0.15;
+    const double length = 2.0 + fold;
+    geometry::TriangleMeshD mesh = geometry::convert_precision<double>(
+        geometry::make_grid_sheet(across, along, 0.5f, static_cast<float>(length)));
+    for (Vec3d& p : mesh.positions) {
+        const double y = p.y + 0.5 * length;  // 0 .. length along the strip
+        if (y <= 1.0) {
+            p = {p.x, y, 0.0};
+        } else if (y <= 1.0 + fold) {
+            const double phi = (y - 1.0) / 0.15;
+            p = {p.x * (1.0 + 0.2 * phi / M_PI), 1.0 + 0.15 * std::sin(phi),
+                 0.15 - 0.15 * std::cos(phi)};
+        } else {
+            const double back = y - 1.0 - fold;
+            p = {p.x * 1.2 + 0.0071, 1.0 - back, 0.3 - 0.6 * back};
+        }
+    }
+    const std::vector<Vec3d> start = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_GT(result.initial_pairs, 20);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
+    EXPECT_GE(result.flips, 1);
+    for (const Vec3d& p : mesh.positions) {
+        ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+    }
+}
+
 TEST(Untangle, IntersectionFreeInputIsLeftAlone) {
     geometry::TriangleMeshD mesh = sheet(10, 1.0);
     const std::vector<Vec3d> start = mesh.positions;

@@ -3,7 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "pliant/collision/intersecting_pairs.hpp"
@@ -17,6 +20,8 @@ namespace {
 
 // |n · d| is clamped below at this fraction of |d| (see the header).
 constexpr double MIN_CROSSING_COSINE = 0.1;
+// Iterations without a new fewest count of pairs after which the region flip runs.
+constexpr int STALL_ITERATIONS = 40;
 
 // Where edge (vertices edge[0], edge[1]) crosses triangle `triangle` (vertex indices), with what
 // the gradient needs.
@@ -160,6 +165,342 @@ void add_pair_gradient(std::span<const Vec3d> x, const geometry::Triangle& a,
     }
 }
 
+// Connected components of triangles over shared edges, skipping triangles with skip[t] != 0
+// (component -1); components are numbered in order of their lowest triangle. Returns the count.
+std::int32_t edge_components(const geometry::MeshTopology& topology,
+                             std::span<const std::uint8_t> skip,
+                             std::vector<std::int32_t>& component,
+                             std::vector<std::int32_t>& stack) {
+    const std::size_t num_triangles = topology.triangle_edges.size();
+    component.assign(num_triangles, -1);
+    std::int32_t count = 0;
+    for (std::size_t seed = 0; seed < num_triangles; ++seed) {
+        if (component[seed] >= 0 || (!skip.empty() && skip[seed] != 0)) {
+            continue;
+        }
+        component[seed] = count;
+        stack.assign(1, static_cast<std::int32_t>(seed));
+        while (!stack.empty()) {
+            const auto t = static_cast<std::size_t>(stack.back());
+            stack.pop_back();
+            for (const std::int32_t e : topology.triangle_edges[t]) {
+                for (const std::int32_t u : topology.triangles_of_edge(e)) {
+                    const auto k = static_cast<std::size_t>(u);
+                    if (component[k] < 0 && (skip.empty() || skip[k] == 0)) {
+                        component[k] = count;
+                        stack.push_back(u);
+                    }
+                }
+            }
+        }
+        ++count;
+    }
+    return count;
+}
+
+// The plane of a set of triangles: area-weighted centroid and unit normal (false when they
+// have no area).
+bool fit_plane(std::span<const Vec3d> x, std::span<const geometry::Triangle> triangles,
+               std::span<const std::int32_t> subset, Vec3d& centre, Vec3d& normal) {
+    Vec3d normal_sum{0.0, 0.0, 0.0};
+    Vec3d centroid_sum{0.0, 0.0, 0.0};
+    double area_sum = 0.0;
+    for (const std::int32_t o : subset) {
+        const geometry::Triangle& t = triangles[static_cast<std::size_t>(o)];
+        const Vec3d& a = x[static_cast<std::size_t>(t[0])];
+        const Vec3d& b = x[static_cast<std::size_t>(t[1])];
+        const Vec3d& c = x[static_cast<std::size_t>(t[2])];
+        const Vec3d n = cross(b - a, c - a);
+        const double area = norm(n);
+        normal_sum += n;
+        centroid_sum += (a + b + c) * (area / 3.0);
+        area_sum += area;
+    }
+    const double length = norm(normal_sum);
+    if (!(length > 0.0) || !(area_sum > 0.0)) {
+        return false;
+    }
+    normal = normal_sum * (1.0 / length);
+    centre = centroid_sum * (1.0 / area_sum);
+    return true;
+}
+
+// The piece move for separate pieces of cloth that pass through each other (see the header).
+// Returns whether it moved anything.
+bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
+                     std::span<const std::int32_t> pieces, std::span<const double> inverse_masses,
+                     const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance) {
+    const std::size_t num_triangles = triangles.size();
+    const std::size_t num_pieces =
+        pieces.empty()
+            ? 0
+            : static_cast<std::size_t>(*std::max_element(pieces.begin(), pieces.end())) + 1;
+    // Per piece: its size (triangles) and whether a vertex is pinned; the triangles of other
+    // pieces that its triangles intersect, as (piece, triangle), sorted.
+    std::vector<std::int64_t> size(num_pieces, 0);
+    std::vector<std::uint8_t> pinned(num_pieces, 0);
+    for (std::size_t t = 0; t < num_triangles; ++t) {
+        const auto piece = static_cast<std::size_t>(pieces[t]);
+        ++size[piece];
+        for (const std::int32_t v : triangles[t]) {
+            if (!(inverse_masses[static_cast<std::size_t>(v)] > 0.0)) {
+                pinned[piece] = 1;
+            }
+        }
+    }
+    std::vector<std::array<std::int32_t, 2>> crossing;
+    for (const auto& [a, b] : pairs) {
+        const std::int32_t pa = pieces[static_cast<std::size_t>(a)];
+        const std::int32_t pb = pieces[static_cast<std::size_t>(b)];
+        if (pa != pb) {
+            crossing.push_back({pa, b});
+            crossing.push_back({pb, a});
+        }
+    }
+    std::sort(crossing.begin(), crossing.end());
+    crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+    std::vector<std::int32_t> order(num_pieces);
+    for (std::size_t piece = 0; piece < num_pieces; ++piece) {
+        order[piece] = static_cast<std::int32_t>(piece);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+        return size[static_cast<std::size_t>(a)] < size[static_cast<std::size_t>(b)];
+    });
+    std::vector<std::uint8_t> blocked(num_pieces, 0);
+    std::vector<std::uint8_t> in_piece(x.size(), 0);
+    std::vector<std::int32_t> others;
+    bool moved = false;
+    for (const std::int32_t piece : order) {
+        const auto p = static_cast<std::size_t>(piece);
+        if (blocked[p] != 0 || pinned[p] != 0) {
+            continue;
+        }
+        others.clear();
+        for (auto it = std::lower_bound(crossing.begin(), crossing.end(),
+                                        std::array<std::int32_t, 2>{piece, INT32_MIN});
+             it != crossing.end() && (*it)[0] == piece; ++it) {
+            others.push_back((*it)[1]);
+        }
+        Vec3d centre;
+        Vec3d normal;
+        if (others.empty() || !fit_plane(x, triangles, others, centre, normal)) {
+            continue;
+        }
+        // Near the other layer's intersected part (within its radius of its centre), the
+        // piece's vertices on either side of its plane: the piece moves as a whole, along the
+        // normal, so that the fewer of them are `clearance` beyond it on the other side.
+        double radius = 0.0;
+        for (const std::int32_t o : others) {
+            for (const std::int32_t v : triangles[static_cast<std::size_t>(o)]) {
+                radius = std::max(radius, norm(x[static_cast<std::size_t>(v)] - centre));
+            }
+        }
+        std::fill(in_piece.begin(), in_piece.end(), 0);
+        for (std::size_t t = 0; t < num_triangles; ++t) {
+            if (pieces[t] == piece) {
+                for (const std::int32_t v : triangles[t]) {
+                    in_piece[static_cast<std::size_t>(v)] = 1;
+                }
+            }
+        }
+        std::int64_t above = 0;
+        std::int64_t below = 0;
+        double depth_above = 0.0;
+        double depth_below = 0.0;
+        for (std::size_t v = 0; v < x.size(); ++v) {
+            if (in_piece[v] == 0 || norm(x[v] - centre) > radius) {
+                continue;
+            }
+            const double d = dot(normal, x[v] - centre);
+            if (d > 0.0) {
+                ++above;
+                depth_above = std::max(depth_above, d);
+            } else if (d < 0.0) {
+                ++below;
+                depth_below = std::max(depth_below, -d);
+            }
+        }
+        if (above == 0 || below == 0) {
+            continue;
+        }
+        const bool lift = below < above || (below == above && depth_below <= depth_above);
+        const Vec3d shift =
+            lift ? normal * (depth_below + clearance) : normal * -(depth_above + clearance);
+        for (std::size_t v = 0; v < x.size(); ++v) {
+            if (in_piece[v] != 0) {
+                x[v] += shift;
+            }
+        }
+        moved = true;
+        blocked[p] = 1;
+        for (const std::int32_t o : others) {
+            blocked[static_cast<std::size_t>(pieces[static_cast<std::size_t>(o)])] = 1;
+        }
+    }
+    return moved;
+}
+
+// The region flip for contours that run from boundary to boundary (see the header). Returns
+// whether it moved anything.
+bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
+                  const geometry::MeshTopology& topology, std::span<const std::int32_t> pieces,
+                  std::span<const double> inverse_masses,
+                  const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance) {
+    const std::size_t num_triangles = triangles.size();
+    // Walls: the triangles of intersecting pairs; partners[t]: the triangles t intersects.
+    std::vector<std::uint8_t> wall(num_triangles, 0);
+    std::vector<std::array<std::int32_t, 2>> directed;
+    directed.reserve(2 * pairs.size());
+    for (const auto& [a, b] : pairs) {
+        wall[static_cast<std::size_t>(a)] = 1;
+        wall[static_cast<std::size_t>(b)] = 1;
+        directed.push_back({a, b});
+        directed.push_back({b, a});
+    }
+    std::sort(directed.begin(), directed.end());
+    std::vector<std::int32_t> region;
+    std::vector<std::int32_t> stack;
+    const std::int32_t num_regions = edge_components(topology, wall, region, stack);
+    // Per region: its triangles (CSR), size and piece; per piece its largest region.
+    std::vector<std::int32_t> region_offsets(static_cast<std::size_t>(num_regions) + 1, 0);
+    for (const std::int32_t r : region) {
+        if (r >= 0) {
+            ++region_offsets[static_cast<std::size_t>(r) + 1];
+        }
+    }
+    for (std::size_t r = 0; r < static_cast<std::size_t>(num_regions); ++r) {
+        region_offsets[r + 1] += region_offsets[r];
+    }
+    std::vector<std::int32_t> region_triangles(static_cast<std::size_t>(region_offsets.back()));
+    {
+        std::vector<std::int32_t> next(region_offsets.begin(), region_offsets.end() - 1);
+        for (std::size_t t = 0; t < num_triangles; ++t) {
+            if (region[t] >= 0) {
+                region_triangles[static_cast<std::size_t>(
+                    next[static_cast<std::size_t>(region[t])]++)] = static_cast<std::int32_t>(t);
+            }
+        }
+    }
+    const auto size_of = [&](std::int32_t r) {
+        return region_offsets[static_cast<std::size_t>(r) + 1] -
+               region_offsets[static_cast<std::size_t>(r)];
+    };
+    const std::size_t num_pieces =
+        pieces.empty()
+            ? 0
+            : static_cast<std::size_t>(*std::max_element(pieces.begin(), pieces.end())) + 1;
+    std::vector<std::int32_t> largest_of_piece(num_pieces, -1);
+    for (std::int32_t r = 0; r < num_regions; ++r) {
+        const auto piece = static_cast<std::size_t>(
+            pieces[static_cast<std::size_t>(region_triangles[static_cast<std::size_t>(
+                region_offsets[static_cast<std::size_t>(r)])])]);
+        std::int32_t& largest = largest_of_piece[piece];
+        if (largest < 0 || size_of(r) > size_of(largest)) {
+            largest = r;
+        }
+    }
+    // Candidates: every region but the largest of its piece (cut off from it by walls),
+    // smallest first.
+    std::vector<std::int32_t> candidates;
+    for (std::int32_t r = 0; r < num_regions; ++r) {
+        const auto piece = static_cast<std::size_t>(
+            pieces[static_cast<std::size_t>(region_triangles[static_cast<std::size_t>(
+                region_offsets[static_cast<std::size_t>(r)])])]);
+        if (largest_of_piece[piece] != r) {
+            candidates.push_back(r);
+        }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [&](std::int32_t a, std::int32_t b) { return size_of(a) < size_of(b); });
+    std::vector<std::uint8_t> blocked(static_cast<std::size_t>(num_regions), 0);
+    std::vector<std::uint8_t> moved(x.size(), 0);
+    std::vector<std::int32_t> walls;
+    std::vector<std::int32_t> others;
+    bool flipped = false;
+    for (const std::int32_t r : candidates) {
+        if (blocked[static_cast<std::size_t>(r)] != 0) {
+            continue;
+        }
+        const auto members =
+            std::span(region_triangles)
+                .subspan(static_cast<std::size_t>(region_offsets[static_cast<std::size_t>(r)]),
+                         static_cast<std::size_t>(size_of(r)));
+        // The walls around the region, and what they intersect: the other layer.
+        walls.clear();
+        bool pinned = false;
+        for (const std::int32_t t : members) {
+            for (const std::int32_t v : triangles[static_cast<std::size_t>(t)]) {
+                pinned = pinned || !(inverse_masses[static_cast<std::size_t>(v)] > 0.0);
+            }
+            for (const std::int32_t e : topology.triangle_edges[static_cast<std::size_t>(t)]) {
+                for (const std::int32_t u : topology.triangles_of_edge(e)) {
+                    if (wall[static_cast<std::size_t>(u)] != 0) {
+                        walls.push_back(u);
+                    }
+                }
+            }
+        }
+        std::sort(walls.begin(), walls.end());
+        walls.erase(std::unique(walls.begin(), walls.end()), walls.end());
+        others.clear();
+        for (const std::int32_t w : walls) {
+            auto it = std::lower_bound(directed.begin(), directed.end(),
+                                       std::array<std::int32_t, 2>{w, INT32_MIN});
+            for (; it != directed.end() && (*it)[0] == w; ++it) {
+                others.push_back((*it)[1]);
+            }
+        }
+        std::sort(others.begin(), others.end());
+        others.erase(std::unique(others.begin(), others.end()), others.end());
+        if (pinned || others.empty()) {
+            continue;
+        }
+        // The other layer's plane there (of the triangles the walls intersect).
+        Vec3d centre;
+        Vec3d normal;
+        if (!fit_plane(x, triangles, others, centre, normal)) {
+            continue;
+        }
+        // The region's side of that plane (its vertices' mean signed distance), then every
+        // vertex of the region on that side is reflected to the other, `clearance` beyond it.
+        double side_sum = 0.0;
+        for (const std::int32_t t : members) {
+            for (const std::int32_t v : triangles[static_cast<std::size_t>(t)]) {
+                side_sum += dot(normal, x[static_cast<std::size_t>(v)] - centre);
+            }
+        }
+        if (!(side_sum != 0.0)) {
+            continue;
+        }
+        const double side = side_sum > 0.0 ? 1.0 : -1.0;
+        // The region folds over, reflected through the other layer's plane to `clearance`
+        // beyond it.
+        for (const std::int32_t t : members) {
+            for (const std::int32_t v : triangles[static_cast<std::size_t>(t)]) {
+                const auto k = static_cast<std::size_t>(v);
+                const double d = dot(normal, x[k] - centre);
+                if (moved[k] == 0 && d * side > 0.0) {
+                    x[k] -= normal * (2.0 * d + side * clearance);
+                    moved[k] = 1;
+                }
+            }
+        }
+        flipped = true;
+        // One flip per contour: neither the other layer's regions along it nor this one again.
+        blocked[static_cast<std::size_t>(r)] = 1;
+        for (const std::int32_t o : others) {
+            for (const std::int32_t e : topology.triangle_edges[static_cast<std::size_t>(o)]) {
+                for (const std::int32_t u : topology.triangles_of_edge(e)) {
+                    if (region[static_cast<std::size_t>(u)] >= 0) {
+                        blocked[static_cast<std::size_t>(region[static_cast<std::size_t>(u)])] = 1;
+                    }
+                }
+            }
+        }
+    }
+    return flipped;
+}
+
 }  // namespace
 
 UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Triangle> triangles,
@@ -229,8 +570,33 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
     std::vector<Vec3d> gradient(n);
     std::vector<Vec3d> spread(n);
     std::vector<Crossing> crossings;
+    // The connected pieces of cloth, for the region flip.
+    std::vector<std::int32_t> pieces;
+    std::vector<std::int32_t> scratch;
+    edge_components(topology, {}, pieces, scratch);
+    int since_best = 0;
     for (int iteration = 0; iteration < options.max_iterations && !pairs.empty() && step > 0.0;
          ++iteration) {
+        if (since_best >= STALL_ITERATIONS) {
+            // Contour minimization stalls on contours that run from boundary to boundary: flip
+            // the smallest region they cut off through the other layer, from the best state.
+            since_best = 0;
+            std::copy(best.begin(), best.end(), positions.begin());
+            pairs =
+                collision::find_intersecting_pairs(std::span<const Vec3d>(positions), triangles);
+            if (separate_pieces(positions, triangles, pieces, inverse_masses, pairs, step) ||
+                flip_regions(positions, triangles, topology, pieces, inverse_masses, pairs, step)) {
+                ++result.flips;
+                ++result.iterations;
+                pairs = collision::find_intersecting_pairs(std::span<const Vec3d>(positions),
+                                                           triangles);
+                if (static_cast<std::int64_t>(pairs.size()) < best_pairs) {
+                    best_pairs = static_cast<std::int64_t>(pairs.size());
+                    best.assign(positions.begin(), positions.end());
+                }
+                continue;
+            }
+        }
         std::fill(gradient.begin(), gradient.end(), Vec3d{0.0, 0.0, 0.0});
         for (const auto& [i, j] : pairs) {
             add_pair_gradient(positions, triangles[static_cast<std::size_t>(i)],
@@ -286,6 +652,9 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
         if (static_cast<std::int64_t>(pairs.size()) < best_pairs) {
             best_pairs = static_cast<std::int64_t>(pairs.size());
             best.assign(positions.begin(), positions.end());
+            since_best = 0;
+        } else {
+            ++since_best;
         }
     }
     std::copy(best.begin(), best.end(), positions.begin());

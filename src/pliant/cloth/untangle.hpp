@@ -34,9 +34,25 @@
 // leave the cloth worse than it found it).
 //
 // A closed contour (a fold pushed through another layer, a sheet poking through another) shrinks
-// and vanishes. A contour that cuts across the whole of a part (two sheets crossing like an X from
-// edge to edge) only shortens towards a boundary and may not vanish within max_iterations: the
-// result then reports the pairs left.
+// and vanishes. A contour that runs from boundary to boundary (two sheets crossing like an X)
+// only slides towards a boundary, and contour minimization stalls on it (on two 1 m sheets of
+// 24 x 24 quads crossing at 20 degrees: 238 pairs down to 115 in 400 iterations). When the
+// fewest pairs seen has not improved for 40 iterations, the best state so far gets one region
+// move, decided globally as in Baraff, Witkin and Kass's global intersection analysis
+// ("Untangling Cloth", SIGGRAPH 2003), then minimization goes on:
+//   - pieces: a connected piece of cloth through another piece, with no pinned vertex, moves
+//     as a whole along the normal of the other's intersected triangles (their area-weighted
+//     plane), so that its vertices near them (within their radius of their centre) all lie on
+//     the side where most of them are, `step` beyond the plane: no deformation. Smallest
+//     pieces first; each piece and those it crosses move at most once per stall;
+//   - regions, otherwise: the triangles of intersecting pairs are walls; the connected regions
+//     of the other triangles (over edges) that walls cut off from the largest region of their
+//     piece are reflected, smallest first, through the plane of the triangles their walls
+//     intersect (a fold along the contour, `step` beyond it), when they have no pinned vertex;
+//     once per contour (the other layer's regions along it are left alone).
+// A region move counts as an iteration. Not untangled: a sheet through itself along a contour
+// that cuts no region off (it ends inside the sheet on both sides, e.g. where a wider part of
+// the sheet crosses a narrower one), and pinned pieces whose contour cuts off no free region.
 //
 // Units: metres. Deterministic (pairs in sorted order, sequential accumulation; the intersection
 // search is identical for any number of threads).
@@ -62,7 +78,8 @@ struct UntangleOptions {
 struct UntangleResult {
     std::int64_t initial_pairs = 0;  // intersecting pairs before
     std::int64_t final_pairs = 0;    // after (0: untangled)
-    int iterations = 0;              // gradient steps taken
+    int iterations = 0;              // gradient steps and region flips taken
+    int flips = 0;                   // region flips among them
     double max_displacement = 0.0;   // largest distance of a vertex from its start, m
     double ms = 0.0;                 // wall-clock time
 };
