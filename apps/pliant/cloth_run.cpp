@@ -47,8 +47,6 @@ constexpr double MAX_QUIET_SUBSTEP_MS = 5.0;
 // A vertex farther than this from the origin (m; NaN included) means the simulation diverged:
 // scene coordinates are at most io::MAX_SCENE_COORDINATE, and the checks run on float boxes.
 constexpr double MAX_COORDINATE = 1e9;
-// Input cloth with more intersecting pairs than this per triangle (on average) is refused.
-constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
 
 // The number N of a frame file name frame_NNNN.obj / .ply (at least 4 digits, nothing else), or
 // -1 for any other name (a number too large for int is not ours).
@@ -158,25 +156,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
 
     // Input that already intersects itself is reported and untangled before the first frame
     // (cloth/untangle.hpp; the fail-safe keeps cloth intersection-free only once it is).
-    // untangle() starts with the same exact search again: twice only for tangled input.
-    // Layers laid on each other (two identical instances: about 6 pairs per triangle) cannot be
-    // untangled, and simulating them costs minutes and gigabytes per frame: an error.
-    const std::int64_t initial_intersections =
-        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
-    const auto num_triangles = static_cast<std::int64_t>(solver.triangles().size());
-    if (initial_intersections > MAX_INITIAL_PAIRS_PER_TRIANGLE * num_triangles) {
-        throw InvalidInput(fmt::format(
-            "{}: the cloth intersects itself in {} pairs of triangles ({:.1f} per triangle, more "
-            "than {}): layers lie on or through each other, which cannot be untangled; check "
-            "the mesh and the scene's instances",
-            scene_name, initial_intersections,
-            static_cast<double>(initial_intersections) / static_cast<double>(num_triangles),
-            MAX_INITIAL_PAIRS_PER_TRIANGLE));
-    }
-    std::optional<cloth::UntangleResult> untangled;
-    if (scene.untangle && initial_intersections > 0) {
-        untangled = solver.untangle();
-    }
+    const StartState start = prepare_start(scene, scene_name, solver);
+    const std::int64_t initial_intersections = start.initial_intersections;
+    const std::optional<cloth::UntangleResult>& untangled = start.untangled;
     nlohmann::ordered_json untangle_stats;
     if (initial_intersections > 0) {
         log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",

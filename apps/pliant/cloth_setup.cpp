@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "memory_budget.hpp"
+#include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/cloth_scene.hpp"
@@ -157,6 +158,27 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
             std::make_shared<const cloth::MeshObstacle>(std::move(shape)));
     }
     return setup;
+}
+
+StartState prepare_start(const cloth::ClothScene& scene, const std::string& scene_name,
+                         cloth::ClothSolver& solver) {
+    StartState start;
+    start.initial_intersections =
+        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+    const auto num_triangles = static_cast<std::int64_t>(solver.triangles().size());
+    if (start.initial_intersections > MAX_INITIAL_PAIRS_PER_TRIANGLE * num_triangles) {
+        throw InvalidInput(fmt::format(
+            "{}: the cloth intersects itself in {} pairs of triangles ({:.1f} per triangle, more "
+            "than {}): layers lie on or through each other, which cannot be untangled; check "
+            "the mesh and the scene's instances",
+            scene_name, start.initial_intersections,
+            static_cast<double>(start.initial_intersections) / static_cast<double>(num_triangles),
+            MAX_INITIAL_PAIRS_PER_TRIANGLE));
+    }
+    if (scene.untangle && start.initial_intersections > 0) {
+        start.untangled = solver.untangle();
+    }
+    return start;
 }
 
 std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,

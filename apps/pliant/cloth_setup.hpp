@@ -10,7 +10,9 @@
 // InvalidInput / IoError for a scene that cannot be built (scene_name prefixes the messages).
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,7 @@
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/scene.hpp"
 #include "pliant/cloth/solver.hpp"
+#include "pliant/cloth/untangle.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
@@ -45,6 +48,23 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
 // self-collision as the scene says.
 std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                                                 const ClothSetup& setup);
+
+// What the start of a run did to cloth that intersects itself.
+struct StartState {
+    std::int64_t initial_intersections = 0;          // exact count before untangling
+    std::optional<cloth::UntangleResult> untangled;  // when the scene asked for it and needed it
+};
+
+// Input cloth with more intersecting pairs than this per triangle (on average) is refused.
+inline constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
+
+// Makes a new solver's state the start `pliant cloth` simulates: counts its intersecting pairs
+// (exactly), throws InvalidInput when there are more than MAX_INITIAL_PAIRS_PER_TRIANGLE per
+// triangle (layers on or through each other: untangling cannot separate them and simulating
+// them costs minutes and gigabytes per frame), and untangles the cloth when there are any and
+// the scene says "untangle" (the default). scene_name prefixes the message.
+StartState prepare_start(const cloth::ClothScene& scene, const std::string& scene_name,
+                         cloth::ClothSolver& solver);
 
 // The box a camera frames: the cloth's points and the bounded obstacles' rest shapes (plane
 // squares are as large as the scene, so they are left out).

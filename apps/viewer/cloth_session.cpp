@@ -38,6 +38,7 @@ void ClothSession::reset() {
         m_task.wait();  // the frame in flight is dropped
     }
     m_solver = cli::make_solver(m_scene, m_setup);
+    m_start = cli::prepare_start(m_scene, m_scene_name, *m_solver);
     m_solver_frame = 0;
     m_solver_stats = {};
     m_grab_vertex = -1;

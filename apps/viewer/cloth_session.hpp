@@ -63,7 +63,9 @@ public:
     // state was published. Rethrows what the step threw.
     bool finish_advance(bool block);
     bool is_advancing() const { return m_task.is_started(); }
-    // Back to the scene's start (waits for a frame in flight; the grab is released).
+    // Back to the scene's start, as `pliant cloth` starts (cli::prepare_start: cloth that
+    // intersects itself is untangled when the scene says so); waits for a frame in flight; the
+    // grab is released.
     void reset();
     // Clamped to [1, 1000]; used from the next frame on.
     void set_substeps_per_frame(int substeps);
@@ -80,6 +82,8 @@ public:
 
     const cloth::ClothScene& scene() const { return m_scene; }
     const cli::ClothSetup& setup() const { return m_setup; }
+    // What the last reset() found and did at the start (intersections, untangling).
+    const cli::StartState& start() const { return m_start; }
     // The published state.
     std::span<const Vec3d> positions() const { return m_positions; }
     std::span<const geometry::Triangle> triangles() const { return m_setup.mesh.triangles; }
@@ -103,6 +107,7 @@ private:
     ClothSessionOptions m_options;
     cli::ClothSetup m_setup;
     std::unique_ptr<cloth::ClothSolver> m_solver;
+    cli::StartState m_start;
     BackgroundTask m_task;
     double m_substep = 0.0;
     AABBd m_framing_box, m_scene_box;

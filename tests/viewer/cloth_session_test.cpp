@@ -56,6 +56,30 @@ TEST(ClothSession, WindowFramesLandOnTheScenesFrames) {
     EXPECT_TRUE(same_positions(session.positions(), reference->positions()));
 }
 
+// A scene that starts intersecting itself starts untangled, as `pliant cloth` starts it (and
+// stays reported only when the scene says "untangle": false).
+TEST(ClothSession, StartsUntangledAsTheCommandDoes) {
+    cloth::ClothScene scene;
+    scene.grid = cloth::GridSheet{{1.0, 1.0}, {16, 16}};
+    scene.instances = {cloth::Placement{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}},
+                       cloth::Placement{{20.0, 0.0, 0.0}, {0.0123, 0.0171, 1.0}}};
+    scene.substeps = 10;
+    ClothSession session(scene, "crossing", {.substeps_per_frame = 10, .check_every = 1});
+    EXPECT_GT(session.start().initial_intersections, 20);
+    ASSERT_TRUE(session.start().untangled.has_value());
+    EXPECT_EQ(session.start().untangled->final_pairs, 0);
+    EXPECT_EQ(session.stats().intersecting_pairs, 0);
+    const cli::ClothSetup setup = cli::load_cloth_setup(scene, "crossing");
+    const std::unique_ptr<cloth::ClothSolver> reference = cli::make_solver(scene, setup);
+    cli::prepare_start(scene, "crossing", *reference);
+    EXPECT_TRUE(same_positions(session.positions(), reference->positions()));
+
+    scene.untangle = false;
+    ClothSession reported(scene, "crossing", {.substeps_per_frame = 10, .check_every = 1});
+    EXPECT_FALSE(reported.start().untangled.has_value());
+    EXPECT_EQ(reported.stats().intersecting_pairs, reported.start().initial_intersections);
+}
+
 // In the background: the published state stays the last one until the frame in flight is
 // published, one frame at a time, and the states are those of advance().
 TEST(ClothSession, BackgroundFramesPublishTheSameStates) {
