@@ -159,16 +159,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const StartState start = prepare_start(scene, scene_name, solver);
     const std::int64_t initial_intersections = start.initial_intersections;
     const std::optional<cloth::UntangleResult>& untangled = start.untangled;
-    nlohmann::ordered_json untangle_stats;
     if (initial_intersections > 0) {
         log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
                     scene_name, initial_intersections);
         if (untangled) {
-            untangle_stats = {{"iterations", untangled->iterations},
-                              {"region_flips", untangled->flips},
-                              {"pairs_left", untangled->final_pairs},
-                              {"max_displacement_m", untangled->max_displacement},
-                              {"ms", untangled->ms}};
             if (untangled->final_pairs == 0) {
                 log_info(
                     "{}: untangled in {} iterations ({:.1f} ms), no vertex moved more than "
@@ -311,7 +305,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"substeps", scene.substeps},
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
-        {"untangle", untangle_stats},
+        {"untangle", untangle_report(start)},
         {"max_intersecting_pairs", worst_intersections},
         {"max_strain_p99", worst_strain_p99},
         {"max_strain", worst_strain},

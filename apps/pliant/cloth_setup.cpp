@@ -181,6 +181,18 @@ StartState prepare_start(const cloth::ClothScene& scene, const std::string& scen
     return start;
 }
 
+nlohmann::ordered_json untangle_report(const StartState& start) {
+    if (!start.untangled) {
+        return nullptr;
+    }
+    const cloth::UntangleResult& u = *start.untangled;
+    return {{"iterations", u.iterations},
+            {"region_flips", u.flips},
+            {"pairs_left", u.final_pairs},
+            {"max_displacement_m", u.max_displacement},
+            {"ms", u.ms}};
+}
+
 std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                                                 const ClothSetup& setup) {
     auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, scene.material);

@@ -10,6 +10,8 @@
 // InvalidInput / IoError for a scene that cannot be built (scene_name prefixes the messages).
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -65,6 +67,10 @@ inline constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
 // the scene says "untangle" (the default). scene_name prefixes the message.
 StartState prepare_start(const cloth::ClothScene& scene, const std::string& scene_name,
                          cloth::ClothSolver& solver);
+
+// The untangling report of stats.json and `view cloth --json` (docs/formats.md): null when
+// nothing was untangled, else iterations, region_flips, pairs_left, max_displacement_m, ms.
+nlohmann::ordered_json untangle_report(const StartState& start);
 
 // The box a camera frames: the cloth's points and the bounded obstacles' rest shapes (plane
 // squares are as large as the scene, so they are left out).

@@ -180,6 +180,8 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["scene"] = scene_name;
     result["triangles"] = session.triangles().size();
     result["vertices"] = session.positions().size();
+    result["initial_intersecting_pairs"] = session.start().initial_intersections;
+    result["untangle"] = cli::untangle_report(session.start());
     result["substeps_per_frame"] = session.substeps_per_frame();
     result["simulated_frames"] = session.frame();
     result["simulated_seconds"] = session.time();
