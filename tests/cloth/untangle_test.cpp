@@ -192,6 +192,17 @@ TEST(Untangle, SeparateSheetsCrossingFromEdgeToEdgeComeApart) {
     // keeping its shape.
     EXPECT_LT(result.max_displacement, 0.25);
     expect_edge_lengths_kept(mesh, start, 0.05);
+
+    // With a vertex of one sheet pinned (the piece that moves otherwise), the other one moves.
+    for (const std::size_t pinned : {std::size_t{0}, static_cast<std::size_t>(offset)}) {
+        mesh.positions = start;
+        std::vector<double> masses(mesh.positions.size(), 1.0);
+        masses[pinned] = 0.0;
+        const UntangleResult again = untangle(mesh.positions, mesh.triangles, masses);
+        EXPECT_EQ(again.final_pairs, 0) << pinned;
+        EXPECT_GE(again.flips, 1) << pinned;
+        EXPECT_EQ(norm(mesh.positions[pinned] - start[pinned]), 0.0) << pinned;
+    }
 }
 
 TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {

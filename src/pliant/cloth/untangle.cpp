@@ -175,7 +175,7 @@ std::int32_t edge_components(const geometry::MeshTopology& topology,
     component.assign(num_triangles, -1);
     std::int32_t count = 0;
     for (std::size_t seed = 0; seed < num_triangles; ++seed) {
-        if (component[seed] >= 0 || (!skip.empty() && skip[seed] != 0)) {
+        if (component[seed] >= 0 || skip[seed] != 0) {
             continue;
         }
         component[seed] = count;
@@ -186,7 +186,7 @@ std::int32_t edge_components(const geometry::MeshTopology& topology,
             for (const std::int32_t e : topology.triangle_edges[t]) {
                 for (const std::int32_t u : topology.triangles_of_edge(e)) {
                     const auto k = static_cast<std::size_t>(u);
-                    if (component[k] < 0 && (skip.empty() || skip[k] == 0)) {
+                    if (component[k] < 0 && skip[k] == 0) {
                         component[k] = count;
                         stack.push_back(u);
                     }
@@ -196,6 +196,44 @@ std::int32_t edge_components(const geometry::MeshTopology& topology,
         ++count;
     }
     return count;
+}
+
+// The connected pieces of cloth: components of triangles that share a vertex (so that moving a
+// piece rigidly tears nothing), numbered in order of their lowest triangle; per triangle.
+std::vector<std::int32_t> vertex_connected_pieces(std::span<const geometry::Triangle> triangles,
+                                                  std::size_t num_vertices) {
+    std::vector<std::int32_t> parent(num_vertices);
+    for (std::size_t v = 0; v < num_vertices; ++v) {
+        parent[v] = static_cast<std::int32_t>(v);
+    }
+    const auto root = [&](std::int32_t v) {
+        while (parent[static_cast<std::size_t>(v)] != v) {
+            parent[static_cast<std::size_t>(v)] =
+                parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(v)])];
+            v = parent[static_cast<std::size_t>(v)];
+        }
+        return v;
+    };
+    for (const geometry::Triangle& t : triangles) {
+        for (int k = 1; k < 3; ++k) {
+            const std::int32_t a = root(t[0]);
+            const std::int32_t b = root(t[static_cast<std::size_t>(k)]);
+            if (a != b) {
+                parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+            }
+        }
+    }
+    std::vector<std::int32_t> label(num_vertices, -1);
+    std::vector<std::int32_t> pieces(triangles.size());
+    std::int32_t count = 0;
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+        const auto r = static_cast<std::size_t>(root(triangles[t][0]));
+        if (label[r] < 0) {
+            label[r] = count++;
+        }
+        pieces[t] = label[r];
+    }
+    return pieces;
 }
 
 // The plane of a set of triangles: area-weighted centroid and unit normal (false when they
@@ -266,8 +304,34 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
     std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
         return size[static_cast<std::size_t>(a)] < size[static_cast<std::size_t>(b)];
     });
+    // The vertices of each piece (CSR; a vertex belongs to one piece).
+    std::vector<std::int32_t> vertex_piece(x.size(), -1);
+    for (std::size_t t = 0; t < num_triangles; ++t) {
+        for (const std::int32_t v : triangles[t]) {
+            vertex_piece[static_cast<std::size_t>(v)] = pieces[t];
+        }
+    }
+    std::vector<std::int32_t> piece_offsets(num_pieces + 1, 0);
+    for (const std::int32_t piece : vertex_piece) {
+        if (piece >= 0) {
+            ++piece_offsets[static_cast<std::size_t>(piece) + 1];
+        }
+    }
+    for (std::size_t piece = 0; piece < num_pieces; ++piece) {
+        piece_offsets[piece + 1] += piece_offsets[piece];
+    }
+    std::vector<std::int32_t> piece_vertices(static_cast<std::size_t>(piece_offsets.back()));
+    {
+        std::vector<std::int32_t> next(piece_offsets.begin(), piece_offsets.end() - 1);
+        for (std::size_t v = 0; v < x.size(); ++v) {
+            if (vertex_piece[v] >= 0) {
+                piece_vertices[static_cast<std::size_t>(
+                    next[static_cast<std::size_t>(vertex_piece[v])]++)] =
+                    static_cast<std::int32_t>(v);
+            }
+        }
+    }
     std::vector<std::uint8_t> blocked(num_pieces, 0);
-    std::vector<std::uint8_t> in_piece(x.size(), 0);
     std::vector<std::int32_t> others;
     bool moved = false;
     for (const std::int32_t piece : order) {
@@ -295,20 +359,17 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
                 radius = std::max(radius, norm(x[static_cast<std::size_t>(v)] - centre));
             }
         }
-        std::fill(in_piece.begin(), in_piece.end(), 0);
-        for (std::size_t t = 0; t < num_triangles; ++t) {
-            if (pieces[t] == piece) {
-                for (const std::int32_t v : triangles[t]) {
-                    in_piece[static_cast<std::size_t>(v)] = 1;
-                }
-            }
-        }
+        const auto members =
+            std::span(piece_vertices)
+                .subspan(static_cast<std::size_t>(piece_offsets[p]),
+                         static_cast<std::size_t>(piece_offsets[p + 1] - piece_offsets[p]));
         std::int64_t above = 0;
         std::int64_t below = 0;
         double depth_above = 0.0;
         double depth_below = 0.0;
-        for (std::size_t v = 0; v < x.size(); ++v) {
-            if (in_piece[v] == 0 || norm(x[v] - centre) > radius) {
+        for (const std::int32_t vertex : members) {
+            const auto v = static_cast<std::size_t>(vertex);
+            if (norm(x[v] - centre) > radius) {
                 continue;
             }
             const double d = dot(normal, x[v] - centre);
@@ -326,10 +387,8 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         const bool lift = below < above || (below == above && depth_below <= depth_above);
         const Vec3d shift =
             lift ? normal * (depth_below + clearance) : normal * -(depth_above + clearance);
-        for (std::size_t v = 0; v < x.size(); ++v) {
-            if (in_piece[v] != 0) {
-                x[v] += shift;
-            }
+        for (const std::int32_t v : members) {
+            x[static_cast<std::size_t>(v)] += shift;
         }
         moved = true;
         blocked[p] = 1;
@@ -570,10 +629,8 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
     std::vector<Vec3d> gradient(n);
     std::vector<Vec3d> spread(n);
     std::vector<Crossing> crossings;
-    // The connected pieces of cloth, for the region flip.
-    std::vector<std::int32_t> pieces;
-    std::vector<std::int32_t> scratch;
-    edge_components(topology, {}, pieces, scratch);
+    // The connected pieces of cloth, for the region moves.
+    const std::vector<std::int32_t> pieces = vertex_connected_pieces(triangles, n);
     int since_best = 0;
     for (int iteration = 0; iteration < options.max_iterations && !pairs.empty() && step > 0.0;
          ++iteration) {

@@ -40,7 +40,8 @@
 // fewest pairs seen has not improved for 40 iterations, the best state so far gets one region
 // move, decided globally as in Baraff, Witkin and Kass's global intersection analysis
 // ("Untangling Cloth", SIGGRAPH 2003), then minimization goes on:
-//   - pieces: a connected piece of cloth through another piece, with no pinned vertex, moves
+//   - pieces: a connected piece of cloth (triangles joined by vertices) through another piece,
+//     with no pinned vertex, moves
 //     as a whole along the normal of the other's intersected triangles (their area-weighted
 //     plane), so that its vertices near them (within their radius of their centre) all lie on
 //     the side where most of them are, `step` beyond the plane: no deformation. Smallest
