@@ -34,6 +34,7 @@
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "pliant/io/video.hpp"
 #include "progress_bar.hpp"
 
 namespace pliant::cli {
@@ -63,6 +64,11 @@ int frame_number(const std::filesystem::path& file) {
     return end - digits >= 4 && error == std::errc() && stop == end && number >= 0 ? number : -1;
 }
 
+// The name this run gives frame n's file.
+std::string frame_file_name(int n, const std::string& format) {
+    return fmt::format("frame_{:04d}.{}", n, format);
+}
+
 // Removes the frame files of an earlier run into the same directory that this run did not
 // replace: frame_NNNN.obj / .ply numbered above last_frame, or in the other format. Called once
 // this run's frames are written, so frames/ holds exactly the frames stats.json describes.
@@ -79,13 +85,15 @@ void remove_stale_frames(const std::filesystem::path& frames_dir, int last_frame
 }
 
 // Throws IoError, before anything is written, when a directory stands where the run would write
-// a file: stats.json, preview.mp4, or frames/frame_NNNN.<format> for a frame it writes. (The
-// preview's PNG frames, written without ffmpeg, go to preview/, which make_output_directory
-// checks.)
+// a file: stats.json, preview.mp4 (when it writes a video) or frames/frame_NNNN.<format> for a
+// frame it writes. (The preview's PNG frames, written without ffmpeg, go to preview/, which
+// make_output_directory checks.)
 void require_output_files_writable(const std::filesystem::path& out, int frames,
-                                   const std::string& format) {
+                                   const std::string& format, bool writes_video) {
     require_no_directory_at(out / "stats.json");
-    require_no_directory_at(out / "preview.mp4");
+    if (writes_video) {
+        require_no_directory_at(out / "preview.mp4");
+    }
     std::error_code ec;
     if (!std::filesystem::is_directory(out / "frames", ec)) {
         return;
@@ -93,7 +101,8 @@ void require_output_files_writable(const std::filesystem::path& out, int frames,
     for (const std::filesystem::directory_entry& entry :
          std::filesystem::directory_iterator(out / "frames")) {
         const int number = frame_number(entry.path());
-        if (number >= 0 && number <= frames && entry.path().extension().string() == "." + format) {
+        if (number >= 0 && number <= frames &&
+            entry.path().filename() == frame_file_name(number, format)) {
             require_no_directory_at(entry.path());
         }
     }
@@ -145,8 +154,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                        const std::filesystem::path& out,
                                        const ClothRunOptions& options) {
     const int frames = options.frames;
-    require_output_files_writable(out, frames, scene.frame_format);
-    const ClothSetup setup = load_cloth_setup(scene, scene_name);
+    require_output_files_writable(out, frames, scene.frame_format,
+                                  options.preview && io::ffmpeg_available());
+    const ClothSetup setup = load_cloth_setup(scene, scene_name, options.max_memory_bytes);
     const geometry::TriangleMeshD& mesh = setup.mesh;
     const std::unique_ptr<cloth::ClothSolver> solver_owner = make_solver(scene, setup);
     cloth::ClothSolver& solver = *solver_owner;
@@ -190,8 +200,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     geometry::TriangleMeshD state{mesh.positions, mesh.triangles};
     const auto write_frame = [&](int frame) {
         state.positions.assign(solver.positions().begin(), solver.positions().end());
-        io::write_mesh(frames_dir / fmt::format("frame_{:04d}.{}", frame, scene.frame_format),
-                       state);
+        io::write_mesh(frames_dir / frame_file_name(frame, scene.frame_format), state);
         if (preview) {
             preview->add_frame(solver.positions(), solver.triangles(), solver.time());
         }

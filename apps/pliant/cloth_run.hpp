@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -24,6 +25,9 @@ struct ClothRunOptions {
     bool preview = true;    // DIR/preview.mp4 (or PNG frames): cloth_preview.hpp
     int preview_width = 640;
     int preview_height = 480;
+    // A cloth that needs more memory is refused before it is generated (memory_budget.hpp);
+    // 0: the memory available.
+    std::uint64_t max_memory_bytes = 0;
 };
 
 nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,

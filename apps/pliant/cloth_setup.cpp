@@ -54,7 +54,8 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
 }
 
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
-geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name) {
+geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name,
+                                   std::uint64_t max_memory_bytes) {
     geometry::TriangleMeshD mesh;
     const std::uint64_t copies_of_the_cloth = std::max<std::size_t>(scene.instances.size(), 1);
     const std::string instances =
@@ -66,7 +67,7 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
                         scene.grid->quads[1], instances),
             2 * static_cast<std::uint64_t>(scene.grid->quads[0]) *
                 static_cast<std::uint64_t>(scene.grid->quads[1]) * copies_of_the_cloth,
-            scene.self_collision, physical_memory_bytes());
+            scene.self_collision, max_memory_bytes);
         mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(
             scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
             static_cast<float>(scene.grid->size[1])));
@@ -74,8 +75,7 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
         mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
         require_cloth_fits_in_memory(
             fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
-            mesh.triangles.size() * copies_of_the_cloth, scene.self_collision,
-            physical_memory_bytes());
+            mesh.triangles.size() * copies_of_the_cloth, scene.self_collision, max_memory_bytes);
     }
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);
@@ -130,9 +130,11 @@ std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
 
 }  // namespace
 
-ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name) {
+ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name,
+                            std::uint64_t max_memory_bytes) {
     ClothSetup setup;
-    setup.mesh = load_cloth(scene, scene_name);
+    setup.mesh = load_cloth(scene, scene_name,
+                            max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes());
     for (const cloth::PinGroup& group : scene.pins) {
         setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
     }
@@ -187,7 +189,7 @@ nlohmann::ordered_json untangle_report(const StartState& start) {
     }
     const cloth::UntangleResult& u = *start.untangled;
     return {{"iterations", u.iterations},
-            {"region_flips", u.flips},
+            {"region_moves", u.region_moves},
             {"pairs_left", u.final_pairs},
             {"max_displacement_m", u.max_displacement},
             {"ms", u.ms}};

@@ -44,7 +44,10 @@ struct ClothSetup {
     std::vector<ObstacleShape> shapes;  // per scene obstacle
 };
 
-ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name);
+// max_memory_bytes: a cloth whose triangles need more memory (memory_budget.hpp) is refused
+// before it is generated; 0: the memory available (available_memory_bytes()).
+ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name,
+                            std::uint64_t max_memory_bytes = 0);
 
 // A solver at the scene's start: material, pins with their motion, obstacles, gravity, air and
 // self-collision as the scene says.
@@ -69,7 +72,7 @@ StartState prepare_start(const cloth::ClothScene& scene, const std::string& scen
                          cloth::ClothSolver& solver);
 
 // The untangling report of stats.json and `view cloth --json` (docs/formats.md): null when
-// nothing was untangled, else iterations, region_flips, pairs_left, max_displacement_m, ms.
+// nothing was untangled, else iterations, region_moves, pairs_left, max_displacement_m, ms.
 nlohmann::ordered_json untangle_report(const StartState& start);
 
 // The box a camera frames: the cloth's points and the bounded obstacles' rest shapes (plane

@@ -1,4 +1,5 @@
-// pliant cloth SCENE.json --out DIR [--frames N] [--no-preview] [--preview-size W H] [--json]
+// pliant cloth SCENE.json --out DIR [--frames N] [--no-preview] [--preview-size W H]
+//              [--max-memory MIB] [--json]
 //
 // Simulates a cloth scene (io/cloth_scene.hpp; format in docs/formats.md) with cloth::ClothSolver
 // and writes:
@@ -48,6 +49,7 @@ struct ClothCommandOptions {
     int frames = -1;  // -1: the scene's
     bool no_preview = false;
     std::array<int, 2> preview_size{640, 480};
+    double max_memory_mib = 0.0;  // 0: the memory available
 };
 
 void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) {
@@ -61,6 +63,7 @@ void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) 
     run.preview = !options.no_preview;
     run.preview_width = options.preview_size[0];
     run.preview_height = options.preview_size[1];
+    run.max_memory_bytes = static_cast<std::uint64_t>(options.max_memory_mib * 1024.0 * 1024.0);
     const nlohmann::ordered_json stats = run_cloth_scene(scene, options.scene, out, run);
     if (global.json) {
         std::fputs((stats.dump(2) + "\n").c_str(), stdout);
@@ -94,6 +97,10 @@ void register_cloth(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--preview-size", options->preview_size, "Preview size in pixels")
         ->type_name("W H")
         ->check(CLI::Range(16, 8192));
+    cmd->add_option("--max-memory", options->max_memory_mib,
+                    "Refuse a cloth whose triangles need more memory than this, MiB (default: the "
+                    "memory available: physical, or the control group's limit)")
+        ->check(CLI::Range(1.0, 1e12));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_cloth(*options, global); });
 }

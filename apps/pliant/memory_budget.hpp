@@ -15,11 +15,13 @@ namespace pliant::cli {
 inline constexpr std::uint64_t CLOTH_BYTES_PER_TRIANGLE = 500;
 inline constexpr std::uint64_t SELF_COLLIDING_CLOTH_BYTES_PER_TRIANGLE = 1300;
 
-// The machine's physical memory in bytes (0 when it cannot be determined).
-std::uint64_t physical_memory_bytes();
+// The memory this process may use, in bytes: the machine's physical memory, or the control
+// group's limit when lower (cgroup v2 memory.max, v1 memory.limit_in_bytes); 0 when neither
+// can be determined.
+std::uint64_t available_memory_bytes();
 
-// Throws InvalidInput "<what>: <triangles> triangles need at least <X> GB to simulate, more than
-// the <Y> GB of memory this machine has" when triangles times the bytes per triangle above
+// Throws InvalidInput "<what>: <triangles> triangles need at least <X GB or MB> to simulate,
+// more than the <Y GB or MB> of memory available" when triangles times the bytes per triangle above
 // (with or without self-collision) exceeds memory_bytes (0: unknown, no check).
 void require_cloth_fits_in_memory(const std::string& what, std::uint64_t triangles,
                                   bool self_collision, std::uint64_t memory_bytes);

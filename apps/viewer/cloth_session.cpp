@@ -23,14 +23,15 @@ ClothSession::ClothSession(cloth::ClothScene scene, std::string scene_name,
     }
     m_setup = cli::load_cloth_setup(m_scene, m_scene_name);
     m_substep = 1.0 / (m_scene.frames_per_second * m_scene.substeps);
-    m_framing_box = cli::framing_box(m_setup.mesh.positions, m_setup.shapes);
+    reset();
+    // Framed as `pliant cloth`'s preview: the cloth at its start (untangled) and the obstacles.
+    m_framing_box = cli::framing_box(m_positions, m_setup.shapes);
     m_scene_box = m_framing_box;
     for (const cli::ObstacleShape& shape : m_setup.shapes) {
         for (const Vec3d& p : shape.rest.positions) {
             m_scene_box.extend(p);
         }
     }
-    reset();
 }
 
 void ClothSession::reset() {

@@ -64,8 +64,8 @@ public:
     bool finish_advance(bool block);
     bool is_advancing() const { return m_task.is_started(); }
     // Back to the scene's start, as `pliant cloth` starts (cli::prepare_start: cloth that
-    // intersects itself is untangled when the scene says so); waits for a frame in flight; the
-    // grab is released.
+    // intersects itself is untangled when the scene says so, again at every reset: the same
+    // start, seconds for a large tangle); waits for a frame in flight; the grab is released.
     void reset();
     // Clamped to [1, 1000]; used from the next frame on.
     void set_substeps_per_frame(int substeps);

@@ -7,6 +7,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "pliant/collision/intersecting_pairs.hpp"
@@ -20,8 +21,10 @@ namespace {
 
 // |n · d| is clamped below at this fraction of |d| (see the header).
 constexpr double MIN_CROSSING_COSINE = 0.1;
-// Iterations without a new fewest count of pairs after which the region flip runs.
+// Iterations without a new fewest count of pairs after which a region move is tried.
 constexpr int STALL_ITERATIONS = 40;
+// The least |Σ n_t| / Σ |n_t| of the triangles a region move takes a plane from.
+constexpr double MIN_PLANE_AGREEMENT = 0.5;
 
 // Where edge (vertices edge[0], edge[1]) crosses triangle `triangle` (vertex indices), with what
 // the gradient needs.
@@ -237,7 +240,7 @@ std::vector<std::int32_t> vertex_connected_pieces(std::span<const geometry::Tria
 }
 
 // The plane of a set of triangles: area-weighted centroid and unit normal (false when they
-// have no area).
+// have no area, or when their normals disagree: |Σ n_t| below MIN_PLANE_AGREEMENT Σ |n_t|).
 bool fit_plane(std::span<const Vec3d> x, std::span<const geometry::Triangle> triangles,
                std::span<const std::int32_t> subset, Vec3d& centre, Vec3d& normal) {
     Vec3d normal_sum{0.0, 0.0, 0.0};
@@ -254,8 +257,10 @@ bool fit_plane(std::span<const Vec3d> x, std::span<const geometry::Triangle> tri
         centroid_sum += (a + b + c) * (area / 3.0);
         area_sum += area;
     }
+    // Normals that disagree (layers wound against each other, a fold) give no plane: their sum
+    // would be noise.
     const double length = norm(normal_sum);
-    if (!(length > 0.0) || !(area_sum > 0.0)) {
+    if (!(length >= MIN_PLANE_AGREEMENT * area_sum) || !(area_sum > 0.0)) {
         return false;
     }
     normal = normal_sum * (1.0 / length);
@@ -263,8 +268,10 @@ bool fit_plane(std::span<const Vec3d> x, std::span<const geometry::Triangle> tri
     return true;
 }
 
-// The piece move for separate pieces of cloth that pass through each other (see the header).
-// Returns whether it moved anything.
+// The piece move for separate pieces of cloth that pass through each other (see the header):
+// of every free piece and every other piece it crosses, the shortest rigid move along the
+// other's intersected plane that puts the piece's vertices near it on one side; the shortest of
+// them all is made. Returns whether one was.
 bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
                      std::span<const std::int32_t> pieces, std::span<const double> inverse_masses,
                      const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance) {
@@ -273,38 +280,7 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         pieces.empty()
             ? 0
             : static_cast<std::size_t>(*std::max_element(pieces.begin(), pieces.end())) + 1;
-    // Per piece: its size (triangles) and whether a vertex is pinned; the triangles of other
-    // pieces that its triangles intersect, as (piece, triangle), sorted.
-    std::vector<std::int64_t> size(num_pieces, 0);
-    std::vector<std::uint8_t> pinned(num_pieces, 0);
-    for (std::size_t t = 0; t < num_triangles; ++t) {
-        const auto piece = static_cast<std::size_t>(pieces[t]);
-        ++size[piece];
-        for (const std::int32_t v : triangles[t]) {
-            if (!(inverse_masses[static_cast<std::size_t>(v)] > 0.0)) {
-                pinned[piece] = 1;
-            }
-        }
-    }
-    std::vector<std::array<std::int32_t, 2>> crossing;
-    for (const auto& [a, b] : pairs) {
-        const std::int32_t pa = pieces[static_cast<std::size_t>(a)];
-        const std::int32_t pb = pieces[static_cast<std::size_t>(b)];
-        if (pa != pb) {
-            crossing.push_back({pa, b});
-            crossing.push_back({pb, a});
-        }
-    }
-    std::sort(crossing.begin(), crossing.end());
-    crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
-    std::vector<std::int32_t> order(num_pieces);
-    for (std::size_t piece = 0; piece < num_pieces; ++piece) {
-        order[piece] = static_cast<std::int32_t>(piece);
-    }
-    std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
-        return size[static_cast<std::size_t>(a)] < size[static_cast<std::size_t>(b)];
-    });
-    // The vertices of each piece (CSR; a vertex belongs to one piece).
+    // The vertices of each piece (CSR; a vertex belongs to one piece) and whether one is pinned.
     std::vector<std::int32_t> vertex_piece(x.size(), -1);
     for (std::size_t t = 0; t < num_triangles; ++t) {
         for (const std::int32_t v : triangles[t]) {
@@ -312,9 +288,14 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         }
     }
     std::vector<std::int32_t> piece_offsets(num_pieces + 1, 0);
-    for (const std::int32_t piece : vertex_piece) {
-        if (piece >= 0) {
-            ++piece_offsets[static_cast<std::size_t>(piece) + 1];
+    std::vector<std::uint8_t> has_pinned(num_pieces, 0);
+    for (std::size_t v = 0; v < x.size(); ++v) {
+        if (vertex_piece[v] >= 0) {
+            const auto piece = static_cast<std::size_t>(vertex_piece[v]);
+            ++piece_offsets[piece + 1];
+            if (!(inverse_masses[v] > 0.0)) {
+                has_pinned[piece] = 1;
+            }
         }
     }
     for (std::size_t piece = 0; piece < num_pieces; ++piece) {
@@ -331,72 +312,77 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
             }
         }
     }
-    std::vector<std::uint8_t> blocked(num_pieces, 0);
+    // (piece, other piece, other piece's triangle) for every intersecting pair across pieces,
+    // sorted.
+    std::vector<std::array<std::int32_t, 3>> crossing;
+    for (const auto& [a, b] : pairs) {
+        const std::int32_t pa = pieces[static_cast<std::size_t>(a)];
+        const std::int32_t pb = pieces[static_cast<std::size_t>(b)];
+        if (pa != pb) {
+            crossing.push_back({pa, pb, b});
+            crossing.push_back({pb, pa, a});
+        }
+    }
+    std::sort(crossing.begin(), crossing.end());
+    crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+    std::int32_t best_piece = -1;
+    Vec3d best_shift{0.0, 0.0, 0.0};
+    double best_length = std::numeric_limits<double>::infinity();
     std::vector<std::int32_t> others;
-    bool moved = false;
-    for (const std::int32_t piece : order) {
-        const auto p = static_cast<std::size_t>(piece);
-        if (blocked[p] != 0 || pinned[p] != 0) {
-            continue;
-        }
+    for (std::size_t k = 0; k < crossing.size();) {
+        // One (piece, other piece) group.
+        const std::int32_t piece = crossing[k][0];
+        const std::int32_t other = crossing[k][1];
         others.clear();
-        for (auto it = std::lower_bound(crossing.begin(), crossing.end(),
-                                        std::array<std::int32_t, 2>{piece, INT32_MIN});
-             it != crossing.end() && (*it)[0] == piece; ++it) {
-            others.push_back((*it)[1]);
+        for (; k < crossing.size() && crossing[k][0] == piece && crossing[k][1] == other; ++k) {
+            others.push_back(crossing[k][2]);
         }
+        const auto p = static_cast<std::size_t>(piece);
         Vec3d centre;
         Vec3d normal;
-        if (others.empty() || !fit_plane(x, triangles, others, centre, normal)) {
+        if (has_pinned[p] != 0 || !fit_plane(x, triangles, others, centre, normal)) {
             continue;
         }
-        // Near the other layer's intersected part (within its radius of its centre), the
-        // piece's vertices on either side of its plane: the piece moves as a whole, along the
-        // normal, so that the fewer of them are `clearance` beyond it on the other side.
+        // The piece's vertices near the intersected triangles (within their radius of their
+        // centre), on either side of their plane: how far the piece must move along the normal
+        // for all of them to be on one side, `clearance` beyond it.
         double radius = 0.0;
         for (const std::int32_t o : others) {
             for (const std::int32_t v : triangles[static_cast<std::size_t>(o)]) {
                 radius = std::max(radius, norm(x[static_cast<std::size_t>(v)] - centre));
             }
         }
-        const auto members =
-            std::span(piece_vertices)
-                .subspan(static_cast<std::size_t>(piece_offsets[p]),
-                         static_cast<std::size_t>(piece_offsets[p + 1] - piece_offsets[p]));
-        std::int64_t above = 0;
-        std::int64_t below = 0;
         double depth_above = 0.0;
         double depth_below = 0.0;
-        for (const std::int32_t vertex : members) {
-            const auto v = static_cast<std::size_t>(vertex);
-            if (norm(x[v] - centre) > radius) {
+        for (std::int32_t i = piece_offsets[p]; i < piece_offsets[p + 1]; ++i) {
+            const Vec3d& point =
+                x[static_cast<std::size_t>(piece_vertices[static_cast<std::size_t>(i)])];
+            if (norm(point - centre) > radius) {
                 continue;
             }
-            const double d = dot(normal, x[v] - centre);
-            if (d > 0.0) {
-                ++above;
-                depth_above = std::max(depth_above, d);
-            } else if (d < 0.0) {
-                ++below;
-                depth_below = std::max(depth_below, -d);
-            }
+            const double d = dot(normal, point - centre);
+            depth_above = std::max(depth_above, d);
+            depth_below = std::max(depth_below, -d);
         }
-        if (above == 0 || below == 0) {
+        if (!(depth_above > 0.0) || !(depth_below > 0.0)) {
             continue;
         }
-        const bool lift = below < above || (below == above && depth_below <= depth_above);
-        const Vec3d shift =
-            lift ? normal * (depth_below + clearance) : normal * -(depth_above + clearance);
-        for (const std::int32_t v : members) {
-            x[static_cast<std::size_t>(v)] += shift;
-        }
-        moved = true;
-        blocked[p] = 1;
-        for (const std::int32_t o : others) {
-            blocked[static_cast<std::size_t>(pieces[static_cast<std::size_t>(o)])] = 1;
+        const bool lift = depth_below <= depth_above;
+        const double length = (lift ? depth_below : depth_above) + clearance;
+        if (length < best_length) {
+            best_length = length;
+            best_piece = piece;
+            best_shift = normal * (lift ? length : -length);
         }
     }
-    return moved;
+    if (best_piece < 0) {
+        return false;
+    }
+    const auto p = static_cast<std::size_t>(best_piece);
+    for (std::int32_t i = piece_offsets[p]; i < piece_offsets[p + 1]; ++i) {
+        x[static_cast<std::size_t>(piece_vertices[static_cast<std::size_t>(i)])] += best_shift;
+    }
+    return true;
 }
 
 // The region flip for contours that run from boundary to boundary (see the header). Returns
@@ -632,24 +618,34 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
     // The connected pieces of cloth, for the region moves.
     const std::vector<std::int32_t> pieces = vertex_connected_pieces(triangles, n);
     int since_best = 0;
+    bool move_tried = false;  // the best state has had its region move
+    int moves = 0;            // region moves made so far
+    int best_moves = 0;       // those that led to the best state
+    std::vector<Vec3d> trial;
     for (int iteration = 0; iteration < options.max_iterations && !pairs.empty() && step > 0.0;
          ++iteration) {
-        if (since_best >= STALL_ITERATIONS) {
-            // Contour minimization stalls on contours that run from boundary to boundary: flip
-            // the smallest region they cut off through the other layer, from the best state.
+        if (since_best >= STALL_ITERATIONS && !move_tried) {
+            // Contour minimization stalls on contours that run from boundary to boundary: one
+            // region move from the best state (one per best state: when it leads to no better
+            // state, minimization goes on from it; when none applies, from where it is).
             since_best = 0;
-            std::copy(best.begin(), best.end(), positions.begin());
-            pairs =
-                collision::find_intersecting_pairs(std::span<const Vec3d>(positions), triangles);
-            if (separate_pieces(positions, triangles, pieces, inverse_masses, pairs, step) ||
-                flip_regions(positions, triangles, topology, pieces, inverse_masses, pairs, step)) {
-                ++result.flips;
+            move_tried = true;
+            trial = best;
+            const std::vector<std::array<std::int32_t, 2>> best_state_pairs =
+                collision::find_intersecting_pairs(std::span<const Vec3d>(trial), triangles);
+            if (separate_pieces(trial, triangles, pieces, inverse_masses, best_state_pairs, step) ||
+                flip_regions(trial, triangles, topology, pieces, inverse_masses, best_state_pairs,
+                             step)) {
+                std::copy(trial.begin(), trial.end(), positions.begin());
+                ++moves;
                 ++result.iterations;
                 pairs = collision::find_intersecting_pairs(std::span<const Vec3d>(positions),
                                                            triangles);
                 if (static_cast<std::int64_t>(pairs.size()) < best_pairs) {
                     best_pairs = static_cast<std::int64_t>(pairs.size());
                     best.assign(positions.begin(), positions.end());
+                    best_moves = moves;
+                    move_tried = false;
                 }
                 continue;
             }
@@ -709,12 +705,15 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
         if (static_cast<std::int64_t>(pairs.size()) < best_pairs) {
             best_pairs = static_cast<std::int64_t>(pairs.size());
             best.assign(positions.begin(), positions.end());
+            best_moves = moves;
+            move_tried = false;
             since_best = 0;
         } else {
             ++since_best;
         }
     }
     std::copy(best.begin(), best.end(), positions.begin());
+    result.region_moves = best_moves;
     result.final_pairs = best_pairs;
     for (std::size_t v = 0; v < n; ++v) {
         result.max_displacement = std::max(result.max_displacement, norm(positions[v] - start[v]));

@@ -79,8 +79,8 @@ struct UntangleOptions {
 struct UntangleResult {
     std::int64_t initial_pairs = 0;  // intersecting pairs before
     std::int64_t final_pairs = 0;    // after (0: untangled)
-    int iterations = 0;              // gradient steps and region flips taken
-    int flips = 0;                   // region flips among them
+    int iterations = 0;              // gradient steps and region moves taken
+    int region_moves = 0;            // region moves that led to the result (see above)
     double max_displacement = 0.0;   // largest distance of a vertex from its start, m
     double ms = 0.0;                 // wall-clock time
 };
