@@ -127,7 +127,8 @@ TEST(Untangle, ClothThatFellThroughItselfIsUntangled) {
 
 TEST(Untangle, NeverLeavesMorePairsThanItFound) {
     // Two sheets crossing like an X from edge to edge: the contour runs across both, and
-    // shortening it need not remove it; whatever happens, the result is no worse than the start.
+    // shortening it need not remove it; within 40 iterations (before any region move), the
+    // result is no worse than the start.
     geometry::TriangleMeshD a = sheet(12, 1.0);
     geometry::TriangleMeshD mesh = a;
     const auto offset = static_cast<std::int32_t>(a.positions.size());
@@ -150,6 +151,12 @@ TEST(Untangle, NeverLeavesMorePairsThanItFound) {
     EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles),
               result.final_pairs);
     EXPECT_LE(result.iterations, 40);
+    // With the default budget, the stall gets a region move: the standing sheet moves up out of
+    // the lying one, by the depth of its lower half (0.5 m).
+    const UntangleResult full = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_EQ(full.final_pairs, 0);
+    EXPECT_GE(full.region_moves, 1);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
 }
 
 // Every edge of `mesh` within `tolerance` (relative) of its length in `start`.
@@ -168,8 +175,8 @@ void expect_edge_lengths_kept(const geometry::TriangleMeshD& mesh, const std::ve
 TEST(Untangle, SeparateSheetsCrossingFromEdgeToEdgeComeApart) {
     // Two 1 m sheets of 24 x 24 quads crossing like an X: the second is tilted by 20 degrees
     // about x (and shifted off the first's grid lines), so the contour runs straight across both
-    // from edge to edge. Contour minimization alone left 115 of 238 pairs after 400 iterations;
-    // the region flip moves one whole sheet along the other's normal, out of it.
+    // from edge to edge. Contour minimization alone left 95 of 188 pairs after 400 iterations;
+    // the piece move takes one whole sheet along the other's normal, out of it.
     geometry::TriangleMeshD a = sheet(24, 1.0);
     geometry::TriangleMeshD mesh = a;
     const auto offset = static_cast<std::int32_t>(a.positions.size());
@@ -239,6 +246,44 @@ TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {
     for (const Vec3d& p : mesh.positions) {
         ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
     }
+}
+
+TEST(Untangle, ASquareThroughBothLayersOfAFoldComesOut) {
+    // A 1 m wide strip folded over on itself (two layers 5 cm apart, joined by a half-turn: one
+    // piece, its layers' normals opposite) and a free 0.3 m square standing through both layers:
+    // the square's walls meet triangles of both layers, whose normals cancel (no plane is taken
+    // from them; the moves come from planes of one layer, or of the square).
+    const double radius = 0.025;
+    const double fold = M_PI * radius;
+    const double length = 2.0 + fold;
+    geometry::TriangleMeshD mesh = geometry::convert_precision<double>(
+        geometry::make_grid_sheet(16, 40, 1.0f, static_cast<float>(length)));
+    for (Vec3d& p : mesh.positions) {
+        const double y = p.y + 0.5 * length;  // 0 .. length along the strip
+        if (y <= 1.0) {
+            p = {p.x, y - 0.5, 0.0};
+        } else if (y <= 1.0 + fold) {
+            const double phi = (y - 1.0) / radius;
+            p = {p.x, 0.5 + radius * std::sin(phi), radius - radius * std::cos(phi)};
+        } else {
+            p = {p.x, 0.5 - (y - 1.0 - fold), 2.0 * radius};
+        }
+    }
+    geometry::TriangleMeshD square = sheet(6, 0.3);
+    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+    for (const Vec3d& p : square.positions) {
+        mesh.positions.push_back({p.x + 0.0113, 0.0137, p.y + 0.025});
+    }
+    for (const geometry::Triangle& t : square.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    const std::vector<Vec3d> start = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_GT(result.initial_pairs, 20);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
+    EXPECT_GE(result.region_moves, 1);
 }
 
 TEST(Untangle, IntersectionFreeInputIsLeftAlone) {
