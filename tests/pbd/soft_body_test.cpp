@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <numbers>
@@ -174,6 +176,139 @@ TEST(SoftBody, BubbleInflatesAndInvertsNothing) {
     EXPECT_GT(r.max_volume_ratio, 1.0 + 0.5 * added / (16.0 * 16.0 * 16.0));
 }
 
+// The inversion `pliant deform` left on the nerf demo's body (cleaned.nrrd --driver twist --axis
+// y --angle 90 --ramp 2 --grip 0.1: one tet inverted in frames 43–48, V / V0 down to −0.08): a
+// vertex on the grid's boundary with 5 of its 8 cells active lies in 5 corner tets, one per cell.
+// Its 6 neighbours are held by the rest of the body, and once the twist has distorted them no
+// position of the vertex gives all 5 tets their rest volume. One Gauss–Seidel sweep then leaves
+// the whole discrepancy to the tet projected first: its own projection restores it (the gradient
+// of C = V − V0 is fine through zero), the 4 tets after it push the vertex back through its
+// opposite face. Here that star alone: the neighbours pinned where the run had them at frame 48
+// (relative to the vertex, in cells, rounded to 0.01), the vertex free and that tet inverted.
+// Without the inversion guard it stays inverted (k = 1: V / V0 = −0.170 for good, the other 4
+// tets at 1.00–1.23 V0; k = 0.8: −0.038; k = 0.5 would not invert); with it the tet is held at
+// GUARD_RATIO · V0.
+TEST(SoftBody, TetOfALowValenceVertexDoesNotStayInverted) {
+    enum : std::int32_t { V, MX, PX, MY, PY, MZ, PZ };  // the vertex, then its −x … +z neighbours
+    geometry::TetMesh star;
+    star.positions = {{0, 0, 0}, {-1, 0, 0}, {1, 0, 0}, {0, -1, 0},
+                      {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+    // The corner tets of the 5 cells, in the order their colours had in the grid.
+    star.tets = {
+        {V, MX, MY, PZ}, {V, MY, PX, PZ}, {V, PX, PY, PZ}, {V, MY, MZ, PX}, {V, PX, MZ, PY}};
+    const std::vector<Vec3f> held = {{0.0f, 0.0f, 0.0f},     {-0.20f, 1.08f, 0.92f},
+                                     {0.19f, 0.07f, -0.89f}, {0.22f, -1.07f, -0.99f},
+                                     {-0.20f, 1.04f, 0.97f}, {-0.96f, -0.26f, -0.25f},
+                                     {1.07f, 0.38f, 0.22f}};
+    const auto volume_ratios = [&](const SoftBody& body) {
+        std::array<double, 5> r{};
+        for (std::size_t k = 0; k < r.size(); ++k) {
+            const geometry::Tet& t = star.tets[k];
+            const auto p = [&](int i) {
+                return vec3_cast<double>(body.positions()[t[i]]);
+            };
+            r[k] = geometry::signed_volume(p(0), p(1), p(2), p(3)) * 6.0;  // V0 = 1/6
+        }
+        return r;
+    };
+    for (const double stiffness : {1.0, 0.8}) {
+        SoftBody body(star, {.stiffness = stiffness});
+        ASSERT_EQ(body.tet_coloring().num_colors(), 5);
+        ASSERT_EQ(body.tet_coloring().color(0)[0], 0);  // the inverted tet is projected first
+        body.set_positions(held);
+        body.pin(std::vector<std::int32_t>{MX, PX, MY, PY, MZ, PZ});
+        ASSERT_EQ(body.stats().inverted_tets, 1);
+        ASSERT_LT(volume_ratios(body)[0], 0.0);
+        std::vector<Vec3f> previous;
+        for (int f = 0; f < 24; ++f) {  // 1 s
+            previous.assign(body.positions().begin(), body.positions().end());
+            body.step(1.0 / FPS);
+            ASSERT_EQ(body.stats().inverted_tets, 0) << "k " << stiffness << ", frame " << f;
+        }
+        const std::array<double, 5> r = volume_ratios(body);
+        EXPECT_NEAR(r[0], detail::GUARD_RATIO, 1e-4) << "k " << stiffness;
+        for (std::size_t t = 1; t < r.size(); ++t) {
+            EXPECT_GT(r[t], 0.75) << "k " << stiffness << ", tet " << t;  // not pushed down instead
+        }
+        // At rest, not jumping between the sweep's state and the guard's.
+        EXPECT_LT(norm(body.positions()[V] - previous[V]), 1e-6f) << "k " << stiffness;
+        EXPECT_GT(norm(body.positions()[V]), 0.01f);  // the vertex did move
+    }
+}
+
+// The guard's kernel: an inverted tet with one free vertex is lifted to GUARD_RATIO · V0 in one
+// projection (V is affine in one vertex); a tet above that, or of rest volume ≤ 0, keeps its bits.
+TEST(SoftBody, GuardKernelLiftsAnInvertedTetToItsFloorOnly) {
+    const geometry::Tet tet{0, 1, 2, 3};
+    const float rest_volume = 1.0f / 6.0f;
+    std::array<detail::Float4, 4> x{
+        {{0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, -0.5f, 2.0f}}};
+    ASSERT_NEAR(detail::tet_volume(x.data(), tet), -0.5f / 6.0f, 1e-7f);
+    EXPECT_TRUE(detail::guard_tet(x.data(), tet, rest_volume));
+    EXPECT_NEAR(detail::tet_volume(x.data(), tet), detail::GUARD_RATIO * rest_volume, 1e-7f);
+    EXPECT_EQ(x[0].x, 0.0f);  // w = 0: not moved
+    const std::array<detail::Float4, 4> lifted = x;
+    EXPECT_FALSE(detail::guard_tet(x.data(), tet, rest_volume));
+    EXPECT_EQ(std::memcmp(x.data(), lifted.data(), sizeof(x)), 0);
+    x[3].z = -0.5f;
+    EXPECT_FALSE(detail::guard_tet(x.data(), tet, -rest_volume));  // an inverted rest shape
+    EXPECT_EQ(x[3].z, -0.5f);
+    x[3].w = 0.0f;
+    EXPECT_FALSE(detail::guard_tet(x.data(), tet, rest_volume));  // nothing free to move
+    EXPECT_EQ(x[3].z, -0.5f);
+}
+
+// Every kernel width flags the same tets at risk: V < AT_RISK_RATIO · V0 before the projection.
+TEST(SoftBody, KernelsFlagTheSameTetsAtRisk) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
+    constexpr int N = 64;  // tets 4 k .. 4 k + 3 of vertices 16 k .. 16 k + 15: no shared vertex
+    std::vector<detail::Float4> x(4 * N);
+    std::vector<geometry::Tet> tets(N);
+    std::vector<float> rest(N);
+    for (int t = 0; t < N; ++t) {
+        tets[t] = {4 * t, 4 * t + 1, 4 * t + 2, 4 * t + 3};
+        for (int k = 0; k < 4; ++k) {
+            x[4 * t + k] = {coordinate(rng), coordinate(rng), coordinate(rng), 1.0f};
+        }
+        // Rest volumes around the tet's own: some at risk, some not, some on the threshold.
+        const float v = detail::tet_volume(x.data(), tets[t]);
+        rest[t] = t % 3 == 0 ? v / detail::AT_RISK_RATIO : v * (0.5f + 0.03f * (t % 40));
+    }
+    std::vector<std::uint8_t> scalar(N, 0);
+    std::vector<detail::Float4> xs = x;
+    for (int t = 0; t < N; ++t) {
+        scalar[t] = detail::project_tet(xs.data(), tets[t], rest[t], 1.0f, 0.0f) ? 1 : 0;
+    }
+    int num_at_risk = 0;
+    for (const std::uint8_t f : scalar) {
+        num_at_risk += f;
+    }
+    EXPECT_GT(num_at_risk, 8);
+    EXPECT_LT(num_at_risk, N - 8);
+#if defined(PLIANT_PBD_SSE)
+    std::vector<detail::Float4> x4 = x;
+    for (int t = 0; t < N; t += 4) {
+        const int mask = detail::project_tets4(x4.data(), &tets[t], &rest[t], 1.0f, 0.0f);
+        for (int l = 0; l < 4; ++l) {
+            EXPECT_EQ((mask >> l) & 1, scalar[t + l]) << t + l;
+        }
+    }
+    EXPECT_EQ(std::memcmp(x4.data(), xs.data(), x4.size() * sizeof(detail::Float4)), 0);
+#endif
+    if (pliant::has_avx2()) {
+        std::vector<detail::Float4> x8 = x;
+        std::vector<std::uint8_t> flags(N, 0);
+        std::int64_t flagged = 0;
+        EXPECT_EQ(detail::project_tets_avx2(x8.data(), tets.data(), rest.data(), flags.data(), N,
+                                            1.0f, 0.0f, flagged),
+                  N);
+        EXPECT_EQ(flags, scalar);
+        EXPECT_EQ(flagged, num_at_risk);
+        EXPECT_EQ(std::memcmp(x8.data(), xs.data(), x8.size() * sizeof(detail::Float4)), 0);
+    }
+}
+
 TEST(SoftBody, PerturbedBodyComesToRestAtItsRestShape) {
     const TetGrid grid = box_grid(4);
     SoftBody body(grid);
@@ -278,9 +413,10 @@ TEST(SoftBody, AVX2AndSSEKernelsAreBitwiseIdentical) {
 }
 
 // The method of soft_body.hpp written plainly: every substep predict, the edges colour by colour
-// then the tets colour by colour (each colour in its order, the scalar kernels), velocities.
+// then the tets colour by colour (each colour in its order, the scalar kernels), the inversion
+// guard on the flagged tets (with_guard), velocities.
 std::vector<Vec3f> reference_steps(const SoftBody& body, std::vector<Vec3f> x, std::vector<Vec3f> v,
-                                   int steps, double dt) {
+                                   int steps, double dt, bool with_guard = true) {
     const SoftBodyOptions& o = body.options();
     const double h = dt / o.substeps;
     const auto hf = static_cast<float>(h);
@@ -292,7 +428,13 @@ std::vector<Vec3f> reference_steps(const SoftBody& body, std::vector<Vec3f> x, s
     const auto rest = [&](std::int32_t i) {
         return vec3_cast<double>(body.rest_positions()[static_cast<std::size_t>(i)]);
     };
+    const auto rest_volume = [&](std::int32_t t) {
+        const geometry::Tet& tet = body.tets()[static_cast<std::size_t>(t)];
+        return static_cast<float>(
+            geometry::signed_volume(rest(tet[0]), rest(tet[1]), rest(tet[2]), rest(tet[3])));
+    };
     std::vector<detail::Float4> p(x.size());
+    std::vector<std::uint8_t> at_risk(body.tets().size(), 0);  // per tet, kept across substeps
     for (int step = 0; step < steps * o.substeps; ++step) {
         std::vector<Vec3f> previous = x;
         for (std::size_t i = 0; i < x.size(); ++i) {
@@ -313,9 +455,37 @@ std::vector<Vec3f> reference_steps(const SoftBody& body, std::vector<Vec3f> x, s
         for (std::int32_t c = 0; c < body.tet_coloring().num_colors(); ++c) {
             for (const std::int32_t t : body.tet_coloring().color(c)) {
                 const geometry::Tet& tet = body.tets()[static_cast<std::size_t>(t)];
-                const auto volume = static_cast<float>(geometry::signed_volume(
-                    rest(tet[0]), rest(tet[1]), rest(tet[2]), rest(tet[3])));
-                detail::project_tet(p.data(), tet, volume, inv_k, 0.0f);
+                if (detail::project_tet(p.data(), tet, rest_volume(t), inv_k, 0.0f)) {
+                    at_risk[static_cast<std::size_t>(t)] = 1;
+                }
+            }
+        }
+        // The guard: the flagged tets in colour order, passes until one moves none, and those
+        // still below AT_RISK_RATIO · V0 flagged for the next substep.
+        std::vector<std::int32_t> guarded;
+        for (std::int32_t c = 0; c < body.tet_coloring().num_colors(); ++c) {
+            for (const std::int32_t t : body.tet_coloring().color(c)) {
+                if (at_risk[static_cast<std::size_t>(t)] != 0) {
+                    at_risk[static_cast<std::size_t>(t)] = 0;
+                    guarded.push_back(t);
+                }
+            }
+        }
+        for (int pass = 0; with_guard && pass < detail::GUARD_PASSES; ++pass) {
+            bool moved = false;
+            for (const std::int32_t t : guarded) {
+                moved = detail::guard_tet(p.data(), body.tets()[static_cast<std::size_t>(t)],
+                                          rest_volume(t)) ||
+                        moved;
+            }
+            if (!moved) {
+                break;
+            }
+        }
+        for (const std::int32_t t : guarded) {
+            if (detail::tet_volume(p.data(), body.tets()[static_cast<std::size_t>(t)]) <
+                rest_volume(t) * detail::AT_RISK_RATIO) {
+                at_risk[static_cast<std::size_t>(t)] = 1;
             }
         }
         for (std::size_t i = 0; i < x.size(); ++i) {
@@ -329,33 +499,42 @@ std::vector<Vec3f> reference_steps(const SoftBody& body, std::vector<Vec3f> x, s
 }
 
 TEST(SoftBody, MatchesThePlainColourByColourMethodBitwise) {
-    // The solver's SIMD kernels, lattice runs, layer-blocked sweep and fused vertex passes against
-    // the plain method: a grid of 6 × 5 × 11 cells (slabs, runs, remainders), random velocities,
-    // gravity, 3 substeps per step, 1 and 2 threads.
+    // The solver's SIMD kernels, lattice runs, layer-blocked sweep, fused vertex passes and
+    // inversion guard against the plain method: a grid of 6 × 5 × 11 cells (slabs, runs,
+    // remainders), random velocities, gravity, 3 substeps per step, 1 and 2 threads. At 3 units/s
+    // no tet comes near inversion; at 60 units/s (0.8 units, 40 % of a cell, per substep) many
+    // do, and the guard acts (the result differs from the plain method without it).
     const volume::Volume vol = volume::Volume::allocate({12, 10, 22}, volume::VoxelType::u8,
                                                         {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
     const TetGrid grid = build_tet_grid(vol, {.cell_voxels = 2, .full_box = true});
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> speed(-3.0f, 3.0f);
-    std::vector<Vec3f> velocities(grid.mesh.num_vertices());
-    for (Vec3f& v : velocities) {
-        v = {speed(rng), speed(rng), speed(rng)};
-    }
-    for (const int threads : {1, 2}) {
-        set_num_threads(threads);
-        SoftBody body(grid, {.stiffness = 0.8, .substeps = 3, .gravity = {0.0, -9.81, 0.0}});
-        body.set_velocities(velocities);
-        const std::vector<Vec3f> expected =
-            reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
-        body.step(1.0 / FPS);
-        body.step(1.0 / FPS);
-        std::size_t differing = 0;
-        for (std::size_t i = 0; i < expected.size(); ++i) {
-            differing +=
-                std::memcmp(&expected[i], &body.positions()[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+    for (const float max_speed : {3.0f, 60.0f}) {
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<float> speed(-max_speed, max_speed);
+        std::vector<Vec3f> velocities(grid.mesh.num_vertices());
+        for (Vec3f& v : velocities) {
+            v = {speed(rng), speed(rng), speed(rng)};
         }
-        EXPECT_EQ(differing, 0u) << threads << " threads";
-        EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
+        for (const int threads : {1, 2}) {
+            set_num_threads(threads);
+            SoftBody body(grid, {.stiffness = 0.8, .substeps = 3, .gravity = {0.0, -9.81, 0.0}});
+            body.set_velocities(velocities);
+            const std::vector<Vec3f> expected =
+                reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
+            body.step(1.0 / FPS);
+            body.step(1.0 / FPS);
+            std::size_t differing = 0;
+            for (std::size_t i = 0; i < expected.size(); ++i) {
+                differing +=
+                    std::memcmp(&expected[i], &body.positions()[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+            }
+            EXPECT_EQ(differing, 0u) << threads << " threads, speeds up to " << max_speed;
+            EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
+            const std::vector<Vec3f> unguarded =
+                reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS, false);
+            const bool guard_acted = std::memcmp(unguarded.data(), expected.data(),
+                                                 expected.size() * sizeof(Vec3f)) != 0;
+            EXPECT_EQ(guard_acted, max_speed > 10.0f) << "speeds up to " << max_speed;
+        }
     }
     set_num_threads(0);
 }

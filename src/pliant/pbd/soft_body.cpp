@@ -1,6 +1,7 @@
 #include "pliant/pbd/soft_body.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -123,6 +124,11 @@ struct SoftBody::State {
     std::vector<float> rest_volumes0;
     std::vector<float> rest_volumes;
     double total_rest_volume = 0.0;
+    // Inversion guard (step 6b): per tet in colour order, 1 when the sweep found it at risk; per
+    // tet colour, 1 when one of its tets is; the flagged tets, scratch. Cleared by the guard.
+    std::vector<std::uint8_t> tet_at_risk;
+    std::vector<std::uint8_t> colour_at_risk;
+    std::vector<std::int64_t> guarded;
     // On a TetGrid: the runs of edge_vertices, those of colour c at
     // edge_runs[edge_run_offsets[c] .. edge_run_offsets[c + 1]); empty for other meshes.
     std::vector<EdgeRun> edge_runs;
@@ -477,6 +483,8 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
         s.rest_volumes0[k] = static_cast<float>(rest_volume[t]);
     }
     s.rest_volumes = s.rest_volumes0;
+    s.tet_at_risk.assign(s.tet_vertices.size(), 0);
+    s.colour_at_risk.assign(static_cast<std::size_t>(s.tet_coloring.num_colors()), 0);
     if (grid != nullptr) {
         // Step 4b: layer blocking of both sweeps.
         std::vector<std::int32_t> keys(s.edge_vertices.size());
@@ -774,11 +782,25 @@ void SoftBody::step(double dt) {
             }
         });
     };
-    // Tets [lo, hi) of colour c, the same way.
+    // Tets [lo, hi) of colour c, the same way; the tets at risk of inversion are flagged in
+    // tet_at_risk (by index: no two chunks write one entry), and their colour in colour_at_risk.
     const auto project_tet_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
         const std::int64_t begin = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
         const geometry::Tet* tets = s.tet_vertices.data() + begin;
         const float* volumes = s.rest_volumes.data() + begin;
+        std::uint8_t* at_risk = s.tet_at_risk.data() + begin;
+        const auto flag_colour = [&](std::int64_t num_at_risk) {
+            if (num_at_risk > 0) {
+                std::atomic_ref<std::uint8_t>(s.colour_at_risk[static_cast<std::size_t>(c)])
+                    .store(1, std::memory_order_relaxed);
+            }
+        };
+        const auto project_one = [&](std::int64_t i, std::int64_t& num_at_risk) {
+            if (detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha)) {
+                at_risk[i] = 1;
+                ++num_at_risk;
+            }
+        };
         if (use_avx2 && !s.tet_runs.empty()) {
             // Rows of cells along x; within a row the tets' vertices follow from the base.
             const TetRun& r = s.tet_runs[static_cast<std::size_t>(c)];
@@ -786,6 +808,7 @@ void SoftBody::step(double dt) {
                 hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     b += lo;
                     e += lo;
+                    std::int64_t num_at_risk = 0;
                     for (std::int64_t q = b; q < e;) {
                         const std::int64_t row = q / r.ni;
                         const std::int64_t a = q - row * r.ni;
@@ -793,32 +816,42 @@ void SoftBody::step(double dt) {
                                                   s.lattice_x * (r.j0 + 2 * (row % r.nj)) +
                                                   s.lattice_xy * (r.k0 + 2 * (row / r.nj));
                         const std::int64_t run = std::min(e - q, r.ni - a);
-                        std::int64_t i =
-                            q + detail::project_tet_run_avx2(x, base, r.offsets, volumes + q, run,
-                                                             inv_k, volume_alpha);
+                        std::int64_t i = q + detail::project_tet_run_avx2(
+                                                 x, base, r.offsets, volumes + q, at_risk + q, run,
+                                                 inv_k, volume_alpha, num_at_risk);
                         for (; i < q + run; ++i) {
-                            detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
+                            project_one(i, num_at_risk);
                         }
                         q += run;
                     }
+                    flag_colour(num_at_risk);
                 });
             return;
         }
         parallel_for_chunks(hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
             std::int64_t i = lo + b;
             e += lo;
+            std::int64_t num_at_risk = 0;
             if (use_avx2) {
-                i +=
-                    detail::project_tets_avx2(x, tets + i, volumes + i, e - i, inv_k, volume_alpha);
+                i += detail::project_tets_avx2(x, tets + i, volumes + i, at_risk + i, e - i, inv_k,
+                                               volume_alpha, num_at_risk);
             }
 #if defined(PLIANT_PBD_SSE)
             for (; i + 4 <= e; i += 4) {
-                detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
+                const int mask =
+                    detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
+                for (int l = 0; mask != 0 && l < 4; ++l) {
+                    if ((mask >> l & 1) != 0) {
+                        at_risk[i + l] = 1;
+                        ++num_at_risk;
+                    }
+                }
             }
 #endif
             for (; i < e; ++i) {
-                detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha);
+                project_one(i, num_at_risk);
             }
+            flag_colour(num_at_risk);
         });
     };
     // Every constraint of a colouring, colour after colour; with a blocking, slab after slab of
@@ -846,6 +879,49 @@ void SoftBody::step(double dt) {
                 if (layer_begin[z0] < layer_begin[z1]) {
                     project_range(c, layer_begin[z0], layer_begin[z1]);
                 }
+            }
+        }
+    };
+    // Step 6b: the inversion guard. The flagged tets, colour by colour (flags cleared), then up to
+    // GUARD_PASSES passes of guard_tet over them in that order, one thread: a handful of tets.
+    const auto guard_flagged_tets = [&] {
+        s.guarded.clear();
+        for (std::int32_t c = 0; c < s.tet_coloring.num_colors(); ++c) {
+            if (s.colour_at_risk[static_cast<std::size_t>(c)] == 0) {
+                continue;
+            }
+            s.colour_at_risk[static_cast<std::size_t>(c)] = 0;
+            for (std::int64_t k = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
+                 k < s.tet_coloring.offsets[static_cast<std::size_t>(c) + 1]; ++k) {
+                if (s.tet_at_risk[static_cast<std::size_t>(k)] != 0) {
+                    s.tet_at_risk[static_cast<std::size_t>(k)] = 0;
+                    s.guarded.push_back(k);
+                }
+            }
+        }
+        for (int pass = 0; pass < detail::GUARD_PASSES && !s.guarded.empty(); ++pass) {
+            bool moved = false;
+            for (const std::int64_t k : s.guarded) {
+                moved = detail::guard_tet(x, s.tet_vertices[static_cast<std::size_t>(k)],
+                                          s.rest_volumes[static_cast<std::size_t>(k)]) ||
+                        moved;
+            }
+            if (!moved) {
+                break;
+            }
+        }
+        // A tet still below AT_RISK_RATIO · V0 stays flagged for the next substep: its own
+        // projection may lift it above the kernels' threshold before later colours push it
+        // back (an earlier colour sharing its vertices can have lifted it too).
+        for (const std::int64_t k : s.guarded) {
+            const auto i = static_cast<std::size_t>(k);
+            if (detail::tet_volume(x, s.tet_vertices[i]) <
+                s.rest_volumes[i] * detail::AT_RISK_RATIO) {
+                s.tet_at_risk[i] = 1;
+                const auto colour = std::upper_bound(s.tet_coloring.offsets.begin(),
+                                                     s.tet_coloring.offsets.end(), k) -
+                                    s.tet_coloring.offsets.begin() - 1;
+                s.colour_at_risk[static_cast<std::size_t>(colour)] = 1;
             }
         }
     };
@@ -919,6 +995,8 @@ void SoftBody::step(double dt) {
         sweep(s.edge_blocking, s.edge_coloring, project_edge_range);
         // Step 6: tet volumes, colour by colour.
         sweep(s.tet_blocking, s.tet_coloring, project_tet_range);
+        // Step 6b: the inversion guard on the tets flagged at risk, in colour order.
+        guard_flagged_tets();
         // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
         // velocities need not be stored) or, after the last substep, with the copy of the
         // positions.

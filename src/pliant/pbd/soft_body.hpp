@@ -13,7 +13,28 @@
 //      "Position Based Dynamics", 2007, eq. 16);
 //      each constraint: Δλ = −C / (Σ_k w_k |∇_k C|² + α̃), x_k += w_k ∇_k C Δλ (XPBD eq. 17–18,
 //      λ starting at 0 in every substep);
+//   3b. inversion guard (below): for the tets flagged at risk, C = V − 0.1 V0 ≥ 0, hard;
 //   4. v = (x − x_previous) / h, then v *= max(0, 1 − damping · h).
+//
+// Inversion guard. One volume constraint per tet over-constrains the vertices, so under a large
+// deformation the constraints cannot all hold, and one Gauss–Seidel sweep leaves the discrepancy
+// to the constraints projected first. It is worst at a boundary vertex in few tets: on a TetGrid,
+// a vertex with 5 of its 8 cells active lies in 5 corner tets, 5 constraints on its 3
+// coordinates. Under the nerf demo's 90° twist one such tet lost volume substep after substep and
+// ended inverted from frame 43 on (V / V0 = −0.08 at frame 48), although its own projection
+// restored it every time (the gradient of C is fine through zero): the 4 tets of that vertex
+// projected after it pushed the vertex back through its opposite face and kept their own volume
+// (1.00–1.14 V0). So the tet
+// kernels flag a tet whose volume before its projection is below 0.75 V0 (AT_RISK_RATIO,
+// detail/projection.hpp); after the sweep the flagged tets, in colour order on one thread, get the
+// unilateral constraint C = V − 0.1 V0 ≥ 0 (GUARD_RATIO; V0 > 0 only) projected where violated,
+// with no stiffness or compliance (like a contact, it is not traded against the volume
+// constraints), in passes until one moves nothing, 16 at most; a tet still below 0.75 V0 after
+// the guard stays flagged for the next substep. The guard keeps the orientation, not the volume:
+// such a tet sits at 0.1 V0. It cannot undo an inversion that kinematic drivers impose, nor one
+// whose flagged tets still conflict after 16 passes, and a tet that one sweep takes from above
+// 0.75 V0 before its own projection to inverted after the sweep is guarded only from the substep
+// whose sweep flags it (docs/architecture.md lists the cases measured).
 //
 // Stiffness k ∈ (0, 1] (the paper's "stiffness 1.0 vs 0.8"): PBD's stiffness, the fraction of a
 // constraint's violation that one projection removes (Müller et al. 2007, §3.3). As XPBD
@@ -37,9 +58,10 @@
 // otherwise); colours run one after the other (Gauss–Seidel across colours), the constraints of
 // a colour in parallel, 4 (SSE) or 8 (AVX2, chosen at run time) at a time. On a TetGrid the sweep
 // is blocked in slabs of lattice layers for cache reuse, with the results of the colour-by-colour
-// order (two constraints sharing a vertex are projected in the order of their colours). Results
-// are bitwise identical for any number of threads and for either SIMD width (the same
-// arithmetic, no FMA).
+// order (two constraints sharing a vertex are projected in the order of their colours). The
+// guard runs on one thread over the few flagged tets, flagged by index with the same float
+// comparison in every kernel. Results are bitwise identical for any number of threads and for
+// either SIMD width (the same arithmetic, no FMA).
 //
 //   const TetGrid grid = build_tet_grid(volume, {.cell_voxels = 4});
 //   SoftBody body(grid, {.stiffness = 0.8});

@@ -6,10 +6,16 @@
 // inv_k = 1 / stiffness; alpha = α_phys / h² (XPBD's α̃ without the stiffness part). A constraint
 // whose vertices all have w = 0, or whose gradient vanishes (zero-length edge, flat tet with
 // coincident vertices), is skipped: its vertices keep their bits.
+//
+// The tet kernels also report the tets at risk of inversion for the guard (soft_body.hpp,
+// "Inversion guard"): those whose volume before their projection is below AT_RISK_RATIO · V0 (V0
+// the rest volume passed in; the same float comparison in every kernel, so every width flags the
+// same tets).
 #pragma once
 
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "pliant/core/host_device.hpp"
@@ -25,6 +31,13 @@ namespace pliant::pbd::detail {
 struct alignas(16) Float4 {
     float x, y, z, w;
 };
+
+// Inversion guard (soft_body.hpp): a tet is at risk below AT_RISK_RATIO · V0 (before its
+// projection in the sweep, or after the guard); the guard lifts it to GUARD_RATIO · V0.
+inline constexpr float AT_RISK_RATIO = 0.75f;
+inline constexpr float GUARD_RATIO = 0.1f;
+// Passes of guard_tet over the flagged tets at most; the guard stops after a pass that moved none.
+inline constexpr int GUARD_PASSES = 16;
 
 // C = |x_a − x_b| − rest_length; ∇_a C = n = (x_a − x_b) / |x_a − x_b| = −∇_b C.
 PLIANT_HOST_DEVICE inline void project_edge(Float4* x, std::int32_t a, std::int32_t b,
@@ -48,46 +61,83 @@ PLIANT_HOST_DEVICE inline void project_edge(Float4* x, std::int32_t a, std::int3
     x[b] = {pb.x - sb * dx, pb.y - sb * dy, pb.z - sb * dz, pb.w};
 }
 
-// C = V − V0, V = e1 · (e2 × e3) / 6 with e_k = x_k − x_0; ∇_1 C = e2 × e3 / 6, ∇_2 C = e3 × e1 /
-// 6, ∇_3 C = e1 × e2 / 6, ∇_0 C = −(∇_1 + ∇_2 + ∇_3).
-PLIANT_HOST_DEVICE inline void project_tet(Float4* x, const geometry::Tet& t, float rest_volume,
-                                           float inv_k, float alpha) {
-    const Float4 p0 = x[t[0]];
-    const Float4 p1 = x[t[1]];
-    const Float4 p2 = x[t[2]];
-    const Float4 p3 = x[t[3]];
-    const float e1x = p1.x - p0.x, e1y = p1.y - p0.y, e1z = p1.z - p0.z;
-    const float e2x = p2.x - p0.x, e2y = p2.y - p0.y, e2z = p2.z - p0.z;
-    const float e3x = p3.x - p0.x, e3y = p3.y - p0.y, e3z = p3.z - p0.z;
+// V = e1 · (e2 × e3) / 6 of tet (p[0], p[1], p[2], p[3]) with e_k = p_k − p_0, its gradients
+// ∇_1 V = e2 × e3 / 6, ∇_2 V = e3 × e1 / 6, ∇_3 V = e1 × e2 / 6, ∇_0 V = −(∇_1 + ∇_2 + ∇_3)
+// (Müller et al. 2007, eq. 16), and weight = Σ_k w_k |∇_k V|².
+struct TetGradient {
+    float volume = 0.0f;
+    float weight = 0.0f;
+    float gx[4]{}, gy[4]{}, gz[4]{};
+};
+PLIANT_HOST_DEVICE inline TetGradient tet_gradient(const Float4 (&p)[4]) {
+    const float e1x = p[1].x - p[0].x, e1y = p[1].y - p[0].y, e1z = p[1].z - p[0].z;
+    const float e2x = p[2].x - p[0].x, e2y = p[2].y - p[0].y, e2z = p[2].z - p[0].z;
+    const float e3x = p[3].x - p[0].x, e3y = p[3].y - p[0].y, e3z = p[3].z - p[0].z;
     constexpr float SIXTH = 1.0f / 6.0f;
-    const float g1x = (e2y * e3z - e2z * e3y) * SIXTH;
-    const float g1y = (e2z * e3x - e2x * e3z) * SIXTH;
-    const float g1z = (e2x * e3y - e2y * e3x) * SIXTH;
-    const float g2x = (e3y * e1z - e3z * e1y) * SIXTH;
-    const float g2y = (e3z * e1x - e3x * e1z) * SIXTH;
-    const float g2z = (e3x * e1y - e3y * e1x) * SIXTH;
-    const float g3x = (e1y * e2z - e1z * e2y) * SIXTH;
-    const float g3y = (e1z * e2x - e1x * e2z) * SIXTH;
-    const float g3z = (e1x * e2y - e1y * e2x) * SIXTH;
-    const float g0x = 0.0f - (g1x + g2x + g3x);
-    const float g0y = 0.0f - (g1y + g2y + g3y);
-    const float g0z = 0.0f - (g1z + g2z + g3z);
-    const float volume = e1x * g1x + e1y * g1y + e1z * g1z;
-    const float weight =
-        p0.w * (g0x * g0x + g0y * g0y + g0z * g0z) + p1.w * (g1x * g1x + g1y * g1y + g1z * g1z) +
-        p2.w * (g2x * g2x + g2y * g2y + g2z * g2z) + p3.w * (g3x * g3x + g3y * g3y + g3z * g3z);
-    if (!(weight > 0.0f)) {
-        return;
+    TetGradient g;
+    g.gx[1] = (e2y * e3z - e2z * e3y) * SIXTH;
+    g.gy[1] = (e2z * e3x - e2x * e3z) * SIXTH;
+    g.gz[1] = (e2x * e3y - e2y * e3x) * SIXTH;
+    g.gx[2] = (e3y * e1z - e3z * e1y) * SIXTH;
+    g.gy[2] = (e3z * e1x - e3x * e1z) * SIXTH;
+    g.gz[2] = (e3x * e1y - e3y * e1x) * SIXTH;
+    g.gx[3] = (e1y * e2z - e1z * e2y) * SIXTH;
+    g.gy[3] = (e1z * e2x - e1x * e2z) * SIXTH;
+    g.gz[3] = (e1x * e2y - e1y * e2x) * SIXTH;
+    g.gx[0] = 0.0f - (g.gx[1] + g.gx[2] + g.gx[3]);
+    g.gy[0] = 0.0f - (g.gy[1] + g.gy[2] + g.gy[3]);
+    g.gz[0] = 0.0f - (g.gz[1] + g.gz[2] + g.gz[3]);
+    g.volume = e1x * g.gx[1] + e1y * g.gy[1] + e1z * g.gz[1];
+    const auto norm2 = [&](int k) {
+        return g.gx[k] * g.gx[k] + g.gy[k] * g.gy[k] + g.gz[k] * g.gz[k];
+    };
+    g.weight = p[0].w * norm2(0) + p[1].w * norm2(1) + p[2].w * norm2(2) + p[3].w * norm2(3);
+    return g;
+}
+
+// x_k += w_k ∇_k V Δλ for the vertices of tet t, loaded as p.
+PLIANT_HOST_DEVICE inline void move_tet(Float4* x, const geometry::Tet& t, const Float4 (&p)[4],
+                                        const TetGradient& g, float dlambda) {
+    for (int k = 0; k < 4; ++k) {
+        const float s = p[k].w * dlambda;
+        x[t[static_cast<std::size_t>(k)]] = {p[k].x + s * g.gx[k], p[k].y + s * g.gy[k],
+                                             p[k].z + s * g.gz[k], p[k].w};
     }
-    const float dlambda = (0.0f - (volume - rest_volume)) / (weight * inv_k + alpha);
-    const float s0 = p0.w * dlambda;
-    const float s1 = p1.w * dlambda;
-    const float s2 = p2.w * dlambda;
-    const float s3 = p3.w * dlambda;
-    x[t[0]] = {p0.x + s0 * g0x, p0.y + s0 * g0y, p0.z + s0 * g0z, p0.w};
-    x[t[1]] = {p1.x + s1 * g1x, p1.y + s1 * g1y, p1.z + s1 * g1z, p1.w};
-    x[t[2]] = {p2.x + s2 * g2x, p2.y + s2 * g2y, p2.z + s2 * g2z, p2.w};
-    x[t[3]] = {p3.x + s3 * g3x, p3.y + s3 * g3y, p3.z + s3 * g3z, p3.w};
+}
+
+// C = V − V0 (tet_gradient: ∇_k C = ∇_k V). Returns whether the tet is at risk (V below
+// AT_RISK_RATIO · V0 before the projection).
+PLIANT_HOST_DEVICE inline bool project_tet(Float4* x, const geometry::Tet& t, float rest_volume,
+                                           float inv_k, float alpha) {
+    const Float4 p[4] = {x[t[0]], x[t[1]], x[t[2]], x[t[3]]};
+    const TetGradient g = tet_gradient(p);
+    const bool at_risk = g.volume < rest_volume * AT_RISK_RATIO;
+    if (!(g.weight > 0.0f)) {
+        return at_risk;
+    }
+    move_tet(x, t, p, g, (0.0f - (g.volume - rest_volume)) / (g.weight * inv_k + alpha));
+    return at_risk;
+}
+
+// V of tet t (tet_gradient's arithmetic).
+PLIANT_HOST_DEVICE inline float tet_volume(const Float4* x, const geometry::Tet& t) {
+    const Float4 p[4] = {x[t[0]], x[t[1]], x[t[2]], x[t[3]]};
+    return tet_gradient(p).volume;
+}
+
+// The inversion guard's projection (soft_body.hpp): the unilateral constraint
+// C = V − GUARD_RATIO · V0 ≥ 0, projected only when violated, as a hard constraint (no stiffness,
+// no compliance), and only for V0 > 0 (a rest-state driver may ask for an inverted rest shape).
+// Returns whether it moved the tet.
+PLIANT_HOST_DEVICE inline bool guard_tet(Float4* x, const geometry::Tet& t, float rest_volume) {
+    const float min_volume = rest_volume * GUARD_RATIO;
+    const Float4 p[4] = {x[t[0]], x[t[1]], x[t[2]], x[t[3]]};
+    const TetGradient g = tet_gradient(p);
+    if (!(rest_volume > 0.0f) || !(g.volume < min_volume) || !(g.weight > 0.0f)) {
+        return false;
+    }
+    move_tet(x, t, p, g, (min_volume - g.volume) / g.weight);
+    return true;
 }
 
 #if defined(PLIANT_PBD_SSE)
@@ -142,8 +192,9 @@ inline void project_edges4(Float4* x, const std::array<std::int32_t, 2>* e,
 }
 
 // Four tets t[0..3] of one colour (no shared vertex), the arithmetic of project_tet per lane.
-inline void project_tets4(Float4* x, const geometry::Tet* t, const float* rest_volumes, float inv_k,
-                          float alpha) {
+// Returns the tets at risk as a mask (bit l: t[l]).
+inline int project_tets4(Float4* x, const geometry::Tet* t, const float* rest_volumes, float inv_k,
+                         float alpha) {
     Lanes p0 = load_lanes(x, t[0][0], t[1][0], t[2][0], t[3][0]);
     Lanes p1 = load_lanes(x, t[0][1], t[1][1], t[2][1], t[3][1]);
     Lanes p2 = load_lanes(x, t[0][2], t[1][2], t[2][2], t[3][2]);
@@ -182,9 +233,12 @@ inline void project_tets4(Float4* x, const geometry::Tet* t, const float* rest_v
         add(add(add(mul(p0.w, norm2(g0x, g0y, g0z)), mul(p1.w, norm2(g1x, g1y, g1z))),
                 mul(p2.w, norm2(g2x, g2y, g2z))),
             mul(p3.w, norm2(g3x, g3y, g3z)));
+    const __m128 rest = _mm_loadu_ps(rest_volumes);
+    const int at_risk =
+        _mm_movemask_ps(_mm_cmplt_ps(volume, mul(rest, _mm_set1_ps(AT_RISK_RATIO))));
     const __m128 valid = _mm_cmpgt_ps(weight, zero);
     const __m128 denominator = add(mul(weight, _mm_set1_ps(inv_k)), _mm_set1_ps(alpha));
-    const __m128 violation = sub(volume, _mm_loadu_ps(rest_volumes));
+    const __m128 violation = sub(volume, rest);
     const __m128 dlambda = _mm_and_ps(valid, _mm_div_ps(sub(zero, violation), denominator));
     const __m128 s0 = mul(p0.w, dlambda);
     const __m128 s1 = mul(p1.w, dlambda);
@@ -198,6 +252,7 @@ inline void project_tets4(Float4* x, const geometry::Tet* t, const float* rest_v
     store_lanes(x, t[0][1], t[1][1], t[2][1], t[3][1], p1);
     store_lanes(x, t[0][2], t[1][2], t[2][2], t[3][2], p2);
     store_lanes(x, t[0][3], t[1][3], t[2][3], t[3][3], p3);
+    return at_risk;
 }
 
 #endif  // PLIANT_PBD_SSE

@@ -146,9 +146,10 @@ PLIANT_AVX2_FN std::int64_t project_edge_run_avx2(Float4* x, std::int64_t first,
 
 namespace {
 
-// The projection of 8 tets whose vertices p0..p3 are loaded; updates their positions in place.
-PLIANT_AVX2_INLINE void project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8& p3,
-                                      const float* rest_volumes, __m256 inv_k8, __m256 alpha8) {
+// The projection of 8 tets whose vertices p0..p3 are loaded; updates their positions in place and
+// returns the mask of the tets at risk (bit l: lane l).
+PLIANT_AVX2_INLINE int project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8& p3,
+                                     const float* rest_volumes, __m256 inv_k8, __m256 alpha8) {
     const __m256 zero = _mm256_setzero_ps();
     const __m256 sixth = _mm256_set1_ps(1.0f / 6.0f);
     const __m256 e1x = sub(p1.x, p0.x), e1y = sub(p1.y, p0.y), e1z = sub(p1.z, p0.z);
@@ -171,9 +172,12 @@ PLIANT_AVX2_INLINE void project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8
         add(add(add(mul(p0.w, norm2(g0x, g0y, g0z)), mul(p1.w, norm2(g1x, g1y, g1z))),
                 mul(p2.w, norm2(g2x, g2y, g2z))),
             mul(p3.w, norm2(g3x, g3y, g3z)));
+    const __m256 rest = _mm256_loadu_ps(rest_volumes);
+    const int at_risk = _mm256_movemask_ps(
+        _mm256_cmp_ps(volume, mul(rest, _mm256_set1_ps(AT_RISK_RATIO)), _CMP_LT_OQ));
     const __m256 valid = _mm256_cmp_ps(weight, zero, _CMP_GT_OQ);
     const __m256 denominator = add(mul(weight, inv_k8), alpha8);
-    const __m256 violation = sub(volume, _mm256_loadu_ps(rest_volumes));
+    const __m256 violation = sub(volume, rest);
     const __m256 dlambda = _mm256_and_ps(valid, _mm256_div_ps(sub(zero, violation), denominator));
     const __m256 s0 = mul(p0.w, dlambda);
     const __m256 s1 = mul(p1.w, dlambda);
@@ -187,15 +191,30 @@ PLIANT_AVX2_INLINE void project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8
     p2.z = add(p2.z, mul(s2, g2z));
     p3.x = add(p3.x, mul(s3, g3x)), p3.y = add(p3.y, mul(s3, g3y));
     p3.z = add(p3.z, mul(s3, g3z));
+    return at_risk;
+}
+
+// Flags the lanes of `mask` in at_risk[0..8) (rare: tets near inversion).
+inline void flag_at_risk(int mask, std::uint8_t* at_risk, std::int64_t& num_at_risk) {
+    if (mask != 0) {
+        for (int l = 0; l < 8; ++l) {
+            if ((mask >> l & 1) != 0) {
+                at_risk[l] = 1;
+                ++num_at_risk;
+            }
+        }
+    }
 }
 
 }  // namespace
 
 PLIANT_AVX2_FN std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t,
-                                              const float* rest_volumes, std::int64_t count,
-                                              float inv_k, float alpha) {
+                                              const float* rest_volumes, std::uint8_t* at_risk,
+                                              std::int64_t count, float inv_k, float alpha,
+                                              std::int64_t& num_at_risk) {
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
     const __m256 alpha8 = _mm256_set1_ps(alpha);
+    std::int64_t flagged = 0;  // a local: the stores below may alias num_at_risk
     std::int64_t k = 0;
     for (; k + 8 <= count; k += 8) {
         std::int32_t i[4][8];
@@ -208,23 +227,27 @@ PLIANT_AVX2_FN std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t,
         Lanes8 p1 = load8(x, i[1]);
         Lanes8 p2 = load8(x, i[2]);
         Lanes8 p3 = load8(x, i[3]);
-        project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8);
+        flag_at_risk(project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8), at_risk + k,
+                     flagged);
         store8(x, i[0], p0);
         store8(x, i[1], p1);
         store8(x, i[2], p2);
         store8(x, i[3], p3);
     }
+    num_at_risk += flagged;
     return k;
 }
 
 PLIANT_AVX2_FN std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
                                                  const std::array<std::int32_t, 4>& offsets,
-                                                 const float* rest_volumes, std::int64_t count,
-                                                 float inv_k, float alpha) {
+                                                 const float* rest_volumes, std::uint8_t* at_risk,
+                                                 std::int64_t count, float inv_k, float alpha,
+                                                 std::int64_t& num_at_risk) {
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
     const __m256 alpha8 = _mm256_set1_ps(alpha);
     // Lane l is tet base + 2 l: constant displacements from one pointer per corner.
     static constexpr std::int32_t LANES[8] = {0, 2, 4, 6, 8, 10, 12, 14};
+    std::int64_t flagged = 0;
     std::int64_t k = 0;
     for (; k + 8 <= count; k += 8) {
         Float4* c0 = x + base + 2 * k + offsets[0];
@@ -235,12 +258,14 @@ PLIANT_AVX2_FN std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
         Lanes8 p1 = load8(c1, LANES);
         Lanes8 p2 = load8(c2, LANES);
         Lanes8 p3 = load8(c3, LANES);
-        project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8);
+        flag_at_risk(project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8), at_risk + k,
+                     flagged);
         store8(c0, LANES, p0);
         store8(c1, LANES, p1);
         store8(c2, LANES, p2);
         store8(c3, LANES, p3);
     }
+    num_at_risk += flagged;
     return k;
 }
 
@@ -249,12 +274,13 @@ std::int64_t project_edges_avx2(Float4*, const std::array<std::int32_t, 2>*, con
                                 std::int64_t, float, float) {
     return 0;
 }
-std::int64_t project_tets_avx2(Float4*, const geometry::Tet*, const float*, std::int64_t, float,
-                               float) {
+std::int64_t project_tets_avx2(Float4*, const geometry::Tet*, const float*, std::uint8_t*,
+                               std::int64_t, float, float, std::int64_t&) {
     return 0;
 }
 std::int64_t project_tet_run_avx2(Float4*, std::int64_t, const std::array<std::int32_t, 4>&,
-                                  const float*, std::int64_t, float, float) {
+                                  const float*, std::uint8_t*, std::int64_t, float, float,
+                                  std::int64_t&) {
     return 0;
 }
 std::int64_t project_edge_run_avx2(Float4*, std::int64_t, std::int32_t, std::int32_t, const float*,

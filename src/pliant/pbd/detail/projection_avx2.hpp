@@ -20,9 +20,11 @@ std::int64_t project_edges_avx2(Float4* x, const std::array<std::int32_t, 2>* e,
                                 const float* rest_lengths, std::int64_t count, float inv_k,
                                 float alpha);
 
-// Tets t[0 .. count) of one colour, the same way.
+// Tets t[0 .. count) of one colour, the same way; at_risk parallel to them: at_risk[q] = 1 for the
+// tets at risk (projection.hpp), the others' entries untouched, their number added to num_at_risk.
 std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t, const float* rest_volumes,
-                               std::int64_t count, float inv_k, float alpha);
+                               std::uint8_t* at_risk, std::int64_t count, float inv_k, float alpha,
+                               std::int64_t& num_at_risk);
 
 // A run of edges: edge q joins first + stride q and first + stride q + span (stride 1 or 2),
 // `rest_lengths` parallel to them. Projects the first count − count mod 8 and returns that number.
@@ -32,10 +34,12 @@ std::int64_t project_edge_run_avx2(Float4* x, std::int64_t first, std::int32_t s
 
 // Tets of a regular lattice (TetGrid full box, vertex index = lattice index): tet q of the run has
 // vertices base + 2 q + offsets[m] (every other cell along x), `rest_volumes` parallel to them.
-// Projects the first count − count mod 8 and returns that number, as above.
+// Projects the first count − count mod 8 and returns that number, and flags the tets at risk in
+// at_risk, as above.
 std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
                                   const std::array<std::int32_t, 4>& offsets,
-                                  const float* rest_volumes, std::int64_t count, float inv_k,
-                                  float alpha);
+                                  const float* rest_volumes, std::uint8_t* at_risk,
+                                  std::int64_t count, float inv_k, float alpha,
+                                  std::int64_t& num_at_risk);
 
 }  // namespace pliant::pbd::detail
