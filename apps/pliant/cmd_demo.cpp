@@ -19,7 +19,8 @@
 //      is the cloth of DIR/untangle/scene.json (a new cloth whose rest shape is that frame), which
 //      `pliant cloth` untangles before frame 0 and simulates with self-collision for 24 frames
 //      (at most --cloth-frames): DIR/untangle/preview.mp4, frames, stats.json (its untangle
-//      report);
+//      report); and two sheets crossing like an X, untangled by a region move and dropped on
+//      the ground: DIR/untangle/crossing/ (scene.json, preview.mp4, frames, stats.json);
 //   5. a volume through the ray caster (the Colin27 brain from mricron-data, else the head CT from
 //      invesalius-examples, else a generated phantom): DIR/volume/volume.png, turntable.mp4;
 //   6. the same volume twisted by the XPBD soft body on a tet grid, resampled and ray-cast every
@@ -445,12 +446,43 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
                     "cloth {} --out {}\n  that frame as a new cloth (its rest shape), untangled "
                     "({}), then {} frames with self-collision: {} intersecting pairs in the worst "
                     "frame, {:.1f} ms per frame; preview {}\n  reproduce: pliant cloth {} --out "
-                    "{}\n\n",
+                    "{}\n",
                     fall_pairs, UNTANGLE_FALL_FRAMES, shown_preview(fall_stats), fall_path.string(),
                     fall_dir.string(), what, frames,
                     stats["max_intersecting_pairs"].get<std::int64_t>(),
                     stats["mean_ms_per_frame"].get<double>(), shown_preview(stats),
                     scene_path.string(), out.string()));
+    // Two sheets crossing like an X (the second tilted by 20 degrees through the first, the
+    // intersection running from edge to edge): contour minimization alone stalls; a region move
+    // takes one sheet out of the other; then they fall onto the ground, apart.
+    const std::filesystem::path crossing_dir = out / "crossing";
+    const nlohmann::ordered_json crossing_json = {
+        {"cloth",
+         {{"grid", {{"size", {1.0, 1.0}}, {"quads", {30, 30}}}},
+          {"instances",
+           {{{"translate", {0.0, 0.0, 0.6}}},
+            {{"rotate_degrees", {20.0, 0.0, 0.0}}, {"translate", {0.0123, 0.0171, 0.6}}}}}}},
+        {"obstacles", {{{"plane", {{"point", {0.0, 0.0, 0.0}}, {"normal", {0.0, 0.0, 1.0}}}}}}},
+        {"frames", frames},
+        {"substeps", 40}};
+    const nlohmann::ordered_json crossing_stats = run_written(crossing_dir, crossing_json).second;
+    const nlohmann::ordered_json& crossing_untangled = crossing_stats["untangle"];
+    const std::filesystem::path crossing_path = crossing_dir / "scene.json";
+    say(quiet,
+        fmt::format(
+            "untangling: two sheets crossing like an X ({} intersecting triangle pairs), {}; then "
+            "{} frames: {} intersecting pairs in the worst frame; preview {}\n  reproduce: pliant "
+            "cloth {} --out {}\n\n",
+            crossing_stats["initial_intersecting_pairs"].get<std::int64_t>(),
+            crossing_untangled.is_null()
+                ? std::string("not untangled")
+                : fmt::format("untangled in {} iterations with {} region moves, {} pairs left",
+                              crossing_untangled["iterations"].get<int>(),
+                              crossing_untangled["region_moves"].get<int>(),
+                              crossing_untangled["pairs_left"].get<std::int64_t>()),
+            frames, crossing_stats["max_intersecting_pairs"].get<std::int64_t>(),
+            shown_preview(crossing_stats), crossing_path.string(), crossing_dir.string()));
+
     return {{"fall_scene", fall_path.string()},
             {"fall_dir", fall_dir.string()},
             {"fall_frames", UNTANGLE_FALL_FRAMES},
@@ -463,7 +495,14 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
             {"untangle", untangled},
             {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
             {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
-            {"preview", preview_of(stats)}};
+            {"preview", preview_of(stats)},
+            {"crossing",
+             {{"scene", crossing_path.string()},
+              {"dir", crossing_dir.string()},
+              {"initial_intersecting_pairs", crossing_stats["initial_intersecting_pairs"]},
+              {"untangle", crossing_untangled},
+              {"max_intersecting_pairs", crossing_stats["max_intersecting_pairs"]},
+              {"preview", preview_of(crossing_stats)}}}};
 }
 
 void run_demo(const DemoOptions& options, const GlobalOptions& global) {
@@ -634,7 +673,8 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
                 "outputs in {}/:\n  {:<27}the folded sheet (binary PLY)\n  {:<27}its "
                 "moved copy\n  {:<27}each cloth scene: preview.mp4 (watch these), frames (OBJ), "
                 "stats.json\n  {:<27}the drape untangled after falling through itself: preview.mp4 "
-                "(watch it), fall/preview.mp4 (the fall), scene.json, stats.json\n  {:<27}the "
+                "(watch it), fall/preview.mp4 (the fall), scene.json, stats.json; crossing/ "
+                "(two sheets crossing like an X, untangled): preview.mp4\n  {:<27}the "
                 "ray-cast volume: volume.png, turntable.mp4\n  {:<27}the "
                 "twisted volume: twist.mp4 (watch it), twist.png, twisted.nrrd\n  {:<27}from "
                 "images: dataset/, reconstructed.nrrd, compare.png (look at it), cleaned.nrrd, "

@@ -416,6 +416,14 @@ TEST(Demo, WritesOutputsThatCollideReproduces) {
     EXPECT_EQ(untangle.at("max_intersecting_pairs"), 0);
     EXPECT_EQ(untangle.at("frames"), 2);
     EXPECT_TRUE(std::filesystem::exists(dir / "untangle" / "frames" / "frame_0002.obj"));
+    // Two sheets crossing like an X: untangled by a region move, apart in every frame.
+    const nlohmann::json& crossing = untangle.at("crossing");
+    EXPECT_GT(crossing.at("initial_intersecting_pairs").get<std::int64_t>(), 40);
+    EXPECT_EQ(crossing.at("untangle").at("pairs_left"), 0);
+    EXPECT_GE(crossing.at("untangle").at("region_moves").get<int>(), 1);
+    EXPECT_EQ(crossing.at("max_intersecting_pairs"), 0);
+    EXPECT_TRUE(
+        std::filesystem::exists(dir / "untangle" / "crossing" / "frames" / "frame_0002.obj"));
     const nlohmann::json again = parse_json(run_cli(
         "--json cloth " + quoted(std::filesystem::path(untangle.at("scene").get<std::string>())) +
             " --out " + quoted(scratch / "untangle_again") + " --no-preview",
