@@ -476,9 +476,10 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
             crossing_stats["initial_intersecting_pairs"].get<std::int64_t>(),
             crossing_untangled.is_null()
                 ? std::string("not untangled")
-                : fmt::format("untangled in {} iterations with {} region moves, {} pairs left",
+                : fmt::format("untangled in {} iterations with {} region move{}, {} pairs left",
                               crossing_untangled["iterations"].get<int>(),
                               crossing_untangled["region_moves"].get<int>(),
+                              crossing_untangled["region_moves"].get<int>() == 1 ? "" : "s",
                               crossing_untangled["pairs_left"].get<std::int64_t>()),
             frames, crossing_stats["max_intersecting_pairs"].get<std::int64_t>(),
             shown_preview(crossing_stats), crossing_path.string(), crossing_dir.string()));
