@@ -18,21 +18,41 @@ geometry::TriangleMeshD sheet(int quads, double size) {
         quads, quads, static_cast<float>(size), static_cast<float>(size)));
 }
 
+// `part` with every vertex mapped by `place`, appended to `mesh` as another piece of it.
+template <typename Place>
+void append(geometry::TriangleMeshD& mesh, const geometry::TriangleMeshD& part, Place&& place) {
+    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+    for (const Vec3d& p : part.positions) {
+        mesh.positions.push_back(place(p));
+    }
+    for (const geometry::Triangle& t : part.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+}
+
+// Untangles `mesh` (every vertex free) and expects more than `at_least` pairs at the start, none
+// at the end (by the result and by an independent count) and at least one region move.
+UntangleResult expect_untangled_by_a_region_move(geometry::TriangleMeshD& mesh,
+                                                 std::int64_t at_least) {
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
+    EXPECT_GT(result.initial_pairs, at_least);
+    EXPECT_EQ(result.final_pairs, 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
+    EXPECT_GE(result.region_moves, 1);
+    return result;
+}
+
 // Two 1 m sheets of 24 × 24 quads, 2 cm apart, one mesh; the upper one has a smooth dent
 // `depth` deep (a cosine bump of radius 0.25 m) that pokes through the lower one: a closed
 // contour.
 geometry::TriangleMeshD dent_through_sheet(double depth) {
-    geometry::TriangleMeshD lower = sheet(24, 1.0);
-    geometry::TriangleMeshD mesh = lower;
-    const auto offset = static_cast<std::int32_t>(lower.positions.size());
-    for (Vec3d p : lower.positions) {
+    geometry::TriangleMeshD mesh = sheet(24, 1.0);
+    append(mesh, sheet(24, 1.0), [&](Vec3d p) {
         const double r = std::sqrt(p.x * p.x + p.y * p.y);
         p.z = 0.02 - (r < 0.25 ? depth * 0.5 * (1.0 + std::cos(M_PI * r / 0.25)) : 0.0);
-        mesh.positions.push_back(p);
-    }
-    for (const geometry::Triangle& t : lower.triangles) {
-        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    }
+        return p;
+    });
     return mesh;
 }
 
@@ -129,15 +149,9 @@ TEST(Untangle, NeverLeavesMorePairsThanItFound) {
     // Two sheets crossing like an X from edge to edge: the contour runs across both, and
     // shortening it need not remove it; within 40 iterations (before any region move), the
     // result is no worse than the start.
-    geometry::TriangleMeshD a = sheet(12, 1.0);
-    geometry::TriangleMeshD mesh = a;
-    const auto offset = static_cast<std::int32_t>(a.positions.size());
-    for (Vec3d p : a.positions) {
-        mesh.positions.push_back({p.x, 0.0, p.y});  // the second sheet stands in the x-z plane
-    }
-    for (const geometry::Triangle& t : a.triangles) {
-        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    }
+    geometry::TriangleMeshD mesh = sheet(12, 1.0);
+    // The second sheet stands in the x-z plane.
+    append(mesh, sheet(12, 1.0), [](const Vec3d& p) { return Vec3d{p.x, 0.0, p.y}; });
     // Tilt both slightly so that no triangle is exactly coplanar with an edge.
     for (Vec3d& p : mesh.positions) {
         p.z += 0.013 * p.x + 0.007 * p.y;
@@ -177,24 +191,15 @@ TEST(Untangle, SeparateSheetsCrossingFromEdgeToEdgeComeApart) {
     // about x (and shifted off the first's grid lines), so the contour runs straight across both
     // from edge to edge. Contour minimization alone left 95 of 188 pairs after 400 iterations;
     // the piece move takes one whole sheet along the other's normal, out of it.
-    geometry::TriangleMeshD a = sheet(24, 1.0);
-    geometry::TriangleMeshD mesh = a;
-    const auto offset = static_cast<std::int32_t>(a.positions.size());
+    geometry::TriangleMeshD mesh = sheet(24, 1.0);
+    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
     const double c = std::cos(20.0 * M_PI / 180.0);
     const double s = std::sin(20.0 * M_PI / 180.0);
-    for (const Vec3d& p : a.positions) {
-        mesh.positions.push_back({p.x + 0.0123, c * p.y + 0.0171, s * p.y});
-    }
-    for (const geometry::Triangle& t : a.triangles) {
-        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    }
+    append(mesh, sheet(24, 1.0), [&](const Vec3d& p) {
+        return Vec3d{p.x + 0.0123, c * p.y + 0.0171, s * p.y};
+    });
     const std::vector<Vec3d> start = mesh.positions;
-    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
-    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
-    EXPECT_GT(result.initial_pairs, 40);
-    EXPECT_EQ(result.final_pairs, 0);
-    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
-    EXPECT_GE(result.region_moves, 1);
+    const UntangleResult result = expect_untangled_by_a_region_move(mesh, 40);
     // A sheet moved by about its depth through the other (sin 20 degrees x 0.5 m = 0.17 m),
     // keeping its shape.
     EXPECT_LT(result.max_displacement, 0.25);
@@ -236,13 +241,7 @@ TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {
             p = {p.x * 1.2 + 0.0071, 1.0 - back, 0.3 - 0.6 * back};
         }
     }
-    const std::vector<Vec3d> start = mesh.positions;
-    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
-    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
-    EXPECT_GT(result.initial_pairs, 20);
-    EXPECT_EQ(result.final_pairs, 0);
-    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
-    EXPECT_GE(result.region_moves, 1);
+    expect_untangled_by_a_region_move(mesh, 20);
     for (const Vec3d& p : mesh.positions) {
         ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
     }
@@ -269,21 +268,10 @@ TEST(Untangle, ASquareThroughBothLayersOfAFoldComesOut) {
             p = {p.x, 0.5 - (y - 1.0 - fold), 2.0 * radius};
         }
     }
-    geometry::TriangleMeshD square = sheet(6, 0.3);
-    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
-    for (const Vec3d& p : square.positions) {
-        mesh.positions.push_back({p.x + 0.0113, 0.0137, p.y + 0.025});
-    }
-    for (const geometry::Triangle& t : square.triangles) {
-        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    }
-    const std::vector<Vec3d> start = mesh.positions;
-    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
-    const UntangleResult result = untangle(mesh.positions, mesh.triangles, inverse_masses);
-    EXPECT_GT(result.initial_pairs, 20);
-    EXPECT_EQ(result.final_pairs, 0);
-    EXPECT_EQ(collision::count_intersecting_pairs(mesh.positions, mesh.triangles), 0);
-    EXPECT_GE(result.region_moves, 1);
+    append(mesh, sheet(6, 0.3), [](const Vec3d& p) {
+        return Vec3d{p.x + 0.0113, 0.0137, p.y + 0.025};
+    });
+    expect_untangled_by_a_region_move(mesh, 20);
 }
 
 TEST(Untangle, IntersectionFreeInputIsLeftAlone) {
