@@ -12,6 +12,7 @@
 
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/core/group_by_key.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/geometry/exact_predicates.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -202,9 +203,20 @@ std::int32_t edge_components(const geometry::MeshTopology& topology,
 }
 
 // The connected pieces of cloth: components of triangles that share a vertex (so that moving a
-// piece rigidly tears nothing), numbered in order of their lowest triangle; per triangle.
-std::vector<std::int32_t> vertex_connected_pieces(std::span<const geometry::Triangle> triangles,
-                                                  std::size_t num_vertices) {
+// piece rigidly tears nothing), numbered in order of their lowest triangle.
+struct Pieces {
+    std::vector<std::int32_t> of_triangle;  // per triangle, its piece
+    std::size_t count = 0;
+    // The vertices of piece p: vertices[vertex_offsets[p] .. vertex_offsets[p + 1]), ascending
+    // (a vertex in no triangle is in no piece).
+    std::vector<std::int32_t> vertex_offsets;
+    std::vector<std::int32_t> vertices;
+    std::vector<std::uint8_t> has_pinned;  // per piece: a vertex with inverse mass 0 (or NaN)
+};
+
+Pieces find_pieces(std::span<const geometry::Triangle> triangles,
+                   std::span<const double> inverse_masses) {
+    const std::size_t num_vertices = inverse_masses.size();
     std::vector<std::int32_t> parent(num_vertices);
     for (std::size_t v = 0; v < num_vertices; ++v) {
         parent[v] = static_cast<std::int32_t>(v);
@@ -226,15 +238,28 @@ std::vector<std::int32_t> vertex_connected_pieces(std::span<const geometry::Tria
             }
         }
     }
+    Pieces pieces;
     std::vector<std::int32_t> label(num_vertices, -1);
-    std::vector<std::int32_t> pieces(triangles.size());
-    std::int32_t count = 0;
+    pieces.of_triangle.resize(triangles.size());
     for (std::size_t t = 0; t < triangles.size(); ++t) {
         const auto r = static_cast<std::size_t>(root(triangles[t][0]));
         if (label[r] < 0) {
-            label[r] = count++;
+            label[r] = static_cast<std::int32_t>(pieces.count++);
         }
-        pieces[t] = label[r];
+        pieces.of_triangle[t] = label[r];
+    }
+    std::vector<std::int32_t> vertex_piece(num_vertices, -1);
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+        for (const std::int32_t v : triangles[t]) {
+            vertex_piece[static_cast<std::size_t>(v)] = pieces.of_triangle[t];
+        }
+    }
+    group_by_key(vertex_piece, pieces.count, pieces.vertex_offsets, pieces.vertices);
+    pieces.has_pinned.assign(pieces.count, 0);
+    for (std::size_t v = 0; v < num_vertices; ++v) {
+        if (vertex_piece[v] >= 0 && !(inverse_masses[v] > 0.0)) {
+            pieces.has_pinned[static_cast<std::size_t>(vertex_piece[v])] = 1;
+        }
     }
     return pieces;
 }
@@ -273,51 +298,14 @@ bool fit_plane(std::span<const Vec3d> x, std::span<const geometry::Triangle> tri
 // other's intersected plane that puts the piece's vertices near it on one side; the shortest of
 // them all is made. Returns whether one was.
 bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
-                     std::span<const std::int32_t> pieces, std::span<const double> inverse_masses,
-                     const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance) {
-    const std::size_t num_triangles = triangles.size();
-    const std::size_t num_pieces =
-        pieces.empty()
-            ? 0
-            : static_cast<std::size_t>(*std::max_element(pieces.begin(), pieces.end())) + 1;
-    // The vertices of each piece (CSR; a vertex belongs to one piece) and whether one is pinned.
-    std::vector<std::int32_t> vertex_piece(x.size(), -1);
-    for (std::size_t t = 0; t < num_triangles; ++t) {
-        for (const std::int32_t v : triangles[t]) {
-            vertex_piece[static_cast<std::size_t>(v)] = pieces[t];
-        }
-    }
-    std::vector<std::int32_t> piece_offsets(num_pieces + 1, 0);
-    std::vector<std::uint8_t> has_pinned(num_pieces, 0);
-    for (std::size_t v = 0; v < x.size(); ++v) {
-        if (vertex_piece[v] >= 0) {
-            const auto piece = static_cast<std::size_t>(vertex_piece[v]);
-            ++piece_offsets[piece + 1];
-            if (!(inverse_masses[v] > 0.0)) {
-                has_pinned[piece] = 1;
-            }
-        }
-    }
-    for (std::size_t piece = 0; piece < num_pieces; ++piece) {
-        piece_offsets[piece + 1] += piece_offsets[piece];
-    }
-    std::vector<std::int32_t> piece_vertices(static_cast<std::size_t>(piece_offsets.back()));
-    {
-        std::vector<std::int32_t> next(piece_offsets.begin(), piece_offsets.end() - 1);
-        for (std::size_t v = 0; v < x.size(); ++v) {
-            if (vertex_piece[v] >= 0) {
-                piece_vertices[static_cast<std::size_t>(
-                    next[static_cast<std::size_t>(vertex_piece[v])]++)] =
-                    static_cast<std::int32_t>(v);
-            }
-        }
-    }
+                     const Pieces& pieces, const std::vector<std::array<std::int32_t, 2>>& pairs,
+                     double clearance) {
     // (piece, other piece, other piece's triangle) for every intersecting pair across pieces,
     // sorted.
     std::vector<std::array<std::int32_t, 3>> crossing;
     for (const auto& [a, b] : pairs) {
-        const std::int32_t pa = pieces[static_cast<std::size_t>(a)];
-        const std::int32_t pb = pieces[static_cast<std::size_t>(b)];
+        const std::int32_t pa = pieces.of_triangle[static_cast<std::size_t>(a)];
+        const std::int32_t pb = pieces.of_triangle[static_cast<std::size_t>(b)];
         if (pa != pb) {
             crossing.push_back({pa, pb, b});
             crossing.push_back({pb, pa, a});
@@ -340,7 +328,7 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         const auto p = static_cast<std::size_t>(piece);
         Vec3d centre;
         Vec3d normal;
-        if (has_pinned[p] != 0 || !fit_plane(x, triangles, others, centre, normal)) {
+        if (pieces.has_pinned[p] != 0 || !fit_plane(x, triangles, others, centre, normal)) {
             continue;
         }
         // The piece's vertices near the intersected triangles (within their radius of their
@@ -354,9 +342,9 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         }
         double depth_above = 0.0;
         double depth_below = 0.0;
-        for (std::int32_t i = piece_offsets[p]; i < piece_offsets[p + 1]; ++i) {
+        for (std::int32_t i = pieces.vertex_offsets[p]; i < pieces.vertex_offsets[p + 1]; ++i) {
             const Vec3d& point =
-                x[static_cast<std::size_t>(piece_vertices[static_cast<std::size_t>(i)])];
+                x[static_cast<std::size_t>(pieces.vertices[static_cast<std::size_t>(i)])];
             if (norm(point - centre) > radius) {
                 continue;
             }
@@ -379,8 +367,8 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         return false;
     }
     const auto p = static_cast<std::size_t>(best_piece);
-    for (std::int32_t i = piece_offsets[p]; i < piece_offsets[p + 1]; ++i) {
-        x[static_cast<std::size_t>(piece_vertices[static_cast<std::size_t>(i)])] += best_shift;
+    for (std::int32_t i = pieces.vertex_offsets[p]; i < pieces.vertex_offsets[p + 1]; ++i) {
+        x[static_cast<std::size_t>(pieces.vertices[static_cast<std::size_t>(i)])] += best_shift;
     }
     return true;
 }
@@ -388,7 +376,7 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
 // The region flip for contours that run from boundary to boundary (see the header). Returns
 // whether it moved anything.
 bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
-                  const geometry::MeshTopology& topology, std::span<const std::int32_t> pieces,
+                  const geometry::MeshTopology& topology, const Pieces& pieces,
                   std::span<const double> inverse_masses,
                   const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance) {
     const std::size_t num_triangles = triangles.size();
@@ -407,39 +395,22 @@ bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triang
     std::vector<std::int32_t> stack;
     const std::int32_t num_regions = edge_components(topology, wall, region, stack);
     // Per region: its triangles (CSR), size and piece; per piece its largest region.
-    std::vector<std::int32_t> region_offsets(static_cast<std::size_t>(num_regions) + 1, 0);
-    for (const std::int32_t r : region) {
-        if (r >= 0) {
-            ++region_offsets[static_cast<std::size_t>(r) + 1];
-        }
-    }
-    for (std::size_t r = 0; r < static_cast<std::size_t>(num_regions); ++r) {
-        region_offsets[r + 1] += region_offsets[r];
-    }
-    std::vector<std::int32_t> region_triangles(static_cast<std::size_t>(region_offsets.back()));
-    {
-        std::vector<std::int32_t> next(region_offsets.begin(), region_offsets.end() - 1);
-        for (std::size_t t = 0; t < num_triangles; ++t) {
-            if (region[t] >= 0) {
-                region_triangles[static_cast<std::size_t>(
-                    next[static_cast<std::size_t>(region[t])]++)] = static_cast<std::int32_t>(t);
-            }
-        }
-    }
+    std::vector<std::int32_t> region_offsets;
+    std::vector<std::int32_t> region_triangles;
+    group_by_key(region, static_cast<std::size_t>(num_regions), region_offsets, region_triangles);
     const auto size_of = [&](std::int32_t r) {
         return region_offsets[static_cast<std::size_t>(r) + 1] -
                region_offsets[static_cast<std::size_t>(r)];
     };
-    const std::size_t num_pieces =
-        pieces.empty()
-            ? 0
-            : static_cast<std::size_t>(*std::max_element(pieces.begin(), pieces.end())) + 1;
-    std::vector<std::int32_t> largest_of_piece(num_pieces, -1);
+    std::vector<std::int32_t> region_piece(static_cast<std::size_t>(num_regions));
+    std::vector<std::int32_t> largest_of_piece(pieces.count, -1);
     for (std::int32_t r = 0; r < num_regions; ++r) {
-        const auto piece = static_cast<std::size_t>(
-            pieces[static_cast<std::size_t>(region_triangles[static_cast<std::size_t>(
-                region_offsets[static_cast<std::size_t>(r)])])]);
-        std::int32_t& largest = largest_of_piece[piece];
+        const std::int32_t first =
+            region_triangles[static_cast<std::size_t>(region_offsets[static_cast<std::size_t>(r)])];
+        region_piece[static_cast<std::size_t>(r)] =
+            pieces.of_triangle[static_cast<std::size_t>(first)];
+        std::int32_t& largest =
+            largest_of_piece[static_cast<std::size_t>(region_piece[static_cast<std::size_t>(r)])];
         if (largest < 0 || size_of(r) > size_of(largest)) {
             largest = r;
         }
@@ -448,10 +419,8 @@ bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triang
     // smallest first.
     std::vector<std::int32_t> candidates;
     for (std::int32_t r = 0; r < num_regions; ++r) {
-        const auto piece = static_cast<std::size_t>(
-            pieces[static_cast<std::size_t>(region_triangles[static_cast<std::size_t>(
-                region_offsets[static_cast<std::size_t>(r)])])]);
-        if (largest_of_piece[piece] != r) {
+        if (largest_of_piece[static_cast<std::size_t>(region_piece[static_cast<std::size_t>(r)])] !=
+            r) {
             candidates.push_back(r);
         }
     }
@@ -616,7 +585,7 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
     std::vector<Vec3d> spread(n);
     std::vector<Crossing> crossings;
     // The connected pieces of cloth, for the region moves.
-    const std::vector<std::int32_t> pieces = vertex_connected_pieces(triangles, n);
+    const Pieces pieces = find_pieces(triangles, inverse_masses);
     int since_best = 0;
     bool move_tried = false;  // the best state has had its region move
     int moves = 0;            // region moves made so far
@@ -633,7 +602,7 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
             trial = best;
             const std::vector<std::array<std::int32_t, 2>> best_state_pairs =
                 collision::find_intersecting_pairs(std::span<const Vec3d>(trial), triangles);
-            if (separate_pieces(trial, triangles, pieces, inverse_masses, best_state_pairs, step) ||
+            if (separate_pieces(trial, triangles, pieces, best_state_pairs, step) ||
                 flip_regions(trial, triangles, topology, pieces, inverse_masses, best_state_pairs,
                              step)) {
                 std::copy(trial.begin(), trial.end(), positions.begin());

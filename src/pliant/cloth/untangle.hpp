@@ -36,11 +36,12 @@
 // A closed contour (a fold pushed through another layer, a sheet poking through another) shrinks
 // and vanishes. A contour that runs from boundary to boundary (two sheets crossing like an X)
 // only slides towards a boundary, and contour minimization stalls on it (two 1 m sheets of
-// 24 x 24 quads crossing at 20 degrees, Untangle.SeparateSheetsCrossingFromEdgeToEdgeComeApart:
-// 188 pairs down to 95 in 400 iterations). When the fewest pairs seen has not improved for 40
-// iterations, the best state so far gets one region move, decided globally as in Baraff, Witkin
-// and Kass's global intersection analysis ("Untangling Cloth", SIGGRAPH 2003), and minimization
-// goes on from the moved state (that X: 0 pairs after 90 iterations, 2 moves):
+// 24 x 24 quads crossing at 20 degrees: 188 pairs down to 95 in 400 iterations; the scene and
+// command are in docs/performance.md, "untangling sheets that cross"). When the fewest pairs
+// seen has not improved for 40 iterations, the best state so far gets one region move, decided
+// globally as in Baraff, Witkin and Kass's global intersection analysis ("Untangling Cloth",
+// SIGGRAPH 2003), and minimization goes on from the moved state (that X: 0 pairs after 95
+// iterations, 2 moves):
 //   - pieces first: for every connected piece of cloth (triangles joined by vertices) with no
 //     pinned vertex and every other piece it intersects, the plane of the other's intersected
 //     triangles (area-weighted centroid and normal); the piece's vertices within those

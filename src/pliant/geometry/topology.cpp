@@ -1,32 +1,10 @@
 #include "pliant/geometry/topology.hpp"
 
-#include <numeric>
-
 #include "pliant/core/check.hpp"
+#include "pliant/core/group_by_key.hpp"
 #include "pliant/core/radix_sort.hpp"
 
 namespace pliant::geometry {
-namespace {
-
-// CSR of `items` grouped by key: offsets (#keys + 1) and the item ids in ascending order per key.
-void build_csr(std::span<const std::int32_t> keys_of_items, std::size_t num_keys,
-               std::vector<std::int32_t>& offsets, std::vector<std::int32_t>& items,
-               std::int32_t item_divisor) {
-    offsets.assign(num_keys + 1, 0);
-    for (const std::int32_t key : keys_of_items) {
-        ++offsets[static_cast<std::size_t>(key) + 1];
-    }
-    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-    items.resize(keys_of_items.size());
-    std::vector<std::int32_t> cursor(offsets.begin(), offsets.end() - 1);
-    for (std::size_t i = 0; i < keys_of_items.size(); ++i) {
-        const auto key = static_cast<std::size_t>(keys_of_items[i]);
-        items[static_cast<std::size_t>(cursor[key]++)] =
-            static_cast<std::int32_t>(i) / item_divisor;
-    }
-}
-
-}  // namespace
 
 MeshTopology build_topology(std::span<const Triangle> triangles, std::size_t num_vertices) {
     MeshTopology topo;
@@ -81,8 +59,8 @@ MeshTopology build_topology(std::span<const Triangle> triangles, std::size_t num
             corner_vertices[3 * t + k] = triangles[t][k];
         }
     }
-    build_csr(corner_vertices, num_vertices, topo.vertex_triangle_offsets, topo.vertex_triangles,
-              3);
+    group_by_key(corner_vertices, num_vertices, topo.vertex_triangle_offsets, topo.vertex_triangles,
+                 3);
     return topo;
 }
 
