@@ -39,7 +39,15 @@ void ClothSession::reset() {
         m_task.wait();  // the frame in flight is dropped
     }
     m_solver = cli::make_solver(m_scene, m_setup);
-    m_start = cli::prepare_start(m_scene, m_scene_name, *m_solver);
+    if (!m_start_found) {
+        m_start = cli::prepare_start(m_scene, m_scene_name, *m_solver);
+        m_start_found = true;
+        if (m_start.untangled) {
+            m_untangled_start.assign(m_solver->positions().begin(), m_solver->positions().end());
+        }
+    } else if (!m_untangled_start.empty()) {
+        m_solver->set_positions(m_untangled_start);
+    }
     m_solver_frame = 0;
     m_solver_stats = {};
     m_grab_vertex = -1;

@@ -64,8 +64,9 @@ public:
     bool finish_advance(bool block);
     bool is_advancing() const { return m_task.is_started(); }
     // Back to the scene's start, as `pliant cloth` starts (cli::prepare_start: cloth that
-    // intersects itself is untangled when the scene says so, again at every reset: the same
-    // start, seconds for a large tangle); waits for a frame in flight; the grab is released.
+    // intersects itself is untangled when the scene says so); waits for a frame in flight; the
+    // grab is released. The first call (the constructor's) finds the start; later ones reuse it
+    // (ClothSolver::set_positions), so a large tangle is untangled once, not at every reset.
     void reset();
     // Clamped to [1, 1000]; used from the next frame on.
     void set_substeps_per_frame(int substeps);
@@ -108,6 +109,8 @@ private:
     cli::ClothSetup m_setup;
     std::unique_ptr<cloth::ClothSolver> m_solver;
     cli::StartState m_start;
+    bool m_start_found = false;            // m_start holds the first reset's findings
+    std::vector<Vec3d> m_untangled_start;  // the positions untangling found (empty: none)
     BackgroundTask m_task;
     double m_substep = 0.0;
     AABBd m_framing_box, m_scene_box;

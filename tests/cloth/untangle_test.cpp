@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <vector>
 
 #include "pliant/cloth/solver.hpp"
@@ -272,6 +274,45 @@ TEST(Untangle, ASquareThroughBothLayersOfAFoldComesOut) {
         return Vec3d{p.x + 0.0113, 0.0137, p.y + 0.025};
     });
     expect_untangled_by_a_region_move(mesh, 20);
+}
+
+// A start untangled once and given to a new solver with set_positions simulates bitwise as the
+// solver that untangled it (the viewer's reset reuses its start so).
+TEST(Untangle, AKeptStartSimulatesAsTheSolverThatUntangledIt) {
+    const geometry::TriangleMeshD mesh = dent_through_sheet(0.06);
+    const std::vector<std::int32_t> pinned{0, 24};
+    auto make = [&] {
+        auto solver = std::make_unique<ClothSolver>(mesh, ClothMaterial{}, pinned);
+        solver->enable_self_collision(true);
+        return solver;
+    };
+    const std::unique_ptr<ClothSolver> untangled = make();
+    ASSERT_EQ(untangled->untangle().final_pairs, 0);
+    const std::unique_ptr<ClothSolver> kept = make();
+    kept->step(1.0 / 24.0, 10);  // self-collision state of positions that are then gone
+    kept->set_velocities(std::vector<Vec3d>(mesh.positions.size(), Vec3d{}));
+    kept->set_positions(untangled->positions());
+    for (int frame = 0; frame < 3; ++frame) {
+        untangled->step(1.0 / 24.0, 10);
+        kept->step(1.0 / 24.0, 10);
+    }
+    ASSERT_EQ(kept->positions().size(), untangled->positions().size());
+    EXPECT_EQ(std::memcmp(kept->positions().data(), untangled->positions().data(),
+                          kept->positions().size() * sizeof(Vec3d)),
+              0);
+    EXPECT_EQ(collision::count_intersecting_pairs(kept->positions(), kept->triangles()), 0);
+
+    std::vector<Vec3d> moved(mesh.positions.begin(), mesh.positions.end());
+    const std::unique_ptr<ClothSolver> fresh = make();
+    EXPECT_THROW(fresh->set_positions(std::span(moved).first(10)), InvalidInput);
+    moved[7].z = std::nan("");
+    EXPECT_THROW(fresh->set_positions(moved), InvalidInput);
+    moved[7] = mesh.positions[7];
+    moved[24].x += 1e-9;  // a pinned vertex
+    EXPECT_THROW(fresh->set_positions(moved), InvalidInput);
+    moved[24] = mesh.positions[24];
+    moved[25].x += 1e-9;  // a free one
+    EXPECT_NO_THROW(fresh->set_positions(moved));
 }
 
 TEST(Untangle, IntersectionFreeInputIsLeftAlone) {

@@ -222,6 +222,31 @@ UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
     return result;
 }
 
+void ClothSolver::set_positions(std::span<const Vec3d> positions) {
+    if (positions.size() != m_positions.size()) {
+        throw InvalidInput(fmt::format("cloth: positions.size() ({}) != the vertex count ({})",
+                                       positions.size(), m_positions.size()));
+    }
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        if (!is_finite(positions[i])) {
+            throw InvalidInput(fmt::format("cloth: position of vertex {} is not finite", i));
+        }
+        if (m_inverse_masses[i] == 0.0 && !(positions[i] == m_positions[i])) {
+            throw InvalidInput(fmt::format(
+                "cloth: vertex {} does not move (pinned, or without area) from ({}, {}, {}), got "
+                "({}, {}, {})",
+                i, m_positions[i].x, m_positions[i].y, m_positions[i].z, positions[i].x,
+                positions[i].y, positions[i].z));
+        }
+    }
+    m_positions.assign(positions.begin(), positions.end());
+    if (m_self_collision) {
+        // Its paths and candidates describe positions that are gone.
+        m_self_collision.reset();
+        enable_self_collision(true);
+    }
+}
+
 void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
     if (const auto* plane = std::get_if<PlaneObstacle>(&obstacle)) {
         if (!(squared_norm(plane->normal) > 0.0) || !is_finite(plane->normal) ||

@@ -116,6 +116,12 @@ public:
     // input that intersects itself, before the first step (the fail-safe keeps cloth
     // intersection-free only once it is). Velocities are kept; self-collision starts over.
     UntangleResult untangle(const UntangleOptions& options = {});
+    // Moves the cloth to `positions` (#V, finite), e.g. a start untangled before and kept, so
+    // that it need not be untangled again: afterwards the solver is in the state untangle()
+    // leaves when it ends there. Pinned vertices (inverse mass 0) must be given where they are.
+    // Velocities are kept; self-collision starts over. InvalidInput: a size that does not match,
+    // a non-finite position, a pinned vertex moved.
+    void set_positions(std::span<const Vec3d> positions);
 
     // Interactive dragging: `vertex` becomes kinematic (inverse mass 0) and, over the substeps of
     // the next step, moves on the straight line from where it is to `target` (metres) with that
