@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "pliant/collision/intersecting_pairs.hpp"
@@ -15,6 +16,7 @@
 #include "pliant/core/group_by_key.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/geometry/exact_predicates.hpp"
+#include "pliant/geometry/fit_plane.hpp"
 #include "pliant/geometry/topology.hpp"
 
 namespace pliant::cloth {
@@ -264,35 +266,6 @@ Pieces find_pieces(std::span<const geometry::Triangle> triangles,
     return pieces;
 }
 
-// The plane of a set of triangles: area-weighted centroid and unit normal (false when they
-// have no area, or when their normals disagree: |Σ n_t| below MIN_PLANE_AGREEMENT Σ |n_t|).
-bool fit_plane(std::span<const Vec3d> x, std::span<const geometry::Triangle> triangles,
-               std::span<const std::int32_t> subset, Vec3d& centre, Vec3d& normal) {
-    Vec3d normal_sum{0.0, 0.0, 0.0};
-    Vec3d centroid_sum{0.0, 0.0, 0.0};
-    double area_sum = 0.0;
-    for (const std::int32_t o : subset) {
-        const geometry::Triangle& t = triangles[static_cast<std::size_t>(o)];
-        const Vec3d& a = x[static_cast<std::size_t>(t[0])];
-        const Vec3d& b = x[static_cast<std::size_t>(t[1])];
-        const Vec3d& c = x[static_cast<std::size_t>(t[2])];
-        const Vec3d n = cross(b - a, c - a);
-        const double area = norm(n);
-        normal_sum += n;
-        centroid_sum += (a + b + c) * (area / 3.0);
-        area_sum += area;
-    }
-    // Normals that disagree (layers wound against each other, a fold) give no plane: their sum
-    // would be noise.
-    const double length = norm(normal_sum);
-    if (!(length >= MIN_PLANE_AGREEMENT * area_sum) || !(area_sum > 0.0)) {
-        return false;
-    }
-    normal = normal_sum * (1.0 / length);
-    centre = centroid_sum * (1.0 / area_sum);
-    return true;
-}
-
 // The piece move for separate pieces of cloth that pass through each other (see the header):
 // of every free piece and every other piece it crosses, the shortest rigid move along the
 // other's intersected plane that puts the piece's vertices near it on one side; the shortest of
@@ -326,11 +299,13 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
             others.push_back(crossing[k][2]);
         }
         const auto p = static_cast<std::size_t>(piece);
-        Vec3d centre;
-        Vec3d normal;
-        if (pieces.has_pinned[p] != 0 || !fit_plane(x, triangles, others, centre, normal)) {
+        const std::optional<geometry::FittedPlane> plane =
+            geometry::fit_plane(x, triangles, others, MIN_PLANE_AGREEMENT);
+        if (pieces.has_pinned[p] != 0 || !plane) {
             continue;
         }
+        const Vec3d& centre = plane->centre;
+        const Vec3d& normal = plane->normal;
         // The piece's vertices near the intersected triangles (within their radius of their
         // centre), on either side of their plane: how far the piece must move along the normal
         // for all of them to be on one side, `clearance` beyond it.
@@ -470,11 +445,13 @@ bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triang
             continue;
         }
         // The other layer's plane there (of the triangles the walls intersect).
-        Vec3d centre;
-        Vec3d normal;
-        if (!fit_plane(x, triangles, others, centre, normal)) {
+        const std::optional<geometry::FittedPlane> plane =
+            geometry::fit_plane(x, triangles, others, MIN_PLANE_AGREEMENT);
+        if (!plane) {
             continue;
         }
+        const Vec3d& centre = plane->centre;
+        const Vec3d& normal = plane->normal;
         // The region's side of that plane (its vertices' mean signed distance), then every
         // vertex of the region on that side is reflected to the other, `clearance` beyond it.
         double side_sum = 0.0;
