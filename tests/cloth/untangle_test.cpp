@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -219,11 +221,11 @@ TEST(Untangle, SeparateSheetsCrossingFromEdgeToEdgeComeApart) {
     }
 }
 
-TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {
-    // A strip 0.5 m wide: flat for 1 m, a half-turn fold of radius 0.15 m widening it to 0.6 m,
-    // then back over itself falling 0.6 m per metre, through the flat part along a line across
-    // it: the contour cuts the flat part's first half metre off from the rest (the region that
-    // flips), while on the wider part it ends inside.
+// A strip 0.5 m wide: flat for 1 m, a half-turn fold of radius 0.15 m widening it to 0.6 m,
+// then back over itself falling 0.6 m per metre, through the flat part along a line across
+// it: the contour cuts the flat part's first half metre off from the rest (the region that
+// flips), while on the wider part it ends inside.
+geometry::TriangleMeshD strip_folded_through_itself() {
     const int across = 12;
     const int along = 64;
     const double fold = M_PI * 0.15;
@@ -243,6 +245,11 @@ TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {
             p = {p.x * 1.2 + 0.0071, 1.0 - back, 0.3 - 0.6 * back};
         }
     }
+    return mesh;
+}
+
+TEST(Untangle, ASheetFoldedThroughItselfFromEdgeToEdgeComesApart) {
+    geometry::TriangleMeshD mesh = strip_folded_through_itself();
     expect_untangled_by_a_region_move(mesh, 20);
     for (const Vec3d& p : mesh.positions) {
         ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
@@ -313,6 +320,89 @@ TEST(Untangle, AKeptStartSimulatesAsTheSolverThatUntangledIt) {
     moved[24] = mesh.positions[24];
     moved[25].x += 1e-9;  // a free one
     EXPECT_NO_THROW(fresh->set_positions(moved));
+}
+
+// Region moves keep out of obstacles. Two 1 m sheets of 12 x 12 quads cross 0.2 m above the
+// ground: one flat at 0.22 m, the other tilted by 20 degrees, its lowest edge 1 cm above the
+// ground. The shortest move sinks the tilted sheet 0.24 m, most of it into the ground (which
+// the simulation then cannot push out through the other sheet: 5,000 CCD hits in every frame,
+// edges stretched to 4 times their length); the solver, which knows the ground, lifts the flat
+// one instead.
+TEST(Untangle, RegionMovesKeepOutOfObstacles) {
+    geometry::TriangleMeshD mesh = sheet(12, 1.0);
+    for (Vec3d& p : mesh.positions) {
+        p.z = 0.22;
+    }
+    const double c = std::cos(M_PI / 9.0);
+    const double s = std::sin(M_PI / 9.0);
+    append(mesh, sheet(12, 1.0), [&](const Vec3d& p) {
+        return Vec3d{p.x + 0.0123, p.y * c + 0.0171, p.y * s + 0.18};
+    });
+    const auto lowest = [](std::span<const Vec3d> x) {
+        double z = std::numeric_limits<double>::infinity();
+        for (const Vec3d& p : x) {
+            z = std::min(z, p.z);
+        }
+        return z;
+    };
+    ASSERT_GT(lowest(mesh.positions), 0.005);
+
+    std::vector<Vec3d> unaware = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult blind = untangle(unaware, mesh.triangles, inverse_masses);
+    EXPECT_EQ(blind.final_pairs, 0);
+    EXPECT_GE(blind.region_moves, 1);
+    EXPECT_LT(lowest(unaware), -0.1);
+
+    // The ground as a plane, and as a triangle mesh (a 4 m square facing up).
+    geometry::TriangleMeshD ground;
+    ground.positions = {{-2.0, -2.0, 0.0}, {2.0, -2.0, 0.0}, {2.0, 2.0, 0.0}, {-2.0, 2.0, 0.0}};
+    ground.triangles = {{0, 1, 2}, {0, 2, 3}};
+    for (const bool as_mesh : {false, true}) {
+        ClothSolver solver(mesh, ClothMaterial{});
+        if (as_mesh) {
+            solver.add_mesh_obstacle(std::make_shared<const MeshObstacle>(ground));
+        } else {
+            solver.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+        }
+        const UntangleResult aware = solver.untangle();
+        EXPECT_EQ(aware.final_pairs, 0) << as_mesh;
+        EXPECT_GE(aware.region_moves, 1) << as_mesh;
+        EXPECT_GT(lowest(solver.positions()), 0.0) << as_mesh;
+        EXPECT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()), 0);
+    }
+}
+
+// The folded strip's cut-off flat part folds down through the other layer, its far edge to
+// 0.5 m below the flat part (under the other layer). With a box there (clear of the input) the
+// fold is not made, and as it is the only region the contour cuts off, the strip stays tangled:
+// untangling reports the pairs it leaves rather than folding cloth into the box.
+TEST(Untangle, ARegionThatWouldFoldIntoAnObstacleStays) {
+    const geometry::TriangleMeshD mesh = strip_folded_through_itself();
+    const BoxObstacle box{{-1.0, 0.5, -0.7}, {1.0, 0.75, -0.3}};
+    const auto inside_box = [&](std::span<const Vec3d> x) {
+        return std::count_if(x.begin(), x.end(), [&](const Vec3d& p) {
+            return surface_distance(Obstacle{box}, p).distance < 0.0;
+        });
+    };
+    ASSERT_EQ(inside_box(mesh.positions), 0);
+
+    std::vector<Vec3d> unaware = mesh.positions;
+    const std::vector<double> inverse_masses(mesh.positions.size(), 1.0);
+    const UntangleResult blind = untangle(unaware, mesh.triangles, inverse_masses);
+    EXPECT_EQ(blind.final_pairs, 0);
+    EXPECT_GE(blind.region_moves, 1);
+    EXPECT_GT(inside_box(unaware), 10);
+
+    ClothSolver solver(mesh, ClothMaterial{});
+    solver.add_obstacle(box);
+    const UntangleResult aware = solver.untangle();
+    EXPECT_EQ(aware.region_moves, 0);
+    EXPECT_GT(aware.final_pairs, 0);
+    EXPECT_LE(aware.final_pairs, aware.initial_pairs);
+    EXPECT_EQ(inside_box(solver.positions()), 0);
+    EXPECT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()),
+              aware.final_pairs);
 }
 
 TEST(Untangle, IntersectionFreeInputIsLeftAlone) {

@@ -212,8 +212,26 @@ void ClothSolver::enable_self_collision(bool enabled) {
 }
 
 UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
+    UntangleOptions with_obstacles = options;
+    if (!with_obstacles.obstacle_distance && !(m_obstacles.empty() && m_mesh_obstacles.empty())) {
+        // Where the obstacles are now (at the start, where their motion has them at time 0).
+        with_obstacles.obstacle_distance = [this](const Vec3d& x) {
+            double distance = std::numeric_limits<double>::infinity();
+            for (const MovingObstacle& obstacle : m_obstacles) {
+                distance = std::min(distance, surface_distance(obstacle.current, x).distance);
+            }
+            for (const MovingMesh& mesh : m_mesh_obstacles) {
+                const std::optional<SurfaceDistance> s = mesh.mesh->surface_distance(
+                    mesh.state.pose.apply_inverse(x), std::numeric_limits<double>::infinity());
+                if (s) {
+                    distance = std::min(distance, s->distance);
+                }
+            }
+            return distance;
+        };
+    }
     const UntangleResult result =
-        cloth::untangle(m_positions, m_triangles, m_inverse_masses, options);
+        cloth::untangle(m_positions, m_triangles, m_inverse_masses, with_obstacles);
     if (m_self_collision && result.iterations > 0) {
         // Its paths and candidates describe positions that are gone.
         m_self_collision.reset();

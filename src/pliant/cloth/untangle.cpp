@@ -266,13 +266,19 @@ Pieces find_pieces(std::span<const geometry::Triangle> triangles,
     return pieces;
 }
 
+// Whether moving vertex x to `target` takes it from outside the obstacles into one.
+bool enters_obstacle(const ObstacleDistance& obstacle_distance, const Vec3d& x,
+                     const Vec3d& target) {
+    return obstacle_distance && obstacle_distance(target) < 0.0 && !(obstacle_distance(x) < 0.0);
+}
+
 // The piece move for separate pieces of cloth that pass through each other (see the header):
-// of every free piece and every other piece it crosses, the shortest rigid move along the
-// other's intersected plane that puts the piece's vertices near it on one side; the shortest of
-// them all is made. Returns whether one was.
+// of every free piece and every other piece it crosses, the rigid moves along the other's
+// intersected plane that put the piece's vertices near it on one side; the shortest of them all
+// that takes no vertex into an obstacle is made. Returns whether one was.
 bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
                      const Pieces& pieces, const std::vector<std::array<std::int32_t, 2>>& pairs,
-                     double clearance) {
+                     double clearance, const ObstacleDistance& obstacle_distance) {
     // (piece, other piece, other piece's triangle) for every intersecting pair across pieces,
     // sorted.
     std::vector<std::array<std::int32_t, 3>> crossing;
@@ -286,9 +292,12 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
     }
     std::sort(crossing.begin(), crossing.end());
     crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
-    std::int32_t best_piece = -1;
-    Vec3d best_shift{0.0, 0.0, 0.0};
-    double best_length = std::numeric_limits<double>::infinity();
+    struct Move {
+        double length;
+        std::int32_t piece;
+        Vec3d shift;
+    };
+    std::vector<Move> moves;  // per group the shorter direction first
     std::vector<std::int32_t> others;
     for (std::size_t k = 0; k < crossing.size();) {
         // One (piece, other piece) group.
@@ -330,22 +339,37 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
         if (!(depth_above > 0.0) || !(depth_below > 0.0)) {
             continue;
         }
-        const bool lift = depth_below <= depth_above;
-        const double length = (lift ? depth_below : depth_above) + clearance;
-        if (length < best_length) {
-            best_length = length;
-            best_piece = piece;
-            best_shift = normal * (lift ? length : -length);
+        const double lift = depth_below + clearance;
+        const double sink = depth_above + clearance;
+        if (depth_below <= depth_above) {
+            moves.push_back({lift, piece, normal * lift});
+            moves.push_back({sink, piece, normal * -sink});
+        } else {
+            moves.push_back({sink, piece, normal * -sink});
+            moves.push_back({lift, piece, normal * lift});
         }
     }
-    if (best_piece < 0) {
-        return false;
+    // Shortest first; among equal lengths, in the order found.
+    std::stable_sort(moves.begin(), moves.end(),
+                     [](const Move& a, const Move& b) { return a.length < b.length; });
+    for (const Move& move : moves) {
+        const auto p = static_cast<std::size_t>(move.piece);
+        const auto vertices = std::span(pieces.vertices)
+                                  .subspan(static_cast<std::size_t>(pieces.vertex_offsets[p]),
+                                           static_cast<std::size_t>(pieces.vertex_offsets[p + 1] -
+                                                                    pieces.vertex_offsets[p]));
+        if (std::any_of(vertices.begin(), vertices.end(), [&](std::int32_t v) {
+                const Vec3d& point = x[static_cast<std::size_t>(v)];
+                return enters_obstacle(obstacle_distance, point, point + move.shift);
+            })) {
+            continue;
+        }
+        for (const std::int32_t v : vertices) {
+            x[static_cast<std::size_t>(v)] += move.shift;
+        }
+        return true;
     }
-    const auto p = static_cast<std::size_t>(best_piece);
-    for (std::int32_t i = pieces.vertex_offsets[p]; i < pieces.vertex_offsets[p + 1]; ++i) {
-        x[static_cast<std::size_t>(pieces.vertices[static_cast<std::size_t>(i)])] += best_shift;
-    }
-    return true;
+    return false;
 }
 
 // The region flip for contours that run from boundary to boundary (see the header). Returns
@@ -353,7 +377,8 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
 bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triangles,
                   const geometry::MeshTopology& topology, const Pieces& pieces,
                   std::span<const double> inverse_masses,
-                  const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance) {
+                  const std::vector<std::array<std::int32_t, 2>>& pairs, double clearance,
+                  const ObstacleDistance& obstacle_distance) {
     const std::size_t num_triangles = triangles.size();
     // Walls: the triangles of intersecting pairs; partners[t]: the triangles t intersects.
     std::vector<std::uint8_t> wall(num_triangles, 0);
@@ -465,13 +490,28 @@ bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triang
         }
         const double side = side_sum > 0.0 ? 1.0 : -1.0;
         // The region folds over, reflected through the other layer's plane to `clearance`
-        // beyond it.
+        // beyond it, unless that takes a vertex into an obstacle.
+        const auto reflected = [&](std::size_t k) {
+            return x[k] - normal * (2.0 * dot(normal, x[k] - centre) + side * clearance);
+        };
+        const auto folds = [&](std::size_t k) {
+            return moved[k] == 0 && dot(normal, x[k] - centre) * side > 0.0;
+        };
+        const auto into_obstacle = [&](std::int32_t t) {
+            const geometry::Triangle& tri = triangles[static_cast<std::size_t>(t)];
+            return std::any_of(tri.begin(), tri.end(), [&](std::int32_t v) {
+                const auto k = static_cast<std::size_t>(v);
+                return folds(k) && enters_obstacle(obstacle_distance, x[k], reflected(k));
+            });
+        };
+        if (obstacle_distance && std::any_of(members.begin(), members.end(), into_obstacle)) {
+            continue;
+        }
         for (const std::int32_t t : members) {
             for (const std::int32_t v : triangles[static_cast<std::size_t>(t)]) {
                 const auto k = static_cast<std::size_t>(v);
-                const double d = dot(normal, x[k] - centre);
-                if (moved[k] == 0 && d * side > 0.0) {
-                    x[k] -= normal * (2.0 * d + side * clearance);
+                if (folds(k)) {
+                    x[k] = reflected(k);
                     moved[k] = 1;
                 }
             }
@@ -579,9 +619,10 @@ UntangleResult untangle(std::span<Vec3d> positions, std::span<const geometry::Tr
             trial = best;
             const std::vector<std::array<std::int32_t, 2>> best_state_pairs =
                 collision::find_intersecting_pairs(std::span<const Vec3d>(trial), triangles);
-            if (separate_pieces(trial, triangles, pieces, best_state_pairs, step) ||
+            if (separate_pieces(trial, triangles, pieces, best_state_pairs, step,
+                                options.obstacle_distance) ||
                 flip_regions(trial, triangles, topology, pieces, inverse_masses, best_state_pairs,
-                             step)) {
+                             step, options.obstacle_distance)) {
                 std::copy(trial.begin(), trial.end(), positions.begin());
                 ++moves;
                 ++result.iterations;
