@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "pliant/cloth/solver.hpp"
@@ -351,21 +352,39 @@ TEST(Untangle, RegionMovesKeepOutOfObstacles) {
     expect_untangled_by_a_region_move(unaware, 20);
     EXPECT_LT(lowest(unaware.positions), -0.1);
 
-    // The ground as a plane, and as a triangle mesh (a 4 m square facing up).
-    geometry::TriangleMeshD ground;
-    ground.positions = {{-2.0, -2.0, 0.0}, {2.0, -2.0, 0.0}, {2.0, 2.0, 0.0}, {-2.0, 2.0, 0.0}};
-    ground.triangles = {{0, 1, 2}, {0, 2, 3}};
-    for (const bool as_mesh : {false, true}) {
-        ClothSolver solver(mesh, ClothMaterial{});
-        if (as_mesh) {
-            solver.add_mesh_obstacle(std::make_shared<const MeshObstacle>(ground));
-        } else {
-            solver.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+    // The ground as a plane, as a triangle mesh (a 4 m square facing up), and as that mesh at
+    // rest 1 m lower, moved up by its motion; a small plate far away blocks nothing.
+    const auto square = [](double half, const Vec3d& centre) {
+        geometry::TriangleMeshD m;
+        for (const auto& [dx, dy] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
+            m.positions.push_back(centre + Vec3d{dx * half, dy * half, 0.0});
         }
-        const UntangleResult aware = solver.untangle();
-        EXPECT_EQ(aware.final_pairs, 0) << as_mesh;
-        EXPECT_GE(aware.region_moves, 1) << as_mesh;
-        EXPECT_GT(lowest(solver.positions()), 0.0) << as_mesh;
+        m.triangles = {{0, 1, 2}, {0, 2, 3}};
+        return std::make_shared<const MeshObstacle>(std::move(m));
+    };
+    Motion lift;
+    lift.keyframes = {Keyframe{0.0, {0.0, 0.0, 1.0}}};
+    enum class Ground { Plane, Mesh, MovedMesh, FarPlate };
+    for (const Ground ground : {Ground::Plane, Ground::Mesh, Ground::MovedMesh, Ground::FarPlate}) {
+        ClothSolver solver(mesh, ClothMaterial{});
+        if (ground == Ground::Plane) {
+            solver.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+        } else if (ground == Ground::Mesh) {
+            solver.add_mesh_obstacle(square(2.0, {0.0, 0.0, 0.0}));
+        } else if (ground == Ground::MovedMesh) {
+            solver.add_mesh_obstacle(square(2.0, {0.0, 0.0, -1.0}), lift);
+        } else {
+            solver.add_mesh_obstacle(square(0.1, {5.0, 5.0, 0.0}));
+        }
+        const UntangleResult result = solver.untangle();
+        const int g = static_cast<int>(ground);
+        EXPECT_EQ(result.final_pairs, 0) << g;
+        EXPECT_GE(result.region_moves, 1) << g;
+        if (ground == Ground::FarPlate) {
+            EXPECT_LT(lowest(solver.positions()), -0.1);  // it sinks, as without obstacles
+        } else {
+            EXPECT_GT(lowest(solver.positions()), 0.0) << g;
+        }
         EXPECT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles()), 0);
     }
 }

@@ -214,7 +214,9 @@ void ClothSolver::enable_self_collision(bool enabled) {
 UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
     UntangleOptions with_obstacles = options;
     if (!with_obstacles.obstacle_distance && !(m_obstacles.empty() && m_mesh_obstacles.empty())) {
-        // Where the obstacles are now (at the start, where their motion has them at time 0).
+        // Where the obstacles are now (before the first step: where their motion has them at
+        // time 0). A mesh counts only within its box's diagonal: an open mesh is "inside" behind
+        // its triangles' planes, which would otherwise reach across all of space.
         with_obstacles.obstacle_distance = [this](const Vec3d& x) {
             double distance = std::numeric_limits<double>::infinity();
             for (const MovingObstacle& obstacle : m_obstacles) {
@@ -222,7 +224,7 @@ UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
             }
             for (const MovingMesh& mesh : m_mesh_obstacles) {
                 const std::optional<SurfaceDistance> s = mesh.mesh->surface_distance(
-                    mesh.state.pose.apply_inverse(x), std::numeric_limits<double>::infinity());
+                    mesh.state.pose.apply_inverse(x), norm(mesh.mesh->bounds().extent()));
                 if (s) {
                     distance = std::min(distance, s->distance);
                 }
@@ -250,11 +252,12 @@ void ClothSolver::set_positions(std::span<const Vec3d> positions) {
             throw InvalidInput(fmt::format("cloth: position of vertex {} is not finite", i));
         }
         if (m_inverse_masses[i] == 0.0 && !(positions[i] == m_positions[i])) {
-            throw InvalidInput(fmt::format(
-                "cloth: vertex {} does not move (pinned, or without area) from ({}, {}, {}), got "
-                "({}, {}, {})",
-                i, m_positions[i].x, m_positions[i].y, m_positions[i].z, positions[i].x,
-                positions[i].y, positions[i].z));
+            throw InvalidInput(
+                fmt::format("cloth: vertex {} does not move (pinned, grabbed or without area) from "
+                            "({}, {}, {}), got "
+                            "({}, {}, {})",
+                            i, m_positions[i].x, m_positions[i].y, m_positions[i].z, positions[i].x,
+                            positions[i].y, positions[i].z));
         }
     }
     m_positions.assign(positions.begin(), positions.end());

@@ -115,6 +115,8 @@ public:
     // Moves the cloth out of its own intersections (untangle.hpp; pinned vertices stay): for
     // input that intersects itself, before the first step (the fail-safe keeps cloth
     // intersection-free only once it is). Velocities are kept; self-collision starts over.
+    // Without options.obstacle_distance, region moves keep out of the solver's obstacles where
+    // they are now (a mesh obstacle within its box's diagonal of its surface).
     UntangleResult untangle(const UntangleOptions& options = {});
     // Moves the cloth to `positions` (#V, finite), e.g. a start untangled before and kept, so
     // that it need not be untangled again: afterwards the solver is in the state untangle()

@@ -7,7 +7,6 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <optional>
 #include <vector>
 
@@ -308,9 +307,12 @@ bool separate_pieces(std::span<Vec3d> x, std::span<const geometry::Triangle> tri
             others.push_back(crossing[k][2]);
         }
         const auto p = static_cast<std::size_t>(piece);
+        if (pieces.has_pinned[p] != 0) {
+            continue;
+        }
         const std::optional<geometry::FittedPlane> plane =
             geometry::fit_plane(x, triangles, others, MIN_PLANE_AGREEMENT);
-        if (pieces.has_pinned[p] != 0 || !plane) {
+        if (!plane) {
             continue;
         }
         const Vec3d& centre = plane->centre;
@@ -430,6 +432,7 @@ bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triang
     std::vector<std::uint8_t> moved(x.size(), 0);
     std::vector<std::int32_t> walls;
     std::vector<std::int32_t> others;
+    std::vector<std::int32_t> region_vertices;
     bool flipped = false;
     for (const std::int32_t r : candidates) {
         if (blocked[static_cast<std::size_t>(r)] != 0) {
@@ -497,15 +500,21 @@ bool flip_regions(std::span<Vec3d> x, std::span<const geometry::Triangle> triang
         const auto folds = [&](std::size_t k) {
             return moved[k] == 0 && dot(normal, x[k] - centre) * side > 0.0;
         };
-        const auto into_obstacle = [&](std::int32_t t) {
-            const geometry::Triangle& tri = triangles[static_cast<std::size_t>(t)];
-            return std::any_of(tri.begin(), tri.end(), [&](std::int32_t v) {
-                const auto k = static_cast<std::size_t>(v);
-                return folds(k) && enters_obstacle(obstacle_distance, x[k], reflected(k));
-            });
-        };
-        if (obstacle_distance && std::any_of(members.begin(), members.end(), into_obstacle)) {
-            continue;
+        if (obstacle_distance) {
+            region_vertices.clear();
+            for (const std::int32_t t : members) {
+                const geometry::Triangle& tri = triangles[static_cast<std::size_t>(t)];
+                region_vertices.insert(region_vertices.end(), tri.begin(), tri.end());
+            }
+            std::sort(region_vertices.begin(), region_vertices.end());
+            region_vertices.erase(std::unique(region_vertices.begin(), region_vertices.end()),
+                                  region_vertices.end());
+            if (std::any_of(region_vertices.begin(), region_vertices.end(), [&](std::int32_t v) {
+                    const auto k = static_cast<std::size_t>(v);
+                    return folds(k) && enters_obstacle(obstacle_distance, x[k], reflected(k));
+                })) {
+                continue;
+            }
         }
         for (const std::int32_t t : members) {
             for (const std::int32_t v : triangles[static_cast<std::size_t>(t)]) {

@@ -46,8 +46,8 @@
 //     pinned vertex and every other piece it intersects, the plane of the other's intersected
 //     triangles (area-weighted centroid and normal); the piece's vertices within those
 //     triangles' radius of their centroid must all end on one side, `step` beyond the plane:
-//     the shorter of the two rigid moves along the normal that does it. The shortest of all
-//     pieces' moves is made (no deformation);
+//     the two rigid moves along the normal that do it. The shortest of all pieces' moves that
+//     enters no obstacle (below) is made (no deformation);
 //   - regions, when no piece can move: the triangles of intersecting pairs are walls; the
 //     connected regions of the other triangles (over edges) that walls cut off from the largest
 //     region of their piece are reflected, smallest first, through the plane of the triangles
@@ -58,10 +58,13 @@
 // the next move waits for a new best state (a move that leads to none is not repeated), and
 // when no move applies minimization simply goes on. Moves are as long as the crossing is deep
 // (a piece may move by half its size: a 1 m sheet standing through another moves 0.5 m). Given
-// the obstacles (UntangleOptions::obstacle_distance), no move takes a vertex from outside an
-// obstacle into it: a piece takes the shortest move that keeps out, possibly the other direction
-// or another piece, and a region that would fold into an obstacle stays (when no other applies,
-// the cloth stays tangled and the pairs left are reported). (Two 1 m sheets of
+// the obstacles (UntangleOptions::obstacle_distance), no move puts a vertex that was outside an
+// obstacle inside it: a piece takes the shortest move that keeps out, possibly the other
+// direction or another piece, and a region that would fold into an obstacle stays (when no other
+// applies, the cloth stays tangled and the pairs left are reported). Only where the vertices end
+// is checked, not the way there: a move may pass through an obstacle thinner than itself, and
+// may end closer to a surface than the cloth's thickness (the first substep pushes those
+// vertices out). (Two 1 m sheets of
 // 12 x 12 quads crossing above the ground, one flat at 0.22 m, the other tilted by 20 degrees
 // with its lowest edge 1 cm up: without this the tilted one sinks to 0.23 m under the ground,
 // where the simulation keeps it trapped below the other, 5,000 CCD hits a frame; with it the
