@@ -305,6 +305,41 @@ TEST(ExactPredicates, Orient3dCoplanarAfterLargeTranslation) {
     }
 }
 
+// Points that share a coordinate (a flat sheet in an axis plane, points along a grid's rows),
+// which the predicates decide without the exact path, and the same with one point moved off by
+// one ulp, against the reference, at scales across the documented domain.
+TEST(ExactPredicates, PointsSharingACoordinateAgainstReference) {
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    for (const double scale : {1.0, 1e-6, 0x1p-280, 0x1p+290}) {
+        for (int trial = 0; trial < 600; ++trial) {
+            const auto random_point = [&] {
+                return Vec3d{unit(rng), unit(rng), unit(rng)} * scale;
+            };
+            Vec3d p[4] = {random_point(), random_point(), random_point(), random_point()};
+            const int axis = trial % 3;
+            const double shared = p[0][axis];
+            for (Vec3d& q : p) {
+                q[axis] = shared;
+            }
+            ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), 0) << scale << " " << trial;
+            const int other = (axis + 1) % 3;
+            ASSERT_EQ(
+                orient2d(p[0][axis], p[0][other], p[1][axis], p[1][other], p[2][axis], p[2][other]),
+                0);
+            const int moved = trial % 4;
+            p[moved][axis] = std::nextafter(shared, trial % 2 == 0 ? 1.0 : -1.0);
+            ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), reference_orient3d(p[0], p[1], p[2], p[3]))
+                << scale << " " << trial;
+            ASSERT_NE(orient3d(p[0], p[1], p[2], p[3]), 0) << scale << " " << trial;
+            ASSERT_EQ(
+                orient2d(p[0][axis], p[0][other], p[1][axis], p[1][other], p[2][axis], p[2][other]),
+                reference_orient2d(p[0][axis], p[0][other], p[1][axis], p[1][other], p[2][axis],
+                                   p[2][other]));
+        }
+    }
+}
+
 // Random points, including nearly degenerate ones (a fourth point on the plane of three, then
 // rounded), at scales across the documented domain.
 TEST(ExactPredicates, RandomAgainstReference) {

@@ -253,12 +253,23 @@ int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
             return -1;
         }
     }
+    // Four points with one coordinate in common (a flat sheet in an axis plane, as generated
+    // grids start) are coplanar: a row of the determinant is zero. The differences are exactly
+    // zero just when the coordinates are equal (no flush to zero), so this decides exactly.
+    if ((ux == 0.0 && vx == 0.0 && wx == 0.0) || (uy == 0.0 && vy == 0.0 && wy == 0.0) ||
+        (uz == 0.0 && vz == 0.0 && wz == 0.0)) {
+        return 0;
+    }
     return orient3d_exact(a, b, c, d);
 }
 
 int orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
-    const double p_xy = (bx - ax) * (cy - ay);
-    const double p_yx = (by - ay) * (cx - ax);
+    const double ux = bx - ax;
+    const double uy = by - ay;
+    const double vx = cx - ax;
+    const double vy = cy - ay;
+    const double p_xy = ux * vy;
+    const double p_yx = uy * vx;
     const double det = p_xy - p_yx;
     const double permanent = std::fabs(p_xy) + std::fabs(p_yx);
     if (permanent >= FILTER_MIN) {
@@ -269,6 +280,11 @@ int orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
         if (-det > bound) {
             return -1;
         }
+    }
+    // Both products exactly zero by a zero factor (points on one axis-parallel line, as along a
+    // grid's rows): the determinant is zero, whatever the magnitudes.
+    if ((ux == 0.0 || vy == 0.0) && (uy == 0.0 || vx == 0.0)) {
+        return 0;
     }
     return orient2d_exact(ax, ay, bx, by, cx, cy);
 }
