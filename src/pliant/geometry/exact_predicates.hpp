@@ -16,8 +16,9 @@
 // is the exact sign. Otherwise the determinant is recomputed exactly as a floating-point expansion
 // (a sum of non-overlapping doubles: two-sum, two-product through std::fma, grow / sum / scale
 // expansion), whose largest component has the sign of the exact value. Nearly every call on
-// generic data ends in the filter; exactly degenerate inputs (coplanar points of a flat cloth)
-// always take the exact path.
+// generic data ends in the filter. Exactly degenerate inputs take the exact path, except points
+// that share a coordinate (a flat cloth in an axis plane, points along a grid's rows): there a
+// row or both products of the determinant are exactly zero, which is checked before (0).
 //
 // Domain of exactness: every coordinate must be 0 or have EXACT_MIN_MAGNITUDE ≤ |x| ≤
 // EXACT_MAX_MAGNITUDE (2^-300 ≈ 4.9e-91 to 2^300 ≈ 2.0e90; in_exact_domain checks one value).
