@@ -252,12 +252,11 @@ void ClothSolver::set_positions(std::span<const Vec3d> positions) {
             throw InvalidInput(fmt::format("cloth: position of vertex {} is not finite", i));
         }
         if (m_inverse_masses[i] == 0.0 && !(positions[i] == m_positions[i])) {
-            throw InvalidInput(
-                fmt::format("cloth: vertex {} does not move (pinned, grabbed or without area) from "
-                            "({}, {}, {}), got "
-                            "({}, {}, {})",
-                            i, m_positions[i].x, m_positions[i].y, m_positions[i].z, positions[i].x,
-                            positions[i].y, positions[i].z));
+            const Vec3d& at = m_positions[i];
+            throw InvalidInput(fmt::format(
+                "cloth: vertex {} does not move (pinned, grabbed or without area) from ({}, {}, "
+                "{}), got ({}, {}, {})",
+                i, at.x, at.y, at.z, positions[i].x, positions[i].y, positions[i].z));
         }
     }
     m_positions.assign(positions.begin(), positions.end());
