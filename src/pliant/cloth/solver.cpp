@@ -80,6 +80,7 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
       m_velocities(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 0.0}),
       m_inverse_masses(rest_mesh.positions.size(), 0.0),
       m_contact_depths(rest_mesh.positions.size(), 0.0),
+      m_contact_settled(rest_mesh.positions.size(), 0.0),
       m_contact_normals(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 1.0}),
       m_contact_velocities(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 0.0}) {
     validate_material(material);
@@ -296,8 +297,9 @@ void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
         throw InvalidInput(
             "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
     }
-    MovingObstacle moving{obstacle, MotionState(motion, m_time), obstacle};
+    MovingObstacle moving{obstacle, MotionState(motion, m_time), obstacle, obstacle};
     moving.current = placed(obstacle, moving.state.pose);
+    moving.previous = moving.current;
     m_obstacles.push_back(std::move(moving));
 }
 
@@ -497,11 +499,15 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
             const auto v = static_cast<std::size_t>(i);
             Vec3d velocity = (m_positions[v] - m_previous_positions[v]) * (1.0 / h);
             if (m_contact_depths[v] > 0.0) {
-                // Friction acts on the velocity relative to the obstacle's surface.
+                // A penetration the substep began with is undone without becoming velocity
+                // (cloth given inside an obstacle comes out, it is not thrown out); friction acts
+                // on the velocity relative to the obstacle's surface, bounded by the rest.
+                const double settled = m_contact_settled[v];
+                velocity -= m_contact_normals[v] * (settled / h);
                 velocity = m_contact_velocities[v] +
                            apply_friction(velocity - m_contact_velocities[v], m_contact_normals[v],
-                                          m_contact_depths[v] / h, m_material.static_friction,
-                                          m_material.kinetic_friction);
+                                          (m_contact_depths[v] - settled) / h,
+                                          m_material.static_friction, m_material.kinetic_friction);
             }
             m_velocities[v] = velocity * keep;
         },
@@ -562,6 +568,7 @@ void ClothSolver::move_obstacles(double t) {
     for (MovingObstacle& obstacle : m_obstacles) {
         if (!obstacle.state.motion.is_static()) {
             obstacle.state.advance(t);
+            obstacle.previous = obstacle.current;
             obstacle.current = placed(obstacle.rest, obstacle.state.pose);
         }
     }
@@ -651,18 +658,25 @@ std::int64_t ClothSolver::resolve_obstacles(double h) {
             for (std::int64_t i = begin; i < end; ++i) {
                 const auto v = static_cast<std::size_t>(i);
                 m_contact_depths[v] = 0.0;
+                m_contact_settled[v] = 0.0;
                 if (!(m_inverse_masses[v] > 0.0)) {
                     continue;
                 }
+                const Vec3d& start = m_previous_positions[v];
+                const double thickness = m_material.thickness;
                 for (const MovingObstacle& obstacle : m_obstacles) {
                     const ContactCorrection contact =
-                        push_out(obstacle.current, m_positions[v], m_material.thickness);
+                        push_out(obstacle.current, m_positions[v], thickness);
                     if (contact.depth > m_contact_depths[v]) {
                         m_contact_depths[v] = contact.depth;
                         m_contact_normals[v] = contact.normal;
                         // The surface point under x moved from where the previous pose had it.
                         m_contact_velocities[v] =
                             obstacle.state.surface_displacement(m_positions[v]) * (1.0 / h);
+                        // How deep the vertex already was when the substep began.
+                        const double was_in =
+                            thickness - surface_distance(obstacle.previous, start).distance;
+                        m_contact_settled[v] = std::clamp(was_in, 0.0, contact.depth);
                     }
                 }
                 for (const MovingMesh& mesh : m_mesh_obstacles) {
@@ -670,12 +684,12 @@ std::int64_t ClothSolver::resolve_obstacles(double h) {
                     // the surface's over the substep, plus the thickness.
                     Vec3d& x = m_positions[v];
                     const Vec3d swept_by_surface = mesh.state.surface_displacement(x);
-                    const double max_depth = norm(x - m_previous_positions[v]) +
-                                             norm(swept_by_surface) + 2.0 * m_material.thickness;
+                    const double max_depth =
+                        norm(x - start) + norm(swept_by_surface) + 2.0 * thickness;
                     const Pose& pose = mesh.state.pose;
                     Vec3d x_rest = pose.apply_inverse(x);
                     const ContactCorrection contact =
-                        push_out(*mesh.mesh, x_rest, m_material.thickness, max_depth);
+                        push_out(*mesh.mesh, x_rest, thickness, max_depth);
                     if (contact.depth > 0.0) {
                         x = pose.apply(x_rest);
                     }
@@ -683,6 +697,11 @@ std::int64_t ClothSolver::resolve_obstacles(double h) {
                         m_contact_depths[v] = contact.depth;
                         m_contact_normals[v] = pose.rotation.apply(contact.normal);
                         m_contact_velocities[v] = swept_by_surface * (1.0 / h);
+                        const std::optional<SurfaceDistance> before = mesh.mesh->surface_distance(
+                            mesh.state.previous_pose.apply_inverse(start), max_depth);
+                        m_contact_settled[v] =
+                            before ? std::clamp(thickness - before->distance, 0.0, contact.depth)
+                                   : 0.0;
                     }
                 }
                 contacts += m_contact_depths[v] > 0.0 ? 1 : 0;
