@@ -100,7 +100,7 @@ void register_cloth(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--max-memory", options->max_memory_mib,
                     "Refuse a cloth whose triangles need more memory than this, MiB (default: the "
                     "memory available: physical, or the control group's limit)")
-        ->check(CLI::Range(1.0, 1e12));
+        ->check(finite_in_range(1.0, 1e12));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_cloth(*options, global); });
 }

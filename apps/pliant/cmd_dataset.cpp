@@ -82,17 +82,17 @@ void register_dataset(CLI::App& app, const GlobalOptions& global) {
                     "Transfer function: a preset (ct-bone, ct-skin, mri-brain, grayscale) or a "
                     "JSON file; ignored for RGBA volumes");
     cmd->add_option("--fov", options->fov, "Vertical field of view, degrees")
-        ->check(CLI::Range(1.0, 170.0));
+        ->check(finite_in_range(1.0, 170.0));
     cmd->add_option("--test-every", options->test_every,
                     "View i goes to the test split when i % K == 0")
         ->check(CLI::Range(1, 100000));
     cmd->add_option("--background", options->background, "Background colour, each in [0, 1]")
         ->type_name("R,G,B")
         ->delimiter(',')
-        ->check(CLI::Range(0.0, 1.0));
+        ->check(finite_in_range(0.0, 1.0));
     cmd->add_option("--step", options->step,
                     "Ray-casting step, world units (default 0: half the smallest spacing)")
-        ->check(CLI::Range(0.0, 1e30));
+        ->check(finite_in_range(0.0, 1e30));
     cmd->add_option("-o,--output", options->out, "Output directory")
         ->required()
         ->check(non_empty_path());

@@ -207,32 +207,32 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
              ->check(CLI::IsMember({"x", "y", "z"})),
          {"wave"});
     only(cmd->add_option("--angle", options->angle, "rotate/twist: angle in degrees (default 90)")
-             ->check(CLI::Range(-1e6, 1e6)),
+             ->check(finite_in_range(-1e6, 1e6)),
          {"rotate", "twist"});
     only(cmd->add_option("--grip", options->grip,
                          "twist: thickness of the two held slabs, box units (default 0.1)")
-             ->check(CLI::Range(0.0, 0.49)),
+             ->check(finite_in_range(0.0, 0.49)),
          {"twist"});
     only(cmd->add_option("--amplitude", options->amplitude, "wave: amplitude, box units")
              ->check(finite_non_negative()),
          {"wave"});
     only(cmd->add_option("--wavelength", options->wavelength, "wave: wavelength, box units")
-             ->check(CLI::Range(1e-6, 1e6)),
+             ->check(finite_in_range(1e-6, 1e6)),
          {"wave"});
     only(cmd->add_option("--speed", options->speed, "wave: speed, box units per second")
-             ->check(CLI::Range(-1e6, 1e6)),
+             ->check(finite_in_range(-1e6, 1e6)),
          {"wave"});
     only(cmd->add_option("--center", options->center, "bubble: centre, box coordinates")
              ->type_name("X,Y,Z")
              ->delimiter(',')
-             ->check(CLI::Range(-1e6, 1e6)),
+             ->check(finite_in_range(-1e6, 1e6)),
          {"bubble"});
     only(cmd->add_option("--radius", options->radius, "bubble: radius, box units")
-             ->check(CLI::Range(1e-6, 1e6)),
+             ->check(finite_in_range(1e-6, 1e6)),
          {"bubble"});
     only(cmd->add_option("--inflation", options->inflation,
                          "bubble: rest-volume factor at the centre (> 1 inflates)")
-             ->check(CLI::Range(1e-6, 1e6)),
+             ->check(finite_in_range(1e-6, 1e6)),
          {"bubble"});
     cmd->add_option("--ramp", options->ramp,
                     "Seconds to reach full strength (default: the whole run for rotate and "
@@ -248,7 +248,7 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                   "Tets over the whole box, not only near visible voxels")
         ->excludes(mesh);
     cmd->add_option("--stiffness", options->stiffness, "PBD stiffness in (0, 1] (default 1)")
-        ->check(CLI::Range(1e-6, 1.0));
+        ->check(finite_in_range(1e-6, 1.0));
     cmd->add_option("--substeps", options->substeps, "XPBD substeps per frame")
         ->check(CLI::Range(1, 10000));
     cmd->add_option("--damping", options->damping, "Velocity damping, 1/s")
@@ -256,7 +256,7 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--frames", options->frames, "Frames to simulate (default 48)")
         ->check(CLI::Range(1, 1000000));
     cmd->add_option("--fps", options->fps, "Frames per second (default 24)")
-        ->check(CLI::Range(1e-3, 1e4));
+        ->check(finite_in_range(1e-3, 1e4));
     cmd->add_option("-o,--output", options->out, "Deformed volume of the last frame")
         ->required()
         ->check(non_empty_path());
@@ -272,10 +272,10 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "Video camera: azimuth, elevation (degrees), distance (0 = frame the box)")
         ->type_name("AZ,EL,DIST")
         ->delimiter(',')
-        ->check(CLI::Range(-1e6, 1e6));
+        ->check(finite_in_range(-1e6, 1e6));
     cmd->add_option("--max-memory", options->max_memory_mib,
                     "Largest volume to read, MiB (default 16384)")
-        ->check(CLI::Range(1.0, 1e9));
+        ->check(finite_in_range(1.0, 1e9));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_deform_command(*options, global); });
 }

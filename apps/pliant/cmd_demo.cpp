@@ -718,7 +718,7 @@ void register_demo(CLI::App& app, const GlobalOptions& global) {
     CLI::Option* minutes =
         cmd->add_option("--nerf-minutes", options->nerf_minutes,
                         "Training budget of the radiance field, minutes (default 2)")
-            ->check(CLI::Range(0.001, 1e4));
+            ->check(finite_in_range(0.001, 1e4));
     cmd->add_option("--nerf-iterations", options->nerf_iterations,
                     "A fixed number of training iterations instead of --nerf-minutes "
                     "(reproducible)")

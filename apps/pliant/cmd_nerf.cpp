@@ -214,7 +214,7 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->check(non_empty_path());
     CLI::Option* minutes =
         train->add_option("--minutes", t->minutes, "Wall-clock budget in minutes (default 2)")
-            ->check(CLI::Range(0.0, 1e6));
+            ->check(finite_in_range(0.0, 1e6));
     train
         ->add_option("--iterations", t->iterations,
                      "A fixed number of iterations instead of a time budget (reproducible)")
@@ -236,7 +236,7 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
     train
         ->add_option("--threshold", t->threshold,
                      "volume::clean threshold on the 0-255 alpha scale (the paper: 5, 20, 35)")
-        ->check(CLI::Range(0.0, 255.0));
+        ->check(finite_in_range(0.0, 255.0));
     train->add_option("--normalize", t->normalize, "Alpha normalization after the threshold")
         ->check(CLI::IsMember({"none", "max", "range"}));
     train
@@ -244,20 +244,20 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
                      "Colour transparent image pixels are composited over, each in [0, 1]")
         ->type_name("R,G,B")
         ->delimiter(',')
-        ->check(CLI::Range(0.0, 1.0));
+        ->check(finite_in_range(0.0, 1.0));
     train->add_option("--seed", t->seed, "Seed of the ray batches");
     train->add_option("--tv-density", t->tv_density, "Total-variation weight on density")
-        ->check(CLI::Range(0.0, 1e9));
+        ->check(finite_in_range(0.0, 1e9));
     train->add_option("--tv-color", t->tv_color, "Total-variation weight on colour")
-        ->check(CLI::Range(0.0, 1e9));
+        ->check(finite_in_range(0.0, 1e9));
     train->add_option("--lr", t->lr, "Adam learning rate (raw density and colour)")
-        ->check(CLI::Range(0.0, 100.0));
+        ->check(finite_in_range(0.0, 100.0));
     train
         ->add_option("--max-memory", t->max_memory_mib,
                      "Refuse datasets and grids that would need more than this (MiB; default "
                      "16384), before allocating")
         ->type_name("MIB")
-        ->check(CLI::Range(1e-6, 1e9));
+        ->check(finite_in_range(1e-6, 1e9));
     train->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     train->callback([t, &global] { run_train(*t, global); });
 
@@ -269,13 +269,13 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
     eval->add_option("--background", e->background, "Background colour, each in [0, 1]")
         ->type_name("R,G,B")
         ->delimiter(',')
-        ->check(CLI::Range(0.0, 1.0));
+        ->check(finite_in_range(0.0, 1.0));
     eval->add_option("--images", e->images, "Write the renders to this directory");
     eval->add_option("--max-memory", e->max_memory_mib,
                      "Refuse datasets and volumes that would need more than this (MiB; default "
                      "16384), before allocating")
         ->type_name("MIB")
-        ->check(CLI::Range(1e-6, 1e9));
+        ->check(finite_in_range(1e-6, 1e9));
     eval->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     eval->callback([e, &global] { run_eval(*e, global); });
 }

@@ -183,18 +183,18 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
         ->type_name("AZ,EL,DIST")
         ->delimiter(',')
         ->excludes(view)
-        ->check(CLI::Range(-1e6, 1e6));
+        ->check(finite_in_range(-1e6, 1e6));
     cmd->add_option("--size", options->size, "Image size (default 512x512)")->type_name("WxH");
     cmd->add_option("--step", options->step,
                     "Sampling step, world units (default 0: half the smallest spacing)")
-        ->check(CLI::Range(0.0, 1e30));
+        ->check(finite_in_range(0.0, 1e30));
     cmd->add_option("--opacity-unit", options->opacity_unit,
                     "World units opacities are per (default 0: the smallest spacing)")
-        ->check(CLI::Range(0.0, 1e30));
+        ->check(finite_in_range(0.0, 1e30));
     cmd->add_option("--background", options->background, "Background colour, each in [0, 1]")
         ->type_name("R,G,B")
         ->delimiter(',')
-        ->check(CLI::Range(0.0, 1.0));
+        ->check(finite_in_range(0.0, 1.0));
     cmd->add_flag("--mip", options->mip, "Maximum intensity projection instead of compositing");
     cmd->add_flag("--shading", options->shading, "Gradient (headlight) shading");
     cmd->add_option("--clip", options->clip,
@@ -202,7 +202,7 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
                     "normal's side is rendered")
         ->type_name("PX,PY,PZ,NX,NY,NZ")
         ->delimiter(',')
-        ->check(CLI::Range(-1e12, 1e12))
+        ->check(finite_in_range(-1e12, 1e12))
         ->each([options](const std::string&) { options->has_clip = true; });
     cmd->add_option("-o,--output", options->out, "Output PNG (or MP4 with --orbit)")
         ->required()

@@ -78,7 +78,7 @@ void add_view_options(CLI::App* cmd, ViewCommandOptions& o, viewer::ViewRunOptio
                     "the scene)")
         ->type_name("AZ,EL,DIST")
         ->delimiter(',')
-        ->check(CLI::Range(-1e6, 1e6));
+        ->check(finite_in_range(-1e6, 1e6));
     CLI::Option* frames =
         cmd->add_option("--frames", run.frames, "Stop after N frames (headless runs, timing)")
             ->check(CLI::Range(1, 100'000'000));
@@ -222,16 +222,16 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                     "JSON file; ignored for RGBA volumes");
     vol->add_option("--opacity-scale", s.opacity_scale,
                     "Opacity scale: opacities per opacity unit / S (default 1)")
-        ->check(CLI::Range(1e-6, 1e6));
+        ->check(finite_in_range(1e-6, 1e6));
     vol->add_option("--threshold", s.threshold,
                     "Cleaning threshold on the 0-255 alpha scale (volume/clean.hpp; default 0)")
-        ->check(CLI::Range(0.0, 255.0));
+        ->check(finite_in_range(0.0, 255.0));
     vol->add_option("--clip", volume_o->clip,
                     "Clipping plane through (PX,PY,PZ) with normal (NX,NY,NZ), world units: the "
                     "normal's side is shown")
         ->type_name("PX,PY,PZ,NX,NY,NZ")
         ->delimiter(',')
-        ->check(CLI::Range(-1e12, 1e12));
+        ->check(finite_in_range(-1e12, 1e12));
     vol->add_flag("--shading", s.shading, "Gradient (headlight) shading");
     vol->add_option("--step", s.step,
                     "Ray-casting step, world units (default 0: half the smallest spacing)")
@@ -245,20 +245,20 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
     vol->add_option("--driver", volume_o->driver, "Initial driver (with --deform)")
         ->check(CLI::IsMember({"none", "wave", "twist", "bubble"}));
     vol->add_option("--stiffness", s.body.stiffness, "PBD stiffness in (0, 1] (default 1)")
-        ->check(CLI::Range(1e-6, 1.0));
+        ->check(finite_in_range(1e-6, 1.0));
     vol->add_option("--cells", s.grid.cell_voxels, "Voxels per tet-grid cell side (default 4)")
         ->check(CLI::Range(1, 4096));
     vol->add_option("--substeps", s.body.substeps, "XPBD substeps per frame (default 10)")
         ->check(CLI::Range(1, 10000));
     vol->add_option("--fps", s.fps, "Simulated frames per second: a frame is 1/F s (default 24)")
-        ->check(CLI::Range(1e-3, 1e4));
+        ->check(finite_in_range(1e-3, 1e4));
     vol->add_option("--drag-radius", s.drag_radius,
                     "Vertices within this radius of the grabbed one move with it, box units "
                     "(default 0.05)")
-        ->check(CLI::Range(0.0, 10.0));
+        ->check(finite_in_range(0.0, 10.0));
     vol->add_option("--max-memory", volume_options->max_memory_mib,
                     "Largest volume to read, MiB (default 16384)")
-        ->check(CLI::Range(1.0, 1e9));
+        ->check(finite_in_range(1.0, 1e9));
     vol->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     vol->callback([volume_o, volume_options, vol, &global] {
         run_view_volume(*volume_o, *volume_options, vol, global);

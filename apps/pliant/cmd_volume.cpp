@@ -30,6 +30,7 @@
 #include "pliant/io/volume_io.hpp"
 #include "pliant/volume/clean.hpp"
 #include "pliant/volume/generate.hpp"
+#include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -187,7 +188,7 @@ void add_memory_option(CLI::App* cmd, VolumeOptions& options) {
     cmd->add_option("--max-memory", options.max_memory_mib,
                     "Refuse volumes whose voxels would need more than this (MiB; default 16384)")
         ->type_name("MIB")
-        ->check(CLI::Range(1e-6, 1e9));
+        ->check(finite_in_range(1e-6, 1e9));
 }
 
 }  // namespace
@@ -224,7 +225,7 @@ void register_volume(CLI::App& app, const GlobalOptions& global) {
         ->add_option("--threshold", options->threshold,
                      "T on the 0-255 alpha scale: alpha = 0 where 255 alpha < T (0: none)")
         ->type_name("T")
-        ->check(CLI::Range(0.0, 255.0));
+        ->check(finite_in_range(0.0, 255.0));
     clean
         ->add_option("--normalize", options->normalize,
                      "max: alpha / max alpha; range: (alpha - T/255) / (1 - T/255); none")

@@ -8,19 +8,40 @@
 
 namespace pliant::cli {
 
+namespace {
+
+// Whether text is a whole decimal number (std::from_chars: no hex, no spaces) that is finite.
+bool finite_number(const std::string& text, double& value) {
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    return ec == std::errc() && ptr == end && std::isfinite(value);
+}
+
+}  // namespace
+
 const CLI::Validator& finite_non_negative() {
     static const CLI::Validator validator(
         [](std::string& text) -> std::string {
             double value = 0.0;
-            const char* end = text.data() + text.size();
-            const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-            if (ec != std::errc() || ptr != end || !std::isfinite(value) || value < 0.0) {
+            if (!finite_number(text, value) || value < 0.0) {
                 return fmt::format("must be a finite number >= 0, got '{}'", text);
             }
             return {};
         },
         "", "FINITE_NON_NEGATIVE");
     return validator;
+}
+
+CLI::Validator finite_in_range(double lo, double hi) {
+    return CLI::Validator(
+        [lo, hi](std::string& text) -> std::string {
+            double value = 0.0;
+            if (!finite_number(text, value) || value < lo || value > hi) {
+                return fmt::format("must be a finite number in [{}, {}], got '{}'", lo, hi, text);
+            }
+            return {};
+        },
+        "", "FINITE_IN_RANGE");
 }
 
 const CLI::Validator& non_empty_path() {

@@ -315,6 +315,31 @@ TEST(Collide, NegativeOrNanInflationIsUsageError) {
     }
 }
 
+// Every bounded number option takes finite decimal numbers only: CLI11's own range check lets
+// NaN through (pliant cloth --max-memory nan turned the memory check off) and reads 0x10 as 16.
+TEST(Cli, BoundedNumberOptionsRefuseNanInfinityAndHex) {
+    ScratchDir scratch;
+    const std::string scene = quoted(scratch / "s.json");
+    std::ofstream(scratch / "s.json") << R"({"cloth": {"grid": {"quads": [2, 2]}}, "frames": 1})";
+    for (const char* value : {"nan", "-nan", "inf", "0x10", "1e400", "0"}) {
+        const CliResult r = run_cli(
+            "cloth " + scene + " --out " + quoted(scratch / "out") + " --max-memory " + value,
+            scratch);
+        EXPECT_EQ(r.exit_code, 2) << value;
+        EXPECT_NE(r.err.find("--max-memory: must be a finite number in [1, "), std::string::npos)
+            << r.err;
+        EXPECT_FALSE(std::filesystem::exists(scratch / "out")) << value;
+    }
+    const CliResult camera = run_cli("render in.nrrd -o out.png --camera 30,nan,0", scratch);
+    EXPECT_EQ(camera.exit_code, 2);
+    EXPECT_NE(camera.err.find("--camera: must be a finite number"), std::string::npos)
+        << camera.err;
+    const CliResult fov = run_cli("dataset in.nrrd --out d --fov inf", scratch);
+    EXPECT_EQ(fov.exit_code, 2);
+    EXPECT_NE(fov.err.find("--fov: must be a finite number in [1, 170]"), std::string::npos)
+        << fov.err;
+}
+
 TEST(Collide, ZeroRepeatIsUsageError) {
     ScratchDir scratch;
     const auto path = scratch / "sheet.ply";
