@@ -14,6 +14,7 @@
 #include "memory_budget.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/cloth_scene.hpp"
 #include "pliant/io/mesh_io.hpp"
@@ -156,8 +157,16 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
             obstacle.mesh, scene_name, fmt::format("obstacles[{}].mesh.file", k));
         place(shape.positions, obstacle.mesh_placement);
         setup.shapes.push_back(obstacle_shape(obstacle, &shape, centre, plane_half_size));
-        setup.mesh_obstacles.push_back(
-            std::make_shared<const cloth::MeshObstacle>(std::move(shape)));
+        auto mesh_obstacle = std::make_shared<const cloth::MeshObstacle>(std::move(shape));
+        if (const std::optional<double> volume = mesh_obstacle->enclosed_volume();
+            volume && *volume < 0.0) {
+            log_warning(
+                "{}: obstacles[{}].mesh.file ({}): a closed mesh wound inward (its normals point "
+                "in; enclosed volume {:.3g} m³): cloth is kept inside it, as in a container; "
+                "reverse its triangles' winding to keep cloth outside",
+                scene_name, k, obstacle.mesh.string(), *volume);
+        }
+        setup.mesh_obstacles.push_back(std::move(mesh_obstacle));
     }
     return setup;
 }

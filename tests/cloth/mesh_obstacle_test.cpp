@@ -493,6 +493,25 @@ TEST(MeshObstacle, PushOutPlacesPointsAtThickness) {
     expect_near(contact.normal, {0.0, 0.0, 1.0}, 1e-15);
 }
 
+// The enclosed volume: a box's, negative when every triangle is reversed (wound inward), and
+// none for an open mesh or a closed one wound inconsistently.
+TEST(MeshObstacle, EnclosedVolumeOfClosedMeshesOnly) {
+    geometry::TriangleMeshD box = geometry::make_box({-0.5, 0.0, 1.0}, {1.5, 0.5, 4.0});
+    ASSERT_TRUE(MeshObstacle(box).enclosed_volume().has_value());
+    EXPECT_NEAR(*MeshObstacle(box).enclosed_volume(), 2.0 * 0.5 * 3.0, 1e-12);
+    geometry::TriangleMeshD inward = box;
+    for (geometry::Triangle& t : inward.triangles) {
+        std::swap(t[1], t[2]);
+    }
+    EXPECT_NEAR(*MeshObstacle(inward).enclosed_volume(), -3.0, 1e-12);
+    geometry::TriangleMeshD mixed = box;
+    std::swap(mixed.triangles[0][1], mixed.triangles[0][2]);
+    EXPECT_FALSE(MeshObstacle(mixed).enclosed_volume().has_value());
+    geometry::TriangleMeshD open = box;
+    open.triangles.pop_back();
+    EXPECT_FALSE(MeshObstacle(open).enclosed_volume().has_value());
+}
+
 TEST(MeshObstacle, RejectsBadInput) {
     TriangleMeshD mesh = icosphere(0, 1.0, {0.0, 0.0, 0.0});
     EXPECT_NE(message_of([] { MeshObstacle{TriangleMeshD{}}; }).find("no triangles"),

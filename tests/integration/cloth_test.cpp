@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "integration/run_cli.hpp"
@@ -233,6 +234,25 @@ f 4 5 8
         mean_x += p.x;
     }
     EXPECT_NEAR(mean_x / static_cast<double>(last.positions.size()), 0.2, 0.03);
+    EXPECT_EQ(r.err.find("wound inward"), std::string::npos) << r.err;
+
+    // The same table wound inward (every face reversed) holds cloth inside it, as a container:
+    // the command says so.
+    std::ifstream table(scratch / "table.obj");
+    std::string inward;
+    for (std::string line; std::getline(table, line);) {
+        std::istringstream fields(line);
+        std::string kind, a, b, c;
+        fields >> kind >> a >> b >> c;
+        inward += kind == "f" ? fmt::format("f {} {} {}\n", a, c, b) : line + "\n";
+    }
+    write(scratch / "table.obj", inward);
+    const CliResult turned = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
+                                         quoted(scratch / "out") + " --no-preview --frames 1",
+                                     scratch);
+    EXPECT_EQ(turned.exit_code, 0) << turned.err;
+    EXPECT_NE(turned.err.find("obstacles[0].mesh.file"), std::string::npos) << turned.err;
+    EXPECT_NE(turned.err.find("a closed mesh wound inward"), std::string::npos) << turned.err;
 }
 
 // A sheet with a dent pushed through another sheet below it (one mesh) is untangled before the

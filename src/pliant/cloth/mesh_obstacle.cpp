@@ -33,6 +33,26 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     geometry::validate_mesh(m_mesh, "cloth::MeshObstacle: mesh");
     geometry::MeshTopology topology =
         geometry::build_topology(m_mesh.triangles, m_mesh.positions.size());
+    // Closed and consistently wound: each edge in exactly two triangles, once in each direction.
+    const auto runs_forward = [&](std::int32_t t, const geometry::Edge& edge) {
+        const geometry::Triangle& tri = m_mesh.triangles[static_cast<std::size_t>(t)];
+        for (std::size_t k = 0; k < 3; ++k) {
+            if (tri[k] == edge[0]) {
+                return tri[(k + 1) % 3] == edge[1];
+            }
+        }
+        return false;
+    };
+    m_closed = true;
+    for (std::size_t e = 0; e < topology.edges.size() && m_closed; ++e) {
+        const std::int32_t begin = topology.edge_triangle_offsets[e];
+        const std::int32_t end = topology.edge_triangle_offsets[e + 1];
+        m_closed = end - begin == 2 &&
+                   runs_forward(topology.edge_triangles[static_cast<std::size_t>(begin)],
+                                topology.edges[e]) !=
+                       runs_forward(topology.edge_triangles[static_cast<std::size_t>(begin) + 1],
+                                    topology.edges[e]);
+    }
     m_triangle_edges = std::move(topology.triangle_edges);
     m_edge_triangle_offsets = std::move(topology.edge_triangle_offsets);
     m_edge_triangles = std::move(topology.edge_triangles);
@@ -47,6 +67,20 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     m_tree.build(m_boxes);
     m_leaf_corners.resize(m_mesh.triangles.size());
     gather_leaf_corners();
+}
+
+std::optional<double> MeshObstacle::enclosed_volume() const {
+    if (!m_closed) {
+        return std::nullopt;
+    }
+    double six_volume = 0.0;
+    for (const geometry::Triangle& t : m_mesh.triangles) {
+        const Vec3d& a = m_mesh.positions[static_cast<std::size_t>(t[0])];
+        const Vec3d& b = m_mesh.positions[static_cast<std::size_t>(t[1])];
+        const Vec3d& c = m_mesh.positions[static_cast<std::size_t>(t[2])];
+        six_volume += dot(a, cross(b, c));
+    }
+    return six_volume / 6.0;
 }
 
 void MeshObstacle::set_positions(std::span<const Vec3d> positions) {

@@ -80,6 +80,11 @@ public:
     std::optional<SurfaceDistance> surface_distance(const Vec3d& x, double max_distance) const;
 
     const geometry::TriangleMeshD& mesh() const { return m_mesh; }
+    // The volume the mesh encloses (m³, by the divergence theorem: Σ a · (b × c) / 6) when it is
+    // closed and consistently wound (every edge shared by exactly two triangles that run along it
+    // in opposite directions), else none. Negative when it is wound inward: its normals point in,
+    // so its inside is everything outside it, and cloth is kept inside it, as in a container.
+    std::optional<double> enclosed_volume() const;
     std::size_t num_triangles() const { return m_mesh.triangles.size(); }
     // Box of the surface (double, exact).
     const AABBd& bounds() const { return m_bounds; }
@@ -97,6 +102,7 @@ private:
     void gather_leaf_corners();
 
     geometry::TriangleMeshD m_mesh;
+    bool m_closed = false;  // see enclosed_volume()
     // Topology (fixed): edges of each triangle; triangles of each edge and vertex (CSR).
     std::vector<std::array<std::int32_t, 3>> m_triangle_edges;
     std::vector<std::int32_t> m_edge_triangle_offsets;
