@@ -174,6 +174,14 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
 StartState prepare_start(const cloth::ClothScene& scene, const std::string& scene_name,
                          cloth::ClothSolver& solver) {
     StartState start;
+    const cloth::ClothSolver::Penetration inside = solver.obstacle_penetration();
+    if (inside.vertices > 0) {
+        log_warning(
+            "{}: {} of the cloth's {} vertices start inside an obstacle (the deepest {:.3g} m "
+            "in): the first substep puts them on its surface, stretching the cloth; check the "
+            "obstacles' placement and, for planes and open meshes, which side their normals face",
+            scene_name, inside.vertices, solver.positions().size(), inside.deepest);
+    }
     start.initial_intersections =
         collision::count_intersecting_pairs(solver.positions(), solver.triangles());
     const auto num_triangles = static_cast<std::int64_t>(solver.triangles().size());

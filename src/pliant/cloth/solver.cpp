@@ -216,21 +216,9 @@ UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
     UntangleOptions with_obstacles = options;
     if (!with_obstacles.obstacle_distance && !(m_obstacles.empty() && m_mesh_obstacles.empty())) {
         // Where the obstacles are now (before the first step: where their motion has them at
-        // time 0). A mesh counts only within its box's diagonal: an open mesh is "inside" behind
-        // its triangles' planes, which would otherwise reach across all of space.
+        // time 0).
         with_obstacles.obstacle_distance = [this](const Vec3d& x) {
-            double distance = std::numeric_limits<double>::infinity();
-            for (const MovingObstacle& obstacle : m_obstacles) {
-                distance = std::min(distance, surface_distance(obstacle.current, x).distance);
-            }
-            for (const MovingMesh& mesh : m_mesh_obstacles) {
-                const std::optional<SurfaceDistance> s = mesh.mesh->surface_distance(
-                    mesh.state.pose.apply_inverse(x), norm(mesh.mesh->bounds().extent()));
-                if (s) {
-                    distance = std::min(distance, s->distance);
-                }
-            }
-            return distance;
+            return nearest_obstacle(x).distance;
         };
     }
     const UntangleResult result =
@@ -241,6 +229,42 @@ UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
         enable_self_collision(true);
     }
     return result;
+}
+
+SurfaceDistance ClothSolver::nearest_obstacle(const Vec3d& x) const {
+    SurfaceDistance nearest{std::numeric_limits<double>::infinity(), {0.0, 0.0, 0.0}};
+    for (const MovingObstacle& obstacle : m_obstacles) {
+        const SurfaceDistance s = surface_distance(obstacle.current, x);
+        if (s.distance < nearest.distance) {
+            nearest = s;
+        }
+    }
+    for (const MovingMesh& mesh : m_mesh_obstacles) {
+        const Pose& pose = mesh.state.pose;
+        const std::optional<SurfaceDistance> s =
+            mesh.mesh->surface_distance(pose.apply_inverse(x), norm(mesh.mesh->bounds().extent()));
+        if (s && s->distance < nearest.distance) {
+            nearest = {s->distance, pose.rotation.apply(s->normal)};
+        }
+    }
+    return nearest;
+}
+
+ClothSolver::Penetration ClothSolver::obstacle_penetration() const {
+    Penetration penetration;
+    if (m_obstacles.empty() && m_mesh_obstacles.empty()) {
+        return penetration;
+    }
+    for (std::size_t v = 0; v < m_positions.size(); ++v) {
+        if (m_inverse_masses[v] > 0.0) {
+            const double distance = nearest_obstacle(m_positions[v]).distance;
+            if (distance < 0.0) {
+                ++penetration.vertices;
+                penetration.deepest = std::max(penetration.deepest, -distance);
+            }
+        }
+    }
+    return penetration;
 }
 
 void ClothSolver::set_positions(std::span<const Vec3d> positions) {

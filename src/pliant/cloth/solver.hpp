@@ -121,6 +121,15 @@ public:
     // Without options.obstacle_distance, region moves keep out of the solver's obstacles where
     // they are now (a mesh obstacle within its box's diagonal of its surface).
     UntangleResult untangle(const UntangleOptions& options = {});
+    // The free vertices inside an obstacle (signed distance < 0 to an analytic obstacle, or to a
+    // mesh obstacle within its box's diagonal of its surface) where the obstacles are now, and
+    // how deep the deepest is (m; 0 when none). Cloth given inside an obstacle is pushed out onto
+    // its surface in the first substep (without being thrown, but stretched as the surface has it).
+    struct Penetration {
+        std::int64_t vertices = 0;
+        double deepest = 0.0;
+    };
+    Penetration obstacle_penetration() const;
     // Moves the cloth to `positions` (#V, finite), e.g. a start untangled before and kept, so
     // that it need not be untangled again: afterwards the solver is in the state untangle()
     // leaves when it ends there. Pinned vertices (inverse mass 0) must be given where they are.
@@ -171,6 +180,10 @@ private:
     // Places the obstacles at time t (the end of the substep); previous placements are kept
     // for the obstacles' surface velocities.
     void move_obstacles(double t);
+    // The obstacle surface nearest to x where the obstacles are now (a mesh obstacle within its
+    // box's diagonal: an open mesh is "inside" behind its triangles' planes, which would
+    // otherwise reach across all of space); distance +inf without one.
+    SurfaceDistance nearest_obstacle(const Vec3d& x) const;
     // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
     // and the obstacle surface's velocity there for friction; returns the vertices in contact.
     std::int64_t resolve_obstacles(double h);
