@@ -281,6 +281,33 @@ TEST(ClothCommand, ClothGivenInsideAnObstacleIsReportedAndComesOut) {
     }
 }
 
+// A seam left unwelded in the file (two squares whose shared edge has its own vertices in each)
+// is named in a warning: the cloth is cut there.
+TEST(ClothCommand, UnweldedSeamsAreNamed) {
+    ScratchDir scratch;
+    write(scratch / "seam.obj", R"(v 0 0 0.3
+v 0.1 0 0.3
+v 0.1 0.1 0.3
+v 0 0.1 0.3
+v 0.1 0 0.3
+v 0.2 0 0.3
+v 0.2 0.1 0.3
+v 0.1 0.1 0.3
+f 1 2 3
+f 1 3 4
+f 5 6 7
+f 5 7 8
+)");
+    write(scratch / "scene.json", R"({"cloth": {"mesh": "seam.obj"}, "frames": 1})");
+    const CliResult r = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --no-preview",
+                                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("2 of the cloth's 8 vertices lie exactly on another vertex"),
+              std::string::npos)
+        << r.err;
+}
+
 // A sheet with a dent pushed through another sheet below it (one mesh) is untangled before the
 // first frame and stays apart; with "untangle": false it is only reported.
 TEST(ClothCommand, ClothThatStartsIntersectingIsUntangled) {
