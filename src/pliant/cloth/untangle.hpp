@@ -70,10 +70,10 @@
 // where the simulation keeps it trapped below the other, 5,000 CCD hits a frame; with it the
 // flat one is lifted. tests/cloth/untangle_test.cpp.) Gradient steps are small (`step`) and
 // take no notice of obstacles: the demo's drape, fallen through itself onto the sphere, is
-// untangled in 236 iterations with 54 vertices left up to 14 mm inside the sphere, which the
-// first frames push out without an intersection; putting every vertex a step takes inside back
-// onto the surface (tried) left 25 of its 693 pairs after 400 iterations, the layer against the
-// sphere having no room to give way. The best state is chosen on pairs alone. Not untangled: a
+// untangled in 233 iterations with 56 vertices left up to 13 mm inside the sphere, which the
+// first substep puts back on it without an intersection; putting every vertex a step takes inside
+// back onto the surface (tried) left 25 of its 693 pairs after 400 iterations, the layer against
+// the sphere having no room to give way. The best state is chosen on pairs alone. Not untangled: a
 // sheet through itself along a contour that cuts no region off (it ends inside the sheet on both
 // sides, e.g. where a wider part of the sheet crosses a narrower one), and pinned pieces whose
 // contour cuts off no free region.
