@@ -169,25 +169,6 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const StartState start = prepare_start(scene, scene_name, solver);
     const std::int64_t initial_intersections = start.initial_intersections;
     const std::optional<cloth::UntangleResult>& untangled = start.untangled;
-    if (initial_intersections > 0) {
-        log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
-                    scene_name, initial_intersections);
-        if (untangled) {
-            if (untangled->final_pairs == 0) {
-                log_info(
-                    "{}: untangled in {} iterations ({:.1f} ms), no vertex moved more than "
-                    "{:.2f} mm",
-                    scene_name, untangled->iterations, untangled->ms,
-                    untangled->max_displacement * 1e3);
-            } else {
-                log_warning(
-                    "{}: untangling left {} of {} pairs after {} iterations; the "
-                    "simulation keeps those from growing but does not undo them",
-                    scene_name, untangled->final_pairs, initial_intersections,
-                    untangled->iterations);
-            }
-        }
-    }
 
     const std::filesystem::path frames_dir = out / "frames";
     make_output_directory(frames_dir);

@@ -217,8 +217,24 @@ StartState prepare_start(const cloth::ClothScene& scene, const std::string& scen
             static_cast<double>(start.initial_intersections) / static_cast<double>(num_triangles),
             MAX_INITIAL_PAIRS_PER_TRIANGLE));
     }
+    if (start.initial_intersections > 0) {
+        log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
+                    scene_name, start.initial_intersections);
+    }
     if (scene.untangle && start.initial_intersections > 0) {
         start.untangled = solver.untangle();
+        const cloth::UntangleResult& u = *start.untangled;
+        if (u.final_pairs == 0) {
+            log_info(
+                "{}: untangled in {} iterations ({:.1f} ms), no vertex moved more than "
+                "{:.2f} mm",
+                scene_name, u.iterations, u.ms, u.max_displacement * 1e3);
+        } else {
+            log_warning(
+                "{}: untangling left {} of {} pairs after {} iterations; the simulation keeps "
+                "those from growing but does not undo them",
+                scene_name, u.final_pairs, start.initial_intersections, u.iterations);
+        }
     }
     return start;
 }

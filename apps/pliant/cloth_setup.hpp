@@ -67,7 +67,9 @@ inline constexpr std::int64_t MAX_INITIAL_PAIRS_PER_TRIANGLE = 4;
 // (exactly), throws InvalidInput when there are more than MAX_INITIAL_PAIRS_PER_TRIANGLE per
 // triangle (layers on or through each other: untangling cannot separate them and simulating
 // them costs minutes and gigabytes per frame), and untangles the cloth when there are any and
-// the scene says "untangle" (the default). scene_name prefixes the message.
+// the scene says "untangle" (the default). It logs what it finds (log.hpp), for `pliant cloth`
+// and the viewer alike: vertices inside obstacles, intersections at the start, and what
+// untangling did. scene_name prefixes the messages.
 StartState prepare_start(const cloth::ClothScene& scene, const std::string& scene_name,
                          cloth::ClothSolver& solver);
 

@@ -6,10 +6,12 @@
 //   volume: the viewer's image vs `pliant render` (the same ray caster), with and without a
 //          clipping plane, PSNR ≥ 25 dB (identical in practice);
 // the overlay never appears in screenshots, and a deforming volume runs.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -249,6 +251,28 @@ TEST(ViewCli, ClothSimulatesInTheBackground) {
     j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j["simulated_frames"].get<int>(), 0);
     EXPECT_EQ(j["intersecting_pairs_frame"].get<int>(), 0);  // the start was counted
+}
+
+// The viewer reports a start as `pliant cloth` does: two sheets crossing like an X on stderr,
+// then untangled (the counts in --json).
+TEST(ViewCli, ClothStartIsReportedAsTheCommandReportsIt) {
+    if (!has_xvfb()) {
+        GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb xauth)";
+    }
+    const ScratchDir scratch;
+    std::ofstream(scratch / "x.json") << R"({"cloth": {"grid": {"size": [1, 1], "quads": [8, 8]},
+        "instances": [{}, {"rotate_degrees": [20, 0, 0], "translate": [0.0123, 0.0171, 0]}]},
+        "gravity": [0, 0, 0], "frames": 1})";
+    const CliResult r = run_headless(
+        "--json view cloth " + quoted(scratch / "x.json") + " --frames 1 --size 160x120", scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    const auto pairs = j["initial_intersecting_pairs"].get<std::int64_t>();
+    EXPECT_GT(pairs, 0);
+    EXPECT_NE(r.err.find(fmt::format("the cloth intersects itself at the start ({} pairs", pairs)),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("untangled in "), std::string::npos) << r.err;
 }
 
 TEST(ViewCli, VolumeScreenshotMatchesPliantRender) {
