@@ -55,6 +55,21 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
     return mesh;
 }
 
+// How many vertices have the exact position of another vertex (each such group counts all but
+// one).
+std::int64_t vertices_on_others(std::span<const Vec3d> positions) {
+    std::vector<Vec3d> sorted(positions.begin(), positions.end());
+    const auto less = [](const Vec3d& a, const Vec3d& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::sort(sorted.begin(), sorted.end(), less);
+    std::int64_t doubled = 0;
+    for (std::size_t k = 1; k < sorted.size(); ++k) {
+        doubled += sorted[k] == sorted[k - 1] ? 1 : 0;
+    }
+    return doubled;
+}
+
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name,
                                    std::uint64_t max_memory_bytes) {
@@ -78,6 +93,14 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
         require_cloth_fits_in_memory(
             fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
             mesh.triangles.size() * copies_of_the_cloth, scene.self_collision, max_memory_bytes);
+        // A file's seams (a generated grid has none; instances are checked for overlap later).
+        if (const std::int64_t doubled = vertices_on_others(mesh.positions); doubled > 0) {
+            log_warning(
+                "{}: {} of the cloth's {} vertices lie exactly on another vertex (seams left "
+                "unwelded in the file?): the cloth is not joined there, and its pieces start "
+                "touching; weld those vertices in the file to sew them",
+                scene_name, doubled, mesh.positions.size());
+        }
     }
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);
@@ -130,21 +153,6 @@ std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
     return pinned;
 }
 
-// How many vertices have the exact position of another vertex (each such group counts all but
-// one).
-std::int64_t vertices_on_others(std::span<const Vec3d> positions) {
-    std::vector<Vec3d> sorted(positions.begin(), positions.end());
-    const auto less = [](const Vec3d& a, const Vec3d& b) {
-        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
-    };
-    std::sort(sorted.begin(), sorted.end(), less);
-    std::int64_t doubled = 0;
-    for (std::size_t k = 1; k < sorted.size(); ++k) {
-        doubled += sorted[k] == sorted[k - 1] ? 1 : 0;
-    }
-    return doubled;
-}
-
 }  // namespace
 
 ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name,
@@ -152,13 +160,6 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
     ClothSetup setup;
     setup.mesh = load_cloth(scene, scene_name,
                             max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes());
-    if (const std::int64_t doubled = vertices_on_others(setup.mesh.positions); doubled > 0) {
-        log_warning(
-            "{}: {} of the cloth's {} vertices lie exactly on another vertex (seams left unwelded "
-            "in the file?): the cloth is not joined there, and its pieces start touching; weld "
-            "those vertices in the file to sew them",
-            scene_name, doubled, setup.mesh.positions.size());
-    }
     for (const cloth::PinGroup& group : scene.pins) {
         setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
     }

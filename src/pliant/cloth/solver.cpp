@@ -223,10 +223,8 @@ UntangleResult ClothSolver::untangle(const UntangleOptions& options) {
     }
     const UntangleResult result =
         cloth::untangle(m_positions, m_triangles, m_inverse_masses, with_obstacles);
-    if (m_self_collision && result.iterations > 0) {
-        // Its paths and candidates describe positions that are gone.
-        m_self_collision.reset();
-        enable_self_collision(true);
+    if (result.iterations > 0) {
+        restart_self_collision();
     }
     return result;
 }
@@ -285,8 +283,11 @@ void ClothSolver::set_positions(std::span<const Vec3d> positions) {
         }
     }
     m_positions.assign(positions.begin(), positions.end());
+    restart_self_collision();
+}
+
+void ClothSolver::restart_self_collision() {
     if (m_self_collision) {
-        // Its paths and candidates describe positions that are gone.
         m_self_collision.reset();
         enable_self_collision(true);
     }
@@ -321,10 +322,9 @@ void ClothSolver::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
         throw InvalidInput(
             "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
     }
-    MovingObstacle moving{obstacle, MotionState(motion, m_time), obstacle, obstacle};
-    moving.current = placed(obstacle, moving.state.pose);
-    moving.previous = moving.current;
-    m_obstacles.push_back(std::move(moving));
+    MotionState state(motion, m_time);
+    const Obstacle now = placed(obstacle, state.pose);
+    m_obstacles.push_back(MovingObstacle{obstacle, std::move(state), now, now});
 }
 
 void ClothSolver::add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,

@@ -184,6 +184,9 @@ private:
     // box's diagonal: an open mesh is "inside" behind its triangles' planes, which would
     // otherwise reach across all of space); distance +inf without one.
     SurfaceDistance nearest_obstacle(const Vec3d& x) const;
+    // Self-collision's paths and candidates describe positions that are gone: it starts over
+    // (when it is on).
+    void restart_self_collision();
     // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
     // and the obstacle surface's velocity there for friction; returns the vertices in contact.
     std::int64_t resolve_obstacles(double h);
