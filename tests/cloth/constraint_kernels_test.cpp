@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -233,6 +234,216 @@ TEST(ConstraintKernels, VectorAndScalarKernelsGiveTheSameBits) {
         ASSERT_EQ(x[i].x, y[i].x) << i;
         ASSERT_EQ(x[i].y, y[i].y) << i;
         ASSERT_EQ(x[i].z, y[i].z) << i;
+    }
+}
+
+// Four chains side by side as a packet (lane l = chains[l]; an empty chain is a lane without a
+// chain), over vertex records x (the last record: the padding vertex).
+struct Packet {
+    std::vector<std::int32_t> vertices;
+    std::vector<double> rest;
+    std::int32_t edges = 0;
+    ChainPacket view() const { return {vertices.data(), rest.data(), edges}; }
+};
+
+Packet make_packet(const std::vector<std::vector<std::int32_t>>& chains,
+                   const std::vector<std::vector<double>>& rests, std::int32_t padding) {
+    Packet packet;
+    for (const auto& chain : chains) {
+        packet.edges = std::max(packet.edges, static_cast<std::int32_t>(chain.size()) - 1);
+    }
+    for (std::int32_t row = 0; row <= packet.edges; ++row) {
+        for (std::size_t lane = 0; lane < 4; ++lane) {
+            const auto& chain = chains[lane];
+            const auto last = static_cast<std::int32_t>(chain.size()) - 1;
+            packet.vertices.push_back(chain.empty() ? padding
+                                                    : chain[static_cast<std::size_t>(
+                                                          std::min(row, last))]);
+            if (row < packet.edges) {
+                packet.rest.push_back(row < last ? rests[lane][static_cast<std::size_t>(row)]
+                                                 : -1.0);
+            }
+        }
+    }
+    return packet;
+}
+
+// The chain's linearized XPBD step by dense Gaussian elimination with partial pivoting: the
+// matrix built entry by entry from J W Jᵀ (no tridiagonal structure assumed).
+void reference_chain(std::vector<PackedVertex>& x, const std::vector<std::int32_t>& chain,
+                     const std::vector<double>& rest, double alpha, double regularization) {
+    const std::size_t m = chain.size() - 1;
+    std::vector<Vec3d> n(m, Vec3d{0.0, 0.0, 0.0});
+    std::vector<double> c(m, 0.0);
+    std::vector<bool> active(m, false);
+    const auto at = [&](std::size_t k) -> PackedVertex& {
+        return x[static_cast<std::size_t>(chain[k])];
+    };
+    for (std::size_t k = 0; k < m; ++k) {
+        const Vec3d d{at(k + 1).x - at(k).x, at(k + 1).y - at(k).y, at(k + 1).z - at(k).z};
+        const double length = norm(d);
+        active[k] = at(k).inverse_mass + at(k + 1).inverse_mass > 0.0 && length > 0.0;
+        if (active[k]) {
+            n[k] = d * (1.0 / length);
+            c[k] = length - rest[k];
+        }
+    }
+    // Gradient of constraint k at chain vertex j.
+    const auto gradient = [&](std::size_t k, std::size_t j) {
+        if (!active[k]) {
+            return Vec3d{0.0, 0.0, 0.0};
+        }
+        return j == k + 1 ? n[k] : j == k ? n[k] * -1.0 : Vec3d{0.0, 0.0, 0.0};
+    };
+    std::vector<std::vector<double>> a(m, std::vector<double>(m + 1, 0.0));
+    for (std::size_t i = 0; i < m; ++i) {
+        for (std::size_t k = 0; k < m; ++k) {
+            for (std::size_t j = 0; j <= m; ++j) {
+                a[i][k] += at(j).inverse_mass * dot(gradient(i, j), gradient(k, j));
+            }
+        }
+        a[i][i] = active[i] ? a[i][i] + regularization * (at(i).inverse_mass +
+                                                          at(i + 1).inverse_mass) + alpha
+                            : 1.0;
+        a[i][m] = -c[i];
+    }
+    for (std::size_t col = 0; col < m; ++col) {
+        std::size_t pivot = col;
+        for (std::size_t r = col + 1; r < m; ++r) {
+            if (std::abs(a[r][col]) > std::abs(a[pivot][col])) {
+                pivot = r;
+            }
+        }
+        std::swap(a[col], a[pivot]);
+        for (std::size_t r = 0; r < m; ++r) {
+            if (r != col) {
+                const double f = a[r][col] / a[col][col];
+                for (std::size_t k = col; k <= m; ++k) {
+                    a[r][k] -= f * a[col][k];
+                }
+            }
+        }
+    }
+    std::vector<Vec3d> step(m + 1, Vec3d{0.0, 0.0, 0.0});
+    for (std::size_t k = 0; k < m; ++k) {
+        const double lambda = a[k][m] / a[k][k];
+        for (std::size_t j = 0; j <= m; ++j) {
+            step[j] += gradient(k, j) * (at(j).inverse_mass * lambda);
+        }
+    }
+    for (std::size_t j = 0; j <= m; ++j) {
+        at(j).x += step[j].x;
+        at(j).y += step[j].y;
+        at(j).z += step[j].z;
+    }
+}
+
+// Four random chains (9, 6, 2 edges and no chain) on their own vertices, randomly bent and
+// stretched, with a pinned vertex inside the first, a pinned end of the second and a
+// zero-length edge in the first; the padding vertex last.
+struct Chains {
+    std::vector<PackedVertex> x;
+    std::vector<std::vector<std::int32_t>> chains;
+    std::vector<std::vector<double>> rests;
+};
+
+Chains random_chains(std::uint64_t seed) {
+    std::mt19937_64 random(seed);
+    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+    Chains c;
+    for (const int length : {9, 6, 2, 0}) {
+        std::vector<std::int32_t> chain;
+        std::vector<double> rest;
+        Vec3d p{uniform(random), uniform(random), uniform(random)};
+        for (int k = 0; k <= length && length > 0; ++k) {
+            chain.push_back(static_cast<std::int32_t>(c.x.size()));
+            c.x.push_back({p.x, p.y, p.z, 1.0 + 0.5 * uniform(random)});
+            p += Vec3d{0.1 + 0.02 * uniform(random), 0.03 * uniform(random),
+                       0.03 * uniform(random)};
+            if (k < length) {
+                rest.push_back(0.09 + 0.01 * uniform(random));
+            }
+        }
+        c.chains.push_back(chain);
+        c.rests.push_back(rest);
+    }
+    c.x[4].inverse_mass = 0.0;                        // inside chain 0
+    c.x[static_cast<std::size_t>(c.chains[1][0])].inverse_mass = 0.0;  // chain 1's first
+    c.x[7] = {c.x[6].x, c.x[6].y, c.x[6].z, 1.0};     // chain 0: edge 6 of zero length
+    c.x.push_back({0.0, 0.0, 0.0, 0.0});              // the padding vertex
+    return c;
+}
+
+TEST(ConstraintKernels, ChainPacketSolvesTheLinearizedChainSystem) {
+    for (const double regularization : {0.0, 0.01, 1.0}) {
+        for (const double alpha : {0.0, 0.5}) {
+            Chains chains = random_chains(21);
+            const Packet packet = make_packet(chains.chains, chains.rests,
+                                              static_cast<std::int32_t>(chains.x.size()) - 1);
+            std::vector<PackedVertex> expected = chains.x;
+            for (std::size_t l = 0; l < 3; ++l) {
+                reference_chain(expected, chains.chains[l], chains.rests[l], alpha,
+                                regularization);
+            }
+            std::vector<double> scratch(
+                static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
+            project_chain_packet(chains.x.data(), packet.view(), alpha, regularization,
+                                 scratch.data());
+            for (std::size_t i = 0; i < chains.x.size(); ++i) {
+                EXPECT_NEAR(chains.x[i].x, expected[i].x, 1e-12) << i;
+                EXPECT_NEAR(chains.x[i].y, expected[i].y, 1e-12) << i;
+                EXPECT_NEAR(chains.x[i].z, expected[i].z, 1e-12) << i;
+            }
+            EXPECT_EQ(chains.x.back().x, 0.0);  // the padding vertex stays
+            EXPECT_EQ(chains.x[4].x, random_chains(21).x[4].x);  // pinned
+        }
+    }
+}
+
+TEST(ConstraintKernels, AStraightChainUnderLoadComesToItsRestLengthInOneSolve) {
+    // A vertical chain of 50 edges hanging from a pinned top, every vertex displaced down by
+    // gravity's step: a single-edge sweep fixes only the top edge's share; the chain solve
+    // restores every length at once (the linearization is exact along a straight chain).
+    std::vector<PackedVertex> x;
+    std::vector<std::int32_t> chain;
+    std::vector<double> rest;
+    for (int k = 0; k <= 50; ++k) {
+        const double sag = k == 0 ? 0.0 : 1e-4 * k;  // stretched, more towards the bottom
+        x.push_back({0.0, 0.0, -0.02 * k - sag, k == 0 ? 0.0 : 100.0});
+        chain.push_back(k);
+        if (k < 50) {
+            rest.push_back(0.02);
+        }
+    }
+    x.push_back({0.0, 0.0, 0.0, 0.0});
+    const Packet packet = make_packet({chain, {}, {}, {}}, {rest, {}, {}, {}}, 51);
+    std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
+    project_chain_packet(x.data(), packet.view(), 0.0, 0.0, scratch.data());
+    for (int k = 0; k < 50; ++k) {
+        EXPECT_NEAR(x[static_cast<std::size_t>(k)].z - x[static_cast<std::size_t>(k) + 1].z, 0.02,
+                    1e-15);
+    }
+}
+
+TEST(ConstraintKernels, ChainVectorAndScalarKernelsGiveTheSameBits) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "no AVX2 on this CPU";
+    }
+    for (const std::uint64_t seed : {1, 2, 3, 4}) {
+        Chains vector = random_chains(seed);
+        Chains scalar = vector;
+        const Packet packet = make_packet(vector.chains, vector.rests,
+                                          static_cast<std::int32_t>(vector.x.size()) - 1);
+        std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
+        project_chain_packet(vector.x.data(), packet.view(), 1e-3, 0.01, scratch.data());
+        allow_avx2(false);
+        project_chain_packet(scalar.x.data(), packet.view(), 1e-3, 0.01, scratch.data());
+        allow_avx2(true);
+        for (std::size_t i = 0; i < vector.x.size(); ++i) {
+            ASSERT_EQ(vector.x[i].x, scalar.x[i].x) << seed << " " << i;
+            ASSERT_EQ(vector.x[i].y, scalar.x[i].y) << seed << " " << i;
+            ASSERT_EQ(vector.x[i].z, scalar.x[i].z) << seed << " " << i;
+        }
     }
 }
 

@@ -36,7 +36,8 @@ TEST(ClothScene, ReadsEveryKey) {
         "pins": {"vertices": [0, 5], "regions": [{"min": [-1, -1, 0], "max": [1, 1, 2]}]},
         "material": {"areal_density": 0.2, "stretch_compliance": 0, "bend_compliance": 3,
                      "damping": 1, "thickness": 0.002, "static_friction": 0.5,
-                     "kinetic_friction": 0.4, "strain_limit": 0.05, "bending": "isometric"},
+                     "kinetic_friction": 0.4, "strain_limit": 0.05, "bending": "isometric",
+                     "stretch_solver": "chains"},
         "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.5}},
                       {"plane": {"point": [0, 0, -1], "normal": [0, 0, 1]}},
                       {"box": {"min": [-1, -1, -1], "max": [1, 1, 0]}}],
@@ -56,6 +57,7 @@ TEST(ClothScene, ReadsEveryKey) {
     EXPECT_DOUBLE_EQ(scene.material.kinetic_friction, 0.4);
     EXPECT_DOUBLE_EQ(scene.material.strain_limit, 0.05);
     EXPECT_EQ(scene.material.bending, cloth::BendingModel::isometric);
+    EXPECT_EQ(scene.material.stretch_solver, cloth::StretchSolver::chains);
     ASSERT_EQ(scene.obstacles.size(), 3u);
     EXPECT_DOUBLE_EQ(std::get<cloth::SphereObstacle>(scene.obstacles[0].shape).radius, 0.5);
     EXPECT_TRUE(std::holds_alternative<cloth::PlaneObstacle>(scene.obstacles[1].shape));
@@ -82,6 +84,7 @@ TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     EXPECT_DOUBLE_EQ(scene.material.thickness, cloth::ClothMaterial{}.thickness);
     EXPECT_TRUE(std::isinf(scene.material.strain_limit));
     EXPECT_EQ(scene.material.bending, cloth::BendingModel::dihedral);
+    EXPECT_EQ(scene.material.stretch_solver, cloth::StretchSolver::edges);
     EXPECT_EQ(
         parse(R"({"cloth": {"grid": {}}, "material": {"bending": "isometric"}})").material.bending,
         cloth::BendingModel::isometric);
@@ -116,6 +119,10 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
                  {"material.bending", "\"dihedral\", \"isometric\"", "\"hinge\""});
     expect_error(R"({"cloth": {"grid": {}}, "material": {"bending": 1}})",
                  {"material.bending", "\"dihedral\"", "an integer"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"stretch_solver": "chain"}})",
+                 {"material.stretch_solver", "\"chains\", \"edges\"", "\"chain\""});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"stretch_solver": null}})",
+                 {"material.stretch_solver", "\"edges\""});
     expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0]})",
                  {"gravity", "3 numbers", "2 elements"});
     expect_error(R"({"cloth": {"grid": {}}, "frames": 1.5})", {"frames", "an integer"});

@@ -26,6 +26,20 @@ enum class BendingModel {
     isometric,
 };
 
+// How the stretch constraints are solved.
+enum class StretchSolver {
+    // One edge at a time, colour by colour (Gauss-Seidel, one iteration per substep): a
+    // correction travels one edge per substep, so long paths under load (a hanging skirt)
+    // stretch the more the fewer the substeps.
+    edges,
+    // Chains of edges, each solved as a whole (stretch_chains.hpp): a correction reaches the
+    // whole chain at once. Measured on the built-in scenes (docs/performance.md): the drape's,
+    // pile's and flag's strain p99 fall by a half to two thirds at the same substeps; a sheet
+    // twisted between turning pins, whose pins impose a strain, stretches less but is squeezed
+    // into far more self-contact (the twist scene keeps edges).
+    chains,
+};
+
 struct ClothMaterial {
     // kg/m²: mass per unit of rest area; each vertex gets a third of its triangles' mass.
     double areal_density = 0.15;
@@ -35,6 +49,7 @@ struct ClothMaterial {
     // angle - rest angle, or the isometric model's C (to first order the same angle).
     double bend_compliance = 1.0;
     BendingModel bending = BendingModel::dihedral;
+    StretchSolver stretch_solver = StretchSolver::edges;
     // Unitless: multi-resolution strain limiting (strain_hierarchy.hpp). Coarse vertices farther
     // apart than (1 + strain_limit) times the shortest path between them along the rest mesh's
     // edges are pulled together every substep (by a fifth of the excess, at most a tenth of the

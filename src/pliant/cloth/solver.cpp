@@ -21,6 +21,12 @@ namespace {
 
 constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
 constexpr std::int64_t VERTEX_GRAIN = 2048;
+constexpr std::int64_t CHAIN_PACKET_GRAIN = 2;
+// ε of the stretch chains' Levenberg-Marquardt damping (detail/constraint_kernels.hpp): 0.01
+// against 0 left the hammock of docs/performance.md at strain p99 1.3 % instead of 2.4 %, and
+// keeps the chain between two fixed vertices regular.
+constexpr double CHAIN_REGULARIZATION = 0.01;
+
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
 constexpr int FAIL_SAFE_WINDOW = 4;
@@ -33,6 +39,18 @@ constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
 // Larger moves outran the self-collision's proximity constraints: at half the thickness the
 // twist scene had 56 CCD hits in 36 frames, at a tenth none (docs/performance.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
+
+// Coordinates below 2^-200 m (6e-61 m: nothing cloth has is that short) become 0: the exact
+// predicates of the self-collision and of the intersection count take 0 or magnitudes from
+// 2^-300 up (geometry/exact_predicates.hpp; differences of coordinates of 2^-200 or more are
+// multiples of 2^-252), and a chain solve spreads corrections that small along its chain (a
+// vertex on a grid's symmetry line got x = 1.5e-98 in the pile scene).
+void flush_tiny(Vec3d& x) {
+    constexpr double TINY = 0x1p-200;
+    x.x = std::abs(x.x) < TINY ? 0.0 : x.x;
+    x.y = std::abs(x.y) < TINY ? 0.0 : x.y;
+    x.z = std::abs(x.z) < TINY ? 0.0 : x.z;
+}
 
 void validate_material(const ClothMaterial& m) {
     const auto check = [](double value, const char* name) {
@@ -182,6 +200,11 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
         }
     }
     m_packed.resize(num_vertices);
+    if (material.stretch_solver == StretchSolver::chains) {
+        m_chains = StretchChains(m_stretch_vertices, m_rest_lengths, m_positions);
+        m_chain_scratch.resize(static_cast<std::size_t>(m_chains.scratch_size()));
+        m_packed.push_back({0.0, 0.0, 0.0, 0.0});  // the padding vertex
+    }
     if (std::isfinite(material.strain_limit)) {
         m_strain_hierarchy = StrainHierarchy(static_cast<std::int64_t>(num_vertices),
                                              topology.edges, m_rest_lengths);
@@ -521,6 +544,7 @@ std::int64_t ClothSolver::substep(double h, double t_end, double& solve_ms) {
         n,
         [&](std::int64_t i) {
             const auto v = static_cast<std::size_t>(i);
+            flush_tiny(m_positions[v]);
             Vec3d velocity = (m_positions[v] - m_previous_positions[v]) * (1.0 / h);
             if (m_contact_depths[v] > 0.0) {
                 // A penetration the substep began with is undone without becoming velocity
@@ -622,6 +646,19 @@ void ClothSolver::project_constraints(double h) {
                                        : std::numeric_limits<double>::infinity());
     }
     const double stretch_alpha = m_material.stretch_compliance / (h * h);
+    for (std::int32_t f = 0; f < m_chains.num_families(); ++f) {
+        const std::int32_t first = m_chains.family_packets(f);
+        parallel_for_chunks(m_chains.family_packets(f + 1) - first, CHAIN_PACKET_GRAIN,
+                            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                for (std::int64_t i = begin; i < end; ++i) {
+                                    const auto p = first + static_cast<std::int32_t>(i);
+                                    detail::project_chain_packet(
+                                        x, m_chains.packet(p), stretch_alpha,
+                                        CHAIN_REGULARIZATION,
+                                        m_chain_scratch.data() + m_chains.scratch_offset(p));
+                                }
+                            });
+    }
     for (std::int32_t c = 0; c < m_stretch.colors.num_colors(); ++c) {
         const auto offset =
             static_cast<std::size_t>(m_stretch.colors.offsets[static_cast<std::size_t>(c)]);

@@ -67,6 +67,7 @@
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/strain_hierarchy.hpp"
+#include "pliant/cloth/stretch_chains.hpp"
 #include "pliant/cloth/untangle.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -254,7 +255,11 @@ private:
     std::vector<double> m_dihedral_rest;
     ColoredHinges m_isometric;
     std::array<std::vector<double>, 4> m_isometric_k;
-    std::vector<detail::PackedVertex> m_packed;  // positions and inverse masses, per substep
+    // Positions and inverse masses, per substep, and (with stretch chains) the chains' padding
+    // vertex last.
+    std::vector<detail::PackedVertex> m_packed;
+    StretchChains m_chains;              // material.stretch_solver = chains
+    std::vector<double> m_chain_scratch;
     StrainHierarchy m_strain_hierarchy;          // coarse strain limits (material.strain_limit)
 };
 

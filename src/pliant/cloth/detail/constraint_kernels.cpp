@@ -185,6 +185,90 @@ void isometric_scalar(PackedVertex* x, const IsometricBendingColumns& c, std::in
     move(p3, k3);
 }
 
+// Scratch of a chain packet: per row of edges, five rows of four lanes: the edge direction n
+// (x, y, z), the eliminated right-hand side r_k and the eliminated super-diagonal u_k.
+enum ChainField { CHAIN_NX, CHAIN_NY, CHAIN_NZ, CHAIN_R, CHAIN_U };
+inline std::int64_t chain_slot(std::int32_t row, ChainField field) {
+    return (5 * static_cast<std::int64_t>(row) + field) * 4;
+}
+
+// Lane `lane` of a chain packet. Forward sweep: per edge its direction and −C, and the Thomas
+// elimination: with ℓ_k = A_{k,k−1}, u_{k−1} = ℓ_k / d_{k−1}, d_k = A_kk − ℓ_k u_{k−1},
+// r_k = (−C_k − ℓ_k r_{k−1}) / d_k. Backward sweep: Δλ_k = r_k − u_k Δλ_{k+1}, and vertex k + 1
+// moves by w (n_k Δλ_k − n_{k+1} Δλ_{k+1}) as soon as both are known; vertex 0 last.
+void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, double alpha,
+                       double diagonal_scale, double* s) {
+    const std::int32_t m = c.edges;
+    const auto vertex = [&](std::int32_t row) -> PackedVertex& {
+        return x[c.vertices[4 * static_cast<std::int64_t>(row) + lane]];
+    };
+    const PackedVertex* p = &vertex(0);
+    double pnx = 0.0;
+    double pny = 0.0;
+    double pnz = 0.0;
+    double previous_inverse = 0.0;
+    double previous_r = 0.0;
+    for (std::int32_t k = 0; k < m; ++k) {
+        const PackedVertex* q = &vertex(k + 1);
+        const double dx = q->x - p->x;
+        const double dy = q->y - p->y;
+        const double dz = q->z - p->z;
+        const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const double w0 = p->inverse_mass;
+        const double weight = w0 + q->inverse_mass;
+        const double rest = c.rest_length[4 * static_cast<std::int64_t>(k) + lane];
+        const bool active = weight > 0.0 && length > 0.0 && rest >= 0.0;
+        const double inverse_length = 1.0 / length;
+        const double nx = active ? dx * inverse_length : 0.0;
+        const double ny = active ? dy * inverse_length : 0.0;
+        const double nz = active ? dz * inverse_length : 0.0;
+        const double minus_c = active ? rest - length : 0.0;
+        const double diagonal = active ? weight * diagonal_scale + alpha : 1.0;
+        const double lower = -(w0 * (pnx * nx + pny * ny + pnz * nz));
+        const double u = lower * previous_inverse;
+        const double inverse = 1.0 / (diagonal - lower * u);
+        const double r = (minus_c - lower * previous_r) * inverse;
+        if (k > 0) {
+            s[chain_slot(k - 1, CHAIN_U) + lane] = u;
+        }
+        s[chain_slot(k, CHAIN_NX) + lane] = nx;
+        s[chain_slot(k, CHAIN_NY) + lane] = ny;
+        s[chain_slot(k, CHAIN_NZ) + lane] = nz;
+        s[chain_slot(k, CHAIN_R) + lane] = r;
+        pnx = nx;
+        pny = ny;
+        pnz = nz;
+        previous_inverse = inverse;
+        previous_r = r;
+        p = q;
+    }
+    if (m > 0) {
+        s[chain_slot(m - 1, CHAIN_U) + lane] = 0.0;
+    }
+    double next_lambda = 0.0;  // Δλ_{k+1}, and n_{k+1}
+    double nnx = 0.0;
+    double nny = 0.0;
+    double nnz = 0.0;
+    const auto move = [&](PackedVertex& v, double nx, double ny, double nz, double lambda) {
+        v.x = v.x + v.inverse_mass * (nx * lambda - nnx * next_lambda);
+        v.y = v.y + v.inverse_mass * (ny * lambda - nny * next_lambda);
+        v.z = v.z + v.inverse_mass * (nz * lambda - nnz * next_lambda);
+    };
+    for (std::int32_t k = m - 1; k >= 0; --k) {
+        const double lambda =
+            s[chain_slot(k, CHAIN_R) + lane] - s[chain_slot(k, CHAIN_U) + lane] * next_lambda;
+        const double nx = s[chain_slot(k, CHAIN_NX) + lane];
+        const double ny = s[chain_slot(k, CHAIN_NY) + lane];
+        const double nz = s[chain_slot(k, CHAIN_NZ) + lane];
+        move(vertex(k + 1), nx, ny, nz, lambda);
+        next_lambda = lambda;
+        nnx = nx;
+        nny = ny;
+        nnz = nz;
+    }
+    move(vertex(0), 0.0, 0.0, 0.0, 0.0);
+}
+
 #if defined(PLIANT_HAS_AVX2_TARGET)
 
 using V = __m256d;
@@ -481,6 +565,87 @@ PLIANT_AVX2_FN std::int64_t project_bending_avx2(PackedVertex* x, const BendingC
     return k;
 }
 
+// The four lanes of chain_lane_scalar at once (same operations, same order).
+PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket& c, double alpha,
+                                              double diagonal_scale, double* s) {
+    const std::int32_t m = c.edges;
+    const V zero = _mm256_setzero_pd();
+    const V one = set1(1.0);
+    const V alpha4 = set1(alpha);
+    const V scale4 = set1(diagonal_scale);
+    Lanes p = load4(x, c.vertices);
+    V pnx = zero;
+    V pny = zero;
+    V pnz = zero;
+    V previous_inverse = zero;
+    V previous_r = zero;
+    for (std::int32_t k = 0; k < m; ++k) {
+        const Lanes q = load4(x, c.vertices + 4 * static_cast<std::int64_t>(k + 1));
+        const V dx = sub(q.x, p.x);
+        const V dy = sub(q.y, p.y);
+        const V dz = sub(q.z, p.z);
+        const V length = _mm256_sqrt_pd(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
+        const V weight = add(p.w, q.w);
+        const V rest = _mm256_loadu_pd(c.rest_length + 4 * static_cast<std::int64_t>(k));
+        const V active =
+            _mm256_and_pd(_mm256_and_pd(greater(weight, zero), greater(length, zero)),
+                          _mm256_cmp_pd(rest, zero, _CMP_GE_OQ));
+        const V inverse_length = div(one, length);
+        const V nx = select(active, mul(dx, inverse_length), zero);
+        const V ny = select(active, mul(dy, inverse_length), zero);
+        const V nz = select(active, mul(dz, inverse_length), zero);
+        const V minus_c = select(active, sub(rest, length), zero);
+        const V diagonal = select(active, add(mul(weight, scale4), alpha4), one);
+        const V lower = negate(mul(p.w, add(add(mul(pnx, nx), mul(pny, ny)), mul(pnz, nz))));
+        const V u = mul(lower, previous_inverse);
+        const V inverse = div(one, sub(diagonal, mul(lower, u)));
+        const V r = mul(sub(minus_c, mul(lower, previous_r)), inverse);
+        if (k > 0) {
+            _mm256_storeu_pd(s + chain_slot(k - 1, CHAIN_U), u);
+        }
+        _mm256_storeu_pd(s + chain_slot(k, CHAIN_NX), nx);
+        _mm256_storeu_pd(s + chain_slot(k, CHAIN_NY), ny);
+        _mm256_storeu_pd(s + chain_slot(k, CHAIN_NZ), nz);
+        _mm256_storeu_pd(s + chain_slot(k, CHAIN_R), r);
+        pnx = nx;
+        pny = ny;
+        pnz = nz;
+        previous_inverse = inverse;
+        previous_r = r;
+        p = q;
+    }
+    if (m > 0) {
+        _mm256_storeu_pd(s + chain_slot(m - 1, CHAIN_U), zero);
+    }
+    V next_lambda = zero;
+    V nnx = zero;
+    V nny = zero;
+    V nnz = zero;
+    for (std::int32_t k = m - 1; k >= -1; --k) {
+        V lambda = zero;
+        V nx = zero;
+        V ny = zero;
+        V nz = zero;
+        if (k >= 0) {
+            lambda = sub(_mm256_loadu_pd(s + chain_slot(k, CHAIN_R)),
+                         mul(_mm256_loadu_pd(s + chain_slot(k, CHAIN_U)), next_lambda));
+            nx = _mm256_loadu_pd(s + chain_slot(k, CHAIN_NX));
+            ny = _mm256_loadu_pd(s + chain_slot(k, CHAIN_NY));
+            nz = _mm256_loadu_pd(s + chain_slot(k, CHAIN_NZ));
+        }
+        const std::int32_t* row = c.vertices + 4 * static_cast<std::int64_t>(k + 1);
+        Lanes v = load4(x, row);
+        v.x = add(v.x, mul(v.w, sub(mul(nx, lambda), mul(nnx, next_lambda))));
+        v.y = add(v.y, mul(v.w, sub(mul(ny, lambda), mul(nny, next_lambda))));
+        v.z = add(v.z, mul(v.w, sub(mul(nz, lambda), mul(nnz, next_lambda))));
+        store4(x, row, v, 0xF);
+        next_lambda = lambda;
+        nnx = nx;
+        nny = ny;
+        nnz = nz;
+    }
+}
+
 #endif  // PLIANT_HAS_AVX2_TARGET
 
 }  // namespace
@@ -541,6 +706,20 @@ void project_isometric_bending(PackedVertex* x, const IsometricBendingColumns& c
 #endif
     for (; k < end; ++k) {
         isometric_scalar(x, c, k, alpha);
+    }
+}
+
+void project_chain_packet(PackedVertex* x, const ChainPacket& packet, double alpha,
+                          double regularization, double* scratch) {
+    const double diagonal_scale = 1.0 + regularization;
+#if defined(PLIANT_HAS_AVX2_TARGET)
+    if (has_avx2()) {
+        project_chain_packet_avx2(x, packet, alpha, diagonal_scale, scratch);
+        return;
+    }
+#endif
+    for (int lane = 0; lane < 4; ++lane) {
+        chain_lane_scalar(x, packet, lane, alpha, diagonal_scale, scratch);
     }
 }
 

@@ -28,6 +28,18 @@
 // as n · (−(n · b) / (|n|² (Σ w_k K_k² + α̃))); skipped when Σ w_k K_k² = 0 or that denominator
 // is not positive (n = 0, or its square underflows). No square root, one division.
 //
+// Stretch chains (stretch_chains.hpp): the stretch constraints of a chain of edges v_0 … v_m solved
+// together, one linearized XPBD step (λ starting at 0) for all of them: with n_k the unit
+// direction of edge k (x_{k+1} − x_k) and C_k = |x_{k+1} − x_k| − L_k,
+//   A Δλ = −C,  A_kk = (w_k + w_{k+1}) (1 + ε) + α̃,  A_{k,k+1} = A_{k+1,k} = −w_{k+1} n_k · n_{k+1},
+//   Δx_j = w_j (n_{j−1} Δλ_{j−1} − n_j Δλ_j),
+// A = J W Jᵀ + diag(ε (w_k + w_{k+1}) + α̃) is tridiagonal, symmetric and positive definite (ε > 0),
+// so the Thomas algorithm solves it in one forward and one backward sweep without pivoting.
+// ε is a Levenberg-Marquardt damping of the step: without it a straight chain stretched between
+// two fixed vertices is singular (a uniform tension changes no length to first order) and the
+// step's tension grows as 1 / α̃. An edge with w_k + w_{k+1} = 0 or zero length, and a padding
+// row, takes no part (its row is decoupled, Δλ = 0), as the single-edge kernel skips it.
+//
 // Per-element kernels: no allocation, no exceptions; the constraints of one call must not share
 // vertices (a colour), and calls on disjoint ranges of a colour may run in parallel.
 #pragma once
@@ -68,6 +80,17 @@ struct IsometricBendingColumns {
     const double* k3;
 };
 
+// Four chains of one family side by side (lane l = chain l), padded to the longest: rows past a
+// chain's end repeat its last vertex and hold no edge (rest length < 0); a lane without a chain
+// repeats a vertex that no other lane of any packet uses (the solver's padding vertex).
+struct ChainPacket {
+    const std::int32_t* vertices;  // edges + 1 rows of four: row k, lane l = vertex k of chain l
+    const double* rest_length;     // edges rows of four; negative: padding, no edge
+    std::int32_t edges;            // rows of edges (the longest chain's edges)
+};
+// Doubles of scratch project_chain_packet needs per row of edges.
+inline constexpr std::int32_t CHAIN_SCRATCH_PER_ROW = 20;
+
 // Projects constraints [begin, end) of a colour; alpha = compliance / h². The AVX2 kernels take
 // the constraints in groups of four from `begin`; ranges that start at a multiple of four give
 // the same grouping for any split of a colour into ranges (not that grouping matters: every
@@ -78,6 +101,13 @@ void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begi
                      double alpha);
 void project_isometric_bending(PackedVertex* x, const IsometricBendingColumns& c,
                                std::int64_t begin, std::int64_t end, double alpha);
+
+// Solves the four chains of a packet (alpha = compliance / h², regularization = ε > 0), using
+// CHAIN_SCRATCH_PER_ROW × packet.edges doubles of scratch. The chains of a packet share no vertex;
+// packets of one family may run in parallel. The AVX2 kernel (four lanes) gives the bits of the
+// scalar one.
+void project_chain_packet(PackedVertex* x, const ChainPacket& packet, double alpha,
+                          double regularization, double* scratch);
 
 // atan2(y, x) in (−π, π] from +, −, ×, ÷ and comparisons only (the vector kernels evaluate the
 // same operations): the octant reduction |y| ≤ |x| → t = |y| / |x| ∈ [0, 1], t > 0.66 → (t − 1) /
