@@ -269,13 +269,13 @@ double hanging_length(const Strip& strip, StretchSolver stretch_solver, int subs
 
 TEST(StretchChains, AHangingStripKeepsItsLengthWhereSingleEdgesStretch) {
     // Inextensible in effect (stretch compliance 1e-7 m/N): the strip should hang at its rest
-    // length. Single edges, one sweep per substep, leave it 8 % longer at 12 substeps; chains
-    // keep it within 1 %.
+    // length. Single edges, one sweep per substep, leave it 12.5 % longer at 12 substeps;
+    // chains keep it within 1 % (0.2 %, measured).
     const Strip strip = hanging_strip();
     ASSERT_EQ(strip.top.size(), 3u);
     const double edges = hanging_length(strip, StretchSolver::edges, 12);
     const double chains = hanging_length(strip, StretchSolver::chains, 12);
-    EXPECT_GT(edges, 1.06);
+    EXPECT_GT(edges, 1.08);
     EXPECT_LT(chains, 1.01);
     EXPECT_GT(chains, 0.99);
 }

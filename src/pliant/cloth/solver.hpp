@@ -6,8 +6,10 @@
 //   1. predict: v += h (g + f_air / m); x_previous = x; x += h v (pinned vertices, inverse mass 0,
 //      stay put, or follow their motion: motion.hpp; air: air.hpp);
 //   2. stretch: with material.strain_limit, first the coarse strain limits, coarsest level first,
-//      carried down to every vertex (strain_hierarchy.hpp); then C = |x_i - x_j| - L for every
-//      mesh edge, compliance α (material.hpp);
+//      carried down to every vertex (strain_hierarchy.hpp); with material.stretch_solver =
+//      chains, the chains of edges, each solved as a whole, family after family
+//      (stretch_chains.hpp); then C = |x_i - x_j| - L for every mesh edge, compliance α
+//      (material.hpp);
 //   3. bending, per interior edge (hinge): with material.bending = isometric, on
 //      hinges flat at rest the normal part of the isometric model's linear C = Σ K_k x_k
 //      (isometric_bending.hpp), on the others C = θ - θ_rest, θ the dihedral angle
@@ -35,8 +37,10 @@
 // so strain under load falls with the substep count: a 1.2 m sheet of 24 × 24 quads resting over
 // a sphere with friction keeps every edge within 7 % of its rest length at 40 substeps per frame
 // (24 frames per second; tests/cloth/solver_test.cpp), and stretches more at fewer substeps.
-// material.strain_limit reduces the stretch of long paths (a heavy 1 m strip, 2 kg/m²,
-// hanging at 12 substeps: 12.5 % longer without, 3.3 % with a limit of 0.03;
+// material.stretch_solver = chains carries a correction along whole chains of edges at once: a
+// heavy 1 m strip (2 kg/m²) hanging at 12 substeps is 12.5 % longer than at rest with single
+// edges, 0.2 % with chains (tests/cloth/stretch_chains_test.cpp). material.strain_limit bounds the
+// stretch of long paths (the same strip: 3.3 % with a limit of 0.03;
 // tests/cloth/strain_hierarchy_test.cpp).
 //
 // Masses: each vertex gets a third of the rest area of each of its triangles times
@@ -163,6 +167,11 @@ public:
     std::span<const geometry::Triangle> triangles() const { return m_triangles; }
     const ClothMaterial& material() const { return m_material; }
     std::size_t num_stretch_constraints() const { return m_stretch_vertices.size(); }
+    // Chains the stretch constraints are solved in (0 unless material.stretch_solver = chains;
+    // stretch_chains.hpp).
+    std::size_t num_stretch_chains() const {
+        return static_cast<std::size_t>(m_chains.num_chains());
+    }
     // Coarse strain limits (0 unless material.strain_limit is finite; strain_hierarchy.hpp).
     std::size_t num_strain_limits() const { return m_strain_hierarchy.num_limits(); }
     // Bending constraints: dihedral plus isometric (material.bending).
