@@ -22,7 +22,7 @@
 // sheet by two full turns (the twist scene) ask for more length than it has; each family then
 // takes its full share and hands the rest to the others, and the sheet jitters (without
 // self-collision its strain p99 reaches 400 % against 38 % with single edges; with it, 155 CCD
-// hits in 36 frames against none, at 2.7 times the cost; docs/performance.md). Single edges
+// hits in 36 frames against none, at 2.5 times the cost; docs/performance.md). Single edges
 // stay the default; scenes that drape and hang choose chains.
 //
 // Decomposition (once per mesh, from the rest shape): at every vertex the incident edges are
