@@ -29,7 +29,8 @@ struct HangingSheet {
 const HangingSheet& hanging_sheet() {
     static const HangingSheet sheet = [] {
         HangingSheet s;
-        s.mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(134, 134, 2.0f, 2.0f));
+        s.mesh =
+            geometry::convert_precision<double>(geometry::make_grid_sheet(134, 134, 2.0f, 2.0f));
         for (std::size_t v = 0; v < s.mesh.positions.size(); ++v) {
             Vec3d& p = s.mesh.positions[v];
             p = {p.x, 0.0, 1.0 + p.y};  // stand it up: y becomes height

@@ -256,9 +256,8 @@ Packet make_packet(const std::vector<std::vector<std::int32_t>>& chains,
         for (std::size_t lane = 0; lane < 4; ++lane) {
             const auto& chain = chains[lane];
             const auto last = static_cast<std::int32_t>(chain.size()) - 1;
-            packet.vertices.push_back(chain.empty() ? padding
-                                                    : chain[static_cast<std::size_t>(
-                                                          std::min(row, last))]);
+            packet.vertices.push_back(
+                chain.empty() ? padding : chain[static_cast<std::size_t>(std::min(row, last))]);
             if (row < packet.edges) {
                 packet.rest.push_back(row < last ? rests[lane][static_cast<std::size_t>(row)]
                                                  : -1.0);
@@ -302,9 +301,10 @@ void reference_chain(std::vector<PackedVertex>& x, const std::vector<std::int32_
                 a[i][k] += at(j).inverse_mass * dot(gradient(i, j), gradient(k, j));
             }
         }
-        a[i][i] = active[i] ? a[i][i] + regularization * (at(i).inverse_mass +
-                                                          at(i + 1).inverse_mass) + alpha
-                            : 1.0;
+        a[i][i] =
+            active[i]
+                ? a[i][i] + regularization * (at(i).inverse_mass + at(i + 1).inverse_mass) + alpha
+                : 1.0;
         a[i][m] = -c[i];
     }
     for (std::size_t col = 0; col < m; ++col) {
@@ -358,8 +358,8 @@ Chains random_chains(std::uint64_t seed) {
         for (int k = 0; k <= length && length > 0; ++k) {
             chain.push_back(static_cast<std::int32_t>(c.x.size()));
             c.x.push_back({p.x, p.y, p.z, 1.0 + 0.5 * uniform(random)});
-            p += Vec3d{0.1 + 0.02 * uniform(random), 0.03 * uniform(random),
-                       0.03 * uniform(random)};
+            p +=
+                Vec3d{0.1 + 0.02 * uniform(random), 0.03 * uniform(random), 0.03 * uniform(random)};
             if (k < length) {
                 rest.push_back(0.09 + 0.01 * uniform(random));
             }
@@ -367,10 +367,10 @@ Chains random_chains(std::uint64_t seed) {
         c.chains.push_back(chain);
         c.rests.push_back(rest);
     }
-    c.x[4].inverse_mass = 0.0;                        // inside chain 0
+    c.x[4].inverse_mass = 0.0;                                         // inside chain 0
     c.x[static_cast<std::size_t>(c.chains[1][0])].inverse_mass = 0.0;  // chain 1's first
-    c.x[7] = {c.x[6].x, c.x[6].y, c.x[6].z, 1.0};     // chain 0: edge 6 of zero length
-    c.x.push_back({0.0, 0.0, 0.0, 0.0});              // the padding vertex
+    c.x[7] = {c.x[6].x, c.x[6].y, c.x[6].z, 1.0};  // chain 0: edge 6 of zero length
+    c.x.push_back({0.0, 0.0, 0.0, 0.0});           // the padding vertex
     return c;
 }
 
@@ -382,8 +382,7 @@ TEST(ConstraintKernels, ChainPacketSolvesTheLinearizedChainSystem) {
                                               static_cast<std::int32_t>(chains.x.size()) - 1);
             std::vector<PackedVertex> expected = chains.x;
             for (std::size_t l = 0; l < 3; ++l) {
-                reference_chain(expected, chains.chains[l], chains.rests[l], alpha,
-                                regularization);
+                reference_chain(expected, chains.chains[l], chains.rests[l], alpha, regularization);
             }
             std::vector<double> scratch(
                 static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
@@ -394,7 +393,7 @@ TEST(ConstraintKernels, ChainPacketSolvesTheLinearizedChainSystem) {
                 EXPECT_NEAR(chains.x[i].y, expected[i].y, 1e-12) << i;
                 EXPECT_NEAR(chains.x[i].z, expected[i].z, 1e-12) << i;
             }
-            EXPECT_EQ(chains.x.back().x, 0.0);  // the padding vertex stays
+            EXPECT_EQ(chains.x.back().x, 0.0);                   // the padding vertex stays
             EXPECT_EQ(chains.x[4].x, random_chains(21).x[4].x);  // pinned
         }
     }

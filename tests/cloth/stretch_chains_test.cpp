@@ -92,7 +92,8 @@ std::vector<int> check_decomposition(const StretchChains& chains, const Edges& e
                 const auto last = static_cast<std::int32_t>(chain.size()) - 1;
                 EXPECT_LE(last, packet.edges);
                 for (std::int32_t row = 0; row <= packet.edges; ++row) {
-                    EXPECT_EQ(row_vertex(row), chain[static_cast<std::size_t>(std::min(row, last))]);
+                    EXPECT_EQ(row_vertex(row),
+                              chain[static_cast<std::size_t>(std::min(row, last))]);
                     if (row < packet.edges) {
                         const double rest = packet.rest_length[4 * row + lane];
                         if (row < last) {
@@ -104,7 +105,8 @@ std::vector<int> check_decomposition(const StretchChains& chains, const Edges& e
                     }
                 }
                 for (const std::int32_t v : chain) {
-                    EXPECT_TRUE(used.insert(v).second) << "vertex " << v << " twice in family " << f;
+                    EXPECT_TRUE(used.insert(v).second)
+                        << "vertex " << v << " twice in family " << f;
                 }
             }
         }
@@ -207,8 +209,8 @@ TEST(StretchChains, AnyMeshIsCoveredOnceByStraightishChains) {
         const std::span<const std::int32_t> chain = chains.chain(c);
         bool on_a_ring = chain.front() >= ring_start && chain.front() < lone;
         for (std::size_t k = 1; k < chain.size(); ++k) {
-            on_a_ring = on_a_ring && (chain[k] - ring_start) / around ==
-                                         (chain.front() - ring_start) / around;
+            on_a_ring = on_a_ring &&
+                        (chain[k] - ring_start) / around == (chain.front() - ring_start) / around;
         }
         ring_chains += on_a_ring && chain.size() == static_cast<std::size_t>(around) ? 1 : 0;
     }
@@ -232,8 +234,7 @@ struct Strip {
 
 Strip hanging_strip() {
     Strip strip;
-    strip.mesh =
-        geometry::convert_precision<double>(geometry::make_grid_sheet(2, 40, 0.1f, 1.0f));
+    strip.mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(2, 40, 0.1f, 1.0f));
     double top = -std::numeric_limits<double>::infinity();
     double bottom = std::numeric_limits<double>::infinity();
     for (Vec3d& p : strip.mesh.positions) {
@@ -339,10 +340,10 @@ TEST(StretchChains, EverythingPinnedStaysAndHugeStepsStayFinite) {
                 const auto a = static_cast<std::size_t>(t[static_cast<std::size_t>(k)]);
                 const auto b = static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)]);
                 EXPECT_TRUE(is_finite(hammock.positions()[a]));
-                worst = std::max(worst,
-                                 std::abs(norm(hammock.positions()[a] - hammock.positions()[b]) /
-                                              norm(mesh.positions[a] - mesh.positions[b]) -
-                                          1.0));
+                worst =
+                    std::max(worst, std::abs(norm(hammock.positions()[a] - hammock.positions()[b]) /
+                                                 norm(mesh.positions[a] - mesh.positions[b]) -
+                                             1.0));
             }
         }
         return worst;

@@ -653,8 +653,7 @@ void ClothSolver::project_constraints(double h) {
                                 for (std::int64_t i = begin; i < end; ++i) {
                                     const auto p = first + static_cast<std::int32_t>(i);
                                     detail::project_chain_packet(
-                                        x, m_chains.packet(p), stretch_alpha,
-                                        CHAIN_REGULARIZATION,
+                                        x, m_chains.packet(p), stretch_alpha, CHAIN_REGULARIZATION,
                                         m_chain_scratch.data() + m_chains.scratch_offset(p));
                                 }
                             });

@@ -267,9 +267,9 @@ private:
     // Positions and inverse masses, per substep, and (with stretch chains) the chains' padding
     // vertex last.
     std::vector<detail::PackedVertex> m_packed;
-    StretchChains m_chains;              // material.stretch_solver = chains
+    StretchChains m_chains;  // material.stretch_solver = chains
     std::vector<double> m_chain_scratch;
-    StrainHierarchy m_strain_hierarchy;          // coarse strain limits (material.strain_limit)
+    StrainHierarchy m_strain_hierarchy;  // coarse strain limits (material.strain_limit)
 };
 
 }  // namespace pliant::cloth

@@ -54,9 +54,9 @@ std::vector<Chain> follow_chains(std::span<const std::array<std::int32_t, 2>> ed
         directions.assign(count, Vec3d{0.0, 0.0, 0.0});
         for (std::size_t i = 0; i < count; ++i) {
             const std::int32_t e = incident[first + i];
-            const Vec3d d = positions[static_cast<std::size_t>(
-                                other_end(e, static_cast<std::int32_t>(v)))] -
-                            positions[v];
+            const Vec3d d =
+                positions[static_cast<std::size_t>(other_end(e, static_cast<std::int32_t>(v)))] -
+                positions[v];
             const double length = norm(d);
             if (length > 0.0) {
                 directions[i] = d * (1.0 / length);
@@ -88,7 +88,7 @@ std::vector<Chain> follow_chains(std::span<const std::array<std::int32_t, 2>> ed
     std::vector<Chain> chains;
     std::vector<std::uint8_t> visited(num_edges, 0);
     std::vector<std::int32_t> stamp(num_vertices, -1);  // the chain a vertex is in
-    std::vector<std::int32_t> cut;  // edges whose chain was cut before them
+    std::vector<std::int32_t> cut;                      // edges whose chain was cut before them
     const auto is_end = [&](std::int32_t e, int side) {
         const std::int32_t p =
             partner[2 * static_cast<std::size_t>(e) + static_cast<std::size_t>(side)];
@@ -224,9 +224,10 @@ StretchChains::StretchChains(std::span<const std::array<std::int32_t, 2>> edges,
 
 detail::ChainPacket StretchChains::packet(std::int32_t p) const {
     const auto rows = static_cast<std::size_t>(m_edge_rows[static_cast<std::size_t>(p)]);
-    return {m_vertex_rows.data() + 4 * (rows + static_cast<std::size_t>(p)),
-            m_rest_rows.data() + 4 * rows,
-            m_edge_rows[static_cast<std::size_t>(p) + 1] - m_edge_rows[static_cast<std::size_t>(p)]};
+    return {
+        m_vertex_rows.data() + 4 * (rows + static_cast<std::size_t>(p)),
+        m_rest_rows.data() + 4 * rows,
+        m_edge_rows[static_cast<std::size_t>(p) + 1] - m_edge_rows[static_cast<std::size_t>(p)]};
 }
 
 }  // namespace pliant::cloth

@@ -83,8 +83,8 @@ private:
     std::vector<std::vector<std::int32_t>> m_chains;
     std::vector<std::int32_t> m_family_packets{0};
     std::vector<std::int32_t> m_edge_rows{0};  // packet p: edge rows [m_edge_rows[p], [p + 1])
-    std::vector<std::int32_t> m_vertex_rows;   // 4 per row; packet p's start at row edge_rows[p] + p
-    std::vector<double> m_rest_rows;           // 4 per edge row, −1 for padding
+    std::vector<std::int32_t> m_vertex_rows;  // 4 per row; packet p's start at row edge_rows[p] + p
+    std::vector<double> m_rest_rows;          // 4 per edge row, −1 for padding
     std::int32_t m_padding_vertex = 0;
 };
 

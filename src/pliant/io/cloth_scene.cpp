@@ -239,10 +239,10 @@ void read_material(ObjectReader& r, cloth::ClothMaterial& m) {
                     ? cloth::BendingModel::dihedral
                     : cloth::BendingModel::isometric;
     const bool edges = m.stretch_solver == cloth::StretchSolver::edges;
-    m.stretch_solver = r.text("stretch_solver", edges ? "edges" : "chains", {"edges", "chains"}) ==
-                               "edges"
-                           ? cloth::StretchSolver::edges
-                           : cloth::StretchSolver::chains;
+    m.stretch_solver =
+        r.text("stretch_solver", edges ? "edges" : "chains", {"edges", "chains"}) == "edges"
+            ? cloth::StretchSolver::edges
+            : cloth::StretchSolver::chains;
     m.strain_limit = r.nullable_number("strain_limit", m.strain_limit, 0.0, HUGE_VALUE,
                                        std::numeric_limits<double>::infinity());
     m.damping = r.number("damping", m.damping, 0.0, HUGE_VALUE);

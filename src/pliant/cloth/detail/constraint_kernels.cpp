@@ -587,9 +587,8 @@ PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket
         const V length = _mm256_sqrt_pd(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
         const V weight = add(p.w, q.w);
         const V rest = _mm256_loadu_pd(c.rest_length + 4 * static_cast<std::int64_t>(k));
-        const V active =
-            _mm256_and_pd(_mm256_and_pd(greater(weight, zero), greater(length, zero)),
-                          _mm256_cmp_pd(rest, zero, _CMP_GE_OQ));
+        const V active = _mm256_and_pd(_mm256_and_pd(greater(weight, zero), greater(length, zero)),
+                                       _mm256_cmp_pd(rest, zero, _CMP_GE_OQ));
         const V inverse_length = div(one, length);
         const V nx = select(active, mul(dx, inverse_length), zero);
         const V ny = select(active, mul(dy, inverse_length), zero);

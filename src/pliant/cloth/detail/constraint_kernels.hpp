@@ -28,11 +28,11 @@
 // as n · (−(n · b) / (|n|² (Σ w_k K_k² + α̃))); skipped when Σ w_k K_k² = 0 or that denominator
 // is not positive (n = 0, or its square underflows). No square root, one division.
 //
-// Stretch chains (stretch_chains.hpp): the stretch constraints of a chain of edges v_0 … v_m solved
-// together, one linearized XPBD step (λ starting at 0) for all of them: with n_k the unit
+// Stretch chains (stretch_chains.hpp): the stretch constraints of a chain of edges v_0 … v_m
+// solved together, one linearized XPBD step (λ starting at 0) for all of them: with n_k the unit
 // direction of edge k (x_{k+1} − x_k) and C_k = |x_{k+1} − x_k| − L_k,
-//   A Δλ = −C,  A_kk = (w_k + w_{k+1}) (1 + ε) + α̃,  A_{k,k+1} = A_{k+1,k} = −w_{k+1} n_k · n_{k+1},
-//   Δx_j = w_j (n_{j−1} Δλ_{j−1} − n_j Δλ_j),
+//   A Δλ = −C,   A_kk = (w_k + w_{k+1}) (1 + ε) + α̃,
+//   A_{k,k+1} = A_{k+1,k} = −w_{k+1} n_k · n_{k+1},   Δx_j = w_j (n_{j−1} Δλ_{j−1} − n_j Δλ_j),
 // A = J W Jᵀ + diag(ε (w_k + w_{k+1}) + α̃) is tridiagonal, symmetric and positive definite (ε > 0),
 // so the Thomas algorithm solves it in one forward and one backward sweep without pivoting.
 // ε is a Levenberg-Marquardt damping of the step: without it a straight chain stretched between
