@@ -420,6 +420,7 @@ TEST(StrainHierarchy, AHangingStripStretchesLessWithALimit) {
         ClothMaterial material;
         material.strain_limit = strain_limit;
         material.areal_density = 2.0;  // heavy: a long chain under its own weight
+        material.stretch_solver = StretchSolver::edges;  // chains would hold it anyway
         ClothSolver solver(strip, material, top);
         for (int frame = 0; frame < 48; ++frame) {
             solver.step(1.0 / 24.0, 12);

@@ -84,7 +84,7 @@ TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     EXPECT_DOUBLE_EQ(scene.material.thickness, cloth::ClothMaterial{}.thickness);
     EXPECT_TRUE(std::isinf(scene.material.strain_limit));
     EXPECT_EQ(scene.material.bending, cloth::BendingModel::dihedral);
-    EXPECT_EQ(scene.material.stretch_solver, cloth::StretchSolver::edges);
+    EXPECT_EQ(scene.material.stretch_solver, cloth::StretchSolver::chains);
     EXPECT_EQ(
         parse(R"({"cloth": {"grid": {}}, "material": {"bending": "isometric"}})").material.bending,
         cloth::BendingModel::isometric);

@@ -36,10 +36,10 @@ enum class StretchSolver {
     // whole chain at once. On the built-in scenes at 40 substeps (docs/performance.md) the
     // drape's strain p99 falls from 34 % to 12 % at the impact and from 13 % to 2 % draped, the
     // pile's and the flag's by three to four times, at 0-10 % more time; a sheet hanging for 1 s
-    // keeps 4.5 % at 10 substeps where single edges leave 304 %. Where pins ask for more length
-    // than the cloth has (the twist scene's two full turns) chains do worse: the families pull
-    // against each other (155 CCD hits in 36 frames, 2.5 times the time), so the twist scene,
-    // and the default, keep single edges.
+    // keeps 4.5 % at 10 substeps where single edges leave 304 %. The default. Where pins ask for
+    // more length than the cloth has (the twist scene's two full turns) chains do worse: the
+    // families pull against each other (155 CCD hits in 36 frames, 2.5 times the time), and the
+    // twist scene chooses single edges.
     chains,
 };
 
@@ -52,7 +52,7 @@ struct ClothMaterial {
     // angle - rest angle, or the isometric model's C (to first order the same angle).
     double bend_compliance = 1.0;
     BendingModel bending = BendingModel::dihedral;
-    StretchSolver stretch_solver = StretchSolver::edges;
+    StretchSolver stretch_solver = StretchSolver::chains;
     // Unitless: multi-resolution strain limiting (strain_hierarchy.hpp). Coarse vertices farther
     // apart than (1 + strain_limit) times the shortest path between them along the rest mesh's
     // edges are pulled together every substep (by a fifth of the excess, at most a tenth of the

@@ -22,8 +22,8 @@
 // sheet by two full turns (the twist scene) ask for more length than it has; each family then
 // takes its full share and hands the rest to the others, and the sheet jitters (without
 // self-collision its strain p99 reaches 400 % against 38 % with single edges; with it, 155 CCD
-// hits in 36 frames against none, at 2.5 times the cost; docs/performance.md). Single edges
-// stay the default; scenes that drape and hang choose chains.
+// hits in 36 frames against none, at 2.5 times the cost; docs/performance.md). Chains are the
+// default; the twist scene chooses single edges.
 //
 // Decomposition (once per mesh, from the rest shape): at every vertex the incident edges are
 // paired greedily, most nearly opposite first (at least 120° apart); a chain continues through a
