@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pliant/cloth/dihedral.hpp"
+#include "pliant/cloth/stretch_chains.hpp"
 #include "pliant/core/simd_dispatch.hpp"
 
 namespace pliant::cloth::detail {
@@ -242,25 +243,27 @@ TEST(ConstraintKernels, VectorAndScalarKernelsGiveTheSameBits) {
 struct Packet {
     std::vector<std::int32_t> vertices;
     std::vector<double> rest;
-    std::int32_t edges = 0;
-    ChainPacket view() const { return {vertices.data(), rest.data(), edges}; }
+    std::vector<std::int32_t> edges;  // lane l's edge k: index 64 l + k
+    std::int32_t num_rows = 0;
+    ChainPacket view() const { return {vertices.data(), rest.data(), edges.data(), num_rows}; }
 };
 
 Packet make_packet(const std::vector<std::vector<std::int32_t>>& chains,
                    const std::vector<std::vector<double>>& rests, std::int32_t padding) {
     Packet packet;
     for (const auto& chain : chains) {
-        packet.edges = std::max(packet.edges, static_cast<std::int32_t>(chain.size()) - 1);
+        packet.num_rows = std::max(packet.num_rows, static_cast<std::int32_t>(chain.size()) - 1);
     }
-    for (std::int32_t row = 0; row <= packet.edges; ++row) {
+    for (std::int32_t row = 0; row <= packet.num_rows; ++row) {
         for (std::size_t lane = 0; lane < 4; ++lane) {
             const auto& chain = chains[lane];
             const auto last = static_cast<std::int32_t>(chain.size()) - 1;
             packet.vertices.push_back(
                 chain.empty() ? padding : chain[static_cast<std::size_t>(std::min(row, last))]);
-            if (row < packet.edges) {
+            if (row < packet.num_rows) {
                 packet.rest.push_back(row < last ? rests[lane][static_cast<std::size_t>(row)]
                                                  : -1.0);
+                packet.edges.push_back(row < last ? 64 * static_cast<std::int32_t>(lane) + row : -1);
             }
         }
     }
@@ -268,9 +271,11 @@ Packet make_packet(const std::vector<std::vector<std::int32_t>>& chains,
 }
 
 // The chain's linearized XPBD step by dense Gaussian elimination with partial pivoting: the
-// matrix built entry by entry from J W Jᵀ (no tridiagonal structure assumed).
-void reference_chain(std::vector<PackedVertex>& x, const std::vector<std::int32_t>& chain,
-                     const std::vector<double>& rest, double alpha, double regularization) {
+// matrix built entry by entry from J W Jᵀ (no tridiagonal structure assumed). Returns Δλ per
+// edge (0 for edges that take no part).
+std::vector<double> reference_chain(std::vector<PackedVertex>& x,
+                                    const std::vector<std::int32_t>& chain,
+                                    const std::vector<double>& rest, const ChainSolve& solve) {
     const std::size_t m = chain.size() - 1;
     std::vector<Vec3d> n(m, Vec3d{0.0, 0.0, 0.0});
     std::vector<double> c(m, 0.0);
@@ -301,10 +306,11 @@ void reference_chain(std::vector<PackedVertex>& x, const std::vector<std::int32_
                 a[i][k] += at(j).inverse_mass * dot(gradient(i, j), gradient(k, j));
             }
         }
-        a[i][i] =
-            active[i]
-                ? a[i][i] + regularization * (at(i).inverse_mass + at(i + 1).inverse_mass) + alpha
-                : 1.0;
+        a[i][i] = active[i] ? a[i][i] +
+                                  solve.regularization *
+                                      (at(i).inverse_mass + at(i + 1).inverse_mass) +
+                                  solve.alpha
+                            : 1.0;
         a[i][m] = -c[i];
     }
     for (std::size_t col = 0; col < m; ++col) {
@@ -324,11 +330,12 @@ void reference_chain(std::vector<PackedVertex>& x, const std::vector<std::int32_
             }
         }
     }
+    std::vector<double> lambdas(m, 0.0);
     std::vector<Vec3d> step(m + 1, Vec3d{0.0, 0.0, 0.0});
     for (std::size_t k = 0; k < m; ++k) {
-        const double lambda = a[k][m] / a[k][k];
+        lambdas[k] = a[k][m] / a[k][k];
         for (std::size_t j = 0; j <= m; ++j) {
-            step[j] += gradient(k, j) * (at(j).inverse_mass * lambda);
+            step[j] += gradient(k, j) * (at(j).inverse_mass * lambdas[k]);
         }
     }
     for (std::size_t j = 0; j <= m; ++j) {
@@ -336,11 +343,12 @@ void reference_chain(std::vector<PackedVertex>& x, const std::vector<std::int32_
         at(j).y += step[j].y;
         at(j).z += step[j].z;
     }
+    return lambdas;
 }
 
 // Four random chains (9, 6, 2 edges and no chain) on their own vertices, randomly bent and
-// stretched, with a pinned vertex inside the first, a pinned end of the second and a
-// zero-length edge in the first; the padding vertex last.
+// stretched, with a zero-length edge and two fixed vertices inside the first, a fixed end of the
+// second; the padding vertex last.
 struct Chains {
     std::vector<PackedVertex> x;
     std::vector<std::vector<std::int32_t>> chains;
@@ -367,7 +375,8 @@ Chains random_chains(std::uint64_t seed) {
         c.chains.push_back(chain);
         c.rests.push_back(rest);
     }
-    c.x[4].inverse_mass = 0.0;                                         // inside chain 0
+    c.x[2].inverse_mass = 0.0;                                         // inside chain 0
+    c.x[5].inverse_mass = 0.0;                                         // inside chain 0
     c.x[static_cast<std::size_t>(c.chains[1][0])].inverse_mass = 0.0;  // chain 1's first
     c.x[7] = {c.x[6].x, c.x[6].y, c.x[6].z, 1.0};  // chain 0: edge 6 of zero length
     c.x.push_back({0.0, 0.0, 0.0, 0.0});           // the padding vertex
@@ -377,24 +386,35 @@ Chains random_chains(std::uint64_t seed) {
 TEST(ConstraintKernels, ChainPacketSolvesTheLinearizedChainSystem) {
     for (const double regularization : {0.0, 0.01, 1.0}) {
         for (const double alpha : {0.0, 0.5}) {
+            const ChainSolve solve{alpha, regularization};
             Chains chains = random_chains(21);
             const Packet packet = make_packet(chains.chains, chains.rests,
                                               static_cast<std::int32_t>(chains.x.size()) - 1);
             std::vector<PackedVertex> expected = chains.x;
+            std::vector<double> expected_lambda(256, -7.0);
             for (std::size_t l = 0; l < 3; ++l) {
-                reference_chain(expected, chains.chains[l], chains.rests[l], alpha, regularization);
+                const std::vector<double> lambdas =
+                    reference_chain(expected, chains.chains[l], chains.rests[l], solve);
+                for (std::size_t k = 0; k < lambdas.size(); ++k) {
+                    expected_lambda[64 * l + k] = lambdas[k];
+                }
             }
             std::vector<double> scratch(
-                static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
-            project_chain_packet(chains.x.data(), packet.view(), alpha, regularization,
+                static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.num_rows));
+            std::vector<double> lambda(256, -7.0);  // -7: not written
+            project_chain_packet(chains.x.data(), packet.view(), solve, lambda.data(),
                                  scratch.data());
             for (std::size_t i = 0; i < chains.x.size(); ++i) {
                 EXPECT_NEAR(chains.x[i].x, expected[i].x, 1e-12) << i;
                 EXPECT_NEAR(chains.x[i].y, expected[i].y, 1e-12) << i;
                 EXPECT_NEAR(chains.x[i].z, expected[i].z, 1e-12) << i;
             }
+            for (std::size_t i = 0; i < lambda.size(); ++i) {
+                EXPECT_NEAR(lambda[i], expected_lambda[i], 1e-12) << i;
+            }
             EXPECT_EQ(chains.x.back().x, 0.0);                   // the padding vertex stays
-            EXPECT_EQ(chains.x[4].x, random_chains(21).x[4].x);  // pinned
+            EXPECT_EQ(chains.x[2].x, random_chains(21).x[2].x);  // fixed
+            EXPECT_EQ(chains.x[5].x, random_chains(21).x[5].x);
         }
     }
 }
@@ -416,12 +436,46 @@ TEST(ConstraintKernels, AStraightChainUnderLoadComesToItsRestLengthInOneSolve) {
     }
     x.push_back({0.0, 0.0, 0.0, 0.0});
     const Packet packet = make_packet({chain, {}, {}, {}}, {rest, {}, {}, {}}, 51);
-    std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
-    project_chain_packet(x.data(), packet.view(), 0.0, 0.0, scratch.data());
+    std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.num_rows));
+    std::vector<double> lambda(64, 0.0);
+    project_chain_packet(x.data(), packet.view(), {0.0, 0.0}, lambda.data(), scratch.data());
     for (int k = 0; k < 50; ++k) {
         EXPECT_NEAR(x[static_cast<std::size_t>(k)].z - x[static_cast<std::size_t>(k) + 1].z, 0.02,
                     1e-15);
     }
+}
+
+TEST(ConstraintKernels, ATautChainBetweenFixedEndsIsNotKickedSideways) {
+    // 20 edges of 5 cm between two fixed vertices, stretched by 10 % with a zigzag of ±0.1 mm:
+    // the stretch cannot go (its ends are fixed), and a uniform tension along the chain changes
+    // no length to first order. With ε = 0.01 one solve grows the zigzag to 1.8 mm; with the
+    // solver's ε to 0.103 mm.
+    const int m = 20;
+    std::vector<PackedVertex> x;
+    std::vector<std::int32_t> chain;
+    std::vector<double> rest(m, 0.05);
+    for (int k = 0; k <= m; ++k) {
+        const double z = (k % 2 == 0 ? 1e-4 : -1e-4) * (k > 0 && k < m ? 1.0 : 0.0);
+        x.push_back({0.055 * k, 0.0, z, k == 0 || k == m ? 0.0 : 1.0 / 3e-4});
+        chain.push_back(k);
+    }
+    x.push_back({0.0, 0.0, 0.0, 0.0});
+    const Packet packet = make_packet({chain, {}, {}, {}}, {rest, {}, {}, {}}, m + 1);
+    std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.num_rows));
+    std::vector<double> lambda(64, 0.0);
+    const double alpha = 1e-7 * 960.0 * 960.0;  // the default compliance at 40 substeps, 24 fps
+    const auto zigzag_after = [&](double regularization) {
+        std::vector<PackedVertex> y = x;
+        project_chain_packet(y.data(), packet.view(), {alpha, regularization}, lambda.data(),
+                             scratch.data());
+        double largest = 0.0;
+        for (int k = 0; k <= m; ++k) {
+            largest = std::max(largest, std::abs(y[static_cast<std::size_t>(k)].z));
+        }
+        return largest;
+    };
+    EXPECT_GT(zigzag_after(0.01), 1e-3);
+    EXPECT_LT(zigzag_after(CHAIN_REGULARIZATION), 1.1e-4);
 }
 
 TEST(ConstraintKernels, ChainVectorAndScalarKernelsGiveTheSameBits) {
@@ -433,18 +487,24 @@ TEST(ConstraintKernels, ChainVectorAndScalarKernelsGiveTheSameBits) {
         Chains scalar = vector;
         const Packet packet = make_packet(vector.chains, vector.rests,
                                           static_cast<std::int32_t>(vector.x.size()) - 1);
-        std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.edges));
-        project_chain_packet(vector.x.data(), packet.view(), 1e-3, 0.01, scratch.data());
+        std::vector<double> scratch(
+            static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.num_rows));
+        std::vector<double> vector_lambda(256, 0.0);
+        std::vector<double> scalar_lambda(256, 0.0);
+        const ChainSolve solve{1e-3, 0.1};
+        project_chain_packet(vector.x.data(), packet.view(), solve, vector_lambda.data(),
+                             scratch.data());
         allow_avx2(false);
-        project_chain_packet(scalar.x.data(), packet.view(), 1e-3, 0.01, scratch.data());
+        project_chain_packet(scalar.x.data(), packet.view(), solve, scalar_lambda.data(),
+                             scratch.data());
         allow_avx2(true);
         for (std::size_t i = 0; i < vector.x.size(); ++i) {
             ASSERT_EQ(vector.x[i].x, scalar.x[i].x) << seed << " " << i;
             ASSERT_EQ(vector.x[i].y, scalar.x[i].y) << seed << " " << i;
             ASSERT_EQ(vector.x[i].z, scalar.x[i].z) << seed << " " << i;
         }
+        EXPECT_EQ(vector_lambda, scalar_lambda);
     }
 }
-
 }  // namespace
 }  // namespace pliant::cloth::detail

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/generate.hpp"
@@ -49,8 +50,10 @@ std::pair<std::int32_t, std::int32_t> key(std::int32_t a, std::int32_t b) {
 std::vector<int> check_decomposition(const StretchChains& chains, const Edges& edges,
                                      std::size_t num_vertices) {
     std::map<std::pair<std::int32_t, std::int32_t>, double> rest_of;
+    std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> index_of;
     for (std::size_t e = 0; e < edges.pairs.size(); ++e) {
         rest_of[key(edges.pairs[e][0], edges.pairs[e][1])] = edges.rest[e];
+        index_of[key(edges.pairs[e][0], edges.pairs[e][1])] = static_cast<std::int32_t>(e);
     }
     std::map<std::pair<std::int32_t, std::int32_t>, int> seen;
     for (std::int32_t c = 0; c < chains.num_chains(); ++c) {
@@ -74,14 +77,14 @@ std::vector<int> check_decomposition(const StretchChains& chains, const Edges& e
     std::int32_t next_chain = 0;
     for (std::int32_t f = 0; f < chains.num_families(); ++f) {
         std::set<std::int32_t> used;
-        for (std::int32_t p = chains.family_packets(f); p < chains.family_packets(f + 1); ++p) {
+        for (std::int32_t p = chains.first_packet(f); p < chains.first_packet(f + 1); ++p) {
             const detail::ChainPacket packet = chains.packet(p);
             for (int lane = 0; lane < 4; ++lane) {
                 const auto row_vertex = [&](std::int32_t row) {
                     return packet.vertices[4 * row + lane];
                 };
                 if (row_vertex(0) == chains.padding_vertex()) {  // a lane without a chain
-                    for (std::int32_t row = 0; row <= packet.edges; ++row) {
+                    for (std::int32_t row = 0; row <= packet.num_rows; ++row) {
                         EXPECT_EQ(row_vertex(row), chains.padding_vertex());
                     }
                     continue;
@@ -90,17 +93,21 @@ std::vector<int> check_decomposition(const StretchChains& chains, const Edges& e
                 family_of[static_cast<std::size_t>(next_chain)] = f;
                 ++next_chain;
                 const auto last = static_cast<std::int32_t>(chain.size()) - 1;
-                EXPECT_LE(last, packet.edges);
-                for (std::int32_t row = 0; row <= packet.edges; ++row) {
+                EXPECT_LE(last, packet.num_rows);
+                for (std::int32_t row = 0; row <= packet.num_rows; ++row) {
                     EXPECT_EQ(row_vertex(row),
                               chain[static_cast<std::size_t>(std::min(row, last))]);
-                    if (row < packet.edges) {
+                    if (row < packet.num_rows) {
                         const double rest = packet.rest_length[4 * row + lane];
+                        const std::int32_t edge = packet.edges[4 * row + lane];
                         if (row < last) {
-                            EXPECT_EQ(rest, rest_of[key(chain[static_cast<std::size_t>(row)],
-                                                        chain[static_cast<std::size_t>(row) + 1])]);
+                            const auto pair = key(chain[static_cast<std::size_t>(row)],
+                                                  chain[static_cast<std::size_t>(row) + 1]);
+                            EXPECT_EQ(rest, rest_of[pair]);
+                            EXPECT_EQ(edge, index_of[pair]);
                         } else {
                             EXPECT_LT(rest, 0.0);
+                            EXPECT_EQ(edge, -1);
                         }
                     }
                 }
@@ -271,13 +278,14 @@ double hanging_length(const Strip& strip, StretchSolver stretch_solver, int subs
 TEST(StretchChains, AHangingStripKeepsItsLengthWhereSingleEdgesStretch) {
     // Inextensible in effect (stretch compliance 1e-7 m/N): the strip should hang at its rest
     // length. Single edges, one sweep per substep, leave it 12.5 % longer at 12 substeps;
-    // chains keep it within 1 % (0.2 %, measured).
+    // chains keep it within 2.5 % (1.8 %, measured; 0.2 % with a tenth of their damping,
+    // stretch_chains.hpp).
     const Strip strip = hanging_strip();
     ASSERT_EQ(strip.top.size(), 3u);
     const double edges = hanging_length(strip, StretchSolver::edges, 12);
     const double chains = hanging_length(strip, StretchSolver::chains, 12);
     EXPECT_GT(edges, 1.08);
-    EXPECT_LT(chains, 1.01);
+    EXPECT_LT(chains, 1.025);
     EXPECT_GT(chains, 0.99);
 }
 
@@ -320,8 +328,7 @@ TEST(StretchChains, EverythingPinnedStaysAndHugeStepsStayFinite) {
     }
     // Two opposite edges pinned (the chains between them straight and fixed at both ends) and
     // steps of 1 s in 4 substeps (gravity moves a vertex 0.6 m per substep): everything stays
-    // finite, and the chains stretch far less than single edges (4.0 against 37.7 times the
-    // rest length at worst, measured).
+    // finite, and the chains stretch far less than single edges.
     std::vector<std::int32_t> sides;
     for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
         if (std::abs(std::abs(mesh.positions[v].x) - 0.5) < 1e-6) {
@@ -349,6 +356,97 @@ TEST(StretchChains, EverythingPinnedStaysAndHugeStepsStayFinite) {
         return worst;
     };
     EXPECT_LT(worst_strain(StretchSolver::chains), 0.25 * worst_strain(StretchSolver::edges));
+}
+
+TEST(StretchChains, ComplianceIsHonoured) {
+    // A triangle hanging from its two pinned corners: the free corner C settles where the two
+    // edges' tension T = (l − L) / α holds its weight, 2 T d / l = m g (d: its depth below the
+    // pins, l its edges' length). Chains pass their λ to the single-edge sweep as XPBD's second
+    // iteration; restarting it from 0 made the cloth twice as stiff as its compliance (a
+    // reviewer's measurement: half the analytic stretch at α = 1e-3 … 1e-1 m/N).
+    geometry::TriangleMeshD mesh;
+    mesh.positions = {{-0.5, 0.0, 0.0}, {0.5, 0.0, 0.0}, {0.0, 0.0, -0.1}};
+    mesh.triangles = {{0, 1, 2}};
+    const double rest = std::sqrt(0.25 + 0.01);
+    for (const double compliance : {1e-3, 1e-2, 1e-1}) {
+        ClothMaterial material;
+        material.areal_density = 1.0;
+        material.stretch_compliance = compliance;
+        material.damping = 20.0;
+        const double weight = material.areal_density * 0.5 * 1.0 * 0.1 / 3.0 * 9.81;
+        double shallow = 0.1;  // bisection on the depth
+        double deep = 10.0;
+        for (int i = 0; i < 200; ++i) {
+            const double d = 0.5 * (shallow + deep);
+            const double l = std::sqrt(0.25 + d * d);
+            (2.0 * (l - rest) / compliance * d / l > weight ? deep : shallow) = d;
+        }
+        const double analytic = std::sqrt(0.25 + shallow * shallow) - rest;
+        for (const StretchSolver stretch_solver : {StretchSolver::edges, StretchSolver::chains}) {
+            material.stretch_solver = stretch_solver;
+            ClothSolver solver(mesh, material, std::vector<std::int32_t>{0, 1});
+            for (int f = 0; f < 240; ++f) {
+                solver.step(1.0 / 24.0, 40);
+            }
+            const double stretch = norm(solver.positions()[2] - mesh.positions[0]) - rest;
+            EXPECT_NEAR(stretch / analytic, 1.0, 0.07) << compliance;
+        }
+    }
+}
+
+TEST(StretchChains, ASheetPulledTautBetweenPinsComesToRest) {
+    // A 1 m sheet of 20 × 20 quads pinned along its left edge, its right edge's pins moved 0.2 m
+    // out over 1 s and held there: the constraints cannot all hold (20 % beyond the sheet's
+    // width), the families' steps oppose one another, and with too little damping (ε = 0.01)
+    // the sheet jittered at up to 53 m/s a second later. It must come to rest, as with single
+    // edges.
+    const geometry::TriangleMeshD mesh =
+        geometry::convert_precision<double>(geometry::make_grid_sheet(20, 20, 1.0f, 1.0f));
+    std::vector<std::int32_t> left;
+    std::vector<std::int32_t> right;
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        if (mesh.positions[v].x < -0.499) {
+            left.push_back(static_cast<std::int32_t>(v));
+        }
+        if (mesh.positions[v].x > 0.499) {
+            right.push_back(static_cast<std::int32_t>(v));
+        }
+    }
+    for (const StretchSolver stretch_solver : {StretchSolver::edges, StretchSolver::chains}) {
+        ClothMaterial material;
+        material.stretch_solver = stretch_solver;
+        ClothSolver solver(mesh, material, left);
+        Motion pull;
+        pull.keyframes = {Keyframe{0.0, {0.0, 0.0, 0.0}, {}},
+                          Keyframe{1.0, {0.2, 0.0, 0.0}, {}}};
+        solver.add_moving_pins(right, pull);
+        double fastest = 0.0;
+        for (int f = 0; f < 72; ++f) {
+            solver.step(1.0 / 24.0, 40);
+            for (const Vec3d& velocity : solver.velocities()) {
+                ASSERT_TRUE(is_finite(velocity));
+                fastest = f >= 48 ? std::max(fastest, norm(velocity)) : 0.0;
+            }
+        }
+        EXPECT_LT(fastest, 0.05) << (stretch_solver == StretchSolver::chains ? "chains" : "edges");
+    }
+}
+
+TEST(StretchChains, CoordinatesTooSmallForTheExactPredicatesBecomeZero) {
+    // A chain solve spreads corrections as small as 1e-98 m along a chain (the pile scene had
+    // one), outside the exact predicates' domain (0, or 2^-300 and up): the solver sets
+    // coordinates below 2^-200 m to 0 after every substep; others are kept.
+    geometry::TriangleMeshD mesh =
+        geometry::convert_precision<double>(geometry::make_grid_sheet(4, 4, 1.0f, 1.0f));
+    mesh.positions[12].x = 1e-98;
+    mesh.positions[13].y = 0x1p-199;
+    ClothMaterial material;
+    material.damping = 0.0;
+    ClothSolver solver(mesh, material);
+    solver.set_gravity({0.0, 0.0, -1.0});
+    solver.step(0.01, 1);
+    EXPECT_EQ(solver.positions()[12].x, 0.0);
+    EXPECT_EQ(solver.positions()[13].y, 0x1p-199);
 }
 
 }  // namespace

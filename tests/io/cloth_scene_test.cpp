@@ -37,7 +37,7 @@ TEST(ClothScene, ReadsEveryKey) {
         "material": {"areal_density": 0.2, "stretch_compliance": 0, "bend_compliance": 3,
                      "damping": 1, "thickness": 0.002, "static_friction": 0.5,
                      "kinetic_friction": 0.4, "strain_limit": 0.05, "bending": "isometric",
-                     "stretch_solver": "chains"},
+                     "stretch_solver": "edges"},
         "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.5}},
                       {"plane": {"point": [0, 0, -1], "normal": [0, 0, 1]}},
                       {"box": {"min": [-1, -1, -1], "max": [1, 1, 0]}}],
@@ -57,7 +57,7 @@ TEST(ClothScene, ReadsEveryKey) {
     EXPECT_DOUBLE_EQ(scene.material.kinetic_friction, 0.4);
     EXPECT_DOUBLE_EQ(scene.material.strain_limit, 0.05);
     EXPECT_EQ(scene.material.bending, cloth::BendingModel::isometric);
-    EXPECT_EQ(scene.material.stretch_solver, cloth::StretchSolver::chains);
+    EXPECT_EQ(scene.material.stretch_solver, cloth::StretchSolver::edges);  // not the default
     ASSERT_EQ(scene.obstacles.size(), 3u);
     EXPECT_DOUBLE_EQ(std::get<cloth::SphereObstacle>(scene.obstacles[0].shape).radius, 0.5);
     EXPECT_TRUE(std::holds_alternative<cloth::PlaneObstacle>(scene.obstacles[1].shape));

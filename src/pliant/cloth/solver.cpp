@@ -22,11 +22,6 @@ namespace {
 constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
 constexpr std::int64_t VERTEX_GRAIN = 2048;
 constexpr std::int64_t CHAIN_PACKET_GRAIN = 2;
-// ε of the stretch chains' Levenberg-Marquardt damping (detail/constraint_kernels.hpp): 0.01
-// against 0 left the hammock of docs/performance.md at strain p99 1.3 % instead of 2.4 %, and
-// keeps the chain between two fixed vertices regular.
-constexpr double CHAIN_REGULARIZATION = 0.01;
-
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
 constexpr int FAIL_SAFE_WINDOW = 4;
@@ -201,8 +196,14 @@ ClothSolver::ClothSolver(const geometry::TriangleMeshD& rest_mesh, const ClothMa
     }
     m_packed.resize(num_vertices);
     if (material.stretch_solver == StretchSolver::chains) {
-        m_chains = StretchChains(m_stretch_vertices, m_rest_lengths, m_positions);
+        // In colour order, so that an edge's index in the chains is its column in m_stretch.
+        std::vector<std::array<std::int32_t, 2>> colored(m_stretch.p.size());
+        for (std::size_t i = 0; i < colored.size(); ++i) {
+            colored[i] = {m_stretch.p[i], m_stretch.q[i]};
+        }
+        m_chains = StretchChains(colored, m_stretch.rest, m_positions);
         m_chain_scratch.resize(static_cast<std::size_t>(m_chains.scratch_size()));
+        m_stretch_lambda.assign(colored.size(), 0.0);
         m_packed.push_back({0.0, 0.0, 0.0, 0.0});  // the padding vertex
     }
     if (std::isfinite(material.strain_limit)) {
@@ -646,24 +647,29 @@ void ClothSolver::project_constraints(double h) {
                                        : std::numeric_limits<double>::infinity());
     }
     const double stretch_alpha = m_material.stretch_compliance / (h * h);
+    // Chains first (their Δλ per edge, in colour order, to m_stretch_lambda), then the sweep
+    // over single edges as XPBD's next iteration from those λ.
+    const detail::ChainSolve chain_solve{stretch_alpha, CHAIN_REGULARIZATION};
     for (std::int32_t f = 0; f < m_chains.num_families(); ++f) {
-        const std::int32_t first = m_chains.family_packets(f);
-        parallel_for_chunks(m_chains.family_packets(f + 1) - first, CHAIN_PACKET_GRAIN,
+        const std::int32_t first = m_chains.first_packet(f);
+        parallel_for_chunks(m_chains.first_packet(f + 1) - first, CHAIN_PACKET_GRAIN,
                             [&](std::int64_t, std::int64_t begin, std::int64_t end) {
                                 for (std::int64_t i = begin; i < end; ++i) {
                                     const auto p = first + static_cast<std::int32_t>(i);
                                     detail::project_chain_packet(
-                                        x, m_chains.packet(p), stretch_alpha, CHAIN_REGULARIZATION,
+                                        x, m_chains.packet(p), chain_solve,
+                                        m_stretch_lambda.data(),
                                         m_chain_scratch.data() + m_chains.scratch_offset(p));
                                 }
                             });
     }
+    const bool chains = m_chains.num_families() > 0;
     for (std::int32_t c = 0; c < m_stretch.colors.num_colors(); ++c) {
         const auto offset =
             static_cast<std::size_t>(m_stretch.colors.offsets[static_cast<std::size_t>(c)]);
-        const detail::StretchColumns columns{m_stretch.p.data() + offset,
-                                             m_stretch.q.data() + offset,
-                                             m_stretch.rest.data() + offset};
+        const detail::StretchColumns columns{
+            m_stretch.p.data() + offset, m_stretch.q.data() + offset,
+            m_stretch.rest.data() + offset, chains ? m_stretch_lambda.data() + offset : nullptr};
         parallel_for_chunks(static_cast<std::int64_t>(m_stretch.colors.color(c).size()),
                             CONSTRAINT_GRAIN,
                             [&](std::int64_t, std::int64_t begin, std::int64_t end) {

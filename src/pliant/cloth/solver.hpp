@@ -269,6 +269,7 @@ private:
     std::vector<detail::PackedVertex> m_packed;
     StretchChains m_chains;  // material.stretch_solver = chains
     std::vector<double> m_chain_scratch;
+    std::vector<double> m_stretch_lambda;  // per stretch constraint, in colour order (with chains)
     StrainHierarchy m_strain_hierarchy;  // coarse strain limits (material.strain_limit)
 };
 

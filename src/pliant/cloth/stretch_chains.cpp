@@ -10,6 +10,7 @@
 #include "pliant/core/group_by_key.hpp"
 
 namespace pliant::cloth {
+
 namespace {
 
 // Edges at least this far from straight ahead (cos of the angle between the directions away
@@ -198,18 +199,20 @@ StretchChains::StretchChains(std::span<const std::array<std::int32_t, 2>> edges,
                 for (std::size_t lane = 0; lane < 4; ++lane) {
                     std::int32_t v = m_padding_vertex;
                     double length = -1.0;
+                    std::int32_t edge = -1;
                     if (first + lane < family.size()) {
                         const Chain& chain = chains[static_cast<std::size_t>(family[first + lane])];
                         const auto last = static_cast<std::int32_t>(chain.edges.size());
                         v = chain.vertices[static_cast<std::size_t>(std::min(row, last))];
                         if (row < last) {
-                            length = rest[static_cast<std::size_t>(
-                                chain.edges[static_cast<std::size_t>(row)])];
+                            edge = chain.edges[static_cast<std::size_t>(row)];
+                            length = rest[static_cast<std::size_t>(edge)];
                         }
                     }
                     m_vertex_rows.push_back(v);
                     if (row < edge_rows) {
                         m_rest_rows.push_back(length);
+                        m_edge_index_rows.push_back(edge);
                     }
                 }
             }
@@ -226,7 +229,7 @@ detail::ChainPacket StretchChains::packet(std::int32_t p) const {
     const auto rows = static_cast<std::size_t>(m_edge_rows[static_cast<std::size_t>(p)]);
     return {
         m_vertex_rows.data() + 4 * (rows + static_cast<std::size_t>(p)),
-        m_rest_rows.data() + 4 * rows,
+        m_rest_rows.data() + 4 * rows, m_edge_index_rows.data() + 4 * rows,
         m_edge_rows[static_cast<std::size_t>(p) + 1] - m_edge_rows[static_cast<std::size_t>(p)]};
 }
 

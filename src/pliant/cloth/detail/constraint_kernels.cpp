@@ -1,6 +1,7 @@
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "pliant/core/simd_dispatch.hpp"
 
@@ -33,6 +34,9 @@ constexpr double PI = 3.14159265358979323846E0;
 constexpr double REDUCE = 0.66;
 constexpr double TWO_PI = 2.0 * PI;
 
+// The largest finite double: an edge longer than that (an overflow) takes no part in a chain.
+constexpr double LARGEST = std::numeric_limits<double>::max();
+
 // C = angle − rest wrapped into (−π, π] (both in (−π, π], so one turn at most).
 inline double wrap(double c) {
     c = c > PI ? c - TWO_PI : c;
@@ -58,6 +62,7 @@ inline Vec load(const PackedVertex& v) {
     return {v.x, v.y, v.z};
 }
 
+template <bool WITH_LAMBDA>
 void stretch_scalar(PackedVertex* x, const StretchColumns& c, std::int64_t k, double alpha) {
     PackedVertex& a = x[c.p[k]];
     PackedVertex& b = x[c.q[k]];
@@ -69,7 +74,9 @@ void stretch_scalar(PackedVertex* x, const StretchColumns& c, std::int64_t k, do
     if (!(w > 0.0) || !(length > 0.0)) {
         return;
     }
-    const double lambda = -(length - c.rest_length[k]) / (w + alpha);
+    const double minus_c = -(length - c.rest_length[k]);
+    const double lambda =
+        (WITH_LAMBDA ? minus_c - alpha * c.lambda[k] : minus_c) / (w + alpha);
     const double inverse_length = 1.0 / length;
     const double gx = dx * inverse_length;
     const double gy = dy * inverse_length;
@@ -185,23 +192,26 @@ void isometric_scalar(PackedVertex* x, const IsometricBendingColumns& c, std::in
     move(p3, k3);
 }
 
-// Scratch of a chain packet: per row of edges, five rows of four lanes: the edge direction n
-// (x, y, z), the eliminated right-hand side r_k and the eliminated super-diagonal u_k.
-enum ChainField { CHAIN_NX, CHAIN_NY, CHAIN_NZ, CHAIN_R, CHAIN_U };
+// Scratch of a chain packet: per row of edges, six rows of four lanes: the edge direction n
+// (x, y, z), the eliminated right-hand side r_k, the eliminated super-diagonal u_k, and whether
+// the edge takes part.
+enum ChainField { CHAIN_NX, CHAIN_NY, CHAIN_NZ, CHAIN_R, CHAIN_U, CHAIN_ACTIVE };
 inline std::int64_t chain_slot(std::int32_t row, ChainField field) {
-    return (5 * static_cast<std::int64_t>(row) + field) * 4;
+    return (6 * static_cast<std::int64_t>(row) + field) * 4;
 }
 
 // Lane `lane` of a chain packet. Forward sweep: per edge its direction and −C, and the Thomas
 // elimination: with ℓ_k = A_{k,k−1}, u_{k−1} = ℓ_k / d_{k−1}, d_k = A_kk − ℓ_k u_{k−1},
-// r_k = (−C_k − ℓ_k r_{k−1}) / d_k. Backward sweep: Δλ_k = r_k − u_k Δλ_{k+1}, and vertex k + 1
-// moves by w (n_k Δλ_k − n_{k+1} Δλ_{k+1}) as soon as both are known; vertex 0 last.
-void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, double alpha,
-                       double diagonal_scale, double* s) {
-    const std::int32_t m = c.edges;
+// r_k = (−C_k − ℓ_k r_{k−1}) / d_k (u and r 0 on an edge that takes no part). Backward sweep:
+// Δλ_k = r_k − u_k Δλ_{k+1} (0 on an edge that takes no part), written to lambda[edge], and
+// vertex k + 1 moves by w (n_k Δλ_k − n_{k+1} Δλ_{k+1}) as soon as both are known; vertex 0 last.
+void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, const ChainSolve& solve,
+                       double* lambda_out, double* s) {
+    const std::int32_t m = c.num_rows;
     const auto vertex = [&](std::int32_t row) -> PackedVertex& {
         return x[c.vertices[4 * static_cast<std::int64_t>(row) + lane]];
     };
+    const double scale = 1.0 + solve.regularization;
     const PackedVertex* p = &vertex(0);
     double pnx = 0.0;
     double pny = 0.0;
@@ -217,20 +227,21 @@ void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, double a
         const double w0 = p->inverse_mass;
         const double weight = w0 + q->inverse_mass;
         const double rest = c.rest_length[4 * static_cast<std::int64_t>(k) + lane];
-        const bool active = weight > 0.0 && length > 0.0 && rest >= 0.0;
+        const bool active = weight > 0.0 && length > 0.0 && length <= LARGEST && rest >= 0.0;
         const double inverse_length = 1.0 / length;
         const double nx = active ? dx * inverse_length : 0.0;
         const double ny = active ? dy * inverse_length : 0.0;
         const double nz = active ? dz * inverse_length : 0.0;
         const double minus_c = active ? rest - length : 0.0;
-        const double diagonal = active ? weight * diagonal_scale + alpha : 1.0;
+        const double diagonal = active ? weight * scale + solve.alpha : 1.0;
         const double lower = -(w0 * (pnx * nx + pny * ny + pnz * nz));
-        const double u = lower * previous_inverse;
+        const double u = active ? lower * previous_inverse : 0.0;
         const double inverse = 1.0 / (diagonal - lower * u);
-        const double r = (minus_c - lower * previous_r) * inverse;
+        const double r = active ? (minus_c - lower * previous_r) * inverse : 0.0;
         if (k > 0) {
             s[chain_slot(k - 1, CHAIN_U) + lane] = u;
         }
+        s[chain_slot(k, CHAIN_ACTIVE) + lane] = active ? 1.0 : 0.0;
         s[chain_slot(k, CHAIN_NX) + lane] = nx;
         s[chain_slot(k, CHAIN_NY) + lane] = ny;
         s[chain_slot(k, CHAIN_NZ) + lane] = nz;
@@ -256,7 +267,13 @@ void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, double a
     };
     for (std::int32_t k = m - 1; k >= 0; --k) {
         const double lambda =
-            s[chain_slot(k, CHAIN_R) + lane] - s[chain_slot(k, CHAIN_U) + lane] * next_lambda;
+            s[chain_slot(k, CHAIN_ACTIVE) + lane] != 0.0
+                ? s[chain_slot(k, CHAIN_R) + lane] - s[chain_slot(k, CHAIN_U) + lane] * next_lambda
+                : 0.0;
+        const std::int32_t edge = c.edges[4 * static_cast<std::int64_t>(k) + lane];
+        if (edge >= 0) {
+            lambda_out[edge] = lambda;
+        }
         const double nx = s[chain_slot(k, CHAIN_NX) + lane];
         const double ny = s[chain_slot(k, CHAIN_NY) + lane];
         const double nz = s[chain_slot(k, CHAIN_NZ) + lane];
@@ -392,6 +409,7 @@ PLIANT_AVX2_INLINE V wrap4(V c) {
     return select(less_equal(c, set1(-PI)), add(c, set1(TWO_PI)), c);
 }
 
+template <bool WITH_LAMBDA>
 PLIANT_AVX2_FN void stretch_avx2(PackedVertex* x, const StretchColumns& c, std::int64_t k,
                                  V alpha) {
     Lanes a = load4(x, c.p + k);
@@ -403,7 +421,11 @@ PLIANT_AVX2_FN void stretch_avx2(PackedVertex* x, const StretchColumns& c, std::
     const V dz = sub(a.z, b.z);
     const V length = _mm256_sqrt_pd(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
     const int valid = _mm256_movemask_pd(_mm256_and_pd(greater(w, zero), greater(length, zero)));
-    const V lambda = div(negate(sub(length, _mm256_loadu_pd(c.rest_length + k))), add(w, alpha));
+    V minus_c = negate(sub(length, _mm256_loadu_pd(c.rest_length + k)));
+    if constexpr (WITH_LAMBDA) {
+        minus_c = sub(minus_c, mul(alpha, _mm256_loadu_pd(c.lambda + k)));
+    }
+    const V lambda = div(minus_c, add(w, alpha));
     const V inverse_length = div(set1(1.0), length);
     const V gx = mul(dx, inverse_length);
     const V gy = mul(dy, inverse_length);
@@ -482,7 +504,11 @@ PLIANT_AVX2_FN std::int64_t project_stretch_avx2(PackedVertex* x, const StretchC
     const V alpha4 = set1(alpha);
     std::int64_t k = begin;
     for (; k + 4 <= end; k += 4) {
-        stretch_avx2(x, c, k, alpha4);
+        if (c.lambda != nullptr) {
+            stretch_avx2<true>(x, c, k, alpha4);
+        } else {
+            stretch_avx2<false>(x, c, k, alpha4);
+        }
     }
     return k;
 }
@@ -566,13 +592,15 @@ PLIANT_AVX2_FN std::int64_t project_bending_avx2(PackedVertex* x, const BendingC
 }
 
 // The four lanes of chain_lane_scalar at once (same operations, same order).
-PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket& c, double alpha,
-                                              double diagonal_scale, double* s) {
-    const std::int32_t m = c.edges;
+PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket& c,
+                                              const ChainSolve& solve, double* lambda_out,
+                                              double* s) {
+    const std::int32_t m = c.num_rows;
     const V zero = _mm256_setzero_pd();
     const V one = set1(1.0);
-    const V alpha4 = set1(alpha);
-    const V scale4 = set1(diagonal_scale);
+    const V alpha = set1(solve.alpha);
+    const V scale = set1(1.0 + solve.regularization);
+    const V largest = set1(LARGEST);
     Lanes p = load4(x, c.vertices);
     V pnx = zero;
     V pny = zero;
@@ -587,21 +615,23 @@ PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket
         const V length = _mm256_sqrt_pd(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
         const V weight = add(p.w, q.w);
         const V rest = _mm256_loadu_pd(c.rest_length + 4 * static_cast<std::int64_t>(k));
-        const V active = _mm256_and_pd(_mm256_and_pd(greater(weight, zero), greater(length, zero)),
-                                       _mm256_cmp_pd(rest, zero, _CMP_GE_OQ));
+        const V active = _mm256_and_pd(
+            _mm256_and_pd(greater(weight, zero), greater(length, zero)),
+            _mm256_and_pd(less_equal(length, largest), _mm256_cmp_pd(rest, zero, _CMP_GE_OQ)));
         const V inverse_length = div(one, length);
         const V nx = select(active, mul(dx, inverse_length), zero);
         const V ny = select(active, mul(dy, inverse_length), zero);
         const V nz = select(active, mul(dz, inverse_length), zero);
         const V minus_c = select(active, sub(rest, length), zero);
-        const V diagonal = select(active, add(mul(weight, scale4), alpha4), one);
+        const V diagonal = select(active, add(mul(weight, scale), alpha), one);
         const V lower = negate(mul(p.w, add(add(mul(pnx, nx), mul(pny, ny)), mul(pnz, nz))));
-        const V u = mul(lower, previous_inverse);
+        const V u = select(active, mul(lower, previous_inverse), zero);
         const V inverse = div(one, sub(diagonal, mul(lower, u)));
-        const V r = mul(sub(minus_c, mul(lower, previous_r)), inverse);
+        const V r = select(active, mul(sub(minus_c, mul(lower, previous_r)), inverse), zero);
         if (k > 0) {
             _mm256_storeu_pd(s + chain_slot(k - 1, CHAIN_U), u);
         }
+        _mm256_storeu_pd(s + chain_slot(k, CHAIN_ACTIVE), active);
         _mm256_storeu_pd(s + chain_slot(k, CHAIN_NX), nx);
         _mm256_storeu_pd(s + chain_slot(k, CHAIN_NY), ny);
         _mm256_storeu_pd(s + chain_slot(k, CHAIN_NZ), nz);
@@ -620,14 +650,24 @@ PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket
     V nnx = zero;
     V nny = zero;
     V nnz = zero;
+    alignas(32) double lanes[4];
     for (std::int32_t k = m - 1; k >= -1; --k) {
         V lambda = zero;
         V nx = zero;
         V ny = zero;
         V nz = zero;
         if (k >= 0) {
-            lambda = sub(_mm256_loadu_pd(s + chain_slot(k, CHAIN_R)),
-                         mul(_mm256_loadu_pd(s + chain_slot(k, CHAIN_U)), next_lambda));
+            lambda = select(_mm256_loadu_pd(s + chain_slot(k, CHAIN_ACTIVE)),
+                            sub(_mm256_loadu_pd(s + chain_slot(k, CHAIN_R)),
+                                mul(_mm256_loadu_pd(s + chain_slot(k, CHAIN_U)), next_lambda)),
+                            zero);
+            _mm256_store_pd(lanes, lambda);
+            const std::int32_t* edges = c.edges + 4 * static_cast<std::int64_t>(k);
+            for (int l = 0; l < 4; ++l) {
+                if (edges[l] >= 0) {
+                    lambda_out[edges[l]] = lanes[l];
+                }
+            }
             nx = _mm256_loadu_pd(s + chain_slot(k, CHAIN_NX));
             ny = _mm256_loadu_pd(s + chain_slot(k, CHAIN_NY));
             nz = _mm256_loadu_pd(s + chain_slot(k, CHAIN_NZ));
@@ -678,7 +718,11 @@ void project_stretch(PackedVertex* x, const StretchColumns& c, std::int64_t begi
     }
 #endif
     for (; k < end; ++k) {
-        stretch_scalar(x, c, k, alpha);
+        if (c.lambda != nullptr) {
+            stretch_scalar<true>(x, c, k, alpha);
+        } else {
+            stretch_scalar<false>(x, c, k, alpha);
+        }
     }
 }
 
@@ -708,17 +752,16 @@ void project_isometric_bending(PackedVertex* x, const IsometricBendingColumns& c
     }
 }
 
-void project_chain_packet(PackedVertex* x, const ChainPacket& packet, double alpha,
-                          double regularization, double* scratch) {
-    const double diagonal_scale = 1.0 + regularization;
+void project_chain_packet(PackedVertex* x, const ChainPacket& packet, const ChainSolve& solve,
+                          double* lambda, double* scratch) {
 #if defined(PLIANT_HAS_AVX2_TARGET)
     if (has_avx2()) {
-        project_chain_packet_avx2(x, packet, alpha, diagonal_scale, scratch);
+        project_chain_packet_avx2(x, packet, solve, lambda, scratch);
         return;
     }
 #endif
     for (int lane = 0; lane < 4; ++lane) {
-        chain_lane_scalar(x, packet, lane, alpha, diagonal_scale, scratch);
+        chain_lane_scalar(x, packet, lane, solve, lambda, scratch);
     }
 }
 

@@ -35,10 +35,9 @@
 //   A_{k,k+1} = A_{k+1,k} = −w_{k+1} n_k · n_{k+1},   Δx_j = w_j (n_{j−1} Δλ_{j−1} − n_j Δλ_j),
 // A = J W Jᵀ + diag(ε (w_k + w_{k+1}) + α̃) is tridiagonal, symmetric and positive definite (ε > 0),
 // so the Thomas algorithm solves it in one forward and one backward sweep without pivoting.
-// ε is a Levenberg-Marquardt damping of the step: without it a straight chain stretched between
-// two fixed vertices is singular (a uniform tension changes no length to first order) and the
-// step's tension grows as 1 / α̃. An edge with w_k + w_{k+1} = 0 or zero length, and a padding
-// row, takes no part (its row is decoupled, Δλ = 0), as the single-edge kernel skips it.
+// ε is a Levenberg-Marquardt damping of the step (stretch_chains.hpp has its value and why). An
+// edge with w_k + w_{k+1} = 0, zero length or a length that overflows, and a padding row, take no
+// part (the row is decoupled, Δλ = 0), as the single-edge kernel skips such an edge.
 //
 // Per-element kernels: no allocation, no exceptions; the constraints of one call must not share
 // vertices (a colour), and calls on disjoint ranges of a colour may run in parallel.
@@ -60,6 +59,10 @@ struct StretchColumns {
     const std::int32_t* p;
     const std::int32_t* q;
     const double* rest_length;
+    // The multipliers λ the substep has already given these constraints (a stretch-chain solve
+    // before, in the same order), or null for none: the projection is then XPBD's next iteration,
+    // Δλ = (−C − α̃ λ) / (w_p + w_q + α̃), so that compliant edges converge to C = −α̃ λ.
+    const double* lambda = nullptr;
 };
 struct BendingColumns {
     const std::int32_t* v0;
@@ -84,12 +87,18 @@ struct IsometricBendingColumns {
 // chain's end repeat its last vertex and hold no edge (rest length < 0); a lane without a chain
 // repeats a vertex that no other lane of any packet uses (the solver's padding vertex).
 struct ChainPacket {
-    const std::int32_t* vertices;  // edges + 1 rows of four: row k, lane l = vertex k of chain l
-    const double* rest_length;     // edges rows of four; negative: padding, no edge
-    std::int32_t edges;            // rows of edges (the longest chain's edges)
+    const std::int32_t* vertices;  // num_rows + 1 rows of four: row k, lane l = vertex k of chain l
+    const double* rest_length;     // num_rows rows of four; negative: padding, no edge
+    const std::int32_t* edges;     // num_rows rows of four: the edge's index (for λ), −1: padding
+    std::int32_t num_rows;         // rows of edges (the longest chain's edge count)
+};
+// The parameters of a chain solve: alpha = compliance / h², regularization = ε > 0.
+struct ChainSolve {
+    double alpha;
+    double regularization;
 };
 // Doubles of scratch project_chain_packet needs per row of edges.
-inline constexpr std::int32_t CHAIN_SCRATCH_PER_ROW = 20;
+inline constexpr std::int32_t CHAIN_SCRATCH_PER_ROW = 24;
 
 // Projects constraints [begin, end) of a colour; alpha = compliance / h². The AVX2 kernels take
 // the constraints in groups of four from `begin`; ranges that start at a multiple of four give
@@ -102,12 +111,12 @@ void project_bending(PackedVertex* x, const BendingColumns& c, std::int64_t begi
 void project_isometric_bending(PackedVertex* x, const IsometricBendingColumns& c,
                                std::int64_t begin, std::int64_t end, double alpha);
 
-// Solves the four chains of a packet (alpha = compliance / h², regularization = ε > 0), using
-// CHAIN_SCRATCH_PER_ROW × packet.edges doubles of scratch. The chains of a packet share no vertex;
-// packets of one family may run in parallel. The AVX2 kernel (four lanes) gives the bits of the
-// scalar one.
-void project_chain_packet(PackedVertex* x, const ChainPacket& packet, double alpha,
-                          double regularization, double* scratch);
+// Solves the four chains of a packet, using CHAIN_SCRATCH_PER_ROW × packet.num_rows doubles of
+// scratch, and writes each edge's Δλ to lambda[edge] (for the single-edge sweep that follows).
+// The chains of a packet share no vertex; packets of one family may run in parallel. The AVX2
+// kernel (four lanes) gives the bits of the scalar one.
+void project_chain_packet(PackedVertex* x, const ChainPacket& packet, const ChainSolve& solve,
+                          double* lambda, double* scratch);
 
 // atan2(y, x) in (−π, π] from +, −, ×, ÷ and comparisons only (the vector kernels evaluate the
 // same operations): the octant reduction |y| ≤ |x| → t = |y| / |x| ∈ [0, 1], t > 0.66 → (t − 1) /
