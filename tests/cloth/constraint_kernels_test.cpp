@@ -263,7 +263,8 @@ Packet make_packet(const std::vector<std::vector<std::int32_t>>& chains,
             if (row < packet.num_rows) {
                 packet.rest.push_back(row < last ? rests[lane][static_cast<std::size_t>(row)]
                                                  : -1.0);
-                packet.edges.push_back(row < last ? 64 * static_cast<std::int32_t>(lane) + row : -1);
+                packet.edges.push_back(row < last ? 64 * static_cast<std::int32_t>(lane) + row
+                                                  : -1);
             }
         }
     }
@@ -306,9 +307,11 @@ std::vector<double> reference_chain(std::vector<PackedVertex>& x,
                 a[i][k] += at(j).inverse_mass * dot(gradient(i, j), gradient(k, j));
             }
         }
-        a[i][i] = active[i] ? a[i][i] +
-                                  solve.regularization *
-                                      (at(i).inverse_mass + at(i + 1).inverse_mass) +
+        const double length = c[i] + rest[i];
+        const double epsilon =
+            solve.regularization +
+            (active[i] ? solve.strain_regularization * std::abs(c[i]) / length : 0.0);
+        a[i][i] = active[i] ? a[i][i] + epsilon * (at(i).inverse_mass + at(i + 1).inverse_mass) +
                                   solve.alpha
                             : 1.0;
         a[i][m] = -c[i];
@@ -386,7 +389,7 @@ Chains random_chains(std::uint64_t seed) {
 TEST(ConstraintKernels, ChainPacketSolvesTheLinearizedChainSystem) {
     for (const double regularization : {0.0, 0.01, 1.0}) {
         for (const double alpha : {0.0, 0.5}) {
-            const ChainSolve solve{alpha, regularization};
+            const ChainSolve solve{alpha, regularization, regularization > 0.0 ? 1.0 : 0.0};
             Chains chains = random_chains(21);
             const Packet packet = make_packet(chains.chains, chains.rests,
                                               static_cast<std::int32_t>(chains.x.size()) - 1);
@@ -448,8 +451,8 @@ TEST(ConstraintKernels, AStraightChainUnderLoadComesToItsRestLengthInOneSolve) {
 TEST(ConstraintKernels, ATautChainBetweenFixedEndsIsNotKickedSideways) {
     // 20 edges of 5 cm between two fixed vertices, stretched by 10 % with a zigzag of ±0.1 mm:
     // the stretch cannot go (its ends are fixed), and a uniform tension along the chain changes
-    // no length to first order. With ε = 0.01 one solve grows the zigzag to 1.8 mm; with the
-    // solver's ε to 0.103 mm.
+    // no length to first order. With ε = 0.01 alone one solve grows the zigzag to 1.8 mm; with
+    // the solver's damping (ε, and κ on the 10 % strain) not beyond its 0.1 mm.
     const int m = 20;
     std::vector<PackedVertex> x;
     std::vector<std::int32_t> chain;
@@ -464,9 +467,10 @@ TEST(ConstraintKernels, ATautChainBetweenFixedEndsIsNotKickedSideways) {
     std::vector<double> scratch(static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.num_rows));
     std::vector<double> lambda(64, 0.0);
     const double alpha = 1e-7 * 960.0 * 960.0;  // the default compliance at 40 substeps, 24 fps
-    const auto zigzag_after = [&](double regularization) {
+    const auto zigzag_after = [&](double regularization, double strain_regularization) {
         std::vector<PackedVertex> y = x;
-        project_chain_packet(y.data(), packet.view(), {alpha, regularization}, lambda.data(),
+        project_chain_packet(y.data(), packet.view(),
+                             {alpha, regularization, strain_regularization}, lambda.data(),
                              scratch.data());
         double largest = 0.0;
         for (int k = 0; k <= m; ++k) {
@@ -474,8 +478,8 @@ TEST(ConstraintKernels, ATautChainBetweenFixedEndsIsNotKickedSideways) {
         }
         return largest;
     };
-    EXPECT_GT(zigzag_after(0.01), 1e-3);
-    EXPECT_LT(zigzag_after(CHAIN_REGULARIZATION), 1.1e-4);
+    EXPECT_GT(zigzag_after(0.01, 0.0), 1e-3);
+    EXPECT_LT(zigzag_after(CHAIN_REGULARIZATION, CHAIN_STRAIN_REGULARIZATION), 1.1e-4);
 }
 
 TEST(ConstraintKernels, ChainVectorAndScalarKernelsGiveTheSameBits) {
@@ -491,7 +495,7 @@ TEST(ConstraintKernels, ChainVectorAndScalarKernelsGiveTheSameBits) {
             static_cast<std::size_t>(CHAIN_SCRATCH_PER_ROW * packet.num_rows));
         std::vector<double> vector_lambda(256, 0.0);
         std::vector<double> scalar_lambda(256, 0.0);
-        const ChainSolve solve{1e-3, 0.1};
+        const ChainSolve solve{1e-3, 0.01, 1.0};
         project_chain_packet(vector.x.data(), packet.view(), solve, vector_lambda.data(),
                              scratch.data());
         allow_avx2(false);

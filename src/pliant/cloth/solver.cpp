@@ -649,7 +649,8 @@ void ClothSolver::project_constraints(double h) {
     const double stretch_alpha = m_material.stretch_compliance / (h * h);
     // Chains first (their Δλ per edge, in colour order, to m_stretch_lambda), then the sweep
     // over single edges as XPBD's next iteration from those λ.
-    const detail::ChainSolve chain_solve{stretch_alpha, CHAIN_REGULARIZATION};
+    const detail::ChainSolve chain_solve{stretch_alpha, CHAIN_REGULARIZATION,
+                                         CHAIN_STRAIN_REGULARIZATION};
     for (std::int32_t f = 0; f < m_chains.num_families(); ++f) {
         const std::int32_t first = m_chains.first_packet(f);
         parallel_for_chunks(m_chains.first_packet(f + 1) - first, CHAIN_PACKET_GRAIN,
@@ -657,8 +658,7 @@ void ClothSolver::project_constraints(double h) {
                                 for (std::int64_t i = begin; i < end; ++i) {
                                     const auto p = first + static_cast<std::int32_t>(i);
                                     detail::project_chain_packet(
-                                        x, m_chains.packet(p), chain_solve,
-                                        m_stretch_lambda.data(),
+                                        x, m_chains.packet(p), chain_solve, m_stretch_lambda.data(),
                                         m_chain_scratch.data() + m_chains.scratch_offset(p));
                                 }
                             });

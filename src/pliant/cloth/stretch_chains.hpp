@@ -46,17 +46,21 @@
 
 namespace pliant::cloth {
 
-// ε of the chains' Levenberg-Marquardt damping (detail/constraint_kernels.hpp): the diagonal
-// w_k + w_{k+1} of each chain's system is scaled by 1 + ε. Without damping, a chain's exact step
-// is too bold where the constraints cannot all hold: a straight chain between two fixed vertices
-// is singular (a uniform tension changes no length to first order), and in a sheet pulled taut
-// the families' full steps undo one another. A 1 m sheet held by pins along two opposite edges,
-// 20 × 20 quads, 40 substeps, pulled 20 % beyond its width and held: its fastest vertex over the
-// last second moved at 53 m/s with ε = 0.01, 29 with 0.03, 14 with 0.05, 3.5e-10 with 0.1 (single
-// edges: 0.01 m/s), and the twist scene ran with 155 CCD hits in 36 frames at 0.01, none at 0.1.
-// The price: a heavy strip hanging at 12 substeps ends 1.8 % longer than at rest (0.2 % at 0.01;
-// single edges 12.5 %). Tests: tests/cloth/stretch_chains_test.cpp.
-inline constexpr double CHAIN_REGULARIZATION = 0.1;
+// The chains' Levenberg-Marquardt damping (detail/constraint_kernels.hpp): the diagonal
+// w_k + w_{k+1} of edge k's row is scaled by 1 + ε + κ |C_k| / ℓ_k. Undamped, a chain's exact
+// step is too bold where the constraints cannot all hold: a straight chain between two fixed
+// vertices is singular (a uniform tension changes no length to first order), and in a sheet
+// pulled taut the families' full steps undo one another. A 1 m sheet of 20 × 20 quads held by
+// pins along two opposite edges, pulled 20 % beyond its width and held, 40 substeps: its fastest
+// vertex in the last second moved at 53 m/s with ε = 0.01 alone, 14 with 0.05, 3.5e-10 with 0.1
+// (single edges 0.01); but a uniform 0.1 damps the long chains of a hanging sheet too (the drape's
+// grid hanging 1 s at 20 substeps: strain p99 12 % against 0.9 % with 0.01; bench_cloth). Damping
+// where the edges are strained keeps both: with ε = 0.01 and κ = 1 the sheet rests at pulls of
+// 1 % to 50 % (at most 0.03 m/s), and the hanging grid keeps 2.2 % at 20 substeps and 0.26 % at
+// 40 (0.5 % at κ = 0.5, which jittered at 3 m/s from a 30 % pull). Tests:
+// tests/cloth/stretch_chains_test.cpp.
+inline constexpr double CHAIN_REGULARIZATION = 0.01;
+inline constexpr double CHAIN_STRAIN_REGULARIZATION = 1.0;
 
 class StretchChains {
 public:

@@ -75,8 +75,7 @@ void stretch_scalar(PackedVertex* x, const StretchColumns& c, std::int64_t k, do
         return;
     }
     const double minus_c = -(length - c.rest_length[k]);
-    const double lambda =
-        (WITH_LAMBDA ? minus_c - alpha * c.lambda[k] : minus_c) / (w + alpha);
+    const double lambda = (WITH_LAMBDA ? minus_c - alpha * c.lambda[k] : minus_c) / (w + alpha);
     const double inverse_length = 1.0 / length;
     const double gx = dx * inverse_length;
     const double gy = dy * inverse_length;
@@ -200,11 +199,12 @@ inline std::int64_t chain_slot(std::int32_t row, ChainField field) {
     return (6 * static_cast<std::int64_t>(row) + field) * 4;
 }
 
-// Lane `lane` of a chain packet. Forward sweep: per edge its direction and −C, and the Thomas
-// elimination: with ℓ_k = A_{k,k−1}, u_{k−1} = ℓ_k / d_{k−1}, d_k = A_kk − ℓ_k u_{k−1},
-// r_k = (−C_k − ℓ_k r_{k−1}) / d_k (u and r 0 on an edge that takes no part). Backward sweep:
-// Δλ_k = r_k − u_k Δλ_{k+1} (0 on an edge that takes no part), written to lambda[edge], and
-// vertex k + 1 moves by w (n_k Δλ_k − n_{k+1} Δλ_{k+1}) as soon as both are known; vertex 0 last.
+// Lane `lane` of a chain packet. Forward sweep: per edge its direction and −C, the diagonal
+// (w_k + w_{k+1}) (1 + ε + κ |C_k| / ℓ_k) + α̃, and the Thomas elimination: with ℓ_k = A_{k,k−1},
+// u_{k−1} = ℓ_k / d_{k−1}, d_k = A_kk − ℓ_k u_{k−1}, r_k = (−C_k − ℓ_k r_{k−1}) / d_k (u and r 0 on
+// an edge that takes no part). Backward sweep: Δλ_k = r_k − u_k Δλ_{k+1} (0 on an edge that takes
+// no part), written to lambda[edge], and vertex k + 1 moves by w (n_k Δλ_k − n_{k+1} Δλ_{k+1}) as
+// soon as both are known; vertex 0 last.
 void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, const ChainSolve& solve,
                        double* lambda_out, double* s) {
     const std::int32_t m = c.num_rows;
@@ -212,6 +212,7 @@ void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, const Ch
         return x[c.vertices[4 * static_cast<std::int64_t>(row) + lane]];
     };
     const double scale = 1.0 + solve.regularization;
+    const double strain = solve.strain_regularization;
     const PackedVertex* p = &vertex(0);
     double pnx = 0.0;
     double pny = 0.0;
@@ -233,7 +234,9 @@ void chain_lane_scalar(PackedVertex* x, const ChainPacket& c, int lane, const Ch
         const double ny = active ? dy * inverse_length : 0.0;
         const double nz = active ? dz * inverse_length : 0.0;
         const double minus_c = active ? rest - length : 0.0;
-        const double diagonal = active ? weight * scale + solve.alpha : 1.0;
+        const double diagonal =
+            active ? weight * (scale + strain * std::abs(minus_c) * inverse_length) + solve.alpha
+                   : 1.0;
         const double lower = -(w0 * (pnx * nx + pny * ny + pnz * nz));
         const double u = active ? lower * previous_inverse : 0.0;
         const double inverse = 1.0 / (diagonal - lower * u);
@@ -600,6 +603,7 @@ PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket
     const V one = set1(1.0);
     const V alpha = set1(solve.alpha);
     const V scale = set1(1.0 + solve.regularization);
+    const V strain = set1(solve.strain_regularization);
     const V largest = set1(LARGEST);
     Lanes p = load4(x, c.vertices);
     V pnx = zero;
@@ -623,7 +627,11 @@ PLIANT_AVX2_FN void project_chain_packet_avx2(PackedVertex* x, const ChainPacket
         const V ny = select(active, mul(dy, inverse_length), zero);
         const V nz = select(active, mul(dz, inverse_length), zero);
         const V minus_c = select(active, sub(rest, length), zero);
-        const V diagonal = select(active, add(mul(weight, scale), alpha), one);
+        const V diagonal =
+            select(active,
+                   add(mul(weight, add(scale, mul(mul(strain, absolute(minus_c)), inverse_length))),
+                       alpha),
+                   one);
         const V lower = negate(mul(p.w, add(add(mul(pnx, nx), mul(pny, ny)), mul(pnz, nz))));
         const V u = select(active, mul(lower, previous_inverse), zero);
         const V inverse = div(one, sub(diagonal, mul(lower, u)));

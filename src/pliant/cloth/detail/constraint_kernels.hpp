@@ -31,11 +31,12 @@
 // Stretch chains (stretch_chains.hpp): the stretch constraints of a chain of edges v_0 … v_m
 // solved together, one linearized XPBD step (λ starting at 0) for all of them: with n_k the unit
 // direction of edge k (x_{k+1} − x_k) and C_k = |x_{k+1} − x_k| − L_k,
-//   A Δλ = −C,   A_kk = (w_k + w_{k+1}) (1 + ε) + α̃,
+//   A Δλ = −C,   A_kk = (w_k + w_{k+1}) (1 + ε_k) + α̃,   ε_k = ε + κ |C_k| / ℓ_k,
 //   A_{k,k+1} = A_{k+1,k} = −w_{k+1} n_k · n_{k+1},   Δx_j = w_j (n_{j−1} Δλ_{j−1} − n_j Δλ_j),
-// A = J W Jᵀ + diag(ε (w_k + w_{k+1}) + α̃) is tridiagonal, symmetric and positive definite (ε > 0),
-// so the Thomas algorithm solves it in one forward and one backward sweep without pivoting.
-// ε is a Levenberg-Marquardt damping of the step (stretch_chains.hpp has its value and why). An
+// (ℓ_k the edge's length). A = J W Jᵀ + diag(ε_k (w_k + w_{k+1}) + α̃) is tridiagonal, symmetric
+// and positive definite (ε > 0), so the Thomas algorithm solves it in one forward and one
+// backward sweep without pivoting. ε_k is a Levenberg-Marquardt damping of the step, larger on
+// strained edges (stretch_chains.hpp has ε, κ and why). An
 // edge with w_k + w_{k+1} = 0, zero length or a length that overflows, and a padding row, take no
 // part (the row is decoupled, Δλ = 0), as the single-edge kernel skips such an edge.
 //
@@ -89,13 +90,15 @@ struct IsometricBendingColumns {
 struct ChainPacket {
     const std::int32_t* vertices;  // num_rows + 1 rows of four: row k, lane l = vertex k of chain l
     const double* rest_length;     // num_rows rows of four; negative: padding, no edge
-    const std::int32_t* edges;     // num_rows rows of four: the edge's index (for λ), −1: padding
-    std::int32_t num_rows;         // rows of edges (the longest chain's edge count)
+    const std::int32_t* edges;  // num_rows rows of four: the edge's index (for λ), −1: padding
+    std::int32_t num_rows;      // rows of edges (the longest chain's edge count)
 };
-// The parameters of a chain solve: alpha = compliance / h², regularization = ε > 0.
+// The parameters of a chain solve: alpha = compliance / h², regularization = ε > 0,
+// strain_regularization = κ ≥ 0.
 struct ChainSolve {
     double alpha;
     double regularization;
+    double strain_regularization = 0.0;
 };
 // Doubles of scratch project_chain_packet needs per row of edges.
 inline constexpr std::int32_t CHAIN_SCRATCH_PER_ROW = 24;
