@@ -10,11 +10,13 @@
 #include <numbers>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
+#include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -222,6 +224,26 @@ TEST(StretchChains, AnyMeshIsCoveredOnceByStraightishChains) {
         ring_chains += on_a_ring && chain.size() == static_cast<std::size_t>(around) ? 1 : 0;
     }
     EXPECT_EQ(ring_chains, rings);
+}
+
+TEST(StretchChains, AVertexOnMoreChainsThanFamiliesIsAClearError) {
+    // A fan of 160 triangles around one vertex (a disc's centre): 80 chains pass through it, and
+    // chains through one vertex need a family each, more than the colouring's 64.
+    geometry::TriangleMeshD fan;
+    fan.positions.push_back({0.0, 0.0, 0.0});
+    const int spokes = 160;
+    for (int k = 0; k < spokes; ++k) {
+        const double angle = 2.0 * std::numbers::pi * k / spokes;
+        fan.positions.push_back({std::cos(angle), std::sin(angle), 0.0});
+        fan.triangles.push_back({0, 1 + k, 1 + (k + 1) % spokes});
+    }
+    const Edges edges = edges_of(fan);
+    try {
+        const StretchChains chains(edges.pairs, edges.rest, fan.positions);
+        FAIL() << "expected InvalidInput";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("64 families"), std::string::npos) << e.what();
+    }
 }
 
 TEST(StretchChains, NoEdgesGiveNoChains) {

@@ -33,13 +33,11 @@ enum class StretchSolver {
     // stretch the more the fewer the substeps.
     edges,
     // Chains of edges, each solved as a whole (stretch_chains.hpp): a correction reaches the
-    // whole chain at once. On the built-in scenes at 40 substeps (docs/performance.md) the
-    // drape's strain p99 falls from 34 % to 12 % at the impact and from 13 % to 2 % draped, the
-    // pile's and the flag's by three to four times, at 0-10 % more time; a sheet hanging for 1 s
-    // keeps 4.5 % at 10 substeps where single edges leave 304 %. The default. Where pins ask for
-    // more length than the cloth has (the twist scene's two full turns) chains do worse: the
-    // families pull against each other (155 CCD hits in 36 frames, 2.5 times the time), and the
-    // twist scene chooses single edges.
+    // whole chain at once, and the cloth keeps its length as its compliance asks (the drape's
+    // strain p99 2.4 % draped against 13 % with single edges, at 40 substeps; docs/performance.md).
+    // The default. Where pins ask for more length than the cloth has (the twist scene's two full
+    // turns), the cloth, holding its length, is squeezed into far more self-contact; that scene
+    // keeps single edges.
     chains,
 };
 

@@ -34,12 +34,13 @@
 // AVX2 where the CPU has it, the same bits as their scalar versions).
 //
 // Convergence: one iteration per substep makes stiff constraints as stiff as the substeps allow,
-// so strain under load falls with the substep count: a 1.2 m sheet of 24 × 24 quads resting over
-// a sphere with friction keeps every edge within 7 % of its rest length at 40 substeps per frame
-// (24 frames per second; tests/cloth/solver_test.cpp), and stretches more at fewer substeps.
-// material.stretch_solver = chains carries a correction along whole chains of edges at once: a
-// heavy 1 m strip (2 kg/m²) hanging at 12 substeps is 12.5 % longer than at rest with single
-// edges, 0.2 % with chains (tests/cloth/stretch_chains_test.cpp). material.strain_limit bounds the
+// so with single edges strain under load falls with the substep count: a 1.2 m sheet of 24 × 24
+// quads resting over a sphere with friction keeps every edge within 7 % of its rest length at 40
+// substeps per frame (24 frames per second), and stretches more at fewer substeps.
+// material.stretch_solver = chains (the default) carries a correction along whole chains of
+// edges at once: the same sheet within 1.2 % (tests/cloth/solver_test.cpp); a heavy 1 m strip
+// (2 kg/m²) hanging at 12 substeps 12.5 % longer than at rest with single edges, 0.3 % with
+// chains (tests/cloth/stretch_chains_test.cpp). material.strain_limit bounds the
 // stretch of long paths (the same strip: 3.3 % with a limit of 0.03;
 // tests/cloth/strain_hierarchy_test.cpp).
 //
@@ -270,7 +271,7 @@ private:
     StretchChains m_chains;  // material.stretch_solver = chains
     std::vector<double> m_chain_scratch;
     std::vector<double> m_stretch_lambda;  // per stretch constraint, in colour order (with chains)
-    StrainHierarchy m_strain_hierarchy;  // coarse strain limits (material.strain_limit)
+    StrainHierarchy m_strain_hierarchy;    // coarse strain limits (material.strain_limit)
 };
 
 }  // namespace pliant::cloth

@@ -172,8 +172,9 @@ StretchChains::StretchChains(std::span<const std::array<std::int32_t, 2>> edges,
         }
         if (taken == ~std::uint64_t{0}) {
             throw InvalidInput(fmt::format(
-                "cloth: stretch chains: a vertex near vertex {} is on more than 63 chains, "
-                "expected vertices with at most 126 edges",
+                "cloth: stretch chains: the chain from vertex {} meets chains of 64 families, "
+                "expected at most 63 (vertices with fewer edges, or material.stretch_solver "
+                "\"edges\")",
                 chain.front()));
         }
         const int color = std::countr_one(taken);

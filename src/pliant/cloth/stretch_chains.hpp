@@ -3,27 +3,22 @@
 //
 // Gauss-Seidel over single edges, one XPBD iteration per substep, moves a correction one edge
 // per sweep: along the long paths of a hanging skirt it converges slowly, and cloth stretches
-// under its own weight the more the fewer the substeps (a heavy 1 m strip hanging at 12
-// substeps per frame ends 12.5 % longer than at rest; tests/cloth/stretch_chains_test.cpp).
-// Here the edges are cut into chains, paths through the mesh that go as straight as they can (on
-// a grid sheet: its rows, columns and both diagonals), the chains are grouped into families
-// whose chains share no vertex, and each chain is solved in one step: one linearized XPBD step
-// for all its constraints at once, (J W Jᵀ + α̃) Δλ = −C, Δx = W Jᵀ Δλ (Macklin, Müller,
-// Chentanez, "XPBD", MIG 2016, eq. 9 with λ = 0), tridiagonal for a chain and solved in linear
-// time by the Thomas algorithm (as Deul, Kugelstadt, Weiler and Bender, "Direct Position-Based
-// Solver for Stiff Rods", CGF 2018, solve trees of rod constraints), with a small
-// Levenberg-Marquardt damping (detail/constraint_kernels.hpp has the system). A correction
-// reaches every edge of its chain in one solve: the same strip stays within 0.2 % of its length.
-// The families follow each other (block Gauss-Seidel), then the solver's sweep over the single
-// edges: block Gauss-Seidel leaves each family's residual on the families solved before it, and
-// the sweep spreads it (the drape's last frame: strain p99 3.3 % → 2.1 %).
+// under its own weight the more the fewer the substeps. Here the edges are cut into chains,
+// paths through the mesh that go as straight as they can (on a grid sheet: its rows, columns and
+// both diagonals), the chains are grouped into families whose chains share no vertex, and each
+// chain is solved in one step: one linearized XPBD step for all its constraints at once,
+// (J W Jᵀ + α̃) Δλ = −C, Δx = W Jᵀ Δλ (Macklin, Müller, Chentanez, "XPBD", MIG 2016, eq. 9 with
+// λ = 0), tridiagonal for a chain and solved in linear time by the Thomas algorithm (as Deul,
+// Kugelstadt, Weiler and Bender, "Direct Position-Based Solver for Stiff Rods", CGF 2018, solve
+// trees of rod constraints), with a Levenberg-Marquardt damping that grows with each edge's strain
+// (detail/constraint_kernels.hpp has the system; the constants below say why). The families follow
+// each other (block Gauss-Seidel); then the solver's sweep over the single edges runs as XPBD's
+// second iteration from the chains' λ, spreading what the families leave on each other.
 //
-// Where the constraints cannot all hold, chains do worse than single edges: pins that turn a
-// sheet by two full turns (the twist scene) ask for more length than it has; each family then
-// takes its full share and hands the rest to the others, and the sheet jitters (without
-// self-collision its strain p99 reaches 400 % against 38 % with single edges; with it, 155 CCD
-// hits in 36 frames against none, at 2.5 times the cost; docs/performance.md). Chains are the
-// default; the twist scene chooses single edges.
+// Measured (docs/performance.md): a heavy strip hanging at 12 substeps ends 0.3 % longer than at
+// rest (12.5 % with single edges); the drape's strain p99 2.4 % draped (13 %). Where pins ask for
+// more length than the cloth has (the twist scene) chains do worse than single edges: the cloth,
+// holding its length, is squeezed into more self-contact.
 //
 // Decomposition (once per mesh, from the rest shape): at every vertex the incident edges are
 // paired greedily, most nearly opposite first (at least 120° apart); a chain continues through a
@@ -33,7 +28,8 @@
 // is made in index order. Within a family the chains, longest first, are laid out four by four
 // as the kernel's packets (detail::ChainPacket): a shorter chain repeats its last vertex, a
 // missing one uses the padding vertex (index num_vertices: the caller's vertex array has one more
-// record, with inverse mass 0, that nothing else uses).
+// record, with inverse mass 0, that no chain uses). Only a family's last packet has missing
+// chains, and families run one after the other, so no two threads write the padding vertex.
 #pragma once
 
 #include <array>
@@ -65,9 +61,11 @@ inline constexpr double CHAIN_STRAIN_REGULARIZATION = 1.0;
 class StretchChains {
 public:
     StretchChains() = default;
-    // edges[i] = {a, b} (vertices in [0, #positions)) with rest length rest[i] (m); positions:
-    // the rest shape, for the pairing's angles. Every edge is in exactly one chain. InvalidInput
-    // for a vertex on more than 63 chains (more than 126 edges).
+    // edges[i] = {a, b} (vertices in [0, #positions), rest.size() = edges.size()) with rest
+    // length rest[i] (m); positions: the rest shape, for the pairing's angles. Every edge is in
+    // exactly one chain. O(E log E). InvalidInput when a chain's vertices already lie on chains
+    // of 64 families (the colouring's limit; a grid needs 4, jittered grids and icospheres of up
+    // to 163,842 vertices needed at most 13).
     StretchChains(std::span<const std::array<std::int32_t, 2>> edges, std::span<const double> rest,
                   std::span<const Vec3d> positions);
 

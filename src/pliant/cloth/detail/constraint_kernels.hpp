@@ -86,7 +86,7 @@ struct IsometricBendingColumns {
 
 // Four chains of one family side by side (lane l = chain l), padded to the longest: rows past a
 // chain's end repeat its last vertex and hold no edge (rest length < 0); a lane without a chain
-// repeats a vertex that no other lane of any packet uses (the solver's padding vertex).
+// holds the padding vertex (inverse mass 0, used by no chain), written back unchanged.
 struct ChainPacket {
     const std::int32_t* vertices;  // num_rows + 1 rows of four: row k, lane l = vertex k of chain l
     const double* rest_length;     // num_rows rows of four; negative: padding, no edge
