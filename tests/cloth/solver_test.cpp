@@ -128,29 +128,38 @@ TEST(ClothSolver, DrapesOverASphereAndKeepsTheThickness) {
 }
 
 TEST(ClothSolver, BitwiseIdenticalForOneAndTwoThreads) {
+    // With either stretch solver (stretch chains also below, at 100 × 100 quads, where each
+    // family spans many packets).
     const geometry::TriangleMeshD mesh = sheet(20, 1.0, 0.5);
-    const auto run = [&](int threads) {
-        set_num_threads(threads);
-        ClothSolver solver(mesh, ClothMaterial{});
-        solver.add_obstacle(SphereObstacle{{0.1, 0.0, 0.0}, 0.25});
-        for (int f = 0; f < 12; ++f) {
-            solver.step(1.0 / 24.0, 10);
-        }
-        set_num_threads(0);
-        return std::vector<Vec3d>(solver.positions().begin(), solver.positions().end());
-    };
-    EXPECT_EQ(run(1), run(2));
+    for (const StretchSolver stretch_solver : {StretchSolver::edges, StretchSolver::chains}) {
+        ClothMaterial material;
+        material.stretch_solver = stretch_solver;
+        const auto run = [&](int threads) {
+            set_num_threads(threads);
+            ClothSolver solver(mesh, material);
+            solver.add_obstacle(SphereObstacle{{0.1, 0.0, 0.0}, 0.25});
+            for (int f = 0; f < 12; ++f) {
+                solver.step(1.0 / 24.0, 10);
+            }
+            set_num_threads(0);
+            return std::vector<Vec3d>(solver.positions().begin(), solver.positions().end());
+        };
+        EXPECT_EQ(run(1), run(2));
+    }
 }
 
 TEST(ClothSolver, IsometricBendingIsBitwiseIdenticalForOneAndTwoThreads) {
-    // 100 × 100 quads: each bending colour spans several parallel chunks.
+    // 100 × 100 quads: each bending colour spans several parallel chunks, and each family of the
+    // stretch chains (the default) many packets.
     const geometry::TriangleMeshD mesh = sheet(100, 1.0, 0.5);
     ClothMaterial material;
     material.bending = BendingModel::isometric;
+    material.stretch_solver = StretchSolver::chains;
     const auto run = [&](int threads) {
         set_num_threads(threads);
         ClothSolver solver(mesh, material);
         EXPECT_EQ(solver.num_isometric_bending_constraints(), solver.num_bending_constraints());
+        EXPECT_GT(solver.num_stretch_chains(), 0u);
         solver.add_obstacle(SphereObstacle{{0.1, 0.0, 0.0}, 0.25});
         for (int f = 0; f < 6; ++f) {
             solver.step(1.0 / 24.0, 10);

@@ -310,28 +310,6 @@ TEST(StretchChains, AHangingStripKeepsItsLengthWhereSingleEdgesStretch) {
     EXPECT_GT(chains, 0.99);
 }
 
-TEST(StretchChains, SolverIsBitwiseIdenticalForOneAndTwoThreads) {
-    // 100 × 100 quads over a sphere: each family spans many packets.
-    geometry::TriangleMeshD mesh =
-        geometry::convert_precision<double>(geometry::make_grid_sheet(100, 100, 1.0f, 1.0f));
-    for (Vec3d& p : mesh.positions) {
-        p.z = 0.5;
-    }
-    ClothMaterial material;
-    material.stretch_solver = StretchSolver::chains;
-    const auto run = [&](int threads) {
-        set_num_threads(threads);
-        ClothSolver solver(mesh, material);
-        solver.add_obstacle(SphereObstacle{{0.1, 0.0, 0.0}, 0.25});
-        for (int f = 0; f < 6; ++f) {
-            solver.step(1.0 / 24.0, 10);
-        }
-        set_num_threads(0);
-        return std::vector<Vec3d>(solver.positions().begin(), solver.positions().end());
-    };
-    EXPECT_EQ(run(1), run(2));
-}
-
 TEST(StretchChains, EverythingPinnedStaysAndHugeStepsStayFinite) {
     const geometry::TriangleMeshD mesh =
         geometry::convert_precision<double>(geometry::make_grid_sheet(8, 8, 1.0f, 1.0f));
@@ -417,11 +395,11 @@ TEST(StretchChains, ComplianceIsHonoured) {
 }
 
 TEST(StretchChains, ASheetPulledTautBetweenPinsComesToRest) {
-    // A 1 m sheet of 20 × 20 quads pinned along its left edge, its right edge's pins moved 0.2 m
-    // out over 1 s and held there: the constraints cannot all hold (20 % beyond the sheet's
-    // width), the families' steps oppose one another, and with too little damping (ε = 0.01)
-    // the sheet jittered at up to 53 m/s a second later. It must come to rest, as with single
-    // edges.
+    // A 1 m sheet of 20 × 20 quads pinned along its left edge, its right edge's pins moved out
+    // by 1 %, 20 % or 50 % of its width over 1 s and held there: the constraints cannot all hold,
+    // the families' steps oppose one another, and with too little damping (ε = 0.01 alone) the
+    // sheet pulled 20 % jittered at up to 53 m/s a second later. It must come to rest, as single
+    // edges do.
     const geometry::TriangleMeshD mesh =
         geometry::convert_precision<double>(geometry::make_grid_sheet(20, 20, 1.0f, 1.0f));
     std::vector<std::int32_t> left;
@@ -434,12 +412,18 @@ TEST(StretchChains, ASheetPulledTautBetweenPinsComesToRest) {
             right.push_back(static_cast<std::int32_t>(v));
         }
     }
-    for (const StretchSolver stretch_solver : {StretchSolver::edges, StretchSolver::chains}) {
+    // (Single edges at 20 % for comparison; pulled by 1 %, their sheet, stretched and sagging,
+    // still swings at 0.3 m/s.)
+    const std::pair<double, StretchSolver> runs[] = {{0.01, StretchSolver::chains},
+                                                     {0.2, StretchSolver::chains},
+                                                     {0.5, StretchSolver::chains},
+                                                     {0.2, StretchSolver::edges}};
+    for (const auto& [width, stretch_solver] : runs) {
         ClothMaterial material;
         material.stretch_solver = stretch_solver;
         ClothSolver solver(mesh, material, left);
         Motion pull;
-        pull.keyframes = {Keyframe{0.0, {0.0, 0.0, 0.0}, {}}, Keyframe{1.0, {0.2, 0.0, 0.0}, {}}};
+        pull.keyframes = {Keyframe{0.0, {0.0, 0.0, 0.0}, {}}, Keyframe{1.0, {width, 0.0, 0.0}, {}}};
         solver.add_moving_pins(right, pull);
         double fastest = 0.0;
         for (int f = 0; f < 72; ++f) {
@@ -449,7 +433,8 @@ TEST(StretchChains, ASheetPulledTautBetweenPinsComesToRest) {
                 fastest = f >= 48 ? std::max(fastest, norm(velocity)) : 0.0;
             }
         }
-        EXPECT_LT(fastest, 0.05) << (stretch_solver == StretchSolver::chains ? "chains" : "edges");
+        EXPECT_LT(fastest, 0.05) << (stretch_solver == StretchSolver::chains ? "chains" : "edges")
+                                 << ", pulled " << width << " m";
     }
 }
 

@@ -3,9 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <bit>
 #include <tuple>
 
+#include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/group_by_key.hpp"
 
@@ -152,7 +152,8 @@ StretchChains::StretchChains(std::span<const std::array<std::int32_t, 2>> edges,
     : m_padding_vertex(static_cast<std::int32_t>(positions.size())) {
     const std::size_t num_vertices = positions.size();
     std::vector<Chain> chains = follow_chains(edges, positions);
-    // Colour the chains, longest first (ties in the order they were followed).
+    // Colour the chains, longest first (ties in the order they were followed): colour_constraints
+    // visits its constraints in index order, so constraint i is chain by_length[i].
     std::vector<std::int32_t> by_length(chains.size());
     for (std::size_t c = 0; c < chains.size(); ++c) {
         by_length[c] = static_cast<std::int32_t>(c);
@@ -161,48 +162,34 @@ StretchChains::StretchChains(std::span<const std::array<std::int32_t, 2>> edges,
         return chains[static_cast<std::size_t>(a)].edges.size() >
                chains[static_cast<std::size_t>(b)].edges.size();
     });
-    std::vector<std::uint64_t> used(num_vertices, 0);
-    std::vector<std::int32_t> color_of(chains.size());
-    std::int32_t num_colors = 0;
-    for (const std::int32_t c : by_length) {
-        const std::vector<std::int32_t>& chain = chains[static_cast<std::size_t>(c)].vertices;
-        std::uint64_t taken = 0;
-        for (const std::int32_t v : chain) {
-            taken |= used[static_cast<std::size_t>(v)];
-        }
-        if (taken == ~std::uint64_t{0}) {
-            throw InvalidInput(fmt::format(
-                "cloth: stretch chains: the chain from vertex {} meets chains of 64 families, "
-                "expected at most 63 (vertices with fewer edges, or material.stretch_solver "
-                "\"edges\")",
-                chain.front()));
-        }
-        const int color = std::countr_one(taken);
-        for (const std::int32_t v : chain) {
-            used[static_cast<std::size_t>(v)] |= std::uint64_t{1} << color;
-        }
-        color_of[static_cast<std::size_t>(c)] = color;
-        num_colors = std::max(num_colors, color + 1);
+    const auto chain_of = [&](std::int64_t i) -> const Chain& {
+        return chains[static_cast<std::size_t>(by_length[static_cast<std::size_t>(i)])];
+    };
+    ConstraintColoring coloring;
+    try {
+        coloring = color_constraints(
+            static_cast<std::int64_t>(chains.size()), static_cast<std::int64_t>(num_vertices),
+            [&](std::int64_t i) { return std::span<const std::int32_t>(chain_of(i).vertices); });
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(fmt::format(
+            "cloth: stretch chains: a chain meets chains of 64 families, expected at most 63 "
+            "(vertices with fewer edges, or material.stretch_solver \"edges\"): {}",
+            e.what()));
     }
 
     // Families, and their chains four by four as packets.
-    for (std::int32_t color = 0; color < num_colors; ++color) {
-        std::vector<std::int32_t> family;
-        for (const std::int32_t c : by_length) {
-            if (color_of[static_cast<std::size_t>(c)] == color) {
-                family.push_back(c);
-            }
-        }
+    for (std::int32_t color = 0; color < coloring.num_colors(); ++color) {
+        // The colour's chains, longest first (ascending constraint index).
+        const std::span<const std::int32_t> family = coloring.color(color);
         for (std::size_t first = 0; first < family.size(); first += 4) {
-            const auto edge_rows = static_cast<std::int32_t>(
-                chains[static_cast<std::size_t>(family[first])].edges.size());
+            const auto edge_rows = static_cast<std::int32_t>(chain_of(family[first]).edges.size());
             for (std::int32_t row = 0; row <= edge_rows; ++row) {
                 for (std::size_t lane = 0; lane < 4; ++lane) {
                     std::int32_t v = m_padding_vertex;
                     double length = -1.0;
                     std::int32_t edge = -1;
                     if (first + lane < family.size()) {
-                        const Chain& chain = chains[static_cast<std::size_t>(family[first + lane])];
+                        const Chain& chain = chain_of(family[first + lane]);
                         const auto last = static_cast<std::int32_t>(chain.edges.size());
                         v = chain.vertices[static_cast<std::size_t>(std::min(row, last))];
                         if (row < last) {
@@ -219,8 +206,9 @@ StretchChains::StretchChains(std::span<const std::array<std::int32_t, 2>> edges,
             }
             m_edge_rows.push_back(m_edge_rows.back() + edge_rows);
         }
-        for (const std::int32_t c : family) {
-            m_chains.push_back(std::move(chains[static_cast<std::size_t>(c)].vertices));
+        for (const std::int32_t i : family) {  // laid out: its vertices move to m_chains
+            m_chains.push_back(std::move(
+                chains[static_cast<std::size_t>(by_length[static_cast<std::size_t>(i)])].vertices));
         }
         m_family_packets.push_back(num_packets());
     }

@@ -24,12 +24,13 @@
 // paired greedily, most nearly opposite first (at least 120° apart); a chain continues through a
 // vertex along its pair. Chains are followed from their ends, then around cycles (cut where they
 // start), and cut where they would visit a vertex twice; they are coloured greedily, longest
-// first, so that the chains of a colour (a family) share no vertex. Deterministic: every choice
-// is made in index order. Within a family the chains, longest first, are laid out four by four
-// as the kernel's packets (detail::ChainPacket): a shorter chain repeats its last vertex, a
-// missing one uses the padding vertex (index num_vertices: the caller's vertex array has one more
-// record, with inverse mass 0, that no chain uses). Only a family's last packet has missing
-// chains, and families run one after the other, so no two threads write the padding vertex.
+// first (constraint_coloring.hpp), so that the chains of a colour (a family) share no vertex.
+// Deterministic: every choice is made in index order. Within a family the chains, longest first,
+// are laid out four by four as the kernel's packets (detail::ChainPacket): a shorter chain repeats
+// its last vertex, a missing one uses the padding vertex (index num_vertices: the caller's vertex
+// array has one more record, with inverse mass 0, that no chain uses). Only a family's last packet
+// has missing chains, and families run one after the other, so no two threads write the padding
+// vertex.
 #pragma once
 
 #include <array>
@@ -52,9 +53,9 @@ namespace pliant::cloth {
 // (single edges 0.01); but a uniform 0.1 damps the long chains of a hanging sheet too (the drape's
 // grid hanging 1 s at 20 substeps: strain p99 12 % against 0.9 % with 0.01; bench_cloth). Damping
 // where the edges are strained keeps both: with ε = 0.01 and κ = 1 the sheet rests at pulls of
-// 1 % to 50 % (at most 0.03 m/s), and the hanging grid keeps 2.2 % at 20 substeps and 0.26 % at
-// 40 (0.5 % at κ = 0.5, which jittered at 3 m/s from a 30 % pull). Tests:
-// tests/cloth/stretch_chains_test.cpp.
+// 1 % to 50 % (StretchChains.ASheetPulledTautBetweenPinsComesToRest), and the hanging grid keeps
+// 2.2 % at 20 substeps and 0.26 % at 40 (bench_cloth). The other values were scratch builds
+// (docs/performance.md, "stretch chains"; κ = 0.5 jittered at 3 m/s from a 30 % pull).
 inline constexpr double CHAIN_REGULARIZATION = 0.01;
 inline constexpr double CHAIN_STRAIN_REGULARIZATION = 1.0;
 
@@ -64,8 +65,8 @@ public:
     // edges[i] = {a, b} (vertices in [0, #positions), rest.size() = edges.size()) with rest
     // length rest[i] (m); positions: the rest shape, for the pairing's angles. Every edge is in
     // exactly one chain. O(E log E). InvalidInput when a chain's vertices already lie on chains
-    // of 64 families (the colouring's limit; a grid needs 4, jittered grids and icospheres of up
-    // to 163,842 vertices needed at most 13).
+    // of 64 families (color_constraints' limit; a grid needs 4, jittered grids and icospheres of
+    // up to 163,842 vertices needed at most 13).
     StretchChains(std::span<const std::array<std::int32_t, 2>> edges, std::span<const double> rest,
                   std::span<const Vec3d> positions);
 

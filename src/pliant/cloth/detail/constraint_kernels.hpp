@@ -36,9 +36,9 @@
 // (ℓ_k the edge's length). A = J W Jᵀ + diag(ε_k (w_k + w_{k+1}) + α̃) is tridiagonal, symmetric
 // and positive definite (ε > 0), so the Thomas algorithm solves it in one forward and one
 // backward sweep without pivoting. ε_k is a Levenberg-Marquardt damping of the step, larger on
-// strained edges (stretch_chains.hpp has ε, κ and why). An
-// edge with w_k + w_{k+1} = 0, zero length or a length that overflows, and a padding row, take no
-// part (the row is decoupled, Δλ = 0), as the single-edge kernel skips such an edge.
+// strained edges (stretch_chains.hpp has ε, κ and why). An edge with w_k + w_{k+1} = 0, zero
+// length or a length that overflows, and a padding row, take no part (the row is decoupled,
+// Δλ = 0), as the single-edge kernel skips such an edge.
 //
 // Per-element kernels: no allocation, no exceptions; the constraints of one call must not share
 // vertices (a colour), and calls on disjoint ranges of a colour may run in parallel.
