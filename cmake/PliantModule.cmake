@@ -1,14 +1,17 @@
-# pliant_add_module(NAME <name> SOURCES <files...> DEPS <targets...>)
+# pliant_add_module(NAME <name> SOURCES <files...> DEPS <targets...> [PRIVATE_DEPS <targets...>])
 # One static library per module, target pliant_<name>, alias pliant::<name>. Headers live beside
 # the sources under src/pliant/<name>/ and are included as "pliant/<name>/<file>.hpp".
-# DEPS are PUBLIC: the module graph in DESIGN.md is exactly these link lines.
+# DEPS are PUBLIC: the pliant modules this one builds on and the third-party libraries its public
+# headers include; the module graph in docs/architecture.md is exactly the pliant:: entries.
+# PRIVATE_DEPS are used by the sources only, so they do not reach a caller's compile line (a static
+# library still passes them on to the final link).
 function(pliant_add_module)
-  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
   set(target pliant_${ARG_NAME})
   add_library(${target} STATIC ${ARG_SOURCES})
   add_library(pliant::${ARG_NAME} ALIAS ${target})
-  target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR}/src)
-  target_link_libraries(${target} PUBLIC ${ARG_DEPS})
+  target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>)
+  target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_features(${target} PUBLIC cxx_std_20)
   pliant_set_warnings(${target})
 endfunction()

@@ -1,8 +1,7 @@
 // pliant cloth SCENE.json --out DIR [--frames N] [--no-preview] [--preview-size W H]
 //              [--max-memory MIB] [--json]
 //
-// Simulates a cloth scene (io/cloth_scene.hpp; format in docs/formats.md) with cloth::ClothSolver
-// and writes:
+// Simulates a cloth scene (format in docs/formats.md) with pipeline::run_cloth_scene and writes:
 //   DIR/frames/frame_0000.obj … frame_NNNN.obj (or .ply with "output": {"format": "ply"}): the
 //     initial state, then one file per simulated frame, each replaced atomically;
 //   DIR/preview.mp4: a shaded preview through ffmpeg (DIR/preview/frame_NNNN.png when ffmpeg is
@@ -29,15 +28,17 @@
 #include <string>
 #include <vector>
 
-#include "cloth_run.hpp"
 #include "commands.hpp"
+#include "interrupt.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/atomic_file.hpp"
-#include "pliant/io/cloth_scene.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "pliant/pipeline/cloth_run.hpp"
+#include "pliant/pipeline/cloth_scene_file.hpp"
+#include "progress_bar.hpp"
 #include "validators.hpp"
 
 namespace pliant::cli {
@@ -53,18 +54,19 @@ struct ClothCommandOptions {
 };
 
 void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) {
-    const cloth::ClothScene scene = io::read_cloth_scene(options.scene);
+    const cloth::ClothScene scene = pipeline::read_cloth_scene(options.scene);
     const int frames = options.frames >= 0 ? options.frames : scene.frames;
     const std::filesystem::path out(options.out);
-    const bool progress = ::isatty(::fileno(stderr)) != 0 && !global.json;
-    ClothRunOptions run;
+    pipeline::ClothRunOptions run;
     run.frames = frames;
-    run.progress = progress;
+    run.progress = frame_progress(stderr_is_terminal() && !global.json);
+    run.keep_going = InterruptGuard::keep_going;
     run.preview = !options.no_preview;
     run.preview_width = options.preview_size[0];
     run.preview_height = options.preview_size[1];
     run.max_memory_bytes = static_cast<std::uint64_t>(options.max_memory_mib * 1024.0 * 1024.0);
-    const nlohmann::ordered_json stats = run_cloth_scene(scene, options.scene, out, run);
+    const InterruptGuard interrupt_guard;
+    const nlohmann::ordered_json stats = pipeline::run_cloth_scene(scene, options.scene, out, run);
     if (global.json) {
         std::fputs((stats.dump(2) + "\n").c_str(), stdout);
     } else {

@@ -25,7 +25,6 @@
 #include <span>
 #include <string>
 
-#include "broad_phase_report.hpp"
 #include "commands.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
@@ -33,6 +32,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "pliant/pipeline/broad_phase_report.hpp"
 #include "validators.hpp"
 
 namespace pliant::cli {
@@ -77,7 +77,7 @@ struct IntersectionCounts {
     double ms = 0.0;
 };
 
-void print_human(const CollideOptions& options, const BroadPhaseReport& r,
+void print_human(const CollideOptions& options, const pipeline::BroadPhaseReport& r,
                  const IntersectionCounts& intersections) {
     const bool swept = !options.mesh_t1.empty();
     std::string text;
@@ -88,10 +88,12 @@ void print_human(const CollideOptions& options, const BroadPhaseReport& r,
         text += fmt::format("collide {} (static), inflation {}\n", options.mesh, options.inflate);
     }
     text += fmt::format("  {:<16}{:>12} vertices, {} edges, {} triangles\n", "mesh",
-                        thousands(r.vertices), thousands(r.edges), thousands(r.triangles));
-    text += fmt::format("  {:<16}{:>12}\n", "triangle pairs", thousands(r.triangle_pairs));
-    text += fmt::format("  {:<16}{:>12}\n", "VF pairs", thousands(r.vf_pairs));
-    text += fmt::format("  {:<16}{:>12}\n", "EE pairs", thousands(r.ee_pairs));
+                        pipeline::thousands(r.vertices), pipeline::thousands(r.edges),
+                        pipeline::thousands(r.triangles));
+    text +=
+        fmt::format("  {:<16}{:>12}\n", "triangle pairs", pipeline::thousands(r.triangle_pairs));
+    text += fmt::format("  {:<16}{:>12}\n", "VF pairs", pipeline::thousands(r.vf_pairs));
+    text += fmt::format("  {:<16}{:>12}\n", "EE pairs", pipeline::thousands(r.ee_pairs));
     const std::string runs = fmt::format("median of {}", options.repeat);
     text += fmt::format("  {:<16}{:>12.3f} ms   {}\n", "build", r.build_ms, runs);
     text += fmt::format("  {:<16}{:>12.3f} ms   {}\n", "refit", r.refit_ms, runs);
@@ -100,8 +102,8 @@ void print_human(const CollideOptions& options, const BroadPhaseReport& r,
     text += fmt::format("  {:<16}{:>12.3f} ms   {}, refit-based update end to end\n", "total",
                         r.total_ms, runs);
     if (r.has_narrow) {
-        text += fmt::format("  {:<16}{:>12}\n", "VF hits (CCD)", thousands(r.vf_hits));
-        text += fmt::format("  {:<16}{:>12}\n", "EE hits (CCD)", thousands(r.ee_hits));
+        text += fmt::format("  {:<16}{:>12}\n", "VF hits (CCD)", pipeline::thousands(r.vf_hits));
+        text += fmt::format("  {:<16}{:>12}\n", "EE hits (CCD)", pipeline::thousands(r.ee_hits));
         text += fmt::format("  {:<16}{:>12.6g}\n", "earliest toi", r.earliest_toi);
         text += fmt::format("  {:<16}{:>12.3f} ms   {}\n", "narrow (CCD)", r.narrow_ms, runs);
     }
@@ -128,9 +130,9 @@ void run_collide(const CollideOptions& options, const GlobalOptions& global) {
     const std::span<const Vec3d> positions_t1 = options.mesh_t1.empty()
                                                     ? std::span<const Vec3d>(mesh.positions)
                                                     : std::span<const Vec3d>(mesh_t1.positions);
-    const BroadPhaseReport result = measure_broad_phase(mesh, positions_t1, options.inflate,
-                                                        options.repeat, !options.mesh_t1.empty(),
-                                                        /*warm_up=*/false, options.ccd);
+    const pipeline::BroadPhaseReport result = pipeline::measure_broad_phase(
+        mesh, positions_t1, options.inflate, options.repeat, !options.mesh_t1.empty(),
+        /*warm_up=*/false, options.ccd);
     IntersectionCounts intersections;
     if (options.intersections) {
         Stopwatch watch;
@@ -144,7 +146,7 @@ void run_collide(const CollideOptions& options, const GlobalOptions& global) {
         intersections.ms = watch.elapsed_ms();
     }
     if (global.json) {
-        nlohmann::ordered_json json = to_json(result);
+        nlohmann::ordered_json json = pipeline::to_json(result);
         if (options.intersections) {
             json["intersecting_pairs"] = intersections.t0;
             if (intersections.t1 >= 0) {

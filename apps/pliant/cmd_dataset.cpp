@@ -23,10 +23,11 @@
 #include <string>
 
 #include "commands.hpp"
-#include "nerf_run.hpp"
+#include "option_values.hpp"
+#include "pliant/io/transfer_function_json.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/pipeline/nerf_run.hpp"
 #include "validators.hpp"
-#include "volume_view.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -48,16 +49,17 @@ void run_dataset(const DatasetCommandOptions& options, const GlobalOptions& glob
     const bool is_rgba = volume::channels(vol.type()) == 4;
     volume::TransferFunction tf;
     if (!is_rgba) {
-        tf = load_transfer_function(options.tf, vol);
+        tf = io::load_transfer_function(options.tf, vol);
     }
-    DatasetRunOptions run;
+    pipeline::DatasetRunOptions run;
     run.views = options.views;
     run.size = parse_size(options.size);
     run.fov = options.fov;
     run.test_every = options.test_every;
     run.background = options.background;
     run.step = options.step;
-    const nlohmann::ordered_json j = render_dataset(vol, is_rgba ? nullptr : &tf, run, options.out);
+    const nlohmann::ordered_json j =
+        pipeline::render_dataset(vol, is_rgba ? nullptr : &tf, run, options.out);
     if (global.json) {
         std::fputs((j.dump(2) + "\n").c_str(), stdout);
     } else {

@@ -42,12 +42,14 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "deform_run.hpp"
+#include "option_values.hpp"
+#include "pliant/io/transfer_function_json.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/pbd/drivers.hpp"
+#include "pliant/pipeline/deform_run.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "progress_bar.hpp"
 #include "validators.hpp"
-#include "volume_view.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -140,7 +142,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
         throw CLI::ValidationError("--render",
                                    "expected an .mp4 file name, got '" + options.render + "'");
     }
-    DeformRunOptions run;
+    pipeline::DeformRunOptions run;
     run.size = parse_size(options.size);
 
     io::ReadVolumeOptions read;
@@ -148,7 +150,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     const volume::Volume source = io::read_volume(options.volume, read);
     std::optional<volume::TransferFunction> tf;
     if (volume::channels(source.type()) != 4) {
-        tf = load_transfer_function(options.tf, source);
+        tf = io::load_transfer_function(options.tf, source);
         tf->validate();
     }
 
@@ -166,8 +168,8 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.video = options.render;
     run.camera = options.camera;
     run.step = options.step;
-    run.progress = ::isatty(::fileno(stderr)) != 0 && !global.json;
-    const nlohmann::ordered_json result = run_deform(source, tf ? &*tf : nullptr, run);
+    run.progress = frame_progress(stderr_is_terminal() && !global.json);
+    const nlohmann::ordered_json result = pipeline::run_deform(source, tf ? &*tf : nullptr, run);
 
     if (global.json) {
         std::fputs((result.dump(2) + "\n").c_str(), stdout);

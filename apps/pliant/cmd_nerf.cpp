@@ -25,49 +25,24 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <signal.h>
 #include <unistd.h>
 
 #include <array>
-#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
-#include "nerf_run.hpp"
+#include "interrupt.hpp"
 #include "pliant/core/error.hpp"
-#include "pliant/io/nerf_dataset.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/pipeline/nerf_dataset_file.hpp"
+#include "pliant/pipeline/nerf_run.hpp"
+#include "progress_bar.hpp"
 #include "validators.hpp"
 
 namespace pliant::cli {
 namespace {
-
-// Set by SIGINT while training runs: training stops after the iteration in progress.
-volatile std::sig_atomic_t g_interrupted = 0;
-
-extern "C" void on_nerf_interrupt(int /*signal*/) {
-    g_interrupted = 1;
-}
-
-// Installs on_nerf_interrupt for SIGINT for its lifetime and restores the previous handler.
-class InterruptGuard {
-public:
-    InterruptGuard() {
-        g_interrupted = 0;
-        struct sigaction action {};
-        action.sa_handler = on_nerf_interrupt;
-        sigemptyset(&action.sa_mask);
-        ::sigaction(SIGINT, &action, &m_previous);
-    }
-    ~InterruptGuard() { ::sigaction(SIGINT, &m_previous, nullptr); }
-    InterruptGuard(const InterruptGuard&) = delete;
-    InterruptGuard& operator=(const InterruptGuard&) = delete;
-
-private:
-    struct sigaction m_previous {};
-};
 
 struct TrainCommandOptions {
     std::string transforms;
@@ -97,12 +72,12 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     const volume::VoxelType type =
         options.type == "rgba32f" ? volume::VoxelType::rgba32f : volume::VoxelType::rgba8;
     io::check_volume_writable(options.out, type);  // fail before a long run
-    io::ReadNerfDatasetOptions ro;
+    pipeline::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
     ro.max_bytes = to_bytes(options.max_memory_mib);
-    const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
+    const nerf::Dataset dataset = pipeline::read_nerf_dataset(options.transforms, ro);
 
-    TrainRunOptions run;
+    pipeline::TrainRunOptions run;
     nerf::TrainOptions& to = run.train;
     to.max_bytes = to_bytes(options.max_memory_mib);
     run.exported.max_bytes = to.max_bytes;
@@ -129,12 +104,13 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
                                : volume::AlphaNormalization::none;
         run.clean = co;
     }
-    run.progress = ::isatty(STDERR_FILENO) != 0;
+    run.on_progress = train_progress(stderr_is_terminal());
 
-    TrainRunResult result;
+    pipeline::TrainRunResult result;
     {
         const InterruptGuard guard;
-        result = train_volume(dataset, run, [] { return g_interrupted == 0; });
+        result = pipeline::train_volume(dataset, run, [] { return InterruptGuard::keep_going(); });
+        end_progress();
     }
     io::write_volume(options.out, result.volume);
 
@@ -153,7 +129,7 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
             r["grid_dims"][0].get<int>(), r["grid_dims"][1].get<int>(),
             r["grid_dims"][2].get<int>(), r["train_psnr"].get<double>(),
             static_cast<long long>(vd[0]), static_cast<long long>(vd[1]),
-            static_cast<long long>(vd[2]), peak_rss_bytes() / 1048576.0);
+            static_cast<long long>(vd[2]), pipeline::peak_rss_bytes() / 1048576.0);
     }
     if (result.stopped) {
         throw Interrupted(
@@ -172,10 +148,10 @@ struct EvalCommandOptions {
 };
 
 void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
-    io::ReadNerfDatasetOptions ro;
+    pipeline::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
     ro.max_bytes = to_bytes(options.max_memory_mib);
-    const nerf::Dataset dataset = io::read_nerf_dataset(options.transforms, ro);
+    const nerf::Dataset dataset = pipeline::read_nerf_dataset(options.transforms, ro);
     io::ReadVolumeOptions rv;
     rv.max_bytes = ro.max_bytes;
     const volume::Volume vol = io::read_volume(options.volume, rv);
@@ -184,7 +160,7 @@ void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
                                        options.volume, volume::name(vol.type())));
     }
     const nlohmann::ordered_json j =
-        evaluate_volume(dataset, vol, options.background, options.images);
+        pipeline::evaluate_volume(dataset, vol, options.background, options.images);
     if (global.json) {
         std::fputs((j.dump(2) + "\n").c_str(), stdout);
     } else {

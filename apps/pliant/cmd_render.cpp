@@ -35,15 +35,16 @@
 #include <string>
 
 #include "commands.hpp"
+#include "option_values.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/io/png.hpp"
+#include "pliant/io/transfer_function_json.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "validators.hpp"
-#include "volume_view.hpp"
 
 namespace pliant::cli {
 namespace {
@@ -85,7 +86,7 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
     volume::TransferFunction tf;
     const bool is_rgba = volume::channels(vol.type()) == 4;
     if (!is_rgba) {
-        tf = load_transfer_function(options.tf, vol);
+        tf = io::load_transfer_function(options.tf, vol);
     }
     render::RayCastOptions ro;
     ro.step = options.step;
@@ -105,7 +106,8 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
             return render::view_camera(box, render::parse_view_axis(options.view.c_str()), size[0],
                                        size[1]);
         }
-        return orbit_camera(box, azimuth, options.camera[1], options.camera[2], size[0], size[1]);
+        return render::orbit_camera(box, azimuth, options.camera[1], options.camera[2], size[0],
+                                    size[1]);
     };
     if (!options.view.empty() && !has_size) {
         // Longer side 512 pixels, the other from the box's aspect as seen along the axis.

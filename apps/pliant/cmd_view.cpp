@@ -35,11 +35,11 @@
 #include <string>
 
 #include "commands.hpp"
+#include "option_values.hpp"
 #include "pliant/core/error.hpp"
-#include "pliant/io/cloth_scene.hpp"
+#include "pliant/pipeline/cloth_scene_file.hpp"
 #include "validators.hpp"
 #include "view_options.hpp"
-#include "volume_view.hpp"
 #ifdef PLIANT_HAS_VIEWER
 #include "viewer.hpp"
 #endif
@@ -143,7 +143,7 @@ void print_summary(const nlohmann::ordered_json& result, const GlobalOptions& gl
 void run_view_cloth(const ViewCommandOptions& o, viewer::ClothViewOptions options,
                     const GlobalOptions& global) {
     finish_view_options(o, CLOTH_VIEW_DEFAULTS, options.run);
-    const cloth::ClothScene scene = io::read_cloth_scene(o.input);
+    const cloth::ClothScene scene = pipeline::read_cloth_scene(o.input);
 #ifdef PLIANT_HAS_VIEWER
     print_summary(viewer::run_cloth_view(scene, o.input, options), global);
 #else

@@ -16,12 +16,6 @@ struct GlobalOptions {
     bool json = false;  // machine-readable result on stdout
 };
 
-// Thrown when the user interrupts a long run (SIGINT) after it stopped cleanly: main prints
-// `pliant: interrupted: <what>` (where the outputs are) and exits with 130.
-struct Interrupted : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
-
 void register_collide(CLI::App& app, const GlobalOptions& global);
 void register_ccd(CLI::App& app, const GlobalOptions& global);
 void register_bench(CLI::App& app, const GlobalOptions& global);

@@ -9,6 +9,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/version.hpp"
+#include "progress_bar.hpp"
 
 int main(int argc, char** argv) {
     using namespace pliant;
@@ -45,18 +46,23 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
+        cli::end_progress();
         std::fprintf(stderr, "pliant: error: %s\nRun with --help for usage.\n", e.what());
         return 2;
     } catch (const Error& e) {
+        cli::end_progress();
         std::fprintf(stderr, "pliant: error: %s\n", e.what());
         return 1;
-    } catch (const cli::Interrupted& e) {
+    } catch (const Interrupted& e) {
+        cli::end_progress();
         std::fprintf(stderr, "pliant: interrupted: %s\n", e.what());
         return 130;
     } catch (const std::bad_alloc&) {
+        cli::end_progress();
         std::fprintf(stderr, "pliant: error: out of memory\n");
         return 1;
     } catch (const std::exception& e) {
+        cli::end_progress();
         std::fprintf(stderr, "pliant: error: internal: %s\n", e.what());
         return 1;
     }

@@ -14,20 +14,21 @@ namespace pliant::viewer {
 
 ClothSession::ClothSession(cloth::ClothScene scene, std::string scene_name,
                            const ClothSessionOptions& options)
-    : m_scene(std::move(scene)), m_scene_name(std::move(scene_name)), m_options(options) {
+    : m_options(options) {
     if (options.substeps_per_frame < 1 || options.check_every < 1) {
         throw InvalidInput(fmt::format(
             "viewer: substeps per frame ({}) and frames between intersection checks ({}) must "
             "be >= 1",
             options.substeps_per_frame, options.check_every));
     }
-    m_setup = cli::load_cloth_setup(m_scene, m_scene_name);
-    m_substep = 1.0 / (m_scene.frames_per_second * m_scene.substeps);
-    reset();
+    m_sim = std::make_unique<pipeline::ClothSimulation>(
+        pipeline::ClothSimulation::from_scene(std::move(scene), std::move(scene_name)));
+    m_substep = 1.0 / (m_sim->scene().frames_per_second * m_sim->scene().substeps);
+    start_from_reset();
     // Framed as `pliant cloth`'s preview: the cloth at its start (untangled) and the obstacles.
-    m_framing_box = cli::framing_box(m_positions, m_setup.shapes);
+    m_framing_box = pipeline::framing_box(m_positions, setup().shapes);
     m_scene_box = m_framing_box;
-    for (const cli::ObstacleShape& shape : m_setup.shapes) {
+    for (const pipeline::ObstacleShape& shape : setup().shapes) {
         for (const Vec3d& p : shape.rest.positions) {
             m_scene_box.extend(p);
         }
@@ -38,16 +39,11 @@ void ClothSession::reset() {
     if (m_task.is_started()) {
         m_task.wait();  // the frame in flight is dropped
     }
-    m_solver = cli::make_solver(m_scene, m_setup);
-    if (!m_start_found) {
-        m_start = cli::prepare_start(m_scene, m_scene_name, *m_solver);
-        m_start_found = true;
-        if (m_start.untangled) {
-            m_untangled_start.assign(m_solver->positions().begin(), m_solver->positions().end());
-        }
-    } else if (!m_untangled_start.empty()) {
-        m_solver->set_positions(m_untangled_start);
-    }
+    m_sim->reset();
+    start_from_reset();
+}
+
+void ClothSession::start_from_reset() {
     m_solver_frame = 0;
     m_solver_stats = {};
     m_grab_vertex = -1;
@@ -71,9 +67,9 @@ bool ClothSession::start_advance() {
     }
     if (m_grab_changed) {
         if (m_grab_vertex >= 0) {
-            m_solver->grab(m_grab_vertex, m_grab_target);
+            m_sim->solver().grab(m_grab_vertex, m_grab_target);
         } else {
-            m_solver->release_grab();
+            m_sim->solver().release_grab();
         }
         m_grab_changed = false;
     }
@@ -92,7 +88,7 @@ bool ClothSession::finish_advance(bool block) {
 }
 
 void ClothSession::run_frame(int substeps) {
-    m_solver_stats.step = m_solver->step(substeps * m_substep, substeps);
+    m_solver_stats.step = m_sim->solver().step(substeps * m_substep, substeps);
     ++m_solver_frame;
     if (m_solver_frame == 1 || m_solver_frame % m_options.check_every == 0) {
         count_intersections();
@@ -101,15 +97,15 @@ void ClothSession::run_frame(int substeps) {
 
 void ClothSession::count_intersections() {
     const Stopwatch watch;
-    m_solver_stats.intersecting_pairs =
-        collision::count_intersecting_pairs(m_solver->positions(), m_solver->triangles());
+    m_solver_stats.intersecting_pairs = collision::count_intersecting_pairs(
+        m_sim->solver().positions(), m_sim->solver().triangles());
     m_solver_stats.checked_frame = m_solver_frame;
     m_solver_stats.check_ms = watch.elapsed_ms();
 }
 
 void ClothSession::publish() {
-    m_positions.assign(m_solver->positions().begin(), m_solver->positions().end());
-    m_time = m_solver->time();
+    m_positions.assign(m_sim->solver().positions().begin(), m_sim->solver().positions().end());
+    m_time = m_sim->solver().time();
     m_frame = m_solver_frame;
     m_stats = m_solver_stats;
 }

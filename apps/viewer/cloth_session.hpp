@@ -1,5 +1,5 @@
-// The simulation behind `pliant view cloth`, without any drawing: a cloth scene built exactly as
-// `pliant cloth` builds it (cloth_setup.hpp), advanced a few substeps per displayed frame, with
+// The simulation behind `pliant view cloth`, without any drawing: the pipeline::ClothSimulation
+// that `pliant cloth` runs, advanced a few substeps per displayed frame, with
 // the exact intersection counter run every few frames and mouse grabbing of cloth vertices.
 //
 // Time: the scene's substep h = 1 / (fps · substeps) is kept; a frame advances
@@ -23,11 +23,12 @@
 #include <string>
 #include <vector>
 
-#include "cloth_setup.hpp"
 #include "pliant/cloth/scene.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/core/parallel_task.hpp"
+#include "pliant/pipeline/cloth_setup.hpp"
+#include "pliant/pipeline/cloth_simulation.hpp"
 #include "pliant/render/camera.hpp"
 
 namespace pliant::viewer {
@@ -63,10 +64,10 @@ public:
     // state was published. Rethrows what the step threw.
     bool finish_advance(bool block);
     bool is_advancing() const { return m_task.is_started(); }
-    // Back to the scene's start, as `pliant cloth` starts (cli::prepare_start: cloth that
+    // Back to the scene's start, as `pliant cloth` starts (pipeline::prepare_start: cloth that
     // intersects itself is untangled when the scene says so); waits for a frame in flight; the
-    // grab is released. The first call (the constructor's) finds the start; later ones reuse it
-    // (ClothSolver::set_positions), so a large tangle is untangled once, not at every reset.
+    // grab is released. The start is found once, when the session is built; resets reuse it
+    // (ClothSimulation::reset), so a large tangle is untangled once, not at every reset.
     void reset();
     // Clamped to [1, 1000]; used from the next frame on.
     void set_substeps_per_frame(int substeps);
@@ -81,13 +82,13 @@ public:
     void end_grab();
     std::int32_t grabbed_vertex() const { return m_grab_vertex; }
 
-    const cloth::ClothScene& scene() const { return m_scene; }
-    const cli::ClothSetup& setup() const { return m_setup; }
-    // What the last reset() found and did at the start (intersections, untangling).
-    const cli::StartState& start() const { return m_start; }
+    const cloth::ClothScene& scene() const { return m_sim->scene(); }
+    const pipeline::ClothSetup& setup() const { return m_sim->setup(); }
+    // What the start needed (intersections, untangling).
+    const pipeline::StartState& start() const { return m_sim->start(); }
     // The published state.
     std::span<const Vec3d> positions() const { return m_positions; }
-    std::span<const geometry::Triangle> triangles() const { return m_setup.mesh.triangles; }
+    std::span<const geometry::Triangle> triangles() const { return setup().mesh.triangles; }
     double time() const { return m_time; }          // simulated seconds
     std::int64_t frame() const { return m_frame; }  // frames advanced since the start
     const ClothFrameStats& stats() const { return m_stats; }
@@ -100,17 +101,12 @@ public:
 private:
     // The step itself (in the background): solver step, frame count, exact count.
     void run_frame(int substeps);
+    void start_from_reset();     // frame 0 of the simulation's start, published
     void count_intersections();  // of the solver's state, into m_solver_stats
     void publish();
 
-    cloth::ClothScene m_scene;
-    std::string m_scene_name;
     ClothSessionOptions m_options;
-    cli::ClothSetup m_setup;
-    std::unique_ptr<cloth::ClothSolver> m_solver;
-    cli::StartState m_start;
-    bool m_start_found = false;            // m_start holds the first reset's findings
-    std::vector<Vec3d> m_untangled_start;  // the positions untangling found (empty: none)
+    std::unique_ptr<pipeline::ClothSimulation> m_sim;
     BackgroundTask m_task;
     double m_substep = 0.0;
     AABBd m_framing_box, m_scene_box;

@@ -13,7 +13,6 @@
 #include <optional>
 #include <vector>
 
-#include "cloth_look.hpp"
 #include "cloth_panel.hpp"
 #include "cloth_session.hpp"
 #include "frame_clock.hpp"
@@ -22,6 +21,7 @@
 #include "mouse.hpp"
 #include "orbit_controller.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/pipeline/cloth_look.hpp"
 #include "screenshot.hpp"
 #include "view_summary.hpp"
 #include "viewer.hpp"
@@ -39,7 +39,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     MeshBuffers cloth_buffers;
     std::vector<MeshBuffers> obstacle_buffers(session.setup().shapes.size());
     for (std::size_t k = 0; k < obstacle_buffers.size(); ++k) {
-        const cli::ObstacleShape& shape = session.setup().shapes[k];
+        const pipeline::ObstacleShape& shape = session.setup().shapes[k];
         obstacle_buffers[k].upload(shape.rest.positions, shape.rest.triangles, shape.smooth);
     }
     int width = 0, height = 0;
@@ -49,7 +49,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     const AABBd& scene_box = session.scene_box();
     const Vec3d scene_centre = scene_box.center();
     const double scene_radius = 0.5 * norm(scene_box.extent());
-    const render::RasterOptions look = cli::cloth_raster_options();
+    const render::RasterOptions look = pipeline::cloth_raster_options();
 
     ClothViewState state;
     state.paused = run.paused;
@@ -145,19 +145,19 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
         const Stopwatch draw_watch;
         drawer.begin(camera, depth_range(camera, scene_centre, scene_radius), look);
         for (std::size_t k = 0; k < obstacle_buffers.size(); ++k) {
-            const cli::ObstacleShape& shape = session.setup().shapes[k];
+            const pipeline::ObstacleShape& shape = session.setup().shapes[k];
             Matrix4 model = identity_matrix();
             if (!shape.motion.is_static()) {
                 const cloth::Pose pose = shape.motion.pose(session.time());
                 model = rigid_matrix(pose.rotation.row, pose.pivot, pose.translate);
             }
-            drawer.draw(obstacle_buffers[k], cli::OBSTACLE_COLOR, model);
+            drawer.draw(obstacle_buffers[k], pipeline::OBSTACLE_COLOR, model);
         }
         if (cloth_changed) {  // new normals and upload only for a new state
             cloth_buffers.upload(session.positions(), session.triangles(), true);
             cloth_changed = false;
         }
-        drawer.draw(cloth_buffers, cli::CLOTH_COLOR, identity_matrix());
+        drawer.draw(cloth_buffers, pipeline::CLOTH_COLOR, identity_matrix());
         state.draw_ms = draw_watch.elapsed_ms();
         draw_ms.add(state.draw_ms);
         const bool last = run.frames > 0 && frame + 1 == run.frames;
@@ -181,7 +181,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     result["triangles"] = session.triangles().size();
     result["vertices"] = session.positions().size();
     result["initial_intersecting_pairs"] = session.start().initial_intersections;
-    result["untangle"] = cli::untangle_report(session.start());
+    result["untangle"] = pipeline::untangle_report(session.start());
     result["substeps_per_frame"] = session.substeps_per_frame();
     result["simulated_frames"] = session.frame();
     result["simulated_seconds"] = session.time();

@@ -7,7 +7,7 @@
 #include <numbers>
 
 #include "pliant/core/error.hpp"
-#include "volume_view.hpp"
+#include "pliant/render/camera.hpp"
 
 namespace pliant::viewer {
 
@@ -65,7 +65,7 @@ void OrbitController::reset() {
 }
 
 render::Camera OrbitController::camera(int width, int height) const {
-    return cli::orbit_camera_at(m_target, m_azimuth, m_elevation, m_distance, width, height);
+    return render::orbit_camera_at(m_target, m_azimuth, m_elevation, m_distance, width, height);
 }
 
 }  // namespace pliant::viewer

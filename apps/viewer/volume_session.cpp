@@ -9,8 +9,8 @@
 #include "picking.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/io/transfer_function_json.hpp"
 #include "pliant/volume/clean.hpp"
-#include "volume_view.hpp"
 
 namespace pliant::viewer {
 namespace {
@@ -82,7 +82,7 @@ VolumeSession::VolumeSession(volume::Volume source, const VolumeSessionOptions& 
         }
     } else {
         m_source = std::move(source);
-        m_base_tf = cli::load_transfer_function(options.tf, m_source);
+        m_base_tf = io::load_transfer_function(options.tf, m_source);
         m_base_tf.validate();
         update_render_tf();
     }
@@ -109,7 +109,7 @@ void VolumeSession::build_deformable() {
     m_drag_vertex = -1;
     m_drag_changed = false;
     m_visibility_tf = m_base_tf;
-    m_deformable = std::make_unique<cli::DeformableVolume>(
+    m_deformable = std::make_unique<pipeline::DeformableVolume>(
         m_source, m_is_rgba ? nullptr : &m_visibility_tf, m_options.grid, std::filesystem::path(),
         m_options.body);
     m_targets[0] = m_deformable->target_like();
@@ -181,7 +181,7 @@ void VolumeSession::set_transfer_function(const std::string& name_or_file) {
         m_options.tf = name_or_file;  // RGBA volumes have their own colours: nothing to do
         return;
     }
-    volume::TransferFunction tf = cli::load_transfer_function(name_or_file, m_source);
+    volume::TransferFunction tf = io::load_transfer_function(name_or_file, m_source);
     tf.validate();
     m_base_tf = std::move(tf);
     m_options.tf = name_or_file;

@@ -1,7 +1,7 @@
 // The state behind `pliant view volume`, without any drawing: a volume shown through the
 // library's ray caster (render::RayCaster) with a transfer function, an opacity scale, the
 // paper's cleaning threshold and a clipping plane, and with --deform the deformable-volume
-// pipeline (cli::DeformableVolume: tet grid, XPBD soft body, resampling) under a driver and
+// pipeline (pipeline::DeformableVolume: tet grid, XPBD soft body, resampling) under a driver and
 // mouse drag.
 //
 // Controls and what they change:
@@ -34,11 +34,11 @@
 #include <string>
 #include <vector>
 
-#include "deformable_volume.hpp"
 #include "pliant/core/parallel_task.hpp"
 #include "pliant/pbd/drivers.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/image.hpp"
 #include "pliant/render/raycast.hpp"
@@ -159,7 +159,7 @@ private:
     volume::TransferFunction m_base_tf;        // as chosen (scalar volumes)
     volume::TransferFunction m_visibility_tf;  // the tet grid's (scalar volumes with --deform)
     volume::TransferFunction m_render_tf;      // threshold and opacity scale applied
-    std::unique_ptr<cli::DeformableVolume> m_deformable;
+    std::unique_ptr<pipeline::DeformableVolume> m_deformable;
     // Resampled volumes (--deform): m_targets[m_front] is shown, the other one is filled by the
     // frame in flight.
     std::array<volume::Volume, 2> m_targets;

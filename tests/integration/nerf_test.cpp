@@ -11,8 +11,8 @@
 #include <string>
 #include <thread>
 
-#include "pliant/io/nerf_dataset.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/pipeline/nerf_dataset_file.hpp"
 #include "pliant/volume/generate.hpp"
 #include "run_cli.hpp"
 
@@ -36,8 +36,8 @@ TEST(NerfCli, DatasetTrainEvalRoundTrip) {
     const auto ds = make_dataset(scratch);
     EXPECT_TRUE(std::filesystem::exists(ds / "train/r_1.png"));
     EXPECT_TRUE(std::filesystem::exists(ds / "test/r_0.png"));
-    const nerf::Dataset train = io::read_nerf_dataset(ds / "transforms_train.json");
-    const nerf::Dataset test = io::read_nerf_dataset(ds / "transforms_test.json");
+    const nerf::Dataset train = pipeline::read_nerf_dataset(ds / "transforms_train.json");
+    const nerf::Dataset test = pipeline::read_nerf_dataset(ds / "transforms_test.json");
     EXPECT_EQ(train.views.size(), 24u);
     EXPECT_EQ(test.views.size(), 6u);
     ASSERT_TRUE(train.box.has_value());

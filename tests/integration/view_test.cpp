@@ -17,13 +17,13 @@
 #include <string>
 #include <vector>
 
-#include "cloth_look.hpp"
-#include "cloth_setup.hpp"
-#include "pliant/io/cloth_scene.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/nerf/metrics.hpp"
+#include "pliant/pipeline/cloth_look.hpp"
+#include "pliant/pipeline/cloth_scene_file.hpp"
+#include "pliant/pipeline/cloth_setup.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/mesh_rasterizer.hpp"
 #include "pliant/volume/generate.hpp"
@@ -183,14 +183,14 @@ TEST(ViewCli, ClothScreenshotMatchesTheMeshRasterizer) {
     // The offline image: frame 3 as written, the scene's obstacles as the preview draws them.
     const geometry::TriangleMeshD frame =
         io::read_mesh(scratch / "run" / "frames" / "frame_0003.obj");
-    const cloth::ClothScene parsed = io::read_cloth_scene(scene);
-    const cli::ClothSetup setup = cli::load_cloth_setup(parsed, "grid");
+    const cloth::ClothScene parsed = pipeline::read_cloth_scene(scene);
+    const pipeline::ClothSetup setup = pipeline::load_cloth_setup(parsed, "grid");
     std::vector<render::RenderMesh> meshes;
-    for (const cli::ObstacleShape& shape : setup.shapes) {
+    for (const pipeline::ObstacleShape& shape : setup.shapes) {
         meshes.push_back(
-            {shape.rest.positions, shape.rest.triangles, cli::OBSTACLE_COLOR, shape.smooth});
+            {shape.rest.positions, shape.rest.triangles, pipeline::OBSTACLE_COLOR, shape.smooth});
     }
-    meshes.push_back({frame.positions, frame.triangles, cli::CLOTH_COLOR, true});
+    meshes.push_back({frame.positions, frame.triangles, pipeline::CLOTH_COLOR, true});
 
     // Automatic multisampling (none on Mesa's software renderer), and 4 samples.
     for (const std::string msaa : {"", " --msaa 4"}) {
@@ -216,7 +216,7 @@ TEST(ViewCli, ClothScreenshotMatchesTheMeshRasterizer) {
         ASSERT_EQ(viewer.width, 480);
         ASSERT_EQ(viewer.height, 360);
         const render::Image offline = render::render_meshes(camera_from_json(j["camera"]), meshes,
-                                                            cli::cloth_raster_options());
+                                                            pipeline::cloth_raster_options());
         const double db = psnr(viewer, offline);
         std::printf("cloth screenshot%s vs mesh rasterizer: %.2f dB\n", msaa.c_str(), db);
         EXPECT_GE(db, 25.0);

@@ -33,8 +33,8 @@ bool same_positions(std::span<const Vec3d> a, std::span<const Vec3d> b) {
 TEST(ClothSession, WindowFramesLandOnTheScenesFrames) {
     const cloth::ClothScene scene = small_scene();
     ClothSession session(scene, "small", {.substeps_per_frame = 4, .check_every = 10});
-    const cli::ClothSetup setup = cli::load_cloth_setup(scene, "small");
-    const std::unique_ptr<cloth::ClothSolver> reference = cli::make_solver(scene, setup);
+    const pipeline::ClothSetup setup = pipeline::load_cloth_setup(scene, "small");
+    const std::unique_ptr<cloth::ClothSolver> reference = pipeline::make_solver(scene, setup);
     for (int scene_frame = 1; scene_frame <= 6; ++scene_frame) {
         for (int k = 0; k < 5; ++k) {
             session.advance();
@@ -69,9 +69,9 @@ TEST(ClothSession, StartsUntangledAsTheCommandDoes) {
     ASSERT_TRUE(session.start().untangled.has_value());
     EXPECT_EQ(session.start().untangled->final_pairs, 0);
     EXPECT_EQ(session.stats().intersecting_pairs, 0);
-    const cli::ClothSetup setup = cli::load_cloth_setup(scene, "crossing");
-    const std::unique_ptr<cloth::ClothSolver> reference = cli::make_solver(scene, setup);
-    cli::prepare_start(scene, "crossing", *reference);
+    const pipeline::ClothSetup setup = pipeline::load_cloth_setup(scene, "crossing");
+    const std::unique_ptr<cloth::ClothSolver> reference = pipeline::make_solver(scene, setup);
+    pipeline::prepare_start(scene, "crossing", *reference);
     EXPECT_TRUE(same_positions(session.positions(), reference->positions()));
 
     // Reset reuses the start rather than untangling again (the same report, to the timing),

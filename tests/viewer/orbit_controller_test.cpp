@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "pliant/core/error.hpp"
-#include "volume_view.hpp"
+#include "pliant/render/camera.hpp"
 
 namespace pliant::viewer {
 namespace {
@@ -27,7 +27,7 @@ void expect_same_camera(const render::Camera& a, const render::Camera& b, double
 TEST(OrbitController, StartsAtTheCameraOfPliantRender) {
     const OrbitController given(BOX, 30.0, 20.0, 7.5, 640, 480);
     const render::Camera a = given.camera(640, 480);
-    const render::Camera b = cli::orbit_camera(BOX, 30.0, 20.0, 7.5, 640, 480);
+    const render::Camera b = render::orbit_camera(BOX, 30.0, 20.0, 7.5, 640, 480);
     expect_same_camera(a, b, 0.0);
     const OrbitController framed(BOX, -60.0, 25.0, 0.0, 320, 200);
     expect_same_camera(framed.camera(320, 200), render::frame_box(BOX, -60.0, 25.0, 320, 200),

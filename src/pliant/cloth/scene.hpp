@@ -1,7 +1,7 @@
 // ClothScene: everything `pliant cloth` simulates, as plain data: the cloth (a generated grid or
 // a mesh file) and its placement, pins, material, obstacles, gravity, timing and output format.
-// Read from JSON by io::read_cloth_scene (format and defaults in docs/formats.md); built into a
-// ClothSolver by the caller.
+// Read from JSON by pipeline::read_cloth_scene (format and defaults in docs/formats.md); built into
+// a ClothSolver by the caller.
 //
 // Units: SI; angles in degrees; +z up.
 #pragma once

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "pliant/core/error.hpp"
-#include "pliant/io/detail/read_file.hpp"
 #include "pliant/io/detail/text.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 
@@ -259,12 +259,12 @@ CcdQuerySet read_ccd_queries(const std::filesystem::path& csv) {
 }
 
 CcdQuerySet read_ccd_queries(const std::filesystem::path& csv, CcdQueryKind kind) {
-    const std::string text = detail::read_file(csv);
+    const std::string text = read_file(csv);
     return parse_ccd_queries(text, csv, kind);
 }
 
 std::vector<bool> read_mathematica_bools(const std::filesystem::path& json) {
-    const std::string text = detail::read_file(json);
+    const std::string text = read_file(json);
     nlohmann::json value;
     try {
         value = nlohmann::json::parse(text);

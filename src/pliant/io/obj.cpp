@@ -16,8 +16,8 @@
 #include "pliant/core/error.hpp"
 #include "pliant/geometry/validate.hpp"
 #include "pliant/io/atomic_file.hpp"
-#include "pliant/io/detail/read_file.hpp"
 #include "pliant/io/detail/text.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 
@@ -193,7 +193,7 @@ void write_obj_impl(const std::filesystem::path& path,
 
 geometry::TriangleMeshD read_obj(const std::filesystem::path& path) {
     // Step 1: one read, then pliant's validating scan (coordinates, index ranges, line numbers).
-    const std::string text = detail::read_file(path);
+    const std::string text = read_file(path);
     ObjScan scan = scan_obj(text, path);
 
     // Step 2: tinyobjloader parses the faces and triangulates them. Parsing from the string keeps

@@ -20,8 +20,8 @@
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/byte_order.hpp"
 #include "pliant/io/detail/ply_header.hpp"
-#include "pliant/io/detail/read_file.hpp"
 #include "pliant/io/detail/text.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 
@@ -696,7 +696,7 @@ const char* to_string(PlyFormat format) {
 geometry::TriangleMeshD read_ply(const std::filesystem::path& path) {
     // Step 1: the whole file in one read; the header; the layout and counts checked before any
     // allocation that depends on them.
-    const std::string bytes = detail::read_file(path);
+    const std::string bytes = read_file(path);
     const PlyHeader header = detail::parse_ply_header(bytes, path);
     Diagnostics diag(path);
     const MeshLayout layout = check_layout(header, diag);

@@ -12,7 +12,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
-#include "pliant/io/detail/read_file.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 
@@ -65,7 +65,7 @@ void write_png(const std::filesystem::path& path, const render::Image& image) {
 }
 
 render::Image read_png(const std::filesystem::path& path) {
-    const std::string bytes = detail::read_file(path);
+    const std::string bytes = read_file(path);
     if (bytes.size() < sizeof(PNG_SIGNATURE) ||
         std::memcmp(bytes.data(), PNG_SIGNATURE, sizeof(PNG_SIGNATURE)) != 0) {
         throw IoError(

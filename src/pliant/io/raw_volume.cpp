@@ -10,8 +10,8 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
-#include "pliant/io/detail/read_file.hpp"
 #include "pliant/io/detail/volume_data.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 
@@ -78,7 +78,7 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
         fail(sidecar, fmt::format("sidecar larger than {} bytes: not a pliant raw-volume sidecar",
                                   MAX_SIDECAR_BYTES));
     }
-    const std::string text = detail::read_file(sidecar);
+    const std::string text = read_file(sidecar);
     json doc;
     try {
         doc = json::parse(text);

@@ -12,8 +12,8 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
-#include "pliant/io/detail/read_file.hpp"
 #include "pliant/io/detail/text.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 namespace {
@@ -23,7 +23,7 @@ namespace {
 class TokenLines {
 public:
     explicit TokenLines(std::filesystem::path path)
-        : m_path(std::move(path)), m_text(detail::read_file(m_path)) {}
+        : m_path(std::move(path)), m_text(read_file(m_path)) {}
 
     // Advances to the next line holding a token; false at the end of the file.
     bool next() {

@@ -4,19 +4,20 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "pliant/core/error.hpp"
-#include "pliant/io/detail/json_text.hpp"
-#include "pliant/io/detail/read_file.hpp"
+#include "pliant/io/json_text.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 namespace {
 
 using Json = nlohmann::json;
 
-using detail::json_type_name;
+using io::json_type_name;
 
 class Reader {
 public:
@@ -160,8 +161,16 @@ volume::TransferFunction parse_transfer_function(std::string_view text, std::str
 }
 
 volume::TransferFunction read_transfer_function(const std::filesystem::path& path) {
-    const std::string text = detail::read_file(path);
+    const std::string text = read_file(path);
     return parse_transfer_function(text, path.string());
+}
+
+volume::TransferFunction load_transfer_function(const std::string& name_or_file,
+                                                const volume::Volume& volume) {
+    const auto& presets = volume::preset_names();
+    return std::find(presets.begin(), presets.end(), name_or_file) != presets.end()
+               ? volume::preset(name_or_file, volume)
+               : read_transfer_function(name_or_file);
 }
 
 }  // namespace pliant::io

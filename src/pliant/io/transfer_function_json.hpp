@@ -14,13 +14,20 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 #include "pliant/volume/transfer_function.hpp"
+#include "pliant/volume/volume.hpp"
 
 namespace pliant::io {
 
 volume::TransferFunction read_transfer_function(const std::filesystem::path& path);
+
+// `name_or_file`: a preset (volume::preset_names) computed for `volume`, else a transfer
+// function JSON file (read_transfer_function; IoError when missing or broken).
+volume::TransferFunction load_transfer_function(const std::string& name_or_file,
+                                                const volume::Volume& volume);
 
 // The same from JSON text; `name` (the file name) starts error messages and is the function's
 // name unless the JSON has one.

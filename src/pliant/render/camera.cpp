@@ -185,4 +185,24 @@ Camera frame_box(const AABBd& box, double azimuth_degrees, double elevation_degr
     return camera;
 }
 
+Camera orbit_camera(const AABBd& box, double azimuth, double elevation, double distance, int width,
+                    int height) {
+    if (distance <= 0.0) {
+        return frame_box(box, azimuth, elevation, width, height);
+    }
+    return orbit_camera_at(box.center(), azimuth, elevation, distance, width, height);
+}
+
+Camera orbit_camera_at(const Vec3d& target, double azimuth, double elevation, double distance,
+                       int width, int height) {
+    const double az = azimuth * std::numbers::pi / 180.0;
+    const double el = elevation * std::numbers::pi / 180.0;
+    const Vec3d dir{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+    const Vec3d up = std::fabs(std::sin(el)) > 0.999
+                         ? Vec3d{-std::cos(az) * std::sin(el), -std::sin(az) * std::sin(el), 0.0}
+                         : Vec3d{0.0, 0.0, 1.0};
+    return Camera::perspective(target + distance * dir, target, up, ORBIT_FOV_DEGREES, width,
+                               height);
+}
+
 }  // namespace pliant::render

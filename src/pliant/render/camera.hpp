@@ -115,4 +115,17 @@ struct FramingOptions {
 Camera frame_box(const AABBd& box, double azimuth_degrees, double elevation_degrees, int width,
                  int height, const FramingOptions& options = {});
 
+// The orbit camera of the CLI and the viewer: a perspective camera at azimuth, elevation (degrees,
+// frame_box's convention) and `distance` world units from `target`, looking at it:
+// eye = target + distance · (cos el cos az, cos el sin az, sin el), vertical field of view
+// ORBIT_FOV_DEGREES, up hint +z (at elevation ±90° the horizontal direction away from the
+// azimuth). distance > 0.
+inline constexpr double ORBIT_FOV_DEGREES = 30.0;
+Camera orbit_camera_at(const Vec3d& target, double azimuth, double elevation, double distance,
+                       int width, int height);
+
+// The same around the box's centre; distance ≤ 0 frames the box (frame_box).
+Camera orbit_camera(const AABBd& box, double azimuth, double elevation, double distance, int width,
+                    int height);
+
 }  // namespace pliant::render

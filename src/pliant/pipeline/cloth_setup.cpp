@@ -1,0 +1,314 @@
+#include "pliant/pipeline/cloth_setup.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <span>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <variant>
+
+#include "pliant/collision/intersecting_pairs.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
+#include "pliant/geometry/generate.hpp"
+#include "pliant/io/mesh_io.hpp"
+#include "pliant/pipeline/cloth_scene_file.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
+
+namespace pliant::pipeline {
+namespace {
+
+constexpr int SPHERE_SEGMENTS = 48;
+
+// Applies a placement (rotation, then translation) to points, the rotation built once.
+void place(std::span<Vec3d> points, const cloth::Placement& placement) {
+    const cloth::Rotation rotation = cloth::Rotation::from_degrees(placement.rotate_degrees);
+    for (Vec3d& p : points) {
+        p = rotation.apply(p) + placement.translate;
+    }
+}
+
+// A mesh file's triangles, or an error naming the scene key when it has none or a coordinate
+// beyond pipeline::MAX_SCENE_COORDINATE (a run would end as "diverged" at its first frame).
+geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
+                                           const std::string& scene_name, const std::string& key) {
+    geometry::TriangleMeshD mesh = io::read_mesh(file);
+    if (mesh.triangles.empty()) {
+        throw InvalidInput(
+            fmt::format("{}: {}: {}: expected a mesh with at least one triangle, "
+                        "got {} vertices and no triangles",
+                        scene_name, key, file.string(), mesh.positions.size()));
+    }
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        const Vec3d& p = mesh.positions[v];
+        if (!within_cube(p, pipeline::MAX_SCENE_COORDINATE)) {
+            throw InvalidInput(fmt::format(
+                "{}: {}: {}: vertex {} at ({}, {}, {}): expected coordinates within {:g} m",
+                scene_name, key, file.string(), v, p.x, p.y, p.z, pipeline::MAX_SCENE_COORDINATE));
+        }
+    }
+    return mesh;
+}
+
+// How many vertices have the exact position of another vertex (each such group counts all but
+// one).
+std::int64_t vertices_on_others(std::span<const Vec3d> positions) {
+    std::vector<Vec3d> sorted(positions.begin(), positions.end());
+    const auto less = [](const Vec3d& a, const Vec3d& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::sort(sorted.begin(), sorted.end(), less);
+    std::int64_t doubled = 0;
+    for (std::size_t k = 1; k < sorted.size(); ++k) {
+        doubled += sorted[k] == sorted[k - 1] ? 1 : 0;
+    }
+    return doubled;
+}
+
+// The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
+geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name,
+                                   std::uint64_t max_memory_bytes) {
+    geometry::TriangleMeshD mesh;
+    const std::uint64_t copies_of_the_cloth = std::max<std::size_t>(scene.instances.size(), 1);
+    const std::string instances =
+        scene.instances.empty() ? "" : fmt::format(" in {} instances", scene.instances.size());
+    if (scene.grid) {
+        // Checked before the grid is generated (the reader allows up to 50 million quads).
+        require_cloth_fits_in_memory(
+            fmt::format("{}: cloth.grid of {} x {} quads{}", scene_name, scene.grid->quads[0],
+                        scene.grid->quads[1], instances),
+            2 * static_cast<std::uint64_t>(scene.grid->quads[0]) *
+                static_cast<std::uint64_t>(scene.grid->quads[1]) * copies_of_the_cloth,
+            scene.self_collision, max_memory_bytes);
+        mesh = geometry::convert_precision<double>(geometry::make_grid_sheet(
+            scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
+            static_cast<float>(scene.grid->size[1])));
+    } else {
+        mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
+        require_cloth_fits_in_memory(
+            fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
+            mesh.triangles.size() * copies_of_the_cloth, scene.self_collision, max_memory_bytes);
+        // A file's seams (a generated grid has none; instances are checked for overlap later).
+        if (const std::int64_t doubled = vertices_on_others(mesh.positions); doubled > 0) {
+            log_warning(
+                "{}: {} of the cloth's {} vertices lie exactly on another vertex (seams left "
+                "unwelded in the file?): the cloth is not joined there, and its pieces start "
+                "touching; weld those vertices in the file to sew them",
+                scene_name, doubled, mesh.positions.size());
+        }
+    }
+    const cloth::Placement transform{scene.rotate_degrees, scene.translate};
+    place(mesh.positions, transform);
+    if (scene.instances.empty()) {
+        return mesh;
+    }
+    const auto num_vertices = static_cast<std::int64_t>(mesh.positions.size());
+    if (num_vertices * static_cast<std::int64_t>(scene.instances.size()) >
+        std::numeric_limits<std::int32_t>::max()) {
+        throw InvalidInput(fmt::format(
+            "cloth: {} instances of {} vertices exceed the 2^31 - 1 vertex indices a mesh has",
+            scene.instances.size(), num_vertices));
+    }
+    geometry::TriangleMeshD copies;
+    for (std::size_t k = 0; k < scene.instances.size(); ++k) {
+        const auto offset = static_cast<std::int32_t>(k * mesh.positions.size());
+        const std::size_t first = copies.positions.size();
+        copies.positions.insert(copies.positions.end(), mesh.positions.begin(),
+                                mesh.positions.end());
+        place(std::span<Vec3d>(copies.positions).subspan(first), scene.instances[k]);
+        for (const geometry::Triangle& t : mesh.triangles) {
+            copies.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        }
+    }
+    return copies;
+}
+
+// The vertices of a pin group: its listed indices and every vertex inside one of its regions.
+std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
+                                          const geometry::TriangleMeshD& mesh,
+                                          const std::string& scene_name) {
+    std::vector<std::int32_t> pinned = group.vertices;
+    for (const std::int32_t v : pinned) {
+        if (static_cast<std::size_t>(v) >= mesh.positions.size()) {
+            throw InvalidInput(fmt::format(
+                "{}: {}.vertices: vertex {} out of range, expected an index below {} (the "
+                "cloth's vertices, all copies)",
+                scene_name, group.key, v, mesh.positions.size()));
+        }
+    }
+    for (const cloth::PinRegion& region : group.regions) {
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+            const Vec3d& p = mesh.positions[v];
+            if (p.x >= region.min.x && p.x <= region.max.x && p.y >= region.min.y &&
+                p.y <= region.max.y && p.z >= region.min.z && p.z <= region.max.z) {
+                pinned.push_back(static_cast<std::int32_t>(v));
+            }
+        }
+    }
+    return pinned;
+}
+
+}  // namespace
+
+ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name,
+                            std::uint64_t max_memory_bytes) {
+    ClothSetup setup;
+    setup.mesh = load_cloth(scene, scene_name,
+                            max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes());
+    for (const cloth::PinGroup& group : scene.pins) {
+        setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
+    }
+    // Obstacles, and their shapes (planes as squares around the cloth).
+    AABBd cloth_box;
+    for (const Vec3d& p : setup.mesh.positions) {
+        cloth_box.extend(p);
+    }
+    const Vec3d centre = (cloth_box.lo + cloth_box.hi) * 0.5;
+    const double plane_half_size = 0.75 * norm(cloth_box.hi - cloth_box.lo) + 0.5;
+    for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+        const cloth::SceneObstacle& obstacle = scene.obstacles[k];
+        if (obstacle.mesh.empty()) {
+            setup.mesh_obstacles.push_back(nullptr);
+            setup.shapes.push_back(obstacle_shape(obstacle, nullptr, centre, plane_half_size));
+            continue;
+        }
+        geometry::TriangleMeshD shape = read_nonempty_mesh(
+            obstacle.mesh, scene_name, fmt::format("obstacles[{}].mesh.file", k));
+        place(shape.positions, obstacle.mesh_placement);
+        setup.shapes.push_back(obstacle_shape(obstacle, &shape, centre, plane_half_size));
+        auto mesh_obstacle = std::make_shared<const cloth::MeshObstacle>(std::move(shape));
+        if (const std::optional<double> volume = mesh_obstacle->enclosed_volume();
+            volume && *volume < 0.0) {
+            log_warning(
+                "{}: obstacles[{}].mesh.file ({}): a closed mesh wound inward (its normals point "
+                "in; enclosed volume {:.3g} m³): cloth is kept inside it, as in a container; "
+                "reverse its triangles' winding to keep cloth outside",
+                scene_name, k, obstacle.mesh.string(), *volume);
+        }
+        setup.mesh_obstacles.push_back(std::move(mesh_obstacle));
+    }
+    return setup;
+}
+
+StartState prepare_start(const cloth::ClothScene& scene, const std::string& scene_name,
+                         cloth::ClothSolver& solver) {
+    StartState start;
+    const cloth::ClothSolver::Penetration inside = solver.obstacle_penetration();
+    if (inside.vertices > 0) {
+        log_warning(
+            "{}: {} of the cloth's {} vertices start inside an obstacle (the deepest {:.3g} m "
+            "in): the first substep puts them on its surface, stretching the cloth; check the "
+            "obstacles' placement and, for planes and open meshes, which side their normals face",
+            scene_name, inside.vertices, solver.positions().size(), inside.deepest);
+    }
+    start.initial_intersections =
+        collision::count_intersecting_pairs(solver.positions(), solver.triangles());
+    const auto num_triangles = static_cast<std::int64_t>(solver.triangles().size());
+    if (start.initial_intersections > MAX_INITIAL_PAIRS_PER_TRIANGLE * num_triangles) {
+        throw InvalidInput(fmt::format(
+            "{}: the cloth intersects itself in {} pairs of triangles ({:.1f} per triangle, more "
+            "than {}): layers lie on or through each other, which cannot be untangled; check "
+            "the mesh and the scene's instances",
+            scene_name, start.initial_intersections,
+            static_cast<double>(start.initial_intersections) / static_cast<double>(num_triangles),
+            MAX_INITIAL_PAIRS_PER_TRIANGLE));
+    }
+    if (start.initial_intersections > 0) {
+        log_warning("{}: the cloth intersects itself at the start ({} pairs of triangles)",
+                    scene_name, start.initial_intersections);
+    }
+    if (scene.untangle && start.initial_intersections > 0) {
+        start.untangled = solver.untangle();
+        const cloth::UntangleResult& u = *start.untangled;
+        if (u.final_pairs == 0) {
+            log_info(
+                "{}: untangled in {} iterations ({:.1f} ms), no vertex moved more than "
+                "{:.2f} mm",
+                scene_name, u.iterations, u.ms, u.max_displacement * 1e3);
+        } else {
+            log_warning(
+                "{}: untangling left {} of {} pairs after {} iterations; the simulation keeps "
+                "those from growing but does not undo them",
+                scene_name, u.final_pairs, start.initial_intersections, u.iterations);
+        }
+    }
+    return start;
+}
+
+nlohmann::ordered_json untangle_report(const StartState& start) {
+    if (!start.untangled) {
+        return nullptr;
+    }
+    const cloth::UntangleResult& u = *start.untangled;
+    return {{"iterations", u.iterations},
+            {"region_moves", u.region_moves},
+            {"pairs_left", u.final_pairs},
+            {"max_displacement_m", u.max_displacement},
+            {"ms", u.ms}};
+}
+
+std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
+                                                const ClothSetup& setup) {
+    auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, scene.material);
+    for (std::size_t g = 0; g < scene.pins.size(); ++g) {
+        solver->add_moving_pins(setup.pins[g], scene.pins[g].motion);
+    }
+    for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+        const cloth::SceneObstacle& obstacle = scene.obstacles[k];
+        if (setup.mesh_obstacles[k]) {
+            solver->add_mesh_obstacle(setup.mesh_obstacles[k], obstacle.motion);
+        } else {
+            solver->add_obstacle(obstacle.shape, obstacle.motion);
+        }
+    }
+    solver->set_gravity(scene.gravity);
+    solver->set_air(scene.air);
+    solver->enable_self_collision(scene.self_collision);
+    return solver;
+}
+
+AABBd framing_box(std::span<const Vec3d> cloth, const std::vector<ObstacleShape>& obstacles) {
+    AABBd box;
+    for (const Vec3d& p : cloth) {
+        box.extend(p);
+    }
+    for (const ObstacleShape& shape : obstacles) {
+        if (shape.bounded) {
+            for (const Vec3d& p : shape.rest.positions) {
+                box.extend(p);
+            }
+        }
+    }
+    return box;
+}
+
+ObstacleShape obstacle_shape(const cloth::SceneObstacle& obstacle,
+                             const geometry::TriangleMeshD* mesh, const Vec3d& centre,
+                             double plane_half_size) {
+    ObstacleShape shape;
+    shape.motion = obstacle.motion;
+    if (mesh != nullptr) {
+        shape.rest = *mesh;
+        shape.smooth = false;
+    } else if (const auto* sphere = std::get_if<cloth::SphereObstacle>(&obstacle.shape)) {
+        shape.rest = geometry::make_uv_sphere(sphere->center, sphere->radius, SPHERE_SEGMENTS);
+    } else if (const auto* box = std::get_if<cloth::BoxObstacle>(&obstacle.shape)) {
+        shape.rest = geometry::make_box(box->min, box->max);
+        shape.smooth = false;
+    } else {
+        const auto& plane = std::get<cloth::PlaneObstacle>(obstacle.shape);
+        const Vec3d n = plane.normal * (1.0 / norm(plane.normal));
+        const Vec3d foot = centre - n * dot(centre - plane.point, n);
+        shape.rest = geometry::make_plane_square(foot, n, plane_half_size);
+        shape.smooth = false;
+        shape.bounded = false;
+    }
+    return shape;
+}
+
+}  // namespace pliant::pipeline

@@ -1,0 +1,49 @@
+// Running the deformable-volume pipeline on a volume: shared by `pliant deform` and `pliant demo`.
+//
+// A tet grid over the volume (or the given TetGen mesh), the XPBD soft body under one driver for
+// `frames` steps of 1/fps seconds, the deformed mesh resampled into a grid like the source and
+// written to `out`; with `video`, every frame resampled and ray-cast into an MP4; with `still`,
+// the last frame ray-cast into a PNG. Returns the run's numbers (the JSON of `pliant deform`,
+// docs/formats.md). Throws InvalidInput / IoError / Unsupported before simulating when the
+// output cannot be written or there is nothing to deform.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <filesystem>
+#include <string>
+
+#include "pliant/pbd/drivers.hpp"
+#include "pliant/pbd/soft_body.hpp"
+#include "pliant/pbd/tet_grid.hpp"
+#include "pliant/pipeline/progress.hpp"
+#include "pliant/volume/transfer_function.hpp"
+#include "pliant/volume/volume.hpp"
+
+namespace pliant::pipeline {
+
+struct DeformRunOptions {
+    std::string driver_name;  // for messages and the JSON
+    pbd::Driver driver;
+    pbd::TetGridOptions grid;    // its tf is replaced by the run's tf
+    std::filesystem::path mesh;  // a TetGen mesh instead of the grid (empty: the grid)
+    pbd::SoftBodyOptions body;
+    int frames = 48;
+    double fps = 24.0;
+    std::filesystem::path out;    // the deformed volume of the last frame
+    std::filesystem::path video;  // MP4 of every frame (empty: none)
+    std::filesystem::path still;  // PNG of the last frame (empty: none)
+    std::array<int, 2> size{512, 512};
+    std::array<double, 3> camera{30.0, 20.0, 0.0};  // azimuth, elevation (degrees), distance
+    bool shading = false;
+    double step = 0.0;    // ray-casting step, world units (0: half the smallest spacing)
+    ProgressFn progress;  // after every frame (progress.hpp)
+};
+
+// tf: the transfer function of a scalar source (rendering and which voxels are visible), nullptr
+// for RGBA sources.
+nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::TransferFunction* tf,
+                                  const DeformRunOptions& options);
+
+}  // namespace pliant::pipeline
