@@ -37,7 +37,7 @@
 // Human output on stdout (progress on stderr when it is a terminal); with --json, stdout is
 // summary.json's object. Throws IoError when DIR cannot be created or written, InternalError when
 // the BVH table's pair counts disagree between pliant, Embree and brute force (after writing the
-// summary). Takes about four minutes on 2 vCPUs (two of them training the radiance field).
+// summary). The steps are library calls (pipeline/demo.hpp); this file parses, calls and prints.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

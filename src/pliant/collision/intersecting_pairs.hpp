@@ -17,7 +17,7 @@
 // traversal's fixed chunks; the count and the sorted list are identical for any number of threads.
 // O(T) for boxes and the LBVH build, then the traversal and one exact test per candidate pair
 // (most end after 6 orient3d; exactly coplanar pairs, as in a flat sheet, take the predicates'
-// exact path). About 80 ms on one thread for a flat 134 × 134-quad sheet (35,912 triangles).
+// exact path). Measured in bench/ (docs/performance.md).
 //
 // positions: #V points (world units); triangles: #T index triples into positions.
 // Throws InvalidInput naming the offending element when an index is out of [0, #V), a triangle

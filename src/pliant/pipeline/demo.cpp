@@ -215,15 +215,11 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
     nlohmann::ordered_json fall_json = nlohmann::ordered_json::parse(drape_json);
     fall_json["self_collision"] = false;
     fall_json["frames"] = UNTANGLE_FALL_FRAMES;
-    // The dihedral bending model: with the isometric one that scenes/drape.json chooses, the
-    // skirt, softer in sharp folds, falls deeper through itself (1,157 pairs at frame 16
-    // against 693), more than the untangler clears in its 400 iterations (491 left;
-    // docs/performance.md, "isometric bending").
+    // Dihedral bending and single-edge stretch: with the isometric bending and stretch chains of
+    // scenes/drape.json the skirt falls deeper through itself than the untangler's 400
+    // iterations clear (docs/journal/2026-11-25-isometric-bending.md,
+    // docs/journal/2026-11-28-stretch-chains.md).
     fall_json["material"]["bending"] = "dihedral";
-    // And single-edge stretch: with the stretch chains of scenes/drape.json the skirt, which then
-    // keeps its length, swings through itself deeper still (2,410 pairs at frame 16), and 400
-    // iterations leave 666 of them (this fall scene with "stretch_solver": "chains", then the
-    // untangle scene on its frame 16, `--frames 0`).
     fall_json["material"]["stretch_solver"] = "edges";
     const auto [fall, fall_stats] = run_written(fall_dir, fall_json);
     const std::int64_t fall_pairs = fall_stats["frames"].back()["intersecting_pairs"];
