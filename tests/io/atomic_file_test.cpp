@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
 namespace pliant::io {
 namespace {

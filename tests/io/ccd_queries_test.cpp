@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
 namespace pliant::io {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "pliant/io/obj.hpp"
 #include "pliant/io/ply.hpp"
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
 namespace pliant::io {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
 namespace pliant::io {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "pliant/geometry/generate.hpp"
 #include "pliant/geometry/validate.hpp"
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
 namespace pliant::io {
 namespace {

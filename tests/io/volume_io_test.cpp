@@ -9,7 +9,7 @@
 #include <string>
 
 #include "pliant/core/error.hpp"
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
 namespace pliant::io {
 namespace {

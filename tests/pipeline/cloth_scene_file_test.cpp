@@ -8,7 +8,7 @@
 
 #include "pliant/core/error.hpp"
 
-namespace pliant::io {
+namespace pliant::pipeline {
 namespace {
 
 cloth::ClothScene parse(const std::string& text) {
@@ -250,4 +250,4 @@ TEST(ClothScene, MissingFile) {
 }
 
 }  // namespace
-}  // namespace pliant::io
+}  // namespace pliant::pipeline

@@ -12,13 +12,13 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/png.hpp"
-#include "test_files.hpp"
+#include "support/test_files.hpp"
 
-namespace pliant::io {
+namespace pliant::pipeline {
 namespace {
 
-using test::TempDir;
-using test::write_bytes;
+using io::test::TempDir;
+using io::test::write_bytes;
 
 // A 4 × 3 RGBA PNG: pixel (x, y) = (60 x, 80 y, 200, alpha), alpha 255 except pixel (0, 0) = 0
 // and (1, 0) = 128.
@@ -130,31 +130,31 @@ TEST(NerfDataset, BrokenDatasetsGiveClearErrors) {
         return read_nerf_dataset(json);
     };
 
-    test::expect_io_error(read, {"t.json", "cannot open"});
+    io::test::expect_io_error(read, {"t.json", "cannot open"});
     write_bytes(json, "{ not json");
-    test::expect_io_error(read, {"t.json", "not valid JSON"});
+    io::test::expect_io_error(read, {"t.json", "not valid JSON"});
     write_bytes(json, R"({"camera_angle_x": 0.7, "frames": []})");
-    test::expect_io_error(read, {"frames", "non-empty"});
+    io::test::expect_io_error(read, {"frames", "non-empty"});
     write_bytes(json, blender_json(R"(, {"file_path": "./train/missing", "transform_matrix": )" +
                                    std::string(IDENTITY) + "}"));
-    test::expect_io_error(read, {"frames[1]", "missing", "no such file"});
+    io::test::expect_io_error(read, {"frames[1]", "missing", "no such file"});
     write_bytes(json, blender_json(R"(, {"file_path": "small.png", "transform_matrix": )" +
                                    std::string(IDENTITY) + "}"));
-    test::expect_io_error(read, {"frames[1]", "2 x 2", "expected 4 x 3"});
+    io::test::expect_io_error(read, {"frames[1]", "2 x 2", "expected 4 x 3"});
     write_bytes(json, R"({"frames": [{"file_path": "./train/r_0", "transform_matrix": )" +
                           std::string(IDENTITY) + "}]}");
-    test::expect_io_error(read, {"camera_angle_x", "fl_x"});
+    io::test::expect_io_error(read, {"camera_angle_x", "fl_x"});
     write_bytes(json, blender_json("", "[[1,0,0],[0,1,0],[0,0,1]]"));
-    test::expect_io_error(read, {"frames[0].transform_matrix", "row 0"});
+    io::test::expect_io_error(read, {"frames[0].transform_matrix", "row 0"});
     write_bytes(json, blender_json("", R"([[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,1,1]])"));
-    test::expect_io_error(read, {"last row"});
+    io::test::expect_io_error(read, {"last row"});
     write_bytes(json, blender_json("", R"([[1,0,0,0],[0,"x",0,0],[0,0,1,0],[0,0,0,1]])"));
-    test::expect_io_error(read, {"entry [1][1]"});
+    io::test::expect_io_error(read, {"entry [1][1]"});
     write_bytes(
         json,
         R"({"camera_angle_x": 0.7, "aabb": [1, 2], "frames": [{"file_path": "./train/r_0", "transform_matrix": )" +
             std::string(IDENTITY) + "}]}");
-    test::expect_io_error(read, {"aabb"});
+    io::test::expect_io_error(read, {"aabb"});
     // A singular rotation (two equal columns): InvalidInput naming the view.
     write_bytes(json, blender_json("", R"([[1,1,0,0],[0,0,0,0],[0,0,1,0],[0,0,0,1]])"));
     try {
@@ -188,11 +188,11 @@ TEST(NerfDataset, AbsurdSizesAreRefusedBeforeDecoding) {
     for (const auto& [w, h] : {std::pair{"1e30", "3"}, std::pair{"-4", "3"}, std::pair{"4", "2.5"},
                                std::pair{"4", "0"}, std::pair{"70000", "3"}}) {
         with_size(w, h);
-        test::expect_io_error(read, {"t.json", "whole number of pixels"});
+        io::test::expect_io_error(read, {"t.json", "whole number of pixels"});
     }
     // A declared size the image does not have: refused from the image's header.
     with_size("8", "3");
-    test::expect_io_error(read, {"frames[0]", "4 x 3", "expected 8 x 3"});
+    io::test::expect_io_error(read, {"frames[0]", "4 x 3", "expected 8 x 3"});
     // More decoded pixels than the memory limit: refused before any image is decoded.
     with_size("4", "3");
     ReadNerfDatasetOptions options;
@@ -227,4 +227,4 @@ TEST(NerfDataset, DerivesASceneBoxFromTheCameras) {
 }
 
 }  // namespace
-}  // namespace pliant::io
+}  // namespace pliant::pipeline

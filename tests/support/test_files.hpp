@@ -1,4 +1,4 @@
-// Helpers for the io tests: a scratch directory under the system temp directory that is removed
+// Helpers for the file-format tests (io, pipeline readers): a scratch directory under the system temp directory that is removed
 // with everything in it, byte-exact file writing and reading, a check that a call throws IoError
 // whose message contains given fragments, and meshes with awkward numbers for round trips.
 #pragma once
