@@ -10,13 +10,18 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 
 namespace pliant::pbd {
 
+using detail::EdgeRun;
 using detail::Float4;
+using detail::LayerBlocking;
+using detail::LAYERS_PER_SLAB;
+using detail::TetRun;
 
 namespace {
 
@@ -25,9 +30,6 @@ constexpr std::int64_t VERTEX_GRAIN = 4096;
 constexpr std::int64_t EDGE_GRAIN = 2048;
 constexpr std::int64_t TET_GRAIN = 1024;
 constexpr std::int32_t DRAG = -2;  // driven_by code of the drag
-// Lattice layers per slab of the blocked sweep (LayerBlocking): enough constraints per colour for
-// a few chunks, few enough that a slab's vertices stay in the L2 cache.
-constexpr std::int64_t LAYERS_PER_SLAB = 4;
 
 void validate_options(const SoftBodyOptions& o) {
     const auto fail = [](const char* field, double value, const char* rule) {
@@ -67,44 +69,6 @@ double tet_volume(std::span<const Vec3f> p, const geometry::Tet& t) {
                                    vec3_cast<double>(p[static_cast<std::size_t>(t[3])]));
 }
 
-// The tets of one colour of a full-box TetGrid, whose vertex index is the lattice index: cells of
-// one parity class in lattice order, tet q of the colour in cell (i0 + 2 a, j0 + 2 b, k0 + 2 c)
-// with q = a + ni (b + nj c), its vertices the cell's base index + offsets[m]. The AVX2 kernel
-// derives the vertices from the base instead of loading them.
-struct TetRun {
-    std::array<std::int32_t, 4> offsets{};
-    std::int64_t i0 = 0, j0 = 0, k0 = 0;
-    std::int64_t ni = 0, nj = 0, nk = 0;
-};
-
-// A run of edges of one colour: edge q ∈ [begin, next run's begin) joins first + stride (q − begin)
-// and that + span (stride 1 or 2). On a TetGrid nearly every edge lies in a run of a lattice row.
-struct EdgeRun {
-    std::int64_t begin = 0;
-    std::int32_t first = 0;
-    std::int32_t stride = 1;
-    std::int32_t span = 0;
-};
-
-// Layer blocking of a grid's colour sweep, for cache reuse. Every constraint has a layer key z
-// (its lowest lattice z; a tet, its cell's), every vertex it holds lies in layer z or z + 1, and a
-// colour's constraints are sorted by key. The sweep runs slab after slab; in slab t colour c
-// projects its constraints of layers [t − skew[c], t − skew[c] + LAYERS_PER_SLAB). The skews are
-// the smallest with skew[c'] − skew[c] ≥ z − z' for every two constraints of colours c < c' (z,
-// z' their keys) that share a vertex: such a pair then lands in slabs t ≤ t', and colours run in
-// order within a slab, so every two constraints sharing a vertex are projected in the order of
-// their colours, as in the plain colour-by-colour sweep (constraints sharing no vertex commute):
-// the results are bitwise those of the plain sweep. A slab touches LAYERS_PER_SLAB + max_skew + 1
-// vertex layers rather than the whole body per colour.
-struct LayerBlocking {
-    std::int64_t num_layers = 0;  // 0: no blocking (plain sweep)
-    std::int64_t max_skew = 0;
-    std::vector<std::int64_t> skew;  // per colour
-    // Per colour c, at c · (num_layers + 1) + z: the first constraint of the colour (index within
-    // the colour) with key ≥ z.
-    std::vector<std::int64_t> layer_begin;
-};
-
 }  // namespace
 
 struct SoftBody::State {
@@ -112,34 +76,15 @@ struct SoftBody::State {
     std::vector<Vec3f> rest;                         // #V
     std::vector<geometry::Tet> tets;                 // #T, input order
     std::vector<std::array<std::int32_t, 2>> edges;  // #E, sorted
-    ConstraintColoring edge_coloring;
-    ConstraintColoring tet_coloring;
-    // Constraint data in colour order (colour c = [offsets[c], offsets[c + 1])): the projection
-    // loops stream through them. On a grid the edges of a colour are reordered by layer and
-    // direction (sort_edges_into_runs), the tets keep the colouring's order.
-    std::vector<std::array<std::int32_t, 2>> edge_vertices;
-    std::vector<float> rest_lengths0;  // at construction
-    std::vector<float> rest_lengths;   // current (rest-state drivers)
-    std::vector<geometry::Tet> tet_vertices;
-    std::vector<float> rest_volumes0;
-    std::vector<float> rest_volumes;
     double total_rest_volume = 0.0;
+    // Constraint data in colour order: the projection loops stream through them.
+    detail::EdgeConstraints edge_constraints;
+    detail::TetConstraints tet_constraints;
     // Inversion guard (step 6b): per tet in colour order, 1 when the sweep found it at risk; per
     // tet colour, 1 when one of its tets is; the flagged tets, scratch. Cleared by the guard.
     std::vector<std::uint8_t> tet_at_risk;
     std::vector<std::uint8_t> colour_at_risk;
     std::vector<std::int64_t> guarded;
-    // On a TetGrid: the runs of edge_vertices, those of colour c at
-    // edge_runs[edge_run_offsets[c] .. edge_run_offsets[c + 1]); empty for other meshes.
-    std::vector<EdgeRun> edge_runs;
-    std::vector<std::int64_t> edge_run_begins;  // edge_runs[r].begin
-    std::vector<std::int64_t> edge_run_offsets;
-    LayerBlocking edge_blocking;  // on a TetGrid; none otherwise
-    LayerBlocking tet_blocking;
-    // Per tet colour of a full-box TetGrid (TetRun); empty for other meshes.
-    std::vector<TetRun> tet_runs;
-    std::int64_t lattice_x = 0;   // lattice vertices along x
-    std::int64_t lattice_xy = 0;  // … in one z layer
 
     // x: positions and this substep's inverse mass (0 for pinned and driven vertices).
     std::vector<Float4> x;
@@ -164,190 +109,6 @@ struct SoftBody::State {
     double last_step_ms = 0.0;
     double last_substep_ms = 0.0;
 };
-
-namespace {
-
-// The runs of every tet colour (tet_vertices in colour order) when the grid keeps every lattice
-// vertex (full box) and every colour is the run its lattice predicts, checked tet by tet; empty
-// otherwise.
-std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring& coloring,
-                                  std::span<const geometry::Tet> tet_vertices,
-                                  std::int64_t num_vertices) {
-    const std::int64_t nx = grid.cells[0];
-    const std::int64_t ny = grid.cells[1];
-    const std::int64_t nz = grid.cells[2];
-    const std::int64_t lx = nx + 1;
-    const std::int64_t lxy = lx * (ny + 1);
-    if (num_vertices != lxy * (nz + 1) || tet_vertices.empty()) {
-        return {};
-    }
-    std::vector<TetRun> runs(static_cast<std::size_t>(coloring.num_colors()));
-    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count = coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        const std::int64_t cell = grid.tet_cell[static_cast<std::size_t>(
-            coloring.order[static_cast<std::size_t>(begin)])];
-        TetRun& r = runs[static_cast<std::size_t>(c)];
-        r.i0 = cell % nx;
-        r.j0 = (cell / nx) % ny;
-        r.k0 = cell / (nx * ny);
-        r.ni = (nx - r.i0 + 1) / 2;
-        r.nj = (ny - r.j0 + 1) / 2;
-        r.nk = (nz - r.k0 + 1) / 2;
-        if (r.i0 > 1 || r.j0 > 1 || r.k0 > 1 || r.ni * r.nj * r.nk != count) {
-            return {};
-        }
-        const std::int64_t base0 = r.i0 + lx * r.j0 + lxy * r.k0;
-        const geometry::Tet& first = tet_vertices[static_cast<std::size_t>(begin)];
-        for (std::size_t m = 0; m < 4; ++m) {
-            r.offsets[m] = static_cast<std::int32_t>(first[m] - base0);
-        }
-        for (std::int64_t q = 0; q < count; ++q) {
-            const std::int64_t a = q % r.ni;
-            const std::int64_t b = (q / r.ni) % r.nj;
-            const std::int64_t k = q / (r.ni * r.nj);
-            const std::int64_t base = r.i0 + 2 * a + lx * (r.j0 + 2 * b) + lxy * (r.k0 + 2 * k);
-            const geometry::Tet& t = tet_vertices[static_cast<std::size_t>(begin + q)];
-            for (std::size_t m = 0; m < 4; ++m) {
-                if (t[m] != base + r.offsets[m]) {
-                    return {};
-                }
-            }
-        }
-    }
-    return runs;
-}
-
-// The blocking of constraints (in colour order, sorted by key within each colour; vertex_z:
-// lattice z per vertex); none when a key is out of order or a vertex lies outside layers z, z + 1
-// of a constraint holding it, or for more than 64 colours.
-template <std::size_t K>
-LayerBlocking block_layers(const ConstraintColoring& coloring,
-                           const std::vector<std::array<std::int32_t, K>>& constraints,
-                           const std::vector<std::int32_t>& keys, std::int64_t num_layers,
-                           const std::vector<std::int32_t>& vertex_z) {
-    const std::int32_t num_colors = coloring.num_colors();
-    if (num_colors > 64 || num_layers <= 0) {
-        return {};
-    }
-    LayerBlocking blocking;
-    blocking.num_layers = num_layers;
-    blocking.layer_begin.resize(static_cast<std::size_t>(num_colors * (num_layers + 1)));
-    // Per vertex: bit c of `below` when colour c holds it in a constraint of key z_v − 1, of
-    // `level` of key z_v.
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(vertex_z.size(), {0, 0});
-    for (std::int32_t c = 0; c < num_colors; ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
-        const auto* first = keys.data() + begin;
-        const auto* last = keys.data() + end;
-        if (!std::is_sorted(first, last) || *first < 0 || *(last - 1) >= num_layers) {
-            return {};
-        }
-        for (std::int64_t z = 0; z <= num_layers; ++z) {
-            blocking.layer_begin[static_cast<std::size_t>(c * (num_layers + 1) + z)] =
-                std::lower_bound(first, last, z) - first;
-        }
-        const std::uint64_t bit = std::uint64_t{1} << c;
-        for (std::int64_t q = begin; q < end; ++q) {
-            for (const std::int32_t v : constraints[static_cast<std::size_t>(q)]) {
-                const std::int32_t offset =
-                    keys[static_cast<std::size_t>(q)] - vertex_z[static_cast<std::size_t>(v)];
-                if (offset == -1) {
-                    masks[static_cast<std::size_t>(v)].first |= bit;
-                } else if (offset == 0) {
-                    masks[static_cast<std::size_t>(v)].second |= bit;
-                } else {
-                    return {};
-                }
-            }
-        }
-    }
-    std::sort(masks.begin(), masks.end());
-    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
-    // Colours in order: every bound on skew[c'] comes from colours c < c', already final.
-    blocking.skew.assign(static_cast<std::size_t>(num_colors), 0);
-    for (std::int32_t later = 0; later < num_colors; ++later) {
-        for (const auto& [below, level] : masks) {
-            if (((below | level) >> later & 1) == 0) {
-                continue;
-            }
-            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
-            for (std::int32_t c = 0; c < later; ++c) {
-                if (((below | level) >> c & 1) != 0) {
-                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
-                    auto& skew = blocking.skew[static_cast<std::size_t>(later)];
-                    skew = std::max(
-                        skew, blocking.skew[static_cast<std::size_t>(c)] + offset - later_offset);
-                }
-            }
-        }
-        blocking.max_skew =
-            std::max(blocking.max_skew, blocking.skew[static_cast<std::size_t>(later)]);
-    }
-    return blocking;
-}
-
-// Within each colour, orders the edges (and their rest lengths) by layer (the lower lattice z of
-// their vertices), then direction b − a, then a (the order within a colour does not change a
-// result: its edges share no vertex), and cuts them into runs of equal direction and equal steps
-// of a.
-void sort_edges_into_runs(const ConstraintColoring& coloring,
-                          const std::vector<std::int32_t>& vertex_z,
-                          std::vector<std::array<std::int32_t, 2>>& edges,
-                          std::vector<float>& rest_lengths, std::vector<EdgeRun>& runs,
-                          std::vector<std::int64_t>& run_offsets) {
-    std::vector<std::int64_t> perm;
-    std::vector<std::array<std::int32_t, 2>> sorted_edges;
-    std::vector<float> sorted_lengths;
-    run_offsets.assign(1, 0);
-    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
-        perm.resize(static_cast<std::size_t>(end - begin));
-        for (std::int64_t q = begin; q < end; ++q) {
-            perm[static_cast<std::size_t>(q - begin)] = q;
-        }
-        const auto edge = [&](std::int64_t q) -> const std::array<std::int32_t, 2>& {
-            return edges[static_cast<std::size_t>(q)];
-        };
-        const auto layer = [&](std::int64_t q) {
-            return std::min(vertex_z[static_cast<std::size_t>(edge(q)[0])],
-                            vertex_z[static_cast<std::size_t>(edge(q)[1])]);
-        };
-        std::stable_sort(perm.begin(), perm.end(), [&](std::int64_t p, std::int64_t q) {
-            return std::pair(layer(p), edge(p)[1] - edge(p)[0]) <
-                   std::pair(layer(q), edge(q)[1] - edge(q)[0]);
-        });
-        sorted_edges.clear();
-        sorted_lengths.clear();
-        for (const std::int64_t q : perm) {
-            sorted_edges.push_back(edge(q));
-            sorted_lengths.push_back(rest_lengths[static_cast<std::size_t>(q)]);
-        }
-        std::copy(sorted_edges.begin(), sorted_edges.end(),
-                  edges.begin() + static_cast<std::ptrdiff_t>(begin));
-        std::copy(sorted_lengths.begin(), sorted_lengths.end(),
-                  rest_lengths.begin() + static_cast<std::ptrdiff_t>(begin));
-        for (std::int64_t q = begin; q < end;) {
-            EdgeRun run{q, edge(q)[0], 1, edge(q)[1] - edge(q)[0]};
-            std::int64_t next = q + 1;
-            if (next < end && edge(next)[1] - edge(next)[0] == run.span &&
-                (edge(next)[0] - run.first == 1 || edge(next)[0] - run.first == 2)) {
-                run.stride = edge(next)[0] - run.first;
-                while (next < end && edge(next)[1] - edge(next)[0] == run.span &&
-                       edge(next)[0] == run.first + run.stride * (next - q)) {
-                    ++next;
-                }
-            }
-            runs.push_back(run);
-            q = next;
-        }
-        run_offsets.push_back(static_cast<std::int64_t>(runs.size()));
-    }
-}
-
-}  // namespace
 
 SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
     : SoftBody(rest, options, nullptr) {}
@@ -439,73 +200,29 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
     }
     s.pinned.assign(static_cast<std::size_t>(nv), 0);
 
-    // Step 4: edges, colourings, constraint data in colour order.
+    // Step 4: edges, colourings (analytic on a grid, greedy otherwise), constraint data in colour
+    // order.
     s.edges = tet_edges(s.tets, nv);
+    ConstraintColoring edge_coloring;
+    ConstraintColoring tet_coloring;
     if (grid != nullptr) {
-        s.edge_coloring = color_grid_edges(*grid, s.edges);
-        s.tet_coloring = color_grid_tets(*grid);
+        edge_coloring = color_grid_edges(*grid, s.edges);
+        tet_coloring = color_grid_tets(*grid);
     } else {
-        s.edge_coloring =
+        edge_coloring =
             color_greedy(static_cast<std::int64_t>(s.edges.size()), nv, [&](std::int64_t e) {
                 return std::span<const std::int32_t>(s.edges[static_cast<std::size_t>(e)]);
             });
-        s.tet_coloring = color_greedy(nt, nv, [&](std::int64_t t) {
+        tet_coloring = color_greedy(nt, nv, [&](std::int64_t t) {
             return std::span<const std::int32_t>(s.tets[static_cast<std::size_t>(t)]);
         });
     }
-    s.edge_vertices.resize(s.edges.size());
-    s.rest_lengths0.resize(s.edges.size());
-    for (std::size_t k = 0; k < s.edge_coloring.order.size(); ++k) {
-        const auto& e = s.edges[static_cast<std::size_t>(s.edge_coloring.order[k])];
-        s.edge_vertices[k] = e;
-        s.rest_lengths0[k] =
-            static_cast<float>(norm(vec3_cast<double>(s.rest[static_cast<std::size_t>(e[0])]) -
-                                    vec3_cast<double>(s.rest[static_cast<std::size_t>(e[1])])));
-    }
-    std::vector<std::int32_t> vertex_z;  // lattice z per vertex (grid)
-    if (grid != nullptr) {
-        vertex_z.reserve(grid->vertex_lattice.size());
-        for (const auto& lattice : grid->vertex_lattice) {
-            vertex_z.push_back(lattice[2]);
-        }
-        sort_edges_into_runs(s.edge_coloring, vertex_z, s.edge_vertices, s.rest_lengths0,
-                             s.edge_runs, s.edge_run_offsets);
-        for (const EdgeRun& r : s.edge_runs) {
-            s.edge_run_begins.push_back(r.begin);
-        }
-    }
-    s.rest_lengths = s.rest_lengths0;
-    s.tet_vertices.resize(s.tets.size());
-    s.rest_volumes0.resize(s.tets.size());
-    for (std::size_t k = 0; k < s.tet_coloring.order.size(); ++k) {
-        const auto t = static_cast<std::size_t>(s.tet_coloring.order[k]);
-        s.tet_vertices[k] = s.tets[t];
-        s.rest_volumes0[k] = static_cast<float>(rest_volume[t]);
-    }
-    s.rest_volumes = s.rest_volumes0;
-    s.tet_at_risk.assign(s.tet_vertices.size(), 0);
-    s.colour_at_risk.assign(static_cast<std::size_t>(s.tet_coloring.num_colors()), 0);
-    if (grid != nullptr) {
-        // Step 4b: layer blocking of both sweeps.
-        std::vector<std::int32_t> keys(s.edge_vertices.size());
-        for (std::size_t k = 0; k < keys.size(); ++k) {
-            keys[k] = std::min(vertex_z[static_cast<std::size_t>(s.edge_vertices[k][0])],
-                               vertex_z[static_cast<std::size_t>(s.edge_vertices[k][1])]);
-        }
-        s.edge_blocking = block_layers(s.edge_coloring, s.edge_vertices, keys,
-                                       std::int64_t{grid->cells[2]} + 1, vertex_z);
-        std::vector<std::int32_t> tet_keys(s.tet_vertices.size());
-        const std::int64_t cells_xy = std::int64_t{grid->cells[0]} * grid->cells[1];
-        for (std::size_t k = 0; k < tet_keys.size(); ++k) {
-            tet_keys[k] = static_cast<std::int32_t>(
-                grid->tet_cell[static_cast<std::size_t>(s.tet_coloring.order[k])] / cells_xy);
-        }
-        s.tet_blocking =
-            block_layers(s.tet_coloring, s.tet_vertices, tet_keys, grid->cells[2], vertex_z);
-        s.tet_runs = find_tet_runs(*grid, s.tet_coloring, s.tet_vertices, nv);
-        s.lattice_x = std::int64_t{grid->cells[0]} + 1;
-        s.lattice_xy = s.lattice_x * (std::int64_t{grid->cells[1]} + 1);
-    }
+    s.edge_constraints =
+        detail::layout_edge_constraints(std::move(edge_coloring), s.edges, s.rest, grid);
+    s.tet_constraints =
+        detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, nv, grid);
+    s.tet_at_risk.assign(s.tets.size(), 0);
+    s.colour_at_risk.assign(static_cast<std::size_t>(s.tet_constraints.coloring.num_colors()), 0);
 
     // Step 5: state.
     s.x.resize(static_cast<std::size_t>(nv));
@@ -685,8 +402,8 @@ void SoftBody::step(double dt) {
         update_rest_state(m_time + dt);
         s.rest_modified = true;
     } else if (s.rest_modified) {
-        s.rest_lengths = s.rest_lengths0;
-        s.rest_volumes = s.rest_volumes0;
+        s.edge_constraints.rest_lengths = s.edge_constraints.rest_lengths0;
+        s.tet_constraints.rest_volumes = s.tet_constraints.rest_volumes0;
         s.rest_modified = false;
     }
     if (s.drag && !s.drag_vertices.empty()) {
@@ -726,18 +443,21 @@ void SoftBody::step(double dt) {
     };
     // Edges [lo, hi) of colour c (indices within the colour), in fixed chunks of the range.
     const auto project_edge_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-        const std::int64_t begin = s.edge_coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count = s.edge_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        const auto* edges = s.edge_vertices.data() + begin;
-        const float* lengths = s.rest_lengths.data() + begin;
-        if (use_avx2 && !s.edge_runs.empty()) {
+        const std::int64_t begin = s.edge_constraints.coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t count =
+            s.edge_constraints.coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+        const auto* edges = s.edge_constraints.vertices.data() + begin;
+        const float* lengths = s.edge_constraints.rest_lengths.data() + begin;
+        if (use_avx2 && !s.edge_constraints.runs.empty()) {
             // Runs: the edges' vertices follow from the run's first vertex.
             const std::int64_t* run_begins =
-                s.edge_run_begins.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
-            const std::int64_t num_runs = s.edge_run_offsets[static_cast<std::size_t>(c) + 1] -
-                                          s.edge_run_offsets[static_cast<std::size_t>(c)];
-            const EdgeRun* runs =
-                s.edge_runs.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
+                s.edge_constraints.run_begins.data() +
+                s.edge_constraints.run_offsets[static_cast<std::size_t>(c)];
+            const std::int64_t num_runs =
+                s.edge_constraints.run_offsets[static_cast<std::size_t>(c) + 1] -
+                s.edge_constraints.run_offsets[static_cast<std::size_t>(c)];
+            const EdgeRun* runs = s.edge_constraints.runs.data() +
+                                  s.edge_constraints.run_offsets[static_cast<std::size_t>(c)];
             parallel_for_chunks(
                 hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     b += lo;
@@ -785,9 +505,9 @@ void SoftBody::step(double dt) {
     // Tets [lo, hi) of colour c, the same way; the tets at risk of inversion are flagged in
     // tet_at_risk (by index: no two chunks write one entry), and their colour in colour_at_risk.
     const auto project_tet_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-        const std::int64_t begin = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
-        const geometry::Tet* tets = s.tet_vertices.data() + begin;
-        const float* volumes = s.rest_volumes.data() + begin;
+        const std::int64_t begin = s.tet_constraints.coloring.offsets[static_cast<std::size_t>(c)];
+        const geometry::Tet* tets = s.tet_constraints.vertices.data() + begin;
+        const float* volumes = s.tet_constraints.rest_volumes.data() + begin;
         std::uint8_t* at_risk = s.tet_at_risk.data() + begin;
         const auto flag_colour = [&](std::int64_t num_at_risk) {
             if (num_at_risk > 0) {
@@ -801,9 +521,9 @@ void SoftBody::step(double dt) {
                 ++num_at_risk;
             }
         };
-        if (use_avx2 && !s.tet_runs.empty()) {
+        if (use_avx2 && !s.tet_constraints.runs.empty()) {
             // Rows of cells along x; within a row the tets' vertices follow from the base.
-            const TetRun& r = s.tet_runs[static_cast<std::size_t>(c)];
+            const TetRun& r = s.tet_constraints.runs[static_cast<std::size_t>(c)];
             parallel_for_chunks(
                 hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     b += lo;
@@ -812,9 +532,9 @@ void SoftBody::step(double dt) {
                     for (std::int64_t q = b; q < e;) {
                         const std::int64_t row = q / r.ni;
                         const std::int64_t a = q - row * r.ni;
-                        const std::int64_t base = r.i0 + 2 * a +
-                                                  s.lattice_x * (r.j0 + 2 * (row % r.nj)) +
-                                                  s.lattice_xy * (r.k0 + 2 * (row / r.nj));
+                        const std::int64_t base =
+                            r.i0 + 2 * a + s.tet_constraints.lattice_x * (r.j0 + 2 * (row % r.nj)) +
+                            s.tet_constraints.lattice_xy * (r.k0 + 2 * (row / r.nj));
                         const std::int64_t run = std::min(e - q, r.ni - a);
                         std::int64_t i = q + detail::project_tet_run_avx2(
                                                  x, base, r.offsets, volumes + q, at_risk + q, run,
@@ -886,13 +606,13 @@ void SoftBody::step(double dt) {
     // GUARD_PASSES passes of guard_tet over them in that order, one thread: a handful of tets.
     const auto guard_flagged_tets = [&] {
         s.guarded.clear();
-        for (std::int32_t c = 0; c < s.tet_coloring.num_colors(); ++c) {
+        for (std::int32_t c = 0; c < s.tet_constraints.coloring.num_colors(); ++c) {
             if (s.colour_at_risk[static_cast<std::size_t>(c)] == 0) {
                 continue;
             }
             s.colour_at_risk[static_cast<std::size_t>(c)] = 0;
-            for (std::int64_t k = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
-                 k < s.tet_coloring.offsets[static_cast<std::size_t>(c) + 1]; ++k) {
+            for (std::int64_t k = s.tet_constraints.coloring.offsets[static_cast<std::size_t>(c)];
+                 k < s.tet_constraints.coloring.offsets[static_cast<std::size_t>(c) + 1]; ++k) {
                 if (s.tet_at_risk[static_cast<std::size_t>(k)] != 0) {
                     s.tet_at_risk[static_cast<std::size_t>(k)] = 0;
                     s.guarded.push_back(k);
@@ -902,8 +622,9 @@ void SoftBody::step(double dt) {
         for (int pass = 0; pass < detail::GUARD_PASSES && !s.guarded.empty(); ++pass) {
             bool moved = false;
             for (const std::int64_t k : s.guarded) {
-                moved = detail::guard_tet(x, s.tet_vertices[static_cast<std::size_t>(k)],
-                                          s.rest_volumes[static_cast<std::size_t>(k)]) ||
+                moved = detail::guard_tet(
+                            x, s.tet_constraints.vertices[static_cast<std::size_t>(k)],
+                            s.tet_constraints.rest_volumes[static_cast<std::size_t>(k)]) ||
                         moved;
             }
             if (!moved) {
@@ -915,12 +636,12 @@ void SoftBody::step(double dt) {
         // back (an earlier colour sharing its vertices can have lifted it too).
         for (const std::int64_t k : s.guarded) {
             const auto i = static_cast<std::size_t>(k);
-            if (detail::tet_volume(x, s.tet_vertices[i]) <
-                s.rest_volumes[i] * detail::AT_RISK_RATIO) {
+            if (detail::tet_volume(x, s.tet_constraints.vertices[i]) <
+                s.tet_constraints.rest_volumes[i] * detail::AT_RISK_RATIO) {
                 s.tet_at_risk[i] = 1;
-                const auto colour = std::upper_bound(s.tet_coloring.offsets.begin(),
-                                                     s.tet_coloring.offsets.end(), k) -
-                                    s.tet_coloring.offsets.begin() - 1;
+                const auto colour = std::upper_bound(s.tet_constraints.coloring.offsets.begin(),
+                                                     s.tet_constraints.coloring.offsets.end(), k) -
+                                    s.tet_constraints.coloring.offsets.begin() - 1;
                 s.colour_at_risk[static_cast<std::size_t>(colour)] = 1;
             }
         }
@@ -992,9 +713,9 @@ void SoftBody::step(double dt) {
         }
         // Step 5: edges, colour by colour (layer-blocked on a grid: the same order where it
         // matters, LayerBlocking).
-        sweep(s.edge_blocking, s.edge_coloring, project_edge_range);
+        sweep(s.edge_constraints.blocking, s.edge_constraints.coloring, project_edge_range);
         // Step 6: tet volumes, colour by colour.
-        sweep(s.tet_blocking, s.tet_coloring, project_tet_range);
+        sweep(s.tet_constraints.blocking, s.tet_constraints.coloring, project_tet_range);
         // Step 6b: the inversion guard on the tets flagged at risk, in colour order.
         guard_flagged_tets();
         // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
@@ -1070,23 +791,25 @@ void SoftBody::update_rest_state(double t) {
         return f;
     };
     parallel_for(
-        static_cast<std::int64_t>(s.edge_vertices.size()),
+        static_cast<std::int64_t>(s.edge_constraints.vertices.size()),
         [&](std::int64_t k) {
-            const auto& e = s.edge_vertices[static_cast<std::size_t>(k)];
-            double length = shaped.empty() ? s.rest_lengths0[static_cast<std::size_t>(k)]
-                                           : norm(shaped[static_cast<std::size_t>(e[0])] -
-                                                  shaped[static_cast<std::size_t>(e[1])]);
+            const auto& e = s.edge_constraints.vertices[static_cast<std::size_t>(k)];
+            double length = shaped.empty()
+                                ? s.edge_constraints.rest_lengths0[static_cast<std::size_t>(k)]
+                                : norm(shaped[static_cast<std::size_t>(e[0])] -
+                                       shaped[static_cast<std::size_t>(e[1])]);
             if (!bubbles.empty()) {
                 length *= std::cbrt(bubble((rest_at(e[0]) + rest_at(e[1])) * 0.5));
             }
-            s.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
+            s.edge_constraints.rest_lengths[static_cast<std::size_t>(k)] =
+                static_cast<float>(length);
         },
         EDGE_GRAIN);
     parallel_for(
-        static_cast<std::int64_t>(s.tet_vertices.size()),
+        static_cast<std::int64_t>(s.tet_constraints.vertices.size()),
         [&](std::int64_t k) {
-            const geometry::Tet& tet = s.tet_vertices[static_cast<std::size_t>(k)];
-            double volume = s.rest_volumes0[static_cast<std::size_t>(k)];
+            const geometry::Tet& tet = s.tet_constraints.vertices[static_cast<std::size_t>(k)];
+            double volume = s.tet_constraints.rest_volumes0[static_cast<std::size_t>(k)];
             if (!shaped.empty()) {
                 volume = geometry::signed_volume(shaped[static_cast<std::size_t>(tet[0])],
                                                  shaped[static_cast<std::size_t>(tet[1])],
@@ -1097,7 +820,8 @@ void SoftBody::update_rest_state(double t) {
                 volume *= bubble(
                     (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25);
             }
-            s.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
+            s.tet_constraints.rest_volumes[static_cast<std::size_t>(k)] =
+                static_cast<float>(volume);
         },
         TET_GRAIN);
 }
@@ -1121,10 +845,10 @@ std::span<const std::array<std::int32_t, 2>> SoftBody::edges() const {
     return m_state->edges;
 }
 const ConstraintColoring& SoftBody::edge_coloring() const {
-    return m_state->edge_coloring;
+    return m_state->edge_constraints.coloring;
 }
 const ConstraintColoring& SoftBody::tet_coloring() const {
-    return m_state->tet_coloring;
+    return m_state->tet_constraints.coloring;
 }
 
 SoftBodyStats SoftBody::stats() const {
