@@ -11,24 +11,20 @@
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/pbd/detail/constraint_layout.hpp"
+#include "pliant/pbd/detail/constraint_sweep.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
+#include "pliant/pbd/detail/grains.hpp"
 #include "pliant/pbd/detail/projection.hpp"
-#include "pliant/pbd/detail/projection_avx2.hpp"
 
 namespace pliant::pbd {
 
-using detail::EdgeRun;
+using detail::EDGE_GRAIN;
 using detail::Float4;
-using detail::LayerBlocking;
-using detail::LAYERS_PER_SLAB;
-using detail::TetRun;
+using detail::TET_GRAIN;
+using detail::VERTEX_GRAIN;
 
 namespace {
 
-// Fixed chunk sizes (multiples of 8: SIMD groups never straddle a chunk).
-constexpr std::int64_t VERTEX_GRAIN = 4096;
-constexpr std::int64_t EDGE_GRAIN = 2048;
-constexpr std::int64_t TET_GRAIN = 1024;
 constexpr std::int32_t DRAG = -2;  // driven_by code of the drag
 
 void validate_options(const SoftBodyOptions& o) {
@@ -441,167 +437,6 @@ void SoftBody::step(double dt) {
             p.w = 0.0f;
         }
     };
-    // Edges [lo, hi) of colour c (indices within the colour), in fixed chunks of the range.
-    const auto project_edge_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-        const std::int64_t begin = s.edge_constraints.coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count =
-            s.edge_constraints.coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        const auto* edges = s.edge_constraints.vertices.data() + begin;
-        const float* lengths = s.edge_constraints.rest_lengths.data() + begin;
-        if (use_avx2 && !s.edge_constraints.runs.empty()) {
-            // Runs: the edges' vertices follow from the run's first vertex.
-            const std::int64_t* run_begins =
-                s.edge_constraints.run_begins.data() +
-                s.edge_constraints.run_offsets[static_cast<std::size_t>(c)];
-            const std::int64_t num_runs =
-                s.edge_constraints.run_offsets[static_cast<std::size_t>(c) + 1] -
-                s.edge_constraints.run_offsets[static_cast<std::size_t>(c)];
-            const EdgeRun* runs = s.edge_constraints.runs.data() +
-                                  s.edge_constraints.run_offsets[static_cast<std::size_t>(c)];
-            parallel_for_chunks(
-                hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    b += lo;
-                    e += lo;
-                    // The run holding edge b (its begin is the last ≤ begin + b).
-                    std::int64_t r =
-                        std::upper_bound(run_begins, run_begins + num_runs, begin + b) -
-                        run_begins - 1;
-                    for (std::int64_t q = b; q < e; ++r) {
-                        const EdgeRun& run = runs[r];
-                        const std::int64_t run_end =
-                            r + 1 < num_runs ? run_begins[r + 1] - begin : count;
-                        const std::int64_t n_run = std::min(e, run_end) - q;
-                        std::int64_t i =
-                            q + detail::project_edge_run_avx2(
-                                    x, run.first + run.stride * (begin + q - run.begin), run.stride,
-                                    run.span, lengths + q, n_run, edge_inv_k, edge_alpha);
-                        for (; i < q + n_run; ++i) {
-                            detail::project_edge(x, edges[i][0], edges[i][1], lengths[i],
-                                                 edge_inv_k, edge_alpha);
-                        }
-                        q += n_run;
-                    }
-                });
-            return;
-        }
-        parallel_for_chunks(hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-            std::int64_t i = lo + b;
-            e += lo;
-            if (use_avx2) {
-                i += detail::project_edges_avx2(x, edges + i, lengths + i, e - i, edge_inv_k,
-                                                edge_alpha);
-            }
-#if defined(PLIANT_PBD_SSE)
-            for (; i + 4 <= e; i += 4) {
-                detail::project_edges4(x, edges + i, lengths + i, edge_inv_k, edge_alpha);
-            }
-#endif
-            for (; i < e; ++i) {
-                detail::project_edge(x, edges[i][0], edges[i][1], lengths[i], edge_inv_k,
-                                     edge_alpha);
-            }
-        });
-    };
-    // Tets [lo, hi) of colour c, the same way; the tets at risk of inversion are flagged in
-    // tet_at_risk (by index: no two chunks write one entry), and their colour in colour_at_risk.
-    const auto project_tet_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-        const std::int64_t begin = s.tet_constraints.coloring.offsets[static_cast<std::size_t>(c)];
-        const geometry::Tet* tets = s.tet_constraints.vertices.data() + begin;
-        const float* volumes = s.tet_constraints.rest_volumes.data() + begin;
-        std::uint8_t* at_risk = s.tet_at_risk.data() + begin;
-        const auto flag_colour = [&](std::int64_t num_at_risk) {
-            if (num_at_risk > 0) {
-                std::atomic_ref<std::uint8_t>(s.colour_at_risk[static_cast<std::size_t>(c)])
-                    .store(1, std::memory_order_relaxed);
-            }
-        };
-        const auto project_one = [&](std::int64_t i, std::int64_t& num_at_risk) {
-            if (detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha)) {
-                at_risk[i] = 1;
-                ++num_at_risk;
-            }
-        };
-        if (use_avx2 && !s.tet_constraints.runs.empty()) {
-            // Rows of cells along x; within a row the tets' vertices follow from the base.
-            const TetRun& r = s.tet_constraints.runs[static_cast<std::size_t>(c)];
-            parallel_for_chunks(
-                hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    b += lo;
-                    e += lo;
-                    std::int64_t num_at_risk = 0;
-                    for (std::int64_t q = b; q < e;) {
-                        const std::int64_t row = q / r.ni;
-                        const std::int64_t a = q - row * r.ni;
-                        const std::int64_t base =
-                            r.i0 + 2 * a + s.tet_constraints.lattice_x * (r.j0 + 2 * (row % r.nj)) +
-                            s.tet_constraints.lattice_xy * (r.k0 + 2 * (row / r.nj));
-                        const std::int64_t run = std::min(e - q, r.ni - a);
-                        std::int64_t i = q + detail::project_tet_run_avx2(
-                                                 x, base, r.offsets, volumes + q, at_risk + q, run,
-                                                 inv_k, volume_alpha, num_at_risk);
-                        for (; i < q + run; ++i) {
-                            project_one(i, num_at_risk);
-                        }
-                        q += run;
-                    }
-                    flag_colour(num_at_risk);
-                });
-            return;
-        }
-        parallel_for_chunks(hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-            std::int64_t i = lo + b;
-            e += lo;
-            std::int64_t num_at_risk = 0;
-            if (use_avx2) {
-                i += detail::project_tets_avx2(x, tets + i, volumes + i, at_risk + i, e - i, inv_k,
-                                               volume_alpha, num_at_risk);
-            }
-#if defined(PLIANT_PBD_SSE)
-            for (; i + 4 <= e; i += 4) {
-                const int mask =
-                    detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
-                for (int l = 0; mask != 0 && l < 4; ++l) {
-                    if ((mask >> l & 1) != 0) {
-                        at_risk[i + l] = 1;
-                        ++num_at_risk;
-                    }
-                }
-            }
-#endif
-            for (; i < e; ++i) {
-                project_one(i, num_at_risk);
-            }
-            flag_colour(num_at_risk);
-        });
-    };
-    // Every constraint of a colouring, colour after colour; with a blocking, slab after slab of
-    // LAYERS_PER_SLAB layers, colour c shifted back by its skew (LayerBlocking).
-    const auto sweep = [&](const LayerBlocking& blocking, const ConstraintColoring& coloring,
-                           const auto& project_range) {
-        const std::int32_t num_colors = coloring.num_colors();
-        if (blocking.num_layers == 0) {
-            for (std::int32_t c = 0; c < num_colors; ++c) {
-                project_range(c, 0,
-                              coloring.offsets[static_cast<std::size_t>(c) + 1] -
-                                  coloring.offsets[static_cast<std::size_t>(c)]);
-            }
-            return;
-        }
-        const std::int64_t layers = blocking.num_layers;
-        for (std::int64_t t = 0; t < layers + blocking.max_skew; t += LAYERS_PER_SLAB) {
-            for (std::int32_t c = 0; c < num_colors; ++c) {
-                const std::int64_t skew = blocking.skew[static_cast<std::size_t>(c)];
-                const std::int64_t z0 = std::clamp<std::int64_t>(t - skew, 0, layers);
-                const std::int64_t z1 =
-                    std::clamp<std::int64_t>(t - skew + LAYERS_PER_SLAB, 0, layers);
-                const std::int64_t* layer_begin =
-                    blocking.layer_begin.data() + static_cast<std::size_t>(c) * (layers + 1);
-                if (layer_begin[z0] < layer_begin[z1]) {
-                    project_range(c, layer_begin[z0], layer_begin[z1]);
-                }
-            }
-        }
-    };
     // Step 6b: the inversion guard. The flagged tets, colour by colour (flags cleared), then up to
     // GUARD_PASSES passes of guard_tet over them in that order, one thread: a handful of tets.
     const auto guard_flagged_tets = [&] {
@@ -713,9 +548,10 @@ void SoftBody::step(double dt) {
         }
         // Step 5: edges, colour by colour (layer-blocked on a grid: the same order where it
         // matters, LayerBlocking).
-        sweep(s.edge_constraints.blocking, s.edge_constraints.coloring, project_edge_range);
-        // Step 6: tet volumes, colour by colour.
-        sweep(s.tet_constraints.blocking, s.tet_constraints.coloring, project_tet_range);
+        detail::project_edges(x, s.edge_constraints, {edge_inv_k, edge_alpha}, use_avx2);
+        // Step 6: tet volumes, colour by colour; the tets at risk of inversion flagged.
+        detail::project_tets(x, s.tet_constraints, {inv_k, volume_alpha}, use_avx2, s.tet_at_risk,
+                             s.colour_at_risk);
         // Step 6b: the inversion guard on the tets flagged at risk, in colour order.
         guard_flagged_tets();
         // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
