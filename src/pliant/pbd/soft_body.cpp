@@ -14,6 +14,7 @@
 #include "pliant/pbd/detail/constraint_sweep.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
 #include "pliant/pbd/detail/grains.hpp"
+#include "pliant/pbd/detail/inversion_guard.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 
 namespace pliant::pbd {
@@ -76,11 +77,7 @@ struct SoftBody::State {
     // Constraint data in colour order: the projection loops stream through them.
     detail::EdgeConstraints edge_constraints;
     detail::TetConstraints tet_constraints;
-    // Inversion guard (step 6b): per tet in colour order, 1 when the sweep found it at risk; per
-    // tet colour, 1 when one of its tets is; the flagged tets, scratch. Cleared by the guard.
-    std::vector<std::uint8_t> tet_at_risk;
-    std::vector<std::uint8_t> colour_at_risk;
-    std::vector<std::int64_t> guarded;
+    detail::InversionFlags inversion;  // tets flagged for the inversion guard (step 6b)
 
     // x: positions and this substep's inverse mass (0 for pinned and driven vertices).
     std::vector<Float4> x;
@@ -217,8 +214,7 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
         detail::layout_edge_constraints(std::move(edge_coloring), s.edges, s.rest, grid);
     s.tet_constraints =
         detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, nv, grid);
-    s.tet_at_risk.assign(s.tets.size(), 0);
-    s.colour_at_risk.assign(static_cast<std::size_t>(s.tet_constraints.coloring.num_colors()), 0);
+    s.inversion = detail::unflagged(s.tet_constraints);
 
     // Step 5: state.
     s.x.resize(static_cast<std::size_t>(nv));
@@ -437,50 +433,6 @@ void SoftBody::step(double dt) {
             p.w = 0.0f;
         }
     };
-    // Step 6b: the inversion guard. The flagged tets, colour by colour (flags cleared), then up to
-    // GUARD_PASSES passes of guard_tet over them in that order, one thread: a handful of tets.
-    const auto guard_flagged_tets = [&] {
-        s.guarded.clear();
-        for (std::int32_t c = 0; c < s.tet_constraints.coloring.num_colors(); ++c) {
-            if (s.colour_at_risk[static_cast<std::size_t>(c)] == 0) {
-                continue;
-            }
-            s.colour_at_risk[static_cast<std::size_t>(c)] = 0;
-            for (std::int64_t k = s.tet_constraints.coloring.offsets[static_cast<std::size_t>(c)];
-                 k < s.tet_constraints.coloring.offsets[static_cast<std::size_t>(c) + 1]; ++k) {
-                if (s.tet_at_risk[static_cast<std::size_t>(k)] != 0) {
-                    s.tet_at_risk[static_cast<std::size_t>(k)] = 0;
-                    s.guarded.push_back(k);
-                }
-            }
-        }
-        for (int pass = 0; pass < detail::GUARD_PASSES && !s.guarded.empty(); ++pass) {
-            bool moved = false;
-            for (const std::int64_t k : s.guarded) {
-                moved = detail::guard_tet(
-                            x, s.tet_constraints.vertices[static_cast<std::size_t>(k)],
-                            s.tet_constraints.rest_volumes[static_cast<std::size_t>(k)]) ||
-                        moved;
-            }
-            if (!moved) {
-                break;
-            }
-        }
-        // A tet still below AT_RISK_RATIO · V0 stays flagged for the next substep: its own
-        // projection may lift it above the kernels' threshold before later colours push it
-        // back (an earlier colour sharing its vertices can have lifted it too).
-        for (const std::int64_t k : s.guarded) {
-            const auto i = static_cast<std::size_t>(k);
-            if (detail::tet_volume(x, s.tet_constraints.vertices[i]) <
-                s.tet_constraints.rest_volumes[i] * detail::AT_RISK_RATIO) {
-                s.tet_at_risk[i] = 1;
-                const auto colour = std::upper_bound(s.tet_constraints.coloring.offsets.begin(),
-                                                     s.tet_constraints.coloring.offsets.end(), k) -
-                                    s.tet_constraints.coloring.offsets.begin() - 1;
-                s.colour_at_risk[static_cast<std::size_t>(colour)] = 1;
-            }
-        }
-    };
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
         const double t_end = m_time + h * (sub + 1);
@@ -550,10 +502,10 @@ void SoftBody::step(double dt) {
         // matters, LayerBlocking).
         detail::project_edges(x, s.edge_constraints, {edge_inv_k, edge_alpha}, use_avx2);
         // Step 6: tet volumes, colour by colour; the tets at risk of inversion flagged.
-        detail::project_tets(x, s.tet_constraints, {inv_k, volume_alpha}, use_avx2, s.tet_at_risk,
-                             s.colour_at_risk);
+        detail::project_tets(x, s.tet_constraints, {inv_k, volume_alpha}, use_avx2,
+                             s.inversion.tet_at_risk, s.inversion.colour_at_risk);
         // Step 6b: the inversion guard on the tets flagged at risk, in colour order.
-        guard_flagged_tets();
+        detail::guard_flagged_tets(x, s.tet_constraints, s.inversion);
         // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
         // velocities need not be stored) or, after the last substep, with the copy of the
         // positions.
