@@ -12,6 +12,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/constraint_sweep.hpp"
+#include "pliant/pbd/detail/driver_apply.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
 #include "pliant/pbd/detail/grains.hpp"
 #include "pliant/pbd/detail/inversion_guard.hpp"
@@ -25,8 +26,6 @@ using detail::TET_GRAIN;
 using detail::VERTEX_GRAIN;
 
 namespace {
-
-constexpr std::int32_t DRAG = -2;  // driven_by code of the drag
 
 void validate_options(const SoftBodyOptions& o) {
     const auto fail = [](const char* field, double value, const char* rule) {
@@ -89,15 +88,10 @@ struct SoftBody::State {
 
     std::vector<Driver> drivers;
     bool has_rest_drivers = false;
-    bool rest_modified = false;
-    std::vector<std::int32_t> driven_vertices;  // sorted, not pinned
-    std::vector<std::int32_t> driven_by;        // per driven vertex: driver index or DRAG
-    bool kinematics_dirty = false;
-
-    std::optional<DragDriver> drag;
-    std::vector<std::int32_t> drag_vertices;
-    std::vector<Vec3f> drag_offsets;  // from the grabbed vertex, at grab time
-    Vec3f drag_from{};                // grabbed vertex at the step's start
+    bool rest_modified = false;  // rest lengths and volumes differ from the construction's
+    detail::DrivenVertices driven;
+    bool kinematics_dirty = false;  // `driven` is to be assigned again
+    detail::DragGrab grab;
 
     double last_step_ms = 0.0;
     double last_substep_ms = 0.0;
@@ -256,30 +250,19 @@ void SoftBody::set_drag(std::int32_t vertex, const Vec3f& target, float radius) 
         throw InvalidInput("pbd::SoftBody::set_drag: radius (" + std::to_string(radius) +
                            ") must be finite and >= 0");
     }
-    if (s.drag && s.drag->vertex == vertex) {
-        s.drag->target = target;
+    if (s.grab.drag && s.grab.drag->vertex == vertex) {
+        s.grab.drag->target = target;
         return;
     }
-    s.drag = DragDriver{vertex, target, radius};
-    // Grab: the vertices within radius of the grabbed one, with their offsets from it.
-    s.drag_vertices.clear();
-    s.drag_offsets.clear();
-    const Vec3f centre = s.positions[static_cast<std::size_t>(vertex)];
-    for (std::int64_t v = 0; v < nv; ++v) {
-        const Vec3f offset = s.positions[static_cast<std::size_t>(v)] - centre;
-        if (v == vertex || squared_norm(offset) <= radius * radius) {
-            s.drag_vertices.push_back(static_cast<std::int32_t>(v));
-            s.drag_offsets.push_back(v == vertex ? Vec3f{} : offset);
-        }
-    }
+    detail::grab_vertices(DragDriver{vertex, target, radius}, s.positions, s.grab);
     s.kinematics_dirty = true;
 }
 
 void SoftBody::release_drag() {
     State& s = *m_state;
-    s.drag.reset();
-    s.drag_vertices.clear();
-    s.drag_offsets.clear();
+    s.grab.drag.reset();
+    s.grab.vertices.clear();
+    s.grab.offsets.clear();
     s.kinematics_dirty = true;
 }
 
@@ -291,7 +274,7 @@ void SoftBody::set_stiffness(double stiffness) {
 }
 
 std::optional<DragDriver> SoftBody::drag() const {
-    return m_state->drag;
+    return m_state->grab.drag;
 }
 
 void SoftBody::pin(std::span<const std::int32_t> vertices) {
@@ -359,47 +342,22 @@ void SoftBody::step(double dt) {
 
     // Step 1: which vertex follows which kinematic driver (the last added; drag last; pins win).
     if (s.kinematics_dirty) {
-        std::vector<std::int32_t> by(static_cast<std::size_t>(nv), -1);
-        for (std::size_t d = 0; d < s.drivers.size(); ++d) {
-            const Driver& driver = s.drivers[d];
-            if (std::holds_alternative<RotateDriver>(driver)) {
-                std::fill(by.begin(), by.end(), static_cast<std::int32_t>(d));
-            } else if (const auto* twist = std::get_if<TwistDriver>(&driver)) {
-                const int a = static_cast<int>(twist->axis);
-                const double reach = twist->grip * s.box.size + 1e-6 * s.box.size;
-                for (std::int64_t v = 0; v < nv; ++v) {
-                    const double q = s.rest[static_cast<std::size_t>(v)][a];
-                    if (q <= s.box.lo[a] + reach || q >= s.box.hi[a] - reach) {
-                        by[static_cast<std::size_t>(v)] = static_cast<std::int32_t>(d);
-                    }
-                }
-            }
-        }
-        for (const std::int32_t v : s.drag_vertices) {
-            by[static_cast<std::size_t>(v)] = DRAG;
-        }
-        s.driven_vertices.clear();
-        s.driven_by.clear();
-        for (std::int64_t v = 0; v < nv; ++v) {
-            if (by[static_cast<std::size_t>(v)] != -1 &&
-                s.pinned[static_cast<std::size_t>(v)] == 0) {
-                s.driven_vertices.push_back(static_cast<std::int32_t>(v));
-                s.driven_by.push_back(by[static_cast<std::size_t>(v)]);
-            }
-        }
+        detail::assign_driven_vertices(s.drivers, s.box, s.rest, s.pinned, s.grab.vertices,
+                                       s.driven);
         s.kinematics_dirty = false;
     }
     // Step 2: rest-state drivers at the step's end time.
     if (s.has_rest_drivers) {
-        update_rest_state(m_time + dt);
+        detail::apply_rest_drivers(s.drivers, s.box, s.rest, m_time + dt, s.edge_constraints,
+                                   s.tet_constraints);
         s.rest_modified = true;
     } else if (s.rest_modified) {
         s.edge_constraints.rest_lengths = s.edge_constraints.rest_lengths0;
         s.tet_constraints.rest_volumes = s.tet_constraints.rest_volumes0;
         s.rest_modified = false;
     }
-    if (s.drag && !s.drag_vertices.empty()) {
-        s.drag_from = s.positions[static_cast<std::size_t>(s.drag->vertex)];
+    if (s.grab.drag && !s.grab.vertices.empty()) {
+        s.grab.from = s.positions[static_cast<std::size_t>(s.grab.drag->vertex)];
     }
 
     const int n = m_options.substeps;
@@ -449,54 +407,9 @@ void SoftBody::step(double dt) {
                 VERTEX_GRAIN);
         }
         // Step 4: driven vertices at their targets for t_end, inverse mass 0.
-        if (!s.driven_vertices.empty()) {
-            std::vector<std::array<double, 9>> rotations(s.drivers.size());
-            for (std::size_t d = 0; d < s.drivers.size(); ++d) {
-                if (const auto* r = std::get_if<RotateDriver>(&s.drivers[d])) {
-                    rotations[d] =
-                        detail::rotation(r->axis, r->angle * detail::ramp(t_end, r->ramp_time));
-                } else if (const auto* tw = std::get_if<TwistDriver>(&s.drivers[d])) {
-                    rotations[d] =
-                        detail::rotation(tw->axis, tw->angle * detail::ramp(t_end, tw->ramp_time));
-                }
-            }
-            const float drag_fraction = static_cast<float>(sub + 1) / static_cast<float>(n);
-            parallel_for(
-                static_cast<std::int64_t>(s.driven_vertices.size()),
-                [&](std::int64_t k) {
-                    const auto v =
-                        static_cast<std::size_t>(s.driven_vertices[static_cast<std::size_t>(k)]);
-                    const std::int32_t d = s.driven_by[static_cast<std::size_t>(k)];
-                    Vec3f target;
-                    if (d == DRAG) {
-                        // The grab set is small; its offsets are found by a scan of it.
-                        const auto it =
-                            std::lower_bound(s.drag_vertices.begin(), s.drag_vertices.end(),
-                                             static_cast<std::int32_t>(v));
-                        const Vec3f offset =
-                            s.drag_offsets[static_cast<std::size_t>(it - s.drag_vertices.begin())];
-                        target =
-                            s.drag_from + (s.drag->target - s.drag_from) * drag_fraction + offset;
-                    } else {
-                        const Vec3d rest = vec3_cast<double>(s.rest[v]);
-                        const Driver& driver = s.drivers[static_cast<std::size_t>(d)];
-                        const auto* rotate = std::get_if<RotateDriver>(&driver);
-                        const Vec3d c =
-                            rotate != nullptr && rotate->centre ? *rotate->centre : s.box.centre;
-                        bool turns = true;
-                        if (const auto* tw = std::get_if<TwistDriver>(&driver)) {
-                            const int a = static_cast<int>(tw->axis);
-                            turns = rest[a] > c[a];
-                        }
-                        target =
-                            turns ? vec3_cast<float>(
-                                        c + detail::rotate(rotations[static_cast<std::size_t>(d)],
-                                                           rest - c))
-                                  : s.rest[v];
-                    }
-                    x[v] = {target.x, target.y, target.z, 0.0f};
-                },
-                VERTEX_GRAIN);
+        if (!s.driven.vertices.empty()) {
+            detail::place_driven_vertices(x, s.drivers, s.box, s.rest, s.driven, s.grab, t_end,
+                                          static_cast<float>(sub + 1) / static_cast<float>(n));
         }
         // Step 5: edges, colour by colour (layer-blocked on a grid: the same order where it
         // matters, LayerBlocking).
@@ -536,82 +449,6 @@ void SoftBody::step(double dt) {
     m_time += dt;
     s.last_substep_ms = substeps_ms / n;
     s.last_step_ms = step_watch.elapsed_ms();
-}
-
-// Waves displace the rest positions, bubbles scale; results in colour order.
-void SoftBody::update_rest_state(double t) {
-    State& s = *m_state;
-    std::vector<const WaveDriver*> waves;
-    std::vector<const BubbleDriver*> bubbles;
-    for (const Driver& d : s.drivers) {
-        if (const auto* w = std::get_if<WaveDriver>(&d)) {
-            waves.push_back(w);
-        } else if (const auto* b = std::get_if<BubbleDriver>(&d)) {
-            bubbles.push_back(b);
-        }
-    }
-    const auto nv = static_cast<std::int64_t>(s.rest.size());
-    // Displaced rest positions (double), only when a wave runs.
-    std::vector<Vec3d> shaped;
-    if (!waves.empty()) {
-        shaped.resize(static_cast<std::size_t>(nv));
-        parallel_for(
-            nv,
-            [&](std::int64_t i) {
-                const auto v = static_cast<std::size_t>(i);
-                const Vec3d rest = vec3_cast<double>(s.rest[v]);
-                Vec3d p = rest;
-                for (const WaveDriver* w : waves) {
-                    p += detail::wave_displacement(*w, s.box, rest, t);
-                }
-                shaped[v] = p;
-            },
-            VERTEX_GRAIN);
-    }
-    const auto rest_at = [&](std::int32_t v) {
-        return vec3_cast<double>(s.rest[static_cast<std::size_t>(v)]);
-    };
-    const auto bubble = [&](const Vec3d& p) {
-        double f = 1.0;
-        for (const BubbleDriver* b : bubbles) {
-            f *= detail::bubble_factor(*b, s.box, p, t);
-        }
-        return f;
-    };
-    parallel_for(
-        static_cast<std::int64_t>(s.edge_constraints.vertices.size()),
-        [&](std::int64_t k) {
-            const auto& e = s.edge_constraints.vertices[static_cast<std::size_t>(k)];
-            double length = shaped.empty()
-                                ? s.edge_constraints.rest_lengths0[static_cast<std::size_t>(k)]
-                                : norm(shaped[static_cast<std::size_t>(e[0])] -
-                                       shaped[static_cast<std::size_t>(e[1])]);
-            if (!bubbles.empty()) {
-                length *= std::cbrt(bubble((rest_at(e[0]) + rest_at(e[1])) * 0.5));
-            }
-            s.edge_constraints.rest_lengths[static_cast<std::size_t>(k)] =
-                static_cast<float>(length);
-        },
-        EDGE_GRAIN);
-    parallel_for(
-        static_cast<std::int64_t>(s.tet_constraints.vertices.size()),
-        [&](std::int64_t k) {
-            const geometry::Tet& tet = s.tet_constraints.vertices[static_cast<std::size_t>(k)];
-            double volume = s.tet_constraints.rest_volumes0[static_cast<std::size_t>(k)];
-            if (!shaped.empty()) {
-                volume = geometry::signed_volume(shaped[static_cast<std::size_t>(tet[0])],
-                                                 shaped[static_cast<std::size_t>(tet[1])],
-                                                 shaped[static_cast<std::size_t>(tet[2])],
-                                                 shaped[static_cast<std::size_t>(tet[3])]);
-            }
-            if (!bubbles.empty()) {
-                volume *= bubble(
-                    (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25);
-            }
-            s.tet_constraints.rest_volumes[static_cast<std::size_t>(k)] =
-                static_cast<float>(volume);
-        },
-        TET_GRAIN);
 }
 
 std::span<const Vec3f> SoftBody::positions() const {

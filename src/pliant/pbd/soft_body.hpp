@@ -173,8 +173,6 @@ public:
 private:
     struct State;
     SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options, const TetGrid* grid);
-    // Rest lengths and volumes for time t from the rest-state drivers.
-    void update_rest_state(double t);
 
     SoftBodyOptions m_options;
     double m_time = 0.0;
