@@ -1,7 +1,6 @@
 #include "pliant/pbd/soft_body.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -14,16 +13,13 @@
 #include "pliant/pbd/detail/constraint_sweep.hpp"
 #include "pliant/pbd/detail/driver_apply.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
-#include "pliant/pbd/detail/grains.hpp"
+#include "pliant/pbd/detail/integration.hpp"
 #include "pliant/pbd/detail/inversion_guard.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 
 namespace pliant::pbd {
 
-using detail::EDGE_GRAIN;
 using detail::Float4;
-using detail::TET_GRAIN;
-using detail::VERTEX_GRAIN;
 
 namespace {
 
@@ -65,59 +61,14 @@ double tet_volume(std::span<const Vec3f> p, const geometry::Tet& t) {
                                    vec3_cast<double>(p[static_cast<std::size_t>(t[3])]));
 }
 
-}  // namespace
-
-struct SoftBody::State {
-    detail::BodyBox box;
-    std::vector<Vec3f> rest;                         // #V
-    std::vector<geometry::Tet> tets;                 // #T, input order
-    std::vector<std::array<std::int32_t, 2>> edges;  // #E, sorted
-    double total_rest_volume = 0.0;
-    // Constraint data in colour order: the projection loops stream through them.
-    detail::EdgeConstraints edge_constraints;
-    detail::TetConstraints tet_constraints;
-    detail::InversionFlags inversion;  // tets flagged for the inversion guard (step 6b)
-
-    // x: positions and this substep's inverse mass (0 for pinned and driven vertices).
-    std::vector<Float4> x;
-    std::vector<Vec3f> previous;
-    std::vector<Vec3f> velocities;
-    std::vector<Vec3f> positions;  // copy of x's positions after every step
-    std::vector<float> inv_masses;
-    std::vector<std::uint8_t> pinned;
-
-    std::vector<Driver> drivers;
-    bool has_rest_drivers = false;
-    bool rest_modified = false;  // rest lengths and volumes differ from the construction's
-    detail::DrivenVertices driven;
-    bool kinematics_dirty = false;  // `driven` is to be assigned again
-    detail::DragGrab grab;
-
-    double last_step_ms = 0.0;
-    double last_substep_ms = 0.0;
-};
-
-SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
-    : SoftBody(rest, options, nullptr) {}
-
-SoftBody::SoftBody(const TetGrid& grid, const SoftBodyOptions& options)
-    : SoftBody(grid.mesh, options, &grid) {}
-
-SoftBody::~SoftBody() = default;
-SoftBody::SoftBody(SoftBody&&) noexcept = default;
-SoftBody& SoftBody::operator=(SoftBody&&) noexcept = default;
-
-SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options,
-                   const TetGrid* grid)
-    : m_options(options), m_state(std::make_unique<State>()) {
-    validate_options(options);
-    State& s = *m_state;
+// InvalidInput naming the problem: more than 2³¹ − 1 vertices, non-finite positions, tet indices
+// out of range or repeated within a tet, rest volume ≤ 0, a grid whose lattice does not match.
+void validate_rest_mesh(const geometry::TetMesh& rest, const TetGrid* grid) {
     const std::int64_t nv = static_cast<std::int64_t>(rest.positions.size());
     const std::int64_t nt = static_cast<std::int64_t>(rest.tets.size());
     if (nv > std::numeric_limits<std::int32_t>::max()) {
         throw InvalidInput("pbd::SoftBody: too many vertices (" + std::to_string(nv) + ")");
     }
-    // Step 1: validate the mesh.
     for (std::int64_t v = 0; v < nv; ++v) {
         if (!is_finite(rest.positions[static_cast<std::size_t>(v)])) {
             throw InvalidInput("pbd::SoftBody: rest position " + std::to_string(v) +
@@ -151,23 +102,106 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
                             grid->tet_cell.size() != rest.tets.size())) {
         throw InvalidInput("pbd::SoftBody: the grid's lattice does not match its mesh");
     }
+}
+
+// The axis-aligned box of rest (#V, world units); size 1 for a degenerate box, the default box
+// for no vertex.
+detail::BodyBox body_box(std::span<const Vec3f> rest) {
+    detail::BodyBox box;
+    if (!rest.empty()) {
+        Vec3d lo = vec3_cast<double>(rest[0]);
+        Vec3d hi = lo;
+        for (const Vec3f& p : rest) {
+            lo = min(lo, vec3_cast<double>(p));
+            hi = max(hi, vec3_cast<double>(p));
+        }
+        box.lo = lo;
+        box.hi = hi;
+        box.centre = (lo + hi) * 0.5;
+        const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+        box.size = size > 0.0 ? size : 1.0;
+    }
+    return box;
+}
+
+// The float constants of a substep h (s) under options o: computed in double, rounded once.
+struct SubstepConstants {
+    detail::SubstepMotion motion;
+    detail::ConstraintStiffness edges;    // k β (soft_body.hpp, "Stiffness"), α_edge / h²
+    detail::ConstraintStiffness volumes;  // k, α_volume / h²
+};
+
+SubstepConstants substep_constants(const SoftBodyOptions& o, double h) {
+    SubstepConstants c;
+    c.motion.h = static_cast<float>(h);
+    c.motion.inv_h = 1.0f / c.motion.h;
+    c.motion.keep = static_cast<float>(std::max(0.0, 1.0 - o.damping * h));
+    c.motion.gravity_h = vec3_cast<float>(o.gravity * h);
+    c.edges.inv_k = static_cast<float>(1.0 / (o.stiffness * o.edge_share));
+    c.edges.alpha = static_cast<float>(o.edge_compliance / (h * h));
+    c.volumes.inv_k = static_cast<float>(1.0 / o.stiffness);
+    c.volumes.alpha = static_cast<float>(o.volume_compliance / (h * h));
+    return c;
+}
+
+}  // namespace
+
+struct SoftBody::State {
+    detail::BodyBox box;                             // of rest, for the drivers
+    std::vector<Vec3f> rest;                         // #V, world units
+    std::vector<geometry::Tet> tets;                 // #T, input order
+    std::vector<std::array<std::int32_t, 2>> edges;  // #E, sorted
+    double total_rest_volume = 0.0;                  // world units³, at construction
+    // Constraint data in colour order: the projection loops stream through them.
+    detail::EdgeConstraints edge_constraints;
+    detail::TetConstraints tet_constraints;
+    detail::InversionFlags inversion;  // tets flagged for the inversion guard (step 3b)
+
+    // #V each. x: positions and this substep's inverse mass (0 for pinned and driven vertices);
+    // previous: x's positions at the substep's start; velocities: world units / s, those of the
+    // last substep; positions: x's positions after the last step.
+    std::vector<Float4> x;
+    std::vector<Vec3f> previous;
+    std::vector<Vec3f> velocities;
+    std::vector<Vec3f> positions;
+    std::vector<float> inv_masses;     // 1/kg; 0 = pinned or in no tet
+    std::vector<std::uint8_t> pinned;  // 1 = pinned
+
+    std::vector<Driver> drivers;
+    bool has_rest_drivers = false;
+    bool rest_modified = false;  // rest lengths and volumes differ from the construction's
+    detail::DrivenVertices driven;
+    bool kinematics_dirty = false;  // `driven` is to be assigned again
+    detail::DragGrab grab;
+
+    double last_step_ms = 0.0;
+    double last_substep_ms = 0.0;
+};
+
+SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
+    : SoftBody(rest, options, nullptr) {}
+
+SoftBody::SoftBody(const TetGrid& grid, const SoftBodyOptions& options)
+    : SoftBody(grid.mesh, options, &grid) {}
+
+SoftBody::~SoftBody() = default;
+SoftBody::SoftBody(SoftBody&&) noexcept = default;
+SoftBody& SoftBody::operator=(SoftBody&&) noexcept = default;
+
+SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options,
+                   const TetGrid* grid)
+    : m_options(options), m_state(std::make_unique<State>()) {
+    validate_options(options);
+    State& s = *m_state;
+    const std::int64_t nv = static_cast<std::int64_t>(rest.positions.size());
+    const std::int64_t nt = static_cast<std::int64_t>(rest.tets.size());
+    // Step 1: validate the mesh.
+    validate_rest_mesh(rest, grid);
     s.rest = rest.positions;
     s.tets = rest.tets;
 
     // Step 2: the box drivers work in.
-    if (nv > 0) {
-        Vec3d lo = vec3_cast<double>(s.rest[0]);
-        Vec3d hi = lo;
-        for (const Vec3f& p : s.rest) {
-            lo = min(lo, vec3_cast<double>(p));
-            hi = max(hi, vec3_cast<double>(p));
-        }
-        s.box.lo = lo;
-        s.box.hi = hi;
-        s.box.centre = (lo + hi) * 0.5;
-        const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-        s.box.size = size > 0.0 ? size : 1.0;
-    }
+    s.box = body_box(s.rest);
 
     // Step 3: masses: a quarter of each tet's rest mass to each of its vertices.
     std::vector<double> mass(static_cast<std::size_t>(nv), 0.0);
@@ -331,24 +365,15 @@ void SoftBody::set_velocities(std::span<const Vec3f> velocities) {
     std::copy(velocities.begin(), velocities.end(), s.velocities.begin());
 }
 
-void SoftBody::step(double dt) {
-    if (!(dt > 0.0) || !std::isfinite(dt)) {
-        throw InvalidInput("pbd::SoftBody::step: dt (" + std::to_string(dt) +
-                           ") must be finite and > 0");
-    }
-    Stopwatch step_watch;
+void SoftBody::prepare_drivers(double t_end) {
     State& s = *m_state;
-    const auto nv = static_cast<std::int64_t>(s.rest.size());
-
-    // Step 1: which vertex follows which kinematic driver (the last added; drag last; pins win).
     if (s.kinematics_dirty) {
         detail::assign_driven_vertices(s.drivers, s.box, s.rest, s.pinned, s.grab.vertices,
                                        s.driven);
         s.kinematics_dirty = false;
     }
-    // Step 2: rest-state drivers at the step's end time.
     if (s.has_rest_drivers) {
-        detail::apply_rest_drivers(s.drivers, s.box, s.rest, m_time + dt, s.edge_constraints,
+        detail::apply_rest_drivers(s.drivers, s.box, s.rest, t_end, s.edge_constraints,
                                    s.tet_constraints);
         s.rest_modified = true;
     } else if (s.rest_modified) {
@@ -359,90 +384,47 @@ void SoftBody::step(double dt) {
     if (s.grab.drag && !s.grab.vertices.empty()) {
         s.grab.from = s.positions[static_cast<std::size_t>(s.grab.drag->vertex)];
     }
+}
 
+void SoftBody::step(double dt) {
+    if (!(dt > 0.0) || !std::isfinite(dt)) {
+        throw InvalidInput("pbd::SoftBody::step: dt (" + std::to_string(dt) +
+                           ") must be finite and > 0");
+    }
+    Stopwatch step_watch;
+    State& s = *m_state;
+    prepare_drivers(m_time + dt);
     const int n = m_options.substeps;
     const double h = dt / n;
-    const float hf = static_cast<float>(h);
-    const Vec3f gravity_h = vec3_cast<float>(m_options.gravity * h);
-    const float keep = static_cast<float>(std::max(0.0, 1.0 - m_options.damping * h));
-    const auto inv_k = static_cast<float>(1.0 / m_options.stiffness);
-    const auto edge_inv_k = static_cast<float>(1.0 / (m_options.stiffness * m_options.edge_share));
-    const auto edge_alpha = static_cast<float>(m_options.edge_compliance / (h * h));
-    const auto volume_alpha = static_cast<float>(m_options.volume_compliance / (h * h));
-    Float4* x = s.x.data();
+    const SubstepConstants k = substep_constants(m_options, h);
     // The kernels give the same bits (projection_avx2.hpp): the choice is for speed only.
     const bool use_avx2 = pliant::has_avx2();
-    const float inv_h = 1.0f / hf;
-    // Step 7's velocity of vertex v (not pinned) from its motion over the substep.
-    const auto motion = [&](std::size_t v) {
-        const Float4& p = x[v];
-        const Vec3f& q = s.previous[v];
-        return Vec3f{(p.x - q.x) * inv_h, (p.y - q.y) * inv_h, (p.z - q.z) * inv_h} * keep;
-    };
-    // Step 3 on vertex v with velocity vel (updated for a free vertex).
-    const auto predict = [&](std::size_t v, Vec3f& vel) {
-        const float w = s.inv_masses[v];
-        Float4& p = x[v];
-        s.previous[v] = {p.x, p.y, p.z};
-        if (w > 0.0f) {
-            vel += gravity_h;
-            p = {p.x + hf * vel.x, p.y + hf * vel.y, p.z + hf * vel.z, w};
-        } else {
-            p.w = 0.0f;
-        }
-    };
+    Float4* x = s.x.data();
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
-        const double t_end = m_time + h * (sub + 1);
-        // Step 3: predict free vertices; pinned ones stay. After the first substep this ran
-        // fused with the previous substep's step 7.
+        // Step 1 (soft_body.hpp): predict; after the first substep, fused into the previous
+        // substep's step 4. Driven vertices at their targets for the substep's end, w = 0.
         if (sub == 0) {
-            parallel_for(
-                nv,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    Vec3f vel = s.velocities[v];  // step 7 of the last substep overwrites it
-                    predict(v, vel);
-                },
-                VERTEX_GRAIN);
+            detail::predict(x, s.previous, s.velocities, s.inv_masses, k.motion);
         }
-        // Step 4: driven vertices at their targets for t_end, inverse mass 0.
         if (!s.driven.vertices.empty()) {
-            detail::place_driven_vertices(x, s.drivers, s.box, s.rest, s.driven, s.grab, t_end,
+            detail::place_driven_vertices(x, s.drivers, s.box, s.rest, s.driven, s.grab,
+                                          m_time + h * (sub + 1),
                                           static_cast<float>(sub + 1) / static_cast<float>(n));
         }
-        // Step 5: edges, colour by colour (layer-blocked on a grid: the same order where it
-        // matters, LayerBlocking).
-        detail::project_edges(x, s.edge_constraints, {edge_inv_k, edge_alpha}, use_avx2);
-        // Step 6: tet volumes, colour by colour; the tets at risk of inversion flagged.
-        detail::project_tets(x, s.tet_constraints, {inv_k, volume_alpha}, use_avx2,
-                             s.inversion.tet_at_risk, s.inversion.colour_at_risk);
-        // Step 6b: the inversion guard on the tets flagged at risk, in colour order.
+        // Step 2: edge lengths, colour by colour.
+        detail::project_edges(x, s.edge_constraints, k.edges, use_avx2);
+        // Step 3: tet volumes, colour by colour, flagging the tets at risk of inversion; 3b: the
+        // inversion guard on them.
+        detail::project_tets(x, s.tet_constraints, k.volumes, use_avx2, s.inversion.tet_at_risk,
+                             s.inversion.colour_at_risk);
         detail::guard_flagged_tets(x, s.tet_constraints, s.inversion);
-        // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
-        // velocities need not be stored) or, after the last substep, with the copy of the
-        // positions.
+        // Step 4: velocities from the motion, damped; with the next substep's prediction, or
+        // after the last substep stored with the positions.
         if (sub + 1 < n) {
-            parallel_for(
-                nv,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    // Only free vertices use vel; pinned ones keep velocity 0.
-                    Vec3f vel = s.pinned[v] != 0 ? Vec3f{} : motion(v);
-                    predict(v, vel);
-                },
-                VERTEX_GRAIN);
+            detail::update_velocities_and_predict(x, s.previous, s.inv_masses, s.pinned, k.motion);
         } else {
-            parallel_for(
-                nv,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    if (s.pinned[v] == 0) {
-                        s.velocities[v] = motion(v);
-                    }
-                    s.positions[v] = {x[v].x, x[v].y, x[v].z};
-                },
-                VERTEX_GRAIN);
+            detail::update_velocities(x, s.previous, s.pinned, k.motion, s.velocities, s.positions);
         }
     }
     const double substeps_ms = substeps_watch.elapsed_ms();

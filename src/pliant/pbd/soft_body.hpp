@@ -173,6 +173,10 @@ public:
 private:
     struct State;
     SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options, const TetGrid* grid);
+    // The drivers for a step ending at t_end (s): driven vertices assigned again when drivers, drag
+    // or pins changed; rest lengths and volumes for t_end (back to the construction's once the
+    // rest-state drivers are gone); the drag's start.
+    void prepare_drivers(double t_end);
 
     SoftBodyOptions m_options;
     double m_time = 0.0;
