@@ -1,3 +1,8 @@
+// SoftBody: validation, setup, the public API and the order of a step's stages. The stages of
+// the method (soft_body.hpp) live in detail/: integration.hpp (steps 1 and 4: prediction,
+// velocities), driver_apply.hpp (the drivers: driven vertices, targets, rest state),
+// constraint_sweep.hpp (steps 2 and 3: the colour sweep) over the layout of
+// constraint_layout.hpp, inversion_guard.hpp (step 3b), projection.hpp (the kernels).
 #include "pliant/pbd/soft_body.hpp"
 
 #include <algorithm>
@@ -427,6 +432,7 @@ void SoftBody::step(double dt) {
             detail::update_velocities(x, s.previous, s.pinned, k.motion, s.velocities, s.positions);
         }
     }
+    // The step's wall clock, for stats().
     const double substeps_ms = substeps_watch.elapsed_ms();
     m_time += dt;
     s.last_substep_ms = substeps_ms / n;

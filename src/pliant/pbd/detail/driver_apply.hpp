@@ -41,8 +41,8 @@ void grab_vertices(const DragDriver& drag, std::span<const Vec3f> positions, Dra
 // Which vertex follows which kinematic driver: a twist holds the vertices of rest (#V) within
 // grip · L (+ 1e-6 L) of its axis's two faces of `box`, a rotate holds every vertex; a vertex held
 // by several follows the last driver added, the drag (grabbed: ascending) overrides them, and
-// pinned vertices (#V, 1 = pinned) follow none. Writes `driven`, reusing its storage. O(#V ·
-// drivers).
+// pinned vertices (#V, 1 = pinned) follow none. Writes `driven`, reusing its storage;
+// O(#V · drivers).
 void assign_driven_vertices(std::span<const Driver> drivers, const BodyBox& box,
                             std::span<const Vec3f> rest, std::span<const std::uint8_t> pinned,
                             std::span<const std::int32_t> grabbed, DrivenVertices& driven);
