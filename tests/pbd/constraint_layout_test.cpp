@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <vector>
 
 #include "pliant/pbd/tet_edges.hpp"
@@ -45,20 +46,20 @@ std::vector<double> rest_volumes(const TetGrid& grid) {
 }
 
 EdgeConstraints grid_edges(const TetGrid& grid) {
-    const auto edges = tet_edges(grid.mesh.tets, grid.mesh.num_vertices());
+    const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
     return layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions,
                                    &grid);
 }
 
 TetConstraints grid_tets(const TetGrid& grid) {
     return layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid),
-                                  grid.mesh.num_vertices(), &grid);
+                                  std::ssize(grid.mesh.positions), &grid);
 }
 
 TEST(ConstraintLayout, EdgesOfAColourAreTheColouringsWithTheirRestLengths) {
     for (const bool full_box : {true, false}) {
         const TetGrid grid = grid_over({12, 10, 22}, full_box);
-        const auto edges = tet_edges(grid.mesh.tets, grid.mesh.num_vertices());
+        const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
         const EdgeConstraints laid = grid_edges(grid);
         const ConstraintColoring& coloring = laid.coloring;
         ASSERT_EQ(laid.vertices.size(), edges.size());
@@ -163,12 +164,12 @@ TEST(ConstraintLayout, TetsInColourOrderWithTheirRestVolumes) {
 
 TEST(ConstraintLayout, OtherMeshesHaveNoRunsAndNoBlocking) {
     const TetGrid grid = grid_over({8, 8, 8}, true);
-    const auto edges = tet_edges(grid.mesh.tets, grid.mesh.num_vertices());
+    const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
     const EdgeConstraints laid_edges =
         layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions, nullptr);
     const TetConstraints laid_tets =
         layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid),
-                               grid.mesh.num_vertices(), nullptr);
+                               std::ssize(grid.mesh.positions), nullptr);
     EXPECT_TRUE(laid_edges.runs.empty());
     EXPECT_TRUE(laid_edges.run_offsets.empty());
     EXPECT_EQ(laid_edges.blocking.num_layers, 0);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -72,12 +73,12 @@ TEST(ConstraintSweep, BlockedSweepKeepsTheColourOrderAtEveryVertex) {
     for (const bool full_box : {true, false}) {
         // 6 × 5 × 21 cells: several slabs of LAYERS_PER_SLAB layers and a partial last one.
         const TetGrid grid = grid_over({12, 10, 42}, full_box);
-        const auto edges = tet_edges(grid.mesh.tets, grid.mesh.num_vertices());
+        const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
         const EdgeConstraints laid_edges = layout_edge_constraints(
             color_grid_edges(grid, edges), edges, grid.mesh.positions, &grid);
         const std::vector<double> volumes(grid.mesh.tets.size(), 1.0);
         const TetConstraints laid_tets = layout_tet_constraints(
-            color_grid_tets(grid), grid.mesh.tets, volumes, grid.mesh.num_vertices(), &grid);
+            color_grid_tets(grid), grid.mesh.tets, volumes, std::ssize(grid.mesh.positions), &grid);
         ASSERT_GT(laid_edges.blocking.num_layers, 2 * LAYERS_PER_SLAB);
         ASSERT_GT(laid_tets.blocking.num_layers, 2 * LAYERS_PER_SLAB);
         EXPECT_GT(laid_edges.blocking.max_skew, 0);  // else the ordering is not at stake

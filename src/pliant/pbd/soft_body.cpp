@@ -69,8 +69,8 @@ double tet_volume(std::span<const Vec3f> p, const geometry::Tet& t) {
 // InvalidInput naming the problem: more than 2³¹ − 1 vertices, non-finite positions, tet indices
 // out of range or repeated within a tet, rest volume ≤ 0, a grid whose lattice does not match.
 void validate_rest_mesh(const geometry::TetMesh& rest, const TetGrid* grid) {
-    const std::int64_t nv = static_cast<std::int64_t>(rest.positions.size());
-    const std::int64_t nt = static_cast<std::int64_t>(rest.tets.size());
+    const auto nv = static_cast<std::int64_t>(rest.positions.size());
+    const auto nt = static_cast<std::int64_t>(rest.tets.size());
     if (nv > std::numeric_limits<std::int32_t>::max()) {
         throw InvalidInput("pbd::SoftBody: too many vertices (" + std::to_string(nv) + ")");
     }
@@ -198,8 +198,8 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
     : m_options(options), m_state(std::make_unique<State>()) {
     validate_options(options);
     State& s = *m_state;
-    const std::int64_t nv = static_cast<std::int64_t>(rest.positions.size());
-    const std::int64_t nt = static_cast<std::int64_t>(rest.tets.size());
+    const auto nv = static_cast<std::int64_t>(rest.positions.size());
+    const auto nt = static_cast<std::int64_t>(rest.tets.size());
     // Step 1: validate the mesh.
     validate_rest_mesh(rest, grid);
     s.rest = rest.positions;

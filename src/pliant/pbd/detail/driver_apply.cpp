@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <iterator>
 #include <variant>
 
 #include "pliant/core/parallel.hpp"
