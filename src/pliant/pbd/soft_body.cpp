@@ -1,7 +1,11 @@
+// SoftBody: validation, setup, the public API and the order of a step's stages. The stages of
+// the method (soft_body.hpp) live in detail/: integration.hpp (steps 1 and 4: prediction,
+// velocities), driver_apply.hpp (the drivers: driven vertices, targets, rest state),
+// constraint_sweep.hpp (steps 2 and 3: the colour sweep) over the layout of
+// constraint_layout.hpp, inversion_guard.hpp (step 3b), projection.hpp (the kernels).
 #include "pliant/pbd/soft_body.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -10,24 +14,19 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/pbd/detail/constraint_layout.hpp"
+#include "pliant/pbd/detail/constraint_sweep.hpp"
+#include "pliant/pbd/detail/driver_apply.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
+#include "pliant/pbd/detail/integration.hpp"
+#include "pliant/pbd/detail/inversion_guard.hpp"
 #include "pliant/pbd/detail/projection.hpp"
-#include "pliant/pbd/detail/projection_avx2.hpp"
 
 namespace pliant::pbd {
 
 using detail::Float4;
 
 namespace {
-
-// Fixed chunk sizes (multiples of 8: SIMD groups never straddle a chunk).
-constexpr std::int64_t VERTEX_GRAIN = 4096;
-constexpr std::int64_t EDGE_GRAIN = 2048;
-constexpr std::int64_t TET_GRAIN = 1024;
-constexpr std::int32_t DRAG = -2;  // driven_by code of the drag
-// Lattice layers per slab of the blocked sweep (LayerBlocking): enough constraints per colour for
-// a few chunks, few enough that a slab's vertices stay in the L2 cache.
-constexpr std::int64_t LAYERS_PER_SLAB = 4;
 
 void validate_options(const SoftBodyOptions& o) {
     const auto fail = [](const char* field, double value, const char* rule) {
@@ -67,309 +66,14 @@ double tet_volume(std::span<const Vec3f> p, const geometry::Tet& t) {
                                    vec3_cast<double>(p[static_cast<std::size_t>(t[3])]));
 }
 
-// The tets of one colour of a full-box TetGrid, whose vertex index is the lattice index: cells of
-// one parity class in lattice order, tet q of the colour in cell (i0 + 2 a, j0 + 2 b, k0 + 2 c)
-// with q = a + ni (b + nj c), its vertices the cell's base index + offsets[m]. The AVX2 kernel
-// derives the vertices from the base instead of loading them.
-struct TetRun {
-    std::array<std::int32_t, 4> offsets{};
-    std::int64_t i0 = 0, j0 = 0, k0 = 0;
-    std::int64_t ni = 0, nj = 0, nk = 0;
-};
-
-// A run of edges of one colour: edge q ∈ [begin, next run's begin) joins first + stride (q − begin)
-// and that + span (stride 1 or 2). On a TetGrid nearly every edge lies in a run of a lattice row.
-struct EdgeRun {
-    std::int64_t begin = 0;
-    std::int32_t first = 0;
-    std::int32_t stride = 1;
-    std::int32_t span = 0;
-};
-
-// Layer blocking of a grid's colour sweep, for cache reuse. Every constraint has a layer key z
-// (its lowest lattice z; a tet, its cell's), every vertex it holds lies in layer z or z + 1, and a
-// colour's constraints are sorted by key. The sweep runs slab after slab; in slab t colour c
-// projects its constraints of layers [t − skew[c], t − skew[c] + LAYERS_PER_SLAB). The skews are
-// the smallest with skew[c'] − skew[c] ≥ z − z' for every two constraints of colours c < c' (z,
-// z' their keys) that share a vertex: such a pair then lands in slabs t ≤ t', and colours run in
-// order within a slab, so every two constraints sharing a vertex are projected in the order of
-// their colours, as in the plain colour-by-colour sweep (constraints sharing no vertex commute):
-// the results are bitwise those of the plain sweep. A slab touches LAYERS_PER_SLAB + max_skew + 1
-// vertex layers rather than the whole body per colour.
-struct LayerBlocking {
-    std::int64_t num_layers = 0;  // 0: no blocking (plain sweep)
-    std::int64_t max_skew = 0;
-    std::vector<std::int64_t> skew;  // per colour
-    // Per colour c, at c · (num_layers + 1) + z: the first constraint of the colour (index within
-    // the colour) with key ≥ z.
-    std::vector<std::int64_t> layer_begin;
-};
-
-}  // namespace
-
-struct SoftBody::State {
-    detail::BodyBox box;
-    std::vector<Vec3f> rest;                         // #V
-    std::vector<geometry::Tet> tets;                 // #T, input order
-    std::vector<std::array<std::int32_t, 2>> edges;  // #E, sorted
-    ConstraintColoring edge_coloring;
-    ConstraintColoring tet_coloring;
-    // Constraint data in colour order (colour c = [offsets[c], offsets[c + 1])): the projection
-    // loops stream through them. On a grid the edges of a colour are reordered by layer and
-    // direction (sort_edges_into_runs), the tets keep the colouring's order.
-    std::vector<std::array<std::int32_t, 2>> edge_vertices;
-    std::vector<float> rest_lengths0;  // at construction
-    std::vector<float> rest_lengths;   // current (rest-state drivers)
-    std::vector<geometry::Tet> tet_vertices;
-    std::vector<float> rest_volumes0;
-    std::vector<float> rest_volumes;
-    double total_rest_volume = 0.0;
-    // Inversion guard (step 6b): per tet in colour order, 1 when the sweep found it at risk; per
-    // tet colour, 1 when one of its tets is; the flagged tets, scratch. Cleared by the guard.
-    std::vector<std::uint8_t> tet_at_risk;
-    std::vector<std::uint8_t> colour_at_risk;
-    std::vector<std::int64_t> guarded;
-    // On a TetGrid: the runs of edge_vertices, those of colour c at
-    // edge_runs[edge_run_offsets[c] .. edge_run_offsets[c + 1]); empty for other meshes.
-    std::vector<EdgeRun> edge_runs;
-    std::vector<std::int64_t> edge_run_begins;  // edge_runs[r].begin
-    std::vector<std::int64_t> edge_run_offsets;
-    LayerBlocking edge_blocking;  // on a TetGrid; none otherwise
-    LayerBlocking tet_blocking;
-    // Per tet colour of a full-box TetGrid (TetRun); empty for other meshes.
-    std::vector<TetRun> tet_runs;
-    std::int64_t lattice_x = 0;   // lattice vertices along x
-    std::int64_t lattice_xy = 0;  // … in one z layer
-
-    // x: positions and this substep's inverse mass (0 for pinned and driven vertices).
-    std::vector<Float4> x;
-    std::vector<Vec3f> previous;
-    std::vector<Vec3f> velocities;
-    std::vector<Vec3f> positions;  // copy of x's positions after every step
-    std::vector<float> inv_masses;
-    std::vector<std::uint8_t> pinned;
-
-    std::vector<Driver> drivers;
-    bool has_rest_drivers = false;
-    bool rest_modified = false;
-    std::vector<std::int32_t> driven_vertices;  // sorted, not pinned
-    std::vector<std::int32_t> driven_by;        // per driven vertex: driver index or DRAG
-    bool kinematics_dirty = false;
-
-    std::optional<DragDriver> drag;
-    std::vector<std::int32_t> drag_vertices;
-    std::vector<Vec3f> drag_offsets;  // from the grabbed vertex, at grab time
-    Vec3f drag_from{};                // grabbed vertex at the step's start
-
-    double last_step_ms = 0.0;
-    double last_substep_ms = 0.0;
-};
-
-namespace {
-
-// The runs of every tet colour (tet_vertices in colour order) when the grid keeps every lattice
-// vertex (full box) and every colour is the run its lattice predicts, checked tet by tet; empty
-// otherwise.
-std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring& coloring,
-                                  std::span<const geometry::Tet> tet_vertices,
-                                  std::int64_t num_vertices) {
-    const std::int64_t nx = grid.cells[0];
-    const std::int64_t ny = grid.cells[1];
-    const std::int64_t nz = grid.cells[2];
-    const std::int64_t lx = nx + 1;
-    const std::int64_t lxy = lx * (ny + 1);
-    if (num_vertices != lxy * (nz + 1) || tet_vertices.empty()) {
-        return {};
-    }
-    std::vector<TetRun> runs(static_cast<std::size_t>(coloring.num_colors()));
-    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count = coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        const std::int64_t cell = grid.tet_cell[static_cast<std::size_t>(
-            coloring.order[static_cast<std::size_t>(begin)])];
-        TetRun& r = runs[static_cast<std::size_t>(c)];
-        r.i0 = cell % nx;
-        r.j0 = (cell / nx) % ny;
-        r.k0 = cell / (nx * ny);
-        r.ni = (nx - r.i0 + 1) / 2;
-        r.nj = (ny - r.j0 + 1) / 2;
-        r.nk = (nz - r.k0 + 1) / 2;
-        if (r.i0 > 1 || r.j0 > 1 || r.k0 > 1 || r.ni * r.nj * r.nk != count) {
-            return {};
-        }
-        const std::int64_t base0 = r.i0 + lx * r.j0 + lxy * r.k0;
-        const geometry::Tet& first = tet_vertices[static_cast<std::size_t>(begin)];
-        for (std::size_t m = 0; m < 4; ++m) {
-            r.offsets[m] = static_cast<std::int32_t>(first[m] - base0);
-        }
-        for (std::int64_t q = 0; q < count; ++q) {
-            const std::int64_t a = q % r.ni;
-            const std::int64_t b = (q / r.ni) % r.nj;
-            const std::int64_t k = q / (r.ni * r.nj);
-            const std::int64_t base = r.i0 + 2 * a + lx * (r.j0 + 2 * b) + lxy * (r.k0 + 2 * k);
-            const geometry::Tet& t = tet_vertices[static_cast<std::size_t>(begin + q)];
-            for (std::size_t m = 0; m < 4; ++m) {
-                if (t[m] != base + r.offsets[m]) {
-                    return {};
-                }
-            }
-        }
-    }
-    return runs;
-}
-
-// The blocking of constraints (in colour order, sorted by key within each colour; vertex_z:
-// lattice z per vertex); none when a key is out of order or a vertex lies outside layers z, z + 1
-// of a constraint holding it, or for more than 64 colours.
-template <std::size_t K>
-LayerBlocking block_layers(const ConstraintColoring& coloring,
-                           const std::vector<std::array<std::int32_t, K>>& constraints,
-                           const std::vector<std::int32_t>& keys, std::int64_t num_layers,
-                           const std::vector<std::int32_t>& vertex_z) {
-    const std::int32_t num_colors = coloring.num_colors();
-    if (num_colors > 64 || num_layers <= 0) {
-        return {};
-    }
-    LayerBlocking blocking;
-    blocking.num_layers = num_layers;
-    blocking.layer_begin.resize(static_cast<std::size_t>(num_colors * (num_layers + 1)));
-    // Per vertex: bit c of `below` when colour c holds it in a constraint of key z_v − 1, of
-    // `level` of key z_v.
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(vertex_z.size(), {0, 0});
-    for (std::int32_t c = 0; c < num_colors; ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
-        const auto* first = keys.data() + begin;
-        const auto* last = keys.data() + end;
-        if (!std::is_sorted(first, last) || *first < 0 || *(last - 1) >= num_layers) {
-            return {};
-        }
-        for (std::int64_t z = 0; z <= num_layers; ++z) {
-            blocking.layer_begin[static_cast<std::size_t>(c * (num_layers + 1) + z)] =
-                std::lower_bound(first, last, z) - first;
-        }
-        const std::uint64_t bit = std::uint64_t{1} << c;
-        for (std::int64_t q = begin; q < end; ++q) {
-            for (const std::int32_t v : constraints[static_cast<std::size_t>(q)]) {
-                const std::int32_t offset =
-                    keys[static_cast<std::size_t>(q)] - vertex_z[static_cast<std::size_t>(v)];
-                if (offset == -1) {
-                    masks[static_cast<std::size_t>(v)].first |= bit;
-                } else if (offset == 0) {
-                    masks[static_cast<std::size_t>(v)].second |= bit;
-                } else {
-                    return {};
-                }
-            }
-        }
-    }
-    std::sort(masks.begin(), masks.end());
-    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
-    // Colours in order: every bound on skew[c'] comes from colours c < c', already final.
-    blocking.skew.assign(static_cast<std::size_t>(num_colors), 0);
-    for (std::int32_t later = 0; later < num_colors; ++later) {
-        for (const auto& [below, level] : masks) {
-            if (((below | level) >> later & 1) == 0) {
-                continue;
-            }
-            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
-            for (std::int32_t c = 0; c < later; ++c) {
-                if (((below | level) >> c & 1) != 0) {
-                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
-                    auto& skew = blocking.skew[static_cast<std::size_t>(later)];
-                    skew = std::max(
-                        skew, blocking.skew[static_cast<std::size_t>(c)] + offset - later_offset);
-                }
-            }
-        }
-        blocking.max_skew =
-            std::max(blocking.max_skew, blocking.skew[static_cast<std::size_t>(later)]);
-    }
-    return blocking;
-}
-
-// Within each colour, orders the edges (and their rest lengths) by layer (the lower lattice z of
-// their vertices), then direction b − a, then a (the order within a colour does not change a
-// result: its edges share no vertex), and cuts them into runs of equal direction and equal steps
-// of a.
-void sort_edges_into_runs(const ConstraintColoring& coloring,
-                          const std::vector<std::int32_t>& vertex_z,
-                          std::vector<std::array<std::int32_t, 2>>& edges,
-                          std::vector<float>& rest_lengths, std::vector<EdgeRun>& runs,
-                          std::vector<std::int64_t>& run_offsets) {
-    std::vector<std::int64_t> perm;
-    std::vector<std::array<std::int32_t, 2>> sorted_edges;
-    std::vector<float> sorted_lengths;
-    run_offsets.assign(1, 0);
-    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
-        perm.resize(static_cast<std::size_t>(end - begin));
-        for (std::int64_t q = begin; q < end; ++q) {
-            perm[static_cast<std::size_t>(q - begin)] = q;
-        }
-        const auto edge = [&](std::int64_t q) -> const std::array<std::int32_t, 2>& {
-            return edges[static_cast<std::size_t>(q)];
-        };
-        const auto layer = [&](std::int64_t q) {
-            return std::min(vertex_z[static_cast<std::size_t>(edge(q)[0])],
-                            vertex_z[static_cast<std::size_t>(edge(q)[1])]);
-        };
-        std::stable_sort(perm.begin(), perm.end(), [&](std::int64_t p, std::int64_t q) {
-            return std::pair(layer(p), edge(p)[1] - edge(p)[0]) <
-                   std::pair(layer(q), edge(q)[1] - edge(q)[0]);
-        });
-        sorted_edges.clear();
-        sorted_lengths.clear();
-        for (const std::int64_t q : perm) {
-            sorted_edges.push_back(edge(q));
-            sorted_lengths.push_back(rest_lengths[static_cast<std::size_t>(q)]);
-        }
-        std::copy(sorted_edges.begin(), sorted_edges.end(),
-                  edges.begin() + static_cast<std::ptrdiff_t>(begin));
-        std::copy(sorted_lengths.begin(), sorted_lengths.end(),
-                  rest_lengths.begin() + static_cast<std::ptrdiff_t>(begin));
-        for (std::int64_t q = begin; q < end;) {
-            EdgeRun run{q, edge(q)[0], 1, edge(q)[1] - edge(q)[0]};
-            std::int64_t next = q + 1;
-            if (next < end && edge(next)[1] - edge(next)[0] == run.span &&
-                (edge(next)[0] - run.first == 1 || edge(next)[0] - run.first == 2)) {
-                run.stride = edge(next)[0] - run.first;
-                while (next < end && edge(next)[1] - edge(next)[0] == run.span &&
-                       edge(next)[0] == run.first + run.stride * (next - q)) {
-                    ++next;
-                }
-            }
-            runs.push_back(run);
-            q = next;
-        }
-        run_offsets.push_back(static_cast<std::int64_t>(runs.size()));
-    }
-}
-
-}  // namespace
-
-SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
-    : SoftBody(rest, options, nullptr) {}
-
-SoftBody::SoftBody(const TetGrid& grid, const SoftBodyOptions& options)
-    : SoftBody(grid.mesh, options, &grid) {}
-
-SoftBody::~SoftBody() = default;
-SoftBody::SoftBody(SoftBody&&) noexcept = default;
-SoftBody& SoftBody::operator=(SoftBody&&) noexcept = default;
-
-SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options,
-                   const TetGrid* grid)
-    : m_options(options), m_state(std::make_unique<State>()) {
-    validate_options(options);
-    State& s = *m_state;
-    const std::int64_t nv = static_cast<std::int64_t>(rest.positions.size());
-    const std::int64_t nt = static_cast<std::int64_t>(rest.tets.size());
+// InvalidInput naming the problem: more than 2³¹ − 1 vertices, non-finite positions, tet indices
+// out of range or repeated within a tet, rest volume ≤ 0, a grid whose lattice does not match.
+void validate_rest_mesh(const geometry::TetMesh& rest, const TetGrid* grid) {
+    const auto nv = static_cast<std::int64_t>(rest.positions.size());
+    const auto nt = static_cast<std::int64_t>(rest.tets.size());
     if (nv > std::numeric_limits<std::int32_t>::max()) {
         throw InvalidInput("pbd::SoftBody: too many vertices (" + std::to_string(nv) + ")");
     }
-    // Step 1: validate the mesh.
     for (std::int64_t v = 0; v < nv; ++v) {
         if (!is_finite(rest.positions[static_cast<std::size_t>(v)])) {
             throw InvalidInput("pbd::SoftBody: rest position " + std::to_string(v) +
@@ -403,23 +107,106 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
                             grid->tet_cell.size() != rest.tets.size())) {
         throw InvalidInput("pbd::SoftBody: the grid's lattice does not match its mesh");
     }
+}
+
+// The axis-aligned box of rest (#V, world units); size 1 for a degenerate box, the default box
+// for no vertex.
+detail::BodyBox body_box(std::span<const Vec3f> rest) {
+    detail::BodyBox box;
+    if (!rest.empty()) {
+        Vec3d lo = vec3_cast<double>(rest[0]);
+        Vec3d hi = lo;
+        for (const Vec3f& p : rest) {
+            lo = min(lo, vec3_cast<double>(p));
+            hi = max(hi, vec3_cast<double>(p));
+        }
+        box.lo = lo;
+        box.hi = hi;
+        box.centre = (lo + hi) * 0.5;
+        const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+        box.size = size > 0.0 ? size : 1.0;
+    }
+    return box;
+}
+
+// The float constants of a substep h (s) under options o: computed in double, rounded once.
+struct SubstepConstants {
+    detail::SubstepMotion motion;
+    detail::ConstraintStiffness edges;    // k β (soft_body.hpp, "Stiffness"), α_edge / h²
+    detail::ConstraintStiffness volumes;  // k, α_volume / h²
+};
+
+SubstepConstants substep_constants(const SoftBodyOptions& o, double h) {
+    SubstepConstants c;
+    c.motion.h = static_cast<float>(h);
+    c.motion.inv_h = 1.0f / c.motion.h;
+    c.motion.keep = static_cast<float>(std::max(0.0, 1.0 - o.damping * h));
+    c.motion.gravity_h = vec3_cast<float>(o.gravity * h);
+    c.edges.inv_k = static_cast<float>(1.0 / (o.stiffness * o.edge_share));
+    c.edges.alpha = static_cast<float>(o.edge_compliance / (h * h));
+    c.volumes.inv_k = static_cast<float>(1.0 / o.stiffness);
+    c.volumes.alpha = static_cast<float>(o.volume_compliance / (h * h));
+    return c;
+}
+
+}  // namespace
+
+struct SoftBody::State {
+    detail::BodyBox box;                             // of rest, for the drivers
+    std::vector<Vec3f> rest;                         // #V, world units
+    std::vector<geometry::Tet> tets;                 // #T, input order
+    std::vector<std::array<std::int32_t, 2>> edges;  // #E, sorted
+    double total_rest_volume = 0.0;                  // world units³, at construction
+    // Constraint data in colour order: the projection loops stream through them.
+    detail::EdgeConstraints edge_constraints;
+    detail::TetConstraints tet_constraints;
+    detail::InversionFlags inversion;  // tets flagged for the inversion guard (step 3b)
+
+    // #V each. x: positions and this substep's inverse mass (0 for pinned and driven vertices);
+    // previous: x's positions at the substep's start; velocities: world units / s, those of the
+    // last substep; positions: x's positions after the last step.
+    std::vector<Float4> x;
+    std::vector<Vec3f> previous;
+    std::vector<Vec3f> velocities;
+    std::vector<Vec3f> positions;
+    std::vector<float> inv_masses;     // 1/kg; 0 = pinned or in no tet
+    std::vector<std::uint8_t> pinned;  // 1 = pinned
+
+    std::vector<Driver> drivers;
+    bool has_rest_drivers = false;
+    bool rest_modified = false;  // rest lengths and volumes differ from the construction's
+    detail::DrivenVertices driven;
+    bool kinematics_dirty = false;  // `driven` is to be assigned again
+    detail::DragGrab grab;
+
+    double last_step_ms = 0.0;
+    double last_substep_ms = 0.0;
+};
+
+SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options)
+    : SoftBody(rest, options, nullptr) {}
+
+SoftBody::SoftBody(const TetGrid& grid, const SoftBodyOptions& options)
+    : SoftBody(grid.mesh, options, &grid) {}
+
+SoftBody::~SoftBody() = default;
+SoftBody::SoftBody(SoftBody&&) noexcept = default;
+SoftBody& SoftBody::operator=(SoftBody&&) noexcept = default;
+
+SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options,
+                   const TetGrid* grid)
+    : m_options(options), m_state(std::make_unique<State>()) {
+    validate_options(options);
+    State& s = *m_state;
+    const auto nv = static_cast<std::int64_t>(rest.positions.size());
+    const auto nt = static_cast<std::int64_t>(rest.tets.size());
+    // Step 1: validate the mesh.
+    validate_rest_mesh(rest, grid);
     s.rest = rest.positions;
     s.tets = rest.tets;
 
     // Step 2: the box drivers work in.
-    if (nv > 0) {
-        Vec3d lo = vec3_cast<double>(s.rest[0]);
-        Vec3d hi = lo;
-        for (const Vec3f& p : s.rest) {
-            lo = min(lo, vec3_cast<double>(p));
-            hi = max(hi, vec3_cast<double>(p));
-        }
-        s.box.lo = lo;
-        s.box.hi = hi;
-        s.box.centre = (lo + hi) * 0.5;
-        const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-        s.box.size = size > 0.0 ? size : 1.0;
-    }
+    s.box = body_box(s.rest);
 
     // Step 3: masses: a quarter of each tet's rest mass to each of its vertices.
     std::vector<double> mass(static_cast<std::size_t>(nv), 0.0);
@@ -439,73 +226,28 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
     }
     s.pinned.assign(static_cast<std::size_t>(nv), 0);
 
-    // Step 4: edges, colourings, constraint data in colour order.
+    // Step 4: edges, colourings (analytic on a grid, greedy otherwise), constraint data in colour
+    // order.
     s.edges = tet_edges(s.tets, nv);
+    ConstraintColoring edge_coloring;
+    ConstraintColoring tet_coloring;
     if (grid != nullptr) {
-        s.edge_coloring = color_grid_edges(*grid, s.edges);
-        s.tet_coloring = color_grid_tets(*grid);
+        edge_coloring = color_grid_edges(*grid, s.edges);
+        tet_coloring = color_grid_tets(*grid);
     } else {
-        s.edge_coloring =
+        edge_coloring =
             color_greedy(static_cast<std::int64_t>(s.edges.size()), nv, [&](std::int64_t e) {
                 return std::span<const std::int32_t>(s.edges[static_cast<std::size_t>(e)]);
             });
-        s.tet_coloring = color_greedy(nt, nv, [&](std::int64_t t) {
+        tet_coloring = color_greedy(nt, nv, [&](std::int64_t t) {
             return std::span<const std::int32_t>(s.tets[static_cast<std::size_t>(t)]);
         });
     }
-    s.edge_vertices.resize(s.edges.size());
-    s.rest_lengths0.resize(s.edges.size());
-    for (std::size_t k = 0; k < s.edge_coloring.order.size(); ++k) {
-        const auto& e = s.edges[static_cast<std::size_t>(s.edge_coloring.order[k])];
-        s.edge_vertices[k] = e;
-        s.rest_lengths0[k] =
-            static_cast<float>(norm(vec3_cast<double>(s.rest[static_cast<std::size_t>(e[0])]) -
-                                    vec3_cast<double>(s.rest[static_cast<std::size_t>(e[1])])));
-    }
-    std::vector<std::int32_t> vertex_z;  // lattice z per vertex (grid)
-    if (grid != nullptr) {
-        vertex_z.reserve(grid->vertex_lattice.size());
-        for (const auto& lattice : grid->vertex_lattice) {
-            vertex_z.push_back(lattice[2]);
-        }
-        sort_edges_into_runs(s.edge_coloring, vertex_z, s.edge_vertices, s.rest_lengths0,
-                             s.edge_runs, s.edge_run_offsets);
-        for (const EdgeRun& r : s.edge_runs) {
-            s.edge_run_begins.push_back(r.begin);
-        }
-    }
-    s.rest_lengths = s.rest_lengths0;
-    s.tet_vertices.resize(s.tets.size());
-    s.rest_volumes0.resize(s.tets.size());
-    for (std::size_t k = 0; k < s.tet_coloring.order.size(); ++k) {
-        const auto t = static_cast<std::size_t>(s.tet_coloring.order[k]);
-        s.tet_vertices[k] = s.tets[t];
-        s.rest_volumes0[k] = static_cast<float>(rest_volume[t]);
-    }
-    s.rest_volumes = s.rest_volumes0;
-    s.tet_at_risk.assign(s.tet_vertices.size(), 0);
-    s.colour_at_risk.assign(static_cast<std::size_t>(s.tet_coloring.num_colors()), 0);
-    if (grid != nullptr) {
-        // Step 4b: layer blocking of both sweeps.
-        std::vector<std::int32_t> keys(s.edge_vertices.size());
-        for (std::size_t k = 0; k < keys.size(); ++k) {
-            keys[k] = std::min(vertex_z[static_cast<std::size_t>(s.edge_vertices[k][0])],
-                               vertex_z[static_cast<std::size_t>(s.edge_vertices[k][1])]);
-        }
-        s.edge_blocking = block_layers(s.edge_coloring, s.edge_vertices, keys,
-                                       std::int64_t{grid->cells[2]} + 1, vertex_z);
-        std::vector<std::int32_t> tet_keys(s.tet_vertices.size());
-        const std::int64_t cells_xy = std::int64_t{grid->cells[0]} * grid->cells[1];
-        for (std::size_t k = 0; k < tet_keys.size(); ++k) {
-            tet_keys[k] = static_cast<std::int32_t>(
-                grid->tet_cell[static_cast<std::size_t>(s.tet_coloring.order[k])] / cells_xy);
-        }
-        s.tet_blocking =
-            block_layers(s.tet_coloring, s.tet_vertices, tet_keys, grid->cells[2], vertex_z);
-        s.tet_runs = find_tet_runs(*grid, s.tet_coloring, s.tet_vertices, nv);
-        s.lattice_x = std::int64_t{grid->cells[0]} + 1;
-        s.lattice_xy = s.lattice_x * (std::int64_t{grid->cells[1]} + 1);
-    }
+    s.edge_constraints =
+        detail::layout_edge_constraints(std::move(edge_coloring), s.edges, s.rest, grid);
+    s.tet_constraints =
+        detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, nv, grid);
+    s.inversion = detail::unflagged(s.tet_constraints);
 
     // Step 5: state.
     s.x.resize(static_cast<std::size_t>(nv));
@@ -547,30 +289,19 @@ void SoftBody::set_drag(std::int32_t vertex, const Vec3f& target, float radius) 
         throw InvalidInput("pbd::SoftBody::set_drag: radius (" + std::to_string(radius) +
                            ") must be finite and >= 0");
     }
-    if (s.drag && s.drag->vertex == vertex) {
-        s.drag->target = target;
+    if (s.grab.drag && s.grab.drag->vertex == vertex) {
+        s.grab.drag->target = target;
         return;
     }
-    s.drag = DragDriver{vertex, target, radius};
-    // Grab: the vertices within radius of the grabbed one, with their offsets from it.
-    s.drag_vertices.clear();
-    s.drag_offsets.clear();
-    const Vec3f centre = s.positions[static_cast<std::size_t>(vertex)];
-    for (std::int64_t v = 0; v < nv; ++v) {
-        const Vec3f offset = s.positions[static_cast<std::size_t>(v)] - centre;
-        if (v == vertex || squared_norm(offset) <= radius * radius) {
-            s.drag_vertices.push_back(static_cast<std::int32_t>(v));
-            s.drag_offsets.push_back(v == vertex ? Vec3f{} : offset);
-        }
-    }
+    detail::grab_vertices(DragDriver{vertex, target, radius}, s.positions, s.grab);
     s.kinematics_dirty = true;
 }
 
 void SoftBody::release_drag() {
     State& s = *m_state;
-    s.drag.reset();
-    s.drag_vertices.clear();
-    s.drag_offsets.clear();
+    s.grab.drag.reset();
+    s.grab.vertices.clear();
+    s.grab.offsets.clear();
     s.kinematics_dirty = true;
 }
 
@@ -582,7 +313,7 @@ void SoftBody::set_stiffness(double stiffness) {
 }
 
 std::optional<DragDriver> SoftBody::drag() const {
-    return m_state->drag;
+    return m_state->grab.drag;
 }
 
 void SoftBody::pin(std::span<const std::int32_t> vertices) {
@@ -639,6 +370,27 @@ void SoftBody::set_velocities(std::span<const Vec3f> velocities) {
     std::copy(velocities.begin(), velocities.end(), s.velocities.begin());
 }
 
+void SoftBody::prepare_drivers(double t_end) {
+    State& s = *m_state;
+    if (s.kinematics_dirty) {
+        detail::assign_driven_vertices(s.drivers, s.box, s.rest, s.pinned, s.grab.vertices,
+                                       s.driven);
+        s.kinematics_dirty = false;
+    }
+    if (s.has_rest_drivers) {
+        detail::apply_rest_drivers(s.drivers, s.box, s.rest, t_end, s.edge_constraints,
+                                   s.tet_constraints);
+        s.rest_modified = true;
+    } else if (s.rest_modified) {
+        s.edge_constraints.rest_lengths = s.edge_constraints.rest_lengths0;
+        s.tet_constraints.rest_volumes = s.tet_constraints.rest_volumes0;
+        s.rest_modified = false;
+    }
+    if (s.grab.drag && !s.grab.vertices.empty()) {
+        s.grab.from = s.positions[static_cast<std::size_t>(s.grab.drag->vertex)];
+    }
+}
+
 void SoftBody::step(double dt) {
     if (!(dt > 0.0) || !std::isfinite(dt)) {
         throw InvalidInput("pbd::SoftBody::step: dt (" + std::to_string(dt) +
@@ -646,460 +398,45 @@ void SoftBody::step(double dt) {
     }
     Stopwatch step_watch;
     State& s = *m_state;
-    const auto nv = static_cast<std::int64_t>(s.rest.size());
-
-    // Step 1: which vertex follows which kinematic driver (the last added; drag last; pins win).
-    if (s.kinematics_dirty) {
-        std::vector<std::int32_t> by(static_cast<std::size_t>(nv), -1);
-        for (std::size_t d = 0; d < s.drivers.size(); ++d) {
-            const Driver& driver = s.drivers[d];
-            if (std::holds_alternative<RotateDriver>(driver)) {
-                std::fill(by.begin(), by.end(), static_cast<std::int32_t>(d));
-            } else if (const auto* twist = std::get_if<TwistDriver>(&driver)) {
-                const int a = static_cast<int>(twist->axis);
-                const double reach = twist->grip * s.box.size + 1e-6 * s.box.size;
-                for (std::int64_t v = 0; v < nv; ++v) {
-                    const double q = s.rest[static_cast<std::size_t>(v)][a];
-                    if (q <= s.box.lo[a] + reach || q >= s.box.hi[a] - reach) {
-                        by[static_cast<std::size_t>(v)] = static_cast<std::int32_t>(d);
-                    }
-                }
-            }
-        }
-        for (const std::int32_t v : s.drag_vertices) {
-            by[static_cast<std::size_t>(v)] = DRAG;
-        }
-        s.driven_vertices.clear();
-        s.driven_by.clear();
-        for (std::int64_t v = 0; v < nv; ++v) {
-            if (by[static_cast<std::size_t>(v)] != -1 &&
-                s.pinned[static_cast<std::size_t>(v)] == 0) {
-                s.driven_vertices.push_back(static_cast<std::int32_t>(v));
-                s.driven_by.push_back(by[static_cast<std::size_t>(v)]);
-            }
-        }
-        s.kinematics_dirty = false;
-    }
-    // Step 2: rest-state drivers at the step's end time.
-    if (s.has_rest_drivers) {
-        update_rest_state(m_time + dt);
-        s.rest_modified = true;
-    } else if (s.rest_modified) {
-        s.rest_lengths = s.rest_lengths0;
-        s.rest_volumes = s.rest_volumes0;
-        s.rest_modified = false;
-    }
-    if (s.drag && !s.drag_vertices.empty()) {
-        s.drag_from = s.positions[static_cast<std::size_t>(s.drag->vertex)];
-    }
-
+    prepare_drivers(m_time + dt);
     const int n = m_options.substeps;
     const double h = dt / n;
-    const float hf = static_cast<float>(h);
-    const Vec3f gravity_h = vec3_cast<float>(m_options.gravity * h);
-    const float keep = static_cast<float>(std::max(0.0, 1.0 - m_options.damping * h));
-    const auto inv_k = static_cast<float>(1.0 / m_options.stiffness);
-    const auto edge_inv_k = static_cast<float>(1.0 / (m_options.stiffness * m_options.edge_share));
-    const auto edge_alpha = static_cast<float>(m_options.edge_compliance / (h * h));
-    const auto volume_alpha = static_cast<float>(m_options.volume_compliance / (h * h));
-    Float4* x = s.x.data();
+    const SubstepConstants k = substep_constants(m_options, h);
     // The kernels give the same bits (projection_avx2.hpp): the choice is for speed only.
     const bool use_avx2 = pliant::has_avx2();
-    const float inv_h = 1.0f / hf;
-    // Step 7's velocity of vertex v (not pinned) from its motion over the substep.
-    const auto motion = [&](std::size_t v) {
-        const Float4& p = x[v];
-        const Vec3f& q = s.previous[v];
-        return Vec3f{(p.x - q.x) * inv_h, (p.y - q.y) * inv_h, (p.z - q.z) * inv_h} * keep;
-    };
-    // Step 3 on vertex v with velocity vel (updated for a free vertex).
-    const auto predict = [&](std::size_t v, Vec3f& vel) {
-        const float w = s.inv_masses[v];
-        Float4& p = x[v];
-        s.previous[v] = {p.x, p.y, p.z};
-        if (w > 0.0f) {
-            vel += gravity_h;
-            p = {p.x + hf * vel.x, p.y + hf * vel.y, p.z + hf * vel.z, w};
-        } else {
-            p.w = 0.0f;
-        }
-    };
-    // Edges [lo, hi) of colour c (indices within the colour), in fixed chunks of the range.
-    const auto project_edge_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-        const std::int64_t begin = s.edge_coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count = s.edge_coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        const auto* edges = s.edge_vertices.data() + begin;
-        const float* lengths = s.rest_lengths.data() + begin;
-        if (use_avx2 && !s.edge_runs.empty()) {
-            // Runs: the edges' vertices follow from the run's first vertex.
-            const std::int64_t* run_begins =
-                s.edge_run_begins.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
-            const std::int64_t num_runs = s.edge_run_offsets[static_cast<std::size_t>(c) + 1] -
-                                          s.edge_run_offsets[static_cast<std::size_t>(c)];
-            const EdgeRun* runs =
-                s.edge_runs.data() + s.edge_run_offsets[static_cast<std::size_t>(c)];
-            parallel_for_chunks(
-                hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    b += lo;
-                    e += lo;
-                    // The run holding edge b (its begin is the last ≤ begin + b).
-                    std::int64_t r =
-                        std::upper_bound(run_begins, run_begins + num_runs, begin + b) -
-                        run_begins - 1;
-                    for (std::int64_t q = b; q < e; ++r) {
-                        const EdgeRun& run = runs[r];
-                        const std::int64_t run_end =
-                            r + 1 < num_runs ? run_begins[r + 1] - begin : count;
-                        const std::int64_t n_run = std::min(e, run_end) - q;
-                        std::int64_t i =
-                            q + detail::project_edge_run_avx2(
-                                    x, run.first + run.stride * (begin + q - run.begin), run.stride,
-                                    run.span, lengths + q, n_run, edge_inv_k, edge_alpha);
-                        for (; i < q + n_run; ++i) {
-                            detail::project_edge(x, edges[i][0], edges[i][1], lengths[i],
-                                                 edge_inv_k, edge_alpha);
-                        }
-                        q += n_run;
-                    }
-                });
-            return;
-        }
-        parallel_for_chunks(hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-            std::int64_t i = lo + b;
-            e += lo;
-            if (use_avx2) {
-                i += detail::project_edges_avx2(x, edges + i, lengths + i, e - i, edge_inv_k,
-                                                edge_alpha);
-            }
-#if defined(PLIANT_PBD_SSE)
-            for (; i + 4 <= e; i += 4) {
-                detail::project_edges4(x, edges + i, lengths + i, edge_inv_k, edge_alpha);
-            }
-#endif
-            for (; i < e; ++i) {
-                detail::project_edge(x, edges[i][0], edges[i][1], lengths[i], edge_inv_k,
-                                     edge_alpha);
-            }
-        });
-    };
-    // Tets [lo, hi) of colour c, the same way; the tets at risk of inversion are flagged in
-    // tet_at_risk (by index: no two chunks write one entry), and their colour in colour_at_risk.
-    const auto project_tet_range = [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-        const std::int64_t begin = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
-        const geometry::Tet* tets = s.tet_vertices.data() + begin;
-        const float* volumes = s.rest_volumes.data() + begin;
-        std::uint8_t* at_risk = s.tet_at_risk.data() + begin;
-        const auto flag_colour = [&](std::int64_t num_at_risk) {
-            if (num_at_risk > 0) {
-                std::atomic_ref<std::uint8_t>(s.colour_at_risk[static_cast<std::size_t>(c)])
-                    .store(1, std::memory_order_relaxed);
-            }
-        };
-        const auto project_one = [&](std::int64_t i, std::int64_t& num_at_risk) {
-            if (detail::project_tet(x, tets[i], volumes[i], inv_k, volume_alpha)) {
-                at_risk[i] = 1;
-                ++num_at_risk;
-            }
-        };
-        if (use_avx2 && !s.tet_runs.empty()) {
-            // Rows of cells along x; within a row the tets' vertices follow from the base.
-            const TetRun& r = s.tet_runs[static_cast<std::size_t>(c)];
-            parallel_for_chunks(
-                hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    b += lo;
-                    e += lo;
-                    std::int64_t num_at_risk = 0;
-                    for (std::int64_t q = b; q < e;) {
-                        const std::int64_t row = q / r.ni;
-                        const std::int64_t a = q - row * r.ni;
-                        const std::int64_t base = r.i0 + 2 * a +
-                                                  s.lattice_x * (r.j0 + 2 * (row % r.nj)) +
-                                                  s.lattice_xy * (r.k0 + 2 * (row / r.nj));
-                        const std::int64_t run = std::min(e - q, r.ni - a);
-                        std::int64_t i = q + detail::project_tet_run_avx2(
-                                                 x, base, r.offsets, volumes + q, at_risk + q, run,
-                                                 inv_k, volume_alpha, num_at_risk);
-                        for (; i < q + run; ++i) {
-                            project_one(i, num_at_risk);
-                        }
-                        q += run;
-                    }
-                    flag_colour(num_at_risk);
-                });
-            return;
-        }
-        parallel_for_chunks(hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-            std::int64_t i = lo + b;
-            e += lo;
-            std::int64_t num_at_risk = 0;
-            if (use_avx2) {
-                i += detail::project_tets_avx2(x, tets + i, volumes + i, at_risk + i, e - i, inv_k,
-                                               volume_alpha, num_at_risk);
-            }
-#if defined(PLIANT_PBD_SSE)
-            for (; i + 4 <= e; i += 4) {
-                const int mask =
-                    detail::project_tets4(x, tets + i, volumes + i, inv_k, volume_alpha);
-                for (int l = 0; mask != 0 && l < 4; ++l) {
-                    if ((mask >> l & 1) != 0) {
-                        at_risk[i + l] = 1;
-                        ++num_at_risk;
-                    }
-                }
-            }
-#endif
-            for (; i < e; ++i) {
-                project_one(i, num_at_risk);
-            }
-            flag_colour(num_at_risk);
-        });
-    };
-    // Every constraint of a colouring, colour after colour; with a blocking, slab after slab of
-    // LAYERS_PER_SLAB layers, colour c shifted back by its skew (LayerBlocking).
-    const auto sweep = [&](const LayerBlocking& blocking, const ConstraintColoring& coloring,
-                           const auto& project_range) {
-        const std::int32_t num_colors = coloring.num_colors();
-        if (blocking.num_layers == 0) {
-            for (std::int32_t c = 0; c < num_colors; ++c) {
-                project_range(c, 0,
-                              coloring.offsets[static_cast<std::size_t>(c) + 1] -
-                                  coloring.offsets[static_cast<std::size_t>(c)]);
-            }
-            return;
-        }
-        const std::int64_t layers = blocking.num_layers;
-        for (std::int64_t t = 0; t < layers + blocking.max_skew; t += LAYERS_PER_SLAB) {
-            for (std::int32_t c = 0; c < num_colors; ++c) {
-                const std::int64_t skew = blocking.skew[static_cast<std::size_t>(c)];
-                const std::int64_t z0 = std::clamp<std::int64_t>(t - skew, 0, layers);
-                const std::int64_t z1 =
-                    std::clamp<std::int64_t>(t - skew + LAYERS_PER_SLAB, 0, layers);
-                const std::int64_t* layer_begin =
-                    blocking.layer_begin.data() + static_cast<std::size_t>(c) * (layers + 1);
-                if (layer_begin[z0] < layer_begin[z1]) {
-                    project_range(c, layer_begin[z0], layer_begin[z1]);
-                }
-            }
-        }
-    };
-    // Step 6b: the inversion guard. The flagged tets, colour by colour (flags cleared), then up to
-    // GUARD_PASSES passes of guard_tet over them in that order, one thread: a handful of tets.
-    const auto guard_flagged_tets = [&] {
-        s.guarded.clear();
-        for (std::int32_t c = 0; c < s.tet_coloring.num_colors(); ++c) {
-            if (s.colour_at_risk[static_cast<std::size_t>(c)] == 0) {
-                continue;
-            }
-            s.colour_at_risk[static_cast<std::size_t>(c)] = 0;
-            for (std::int64_t k = s.tet_coloring.offsets[static_cast<std::size_t>(c)];
-                 k < s.tet_coloring.offsets[static_cast<std::size_t>(c) + 1]; ++k) {
-                if (s.tet_at_risk[static_cast<std::size_t>(k)] != 0) {
-                    s.tet_at_risk[static_cast<std::size_t>(k)] = 0;
-                    s.guarded.push_back(k);
-                }
-            }
-        }
-        for (int pass = 0; pass < detail::GUARD_PASSES && !s.guarded.empty(); ++pass) {
-            bool moved = false;
-            for (const std::int64_t k : s.guarded) {
-                moved = detail::guard_tet(x, s.tet_vertices[static_cast<std::size_t>(k)],
-                                          s.rest_volumes[static_cast<std::size_t>(k)]) ||
-                        moved;
-            }
-            if (!moved) {
-                break;
-            }
-        }
-        // A tet still below AT_RISK_RATIO · V0 stays flagged for the next substep: its own
-        // projection may lift it above the kernels' threshold before later colours push it
-        // back (an earlier colour sharing its vertices can have lifted it too).
-        for (const std::int64_t k : s.guarded) {
-            const auto i = static_cast<std::size_t>(k);
-            if (detail::tet_volume(x, s.tet_vertices[i]) <
-                s.rest_volumes[i] * detail::AT_RISK_RATIO) {
-                s.tet_at_risk[i] = 1;
-                const auto colour = std::upper_bound(s.tet_coloring.offsets.begin(),
-                                                     s.tet_coloring.offsets.end(), k) -
-                                    s.tet_coloring.offsets.begin() - 1;
-                s.colour_at_risk[static_cast<std::size_t>(colour)] = 1;
-            }
-        }
-    };
+    Float4* x = s.x.data();
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
-        const double t_end = m_time + h * (sub + 1);
-        // Step 3: predict free vertices; pinned ones stay. After the first substep this ran
-        // fused with the previous substep's step 7.
+        // Step 1 (soft_body.hpp): predict; after the first substep, fused into the previous
+        // substep's step 4. Driven vertices at their targets for the substep's end, w = 0.
         if (sub == 0) {
-            parallel_for(
-                nv,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    Vec3f vel = s.velocities[v];  // step 7 of the last substep overwrites it
-                    predict(v, vel);
-                },
-                VERTEX_GRAIN);
+            detail::predict(x, s.previous, s.velocities, s.inv_masses, k.motion);
         }
-        // Step 4: driven vertices at their targets for t_end, inverse mass 0.
-        if (!s.driven_vertices.empty()) {
-            std::vector<std::array<double, 9>> rotations(s.drivers.size());
-            for (std::size_t d = 0; d < s.drivers.size(); ++d) {
-                if (const auto* r = std::get_if<RotateDriver>(&s.drivers[d])) {
-                    rotations[d] =
-                        detail::rotation(r->axis, r->angle * detail::ramp(t_end, r->ramp_time));
-                } else if (const auto* tw = std::get_if<TwistDriver>(&s.drivers[d])) {
-                    rotations[d] =
-                        detail::rotation(tw->axis, tw->angle * detail::ramp(t_end, tw->ramp_time));
-                }
-            }
-            const float drag_fraction = static_cast<float>(sub + 1) / static_cast<float>(n);
-            parallel_for(
-                static_cast<std::int64_t>(s.driven_vertices.size()),
-                [&](std::int64_t k) {
-                    const auto v =
-                        static_cast<std::size_t>(s.driven_vertices[static_cast<std::size_t>(k)]);
-                    const std::int32_t d = s.driven_by[static_cast<std::size_t>(k)];
-                    Vec3f target;
-                    if (d == DRAG) {
-                        // The grab set is small; its offsets are found by a scan of it.
-                        const auto it =
-                            std::lower_bound(s.drag_vertices.begin(), s.drag_vertices.end(),
-                                             static_cast<std::int32_t>(v));
-                        const Vec3f offset =
-                            s.drag_offsets[static_cast<std::size_t>(it - s.drag_vertices.begin())];
-                        target =
-                            s.drag_from + (s.drag->target - s.drag_from) * drag_fraction + offset;
-                    } else {
-                        const Vec3d rest = vec3_cast<double>(s.rest[v]);
-                        const Driver& driver = s.drivers[static_cast<std::size_t>(d)];
-                        const auto* rotate = std::get_if<RotateDriver>(&driver);
-                        const Vec3d c =
-                            rotate != nullptr && rotate->centre ? *rotate->centre : s.box.centre;
-                        bool turns = true;
-                        if (const auto* tw = std::get_if<TwistDriver>(&driver)) {
-                            const int a = static_cast<int>(tw->axis);
-                            turns = rest[a] > c[a];
-                        }
-                        target =
-                            turns ? vec3_cast<float>(
-                                        c + detail::rotate(rotations[static_cast<std::size_t>(d)],
-                                                           rest - c))
-                                  : s.rest[v];
-                    }
-                    x[v] = {target.x, target.y, target.z, 0.0f};
-                },
-                VERTEX_GRAIN);
+        if (!s.driven.vertices.empty()) {
+            detail::place_driven_vertices(x, s.drivers, s.box, s.rest, s.driven, s.grab,
+                                          m_time + h * (sub + 1),
+                                          static_cast<float>(sub + 1) / static_cast<float>(n));
         }
-        // Step 5: edges, colour by colour (layer-blocked on a grid: the same order where it
-        // matters, LayerBlocking).
-        sweep(s.edge_blocking, s.edge_coloring, project_edge_range);
-        // Step 6: tet volumes, colour by colour.
-        sweep(s.tet_blocking, s.tet_coloring, project_tet_range);
-        // Step 6b: the inversion guard on the tets flagged at risk, in colour order.
-        guard_flagged_tets();
-        // Step 7: velocities from the motion, damped; fused with the next substep's step 3 (its
-        // velocities need not be stored) or, after the last substep, with the copy of the
-        // positions.
+        // Step 2: edge lengths, colour by colour.
+        detail::project_edges(x, s.edge_constraints, k.edges, use_avx2);
+        // Step 3: tet volumes, colour by colour, flagging the tets at risk of inversion; 3b: the
+        // inversion guard on them.
+        detail::project_tets(x, s.tet_constraints, k.volumes, use_avx2, s.inversion.tet_at_risk,
+                             s.inversion.colour_at_risk);
+        detail::guard_flagged_tets(x, s.tet_constraints, s.inversion);
+        // Step 4: velocities from the motion, damped; with the next substep's prediction, or
+        // after the last substep stored with the positions.
         if (sub + 1 < n) {
-            parallel_for(
-                nv,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    // Only free vertices use vel; pinned ones keep velocity 0.
-                    Vec3f vel = s.pinned[v] != 0 ? Vec3f{} : motion(v);
-                    predict(v, vel);
-                },
-                VERTEX_GRAIN);
+            detail::update_velocities_and_predict(x, s.previous, s.inv_masses, s.pinned, k.motion);
         } else {
-            parallel_for(
-                nv,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    if (s.pinned[v] == 0) {
-                        s.velocities[v] = motion(v);
-                    }
-                    s.positions[v] = {x[v].x, x[v].y, x[v].z};
-                },
-                VERTEX_GRAIN);
+            detail::update_velocities(x, s.previous, s.pinned, k.motion, s.velocities, s.positions);
         }
     }
+    // The step's wall clock, for stats().
     const double substeps_ms = substeps_watch.elapsed_ms();
     m_time += dt;
     s.last_substep_ms = substeps_ms / n;
     s.last_step_ms = step_watch.elapsed_ms();
-}
-
-// Waves displace the rest positions, bubbles scale; results in colour order.
-void SoftBody::update_rest_state(double t) {
-    State& s = *m_state;
-    std::vector<const WaveDriver*> waves;
-    std::vector<const BubbleDriver*> bubbles;
-    for (const Driver& d : s.drivers) {
-        if (const auto* w = std::get_if<WaveDriver>(&d)) {
-            waves.push_back(w);
-        } else if (const auto* b = std::get_if<BubbleDriver>(&d)) {
-            bubbles.push_back(b);
-        }
-    }
-    const auto nv = static_cast<std::int64_t>(s.rest.size());
-    // Displaced rest positions (double), only when a wave runs.
-    std::vector<Vec3d> shaped;
-    if (!waves.empty()) {
-        shaped.resize(static_cast<std::size_t>(nv));
-        parallel_for(
-            nv,
-            [&](std::int64_t i) {
-                const auto v = static_cast<std::size_t>(i);
-                const Vec3d rest = vec3_cast<double>(s.rest[v]);
-                Vec3d p = rest;
-                for (const WaveDriver* w : waves) {
-                    p += detail::wave_displacement(*w, s.box, rest, t);
-                }
-                shaped[v] = p;
-            },
-            VERTEX_GRAIN);
-    }
-    const auto rest_at = [&](std::int32_t v) {
-        return vec3_cast<double>(s.rest[static_cast<std::size_t>(v)]);
-    };
-    const auto bubble = [&](const Vec3d& p) {
-        double f = 1.0;
-        for (const BubbleDriver* b : bubbles) {
-            f *= detail::bubble_factor(*b, s.box, p, t);
-        }
-        return f;
-    };
-    parallel_for(
-        static_cast<std::int64_t>(s.edge_vertices.size()),
-        [&](std::int64_t k) {
-            const auto& e = s.edge_vertices[static_cast<std::size_t>(k)];
-            double length = shaped.empty() ? s.rest_lengths0[static_cast<std::size_t>(k)]
-                                           : norm(shaped[static_cast<std::size_t>(e[0])] -
-                                                  shaped[static_cast<std::size_t>(e[1])]);
-            if (!bubbles.empty()) {
-                length *= std::cbrt(bubble((rest_at(e[0]) + rest_at(e[1])) * 0.5));
-            }
-            s.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
-        },
-        EDGE_GRAIN);
-    parallel_for(
-        static_cast<std::int64_t>(s.tet_vertices.size()),
-        [&](std::int64_t k) {
-            const geometry::Tet& tet = s.tet_vertices[static_cast<std::size_t>(k)];
-            double volume = s.rest_volumes0[static_cast<std::size_t>(k)];
-            if (!shaped.empty()) {
-                volume = geometry::signed_volume(shaped[static_cast<std::size_t>(tet[0])],
-                                                 shaped[static_cast<std::size_t>(tet[1])],
-                                                 shaped[static_cast<std::size_t>(tet[2])],
-                                                 shaped[static_cast<std::size_t>(tet[3])]);
-            }
-            if (!bubbles.empty()) {
-                volume *= bubble(
-                    (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25);
-            }
-            s.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
-        },
-        TET_GRAIN);
 }
 
 std::span<const Vec3f> SoftBody::positions() const {
@@ -1121,10 +458,10 @@ std::span<const std::array<std::int32_t, 2>> SoftBody::edges() const {
     return m_state->edges;
 }
 const ConstraintColoring& SoftBody::edge_coloring() const {
-    return m_state->edge_coloring;
+    return m_state->edge_constraints.coloring;
 }
 const ConstraintColoring& SoftBody::tet_coloring() const {
-    return m_state->tet_coloring;
+    return m_state->tet_constraints.coloring;
 }
 
 SoftBodyStats SoftBody::stats() const {

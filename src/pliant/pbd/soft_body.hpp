@@ -20,21 +20,20 @@
 // deformation the constraints cannot all hold, and one Gauss–Seidel sweep leaves the discrepancy
 // to the constraints projected first. It is worst at a boundary vertex in few tets: on a TetGrid,
 // a vertex with 5 of its 8 cells active lies in 5 corner tets, 5 constraints on its 3
-// coordinates. Under the nerf demo's 90° twist one such tet lost volume substep after substep and
-// ended inverted from frame 43 on (V / V0 = −0.08 at frame 48), although its own projection
-// restored it every time (the gradient of C is fine through zero): the 4 tets of that vertex
-// projected after it pushed the vertex back through its opposite face and kept their own volume
-// (1.00–1.14 V0). So the tet
-// kernels flag a tet whose volume before its projection is below 0.75 V0 (AT_RISK_RATIO,
-// detail/projection.hpp); after the sweep the flagged tets, in colour order on one thread, get the
-// unilateral constraint C = V − 0.1 V0 ≥ 0 (GUARD_RATIO; V0 > 0 only) projected where violated,
-// with no stiffness or compliance (like a contact, it is not traded against the volume
-// constraints), in passes until one moves nothing, 16 at most; a tet still below 0.75 V0 after
-// the guard stays flagged for the next substep. The guard keeps the orientation, not the volume:
-// such a tet sits at 0.1 V0. It cannot undo an inversion that kinematic drivers impose, nor one
-// whose flagged tets still conflict after 16 passes, and a tet that one sweep takes from above
-// 0.75 V0 before its own projection to inverted after the sweep is guarded only from the substep
-// whose sweep flags it (docs/architecture.md lists the cases measured).
+// coordinates. A tet of such a vertex can end a sweep inverted although its own projection
+// restores it (the gradient of C is fine through zero): the tets of the vertex projected after it
+// push the vertex back through its opposite face and keep their own volume (docs/architecture.md;
+// the test TetOfALowValenceVertexDoesNotStayInverted). So the tet kernels flag a tet whose volume
+// before its projection is below 0.75 V0 (AT_RISK_RATIO, detail/projection.hpp); after the sweep
+// the flagged tets, in colour order on one thread, get the unilateral constraint
+// C = V − 0.1 V0 ≥ 0 (GUARD_RATIO; V0 > 0 only) projected where violated, with no stiffness or
+// compliance (like a contact, it is not traded against the volume constraints), in passes until
+// one moves nothing, 16 at most; a tet still below 0.75 V0 after the guard stays flagged for the
+// next substep. The guard keeps the orientation, not the volume: such a tet sits at 0.1 V0. It
+// cannot undo an inversion that kinematic drivers impose, nor one whose flagged tets still
+// conflict after 16 passes, and a tet that one sweep takes from above 0.75 V0 before its own
+// projection to inverted after the sweep is guarded only from the substep whose sweep flags it
+// (docs/architecture.md lists the cases).
 //
 // Stiffness k ∈ (0, 1] (the paper's "stiffness 1.0 vs 0.8"): PBD's stiffness, the fraction of a
 // constraint's violation that one projection removes (Müller et al. 2007, §3.3). As XPBD
@@ -44,11 +43,11 @@
 // substeps converge) and k = 0.8 removes 80 % of every violation per projection. Edges use
 // k_edge = edge_share · k (default 0.05) and volumes k: the body keeps its volume first (a
 // nearly incompressible tissue). k = 0.8 is a softer body that deforms more under the same load
-// (tests/pbd/soft_body_test.cpp: a drag, 14 % more mean edge strain; gravity on a hung body,
-// 1.9× the sag). The mapping is per substep, as PBD's stiffness is per iteration. The k part
-// depends only on positions and mass ratios: results do not change with units or density. The
-// physical route adds α_phys (edge_compliance, volume_compliance, in SI units below), the true
-// XPBD compliance, independent of h.
+// (tests/pbd/soft_body_test.cpp, StiffnessPointEightDeformsMoreThanOne: more edge strain under a
+// drag, more sag when hung under gravity). The mapping is per substep, as PBD's stiffness is per
+// iteration. The k part depends only on positions and mass ratios: results do not change with
+// units or density. The physical route adds α_phys (edge_compliance, volume_compliance, in SI
+// units below), the true XPBD compliance, independent of h.
 //
 // Masses: each vertex gets a quarter of the rest volume of each of its tets times `density`;
 // vertices of no tet get inverse mass 0.
@@ -91,9 +90,9 @@ namespace pliant::pbd {
 struct SoftBodyOptions {
     double stiffness = 1.0;  // k ∈ (0, 1]: PBD stiffness (see above)
     // β ∈ (0, 1]: edges get the PBD stiffness β · k, volumes k. Below 1 the body keeps its
-    // volume first and its edge lengths second, as a nearly incompressible tissue does: a
-    // 90° twist of a cube then keeps its volume within 1 % (β = 1: 7 % lost to edges that cannot
-    // all keep their lengths).
+    // volume first and its edge lengths second, as a nearly incompressible tissue does: at the
+    // default a 90° twist of a cube keeps its volume within 1 % (soft_body_test.cpp); at β = 1
+    // the edges, which cannot all keep their lengths, pull volume away.
     double edge_share = 0.05;
     // kg per world unit cubed (1000: water, when world units are metres).
     double density = 1000.0;
@@ -173,8 +172,10 @@ public:
 private:
     struct State;
     SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options, const TetGrid* grid);
-    // Rest lengths and volumes for time t from the rest-state drivers.
-    void update_rest_state(double t);
+    // The drivers for a step ending at t_end (s): driven vertices assigned again when drivers, drag
+    // or pins changed; rest lengths and volumes for t_end (back to the construction's once the
+    // rest-state drivers are gone); the drag's start.
+    void prepare_drivers(double t_end);
 
     SoftBodyOptions m_options;
     double m_time = 0.0;

@@ -1,0 +1,267 @@
+#include "pliant/pbd/detail/constraint_layout.hpp"
+
+#include <algorithm>
+#include <cstddef>
+#include <utility>
+
+namespace pliant::pbd::detail {
+namespace {
+
+// Lattice z per vertex of a grid (#V).
+std::vector<std::int32_t> vertex_layers(const TetGrid& grid) {
+    std::vector<std::int32_t> vertex_z;
+    vertex_z.reserve(grid.vertex_lattice.size());
+    for (const auto& lattice : grid.vertex_lattice) {
+        vertex_z.push_back(lattice[2]);
+    }
+    return vertex_z;
+}
+
+// The runs of every tet colour (tet_vertices in colour order) when the grid keeps every lattice
+// vertex (full box) and every colour is the run its lattice predicts, checked tet by tet; empty
+// otherwise.
+std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring& coloring,
+                                  std::span<const geometry::Tet> tet_vertices,
+                                  std::int64_t num_vertices) {
+    const std::int64_t nx = grid.cells[0];
+    const std::int64_t ny = grid.cells[1];
+    const std::int64_t nz = grid.cells[2];
+    const std::int64_t lx = nx + 1;
+    const std::int64_t lxy = lx * (ny + 1);
+    if (num_vertices != lxy * (nz + 1) || tet_vertices.empty()) {
+        return {};
+    }
+    std::vector<TetRun> runs(static_cast<std::size_t>(coloring.num_colors()));
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t count = coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+        const std::int64_t cell = grid.tet_cell[static_cast<std::size_t>(
+            coloring.order[static_cast<std::size_t>(begin)])];
+        TetRun& r = runs[static_cast<std::size_t>(c)];
+        r.i0 = cell % nx;
+        r.j0 = (cell / nx) % ny;
+        r.k0 = cell / (nx * ny);
+        r.ni = (nx - r.i0 + 1) / 2;
+        r.nj = (ny - r.j0 + 1) / 2;
+        r.nk = (nz - r.k0 + 1) / 2;
+        if (r.i0 > 1 || r.j0 > 1 || r.k0 > 1 || r.ni * r.nj * r.nk != count) {
+            return {};
+        }
+        const std::int64_t base0 = r.i0 + lx * r.j0 + lxy * r.k0;
+        const geometry::Tet& first = tet_vertices[static_cast<std::size_t>(begin)];
+        for (std::size_t m = 0; m < 4; ++m) {
+            r.offsets[m] = static_cast<std::int32_t>(first[m] - base0);
+        }
+        for (std::int64_t q = 0; q < count; ++q) {
+            const std::int64_t a = q % r.ni;
+            const std::int64_t b = (q / r.ni) % r.nj;
+            const std::int64_t k = q / (r.ni * r.nj);
+            const std::int64_t base = r.i0 + 2 * a + lx * (r.j0 + 2 * b) + lxy * (r.k0 + 2 * k);
+            const geometry::Tet& t = tet_vertices[static_cast<std::size_t>(begin + q)];
+            for (std::size_t m = 0; m < 4; ++m) {
+                if (t[m] != base + r.offsets[m]) {
+                    return {};
+                }
+            }
+        }
+    }
+    return runs;
+}
+
+// The blocking of constraints (in colour order, sorted by key within each colour; vertex_z:
+// lattice z per vertex); none when a key is out of order or a vertex lies outside layers z, z + 1
+// of a constraint holding it, or for more than 64 colours.
+template <std::size_t K>
+LayerBlocking block_layers(const ConstraintColoring& coloring,
+                           const std::vector<std::array<std::int32_t, K>>& constraints,
+                           const std::vector<std::int32_t>& keys, std::int64_t num_layers,
+                           const std::vector<std::int32_t>& vertex_z) {
+    const std::int32_t num_colors = coloring.num_colors();
+    if (num_colors > 64 || num_layers <= 0) {
+        return {};
+    }
+    LayerBlocking blocking;
+    blocking.num_layers = num_layers;
+    blocking.layer_begin.resize(static_cast<std::size_t>(num_colors * (num_layers + 1)));
+    // Per vertex: bit c of `below` when colour c holds it in a constraint of key z_v − 1, of
+    // `level` of key z_v.
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(vertex_z.size(), {0, 0});
+    for (std::int32_t c = 0; c < num_colors; ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
+        const auto* first = keys.data() + begin;
+        const auto* last = keys.data() + end;
+        if (!std::is_sorted(first, last) || *first < 0 || *(last - 1) >= num_layers) {
+            return {};
+        }
+        for (std::int64_t z = 0; z <= num_layers; ++z) {
+            blocking.layer_begin[static_cast<std::size_t>(c * (num_layers + 1) + z)] =
+                std::lower_bound(first, last, z) - first;
+        }
+        const std::uint64_t bit = std::uint64_t{1} << c;
+        for (std::int64_t q = begin; q < end; ++q) {
+            for (const std::int32_t v : constraints[static_cast<std::size_t>(q)]) {
+                const std::int32_t offset =
+                    keys[static_cast<std::size_t>(q)] - vertex_z[static_cast<std::size_t>(v)];
+                if (offset == -1) {
+                    masks[static_cast<std::size_t>(v)].first |= bit;
+                } else if (offset == 0) {
+                    masks[static_cast<std::size_t>(v)].second |= bit;
+                } else {
+                    return {};
+                }
+            }
+        }
+    }
+    std::sort(masks.begin(), masks.end());
+    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
+    // Colours in order: every bound on skew[c'] comes from colours c < c', already final.
+    blocking.skew.assign(static_cast<std::size_t>(num_colors), 0);
+    for (std::int32_t later = 0; later < num_colors; ++later) {
+        for (const auto& [below, level] : masks) {
+            if (((below | level) >> later & 1) == 0) {
+                continue;
+            }
+            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
+            for (std::int32_t c = 0; c < later; ++c) {
+                if (((below | level) >> c & 1) != 0) {
+                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
+                    auto& skew = blocking.skew[static_cast<std::size_t>(later)];
+                    skew = std::max(
+                        skew, blocking.skew[static_cast<std::size_t>(c)] + offset - later_offset);
+                }
+            }
+        }
+        blocking.max_skew =
+            std::max(blocking.max_skew, blocking.skew[static_cast<std::size_t>(later)]);
+    }
+    return blocking;
+}
+
+// Within each colour, orders the edges (and their rest lengths) by layer (the lower lattice z of
+// their vertices), then direction b − a, then a (the order within a colour does not change a
+// result: its edges share no vertex), and cuts them into runs of equal direction and equal steps
+// of a.
+void sort_edges_into_runs(const ConstraintColoring& coloring,
+                          const std::vector<std::int32_t>& vertex_z,
+                          std::vector<std::array<std::int32_t, 2>>& edges,
+                          std::vector<float>& rest_lengths, std::vector<EdgeRun>& runs,
+                          std::vector<std::int64_t>& run_offsets) {
+    std::vector<std::int64_t> perm;
+    std::vector<std::array<std::int32_t, 2>> sorted_edges;
+    std::vector<float> sorted_lengths;
+    run_offsets.assign(1, 0);
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
+        perm.resize(static_cast<std::size_t>(end - begin));
+        for (std::int64_t q = begin; q < end; ++q) {
+            perm[static_cast<std::size_t>(q - begin)] = q;
+        }
+        const auto edge = [&](std::int64_t q) -> const std::array<std::int32_t, 2>& {
+            return edges[static_cast<std::size_t>(q)];
+        };
+        const auto layer = [&](std::int64_t q) {
+            return std::min(vertex_z[static_cast<std::size_t>(edge(q)[0])],
+                            vertex_z[static_cast<std::size_t>(edge(q)[1])]);
+        };
+        std::stable_sort(perm.begin(), perm.end(), [&](std::int64_t p, std::int64_t q) {
+            return std::pair(layer(p), edge(p)[1] - edge(p)[0]) <
+                   std::pair(layer(q), edge(q)[1] - edge(q)[0]);
+        });
+        sorted_edges.clear();
+        sorted_lengths.clear();
+        for (const std::int64_t q : perm) {
+            sorted_edges.push_back(edge(q));
+            sorted_lengths.push_back(rest_lengths[static_cast<std::size_t>(q)]);
+        }
+        std::copy(sorted_edges.begin(), sorted_edges.end(),
+                  edges.begin() + static_cast<std::ptrdiff_t>(begin));
+        std::copy(sorted_lengths.begin(), sorted_lengths.end(),
+                  rest_lengths.begin() + static_cast<std::ptrdiff_t>(begin));
+        for (std::int64_t q = begin; q < end;) {
+            EdgeRun run{q, edge(q)[0], 1, edge(q)[1] - edge(q)[0]};
+            std::int64_t next = q + 1;
+            if (next < end && edge(next)[1] - edge(next)[0] == run.span &&
+                (edge(next)[0] - run.first == 1 || edge(next)[0] - run.first == 2)) {
+                run.stride = edge(next)[0] - run.first;
+                while (next < end && edge(next)[1] - edge(next)[0] == run.span &&
+                       edge(next)[0] == run.first + run.stride * (next - q)) {
+                    ++next;
+                }
+            }
+            runs.push_back(run);
+            q = next;
+        }
+        run_offsets.push_back(static_cast<std::int64_t>(runs.size()));
+    }
+}
+}  // namespace
+
+EdgeConstraints layout_edge_constraints(ConstraintColoring coloring,
+                                        std::span<const std::array<std::int32_t, 2>> edges,
+                                        std::span<const Vec3f> rest, const TetGrid* grid) {
+    EdgeConstraints out;
+    out.coloring = std::move(coloring);
+    out.vertices.resize(edges.size());
+    out.rest_lengths0.resize(edges.size());
+    for (std::size_t k = 0; k < out.coloring.order.size(); ++k) {
+        const auto& e = edges[static_cast<std::size_t>(out.coloring.order[k])];
+        out.vertices[k] = e;
+        out.rest_lengths0[k] =
+            static_cast<float>(norm(vec3_cast<double>(rest[static_cast<std::size_t>(e[0])]) -
+                                    vec3_cast<double>(rest[static_cast<std::size_t>(e[1])])));
+    }
+    if (grid == nullptr) {
+        out.rest_lengths = out.rest_lengths0;
+        return out;
+    }
+    const std::vector<std::int32_t> vertex_z = vertex_layers(*grid);
+    sort_edges_into_runs(out.coloring, vertex_z, out.vertices, out.rest_lengths0, out.runs,
+                         out.run_offsets);
+    for (const EdgeRun& r : out.runs) {
+        out.run_begins.push_back(r.begin);
+    }
+    out.rest_lengths = out.rest_lengths0;
+    std::vector<std::int32_t> keys(out.vertices.size());
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+        keys[k] = std::min(vertex_z[static_cast<std::size_t>(out.vertices[k][0])],
+                           vertex_z[static_cast<std::size_t>(out.vertices[k][1])]);
+    }
+    out.blocking =
+        block_layers(out.coloring, out.vertices, keys, std::int64_t{grid->cells[2]} + 1, vertex_z);
+    return out;
+}
+
+TetConstraints layout_tet_constraints(ConstraintColoring coloring,
+                                      std::span<const geometry::Tet> tets,
+                                      std::span<const double> rest_volumes,
+                                      std::int64_t num_vertices, const TetGrid* grid) {
+    TetConstraints out;
+    out.coloring = std::move(coloring);
+    out.vertices.resize(tets.size());
+    out.rest_volumes0.resize(tets.size());
+    for (std::size_t k = 0; k < out.coloring.order.size(); ++k) {
+        const auto t = static_cast<std::size_t>(out.coloring.order[k]);
+        out.vertices[k] = tets[t];
+        out.rest_volumes0[k] = static_cast<float>(rest_volumes[t]);
+    }
+    out.rest_volumes = out.rest_volumes0;
+    if (grid == nullptr) {
+        return out;
+    }
+    const std::vector<std::int32_t> vertex_z = vertex_layers(*grid);
+    std::vector<std::int32_t> keys(out.vertices.size());
+    const std::int64_t cells_xy = std::int64_t{grid->cells[0]} * grid->cells[1];
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+        keys[k] = static_cast<std::int32_t>(
+            grid->tet_cell[static_cast<std::size_t>(out.coloring.order[k])] / cells_xy);
+    }
+    out.blocking = block_layers(out.coloring, out.vertices, keys, grid->cells[2], vertex_z);
+    out.runs = find_tet_runs(*grid, out.coloring, out.vertices, num_vertices);
+    out.lattice_x = std::int64_t{grid->cells[0]} + 1;
+    out.lattice_xy = out.lattice_x * (std::int64_t{grid->cells[1]} + 1);
+    return out;
+}
+
+}  // namespace pliant::pbd::detail

@@ -1,0 +1,204 @@
+#include "pliant/pbd/detail/driver_apply.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <iterator>
+#include <variant>
+
+#include "pliant/core/parallel.hpp"
+#include "pliant/pbd/detail/grains.hpp"
+
+namespace pliant::pbd::detail {
+namespace {
+
+// The rotation of a rotate or twist driver at time t (its angle ramped); the other drivers get a
+// zero matrix, never used.
+std::array<double, 9> driver_rotation(const Driver& driver, double t) {
+    if (const auto* r = std::get_if<RotateDriver>(&driver)) {
+        return rotation(r->axis, r->angle * ramp(t, r->ramp_time));
+    }
+    if (const auto* tw = std::get_if<TwistDriver>(&driver)) {
+        return rotation(tw->axis, tw->angle * ramp(t, tw->ramp_time));
+    }
+    return {};
+}
+
+// The target of a vertex at rest position `rest_f` held by a rotate or twist driver turning by
+// `rotation`: about a rotate's centre or the box's; a twist turns only vertices beyond the centre
+// along its axis.
+Vec3f turned_target(const Driver& driver, const std::array<double, 9>& rotation, const BodyBox& box,
+                    const Vec3f& rest_f) {
+    const Vec3d rest = vec3_cast<double>(rest_f);
+    const auto* rotate_driver = std::get_if<RotateDriver>(&driver);
+    const Vec3d c =
+        rotate_driver != nullptr && rotate_driver->centre ? *rotate_driver->centre : box.centre;
+    bool turns = true;
+    if (const auto* tw = std::get_if<TwistDriver>(&driver)) {
+        const int a = static_cast<int>(tw->axis);
+        turns = rest[a] > c[a];
+    }
+    return turns ? vec3_cast<float>(c + rotate(rotation, rest - c)) : rest_f;
+}
+
+// The target of a grabbed vertex: the grab translated by the fraction of the way to the target.
+Vec3f dragged_target(const DragGrab& grab, std::int32_t vertex, float drag_fraction) {
+    // The grab set is small; its offsets are found by a binary search of it.
+    const auto it = std::lower_bound(grab.vertices.begin(), grab.vertices.end(), vertex);
+    const Vec3f offset = grab.offsets[static_cast<std::size_t>(it - grab.vertices.begin())];
+    return grab.from + (grab.drag->target - grab.from) * drag_fraction + offset;
+}
+
+// The product of the bubbles' rest-volume factors at rest point p, time t (1 for none).
+double bubble_product(std::span<const BubbleDriver* const> bubbles, const BodyBox& box,
+                      const Vec3d& p, double t) {
+    double f = 1.0;
+    for (const BubbleDriver* b : bubbles) {
+        f *= bubble_factor(*b, box, p, t);
+    }
+    return f;
+}
+
+}  // namespace
+
+void grab_vertices(const DragDriver& drag, std::span<const Vec3f> positions, DragGrab& grab) {
+    grab.drag = drag;
+    grab.vertices.clear();
+    grab.offsets.clear();
+    const Vec3f centre = positions[static_cast<std::size_t>(drag.vertex)];
+    for (std::int64_t v = 0; v < std::ssize(positions); ++v) {
+        const Vec3f offset = positions[static_cast<std::size_t>(v)] - centre;
+        if (v == drag.vertex || squared_norm(offset) <= drag.radius * drag.radius) {
+            grab.vertices.push_back(static_cast<std::int32_t>(v));
+            grab.offsets.push_back(v == drag.vertex ? Vec3f{} : offset);
+        }
+    }
+}
+
+void assign_driven_vertices(std::span<const Driver> drivers, const BodyBox& box,
+                            std::span<const Vec3f> rest, std::span<const std::uint8_t> pinned,
+                            std::span<const std::int32_t> grabbed, DrivenVertices& driven) {
+    const auto nv = static_cast<std::int64_t>(rest.size());
+    std::vector<std::int32_t> by(static_cast<std::size_t>(nv), -1);
+    for (std::size_t d = 0; d < drivers.size(); ++d) {
+        const Driver& driver = drivers[d];
+        if (std::holds_alternative<RotateDriver>(driver)) {
+            std::fill(by.begin(), by.end(), static_cast<std::int32_t>(d));
+        } else if (const auto* twist = std::get_if<TwistDriver>(&driver)) {
+            const int a = static_cast<int>(twist->axis);
+            const double reach = twist->grip * box.size + 1e-6 * box.size;
+            for (std::int64_t v = 0; v < nv; ++v) {
+                const double q = rest[static_cast<std::size_t>(v)][a];
+                if (q <= box.lo[a] + reach || q >= box.hi[a] - reach) {
+                    by[static_cast<std::size_t>(v)] = static_cast<std::int32_t>(d);
+                }
+            }
+        }
+    }
+    for (const std::int32_t v : grabbed) {
+        by[static_cast<std::size_t>(v)] = DRAG;
+    }
+    driven.vertices.clear();
+    driven.driver.clear();
+    for (std::int64_t v = 0; v < nv; ++v) {
+        if (by[static_cast<std::size_t>(v)] != -1 && pinned[static_cast<std::size_t>(v)] == 0) {
+            driven.vertices.push_back(static_cast<std::int32_t>(v));
+            driven.driver.push_back(by[static_cast<std::size_t>(v)]);
+        }
+    }
+}
+
+void place_driven_vertices(Float4* x, std::span<const Driver> drivers, const BodyBox& box,
+                           std::span<const Vec3f> rest, const DrivenVertices& driven,
+                           const DragGrab& grab, double t_end, float drag_fraction) {
+    std::vector<std::array<double, 9>> rotations(drivers.size());
+    for (std::size_t d = 0; d < drivers.size(); ++d) {
+        rotations[d] = driver_rotation(drivers[d], t_end);
+    }
+    parallel_for(
+        static_cast<std::int64_t>(driven.vertices.size()),
+        [&](std::int64_t k) {
+            const std::int32_t v = driven.vertices[static_cast<std::size_t>(k)];
+            const std::int32_t d = driven.driver[static_cast<std::size_t>(k)];
+            const Vec3f target = d == DRAG ? dragged_target(grab, v, drag_fraction)
+                                           : turned_target(drivers[static_cast<std::size_t>(d)],
+                                                           rotations[static_cast<std::size_t>(d)],
+                                                           box, rest[static_cast<std::size_t>(v)]);
+            x[v] = {target.x, target.y, target.z, 0.0f};
+        },
+        VERTEX_GRAIN);
+}
+
+void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
+                        std::span<const Vec3f> rest, double t, EdgeConstraints& edges,
+                        TetConstraints& tets) {
+    std::vector<const WaveDriver*> waves;
+    std::vector<const BubbleDriver*> bubbles;
+    for (const Driver& d : drivers) {
+        if (const auto* w = std::get_if<WaveDriver>(&d)) {
+            waves.push_back(w);
+        } else if (const auto* b = std::get_if<BubbleDriver>(&d)) {
+            bubbles.push_back(b);
+        }
+    }
+    const auto nv = static_cast<std::int64_t>(rest.size());
+    // Step 1: the displaced rest positions (double), only when a wave runs.
+    std::vector<Vec3d> shaped;
+    if (!waves.empty()) {
+        shaped.resize(static_cast<std::size_t>(nv));
+        parallel_for(
+            nv,
+            [&](std::int64_t i) {
+                const auto v = static_cast<std::size_t>(i);
+                const Vec3d rest_v = vec3_cast<double>(rest[v]);
+                Vec3d p = rest_v;
+                for (const WaveDriver* w : waves) {
+                    p += wave_displacement(*w, box, rest_v, t);
+                }
+                shaped[v] = p;
+            },
+            VERTEX_GRAIN);
+    }
+    const auto rest_at = [&](std::int32_t v) {
+        return vec3_cast<double>(rest[static_cast<std::size_t>(v)]);
+    };
+    // Step 2: edge lengths.
+    parallel_for(
+        static_cast<std::int64_t>(edges.vertices.size()),
+        [&](std::int64_t k) {
+            const auto& e = edges.vertices[static_cast<std::size_t>(k)];
+            double length = shaped.empty() ? edges.rest_lengths0[static_cast<std::size_t>(k)]
+                                           : norm(shaped[static_cast<std::size_t>(e[0])] -
+                                                  shaped[static_cast<std::size_t>(e[1])]);
+            if (!bubbles.empty()) {
+                length *= std::cbrt(
+                    bubble_product(bubbles, box, (rest_at(e[0]) + rest_at(e[1])) * 0.5, t));
+            }
+            edges.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
+        },
+        EDGE_GRAIN);
+    // Step 3: tet volumes.
+    parallel_for(
+        static_cast<std::int64_t>(tets.vertices.size()),
+        [&](std::int64_t k) {
+            const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
+            double volume = tets.rest_volumes0[static_cast<std::size_t>(k)];
+            if (!shaped.empty()) {
+                volume = geometry::signed_volume(shaped[static_cast<std::size_t>(tet[0])],
+                                                 shaped[static_cast<std::size_t>(tet[1])],
+                                                 shaped[static_cast<std::size_t>(tet[2])],
+                                                 shaped[static_cast<std::size_t>(tet[3])]);
+            }
+            if (!bubbles.empty()) {
+                volume *= bubble_product(
+                    bubbles, box,
+                    (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25,
+                    t);
+            }
+            tets.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
+        },
+        TET_GRAIN);
+}
+
+}  // namespace pliant::pbd::detail

@@ -1,0 +1,186 @@
+#include "pliant/pbd/detail/constraint_layout.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <vector>
+
+#include "pliant/pbd/tet_edges.hpp"
+#include "pliant/pbd/tet_grid.hpp"
+#include "pliant/volume/volume.hpp"
+
+namespace pliant::pbd::detail {
+namespace {
+
+// A grid of cells of 2 unit voxels over dims voxels: every cell (full_box) or the cells near a
+// ball of visible voxels (a ragged body).
+TetGrid grid_over(volume::Dims dims, bool full_box) {
+    volume::Volume v =
+        volume::Volume::allocate(dims, volume::VoxelType::u8, {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
+    const auto data = v.values<volume::VoxelType::u8>();
+    for (std::int64_t k = 0; k < dims[2]; ++k) {
+        for (std::int64_t j = 0; j < dims[1]; ++j) {
+            for (std::int64_t i = 0; i < dims[0]; ++i) {
+                const double dx = static_cast<double>(i) - dims[0] / 2.0;
+                const double dy = static_cast<double>(j) - dims[1] / 2.0;
+                const double dz = static_cast<double>(k) - dims[2] / 2.0;
+                data[static_cast<std::size_t>(v.index(i, j, k))] =
+                    dx * dx + dy * dy + dz * dz < 0.2 * dims[0] * dims[0] ? 200 : 0;
+            }
+        }
+    }
+    return build_tet_grid(v, {.cell_voxels = 2, .full_box = full_box});
+}
+
+std::vector<double> rest_volumes(const TetGrid& grid) {
+    std::vector<double> volumes;
+    for (const geometry::Tet& t : grid.mesh.tets) {
+        const auto p = [&](int m) {
+            return vec3_cast<double>(grid.mesh.positions[static_cast<std::size_t>(t[m])]);
+        };
+        volumes.push_back(geometry::signed_volume(p(0), p(1), p(2), p(3)));
+    }
+    return volumes;
+}
+
+EdgeConstraints grid_edges(const TetGrid& grid) {
+    const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
+    return layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions,
+                                   &grid);
+}
+
+TetConstraints grid_tets(const TetGrid& grid) {
+    return layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid),
+                                  std::ssize(grid.mesh.positions), &grid);
+}
+
+TEST(ConstraintLayout, EdgesOfAColourAreTheColouringsWithTheirRestLengths) {
+    for (const bool full_box : {true, false}) {
+        const TetGrid grid = grid_over({12, 10, 22}, full_box);
+        const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
+        const EdgeConstraints laid = grid_edges(grid);
+        const ConstraintColoring& coloring = laid.coloring;
+        ASSERT_EQ(laid.vertices.size(), edges.size());
+        ASSERT_EQ(laid.rest_lengths, laid.rest_lengths0);
+        for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+            // The same set of edges, reordered within the colour.
+            std::vector<std::array<std::int32_t, 2>> expected;
+            for (const std::int32_t e : coloring.color(c)) {
+                expected.push_back(edges[static_cast<std::size_t>(e)]);
+            }
+            const auto begin =
+                laid.vertices.begin() + coloring.offsets[static_cast<std::size_t>(c)];
+            std::vector<std::array<std::int32_t, 2>> got(begin, begin + std::ssize(expected));
+            std::sort(expected.begin(), expected.end());
+            std::sort(got.begin(), got.end());
+            EXPECT_EQ(got, expected) << "colour " << c;
+        }
+        for (std::size_t q = 0; q < laid.vertices.size(); ++q) {
+            const auto& [a, b] = laid.vertices[q];
+            const auto length = static_cast<float>(
+                norm(vec3_cast<double>(grid.mesh.positions[static_cast<std::size_t>(a)]) -
+                     vec3_cast<double>(grid.mesh.positions[static_cast<std::size_t>(b)])));
+            ASSERT_EQ(laid.rest_lengths0[q], length) << "edge " << q;
+        }
+    }
+}
+
+TEST(ConstraintLayout, EdgeRunsGiveEveryEdgesVertices) {
+    for (const bool full_box : {true, false}) {
+        const EdgeConstraints laid = grid_edges(grid_over({12, 10, 22}, full_box));
+        const ConstraintColoring& coloring = laid.coloring;
+        ASSERT_EQ(laid.run_offsets.size(), static_cast<std::size_t>(coloring.num_colors()) + 1);
+        ASSERT_EQ(laid.run_offsets.back(), std::ssize(laid.runs));
+        ASSERT_EQ(laid.run_begins.size(), laid.runs.size());
+        std::int64_t longer_than_one = 0;
+        for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+            const std::int64_t r0 = laid.run_offsets[static_cast<std::size_t>(c)];
+            const std::int64_t r1 = laid.run_offsets[static_cast<std::size_t>(c) + 1];
+            ASSERT_LT(r0, r1) << "colour " << c;
+            EXPECT_EQ(laid.runs[static_cast<std::size_t>(r0)].begin,
+                      coloring.offsets[static_cast<std::size_t>(c)]);
+            for (std::int64_t r = r0; r < r1; ++r) {
+                const EdgeRun& run = laid.runs[static_cast<std::size_t>(r)];
+                EXPECT_EQ(laid.run_begins[static_cast<std::size_t>(r)], run.begin);
+                EXPECT_TRUE(run.stride == 1 || run.stride == 2);
+                const std::int64_t end = r + 1 < r1
+                                             ? laid.runs[static_cast<std::size_t>(r) + 1].begin
+                                             : coloring.offsets[static_cast<std::size_t>(c) + 1];
+                ASSERT_LT(run.begin, end);
+                longer_than_one += end - run.begin > 1 ? 1 : 0;
+                for (std::int64_t q = run.begin; q < end; ++q) {
+                    const std::int64_t a = run.first + run.stride * (q - run.begin);
+                    const auto& e = laid.vertices[static_cast<std::size_t>(q)];
+                    ASSERT_EQ(e[0], a) << "colour " << c << " run " << r << " edge " << q;
+                    ASSERT_EQ(e[1], a + run.span) << "colour " << c << " run " << r;
+                }
+            }
+        }
+        EXPECT_GT(longer_than_one, 0);
+    }
+}
+
+TEST(ConstraintLayout, TetRunsOnAFullBoxGiveEveryTetsVertices) {
+    const TetGrid grid = grid_over({12, 10, 22}, true);
+    const TetConstraints laid = grid_tets(grid);
+    ASSERT_EQ(laid.runs.size(), static_cast<std::size_t>(laid.coloring.num_colors()));
+    EXPECT_EQ(laid.lattice_x, grid.cells[0] + 1);
+    EXPECT_EQ(laid.lattice_xy, laid.lattice_x * (grid.cells[1] + 1));
+    for (std::int32_t c = 0; c < laid.coloring.num_colors(); ++c) {
+        const TetRun& r = laid.runs[static_cast<std::size_t>(c)];
+        const std::int64_t begin = laid.coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t count = laid.coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
+        ASSERT_EQ(r.ni * r.nj * r.nk, count);
+        for (std::int64_t q = 0; q < count; ++q) {
+            const std::int64_t a = q % r.ni;
+            const std::int64_t b = (q / r.ni) % r.nj;
+            const std::int64_t k = q / (r.ni * r.nj);
+            const std::int64_t base =
+                r.i0 + 2 * a + laid.lattice_x * (r.j0 + 2 * b) + laid.lattice_xy * (r.k0 + 2 * k);
+            const geometry::Tet& t = laid.vertices[static_cast<std::size_t>(begin + q)];
+            for (std::size_t m = 0; m < 4; ++m) {
+                ASSERT_EQ(t[m], base + r.offsets[m]) << "colour " << c << " tet " << q;
+            }
+        }
+    }
+}
+
+TEST(ConstraintLayout, TetsInColourOrderWithTheirRestVolumes) {
+    for (const bool full_box : {true, false}) {
+        const TetGrid grid = grid_over({12, 10, 22}, full_box);
+        const std::vector<double> volumes = rest_volumes(grid);
+        const TetConstraints laid = grid_tets(grid);
+        EXPECT_EQ(laid.runs.empty(), !full_box);  // runs need every lattice vertex
+        ASSERT_EQ(laid.rest_volumes, laid.rest_volumes0);
+        for (std::size_t k = 0; k < laid.coloring.order.size(); ++k) {
+            const auto t = static_cast<std::size_t>(laid.coloring.order[k]);
+            ASSERT_EQ(laid.vertices[k], grid.mesh.tets[t]);
+            ASSERT_EQ(laid.rest_volumes0[k], static_cast<float>(volumes[t]));
+        }
+    }
+}
+
+TEST(ConstraintLayout, OtherMeshesHaveNoRunsAndNoBlocking) {
+    const TetGrid grid = grid_over({8, 8, 8}, true);
+    const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
+    const EdgeConstraints laid_edges =
+        layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions, nullptr);
+    const TetConstraints laid_tets =
+        layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid),
+                               std::ssize(grid.mesh.positions), nullptr);
+    EXPECT_TRUE(laid_edges.runs.empty());
+    EXPECT_TRUE(laid_edges.run_offsets.empty());
+    EXPECT_EQ(laid_edges.blocking.num_layers, 0);
+    EXPECT_TRUE(laid_tets.runs.empty());
+    EXPECT_EQ(laid_tets.blocking.num_layers, 0);
+    // Without a grid the edges keep the colouring's order.
+    for (std::size_t k = 0; k < laid_edges.coloring.order.size(); ++k) {
+        ASSERT_EQ(laid_edges.vertices[k],
+                  edges[static_cast<std::size_t>(laid_edges.coloring.order[k])]);
+    }
+}
+
+}  // namespace
+}  // namespace pliant::pbd::detail
