@@ -22,8 +22,9 @@
 // a vertex with 5 of its 8 cells active lies in 5 corner tets, 5 constraints on its 3
 // coordinates. A tet of such a vertex can end a sweep inverted although its own projection
 // restores it (the gradient of C is fine through zero): the tets of the vertex projected after it
-// push the vertex back through its opposite face and keep their own volume (docs/architecture.md;
-// the test TetOfALowValenceVertexDoesNotStayInverted). So the tet kernels flag a tet whose volume
+// push the vertex back through its opposite face and keep their own volume
+// (docs/journal/2026-11-25-inversion-guard.md; the test
+// TetOfALowValenceVertexDoesNotStayInverted). So the tet kernels flag a tet whose volume
 // before its projection is below 0.75 V0 (AT_RISK_RATIO, detail/projection.hpp); after the sweep
 // the flagged tets, in colour order on one thread, get the unilateral constraint
 // C = V − 0.1 V0 ≥ 0 (GUARD_RATIO; V0 > 0 only) projected where violated, with no stiffness or
@@ -33,7 +34,7 @@
 // cannot undo an inversion that kinematic drivers impose, nor one whose flagged tets still
 // conflict after 16 passes, and a tet that one sweep takes from above 0.75 V0 before its own
 // projection to inverted after the sweep is guarded only from the substep whose sweep flags it
-// (docs/architecture.md lists the cases).
+// (docs/journal/2026-11-25-inversion-guard.md lists the measured cases).
 //
 // Stiffness k ∈ (0, 1] (the paper's "stiffness 1.0 vs 0.8"): PBD's stiffness, the fraction of a
 // constraint's violation that one projection removes (Müller et al. 2007, §3.3). As XPBD
