@@ -23,10 +23,11 @@ help:
 deps:
 	scripts/install-deps
 
-# cmake re-runs itself when CMakeLists change, so the tree is configured only once.
+# cmake re-runs itself when CMakeLists change, so the tree is configured only once. The demo and
+# the tests build for this machine's CPU (PLIANT_NATIVE), as docs/performance.md measures.
 configure: deps
 	@if [ ! -f $(BUILD_DIR)/CMakeCache.txt ]; then \
-	    cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS); \
+	    cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release -DPLIANT_NATIVE=ON $(CMAKE_ARGS); \
 	fi
 
 build: configure
