@@ -2,14 +2,82 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "commands.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/version.hpp"
 #include "progress_bar.hpp"
+
+namespace {
+
+// Edit distance between two words (insertions, deletions, substitutions, transpositions).
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+    std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+    for (std::size_t i = 0; i <= a.size(); ++i) {
+        d[i][0] = i;
+    }
+    for (std::size_t j = 0; j <= b.size(); ++j) {
+        d[0][j] = j;
+    }
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1,
+                                d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+                d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+            }
+        }
+    }
+    return d[a.size()][b.size()];
+}
+
+// The first word of the command line that is neither an option nor an option's value: what the
+// user meant as the command ("" when there is none). Only --threads takes a value.
+std::string command_word(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string_view arg = argv[i];
+        if (arg == "--threads") {
+            ++i;
+        } else if (!arg.starts_with("-")) {
+            return std::string(arg);
+        }
+    }
+    return {};
+}
+
+// "unknown command 'colide' (did you mean 'collide'?); the commands are: ..." when `word` is not
+// one of the app's commands; "" when it is (or is empty).
+std::string unknown_command_message(const CLI::App& app, const std::string& word) {
+    if (word.empty()) {
+        return {};
+    }
+    std::string names;
+    std::string nearest;
+    std::size_t nearest_distance = 3;  // suggest at distance 2 at most
+    for (const CLI::App* sub : app.get_subcommands({})) {
+        if (sub->get_name() == word) {
+            return {};
+        }
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+        const std::size_t distance = edit_distance(word, sub->get_name());
+        if (distance < nearest_distance || sub->get_name().starts_with(word)) {
+            nearest_distance = sub->get_name().starts_with(word) ? 0 : distance;
+            nearest = sub->get_name();
+        }
+    }
+    return fmt::format("unknown command '{}'{}; the commands are: {}", word,
+                       nearest.empty() ? "" : fmt::format(" (did you mean '{}'?)", nearest),
+                       names);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace pliant;
@@ -47,6 +115,12 @@ int main(int argc, char** argv) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         cli::end_progress();
+        if (const std::string unknown = unknown_command_message(app, command_word(argc, argv));
+            !unknown.empty()) {
+            std::fprintf(stderr, "pliant: error: %s\nRun with --help for usage.\n",
+                         unknown.c_str());
+            return 2;
+        }
         std::fprintf(stderr, "pliant: error: %s\nRun with --help for usage.\n", e.what());
         return 2;
     } catch (const Error& e) {

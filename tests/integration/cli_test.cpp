@@ -160,6 +160,41 @@ TEST(Cli, MissingSubcommandIsUsageError) {
     EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
 }
 
+TEST(Cli, MistypedCommandSuggestsTheNearest) {
+    ScratchDir scratch;
+    const CliResult r = run_cli("colide mesh.obj", scratch);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("pliant: error: unknown command 'colide' (did you mean 'collide'?)"),
+              std::string::npos)
+        << r.err;
+    const CliResult far = run_cli("--threads 2 frobnicate", scratch);
+    EXPECT_EQ(far.exit_code, 2);
+    EXPECT_NE(far.err.find("unknown command 'frobnicate'; the commands are: collide"),
+              std::string::npos)
+        << far.err;
+    EXPECT_EQ(far.err.find("did you mean"), std::string::npos) << far.err;
+}
+
+TEST(Collide, AFileWithoutTrianglesIsAnError) {
+    ScratchDir scratch;
+    const auto empty = scratch / "empty.obj";
+    std::ofstream(empty).flush();
+    const CliResult r = run_cli("collide " + quoted(empty), scratch);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("expected a mesh with at least one triangle, got 0 vertices"),
+              std::string::npos)
+        << r.err;
+    const auto binary = scratch / "random.obj";
+    std::string bytes(4096, '\0');
+    for (std::size_t k = 0; k < bytes.size(); ++k) {
+        bytes[k] = static_cast<char>((k * 2654435761u) >> 13);
+    }
+    std::ofstream(binary, std::ios::binary) << bytes;
+    const CliResult b = run_cli("collide " + quoted(binary), scratch);
+    EXPECT_EQ(b.exit_code, 1);
+    EXPECT_NE(b.err.find("not a text OBJ file"), std::string::npos) << b.err;
+}
+
 TEST(Collide, MissingFileNamesTheFile) {
     ScratchDir scratch;
     const auto missing = scratch / "no_such_mesh.ply";

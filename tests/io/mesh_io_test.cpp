@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "pliant/core/error.hpp"
 #include "pliant/io/obj.hpp"
 #include "pliant/io/ply.hpp"
 #include "support/test_files.hpp"
@@ -49,6 +50,31 @@ TEST(MeshIo, WritesTheFormatOfTheExtension) {
     // The readers agree with the dispatcher.
     test::expect_bitwise_equal(mesh, read_ply(dir / "m.PLY"));
     test::expect_rounds_to(mesh, read_obj(dir / "m.obj"));
+}
+
+TEST(MeshIo, AMeshWithoutTrianglesIsRefused) {
+    TempDir dir;
+    const auto vertices_only = dir.path() / "points.obj";
+    test::write_bytes(vertices_only, "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    try {
+        read_mesh(vertices_only);
+        FAIL() << "expected InvalidInput";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("points.obj: expected a mesh with at least one "
+                                             "triangle, got 3 vertices and no triangles"),
+                  std::string::npos)
+            << e.what();
+    }
+    // read_obj itself reads what is there.
+    EXPECT_EQ(read_obj(vertices_only).positions.size(), 3u);
+}
+
+TEST(MeshIo, BinaryBytesUnderAnObjNameAreRefused) {
+    TempDir dir;
+    const auto binary = dir.path() / "binary.obj";
+    test::write_bytes(binary, std::string_view("v 0 0 0\nv 1\0\x01 0 0\n", 18));
+    expect_io_error([&] { read_mesh(binary); }, {"binary.obj", "line 2", "not a text OBJ file",
+                                                 "byte 0x00"});
 }
 
 TEST(MeshIo, UnknownExtension) {

@@ -47,13 +47,21 @@ void write_mesh_impl(const std::filesystem::path& path,
 }  // namespace
 
 geometry::TriangleMeshD read_mesh(const std::filesystem::path& path) {
+    geometry::TriangleMeshD mesh;
     switch (format_from_extension(path)) {
         case MeshFormat::obj:
-            return read_obj(path);
+            mesh = read_obj(path);
+            break;
         case MeshFormat::ply:
-            return read_ply(path);
+            mesh = read_ply(path);
+            break;
     }
-    throw InternalError("read_mesh: unhandled MeshFormat");
+    if (mesh.triangles.empty()) {
+        throw InvalidInput(fmt::format(
+            "{}: expected a mesh with at least one triangle, got {} vertices and no triangles",
+            path.string(), mesh.positions.size()));
+    }
+    return mesh;
 }
 
 void write_mesh(const std::filesystem::path& path, const geometry::TriangleMesh& mesh) {

@@ -79,6 +79,13 @@ ObjScan scan_obj(std::string_view text, const std::filesystem::path& path) {
         std::string_view line = text.substr(pos, end - pos);
         pos = next;
         ++line_number;
+        // OBJ is text: a NUL or another control byte means a binary file under an .obj name.
+        for (std::size_t k = 0; k < line.size(); ++k) {
+            const auto byte = static_cast<unsigned char>(line[k]);
+            if (byte < 0x20 && byte != '\t' && byte != '\f' && byte != '\v') {
+                fail(fmt::format("not a text OBJ file: byte 0x{:02x} in column {}", byte, k + 1));
+            }
+        }
         while (!line.empty() && is_space(line.front())) {
             line.remove_prefix(1);
         }

@@ -37,12 +37,11 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
 // beyond pipeline::MAX_SCENE_COORDINATE (a run would end as "diverged" at its first frame).
 geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
                                            const std::string& scene_name, const std::string& key) {
-    geometry::TriangleMeshD mesh = io::read_mesh(file);
-    if (mesh.triangles.empty()) {
-        throw InvalidInput(
-            fmt::format("{}: {}: {}: expected a mesh with at least one triangle, "
-                        "got {} vertices and no triangles",
-                        scene_name, key, file.string(), mesh.positions.size()));
+    geometry::TriangleMeshD mesh;
+    try {
+        mesh = io::read_mesh(file);
+    } catch (const InvalidInput& e) {  // a file without triangles: say which key named it
+        throw InvalidInput(fmt::format("{}: {}: {}", scene_name, key, e.what()));
     }
     for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
         const Vec3d& p = mesh.positions[v];
