@@ -64,6 +64,7 @@
 #include <vector>
 
 #include "pliant/cloth/air.hpp"
+#include "pliant/cloth/cloth_model.hpp"
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/material.hpp"
@@ -101,21 +102,29 @@ public:
     // start). Moving obstacles carry the cloth along through friction (relative velocity). Boxes
     // stay axis-aligned: a motion that rotates a box is InvalidInput. Invalid shapes (zero plane
     // normal, radius <= 0, min > max) are InvalidInput.
-    void add_obstacle(const Obstacle& obstacle, const Motion& motion = {});
-    // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
-    // their current positions: every substep they are placed at motion.pose(t)(rest) with the
-    // velocity of that path. A vertex in several groups follows the last.
+    void add_obstacle(const Obstacle& obstacle, const Motion& motion = {}) {
+        m_model.add_obstacle(obstacle, motion);
+    }
     // A triangle-mesh obstacle (mesh_obstacle.hpp), given at its rest placement and moved
     // rigidly by `motion` (queries run in its rest frame: no refit per substep). Shared, so that
     // several solvers can use one mesh.
-    void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle, const Motion& motion = {});
-    void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
-    void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,
+                           const Motion& motion = {}) {
+        m_model.add_mesh_obstacle(std::move(obstacle), motion);
+    }
+    // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
+    // their current positions: every substep they are placed at motion.pose(t)(rest) with the
+    // velocity of that path. A vertex in several groups follows the last.
+    void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
+        m_model.add_moving_pins(vertices, motion);
+    }
+    // m/s², default (0, 0, -9.81)
+    void set_gravity(const Vec3d& gravity) { m_model.set_gravity(gravity); }
     // Replaces the velocities (m/s, #V, finite; else InvalidInput), e.g. an initial motion or a
     // kick between steps. Pinned vertices keep following their pins.
-    void set_velocities(std::span<const Vec3d> velocities);
+    void set_velocities(std::span<const Vec3d> velocities) { m_model.set_velocities(velocities); }
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
-    void set_air(const Air& air);
+    void set_air(const Air& air) { m_model.set_air(air); }
     // Self-collision handling (self_collision.hpp): proximity constraints every substep and the
     // CCD fail-safe at the end of every step, so that no step ends with intersecting triangles
     // when it started without. Off by default.
@@ -126,22 +135,21 @@ public:
     // intersection-free only once it is). Velocities are kept; self-collision starts over.
     // Without options.obstacle_distance, region moves keep out of the solver's obstacles where
     // they are now (a mesh obstacle within its box's diagonal of its surface).
-    UntangleResult untangle(const UntangleOptions& options = {});
+    UntangleResult untangle(const UntangleOptions& options = {}) {
+        return m_model.untangle(options);
+    }
     // The free vertices inside an obstacle (signed distance < 0 to an analytic obstacle, or to a
     // mesh obstacle within its box's diagonal of its surface) where the obstacles are now, and
     // how deep the deepest is (m; 0 when none). Cloth given inside an obstacle is pushed out onto
     // its surface in the first substep (without being thrown, but stretched as the surface has it).
-    struct Penetration {
-        std::int64_t vertices = 0;
-        double deepest = 0.0;
-    };
-    Penetration obstacle_penetration() const;
+    using Penetration = ClothModel::Penetration;
+    Penetration obstacle_penetration() const { return m_model.obstacle_penetration(); }
     // Moves the cloth to `positions` (#V, finite), e.g. a start untangled before and kept, so
     // that it need not be untangled again: afterwards the solver is in the state untangle()
     // leaves when it ends there. Pinned vertices (inverse mass 0) must be given where they are.
     // Velocities are kept; self-collision starts over. InvalidInput: a size that does not match,
     // a non-finite position, a pinned vertex moved.
-    void set_positions(std::span<const Vec3d> positions);
+    void set_positions(std::span<const Vec3d> positions) { m_model.set_positions(positions); }
 
     // Interactive dragging: `vertex` becomes kinematic (inverse mass 0) and, over the substeps of
     // the next step, moves on the straight line from where it is to `target` (metres) with that
@@ -150,23 +158,23 @@ public:
     // grab overrides a pin's motion while it lasts, and the self-collision fail-safe may still
     // put the vertex back like any other (the cloth stays intersection-free). InvalidInput:
     // vertex out of range, target not finite.
-    void grab(std::int32_t vertex, const Vec3d& target);
+    void grab(std::int32_t vertex, const Vec3d& target) { m_model.grab(vertex, target); }
     // Ends the grab (no-op without one): the vertex gets its inverse mass back and keeps its
     // velocity (a pinned vertex stays pinned where it was left; a moving pin resumes its motion).
-    void release_grab();
+    void release_grab() { m_model.release_grab(); }
     // The grabbed vertex, or -1.
-    std::int32_t grabbed_vertex() const { return m_grab ? m_grab->vertex : -1; }
+    std::int32_t grabbed_vertex() const { return m_model.grabbed_vertex(); }
 
     // Advances the cloth by dt seconds in `substeps` equal substeps (dt > 0, substeps >= 1; else
     // InvalidInput).
     ClothStepStats step(double dt, int substeps);
 
-    double time() const { return m_time; }  // s since the start
-    std::span<const Vec3d> positions() const { return m_positions; }
-    std::span<const Vec3d> velocities() const { return m_velocities; }
-    std::span<const double> inverse_masses() const { return m_inverse_masses; }
-    std::span<const geometry::Triangle> triangles() const { return m_triangles; }
-    const ClothMaterial& material() const { return m_material; }
+    double time() const { return m_model.time(); }  // s since the start
+    std::span<const Vec3d> positions() const { return m_model.positions(); }
+    std::span<const Vec3d> velocities() const { return m_model.velocities(); }
+    std::span<const double> inverse_masses() const { return m_model.inverse_masses(); }
+    std::span<const geometry::Triangle> triangles() const { return m_model.triangles(); }
+    const ClothMaterial& material() const { return m_model.material(); }
     std::size_t num_stretch_constraints() const { return m_stretch_vertices.size(); }
     // Chains the stretch constraints are solved in (0 unless material.stretch_solver = chains;
     // stretch_chains.hpp).
@@ -186,15 +194,6 @@ private:
     // Strain limits, stretch, then bending (dihedral, then isometric), colour by colour
     // (detail/constraint_kernels.hpp).
     void project_constraints(double h);
-    // Adds h · (air force at time t / mass) to the free vertices' velocities.
-    void apply_air(double h, double t);
-    // Places the obstacles at time t (the end of the substep); previous placements are kept
-    // for the obstacles' surface velocities.
-    void move_obstacles(double t);
-    // The obstacle surface nearest to x where the obstacles are now (a mesh obstacle within its
-    // box's diagonal: an open mesh is "inside" behind its triangles' planes, which would
-    // otherwise reach across all of space); distance +inf without one.
-    SurfaceDistance nearest_obstacle(const Vec3d& x) const;
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision();
@@ -202,45 +201,9 @@ private:
     // and the obstacle surface's velocity there for friction; returns the vertices in contact.
     std::int64_t resolve_obstacles(double h);
 
-    struct MovingObstacle {
-        Obstacle rest;  // at time 0
-        MotionState state;
-        Obstacle current;   // rest placed by state.pose
-        Obstacle previous;  // rest placed by state.previous_pose
-    };
-    struct MovingMesh {
-        std::shared_ptr<const MeshObstacle> mesh;  // at its rest placement
-        MotionState state;
-    };
-    struct MovingPins {
-        std::vector<std::int32_t> vertices;
-        std::vector<Vec3d> rest_positions;
-        Motion motion;
-    };
-    struct Grab {
-        std::int32_t vertex = -1;
-        Vec3d start;                // where the current step's path starts
-        Vec3d target;               // where it ends
-        double inverse_mass = 0.0;  // the vertex's own, restored on release
-    };
-    std::optional<Grab> m_grab;
-    double m_step_start = 0.0;  // time and length of the step in progress (grab paths), s
-    double m_step_dt = 1.0;
-
-    ClothMaterial m_material;
-    Vec3d m_gravity{0.0, 0.0, -9.81};
-    std::vector<geometry::Triangle> m_triangles;
-    std::vector<Vec3d> m_positions;
+    ClothModel m_model;
+    std::int64_t m_num_position_resets = 0;  // the model's when self-collision last started
     std::vector<Vec3d> m_previous_positions;
-    std::vector<Vec3d> m_velocities;
-    std::vector<double> m_inverse_masses;
-    std::vector<MovingObstacle> m_obstacles;
-    std::vector<MovingMesh> m_mesh_obstacles;
-    std::vector<MovingPins> m_moving_pins;
-    Air m_air;
-    double m_time = 0.0;  // s
-    geometry::MeshTopology m_topology;
-    std::vector<Vec3d> m_triangle_forces;  // air, per triangle (N)
     std::unique_ptr<SelfCollision> m_self_collision;
     std::vector<Vec3d> m_window_start;  // positions at the start of a self-collision window
     double m_window_start_time = 0.0;   // s
