@@ -1,0 +1,377 @@
+#include "pliant/cloth/cloth_model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/geometry/validate.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t VERTEX_GRAIN = 2048;
+
+void validate_material(const ClothMaterial& m) {
+    const auto check = [](double value, const char* name) {
+        if (!(value >= 0.0) || !std::isfinite(value)) {
+            throw InvalidInput(fmt::format(
+                "cloth material: {} must be a finite number >= 0, got {}", name, value));
+        }
+    };
+    check(m.areal_density, "areal_density");
+    check(m.stretch_compliance, "stretch_compliance");
+    check(m.bend_compliance, "bend_compliance");
+    if (!(m.strain_limit >= 0.0)) {
+        throw InvalidInput(fmt::format(
+            "cloth material: strain_limit must be a number >= 0 (infinity: none), got {}",
+            m.strain_limit));
+    }
+    check(m.damping, "damping");
+    check(m.thickness, "thickness");
+    check(m.static_friction, "static_friction");
+    check(m.kinetic_friction, "kinetic_friction");
+    check(m.self_static_friction, "self_static_friction");
+    check(m.self_kinetic_friction, "self_kinetic_friction");
+}
+
+// The obstacle at its rest placement moved by pose (boxes only translate: add_obstacle checks).
+Obstacle placed(const Obstacle& rest, const Pose& pose) {
+    if (const auto* plane = std::get_if<PlaneObstacle>(&rest)) {
+        return PlaneObstacle{pose.apply(plane->point), pose.rotation.apply(plane->normal)};
+    }
+    if (const auto* sphere = std::get_if<SphereObstacle>(&rest)) {
+        return SphereObstacle{pose.apply(sphere->center), sphere->radius};
+    }
+    const auto& box = std::get<BoxObstacle>(rest);
+    return BoxObstacle{box.min + pose.translate, box.max + pose.translate};
+}
+
+}  // namespace
+
+ClothModel::ClothModel(const geometry::TriangleMeshD& rest_mesh, const ClothMaterial& material,
+                       std::span<const std::int32_t> pinned)
+    : m_material(material),
+      m_triangles(rest_mesh.triangles),
+      m_rest_positions(rest_mesh.positions),
+      m_positions(rest_mesh.positions),
+      m_velocities(rest_mesh.positions.size(), Vec3d{0.0, 0.0, 0.0}),
+      m_inverse_masses(rest_mesh.positions.size(), 0.0) {
+    validate_material(material);
+    geometry::validate_mesh(rest_mesh, "cloth mesh");
+    const std::size_t num_vertices = m_positions.size();
+
+    // Masses from the rest area.
+    std::vector<double> masses(num_vertices, 0.0);
+    for (const geometry::Triangle& t : m_triangles) {
+        const Vec3d& a = m_positions[static_cast<std::size_t>(t[0])];
+        const Vec3d& b = m_positions[static_cast<std::size_t>(t[1])];
+        const Vec3d& c = m_positions[static_cast<std::size_t>(t[2])];
+        const double third = material.areal_density * 0.5 * norm(cross(b - a, c - a)) / 3.0;
+        for (const std::int32_t v : t) {
+            masses[static_cast<std::size_t>(v)] += third;
+        }
+    }
+    for (std::size_t v = 0; v < num_vertices; ++v) {
+        m_inverse_masses[v] = masses[v] > 0.0 ? 1.0 / masses[v] : 0.0;
+    }
+    for (const std::int32_t v : pinned) {
+        if (v < 0 || static_cast<std::size_t>(v) >= num_vertices) {
+            throw InvalidInput(
+                fmt::format("cloth: pinned vertex {} out of range, expected an index in [0, {})", v,
+                            num_vertices));
+        }
+        m_inverse_masses[static_cast<std::size_t>(v)] = 0.0;
+    }
+    m_topology = geometry::build_topology(m_triangles, num_vertices);
+}
+
+void ClothModel::add_obstacle(const Obstacle& obstacle, const Motion& motion) {
+    if (const auto* plane = std::get_if<PlaneObstacle>(&obstacle)) {
+        if (!(squared_norm(plane->normal) > 0.0) || !is_finite(plane->normal) ||
+            !is_finite(plane->point)) {
+            throw InvalidInput("cloth: a plane obstacle needs a finite point and a nonzero normal");
+        }
+    }
+    if (const auto* sphere = std::get_if<SphereObstacle>(&obstacle)) {
+        if (!(sphere->radius > 0.0) || !std::isfinite(sphere->radius) ||
+            !is_finite(sphere->center)) {
+            throw InvalidInput(fmt::format(
+                "cloth: a sphere obstacle needs a finite centre and radius > 0, got radius {}",
+                sphere->radius));
+        }
+    }
+    if (const auto* box = std::get_if<BoxObstacle>(&obstacle)) {
+        if (!(box->min.x <= box->max.x && box->min.y <= box->max.y && box->min.z <= box->max.z) ||
+            !is_finite(box->min) || !is_finite(box->max)) {
+            throw InvalidInput("cloth: a box obstacle needs finite min <= max on every axis");
+        }
+        if (motion.rotates()) {
+            throw InvalidInput(
+                "cloth: a box obstacle stays axis-aligned, expected a motion without rotation");
+        }
+    }
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
+    }
+    MotionState state(motion, m_time);
+    const Obstacle now = placed(obstacle, state.pose);
+    m_obstacles.push_back(MovingObstacle{obstacle, std::move(state), now, now});
+}
+
+void ClothModel::add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,
+                                   const Motion& motion) {
+    if (!obstacle) {
+        throw InvalidInput("cloth: a mesh obstacle needs a mesh");
+    }
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
+    }
+    m_mesh_obstacles.push_back({std::move(obstacle), MotionState(motion, m_time)});
+}
+
+void ClothModel::add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: pin motion: expected finite keyframes at strictly increasing times");
+    }
+    MovingPins pins;
+    pins.motion = motion;
+    const Pose start = motion.pose(m_time);
+    for (const std::int32_t v : vertices) {
+        if (v < 0 || static_cast<std::size_t>(v) >= m_positions.size()) {
+            throw InvalidInput(
+                fmt::format("cloth: pinned vertex {} out of range, expected an index in [0, {})", v,
+                            m_positions.size()));
+        }
+        m_inverse_masses[static_cast<std::size_t>(v)] = 0.0;
+        pins.vertices.push_back(v);
+        // The rest placement that the motion's current pose maps to the vertex's position.
+        pins.rest_positions.push_back(
+            start.apply_inverse(m_positions[static_cast<std::size_t>(v)]));
+    }
+    m_moving_pins.push_back(std::move(pins));
+}
+
+void ClothModel::set_air(const Air& air) {
+    if (!(air.density >= 0.0) || !std::isfinite(air.density) || !(air.drag_coefficient >= 0.0) ||
+        !std::isfinite(air.drag_coefficient) || !is_finite(air.wind) ||
+        !(air.gust_amplitude >= 0.0) || !std::isfinite(air.gust_amplitude) ||
+        !(air.gust_period > 0.0) || !std::isfinite(air.gust_period) ||
+        !(air.gust_wavelength > 0.0) || !std::isfinite(air.gust_wavelength)) {
+        throw InvalidInput(
+            "cloth: air: expected finite density, drag_coefficient and gust_amplitude >= 0, "
+            "gust_period and gust_wavelength > 0 and a finite wind");
+    }
+    m_air = air;
+    m_triangle_forces.assign(air.is_active() ? m_triangles.size() : 0, Vec3d{});
+}
+
+void ClothModel::set_velocities(std::span<const Vec3d> velocities) {
+    if (velocities.size() != m_velocities.size()) {
+        throw InvalidInput(fmt::format("cloth: velocities.size() ({}) != the vertex count ({})",
+                                       velocities.size(), m_velocities.size()));
+    }
+    for (const Vec3d& v : velocities) {
+        if (!is_finite(v)) {
+            throw InvalidInput("cloth: velocities must be finite");
+        }
+    }
+    m_velocities.assign(velocities.begin(), velocities.end());
+}
+
+void ClothModel::set_positions(std::span<const Vec3d> positions) {
+    if (positions.size() != m_positions.size()) {
+        throw InvalidInput(fmt::format("cloth: positions.size() ({}) != the vertex count ({})",
+                                       positions.size(), m_positions.size()));
+    }
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        if (!is_finite(positions[i])) {
+            throw InvalidInput(fmt::format("cloth: position of vertex {} is not finite", i));
+        }
+        if (m_inverse_masses[i] == 0.0 && !(positions[i] == m_positions[i])) {
+            const Vec3d& at = m_positions[i];
+            throw InvalidInput(fmt::format(
+                "cloth: vertex {} does not move (pinned, grabbed or without area) from ({}, {}, "
+                "{}), got ({}, {}, {})",
+                i, at.x, at.y, at.z, positions[i].x, positions[i].y, positions[i].z));
+        }
+    }
+    m_positions.assign(positions.begin(), positions.end());
+    ++m_num_position_resets;
+}
+
+UntangleResult ClothModel::untangle(const UntangleOptions& options) {
+    UntangleOptions with_obstacles = options;
+    if (!with_obstacles.obstacle_distance && has_obstacles()) {
+        // Where the obstacles are now (before the first step: where their motion has them at
+        // time 0).
+        with_obstacles.obstacle_distance = [this](const Vec3d& x) {
+            return nearest_obstacle(x).distance;
+        };
+    }
+    const UntangleResult result =
+        cloth::untangle(m_positions, m_triangles, m_inverse_masses, with_obstacles);
+    if (result.iterations > 0) {
+        ++m_num_position_resets;
+    }
+    return result;
+}
+
+void ClothModel::grab(std::int32_t vertex, const Vec3d& target) {
+    if (vertex < 0 || static_cast<std::size_t>(vertex) >= m_positions.size()) {
+        throw InvalidInput(
+            fmt::format("cloth: grabbed vertex {} out of range, expected an index in [0, {})",
+                        vertex, m_positions.size()));
+    }
+    if (!is_finite(target)) {
+        throw InvalidInput(fmt::format("cloth: grab target ({}, {}, {}) is not finite", target.x,
+                                       target.y, target.z));
+    }
+    if (m_grab && m_grab->vertex != vertex) {
+        release_grab();
+    }
+    if (!m_grab) {
+        const auto v = static_cast<std::size_t>(vertex);
+        m_grab = Grab{vertex, m_positions[v], target, m_inverse_masses[v]};
+        m_inverse_masses[v] = 0.0;
+    }
+    m_grab->target = target;
+}
+
+void ClothModel::release_grab() {
+    if (m_grab) {
+        m_inverse_masses[static_cast<std::size_t>(m_grab->vertex)] = m_grab->inverse_mass;
+        m_grab.reset();
+    }
+}
+
+SurfaceDistance ClothModel::nearest_obstacle(const Vec3d& x) const {
+    SurfaceDistance nearest{std::numeric_limits<double>::infinity(), {0.0, 0.0, 0.0}};
+    for (const MovingObstacle& obstacle : m_obstacles) {
+        const SurfaceDistance s = surface_distance(obstacle.current, x);
+        if (s.distance < nearest.distance) {
+            nearest = s;
+        }
+    }
+    for (const MovingMeshObstacle& mesh : m_mesh_obstacles) {
+        const Pose& pose = mesh.state.pose;
+        const std::optional<SurfaceDistance> s =
+            mesh.mesh->surface_distance(pose.apply_inverse(x), norm(mesh.mesh->bounds().extent()));
+        if (s && s->distance < nearest.distance) {
+            nearest = {s->distance, pose.rotation.apply(s->normal)};
+        }
+    }
+    return nearest;
+}
+
+ClothModel::Penetration ClothModel::obstacle_penetration() const {
+    Penetration penetration;
+    if (!has_obstacles()) {
+        return penetration;
+    }
+    for (std::size_t v = 0; v < m_positions.size(); ++v) {
+        if (m_inverse_masses[v] > 0.0) {
+            const double distance = nearest_obstacle(m_positions[v]).distance;
+            if (distance < 0.0) {
+                ++penetration.vertices;
+                penetration.deepest = std::max(penetration.deepest, -distance);
+            }
+        }
+    }
+    return penetration;
+}
+
+void ClothModel::begin_step(double dt) {
+    m_step_start = m_time;
+    m_step_dt = dt;
+    if (m_grab) {
+        m_grab->start = m_positions[static_cast<std::size_t>(m_grab->vertex)];
+    }
+}
+
+void ClothModel::move_pins(double t) {
+    for (const MovingPins& pins : m_moving_pins) {
+        const Pose pose = pins.motion.pose(t);
+        parallel_for(static_cast<std::int64_t>(pins.vertices.size()), [&](std::int64_t k) {
+            m_positions[static_cast<std::size_t>(pins.vertices[static_cast<std::size_t>(k)])] =
+                pose.apply(pins.rest_positions[static_cast<std::size_t>(k)]);
+        });
+    }
+    if (m_grab) {
+        const double f = std::min(1.0, (t - m_step_start) / m_step_dt);
+        m_positions[static_cast<std::size_t>(m_grab->vertex)] =
+            m_grab->start + (m_grab->target - m_grab->start) * f;
+    }
+}
+
+void ClothModel::move_obstacles(double t) {
+    for (MovingObstacle& obstacle : m_obstacles) {
+        if (!obstacle.state.motion.is_static()) {
+            obstacle.state.advance(t);
+            obstacle.previous = obstacle.current;
+            obstacle.current = placed(obstacle.rest, obstacle.state.pose);
+        }
+    }
+    for (MovingMeshObstacle& mesh : m_mesh_obstacles) {
+        mesh.state.advance(t);
+    }
+}
+
+void ClothModel::apply_air(double h, double t) {
+    if (!m_air.is_active()) {
+        return;
+    }
+    // Per triangle, then per vertex over its incident triangles in ascending order: no
+    // concurrent writes, the same sums for any number of threads.
+    parallel_for(
+        static_cast<std::int64_t>(m_triangles.size()),
+        [&](std::int64_t i) {
+            const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(i)];
+            const Vec3d& a = m_positions[static_cast<std::size_t>(tri[0])];
+            const Vec3d& b = m_positions[static_cast<std::size_t>(tri[1])];
+            const Vec3d& c = m_positions[static_cast<std::size_t>(tri[2])];
+            const Vec3d area_normal = cross(b - a, c - a) * 0.5;  // |.| = area
+            const double area = norm(area_normal);
+            Vec3d force{0.0, 0.0, 0.0};
+            if (area > 0.0) {
+                const Vec3d velocity = (m_velocities[static_cast<std::size_t>(tri[0])] +
+                                        m_velocities[static_cast<std::size_t>(tri[1])] +
+                                        m_velocities[static_cast<std::size_t>(tri[2])]) *
+                                       (1.0 / 3.0);
+                const Vec3d centre = (a + b + c) * (1.0 / 3.0);
+                const Vec3d normal = area_normal * (1.0 / area);
+                const double u_n = dot(velocity - m_air.wind_at(centre, t), normal);
+                // Drag can at most stop the relative motion within the substep: the impulse is
+                // capped at the triangle's momentum normal to it (explicit quadratic drag would
+                // overshoot and blow up once h ρ C_d |u·n| / areal_density > 2).
+                const double drag = 0.5 * m_air.density * m_air.drag_coefficient * area * u_n * u_n;
+                const double stopping = m_material.areal_density * area * std::abs(u_n) / h;
+                force = normal * (-std::copysign(std::min(drag, stopping), u_n));
+            }
+            m_triangle_forces[static_cast<std::size_t>(i)] = force;
+        },
+        VERTEX_GRAIN);
+    parallel_for(
+        static_cast<std::int64_t>(m_positions.size()),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            if (!(m_inverse_masses[v] > 0.0)) {
+                return;
+            }
+            Vec3d force{0.0, 0.0, 0.0};
+            for (const std::int32_t triangle :
+                 m_topology.triangles_of_vertex(static_cast<std::int32_t>(i))) {
+                force += m_triangle_forces[static_cast<std::size_t>(triangle)];
+            }
+            m_velocities[v] += force * (m_inverse_masses[v] * h / 3.0);
+        },
+        VERTEX_GRAIN);
+}
+
+}  // namespace pliant::cloth

@@ -1,0 +1,462 @@
+#include "pliant/cloth/xpbd_stepper.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/cloth/dihedral.hpp"
+#include "pliant/cloth/isometric_bending.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
+constexpr std::int64_t VERTEX_GRAIN = 2048;
+constexpr std::int64_t CHAIN_PACKET_GRAIN = 2;
+// The self-collision fail-safe checks the motion of every this many substeps (a window); the
+// candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
+constexpr int FAIL_SAFE_WINDOW = 4;
+// Self-collision needs a thickness of at most this many median edge lengths: with more, every
+// triangle is within reach of hundreds of others (in a flat sheet about 2π (thickness / edge)²),
+// and a broad phase costs gigabytes (a 5 cm sheet of 134 × 134 quads under 5 mm: 24 GB).
+constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
+// A strain limit moves its two vertices by at most this fraction of the thickness per substep
+// (per limit: a vertex in several limits can move several times that; strain_hierarchy.hpp).
+// Larger moves outrun the self-collision's proximity constraints, which act once per substep
+// (docs/performance.md, strain limits).
+constexpr double STRAIN_LIMIT_MOVE = 0.1;
+
+// Coordinates below 2^-200 m (6e-61 m: nothing cloth has is that short) become 0: the exact
+// predicates of the self-collision and of the intersection count take 0 or magnitudes from
+// 2^-300 up (geometry/exact_predicates.hpp; differences of coordinates of 2^-200 or more are
+// multiples of 2^-252), and a chain solve spreads corrections that small along its chain (a
+// vertex on a grid's symmetry line got x = 1.5e-98 in the pile scene).
+void flush_tiny(Vec3d& x) {
+    constexpr double TINY = 0x1p-200;
+    x.x = std::abs(x.x) < TINY ? 0.0 : x.x;
+    x.y = std::abs(x.y) < TINY ? 0.0 : x.y;
+    x.z = std::abs(x.z) < TINY ? 0.0 : x.z;
+}
+
+}  // namespace
+
+XPBDStepper::XPBDStepper(const ClothModel& model)
+    : m_num_vertices(model.num_vertices()),
+      m_num_triangles(model.triangles().size()),
+      m_previous_positions(model.rest_positions().begin(), model.rest_positions().end()),
+      m_contact_depths(model.num_vertices(), 0.0),
+      m_contact_settled(model.num_vertices(), 0.0),
+      m_contact_normals(model.num_vertices(), Vec3d{0.0, 0.0, 1.0}),
+      m_contact_velocities(model.num_vertices(), Vec3d{0.0, 0.0, 0.0}) {
+    const std::size_t num_vertices = model.num_vertices();
+    const std::span<const Vec3d> rest = model.rest_positions();
+    const std::span<const geometry::Triangle> triangles = model.triangles();
+    const ClothMaterial& material = model.material();
+
+    // Constraints from the topology.
+    const geometry::MeshTopology& topology = model.topology();
+    for (const geometry::Edge& e : topology.edges) {
+        m_stretch_vertices.push_back({e[0], e[1]});
+        m_rest_lengths.push_back(
+            norm(rest[static_cast<std::size_t>(e[1])] - rest[static_cast<std::size_t>(e[0])]));
+    }
+    // Hinges (x0, x1, x2, x3) as in dihedral.hpp, x2-x3 the shared edge, with their rest angles
+    // (dihedral) or stencils (isometric).
+    std::vector<std::array<std::int32_t, 4>> dihedral_hinges;
+    std::vector<double> rest_angles;
+    std::vector<std::array<std::int32_t, 4>> isometric_hinges;
+    std::vector<std::array<double, 4>> stencils;
+    for (std::int32_t e = 0; e < static_cast<std::int32_t>(topology.num_edges()); ++e) {
+        const std::span<const std::int32_t> faces = topology.triangles_of_edge(e);
+        if (faces.size() != 2) {
+            continue;  // boundary or non-manifold edge: no bending
+        }
+        const geometry::Edge& edge = topology.edges[static_cast<std::size_t>(e)];
+        // Orient the shared edge as triangle A traverses it: A = (x0, x2, x3).
+        const geometry::Triangle& a = triangles[static_cast<std::size_t>(faces[0])];
+        const geometry::Triangle& b = triangles[static_cast<std::size_t>(faces[1])];
+        std::int32_t x2 = edge[0];
+        std::int32_t x3 = edge[1];
+        for (int k = 0; k < 3; ++k) {
+            if (a[static_cast<std::size_t>(k)] == edge[1] &&
+                a[static_cast<std::size_t>((k + 1) % 3)] == edge[0]) {
+                std::swap(x2, x3);
+            }
+        }
+        const auto opposite = [&](const geometry::Triangle& t) {
+            for (const std::int32_t v : t) {
+                if (v != edge[0] && v != edge[1]) {
+                    return v;
+                }
+            }
+            return t[0];
+        };
+        const std::array<std::int32_t, 4> vertices{opposite(a), opposite(b), x2, x3};
+        if (vertices[0] == vertices[1]) {
+            continue;  // two triangles on the same three vertices
+        }
+        const auto at = [&](std::int32_t v) {
+            return rest[static_cast<std::size_t>(v)];
+        };
+        if (material.bending == BendingModel::isometric) {
+            if (const auto stencil = isometric_bending_stencil(at(vertices[0]), at(vertices[1]),
+                                                               at(vertices[2]), at(vertices[3]))) {
+                isometric_hinges.push_back(vertices);
+                stencils.push_back(*stencil);
+                continue;
+            }
+        }
+        dihedral_hinges.push_back(vertices);
+        rest_angles.push_back(dihedral_angle_value(at(vertices[0]), at(vertices[1]),
+                                                   at(vertices[2]), at(vertices[3])));
+    }
+    m_stretch =
+        color_edges(m_stretch_vertices, m_rest_lengths, static_cast<std::int64_t>(num_vertices));
+    // The kernels' columns, in colour order.
+    m_dihedral = color_hinges(dihedral_hinges, static_cast<std::int64_t>(num_vertices));
+    for (const std::int32_t i : m_dihedral.colors.order) {
+        m_dihedral_rest.push_back(rest_angles[static_cast<std::size_t>(i)]);
+    }
+    m_isometric = color_hinges(isometric_hinges, static_cast<std::int64_t>(num_vertices));
+    for (const std::int32_t i : m_isometric.colors.order) {
+        for (std::size_t k = 0; k < 4; ++k) {
+            m_isometric_k[k].push_back(stencils[static_cast<std::size_t>(i)][k]);
+        }
+    }
+    m_packed.resize(num_vertices);
+    if (material.stretch_solver == StretchSolver::chains) {
+        // In colour order, so that an edge's index in the chains is its column in m_stretch.
+        std::vector<std::array<std::int32_t, 2>> colored(m_stretch.p.size());
+        for (std::size_t i = 0; i < colored.size(); ++i) {
+            colored[i] = {m_stretch.p[i], m_stretch.q[i]};
+        }
+        m_chains = StretchChains(colored, m_stretch.rest, rest);
+        m_chain_scratch.resize(static_cast<std::size_t>(m_chains.scratch_size()));
+        m_stretch_lambda.assign(colored.size(), 0.0);
+        m_packed.push_back({0.0, 0.0, 0.0, 0.0});  // the padding vertex
+    }
+    if (std::isfinite(material.strain_limit)) {
+        m_strain_hierarchy = StrainHierarchy(static_cast<std::int64_t>(num_vertices),
+                                             topology.edges, m_rest_lengths);
+    }
+}
+
+void XPBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
+    if (!enabled) {
+        m_self_collision.reset();
+    } else if (!m_self_collision) {
+        const double thickness = model.material().thickness;
+        if (!m_rest_lengths.empty()) {
+            std::vector<double> lengths = m_rest_lengths;
+            const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+            std::nth_element(lengths.begin(), middle, lengths.end());
+            if (thickness > MAX_THICKNESS_IN_EDGES * *middle) {
+                throw InvalidInput(fmt::format(
+                    "cloth: self-collision: material.thickness ({} m) is {:.1f} times the "
+                    "median edge length ({:.3g} m), expected at most {}: every triangle would be "
+                    "within reach of hundreds of others; use a smaller thickness or a coarser "
+                    "mesh, or turn self_collision off",
+                    thickness, thickness / *middle, *middle, MAX_THICKNESS_IN_EDGES));
+            }
+        }
+        m_self_collision =
+            std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(), thickness);
+        m_num_position_resets = model.num_position_resets();
+        m_gather_end_time = -std::numeric_limits<double>::infinity();
+    }
+}
+
+void XPBDStepper::restart_self_collision(const ClothModel& model) {
+    if (m_self_collision) {
+        m_self_collision.reset();
+        enable_self_collision(model, true);
+    }
+}
+
+ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
+    if (!(dt > 0.0) || !std::isfinite(dt) || substeps < 1) {
+        throw InvalidInput(fmt::format(
+            "cloth step: expected dt > 0 (finite) and substeps >= 1, got dt {} and substeps {}", dt,
+            substeps));
+    }
+    if (model.num_vertices() != m_num_vertices || model.triangles().size() != m_num_triangles) {
+        throw InvalidInput(fmt::format(
+            "cloth step: the model has {} vertices and {} triangles, the stepper was built for {} "
+            "and {}",
+            model.num_vertices(), model.triangles().size(), m_num_vertices, m_num_triangles));
+    }
+    if (m_self_collision && m_num_position_resets != model.num_position_resets()) {
+        restart_self_collision(model);
+    }
+    Stopwatch watch;
+    const double h = dt / substeps;
+    ClothStepStats stats;
+    const double start_time = model.time();
+    if (m_self_collision) {
+        m_self_collision->reset_stats();
+    }
+    // With self-collision the step runs in windows of FAIL_SAFE_WINDOW substeps, each ending with
+    // the fail-safe over the window's motion; candidates are gathered at the start of a window for
+    // it and, while contact is sparse, the next one too. A window's start-to-end line is close to
+    // the path its substeps took (a frame's is not: cloth that folds around something within a
+    // frame crosses it on the straight line between the frame's ends), and a vertex put back loses
+    // only that window's motion.
+    model.begin_step(dt);
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<Vec3d> velocities = model.mutable_velocities();
+    for (int s = 0; s < substeps; ++s) {
+        if (m_self_collision && s % FAIL_SAFE_WINDOW == 0) {
+            // A new gather unless the last one's span covers this window (times compared to a
+            // millionth of a substep: steps sum their times differently).
+            const double window_start = start_time + s * h;
+            const double window_end = start_time + std::min(s + FAIL_SAFE_WINDOW, substeps) * h;
+            const double slop = 1e-6 * h;
+            if (window_start < m_gather_start_time - slop ||
+                window_end > m_gather_end_time + slop) {
+                const int windows = m_self_collision->windows_for_next_gather();
+                const double span = windows * FAIL_SAFE_WINDOW * h;
+                m_self_collision->prepare(positions, velocities, window_start, span);
+                m_gather_start_time = window_start;
+                m_gather_end_time = window_start + span;
+            }
+            m_window_start.assign(positions.begin(), positions.end());
+            m_window_start_time = window_start;
+        }
+        stats.obstacle_contacts = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
+        if (m_self_collision &&
+            (s % FAIL_SAFE_WINDOW == FAIL_SAFE_WINDOW - 1 || s == substeps - 1)) {
+            m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time,
+                                      start_time + (s + 1) * h);
+        }
+    }
+    model.end_step();
+    if (m_self_collision) {
+        stats.has_self_collision = true;
+        stats.self = m_self_collision->stats();
+    }
+    stats.ms = watch.elapsed_ms();
+    return stats;
+}
+
+std::int64_t XPBDStepper::substep(ClothModel& model, double h, double t_end, double& solve_ms) {
+    Stopwatch watch;
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<Vec3d> velocities = model.mutable_velocities();
+    const std::span<const double> inverse_masses = model.inverse_masses();
+    const ClothMaterial& material = model.material();
+    const auto n = static_cast<std::int64_t>(positions.size());
+    model.apply_air(h, t_end - h);
+    const Vec3d gravity = model.gravity();
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_previous_positions[v] = positions[v];
+            if (inverse_masses[v] > 0.0) {
+                velocities[v] += gravity * h;
+                positions[v] += velocities[v] * h;
+            }
+        },
+        VERTEX_GRAIN);
+    model.move_pins(t_end);
+    project_constraints(model, h);
+    model.move_obstacles(t_end);
+    const std::int64_t contacts = resolve_obstacles(model, h);
+    solve_ms += watch.elapsed_ms();
+    // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
+    // may have pressed one layer into the next); a vertex pushed back into an obstacle is
+    // pushed out again next substep, while layers that pass through each other stay entangled.
+    if (m_self_collision) {
+        m_self_collision->project(positions, m_previous_positions, inverse_masses, material, t_end,
+                                  h);
+    }
+    watch.restart();
+    const double keep = std::max(0.0, 1.0 - material.damping * h);
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            flush_tiny(positions[v]);
+            Vec3d velocity = (positions[v] - m_previous_positions[v]) * (1.0 / h);
+            if (m_contact_depths[v] > 0.0) {
+                // A penetration the substep began with is undone without becoming velocity
+                // (cloth given inside an obstacle comes out, it is not thrown out); friction acts
+                // on the velocity relative to the obstacle's surface, bounded by the rest.
+                const double settled = m_contact_settled[v];
+                velocity -= m_contact_normals[v] * (settled / h);
+                velocity = m_contact_velocities[v] +
+                           apply_friction(velocity - m_contact_velocities[v], m_contact_normals[v],
+                                          (m_contact_depths[v] - settled) / h,
+                                          material.static_friction, material.kinetic_friction);
+            }
+            velocities[v] = velocity * keep;
+        },
+        VERTEX_GRAIN);
+    solve_ms += watch.elapsed_ms();
+    return contacts;
+}
+
+void XPBDStepper::project_constraints(ClothModel& model, double h) {
+    // Positions and inverse masses packed for the kernels (detail/constraint_kernels.hpp), then
+    // the strain limits (with material.strain_limit; strain_hierarchy.hpp), stretch and bending
+    // colour by colour, each colour in parallel over fixed chunks.
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<const double> inverse_masses = model.inverse_masses();
+    const ClothMaterial& material = model.material();
+    const auto n = static_cast<std::int64_t>(positions.size());
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_packed[v] = {positions[v].x, positions[v].y, positions[v].z, inverse_masses[v]};
+        },
+        VERTEX_GRAIN);
+    detail::PackedVertex* x = m_packed.data();
+    if (std::isfinite(material.strain_limit)) {
+        m_strain_hierarchy.project(x, material.strain_limit,
+                                   material.thickness > 0.0
+                                       ? STRAIN_LIMIT_MOVE * material.thickness
+                                       : std::numeric_limits<double>::infinity());
+    }
+    const double stretch_alpha = material.stretch_compliance / (h * h);
+    // Chains first (their Δλ per edge, in colour order, to m_stretch_lambda), then the sweep
+    // over single edges as XPBD's next iteration from those λ.
+    const detail::ChainSolve chain_solve{stretch_alpha, CHAIN_REGULARIZATION,
+                                         CHAIN_STRAIN_REGULARIZATION};
+    for (std::int32_t f = 0; f < m_chains.num_families(); ++f) {
+        const std::int32_t first = m_chains.first_packet(f);
+        parallel_for_chunks(m_chains.first_packet(f + 1) - first, CHAIN_PACKET_GRAIN,
+                            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                for (std::int64_t i = begin; i < end; ++i) {
+                                    const auto p = first + static_cast<std::int32_t>(i);
+                                    detail::project_chain_packet(
+                                        x, m_chains.packet(p), chain_solve, m_stretch_lambda.data(),
+                                        m_chain_scratch.data() + m_chains.scratch_offset(p));
+                                }
+                            });
+    }
+    const bool chains = m_chains.num_families() > 0;
+    for (std::int32_t c = 0; c < m_stretch.colors.num_colors(); ++c) {
+        const auto offset =
+            static_cast<std::size_t>(m_stretch.colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::StretchColumns columns{
+            m_stretch.p.data() + offset, m_stretch.q.data() + offset,
+            m_stretch.rest.data() + offset, chains ? m_stretch_lambda.data() + offset : nullptr};
+        parallel_for_chunks(static_cast<std::int64_t>(m_stretch.colors.color(c).size()),
+                            CONSTRAINT_GRAIN,
+                            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                detail::project_stretch(x, columns, begin, end, stretch_alpha);
+                            });
+    }
+    const double bend_alpha = material.bend_compliance / (h * h);
+    for (std::int32_t c = 0; c < m_dihedral.colors.num_colors(); ++c) {
+        const auto offset =
+            static_cast<std::size_t>(m_dihedral.colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::BendingColumns columns{
+            m_dihedral.v[0].data() + offset, m_dihedral.v[1].data() + offset,
+            m_dihedral.v[2].data() + offset, m_dihedral.v[3].data() + offset,
+            m_dihedral_rest.data() + offset};
+        parallel_for_chunks(static_cast<std::int64_t>(m_dihedral.colors.color(c).size()),
+                            CONSTRAINT_GRAIN,
+                            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                                detail::project_bending(x, columns, begin, end, bend_alpha);
+                            });
+    }
+    for (std::int32_t c = 0; c < m_isometric.colors.num_colors(); ++c) {
+        const auto offset =
+            static_cast<std::size_t>(m_isometric.colors.offsets[static_cast<std::size_t>(c)]);
+        const detail::IsometricBendingColumns columns{
+            m_isometric.v[0].data() + offset, m_isometric.v[1].data() + offset,
+            m_isometric.v[2].data() + offset, m_isometric.v[3].data() + offset,
+            m_isometric_k[0].data() + offset, m_isometric_k[1].data() + offset,
+            m_isometric_k[2].data() + offset, m_isometric_k[3].data() + offset};
+        parallel_for_chunks(
+            static_cast<std::int64_t>(m_isometric.colors.color(c).size()), CONSTRAINT_GRAIN,
+            [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                detail::project_isometric_bending(x, columns, begin, end, bend_alpha);
+            });
+    }
+    parallel_for(
+        n,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            positions[v] = {m_packed[v].x, m_packed[v].y, m_packed[v].z};
+        },
+        VERTEX_GRAIN);
+}
+
+std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
+    if (!model.has_obstacles()) {
+        return 0;
+    }
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<const double> inverse_masses = model.inverse_masses();
+    const std::span<const MovingObstacle> obstacles = model.obstacles();
+    const std::span<const MovingMeshObstacle> mesh_obstacles = model.mesh_obstacles();
+    const double thickness = model.material().thickness;
+    return parallel_reduce(
+        static_cast<std::int64_t>(positions.size()), std::int64_t{0},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::int64_t contacts = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                m_contact_depths[v] = 0.0;
+                m_contact_settled[v] = 0.0;
+                if (!(inverse_masses[v] > 0.0)) {
+                    continue;
+                }
+                const Vec3d& start = m_previous_positions[v];
+                for (const MovingObstacle& obstacle : obstacles) {
+                    const ContactCorrection contact =
+                        push_out(obstacle.current, positions[v], thickness);
+                    if (contact.depth > m_contact_depths[v]) {
+                        m_contact_depths[v] = contact.depth;
+                        m_contact_normals[v] = contact.normal;
+                        // The surface point under x moved from where the previous pose had it.
+                        m_contact_velocities[v] =
+                            obstacle.state.surface_displacement(positions[v]) * (1.0 / h);
+                        // How deep the vertex already was when the substep began.
+                        const double was_in =
+                            thickness - surface_distance(obstacle.previous, start).distance;
+                        m_contact_settled[v] = std::clamp(was_in, 0.0, contact.depth);
+                    }
+                }
+                for (const MovingMeshObstacle& mesh : mesh_obstacles) {
+                    // In the mesh's rest frame. A vertex can be as deep as its own motion plus
+                    // the surface's over the substep, plus the thickness.
+                    Vec3d& x = positions[v];
+                    const Vec3d swept_by_surface = mesh.state.surface_displacement(x);
+                    const double max_depth =
+                        norm(x - start) + norm(swept_by_surface) + 2.0 * thickness;
+                    const Pose& pose = mesh.state.pose;
+                    Vec3d x_rest = pose.apply_inverse(x);
+                    const ContactCorrection contact =
+                        push_out(*mesh.mesh, x_rest, thickness, max_depth);
+                    if (contact.depth > 0.0) {
+                        x = pose.apply(x_rest);
+                    }
+                    if (contact.depth > m_contact_depths[v]) {
+                        m_contact_depths[v] = contact.depth;
+                        m_contact_normals[v] = pose.rotation.apply(contact.normal);
+                        m_contact_velocities[v] = swept_by_surface * (1.0 / h);
+                        const std::optional<SurfaceDistance> before = mesh.mesh->surface_distance(
+                            mesh.state.previous_pose.apply_inverse(start), max_depth);
+                        m_contact_settled[v] =
+                            before ? std::clamp(thickness - before->distance, 0.0, contact.depth)
+                                   : 0.0;
+                    }
+                }
+                contacts += m_contact_depths[v] > 0.0 ? 1 : 0;
+            }
+            return contacts;
+        },
+        [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
+}
+
+}  // namespace pliant::cloth

@@ -1,0 +1,170 @@
+// XPBDStepper: advances a ClothModel (cloth_model.hpp) by XPBD with small substeps.
+//
+// Method: extended position-based dynamics (Macklin, Müller, Chentanez, "XPBD", MIG 2016) run as
+// many small substeps with one constraint iteration each (Macklin, Storey, Lu, Terdiman,
+// Chentanez, Jeschke, Müller, "Small Steps in Physics Simulation", SCA 2019). Every substep h
+// ending at time t:
+//   1. predict: v += h (g + f_air / m); x_previous = x; x += h v for the free vertices; pinned and
+//      grabbed vertices (inverse mass 0) are placed where their motion has them at t
+//      (ClothModel::move_pins; motion.hpp; air: air.hpp);
+//   2. stretch: with material.strain_limit, first the coarse strain limits, coarsest level first,
+//      carried down to every vertex (strain_hierarchy.hpp); with material.stretch_solver =
+//      chains, the chains of edges, each solved as a whole, family after family
+//      (stretch_chains.hpp); then C = |x_i - x_j| - L for every mesh edge, compliance α
+//      (material.hpp);
+//   3. bending, per interior edge (hinge): with material.bending = isometric, on
+//      hinges flat at rest the normal part of the isometric model's linear C = Σ K_k x_k
+//      (isometric_bending.hpp), on the others C = θ - θ_rest, θ the dihedral angle
+//      (dihedral.hpp); for each constraint Δλ = -C / (Σ w_k |∇C_k|² + α / h²), x_k += w_k ∇C_k Δλ
+//      (λ starts at 0 every substep: one iteration per substep);
+//   4. obstacles, placed at t (ClothModel::move_obstacles): every vertex is pushed `thickness`
+//      away from every obstacle (obstacles.hpp, mesh_obstacle.hpp);
+//   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; the CCD
+//   fail-safe runs after every 4 substeps (a window) on the motion of those 4 substeps, and the
+//   candidate pairs are gathered before every window or, while contact is sparse, every second
+//   one; self_collision.hpp)
+//   5. v = (x - x_previous) / h, less the part of an obstacle's push that undid a penetration
+//      the vertex began the substep with (cloth given inside an obstacle comes out without being
+//      thrown); Coulomb friction on the velocities of vertices in contact (relative to the
+//      obstacle surface's velocity), bounded by the rest of their normal correction / h
+//      (obstacles.hpp: at the velocity level, friction never cancels a constraint's correction,
+//      which positional friction does, locking stretched cloth on a rough surface); then v *=
+//      max(0, 1 - damping h).
+// Constraints of a kind are projected colour by colour (constraint_coloring.hpp), each colour in
+// parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads. The
+// projections are the kernels of detail/constraint_kernels.hpp (four constraints at a time with
+// AVX2 where the CPU has it, the same bits as their scalar versions).
+//
+// Convergence: one iteration per substep makes stiff constraints as stiff as the substeps allow,
+// so with single edges strain under load falls with the substep count: a 1.2 m sheet of 24 × 24
+// quads resting over a sphere with friction keeps every edge within 7 % of its rest length at 40
+// substeps per frame (24 frames per second), and stretches more at fewer substeps.
+// material.stretch_solver = chains (the default) carries a correction along whole chains of
+// edges at once: the same sheet within 1.2 % (tests/cloth/solver_test.cpp); a heavy 1 m strip
+// (2 kg/m²) hanging at 12 substeps 12.5 % longer than at rest with single edges, 0.3 % with
+// chains (tests/cloth/stretch_chains_test.cpp). material.strain_limit bounds the
+// stretch of long paths (the same strip: 3.3 % with a limit of 0.03;
+// tests/cloth/strain_hierarchy_test.cpp).
+//
+// The constraints come from the model's rest shape, topology and material when the stepper is
+// built; step() takes that model (the vertex and triangle counts are checked). When the model's
+// positions were replaced from outside (ClothModel::num_position_resets), self-collision starts
+// over at the next step.
+//
+// Units: SI (metres, seconds, kilograms). Not thread safe (one stepper per thread); step()
+// parallelises internally.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "pliant/cloth/cloth_model.hpp"
+#include "pliant/cloth/constraint_coloring.hpp"
+#include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/cloth/self_collision.hpp"
+#include "pliant/cloth/strain_hierarchy.hpp"
+#include "pliant/cloth/stretch_chains.hpp"
+#include "pliant/core/vec3.hpp"
+
+namespace pliant::cloth {
+
+struct ClothStepStats {
+    double ms = 0.0;        // wall-clock time of the step
+    double solve_ms = 0.0;  // prediction, stretch, bending, air, obstacles, velocities, friction
+    std::int64_t obstacle_contacts = 0;  // vertices in contact with an obstacle in the last substep
+    bool has_self_collision = false;     // the fields below are filled
+    SelfCollisionStats self;             // self_collision.hpp
+};
+
+class XPBDStepper {
+public:
+    // The constraints of `model`'s rest shape (stretch per edge, bending per interior edge,
+    // chains and strain limits as model.material() asks). InvalidInput when the chains need more
+    // than 64 families (stretch_chains.hpp) or the colouring more than 64 colours.
+    explicit XPBDStepper(const ClothModel& model);
+
+    // Self-collision handling (self_collision.hpp) for `model`: proximity constraints every
+    // substep and the CCD fail-safe at the end of every window, so that no step ends with
+    // intersecting triangles when it started without. Off by default. InvalidInput when the
+    // thickness exceeds 4 median edge lengths (every triangle within reach of hundreds).
+    void enable_self_collision(const ClothModel& model, bool enabled);
+    bool has_self_collision() const { return m_self_collision != nullptr; }
+
+    // Advances `model` (the one the stepper was built from) by dt seconds in `substeps` equal
+    // substeps. InvalidInput: dt not finite and > 0, substeps < 1, a model of other vertex or
+    // triangle counts.
+    ClothStepStats step(ClothModel& model, double dt, int substeps);
+
+    std::size_t num_stretch_constraints() const { return m_stretch_vertices.size(); }
+    // Chains the stretch constraints are solved in (0 unless material.stretch_solver = chains;
+    // stretch_chains.hpp).
+    std::size_t num_stretch_chains() const {
+        return static_cast<std::size_t>(m_chains.num_chains());
+    }
+    // Coarse strain limits (0 unless material.strain_limit is finite; strain_hierarchy.hpp).
+    std::size_t num_strain_limits() const { return m_strain_hierarchy.num_limits(); }
+    // Bending constraints: dihedral plus isometric (material.bending).
+    std::size_t num_bending_constraints() const { return m_dihedral.size() + m_isometric.size(); }
+    std::size_t num_isometric_bending_constraints() const { return m_isometric.size(); }
+
+private:
+    // One substep of length h ending at time t_end; returns the vertices in contact with an
+    // obstacle and adds the stepper's own time (not self-collision's) to solve_ms.
+    std::int64_t substep(ClothModel& model, double h, double t_end, double& solve_ms);
+    // Strain limits, stretch, then bending (dihedral, then isometric), colour by colour
+    // (detail/constraint_kernels.hpp).
+    void project_constraints(ClothModel& model, double h);
+    // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
+    // and the obstacle surface's velocity there for friction; returns the vertices in contact.
+    std::int64_t resolve_obstacles(ClothModel& model, double h);
+    // Self-collision's paths and candidates describe positions that are gone: it starts over
+    // (when it is on).
+    void restart_self_collision(const ClothModel& model);
+
+    std::size_t m_num_vertices = 0;
+    std::size_t m_num_triangles = 0;
+
+    // Constraints.
+    std::vector<std::array<std::int32_t, 2>> m_stretch_vertices;
+    std::vector<double> m_rest_lengths;
+    ColoredEdges m_stretch;  // the stretch constraints as the kernels' columns, in colour order
+    // The bending constraints as the kernels' columns, in colour order: the dihedral ones with
+    // their rest angles, the isometric ones (material.bending; isometric_bending.hpp) with their
+    // stencils.
+    ColoredHinges m_dihedral;
+    std::vector<double> m_dihedral_rest;
+    ColoredHinges m_isometric;
+    std::array<std::vector<double>, 4> m_isometric_k;
+    StretchChains m_chains;  // material.stretch_solver = chains
+    std::vector<double> m_chain_scratch;
+    std::vector<double> m_stretch_lambda;  // per stretch constraint, in colour order (with chains)
+    StrainHierarchy m_strain_hierarchy;    // coarse strain limits (material.strain_limit)
+
+    // Per substep.
+    // Positions and inverse masses for the kernels, and (with stretch chains) the chains' padding
+    // vertex last.
+    std::vector<detail::PackedVertex> m_packed;
+    std::vector<Vec3d> m_previous_positions;  // at the substep's start
+    std::vector<double> m_contact_depths;     // this substep's obstacle correction per vertex (m)
+    // The part of it that undid a penetration the vertex started the substep with (m): moved
+    // out, but not turned into velocity.
+    std::vector<double> m_contact_settled;
+    std::vector<Vec3d> m_contact_normals;
+    std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
+
+    // Self-collision and its windows.
+    std::unique_ptr<SelfCollision> m_self_collision;
+    std::int64_t m_num_position_resets = 0;  // the model's when self-collision last started
+    std::vector<Vec3d> m_window_start;       // positions at the start of a fail-safe window
+    double m_window_start_time = 0.0;        // s
+    // The span [start, end] (s) the last self-collision gather covers; it outlives a step, so
+    // that steps of one window each gather at the same substeps as longer steps.
+    double m_gather_start_time = 0.0;
+    double m_gather_end_time = -std::numeric_limits<double>::infinity();  // none yet
+};
+
+}  // namespace pliant::cloth

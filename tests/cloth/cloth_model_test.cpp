@@ -1,0 +1,159 @@
+#include "pliant/cloth/cloth_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pliant/core/error.hpp"
+#include "pliant/geometry/generate.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+// A square sheet of n × n quads, side `size` metres, at height z.
+geometry::TriangleMeshD sheet(int n, double size, double z) {
+    const geometry::TriangleMesh flat =
+        geometry::make_grid_sheet(n, n, static_cast<float>(size), static_cast<float>(size));
+    geometry::TriangleMeshD mesh = geometry::convert_precision<double>(flat);
+    for (Vec3d& p : mesh.positions) {
+        p.z = z;
+    }
+    return mesh;
+}
+
+TEST(ClothModel, MassesAreAThirdOfEachTrianglesRestMass) {
+    // One right triangle of legs 1 m and 2 m (area 1 m²) and an unused vertex.
+    geometry::TriangleMeshD mesh;
+    mesh.positions = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.0, 2.0, 0.0}, {5.0, 5.0, 5.0}};
+    mesh.triangles = {{0, 1, 2}};
+    ClothMaterial material;
+    material.areal_density = 0.3;
+    const ClothModel model(mesh, material, std::vector<std::int32_t>{2});
+    const std::span<const double> w = model.inverse_masses();
+    EXPECT_DOUBLE_EQ(w[0], 1.0 / 0.1);
+    EXPECT_DOUBLE_EQ(w[1], 1.0 / 0.1);
+    EXPECT_EQ(w[2], 0.0);  // pinned
+    EXPECT_EQ(w[3], 0.0);  // no area
+    EXPECT_EQ(model.time(), 0.0);
+    EXPECT_EQ(model.num_vertices(), 4u);
+    EXPECT_EQ(model.topology().num_edges(), 3u);
+    EXPECT_EQ(model.rest_positions()[3], (Vec3d{5.0, 5.0, 5.0}));
+}
+
+TEST(ClothModel, MovesPinsAndObstaclesToATimeWithoutAStepper) {
+    const geometry::TriangleMeshD mesh = sheet(4, 1.0, 1.0);
+    ClothModel model(mesh, ClothMaterial{});
+    Motion lift;
+    lift.keyframes = {{0.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}},
+                      {2.0, {0.0, 0.0, 1.0}, {0.0, 0.0, 0.0}}};
+    model.add_moving_pins(std::vector<std::int32_t>{0, 4}, lift);
+    Motion slide;
+    slide.keyframes = {{0.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}},
+                       {1.0, {3.0, 0.0, 0.0}, {0.0, 0.0, 0.0}}};
+    model.add_obstacle(SphereObstacle{{0.0, 0.0, -2.0}, 0.5}, slide);
+    EXPECT_EQ(model.inverse_masses()[0], 0.0);
+    EXPECT_EQ(model.inverse_masses()[4], 0.0);
+
+    model.move_pins(1.0);
+    model.move_obstacles(1.0);
+    // Halfway up their path; the other vertices stay where they are (a stepper moves them).
+    EXPECT_DOUBLE_EQ(model.positions()[0].z, 1.5);
+    EXPECT_DOUBLE_EQ(model.positions()[4].z, 1.5);
+    EXPECT_EQ(model.positions()[1], mesh.positions[1]);
+    const auto* sphere = std::get_if<SphereObstacle>(&model.obstacles()[0].current);
+    ASSERT_NE(sphere, nullptr);
+    EXPECT_EQ(sphere->center, (Vec3d{3.0, 0.0, -2.0}));
+    const auto* before = std::get_if<SphereObstacle>(&model.obstacles()[0].previous);
+    ASSERT_NE(before, nullptr);
+    EXPECT_EQ(before->center, (Vec3d{0.0, 0.0, -2.0}));
+    // Moving obstacles and pins is not a step: the model's time is the steps'.
+    EXPECT_EQ(model.time(), 0.0);
+    EXPECT_NEAR(model.nearest_obstacle({3.0, 0.0, 0.0}).distance, 1.5, 1e-12);
+}
+
+TEST(ClothModel, GrabFollowsItsPathOverAStep) {
+    const geometry::TriangleMeshD mesh = sheet(2, 1.0, 0.0);
+    ClothModel model(mesh, ClothMaterial{});
+    const Vec3d start = model.positions()[4];
+    const Vec3d target = start + Vec3d{0.0, 0.0, 0.4};
+    model.grab(4, target);
+    EXPECT_EQ(model.grabbed_vertex(), 4);
+    EXPECT_EQ(model.inverse_masses()[4], 0.0);
+    model.begin_step(0.1);
+    model.move_pins(0.025);
+    EXPECT_DOUBLE_EQ(model.positions()[4].z, 0.1);
+    model.move_pins(0.1);
+    EXPECT_EQ(model.positions()[4], target);
+    model.end_step();
+    EXPECT_DOUBLE_EQ(model.time(), 0.1);
+    model.release_grab();
+    EXPECT_EQ(model.grabbed_vertex(), -1);
+    EXPECT_GT(model.inverse_masses()[4], 0.0);
+}
+
+TEST(ClothModel, ReportsPenetrationAndCountsPositionResets) {
+    const geometry::TriangleMeshD mesh = sheet(4, 1.0, 0.0);
+    ClothModel model(mesh, ClothMaterial{});
+    EXPECT_FALSE(model.has_obstacles());
+    EXPECT_EQ(model.obstacle_penetration().vertices, 0);
+    model.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.1}, {0.0, 0.0, 1.0}});
+    const ClothModel::Penetration inside = model.obstacle_penetration();
+    EXPECT_EQ(inside.vertices, 25);
+    EXPECT_NEAR(inside.deepest, 0.1, 1e-12);
+
+    EXPECT_EQ(model.num_position_resets(), 0);
+    std::vector<Vec3d> lifted(model.positions().begin(), model.positions().end());
+    for (Vec3d& p : lifted) {
+        p.z = 0.2;
+    }
+    model.set_positions(lifted);
+    EXPECT_EQ(model.num_position_resets(), 1);
+    EXPECT_EQ(model.obstacle_penetration().vertices, 0);
+    // Nothing to untangle: the positions are not replaced.
+    EXPECT_EQ(model.untangle().iterations, 0);
+    EXPECT_EQ(model.num_position_resets(), 1);
+}
+
+TEST(ClothModel, AirSlowsAFallingSheetAndNothingWithoutAir) {
+    const geometry::TriangleMeshD mesh = sheet(4, 1.0, 0.0);
+    ClothModel model(mesh, ClothMaterial{});
+    model.set_velocities(std::vector<Vec3d>(mesh.positions.size(), Vec3d{0.0, 0.0, -5.0}));
+    model.apply_air(0.01, 0.0);  // no air: no change
+    EXPECT_EQ(model.velocities()[12], (Vec3d{0.0, 0.0, -5.0}));
+    Air air;
+    air.density = 1.2;
+    model.set_air(air);
+    model.apply_air(0.01, 0.0);
+    const Vec3d v = model.velocities()[12];
+    EXPECT_GT(v.z, -5.0);
+    EXPECT_LT(v.z, 0.0);
+    EXPECT_NEAR(v.x, 0.0, 1e-12);
+    EXPECT_NEAR(v.y, 0.0, 1e-12);
+}
+
+TEST(ClothModel, RejectsBadInputNamingIt) {
+    const geometry::TriangleMeshD mesh = sheet(2, 1.0, 0.0);
+    ClothModel model(mesh, ClothMaterial{}, std::vector<std::int32_t>{0});
+    Motion turn;
+    turn.keyframes = {{0.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}},
+                      {1.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 90.0}}};
+    EXPECT_THROW(model.add_obstacle(BoxObstacle{}, turn), InvalidInput);
+    EXPECT_THROW(model.add_mesh_obstacle(nullptr), InvalidInput);
+    EXPECT_THROW(model.grab(9, {0.0, 0.0, 0.0}), InvalidInput);
+    std::vector<Vec3d> moved(model.positions().begin(), model.positions().end());
+    moved[0].z += 0.1;
+    try {
+        model.set_positions(moved);
+        FAIL() << "a pinned vertex moved";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex 0 does not move"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(model.num_position_resets(), 0);
+}
+
+}  // namespace
+}  // namespace pliant::cloth
