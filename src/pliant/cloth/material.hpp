@@ -18,11 +18,9 @@ enum class BendingModel {
     // The quadratic isometric model (isometric_bending.hpp; Bergou et al. 2006) on hinges flat at
     // rest, the dihedral constraint on the others: as stiff as the dihedral one for small angles,
     // softer towards a full fold (2 sin(θ/2) instead of θ), and linear in the positions, so its
-    // projection costs no square root or arctangent: about a third of the dihedral kernel's time,
-    // the drape's solver step 42 → 25 ms per frame on the machine of docs/performance.md. Sharp
-    // folds bend more easily, so cloth in heavy self-contact folds tighter (the twist scene:
-    // 500-800 CCD hits in 72 frames against 0, 10-30 % slower); the drape and the flag run
-    // 12-13 % faster in all (docs/performance.md, "isometric bending").
+    // projection costs no square root or arctangent (faster than the dihedral kernel). Sharp
+    // folds bend more easily, so cloth in heavy self-contact folds tighter, which costs the
+    // twist scene more CCD work (docs/journal/2026-11-25-isometric-bending.md).
     isometric,
 };
 
@@ -33,9 +31,8 @@ enum class StretchSolver {
     // stretch the more the fewer the substeps.
     edges,
     // Chains of edges, each solved as a whole (stretch_chains.hpp): a correction reaches the
-    // whole chain at once, and the cloth keeps its length as its compliance asks (the drape's
-    // strain p99 2.4 % draped against 13 % with single edges, at 40 substeps; docs/performance.md).
-    // The default. Where pins ask for more length than the cloth has (the twist scene's two full
+    // whole chain at once, and the cloth keeps its length as its compliance asks (measured
+    // against single edges in docs/performance.md, "Cloth"). The default. Where pins ask for more length than the cloth has (the twist scene's two full
     // turns), the cloth, holding its length, is squeezed into far more self-contact; that scene
     // keeps single edges.
     chains,
@@ -55,9 +52,8 @@ struct ClothMaterial {
     // apart than (1 + strain_limit) times the shortest path between them along the rest mesh's
     // edges are pulled together every substep (by a fifth of the excess, at most a tenth of the
     // thickness per limit), however slowly the edges' own stretch constraints converge; single
-    // edges can still stretch by their compliance. Infinity (the default): no limit. Measured on
-    // the built-in scenes at 0.05 (docs/performance.md): the flag's and the drape's worst strain
-    // p99 fall by 40–50 %; the twist, whose turning pins impose its strain, runs slower with it.
+    // edges can still stretch by their compliance. Infinity (the default): no limit (measured on
+    // the built-in scenes: docs/journal/2026-11-25-strain-limiting.md).
     double strain_limit = std::numeric_limits<double>::infinity();
     // 1/s: velocities lose the fraction damping · h of themselves every substep h.
     double damping = 0.5;

@@ -27,12 +27,9 @@
 // (std::nullopt), like a point farther than max_distance outside. The caller chooses the radius
 // of interest: the solver passes thickness plus a margin for the deepest penetration it repairs.
 // Cost: O(log T + k) per query for k triangles whose boxes come within the radius; a query whose
-// point is farther than max_distance from the mesh's bounds costs one 4-box SIMD test. Measured
-// (temporary harness, 2 vCPUs under other engineers' builds, load 3-5, process CPU time, one
-// thread; 18,225 points of a 135² grid, icosphere of 20,480 / 81,920 triangles, radius 0.5 m,
-// max_distance 1 cm): all points 1.2 m away 0.35-0.6 ms / 0.65 ms; all points within ±2 mm of
-// the surface 17 ms / 24 ms (about 12 wide nodes and 3 point-triangle tests per query); two
-// threads 12.5 ms wall for both. set_positions: 6.5 ms / 27-30 ms.
+// point is farther than max_distance from the mesh's bounds costs one 4-box SIMD test. A query
+// near the surface visits about 12 wide nodes and 3 point-triangle tests; set_positions refits
+// in O(T).
 //
 // Rigid motion (a keyframed pose) needs no set_positions: query x in the obstacle's rest frame
 // (pose.apply_inverse) and rotate the normal back; set_positions is for deforming meshes.

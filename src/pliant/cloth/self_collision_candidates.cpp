@@ -401,7 +401,7 @@ void SelfCollisionCandidates::renew_paths(std::span<const Vec3d> x, const Vec3d&
 
 int SelfCollisionCandidates::windows_for_next_gather() {
     // Hysteresis on the candidate count: a draped sheet has fewer candidates than vertices, an
-    // impact many times more (docs/performance.md).
+    // impact many times more (docs/journal/2026-11-24-self-collision-gather-two-windows.md).
     const auto candidates = static_cast<double>(m_candidates.size());
     const auto vertices = static_cast<double>(m_num_vertices);
     m_dense_contact = m_dense_contact ? candidates > vertices / 8.0 : candidates > vertices;

@@ -92,10 +92,9 @@ public:
     static constexpr std::int64_t MIN_VERTICES = 8;
     // The fraction of a limit's excess one projection removes. A stiff limit (1) turns a large
     // excess into a jump of centimetres within one substep, i.e. metres per second: after the
-    // self-collision fail-safe has put vertices back (self_collision.hpp), such jumps cascaded
-    // into more put-backs (the drape: 6,328 CCD hits at frame 15, 797 k at frame 22, strain up
-    // to 702 %; docs/performance.md). A fifth per substep leaves 0.8^32 < 0.1 % of an excess
-    // after 32 substeps while max_move does not bind.
+    // self-collision fail-safe has put vertices back (self_collision.hpp), such jumps cascade
+    // into more put-backs (docs/journal/2026-11-25-strain-limiting.md). A fifth per substep
+    // leaves 0.8^32 < 0.1 % of an excess after 32 substeps while max_move does not bind.
     static constexpr double RELAXATION = 0.2;
 
     // One coarse level: its limits between kept vertices and how its children (the finer level's

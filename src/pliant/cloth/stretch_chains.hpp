@@ -15,10 +15,9 @@
 // each other (block Gauss-Seidel); then the solver's sweep over the single edges runs as XPBD's
 // second iteration from the chains' λ, spreading what the families leave on each other.
 //
-// Measured (docs/performance.md): a heavy strip hanging at 12 substeps ends 0.3 % longer than at
-// rest (12.5 % with single edges); the drape's strain p99 2.4 % draped (13 %). Where pins ask for
-// more length than the cloth has (the twist scene) chains do worse than single edges: the cloth,
-// holding its length, is squeezed into more self-contact.
+// Where pins ask for more length than the cloth has (the twist scene) chains do worse than single
+// edges: the cloth, holding its length, is squeezed into more self-contact. Measured against
+// single edges: docs/performance.md ("Cloth") and docs/journal/2026-11-28-stretch-chains.md.
 //
 // Decomposition (once per mesh, from the rest shape): at every vertex the incident edges are
 // paired greedily, most nearly opposite first (at least 120° apart); a chain continues through a
@@ -47,15 +46,12 @@ namespace pliant::cloth {
 // w_k + w_{k+1} of edge k's row is scaled by 1 + ε + κ |C_k| / ℓ_k. Undamped, a chain's exact
 // step is too bold where the constraints cannot all hold: a straight chain between two fixed
 // vertices is singular (a uniform tension changes no length to first order), and in a sheet
-// pulled taut the families' full steps undo one another. A 1 m sheet of 20 × 20 quads held by
-// pins along two opposite edges, pulled 20 % beyond its width and held, 40 substeps: its fastest
-// vertex in the last second moved at 53 m/s with ε = 0.01 alone, 14 with 0.05, 3.5e-10 with 0.1
-// (single edges 0.01); but a uniform 0.1 damps the long chains of a hanging sheet too (the drape's
-// grid hanging 1 s at 20 substeps: strain p99 12 % against 0.9 % with 0.01; bench_cloth). Damping
-// where the edges are strained keeps both: with ε = 0.01 and κ = 1 the sheet rests at pulls of
-// 1 % to 50 % (StretchChains.ASheetPulledTautBetweenPinsComesToRest), and the hanging grid keeps
-// 2.2 % at 20 substeps and 0.26 % at 40 (bench_cloth). The other values were scratch builds
-// (docs/performance.md, "stretch chains"; κ = 0.5 jittered at 3 m/s from a 30 % pull).
+// pulled taut the families' full steps undo one another, so a small uniform ε lets such a sheet
+// jitter; a large uniform ε also damps the long chains of a hanging sheet, which then stretches.
+// Damping where the edges are strained keeps both: with ε = 0.01 and κ = 1 a sheet pulled 1 % to
+// 50 % beyond its width between pins comes to rest
+// (StretchChains.ASheetPulledTautBetweenPinsComesToRest) and a hanging sheet keeps its length
+// (bench_cloth). The values tried: docs/journal/2026-11-28-stretch-chains.md.
 inline constexpr double CHAIN_REGULARIZATION = 0.01;
 inline constexpr double CHAIN_STRAIN_REGULARIZATION = 1.0;
 

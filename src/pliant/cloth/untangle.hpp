@@ -35,13 +35,11 @@
 //
 // A closed contour (a fold pushed through another layer, a sheet poking through another) shrinks
 // and vanishes. A contour that runs from boundary to boundary (two sheets crossing like an X)
-// only slides towards a boundary, and contour minimization stalls on it (two 1 m sheets of
-// 24 x 24 quads crossing at 20 degrees: 188 pairs down to 95 in 400 iterations; the scene and
-// command are in docs/performance.md, "untangling sheets that cross"). When the fewest pairs
-// seen has not improved for 40 iterations, the best state so far gets one region move, decided
-// globally as in Baraff, Witkin and Kass's global intersection analysis ("Untangling Cloth",
-// SIGGRAPH 2003), and minimization goes on from the moved state (that X: 0 pairs after 95
-// iterations, 2 moves):
+// only slides towards a boundary, and contour minimization stalls on it
+// (docs/journal/2026-11-25-untangling-crossing-sheets.md has the scene, the command and the
+// numbers). When the fewest pairs seen has not improved for 40 iterations, the best state so far
+// gets one region move, decided globally as in Baraff, Witkin and Kass's global intersection
+// analysis ("Untangling Cloth", SIGGRAPH 2003), and minimization goes on from the moved state:
 //   - pieces first: for every connected piece of cloth (triangles joined by vertices) with no
 //     pinned vertex and every other piece it intersects, the plane of the other's intersected
 //     triangles (area-weighted centroid and normal); the piece's vertices within those
@@ -69,11 +67,10 @@
 // with its lowest edge 1 cm up: without this the tilted one sinks to 0.23 m under the ground,
 // where the simulation keeps it trapped below the other, 5,000 CCD hits a frame; with it the
 // flat one is lifted. tests/cloth/untangle_test.cpp.) Gradient steps are small (`step`) and
-// take no notice of obstacles: the demo's drape, fallen through itself onto the sphere, is
-// untangled in 233 iterations with 56 vertices left up to 13 mm inside the sphere, which the
-// first substep puts back on it without an intersection; putting every vertex a step takes inside
-// back onto the surface (tried) left 25 of its 693 pairs after 400 iterations, the layer against
-// the sphere having no room to give way. The best state is chosen on pairs alone. Not untangled: a
+// take no notice of obstacles: vertices a step leaves inside an obstacle are put back on it by
+// the first substep without an intersection, whereas putting them back at every step leaves a
+// layer pressed against an obstacle no room to give way, and pairs stay
+// (docs/journal/2026-11-25-untangling-crossing-sheets.md). The best state is chosen on pairs alone. Not untangled: a
 // sheet through itself along a contour that cuts no region off (it ends inside the sheet on both
 // sides, e.g. where a wider part of the sheet crosses a narrower one), and pinned pieces whose
 // contour cuts off no free region.

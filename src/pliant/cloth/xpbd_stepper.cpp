@@ -29,7 +29,7 @@ constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
 // A strain limit moves its two vertices by at most this fraction of the thickness per substep
 // (per limit: a vertex in several limits can move several times that; strain_hierarchy.hpp).
 // Larger moves outrun the self-collision's proximity constraints, which act once per substep
-// (docs/performance.md, strain limits).
+// (docs/journal/2026-11-25-strain-limiting.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
 
 // Coordinates below 2^-200 m (6e-61 m: nothing cloth has is that short) become 0: the exact
