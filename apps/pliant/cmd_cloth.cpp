@@ -1,11 +1,11 @@
-// pliant cloth SCENE.json --out DIR [--frames N] [--no-preview] [--preview-size W H]
+// pliant cloth SCENE.json --out DIR [--frames N] [--no-preview] [--preview-size WxH]
 //              [--max-memory MIB] [--json]
 //
 // Simulates a cloth scene (format in docs/formats.md) with pipeline::run_cloth_scene and writes:
 //   DIR/frames/frame_0000.obj … frame_NNNN.obj (or .ply with "output": {"format": "ply"}): the
 //     initial state, then one file per simulated frame, each replaced atomically;
 //   DIR/preview.mp4: a shaded preview through ffmpeg (DIR/preview/frame_NNNN.png when ffmpeg is
-//     not installed; --no-preview: none; --preview-size W H, default 640 480);
+//     not installed; --no-preview: none; --preview-size WxH, default 640x480);
 //   DIR/stats.json: the scene's sizes and, per frame, `frame`, `ms` (the simulation step),
 //     the step's stages (`step_ms`, `refit_ms`, `traverse_ms`, `narrow_ms`, `response_ms`),
 //     `contacts`, `ccd_hits`, `intersecting_pairs` (exact count on the frame as written); and
@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -30,6 +31,7 @@
 
 #include "commands.hpp"
 #include "interrupt.hpp"
+#include "option_values.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -49,7 +51,7 @@ struct ClothCommandOptions {
     std::string out;
     int frames = -1;  // -1: the scene's
     bool no_preview = false;
-    std::array<int, 2> preview_size{640, 480};
+    std::string preview_size = "640x480";
     double max_memory_mib = 0.0;  // 0: the memory available
 };
 
@@ -62,8 +64,14 @@ void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) 
     run.progress = frame_progress(stderr_is_terminal() && !global.json);
     run.keep_going = InterruptGuard::keep_going;
     run.preview = !options.no_preview;
-    run.preview_width = options.preview_size[0];
-    run.preview_height = options.preview_size[1];
+    const std::array<int, 2> preview_size = parse_size(options.preview_size, "--preview-size");
+    if (std::min(preview_size[0], preview_size[1]) < 16 ||
+        std::max(preview_size[0], preview_size[1]) > 8192) {
+        throw CLI::ValidationError("--preview-size", "expected WxH with 16 <= W, H <= 8192, got '" +
+                                                         options.preview_size + "'");
+    }
+    run.preview_width = preview_size[0];
+    run.preview_height = preview_size[1];
     run.max_memory_bytes = static_cast<std::uint64_t>(options.max_memory_mib * 1024.0 * 1024.0);
     const InterruptGuard interrupt_guard;
     const nlohmann::ordered_json stats = pipeline::run_cloth_scene(scene, options.scene, out, run);
@@ -96,9 +104,9 @@ void register_cloth(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::Range(0, 1'000'000));
     cmd->add_flag("--no-preview", options->no_preview,
                   "Do not render DIR/preview.mp4 (PNG frames in DIR/preview/ without ffmpeg)");
-    cmd->add_option("--preview-size", options->preview_size, "Preview size in pixels")
-        ->type_name("W H")
-        ->check(CLI::Range(16, 8192));
+    cmd->add_option("--preview-size", options->preview_size,
+                    "Preview size in pixels, WxH like --size elsewhere (default 640x480)")
+        ->type_name("WxH");
     cmd->add_option("--max-memory", options->max_memory_mib,
                     "Refuse a cloth whose triangles need more memory than this, MiB (default: the "
                     "memory available: physical, or the control group's limit)")

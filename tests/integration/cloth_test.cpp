@@ -112,6 +112,23 @@ TEST(ClothCommand, DropsASheetOnASphereAndWritesFramesAndStats) {
     EXPECT_FALSE(std::filesystem::exists(scratch / "short" / "preview"));
 }
 
+// --preview-size takes WxH, as --size does everywhere else; the old "W H" form is a usage error.
+TEST(ClothCommand, PreviewSizeIsWxH) {
+    ScratchDir scratch;
+    write(scratch / "scene.json", R"({"cloth": {"grid": {"size": [1, 1], "quads": [4, 4]}},
+        "frames": 1, "substeps": 2})");
+    for (const char* size : {"64 48", "8x8", "64x"}) {
+        const CliResult r = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
+                                        quoted(scratch / "out") + " --preview-size " + size,
+                                    scratch);
+        EXPECT_EQ(r.exit_code, 2) << size << ": " << r.err;
+        // "64 48": CLI11 names the stray "48"; the malformed sizes name the option.
+        EXPECT_NE(r.err.find(std::string(size) == "64 48" ? "not expected: 48" : "--preview-size"),
+                  std::string::npos)
+            << r.err;
+    }
+}
+
 // Without ffmpeg on the PATH the preview is PNG frames of the requested size.
 TEST(ClothCommand, PreviewFallsBackToPngFramesWithoutFfmpeg) {
     ScratchDir scratch;
@@ -121,7 +138,7 @@ TEST(ClothCommand, PreviewFallsBackToPngFramesWithoutFfmpeg) {
         "frames": 3, "substeps": 5
     })");
     const CliResult r = run_cli("--json cloth " + quoted(scratch / "scene.json") + " --out " +
-                                    quoted(scratch / "out") + " --preview-size 64 48",
+                                    quoted(scratch / "out") + " --preview-size 64x48",
                                 scratch, "PATH=/nonexistent");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const nlohmann::json stats = nlohmann::json::parse(r.out);

@@ -131,6 +131,8 @@ TEST(NerfDataset, BrokenDatasetsGiveClearErrors) {
     };
 
     io::test::expect_io_error(read, {"t.json", "cannot open"});
+    io::test::expect_io_error([&] { read_nerf_dataset(dir.path()); },
+                              {"expected a regular file, got a directory"});
     write_bytes(json, "{ not json");
     io::test::expect_io_error(read, {"t.json", "not valid JSON"});
     write_bytes(json, R"({"camera_angle_x": 0.7, "frames": []})");

@@ -10,6 +10,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
+#include "pliant/io/read_file.hpp"
 
 namespace pliant::pipeline {
 
@@ -74,13 +75,10 @@ std::filesystem::path resolve_image(const std::filesystem::path& dir, const std:
 
 nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
                                 const ReadNerfDatasetOptions& options) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        throw IoError(fmt::format("{}: cannot open the file", path.string()));
-    }
+    const std::string text = io::read_file(path);  // a directory or a missing file: IoError
     json j;
     try {
-        j = json::parse(in);
+        j = json::parse(text);
     } catch (const json::exception& e) {
         throw IoError(fmt::format("{}: not valid JSON: {}", path.string(), e.what()));
     }
