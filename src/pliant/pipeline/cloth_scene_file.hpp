@@ -18,7 +18,7 @@ namespace pliant::pipeline {
 
 // The largest magnitude of a scene vector's components (positions in m, velocities,
 // accelerations, angles); nonzero ones are at least 1e-30. Mesh files a scene names are held to
-// the same bound on their coordinates where they are read (apps/pliant/cloth_setup.cpp).
+// the same bound on their coordinates where they are read (cloth_setup.cpp).
 inline constexpr double MAX_SCENE_COORDINATE = 1e6;
 
 cloth::ClothScene read_cloth_scene(const std::filesystem::path& path);

@@ -1,5 +1,5 @@
-// The radiance-field pipeline's steps as the CLI runs them: shared by `pliant dataset`,
-// `pliant nerf train`, `pliant nerf eval` and `pliant demo`.
+// The radiance-field pipeline's steps, as `pliant dataset`, `pliant nerf train`, `pliant nerf eval`
+// and `pliant demo` run them.
 //
 //   render_dataset:  a volume → a posed-image dataset on disk (PNGs + transforms_*.json);
 //   train_volume:    a dataset → a trained radiance field exported as an RGBA volume, optionally
