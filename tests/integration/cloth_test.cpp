@@ -325,6 +325,27 @@ f 5 7 8
         << r.err;
 }
 
+// Legal but almost certainly not meant: a mesh with an edge of three triangles, and a pin region
+// that holds no vertex, are named in warnings; the run goes on.
+TEST(ClothCommand, NonManifoldMeshesAndEmptyPinRegionsAreWarnedAbout) {
+    ScratchDir scratch;
+    write(scratch / "fin.obj", "v 0 0 0.3\nv 0.1 0 0.3\nv 0 0.1 0.3\nv 0 0 0.4\nv 0 -0.1 0.3\n"
+                               "f 1 2 3\nf 1 2 4\nf 1 2 5\n");
+    write(scratch / "scene.json", R"({"cloth": {"mesh": "fin.obj"},
+        "pins": [{"regions": [{"min": [5, 5, 5], "max": [6, 6, 6]}]}], "frames": 1})");
+    const CliResult r = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --no-preview",
+                                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("1 of its 7 edges are shared by more than two triangles (non-manifold)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("pins[0] region 0 (min (5, 5, 5), max (6, 6, 6)) holds none of the "
+                         "cloth's 5 vertices"),
+              std::string::npos)
+        << r.err;
+}
+
 // A sheet with a dent pushed through another sheet below it (one mesh) is untangled before the
 // first frame and stays apart; with "untangle": false it is only reported.
 TEST(ClothCommand, ClothThatStartsIntersectingIsUntangled) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <fstream>
 #include <string>
 
 #include "pliant/io/png.hpp"
@@ -30,6 +31,35 @@ TEST(RenderCli, WritesAPngOfTheRequestedSize) {
     EXPECT_EQ(image.width, 40);
     EXPECT_EQ(image.height, 30);
     EXPECT_NE(image, render::Image(40, 30));  // something was drawn
+}
+
+// Legal but almost certainly not meant: a CT preset on a volume without air (values 0-1), and a
+// transfer function that shows none of the volume, are warned about; a fitting preset is not.
+TEST(RenderCli, TransferFunctionsThatShowNothingAreWarnedAbout) {
+    const ScratchDir scratch;
+    const auto volume = write_phantom(scratch);
+    const auto png = scratch / "out.png";
+    const CliResult ct =
+        run_cli("render " + quoted(volume) + " --tf ct-bone --size 16x16 -o " + quoted(png),
+                scratch);
+    ASSERT_EQ(ct.exit_code, 0) << ct.err;
+    EXPECT_NE(ct.err.find("pliant: warning: transfer function 'ct-bone' is for CT in Hounsfield "
+                          "units"),
+              std::string::npos)
+        << ct.err;
+    std::ofstream(scratch / "high.json") << R"({"color": [{"value": 50, "rgb": [1, 1, 1]}],
+        "opacity": [{"value": 50, "alpha": 0}, {"value": 60, "alpha": 1}]})";
+    const CliResult high = run_cli(
+        "render " + quoted(volume) + " --tf " + quoted(scratch / "high.json") +
+            " --size 16x16 -o " + quoted(png),
+        scratch);
+    ASSERT_EQ(high.exit_code, 0) << high.err;
+    EXPECT_NE(high.err.find("makes 0 % of the volume's voxels visible"), std::string::npos)
+        << high.err;
+    const CliResult fitting = run_cli(
+        "render " + quoted(volume) + " --tf mri-brain --size 16x16 -o " + quoted(png), scratch);
+    ASSERT_EQ(fitting.exit_code, 0) << fitting.err;
+    EXPECT_EQ(fitting.err.find("warning"), std::string::npos) << fitting.err;
 }
 
 TEST(RenderCli, JsonHasTheTimingsAndSamples) {

@@ -2,6 +2,7 @@
 #include "pliant/io/transfer_function_json.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -9,8 +10,10 @@
 #include <string>
 
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
 #include "pliant/io/json_text.hpp"
 #include "pliant/io/read_file.hpp"
+#include "pliant/volume/visibility.hpp"
 
 namespace pliant::io {
 namespace {
@@ -168,9 +171,36 @@ volume::TransferFunction read_transfer_function(const std::filesystem::path& pat
 volume::TransferFunction load_transfer_function(const std::string& name_or_file,
                                                 const volume::Volume& volume) {
     const auto& presets = volume::preset_names();
-    return std::find(presets.begin(), presets.end(), name_or_file) != presets.end()
-               ? volume::preset(name_or_file, volume)
-               : read_transfer_function(name_or_file);
+    volume::TransferFunction tf = std::find(presets.begin(), presets.end(), name_or_file) !=
+                                          presets.end()
+                                      ? volume::preset(name_or_file, volume)
+                                      : read_transfer_function(name_or_file);
+    // Legal but almost certainly not meant: a function that shows (almost) nothing of this volume
+    // (a CT preset on an MRI, a file made for another value range).
+    if (volume::channels(volume.type()) == 1 && volume.num_voxels() > 0) {
+        const std::array<double, 2> range = volume::value_range(volume);
+        // The CT presets are in Hounsfield units: a CT has air near −1000.
+        if (name_or_file.starts_with("ct-") && range[0] > CT_AIR_ABOVE) {
+            log_warning(
+                "transfer function '{}' is for CT in Hounsfield units (air near -1000, bone above "
+                "150), but this volume's values run from {:g} to {:g}: it is probably not such a "
+                "CT (an MRI?) and the image may be nearly black; try mri-brain or grayscale",
+                tf.name, range[0], range[1]);
+            return tf;
+        }
+        const std::vector<std::uint8_t> visible = volume::visible_voxels(volume, &tf);
+        const auto num_visible = std::count(visible.begin(), visible.end(), std::uint8_t{1});
+        const double fraction =
+            static_cast<double>(num_visible) / static_cast<double>(volume.num_voxels());
+        if (fraction < NEARLY_INVISIBLE_FRACTION) {
+            log_warning(
+                "transfer function '{}' makes {:.3g} % of the volume's voxels visible (its values "
+                "run from {:g} to {:g}): the image will be nearly empty; choose another transfer "
+                "function (presets: {})",
+                tf.name, 100.0 * fraction, range[0], range[1], fmt::join(presets, ", "));
+        }
+    }
+    return tf;
 }
 
 }  // namespace pliant::io

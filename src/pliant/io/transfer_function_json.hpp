@@ -25,7 +25,13 @@ namespace pliant::io {
 volume::TransferFunction read_transfer_function(const std::filesystem::path& path);
 
 // `name_or_file`: a preset (volume::preset_names) computed for `volume`, else a transfer
-// function JSON file (read_transfer_function; IoError when missing or broken).
+// function JSON file (read_transfer_function; IoError when missing or broken). Logs a warning
+// (core/log.hpp) when the choice is legal but almost certainly not meant: a CT preset ("ct-…",
+// Hounsfield units) on a volume whose smallest value is above CT_AIR_ABOVE (no air: an MRI or an
+// unscaled image, which the preset shows nearly black), or a function that makes fewer than
+// NEARLY_INVISIBLE_FRACTION of a scalar volume's voxels visible (a nearly empty image).
+inline constexpr double CT_AIR_ABOVE = -200.0;
+inline constexpr double NEARLY_INVISIBLE_FRACTION = 1e-4;
 volume::TransferFunction load_transfer_function(const std::string& name_or_file,
                                                 const volume::Volume& volume);
 

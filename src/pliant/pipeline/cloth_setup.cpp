@@ -16,6 +16,8 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
 #include "pliant/geometry/generate.hpp"
+#include "pliant/geometry/topology.hpp"
+#include "pliant/geometry/validate.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/pipeline/cloth_scene_file.hpp"
 #include "pliant/pipeline/memory_budget.hpp"
@@ -92,6 +94,22 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
         require_cloth_fits_in_memory(
             fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
             mesh.triangles.size() * copies_of_the_cloth, scene.self_collision, max_memory_bytes);
+        // Edges of more than two triangles: the cloth is not a surface there (bending and the
+        // self-collision's feature ownership assume at most two).
+        geometry::validate_triangles(mesh.triangles, mesh.positions.size(), "cloth mesh");
+        const geometry::MeshTopology topology =
+            geometry::build_topology(mesh.triangles, mesh.positions.size());
+        std::int64_t non_manifold = 0;
+        for (std::size_t e = 0; e < topology.num_edges(); ++e) {
+            non_manifold += topology.triangles_of_edge(static_cast<std::int32_t>(e)).size() > 2;
+        }
+        if (non_manifold > 0) {
+            log_warning(
+                "{}: cloth.mesh {}: {} of its {} edges are shared by more than two triangles "
+                "(non-manifold): cloth is a surface, and there it is not one; check the mesh for "
+                "duplicated or fused faces",
+                scene_name, scene.mesh.string(), non_manifold, topology.num_edges());
+        }
         // A file's seams (a generated grid has none; instances are checked for overlap later).
         if (const std::int64_t doubled = vertices_on_others(mesh.positions); doubled > 0) {
             log_warning(
@@ -140,13 +158,28 @@ std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
                 scene_name, group.key, v, mesh.positions.size()));
         }
     }
-    for (const cloth::PinRegion& region : group.regions) {
+    for (std::size_t r = 0; r < group.regions.size(); ++r) {
+        const cloth::PinRegion& region = group.regions[r];
+        const std::size_t before = pinned.size();
         for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
             const Vec3d& p = mesh.positions[v];
             if (p.x >= region.min.x && p.x <= region.max.x && p.y >= region.min.y &&
                 p.y <= region.max.y && p.z >= region.min.z && p.z <= region.max.z) {
                 pinned.push_back(static_cast<std::int32_t>(v));
             }
+        }
+        if (pinned.size() == before) {  // legal, but almost certainly not meant
+            AABBd cloth_box;
+            for (const Vec3d& p : mesh.positions) {
+                cloth_box.extend(p);
+            }
+            log_warning(
+                "{}: {} region {} (min ({:g}, {:g}, {:g}), max ({:g}, {:g}, {:g})) holds none of "
+                "the cloth's {} vertices, which span ({:.3g}, {:.3g}, {:.3g}) to ({:.3g}, {:.3g}, "
+                "{:.3g}) as placed: it pins nothing; check the box against the cloth's placement",
+                scene_name, group.key, r, region.min.x, region.min.y, region.min.z, region.max.x,
+                region.max.y, region.max.z, mesh.positions.size(), cloth_box.lo.x, cloth_box.lo.y,
+                cloth_box.lo.z, cloth_box.hi.x, cloth_box.hi.y, cloth_box.hi.z);
         }
     }
     return pinned;
