@@ -11,19 +11,13 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/generate.hpp"
+#include "support/sheets.hpp"
 
 namespace pliant::cloth {
 namespace {
 
-// A square sheet of n × n quads, side `size` metres, at height z.
 geometry::TriangleMeshD sheet(int n, double size, double z) {
-    const geometry::TriangleMesh flat =
-        geometry::make_grid_sheet(n, n, static_cast<float>(size), static_cast<float>(size));
-    geometry::TriangleMeshD mesh = geometry::convert_precision<double>(flat);
-    for (Vec3d& p : mesh.positions) {
-        p.z = z;
-    }
-    return mesh;
+    return test::flat_sheet(n, size, z);
 }
 
 double max_edge_strain(const ClothSolver& solver, const geometry::TriangleMeshD& rest) {

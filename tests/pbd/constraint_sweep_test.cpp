@@ -10,28 +10,13 @@
 #include "pliant/pbd/tet_edges.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/volume/volume.hpp"
+#include "support/tet_grids.hpp"
 
 namespace pliant::pbd::detail {
 namespace {
 
-// A grid of cells of 2 unit voxels over dims voxels: every cell (full_box) or the cells near a
-// ball of visible voxels (a ragged body).
 TetGrid grid_over(volume::Dims dims, bool full_box) {
-    volume::Volume v =
-        volume::Volume::allocate(dims, volume::VoxelType::u8, {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
-    const auto data = v.values<volume::VoxelType::u8>();
-    for (std::int64_t k = 0; k < dims[2]; ++k) {
-        for (std::int64_t j = 0; j < dims[1]; ++j) {
-            for (std::int64_t i = 0; i < dims[0]; ++i) {
-                const double dx = static_cast<double>(i) - dims[0] / 2.0;
-                const double dy = static_cast<double>(j) - dims[1] / 2.0;
-                const double dz = static_cast<double>(k) - dims[2] / 2.0;
-                data[static_cast<std::size_t>(v.index(i, j, k))] =
-                    dx * dx + dy * dy + dz * dz < 0.2 * dims[0] * dims[0] ? 200 : 0;
-            }
-        }
-    }
-    return build_tet_grid(v, {.cell_voxels = 2, .full_box = full_box});
+    return test::ball_tet_grid(dims, full_box);
 }
 
 // Runs sweep_colours and returns "" when it visited every constraint once and, at every vertex,
