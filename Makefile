@@ -17,7 +17,7 @@ help:
 	@echo "make test    install deps, build, run all tests (ctest)"
 	@echo "make build   install deps, configure and build everything (no tests run)"
 	@echo "make bench   build, then run '$(PLIANT) bench bvh'"
-	@echo "make format  clang-format every C++ source in place"
+	@echo "make format  clang-format every C++ source in place (scripts/check-format --fix)"
 	@echo "make clean   remove build/ and out/"
 
 deps:
@@ -47,8 +47,7 @@ bench: configure
 	$(PLIANT) bench bvh
 
 format:
-	@command -v clang-format >/dev/null || { echo "make format: clang-format not found" >&2; exit 1; }
-	find src apps tests bench \( -name '*.hpp' -o -name '*.cpp' \) -print0 | xargs -0 clang-format -i
+	scripts/check-format --fix
 
 clean:
 	rm -rf build out

@@ -20,7 +20,7 @@ bool finite_number(const std::string& text, double& value) {
 }  // namespace
 
 const CLI::Validator& finite_non_negative() {
-    static const CLI::Validator validator(
+    static const CLI::Validator VALIDATOR(
         [](std::string& text) -> std::string {
             double value = 0.0;
             if (!finite_number(text, value) || value < 0.0) {
@@ -29,11 +29,11 @@ const CLI::Validator& finite_non_negative() {
             return {};
         },
         "", "FINITE_NON_NEGATIVE");
-    return validator;
+    return VALIDATOR;
 }
 
 CLI::Validator finite_in_range(double lo, double hi) {
-    return CLI::Validator(
+    return {
         [lo, hi](std::string& text) -> std::string {
             double value = 0.0;
             if (!finite_number(text, value) || value < lo || value > hi) {
@@ -45,13 +45,13 @@ CLI::Validator finite_in_range(double lo, double hi) {
 }
 
 const CLI::Validator& non_empty_path() {
-    static const CLI::Validator validator(
+    static const CLI::Validator VALIDATOR(
         [](std::string& text) -> std::string {
             return text.empty() ? std::string("must be a path, got an empty string")
                                 : std::string();
         },
         "", "NON_EMPTY_PATH");
-    return validator;
+    return VALIDATOR;
 }
 
 }  // namespace pliant::cli

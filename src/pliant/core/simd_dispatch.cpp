@@ -14,8 +14,8 @@ void allow_avx2(bool allowed) {
 
 bool has_avx2() {
 #if defined(PLIANT_HAS_AVX2_TARGET)
-    static const bool cpu_has = __builtin_cpu_supports("avx2") != 0;
-    return cpu_has && g_avx2_allowed.load(std::memory_order_relaxed);
+    static const bool CPU_HAS_AVX2 = __builtin_cpu_supports("avx2") != 0;
+    return CPU_HAS_AVX2 && g_avx2_allowed.load(std::memory_order_relaxed);
 #else
     return false;
 #endif

@@ -155,8 +155,8 @@ Slabs bin_tets(std::span<const std::int32_t> kept, std::span<const geometry::Tet
     slabs.count = (nz + slabs.height - 1) / slabs.height;
     const std::int64_t num = static_cast<std::int64_t>(kept.size());
     constexpr std::int64_t GRAIN = 16384;
-    const std::int64_t num_chunks_ = num_chunks(num, GRAIN);
-    std::vector<std::int64_t> counts(static_cast<std::size_t>(num_chunks_ * slabs.count), 0);
+    const std::int64_t chunk_count = num_chunks(num, GRAIN);
+    std::vector<std::int64_t> counts(static_cast<std::size_t>(chunk_count * slabs.count), 0);
     // Per kept tet: first and last slab (last < first when its box holds no layer).
     std::vector<std::array<std::int32_t, 2>> ranges(static_cast<std::size_t>(num));
     parallel_for_chunks(num, GRAIN, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
@@ -187,7 +187,7 @@ Slabs bin_tets(std::span<const std::int32_t> kept, std::span<const geometry::Tet
     std::int64_t total = 0;
     for (std::int64_t s = 0; s < slabs.count; ++s) {
         slabs.begin[static_cast<std::size_t>(s)] = total;
-        for (std::int64_t c = 0; c < num_chunks_; ++c) {
+        for (std::int64_t c = 0; c < chunk_count; ++c) {
             const std::size_t at = static_cast<std::size_t>(c * slabs.count + s);
             offsets[at] = total;
             total += counts[at];

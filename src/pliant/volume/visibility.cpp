@@ -31,11 +31,11 @@ void classify_integer(const Volume& volume, const TransferFunction* tf,
             volume.values<T>(), 1, 0, [](Channel x) { return x != 0; }, visible);
         return;
     }
-    constexpr std::int64_t lo = std::numeric_limits<Channel>::min();
-    constexpr std::int64_t hi = std::numeric_limits<Channel>::max();
-    std::vector<std::uint8_t> lut(static_cast<std::size_t>(hi - lo + 1));
-    for (std::int64_t x = lo; x <= hi; ++x) {
-        lut[static_cast<std::size_t>(x - lo)] = tf->evaluate(static_cast<double>(x))[3] > 0.0f;
+    constexpr std::int64_t LO = std::numeric_limits<Channel>::min();
+    constexpr std::int64_t HI = std::numeric_limits<Channel>::max();
+    std::vector<std::uint8_t> lut(static_cast<std::size_t>(HI - LO + 1));
+    for (std::int64_t x = LO; x <= HI; ++x) {
+        lut[static_cast<std::size_t>(x - LO)] = tf->evaluate(static_cast<double>(x))[3] > 0.0f;
     }
     classify<Channel>(
         volume.values<T>(), 1, 0,
