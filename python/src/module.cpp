@@ -134,4 +134,5 @@ PYBIND11_MODULE(_pliant, m) {
         "restores the default (printed to stderr as 'pliant: <level>: <message>').");
 
     bind_mesh(m);
+    bind_collision(m);
 }
