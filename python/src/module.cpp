@@ -135,4 +135,5 @@ PYBIND11_MODULE(_pliant, m) {
 
     bind_mesh(m);
     bind_collision(m);
+    bind_cloth(m);
 }
