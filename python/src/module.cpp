@@ -136,4 +136,5 @@ PYBIND11_MODULE(_pliant, m) {
     bind_mesh(m);
     bind_collision(m);
     bind_cloth(m);
+    bind_volume(m);
 }
