@@ -137,4 +137,5 @@ PYBIND11_MODULE(_pliant, m) {
     bind_collision(m);
     bind_cloth(m);
     bind_volume(m);
+    bind_render(m);
 }
