@@ -138,4 +138,5 @@ PYBIND11_MODULE(_pliant, m) {
     bind_cloth(m);
     bind_volume(m);
     bind_render(m);
+    bind_pbd(m);
 }
