@@ -139,4 +139,5 @@ PYBIND11_MODULE(_pliant, m) {
     bind_volume(m);
     bind_render(m);
     bind_pbd(m);
+    bind_nerf(m);
 }
