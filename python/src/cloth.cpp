@@ -199,21 +199,21 @@ the solver, so it raises InvalidInput while such a view is alive. Not thread-saf
                                [](const PyClothSimulation& s) { return s.sim.triangles().size(); })
         .def_property_readonly(
             "positions",
-            [](py::object self) {
+            [](const py::object& self) {
                 auto& s = self.cast<PyClothSimulation&>();
                 return guarded_vec3_view(s.sim.positions(), self, s.views);
             },
             "(N, 3) float64 read-only view of the solver's positions (m, no copy).")
         .def_property_readonly(
             "velocities",
-            [](py::object self) {
+            [](const py::object& self) {
                 auto& s = self.cast<PyClothSimulation&>();
                 return guarded_vec3_view(s.sim.solver().velocities(), self, s.views);
             },
             "(N, 3) float64 read-only view of the velocities (m/s, no copy).")
         .def_property_readonly(
             "inverse_masses",
-            [](py::object self) {
+            [](const py::object& self) {
                 auto& s = self.cast<PyClothSimulation&>();
                 const std::span<const double> w = s.sim.solver().inverse_masses();
                 return guarded_view(w.data(), w.size(), 0, self, s.views);
@@ -221,7 +221,7 @@ the solver, so it raises InvalidInput while such a view is alive. Not thread-saf
             "(N,) float64 read-only view of the inverse masses (1/kg; 0: pinned or grabbed).")
         .def_property_readonly(
             "triangles",
-            [](py::object self) {
+            [](const py::object& self) {
                 auto& s = self.cast<PyClothSimulation&>();
                 const std::span<const geometry::Triangle> t = s.sim.triangles();
                 return guarded_view(t.empty() ? nullptr : t.data()->data(), t.size(), 3, self,

@@ -47,13 +47,13 @@ edge_edge:   (Q, 2) int32 view, rows (edge_a, edge_b), edge_a < edge_b, indices 
 Read-only views of this object's memory (no copy); they keep it alive.
 )doc")
         .def_property_readonly("vertex_face",
-                               [](py::object self) {
+                               [](const py::object& self) {
                                    const auto& pairs = self.cast<const FeaturePairs&>().vertex_face;
                                    return records_view(pairs.empty() ? nullptr : &pairs[0].vertex,
                                                        pairs.size(), 2, self, false);
                                })
         .def_property_readonly("edge_edge",
-                               [](py::object self) {
+                               [](const py::object& self) {
                                    const auto& pairs = self.cast<const FeaturePairs&>().edge_edge;
                                    return records_view(pairs.empty() ? nullptr : &pairs[0].edge_a,
                                                        pairs.size(), 2, self, false);
@@ -112,7 +112,7 @@ The first update builds the LBVH, later ones refit it. Not thread-safe: one upda
              "The next update builds the BVH from scratch instead of refitting it.")
         .def_property_readonly(
             "edges",
-            [](py::object self) {
+            [](const py::object& self) {
                 return index_view<2>(std::span<const geometry::Edge>(
                                          self.cast<const BroadPhase&>().topology().edges),
                                      self, false);

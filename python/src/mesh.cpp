@@ -37,14 +37,14 @@ The views keep the mesh alive; they stay valid as long as they exist.
              "other shapes, indices out of [0, N) or a triangle that repeats a vertex.")
         .def_property_readonly(
             "positions",
-            [](py::object self) {
+            [](const py::object& self) {
                 return vec3_view(std::span<const Vec3d>(self.cast<TriangleMeshD&>().positions),
                                  self, true);
             },
             "(N, 3) float64 view of the vertex positions (no copy, writeable).")
         .def_property_readonly(
             "triangles",
-            [](py::object self) {
+            [](const py::object& self) {
                 return index_view<3>(
                     std::span<const geometry::Triangle>(self.cast<TriangleMeshD&>().triangles),
                     self, true);

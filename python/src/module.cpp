@@ -69,8 +69,9 @@ void bind_errors(py::module_& m) {
                                   "consistent (a KeyboardInterrupt).",
                                   py::make_tuple(py::handle(PyExc_KeyboardInterrupt)));
 
-    // Most derived first: the messages pass through unchanged.
-    py::register_exception_translator([](std::exception_ptr p) {
+    // Most derived first: the messages pass through unchanged. pybind11's translator signature
+    // takes the exception_ptr by value.
+    py::register_exception_translator([](std::exception_ptr p) {  // NOLINT(performance-*)
         try {
             if (p) {
                 std::rethrow_exception(p);

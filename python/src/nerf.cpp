@@ -171,10 +171,10 @@ image(i) is an (H, W, 3) float32 view of the dataset's memory (no copy, writeabl
                      nerf::View view;
                      view.name =
                          names ? (*names)[static_cast<std::size_t>(i)] : fmt::format("view_{}", i);
-                     for (int r = 0; r < 3; ++r) {
-                         for (int c = 0; c < 4; ++c) {
-                             view.camera_to_world.m[static_cast<std::size_t>(4 * r + c)] =
-                                 poses.at(i, r, c);
+                     for (std::size_t r = 0; r < 3; ++r) {
+                         for (std::size_t c = 0; c < 4; ++c) {
+                             view.camera_to_world.m[4 * r + c] = poses.at(
+                                 i, static_cast<py::ssize_t>(r), static_cast<py::ssize_t>(c));
                          }
                      }
                      view.rgb.resize(pixels);
@@ -216,8 +216,8 @@ image(i) is an (H, W, 3) float32 view of the dataset's memory (no copy, writeabl
             py::arg("i"), "View i as a Camera (square pixels, centred principal point).")
         .def(
             "image",
-            [](py::object self, py::ssize_t i) {
-                const Dataset& d = self.cast<const Dataset&>();
+            [](const py::object& self, py::ssize_t i) {
+                const auto& d = self.cast<const Dataset&>();
                 const nerf::View& view = view_at(d, i);
                 if (view.rgb.empty()) {
                     throw InvalidInput(fmt::format(

@@ -41,7 +41,7 @@ pbd::Axis parse_axis(const std::string& text) {
 }
 
 std::string axis_name(pbd::Axis axis) {
-    return std::string(1, "xyz"[static_cast<int>(axis)]);
+    return {"xyz"[static_cast<int>(axis)]};
 }
 
 // The soft body's options from keyword arguments (TypeError for unknown ones).
@@ -75,7 +75,7 @@ pbd::SoftBodyOptions body_options_from(const py::kwargs& kwargs) {
     return o;
 }
 
-const char* BODY_OPTIONS_DOC = R"doc(
+constexpr const char* BODY_OPTIONS_DOC = R"doc(
 Soft-body options (keywords): stiffness (PBD k in (0, 1], 1.0), edge_share (beta: edges get
 beta k, 0.05), density (kg per world unit cubed, 1000), damping (1/s, 1.0), substeps (10),
 gravity ((0, 0, 0), world units/s^2), edge_compliance and volume_compliance (0: none).)doc";
@@ -106,14 +106,14 @@ A tetrahedral mesh that owns its data (geometry::TetMesh): positions (N, 3) floa
              "A mesh from (N, 3) and (T, 4) arrays (copied).")
         .def_property_readonly(
             "positions",
-            [](py::object self) {
+            [](const py::object& self) {
                 return vec3_view(std::span<const Vec3f>(self.cast<TetMesh&>().positions), self,
                                  true);
             },
             "(N, 3) float32 view (world units).")
         .def_property_readonly(
             "tets",
-            [](py::object self) {
+            [](const py::object& self) {
                 return index_view<4>(std::span<const geometry::Tet>(self.cast<TetMesh&>().tets),
                                      self, true);
             },
@@ -269,32 +269,32 @@ views of the body's memory (no copy) that follow it as it steps.
         .def_property_readonly("time", &SoftBody::time)
         .def_property_readonly(
             "positions",
-            [](py::object self) {
+            [](const py::object& self) {
                 return vec3_view(self.cast<SoftBody&>().positions(), self, false);
             },
             "(N, 3) float32 read-only view (world units).")
         .def_property_readonly("velocities",
-                               [](py::object self) {
+                               [](const py::object& self) {
                                    return vec3_view(self.cast<SoftBody&>().velocities(), self,
                                                     false);
                                })
         .def_property_readonly("rest_positions",
-                               [](py::object self) {
+                               [](const py::object& self) {
                                    return vec3_view(self.cast<SoftBody&>().rest_positions(), self,
                                                     false);
                                })
         .def_property_readonly(
             "inv_masses",
-            [](py::object self) {
+            [](const py::object& self) {
                 const std::span<const float> w = self.cast<SoftBody&>().inv_masses();
                 return records_view(w.data(), w.size(), 0, self, false);
             },
             "(N,) float32 (0: pinned).")
         .def_property_readonly("tets",
-                               [](py::object self) {
+                               [](const py::object& self) {
                                    return index_view<4>(self.cast<SoftBody&>().tets(), self, false);
                                })
-        .def_property_readonly("edges", [](py::object self) {
+        .def_property_readonly("edges", [](const py::object& self) {
             return index_view<2>(self.cast<SoftBody&>().edges(), self, false);
         });
 
@@ -352,7 +352,7 @@ InvalidInput while a reference to `body` (or a view of its arrays) is alive.
              py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
         .def_property_readonly(
             "body",
-            [](py::object self) {
+            [](const py::object& self) {
                 auto& d = self.cast<PyDeformableVolume&>();
                 py::object body =
                     py::cast(&d.deformable->body(), py::return_value_policy::reference);

@@ -79,7 +79,7 @@ render::RayCastOptions options_from(const py::kwargs& kwargs) {
     return o;
 }
 
-const char* RAYCAST_OPTIONS_DOC = R"doc(
+constexpr const char* RAYCAST_OPTIONS_DOC = R"doc(
 Options (keywords): step (world units; 0: half the smallest spacing), opacity_unit (world units
 RGBA opacities and unit-less transfer functions are per; 0: the smallest spacing),
 early_termination (0.99), mode ('composite' or 'mip'), shading (False), background ((r, g, b),

@@ -61,8 +61,8 @@ py::dtype channel_dtype(VoxelType type) {
     return py::dtype::of<float>();
 }
 
-py::array volume_view(py::object self) {
-    Volume& v = self.cast<Volume&>();
+py::array volume_view(const py::object& self) {
+    auto& v = self.cast<Volume&>();
     const auto& d = v.dims();
     const auto c = static_cast<py::ssize_t>(volume::channels(v.type()));
     const auto b = static_cast<py::ssize_t>(volume::bytes_per_channel(v.type()));
