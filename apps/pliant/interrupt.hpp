@@ -3,7 +3,7 @@
 // the unit of work in progress with its outputs consistent.
 #pragma once
 
-#include <signal.h>
+#include <signal.h>  // NOLINT(modernize-deprecated-headers): sigaction is POSIX, not <csignal>
 
 namespace pliant::cli {
 

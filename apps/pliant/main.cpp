@@ -79,7 +79,7 @@ std::string unknown_command_message(const CLI::App& app, const std::string& word
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
     using namespace pliant;
     cli::GlobalOptions global;
     CLI::App app{
@@ -141,4 +141,7 @@ int main(int argc, char** argv) {
         return 1;
     }
     return 0;
+} catch (const std::exception& e) {  // setting up the command line itself failed
+    std::fprintf(stderr, "pliant: error: internal: %s\n", e.what());
+    return 1;
 }

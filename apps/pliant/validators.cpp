@@ -41,7 +41,7 @@ CLI::Validator finite_in_range(double lo, double hi) {
             }
             return {};
         },
-        "", "FINITE_IN_RANGE");
+        "", "FINITE_IN_RANGE"};
 }
 
 const CLI::Validator& non_empty_path() {

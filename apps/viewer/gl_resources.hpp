@@ -26,12 +26,12 @@ private:
     GLuint m_program = 0;
 };
 
-// Generic owner: Create/Destroy are the glGen*/glDelete* pair.
-template <void (*Create)(GLsizei, GLuint*), void (*Destroy)(GLsizei, const GLuint*)>
+// Generic owner: CREATE/DESTROY are the glGen*/glDelete* pair.
+template <void (*CREATE)(GLsizei, GLuint*), void (*DESTROY)(GLsizei, const GLuint*)>
 class GlName {
 public:
-    GlName() { Create(1, &m_id); }
-    ~GlName() { Destroy(1, &m_id); }
+    GlName() { CREATE(1, &m_id); }
+    ~GlName() { DESTROY(1, &m_id); }
     GlName(const GlName&) = delete;
     GlName& operator=(const GlName&) = delete;
     GLuint id() const { return m_id; }

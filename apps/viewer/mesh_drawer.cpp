@@ -79,9 +79,9 @@ Matrix4 rigid_matrix(const Vec3d (&rotation_rows)[3], const Vec3d& pivot, const 
     for (int row = 0; row < 3; ++row) {
         const Vec3d& r = rotation_rows[row];
         m[static_cast<std::size_t>(row)] = static_cast<float>(r.x);
-        m[static_cast<std::size_t>(4 + row)] = static_cast<float>(r.y);
-        m[static_cast<std::size_t>(8 + row)] = static_cast<float>(r.z);
-        m[static_cast<std::size_t>(12 + row)] = static_cast<float>(offset[row]);
+        m[4 + static_cast<std::size_t>(row)] = static_cast<float>(r.y);
+        m[8 + static_cast<std::size_t>(row)] = static_cast<float>(r.z);
+        m[12 + static_cast<std::size_t>(row)] = static_cast<float>(offset[row]);
     }
     m[15] = 1.0f;
     return m;

@@ -16,7 +16,7 @@ render::Image read_back_buffer(int x, int y, int width, int height) {
     glReadPixels(x, y, width, height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
     check_gl("glReadPixels");
     // OpenGL's rows go upwards from the bottom; the image's downwards from the top.
-    const auto row_bytes = static_cast<std::size_t>(3 * width);
+    const auto row_bytes = 3 * static_cast<std::size_t>(width);
     for (int row = 0; row < height; ++row) {
         const auto from =
             rows.begin() +

@@ -35,14 +35,18 @@ void check_threshold(double threshold) {
 }  // namespace
 
 DriverKind parse_driver_kind(const std::string& name) {
-    if (name == "none")
+    if (name == "none") {
         return DriverKind::none;
-    if (name == "wave")
+    }
+    if (name == "wave") {
         return DriverKind::wave;
-    if (name == "twist")
+    }
+    if (name == "twist") {
         return DriverKind::twist;
-    if (name == "bubble")
+    }
+    if (name == "bubble") {
         return DriverKind::bubble;
+    }
     throw InvalidInput(fmt::format("driver '{}' is not one of none, wave, twist, bubble", name));
 }
 

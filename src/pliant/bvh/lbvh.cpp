@@ -140,7 +140,8 @@ void LBVH::collapse() {
             m_wide.resize(static_cast<std::size_t>(end));
             m_slot_counts.resize(static_cast<std::size_t>(end));
         }
-        m_wide_source.resize(static_cast<std::size_t>(end + WIDTH * (end - begin)));
+        m_wide_source.resize(static_cast<std::size_t>(end) +
+                             static_cast<std::size_t>(WIDTH) * static_cast<std::size_t>(end - begin));
         WideNode* wide = m_wide.data();
         std::int32_t* source = m_wide_source.data();
         std::int32_t* counts = m_slot_counts.data();
@@ -210,10 +211,10 @@ void LBVH::collapse() {
                 const auto w = static_cast<std::int32_t>(begin + offset);
                 WideNode& node = wide[w];
                 std::int32_t at = end + counts[w];
-                for (int k = 0; k < WIDTH; ++k) {
-                    if (node.child[k] >= 0) {
-                        source[at] = node.child[k];
-                        node.child[k] = at++;
+                for (int& k : node.child) {
+                    if (k >= 0) {
+                        source[at] = k;
+                        k = at++;
                     }
                 }
             },
@@ -349,9 +350,9 @@ void LBVH::plan_refit() {
     const WideNode* wide = m_wide.data();
     const auto first_internal_child = [&](std::int32_t begin, std::int32_t end) {
         for (std::int32_t w = begin; w < end; ++w) {
-            for (int k = 0; k < WIDTH; ++k) {
-                if (wide[w].child[k] >= 0) {
-                    return wide[w].child[k];
+            for (int k : wide[w].child) {
+                if (k >= 0) {
+                    return k;
                 }
             }
         }

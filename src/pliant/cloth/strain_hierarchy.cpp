@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <queue>
+#include <ranges>
 #include <tuple>
 #include <utility>
 
@@ -282,8 +283,7 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double
         },
         CHILD_GRAIN);
     const double scale = 1.0 + max_strain;
-    for (auto level = m_levels.rbegin(); level != m_levels.rend(); ++level) {
-        const Level& l = *level;
+    for (auto& l : std::ranges::reverse_view(m_levels)) {
         const ColoredEdges& limits = l.limits;
         for (std::int32_t c = 0; c < limits.colors.num_colors(); ++c) {
             const std::int64_t offset = limits.colors.offsets[static_cast<std::size_t>(c)];

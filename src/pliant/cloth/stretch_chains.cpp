@@ -121,7 +121,8 @@ std::vector<Chain> follow_chains(std::span<const std::array<std::int32_t, 2>> ed
         chains.push_back(std::move(chain));
     };
     const auto walk_cut = [&]() {
-        for (std::size_t i = 0; i < cut.size(); ++i) {  // walk() may append to cut
+        // walk() may append to cut: an index loop (a range loop's iterators would dangle).
+        for (std::size_t i = 0; i < cut.size(); ++i) {  // NOLINT(modernize-loop-convert)
             const std::int32_t e = cut[i];
             if (visited[static_cast<std::size_t>(e)] == 0) {
                 walk(e, is_end(e, 0) ? 0 : 1);

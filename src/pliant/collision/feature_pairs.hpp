@@ -10,6 +10,7 @@ namespace pliant::collision {
 struct VertexFacePair {
     std::int32_t vertex;
     std::int32_t face;
+    // NOLINTNEXTLINE(modernize-use-nullptr): clang-tidy 14 flags the synthesized `<=> 0`.
     friend constexpr auto operator<=>(const VertexFacePair&, const VertexFacePair&) = default;
 };
 
@@ -17,6 +18,7 @@ struct VertexFacePair {
 struct EdgeEdgePair {
     std::int32_t edge_a;
     std::int32_t edge_b;
+    // NOLINTNEXTLINE(modernize-use-nullptr): clang-tidy 14 flags the synthesized `<=> 0`.
     friend constexpr auto operator<=>(const EdgeEdgePair&, const EdgeEdgePair&) = default;
 };
 

@@ -18,7 +18,9 @@ public:
     template <typename F>
     requires(!std::is_same_v<std::remove_cvref_t<F>, FunctionRef> &&
              std::is_invocable_r_v<R, F&, Args...>)
-        FunctionRef(F&& f)  // NOLINT(google-explicit-constructor): used like a function parameter
+        // Implicit: used like a function parameter. The requires-clause keeps FunctionRef itself
+        // out (clang-tidy 14 does not read requires-clauses).
+        FunctionRef(F&& f)  // NOLINT(google-explicit-constructor, bugprone-forwarding-reference-overload)
         : m_object(const_cast<void*>(static_cast<const void*>(std::addressof(f)))),
           m_call([](void* object, Args... args) -> R {
               return (*static_cast<std::remove_reference_t<F>*>(object))(

@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pliant/core/error.hpp"
@@ -190,8 +191,8 @@ struct PlistValue {
 
 class PlistParser {
 public:
-    PlistParser(const std::filesystem::path& path, std::string_view text)
-        : m_path(path), m_text(text) {}
+    PlistParser(std::filesystem::path path, std::string_view text)
+        : m_path(std::move(path)), m_text(text) {}
 
     PlistValue parse_document() {
         const std::size_t start = m_text.find("<plist");

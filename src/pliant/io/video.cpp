@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
-#include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -13,6 +12,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
@@ -59,7 +59,7 @@ std::filesystem::path find_ffmpeg() {
         }
         const std::string_view dir = path_list.substr(start, end - start);
         if (!dir.empty()) {
-            const std::filesystem::path candidate = std::filesystem::path(dir) / "ffmpeg";
+            std::filesystem::path candidate = std::filesystem::path(dir) / "ffmpeg";
             if (is_executable_file(candidate)) {
                 return candidate;
             }

@@ -220,18 +220,24 @@ public:
                         total[q] += tv[q] * (x[q] - xn[q]);
                     }
                 };
-                if (i > 0)
+                if (i > 0) {
                     neighbour(-1);
-                if (i + 1 < dims[0])
+                }
+                if (i + 1 < dims[0]) {
                     neighbour(1);
-                if (j > 0)
+                }
+                if (j > 0) {
                     neighbour(-sy);
-                if (j + 1 < dims[1])
+                }
+                if (j + 1 < dims[1]) {
                     neighbour(sy);
-                if (k > 0)
+                }
+                if (k > 0) {
                     neighbour(-sz);
-                if (k + 1 < dims[2])
+                }
+                if (k + 1 < dims[2]) {
                     neighbour(sz);
+                }
                 float* g0 = m_chunks[0].grad.data() + 4 * static_cast<std::int64_t>(v);
                 for (int q = 0; q < 4; ++q) {
                     g0[q] = total[q];
@@ -294,34 +300,48 @@ void TrainOptions::validate() const {
         throw InvalidInput(
             fmt::format("nerf::TrainOptions: {} {}, expected {}", name, value, expected));
     };
-    if (resolution < 4 || resolution > 1024)
+    if (resolution < 4 || resolution > 1024) {
         fail("resolution", resolution, "[4, 1024]");
-    if (stages < 1 || stages > 6)
+    }
+    if (stages < 1 || stages > 6) {
         fail("stages", stages, "[1, 6]");
-    if (seconds < 0.0 || !std::isfinite(seconds))
+    }
+    if (seconds < 0.0 || !std::isfinite(seconds)) {
         fail("seconds", seconds, "a finite value >= 0");
-    if (seconds == 0.0 && iterations < 1)
+    }
+    if (seconds == 0.0 && iterations < 1) {
         fail("iterations", iterations, ">= 1 (or seconds > 0)");
-    if (batch_rays < 1 || batch_rays > (1 << 22))
+    }
+    if (batch_rays < 1 || batch_rays > (1 << 22)) {
         fail("batch_rays", batch_rays, "[1, 4194304]");
-    if (!(lr_density >= 0.0f) || !(lr_color >= 0.0f))
+    }
+    if (!(lr_density >= 0.0f) || !(lr_color >= 0.0f)) {
         fail("lr", lr_density, ">= 0");
-    if (!(lr_final_factor > 0.0f && lr_final_factor <= 1.0f))
+    }
+    if (!(lr_final_factor > 0.0f && lr_final_factor <= 1.0f)) {
         fail("lr_final_factor", lr_final_factor, "(0, 1]");
-    if (!(tv_density >= 0.0f) || !(tv_color >= 0.0f))
+    }
+    if (!(tv_density >= 0.0f) || !(tv_color >= 0.0f)) {
         fail("tv", tv_density, ">= 0");
-    if (!std::isfinite(density_init) || !std::isfinite(color_init))
+    }
+    if (!std::isfinite(density_init) || !std::isfinite(color_init)) {
         fail("density_init", density_init, "finite initial values");
-    if (!(occupancy_alpha >= 0.0f && occupancy_alpha < 1.0f))
+    }
+    if (!(occupancy_alpha >= 0.0f && occupancy_alpha < 1.0f)) {
         fail("occupancy_alpha", occupancy_alpha, "[0, 1)");
-    if (occupancy_interval < 1)
+    }
+    if (occupancy_interval < 1) {
         fail("occupancy_interval", occupancy_interval, ">= 1");
-    if (warmup_iterations < 0)
+    }
+    if (warmup_iterations < 0) {
         fail("warmup_iterations", warmup_iterations, ">= 0");
-    if (!(render.step_voxels > 0.0f) || !std::isfinite(render.step_voxels))
+    }
+    if (!(render.step_voxels > 0.0f) || !std::isfinite(render.step_voxels)) {
         fail("render.step_voxels", render.step_voxels, "> 0");
-    if (!(render.min_transmittance >= 0.0f && render.min_transmittance < 1.0f))
+    }
+    if (!(render.min_transmittance >= 0.0f && render.min_transmittance < 1.0f)) {
         fail("render.min_transmittance", render.min_transmittance, "[0, 1)");
+    }
 }
 
 std::size_t estimated_training_bytes(const AABBd& box, const TrainOptions& options) {

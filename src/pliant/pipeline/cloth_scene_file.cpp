@@ -376,7 +376,7 @@ cloth::SceneObstacle read_obstacle(const Json& value, const std::string& name,
     r.object("motion", [&](ObjectReader& m) { scene_obstacle.motion = read_motion(m); });
     r.finish();
     if (kinds != 1) {
-        r.fail(path, "exactly one of \"plane\", \"sphere\", \"box\", \"mesh\"",
+        r.fail(path, R"(exactly one of "plane", "sphere", "box", "mesh")",
                fmt::format("{} of them", kinds));
     }
     if (std::holds_alternative<cloth::BoxObstacle>(obstacle) && scene_obstacle.mesh.empty() &&
@@ -444,7 +444,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             scene.mesh = path.is_absolute() ? path : base / path;
         }
         if (has_grid == (mesh != nullptr)) {
-            c.fail("cloth", "exactly one of \"grid\" and \"mesh\"", has_grid ? "both" : "neither");
+            c.fail("cloth", R"(exactly one of "grid" and "mesh")", has_grid ? "both" : "neither");
         }
         scene.rotate_degrees = c.vector("rotate_degrees", scene.rotate_degrees);
         scene.translate = c.vector("translate", scene.translate);

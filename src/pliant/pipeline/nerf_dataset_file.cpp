@@ -59,7 +59,7 @@ nerf::Pose read_pose(const json& m, const std::filesystem::path& path, std::size
 }
 
 std::filesystem::path resolve_image(const std::filesystem::path& dir, const std::string& file) {
-    const std::filesystem::path p = dir / file;
+    std::filesystem::path p = dir / file;
     if (std::filesystem::is_regular_file(p)) {
         return p;
     }
@@ -121,7 +121,7 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
     }
 
     // Image size: w, h, else the first image.
-    nerf::Intrinsics& in_ = ds.intrinsics;
+    nerf::Intrinsics& intr = ds.intrinsics;
     if (j.contains("w") && j.contains("h")) {
         constexpr double MAX_SIDE = 65536.0;
         for (const char* key : {"w", "h"}) {
@@ -133,8 +133,8 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
                                 path.string(), key, MAX_SIDE, j[key].dump()));
             }
         }
-        in_.width = static_cast<int>(number(j, "w", path));
-        in_.height = static_cast<int>(number(j, "h", path));
+        intr.width = static_cast<int>(number(j, "w", path));
+        intr.height = static_cast<int>(number(j, "h", path));
     } else {
         int w = 0, h = 0, n = 0;
         if (stbi_info(images[0].string().c_str(), &w, &h, &n) == 0) {
@@ -142,31 +142,31 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
                 "{}: frames[0]: {}: {}", path.string(), images[0].string(),
                 std::filesystem::exists(images[0]) ? "not a decodable image" : "no such file"));
         }
-        in_.width = w;
-        in_.height = h;
+        intr.width = w;
+        intr.height = h;
     }
-    if (in_.width < 1 || in_.height < 1) {
+    if (intr.width < 1 || intr.height < 1) {
         throw IoError(fmt::format("{}: image size {} x {} must be positive", path.string(),
-                                  in_.width, in_.height));
+                                  intr.width, intr.height));
     }
     if (j.contains("fl_x")) {
-        in_.fx = number(j, "fl_x", path);
-        in_.fy = j.contains("fl_y") ? number(j, "fl_y", path) : in_.fx;
+        intr.fx = number(j, "fl_x", path);
+        intr.fy = j.contains("fl_y") ? number(j, "fl_y", path) : intr.fx;
     } else if (j.contains("camera_angle_x")) {
         const double ax = number(j, "camera_angle_x", path);
-        in_.fx = 0.5 * in_.width / std::tan(0.5 * ax);
-        in_.fy = j.contains("camera_angle_y")
-                     ? 0.5 * in_.height / std::tan(0.5 * number(j, "camera_angle_y", path))
-                     : in_.fx;
+        intr.fx = 0.5 * intr.width / std::tan(0.5 * ax);
+        intr.fy = j.contains("camera_angle_y")
+                     ? 0.5 * intr.height / std::tan(0.5 * number(j, "camera_angle_y", path))
+                     : intr.fx;
     } else {
         throw IoError(
             fmt::format("{}: no focal length: expected `camera_angle_x` or `fl_x`", path.string()));
     }
-    in_.cx = j.contains("cx") ? number(j, "cx", path) : 0.5 * in_.width;
-    in_.cy = j.contains("cy") ? number(j, "cy", path) : 0.5 * in_.height;
+    intr.cx = j.contains("cx") ? number(j, "cx", path) : 0.5 * intr.width;
+    intr.cy = j.contains("cy") ? number(j, "cy", path) : 0.5 * intr.height;
     for (std::size_t i = 0; i < frames.size(); ++i) {
-        for (const auto& [key, value] : {std::pair{"fl_x", in_.fx}, std::pair{"fl_y", in_.fy},
-                                         std::pair{"cx", in_.cx}, std::pair{"cy", in_.cy}}) {
+        for (const auto& [key, value] : {std::pair{"fl_x", intr.fx}, std::pair{"fl_y", intr.fy},
+                                         std::pair{"cx", intr.cx}, std::pair{"cy", intr.cy}}) {
             if (frames[i].contains(key) &&
                 (!frames[i][key].is_number() ||
                  std::fabs(frames[i][key].get<double>() - value) > 1e-6 * std::fabs(value))) {
@@ -193,13 +193,13 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
     }
 
     if (options.load_images) {
-        const double bytes = 12.0 * static_cast<double>(in_.width) *
-                             static_cast<double>(in_.height) * static_cast<double>(ds.views.size());
+        const double bytes = 12.0 * static_cast<double>(intr.width) *
+                             static_cast<double>(intr.height) * static_cast<double>(ds.views.size());
         if (bytes > static_cast<double>(options.max_bytes)) {
             throw InvalidInput(fmt::format(
                 "{}: {} images of {} x {} need {:.0f} MiB decoded (12 bytes per pixel), more than "
                 "the memory limit of {:.0f} MiB",
-                path.string(), ds.views.size(), in_.width, in_.height, bytes / 1048576.0,
+                path.string(), ds.views.size(), intr.width, intr.height, bytes / 1048576.0,
                 options.max_bytes / 1048576.0));
         }
         const render::Color bg = options.background;
@@ -215,10 +215,10 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
                     throw IoError(fmt::format("{}: frames[{}]: {}: cannot decode the image ({})",
                                               path.string(), i, file, stbi_failure_reason()));
                 }
-                if (w != in_.width || h != in_.height) {
+                if (w != intr.width || h != intr.height) {
                     throw IoError(fmt::format(
                         "{}: frames[{}]: {}: image is {} x {}, expected {} x {} like the dataset",
-                        path.string(), i, file, w, h, in_.width, in_.height));
+                        path.string(), i, file, w, h, intr.width, intr.height));
                 }
             };
             // The size from the header first: an image that claims another size is refused

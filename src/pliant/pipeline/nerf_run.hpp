@@ -53,6 +53,8 @@ struct TrainRunOptions {
     std::function<void(const nerf::TrainProgress&)> on_progress;
 };
 
+// NOLINTNEXTLINE(bugprone-exception-escape): clang-tidy 14 cannot see that the implicit members
+// (moving a Volume and a JSON object) do not throw.
 struct TrainRunResult {
     volume::Volume volume;        // exported (and cleaned)
     bool stopped = false;         // keep_going returned false

@@ -199,10 +199,10 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
         }
         lo = range[0];
         scale = (detail::LUT_SIZE - 1) / (range[1] - range[0]);
-        m_lut.resize(4 * detail::LUT_SIZE);
+        m_lut.resize(4 * static_cast<std::size_t>(detail::LUT_SIZE));
         m_lut_alpha.resize(detail::LUT_SIZE);
-        for (int e = 0; e < detail::LUT_SIZE; ++e) {
-            const std::array<float, 4> c = tf->evaluate(range[0] + e / scale);
+        for (std::size_t e = 0; e < static_cast<std::size_t>(detail::LUT_SIZE); ++e) {
+            const std::array<float, 4> c = tf->evaluate(range[0] + static_cast<double>(e) / scale);
             m_lut[4 * e] = c[0];
             m_lut[4 * e + 1] = c[1];
             m_lut[4 * e + 2] = c[2];
@@ -291,8 +291,8 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
                         // Into the (sz, sy) sub-cells the row belongs to: layer zl = z − z0 is in
                         // sz = 0 for zl ≤ 2, in sz = 1 for zl ≥ 2 (likewise rows in sy).
                         const std::int64_t zl = z - z0, yl = y - y0;
-                        for (int sz = 0; sz < 2; ++sz) {
-                            for (int sy = 0; sy < 2; ++sy) {
+                        for (std::int64_t sz = 0; sz < 2; ++sz) {
+                            for (std::int64_t sy = 0; sy < 2; ++sy) {
                                 if (zl < 2 * sz || zl > 2 * sz + 2 || yl < 2 * sy ||
                                     yl > 2 * sy + 2) {
                                     continue;
@@ -312,7 +312,7 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
                     std::uint8_t sub_mask = 0;
                     for (int sub = 0; sub < 8; ++sub) {
                         const std::int64_t j = 2 * cx + (sub & 1);
-                        const int plane = 2 * ((sub >> 2) & 1) + ((sub >> 1) & 1);
+                        const std::int64_t plane = 2 * ((sub >> 2) & 1) + ((sub >> 1) & 1);
                         const float vmin = sub_min[static_cast<std::size_t>(plane * num_sub_x + j)];
                         const float vmax = sub_max[static_cast<std::size_t>(plane * num_sub_x + j)];
                         if (!(vmin <= vmax)) {
@@ -508,18 +508,24 @@ RayCastStats raycast(const volume::Volume& volume, const volume::TransferFunctio
 
 ViewAxis parse_view_axis(const char* text) {
     const std::string s = text == nullptr ? std::string() : std::string(text);
-    if (s == "+x" || s == "x")
+    if (s == "+x" || s == "x") {
         return ViewAxis::pos_x;
-    if (s == "-x")
+    }
+    if (s == "-x") {
         return ViewAxis::neg_x;
-    if (s == "+y" || s == "y")
+    }
+    if (s == "+y" || s == "y") {
         return ViewAxis::pos_y;
-    if (s == "-y")
+    }
+    if (s == "-y") {
         return ViewAxis::neg_y;
-    if (s == "+z" || s == "z")
+    }
+    if (s == "+z" || s == "z") {
         return ViewAxis::pos_z;
-    if (s == "-z")
+    }
+    if (s == "-z") {
         return ViewAxis::neg_z;
+    }
     throw InvalidInput(fmt::format("view axis '{}' is not one of +x, -x, +y, -y, +z, -z", s));
 }
 

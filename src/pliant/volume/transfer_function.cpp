@@ -93,8 +93,8 @@ void check_scalar(const Volume& volume, const char* function) {
 
 // Colour and opacity points at fractions f of [lo, hi].
 TransferFunction relative(std::string name, double lo, double hi,
-                          std::vector<std::pair<double, std::array<float, 3>>> colors,
-                          std::vector<std::pair<double, float>> opacities) {
+                          const std::vector<std::pair<double, std::array<float, 3>>>& colors,
+                          const std::vector<std::pair<double, float>>& opacities) {
     TransferFunction tf;
     tf.name = std::move(name);
     for (const auto& [f, rgb] : colors) {

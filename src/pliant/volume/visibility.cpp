@@ -39,7 +39,7 @@ void classify_integer(const Volume& volume, const TransferFunction* tf,
     }
     classify<Channel>(
         volume.values<T>(), 1, 0,
-        [&](Channel x) { return lut[static_cast<std::size_t>(static_cast<std::int64_t>(x) - lo)]; },
+        [&](Channel x) { return lut[static_cast<std::size_t>(static_cast<std::int64_t>(x) - LO)]; },
         visible);
 }
 

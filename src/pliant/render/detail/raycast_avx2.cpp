@@ -167,8 +167,8 @@ void fill_lane(const TileRays& t, int pixel, std::int32_t start, std::int32_t nu
     s.num_full[l] = t.num_segments[pixel] - 1;
     s.samples[l] = 0;
     s.cube[l] = t.cube[pixel];
-    for (int m = 0; m < 3; ++m) {
-        s.more[m][l] = s.cube[l];
+    for (auto& m : s.more) {
+        m[l] = s.cube[l];
     }
     if (t.has_more[pixel] != 0) {
         // A ray with zero direction components (rare outside axis views): up to 3 more octants.
@@ -196,8 +196,8 @@ void clear_lane(Lanes& s, int l) {
     s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
     s.n[l] = s.num_full[l] = s.samples[l] = 0;
     s.cube[l] = 0;
-    for (int m = 0; m < 3; ++m) {
-        s.more[m][l] = 0;
+    for (auto& m : s.more) {
+        m[l] = 0;
     }
 }
 
@@ -423,6 +423,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     const float* lut = k.lut;
     const std::uint8_t* cubes = k.axis_cube != nullptr ? k.axis_cube : k.empty_cube[0];
 
+    // NOLINTNEXTLINE(bugprone-infinite-loop): the lambdas below retire lanes (num_live).
     while (num_live > 0) {
         const __m256i live =
             _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
@@ -458,8 +459,8 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
             store(at, _mm256_add_epi32(load(s.cube), cell));
             __m256i side = load_bytes(cubes, at);
             if (more_count > 0) {
-                for (int m = 0; m < 3; ++m) {
-                    store(at, _mm256_add_epi32(load(s.more[m]), cell));
+                for (auto& m : s.more) {
+                    store(at, _mm256_add_epi32(load(m), cell));
                     side = _mm256_max_epi32(side, load_bytes(k.empty_cube[0], at));
                 }
             }
@@ -576,8 +577,8 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
             store(index, _mm256_add_epi32(
                              ahead[0], _mm256_add_epi32(_mm256_mullo_epi32(stride_y, ahead[1]),
                                                         _mm256_mullo_epi32(stride_z, ahead[2]))));
-            for (int l = 0; l < LANES; ++l) {
-                prefetch_rows(v + index[l], dy, dz);
+            for (int l : index) {
+                prefetch_rows(v + l, dy, dz);
             }
         }
         const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);

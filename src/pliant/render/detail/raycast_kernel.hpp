@@ -223,7 +223,7 @@ PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinea
         const float inv = 1.0f / s.a;
         return {s.r * inv, s.g * inv, s.b * inv, a_step};
     } else {
-        const int index = static_cast<int>(interpolate_scalar(k, t) + 0.5f);
+        const std::ptrdiff_t index = static_cast<int>(interpolate_scalar(k, t) + 0.5f);
         const float* e = k.lut + 4 * index;
         return {e[0], e[1], e[2], e[3]};
     }
@@ -541,7 +541,7 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
             const float inv = best_sample.a > 0.0f ? 1.0f / best_sample.a : 0.0f;
             s = {best_sample.r * inv, best_sample.g * inv, best_sample.b * inv, a};
         } else {
-            const int index = static_cast<int>(best + 0.5f);
+            const std::ptrdiff_t index = static_cast<int>(best + 0.5f);
             s = {k.lut[4 * index], k.lut[4 * index + 1], k.lut[4 * index + 2], 0.0f};
             a = k.lut_alpha[index];
         }
