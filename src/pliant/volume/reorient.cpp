@@ -80,6 +80,31 @@ Volume permuted(const Volume& source, const std::array<int, 3>& perm,
     return out;
 }
 
+// Reverses the voxel order along each flagged axis, in place (no second copy of the data).
+void flip_in_place(Volume& volume, const std::array<bool, 3>& flip) {
+    const Dims& d = volume.dims();
+    const std::size_t bpv = bytes_per_voxel(volume.type());
+    std::byte* bytes = volume.bytes().data();
+    std::array<std::byte, 16> tmp{};
+    for (std::int64_t k = 0; k < d[2]; ++k) {
+        for (std::int64_t j = 0; j < d[1]; ++j) {
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const std::int64_t a = volume.index(i, j, k);
+                const std::int64_t b = volume.index(flip[0] ? d[0] - 1 - i : i,
+                                                    flip[1] ? d[1] - 1 - j : j,
+                                                    flip[2] ? d[2] - 1 - k : k);
+                if (a < b) {
+                    std::byte* pa = bytes + static_cast<std::size_t>(a) * bpv;
+                    std::byte* pb = bytes + static_cast<std::size_t>(b) * bpv;
+                    std::memcpy(tmp.data(), pa, bpv);
+                    std::memcpy(pa, pb, bpv);
+                    std::memcpy(pb, tmp.data(), bpv);
+                }
+            }
+        }
+    }
+}
+
 // Trilinear resampling of one voxel type: T is the channel type, C the channels.
 template <typename T, int C>
 void resample_into(const Volume& source, Volume& out, double outside) {
@@ -271,8 +296,10 @@ Volume place_nearest_axes(Volume volume, const GridPlacement& placement) {
     }
     const bool is_identity_perm = perm == std::array<int, 3>{0, 1, 2};
     const bool any_flip = flip[0] || flip[1] || flip[2];
-    if (!is_identity_perm || any_flip) {
+    if (!is_identity_perm) {
         volume = permuted(volume, perm, flip);
+    } else if (any_flip) {
+        flip_in_place(volume, flip);
     }
 
     bool axis_aligned = true;
@@ -293,7 +320,12 @@ Volume place_nearest_axes(Volume volume, const GridPlacement& placement) {
         volume.set_direction(IDENTITY_DIRECTION);
         return volume;
     }
-    const Vec3d spacing{norm(steps[0]), norm(steps[1]), norm(steps[2])};
+    Vec3d spacing{};
+    for (std::size_t r = 0; r < 3; ++r) {
+        const double stated = placement.lengths[static_cast<std::size_t>(perm[r])];
+        spacing[static_cast<int>(r)] = stated > 0.0 && std::isfinite(stated) ? stated
+                                                                             : norm(steps[r]);
+    }
     direction = orthonormalized(direction);
     volume.set_spacing(spacing);
     volume.set_origin(centre0 - direction[0] * (0.5 * spacing.x) -

@@ -26,6 +26,10 @@ struct GridPlacement {
     Vec3d centre0{0.0, 0.0, 0.0};  // world position of voxel (0, 0, 0)'s centre
     // World step between neighbouring voxels along i, j, k: direction × spacing (world units).
     std::array<Vec3d, 3> steps{Vec3d{1.0, 0.0, 0.0}, Vec3d{0.0, 1.0, 0.0}, Vec3d{0.0, 0.0, 1.0}};
+    // The steps' exact lengths when the file states them apart from the steps (NIfTI pixdim
+    // beside a float sform, DICOM PixelSpacing, MetaImage ElementSpacing); 0: |steps[a]|. Used
+    // for oblique grids, whose |steps[a]| carries the rounding of the direction.
+    std::array<double, 3> lengths{0.0, 0.0, 0.0};
 };
 
 // Largest |cosine| between two grid axes that place_nearest_axes treats as orthogonal (and then
@@ -41,10 +45,11 @@ double max_axis_cosine(const GridPlacement& placement);
 // ignored) so that each grid axis is the one nearest to +x, +y, +z, and sets spacing, origin and
 // direction from `placement`. When every axis is within 1e-6 of a world axis, the direction is
 // exactly the identity and spacing[a] = |steps[a][a]| after re-indexing (so axis-aligned files
-// read bit for bit as they always did); else spacing[a] = |steps[a]| and the direction is the
-// nearest orthonormal matrix to the normalized steps. World positions of the voxels are kept.
+// read bit for bit as they always did); else spacing[a] = lengths[a] (when > 0) or |steps[a]|,
+// and the direction is the nearest orthonormal matrix to the normalized steps. World positions of the voxels are kept.
 // InvalidInput when a step is zero or not finite, or the grid is sheared
-// (max_axis_cosine > MAX_AXIS_COSINE). Needs memory for a second copy when axes are swapped.
+// (max_axis_cosine > MAX_AXIS_COSINE). Flips are done in place; swapping axes needs memory for a
+// second copy of the voxels.
 Volume place_nearest_axes(Volume volume, const GridPlacement& placement);
 
 struct AxisAlignedOptions {
