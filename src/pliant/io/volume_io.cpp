@@ -2,14 +2,20 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <limits>
+#include <numbers>
 #include <string>
 
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
 #include "pliant/io/inv3.hpp"
 #include "pliant/io/nifti.hpp"
 #include "pliant/io/nrrd.hpp"
 #include "pliant/io/raw_volume.hpp"
+#include "pliant/volume/reorient.hpp"
 
 namespace pliant::io {
 
@@ -73,7 +79,9 @@ std::string_view name(VolumeFormat format) {
     return "?";
 }
 
-volume::Volume read_volume(const std::filesystem::path& path, const ReadVolumeOptions& options) {
+namespace {
+
+volume::Volume read_as_stored(const std::filesystem::path& path, const ReadVolumeOptions& options) {
     switch (volume_format(path)) {
         case VolumeFormat::nrrd:
         case VolumeFormat::nhdr:
@@ -90,6 +98,68 @@ volume::Volume read_volume(const std::filesystem::path& path, const ReadVolumeOp
     throw InternalError("read_volume: unhandled format");
 }
 
+// The smallest finite value of a scalar volume (0 for RGBA): what lies outside an oblique volume
+// after resampling (air in CT, background in MRI).
+double background_value(const volume::Volume& v) {
+    const auto smallest = [](auto values) {
+        double lo = std::numeric_limits<double>::infinity();
+        for (const auto x : values) {
+            const auto d = static_cast<double>(x);
+            if (d < lo) {
+                lo = d;
+            }
+        }
+        return std::isfinite(lo) ? lo : 0.0;
+    };
+    switch (v.type()) {
+        case volume::VoxelType::u8:
+            return smallest(v.values<volume::VoxelType::u8>());
+        case volume::VoxelType::i16:
+            return smallest(v.values<volume::VoxelType::i16>());
+        case volume::VoxelType::u16:
+            return smallest(v.values<volume::VoxelType::u16>());
+        case volume::VoxelType::f32:
+            return smallest(v.values<volume::VoxelType::f32>());
+        case volume::VoxelType::rgba8:
+        case volume::VoxelType::rgba32f:
+            return 0.0;
+    }
+    return 0.0;
+}
+
+}  // namespace
+
+volume::Volume to_axis_aligned(const std::filesystem::path& path, volume::Volume volume,
+                               std::size_t max_bytes) {
+    if (volume.is_axis_aligned()) {
+        return volume;
+    }
+    volume::AxisAlignedOptions options;
+    options.outside = background_value(volume);
+    options.max_bytes = max_bytes;
+    volume::Volume out = volume::resample_to_axis_aligned(volume, options);
+    const volume::Direction& d = volume.direction();
+    double largest_angle = 0.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double c = std::clamp(d[a][static_cast<int>(a)], -1.0, 1.0);
+        largest_angle = std::max(largest_angle, std::acos(c) * 180.0 / std::numbers::pi);
+    }
+    log_info(
+        "{}: the grid is oblique (an axis {:.2f}° from the world axes): resampled to an "
+        "axis-aligned {}x{}x{} grid at spacing {:.4g} (trilinear; outside: {:g})",
+        path.string(), largest_angle, out.dims()[0], out.dims()[1], out.dims()[2],
+        out.spacing().x, options.outside);
+    return out;
+}
+
+volume::Volume read_volume(const std::filesystem::path& path, const ReadVolumeOptions& options) {
+    volume::Volume volume = read_as_stored(path, options);
+    if (options.orientation == Orientation::keep) {
+        return volume;
+    }
+    return to_axis_aligned(path, std::move(volume), options.max_bytes);
+}
+
 void check_volume_writable(const std::filesystem::path& path, volume::VoxelType type) {
     const VolumeFormat format = volume_format(path);
     if (format == VolumeFormat::analyze_hdr || format == VolumeFormat::inv3) {
@@ -100,7 +170,8 @@ void check_volume_writable(const std::filesystem::path& path, volume::VoxelType 
     if ((format == VolumeFormat::nifti || format == VolumeFormat::nifti_gz) &&
         type == volume::VoxelType::rgba32f) {
         throw Unsupported(fmt::format(
-            "{}: NIfTI-1 has no RGBA float type: write rgba32f volumes as NRRD or raw + JSON",
+            "{}: NIfTI has no RGBA float type: write rgba32f volumes as NRRD, MetaImage or raw + "
+            "JSON",
             path.string()));
     }
 }
@@ -121,10 +192,10 @@ void write_volume(const std::filesystem::path& path, const volume::Volume& volum
                     "name, got .nii",
                     path.string()));
             }
-            write_nifti(path, volume, false);
+            write_nifti(path, volume, false, options.nifti2);
             return;
         case VolumeFormat::nifti_gz:
-            write_nifti(path, volume, true);
+            write_nifti(path, volume, true, options.nifti2);
             return;
         case VolumeFormat::raw_json:
             write_raw_volume(path, volume, options.gzip);

@@ -20,21 +20,40 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::io {
 
+// What read_volume does with an oblique volume (one whose direction is not the identity after
+// the reader's exact flips and axis swaps).
+enum class Orientation {
+    // Resample it onto an axis-aligned grid covering it (volume::resample_to_axis_aligned at its
+    // smallest spacing; outside: the smallest value of a scalar volume, 0 for RGBA) and say so
+    // once through log_info. What the ray caster, tet grids and the deform pipeline need.
+    axis_aligned,
+    // Return it with its direction (volume info, conversion between formats that hold it).
+    keep,
+};
+
 struct ReadVolumeOptions {
     // Largest voxel data (bytes) a reader may allocate; larger declared sizes are refused.
     std::size_t max_bytes = volume::Volume::MAX_BYTES;
+    Orientation orientation = Orientation::axis_aligned;
+    // DICOM: the SeriesInstanceUID to read from a folder holding several series; empty: the
+    // series with the most slices (io/dicom.hpp). Ignored by the other formats.
+    std::string series_uid{};
 };
 
 struct WriteVolumeOptions {
-    // gzip-compress the voxel data (NRRD, raw + sidecar). NIfTI chooses by extension (.nii.gz);
-    // gzip with a .nii name is InvalidInput.
+    // gzip-compress the voxel data (NRRD, raw + sidecar, MetaImage). NIfTI chooses by extension
+    // (.nii.gz); gzip with a .nii name is InvalidInput.
     bool gzip = false;
+    // NIfTI: write NIfTI-2 (64-bit dims, double placement) instead of NIfTI-1. NIfTI-1 cannot
+    // hold dims above 32767: those need this flag.
+    bool nifti2 = false;
 };
 
 enum class VolumeFormat { nrrd, nhdr, nifti, nifti_gz, analyze_hdr, raw_json, inv3 };
@@ -46,6 +65,12 @@ std::string_view name(VolumeFormat format);
 
 volume::Volume read_volume(const std::filesystem::path& path,
                            const ReadVolumeOptions& options = {});
+
+// What read_volume does under Orientation::axis_aligned: an axis-aligned volume is returned as it
+// is; an oblique one is resampled (see Orientation) and one info line naming `path` is logged.
+// InvalidInput when the result would exceed max_bytes.
+volume::Volume to_axis_aligned(const std::filesystem::path& path, volume::Volume volume,
+                               std::size_t max_bytes = volume::Volume::MAX_BYTES);
 
 // Unsupported for read-only formats (.inv3, .hdr) and for voxel types a format cannot store
 // (NIfTI has no RGBA float).

@@ -234,35 +234,4 @@ void swap_channel_bytes(volume::Volume& volume) {
     }
 }
 
-void flip_axes(volume::Volume& volume, const std::array<bool, 3>& flip) {
-    if (!flip[0] && !flip[1] && !flip[2]) {
-        return;
-    }
-    const volume::Dims& d = volume.dims();
-    const std::size_t bpv = volume::bytes_per_voxel(volume.type());
-    std::span<std::byte> bytes = volume.bytes();
-    std::vector<std::byte> tmp(bpv);
-    auto swap_voxels = [&](std::int64_t a, std::int64_t b) {
-        std::byte* pa = bytes.data() + static_cast<std::size_t>(a) * bpv;
-        std::byte* pb = bytes.data() + static_cast<std::size_t>(b) * bpv;
-        std::memcpy(tmp.data(), pa, bpv);
-        std::memcpy(pa, pb, bpv);
-        std::memcpy(pb, tmp.data(), bpv);
-    };
-    for (std::int64_t k = 0; k < d[2]; ++k) {
-        for (std::int64_t j = 0; j < d[1]; ++j) {
-            for (std::int64_t i = 0; i < d[0]; ++i) {
-                const std::int64_t fi = flip[0] ? d[0] - 1 - i : i;
-                const std::int64_t fj = flip[1] ? d[1] - 1 - j : j;
-                const std::int64_t fk = flip[2] ? d[2] - 1 - k : k;
-                const std::int64_t a = volume.index(i, j, k);
-                const std::int64_t b = volume.index(fi, fj, fk);
-                if (a < b) {
-                    swap_voxels(a, b);
-                }
-            }
-        }
-    }
-}
-
 }  // namespace pliant::io::detail
