@@ -52,7 +52,7 @@ void expect_same(const Volume& a, const Volume& b) {
 TEST(VolumeIo, RoundTripsEveryTypeAndFormat) {
     TempDir dir;
     for (const VoxelType type : ALL_TYPES) {
-        for (const char* name : {"v.nrrd", "v.nhdr", "v.json", "v.nii", "v.nii.gz"}) {
+        for (const char* name : {"v.nrrd", "v.nhdr", "v.json", "v.nii", "v.nii.gz", "v.mha", "v.mhd"}) {
             for (const bool gzip : {false, true}) {
                 const std::string file = name;
                 const bool nifti = file.find(".nii") != std::string::npos;
@@ -89,7 +89,8 @@ Volume turned(Volume v, double degrees) {
 
 TEST(VolumeIo, ObliqueVolumesRoundTripWithTheirDirection) {
     TempDir dir;
-    for (const char* name : {"o.nrrd", "o.nhdr", "o.json", "o.nii", "o.nii.gz", "o2.nii"}) {
+    for (const char* name :
+         {"o.nrrd", "o.nhdr", "o.json", "o.nii", "o.nii.gz", "o2.nii", "o.mha", "o.mhd"}) {
         const std::string file = name;
         SCOPED_TRACE(file);
         const Volume v = turned(sample(VoxelType::i16), 5.0);

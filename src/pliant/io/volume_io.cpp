@@ -11,7 +11,9 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
+#include "pliant/io/dicom.hpp"
 #include "pliant/io/inv3.hpp"
+#include "pliant/io/metaimage.hpp"
 #include "pliant/io/nifti.hpp"
 #include "pliant/io/nrrd.hpp"
 #include "pliant/io/raw_volume.hpp"
@@ -28,6 +30,10 @@ bool ends_with(const std::string& name, std::string_view suffix) {
 }  // namespace
 
 VolumeFormat volume_format(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) {
+        return VolumeFormat::dicom;
+    }
     std::string name = path.filename().string();
     for (char& c : name) {
         c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -53,9 +59,19 @@ VolumeFormat volume_format(const std::filesystem::path& path) {
     if (ends_with(name, ".inv3")) {
         return VolumeFormat::inv3;
     }
+    if (ends_with(name, ".mha")) {
+        return VolumeFormat::metaimage;
+    }
+    if (ends_with(name, ".mhd")) {
+        return VolumeFormat::metaimage_mhd;
+    }
+    if (ends_with(name, ".dcm") || ends_with(name, ".dicom") || ends_with(name, ".ima") ||
+        is_dicom_file(path)) {
+        return VolumeFormat::dicom;
+    }
     throw Unsupported(fmt::format(
-        "{}: unknown volume file extension, expected .nrrd, .nhdr, .nii, .nii.gz, .hdr, .json, "
-        ".raw, .raw.gz or .inv3",
+        "{}: unknown volume file extension, expected .nrrd, .nhdr, .nii, .nii.gz, .hdr, .mha, "
+        ".mhd, .json, .raw, .raw.gz, .inv3, .dcm or a folder of DICOM files",
         path.string()));
 }
 
@@ -75,6 +91,12 @@ std::string_view name(VolumeFormat format) {
             return "raw-json";
         case VolumeFormat::inv3:
             return "inv3";
+        case VolumeFormat::metaimage:
+            return "metaimage";
+        case VolumeFormat::metaimage_mhd:
+            return "metaimage-mhd";
+        case VolumeFormat::dicom:
+            return "dicom";
     }
     return "?";
 }
@@ -94,6 +116,13 @@ volume::Volume read_as_stored(const std::filesystem::path& path, const ReadVolum
             return read_raw_volume(path, options.max_bytes);
         case VolumeFormat::inv3:
             return read_inv3(path, options.max_bytes);
+        case VolumeFormat::metaimage:
+        case VolumeFormat::metaimage_mhd:
+            return read_metaimage(path, options.max_bytes);
+        case VolumeFormat::dicom:
+            return read_dicom_series(
+                path, DicomReadOptions{.series_uid = options.series_uid,
+                                       .max_bytes = options.max_bytes});
     }
     throw InternalError("read_volume: unhandled format");
 }
@@ -162,10 +191,11 @@ volume::Volume read_volume(const std::filesystem::path& path, const ReadVolumeOp
 
 void check_volume_writable(const std::filesystem::path& path, volume::VoxelType type) {
     const VolumeFormat format = volume_format(path);
-    if (format == VolumeFormat::analyze_hdr || format == VolumeFormat::inv3) {
-        throw Unsupported(
-            fmt::format("{}: {} is read only, expected .nrrd, .nhdr, .nii, .nii.gz or .json/.raw",
-                        path.string(), name(format)));
+    if (format == VolumeFormat::analyze_hdr || format == VolumeFormat::inv3 ||
+        format == VolumeFormat::dicom) {
+        throw Unsupported(fmt::format(
+            "{}: {} is read only, expected .nrrd, .nhdr, .nii, .nii.gz, .mha, .mhd or .json/.raw",
+            path.string(), name(format)));
     }
     if ((format == VolumeFormat::nifti || format == VolumeFormat::nifti_gz) &&
         type == volume::VoxelType::rgba32f) {
@@ -200,8 +230,13 @@ void write_volume(const std::filesystem::path& path, const volume::Volume& volum
         case VolumeFormat::raw_json:
             write_raw_volume(path, volume, options.gzip);
             return;
+        case VolumeFormat::metaimage:
+        case VolumeFormat::metaimage_mhd:
+            write_metaimage(path, volume, options.gzip, format == VolumeFormat::metaimage_mhd);
+            return;
         case VolumeFormat::analyze_hdr:
         case VolumeFormat::inv3:
+        case VolumeFormat::dicom:
             return;  // refused by check_volume_writable
     }
 }

@@ -192,11 +192,13 @@ void read_gzip_data(const std::filesystem::path& path, std::uint64_t offset,
     }
 }
 
-void write_gzip(std::ostream& out, std::span<const std::byte> bytes) {
+namespace {
+
+// Deflates `bytes` into `out` with zlib's window bits (15 + 16: gzip wrapper; 15: zlib).
+void write_deflate(std::ostream& out, std::span<const std::byte> bytes, int window_bits) {
     z_stream stream{};
-    // 15 + 16: gzip wrapper.
-    if (deflateInit2(&stream, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
-        throw IoError("gzip: cannot initialize zlib");
+    if (deflateInit2(&stream, 6, Z_DEFLATED, window_bits, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
+        throw IoError("deflate: cannot initialize zlib");
     }
     struct End {
         z_stream* s;
@@ -220,6 +222,16 @@ void write_gzip(std::ostream& out, std::span<const std::byte> bytes) {
         } while (stream.avail_out == 0);
         consumed += chunk;
     } while (status != Z_STREAM_END);
+}
+
+}  // namespace
+
+void write_gzip(std::ostream& out, std::span<const std::byte> bytes) {
+    write_deflate(out, bytes, 15 + 16);
+}
+
+void write_zlib(std::ostream& out, std::span<const std::byte> bytes) {
+    write_deflate(out, bytes, 15);
 }
 
 void swap_channel_bytes(volume::Volume& volume) {

@@ -43,6 +43,8 @@ void read_gzip_data(const std::filesystem::path& path, std::uint64_t offset,
 
 // Writes `bytes` to `out` as one gzip member (level 6).
 void write_gzip(std::ostream& out, std::span<const std::byte> bytes);
+// Writes `bytes` to `out` as one zlib stream (RFC 1950, level 6; MetaImage's CompressedData).
+void write_zlib(std::ostream& out, std::span<const std::byte> bytes);
 
 // Reverses the byte order of every channel (2- and 4-byte types; 1-byte types are unchanged).
 void swap_channel_bytes(volume::Volume& volume);
