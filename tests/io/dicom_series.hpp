@@ -11,6 +11,7 @@
 #include <gdcmImageChangeTransferSyntax.h>
 #include <gdcmImageWriter.h>
 #include <gdcmMediaStorage.h>
+#include <gdcmTrace.h>
 #include <gdcmUIDGenerator.h>
 
 #include <algorithm>
@@ -69,6 +70,7 @@ inline std::array<double, 3> slice_normal(const DicomSeriesSpec& spec) {
 inline void write_dicom_slice(const std::filesystem::path& path, const DicomSeriesSpec& spec,
                               const std::string& series_uid, const std::string& study_uid, int k,
                               double along, int instance) {
+    gdcm::Trace::WarningOff();  // GDCM notes on stderr what the writer fills in itself
     gdcm::SmartPointer<gdcm::Image> image = new gdcm::Image;
     image->SetNumberOfDimensions(2);
     image->SetDimension(0, static_cast<unsigned>(spec.columns));
