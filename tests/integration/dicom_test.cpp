@@ -130,6 +130,40 @@ TEST(DicomCli, TiltedSeriesIsResampledWithANote) {
     EXPECT_EQ(deform.exit_code, 0) << deform.err;
 }
 
+TEST(ObliqueCli, NiftiTiltedBy5DegreesIsReadNotRefused) {
+    // The file that used to fail with "only axis-aligned volumes are supported".
+    const ScratchDir scratch;
+    volume::Volume v = volume::Volume::allocate({24, 20, 16}, volume::VoxelType::f32, {1, 1, 1.5});
+    const double t = 5.0 * std::numbers::pi / 180.0;
+    v.set_direction({Vec3d{std::cos(t), 0, -std::sin(t)}, Vec3d{0, 1, 0},
+                     Vec3d{std::sin(t), 0, std::cos(t)}});
+    auto values = v.values<volume::VoxelType::f32>();
+    for (std::size_t n = 0; n < values.size(); ++n) {
+        values[n] = static_cast<float>(n % 24);  // a ramp along i
+    }
+    io::write_volume(scratch / "tilted.nii.gz", v);
+    const CliResult info = run_cli("--json volume info " + quoted(scratch / "tilted.nii.gz"), scratch);
+    ASSERT_EQ(info.exit_code, 0) << info.err;
+    const auto j = nlohmann::json::parse(info.out);
+    EXPECT_EQ(j.at("axis_aligned"), false);
+    EXPECT_NEAR(j.at("direction")[0][2].get<double>(), -std::sin(t), 1e-6);
+    const CliResult render = run_cli("render " + quoted(scratch / "tilted.nii.gz") +
+                                         " --size 32x32 -o " + quoted(scratch / "t.png"),
+                                     scratch);
+    ASSERT_EQ(render.exit_code, 0) << render.err;
+    EXPECT_NE(render.err.find("resampled"), std::string::npos) << render.err;
+    EXPECT_NE(io::read_png(scratch / "t.png"), render::Image(32, 32));
+    // Converted, the direction goes along (MetaImage here).
+    ASSERT_EQ(run_cli("volume convert " + quoted(scratch / "tilted.nii.gz") + " " +
+                          quoted(scratch / "tilted.mha"),
+                      scratch)
+                  .exit_code,
+              0);
+    const volume::Volume back =
+        io::read_volume(scratch / "tilted.mha", {.orientation = io::Orientation::keep});
+    EXPECT_LT(norm(back.direction()[0] - v.direction()[0]), 1e-6);
+}
+
 TEST(DicomCli, BrokenSeriesExitsOneNamingTheProblem) {
     const ScratchDir scratch;
     const std::vector<fs::path> files = write_dicom_series(scratch / "gap", DicomSeriesSpec{}, 26);
