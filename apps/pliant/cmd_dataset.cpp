@@ -1,4 +1,5 @@
-// pliant dataset VOLUME [--series UID] --views N [--size WxH] [--tf FILE|PRESET] [--fov DEG] [--test-every K]
+// pliant dataset VOLUME [--series UID] --views N [--size WxH] [--tf FILE|PRESET] [--fov DEG]
+// [--test-every K]
 //                [--background R,G,B] [--step S] -o DIR   [--json]
 //
 // Renders a posed-image dataset from a volume with the ray caster (render/raycast.hpp), so that

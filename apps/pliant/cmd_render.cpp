@@ -1,4 +1,5 @@
-// pliant render VOLUME [--series UID] [--tf FILE|PRESET] [--view AXIS | --camera AZ,EL,DIST] [--size WxH]
+// pliant render VOLUME [--series UID] [--tf FILE|PRESET] [--view AXIS | --camera AZ,EL,DIST]
+// [--size WxH]
 //               [--step S] [--opacity-unit U] [--background R,G,B] [--mip] [--shading]
 //               [--clip PX,PY,PZ,NX,NY,NZ]
 //               -o OUT.png | --orbit N -o OUT.mp4   [--json]

@@ -42,9 +42,9 @@ TEST(DicomCli, CtSeriesInShuffledOrderInfoAndRender) {
     EXPECT_EQ(j.at("series_uid"), j.at("series")[0].at("uid"));
 
     const fs::path png = scratch / "ct.png";
-    const CliResult render = run_cli(
-        "render " + quoted(scratch / "ct") + " --tf ct-bone --size 64x64 -o " + quoted(png),
-        scratch);
+    const CliResult render =
+        run_cli("render " + quoted(scratch / "ct") + " --tf ct-bone --size 64x64 -o " + quoted(png),
+                scratch);
     ASSERT_EQ(render.exit_code, 0) << render.err;
     const render::Image image = io::read_png(png);
     EXPECT_EQ(image.width, 64);
@@ -78,10 +78,10 @@ TEST(DicomCli, SeveralSeriesAreListedAndChosen) {
         "--json volume info " + quoted(scratch / "two") + " --series 1.2.840.99.1", scratch);
     ASSERT_EQ(chosen.exit_code, 0) << chosen.err;
     EXPECT_EQ(nlohmann::json::parse(chosen.out).at("dims")[2], 3);
-    const CliResult rendered = run_cli("render " + quoted(scratch / "two") +
-                                           " --series 1.2.840.99.1 --size 16x16 -o " +
-                                           quoted(scratch / "s.png"),
-                                       scratch);
+    const CliResult rendered =
+        run_cli("render " + quoted(scratch / "two") + " --series 1.2.840.99.1 --size 16x16 -o " +
+                    quoted(scratch / "s.png"),
+                scratch);
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;
     const CliResult unknown =
         run_cli("volume info " + quoted(scratch / "two") + " --series 7.7.7", scratch);
@@ -115,18 +115,17 @@ TEST(DicomCli, TiltedSeriesIsResampledWithANote) {
     const CliResult info = run_cli("--json volume info " + quoted(scratch / "tilted"), scratch);
     ASSERT_EQ(info.exit_code, 0) << info.err;
     EXPECT_EQ(nlohmann::json::parse(info.out).at("axis_aligned"), false);
-    const CliResult render = run_cli("render " + quoted(scratch / "tilted") +
-                                         " --tf ct-bone --size 32x32 -o " +
-                                         quoted(scratch / "t.png"),
-                                     scratch);
+    const CliResult render =
+        run_cli("render " + quoted(scratch / "tilted") + " --tf ct-bone --size 32x32 -o " +
+                    quoted(scratch / "t.png"),
+                scratch);
     ASSERT_EQ(render.exit_code, 0) << render.err;
     EXPECT_NE(render.err.find("oblique"), std::string::npos) << render.err;
     EXPECT_NE(render.err.find("resampled"), std::string::npos) << render.err;
-    const CliResult deform =
-        run_cli("deform " + quoted(scratch / "tilted") +
-                    " --driver rotate --angle 10 --frames 2 --cells 8 -o " +
-                    quoted(scratch / "d.nrrd"),
-                scratch);
+    const CliResult deform = run_cli("deform " + quoted(scratch / "tilted") +
+                                         " --driver rotate --angle 10 --frames 2 --cells 8 -o " +
+                                         quoted(scratch / "d.nrrd"),
+                                     scratch);
     EXPECT_EQ(deform.exit_code, 0) << deform.err;
 }
 
@@ -135,14 +134,15 @@ TEST(ObliqueCli, NiftiTiltedBy5DegreesIsReadNotRefused) {
     const ScratchDir scratch;
     volume::Volume v = volume::Volume::allocate({24, 20, 16}, volume::VoxelType::f32, {1, 1, 1.5});
     const double t = 5.0 * std::numbers::pi / 180.0;
-    v.set_direction({Vec3d{std::cos(t), 0, -std::sin(t)}, Vec3d{0, 1, 0},
-                     Vec3d{std::sin(t), 0, std::cos(t)}});
+    v.set_direction(
+        {Vec3d{std::cos(t), 0, -std::sin(t)}, Vec3d{0, 1, 0}, Vec3d{std::sin(t), 0, std::cos(t)}});
     auto values = v.values<volume::VoxelType::f32>();
     for (std::size_t n = 0; n < values.size(); ++n) {
         values[n] = static_cast<float>(n % 24);  // a ramp along i
     }
     io::write_volume(scratch / "tilted.nii.gz", v);
-    const CliResult info = run_cli("--json volume info " + quoted(scratch / "tilted.nii.gz"), scratch);
+    const CliResult info =
+        run_cli("--json volume info " + quoted(scratch / "tilted.nii.gz"), scratch);
     ASSERT_EQ(info.exit_code, 0) << info.err;
     const auto j = nlohmann::json::parse(info.out);
     EXPECT_EQ(j.at("axis_aligned"), false);
@@ -168,9 +168,8 @@ TEST(DicomCli, BrokenSeriesExitsOneNamingTheProblem) {
     const ScratchDir scratch;
     const std::vector<fs::path> files = write_dicom_series(scratch / "gap", DicomSeriesSpec{}, 26);
     fs::remove(files[9]);
-    const CliResult r = run_cli("render " + quoted(scratch / "gap") + " -o " +
-                                    quoted(scratch / "x.png"),
-                                scratch);
+    const CliResult r =
+        run_cli("render " + quoted(scratch / "gap") + " -o " + quoted(scratch / "x.png"), scratch);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("pliant: error:"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("1 slice missing between"), std::string::npos) << r.err;

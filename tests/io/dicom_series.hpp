@@ -34,8 +34,8 @@ struct DicomSeriesSpec {
     double row_spacing = 0.8;     // PixelSpacing[0]: between rows (along the column cosines), mm
     double column_spacing = 0.7;  // PixelSpacing[1]: between columns (along the row cosines), mm
     double slice_step = 2.5;      // between slice positions along the normal, mm
-    std::array<double, 3> position0{-12.0, -11.0, 40.0};       // IPP of slice 0 (LPS, mm)
-    std::array<double, 6> orientation{1, 0, 0, 0, 1, 0};       // IOP: row, column cosines
+    std::array<double, 3> position0{-12.0, -11.0, 40.0};  // IPP of slice 0 (LPS, mm)
+    std::array<double, 6> orientation{1, 0, 0, 0, 1, 0};  // IOP: row, column cosines
     double intercept = -1024.0;
     double slope = 1.0;
     std::string series_uid;  // empty: a new UID
@@ -115,7 +115,9 @@ inline void write_dicom_slice(const std::filesystem::path& path, const DicomSeri
         writer.SetImage(*image);
     }
     gdcm::DataSet& ds = writer.GetFile().GetDataSet();
-    const auto put = [&](auto attribute) { ds.Replace(attribute.GetAsDataElement()); };
+    const auto put = [&](auto attribute) {
+        ds.Replace(attribute.GetAsDataElement());
+    };
     gdcm::Attribute<0x0008, 0x0016> sop_class;
     sop_class.SetValue(gdcm::MediaStorage::GetMSString(gdcm::MediaStorage::CTImageStorage));
     put(sop_class);
@@ -146,9 +148,10 @@ inline void write_dicom_slice(const std::filesystem::path& path, const DicomSeri
 // Writes the spec's series into `dir` in a shuffled order under shuffled names (and shuffled
 // InstanceNumbers); returns the files indexed by slice. `positions`, when not empty, gives each
 // slice's distance from position0 along the normal (default k · slice_step).
-inline std::vector<std::filesystem::path> write_dicom_series(
-    const std::filesystem::path& dir, DicomSeriesSpec spec, std::uint32_t seed = 1,
-    std::vector<double> positions = {}) {
+inline std::vector<std::filesystem::path> write_dicom_series(const std::filesystem::path& dir,
+                                                             DicomSeriesSpec spec,
+                                                             std::uint32_t seed = 1,
+                                                             std::vector<double> positions = {}) {
     std::filesystem::create_directories(dir);
     gdcm::UIDGenerator uids;
     if (spec.series_uid.empty()) {
@@ -167,8 +170,7 @@ inline std::vector<std::filesystem::path> write_dicom_series(
         const double along = positions.empty() ? k * spec.slice_step : positions[kk];
         files[kk] = dir / ("img" + std::to_string(seed) + "_" + std::to_string(names[kk] * 7 % 97) +
                            "_" + std::to_string(names[kk]) + ".dcm");
-        write_dicom_slice(files[kk], spec, spec.series_uid, study_uid, k, along,
-                          names[kk] + 1);
+        write_dicom_slice(files[kk], spec, spec.series_uid, study_uid, k, along, names[kk] + 1);
     }
     return files;
 }

@@ -54,9 +54,11 @@ void expect_phantom(const Volume& v, const DicomSeriesSpec& spec) {
     const auto value = [&](std::int64_t index) {
         switch (v.type()) {
             case VoxelType::i16:
-                return static_cast<double>(v.values<VoxelType::i16>()[static_cast<std::size_t>(index)]);
+                return static_cast<double>(
+                    v.values<VoxelType::i16>()[static_cast<std::size_t>(index)]);
             case VoxelType::f32:
-                return static_cast<double>(v.values<VoxelType::f32>()[static_cast<std::size_t>(index)]);
+                return static_cast<double>(
+                    v.values<VoxelType::f32>()[static_cast<std::size_t>(index)]);
             default:
                 ADD_FAILURE() << "unexpected type " << volume::name(v.type());
                 return 0.0;
@@ -73,7 +75,8 @@ void expect_phantom(const Volume& v, const DicomSeriesSpec& spec) {
                     const double u =
                         dot(d[a], world - v.origin()) / v.spacing()[static_cast<int>(a)] - 0.5;
                     index[a] = std::lround(u);
-                    ASSERT_NEAR(u, static_cast<double>(index[a]), 1e-6) << i << " " << j << " " << k;
+                    ASSERT_NEAR(u, static_cast<double>(index[a]), 1e-6)
+                        << i << " " << j << " " << k;
                     ASSERT_GE(index[a], 0);
                     ASSERT_LT(index[a], v.dims()[a]);
                 }
@@ -209,7 +212,8 @@ TEST(Dicom, BrokenSeriesNameTheFiles) {
     const DicomSeriesSpec spec;
     {
         // A missing middle slice.
-        const std::vector<fs::path> files = pliant::test::write_dicom_series(dir / "missing", spec, 9);
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "missing", spec, 9);
         fs::remove(files[7]);
         expect_invalid([&] { read_dicom_series(dir / "missing"); },
                        {"1 slice missing between", files[6].filename().string(),
@@ -229,7 +233,8 @@ TEST(Dicom, BrokenSeriesNameTheFiles) {
     }
     {
         // A slice of another size in the series.
-        const std::vector<fs::path> files = pliant::test::write_dicom_series(dir / "sizes", spec, 11);
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "sizes", spec, 11);
         DicomSeriesSpec small = spec;
         small.columns = 16;
         const std::string uid = list_dicom_series(dir / "sizes").front().uid;
@@ -239,9 +244,11 @@ TEST(Dicom, BrokenSeriesNameTheFiles) {
     }
     {
         // Two slices at one position.
-        const std::vector<fs::path> files = pliant::test::write_dicom_series(dir / "twice", spec, 12);
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "twice", spec, 12);
         const std::string uid = list_dicom_series(dir / "twice").front().uid;
-        pliant::test::write_dicom_slice(dir / "twice" / "copy.dcm", spec, uid, "1.2.3", 3, 3 * 2.5, 99);
+        pliant::test::write_dicom_slice(dir / "twice" / "copy.dcm", spec, uid, "1.2.3", 3, 3 * 2.5,
+                                        99);
         expect_invalid([&] { read_dicom_series(dir / "twice"); },
                        {"two slices at one position", "copy.dcm"});
     }
@@ -256,8 +263,9 @@ TEST(Dicom, BrokenSeriesNameTheFiles) {
     expect_io_error([&] { read_dicom_series(dir / "nowhere"); }, {"nowhere", "no such"});
     // The memory limit, before any pixel data is read.
     pliant::test::write_dicom_series(dir / "limit", spec, 13);
-    expect_io_error([&] { read_dicom_series(dir / "limit", {.series_uid = "", .max_bytes = 1000}); },
-                    {"memory limit"});
+    expect_io_error(
+        [&] { read_dicom_series(dir / "limit", {.series_uid = "", .max_bytes = 1000}); },
+        {"memory limit"});
 }
 
 TEST(Dicom, FractionalRescaleGivesFloats) {

@@ -80,7 +80,8 @@ TEST(Nifti, ReadsAHandMadeNifti2File) {
         for (std::int64_t j = 0; j < 2; ++j) {
             for (std::int64_t i = 0; i < 3; ++i) {
                 const Vec3d p{10.0 - 0.75 * static_cast<double>(j),
-                              20.0 + 0.5 * static_cast<double>(i), 30.0 + 2.0 * static_cast<double>(k)};
+                              20.0 + 0.5 * static_cast<double>(i),
+                              30.0 + 2.0 * static_cast<double>(k)};
                 // Find the voxel of v at p.
                 const Vec3d u = p - v.origin();
                 const auto x = static_cast<std::int64_t>(u.x / 0.75);
@@ -177,9 +178,9 @@ TEST(Nifti, AxisAlignedFilesAreWrittenWithAnIdentityRotation) {
     const Volume v = Volume::allocate({2, 2, 2}, VoxelType::u8, {0.5, 1.0, 2.0}, {-1.0, 0.0, 1.0});
     write_nifti(dir / "a.nii", v, false);
     const std::string bytes = test::read_bytes(dir / "a.nii");
-    EXPECT_EQ(get<float>(bytes, 256), 0.0F);  // quatern_b
-    EXPECT_EQ(get<float>(bytes, 280), 0.5F);  // srow_x[0]
-    EXPECT_EQ(get<float>(bytes, 284), 0.0F);  // srow_x[1]
+    EXPECT_EQ(get<float>(bytes, 256), 0.0F);    // quatern_b
+    EXPECT_EQ(get<float>(bytes, 280), 0.5F);    // srow_x[0]
+    EXPECT_EQ(get<float>(bytes, 284), 0.0F);    // srow_x[1]
     EXPECT_EQ(get<float>(bytes, 292), -0.75F);  // srow_x[3]: the first voxel's centre
     EXPECT_EQ(bytes.size(), 352u + 8u);
 }

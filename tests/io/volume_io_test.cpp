@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <algorithm>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -52,7 +52,8 @@ void expect_same(const Volume& a, const Volume& b) {
 TEST(VolumeIo, RoundTripsEveryTypeAndFormat) {
     TempDir dir;
     for (const VoxelType type : ALL_TYPES) {
-        for (const char* name : {"v.nrrd", "v.nhdr", "v.json", "v.nii", "v.nii.gz", "v.mha", "v.mhd"}) {
+        for (const char* name :
+             {"v.nrrd", "v.nhdr", "v.json", "v.nii", "v.nii.gz", "v.mha", "v.mhd"}) {
             for (const bool gzip : {false, true}) {
                 const std::string file = name;
                 const bool nifti = file.find(".nii") != std::string::npos;
@@ -72,7 +73,8 @@ TEST(VolumeIo, RoundTripsEveryTypeAndFormat) {
     }
 }
 
-// `v` turned by `degrees` about the axis (1, 2, 3)/|…| (an oblique placement, no axis near another).
+// `v` turned by `degrees` about the axis (1, 2, 3)/|…| (an oblique placement, no axis near
+// another).
 Volume turned(Volume v, double degrees) {
     const double t = degrees * std::numbers::pi / 180.0;
     const Vec3d k = Vec3d{1.0, 2.0, 3.0} / std::sqrt(14.0);
@@ -122,8 +124,8 @@ TEST(VolumeIo, ObliqueFilesAreResampledOnRequestOfTheDefault) {
     }
     v.values<VoxelType::i16>()[0] = -1000;
     write_volume(dir / "tilted.nii.gz", v);
-    EXPECT_FALSE(read_volume(dir / "tilted.nii.gz", {.orientation = Orientation::keep})
-                     .is_axis_aligned());
+    EXPECT_FALSE(
+        read_volume(dir / "tilted.nii.gz", {.orientation = Orientation::keep}).is_axis_aligned());
     std::vector<std::string> infos;
     const LogSink previous = set_log_sink([&](LogLevel level, std::string_view message) {
         if (level == LogLevel::info) {

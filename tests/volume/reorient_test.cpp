@@ -115,7 +115,9 @@ TEST(PlaceNearestAxes, KeepsTheWorldPositionOfEveryVoxel) {
         const Vec3d along_i{0.0, 0.0, -2.0};  // grid i runs toward −z
         const Vec3d along_j{0.5, 0.0, 0.0};   // j toward +x
         const Vec3d along_k{0.0, 1.5, 0.0};   // k toward +y
-        const auto turn = [&](const Vec3d& a) { return r[0] * a.x + r[1] * a.y + r[2] * a.z; };
+        const auto turn = [&](const Vec3d& a) {
+            return r[0] * a.x + r[1] * a.y + r[2] * a.z;
+        };
         p.steps = {turn(along_i), turn(along_j), turn(along_k)};
         const Dims file_dims{5, 4, 3};
         const Volume v = place_nearest_axes(indexed(file_dims), p);
@@ -128,8 +130,8 @@ TEST(PlaceNearestAxes, KeepsTheWorldPositionOfEveryVoxel) {
         for (std::int64_t k = 0; k < v.dims()[2]; ++k) {
             for (std::int64_t j = 0; j < v.dims()[1]; ++j) {
                 for (std::int64_t i = 0; i < v.dims()[0]; ++i) {
-                    const auto code =
-                        static_cast<std::int64_t>(values[static_cast<std::size_t>(v.index(i, j, k))]);
+                    const auto code = static_cast<std::int64_t>(
+                        values[static_cast<std::size_t>(v.index(i, j, k))]);
                     const std::int64_t fi = code % 100;
                     const std::int64_t fj = (code / 100) % 100;
                     const std::int64_t fk = code / 10000;

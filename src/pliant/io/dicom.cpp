@@ -58,13 +58,21 @@ namespace {
 }
 }  // namespace
 
-bool has_dicom_support() { return false; }
-std::vector<DicomSeriesInfo> list_dicom_series(const fs::path& path) { no_gdcm(path); }
+bool has_dicom_support() {
+    return false;
+}
+std::vector<DicomSeriesInfo> list_dicom_series(const fs::path& path) {
+    no_gdcm(path);
+}
 std::vector<DicomSeriesInfo> list_dicom_series(std::span<const fs::path> files) {
     no_gdcm(files.empty() ? fs::path("DICOM") : files.front());
 }
-std::string chosen_dicom_series(const fs::path& path, const std::string&) { no_gdcm(path); }
-volume::Volume read_dicom_series(const fs::path& path, const DicomReadOptions&) { no_gdcm(path); }
+std::string chosen_dicom_series(const fs::path& path, const std::string&) {
+    no_gdcm(path);
+}
+volume::Volume read_dicom_series(const fs::path& path, const DicomReadOptions&) {
+    no_gdcm(path);
+}
 volume::Volume read_dicom_series(std::span<const fs::path> files, const DicomReadOptions&) {
     no_gdcm(files.empty() ? fs::path("DICOM") : files.front());
 }
@@ -163,11 +171,17 @@ std::optional<std::int64_t> integer(const char* text) {
     return v;
 }
 
-std::string text_of(const char* text) { return text == nullptr ? std::string() : trim(text); }
+std::string text_of(const char* text) {
+    return text == nullptr ? std::string() : trim(text);
+}
 
-Vec3d ras(const Vec3d& lps) { return {-lps.x, -lps.y, lps.z}; }
+Vec3d ras(const Vec3d& lps) {
+    return {-lps.x, -lps.y, lps.z};
+}
 
-std::string vec_text(const Vec3d& v) { return fmt::format("({:g}, {:g}, {:g})", v.x, v.y, v.z); }
+std::string vec_text(const Vec3d& v) {
+    return fmt::format("({:g}, {:g}, {:g})", v.x, v.y, v.z);
+}
 
 // One file's header fields that decide where its slice goes.
 struct Slice {
@@ -220,10 +234,10 @@ std::vector<fs::path> candidate_files(const fs::path& dir) {
 std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
     quiet_gdcm();
     gdcm::Scanner scanner;
-    for (const gdcm::Tag& tag : {SERIES_UID, SERIES_DESCRIPTION, MODALITY, ROWS, COLUMNS,
-                                 NUMBER_OF_FRAMES, IMAGE_POSITION, IMAGE_ORIENTATION, PIXEL_SPACING,
-                                 IMAGER_PIXEL_SPACING, INSTANCE_NUMBER, SPACING_BETWEEN_SLICES,
-                                 SLICE_THICKNESS}) {
+    for (const gdcm::Tag& tag :
+         {SERIES_UID, SERIES_DESCRIPTION, MODALITY, ROWS, COLUMNS, NUMBER_OF_FRAMES, IMAGE_POSITION,
+          IMAGE_ORIENTATION, PIXEL_SPACING, IMAGER_PIXEL_SPACING, INSTANCE_NUMBER,
+          SPACING_BETWEEN_SLICES, SLICE_THICKNESS}) {
         scanner.AddTag(tag);
     }
     std::vector<std::string> names;
@@ -241,7 +255,9 @@ std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
             }
             continue;
         }
-        const auto value = [&](const gdcm::Tag& tag) { return scanner.GetValue(name, tag); };
+        const auto value = [&](const gdcm::Tag& tag) {
+            return scanner.GetValue(name, tag);
+        };
         Slice s;
         s.file = files[n];
         s.rows = integer(value(ROWS)).value_or(0);
@@ -346,10 +362,11 @@ std::vector<DicomSeriesInfo> listing(const std::map<std::string, std::vector<Sli
 std::vector<Slice> choose(const fs::path& where, std::map<std::string, std::vector<Slice>> series,
                           const std::string& series_uid, std::size_t num_candidates) {
     if (series.empty()) {
-        throw IoError(fmt::format("{}: no DICOM image found ({} candidate files: *.dcm, *.dicom, "
-                                  "*.ima or with a DICM marker; none holds an image GDCM can "
-                                  "parse)",
-                                  where.string(), num_candidates));
+        throw IoError(
+            fmt::format("{}: no DICOM image found ({} candidate files: *.dcm, *.dicom, "
+                        "*.ima or with a DICM marker; none holds an image GDCM can "
+                        "parse)",
+                        where.string(), num_candidates));
     }
     const std::vector<DicomSeriesInfo> all = listing(series);
     if (!series_uid.empty()) {
@@ -359,9 +376,10 @@ std::vector<Slice> choose(const fs::path& where, std::map<std::string, std::vect
             for (const DicomSeriesInfo& info : all) {
                 known += "\n  " + series_line(info);
             }
-            throw InvalidInput(fmt::format("{}: no DICOM series with UID {}; the series there "
-                                           "are:{}",
-                                           where.string(), series_uid, known));
+            throw InvalidInput(
+                fmt::format("{}: no DICOM series with UID {}; the series there "
+                            "are:{}",
+                            where.string(), series_uid, known));
         }
         return std::move(it->second);
     }
@@ -370,9 +388,10 @@ std::vector<Slice> choose(const fs::path& where, std::map<std::string, std::vect
         for (std::size_t i = 1; i < all.size(); ++i) {
             others += "\n  " + series_line(all[i]);
         }
-        log_info("{}: {} DICOM series; reading the largest, {}; the others (choose one with "
-                 "--series UID):{}",
-                 where.string(), all.size(), series_line(all.front()), others);
+        log_info(
+            "{}: {} DICOM series; reading the largest, {}; the others (choose one with "
+            "--series UID):{}",
+            where.string(), all.size(), series_line(all.front()), others);
     }
     return std::move(series.at(all.front().uid));
 }
@@ -421,10 +440,10 @@ StoredFormat stored_format(const fs::path& file, const gdcm::Image& image) {
                 file.string(), pf.GetScalarTypeAsString(), pf.GetBitsAllocated()));
     }
     if (static_cast<std::size_t>(pf.GetPixelSize()) != f.bytes) {
-        throw Unsupported(fmt::format("{}: DICOM pixel format {} with {} bytes per pixel is not "
-                                      "supported",
-                                      file.string(), pf.GetScalarTypeAsString(),
-                                      pf.GetPixelSize()));
+        throw Unsupported(
+            fmt::format("{}: DICOM pixel format {} with {} bytes per pixel is not "
+                        "supported",
+                        file.string(), pf.GetScalarTypeAsString(), pf.GetPixelSize()));
     }
     return f;
 }
@@ -480,9 +499,10 @@ Pixels read_pixels(const std::vector<Slice>& slices, const volume::Dims& dims,
         gdcm::ImageReader reader;
         reader.SetFileName(file.c_str());
         if (!reader.Read()) {
-            throw IoError(fmt::format("{}: cannot read the DICOM image (GDCM could not parse the "
-                                      "file or decode its pixel data)",
-                                      file.string()));
+            throw IoError(
+                fmt::format("{}: cannot read the DICOM image (GDCM could not parse the "
+                            "file or decode its pixel data)",
+                            file.string()));
         }
         const gdcm::Image& image = reader.GetImage();
         const StoredFormat format = stored_format(file, image);
@@ -495,21 +515,23 @@ Pixels read_pixels(const std::vector<Slice>& slices, const volume::Dims& dims,
             detail::check_declared_size(where, dims, VoxelType::f32, max_bytes);
             px.raw.resize(per_file * slices.size() * format.bytes);
         } else if (format.scalar != px.format.scalar) {
-            throw InvalidInput(fmt::format(
-                "{}: mixed pixel formats in one series: {} stores {}, {} stores {}",
-                where.string(), slices.front().file.filename().string(),
-                gdcm::PixelFormat(px.format.scalar).GetScalarTypeAsString(),
-                file.filename().string(), gdcm::PixelFormat(format.scalar).GetScalarTypeAsString()));
+            throw InvalidInput(
+                fmt::format("{}: mixed pixel formats in one series: {} stores {}, {} stores {}",
+                            where.string(), slices.front().file.filename().string(),
+                            gdcm::PixelFormat(px.format.scalar).GetScalarTypeAsString(),
+                            file.filename().string(),
+                            gdcm::PixelFormat(format.scalar).GetScalarTypeAsString()));
         }
-        const std::int64_t frames =
-            image.GetNumberOfDimensions() >= 3 ? static_cast<std::int64_t>(image.GetDimension(2)) : 1;
+        const std::int64_t frames = image.GetNumberOfDimensions() >= 3
+                                        ? static_cast<std::int64_t>(image.GetDimension(2))
+                                        : 1;
         if (static_cast<std::int64_t>(image.GetDimension(0)) != dims[0] ||
             static_cast<std::int64_t>(image.GetDimension(1)) != dims[1] ||
             frames != slices[n].frames) {
-            throw InvalidInput(fmt::format(
-                "{}: the image is {}x{}x{}, its header said {}x{}x{}", file.string(),
-                image.GetDimension(0), image.GetDimension(1), frames, dims[0], dims[1],
-                slices[n].frames));
+            throw InvalidInput(fmt::format("{}: the image is {}x{}x{}, its header said {}x{}x{}",
+                                           file.string(), image.GetDimension(0),
+                                           image.GetDimension(1), frames, dims[0], dims[1],
+                                           slices[n].frames));
         }
         const std::size_t bytes = per_file * format.bytes;
         if (image.GetBufferLength() != bytes) {
@@ -535,9 +557,10 @@ Pixels read_pixels(const std::vector<Slice>& slices, const volume::Dims& dims,
         const double slope = image.GetSlope();
         const double intercept = image.GetIntercept();
         if (!std::isfinite(slope) || slope == 0.0 || !std::isfinite(intercept)) {
-            throw IoError(fmt::format("{}: RescaleSlope {} / RescaleIntercept {}: expected finite "
-                                      "numbers, a slope other than 0",
-                                      file.string(), slope, intercept));
+            throw IoError(
+                fmt::format("{}: RescaleSlope {} / RescaleIntercept {}: expected finite "
+                            "numbers, a slope other than 0",
+                            file.string(), slope, intercept));
         }
         px.slopes.push_back(slope);
         px.intercepts.push_back(intercept);
@@ -565,15 +588,15 @@ volume::Volume rescaled(const Pixels& px, const volume::Dims& dims, std::size_t 
         }
     }
     const auto scalar = px.format.scalar;
-    const bool stored_integer = scalar != gdcm::PixelFormat::FLOAT32 &&
-                                scalar != gdcm::PixelFormat::FLOAT64;
+    const bool stored_integer =
+        scalar != gdcm::PixelFormat::FLOAT32 && scalar != gdcm::PixelFormat::FLOAT64;
     VoxelType type = VoxelType::f32;
     if (identity && scalar == gdcm::PixelFormat::UINT8) {
         type = VoxelType::u8;
     } else if (stored_integer && integral && lo >= -32768.0 && hi <= 32767.0) {
         type = VoxelType::i16;
-    } else if (identity && (scalar == gdcm::PixelFormat::UINT16 ||
-                            scalar == gdcm::PixelFormat::UINT12)) {
+    } else if (identity &&
+               (scalar == gdcm::PixelFormat::UINT16 || scalar == gdcm::PixelFormat::UINT12)) {
         type = VoxelType::u16;
     }
     volume::Volume v = volume::Volume::allocate(dims, type, {1, 1, 1}, {0, 0, 0}, max_bytes);
@@ -606,7 +629,9 @@ volume::Volume rescaled(const Pixels& px, const volume::Dims& dims, std::size_t 
     return v;
 }
 
-std::string name_of(const Slice& s) { return s.file.filename().string(); }
+std::string name_of(const Slice& s) {
+    return s.file.filename().string();
+}
 
 // Checks that the slices make one regular grid, sorts them along the normal, and returns where
 // the grid lies (LPS → RAS) with its slice step.
@@ -636,8 +661,8 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
                                       first.file.string(), pixel_spacing[0], pixel_spacing[1]));
         }
         if (first.imager_spacing) {
-            log_warning("{}: no PixelSpacing; using ImagerPixelSpacing {}\\{} mm",
-                        where.string(), pixel_spacing[0], pixel_spacing[1]);
+            log_warning("{}: no PixelSpacing; using ImagerPixelSpacing {}\\{} mm", where.string(),
+                        pixel_spacing[0], pixel_spacing[1]);
         }
     } else {
         log_warning("{}: no PixelSpacing; using 1 mm", where.string());
@@ -677,10 +702,10 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
     if (!(row_length > 0.5) || !(column_length > 0.5) ||
         std::abs(dot(cosines[0], cosines[1])) / (row_length * column_length) >
             volume::MAX_AXIS_COSINE) {
-        throw IoError(fmt::format("{}: ImageOrientationPatient {} {}: expected two orthogonal "
-                                  "unit vectors",
-                                  first.file.string(), vec_text(cosines[0]),
-                                  vec_text(cosines[1])));
+        throw IoError(
+            fmt::format("{}: ImageOrientationPatient {} {}: expected two orthogonal "
+                        "unit vectors",
+                        first.file.string(), vec_text(cosines[0]), vec_text(cosines[1])));
     }
     const Vec3d row = cosines[0] / row_length;
     const Vec3d column = cosines[1] / column_length;
@@ -702,9 +727,10 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
             step = 1.0;
         }
         if (slices.size() > 1) {
-            log_warning("{}: no ImagePositionPatient: slices ordered by InstanceNumber, {} mm "
-                        "apart (SpacingBetweenSlices, else SliceThickness, else 1)",
-                        where.string(), step);
+            log_warning(
+                "{}: no ImagePositionPatient: slices ordered by InstanceNumber, {} mm "
+                "apart (SpacingBetweenSlices, else SliceThickness, else 1)",
+                where.string(), step);
         }
     } else {
         for (const Slice& s : slices) {
@@ -741,7 +767,8 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
                 }
             }
             std::vector<double> sorted = gaps;
-            std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+            std::nth_element(sorted.begin(),
+                             sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
                              sorted.end());
             const double typical = sorted[sorted.size() / 2];
             const double tolerance =
@@ -758,7 +785,8 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
                     continue;
                 }
                 const double multiple = std::round(gaps[n] / typical);
-                if (multiple >= 2 && std::abs(gaps[n] - multiple * typical) <= multiple * tolerance) {
+                if (multiple >= 2 &&
+                    std::abs(gaps[n] - multiple * typical) <= multiple * tolerance) {
                     const auto missing = static_cast<std::int64_t>(multiple) - 1;
                     throw InvalidInput(fmt::format(
                         "{}: {} slice{} missing between {} (at {:g} mm) and {} (at {:g} mm): they "
@@ -781,10 +809,11 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
             const double cosine = std::min(1.0, std::abs(dot(span, normal)) / norm(span));
             const double degrees = std::acos(cosine) * 180.0 / 3.14159265358979323846;
             if (degrees > GANTRY_TILT_WARNING_DEGREES) {
-                log_warning("{}: the slices are offset within their plane (gantry tilt of "
-                            "{:.2f}°): placed along the slice normal, so in-plane positions are "
-                            "off by up to {:.3g} mm",
-                            where.string(), degrees, norm(span) * std::sin(std::acos(cosine)));
+                log_warning(
+                    "{}: the slices are offset within their plane (gantry tilt of "
+                    "{:.2f}°): placed along the slice normal, so in-plane positions are "
+                    "off by up to {:.3g} mm",
+                    where.string(), degrees, norm(span) * std::sin(std::acos(cosine)));
             }
         } else {
             step = first.spacing_between_slices.value_or(first.slice_thickness.value_or(1.0));
@@ -795,8 +824,7 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
     }
     volume::GridPlacement grid;
     grid.centre0 = ras(position0);
-    grid.steps = {ras(row) * pixel_spacing[1], ras(column) * pixel_spacing[0],
-                  ras(normal) * step};
+    grid.steps = {ras(row) * pixel_spacing[1], ras(column) * pixel_spacing[0], ras(normal) * step};
     grid.lengths = {pixel_spacing[1], pixel_spacing[0], step};
     return grid;
 }
@@ -848,7 +876,9 @@ volume::Volume read_slices(const fs::path& where, std::vector<Slice> slices,
 
 }  // namespace
 
-bool has_dicom_support() { return true; }
+bool has_dicom_support() {
+    return true;
+}
 
 std::vector<DicomSeriesInfo> list_dicom_series(const fs::path& path) {
     std::error_code ec;
@@ -876,10 +906,9 @@ volume::Volume read_dicom_series(const fs::path& path, const DicomReadOptions& o
     std::error_code ec;
     if (fs::is_directory(path, ec)) {
         const std::vector<fs::path> files = candidate_files(path);
-        return read_slices(path,
-                           choose(path, by_series(scan(files, false)), options.series_uid,
-                                  files.size()),
-                           options.max_bytes);
+        return read_slices(
+            path, choose(path, by_series(scan(files, false)), options.series_uid, files.size()),
+            options.max_bytes);
     }
     if (!fs::exists(path, ec)) {
         throw IoError(fmt::format("{}: no such file or folder", path.string()));

@@ -54,7 +54,7 @@ struct DicomSeriesInfo {
     std::string description;  // SeriesDescription ("" when absent)
     std::string modality;     // Modality (CT, MR, PT, …; "" when absent)
     std::int64_t num_files = 0;
-    volume::Dims dims{0, 0, 0};  // columns, rows, slices (frames of a multi-frame file)
+    volume::Dims dims{0, 0, 0};        // columns, rows, slices (frames of a multi-frame file)
     std::filesystem::path first_file;  // the first of its files in name order
 };
 

@@ -70,7 +70,8 @@ struct Header {
 Header read_header(const std::filesystem::path& path) {
     const std::uint64_t size = detail::file_size(path);
     if (size == 0) {
-        fail(path, "empty file, expected a MetaImage header ('ObjectType = Image', 'NDims = 3', …)");
+        fail(path,
+             "empty file, expected a MetaImage header ('ObjectType = Image', 'NDims = 3', …)");
     }
     std::ifstream in(path, std::ios::binary);
     if (!in) {
@@ -124,8 +125,9 @@ Header read_header(const std::filesystem::path& path) {
     if (header.fields.empty()) {
         fail(path, "not a MetaImage header: expected 'Key = Value' lines");
     }
-    fail(path, "MetaImage header has no ElementDataFile key (it ends the header and says where "
-               "the voxels are)");
+    fail(path,
+         "MetaImage header has no ElementDataFile key (it ends the header and says where "
+         "the voxels are)");
 }
 
 // The value of the first of `keys` present (aliases), with the key found.
@@ -204,7 +206,9 @@ const char* element_type_name(VoxelType type) {
 }
 
 // +0 for −0, so that written headers never show "-0".
-double positive_zero(double v) { return v + 0.0; }
+double positive_zero(double v) {
+    return v + 0.0;
+}
 
 }  // namespace
 
@@ -212,7 +216,8 @@ volume::Volume read_metaimage(const std::filesystem::path& path, std::size_t max
     const Header header = read_header(path);
 
     // Object and dimensions.
-    if (const auto object = find(header, {"ObjectType"}); object && lower(object->second) != "image") {
+    if (const auto object = find(header, {"ObjectType"});
+        object && lower(object->second) != "image") {
         throw Unsupported(fmt::format("{}: ObjectType: expected Image, got {}", path.string(),
                                       detail::quote(object->second)));
     }
@@ -224,8 +229,9 @@ volume::Volume read_metaimage(const std::filesystem::path& path, std::size_t max
     const auto n = static_cast<std::size_t>(ndims);
     const std::vector<std::string> size_words = words(required(header, path, "DimSize"));
     if (size_words.size() != n) {
-        fail(path, fmt::format("DimSize: expected {} sizes (NDims), got {} ({})", n,
-                               size_words.size(), detail::quote(required(header, path, "DimSize"))));
+        fail(path,
+             fmt::format("DimSize: expected {} sizes (NDims), got {} ({})", n, size_words.size(),
+                         detail::quote(required(header, path, "DimSize"))));
     }
     volume::Dims dims{1, 1, 1};
     for (std::size_t a = 0; a < n; ++a) {
@@ -250,24 +256,23 @@ volume::Volume read_metaimage(const std::filesystem::path& path, std::size_t max
                : element == "MET_FLOAT" ? std::optional(VoxelType::rgba32f)
                                         : std::nullopt;
     } else {
-        throw Unsupported(fmt::format(
-            "{}: ElementNumberOfChannels: expected 1 (scalar) or 4 (RGBA), got {}",
-            path.string(), channels));
+        throw Unsupported(
+            fmt::format("{}: ElementNumberOfChannels: expected 1 (scalar) or 4 (RGBA), got {}",
+                        path.string(), channels));
     }
     if (!type) {
         throw Unsupported(fmt::format(
             "{}: ElementType: expected MET_UCHAR, MET_SHORT, MET_USHORT or MET_FLOAT (MET_UCHAR "
             "or MET_FLOAT with 4 channels), got {}{}",
-            path.string(), detail::quote(element),
-            channels == 4 ? " with 4 channels" : ""));
+            path.string(), detail::quote(element), channels == 4 ? " with 4 channels" : ""));
     }
 
     // Encoding.
     if (const auto binary = find(header, {"BinaryData"});
         binary && !parse_bool(path, binary->first, binary->second)) {
-        throw Unsupported(fmt::format(
-            "{}: BinaryData = False (voxels as text) is not supported, expected True",
-            path.string()));
+        throw Unsupported(
+            fmt::format("{}: BinaryData = False (voxels as text) is not supported, expected True",
+                        path.string()));
     }
     bool big_endian = false;
     if (const auto msb = find(header, {"BinaryDataByteOrderMSB", "ElementByteOrderMSB"})) {
@@ -281,8 +286,8 @@ volume::Volume read_metaimage(const std::filesystem::path& path, std::size_t max
     if (const auto c = find(header, {"CompressedDataSize"})) {
         compressed_size = parse_int(path, c->first, c->second);
         if (*compressed_size < 1) {
-            fail(path, fmt::format("CompressedDataSize: expected a size ≥ 1, got {}",
-                                   *compressed_size));
+            fail(path,
+                 fmt::format("CompressedDataSize: expected a size ≥ 1, got {}", *compressed_size));
         }
     }
 
@@ -385,10 +390,10 @@ volume::Volume read_metaimage(const std::filesystem::path& path, std::size_t max
     if (compressed && compressed_size &&
         (file_bytes < offset ||
          file_bytes - offset < static_cast<std::uint64_t>(*compressed_size))) {
-        fail(data_path, fmt::format("truncated compressed data: CompressedDataSize is {}, the "
-                                    "file has {} bytes after byte offset {}",
-                                    *compressed_size,
-                                    file_bytes > offset ? file_bytes - offset : 0, offset));
+        fail(data_path,
+             fmt::format("truncated compressed data: CompressedDataSize is {}, the "
+                         "file has {} bytes after byte offset {}",
+                         *compressed_size, file_bytes > offset ? file_bytes - offset : 0, offset));
     }
     volume::Volume volume = volume::Volume::allocate(dims, *type, {1, 1, 1}, {0, 0, 0}, max_bytes);
     if (compressed) {
@@ -422,8 +427,9 @@ void write_metaimage(const std::filesystem::path& path, const volume::Volume& vo
     const Vec3d c = lps(volume.voxel_center(0, 0, 0));
     const Vec3d& s = volume.spacing();
     const volume::Dims& n = volume.dims();
-    std::string header = "ObjectType = Image\nNDims = 3\nBinaryData = True\n"
-                         "BinaryDataByteOrderMSB = False\n";
+    std::string header =
+        "ObjectType = Image\nNDims = 3\nBinaryData = True\n"
+        "BinaryDataByteOrderMSB = False\n";
     header += fmt::format("CompressedData = {}\n", compressed ? "True" : "False");
     if (compressed) {
         header += fmt::format("CompressedDataSize = {}\n", packed.size());

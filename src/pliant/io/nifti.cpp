@@ -170,7 +170,8 @@ volume::GridPlacement placement(const std::filesystem::path& path, const nifti_i
             for (std::size_t c = 0; c < 3; ++c) {
                 const Vec3d& step = p.steps[c];
                 const double length = norm(step);
-                const double along = std::max({std::abs(step.x), std::abs(step.y), std::abs(step.z)});
+                const double along =
+                    std::max({std::abs(step.x), std::abs(step.y), std::abs(step.z)});
                 const bool oblique = along < length * (1.0 - 1e-12);
                 if (oblique && std::isfinite(pixdim[c]) &&
                     std::abs(length - std::abs(pixdim[c])) <= 1e-5 * length) {

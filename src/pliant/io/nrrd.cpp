@@ -382,8 +382,8 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
             const double spacing = parse_double(path, "spacings", values[first_spatial + a]);
             if (!std::isfinite(spacing) || spacing <= 0) {
                 fail(path,
-                     fmt::format("NRRD spacing of axis {}: expected a finite number > 0, got {}",
-                                 a, spacing));
+                     fmt::format("NRRD spacing of axis {}: expected a finite number > 0, got {}", a,
+                                 spacing));
             }
             grid.steps[a] = {};
             grid.steps[a][static_cast<int>(a)] = spacing;

@@ -88,8 +88,8 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     if (!doc.is_object()) {
         fail(sidecar, "expected a JSON object");
     }
-    static const std::set<std::string> KEYS = {"format", "version",  "data_file", "dims",
-                                               "type",   "spacing",  "origin",    "direction",
+    static const std::set<std::string> KEYS = {"format", "version", "data_file", "dims",
+                                               "type",   "spacing", "origin",    "direction",
                                                "endian", "encoding"};
     for (const auto& item : doc.items()) {
         if (KEYS.count(item.key()) == 0) {
@@ -242,8 +242,8 @@ void write_raw_volume(const std::filesystem::path& path, const volume::Volume& v
     doc["origin"] = {o.x, o.y, o.z};
     if (!volume.is_axis_aligned()) {
         const volume::Direction& d = volume.direction();
-        doc["direction"] = {{d[0].x, d[0].y, d[0].z}, {d[1].x, d[1].y, d[1].z},
-                            {d[2].x, d[2].y, d[2].z}};
+        doc["direction"] = {
+            {d[0].x, d[0].y, d[0].z}, {d[1].x, d[1].y, d[1].z}, {d[2].x, d[2].y, d[2].z}};
     }
     doc["endian"] = "little";
     doc["encoding"] = gzip ? "gzip" : "raw";

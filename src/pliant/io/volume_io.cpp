@@ -120,9 +120,8 @@ volume::Volume read_as_stored(const std::filesystem::path& path, const ReadVolum
         case VolumeFormat::metaimage_mhd:
             return read_metaimage(path, options.max_bytes);
         case VolumeFormat::dicom:
-            return read_dicom_series(
-                path, DicomReadOptions{.series_uid = options.series_uid,
-                                       .max_bytes = options.max_bytes});
+            return read_dicom_series(path, DicomReadOptions{.series_uid = options.series_uid,
+                                                            .max_bytes = options.max_bytes});
     }
     throw InternalError("read_volume: unhandled format");
 }
@@ -176,8 +175,8 @@ volume::Volume to_axis_aligned(const std::filesystem::path& path, volume::Volume
     log_info(
         "{}: the grid is oblique (an axis {:.2f}° from the world axes): resampled to an "
         "axis-aligned {}x{}x{} grid at spacing {:.4g} (trilinear; outside: {:g})",
-        path.string(), largest_angle, out.dims()[0], out.dims()[1], out.dims()[2],
-        out.spacing().x, options.outside);
+        path.string(), largest_angle, out.dims()[0], out.dims()[1], out.dims()[2], out.spacing().x,
+        options.outside);
     return out;
 }
 

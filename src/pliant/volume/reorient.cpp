@@ -18,7 +18,9 @@ constexpr double SNAP_TO_AXIS = 1e-6;    // |off-axis component| below which an 
 constexpr double SNAP_TO_SAMPLE = 1e-6;  // voxels: a sample this near a voxel centre takes it
 constexpr std::size_t NO_LIMIT = std::numeric_limits<std::size_t>::max();
 
-std::string vec_text(const Vec3d& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
+std::string vec_text(const Vec3d& v) {
+    return fmt::format("({}, {}, {})", v.x, v.y, v.z);
+}
 
 // The nearest orthonormal matrix (polar decomposition) to the columns `d`, by the iteration
 // X ← (X + X^-T) / 2, which converges quadratically from a nearly orthonormal start. X^-T has the
@@ -90,9 +92,9 @@ void flip_in_place(Volume& volume, const std::array<bool, 3>& flip) {
         for (std::int64_t j = 0; j < d[1]; ++j) {
             for (std::int64_t i = 0; i < d[0]; ++i) {
                 const std::int64_t a = volume.index(i, j, k);
-                const std::int64_t b = volume.index(flip[0] ? d[0] - 1 - i : i,
-                                                    flip[1] ? d[1] - 1 - j : j,
-                                                    flip[2] ? d[2] - 1 - k : k);
+                const std::int64_t b =
+                    volume.index(flip[0] ? d[0] - 1 - i : i, flip[1] ? d[1] - 1 - j : j,
+                                 flip[2] ? d[2] - 1 - k : k);
                 if (a < b) {
                     std::byte* pa = bytes + static_cast<std::size_t>(a) * bpv;
                     std::byte* pb = bytes + static_cast<std::size_t>(b) * bpv;
@@ -112,7 +114,8 @@ void resample_into(const Volume& source, Volume& out, double outside) {
     const Dims& m = out.dims();
     const std::span<const T> in(reinterpret_cast<const T*>(source.bytes().data()),
                                 source.bytes().size() / sizeof(T));
-    const std::span<T> dst(reinterpret_cast<T*>(out.bytes().data()), out.bytes().size() / sizeof(T));
+    const std::span<T> dst(reinterpret_cast<T*>(out.bytes().data()),
+                           out.bytes().size() / sizeof(T));
     const Direction& d = source.direction();
     const Vec3d s = source.spacing();
     const Vec3d o = source.origin();
@@ -177,10 +180,9 @@ void resample_into(const Volume& source, Volume& out, double outside) {
                         if (w == 0.0) {
                             continue;
                         }
-                        const std::int64_t at =
-                            source.index(bx ? i1[0] : i0[0], by ? i1[1] : i0[1],
-                                         bz ? i1[2] : i0[2]) *
-                            C;
+                        const std::int64_t at = source.index(bx ? i1[0] : i0[0], by ? i1[1] : i0[1],
+                                                             bz ? i1[2] : i0[2]) *
+                                                C;
                         for (int c = 0; c < C; ++c) {
                             sum[static_cast<std::size_t>(c)] +=
                                 w * static_cast<double>(in[static_cast<std::size_t>(at + c)]);
@@ -210,8 +212,8 @@ double max_axis_cosine(const GridPlacement& placement) {
             if (!std::isfinite(nb) || nb == 0.0) {
                 return std::numeric_limits<double>::quiet_NaN();
             }
-            largest =
-                std::max(largest, std::abs(dot(placement.steps[a], placement.steps[b])) / (na * nb));
+            largest = std::max(largest,
+                               std::abs(dot(placement.steps[a], placement.steps[b])) / (na * nb));
         }
     }
     return largest;
@@ -219,9 +221,10 @@ double max_axis_cosine(const GridPlacement& placement) {
 
 Volume place_nearest_axes(Volume volume, const GridPlacement& placement) {
     if (!is_finite(placement.centre0)) {
-        throw InvalidInput(fmt::format("place_nearest_axes: the first voxel's centre must be "
-                                       "finite, got {}",
-                                       vec_text(placement.centre0)));
+        throw InvalidInput(
+            fmt::format("place_nearest_axes: the first voxel's centre must be "
+                        "finite, got {}",
+                        vec_text(placement.centre0)));
     }
     for (std::size_t a = 0; a < 3; ++a) {
         const Vec3d& step = placement.steps[a];
@@ -323,8 +326,8 @@ Volume place_nearest_axes(Volume volume, const GridPlacement& placement) {
     Vec3d spacing{};
     for (std::size_t r = 0; r < 3; ++r) {
         const double stated = placement.lengths[static_cast<std::size_t>(perm[r])];
-        spacing[static_cast<int>(r)] = stated > 0.0 && std::isfinite(stated) ? stated
-                                                                             : norm(steps[r]);
+        spacing[static_cast<int>(r)] =
+            stated > 0.0 && std::isfinite(stated) ? stated : norm(steps[r]);
     }
     direction = orthonormalized(direction);
     volume.set_spacing(spacing);

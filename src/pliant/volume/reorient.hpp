@@ -46,8 +46,8 @@ double max_axis_cosine(const GridPlacement& placement);
 // direction from `placement`. When every axis is within 1e-6 of a world axis, the direction is
 // exactly the identity and spacing[a] = |steps[a][a]| after re-indexing (so axis-aligned files
 // read bit for bit as they always did); else spacing[a] = lengths[a] (when > 0) or |steps[a]|,
-// and the direction is the nearest orthonormal matrix to the normalized steps. World positions of the voxels are kept.
-// InvalidInput when a step is zero or not finite, or the grid is sheared
+// and the direction is the nearest orthonormal matrix to the normalized steps. World positions of
+// the voxels are kept. InvalidInput when a step is zero or not finite, or the grid is sheared
 // (max_axis_cosine > MAX_AXIS_COSINE). Flips are done in place; swapping axes needs memory for a
 // second copy of the voxels.
 Volume place_nearest_axes(Volume volume, const GridPlacement& placement);

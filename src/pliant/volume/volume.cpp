@@ -73,9 +73,9 @@ void Volume::set_origin(const Vec3d& origin) {
 
 void Volume::set_direction(const Direction& direction) {
     const auto text = [&] {
-        return fmt::format("({}, {}, {}) ({}, {}, {}) ({}, {}, {})", direction[0].x,
-                           direction[0].y, direction[0].z, direction[1].x, direction[1].y,
-                           direction[1].z, direction[2].x, direction[2].y, direction[2].z);
+        return fmt::format("({}, {}, {}) ({}, {}, {}) ({}, {}, {})", direction[0].x, direction[0].y,
+                           direction[0].z, direction[1].x, direction[1].y, direction[1].z,
+                           direction[2].x, direction[2].y, direction[2].z);
     };
     for (std::size_t a = 0; a < 3; ++a) {
         if (!is_finite(direction[a]) ||
