@@ -351,6 +351,7 @@ std::string series_line(const DicomSeriesInfo& info) {
 
 std::vector<DicomSeriesInfo> listing(const std::map<std::string, std::vector<Slice>>& series) {
     std::vector<DicomSeriesInfo> out;
+    out.reserve(series.size());
     for (const auto& [uid, slices] : series) {
         out.push_back(info_of(slices));
     }
@@ -683,7 +684,7 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
     if (first.orientation) {
         cosines = *first.orientation;
     } else {
-        log_warning("{}: no ImageOrientationPatient; assuming axial slices (1\\0\\0\\0\\1\\0)",
+        log_warning(R"({}: no ImageOrientationPatient; assuming axial slices (1\0\0\0\1\0))",
                     where.string());
     }
     for (const Slice& s : slices) {

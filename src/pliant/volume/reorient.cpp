@@ -124,8 +124,8 @@ void resample_into(const Volume& source, Volume& out, double outside) {
             return static_cast<T>(v);
         } else {
             const double r = std::nearbyint(v);
-            const double lo = static_cast<double>(std::numeric_limits<T>::lowest());
-            const double hi = static_cast<double>(std::numeric_limits<T>::max());
+            const auto lo = static_cast<double>(std::numeric_limits<T>::lowest());
+            const auto hi = static_cast<double>(std::numeric_limits<T>::max());
             return static_cast<T>(std::clamp(r, lo, hi));
         }
     };
