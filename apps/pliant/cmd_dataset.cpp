@@ -1,4 +1,5 @@
-// pliant dataset VOLUME --views N [--size WxH] [--tf FILE|PRESET] [--fov DEG] [--test-every K]
+// pliant dataset VOLUME [--series UID] --views N [--size WxH] [--tf FILE|PRESET] [--fov DEG]
+// [--test-every K]
 //                [--background R,G,B] [--step S] -o DIR   [--json]
 //
 // Renders a posed-image dataset from a volume with the ray caster (render/raycast.hpp), so that
@@ -11,7 +12,8 @@
 //   - DIR/train/r_<i>.png, DIR/test/r_<i>.png (RGB, the background composited),
 //     DIR/transforms_train.json, DIR/transforms_test.json (io/nerf_dataset.hpp: camera_angle_x,
 //     fl_x …, the volume's box as `aabb`, OpenGL camera-to-world matrices).
-// --tf, --step, --background as for `pliant render`. stdout: a summary, or with --json: output,
+// --series, --tf, --step, --background as for `pliant render` (an oblique volume is resampled to
+// an axis-aligned grid first). stdout: a summary, or with --json: output,
 // views, train, test, width, height, ms.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -34,6 +36,7 @@ namespace {
 
 struct DatasetCommandOptions {
     std::string volume;
+    std::string series;
     int views = 100;
     std::string size = "200x200";
     std::string tf = "grayscale";
@@ -45,7 +48,9 @@ struct DatasetCommandOptions {
 };
 
 void run_dataset(const DatasetCommandOptions& options, const GlobalOptions& global) {
-    const volume::Volume vol = io::read_volume(options.volume);
+    io::ReadVolumeOptions read;
+    read.series_uid = options.series;
+    const volume::Volume vol = io::read_volume(options.volume, read);
     const bool is_rgba = volume::channels(vol.type()) == 4;
     volume::TransferFunction tf;
     if (!is_rgba) {
@@ -76,7 +81,12 @@ void register_dataset(CLI::App& app, const GlobalOptions& global) {
     CLI::App* cmd = app.add_subcommand(
         "dataset",
         "Render a posed-image dataset (transforms_train/test.json + PNGs) from a volume");
-    cmd->add_option("VOLUME", options->volume, "Volume file")->required();
+    cmd->add_option("VOLUME", options->volume, "Volume file, or a folder of DICOM files")
+        ->required();
+    cmd->add_option("--series", options->series,
+                    "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
+                    "the largest)")
+        ->type_name("UID");
     cmd->add_option("--views", options->views, "Number of views (train + test)")
         ->check(CLI::Range(1, 100000));
     cmd->add_option("--size", options->size, "Image size")->type_name("WxH");

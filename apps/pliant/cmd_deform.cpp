@@ -1,4 +1,4 @@
-// pliant deform VOLUME --driver wave|twist|bubble|rotate [driver options]
+// pliant deform VOLUME [--series UID] --driver wave|twist|bubble|rotate [driver options]
 //               [--cells B] [--full-box] [--mesh FILE.node] [--stiffness K] [--substeps N]
 //               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
 //               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB] [--json]
@@ -9,6 +9,8 @@
 // one driver for N frames of 1/fps seconds, then resampled back into a grid like the source
 // (volume::Resampler) and written to OUT (any writable volume format, io/volume_io.hpp). With
 // --render, every frame is resampled and ray-cast (render::RayCaster) into an MP4 at --fps.
+// VOLUME may be a DICOM folder (--series UID picks a series, default the largest); an oblique
+// volume is resampled to an axis-aligned grid first (one info line on stderr).
 //
 // Drivers (pbd/drivers.hpp; lengths in box units, fractions of the volume's largest side):
 //   rotate  --axis x|y|z --angle DEG        rigid rotation about the volume's centre (testing)
@@ -56,6 +58,7 @@ namespace {
 
 struct DeformCommandOptions {
     std::string volume;
+    std::string series;
     std::string driver;
     std::string axis;  // empty: z, for wave x
     std::string displacement_axis = "z";
@@ -147,6 +150,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
 
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    read.series_uid = options.series;
     const volume::Volume source = io::read_volume(options.volume, read);
     std::optional<volume::TransferFunction> tf;
     if (volume::channels(source.type()) != 4) {
@@ -192,8 +196,13 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
     CLI::App* cmd = app.add_subcommand(
         "deform",
         "Deform a volume: tet grid, XPBD soft body under a driver, resampling (and a video)");
-    cmd->add_option("VOLUME", options->volume, "Volume file (NRRD, NIfTI, raw+JSON, .inv3)")
+    cmd->add_option("VOLUME", options->volume,
+                    "Volume file (NRRD, NIfTI, MetaImage, raw+JSON, .inv3) or a DICOM folder")
         ->required();
+    cmd->add_option("--series", options->series,
+                    "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
+                    "the largest)")
+        ->type_name("UID");
     cmd->add_option("--driver", options->driver, "Deformation driver")
         ->required()
         ->check(CLI::IsMember({"wave", "twist", "bubble", "rotate"}));

@@ -1,11 +1,15 @@
-// pliant render VOLUME [--tf FILE|PRESET] [--view AXIS | --camera AZ,EL,DIST] [--size WxH]
+// pliant render VOLUME [--series UID] [--tf FILE|PRESET] [--view AXIS | --camera AZ,EL,DIST]
+// [--size WxH]
 //               [--step S] [--opacity-unit U] [--background R,G,B] [--mip] [--shading]
 //               [--clip PX,PY,PZ,NX,NY,NZ]
 //               -o OUT.png | --orbit N -o OUT.mp4   [--json]
 //
-// Ray-casts a volume file (io/volume_io.hpp: NRRD, NIfTI, raw + JSON, .inv3) with
-// render::RayCaster (render/raycast.hpp) and writes a PNG, or with --orbit N an MP4 turntable of
-// N frames around +z (azimuth advancing 360°/N per frame, 24 frames per second) through ffmpeg.
+// Ray-casts a volume file (io/volume_io.hpp: NRRD, NIfTI, MetaImage, raw + JSON, .inv3, a DICOM
+// folder or file) with render::RayCaster (render/raycast.hpp) and writes a PNG, or with --orbit N
+// an MP4 turntable of N frames around +z (azimuth advancing 360°/N per frame, 24 frames per
+// second) through ffmpeg. An oblique volume is resampled to an axis-aligned grid first (one info
+// line on stderr; io::Orientation).
+//   --series UID  the DICOM series to read when the folder holds several (default: the largest).
 //   --tf          a preset name (ct-bone, ct-skin, mri-brain, grayscale) or a transfer function
 //                 JSON file (docs/formats.md); default grayscale. Ignored for RGBA volumes.
 //   --view AXIS   orthographic, looking along ±x/±y/±z, the volume's box filling the image
@@ -51,6 +55,7 @@ namespace {
 
 struct RenderCommandOptions {
     std::string volume;
+    std::string series;
     std::string tf = "grayscale";
     std::string view;
     std::array<double, 3> camera{30.0, 20.0, 0.0};
@@ -82,7 +87,9 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
         size = parse_size(options.size);
     }
 
-    const volume::Volume vol = io::read_volume(options.volume);
+    io::ReadVolumeOptions read;
+    read.series_uid = options.series;
+    const volume::Volume vol = io::read_volume(options.volume, read);
     volume::TransferFunction tf;
     const bool is_rgba = volume::channels(vol.type()) == 4;
     if (!is_rgba) {
@@ -170,8 +177,15 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
 void register_render(CLI::App& app, const GlobalOptions& global) {
     auto options = std::make_shared<RenderCommandOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "render", "Ray-cast a volume (NRRD, NIfTI, raw+JSON, .inv3) to a PNG, or an MP4 turntable");
-    cmd->add_option("VOLUME", options->volume, "Volume file")->required();
+        "render",
+        "Ray-cast a volume (NRRD, NIfTI, MetaImage, raw+JSON, .inv3, DICOM) to a PNG, or an MP4 "
+        "turntable");
+    cmd->add_option("VOLUME", options->volume, "Volume file, or a folder of DICOM files")
+        ->required();
+    cmd->add_option("--series", options->series,
+                    "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
+                    "the largest; pliant volume series DIR lists them)")
+        ->type_name("UID");
     cmd->add_option("--tf", options->tf,
                     "Transfer function: a preset (ct-bone, ct-skin, mri-brain, grayscale) or a "
                     "JSON file; ignored for RGBA volumes");

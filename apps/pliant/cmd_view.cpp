@@ -213,7 +213,9 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
     volume_options->run.window.msaa_samples = 0;  // an image on a quad: nothing to anti-alias
     CLI::App* vol = view->add_subcommand(
         "volume", "Ray-cast a volume live; --deform: deform it (drivers, mouse drag)");
-    vol->add_option("VOLUME", volume_o->input, "Volume file (NRRD, NIfTI, raw+JSON, .inv3)")
+    vol->add_option("VOLUME", volume_o->input,
+                    "Volume file (NRRD, NIfTI, MetaImage, raw+JSON, .inv3) or a DICOM folder (its "
+                    "largest series)")
         ->required();
     add_view_options(vol, *volume_o, volume_options->run, VOLUME_VIEW_DEFAULTS);
     viewer::VolumeSessionOptions& s = volume_options->session;

@@ -1,9 +1,14 @@
-// pliant volume info|convert|clean|generate: volume files (io/volume_io.hpp).
+// pliant volume info|series|convert|clean|generate: volume files (io/volume_io.hpp).
 //
-//   pliant volume info VOLUME [--max-memory MIB] [--json]
-//       dims, voxel type, spacing, origin, world box, bytes, and min / max / mean per channel.
-//   pliant volume convert IN OUT [--gzip] [--max-memory MIB]
-//       any readable format to any writable one (chosen by OUT's extension), voxels unchanged.
+//   pliant volume info VOLUME [--series UID] [--max-memory MIB] [--json]
+//       dims, voxel type, spacing, origin, direction, world box, bytes, and min / max / mean per
+//       channel; for DICOM also the series read and the others in the folder. Oblique volumes
+//       are shown as stored (not resampled).
+//   pliant volume series DIR [--json]
+//       the DICOM series in a folder (io/dicom.hpp): UID, modality, description, files, dims.
+//   pliant volume convert IN OUT [--series UID] [--gzip] [--nifti2] [--max-memory MIB]
+//       any readable format to any writable one (chosen by OUT's extension), voxels and
+//       orientation unchanged (every writable format holds the direction).
 //   pliant volume clean IN OUT --threshold T [--normalize max|range|none]
 //       RGBA volumes: α' = 0 where 255·α < T, then alpha normalization (volume/clean.hpp gives the
 //       exact formulas; the paper used T = 5, 20, 35).
@@ -27,6 +32,7 @@
 
 #include "commands.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/io/dicom.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/volume/clean.hpp"
 #include "pliant/volume/generate.hpp"
@@ -38,18 +44,39 @@ namespace {
 struct VolumeOptions {
     std::string input;
     std::string output;
+    std::string series;
     double max_memory_mib = 16384.0;
     bool gzip = false;
+    bool nifti2 = false;
     double threshold = 0.0;
     std::string normalize = "max";
     std::string kind;
     int dims = 128;
 };
 
+// Volume files are read as stored: an oblique volume keeps its direction (info shows it,
+// convert and clean write it).
 io::ReadVolumeOptions read_options(const VolumeOptions& options) {
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    read.orientation = io::Orientation::keep;
+    read.series_uid = options.series;
     return read;
+}
+
+nlohmann::ordered_json series_json(const io::DicomSeriesInfo& info) {
+    return {{"uid", info.uid},
+            {"modality", info.modality},
+            {"description", info.description},
+            {"files", info.num_files},
+            {"dims", {info.dims[0], info.dims[1], info.dims[2]}},
+            {"first_file", info.first_file.string()}};
+}
+
+std::string series_text(const io::DicomSeriesInfo& info) {
+    return fmt::format("{}  {:<4} {:>5} files  {}x{}x{}  {}", info.uid,
+                       info.modality.empty() ? "?" : info.modality, info.num_files, info.dims[0],
+                       info.dims[1], info.dims[2], info.description);
 }
 
 struct ChannelStats {
@@ -98,34 +125,59 @@ std::vector<ChannelStats> channel_stats(const volume::Volume& v) {
 void run_info(const VolumeOptions& options, const GlobalOptions& global) {
     const volume::Volume v = io::read_volume(options.input, read_options(options));
     const std::vector<ChannelStats> stats = channel_stats(v);
-    const AABBd box = v.bounds();
+    const AABBd box = v.world_bounds();
+    const volume::Direction& d = v.direction();
+    const io::VolumeFormat format = io::volume_format(options.input);
     nlohmann::ordered_json channels = nlohmann::ordered_json::array();
     for (const ChannelStats& s : stats) {
         channels.push_back({{"min", s.min},
                             {"max", s.max},
                             {"mean", s.sum / static_cast<double>(v.num_voxels())}});
     }
-    const nlohmann::ordered_json json = {
+    nlohmann::ordered_json json = {
         {"file", options.input},
-        {"format", io::name(io::volume_format(options.input))},
+        {"format", io::name(format)},
         {"dims", {v.dims()[0], v.dims()[1], v.dims()[2]}},
         {"type", volume::name(v.type())},
         {"spacing", {v.spacing().x, v.spacing().y, v.spacing().z}},
         {"origin", {v.origin().x, v.origin().y, v.origin().z}},
+        {"direction",
+         {{d[0].x, d[0].y, d[0].z}, {d[1].x, d[1].y, d[1].z}, {d[2].x, d[2].y, d[2].z}}},
+        {"axis_aligned", v.is_axis_aligned()},
         {"bounds", {{box.lo.x, box.lo.y, box.lo.z}, {box.hi.x, box.hi.y, box.hi.z}}},
         {"voxels", v.num_voxels()},
         {"bytes", v.size_bytes()},
         {"channels", channels}};
+    std::vector<io::DicomSeriesInfo> series;
+    std::string series_uid;
+    if (format == io::VolumeFormat::dicom) {
+        series = io::list_dicom_series(options.input);
+        series_uid = io::chosen_dicom_series(options.input, options.series);
+        json["series_uid"] = series_uid;
+        nlohmann::ordered_json list = nlohmann::ordered_json::array();
+        for (const io::DicomSeriesInfo& info : series) {
+            list.push_back(series_json(info));
+        }
+        json["series"] = list;
+    }
     if (global.json) {
         std::fputs((json.dump(2) + "\n").c_str(), stdout);
         return;
     }
-    std::string text =
-        fmt::format("{} ({})\n", options.input, io::name(io::volume_format(options.input)));
+    std::string text = fmt::format("{} ({})\n", options.input, io::name(format));
     text += fmt::format("  dims      {} x {} x {} {} voxels ({:.1f} MiB)\n", v.dims()[0],
                         v.dims()[1], v.dims()[2], volume::name(v.type()),
                         static_cast<double>(v.size_bytes()) / (1024.0 * 1024.0));
     text += fmt::format("  spacing   {} {} {}\n", v.spacing().x, v.spacing().y, v.spacing().z);
+    if (!v.is_axis_aligned()) {
+        text += fmt::format(
+            "  direction i ({:.6f}, {:.6f}, {:.6f})  j ({:.6f}, {:.6f}, {:.6f})  k ({:.6f}, "
+            "{:.6f}, {:.6f}): oblique (render, deform, dataset and view resample it to an "
+            "axis-aligned grid)\n",
+            d[0].x, d[0].y, d[0].z, d[1].x, d[1].y, d[1].z, d[2].x, d[2].y, d[2].z);
+        text += fmt::format("  origin    {} {} {} (corner of voxel 0)\n", v.origin().x,
+                            v.origin().y, v.origin().z);
+    }
     text += fmt::format("  box       [{}, {}, {}] .. [{}, {}, {}]\n", box.lo.x, box.lo.y, box.lo.z,
                         box.hi.x, box.hi.y, box.hi.z);
     const char* names[4] = {"r", "g", "b", "a"};
@@ -134,6 +186,29 @@ void run_info(const VolumeOptions& options, const GlobalOptions& global) {
                             stats.size() == 1 ? "values" : names[c], stats[c].min, stats[c].max,
                             stats[c].sum / static_cast<double>(v.num_voxels()));
     }
+    for (const io::DicomSeriesInfo& info : series) {
+        text += fmt::format("  {} {}\n", info.uid == series_uid ? "series *" : "series  ",
+                            series_text(info));
+    }
+    std::fputs(text.c_str(), stdout);
+}
+
+void run_series(const VolumeOptions& options, const GlobalOptions& global) {
+    const std::vector<io::DicomSeriesInfo> series = io::list_dicom_series(options.input);
+    if (global.json) {
+        nlohmann::ordered_json list = nlohmann::ordered_json::array();
+        for (const io::DicomSeriesInfo& info : series) {
+            list.push_back(series_json(info));
+        }
+        const nlohmann::ordered_json json = {{"folder", options.input}, {"series", list}};
+        std::fputs((json.dump(2) + "\n").c_str(), stdout);
+        return;
+    }
+    std::string text = fmt::format("{}: {} DICOM series (largest first: read by default)\n",
+                                   options.input, series.size());
+    for (const io::DicomSeriesInfo& info : series) {
+        text += "  " + series_text(info) + "\n";
+    }
     std::fputs(text.c_str(), stdout);
 }
 
@@ -141,6 +216,7 @@ void run_convert(const VolumeOptions& options) {
     const volume::Volume v = io::read_volume(options.input, read_options(options));
     io::WriteVolumeOptions write;
     write.gzip = options.gzip;
+    write.nifti2 = options.nifti2;
     io::write_volume(options.output, v, write);
     std::printf("%s -> %s (%lld x %lld x %lld %s)\n", options.input.c_str(), options.output.c_str(),
                 static_cast<long long>(v.dims()[0]), static_cast<long long>(v.dims()[1]),
@@ -184,6 +260,13 @@ void run_generate(const VolumeOptions& options) {
                 options.dims, std::string(volume::name(v.type())).c_str());
 }
 
+void add_series_option(CLI::App* cmd, VolumeOptions& options) {
+    cmd->add_option("--series", options.series,
+                    "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
+                    "the largest; pliant volume series DIR lists them)")
+        ->type_name("UID");
+}
+
 void add_memory_option(CLI::App* cmd, VolumeOptions& options) {
     cmd->add_option("--max-memory", options.max_memory_mib,
                     "Refuse volumes whose voxels would need more than this (MiB; default 16384)")
@@ -196,24 +279,38 @@ void add_memory_option(CLI::App* cmd, VolumeOptions& options) {
 void register_volume(CLI::App& app, const GlobalOptions& global) {
     auto options = std::make_shared<VolumeOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "volume", "Volume files: info, convert, clean (threshold, alpha normalization), generate");
+        "volume",
+        "Volume files: info, DICOM series, convert, clean (threshold, alpha normalization), "
+        "generate");
     cmd->require_subcommand(1);
 
     CLI::App* info = cmd->add_subcommand("info", "Dims, type, spacing, box and value ranges");
     info->add_option("VOLUME", options->input,
-                     "Volume file (.nrrd .nhdr .nii .nii.gz .hdr .json .raw .raw.gz .inv3)")
+                     "Volume file (.nrrd .nhdr .nii .nii.gz .hdr .mha .mhd .json .raw .raw.gz "
+                     ".inv3 .dcm) or a folder of DICOM files")
         ->required();
+    add_series_option(info, *options);
     add_memory_option(info, *options);
     info->callback([options, &global] { run_info(*options, global); });
 
+    CLI::App* series =
+        cmd->add_subcommand("series", "The DICOM series in a folder (UID, modality, files, dims)");
+    series->add_option("DIR", options->input, "Folder of DICOM files (searched recursively)")
+        ->required();
+    series->callback([options, &global] { run_series(*options, global); });
+
     CLI::App* convert =
         cmd->add_subcommand("convert", "Convert between volume formats (by OUT's extension)");
-    convert->add_option("IN", options->input, "Volume file to read")->required();
+    convert->add_option("IN", options->input, "Volume file or DICOM folder to read")->required();
     convert
         ->add_option("OUT", options->output,
-                     "Volume file to write (.nrrd .nhdr .nii .nii.gz .json)")
+                     "Volume file to write (.nrrd .nhdr .nii .nii.gz .mha .mhd .json)")
         ->required();
-    convert->add_flag("--gzip", options->gzip, "gzip the voxel data (NRRD, raw + JSON)");
+    add_series_option(convert, *options);
+    convert->add_flag("--gzip", options->gzip,
+                      "Compress the voxel data (NRRD and raw + JSON: gzip; MetaImage: zlib)");
+    convert->add_flag("--nifti2", options->nifti2,
+                      "Write NIfTI-2 (64-bit dims, double placement) instead of NIfTI-1");
     add_memory_option(convert, *options);
     convert->callback([options] { run_convert(*options); });
 
@@ -230,7 +327,8 @@ void register_volume(CLI::App& app, const GlobalOptions& global) {
         ->add_option("--normalize", options->normalize,
                      "max: alpha / max alpha; range: (alpha - T/255) / (1 - T/255); none")
         ->check(CLI::IsMember({"max", "range", "none"}));
-    clean->add_flag("--gzip", options->gzip, "gzip the voxel data (NRRD, raw + JSON)");
+    clean->add_flag("--gzip", options->gzip,
+                    "Compress the voxel data (NRRD and raw + JSON: gzip; MetaImage: zlib)");
     add_memory_option(clean, *options);
     clean->callback([options] { run_clean(*options); });
 
@@ -240,7 +338,8 @@ void register_volume(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::IsMember({"shepp-logan", "sphere", "rgba-test"}));
     generate->add_option("OUT", options->output, "Volume file to write")->required();
     generate->add_option("--dims", options->dims, "Voxels per axis")->check(CLI::Range(1, 2048));
-    generate->add_flag("--gzip", options->gzip, "gzip the voxel data (NRRD, raw + JSON)");
+    generate->add_flag("--gzip", options->gzip,
+                       "Compress the voxel data (NRRD and raw + JSON: gzip; MetaImage: zlib)");
     generate->callback([options] { run_generate(*options); });
 
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");

@@ -19,6 +19,7 @@
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/text.hpp"
 #include "pliant/io/detail/volume_data.hpp"
+#include "pliant/volume/reorient.hpp"
 
 namespace pliant::io {
 
@@ -327,10 +328,19 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
         fail(path, "NRRD header has no 'endian' field, required for multi-byte types");
     }
 
-    // Placement.
-    std::array<double, 3> spacing{1, 1, 1};
-    std::array<double, 3> centre0{0, 0, 0};
-    std::array<bool, 3> flip{false, false, false};
+    // Placement: the steps along i, j, k and the first voxel's centre, in the file's space,
+    // converted to pliant's RAS+ world (LPS: x and y negated; LAS: x negated).
+    std::string space;
+    if (const auto it = header.fields.find("space"); it != header.fields.end()) {
+        space = lower(it->second);
+    }
+    const bool negate_x = space == "left-posterior-superior" || space == "lps" ||
+                          space == "left-anterior-superior" || space == "las";
+    const bool negate_y = space == "left-posterior-superior" || space == "lps";
+    const auto to_world = [&](std::array<double, 3> v) {
+        return Vec3d{negate_x ? -v[0] : v[0], negate_y ? -v[1] : v[1], v[2]};
+    };
+    volume::GridPlacement grid;
     bool has_centre0 = false;
     if (const auto it = header.fields.find("space directions"); it != header.fields.end()) {
         const std::vector<std::string> vectors = split_vectors(it->second);
@@ -349,18 +359,18 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
                                            "component, expected finite numbers, got {}",
                                            a, (*v)[c]));
                 }
-                if (c != a && (*v)[c] != 0.0) {
-                    throw Unsupported(fmt::format(
-                        "{}: NRRD 'space directions' {} is rotated or permuted: only "
-                        "axis-aligned grids are supported (axis {} must be along space axis {})",
-                        path.string(), it->second, a, a));
-                }
             }
-            if ((*v)[a] == 0.0) {
+            if ((*v)[0] == 0.0 && (*v)[1] == 0.0 && (*v)[2] == 0.0) {
                 fail(path, fmt::format("NRRD 'space directions': axis {} has zero length", a));
             }
-            spacing[a] = std::abs((*v)[a]);
-            flip[a] = (*v)[a] < 0;
+            grid.steps[a] = to_world(*v);
+        }
+        const double cosine = volume::max_axis_cosine(grid);
+        if (!(cosine <= volume::MAX_AXIS_COSINE)) {
+            throw Unsupported(fmt::format(
+                "{}: NRRD 'space directions' {} are sheared (not orthogonal: largest |cosine| "
+                "{:.3g}, expected at most {}): a sheared grid cannot be placed without resampling",
+                path.string(), it->second, cosine, volume::MAX_AXIS_COSINE));
         }
     } else if (const auto sp = header.fields.find("spacings"); sp != header.fields.end()) {
         const std::vector<std::string> values = words(sp->second);
@@ -369,13 +379,14 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
                                    values.size()));
         }
         for (std::size_t a = 0; a < 3; ++a) {
-            spacing[a] = parse_double(path, "spacings", values[first_spatial + a]);
-        }
-    }
-    for (std::size_t a = 0; a < 3; ++a) {
-        if (!std::isfinite(spacing[a]) || spacing[a] <= 0) {
-            fail(path, fmt::format("NRRD spacing of axis {}: expected a finite number > 0, got {}",
-                                   a, spacing[a]));
+            const double spacing = parse_double(path, "spacings", values[first_spatial + a]);
+            if (!std::isfinite(spacing) || spacing <= 0) {
+                fail(path,
+                     fmt::format("NRRD spacing of axis {}: expected a finite number > 0, got {}", a,
+                                 spacing));
+            }
+            grid.steps[a] = {};
+            grid.steps[a][static_cast<int>(a)] = spacing;
         }
     }
     if (const auto it = header.fields.find("space origin"); it != header.fields.end()) {
@@ -387,20 +398,9 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
                                            it->second));
                 }
             }
-            centre0 = *v;
+            grid.centre0 = to_world(*v);
             has_centre0 = true;
         }
-    }
-    Vec3d origin{0, 0, 0};
-    if (has_centre0) {
-        std::array<double, 3> corner{};
-        for (std::size_t a = 0; a < 3; ++a) {
-            // Flipped axis: voxel centres run from centre0 − (n − 1)·s up to centre0.
-            const double low_centre =
-                flip[a] ? centre0[a] - static_cast<double>(dims[a] - 1) * spacing[a] : centre0[a];
-            corner[a] = low_centre - 0.5 * spacing[a];
-        }
-        origin = {corner[0], corner[1], corner[2]};
     }
 
     // Data location.
@@ -462,8 +462,7 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
                              size > offset ? size - offset : 0, offset));
         }
     }
-    volume::Volume volume = volume::Volume::allocate(
-        dims, type, {spacing[0], spacing[1], spacing[2]}, origin, max_bytes);
+    volume::Volume volume = volume::Volume::allocate(dims, type, {1, 1, 1}, {0, 0, 0}, max_bytes);
     if (gzip) {
         detail::read_gzip_data(data_path, offset, volume.bytes());
     } else {
@@ -473,7 +472,10 @@ volume::Volume read_nrrd(const std::filesystem::path& path, std::size_t max_byte
     if (big_endian) {
         detail::swap_channel_bytes(volume);
     }
-    detail::flip_axes(volume, flip);
+    volume = volume::place_nearest_axes(std::move(volume), grid);
+    if (!has_centre0) {
+        volume.set_origin({0, 0, 0});  // no 'space origin': the box corner at the world origin
+    }
     return volume;
 }
 
@@ -493,10 +495,25 @@ void write_nrrd(const std::filesystem::path& path, const volume::Volume& volume,
     header += "space dimension: 3\n";
     header += fmt::format("sizes: {}{} {} {}\n", rgba ? "4 " : "", d[0], d[1], d[2]);
     header += fmt::format("kinds: {}domain domain domain\n", rgba ? "RGBA-color " : "");
-    header += fmt::format("space directions: {}({},0,0) (0,{},0) (0,0,{})\n", rgba ? "none " : "",
-                          s.x, s.y, s.z);
-    header += fmt::format("space origin: ({},{},{})\n", o.x + 0.5 * s.x, o.y + 0.5 * s.y,
-                          o.z + 0.5 * s.z);
+    if (volume.is_axis_aligned()) {
+        header += fmt::format("space directions: {}({},0,0) (0,{},0) (0,0,{})\n",
+                              rgba ? "none " : "", s.x, s.y, s.z);
+        header += fmt::format("space origin: ({},{},{})\n", o.x + 0.5 * s.x, o.y + 0.5 * s.y,
+                              o.z + 0.5 * s.z);
+    } else {
+        // Columns direction × spacing; the first voxel's centre. 17 significant digits: the
+        // directions read back bit for bit.
+        const volume::Direction& direction = volume.direction();
+        const std::array<double, 3> spacing{s.x, s.y, s.z};
+        header += fmt::format("space directions: {}", rgba ? "none " : "");
+        for (std::size_t a = 0; a < 3; ++a) {
+            const Vec3d step = direction[a] * spacing[a];
+            header += fmt::format("({:.17g},{:.17g},{:.17g}){}", step.x, step.y, step.z,
+                                  a < 2 ? " " : "\n");
+        }
+        const Vec3d c = volume.world_from_grid({0.5, 0.5, 0.5});
+        header += fmt::format("space origin: ({:.17g},{:.17g},{:.17g})\n", c.x, c.y, c.z);
+    }
     header += "endian: little\n";
     header += fmt::format("encoding: {}\n", gzip ? "gzip" : "raw");
     const std::span<const std::byte> bytes = volume.bytes();

@@ -88,12 +88,14 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     if (!doc.is_object()) {
         fail(sidecar, "expected a JSON object");
     }
-    static const std::set<std::string> KEYS = {"format",  "version", "data_file", "dims",    "type",
-                                               "spacing", "origin",  "endian",    "encoding"};
+    static const std::set<std::string> KEYS = {"format", "version", "data_file", "dims",
+                                               "type",   "spacing", "origin",    "direction",
+                                               "endian", "encoding"};
     for (const auto& item : doc.items()) {
         if (KEYS.count(item.key()) == 0) {
             fail(sidecar, fmt::format("unknown key \"{}\", expected one of format, version, "
-                                      "data_file, dims, type, spacing, origin, endian, encoding",
+                                      "data_file, dims, type, spacing, origin, direction, endian, "
+                                      "encoding",
                                       item.key()));
         }
     }
@@ -140,6 +142,36 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
                                       spacing[i]));
         }
     }
+    volume::Direction direction = volume::IDENTITY_DIRECTION;
+    if (const auto it = doc.find("direction"); it != doc.end()) {
+        const auto bad = [&] {
+            fail(sidecar, fmt::format("\"direction\": expected 3 columns of 3 finite numbers "
+                                      "(unit, orthogonal: the world directions of the i, j, k "
+                                      "axes), got {}",
+                                      it->dump()));
+        };
+        if (!it->is_array() || it->size() != 3) {
+            bad();
+        }
+        for (std::size_t a = 0; a < 3; ++a) {
+            const json& column = (*it)[a];
+            if (!column.is_array() || column.size() != 3) {
+                bad();
+            }
+            for (std::size_t c = 0; c < 3; ++c) {
+                if (!column[c].is_number()) {
+                    bad();
+                }
+                direction[a][static_cast<int>(c)] = column[c].get<double>();
+            }
+        }
+        try {
+            volume::Volume probe;
+            probe.set_direction(direction);
+        } catch (const InvalidInput& e) {
+            fail(sidecar, fmt::format("\"direction\": {}", e.what()));
+        }
+    }
     const json& endian = field(doc, sidecar, "endian");
     if (endian != "little" && endian != "big") {
         fail(sidecar,
@@ -178,6 +210,7 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     if (endian == "big") {
         detail::swap_channel_bytes(volume);
     }
+    volume.set_direction(direction);
     return volume;
 }
 
@@ -207,6 +240,11 @@ void write_raw_volume(const std::filesystem::path& path, const volume::Volume& v
     doc["type"] = std::string(volume::name(volume.type()));
     doc["spacing"] = {s.x, s.y, s.z};
     doc["origin"] = {o.x, o.y, o.z};
+    if (!volume.is_axis_aligned()) {
+        const volume::Direction& d = volume.direction();
+        doc["direction"] = {
+            {d[0].x, d[0].y, d[0].z}, {d[1].x, d[1].y, d[1].z}, {d[2].x, d[2].y, d[2].z}};
+    }
     doc["endian"] = "little";
     doc["encoding"] = gzip ? "gzip" : "raw";
     const std::string text = doc.dump(2) + "\n";

@@ -6,7 +6,10 @@
 //    "dims": [nx, ny, nz],                 integers ≥ 1, x fastest in the data
 //    "type": "u8" | "i16" | "u16" | "f32" | "rgba8" | "rgba32f",
 //    "spacing": [sx, sy, sz],              finite, > 0
-//    "origin": [ox, oy, oz],               box corner (voxel centres at origin + (i + 0.5) s)
+//    "origin": [ox, oy, oz],               box corner (voxel centres at origin + D (i + 0.5) s)
+//    "direction": [[..], [..], [..]],      optional: the world directions of the i, j, k axes
+//                                          (unit, orthogonal; default identity; written only
+//                                          for oriented volumes)
 //    "endian": "little",                   "big" is read (swapped), never written
 //    "encoding": "raw" | "gzip"}           gzip: data_file is `<stem>.raw.gz`
 // The data file holds exactly nx·ny·nz voxels, channels interleaved, no header.

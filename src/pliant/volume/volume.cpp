@@ -71,6 +71,52 @@ void Volume::set_origin(const Vec3d& origin) {
     m_origin = origin;
 }
 
+void Volume::set_direction(const Direction& direction) {
+    const auto text = [&] {
+        return fmt::format("({}, {}, {}) ({}, {}, {}) ({}, {}, {})", direction[0].x, direction[0].y,
+                           direction[0].z, direction[1].x, direction[1].y, direction[1].z,
+                           direction[2].x, direction[2].y, direction[2].z);
+    };
+    for (std::size_t a = 0; a < 3; ++a) {
+        if (!is_finite(direction[a]) ||
+            !(std::abs(std::sqrt(dot(direction[a], direction[a])) - 1.0) <= DIRECTION_TOLERANCE)) {
+            throw InvalidInput(fmt::format(
+                "volume: direction columns must be finite unit vectors, got {}", text()));
+        }
+        for (std::size_t b = a + 1; b < 3; ++b) {
+            if (!(std::abs(dot(direction[a], direction[b])) <= DIRECTION_TOLERANCE)) {
+                throw InvalidInput(fmt::format(
+                    "volume: direction columns must be orthogonal, got {} (columns {} and {}: "
+                    "dot {})",
+                    text(), a, b, dot(direction[a], direction[b])));
+            }
+        }
+    }
+    m_direction = direction;
+}
+
+Vec3d Volume::world_from_grid(const Vec3d& uvw) const {
+    const Vec3d local{uvw.x * m_spacing.x, uvw.y * m_spacing.y, uvw.z * m_spacing.z};
+    if (is_axis_aligned()) {
+        return m_origin + local;
+    }
+    return m_origin + m_direction[0] * local.x + m_direction[1] * local.y +
+           m_direction[2] * local.z;
+}
+
+AABBd Volume::world_bounds() const {
+    if (is_axis_aligned()) {
+        return bounds();
+    }
+    AABBd box;
+    for (int corner = 0; corner < 8; ++corner) {
+        box.extend(world_from_grid({(corner & 1) != 0 ? static_cast<double>(m_dims[0]) : 0.0,
+                                    (corner & 2) != 0 ? static_cast<double>(m_dims[1]) : 0.0,
+                                    (corner & 4) != 0 ? static_cast<double>(m_dims[2]) : 0.0}));
+    }
+    return box;
+}
+
 AABBd Volume::bounds() const {
     const Vec3d size{static_cast<double>(m_dims[0]) * m_spacing.x,
                      static_cast<double>(m_dims[1]) * m_spacing.y,

@@ -192,11 +192,13 @@ void read_gzip_data(const std::filesystem::path& path, std::uint64_t offset,
     }
 }
 
-void write_gzip(std::ostream& out, std::span<const std::byte> bytes) {
+namespace {
+
+// Deflates `bytes` into `out` with zlib's window bits (15 + 16: gzip wrapper; 15: zlib).
+void write_deflate(std::ostream& out, std::span<const std::byte> bytes, int window_bits) {
     z_stream stream{};
-    // 15 + 16: gzip wrapper.
-    if (deflateInit2(&stream, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
-        throw IoError("gzip: cannot initialize zlib");
+    if (deflateInit2(&stream, 6, Z_DEFLATED, window_bits, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
+        throw IoError("deflate: cannot initialize zlib");
     }
     struct End {
         z_stream* s;
@@ -222,6 +224,16 @@ void write_gzip(std::ostream& out, std::span<const std::byte> bytes) {
     } while (status != Z_STREAM_END);
 }
 
+}  // namespace
+
+void write_gzip(std::ostream& out, std::span<const std::byte> bytes) {
+    write_deflate(out, bytes, 15 + 16);
+}
+
+void write_zlib(std::ostream& out, std::span<const std::byte> bytes) {
+    write_deflate(out, bytes, 15);
+}
+
 void swap_channel_bytes(volume::Volume& volume) {
     const std::size_t width = volume::bytes_per_channel(volume.type());
     if (width == 1) {
@@ -231,37 +243,6 @@ void swap_channel_bytes(volume::Volume& volume) {
     for (std::size_t i = 0; i + width <= bytes.size(); i += width) {
         std::reverse(bytes.begin() + static_cast<std::ptrdiff_t>(i),
                      bytes.begin() + static_cast<std::ptrdiff_t>(i + width));
-    }
-}
-
-void flip_axes(volume::Volume& volume, const std::array<bool, 3>& flip) {
-    if (!flip[0] && !flip[1] && !flip[2]) {
-        return;
-    }
-    const volume::Dims& d = volume.dims();
-    const std::size_t bpv = volume::bytes_per_voxel(volume.type());
-    std::span<std::byte> bytes = volume.bytes();
-    std::vector<std::byte> tmp(bpv);
-    auto swap_voxels = [&](std::int64_t a, std::int64_t b) {
-        std::byte* pa = bytes.data() + static_cast<std::size_t>(a) * bpv;
-        std::byte* pb = bytes.data() + static_cast<std::size_t>(b) * bpv;
-        std::memcpy(tmp.data(), pa, bpv);
-        std::memcpy(pa, pb, bpv);
-        std::memcpy(pb, tmp.data(), bpv);
-    };
-    for (std::int64_t k = 0; k < d[2]; ++k) {
-        for (std::int64_t j = 0; j < d[1]; ++j) {
-            for (std::int64_t i = 0; i < d[0]; ++i) {
-                const std::int64_t fi = flip[0] ? d[0] - 1 - i : i;
-                const std::int64_t fj = flip[1] ? d[1] - 1 - j : j;
-                const std::int64_t fk = flip[2] ? d[2] - 1 - k : k;
-                const std::int64_t a = volume.index(i, j, k);
-                const std::int64_t b = volume.index(fi, fj, fk);
-                if (a < b) {
-                    swap_voxels(a, b);
-                }
-            }
-        }
     }
 }
 

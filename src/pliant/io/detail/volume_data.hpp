@@ -1,6 +1,7 @@
 // Shared pieces of the volume readers and writers (io/nrrd, io/nifti, io/raw_volume, io/inv3):
 // checking declared sizes before allocating, reading raw or gzip-compressed voxel data straight
-// into a Volume's bytes, writing them deflated, byte swapping and axis flips.
+// into a Volume's bytes, writing them deflated, byte swapping. (Flips and axis swaps are
+// volume::place_nearest_axes.)
 //
 // Every function throws IoError "<path>: <what>, expected X, got Y" for a bad file.
 #pragma once
@@ -42,13 +43,11 @@ void read_gzip_data(const std::filesystem::path& path, std::uint64_t offset,
 
 // Writes `bytes` to `out` as one gzip member (level 6).
 void write_gzip(std::ostream& out, std::span<const std::byte> bytes);
+// Writes `bytes` to `out` as one zlib stream (RFC 1950, level 6; MetaImage's CompressedData).
+void write_zlib(std::ostream& out, std::span<const std::byte> bytes);
 
 // Reverses the byte order of every channel (2- and 4-byte types; 1-byte types are unchanged).
 void swap_channel_bytes(volume::Volume& volume);
-
-// Reverses the voxel order along each axis whose flag is set (world positions of the voxels are
-// the caller's business: this only re-indexes).
-void flip_axes(volume::Volume& volume, const std::array<bool, 3>& flip);
 
 // "256×256×108" for messages.
 std::string dims_text(const volume::Dims& dims);

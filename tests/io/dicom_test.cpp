@@ -1,0 +1,284 @@
+#include "pliant/io/dicom.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "io/dicom_series.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
+#include "pliant/io/volume_io.hpp"
+#include "support/test_files.hpp"
+
+namespace pliant::io {
+namespace {
+
+namespace fs = std::filesystem;
+using pliant::test::DicomSeriesSpec;
+using test::expect_io_error;
+using test::TempDir;
+using volume::Volume;
+using volume::VoxelType;
+
+// Runs f, expects InvalidInput whose message holds every fragment.
+template <typename F>
+void expect_invalid(F&& f, std::initializer_list<std::string> fragments) {
+    try {
+        f();
+        ADD_FAILURE() << "expected InvalidInput, nothing was thrown";
+    } catch (const InvalidInput& e) {
+        for (const std::string& fragment : fragments) {
+            EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos)
+                << "message: " << e.what() << "\nmissing: " << fragment;
+        }
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << "expected InvalidInput, got: " << e.what();
+    }
+}
+
+// Every file voxel (i, j, k) of the spec is in `v` at its world position (DICOM LPS converted to
+// RAS) with its phantom value in HU.
+void expect_phantom(const Volume& v, const DicomSeriesSpec& spec) {
+    const auto& o = spec.orientation;
+    const Vec3d row{o[0], o[1], o[2]};
+    const Vec3d column{o[3], o[4], o[5]};
+    const std::array<double, 3> nn = pliant::test::slice_normal(spec);
+    const Vec3d normal{nn[0], nn[1], nn[2]};
+    const Vec3d p0{spec.position0[0], spec.position0[1], spec.position0[2]};
+    const volume::Direction& d = v.direction();
+    const auto value = [&](std::int64_t index) {
+        switch (v.type()) {
+            case VoxelType::i16:
+                return static_cast<double>(
+                    v.values<VoxelType::i16>()[static_cast<std::size_t>(index)]);
+            case VoxelType::f32:
+                return static_cast<double>(
+                    v.values<VoxelType::f32>()[static_cast<std::size_t>(index)]);
+            default:
+                ADD_FAILURE() << "unexpected type " << volume::name(v.type());
+                return 0.0;
+        }
+    };
+    for (int k = 0; k < spec.slices; ++k) {
+        for (int j = 0; j < spec.rows; ++j) {
+            for (int i = 0; i < spec.columns; ++i) {
+                const Vec3d lps = p0 + row * (i * spec.column_spacing) +
+                                  column * (j * spec.row_spacing) + normal * (k * spec.slice_step);
+                const Vec3d world{-lps.x, -lps.y, lps.z};
+                std::array<std::int64_t, 3> index{};
+                for (std::size_t a = 0; a < 3; ++a) {
+                    const double u =
+                        dot(d[a], world - v.origin()) / v.spacing()[static_cast<int>(a)] - 0.5;
+                    index[a] = std::lround(u);
+                    ASSERT_NEAR(u, static_cast<double>(index[a]), 1e-6)
+                        << i << " " << j << " " << k;
+                    ASSERT_GE(index[a], 0);
+                    ASSERT_LT(index[a], v.dims()[a]);
+                }
+                ASSERT_EQ(value(v.index(index[0], index[1], index[2])),
+                          pliant::test::phantom_hu(spec, i, j, k))
+                    << i << " " << j << " " << k;
+            }
+        }
+    }
+}
+
+TEST(Dicom, CtSeriesInShuffledOrderReadsInHounsfieldUnits) {
+    TempDir dir;
+    const DicomSeriesSpec spec;
+    pliant::test::write_dicom_series(dir / "ct", spec, 3);
+    const Volume v = read_dicom_series(dir / "ct");
+    EXPECT_EQ(v.type(), VoxelType::i16);
+    EXPECT_EQ(v.dims(), (volume::Dims{32, 32, 16}));
+    EXPECT_EQ(v.spacing(), (Vec3d{0.7, 0.8, 2.5}));
+    EXPECT_TRUE(v.is_axis_aligned());  // axial LPS: i and j reversed into RAS, exactly
+    const auto values = v.values<VoxelType::i16>();
+    EXPECT_EQ(*std::min_element(values.begin(), values.end()), -1024);
+    EXPECT_EQ(*std::max_element(values.begin(), values.end()), 1500);
+    expect_phantom(v, spec);
+    // The same through read_volume, a file of the series, and an explicit list.
+    EXPECT_EQ(volume_format(dir / "ct"), VolumeFormat::dicom);
+    const Volume by_dispatch = read_volume(dir / "ct");
+    ASSERT_EQ(by_dispatch.size_bytes(), v.size_bytes());
+    EXPECT_EQ(std::memcmp(by_dispatch.bytes().data(), v.bytes().data(), v.size_bytes()), 0);
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(dir / "ct")) {
+        files.push_back(entry.path());
+    }
+    const Volume by_file = read_volume(files[5]);
+    const Volume by_list = read_dicom_series(files);
+    EXPECT_EQ(by_file.origin(), v.origin());
+    EXPECT_EQ(std::memcmp(by_list.bytes().data(), v.bytes().data(), v.size_bytes()), 0);
+    // A Part-10 file without an extension is recognised by its DICM marker.
+    fs::copy_file(files[0], dir / "IM0001");
+    EXPECT_EQ(volume_format(dir / "IM0001"), VolumeFormat::dicom);
+}
+
+TEST(Dicom, CompressedTransferSyntaxesReadTheSameVoxels) {
+    TempDir dir;
+    DicomSeriesSpec spec;
+    spec.slices = 6;
+    pliant::test::write_dicom_series(dir / "plain", spec, 4);
+    const Volume plain = read_dicom_series(dir / "plain");
+    for (const auto syntax :
+         {gdcm::TransferSyntax::RLELossless, gdcm::TransferSyntax::JPEGLSLossless,
+          gdcm::TransferSyntax::JPEG2000Lossless, gdcm::TransferSyntax::JPEGLosslessProcess14_1}) {
+        const std::string name = gdcm::TransferSyntax::GetTSString(syntax);
+        SCOPED_TRACE(name);
+        spec.syntax = syntax;
+        pliant::test::write_dicom_series(dir / name, spec, 5);
+        const Volume v = read_dicom_series(dir / name);
+        ASSERT_EQ(v.dims(), plain.dims());
+        EXPECT_EQ(v.origin(), plain.origin());
+        EXPECT_EQ(std::memcmp(v.bytes().data(), plain.bytes().data(), v.size_bytes()), 0);
+    }
+}
+
+TEST(Dicom, TiltedSeriesKeepsItsDirectionOrIsResampled) {
+    TempDir dir;
+    DicomSeriesSpec spec;
+    const double t = 5.0 * std::numbers::pi / 180.0;
+    spec.orientation = {1, 0, 0, 0, std::cos(t), std::sin(t)};
+    pliant::test::write_dicom_series(dir / "tilted", spec, 6);
+    const Volume v = read_volume(dir / "tilted", {.orientation = Orientation::keep});
+    ASSERT_FALSE(v.is_axis_aligned());
+    EXPECT_NEAR(v.spacing().x, 0.7, 1e-12);
+    EXPECT_NEAR(v.spacing().z, 2.5, 1e-9);
+    // LPS row (1, 0, 0), column (0, c, s), normal (0, −s, c) → RAS (−1, 0, 0), (0, −c, s),
+    // (0, s, c); the first two reversed by the re-indexing.
+    const volume::Direction& d = v.direction();
+    EXPECT_LT(norm(d[0] - Vec3d{1, 0, 0}), 1e-9);
+    EXPECT_LT(norm(d[1] - Vec3d{0, std::cos(t), -std::sin(t)}), 1e-9);
+    EXPECT_LT(norm(d[2] - Vec3d{0, std::sin(t), std::cos(t)}), 1e-9);
+    expect_phantom(v, spec);
+    // By default: resampled onto an axis-aligned grid covering it, air outside.
+    const Volume aligned = read_volume(dir / "tilted");
+    EXPECT_TRUE(aligned.is_axis_aligned());
+    EXPECT_EQ(aligned.type(), VoxelType::i16);
+    const auto values = aligned.values<VoxelType::i16>();
+    EXPECT_EQ(*std::min_element(values.begin(), values.end()), -1024);
+    EXPECT_EQ(*std::max_element(values.begin(), values.end()), 1500);
+}
+
+TEST(Dicom, SeveralSeriesInOneFolder) {
+    TempDir dir;
+    DicomSeriesSpec big;
+    big.description = "abdomen";
+    pliant::test::write_dicom_series(dir / "mixed", big, 7);
+    DicomSeriesSpec scout;
+    scout.slices = 4;
+    scout.description = "scout";
+    scout.modality = "CT";
+    scout.series_uid = "1.2.3.4.5.6.7";
+    pliant::test::write_dicom_series(dir / "mixed" / "sub", scout, 8);  // a subfolder: found too
+
+    const std::vector<DicomSeriesInfo> all = list_dicom_series(dir / "mixed");
+    ASSERT_EQ(all.size(), 2u);
+    EXPECT_EQ(all[0].description, "abdomen");
+    EXPECT_EQ(all[0].num_files, 16);
+    EXPECT_EQ(all[0].dims, (volume::Dims{32, 32, 16}));
+    EXPECT_EQ(all[0].modality, "CT");
+    EXPECT_EQ(all[1].uid, "1.2.3.4.5.6.7");
+    EXPECT_EQ(all[1].num_files, 4);
+    EXPECT_EQ(chosen_dicom_series(dir / "mixed", ""), all[0].uid);
+
+    std::vector<std::string> infos;
+    const LogSink previous = set_log_sink([&](LogLevel level, std::string_view message) {
+        if (level == LogLevel::info) {
+            infos.emplace_back(message);
+        }
+    });
+    const Volume largest = read_dicom_series(dir / "mixed");
+    set_log_sink(previous);
+    EXPECT_EQ(largest.dims()[2], 16);
+    ASSERT_EQ(infos.size(), 1u);
+    EXPECT_NE(infos[0].find("2 DICOM series"), std::string::npos) << infos[0];
+    EXPECT_NE(infos[0].find("1.2.3.4.5.6.7"), std::string::npos) << infos[0];
+    EXPECT_NE(infos[0].find("--series"), std::string::npos) << infos[0];
+
+    const Volume other = read_volume(dir / "mixed", {.series_uid = "1.2.3.4.5.6.7"});
+    EXPECT_EQ(other.dims(), (volume::Dims{32, 32, 4}));
+    expect_invalid([&] { read_dicom_series(dir / "mixed", {.series_uid = "9.9"}); },
+                   {"no DICOM series with UID 9.9", "1.2.3.4.5.6.7", "abdomen"});
+}
+
+TEST(Dicom, BrokenSeriesNameTheFiles) {
+    TempDir dir;
+    const DicomSeriesSpec spec;
+    {
+        // A missing middle slice.
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "missing", spec, 9);
+        fs::remove(files[7]);
+        expect_invalid([&] { read_dicom_series(dir / "missing"); },
+                       {"1 slice missing between", files[6].filename().string(),
+                        files[8].filename().string(), "5 mm apart", "2.5 mm"});
+    }
+    {
+        // Uneven spacing: 2.5 mm, then 3.2 mm between slices 7 and 8.
+        std::vector<double> positions;
+        for (int k = 0; k < spec.slices; ++k) {
+            positions.push_back(k * 2.5 + (k >= 8 ? 0.7 : 0.0));
+        }
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "uneven", spec, 10, positions);
+        expect_invalid([&] { read_dicom_series(dir / "uneven"); },
+                       {"uneven slice spacing", "2.5 mm between", "3.2 mm between",
+                        files[7].filename().string(), files[8].filename().string()});
+    }
+    {
+        // A slice of another size in the series.
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "sizes", spec, 11);
+        DicomSeriesSpec small = spec;
+        small.columns = 16;
+        const std::string uid = list_dicom_series(dir / "sizes").front().uid;
+        pliant::test::write_dicom_slice(files[5], small, uid, "1.2.3", 5, 5 * 2.5, 6);
+        expect_invalid([&] { read_dicom_series(dir / "sizes"); },
+                       {"mixed sizes", files[5].filename().string(), "16x32", "32x32"});
+    }
+    {
+        // Two slices at one position.
+        const std::vector<fs::path> files =
+            pliant::test::write_dicom_series(dir / "twice", spec, 12);
+        const std::string uid = list_dicom_series(dir / "twice").front().uid;
+        pliant::test::write_dicom_slice(dir / "twice" / "copy.dcm", spec, uid, "1.2.3", 3, 3 * 2.5,
+                                        99);
+        expect_invalid([&] { read_dicom_series(dir / "twice"); },
+                       {"two slices at one position", "copy.dcm"});
+    }
+    // No DICOM at all, a non-DICOM file, a folder that is not there.
+    fs::create_directories(dir / "empty");
+    expect_io_error([&] { read_dicom_series(dir / "empty"); }, {"empty", "no DICOM image"});
+    fs::create_directories(dir / "garbage");
+    test::write_bytes(dir / "garbage" / "a.dcm", std::string(300, 'x'));
+    expect_io_error([&] { read_dicom_series(dir / "garbage"); }, {"no DICOM image", "1 candidate"});
+    const std::vector<fs::path> listed{dir / "garbage" / "a.dcm"};
+    expect_io_error([&] { read_dicom_series(listed); }, {"a.dcm", "not a DICOM file"});
+    expect_io_error([&] { read_dicom_series(dir / "nowhere"); }, {"nowhere", "no such"});
+    // The memory limit, before any pixel data is read.
+    pliant::test::write_dicom_series(dir / "limit", spec, 13);
+    expect_io_error(
+        [&] { read_dicom_series(dir / "limit", {.series_uid = "", .max_bytes = 1000}); },
+        {"memory limit"});
+}
+
+TEST(Dicom, FractionalRescaleGivesFloats) {
+    TempDir dir;
+    DicomSeriesSpec spec;
+    spec.slices = 3;
+    spec.slope = 0.5;
+    spec.intercept = -1024.0;
+    pliant::test::write_dicom_series(dir / "f", spec, 14);
+    const Volume v = read_dicom_series(dir / "f");
+    EXPECT_EQ(v.type(), VoxelType::f32);
+    expect_phantom(v, spec);
+}
+
+}  // namespace
+}  // namespace pliant::io
