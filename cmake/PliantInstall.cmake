@@ -44,6 +44,11 @@ set(PLIANT_PC_LIBS "")
 foreach(module pipeline io nerf render pbd volume cloth collision bvh geometry core)
   string(APPEND PLIANT_PC_LIBS " -lpliant_${module}")
 endforeach()
+# Libraries without a pkg-config file of their own (found by hand in PliantLibraryDependencies).
+set(PLIANT_PC_EXTRA_LIBS "-lnifti2 -lznz")
+if(TARGET pliant_gdcm)
+  string(APPEND PLIANT_PC_EXTRA_LIBS " -lgdcmMSFF -lgdcmDSED -lgdcmCommon")
+endif()
 # Relocatable: the prefix is found from the .pc file's own directory (LIBDIR/pkgconfig).
 file(RELATIVE_PATH PLIANT_PC_PREFIX_FROM_PCFILEDIR /${CMAKE_INSTALL_LIBDIR}/pkgconfig /)
 string(REGEX REPLACE "/$" "" PLIANT_PC_PREFIX_FROM_PCFILEDIR "${PLIANT_PC_PREFIX_FROM_PCFILEDIR}")

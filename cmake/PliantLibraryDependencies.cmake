@@ -24,3 +24,38 @@ if(NOT TARGET nifti::niftiio)
   target_include_directories(nifti::niftiio INTERFACE ${NIFTI_INCLUDE_DIR})
   target_link_libraries(nifti::niftiio INTERFACE ${NIFTI_NIFTIIO_LIBRARY} ${NIFTI_ZNZ_LIBRARY} ZLIB::ZLIB m)
 endif()
+
+# niftilib's NIfTI-2 API (libnifti2, nifti2_io.h) reads NIfTI-1 and NIfTI-2 files. It exports the
+# same symbol names as libniftiio (the NIfTI-1 API) with other structs, so io links libnifti2
+# only, never nifti::niftiio too (../shared/DEPENDENCIES.md). Found by hand: Debian's NIFTI CMake
+# config names files that do not exist.
+find_library(PLIANT_NIFTI2_LIBRARY nifti2 REQUIRED)
+if(NOT TARGET pliant_nifti2)
+  add_library(pliant_nifti2 INTERFACE IMPORTED GLOBAL)
+  target_include_directories(pliant_nifti2 INTERFACE ${NIFTI_INCLUDE_DIR})
+  target_link_libraries(pliant_nifti2 INTERFACE ${PLIANT_NIFTI2_LIBRARY} ${NIFTI_ZNZ_LIBRARY} ZLIB::ZLIB m)
+endif()
+
+# GDCM 3 (Debian libgdcm-dev) for DICOM series. Found by hand rather than with find_package(GDCM):
+# its config imports the gdcm-tools executables and VTK parts and warns about each one that is
+# not installed. Without GDCM, pliant builds and DICOM reads are Unsupported.
+find_path(PLIANT_GDCM_INCLUDE_DIR gdcmImageReader.h PATH_SUFFIXES gdcm-3.0)
+set(PLIANT_IO_GDCM "")
+foreach(lib gdcmMSFF gdcmDSED gdcmCommon)
+  find_library(PLIANT_${lib}_LIBRARY ${lib})
+endforeach()
+if(PLIANT_GDCM_INCLUDE_DIR AND PLIANT_gdcmMSFF_LIBRARY AND PLIANT_gdcmDSED_LIBRARY
+   AND PLIANT_gdcmCommon_LIBRARY)
+  if(NOT TARGET pliant_gdcm)
+    add_library(pliant_gdcm INTERFACE IMPORTED GLOBAL)
+    target_include_directories(pliant_gdcm INTERFACE ${PLIANT_GDCM_INCLUDE_DIR})
+    target_link_libraries(pliant_gdcm INTERFACE ${PLIANT_gdcmMSFF_LIBRARY}
+      ${PLIANT_gdcmDSED_LIBRARY} ${PLIANT_gdcmCommon_LIBRARY})
+    target_compile_definitions(pliant_gdcm INTERFACE PLIANT_HAS_GDCM=1)
+  endif()
+  set(PLIANT_IO_GDCM pliant_gdcm)
+  message(STATUS "DICOM: GDCM found (${PLIANT_GDCM_INCLUDE_DIR})")
+else()
+  set(PLIANT_IO_GDCM "")
+  message(STATUS "DICOM: GDCM not found (libgdcm-dev): DICOM reading disabled")
+endif()
