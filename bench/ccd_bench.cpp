@@ -67,8 +67,7 @@ const LoadedSet& load(const SetSource& source) {
             const std::vector<bool> truth = pliant::io::read_mathematica_bools(source.truth_json);
             if (truth.size() != slot->queries.size()) {
                 slot->error = source.truth_json.string() + ": " + std::to_string(truth.size()) +
-                              " booleans for " + std::to_string(slot->queries.size()) +
-                              " queries";
+                              " booleans for " + std::to_string(slot->queries.size()) + " queries";
                 return *slot;
             }
             for (std::size_t i = 0; i < truth.size(); ++i) {
@@ -103,8 +102,8 @@ bool cubic_ccd(CcdQueryKind kind, const CcdQuery& q) {
     return kind == CcdQueryKind::vertex_face
                ? pliant::bench::cubic_vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6],
                                                       p[7], toi)
-               : pliant::bench::cubic_edge_edge_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6],
-                                                    p[7], toi);
+               : pliant::bench::cubic_edge_edge_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7],
+                                                    toi);
 }
 
 // Runs `method` over every query of the set per iteration; counts against the truth.
@@ -152,10 +151,8 @@ void add_pliant_search_counters(benchmark::State& state, const SetSource& source
         const auto& p = q.points;
         const pliant::collision::CcdResult r =
             source.kind == CcdQueryKind::vertex_face
-                ? pliant::collision::vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6],
-                                                     p[7])
-                : pliant::collision::edge_edge_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6],
-                                                   p[7]);
+                ? pliant::collision::vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7])
+                : pliant::collision::edge_edge_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]);
         total += r.iterations;
         largest = std::max<std::int64_t>(largest, r.iterations);
         at_limit += r.hit_iteration_limit ? 1 : 0;
@@ -202,8 +199,8 @@ std::vector<SetSource> discover_sets() {
         }
     }
     const fs::path funnel = DATA_DIR / "cloth-funnel";
-    const std::pair<const char*, CcdQueryKind> funnel_kinds[] = {
-        {"vf", CcdQueryKind::vertex_face}, {"ee", CcdQueryKind::edge_edge}};
+    const std::pair<const char*, CcdQueryKind> funnel_kinds[] = {{"vf", CcdQueryKind::vertex_face},
+                                                                 {"ee", CcdQueryKind::edge_edge}};
     for (const auto& [suffix, kind] : funnel_kinds) {
         const std::string stem = std::string("227") + suffix;
         const fs::path csv = funnel / "queries" / (stem + ".csv");
@@ -216,8 +213,8 @@ std::vector<SetSource> discover_sets() {
 }
 
 void missing_data(benchmark::State& state) {
-    const std::string message = "no CCD query data under " + DATA_DIR.string() +
-                                " (ccd-queries/, cloth-funnel/): skipped";
+    const std::string message =
+        "no CCD query data under " + DATA_DIR.string() + " (ccd-queries/, cloth-funnel/): skipped";
     state.SkipWithError(message.c_str());
     for (auto _ : state) {
     }
@@ -245,10 +242,9 @@ const bool REGISTERED = [] {
                                                    run_set<pliant_ccd>(state, source);
                                                    add_pliant_search_counters(state, source);
                                                }));
-        configure(benchmark::RegisterBenchmark(("BM_CubicCcd/" + source.name).c_str(),
-                                               [source](benchmark::State& state) {
-                                                   run_set<cubic_ccd>(state, source);
-                                               }));
+        configure(benchmark::RegisterBenchmark(
+            ("BM_CubicCcd/" + source.name).c_str(),
+            [source](benchmark::State& state) { run_set<cubic_ccd>(state, source); }));
     }
     return true;
 }();

@@ -3,8 +3,8 @@
 #include "pliant/io/inv3.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    const auto path = pliant::fuzz::write_input(
-        "in.inv3", {reinterpret_cast<const char*>(data), size});
+    const auto path =
+        pliant::fuzz::write_input("in.inv3", {reinterpret_cast<const char*>(data), size});
     pliant::fuzz::expect_result_or_error(
         [&] { pliant::io::read_inv3(path, pliant::fuzz::MAX_BYTES); });
     return 0;

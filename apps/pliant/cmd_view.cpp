@@ -203,9 +203,8 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                      "Frames between exact intersecting-pair counts (default 10)")
         ->check(CLI::Range(1, 1'000'000));
     cloth->footer("Global options --threads N and --json (see pliant --help) apply here too.");
-    cloth->callback([cloth_o, cloth_options, &global] {
-        run_view_cloth(*cloth_o, *cloth_options, global);
-    });
+    cloth->callback(
+        [cloth_o, cloth_options, &global] { run_view_cloth(*cloth_o, *cloth_options, global); });
 
     // pliant view volume
     auto volume_o = std::make_shared<ViewCommandOptions>();

@@ -73,8 +73,7 @@ std::string unknown_command_message(const CLI::App& app, const std::string& word
         }
     }
     return fmt::format("unknown command '{}'{}; the commands are: {}", word,
-                       nearest.empty() ? "" : fmt::format(" (did you mean '{}'?)", nearest),
-                       names);
+                       nearest.empty() ? "" : fmt::format(" (did you mean '{}'?)", nearest), names);
 }
 
 }  // namespace

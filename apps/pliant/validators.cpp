@@ -33,15 +33,15 @@ const CLI::Validator& finite_non_negative() {
 }
 
 CLI::Validator finite_in_range(double lo, double hi) {
-    return {
-        [lo, hi](std::string& text) -> std::string {
-            double value = 0.0;
-            if (!finite_number(text, value) || value < lo || value > hi) {
-                return fmt::format("must be a finite number in [{}, {}], got '{}'", lo, hi, text);
-            }
-            return {};
-        },
-        "", "FINITE_IN_RANGE"};
+    return {[lo, hi](std::string& text) -> std::string {
+                double value = 0.0;
+                if (!finite_number(text, value) || value < lo || value > hi) {
+                    return fmt::format("must be a finite number in [{}, {}], got '{}'", lo, hi,
+                                       text);
+                }
+                return {};
+            },
+            "", "FINITE_IN_RANGE"};
 }
 
 const CLI::Validator& non_empty_path() {

@@ -45,7 +45,8 @@ Matrix4 clip_from_world(const render::Camera& camera, double near, double far) {
     Matrix4 m{};
     for (int row = 0; row < 4; ++row) {
         for (int c = 0; c < 4; ++c) {
-            m[4 * static_cast<std::size_t>(c) + static_cast<std::size_t>(row)] = static_cast<float>(rows[row][c]);
+            m[4 * static_cast<std::size_t>(c) + static_cast<std::size_t>(row)] =
+                static_cast<float>(rows[row][c]);
         }
     }
     return m;

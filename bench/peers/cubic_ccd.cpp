@@ -9,22 +9,24 @@ namespace {
 
 constexpr double BARYCENTRIC_EPS = 1e-10;  // unitless
 constexpr double DISTANCE_EPS = 1e-10;     // relative to the inputs' scale
-constexpr double POLY_EPS = 1e-12;        // relative to the coefficients' magnitude
-constexpr double ROOT_WIDTH = 1e-15;      // Newton / bisection stop, in t
+constexpr double POLY_EPS = 1e-12;         // relative to the coefficients' magnitude
+constexpr double ROOT_WIDTH = 1e-15;       // Newton / bisection stop, in t
 constexpr int MAX_ROOT_STEPS = 80;
 
 // p(t) = c[0] + c[1] t + c[2] t² + c[3] t³.
 using Cubic = std::array<double, 4>;
 
-double eval(const Cubic& c, double t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; }
+double eval(const Cubic& c, double t) {
+    return ((c[3] * t + c[2]) * t + c[1]) * t + c[0];
+}
 
 double eval_derivative(const Cubic& c, double t) {
     return (3.0 * c[3] * t + 2.0 * c[2]) * t + c[1];
 }
 
 // det[a(t), b(t), c(t)] with a(t) = a0 + t da etc., as a cubic in t.
-Cubic det_cubic(const Vec3d& a0, const Vec3d& da, const Vec3d& b0, const Vec3d& db,
-                const Vec3d& c0, const Vec3d& dc) {
+Cubic det_cubic(const Vec3d& a0, const Vec3d& da, const Vec3d& b0, const Vec3d& db, const Vec3d& c0,
+                const Vec3d& dc) {
     const Vec3d n0 = cross(a0, b0);
     const Vec3d n1 = cross(a0, db) + cross(da, b0);
     const Vec3d n2 = cross(da, db);
@@ -128,7 +130,9 @@ bool for_each_root(const Cubic& c, Accept&& accept) {
     return std::abs(p_lo) <= tol && accept(lo);  // t = 1
 }
 
-Vec3d lerp(const Vec3d& p0, const Vec3d& p1, double t) { return p0 + (p1 - p0) * t; }
+Vec3d lerp(const Vec3d& p0, const Vec3d& p1, double t) {
+    return p0 + (p1 - p0) * t;
+}
 
 double max_abs_coordinate(const std::array<const Vec3d*, 8>& points) {
     double m = 0.0;
@@ -154,8 +158,8 @@ bool inside_triangle(const Vec3d& p, const Vec3d& f0, const Vec3d& f1, const Vec
 
 // Squared distance between segments (p1, q1) and (p2, q2): Ericson, Real-Time Collision Detection,
 // §5.1.9, with degenerate (point) segments handled.
-double segment_segment_distance2(const Vec3d& p1, const Vec3d& q1, const Vec3d& p2,
-                                 const Vec3d& q2, double scale) {
+double segment_segment_distance2(const Vec3d& p1, const Vec3d& q1, const Vec3d& p2, const Vec3d& q2,
+                                 double scale) {
     const double eps = 1e-30 * scale * scale;
     const Vec3d d1 = q1 - p1;
     const Vec3d d2 = q2 - p2;
@@ -201,8 +205,8 @@ bool cubic_vertex_face_ccd(const Vec3d& v_t0, const Vec3d& f0_t0, const Vec3d& f
     const Vec3d a0 = f1_t0 - f0_t0;
     const Vec3d b0 = f2_t0 - f0_t0;
     const Vec3d c0 = v_t0 - f0_t0;
-    const Cubic poly = det_cubic(a0, (f1_t1 - f0_t1) - a0, b0, (f2_t1 - f0_t1) - b0, c0,
-                                 (v_t1 - f0_t1) - c0);
+    const Cubic poly =
+        det_cubic(a0, (f1_t1 - f0_t1) - a0, b0, (f2_t1 - f0_t1) - b0, c0, (v_t1 - f0_t1) - c0);
     toi = 1.0;
     return for_each_root(poly, [&](double t) {
         if (!inside_triangle(lerp(v_t0, v_t1, t), lerp(f0_t0, f0_t1, t), lerp(f1_t0, f1_t1, t),
@@ -227,10 +231,9 @@ bool cubic_edge_edge_ccd(const Vec3d& ea0_t0, const Vec3d& ea1_t0, const Vec3d& 
                                  (eb1_t1 - ea0_t1) - c0);
     toi = 1.0;
     return for_each_root(poly, [&](double t) {
-        const double d2 = segment_segment_distance2(lerp(ea0_t0, ea0_t1, t),
-                                                    lerp(ea1_t0, ea1_t1, t),
-                                                    lerp(eb0_t0, eb0_t1, t),
-                                                    lerp(eb1_t0, eb1_t1, t), scale);
+        const double d2 =
+            segment_segment_distance2(lerp(ea0_t0, ea0_t1, t), lerp(ea1_t0, ea1_t1, t),
+                                      lerp(eb0_t0, eb0_t1, t), lerp(eb1_t0, eb1_t1, t), scale);
         if (!(d2 <= max_distance * max_distance)) {
             return false;
         }

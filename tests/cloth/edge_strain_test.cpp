@@ -86,8 +86,8 @@ TEST(EdgeStrain, PercentilesMatchABruteForceOverRandomDisplacements) {
     EXPECT_DOUBLE_EQ(stats.max, values.back());
     EXPECT_DOUBLE_EQ(stats.p99, rank(0.99));
     EXPECT_DOUBLE_EQ(stats.p90, rank(0.90));
-    EXPECT_EQ(stats.over_10_percent, std::count_if(values.begin(), values.end(),
-                                                   [](double v) { return v > 0.1; }));
+    EXPECT_EQ(stats.over_10_percent,
+              std::count_if(values.begin(), values.end(), [](double v) { return v > 0.1; }));
     EXPECT_GT(stats.over_10_percent, 0);  // the jitter is large enough for the count to matter
 }
 

@@ -419,7 +419,7 @@ TEST(StrainHierarchy, AHangingStripStretchesLessWithALimit) {
     const auto hanging_length = [&](double strain_limit) {
         ClothMaterial material;
         material.strain_limit = strain_limit;
-        material.areal_density = 2.0;  // heavy: a long chain under its own weight
+        material.areal_density = 2.0;                    // heavy: a long chain under its own weight
         material.stretch_solver = StretchSolver::edges;  // chains would hold it anyway
         ClothSolver solver(strip, material, top);
         for (int frame = 0; frame < 48; ++frame) {

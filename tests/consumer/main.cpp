@@ -30,10 +30,11 @@ int main() {
         sim.step();
     }
     const pipeline::ClothFrameCheck check = sim.check();
-    fmt::print("pliant {}: {} vertex-face, {} edge-edge pairs; cloth at t = {:.3f} s, {} "
-               "intersecting pairs\n",
-               PLIANT_VERSION, pairs.vertex_face.size(), pairs.edge_edge.size(), sim.time(),
-               check.intersecting_pairs);
+    fmt::print(
+        "pliant {}: {} vertex-face, {} edge-edge pairs; cloth at t = {:.3f} s, {} "
+        "intersecting pairs\n",
+        PLIANT_VERSION, pairs.vertex_face.size(), pairs.edge_edge.size(), sim.time(),
+        check.intersecting_pairs);
     const bool ok = !pairs.vertex_face.empty() && !pairs.edge_edge.empty() &&
                     check.intersecting_pairs == 0 && sim.positions()[0].z < 0.5;
     return ok ? 0 : 1;

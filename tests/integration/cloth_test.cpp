@@ -329,8 +329,9 @@ f 5 7 8
 // that holds no vertex, are named in warnings; the run goes on.
 TEST(ClothCommand, NonManifoldMeshesAndEmptyPinRegionsAreWarnedAbout) {
     ScratchDir scratch;
-    write(scratch / "fin.obj", "v 0 0 0.3\nv 0.1 0 0.3\nv 0 0.1 0.3\nv 0 0 0.4\nv 0 -0.1 0.3\n"
-                               "f 1 2 3\nf 1 2 4\nf 1 2 5\n");
+    write(scratch / "fin.obj",
+          "v 0 0 0.3\nv 0.1 0 0.3\nv 0 0.1 0.3\nv 0 0 0.4\nv 0 -0.1 0.3\n"
+          "f 1 2 3\nf 1 2 4\nf 1 2 5\n");
     write(scratch / "scene.json", R"({"cloth": {"mesh": "fin.obj"},
         "pins": [{"regions": [{"min": [5, 5, 5], "max": [6, 6, 6]}]}], "frames": 1})");
     const CliResult r = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
@@ -452,7 +453,8 @@ f 1 5 2
     for (const std::string solver : {"edges", "chains"}) {
         write(scratch / "huge.json", R"({"cloth": {"mesh": "sliver.obj"},
             "obstacles": [{"sphere": {"center": [0.5, 0.5, 0], "radius": 0.5}}],
-            "material": {"stretch_solver": ")" + solver + R"("},
+            "material": {"stretch_solver": ")" +
+                                         solver + R"("},
             "fps": 0.1, "frames": 3, "substeps": 1})");
         const CliResult huge = run_cli("cloth " + quoted(scratch / "huge.json") + " --out " +
                                            quoted(scratch / ("huge_" + solver)) + " --no-preview",

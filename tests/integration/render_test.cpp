@@ -39,9 +39,8 @@ TEST(RenderCli, TransferFunctionsThatShowNothingAreWarnedAbout) {
     const ScratchDir scratch;
     const auto volume = write_phantom(scratch);
     const auto png = scratch / "out.png";
-    const CliResult ct =
-        run_cli("render " + quoted(volume) + " --tf ct-bone --size 16x16 -o " + quoted(png),
-                scratch);
+    const CliResult ct = run_cli(
+        "render " + quoted(volume) + " --tf ct-bone --size 16x16 -o " + quoted(png), scratch);
     ASSERT_EQ(ct.exit_code, 0) << ct.err;
     EXPECT_NE(ct.err.find("pliant: warning: transfer function 'ct-bone' is for CT in Hounsfield "
                           "units"),
@@ -49,10 +48,10 @@ TEST(RenderCli, TransferFunctionsThatShowNothingAreWarnedAbout) {
         << ct.err;
     std::ofstream(scratch / "high.json") << R"({"color": [{"value": 50, "rgb": [1, 1, 1]}],
         "opacity": [{"value": 50, "alpha": 0}, {"value": 60, "alpha": 1}]})";
-    const CliResult high = run_cli(
-        "render " + quoted(volume) + " --tf " + quoted(scratch / "high.json") +
-            " --size 16x16 -o " + quoted(png),
-        scratch);
+    const CliResult high =
+        run_cli("render " + quoted(volume) + " --tf " + quoted(scratch / "high.json") +
+                    " --size 16x16 -o " + quoted(png),
+                scratch);
     ASSERT_EQ(high.exit_code, 0) << high.err;
     EXPECT_NE(high.err.find("makes 0 % of the volume's voxels visible"), std::string::npos)
         << high.err;

@@ -73,8 +73,8 @@ TEST(MeshIo, BinaryBytesUnderAnObjNameAreRefused) {
     TempDir dir;
     const auto binary = dir.path() / "binary.obj";
     test::write_bytes(binary, std::string_view("v 0 0 0\nv 1\0\x01 0 0\n", 18));
-    expect_io_error([&] { read_mesh(binary); }, {"binary.obj", "line 2", "not a text OBJ file",
-                                                 "byte 0x00"});
+    expect_io_error([&] { read_mesh(binary); },
+                    {"binary.obj", "line 2", "not a text OBJ file", "byte 0x00"});
 }
 
 TEST(MeshIo, UnknownExtension) {

@@ -1,6 +1,7 @@
-// Helpers for the file-format tests (io, pipeline readers): a scratch directory under the system temp directory that is removed
-// with everything in it, byte-exact file writing and reading, a check that a call throws IoError
-// whose message contains given fragments, and meshes with awkward numbers for round trips.
+// Helpers for the file-format tests (io, pipeline readers): a scratch directory under the system
+// temp directory that is removed with everything in it, byte-exact file writing and reading, a
+// check that a call throws IoError whose message contains given fragments, and meshes with awkward
+// numbers for round trips.
 #pragma once
 
 #include <gtest/gtest.h>

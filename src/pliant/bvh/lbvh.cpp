@@ -141,7 +141,8 @@ void LBVH::collapse() {
             m_slot_counts.resize(static_cast<std::size_t>(end));
         }
         m_wide_source.resize(static_cast<std::size_t>(end) +
-                             static_cast<std::size_t>(WIDTH) * static_cast<std::size_t>(end - begin));
+                             static_cast<std::size_t>(WIDTH) *
+                                 static_cast<std::size_t>(end - begin));
         WideNode* wide = m_wide.data();
         std::int32_t* source = m_wide_source.data();
         std::int32_t* counts = m_slot_counts.data();

@@ -32,7 +32,8 @@ enum class StretchSolver {
     edges,
     // Chains of edges, each solved as a whole (stretch_chains.hpp): a correction reaches the
     // whole chain at once, and the cloth keeps its length as its compliance asks (measured
-    // against single edges in docs/performance.md, "Cloth"). The default. Where pins ask for more length than the cloth has (the twist scene's two full
+    // against single edges in docs/performance.md, "Cloth"). The default. Where pins ask for more
+    // length than the cloth has (the twist scene's two full
     // turns), the cloth, holding its length, is squeezed into far more self-contact; that scene
     // keeps single edges.
     chains,

@@ -70,10 +70,10 @@
 // take no notice of obstacles: vertices a step leaves inside an obstacle are put back on it by
 // the first substep without an intersection, whereas putting them back at every step leaves a
 // layer pressed against an obstacle no room to give way, and pairs stay
-// (docs/journal/2026-11-25-untangling-crossing-sheets.md). The best state is chosen on pairs alone. Not untangled: a
-// sheet through itself along a contour that cuts no region off (it ends inside the sheet on both
-// sides, e.g. where a wider part of the sheet crosses a narrower one), and pinned pieces whose
-// contour cuts off no free region.
+// (docs/journal/2026-11-25-untangling-crossing-sheets.md). The best state is chosen on pairs alone.
+// Not untangled: a sheet through itself along a contour that cuts no region off (it ends inside the
+// sheet on both sides, e.g. where a wider part of the sheet crosses a narrower one), and pinned
+// pieces whose contour cuts off no free region.
 //
 // Units: metres. Deterministic (pairs in sorted order, sequential accumulation; the intersection
 // search is identical for any number of threads).

@@ -171,10 +171,10 @@ volume::TransferFunction read_transfer_function(const std::filesystem::path& pat
 volume::TransferFunction load_transfer_function(const std::string& name_or_file,
                                                 const volume::Volume& volume) {
     const auto& presets = volume::preset_names();
-    volume::TransferFunction tf = std::find(presets.begin(), presets.end(), name_or_file) !=
-                                          presets.end()
-                                      ? volume::preset(name_or_file, volume)
-                                      : read_transfer_function(name_or_file);
+    volume::TransferFunction tf =
+        std::find(presets.begin(), presets.end(), name_or_file) != presets.end()
+            ? volume::preset(name_or_file, volume)
+            : read_transfer_function(name_or_file);
     // Legal but almost certainly not meant: a function that shows (almost) nothing of this volume
     // (a CT preset on an MRI, a file made for another value range).
     if (volume::channels(volume.type()) == 1 && volume.num_voxels() > 0) {

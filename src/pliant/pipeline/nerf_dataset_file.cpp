@@ -156,8 +156,8 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
         const double ax = number(j, "camera_angle_x", path);
         intr.fx = 0.5 * intr.width / std::tan(0.5 * ax);
         intr.fy = j.contains("camera_angle_y")
-                     ? 0.5 * intr.height / std::tan(0.5 * number(j, "camera_angle_y", path))
-                     : intr.fx;
+                      ? 0.5 * intr.height / std::tan(0.5 * number(j, "camera_angle_y", path))
+                      : intr.fx;
     } else {
         throw IoError(
             fmt::format("{}: no focal length: expected `camera_angle_x` or `fl_x`", path.string()));
@@ -194,7 +194,8 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
 
     if (options.load_images) {
         const double bytes = 12.0 * static_cast<double>(intr.width) *
-                             static_cast<double>(intr.height) * static_cast<double>(ds.views.size());
+                             static_cast<double>(intr.height) *
+                             static_cast<double>(ds.views.size());
         if (bytes > static_cast<double>(options.max_bytes)) {
             throw InvalidInput(fmt::format(
                 "{}: {} images of {} x {} need {:.0f} MiB decoded (12 bytes per pixel), more than "

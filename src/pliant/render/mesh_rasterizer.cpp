@@ -412,8 +412,7 @@ void MeshRasterizer::render(const Camera& camera, std::span<const RenderMesh> me
                 for (std::int32_t tx = t.min_x / TILE; tx <= t.max_x / TILE; ++tx) {
                     m_bin_items[static_cast<std::size_t>(
                         cursor[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x) +
-                               static_cast<std::size_t>(tx)]++)] =
-                        static_cast<std::uint32_t>(i);
+                               static_cast<std::size_t>(tx)]++)] = static_cast<std::uint32_t>(i);
                 }
             }
         }
