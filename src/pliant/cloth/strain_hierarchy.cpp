@@ -6,7 +6,6 @@
 #include <functional>
 #include <limits>
 #include <queue>
-#include <ranges>
 #include <tuple>
 #include <utility>
 
@@ -283,8 +282,11 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double
         },
         CHILD_GRAIN);
     const double scale = 1.0 + max_strain;
-    for (auto& l : std::ranges::reverse_view(m_levels)) {
-        const ColoredEdges& limits = l.limits;
+    // Levels in reverse order. (A reverse_view range loop does not compile under clang 14's view
+    // of libstdc++ 12's ranges, which clang-tidy uses.)
+    // NOLINTNEXTLINE(modernize-loop-convert)
+    for (auto level = m_levels.rbegin(); level != m_levels.rend(); ++level) {
+        const ColoredEdges& limits = level->limits;
         for (std::int32_t c = 0; c < limits.colors.num_colors(); ++c) {
             const std::int64_t offset = limits.colors.offsets[static_cast<std::size_t>(c)];
             parallel_for_chunks(

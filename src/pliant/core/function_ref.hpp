@@ -20,8 +20,8 @@ public:
              std::is_invocable_r_v<R, F&, Args...>)
         // Implicit: used like a function parameter. The requires-clause keeps FunctionRef itself
         // out (clang-tidy 14 does not read requires-clauses).
-        FunctionRef(
-            F&& f)  // NOLINT(google-explicit-constructor, bugprone-forwarding-reference-overload)
+        // NOLINTNEXTLINE(google-explicit-constructor, bugprone-forwarding-reference-overload)
+        FunctionRef(F&& f)
         : m_object(const_cast<void*>(static_cast<const void*>(std::addressof(f)))),
           m_call([](void* object, Args... args) -> R {
               return (*static_cast<std::remove_reference_t<F>*>(object))(

@@ -77,7 +77,7 @@ public:
             std::string name(block.data(), strnlen(block.data(), 100));
             const std::string prefix(block.data() + 345, strnlen(block.data() + 345, 155));
             if (!prefix.empty()) {
-                name = prefix + "/" + name;
+                name = std::string(prefix).append("/").append(name);
             }
             if (entry.type == 'L') {  // GNU long name: the data is the next entry's name
                 if (entry.size > 4096) {

@@ -385,9 +385,9 @@ void write_nifti(const std::filesystem::path& path, const volume::Volume& volume
     nim->scl_inter = 0.0F;
     nim->qform_code = NIFTI_XFORM_SCANNER_ANAT;
     nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
-    for (std::size_t r = 0; r < 4; ++r) {
-        for (std::size_t c = 0; c < 4; ++c) {
-            nim->sto_xyz.m[r][c] = 0.0;
+    for (auto& row : nim->sto_xyz.m) {
+        for (auto& entry : row) {
+            entry = 0.0;
         }
     }
     nim->sto_xyz.m[3][3] = 1.0;

@@ -101,7 +101,7 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     }
     const json& format = field(doc, sidecar, "format");
     if (format != FORMAT) {
-        fail(sidecar, fmt::format("\"format\": expected \"{}\", got {}", FORMAT, format.dump()));
+        fail(sidecar, fmt::format(R"("format": expected "{}", got {})", FORMAT, format.dump()));
     }
     const json& version = field(doc, sidecar, "version");
     if (version != 1) {
@@ -175,12 +175,12 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
     const json& endian = field(doc, sidecar, "endian");
     if (endian != "little" && endian != "big") {
         fail(sidecar,
-             fmt::format("\"endian\": expected \"little\" or \"big\", got {}", endian.dump()));
+             fmt::format(R"("endian": expected "little" or "big", got {})", endian.dump()));
     }
     const json& encoding = field(doc, sidecar, "encoding");
     if (encoding != "raw" && encoding != "gzip") {
         fail(sidecar,
-             fmt::format("\"encoding\": expected \"raw\" or \"gzip\", got {}", encoding.dump()));
+             fmt::format(R"("encoding": expected "raw" or "gzip", got {})", encoding.dump()));
     }
     const json& data_file = field(doc, sidecar, "data_file");
     if (!data_file.is_string() || data_file.get<std::string>().empty()) {

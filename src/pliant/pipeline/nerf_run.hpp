@@ -53,9 +53,9 @@ struct TrainRunOptions {
     std::function<void(const nerf::TrainProgress&)> on_progress;
 };
 
-// NOLINTNEXTLINE(bugprone-exception-escape): clang-tidy 14 cannot see that the implicit members
-// (moving a Volume and a JSON object) do not throw.
-struct TrainRunResult {
+// clang-tidy 14 cannot see that the implicit members (moving a Volume and a JSON object) do not
+// throw.
+struct TrainRunResult {           // NOLINT(bugprone-exception-escape)
     volume::Volume volume;        // exported (and cleaned)
     bool stopped = false;         // keep_going returned false
     nlohmann::ordered_json json;  // iterations, seconds, train_psnr, resolution, grid_dims,
