@@ -14,7 +14,7 @@ namespace pliant::pipeline {
 ClothSimulation ClothSimulation::from_scene(cloth::ClothScene scene, std::string scene_name,
                                             const ClothSimulationOptions& options) {
     ClothSetup setup = load_cloth_setup(scene, scene_name, options.max_memory_bytes);
-    return ClothSimulation(std::move(scene), std::move(scene_name), std::move(setup));
+    return {std::move(scene), std::move(scene_name), std::move(setup)};
 }
 
 ClothSimulation::ClothSimulation(cloth::ClothScene scene, std::string scene_name, ClothSetup setup)
