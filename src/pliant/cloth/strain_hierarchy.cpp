@@ -286,7 +286,8 @@ void StrainHierarchy::project(detail::PackedVertex* x, double max_strain, double
     // of libstdc++ 12's ranges, which clang-tidy uses.)
     // NOLINTNEXTLINE(modernize-loop-convert)
     for (auto level = m_levels.rbegin(); level != m_levels.rend(); ++level) {
-        const ColoredEdges& limits = level->limits;
+        const Level& l = *level;
+        const ColoredEdges& limits = l.limits;
         for (std::int32_t c = 0; c < limits.colors.num_colors(); ++c) {
             const std::int64_t offset = limits.colors.offsets[static_cast<std::size_t>(c)];
             parallel_for_chunks(

@@ -352,8 +352,7 @@ PLIANT_AVX2_INLINE void store4(PackedVertex* x, const std::int32_t* i, const Lan
 }
 
 // Used by bending_avx2; clang 14 calls it unused there.
-// NOLINTNEXTLINE(clang-diagnostic-unused-function)
-PLIANT_AVX2_INLINE Vec4 sub(const Lanes& a, const Lanes& b) {
+[[maybe_unused]] PLIANT_AVX2_INLINE Vec4 sub(const Lanes& a, const Lanes& b) {
     return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
 }
 PLIANT_AVX2_INLINE Vec4 sub(const Vec4& a, const Vec4& b) {
