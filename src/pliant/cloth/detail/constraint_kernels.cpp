@@ -351,11 +351,11 @@ PLIANT_AVX2_INLINE void store4(PackedVertex* x, const std::int32_t* i, const Lan
     }
 }
 
-// Used by bending_avx2; clang 14 calls it unused there.
-[[maybe_unused]] PLIANT_AVX2_INLINE Vec4 sub(const Lanes& a, const Lanes& b) {
+PLIANT_AVX2_INLINE Vec4 sub(const Lanes& a, const Lanes& b) {
     return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
 }
-PLIANT_AVX2_INLINE Vec4 sub(const Vec4& a, const Vec4& b) {
+// Part of the small vector algebra the kernels use; clang 14 calls it unused.
+[[maybe_unused]] PLIANT_AVX2_INLINE Vec4 sub(const Vec4& a, const Vec4& b) {
     return {sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)};
 }
 PLIANT_AVX2_INLINE Vec4 cross(const Vec4& a, const Vec4& b) {
