@@ -112,6 +112,8 @@ void quiet_gdcm() {
     });
 }
 
+using detail::lower;
+
 std::string trim(std::string_view text) {
     std::size_t b = 0;
     std::size_t e = text.size();
@@ -123,13 +125,6 @@ std::string trim(std::string_view text) {
         --e;
     }
     return std::string(text.substr(b, e - b));
-}
-
-std::string lower(std::string text) {
-    for (char& c : text) {
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    }
-    return text;
 }
 
 // A DICOM multi-valued decimal string "a\b\c" → its numbers; nullopt when absent, empty or

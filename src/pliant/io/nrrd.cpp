@@ -25,38 +25,13 @@ namespace pliant::io {
 
 namespace {
 
+using detail::lower;
+using detail::trim;
+using detail::words;
+
 using volume::VoxelType;
 
 constexpr std::size_t MAX_HEADER_BYTES = std::size_t{1} << 20;
-
-std::string trim(std::string_view text) {
-    std::size_t b = 0;
-    std::size_t e = text.size();
-    while (b < e && std::isspace(static_cast<unsigned char>(text[b])) != 0) {
-        ++b;
-    }
-    while (e > b && std::isspace(static_cast<unsigned char>(text[e - 1])) != 0) {
-        --e;
-    }
-    return std::string(text.substr(b, e - b));
-}
-
-std::string lower(std::string text) {
-    for (char& c : text) {
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    }
-    return text;
-}
-
-std::vector<std::string> words(std::string_view text) {
-    std::vector<std::string> out;
-    std::istringstream in{std::string(text)};
-    std::string w;
-    while (in >> w) {
-        out.push_back(w);
-    }
-    return out;
-}
 
 struct Header {
     std::map<std::string, std::string> fields;  // lower-case field name → value

@@ -2,10 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
+#include <string>
 #include <system_error>
+#include <vector>
 
 namespace pliant::io::detail {
 
@@ -93,6 +97,35 @@ std::string quote(std::string_view text) {
         out += "...";
     }
     out.push_back('\'');
+    return out;
+}
+
+std::string trim(std::string_view text) {
+    std::size_t b = 0;
+    std::size_t e = text.size();
+    while (b < e && std::isspace(static_cast<unsigned char>(text[b])) != 0) {
+        ++b;
+    }
+    while (e > b && std::isspace(static_cast<unsigned char>(text[e - 1])) != 0) {
+        --e;
+    }
+    return std::string(text.substr(b, e - b));
+}
+
+std::string lower(std::string text) {
+    for (char& c : text) {
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+    return text;
+}
+
+std::vector<std::string> words(std::string_view text) {
+    std::vector<std::string> out;
+    std::istringstream in{std::string(text)};
+    std::string w;
+    while (in >> w) {
+        out.push_back(w);
+    }
     return out;
 }
 

@@ -1,10 +1,12 @@
-// Text helpers shared by the OBJ and PLY readers: locale-independent number parsing of a whole
-// token (std::from_chars), and quoting of file content for error messages.
+// Text helpers shared by the text-format readers (OBJ, PLY, NRRD, MetaImage, DICOM):
+// locale-independent number parsing of a whole token (std::from_chars), quoting of file content
+// for error messages, and the small string operations of header parsing.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace pliant::io::detail {
 
@@ -23,5 +25,12 @@ ParseStatus parse_integer(std::string_view token, std::int64_t& out);
 // `text` in single quotes for an error message: at most 40 characters (then "..."), bytes that
 // are not printable ASCII as \xNN.
 std::string quote(std::string_view text);
+
+// `text` without leading and trailing white space (std::isspace).
+std::string trim(std::string_view text);
+// ASCII letters of `text` in lower case.
+std::string lower(std::string text);
+// The white-space separated words of `text`.
+std::vector<std::string> words(std::string_view text);
 
 }  // namespace pliant::io::detail
