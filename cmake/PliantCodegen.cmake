@@ -9,13 +9,14 @@
 # tests compute themselves. No code relies on contraction.
 add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-ffp-contract=off>)
 
-# PLIANT_NATIVE (default ON): compile for the build machine's CPU (the compiler may then use AVX2
-# and AVX-512 anywhere), 1.25-1.3x faster cloth on the drape scene. Every build gives the same
+# PLIANT_NATIVE (default OFF, a portable x86-64 library; `make demo`, `make test` and the release
+# preset turn it ON): compile for the build machine's CPU (the compiler may then use AVX2 and
+# AVX-512 anywhere), 1.25-1.3x faster cloth on the drape scene. Every build gives the same
 # bits for 1 and N threads. A native build's results can differ in the last bits from a portable
 # one's: GCC 12 fuses a vectorized pair a·b − c·d, e·f + g·h into one fmaddsub instruction even
 # under -ffp-contract=off (it does where scenes rotate meshes, cloth/motion.hpp). Adding -mno-fma
 # -mno-avx512f would rule that out and give the portable bits, for 1.17x instead of 1.3x
-# (docs/performance.md, 2026-11-25). Turn it OFF for a binary that must run on any x86-64.
+# (docs/journal/2026-11-25-native-build-solver-floor.md).
 if(PLIANT_NATIVE)
   add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-march=native>)
 endif()
