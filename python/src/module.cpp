@@ -31,20 +31,6 @@ PyObject* new_exception(py::module_& m, const char* name, const char* doc, py::t
     return type;
 }
 
-const char* level_name(LogLevel level) {
-    switch (level) {
-        case LogLevel::debug:
-            return "debug";
-        case LogLevel::info:
-            return "info";
-        case LogLevel::warning:
-            return "warning";
-        case LogLevel::error:
-            return "error";
-    }
-    return "info";
-}
-
 }  // namespace
 
 void bind_errors(py::module_& m) {

@@ -20,20 +20,6 @@ std::atomic<LogLevel>& level() {
     return l;
 }
 
-const char* level_name(LogLevel l) {
-    switch (l) {
-        case LogLevel::debug:
-            return "debug";
-        case LogLevel::info:
-            return "info";
-        case LogLevel::warning:
-            return "warning";
-        case LogLevel::error:
-            return "error";
-    }
-    return "?";
-}
-
 }  // namespace
 
 LogSink set_log_sink(LogSink new_sink) {
@@ -58,6 +44,20 @@ void log_message(LogLevel l, std::string_view message) {
     }
     std::fprintf(stderr, "pliant: %s: %.*s\n", level_name(l), static_cast<int>(message.size()),
                  message.data());
+}
+
+const char* level_name(LogLevel l) {
+    switch (l) {
+        case LogLevel::debug:
+            return "debug";
+        case LogLevel::info:
+            return "info";
+        case LogLevel::warning:
+            return "warning";
+        case LogLevel::error:
+            return "error";
+    }
+    return "?";
 }
 
 }  // namespace pliant

@@ -22,6 +22,9 @@ LogLevel log_level();
 
 void log_message(LogLevel level, std::string_view message);
 
+// "debug", "info", "warning" or "error": the word the default sink prints.
+const char* level_name(LogLevel level);
+
 template <typename... Args>
 void log_info(fmt::format_string<Args...> format, Args&&... args) {
     if (log_level() <= LogLevel::info) {

@@ -430,19 +430,15 @@ void write_metaimage(const std::filesystem::path& path, const volume::Volume& vo
                       static_cast<std::streamsize>(bytes.size()));
         }
     };
+    std::filesystem::path data_path;
     if (detached) {
-        std::filesystem::path data_path = path;
+        data_path = path;
         data_path.replace_extension(compressed ? ".zraw" : ".raw");
-        write_file_atomically(data_path, write_data);
         header += fmt::format("ElementDataFile = {}\n", data_path.filename().string());
-        write_file_atomically(path, [&](std::ostream& out) { out << header; });
-        return;
+    } else {
+        header += "ElementDataFile = LOCAL\n";
     }
-    header += "ElementDataFile = LOCAL\n";
-    write_file_atomically(path, [&](std::ostream& out) {
-        out << header;
-        write_data(out);
-    });
+    detail::write_header_and_data(path, header, data_path, write_data);
 }
 
 }  // namespace pliant::io

@@ -500,19 +500,15 @@ void write_nrrd(const std::filesystem::path& path, const volume::Volume& volume,
                       static_cast<std::streamsize>(bytes.size()));
         }
     };
+    std::filesystem::path data_path;
     if (detached) {
-        std::filesystem::path data_path = path;
+        data_path = path;
         data_path.replace_extension(gzip ? ".raw.gz" : ".raw");
-        write_file_atomically(data_path, write_data);
         header += fmt::format("data file: {}\n", data_path.filename().string());
-        write_file_atomically(path, [&](std::ostream& out) { out << header; });
-        return;
+    } else {
+        header += "\n";
     }
-    header += "\n";
-    write_file_atomically(path, [&](std::ostream& out) {
-        out << header;
-        write_data(out);
-    });
+    detail::write_header_and_data(path, header, data_path, write_data);
 }
 
 }  // namespace pliant::io

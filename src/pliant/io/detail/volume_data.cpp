@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "pliant/core/error.hpp"
+#include "pliant/io/atomic_file.hpp"
 
 namespace pliant::io::detail {
 
@@ -244,6 +245,20 @@ void swap_channel_bytes(volume::Volume& volume) {
         std::reverse(bytes.begin() + static_cast<std::ptrdiff_t>(i),
                      bytes.begin() + static_cast<std::ptrdiff_t>(i + width));
     }
+}
+
+void write_header_and_data(const std::filesystem::path& path, const std::string& header,
+                           const std::filesystem::path& data_file,
+                           const std::function<void(std::ostream&)>& write_data) {
+    if (!data_file.empty()) {
+        write_file_atomically(data_file, write_data);
+        write_file_atomically(path, [&](std::ostream& out) { out << header; });
+        return;
+    }
+    write_file_atomically(path, [&](std::ostream& out) {
+        out << header;
+        write_data(out);
+    });
 }
 
 }  // namespace pliant::io::detail

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <ostream>
 #include <span>
 #include <string>
@@ -48,6 +49,13 @@ void write_zlib(std::ostream& out, std::span<const std::byte> bytes);
 
 // Reverses the byte order of every channel (2- and 4-byte types; 1-byte types are unchanged).
 void swap_channel_bytes(volume::Volume& volume);
+
+// Writes a header-and-data volume file, each file atomically: with `data_file` empty, `header`
+// followed by the data at `path`; else the data to `data_file` first, then `header` alone to
+// `path` (the header names the data file). Used by the NRRD and MetaImage writers.
+void write_header_and_data(const std::filesystem::path& path, const std::string& header,
+                           const std::filesystem::path& data_file,
+                           const std::function<void(std::ostream&)>& write_data);
 
 // "256×256×108" for messages.
 std::string dims_text(const volume::Dims& dims);
