@@ -17,10 +17,52 @@ double Pose::determinant() const {
 }
 
 render::Ray view_ray(const Intrinsics& intrinsics, const Pose& pose, double x, double y) {
-    const double u = (x - intrinsics.cx) / intrinsics.fx;
-    const double v = -(y - intrinsics.cy) / intrinsics.fy;
-    const Vec3d d = u * pose.axis(0) + v * pose.axis(1) - pose.axis(2);
+    if (intrinsics.lens.is_identity()) {
+        const double u = (x - intrinsics.cx) / intrinsics.fx;
+        const double v = -(y - intrinsics.cy) / intrinsics.fy;
+        const Vec3d d = u * pose.axis(0) + v * pose.axis(1) - pose.axis(2);
+        return {pose.eye(), d / norm(d)};
+    }
+    const Point2 distorted{(x - intrinsics.cx) / intrinsics.fx,
+                           (y - intrinsics.cy) / intrinsics.fy};
+    const Vec3d c = undistorted_direction(intrinsics.lens, distorted)
+                        .value_or(Vec3d{distorted.x, distorted.y, 1.0});
+    const Vec3d d = c.x * pose.axis(0) - c.y * pose.axis(1) - c.z * pose.axis(2);
     return {pose.eye(), d / norm(d)};
+}
+
+void validate(const Intrinsics& in, std::string_view where) {
+    if (in.width < 1 || in.height < 1 || !(in.fx > 0.0) || !(in.fy > 0.0) ||
+        !std::isfinite(in.fx) || !std::isfinite(in.fy) || !std::isfinite(in.cx) ||
+        !std::isfinite(in.cy)) {
+        throw InvalidInput(fmt::format(
+            "{}: intrinsics {} x {} fl_x {} fl_y {} cx {} cy {}: expected positive sizes and "
+            "focal lengths, finite principal point",
+            where, in.width, in.height, in.fx, in.fy, in.cx, in.cy));
+    }
+    validate(in.lens, where);
+    if (in.lens.is_identity()) {
+        return;
+    }
+    // The border's pixel centres: the largest radii, where a polynomial folds back first.
+    const auto check = [&](int i, int j) {
+        const Point2 d{(i + 0.5 - in.cx) / in.fx, (j + 0.5 - in.cy) / in.fy};
+        if (!undistorted_direction(in.lens, d)) {
+            throw InvalidInput(fmt::format(
+                "{}: the {} lens (k1 {} k2 {} k3 {} k4 {} p1 {} p2 {}) cannot be inverted at "
+                "pixel ({}, {}): its distortion folds back inside the {} x {} image",
+                where, lens_model_name(in.lens.model), in.lens.k1, in.lens.k2, in.lens.k3,
+                in.lens.k4, in.lens.p1, in.lens.p2, i, j, in.width, in.height));
+        }
+    };
+    for (int i = 0; i < in.width; ++i) {
+        check(i, 0);
+        check(i, in.height - 1);
+    }
+    for (int j = 0; j < in.height; ++j) {
+        check(0, j);
+        check(in.width - 1, j);
+    }
 }
 
 Pose pose_from_camera(const render::Camera& camera) {
@@ -48,6 +90,11 @@ Intrinsics intrinsics_from_camera(const render::Camera& camera) {
 }
 
 render::Camera camera_from_view(const Intrinsics& in, const Pose& pose) {
+    if (!in.lens.is_identity()) {
+        throw Unsupported(fmt::format(
+            "nerf::camera_from_view: the ray caster's camera has no lens distortion; got a {} lens",
+            lens_model_name(in.lens.model)));
+    }
     if (std::fabs(in.fx - in.fy) > 1e-6 * in.fx || std::fabs(in.cx - 0.5 * in.width) > 1e-3 ||
         std::fabs(in.cy - 0.5 * in.height) > 1e-3) {
         throw Unsupported(fmt::format(
@@ -134,14 +181,7 @@ AABBd scene_box(const Dataset& dataset) {
 
 void validate(const Dataset& dataset) {
     const Intrinsics& in = dataset.intrinsics;
-    if (in.width < 1 || in.height < 1 || !(in.fx > 0.0) || !(in.fy > 0.0) ||
-        !std::isfinite(in.fx) || !std::isfinite(in.fy) || !std::isfinite(in.cx) ||
-        !std::isfinite(in.cy)) {
-        throw InvalidInput(fmt::format(
-            "nerf dataset: intrinsics {} x {} fl_x {} fl_y {} cx {} cy {}: expected positive "
-            "sizes and focal lengths, finite principal point",
-            in.width, in.height, in.fx, in.fy, in.cx, in.cy));
-    }
+    validate(in, "nerf dataset");
     if (dataset.views.empty()) {
         throw InvalidInput("nerf dataset: no views");
     }
@@ -164,6 +204,21 @@ void validate(const Dataset& dataset) {
                 "nerf dataset: view {} ('{}'): transform_matrix is singular (det of the rotation "
                 "{})",
                 i, v.name, det));
+        }
+        if (v.intrinsics) {
+            const std::string where = fmt::format("nerf dataset: view {} ('{}')", i, v.name);
+            validate(*v.intrinsics, where);
+            if (v.intrinsics->width != in.width || v.intrinsics->height != in.height) {
+                throw InvalidInput(fmt::format("{}: its image is {} x {}, the dataset's {} x {}",
+                                               where, v.intrinsics->width, v.intrinsics->height,
+                                               in.width, in.height));
+            }
+        }
+        if (!v.mask.empty() && v.mask.size() != pixels / 3) {
+            throw InvalidInput(
+                fmt::format("nerf dataset: view {} ('{}'): mask of {} values, "
+                            "expected {} x {}",
+                            i, v.name, v.mask.size(), in.width, in.height));
         }
         if (v.rgb.size() != pixels) {
             throw InvalidInput(fmt::format(

@@ -7,10 +7,13 @@
 //     columns of R are the camera's x, y, z axes in world coordinates, t is the eye. R may carry a
 //     uniform scale (rays are normalized); it must not be singular.
 //   - Pixels: continuous coordinates (x, y) with the origin at the image's top-left corner, y
-//     down; pixel (i, j) has its centre at (i + 0.5, j + 0.5) (instant-ngp's convention, and the
-//     one of render::Camera). The ray through (x, y) has the camera-frame direction
+//     down; pixel (i, j) has its centre at (i + 0.5, j + 0.5) (instant-ngp's, nerfstudio's and
+//     COLMAP's convention, and the one of render::Camera). Without distortion the ray through
+//     (x, y) has the camera-frame direction
 //       ((x − cx) / fx, −(y − cy) / fy, −1)
-//     rotated by R and normalized; it starts at the eye t.
+//     rotated by R and normalized; it starts at the eye t. With a lens model (nerf/lens.hpp) the
+//     distorted normalized point ((x − cx) / fx, (y − cy) / fy) is undistorted to the direction
+//     (u, v, w) in OpenCV axes, and the ray has the camera-frame direction (u, −v, −w).
 //   - Colours: linear floats in [0, 1] as stored in the PNG (no gamma curve), already composited
 //     over the dataset's background colour where the image had an alpha channel.
 //   - World units: whatever the file uses (the Blender scenes: metres; `pliant dataset`: the
@@ -18,8 +21,10 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "pliant/core/aabb.hpp"
@@ -54,17 +59,36 @@ struct View {
     std::string name;  // the frame's file_path as written in the file
     Pose camera_to_world;
     std::vector<float> rgb;  // 3 · width · height, row-major from the top-left, in [0, 1]
+    // The view's own intrinsics when they differ from the dataset's (per-frame fl_x, cx, k1 …);
+    // same width and height as the dataset's.
+    std::optional<Intrinsics> intrinsics;
+    // Which pixels count (1) and which are ignored (0) in training and evaluation, width · height
+    // row-major; empty: every pixel counts.
+    std::vector<std::uint8_t> mask;
 };
 
 struct Dataset {
-    Intrinsics intrinsics;
+    Intrinsics intrinsics;  // of every view without its own
     std::vector<View> views;
     std::optional<AABBd> box;  // the scene box of the file (`aabb`), when it has one
     render::Color background{0.0f, 0.0f, 0.0f};  // what transparent pixels were composited over
 };
 
-// The ray through continuous pixel coordinates (x, y) (see the header comment).
+// A view's intrinsics: its own, else the dataset's.
+inline const Intrinsics& intrinsics_of(const Dataset& dataset, const View& view) {
+    return view.intrinsics ? *view.intrinsics : dataset.intrinsics;
+}
+
+// The ray through continuous pixel coordinates (x, y) (see the header comment). Without
+// distortion (Lens::is_identity) it is computed exactly as by a pinhole. With a lens, (x, y) must
+// be where the lens inverts (validate checks every pixel centre of the image's border); a point
+// where Newton's method fails gets the pinhole ray.
 render::Ray view_ray(const Intrinsics& intrinsics, const Pose& pose, double x, double y);
+
+// InvalidInput naming `where` unless the sizes and focal lengths are positive, the principal
+// point finite, the lens coefficients belong to its model (nerf::validate(Lens)), and the lens
+// inverts at every pixel centre of the image's border (where a polynomial folds back first).
+void validate(const Intrinsics& intrinsics, std::string_view where);
 
 // The pose and intrinsics of a perspective render::Camera (its right, up, −forward as the axes,
 // its eye as t; fx = fy = focal_pixels, principal point at the image centre), so that view_ray
@@ -85,9 +109,10 @@ render::Camera camera_from_view(const Intrinsics& intrinsics, const Pose& pose);
 // no views or the optical axes are all parallel.
 AABBd scene_box(const Dataset& dataset);
 
-// InvalidInput (naming the view and the values) unless the intrinsics are positive and finite,
-// there is at least one view, every pose is finite with |det R| > 1e-12 · (scale of R)³, and
-// every image has 3 · width · height values.
+// InvalidInput (naming the view and the values) unless the intrinsics (the dataset's and the
+// views' own, validate above; same size as the dataset's) are valid, masks have width · height
+// entries, there is at least one view, every pose is finite with |det R| > 1e-12 · (scale of R)³,
+// and every image has 3 · width · height values.
 void validate(const Dataset& dataset);
 
 // A view's colours as an 8-bit image (rounded, clamped), and back.

@@ -133,8 +133,12 @@ public:
                     const std::uint64_t local = pixel % m_pixels_per_view;
                     const int x = static_cast<int>(local % in.width);
                     const int y = static_cast<int>(local / in.width);
+                    if (!view.mask.empty() && view.mask[local] == 0) {
+                        continue;  // an ignored pixel: no loss, no gradient
+                    }
                     const NormalizedRay ray =
-                        normalize_ray(m_grid, view_ray(in, view.camera_to_world, x + 0.5, y + 0.5));
+                        normalize_ray(m_grid, view_ray(intrinsics_of(m_dataset, view),
+                                                       view.camera_to_world, x + 0.5, y + 0.5));
                     chunk.samples.clear();
                     const detail::RayOutput out = detail::march(
                         g, ray.origin, ray.direction, step_length, bg,
