@@ -1,9 +1,15 @@
-// pliant nerf train TRANSFORMS.json -o VOLUME [--minutes M | --iterations N] [--resolution R]
+// pliant nerf train DATASET -o VOLUME [--minutes M | --iterations N] [--resolution R]
 //                   [--stages S] [--batch B] [--export-resolution E] [--type rgba8|rgba32f]
 //                   [--threshold T] [--normalize none|max|range] [--background R,G,B] [--seed S]
-//                   [--max-memory MIB]
-// pliant nerf eval TRANSFORMS.json VOLUME [--background R,G,B] [--images DIR] [--max-memory MIB]
-//                  [--json]
+//                   [--max-memory MIB] [--downscale N] [--images DIR] [--alpha-mask]
+// pliant nerf eval DATASET VOLUME [--background R,G,B] [--images DIR] [--max-memory MIB]
+//                  [--downscale N] [--photos DIR] [--alpha-mask] [--json]
+//
+// DATASET: a transforms.json (NeRF-synthetic, instant-ngp, nerfstudio), a directory holding one,
+// or a COLMAP sparse model directory (cameras, images, points3D; its photos from train's
+// --images / eval's --photos DIR, default <model>/../../images); --downscale N box-filters the
+// photos by N and scales the intrinsics (pipeline/nerf_dataset_file.hpp); --alpha-mask ignores
+// pixels of alpha 0.
 //
 // train: reconstructs a voxel radiance field (nerf/trainer.hpp) from a posed-image dataset
 // (io/nerf_dataset.hpp) and writes it as an RGBA volume (nerf/export.hpp: E voxels along the
@@ -62,6 +68,9 @@ struct TrainCommandOptions {
     float tv_color = nerf::TrainOptions{}.tv_color;
     float lr = nerf::TrainOptions{}.lr_density;
     double max_memory_mib = 16384.0;
+    int downscale = 1;
+    std::string photos;
+    bool alpha_mask = false;
 };
 
 std::size_t to_bytes(double mib) {
@@ -75,6 +84,9 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     pipeline::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
     ro.max_bytes = to_bytes(options.max_memory_mib);
+    ro.downscale = options.downscale;
+    ro.images_dir = options.photos;
+    ro.alpha_mask = options.alpha_mask;
     const nerf::Dataset dataset = pipeline::read_nerf_dataset(options.transforms, ro);
 
     pipeline::TrainRunOptions run;
@@ -145,12 +157,18 @@ struct EvalCommandOptions {
     std::array<float, 3> background{0.0f, 0.0f, 0.0f};
     std::string images;
     double max_memory_mib = 16384.0;
+    int downscale = 1;
+    std::string photos;
+    bool alpha_mask = false;
 };
 
 void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
     pipeline::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
     ro.max_bytes = to_bytes(options.max_memory_mib);
+    ro.downscale = options.downscale;
+    ro.images_dir = options.photos;
+    ro.alpha_mask = options.alpha_mask;
     const nerf::Dataset dataset = pipeline::read_nerf_dataset(options.transforms, ro);
     io::ReadVolumeOptions rv;
     rv.max_bytes = ro.max_bytes;
@@ -184,7 +202,10 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
     auto t = std::make_shared<TrainCommandOptions>();
     CLI::App* train = nerf->add_subcommand(
         "train", "Train a voxel radiance field on transforms.json and export an RGBA volume");
-    train->add_option("TRANSFORMS", t->transforms, "transforms_train.json")->required();
+    train
+        ->add_option("TRANSFORMS", t->transforms,
+                     "transforms_train.json, or a COLMAP sparse model directory")
+        ->required();
     train->add_option("-o,--output", t->out, "Output volume (.nrrd, .nii, .nii.gz, .json)")
         ->required()
         ->check(non_empty_path());
@@ -234,13 +255,22 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
                      "16384), before allocating")
         ->type_name("MIB")
         ->check(finite_in_range(1e-6, 1e9));
+    train
+        ->add_option("--downscale", t->downscale,
+                     "Box-filter the photos by N x N pixels (intrinsics scaled to match)")
+        ->check(CLI::Range(1, 64));
+    train->add_option("--images,--photos", t->photos,
+                      "A COLMAP model's photos (default: <model>/../../images)");
+    train->add_flag("--alpha-mask", t->alpha_mask, "Ignore pixels of alpha 0 (besides masks)");
     train->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     train->callback([t, &global] { run_train(*t, global); });
 
     auto e = std::make_shared<EvalCommandOptions>();
     CLI::App* eval = nerf->add_subcommand(
         "eval", "PSNR and SSIM of an RGBA volume's ray-cast renders against a dataset's views");
-    eval->add_option("TRANSFORMS", e->transforms, "transforms_test.json")->required();
+    eval->add_option("TRANSFORMS", e->transforms,
+                     "transforms_test.json, or a COLMAP sparse model directory")
+        ->required();
     eval->add_option("VOLUME", e->volume, "RGBA volume (from nerf train)")->required();
     eval->add_option("--background", e->background, "Background colour, each in [0, 1]")
         ->type_name("R,G,B")
@@ -252,6 +282,12 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
                      "16384), before allocating")
         ->type_name("MIB")
         ->check(finite_in_range(1e-6, 1e9));
+    eval->add_option("--downscale", e->downscale,
+                     "Box-filter the photos by N x N pixels (intrinsics scaled to match)")
+        ->check(CLI::Range(1, 64));
+    eval->add_option("--photos", e->photos,
+                     "A COLMAP model's photos (default: <model>/../../images)");
+    eval->add_flag("--alpha-mask", e->alpha_mask, "Ignore pixels of alpha 0 (besides masks)");
     eval->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     eval->callback([e, &global] { run_eval(*e, global); });
 }

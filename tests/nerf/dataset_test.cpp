@@ -76,8 +76,8 @@ void expect_ray_projects_back(const Intrinsics& in, const Pose& pose) {
                          cz = -dot(d, pose.axis(2));
             ASSERT_GT(cz, 0.0);
             const Point2 p = distort(in.lens, {cx / cz, cy / cz});
-            worst = std::max({worst, std::fabs(in.fx * p.x + in.cx - px),
-                              std::fabs(in.fy * p.y + in.cy - py)});
+            worst = std::max(
+                {worst, std::fabs(in.fx * p.x + in.cx - px), std::fabs(in.fy * p.y + in.cy - py)});
         }
     }
     EXPECT_LT(worst, 1e-6) << lens_model_name(in.lens.model);
@@ -87,7 +87,8 @@ TEST(DatasetRays, DistortedRaysProjectBackOntoTheirPixels) {
     const Pose pose = tilted_pose();
     expect_ray_projects_back(intrinsics({.model = LensModel::simple_radial, .k1 = -0.2}), pose);
     expect_ray_projects_back(
-        intrinsics({.model = LensModel::opencv, .k1 = 0.12, .k2 = -0.03, .p1 = 0.004, .p2 = -0.002}),
+        intrinsics(
+            {.model = LensModel::opencv, .k1 = 0.12, .k2 = -0.03, .p1 = 0.004, .p2 = -0.002}),
         pose);
     expect_ray_projects_back(
         intrinsics({.model = LensModel::opencv_fisheye, .k1 = 0.03, .k2 = -0.01, .k4 = 0.001}),
@@ -140,9 +141,9 @@ TEST(DatasetRays, PerViewIntrinsicsAndMasksAreValidated) {
 }
 
 TEST(DatasetRays, TheRayCasterCameraRefusesALens) {
-    EXPECT_THROW(camera_from_view(intrinsics({.model = LensModel::opencv, .k1 = 0.1}),
-                                  tilted_pose()),
-                 Unsupported);
+    EXPECT_THROW(
+        camera_from_view(intrinsics({.model = LensModel::opencv, .k1 = 0.1}), tilted_pose()),
+        Unsupported);
 }
 
 }  // namespace

@@ -104,6 +104,10 @@ TEST(Lens, FoldBackIsReportedNotGuessed) {
     EXPECT_FALSE(undistorted_direction(lens, {0.6, 0.0}).has_value());
     EXPECT_TRUE(undistorted_direction(lens, {0.5, 0.0}).has_value());
     EXPECT_FALSE(undistorted_direction(lens, {std::nan(""), 0.0}).has_value());
+    // k1 = −3: u − 3 u³ = 0.5 has a root at u ≈ −0.74 where the radial factor is negative and
+    // both Jacobian eigenvalues are (det J > 0 there): refused too.
+    const Lens strong{.model = LensModel::simple_radial, .k1 = -3.0};
+    EXPECT_FALSE(undistorted_direction(strong, {0.5, 0.0}).has_value());
 }
 
 TEST(Lens, NamesRoundTrip) {

@@ -6,11 +6,14 @@
 #include <gtest/gtest.h>
 #include <stb_image_write.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
 
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
+#include "pliant/io/colmap_model.hpp"
 #include "pliant/io/png.hpp"
 #include "support/test_files.hpp"
 
@@ -226,6 +229,222 @@ TEST(NerfDataset, DerivesASceneBoxFromTheCameras) {
     EXPECT_NEAR(norm(box.center() - c), 0.0, 1e-9);
     EXPECT_GT(box.extent().x, 0.5);
     EXPECT_LT(box.extent().x, 4.0);
+}
+
+// The warnings logged while f runs.
+template <typename F>
+std::vector<std::string> warnings_of(F&& f) {
+    std::vector<std::string> out;
+    const LogSink previous = set_log_sink([&](LogLevel level, std::string_view message) {
+        if (level == LogLevel::warning) {
+            out.emplace_back(message);
+        }
+    });
+    try {
+        f();
+    } catch (...) {
+        set_log_sink(previous);
+        throw;
+    }
+    set_log_sink(previous);
+    return out;
+}
+
+bool mentions(const std::vector<std::string>& lines, std::string_view text) {
+    return std::any_of(lines.begin(), lines.end(),
+                       [&](const std::string& l) { return l.find(text) != std::string::npos; });
+}
+
+std::string frame(const std::string& file, const std::string& extra = "") {
+    return R"({"file_path": ")" + file + R"(", "transform_matrix": )" + IDENTITY + extra + "}";
+}
+
+TEST(NerfDataset, NerfstudioPerFrameIntrinsics) {
+    const TempDir dir;
+    write_rgba_png(dir / "a.png");
+    write_rgba_png(dir / "b.png");
+    // No file-level focal length: nerfstudio's per-frame layout.
+    write_bytes(
+        dir / "t.json",
+        R"({"camera_model": "OPENCV", "frames": [)" +
+            frame("a.png", R"(, "fl_x": 3.5, "fl_y": 3.6, "cx": 2.1, "cy": 1.4, "k1": 0.01)") +
+            ", " +
+            frame("b.png", R"(, "fl_x": 3.7, "fl_y": 3.6, "cx": 2.0, "cy": 1.5, "k1": 0.02)") +
+            "]}");
+    const nerf::Dataset ds = read_nerf_dataset(dir / "t.json");
+    EXPECT_EQ(ds.intrinsics.fx, 3.5);
+    EXPECT_EQ(ds.intrinsics.cx, 2.1);
+    EXPECT_EQ(ds.intrinsics.lens.model, nerf::LensModel::opencv);
+    EXPECT_EQ(ds.intrinsics.lens.k1, 0.01);
+    EXPECT_FALSE(ds.views[0].intrinsics.has_value());
+    ASSERT_TRUE(ds.views[1].intrinsics.has_value());
+    EXPECT_EQ(ds.views[1].intrinsics->fx, 3.7);
+    EXPECT_EQ(ds.views[1].intrinsics->cy, 1.5);
+    EXPECT_EQ(ds.views[1].intrinsics->lens.k1, 0.02);
+    // A frame of another size is refused.
+    write_bytes(dir / "t.json", R"({"fl_x": 3, "w": 4, "h": 3, "frames": [)" + frame("a.png") +
+                                    ", " + frame("b.png", R"(, "w": 8)") + "]}");
+    EXPECT_THROW(read_nerf_dataset(dir / "t.json"), Unsupported);
+}
+
+TEST(NerfDataset, LensModelsAndTheirCoefficients) {
+    const TempDir dir;
+    write_rgba_png(dir / "a.png");
+    const auto read_with = [&](const std::string& keys) {
+        write_bytes(dir / "t.json", R"({"fl_x": 3, "w": 4, "h": 3, )" + keys + R"(, "frames": [)" +
+                                        frame("a.png") + "]}");
+        return read_nerf_dataset(dir / "t.json");
+    };
+    nerf::Dataset ds = read_with(R"("camera_model": "OPENCV_FISHEYE", "k1": 0.1, "k4": -0.01)");
+    EXPECT_EQ(ds.intrinsics.lens.model, nerf::LensModel::opencv_fisheye);
+    EXPECT_EQ(ds.intrinsics.lens.k4, -0.01);
+    // Coefficients without a model: OPENCV (nerfstudio's and instant-ngp's reading).
+    ds = read_with(R"("k1": -0.05, "p2": 0.001)");
+    EXPECT_EQ(ds.intrinsics.lens.model, nerf::LensModel::opencv);
+    EXPECT_EQ(ds.intrinsics.lens.p2, 0.001);
+    ds = read_with(R"("is_fisheye": true, "k1": 0.02)");
+    EXPECT_EQ(ds.intrinsics.lens.model, nerf::LensModel::opencv_fisheye);
+    // A coefficient the model lacks, an unknown model, a non-number.
+    try {
+        read_with(R"("camera_model": "PINHOLE", "k1": 0.1)");
+        FAIL();
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("k1"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("PINHOLE"), std::string::npos) << e.what();
+    }
+    io::test::expect_io_error([&] { read_with(R"("camera_model": "FANCY")"); },
+                              {"camera_model", "FANCY", "OPENCV_FISHEYE"});
+    io::test::expect_io_error([&] { read_with(R"("k1": "big")"); }, {"k1", "number"});
+    // A lens that folds back inside the image.
+    EXPECT_THROW(read_with(R"("camera_model": "SIMPLE_RADIAL", "k1": -3)"), InvalidInput);
+}
+
+TEST(NerfDataset, EveryKeyIsUnderstoodOrNamed) {
+    const TempDir dir;
+    write_rgba_png(dir / "a.png");
+    const auto read_with = [&](const std::string& keys, const std::string& frame_keys = "") {
+        write_bytes(dir / "t.json", R"({"fl_x": 3, )" + keys + R"(, "frames": [)" +
+                                        frame("a.png", frame_keys) + "]}");
+        return warnings_of([&] { read_nerf_dataset(dir / "t.json"); });
+    };
+    std::vector<std::string> w = read_with(R"("foo": 1)", R"(, "bar": 2, "colmap_im_id": 3)");
+    EXPECT_TRUE(mentions(w, "`foo`"));
+    EXPECT_TRUE(mentions(w, "frames[0]: key `bar`"));
+    EXPECT_FALSE(mentions(w, "colmap_im_id"));
+    // nerfstudio's applied_transform: understood; a broken one is an error.
+    w = read_with(R"("applied_transform": [[0,1,0,0],[1,0,0,0],[0,0,-1,0]])");
+    EXPECT_TRUE(w.empty());
+    io::test::expect_io_error([&] { read_with(R"("applied_transform": [1, 2])"); },
+                              {"applied_transform", "3 x 4"});
+    EXPECT_TRUE(mentions(read_with(R"("orientation_override": "up")"), "orientation_override"));
+    EXPECT_TRUE(read_with(R"("orientation_override": "none")").empty());
+    EXPECT_TRUE(mentions(read_with(R"("aabb_scale": 16)"), "aabb_scale"));
+    EXPECT_TRUE(read_with(R"("aabb_scale": 1)").empty());
+    io::test::expect_io_error([&] { read_with(R"("aabb_scale": 3)"); }, {"power of two"});
+}
+
+TEST(NerfDataset, MasksFromFilesAndAlpha) {
+    const TempDir dir;
+    write_rgba_png(dir / "a.png");
+    // Mask: pixel (2, 1) and (3, 2) ignored.
+    std::vector<unsigned char> m(12, 255);
+    m[1 * 4 + 2] = 0;
+    m[2 * 4 + 3] = 0;
+    ASSERT_NE(stbi_write_png((dir / "m.png").string().c_str(), 4, 3, 1, m.data(), 4), 0);
+    write_bytes(dir / "t.json",
+                R"({"fl_x": 3, "frames": [)" + frame("a.png", R"(, "mask_path": "m.png")") + "]}");
+    nerf::Dataset ds = read_nerf_dataset(dir / "t.json");
+    ASSERT_EQ(ds.views[0].mask.size(), 12u);
+    EXPECT_EQ(ds.views[0].mask[6], 0);
+    EXPECT_EQ(ds.views[0].mask[11], 0);
+    EXPECT_EQ(ds.views[0].mask[0], 1);
+    // With alpha_mask, the alpha-0 pixel (0, 0) too.
+    ReadNerfDatasetOptions o;
+    o.alpha_mask = true;
+    ds = read_nerf_dataset(dir / "t.json", o);
+    EXPECT_EQ(ds.views[0].mask[0], 0);
+    EXPECT_EQ(ds.views[0].mask[1], 1);  // alpha 128 counts
+    EXPECT_EQ(ds.views[0].mask[6], 0);
+    write_bytes(dir / "t.json", R"({"fl_x": 3, "frames": [)" +
+                                    frame("a.png", R"(, "mask_path": "nope.png")") + "]}");
+    io::test::expect_io_error([&] { read_nerf_dataset(dir / "t.json"); },
+                              {"mask_path", "no such file"});
+}
+
+TEST(NerfDataset, DownscaleBoxFiltersAndKeepsThePixelCentres) {
+    const TempDir dir;
+    write_rgba_png(dir / "a.png", 5, 4);  // 5 x 4 → 2 x 2 at N = 2 (the last column dropped)
+    write_bytes(dir / "t.json", R"({"fl_x": 4.5, "fl_y": 5, "cx": 2.25, "cy": 1.75, "k1": 0.01,
+                                    "frames": [)" +
+                                    frame("a.png") + "]}");
+    const nerf::Dataset full = read_nerf_dataset(dir / "t.json");
+    ReadNerfDatasetOptions o;
+    o.downscale = 2;
+    const nerf::Dataset half = read_nerf_dataset(dir / "t.json", o);
+    EXPECT_EQ(half.intrinsics.width, 2);
+    EXPECT_EQ(half.intrinsics.height, 2);
+    EXPECT_EQ(half.intrinsics.fx, 2.25);
+    EXPECT_EQ(half.intrinsics.fy, 2.5);
+    EXPECT_EQ(half.intrinsics.cx, 1.125);
+    EXPECT_EQ(half.intrinsics.cy, 0.875);
+    EXPECT_EQ(half.intrinsics.lens.k1, 0.01);
+    // Pixel (1, 1) of the small image is the mean of pixels (2..3, 2..3) of the large one.
+    for (int c = 0; c < 3; ++c) {
+        const auto at = [&](int x, int y) {
+            return full.views[0].rgb[3 * (y * 5 + x) + c];
+        };
+        EXPECT_FLOAT_EQ(half.views[0].rgb[3 * 3 + c],
+                        (at(2, 2) + at(3, 2) + at(2, 3) + at(3, 3)) / 4.0f);
+    }
+    // The small pixel's centre (i + 0.5) is the large block's centre 2 i + 1: the same ray.
+    for (int i = 0; i < 2; ++i) {
+        const render::Ray a =
+            nerf::view_ray(half.intrinsics, half.views[0].camera_to_world, i + 0.5, i + 0.5);
+        const render::Ray b = nerf::view_ray(full.intrinsics, full.views[0].camera_to_world,
+                                             2.0 * i + 1.0, 2.0 * i + 1.0);
+        EXPECT_NEAR(norm(a.direction - b.direction), 0.0, 1e-12);
+    }
+    o.downscale = 5;
+    EXPECT_THROW(read_nerf_dataset(dir / "t.json", o), InvalidInput);
+}
+
+TEST(NerfDataset, ReadsJpegPhotos) {
+    const TempDir dir;
+    std::vector<unsigned char> px(16 * 8 * 3, 128);
+    ASSERT_NE(stbi_write_jpg((dir / "p.jpg").string().c_str(), 16, 8, 3, px.data(), 95), 0);
+    write_bytes(dir / "t.json", R"({"fl_x": 10, "frames": [)" + frame("p") + "]}");
+    const nerf::Dataset ds = read_nerf_dataset(dir / "t.json");
+    EXPECT_EQ(ds.intrinsics.width, 16);
+    EXPECT_NEAR(ds.views[0].rgb[0], 128.0f / 255.0f, 2.0f / 255.0f);
+}
+
+TEST(NerfDataset, ReadsAColmapModelDirectory) {
+    const TempDir dir;
+    std::filesystem::create_directories(dir / "sparse" / "0");
+    std::filesystem::create_directories(dir / "images");
+    write_rgba_png(dir / "images" / "b.png");
+    write_rgba_png(dir / "images" / "a.png");
+    write_bytes(dir / "sparse/0/cameras.txt", "1 OPENCV 4 3 3.5 3.4 2.1 1.4 -0.01 0.001 0 0\n");
+    write_bytes(dir / "sparse/0/images.txt",
+                "1 1 0 0 0 0 0 4 1 b.png\n\n2 0.9 0.1 0.3 -0.2 1.5 -2.25 3 1 a.png\n\n");
+    const nerf::Dataset ds = read_nerf_dataset(dir / "sparse" / "0");
+    ASSERT_EQ(ds.views.size(), 2u);
+    EXPECT_EQ(ds.views[0].name, "a.png");  // sorted by name
+    EXPECT_EQ(ds.intrinsics.lens.model, nerf::LensModel::opencv);
+    EXPECT_EQ(ds.intrinsics.fy, 3.4);
+    const nerf::ColmapTransforms t =
+        nerf::transforms_from_colmap(io::read_colmap_model(dir / "sparse" / "0"));
+    EXPECT_EQ(ds.views[1].camera_to_world.m, t.frames[1].camera_to_world.m);
+    EXPECT_EQ(ds.views[0].rgb.size(), 36u);
+    // The photos elsewhere: images_dir, or a clear error naming --images.
+    std::filesystem::rename(dir / "images", dir / "photos");
+    io::test::expect_io_error([&] { read_nerf_dataset(dir / "sparse" / "0"); }, {"--images"});
+    ReadNerfDatasetOptions o;
+    o.images_dir = dir / "photos";
+    EXPECT_EQ(read_nerf_dataset(dir / "sparse" / "0", o).views.size(), 2u);
+    // A directory that is neither a model nor holds transforms.json.
+    io::test::expect_io_error([&] { read_nerf_dataset(dir / "photos"); },
+                              {"neither transforms.json nor a COLMAP model"});
 }
 
 }  // namespace

@@ -157,7 +157,8 @@ std::optional<Vec3d> undistorted_direction(const Lens& lens, Point2 d) {
         return std::nullopt;
     }
     // Radial-tangential: Newton on F(u, v) = distort(u, v) − d with the analytic Jacobian; the
-    // solution must have det J > 0 (the lens does not fold back there).
+    // solution must have det J > 0 and a positive radial factor (the lens does not fold back or
+    // turn over there).
     double u = d.x, v = d.y;
     for (int step = 0; step < MAX_NEWTON_STEPS; ++step) {
         const double r2 = u * u + v * v;
@@ -174,7 +175,9 @@ std::optional<Vec3d> undistorted_direction(const Lens& lens, Point2 d) {
         const double scale = std::max({1.0, std::fabs(d.x), std::fabs(d.y)});
         if (std::fabs(fx) <= NEWTON_TOLERANCE * scale &&
             std::fabs(fy) <= NEWTON_TOLERANCE * scale) {
-            if (!(det > 0.0)) {
+            // Both eigenvalues of J positive for a radial lens: the tangential one is the radial
+            // factor, the product the determinant (a folded solution may have both negative).
+            if (!(det > 0.0) || !(radial > 0.0)) {
                 return std::nullopt;
             }
             const Vec3d dir{u, v, 1.0};

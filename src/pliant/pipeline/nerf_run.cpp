@@ -125,6 +125,38 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
     return out;
 }
 
+namespace {
+
+// Whether render::Camera models these intrinsics (nerf::camera_from_view's conditions).
+bool fits_ray_caster_camera(const nerf::Intrinsics& in) {
+    return in.lens.is_identity() && std::fabs(in.fx - in.fy) <= 1e-6 * in.fx &&
+           std::fabs(in.cx - 0.5 * in.width) <= 1e-3 && std::fabs(in.cy - 0.5 * in.height) <= 1e-3;
+}
+
+// The view's pixel-centre rays (nerf::view_ray: any principal point, any lens) ray-cast into
+// an 8-bit image, as RayCaster::render would write it.
+void render_view_rays(const render::RayCaster& caster, const nerf::Intrinsics& in,
+                      const nerf::Pose& pose, render::Image& image) {
+    std::vector<render::Ray> rays;
+    rays.reserve(static_cast<std::size_t>(in.width) * in.height);
+    for (int y = 0; y < in.height; ++y) {
+        for (int x = 0; x < in.width; ++x) {
+            rays.push_back(nerf::view_ray(in, pose, x + 0.5, y + 0.5));
+        }
+    }
+    std::vector<float> rgb(3 * rays.size());
+    caster.render_rays(rays, rgb);
+    image = render::Image(in.width, in.height);
+    for (std::size_t p = 0; p < rays.size(); ++p) {
+        const render::Rgb8 c = render::to_rgb8({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]});
+        image.pixels[3 * p] = c.r;
+        image.pixels[3 * p + 1] = c.g;
+        image.pixels[3 * p + 2] = c.b;
+    }
+}
+
+}  // namespace
+
 nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volume::Volume& volume,
                                        const std::array<float, 3>& background,
                                        const std::filesystem::path& images_dir) {
@@ -147,9 +179,31 @@ nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volum
     render::Image image;
     for (std::size_t i = 0; i < dataset.views.size(); ++i) {
         const nerf::View& v = dataset.views[i];
-        caster.render(nerf::camera_from_view(dataset.intrinsics, v.camera_to_world), image);
-        const std::vector<float> rgb = nerf::from_image(image);
-        const double p = nerf::psnr(rgb, v.rgb);
+        const nerf::Intrinsics& in = nerf::intrinsics_of(dataset, v);
+        if (fits_ray_caster_camera(in)) {
+            caster.render(nerf::camera_from_view(in, v.camera_to_world), image);
+        } else {
+            render_view_rays(caster, in, v.camera_to_world, image);
+        }
+        std::vector<float> rgb = nerf::from_image(image);
+        double p = 0.0;
+        if (v.mask.empty()) {
+            p = nerf::psnr(rgb, v.rgb);
+        } else {
+            // Masked pixels: left out of PSNR, and equal to the reference for SSIM's windows.
+            std::vector<float> kept, kept_ref;
+            for (std::size_t q = 0; q < v.mask.size(); ++q) {
+                for (std::size_t c = 0; c < 3; ++c) {
+                    if (v.mask[q] != 0) {
+                        kept.push_back(rgb[3 * q + c]);
+                        kept_ref.push_back(v.rgb[3 * q + c]);
+                    } else {
+                        rgb[3 * q + c] = v.rgb[3 * q + c];
+                    }
+                }
+            }
+            p = kept.empty() ? 0.0 : nerf::psnr(kept, kept_ref);
+        }
         const double s = nerf::ssim(rgb, v.rgb, image.width, image.height);
         sum_psnr += p;
         sum_ssim += s;

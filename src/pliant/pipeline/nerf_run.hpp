@@ -70,7 +70,10 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
                             FunctionRef<bool()> keep_going);
 
 // Ray-casts the RGBA `volume` (render::RayCaster's defaults) from every view of `dataset` over
-// `background` and compares with the views' images. With images_dir, writes the renders as
+// `background` and compares with the views' images: views that render::Camera models (square
+// pixels, centred principal point, no distortion) through it, others through their per-pixel
+// rays (nerf::view_ray, RayCaster::render_rays); a view's masked pixels are left out of its PSNR
+// and set to the reference for its SSIM. With images_dir, writes the renders as
 // images_dir/<i>.png. Returns {psnr, ssim, views: [{file_path, psnr, ssim}]} (means over the
 // views). InvalidInput when the volume is not RGBA.
 nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volume::Volume& volume,

@@ -376,19 +376,7 @@ std::int64_t RayCaster::num_occupied_cells() const {
     return count;
 }
 
-RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
-    const Stopwatch watch;
-    detail::RayCastKernel k;
-    k.width = camera.width();
-    k.height = camera.height();
-    k.is_perspective = camera.projection() == Projection::perspective;
-    // Positions are taken relative to the volume's origin (in double, then float), so volumes
-    // far from the world origin keep float precision: grid g = (p − origin) / spacing − 0.5.
-    k.eye = vec3_cast<float>(camera.eye() - m_origin);
-    k.forward = vec3_cast<float>(camera.forward());
-    k.right = vec3_cast<float>(camera.right());
-    k.up = vec3_cast<float>(camera.up());
-    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     const Vec3d inv{1.0 / m_spacing.x, 1.0 / m_spacing.y, 1.0 / m_spacing.z};
     k.inv_spacing = vec3_cast<float>(inv);
     for (int a = 0; a < 3; ++a) {
@@ -412,6 +400,81 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupied.size();
     }
     k.cell_max = m_cell_max.data();
+    k.step = static_cast<float>(m_step);
+    k.inv_step = 1.0f / k.step;
+    k.step_over_unit = static_cast<float>(m_step / m_opacity_unit);
+    k.threshold = static_cast<float>(m_options.early_termination);
+    k.is_mip = m_options.mode == RayCastMode::mip;
+    k.shading = m_options.shading && !k.is_mip;
+    k.skipping = m_options.empty_space_skipping;
+    k.background = m_options.background;
+    k.grid_offset = {-0.5f, -0.5f, -0.5f};
+    if (m_options.clip) {
+        // In the kernel's frame (world relative to the volume's origin), unit normal.
+        const Vec3d n = m_options.clip->normal / norm(m_options.clip->normal);
+        k.has_clip = true;
+        k.clip_normal = vec3_cast<float>(n);
+        k.clip_offset = static_cast<float>(dot(n, m_options.clip->point - m_origin));
+    }
+}
+
+RayCastStats RayCaster::render_rays(std::span<const Ray> rays, std::span<float> rgb) const {
+    if (rgb.size() != 3 * rays.size()) {
+        throw InvalidInput(
+            fmt::format("render::RayCaster::render_rays: rgb.size() ({}) != 3 x "
+                        "rays.size() ({})",
+                        rgb.size(), rays.size()));
+    }
+    const Stopwatch watch;
+    detail::RayCastKernel k;
+    k.is_perspective = true;
+    fill_kernel(k);
+    constexpr std::int64_t CHUNK = 256;
+    const auto n = static_cast<std::int64_t>(rays.size());
+    const std::int64_t num_chunks = (n + CHUNK - 1) / CHUNK;
+    std::vector<std::int64_t> chunk_samples(static_cast<std::size_t>(num_chunks), 0);
+    const bool is_rgba = m_is_rgba;
+    parallel_for(
+        num_chunks,
+        [&](std::int64_t chunk) {
+            std::int64_t samples = 0;
+            for (std::int64_t i = chunk * CHUNK; i < std::min(n, (chunk + 1) * CHUNK); ++i) {
+                const Ray& ray = rays[static_cast<std::size_t>(i)];
+                // Relative to the volume's origin, as render() does with the eye.
+                const Vec3f origin = vec3_cast<float>(ray.origin - m_origin);
+                const Vec3f dir = vec3_cast<float>(ray.direction);
+                const detail::PixelResult p = is_rgba ? detail::raycast_ray<true>(k, origin, dir)
+                                                      : detail::raycast_ray<false>(k, origin, dir);
+                rgb[static_cast<std::size_t>(3 * i)] = p.color.r;
+                rgb[static_cast<std::size_t>(3 * i + 1)] = p.color.g;
+                rgb[static_cast<std::size_t>(3 * i + 2)] = p.color.b;
+                samples += p.samples;
+            }
+            chunk_samples[static_cast<std::size_t>(chunk)] = samples;
+        },
+        1);
+    RayCastStats stats;
+    for (const std::int64_t c : chunk_samples) {
+        stats.samples += c;
+    }
+    stats.ms = watch.elapsed_ms();
+    return stats;
+}
+
+RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
+    const Stopwatch watch;
+    detail::RayCastKernel k;
+    k.width = camera.width();
+    k.height = camera.height();
+    k.is_perspective = camera.projection() == Projection::perspective;
+    // Positions are taken relative to the volume's origin (in double, then float), so volumes
+    // far from the world origin keep float precision: grid g = (p − origin) / spacing − 0.5.
+    k.eye = vec3_cast<float>(camera.eye() - m_origin);
+    k.forward = vec3_cast<float>(camera.forward());
+    k.right = vec3_cast<float>(camera.right());
+    k.up = vec3_cast<float>(camera.up());
+    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+    fill_kernel(k);
     // An orthographic axis view: the cubes of its octants merged once per frame (O(cells), a
     // fraction of a millisecond at 64³ cells) instead of 2 or 4 lookups per jump.
     std::vector<std::uint8_t> axis_cube;
@@ -434,23 +497,6 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
             k.axis_cube = axis_cube.data();
         }
     }
-    k.step = static_cast<float>(m_step);
-    k.inv_step = 1.0f / k.step;
-    k.step_over_unit = static_cast<float>(m_step / m_opacity_unit);
-    k.threshold = static_cast<float>(m_options.early_termination);
-    k.is_mip = m_options.mode == RayCastMode::mip;
-    k.shading = m_options.shading && !k.is_mip;
-    k.skipping = m_options.empty_space_skipping;
-    k.background = m_options.background;
-    k.grid_offset = {-0.5f, -0.5f, -0.5f};
-    if (m_options.clip) {
-        // In the kernel's frame (world relative to the volume's origin), unit normal.
-        const Vec3d n = m_options.clip->normal / norm(m_options.clip->normal);
-        k.has_clip = true;
-        k.clip_normal = vec3_cast<float>(n);
-        k.clip_offset = static_cast<float>(dot(n, m_options.clip->point - m_origin));
-    }
-
     image = Image(k.width, k.height);
     const int tiles_x = (k.width + detail::TILE - 1) / detail::TILE;
     const int tiles_y = (k.height + detail::TILE - 1) / detail::TILE;

@@ -76,6 +76,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "pliant/render/camera.hpp"
@@ -84,6 +85,10 @@
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::render {
+
+namespace detail {
+struct RayCastKernel;
+}
 
 enum class RayCastMode { composite, mip };
 
@@ -128,6 +133,12 @@ public:
     RayCaster(const volume::Volume& volume, const volume::TransferFunction* tf,
               const RayCastOptions& options = {});
     RayCastStats render(const Camera& camera, Image& image) const;
+    // Casts the given world-space rays (origins, unit directions: e.g. the per-pixel rays of a
+    // camera with a lens model) with the same scalar kernel as render's pixels; rgb gets the
+    // composited colour of ray i at 3 i … 3 i + 2 (linear floats, not yet rounded to 8 bits).
+    // InvalidInput when rgb.size() != 3 · rays.size(). Parallel over chunks of rays; bitwise
+    // identical for any thread count.
+    RayCastStats render_rays(std::span<const Ray> rays, std::span<float> rgb) const;
     // Changes the clipping plane of later renders (none: the whole volume) without preparing the
     // volume again; InvalidInput as in the constructor. Not to be called during a render.
     void set_clip(const std::optional<ClipPlane>& clip);
@@ -142,6 +153,8 @@ private:
     // The constructor's work: validation, then the float copy, lookup table, macro cells and
     // empty cubes.
     void prepare(const volume::Volume& volume, const volume::TransferFunction* tf);
+    // The kernel's volume, table and option fields (everything but the camera's).
+    void fill_kernel(detail::RayCastKernel& k) const;
 
     RayCastOptions m_options;
     volume::Dims m_dims{0, 0, 0};

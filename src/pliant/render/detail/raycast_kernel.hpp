@@ -375,10 +375,11 @@ struct PixelRay {
     std::int64_t num_full = 0;  // samples marched: every segment for MIP, all but the last else
 };
 
-// Step 1 and 2 for pixel (i, j): false when its ray misses the box (or the kept half-space).
-PLIANT_HOST_DEVICE inline bool begin_pixel(const RayCastKernel& k, int i, int j, PixelRay& p) {
-    Vec3f origin;
-    pixel_ray(k, i, j, origin, p.dir);
+// Step 1 and 2 for the ray (origin, unit dir): false when it misses the box (or the kept
+// half-space).
+PLIANT_HOST_DEVICE inline bool begin_ray(const RayCastKernel& k, Vec3f origin, Vec3f dir,
+                                         PixelRay& p) {
+    p.dir = dir;
     if (!clip_ray(k, origin, p.dir, p.r)) {
         return false;
     }
@@ -388,6 +389,13 @@ PLIANT_HOST_DEVICE inline bool begin_pixel(const RayCastKernel& k, int i, int j,
         std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(p.length / k.step)));
     p.num_full = k.is_mip ? p.num_segments : p.num_segments - 1;
     return true;
+}
+
+// Step 1 and 2 for pixel (i, j).
+PLIANT_HOST_DEVICE inline bool begin_pixel(const RayCastKernel& k, int i, int j, PixelRay& p) {
+    Vec3f origin, dir;
+    pixel_ray(k, i, j, origin, dir);
+    return begin_ray(k, origin, dir, p);
 }
 
 // Grid position of sample m (the midpoint of segment m).
@@ -494,13 +502,10 @@ PLIANT_HOST_DEVICE inline Accumulated march_composite(const RayCastKernel& k, co
     return c;
 }
 
+// Steps 3–5 of a ray that begin_ray / begin_pixel set up.
 template <bool IS_RGBA>
-PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int j) {
+PLIANT_HOST_DEVICE PixelResult raycast_begun(const RayCastKernel& k, const PixelRay& p) {
     PixelResult result{k.background, 0};
-    PixelRay p;
-    if (!begin_pixel(k, i, j, p)) {
-        return result;
-    }
     const GridRay& r = p.r;
     const std::int64_t num_full = p.num_full;
     std::int64_t samples = 0;
@@ -555,6 +560,25 @@ PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int 
     result.color = end_composite<IS_RGBA>(k, p, c, samples);
     result.samples = samples;
     return result;
+}
+
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE PixelResult raycast_pixel(const RayCastKernel& k, int i, int j) {
+    PixelRay p;
+    if (!begin_pixel(k, i, j, p)) {
+        return PixelResult{k.background, 0};
+    }
+    return raycast_begun<IS_RGBA>(k, p);
+}
+
+// A ray of the caller's (origin relative to the volume's origin, unit direction).
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE PixelResult raycast_ray(const RayCastKernel& k, Vec3f origin, Vec3f dir) {
+    PixelRay p;
+    if (!begin_ray(k, origin, dir, p)) {
+        return PixelResult{k.background, 0};
+    }
+    return raycast_begun<IS_RGBA>(k, p);
 }
 
 // The empty cubes of `occupied` (cells[0] · cells[1] · cells[2] flags, x fastest) towards
