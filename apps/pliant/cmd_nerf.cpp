@@ -24,10 +24,11 @@
 //
 // eval: renders the RGBA VOLUME with the ray caster (render::RayCaster, its defaults: step half
 // the smallest spacing, opacity per smallest spacing, early termination at 0.99) from every view
-// of the dataset (nerf::camera_from_view: square pixels and a centred principal point) over the
-// dataset's background, and compares with the dataset's images: PSNR and SSIM (nerf/metrics.hpp)
-// per view and their means. --images DIR writes the renders as DIR/<i>.png.
-// stdout: a table, or with --json: psnr, ssim (means), views [{file_path, psnr, ssim}].
+// of the dataset (through render::Camera when the view is a centred square-pixel pinhole, else
+// through its per-pixel rays: any principal point and lens) over the dataset's background, and
+// compares with the dataset's images: PSNR and SSIM (nerf/metrics.hpp) per view and their means.
+// --images DIR writes the renders as DIR/<i>.png. stdout: a table, or with --json: psnr, ssim
+// (means), views [{file_path, psnr, ssim}].
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
