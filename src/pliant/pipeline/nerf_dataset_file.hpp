@@ -73,8 +73,8 @@ struct ReadNerfDatasetOptions {
     std::size_t max_bytes = std::size_t{16} << 30;  // limit on the decoded images (bytes)
     int downscale = 1;        // box filter of N × N pixels (≥ 1; see the header comment)
     bool alpha_mask = false;  // pixels of alpha 0 are ignored (masked), besides composited
-    std::filesystem::path images_dir;      // COLMAP models: where the photos are (empty: default)
-    nerf::ColmapConversionOptions colmap;  // COLMAP models: the normalization
+    std::filesystem::path images_dir{};      // COLMAP models: where the photos are (empty: default)
+    nerf::ColmapConversionOptions colmap{};  // COLMAP models: the normalization
 };
 
 // A transforms.json file; a directory: a COLMAP model in it (read_colmap_dataset), else its
