@@ -218,7 +218,8 @@ image(i) is an (H, W, 3) float32 view of the dataset's memory (no copy, writeabl
         .def(
             "camera",
             [](const Dataset& d, py::ssize_t i) {
-                return nerf::camera_from_view(d.intrinsics, view_at(d, i).camera_to_world);
+                const nerf::View& v = view_at(d, i);
+                return nerf::camera_from_view(nerf::intrinsics_of(d, v), v.camera_to_world);
             },
             py::arg("i"), "View i as a Camera (square pixels, centred principal point).")
         .def(
