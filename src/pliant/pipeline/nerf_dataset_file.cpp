@@ -280,7 +280,8 @@ void downscale_view(nerf::View& view, int width, int height, int n) {
             bool keep = true;
             for (int dy = 0; dy < n; ++dy) {
                 for (int dx = 0; dx < n; ++dx) {
-                    const std::size_t q = static_cast<std::size_t>(y * n + dy) * width + x * n + dx;
+                    const std::size_t q = static_cast<std::size_t>(y * n + dy) * width +
+                                          static_cast<std::size_t>(x * n + dx);
                     for (int c = 0; c < 3; ++c) {
                         sum[c] += view.rgb[3 * q + c];
                     }
