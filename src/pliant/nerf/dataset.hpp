@@ -43,7 +43,7 @@ struct Intrinsics {
     double fy = 0.0;  // focal length along y, pixels
     double cx = 0.0;  // principal point, continuous pixel coordinates
     double cy = 0.0;
-    Lens lens;  // PINHOLE (no distortion) unless the dataset names a model
+    Lens lens{};  // PINHOLE (no distortion) unless the dataset names a model
 };
 
 // Camera-to-world 3 × 4 matrix [R | t], row-major (m[4 r + c]).
@@ -61,10 +61,10 @@ struct View {
     std::vector<float> rgb;  // 3 · width · height, row-major from the top-left, in [0, 1]
     // The view's own intrinsics when they differ from the dataset's (per-frame fl_x, cx, k1 …);
     // same width and height as the dataset's.
-    std::optional<Intrinsics> intrinsics;
+    std::optional<Intrinsics> intrinsics{};
     // Which pixels count (1) and which are ignored (0) in training and evaluation, width · height
     // row-major; empty: every pixel counts.
-    std::vector<std::uint8_t> mask;
+    std::vector<std::uint8_t> mask{};
 };
 
 struct Dataset {
