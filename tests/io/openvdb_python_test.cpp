@@ -52,12 +52,14 @@ Volume ball(VoxelType type) {
     for (std::int64_t k = 0; k < 5; ++k) {
         for (std::int64_t j = 0; j < 6; ++j) {
             for (std::int64_t i = 0; i < 7; ++i) {
-                const double r2 = (i - 3.0) * (i - 3.0) + (j - 2.5) * (j - 2.5) + (k - 2.0) * (k - 2.0);
+                const double r2 =
+                    (i - 3.0) * (i - 3.0) + (j - 2.5) * (j - 2.5) + (k - 2.0) * (k - 2.0);
                 const bool inside = r2 < 6.5;
                 const std::int64_t n = v.index(i, j, k);
                 for (int c = 0; c < ch; ++c) {
                     const auto at = static_cast<std::size_t>(n * ch + c);
-                    const double x = inside ? 1.0 + static_cast<double>((n * 5 + c * 11) % 200) : 0.0;
+                    const double x =
+                        inside ? 1.0 + static_cast<double>((n * 5 + c * 11) % 200) : 0.0;
                     if (type == VoxelType::f32) {
                         v.values<VoxelType::f32>()[at] = static_cast<float>(x * 0.125 - 7.0);
                         if (!inside) {

@@ -45,8 +45,8 @@ Volume patterned(VoxelType type, const volume::Dims& dims = {6, 5, 4}) {
                     const auto at = static_cast<std::size_t>(n * ch + c);
                     switch (type) {
                         case VoxelType::u8:
-                            v.values<VoxelType::u8>()[at] = static_cast<std::uint8_t>(
-                                std::fmod(x, 255.0));
+                            v.values<VoxelType::u8>()[at] =
+                                static_cast<std::uint8_t>(std::fmod(x, 255.0));
                             break;
                         case VoxelType::i16:
                             v.values<VoxelType::i16>()[at] = static_cast<std::int16_t>(-x * 97);
@@ -147,8 +147,8 @@ TEST(OpenVdb, OnlyNonzeroVoxelsAreActiveAndIndexCentresAreVoxelCentres) {
         EXPECT_EQ(static_cast<std::int64_t>(density->activeVoxelCount()), nonzero_count(v));
         EXPECT_EQ(density->background(), 0.0F);
         // OpenVDB's index (i, j, k) is pliant's voxel (i, j, k): same world centre.
-        for (const auto& ijk : {openvdb::Coord(0, 0, 0), openvdb::Coord(2, 3, 1),
-                                openvdb::Coord(5, 4, 3)}) {
+        for (const auto& ijk :
+             {openvdb::Coord(0, 0, 0), openvdb::Coord(2, 3, 1), openvdb::Coord(5, 4, 3)}) {
             const openvdb::Vec3d w = density->transform().indexToWorld(ijk);
             const Vec3d c = v.voxel_center(ijk.x(), ijk.y(), ijk.z());
             EXPECT_NEAR(w[0], c.x, 1e-12);
@@ -161,18 +161,18 @@ TEST(OpenVdb, OnlyNonzeroVoxelsAreActiveAndIndexCentresAreVoxelCentres) {
             EXPECT_EQ(acc.getValue(openvdb::Coord(2, 3, 2)),
                       v.values<VoxelType::f32>()[static_cast<std::size_t>(n)]);
         } else {
-            EXPECT_EQ(acc.getValue(openvdb::Coord(2, 3, 2)),
-                      static_cast<float>(
-                          v.values<VoxelType::rgba8>()[static_cast<std::size_t>(n * 4 + 3)] /
-                          255.0));
+            EXPECT_EQ(
+                acc.getValue(openvdb::Coord(2, 3, 2)),
+                static_cast<float>(
+                    v.values<VoxelType::rgba8>()[static_cast<std::size_t>(n * 4 + 3)] / 255.0));
             const auto colour = openvdb::gridPtrCast<openvdb::Vec3SGrid>(grids.at("color"));
             ASSERT_TRUE(colour);
             EXPECT_EQ(colour->getName(), "color");
             EXPECT_EQ(colour->activeVoxelCount(), density->activeVoxelCount());
-            EXPECT_EQ(colour->getConstAccessor().getValue(openvdb::Coord(2, 3, 2))[1],
-                      static_cast<float>(
-                          v.values<VoxelType::rgba8>()[static_cast<std::size_t>(n * 4 + 1)] /
-                          255.0));
+            EXPECT_EQ(
+                colour->getConstAccessor().getValue(openvdb::Coord(2, 3, 2))[1],
+                static_cast<float>(
+                    v.values<VoxelType::rgba8>()[static_cast<std::size_t>(n * 4 + 1)] / 255.0));
         }
         EXPECT_FALSE(acc.isValueOn(openvdb::Coord(0, 0, 0)));  // the empty border
     }
@@ -307,7 +307,8 @@ TEST(OpenVdb, BrokenInputsAreIoErrorsNamingThePath) {
     test::write_bytes(dir / "text.vdb", "density 0 0 0 1.0\nthis is not a vdb file\n");
     expect_io_error([&] { read_volume(dir / "text.vdb"); }, {"text.vdb", "magic number"});
     // Truncated anywhere: an IoError, never a crash or a half-read volume.
-    for (std::size_t cut = 8; cut < good.size(); cut += std::max<std::size_t>(1, good.size() / 97)) {
+    for (std::size_t cut = 8; cut < good.size();
+         cut += std::max<std::size_t>(1, good.size() / 97)) {
         SCOPED_TRACE(cut);
         test::write_bytes(dir / "cut.vdb", good.substr(0, cut));
         EXPECT_THROW(read_volume(dir / "cut.vdb", {.max_bytes = 1U << 20}), IoError);

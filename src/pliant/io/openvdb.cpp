@@ -121,8 +121,8 @@ public:
     std::string string(std::string_view what, std::uint64_t limit) {
         const auto n = value<std::uint32_t>(what, limit);
         if (n > MAX_NAME_BYTES) {
-            fail(fmt::format("{} at byte {} is {} bytes long, expected at most {}", what,
-                             m_pos - 4, n, MAX_NAME_BYTES));
+            fail(fmt::format("{} at byte {} is {} bytes long, expected at most {}", what, m_pos - 4,
+                             n, MAX_NAME_BYTES));
         }
         std::string s(n, '\0');
         if (n > 0) {
@@ -152,10 +152,9 @@ private:
 // Bytes of the fixed-size metadata types OpenVDB registers (others are skipped by size).
 std::uint64_t fixed_metadata_size(const std::string& type) {
     static const std::map<std::string, std::uint64_t, std::less<>> SIZES = {
-        {"bool", 1},   {"int32", 4},  {"int64", 8},  {"float", 4},  {"double", 8},
-        {"vec2i", 8},  {"vec2s", 8},  {"vec2d", 16}, {"vec3i", 12}, {"vec3s", 12},
-        {"vec3d", 24}, {"vec4i", 16}, {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64},
-        {"mat4d", 128}};
+        {"bool", 1},   {"int32", 4},  {"int64", 8},  {"float", 4},  {"double", 8}, {"vec2i", 8},
+        {"vec2s", 8},  {"vec2d", 16}, {"vec3i", 12}, {"vec3s", 12}, {"vec3d", 24}, {"vec4i", 16},
+        {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
     const auto it = SIZES.find(type);
     return it == SIZES.end() ? 0 : it->second;
 }
@@ -169,14 +168,14 @@ void check_metadata(LayoutReader& r, std::uint64_t limit, std::string_view where
     }
     for (std::uint32_t i = 0; i < count; ++i) {
         const std::string name = r.string(fmt::format("a {} metadata name", where), limit);
-        const std::string type = r.string(fmt::format("the type of {} metadata '{}'", where, name),
-                                          limit);
-        const auto bytes = r.value<std::uint32_t>(
-            fmt::format("the size of {} metadata '{}'", where, name), limit);
+        const std::string type =
+            r.string(fmt::format("the type of {} metadata '{}'", where, name), limit);
+        const auto bytes =
+            r.value<std::uint32_t>(fmt::format("the size of {} metadata '{}'", where, name), limit);
         const std::uint64_t fixed = fixed_metadata_size(type);
         if (fixed != 0 && bytes != fixed) {
-            r.fail(fmt::format("{} metadata '{}' of type {} has {} bytes, expected {}", where,
-                               name, type, bytes, fixed));
+            r.fail(fmt::format("{} metadata '{}' of type {} has {} bytes, expected {}", where, name,
+                               type, bytes, fixed));
         }
         if (type == "__delayedload" && bytes >= 4) {
             // OpenVDB sizes this one by the leaf count inside it, not by `bytes`. Every leaf
@@ -184,9 +183,10 @@ void check_metadata(LayoutReader& r, std::uint64_t limit, std::string_view where
             const auto leaves = r.value<std::uint32_t>(
                 fmt::format("the leaf count of {} metadata '{}'", where, name), limit);
             if (leaves > r.size() / 64) {
-                r.fail(fmt::format("{} metadata '{}' declares {} leaves, more than a file of {} "
-                                   "bytes can hold",
-                                   where, name, leaves, r.size()));
+                r.fail(
+                    fmt::format("{} metadata '{}' declares {} leaves, more than a file of {} "
+                                "bytes can hold",
+                                where, name, leaves, r.size()));
             }
             r.skip(bytes - 4, fmt::format("the value of {} metadata '{}'", where, name), limit);
             continue;
@@ -251,12 +251,12 @@ bool check_root(LayoutReader& r, const DescriptorLayout& d, std::uint64_t vbytes
     r.skip(map_bytes, fmt::format("the {} of grid '{}'", map, d.name), block);
     r.value<std::int32_t>(fmt::format("the buffer count of grid '{}'", d.name), block);
     r.skip(vbytes, fmt::format("the background of grid '{}'", d.name), block);
-    const auto tiles = r.value<std::uint32_t>(fmt::format("the tile count of grid '{}'", d.name),
-                                              block);
-    const auto children = r.value<std::uint32_t>(
-        fmt::format("the child count of grid '{}'", d.name), block);
-    const std::uint64_t needed = std::uint64_t{tiles} * (12 + vbytes + 1) +
-                                 std::uint64_t{children} * (12 + 2 * 4096);
+    const auto tiles =
+        r.value<std::uint32_t>(fmt::format("the tile count of grid '{}'", d.name), block);
+    const auto children =
+        r.value<std::uint32_t>(fmt::format("the child count of grid '{}'", d.name), block);
+    const std::uint64_t needed =
+        std::uint64_t{tiles} * (12 + vbytes + 1) + std::uint64_t{children} * (12 + 2 * 4096);
     const std::uint64_t left = block - std::min(block, r.position());
     if (needed > left) {
         r.fail(fmt::format(
@@ -291,7 +291,8 @@ std::vector<DescriptorLayout> check_layout(const fs::path& path) {
     if (version < OLDEST_VERSION || version > NEWEST_VERSION) {
         throw Unsupported(fmt::format(
             "{}: OpenVDB file format version {}, expected {} to {} (files of OpenVDB 2.0 to {})",
-            path.string(), version, OLDEST_VERSION, NEWEST_VERSION, OPENVDB_LIBRARY_VERSION_STRING));
+            path.string(), version, OLDEST_VERSION, NEWEST_VERSION,
+            OPENVDB_LIBRARY_VERSION_STRING));
     }
     r.value<std::uint32_t>("the library major version", size);
     r.value<std::uint32_t>("the library minor version", size);
@@ -587,7 +588,8 @@ struct VoxelWriter {
         const std::array<double, 4> c{rgb[0], rgb[1], rgb[2], alpha};
         for (int ch = 0; ch < 4; ++ch) {
             if (type == VoxelType::rgba8) {
-                store<VoxelType::rgba8>(*volume, index, ch, c[static_cast<std::size_t>(ch)] * 255.0);
+                store<VoxelType::rgba8>(*volume, index, ch,
+                                        c[static_cast<std::size_t>(ch)] * 255.0);
             } else {
                 store<VoxelType::rgba32f>(*volume, index, ch, c[static_cast<std::size_t>(ch)]);
             }
@@ -604,10 +606,9 @@ void fill_dense(const GridT& grid, const openvdb::Vec3SGrid* colour, const openv
         colours.emplace(colour->getConstAccessor());
     }
     const auto put = [&](const openvdb::Coord& ijk, double value) {
-        const std::int64_t index =
-            v.index(static_cast<std::int64_t>(ijk.x()) - box.min().x(),
-                    static_cast<std::int64_t>(ijk.y()) - box.min().y(),
-                    static_cast<std::int64_t>(ijk.z()) - box.min().z());
+        const std::int64_t index = v.index(static_cast<std::int64_t>(ijk.x()) - box.min().x(),
+                                           static_cast<std::int64_t>(ijk.y()) - box.min().y(),
+                                           static_cast<std::int64_t>(ijk.z()) - box.min().z());
         if (colours) {
             out.rgba(index, colours->getValue(ijk), value);
         } else {
@@ -685,16 +686,17 @@ Volume read_grid(const fs::path& path, std::size_t max_bytes, const std::string&
     if (const auto dims = meta_value<openvdb::Vec3i>(*chosen, DIMS_KEY)) {
         box = recorded;
         if (!active.empty() && !box.isInside(active)) {
-            log_warning("{}: grid '{}' has active voxels outside its pliant_dims {}x{}x{}: read "
-                        "the active bounding box instead",
-                        path.string(), chosen->getName(), (*dims)[0], (*dims)[1], (*dims)[2]);
+            log_warning(
+                "{}: grid '{}' has active voxels outside its pliant_dims {}x{}x{}: read "
+                "the active bounding box instead",
+                path.string(), chosen->getName(), (*dims)[0], (*dims)[1], (*dims)[2]);
             box = active;
         }
     }
     if (box.empty()) {
-        throw InvalidInput(fmt::format(
-            "{}: grid '{}' has no active voxels, so it has no bounding box to read", path.string(),
-            chosen->getName()));
+        throw InvalidInput(
+            fmt::format("{}: grid '{}' has no active voxels, so it has no bounding box to read",
+                        path.string(), chosen->getName()));
     }
     const volume::Dims dims = box_dims(box);
     detail::check_declared_size(path, dims, type, max_bytes);
@@ -703,8 +705,7 @@ Volume read_grid(const fs::path& path, std::size_t max_bytes, const std::string&
     Volume v = Volume::allocate(dims, type, {1, 1, 1}, {0, 0, 0}, max_bytes);
     const VoxelWriter writer{&v, type};
     if (grid->isType<openvdb::FloatGrid>()) {
-        fill_dense(*openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid), colour.get(), box,
-                   writer);
+        fill_dense(*openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid), colour.get(), box, writer);
     } else {
         fill_dense(*openvdb::gridConstPtrCast<openvdb::DoubleGrid>(grid), colour.get(), box,
                    writer);
@@ -771,14 +772,14 @@ double value_at(const Volume& v, std::int64_t index, int channel) {
 
 void add_pliant_metadata(openvdb::GridBase& g, const Volume& v) {
     const volume::Dims& d = v.dims();
-    g.insertMeta(DIMS_KEY, openvdb::Vec3IMetadata(openvdb::Vec3i(
-                               static_cast<int>(d[0]), static_cast<int>(d[1]),
-                               static_cast<int>(d[2]))));
+    g.insertMeta(DIMS_KEY,
+                 openvdb::Vec3IMetadata(openvdb::Vec3i(
+                     static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2]))));
     g.insertMeta(TYPE_KEY, openvdb::StringMetadata(std::string(volume::name(v.type()))));
-    g.insertMeta(ORIGIN_KEY, openvdb::Vec3DMetadata(
-                                 openvdb::Vec3d(v.origin().x, v.origin().y, v.origin().z)));
-    g.insertMeta(SPACING_KEY, openvdb::Vec3DMetadata(openvdb::Vec3d(
-                                  v.spacing().x, v.spacing().y, v.spacing().z)));
+    g.insertMeta(ORIGIN_KEY,
+                 openvdb::Vec3DMetadata(openvdb::Vec3d(v.origin().x, v.origin().y, v.origin().z)));
+    g.insertMeta(SPACING_KEY, openvdb::Vec3DMetadata(
+                                  openvdb::Vec3d(v.spacing().x, v.spacing().y, v.spacing().z)));
     g.setGridClass(openvdb::GRID_FOG_VOLUME);
     g.setCreator("pliant");
 }
@@ -825,8 +826,9 @@ std::vector<OpenVdbGridInfo> list_openvdb_grids(const fs::path& path) {
             out.push_back({g->getName(), g->valueType()});
         }
         file.close();
-        std::sort(out.begin(), out.end(),
-                  [](const OpenVdbGridInfo& a, const OpenVdbGridInfo& b) { return a.name < b.name; });
+        std::sort(out.begin(), out.end(), [](const OpenVdbGridInfo& a, const OpenVdbGridInfo& b) {
+            return a.name < b.name;
+        });
         return out;
     } catch (const Error&) {
         throw;
@@ -883,10 +885,10 @@ void write_openvdb(const fs::path& path, const volume::Volume& v) {
                                              static_cast<int>(k));
                     dacc.setValueOn(ijk, static_cast<float>(a));
                     if (cacc) {
-                        cacc->setValueOn(
-                            ijk, openvdb::Vec3s(static_cast<float>(value_at(v, index, 0)),
-                                                static_cast<float>(value_at(v, index, 1)),
-                                                static_cast<float>(value_at(v, index, 2))));
+                        cacc->setValueOn(ijk,
+                                         openvdb::Vec3s(static_cast<float>(value_at(v, index, 0)),
+                                                        static_cast<float>(value_at(v, index, 1)),
+                                                        static_cast<float>(value_at(v, index, 2))));
                     }
                 }
             }
