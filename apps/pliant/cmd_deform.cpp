@@ -83,6 +83,7 @@ struct DeformCommandOptions {
     std::string out;
     std::string render;
     std::string mesh_out;
+    std::string grid;
     std::string tf = "grayscale";
     std::string size = "512x512";
     double step = 0.0;
@@ -157,6 +158,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
     read.series_uid = options.series;
+    read.grid = options.grid;
     const volume::Volume source = io::read_volume(options.volume, read);
     std::optional<volume::TransferFunction> tf;
     if (volume::channels(source.type()) != 4) {
@@ -210,6 +212,9 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
                     "the largest)")
         ->type_name("UID");
+    cmd->add_option("--grid", options->grid,
+                    "OpenVDB: the float grid to read (default: \"density\", else the only one)")
+        ->type_name("NAME");
     cmd->add_option("--driver", options->driver, "Deformation driver")
         ->required()
         ->check(CLI::IsMember({"wave", "twist", "bubble", "rotate"}));

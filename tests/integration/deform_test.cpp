@@ -236,6 +236,19 @@ TEST(DeformCommand, ReadsAndWritesOpenVdb) {
                                 scratch);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_EQ(io::read_volume(scratch / "o.vdb").dims(), nrrd.dims());
+    // --grid names the float grid; an unknown one is an error listing the file's grids.
+    const CliResult info =
+        run_cli("volume info " + quoted(scratch / "s.vdb") + " --grid density", scratch);
+    EXPECT_EQ(info.exit_code, 0) << info.err;
+    const CliResult bad =
+        run_cli("deform " + quoted(scratch / "s.vdb") + " --grid smoke --driver rotate -o " +
+                    quoted(scratch / "p.vdb"),
+                scratch);
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_NE(bad.err.find("no grid named 'smoke'; the file has 'density' (float)"),
+              std::string::npos)
+        << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "p.vdb"));
 }
 
 TEST(DeformCommand, UsageAndInputErrors) {
