@@ -346,6 +346,15 @@ TEST(OpenVdb, BrokenInputsAreIoErrorsNamingThePath) {
     lying.replace(count_at, 4, std::string("\xff\xff\xff\x7f", 4));
     test::write_bytes(dir / "lying.vdb", lying);
     expect_io_error([&] { read_volume(dir / "lying.vdb"); }, {"lying.vdb", "grid count"});
+    // OpenVDB's file_delayed_load metadata sizes its parts by numbers inside it (found by
+    // fuzz/fuzz_openvdb.cpp: a mask size of 0xff000000 made OpenVDB allocate 4 GB).
+    const std::size_t delayed = good.find("__delayedload");
+    ASSERT_NE(delayed, std::string::npos);
+    std::string huge_mask = good;
+    // after the type name: the value's size (4 bytes), the leaf count (4), the mask's size (4)
+    huge_mask.replace(delayed + 13 + 8, 4, std::string("\x00\x00\x00\xff", 4));
+    test::write_bytes(dir / "mask.vdb", huge_mask);
+    expect_io_error([&] { read_volume(dir / "mask.vdb"); }, {"mask.vdb", "file_delayed_load"});
     EXPECT_NO_THROW(read_volume(dir / "good.vdb"));
 }
 

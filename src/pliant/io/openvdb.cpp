@@ -159,6 +159,38 @@ std::uint64_t fixed_metadata_size(const std::string& type) {
     return it == SIZES.end() ? 0 : it->second;
 }
 
+// OpenVDB's DelayedLoadMetadata (io/DelayedLoadMetadata.cc) reads its value by the sizes inside
+// it, not by `bytes`: a leaf count, then a mask (Blosc-compressed: its size, then the bytes; or
+// one byte per leaf), then, when bytes remain, the leaves' compressed sizes (the same way, 8
+// bytes per leaf). Each part must lie within `bytes`, and every leaf takes at least its 64-byte
+// value mask in the file.
+void check_delayed_load(LayoutReader& r, std::uint64_t bytes, const std::string& what,
+                        std::uint64_t limit) {
+    const std::uint64_t end = r.position() + bytes;
+    if (end > limit) {
+        r.fail(fmt::format("{} needs {} bytes, but only {} are left", what, bytes,
+                           limit - std::min(limit, r.position())));
+    }
+    const auto leaves = r.value<std::uint32_t>(fmt::format("the leaf count of {}", what), end);
+    if (leaves > r.size() / 64) {
+        r.fail(fmt::format("{} declares {} leaves, more than a file of {} bytes can hold", what,
+                           leaves, r.size()));
+    }
+    const auto part = [&](std::uint64_t bytes_per_leaf, const char* name) {
+        const auto compressed =
+            r.value<std::uint32_t>(fmt::format("the {} size of {}", name, what), end);
+        const std::uint64_t n = compressed > 0 ? compressed : bytes_per_leaf * leaves;
+        r.skip(n, fmt::format("the {} of {}", name, what), end);
+    };
+    if (leaves > 0) {
+        part(1, "mask");
+    }
+    if (r.position() < end) {
+        part(8, "compressed sizes");
+    }
+    r.seek(end, what);
+}
+
 void check_metadata(LayoutReader& r, std::uint64_t limit, std::string_view where) {
     const auto count = r.value<std::uint32_t>(fmt::format("the {} metadata count", where), limit);
     // Each entry takes at least 12 bytes (two string lengths and a value size).
@@ -177,18 +209,8 @@ void check_metadata(LayoutReader& r, std::uint64_t limit, std::string_view where
             r.fail(fmt::format("{} metadata '{}' of type {} has {} bytes, expected {}", where, name,
                                type, bytes, fixed));
         }
-        if (type == "__delayedload" && bytes >= 4) {
-            // OpenVDB sizes this one by the leaf count inside it, not by `bytes`. Every leaf
-            // takes at least its 64-byte value mask in the file.
-            const auto leaves = r.value<std::uint32_t>(
-                fmt::format("the leaf count of {} metadata '{}'", where, name), limit);
-            if (leaves > r.size() / 64) {
-                r.fail(
-                    fmt::format("{} metadata '{}' declares {} leaves, more than a file of {} "
-                                "bytes can hold",
-                                where, name, leaves, r.size()));
-            }
-            r.skip(bytes - 4, fmt::format("the value of {} metadata '{}'", where, name), limit);
+        if (type == "__delayedload" && bytes > 0) {
+            check_delayed_load(r, bytes, fmt::format("{} metadata '{}'", where, name), limit);
             continue;
         }
         r.skip(bytes, fmt::format("the value of {} metadata '{}'", where, name), limit);
@@ -289,10 +311,11 @@ std::vector<DescriptorLayout> check_layout(const fs::path& path) {
     }
     const auto version = r.value<std::uint32_t>("the file format version", size);
     if (version < OLDEST_VERSION || version > NEWEST_VERSION) {
-        throw Unsupported(fmt::format(
-            "{}: OpenVDB file format version {}, expected {} to {} (files of OpenVDB 2.0 to {})",
-            path.string(), version, OLDEST_VERSION, NEWEST_VERSION,
-            OPENVDB_LIBRARY_VERSION_STRING));
+        throw Unsupported(
+            fmt::format("{}: OpenVDB file format version {}, expected {} to {} (pliant is built "
+                        "with OpenVDB {})",
+                        path.string(), version, OLDEST_VERSION, NEWEST_VERSION,
+                        OPENVDB_LIBRARY_VERSION_STRING));
     }
     r.value<std::uint32_t>("the library major version", size);
     r.value<std::uint32_t>("the library minor version", size);

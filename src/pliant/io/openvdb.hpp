@@ -34,11 +34,12 @@
 // Unsupported.
 //
 // Checks before OpenVDB sees the file: the 8-byte magic number, a file format version pliant
-// reads (222 … 224: OpenVDB ≥ 2.0 files), the header, the file metadata and every grid
-// descriptor (lengths and offsets within the file), because OpenVDB trusts them. The dense size is
+// reads (222 … 224), the header, the file and grid metadata (with the sizes inside
+// file_delayed_load), every grid descriptor (offsets within the file) and the root tile and
+// child counts of float, double and vec3s grids, because OpenVDB trusts them. The dense size is
 // checked against max_bytes before allocating: from the grid's recorded bounding box
-// (file_bbox_min/max, pliant_dims) before the grid's tree is read, and from the tree's active
-// bounding box after. Every OpenVDB exception becomes an IoError naming the path.
+// (file_bbox_min/max, pliant_dims) and file_mem_bytes before the grid's tree is read, and from
+// the tree's active bounding box after. Every OpenVDB exception becomes an IoError naming the path.
 // Unsupported when pliant was built without OpenVDB.
 #pragma once
 
