@@ -59,3 +59,28 @@ else()
   set(PLIANT_IO_GDCM "")
   message(STATUS "DICOM: GDCM not found (libgdcm-dev): DICOM reading disabled")
 endif()
+
+# OpenVDB 10 (Debian libopenvdb-dev + libboost-iostreams-dev) for .vdb volumes. Found by hand as
+# GDCM is: Debian ships a find module with its own FindTBB beside it, not a config, and a
+# consumer of the installed package should not need its module path. The headers include
+# <Imath/half.h>, <tbb/…> and Boost headers from /usr/include; libopenvdb.so brings its own
+# shared dependencies. Without OpenVDB, pliant builds and .vdb files are Unsupported.
+find_path(PLIANT_OPENVDB_INCLUDE_DIR openvdb/openvdb.h)
+find_library(PLIANT_OPENVDB_LIBRARY openvdb)
+find_library(PLIANT_IMATH_LIBRARY NAMES Imath Imath-3_1)
+find_path(PLIANT_BOOST_IOSTREAMS_INCLUDE_DIR boost/iostreams/device/array.hpp)
+if(PLIANT_OPENVDB_INCLUDE_DIR AND PLIANT_OPENVDB_LIBRARY AND PLIANT_IMATH_LIBRARY
+   AND PLIANT_BOOST_IOSTREAMS_INCLUDE_DIR)
+  if(NOT TARGET pliant_openvdb)
+    add_library(pliant_openvdb INTERFACE IMPORTED GLOBAL)
+    target_include_directories(pliant_openvdb INTERFACE ${PLIANT_OPENVDB_INCLUDE_DIR})
+    target_link_libraries(pliant_openvdb INTERFACE ${PLIANT_OPENVDB_LIBRARY}
+      ${PLIANT_IMATH_LIBRARY} TBB::tbb)
+    target_compile_definitions(pliant_openvdb INTERFACE PLIANT_HAS_OPENVDB=1)
+  endif()
+  set(PLIANT_IO_OPENVDB pliant_openvdb)
+  message(STATUS "OpenVDB: found (${PLIANT_OPENVDB_LIBRARY})")
+else()
+  set(PLIANT_IO_OPENVDB "")
+  message(STATUS "OpenVDB: not found (libopenvdb-dev libboost-iostreams-dev): .vdb disabled")
+endif()

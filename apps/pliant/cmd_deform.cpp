@@ -1,7 +1,8 @@
 // pliant deform VOLUME [--series UID] --driver wave|twist|bubble|rotate [driver options]
 //               [--cells B] [--full-box] [--mesh FILE.node] [--stiffness K] [--substeps N]
 //               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
-//               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB] [--json]
+//               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB]
+//               [--mesh-out MESH.vtu] [--json]
 //
 // The deformable-volume pipeline of Park & Kye 2022 on a volume file: a tet grid over it
 // (pbd::build_tet_grid: cells of B³ voxels, 5 tets each, only cells near visible voxels unless
@@ -25,9 +26,9 @@
 // An option of another driver is a usage error (exit 2).
 //
 // stdout: a summary, or with --json deform_run.hpp's object (docs/formats.md): output, render,
-// still, driver, frames, substeps, stiffness, vertices, tets, active_cells, ms_per_substep,
-// step_ms, resample_ms, render_ms, ms_per_frame (means over frames), volume_ratio and
-// inverted_tets (last frame), min_volume_ratio, max_volume_ratio, max_inverted_tets (over
+// still, mesh_output, driver, frames, substeps, stiffness, vertices, tets, active_cells,
+// ms_per_substep, step_ms, resample_ms, render_ms, ms_per_frame (means over frames), volume_ratio
+// and inverted_tets (last frame), min_volume_ratio, max_volume_ratio, max_inverted_tets (over
 // frames), tets_skipped, voxels_written (last resampling).
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -81,6 +82,8 @@ struct DeformCommandOptions {
     double fps = 24.0;
     std::string out;
     std::string render;
+    std::string mesh_out;
+    std::string grid;
     std::string tf = "grayscale";
     std::string size = "512x512";
     double step = 0.0;
@@ -141,6 +144,10 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
                                                    fmt::join(drivers, "|"), options.driver));
         }
     }
+    if (!options.mesh_out.empty() && !has_extension(options.mesh_out, ".vtu")) {
+        throw CLI::ValidationError("--mesh-out",
+                                   "expected a .vtu file name, got '" + options.mesh_out + "'");
+    }
     if (!options.render.empty() && !has_extension(options.render, ".mp4")) {
         throw CLI::ValidationError("--render",
                                    "expected an .mp4 file name, got '" + options.render + "'");
@@ -151,6 +158,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
     read.series_uid = options.series;
+    read.grid = options.grid;
     const volume::Volume source = io::read_volume(options.volume, read);
     std::optional<volume::TransferFunction> tf;
     if (volume::channels(source.type()) != 4) {
@@ -170,6 +178,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.fps = options.fps;
     run.out = options.out;
     run.video = options.render;
+    run.mesh_out = options.mesh_out;
     run.camera = options.camera;
     run.step = options.step;
     run.progress = frame_progress(stderr_is_terminal() && !global.json);
@@ -203,6 +212,9 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
                     "the largest)")
         ->type_name("UID");
+    cmd->add_option("--grid", options->grid,
+                    "OpenVDB: the float grid to read (default: \"density\", else the only one)")
+        ->type_name("NAME");
     cmd->add_option("--driver", options->driver, "Deformation driver")
         ->required()
         ->check(CLI::IsMember({"wave", "twist", "bubble", "rotate"}));
@@ -272,6 +284,8 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->required()
         ->check(non_empty_path());
     cmd->add_option("--render", options->render, "MP4 of every frame, ray-cast");
+    cmd->add_option("--mesh-out", options->mesh_out,
+                    "Deformed tet mesh of the last frame, VTK XML .vtu (ParaView)");
     cmd->add_option("--tf", options->tf,
                     "Transfer function (preset or JSON) for scalar volumes: rendering, and which "
                     "voxels are visible for the grid (default grayscale)");

@@ -45,6 +45,7 @@ struct VolumeOptions {
     std::string input;
     std::string output;
     std::string series;
+    std::string grid;
     double max_memory_mib = 16384.0;
     bool gzip = false;
     bool nifti2 = false;
@@ -61,6 +62,7 @@ io::ReadVolumeOptions read_options(const VolumeOptions& options) {
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
     read.orientation = io::Orientation::keep;
     read.series_uid = options.series;
+    read.grid = options.grid;
     return read;
 }
 
@@ -265,6 +267,9 @@ void add_series_option(CLI::App* cmd, VolumeOptions& options) {
                     "DICOM: the SeriesInstanceUID to read from a folder holding several (default: "
                     "the largest; pliant volume series DIR lists them)")
         ->type_name("UID");
+    cmd->add_option("--grid", options.grid,
+                    "OpenVDB: the float grid to read (default: \"density\", else the only one)")
+        ->type_name("NAME");
 }
 
 void add_memory_option(CLI::App* cmd, VolumeOptions& options) {
@@ -287,7 +292,7 @@ void register_volume(CLI::App& app, const GlobalOptions& global) {
     CLI::App* info = cmd->add_subcommand("info", "Dims, type, spacing, box and value ranges");
     info->add_option("VOLUME", options->input,
                      "Volume file (.nrrd .nhdr .nii .nii.gz .hdr .mha .mhd .json .raw .raw.gz "
-                     ".inv3 .dcm) or a folder of DICOM files")
+                     ".inv3 .vdb .dcm) or a folder of DICOM files")
         ->required();
     add_series_option(info, *options);
     add_memory_option(info, *options);

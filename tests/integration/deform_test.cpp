@@ -3,6 +3,7 @@
 // usage and input errors.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <stdio.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "integration/run_cli.hpp"
+#include "pliant/io/openvdb.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/volume/volume.hpp"
 
@@ -175,13 +177,78 @@ TEST(DeformCommand, DeformsATetGenMesh) {
         std::fputs("5 4 0\n1 1 2 3 5\n2 4 3 2 8\n3 6 2 5 8\n4 7 5 3 8\n5 2 3 5 8\n", f);
         std::fclose(f);
     }
-    const CliResult r = run_cli("--json deform " + quoted(scratch / "s.nrrd") + " --mesh " +
-                                    quoted(scratch / "cube.node") +
-                                    " --driver bubble --frames 4 -o " + quoted(scratch / "b.nrrd"),
+    const CliResult r =
+        run_cli("--json deform " + quoted(scratch / "s.nrrd") + " --mesh " +
+                    quoted(scratch / "cube.node") + " --driver bubble --frames 4 -o " +
+                    quoted(scratch / "b.nrrd") + " --mesh-out " + quoted(scratch / "b.vtu"),
+                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("tets"), 5);
+    EXPECT_EQ(j.at("mesh_output"), (scratch / "b.vtu").string());
+    EXPECT_TRUE(std::filesystem::exists(scratch / "b.nrrd"));
+    // The .vtu read back by Python's xml module (tests/io/vtu_readback.py): the 8 vertices and
+    // 5 tets of the TetGen mesh, moved by the bubble.
+    const std::string command = std::string("/usr/bin/python3 ") + PLIANT_SOURCE_DIR +
+                                "/tests/io/vtu_readback.py " + quoted(scratch / "b.vtu");
+    FILE* pipe = ::popen(command.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string text;
+    char buffer[4096];
+    std::size_t n = 0;
+    while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) {
+        text.append(buffer, n);
+    }
+    ASSERT_EQ(::pclose(pipe), 0) << command;
+    const nlohmann::json vtu = nlohmann::json::parse(text);
+    EXPECT_EQ(vtu.at("points"), 8);
+    EXPECT_EQ(vtu.at("cells"), 5);
+    EXPECT_EQ(vtu.at("arrays").at("Cells/types").at("values"),
+              (nlohmann::json{10, 10, 10, 10, 10}));
+    double largest = 0.0;
+    for (const auto& d : vtu.at("arrays").at("PointData/displacement").at("values")) {
+        largest = std::max(largest, std::abs(d.get<double>()));
+    }
+    EXPECT_GT(largest, 0.0);
+    EXPECT_NEAR(largest, j.at("max_displacement").get<double>(), largest);
+}
+
+TEST(DeformCommand, ReadsAndWritesOpenVdb) {
+    if (!io::has_openvdb_support()) {
+        GTEST_SKIP() << "built without OpenVDB";
+    }
+    ScratchDir scratch;
+    ASSERT_EQ(
+        run_cli("volume generate sphere " + quoted(scratch / "s.nrrd") + " --dims 12", scratch)
+            .exit_code,
+        0);
+    ASSERT_EQ(
+        run_cli("volume convert " + quoted(scratch / "s.nrrd") + " " + quoted(scratch / "s.vdb"),
+                scratch)
+            .exit_code,
+        0);
+    const Volume nrrd = io::read_volume(scratch / "s.nrrd");
+    const Volume vdb = io::read_volume(scratch / "s.vdb");
+    ASSERT_EQ(vdb.dims(), nrrd.dims());
+    EXPECT_TRUE(std::equal(nrrd.bytes().begin(), nrrd.bytes().end(), vdb.bytes().begin()));
+    const CliResult r = run_cli("deform " + quoted(scratch / "s.vdb") +
+                                    " --driver rotate --frames 2 -o " + quoted(scratch / "o.vdb"),
                                 scratch);
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_EQ(nlohmann::json::parse(r.out).at("tets"), 5);
-    EXPECT_TRUE(std::filesystem::exists(scratch / "b.nrrd"));
+    EXPECT_EQ(io::read_volume(scratch / "o.vdb").dims(), nrrd.dims());
+    // --grid names the float grid; an unknown one is an error listing the file's grids.
+    const CliResult info =
+        run_cli("volume info " + quoted(scratch / "s.vdb") + " --grid density", scratch);
+    EXPECT_EQ(info.exit_code, 0) << info.err;
+    const CliResult bad =
+        run_cli("deform " + quoted(scratch / "s.vdb") + " --grid smoke --driver rotate -o " +
+                    quoted(scratch / "p.vdb"),
+                scratch);
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_NE(bad.err.find("no grid named 'smoke'; the file has 'density' (float)"),
+              std::string::npos)
+        << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "p.vdb"));
 }
 
 TEST(DeformCommand, UsageAndInputErrors) {
@@ -205,6 +272,8 @@ TEST(DeformCommand, UsageAndInputErrors) {
         {"deform " + in + " --driver rotate --render " + quoted(scratch / "v.png") + out, 2,
          "expected an .mp4"},
         {"deform " + in + " --driver rotate --cells 0" + out, 2, "--cells"},
+        {"deform " + in + " --driver rotate --mesh-out " + quoted(scratch / "m.vtk") + out, 2,
+         "expected a .vtu"},
         {"deform " + quoted(scratch / "missing.nrrd") + " --driver rotate" + out, 1,
          "missing.nrrd"},
         {"deform " + in + " --driver rotate -o " + quoted(scratch / "o.inv3"), 1, "inv3"},

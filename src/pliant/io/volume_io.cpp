@@ -16,6 +16,7 @@
 #include "pliant/io/metaimage.hpp"
 #include "pliant/io/nifti.hpp"
 #include "pliant/io/nrrd.hpp"
+#include "pliant/io/openvdb.hpp"
 #include "pliant/io/raw_volume.hpp"
 #include "pliant/volume/reorient.hpp"
 
@@ -65,13 +66,16 @@ VolumeFormat volume_format(const std::filesystem::path& path) {
     if (ends_with(name, ".mhd")) {
         return VolumeFormat::metaimage_mhd;
     }
+    if (ends_with(name, ".vdb")) {
+        return VolumeFormat::openvdb;
+    }
     if (ends_with(name, ".dcm") || ends_with(name, ".dicom") || ends_with(name, ".ima") ||
         is_dicom_file(path)) {
         return VolumeFormat::dicom;
     }
     throw Unsupported(fmt::format(
         "{}: unknown volume file extension, expected .nrrd, .nhdr, .nii, .nii.gz, .hdr, .mha, "
-        ".mhd, .json, .raw, .raw.gz, .inv3, .dcm or a folder of DICOM files",
+        ".mhd, .json, .raw, .raw.gz, .inv3, .vdb, .dcm or a folder of DICOM files",
         path.string()));
 }
 
@@ -97,6 +101,8 @@ std::string_view name(VolumeFormat format) {
             return "metaimage-mhd";
         case VolumeFormat::dicom:
             return "dicom";
+        case VolumeFormat::openvdb:
+            return "openvdb";
     }
     return "?";
 }
@@ -122,6 +128,8 @@ volume::Volume read_as_stored(const std::filesystem::path& path, const ReadVolum
         case VolumeFormat::dicom:
             return read_dicom_series(path, DicomReadOptions{.series_uid = options.series_uid,
                                                             .max_bytes = options.max_bytes});
+        case VolumeFormat::openvdb:
+            return read_openvdb(path, options.max_bytes, options.grid);
     }
     throw InternalError("read_volume: unhandled format");
 }
@@ -193,7 +201,8 @@ void check_volume_writable(const std::filesystem::path& path, volume::VoxelType 
     if (format == VolumeFormat::analyze_hdr || format == VolumeFormat::inv3 ||
         format == VolumeFormat::dicom) {
         throw Unsupported(fmt::format(
-            "{}: {} is read only, expected .nrrd, .nhdr, .nii, .nii.gz, .mha, .mhd or .json/.raw",
+            "{}: {} is read only, expected .nrrd, .nhdr, .nii, .nii.gz, .mha, .mhd, .vdb or "
+            ".json/.raw",
             path.string(), name(format)));
     }
     if ((format == VolumeFormat::nifti || format == VolumeFormat::nifti_gz) &&
@@ -202,6 +211,9 @@ void check_volume_writable(const std::filesystem::path& path, volume::VoxelType 
             "{}: NIfTI has no RGBA float type: write rgba32f volumes as NRRD, MetaImage or raw + "
             "JSON",
             path.string()));
+    }
+    if (format == VolumeFormat::openvdb && !has_openvdb_support()) {
+        write_openvdb(path, volume::Volume{});  // throws Unsupported, naming the packages
     }
 }
 
@@ -232,6 +244,9 @@ void write_volume(const std::filesystem::path& path, const volume::Volume& volum
         case VolumeFormat::metaimage:
         case VolumeFormat::metaimage_mhd:
             write_metaimage(path, volume, options.gzip, format == VolumeFormat::metaimage_mhd);
+            return;
+        case VolumeFormat::openvdb:
+            write_openvdb(path, volume);
             return;
         case VolumeFormat::analyze_hdr:
         case VolumeFormat::inv3:

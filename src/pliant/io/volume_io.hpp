@@ -7,6 +7,7 @@
 //   .json / .raw    raw voxels + JSON sidecar (io/raw_volume.hpp): name either file
 //   .inv3           InVesalius 3 project (gzip tar with main.plist + int16 matrix.dat), read only
 //   folder, .dcm    DICOM series through GDCM (io/dicom.hpp), read only
+//   .vdb            OpenVDB through libopenvdb (io/openvdb.hpp): a float grid (+ a colour grid)
 //
 // Conventions (docs/formats.md, "Volumes"): pliant's origin is the corner of the voxel box;
 // voxel centres are at origin + D · (i + 0.5) · spacing (volume/volume.hpp). The files' first
@@ -49,6 +50,9 @@ struct ReadVolumeOptions {
     // DICOM: the SeriesInstanceUID to read from a folder holding several series; empty: the
     // series with the most slices (io/dicom.hpp). Ignored by the other formats.
     std::string series_uid{};
+    // OpenVDB: the float grid to read; empty: "density", else the only float grid
+    // (io/openvdb.hpp). Ignored by the other formats.
+    std::string grid{};
 };
 
 struct WriteVolumeOptions {
@@ -71,6 +75,7 @@ enum class VolumeFormat {
     metaimage,      // .mha
     metaimage_mhd,  // .mhd + data file
     dicom,          // a folder, a .dcm / .dicom / .ima file, or any file with a DICM marker
+    openvdb,        // .vdb
 };
 
 // The format for a path: a folder is DICOM; a file by its case-insensitive extension, else DICOM
@@ -88,8 +93,8 @@ volume::Volume to_axis_aligned(const std::filesystem::path& path, volume::Volume
                                std::size_t max_bytes = volume::Volume::MAX_BYTES);
 
 // Unsupported for read-only formats (.inv3, .hdr, DICOM) and for voxel types a format cannot
-// store (NIfTI has no RGBA float). The direction is written by NRRD, NIfTI, MetaImage and raw +
-// JSON (every writable format).
+// store (NIfTI has no RGBA float). The direction is written by NRRD, NIfTI, MetaImage, raw +
+// JSON and OpenVDB (every writable format).
 void write_volume(const std::filesystem::path& path, const volume::Volume& volume,
                   const WriteVolumeOptions& options = {});
 

@@ -13,6 +13,7 @@
 #include "pliant/io/png.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/io/vtu.hpp"
 #include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
@@ -35,6 +36,10 @@ struct Running {
 nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::TransferFunction* tf,
                                   const DeformRunOptions& options) {
     io::check_volume_writable(options.out, source.type());  // fail before the run, not after
+    if (!options.mesh_out.empty() && options.mesh_out.extension() != ".vtu") {
+        throw InvalidInput(fmt::format("deform: the mesh output {} must be a .vtu file (VTK XML)",
+                                       options.mesh_out.string()));
+    }
 
     // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.
     DeformableVolume deformable(source, tf, options.grid, options.mesh, options.body);
@@ -93,6 +98,9 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     if (!options.still.empty()) {
         io::write_png(options.still, image);
     }
+    if (!options.mesh_out.empty()) {
+        io::write_vtu(options.mesh_out, body.positions(), rest.tets, rest.positions);
+    }
     if (video) {
         video->finish();
     }
@@ -111,6 +119,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     return {{"output", options.out.string()},
             {"render", path_or_null(options.video)},
             {"still", path_or_null(options.still)},
+            {"mesh_output", path_or_null(options.mesh_out)},
             {"driver", options.driver_name},
             {"frames", options.frames},
             {"substeps", options.body.substeps},

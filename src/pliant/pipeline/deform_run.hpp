@@ -3,9 +3,9 @@
 // A tet grid over the volume (or the given TetGen mesh), the XPBD soft body under one driver for
 // `frames` steps of 1/fps seconds, the deformed mesh resampled into a grid like the source and
 // written to `out`; with `video`, every frame resampled and ray-cast into an MP4; with `still`,
-// the last frame ray-cast into a PNG. Returns the run's numbers (the JSON of `pliant deform`,
-// docs/formats.md). Throws InvalidInput / IoError / Unsupported before simulating when the
-// output cannot be written or there is nothing to deform.
+// the last frame ray-cast into a PNG; with `mesh_out`, the deformed tet mesh as .vtu. Returns the
+// run's numbers (the JSON of `pliant deform`, docs/formats.md). Throws InvalidInput / IoError /
+// Unsupported before simulating when the output cannot be written or there is nothing to deform.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -34,6 +34,9 @@ struct DeformRunOptions {
     std::filesystem::path out;    // the deformed volume of the last frame
     std::filesystem::path video;  // MP4 of every frame (empty: none)
     std::filesystem::path still;  // PNG of the last frame (empty: none)
+    // The deformed tet mesh of the last frame as VTK XML (.vtu, io/vtu.hpp: positions, tets,
+    // displacement and rest positions per vertex, volume ratio per tet); empty: none.
+    std::filesystem::path mesh_out;
     std::array<int, 2> size{512, 512};
     std::array<double, 3> camera{30.0, 20.0, 0.0};  // azimuth, elevation (degrees), distance
     bool shading = false;
