@@ -45,10 +45,10 @@ TEST(MemoryLimit, RenderRefusesAnImageOrVolumeTooLargeBeforeAllocating) {
     EXPECT_FALSE(std::filesystem::exists(out));
     // An orbit is refused the same way, before ffmpeg starts.
     const auto video = scratch / "orbit.mp4";
-    expect_refused(run_cli("render " + in + " --size 4096x4096 --orbit 4 --max-memory 2 -o " +
-                               quoted(video),
-                           scratch),
-                   "render: a 4096x4096 image");
+    expect_refused(
+        run_cli("render " + in + " --size 4096x4096 --orbit 4 --max-memory 2 -o " + quoted(video),
+                scratch),
+        "render: a 4096x4096 image");
     EXPECT_FALSE(std::filesystem::exists(video));
     // Enough memory, and the default (the memory available): rendered.
     for (const std::string limit : {" --max-memory 4", ""}) {
@@ -64,15 +64,15 @@ TEST(MemoryLimit, DatasetRefusesBeforeWritingAnything) {
     ScratchDir scratch;
     const std::string in = sphere(scratch);
     const auto dir = scratch / "ds";
-    expect_refused(run_cli("dataset " + in + " --views 2 --size 16x16 --max-memory 2 -o " +
-                               quoted(dir),
-                           scratch),
-                   "dataset: ray-casting a 16x16 image of the 64 x 64 x 64 f32 volume needs 2.36 MB");
+    expect_refused(
+        run_cli("dataset " + in + " --views 2 --size 16x16 --max-memory 2 -o " + quoted(dir),
+                scratch),
+        "dataset: ray-casting a 16x16 image of the 64 x 64 x 64 f32 volume needs 2.36 MB");
     EXPECT_FALSE(std::filesystem::exists(dir));
-    expect_refused(run_cli("dataset " + in + " --views 2 --size 8000x8000 --max-memory 100 -o " +
-                               quoted(dir),
-                           scratch),
-                   "dataset: a 8000x8000 view needs 192 MB, more than the 105 MB");
+    expect_refused(
+        run_cli("dataset " + in + " --views 2 --size 8000x8000 --max-memory 100 -o " + quoted(dir),
+                scratch),
+        "dataset: a 8000x8000 view needs 192 MB, more than the 105 MB");
     EXPECT_FALSE(std::filesystem::exists(dir));
     const CliResult r =
         run_cli("dataset " + in + " --views 2 --size 16x16 -o " + quoted(dir), scratch);
@@ -149,8 +149,8 @@ TEST(MemoryLimit, NerfEvalRefusesTheCasterBeforeAllocating) {
                       scratch)
                   .exit_code,
               0);
-    const std::string eval = "nerf eval " + quoted(dir / "transforms_test.json") + " " +
-                             quoted(scratch / "rgba.nrrd");
+    const std::string eval =
+        "nerf eval " + quoted(dir / "transforms_test.json") + " " + quoted(scratch / "rgba.nrrd");
     // The rgba32f volume (0.52 MB) is read within 1 MiB; with its caster (4 floats per voxel)
     // it needs more.
     expect_refused(run_cli(eval + " --max-memory 1", scratch),
@@ -161,11 +161,10 @@ TEST(MemoryLimit, NerfEvalRefusesTheCasterBeforeAllocating) {
 
 TEST(MemoryLimit, UsageErrorsForBadLimits) {
     ScratchDir scratch;
-    for (const char* command : {"render in.nrrd -o a.png", "dataset in.nrrd -o d",
-                                "collide m.obj", "deform in.nrrd -o d.nrrd"}) {
+    for (const char* command : {"render in.nrrd -o a.png", "dataset in.nrrd -o d", "collide m.obj",
+                                "deform in.nrrd -o d.nrrd"}) {
         for (const char* value : {"0", "-1", "nan", "abc"}) {
-            const CliResult r =
-                run_cli(std::string(command) + " --max-memory " + value, scratch);
+            const CliResult r = run_cli(std::string(command) + " --max-memory " + value, scratch);
             EXPECT_EQ(r.exit_code, 2) << command << " " << value << ": " << r.err;
         }
     }

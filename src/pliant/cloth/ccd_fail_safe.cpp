@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "pliant/collision/narrow_phase.hpp"
 #include "pliant/core/parallel.hpp"
@@ -22,7 +23,8 @@ bool CCDFailSafe::separation_exceeds(const FeatureVertices& f, std::span<const V
 
 collision::NarrowPhaseResult CCDFailSafe::test_within_budget(
     const SelfCollisionCandidates& candidates, std::span<const Vec3d> positions_t0,
-    std::span<const Vec3d> positions, const collision::FeaturePairs& pairs, std::int64_t budget) {
+    std::span<const Vec3d> positions, const collision::FeaturePairs& pairs, std::int64_t budget,
+    std::int64_t& ccd_hits) {
     // The `budget` pairs whose fastest vertex moves farthest go to the CCD (ties: pair order):
     // freezing a slow vertex loses little motion, and the fast ones (a jumping pin's
     // neighbours) keep moving where their pairs are clear. The others are hits.
@@ -69,6 +71,7 @@ collision::NarrowPhaseResult CCDFailSafe::test_within_budget(
     }
     collision::NarrowPhaseResult narrow = collision::continuous_narrow_phase(
         positions_t0, positions, candidates.triangles(), candidates.edges(), tested);
+    ccd_hits = narrow.vf_hits + narrow.ee_hits;
     for (std::int64_t k = budget; k < num_pairs; ++k) {
         add(narrow.hits, m_pair_order[static_cast<std::size_t>(k)]);
     }
@@ -264,7 +267,11 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
     collect(false);
     stats.narrow_ms += stage.elapsed_ms();
     // Pair tests left in this window's budget; once spent, every pair that may touch is a hit.
-    std::int64_t budget_left = pair_budget(n);
+    // Unbounded when the rounding margin exceeds the thickness: the cloth has diverged (its
+    // coordinates are beyond what the exact tests resolve) and holding it back would hide that
+    // from the caller's divergence check.
+    std::int64_t budget_left =
+        margin < candidates.thickness() ? pair_budget(n) : std::numeric_limits<std::int64_t>::max();
     for (int round = 0;; ++round) {
         stats.enforce_rounds = std::max(stats.enforce_rounds, round + 1);
         stage.restart();
@@ -273,23 +280,26 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
         const auto num_active =
             static_cast<std::int64_t>(active.vertex_face.size() + active.edge_edge.size());
         collision::NarrowPhaseResult narrow;
+        std::int64_t ccd_hits = 0;  // of the pairs the CCD tested
         if (num_active <= budget_left) {
             budget_left -= num_active;
             stats.ccd_pairs += num_active;
             narrow =
                 collision::continuous_narrow_phase(positions_t0, end, triangles, edges, active);
+            ccd_hits = narrow.vf_hits + narrow.ee_hits;
         } else {
             if (!over_budget) {
                 over_budget = true;
                 ++stats.budget_exceeded;
             }
-            narrow = test_within_budget(candidates, positions_t0, end, active, budget_left);
+            narrow =
+                test_within_budget(candidates, positions_t0, end, active, budget_left, ccd_hits);
             stats.ccd_pairs += budget_left;
             budget_left = 0;
         }
         stats.narrow_ms += stage.elapsed_ms();
-        if (round == 0 && !over_budget) {
-            stats.ccd_hits += narrow.vf_hits + narrow.ee_hits;
+        if (round == 0) {
+            stats.ccd_hits += ccd_hits;
         }
         if (narrow.vf_hits + narrow.ee_hits == 0) {
             break;

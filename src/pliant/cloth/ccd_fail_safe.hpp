@@ -30,10 +30,13 @@
 // moves farthest (test_within_budget) and every other pair that may touch counts as a hit, so its
 // vertices are put back (frozen for the window, Bridson et al. 2002 §7.4's rigid fallback at its
 // simplest); later rounds test nothing. The hits are a superset of the CCD's, so the end stays
-// intersection-free; the rounds continue as above on the changed motion and end as above. The cloth
-// still moves where the budget reached, so the next window starts elsewhere and the frozen part
-// catches up as the motion calms. stats: budget_exceeded (windows) and frozen_vertices (vertices
-// put back after the budget was spent, summed).
+// intersection-free; the rounds continue as above on the changed motion and end as above. The
+// price is motion: frozen vertices lose the window's motion, and where every window exceeds the
+// budget the same vertices stay frozen (a pinned row that jumps 1.6 m stays where it was).
+// stats: budget_exceeded (windows) and frozen_vertices (vertices put back after the budget was
+// spent, summed). The budget does not apply where the rounding margin exceeds the thickness
+// (coordinates beyond about 1e6 thicknesses: cloth that diverged, which the caller must see
+// rather than have held back).
 //
 // Rounding: every test that clears a pair for the CCD keeps a margin of 1e-9 (1 + the largest
 // coordinate).
@@ -88,12 +91,12 @@ private:
                         std::span<const Vec3d> positions, const Vec3d& shift_t0, const Vec3d& shift,
                         double margin, SelfCollisionStats& stats);
     // The CCD on the `budget` pairs of `pairs` (fewer than its size) whose fastest vertex
-    // moves farthest; the other pairs are added to its hits.
+    // moves farthest; the other pairs are added to its hits. ccd_hits: the hits of the CCD.
     collision::NarrowPhaseResult test_within_budget(const SelfCollisionCandidates& candidates,
                                                     std::span<const Vec3d> positions_t0,
                                                     std::span<const Vec3d> positions,
                                                     const collision::FeaturePairs& pairs,
-                                                    std::int64_t budget);
+                                                    std::int64_t budget, std::int64_t& ccd_hits);
     // The CCD rounds.
     void run_rounds(SelfCollisionCandidates& candidates, std::span<const Vec3d> positions_t0,
                     std::span<Vec3d> positions, std::span<Vec3d> velocities, const Vec3d& shift_t0,
