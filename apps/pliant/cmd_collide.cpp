@@ -1,4 +1,5 @@
-// pliant collide MESH [--to MESH_T1] [--inflate H] [--repeat N] [--ccd] [--intersections] [--json]
+// pliant collide MESH [--to MESH_T1] [--inflate H] [--repeat N] [--ccd] [--intersections]
+//                [--max-memory MIB] [--json]
 //
 // The self-collision broad phase (collision::SelfCollisionBroadPhase<double>) on one mesh file
 // (static: both ends of the step are MESH) or between two frames of the same mesh (swept: MESH at
@@ -13,6 +14,9 @@
 //     each), then N refits. build_ms is the median over the builds; refit_ms, traverse_ms,
 //     features_ms and total_ms (one refit-based update end to end) are medians over the refits,
 //     the steady state of a simulation. Pair counts are identical in every run (checked).
+//   - A mesh whose broad phase needs more than --max-memory MiB (default: the memory available;
+//     pipeline/memory_budget.hpp) is refused after reading, before the broad phase allocates
+//     (InvalidInput, exit 1).
 //   - With --json, stdout is one JSON object (schema in docs/formats.md); otherwise a short
 //     aligned summary.
 #include <CLI/CLI.hpp>
@@ -33,6 +37,7 @@
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/pipeline/broad_phase_report.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
 #include "validators.hpp"
 
 namespace pliant::cli {
@@ -43,8 +48,9 @@ struct CollideOptions {
     std::string mesh_t1;   // frame at t1; empty for a static query
     double inflate = 0.0;  // world units
     int repeat = 1;
-    bool ccd = false;            // also run the continuous narrow phase on the pairs
-    bool intersections = false;  // also count intersecting triangle pairs (exact)
+    bool ccd = false;             // also run the continuous narrow phase on the pairs
+    bool intersections = false;   // also count intersecting triangle pairs (exact)
+    double max_memory_mib = 0.0;  // 0: the memory available
 };
 
 // The frame at t1 must be the same mesh as the frame at t0, moved.
@@ -127,6 +133,10 @@ void run_collide(const CollideOptions& options, const GlobalOptions& global) {
         mesh_t1 = io::read_mesh(options.mesh_t1);
         check_same_mesh(mesh, options.mesh, mesh_t1, options.mesh_t1);
     }
+    pipeline::require_memory(
+        fmt::format("collide: the broad phase over {} triangles", mesh.num_triangles()),
+        pipeline::broad_phase_need_bytes(mesh.num_triangles()),
+        pipeline::memory_limit_bytes(options.max_memory_mib));
     const std::span<const Vec3d> positions_t1 = options.mesh_t1.empty()
                                                     ? std::span<const Vec3d>(mesh.positions)
                                                     : std::span<const Vec3d>(mesh_t1.positions);
@@ -187,6 +197,12 @@ void register_collide(CLI::App& app, const GlobalOptions& global) {
                   "Also count the intersecting pairs of triangles that share no vertex, decided "
                   "exactly (in MESH, and in MESH_T1 with --to): intersecting_pairs, "
                   "intersecting_pairs_t1, intersections_ms");
+    cmd->add_option("--max-memory", options->max_memory_mib,
+                    "Refuse a mesh whose broad phase needs more memory than this, MiB, before it "
+                    "allocates (default: the memory available: physical, or the control group's "
+                    "limit)")
+        ->type_name("MIB")
+        ->check(finite_in_range(1e-6, 1e12));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_collide(*options, global); });
 }

@@ -1,6 +1,6 @@
 // pliant dataset VOLUME [--series UID] --views N [--size WxH] [--tf FILE|PRESET] [--fov DEG]
 // [--test-every K]
-//                [--background R,G,B] [--step S] -o DIR   [--json]
+//                [--background R,G,B] [--step S] [--max-memory MIB] -o DIR   [--json]
 //
 // Renders a posed-image dataset from a volume with the ray caster (render/raycast.hpp), so that
 // every radiance-field reconstruction has a ground truth:
@@ -13,8 +13,10 @@
 //     DIR/transforms_train.json, DIR/transforms_test.json (io/nerf_dataset.hpp: camera_angle_x,
 //     fl_x …, the volume's box as `aabb`, OpenGL camera-to-world matrices).
 // --series, --tf, --step, --background as for `pliant render` (an oblique volume is resampled to
-// an axis-aligned grid first). stdout: a summary, or with --json: output,
-// views, train, test, width, height, ms.
+// an axis-aligned grid first). --max-memory MiB: the volume, the ray caster's tables and one image
+// (views are written one at a time) may take at most this (default: the memory available); more is
+// refused before allocating and before anything is written. stdout: a summary, or with --json:
+// output, views, train, test, width, height, ms.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -28,6 +30,7 @@
 #include "option_values.hpp"
 #include "pliant/io/transfer_function_json.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/pipeline/nerf_run.hpp"
 #include "validators.hpp"
 
@@ -45,12 +48,22 @@ struct DatasetCommandOptions {
     std::array<float, 3> background{0.0f, 0.0f, 0.0f};
     double step = 0.0;
     std::string out;
+    double max_memory_mib = 0.0;  // 0: the memory available
 };
 
 void run_dataset(const DatasetCommandOptions& options, const GlobalOptions& global) {
+    const std::array<int, 2> size = parse_size(options.size);
+    const std::uint64_t memory_limit = pipeline::memory_limit_bytes(options.max_memory_mib);
+    pipeline::require_memory(fmt::format("dataset: a {}x{} view", size[0], size[1]),
+                             pipeline::image_bytes(size[0], size[1]), memory_limit);
     io::ReadVolumeOptions read;
     read.series_uid = options.series;
+    if (memory_limit > 0) {
+        read.max_bytes = static_cast<std::size_t>(memory_limit);
+    }
     const volume::Volume vol = io::read_volume(options.volume, read);
+    pipeline::require_memory("dataset: " + pipeline::ray_cast_what(vol, size[0], size[1]),
+                             pipeline::ray_cast_need_bytes(vol, size[0], size[1]), memory_limit);
     const bool is_rgba = volume::channels(vol.type()) == 4;
     volume::TransferFunction tf;
     if (!is_rgba) {
@@ -58,7 +71,7 @@ void run_dataset(const DatasetCommandOptions& options, const GlobalOptions& glob
     }
     pipeline::DatasetRunOptions run;
     run.views = options.views;
-    run.size = parse_size(options.size);
+    run.size = size;
     run.fov = options.fov;
     run.test_every = options.test_every;
     run.background = options.background;
@@ -105,6 +118,12 @@ void register_dataset(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--step", options->step,
                     "Ray-casting step, world units (default 0: half the smallest spacing)")
         ->check(finite_in_range(0.0, 1e30));
+    cmd->add_option("--max-memory", options->max_memory_mib,
+                    "Refuse a volume and views that need more memory than this, MiB, before "
+                    "allocating (default: the memory available: physical, or the control group's "
+                    "limit)")
+        ->type_name("MIB")
+        ->check(finite_in_range(1e-6, 1e12));
     cmd->add_option("-o,--output", options->out, "Output directory")
         ->required()
         ->check(non_empty_path());

@@ -50,6 +50,7 @@
 #include "pliant/io/volume_io.hpp"
 #include "pliant/pbd/drivers.hpp"
 #include "pliant/pipeline/deform_run.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "progress_bar.hpp"
 #include "validators.hpp"
@@ -88,7 +89,7 @@ struct DeformCommandOptions {
     std::string size = "512x512";
     double step = 0.0;
     std::array<double, 3> camera{30.0, 20.0, 0.0};
-    double max_memory_mib = 16384.0;
+    double max_memory_mib = 0.0;  // 0: the memory available
 
     // The driver-specific options the user gave, for the usage check.
     std::vector<std::pair<const CLI::Option*, std::vector<std::string>>> driver_only;
@@ -156,7 +157,10 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.size = parse_size(options.size);
 
     io::ReadVolumeOptions read;
-    read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    run.max_memory_bytes = pipeline::memory_limit_bytes(options.max_memory_mib);
+    if (run.max_memory_bytes > 0) {
+        read.max_bytes = static_cast<std::size_t>(run.max_memory_bytes);
+    }
     read.series_uid = options.series;
     read.grid = options.grid;
     const volume::Volume source = io::read_volume(options.volume, read);
@@ -299,8 +303,11 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->delimiter(',')
         ->check(finite_in_range(-1e6, 1e6));
     cmd->add_option("--max-memory", options->max_memory_mib,
-                    "Largest volume to read, MiB (default 16384)")
-        ->check(finite_in_range(1.0, 1e9));
+                    "Refuse a volume and tet grid that need more memory than this, MiB, before "
+                    "allocating (default: the memory available: physical, or the control group's "
+                    "limit)")
+        ->type_name("MIB")
+        ->check(finite_in_range(1e-6, 1e12));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_deform_command(*options, global); });
 }

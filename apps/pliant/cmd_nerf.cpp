@@ -43,6 +43,7 @@
 #include "interrupt.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
 #include "pliant/pipeline/nerf_run.hpp"
 #include "progress_bar.hpp"
@@ -68,14 +69,16 @@ struct TrainCommandOptions {
     float tv_density = nerf::TrainOptions{}.tv_density;
     float tv_color = nerf::TrainOptions{}.tv_color;
     float lr = nerf::TrainOptions{}.lr_density;
-    double max_memory_mib = 16384.0;
+    double max_memory_mib = 0.0;  // 0: the memory available
     int downscale = 1;
     std::string photos;
     bool alpha_mask = false;
 };
 
+// --max-memory in bytes (0: the memory available; unknown: no limit).
 std::size_t to_bytes(double mib) {
-    return static_cast<std::size_t>(mib * 1024.0 * 1024.0);
+    const std::uint64_t limit = pipeline::memory_limit_bytes(mib);
+    return limit > 0 ? static_cast<std::size_t>(limit) : volume::Volume::MAX_BYTES;
 }
 
 void run_train(const TrainCommandOptions& options, const GlobalOptions& global) {
@@ -157,7 +160,7 @@ struct EvalCommandOptions {
     std::string volume;
     std::array<float, 3> background{0.0f, 0.0f, 0.0f};
     std::string images;
-    double max_memory_mib = 16384.0;
+    double max_memory_mib = 0.0;  // 0: the memory available
     int downscale = 1;
     std::string photos;
     bool alpha_mask = false;
@@ -177,6 +180,20 @@ void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
     if (volume::channels(vol.type()) != 4) {
         throw InvalidInput(fmt::format("{}: a {} volume; nerf eval needs an RGBA volume",
                                        options.volume, volume::name(vol.type())));
+    }
+    if (!dataset.views.empty()) {
+        // The views are in memory already (read against the same limit); the caster and one
+        // render come on top.
+        std::uint64_t view_bytes = 0;
+        for (const nerf::View& v : dataset.views) {
+            view_bytes = pipeline::saturating_sum(view_bytes, v.rgb.size() * sizeof(float));
+        }
+        const int width = dataset.intrinsics.width;
+        const int height = dataset.intrinsics.height;
+        pipeline::require_memory(
+            "nerf eval: " + pipeline::ray_cast_what(vol, width, height),
+            pipeline::saturating_sum(view_bytes, pipeline::ray_cast_need_bytes(vol, width, height)),
+            ro.max_bytes);
     }
     const nlohmann::ordered_json j =
         pipeline::evaluate_volume(dataset, vol, options.background, options.images);
@@ -252,8 +269,8 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->check(finite_in_range(0.0, 100.0));
     train
         ->add_option("--max-memory", t->max_memory_mib,
-                     "Refuse datasets and grids that would need more than this (MiB; default "
-                     "16384), before allocating")
+                     "Refuse datasets and grids that would need more than this (MiB; default: "
+                     "the memory available), before allocating")
         ->type_name("MIB")
         ->check(finite_in_range(1e-6, 1e9));
     train
@@ -279,8 +296,8 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->check(finite_in_range(0.0, 1.0));
     eval->add_option("--images", e->images, "Write the renders to this directory");
     eval->add_option("--max-memory", e->max_memory_mib,
-                     "Refuse datasets and volumes that would need more than this (MiB; default "
-                     "16384), before allocating")
+                     "Refuse datasets and volumes that would need more than this (MiB; default: "
+                     "the memory available), before allocating")
         ->type_name("MIB")
         ->check(finite_in_range(1e-6, 1e9));
     eval->add_option("--downscale", e->downscale,

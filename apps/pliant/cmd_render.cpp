@@ -2,7 +2,7 @@
 // [--size WxH]
 //               [--step S] [--opacity-unit U] [--background R,G,B] [--mip] [--shading]
 //               [--clip PX,PY,PZ,NX,NY,NZ]
-//               -o OUT.png | --orbit N -o OUT.mp4   [--json]
+//               -o OUT.png | --orbit N -o OUT.mp4   [--max-memory MIB] [--json]
 //
 // Ray-casts a volume file (io/volume_io.hpp: NRRD, NIfTI, MetaImage, raw + JSON, .inv3, a DICOM
 // folder or file) with render::RayCaster (render/raycast.hpp) and writes a PNG, or with --orbit N
@@ -23,6 +23,9 @@
 //                 (default: the smallest spacing).
 //   --clip PX,PY,PZ,NX,NY,NZ  a clipping plane through the point with the normal (world units):
 //                 only the normal's side is rendered (render::ClipPlane).
+//   --max-memory  MiB the volume, the ray caster's tables and the image may take (default: the
+//                 memory available); more is refused before allocating
+//                 (pipeline/memory_budget.hpp).
 // stdout: a one-line summary, or with --json one object: output, width, height, frames, step,
 // opacity_unit, prepare_ms, ms_per_frame (mean time of RayCaster::render), samples (per frame,
 // mean over frames).
@@ -45,6 +48,7 @@
 #include "pliant/io/transfer_function_json.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/transfer_function.hpp"
@@ -69,6 +73,7 @@ struct RenderCommandOptions {
     bool has_clip = false;
     std::string out;
     int orbit = 0;
+    double max_memory_mib = 0.0;  // 0: the memory available
 };
 
 void run_render(const RenderCommandOptions& options, const GlobalOptions& global) {
@@ -87,9 +92,19 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
         size = parse_size(options.size);
     }
 
+    // Memory: the image before the volume is read, then everything before the caster allocates.
+    // Without --size, --view's image is at most 512 pixels on a side.
+    const std::uint64_t memory_limit = pipeline::memory_limit_bytes(options.max_memory_mib);
+    pipeline::require_memory(fmt::format("render: a {}x{} image", size[0], size[1]),
+                             pipeline::image_bytes(size[0], size[1]), memory_limit);
     io::ReadVolumeOptions read;
     read.series_uid = options.series;
+    if (memory_limit > 0) {
+        read.max_bytes = static_cast<std::size_t>(memory_limit);
+    }
     const volume::Volume vol = io::read_volume(options.volume, read);
+    pipeline::require_memory("render: " + pipeline::ray_cast_what(vol, size[0], size[1]),
+                             pipeline::ray_cast_need_bytes(vol, size[0], size[1]), memory_limit);
     volume::TransferFunction tf;
     const bool is_rgba = volume::channels(vol.type()) == 4;
     if (!is_rgba) {
@@ -226,6 +241,12 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--orbit", options->orbit, "Turntable of N frames around +z (MP4)")
         ->check(CLI::Range(1, 100000))
         ->excludes(view);
+    cmd->add_option("--max-memory", options->max_memory_mib,
+                    "Refuse a volume and image that need more memory than this, MiB, before "
+                    "allocating (default: the memory available: physical, or the control group's "
+                    "limit)")
+        ->type_name("MIB")
+        ->check(finite_in_range(1e-6, 1e12));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_render(*options, global); });
 }

@@ -65,5 +65,33 @@ TEST(Motion, EmptyIsIdentityAndBadKeyframesAreInvalid) {
     EXPECT_FALSE(nan.is_valid());
 }
 
+TEST(Motion, FastestStepBoundsThePathOfOneStep) {
+    // 1.6 m in 1 ms, then held: a 0.5 ms step covers half of it, a 2 ms step all of it.
+    Motion jump;
+    jump.keyframes = {Keyframe{0.0, {}, {}}, Keyframe{0.001, {0.0, 1.6, 0.0}, {}}};
+    EXPECT_DOUBLE_EQ(jump.fastest_step(10.0, 0.0005).distance, 0.8);
+    EXPECT_DOUBLE_EQ(jump.fastest_step(10.0, 0.002).distance, 1.6);
+    // Two segments: the faster one counts, with its start time.
+    Motion two;
+    two.keyframes = {Keyframe{0.0, {}, {}}, Keyframe{1.0, {0.1, 0.0, 0.0}, {}},
+                     Keyframe{1.5, {0.1, 0.0, 1.1}, {}}};
+    const Motion::FastestStep fastest = two.fastest_step(0.0, 0.01);
+    EXPECT_NEAR(fastest.distance, 0.022, 1e-15);  // 1.1 m in 0.5 s
+    EXPECT_DOUBLE_EQ(fastest.time, 1.0);
+    // A turn: a point 0.5 m from the pivot on two turns in 3 s moves 0.5 · 4π / 3 m/s; the true
+    // chord of one step is just below that bound.
+    Motion turn;
+    turn.keyframes = {Keyframe{0.0, {}, {}}, Keyframe{3.0, {}, {0.0, 0.0, 720.0}}};
+    const double h = 1.0 / 960.0;
+    const double bound = turn.fastest_step(0.5, h).distance;
+    EXPECT_NEAR(bound, 0.5 * 4.0 * std::numbers::pi / 3.0 * h, 1e-12);
+    const Vec3d p{0.5, 0.0, 0.0};
+    const double chord = norm(turn.pose(1.0 + h).apply(p) - turn.pose(1.0).apply(p));
+    EXPECT_LE(chord, bound);
+    EXPECT_GT(chord, 0.999 * bound);
+    // No keyframes, or one: no motion.
+    EXPECT_EQ(Motion{}.fastest_step(1.0, 1.0).distance, 0.0);
+}
+
 }  // namespace
 }  // namespace pliant::cloth

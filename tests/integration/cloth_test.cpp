@@ -627,7 +627,7 @@ TEST(ClothCommand, AClothTooLargeForItsMemoryIsRefusedBeforeItIsGenerated) {
     const CliResult r = run_cli(run + "64", scratch);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("cloth.grid of 200 x 200 quads: 80000 triangles need at least 104 MB to "
-                         "simulate (1300 bytes per triangle), more than the 67 MB of memory "
+                         "simulate (1300 bytes per triangle), more than the 67.1 MB of memory "
                          "available"),
               std::string::npos)
         << r.err;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "pliant/collision/narrow_phase.hpp"
 #include "pliant/core/parallel.hpp"
@@ -18,6 +19,65 @@ bool CCDFailSafe::separation_exceeds(const FeatureVertices& f, std::span<const V
         return true;
     }
     return detail::features_distance(f, start) - sweep > threshold;
+}
+
+collision::NarrowPhaseResult CCDFailSafe::test_within_budget(
+    const SelfCollisionCandidates& candidates, std::span<const Vec3d> positions_t0,
+    std::span<const Vec3d> positions, const collision::FeaturePairs& pairs, std::int64_t budget,
+    std::int64_t& ccd_hits) {
+    // The `budget` pairs whose fastest vertex moves farthest go to the CCD (ties: pair order):
+    // freezing a slow vertex loses little motion, and the fast ones (a jumping pin's
+    // neighbours) keep moving where their pairs are clear. The others are hits.
+    const auto num_vf = static_cast<std::int64_t>(pairs.vertex_face.size());
+    const auto num_pairs = num_vf + static_cast<std::int64_t>(pairs.edge_edge.size());
+    m_pair_motion.resize(static_cast<std::size_t>(num_pairs));
+    parallel_for(
+        num_pairs,
+        [&](std::int64_t i) {
+            const FeatureVertices f = candidates.feature_vertices(pairs, i);
+            double fastest = 0.0;
+            for (const std::int32_t v : f.v) {
+                const auto u = static_cast<std::size_t>(v);
+                fastest = std::max(fastest, squared_norm(positions[u] - positions_t0[u]));
+            }
+            m_pair_motion[static_cast<std::size_t>(i)] = fastest;
+        },
+        detail::SELF_VERTEX_GRAIN);
+    m_pair_order.resize(static_cast<std::size_t>(num_pairs));
+    for (std::int64_t i = 0; i < num_pairs; ++i) {
+        m_pair_order[static_cast<std::size_t>(i)] = i;
+    }
+    const auto faster = [&](std::int64_t a, std::int64_t b) {
+        const double ma = m_pair_motion[static_cast<std::size_t>(a)];
+        const double mb = m_pair_motion[static_cast<std::size_t>(b)];
+        return ma > mb || (ma == mb && a < b);
+    };
+    std::nth_element(m_pair_order.begin(), m_pair_order.begin() + budget, m_pair_order.end(),
+                     faster);
+    std::sort(m_pair_order.begin(), m_pair_order.begin() + budget);
+    std::sort(m_pair_order.begin() + budget, m_pair_order.end());
+    collision::FeaturePairs& tested = m_tested;
+    tested.vertex_face.clear();
+    tested.edge_edge.clear();
+    const auto add = [&](collision::FeaturePairs& to, std::int64_t i) {
+        if (i < num_vf) {
+            to.vertex_face.push_back(pairs.vertex_face[static_cast<std::size_t>(i)]);
+        } else {
+            to.edge_edge.push_back(pairs.edge_edge[static_cast<std::size_t>(i - num_vf)]);
+        }
+    };
+    for (std::int64_t k = 0; k < budget; ++k) {
+        add(tested, m_pair_order[static_cast<std::size_t>(k)]);
+    }
+    collision::NarrowPhaseResult narrow = collision::continuous_narrow_phase(
+        positions_t0, positions, candidates.triangles(), candidates.edges(), tested);
+    ccd_hits = narrow.vf_hits + narrow.ee_hits;
+    for (std::int64_t k = budget; k < num_pairs; ++k) {
+        add(narrow.hits, m_pair_order[static_cast<std::size_t>(k)]);
+    }
+    narrow.vf_hits = static_cast<std::int64_t>(narrow.hits.vertex_face.size());
+    narrow.ee_hits = static_cast<std::int64_t>(narrow.hits.edge_edge.size());
+    return narrow;
 }
 
 void CCDFailSafe::search_escaped(SelfCollisionCandidates& candidates,
@@ -141,9 +201,11 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
         },
         detail::SELF_VERTEX_GRAIN);
     const std::span<const Vec3d> motion(m_window_motion);
+    bool over_budget = false;  // this window's pair budget is spent (set by the rounds below)
     // Puts v back at its start with zero velocity; true when that moved it.
     const auto revert = [&](std::size_t v) {
         stats.reverted_vertices += m_reverted[v] == 0 ? 1 : 0;
+        stats.frozen_vertices += m_reverted[v] == 0 && over_budget ? 1 : 0;
         m_reverted[v] = 1;
         if (positions[v] == positions_t0[v]) {
             return false;
@@ -204,14 +266,40 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
     Stopwatch stage;
     collect(false);
     stats.narrow_ms += stage.elapsed_ms();
+    // Pair tests left in this window's budget; once spent, every pair that may touch is a hit.
+    // Unbounded when the rounding margin exceeds the thickness: the cloth has diverged (its
+    // coordinates are beyond what the exact tests resolve) and holding it back would hide that
+    // from the caller's divergence check.
+    std::int64_t budget_left =
+        margin < candidates.thickness() ? pair_budget(n) : std::numeric_limits<std::int64_t>::max();
     for (int round = 0;; ++round) {
         stats.enforce_rounds = std::max(stats.enforce_rounds, round + 1);
         stage.restart();
-        const collision::NarrowPhaseResult narrow =
-            collision::continuous_narrow_phase(positions_t0, end, triangles, edges, active);
+        // Within the budget the CCD tests every pair; past it, test_within_budget chooses which,
+        // and the others count as hits.
+        const auto num_active =
+            static_cast<std::int64_t>(active.vertex_face.size() + active.edge_edge.size());
+        collision::NarrowPhaseResult narrow;
+        std::int64_t ccd_hits = 0;  // of the pairs the CCD tested
+        if (num_active <= budget_left) {
+            budget_left -= num_active;
+            stats.ccd_pairs += num_active;
+            narrow =
+                collision::continuous_narrow_phase(positions_t0, end, triangles, edges, active);
+            ccd_hits = narrow.vf_hits + narrow.ee_hits;
+        } else {
+            if (!over_budget) {
+                over_budget = true;
+                ++stats.budget_exceeded;
+            }
+            narrow =
+                test_within_budget(candidates, positions_t0, end, active, budget_left, ccd_hits);
+            stats.ccd_pairs += budget_left;
+            budget_left = 0;
+        }
         stats.narrow_ms += stage.elapsed_ms();
         if (round == 0) {
-            stats.ccd_hits += narrow.vf_hits + narrow.ee_hits;
+            stats.ccd_hits += ccd_hits;
         }
         if (narrow.vf_hits + narrow.ee_hits == 0) {
             break;

@@ -88,6 +88,34 @@ struct Motion {
         });
     }
 
+    // The farthest a point within `reach` metres of the pivot travels in one step of h seconds
+    // (h > 0) along this motion, and when that step starts (s). Over keyframes a → b a point's
+    // path is at most |Δd| + r · (|Δθx| + |Δθy| + |Δθz|) (angles in radians: each rotation about
+    // one axis moves a point at most its angle times its distance from the pivot, and rotations
+    // keep lengths), spread evenly over b.time − a.time, so one step covers at most
+    // min(1, h / (b.time − a.time)) of it. 0 (at time 0) for a motion without keyframes.
+    struct FastestStep {
+        double distance = 0.0;  // m
+        double time = 0.0;      // s, the keyframe segment's start
+    };
+    FastestStep fastest_step(double reach, double h) const {
+        FastestStep fastest;
+        const double to_radians = std::numbers::pi / 180.0;
+        for (std::size_t k = 1; k < keyframes.size(); ++k) {
+            const Keyframe& a = keyframes[k - 1];
+            const Keyframe& b = keyframes[k];
+            const Vec3d turn = b.rotate_degrees - a.rotate_degrees;
+            const double path =
+                norm(b.translate - a.translate) +
+                reach * to_radians * (std::fabs(turn.x) + std::fabs(turn.y) + std::fabs(turn.z));
+            const double step = path * std::min(1.0, h / (b.time - a.time));
+            if (step > fastest.distance) {
+                fastest = {step, a.time};
+            }
+        }
+        return fastest;
+    }
+
     Pose pose(double t) const {
         Pose pose;
         pose.pivot = pivot;

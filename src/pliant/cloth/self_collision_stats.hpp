@@ -21,9 +21,14 @@ struct SelfCollisionStats {
     std::int64_t ccd_hits = 0;         // pairs the CCD could not clear in the first round, summed
     std::int64_t reverted_vertices = 0;  // vertices put back by the fail-safe, summed over calls
     int enforce_rounds = 0;              // most rounds of one call
-    std::int64_t gathers = 0;            // full broad phases
-    std::int64_t path_updates = 0;       // partial broad phases (vertices given new paths)
-    std::int64_t new_paths = 0;          // vertices given new paths by them, summed
+    std::int64_t ccd_pairs = 0;          // pairs the fail-safe's CCD tested, summed
+    // Fail-safe windows whose pairs exceeded its budget (CCDFailSafe::pair_budget), and the
+    // vertices those put back without a CCD test, summed.
+    std::int64_t budget_exceeded = 0;
+    std::int64_t frozen_vertices = 0;
+    std::int64_t gathers = 0;       // full broad phases
+    std::int64_t path_updates = 0;  // partial broad phases (vertices given new paths)
+    std::int64_t new_paths = 0;     // vertices given new paths by them, summed
 };
 
 }  // namespace pliant::cloth

@@ -16,6 +16,7 @@
 #include <system_error>
 #include <vector>
 
+#include "pliant/cloth/ccd_fail_safe.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/core/aabb.hpp"
@@ -168,6 +169,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     // "error") are written, then the error is reported.
     std::exception_ptr failure;
     nlohmann::ordered_json failure_json;
+    bool warned_budget = false;  // the fail-safe's budget warning is given once
     for (int frame = 1; frame <= frames; ++frame) {
         if (options.keep_going && !options.keep_going()) {
             break;
@@ -217,6 +219,20 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["ccd_hits"] = step.self.ccd_hits;
             record["reverted_vertices"] = step.self.reverted_vertices;
             record["fail_safe_rounds"] = step.self.enforce_rounds;
+            record["ccd_pairs"] = step.self.ccd_pairs;
+            record["fail_safe_budget_exceeded"] = step.self.budget_exceeded;
+            record["fail_safe_frozen_vertices"] = step.self.frozen_vertices;
+            if (step.self.budget_exceeded > 0 && !warned_budget) {
+                warned_budget = true;
+                log_warning(
+                    "{}: frame {}: the self-collision fail-safe had more pairs to test than its "
+                    "budget ({} per window) in {} of the frame's windows: it held {} vertices at "
+                    "their window-start positions without testing them (the cloth stays "
+                    "intersection-free, but moves stiffly there); the motion is too violent for "
+                    "the substeps (stats.json: fail_safe_budget_exceeded, per frame)",
+                    scene_name, frame, cloth::CCDFailSafe::pair_budget(mesh.positions.size()),
+                    step.self.budget_exceeded, step.self.frozen_vertices);
+            }
             record["gathers"] = step.self.gathers;
             record["path_updates"] = step.self.path_updates;
             record["new_paths"] = step.self.new_paths;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -185,6 +186,46 @@ std::vector<std::int32_t> pinned_vertices(const cloth::PinGroup& group,
     return pinned;
 }
 
+// The largest distance of `points[indices]` (all points when indices is empty) from `pivot`.
+double reach_from(const Vec3d& pivot, std::span<const Vec3d> points,
+                  std::span<const std::int32_t> indices) {
+    double reach = 0.0;
+    const auto add = [&](const Vec3d& p) {
+        reach = std::max(reach, norm(p - pivot));
+    };
+    if (indices.empty()) {
+        std::for_each(points.begin(), points.end(), add);
+    } else {
+        for (const std::int32_t v : indices) {
+            add(points[static_cast<std::size_t>(v)]);
+        }
+    }
+    return reach;
+}
+
+// Warns about a keyframed pin group or obstacle that moves farther than the cloth's thickness in
+// one substep: contact with it is then first seen by the self-collision's fail-safe, which holds
+// vertices back instead of pushing them apart (stiff, jerky cloth; slow when it is much of the
+// cloth), and obstacles can pass through cloth between substeps (docs/formats.md, "Choosing
+// substeps", rule 1).
+void warn_fast_motion(const std::string& scene_name, const std::string& key,
+                      const cloth::Motion& motion, double reach, const cloth::ClothScene& scene) {
+    const double h = 1.0 / (scene.frames_per_second * scene.substeps);
+    const double bound = scene.material.thickness;
+    const cloth::Motion::FastestStep fastest = motion.fastest_step(reach, h);
+    if (!(fastest.distance > bound)) {
+        return;
+    }
+    log_warning(
+        "{}: {}: its motion covers up to {:.3g} m in one substep ({:.3g} m/s) from t = {:.4g} s "
+        "(frame {}), more than the thickness ({:.3g} m) per substep: cloth it pulls or hits is "
+        "caught only "
+        "by the self-collision fail-safe, which holds vertices back (stiff, slow frames); spread "
+        "its keyframes over more time or raise substeps",
+        scene_name, key, fastest.distance, fastest.distance / h, fastest.time,
+        static_cast<long long>(std::floor(fastest.time * scene.frames_per_second)) + 1, bound);
+}
+
 }  // namespace
 
 ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name,
@@ -223,6 +264,22 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
                 scene_name, k, obstacle.mesh.string(), *volume);
         }
         setup.mesh_obstacles.push_back(std::move(mesh_obstacle));
+    }
+    // Pins and obstacles that jump.
+    for (std::size_t g = 0; g < scene.pins.size(); ++g) {
+        const cloth::PinGroup& group = scene.pins[g];
+        if (!group.motion.is_static() && !setup.pins[g].empty()) {
+            warn_fast_motion(scene_name, group.key, group.motion,
+                             reach_from(group.motion.pivot, setup.mesh.positions, setup.pins[g]),
+                             scene);
+        }
+    }
+    for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+        const cloth::Motion& motion = scene.obstacles[k].motion;
+        if (!motion.is_static()) {
+            warn_fast_motion(scene_name, fmt::format("obstacles[{}]", k), motion,
+                             reach_from(motion.pivot, setup.shapes[k].rest.positions, {}), scene);
+        }
     }
     return setup;
 }

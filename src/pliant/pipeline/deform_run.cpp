@@ -15,6 +15,7 @@
 #include "pliant/io/volume_io.hpp"
 #include "pliant/io/vtu.hpp"
 #include "pliant/pipeline/deformable_volume.hpp"
+#include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
 
@@ -39,6 +40,24 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     if (!options.mesh_out.empty() && options.mesh_out.extension() != ".vtu") {
         throw InvalidInput(fmt::format("deform: the mesh output {} must be a .vtu file (VTK XML)",
                                        options.mesh_out.string()));
+    }
+    if (options.mesh.empty() && options.grid.cell_voxels >= 1) {
+        // Every cell of the grid counted: an upper bound on the soft body's size.
+        const volume::Dims& d = source.dims();
+        const auto cells_along = [&](int axis) {
+            return static_cast<std::uint64_t>(
+                (d[static_cast<std::size_t>(axis)] + options.grid.cell_voxels - 1) /
+                options.grid.cell_voxels);
+        };
+        const std::uint64_t cells =
+            saturating_product(saturating_product(cells_along(0), cells_along(1)), cells_along(2));
+        const bool renders = !options.video.empty() || !options.still.empty();
+        require_memory(
+            fmt::format("deform: a grid of {} cells of {}^3 voxels over the {} x {} x {} volume",
+                        cells, options.grid.cell_voxels, d[0], d[1], d[2]),
+            deform_need_bytes(source, cells, renders ? options.size[0] : 0,
+                              renders ? options.size[1] : 0),
+            options.max_memory_bytes > 0 ? options.max_memory_bytes : available_memory_bytes());
     }
 
     // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.

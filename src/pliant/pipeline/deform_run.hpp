@@ -5,7 +5,8 @@
 // written to `out`; with `video`, every frame resampled and ray-cast into an MP4; with `still`,
 // the last frame ray-cast into a PNG; with `mesh_out`, the deformed tet mesh as .vtu. Returns the
 // run's numbers (the JSON of `pliant deform`, docs/formats.md). Throws InvalidInput / IoError /
-// Unsupported before simulating when the output cannot be written or there is nothing to deform.
+// Unsupported before simulating when the output cannot be written, there is nothing to deform or
+// the grid needs more memory than max_memory_bytes allows.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -42,6 +43,9 @@ struct DeformRunOptions {
     bool shading = false;
     double step = 0.0;    // ray-casting step, world units (0: half the smallest spacing)
     ProgressFn progress;  // after every frame (progress.hpp)
+    // The most memory the run may need (bytes; memory_budget.hpp's deform_need_bytes, checked
+    // before the tet grid is built); 0: the memory available.
+    std::uint64_t max_memory_bytes = 0;
 };
 
 // tf: the transfer function of a scalar source (rendering and which voxels are visible), nullptr
