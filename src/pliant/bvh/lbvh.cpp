@@ -462,4 +462,40 @@ void LBVH::validate(std::span<const AABB> boxes) const {
     PLIANT_CHECK_EQ(order.size(), static_cast<std::size_t>(m_num_wide));
 }
 
+void LBVH::save_state(ByteWriter& out) const {
+    out.put_vector(m_wide);
+    out.put(m_num_wide);
+    out.put_vector(m_level_offsets);
+    out.put(m_cut_depth);
+    out.put_vector(m_subtree_offsets);
+    out.put_vector(m_subtree_ranges);
+    out.put_vector(m_primitives);
+    out.put_vector(m_nodes);
+    out.put_vector(m_keys);
+    out.put_vector(m_counters);
+    out.put_vector(m_wide_source);
+    out.put_vector(m_slot_counts);
+    out.put(m_root);
+}
+
+void LBVH::load_state(ByteReader& in) {
+    in.get_vector("bvh.wide", m_wide);
+    m_num_wide = in.get<std::int32_t>("bvh.num_wide");
+    if (m_num_wide < 0 || static_cast<std::size_t>(m_num_wide) > m_wide.size()) {
+        throw InvalidInput(fmt::format("{}: bvh.num_wide: {} of {} nodes", in.source(), m_num_wide,
+                                       m_wide.size()));
+    }
+    in.get_vector("bvh.level_offsets", m_level_offsets);
+    m_cut_depth = in.get<int>("bvh.cut_depth");
+    in.get_vector("bvh.subtree_offsets", m_subtree_offsets);
+    in.get_vector("bvh.subtree_ranges", m_subtree_ranges);
+    in.get_vector("bvh.primitives", m_primitives);
+    in.get_vector("bvh.nodes", m_nodes);
+    in.get_vector("bvh.keys", m_keys);
+    in.get_vector("bvh.counters", m_counters);
+    in.get_vector("bvh.wide_source", m_wide_source);
+    in.get_vector("bvh.slot_counts", m_slot_counts);
+    m_root = in.get<std::int32_t>("bvh.root");
+}
+
 }  // namespace pliant::bvh
