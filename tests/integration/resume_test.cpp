@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -252,6 +253,70 @@ TEST_F(ClothResume, CheckpointingDoesNotChangeTheFrames) {
         cloth_args(scratch, "scene.json", "every", "--checkpoint-every 1 --resume"), scratch);
     ASSERT_EQ(again.exit_code, 0) << again.err;
     expect_same_run(scratch / "reference", scratch / "every");
+}
+
+// A tmpfs of `size` mounted on `dir` (root only); unmounted when it goes out of scope.
+class SmallDisk {
+public:
+    SmallDisk(const std::filesystem::path& dir, const std::string& size) : m_dir(dir) {
+        std::filesystem::create_directories(dir);
+        m_mounted = ::geteuid() == 0 && std::system(("mount -t tmpfs -o size=" + size + " tmpfs " +
+                                                     quoted(dir) + " 2>/dev/null")
+                                                        .c_str()) == 0;
+    }
+    SmallDisk(const SmallDisk&) = delete;
+    SmallDisk& operator=(const SmallDisk&) = delete;
+    ~SmallDisk() {
+        if (m_mounted) {
+            std::system(("umount " + quoted(m_dir)).c_str());
+        }
+    }
+    bool mounted() const { return m_mounted; }
+
+private:
+    std::filesystem::path m_dir;
+    bool m_mounted = false;
+};
+
+TEST_F(ClothResume, FullDiskStopsCleanlyAndResumesOnceThereIsSpace) {
+    const SmallDisk disk(scratch / "disk", "4m");
+    if (!disk.mounted()) {
+        GTEST_SKIP() << "needs root and a tmpfs mount (mount -t tmpfs) to fill a disk for real";
+    }
+    // Most of the disk taken: the run fills the rest after a few frames.
+    {
+        std::ofstream filler(scratch / "disk" / "filler", std::ios::binary);
+        const std::string block(1 << 16, 'x');
+        for (int i = 0; i < 52; ++i) {
+            filler << block;
+        }
+    }
+    const std::string out = "disk/out";
+    const CliResult full =
+        run_cli(cloth_args(scratch, "scene.json", out, "--checkpoint-every 2"), scratch);
+    ASSERT_EQ(full.exit_code, 1) << full.err;
+    EXPECT_NE(full.err.find("No space left on device"), std::string::npos) << full.err;
+    EXPECT_NE(full.err.find("--resume"), std::string::npos) << full.err;
+    // stats.json describes exactly the frames on disk; nothing partial or temporary is left.
+    const nlohmann::json stats = nlohmann::json::parse(read_text(scratch / out / "stats.json"));
+    ASSERT_FALSE(stats.at("error").is_null());
+    const std::size_t frames = stats.at("frames").size();
+    EXPECT_LT(frames, static_cast<std::size_t>(FRAMES));
+    std::vector<std::string> expected;
+    for (std::size_t f = 0; f <= frames; ++f) {
+        expected.push_back(fmt::format("frame_{:04d}.obj", f));
+        EXPECT_TRUE(read_text(scratch / out / "frames" / expected.back()) ==
+                    read_text(scratch / "reference" / "frames" / expected.back()))
+            << expected.back();
+    }
+    EXPECT_EQ(file_names(scratch / out / "frames"), expected);
+    for (const std::string& name : file_names(scratch / out)) {
+        EXPECT_EQ(name.find(".tmp-"), std::string::npos) << name;
+    }
+    // Space freed: the run resumes and ends as an uninterrupted one.
+    std::filesystem::remove(scratch / "disk" / "filler");
+    resume(out);
+    expect_same_run(scratch / "reference", scratch / out);
 }
 
 class ClothResumeErrors : public ClothResume {

@@ -68,18 +68,25 @@ void write_file_atomically(const std::filesystem::path& path,
     }
 
     // Step 2: the caller's content. Its exceptions propagate; ~TemporaryFile cleans up.
+    errno = 0;
     write(out);
 
-    // Step 3: everything must have reached the file before it may replace the target.
+    // Step 3: everything must have reached the file before it may replace the target. The
+    // stream keeps no error code: errno of the failed write(2) names the cause (ENOSPC for a
+    // full disk) when nothing cleared it.
+    const auto cause = [] {
+        const int error = errno;
+        return error != 0 ? fmt::format(": {}", std::strerror(error)) : std::string();
+    };
     out.flush();
     if (!out) {
-        throw IoError(fmt::format("{}: writing the temporary file {} failed", path.string(),
-                                  tmp.path().string()));
+        throw IoError(fmt::format("{}: writing the temporary file {} failed{}", path.string(),
+                                  tmp.path().string(), cause()));
     }
     out.close();
     if (out.fail()) {
-        throw IoError(fmt::format("{}: closing the temporary file {} failed", path.string(),
-                                  tmp.path().string()));
+        throw IoError(fmt::format("{}: closing the temporary file {} failed{}", path.string(),
+                                  tmp.path().string(), cause()));
     }
 
     // Step 4: the atomic replacement.

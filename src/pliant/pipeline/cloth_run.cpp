@@ -460,12 +460,14 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             // The run already failed to write: the frames and stats.json matter more.
         }
     }
+    bool stats_written = true;
     try {
         io::write_file_atomically(out / "stats.json",
                                   [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
     } catch (const IoError& e) {
         // No stats.json rather than one that describes other frames.
         std::filesystem::remove(out / "stats.json", ec);
+        stats_written = false;
         if (!failure) {
             throw;
         }
@@ -476,9 +478,11 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                  frames_dir.string(), (out / "stats.json").string());
         if (write_failed) {
             rethrow_with_context(
-                failure, fmt::format("{}: frame {}: writing the output failed ({}); "
-                                     "frames 0-{} are kept; free space and rerun with --resume: ",
-                                     scene_name, frames_done + 1, out.string(), frames_done));
+                failure,
+                fmt::format("{}: after frame {}: writing the output failed; frames 0-{}{} "
+                            "are kept in {}; free space and rerun with --resume: ",
+                            scene_name, frames_done, frames_done,
+                            stats_written ? " and stats.json describing them" : "", out.string()));
         }
         rethrow_with_context(failure, fmt::format("{}: frame {}: ", scene_name, frames_done + 1));
     }
