@@ -369,5 +369,55 @@ TEST_F(ClothResumeErrors, CheckpointOfAnotherSceneIsAnError) {
     expect_refused("other", "other.json", "belongs to another run");
 }
 
+// `pliant deform` killed once its checkpoint appears and resumed writes the same volume as an
+// uninterrupted run; kinematic (twist) and rest-state (bubble) drivers.
+TEST(DeformResume, KilledAndResumedWritesTheSameVolume) {
+    ScratchDir scratch;
+    ASSERT_EQ(
+        run_cli("volume generate sphere " + quoted(scratch / "s.nrrd") + " --dims 64", scratch)
+            .exit_code,
+        0);
+    for (const std::string driver : {"twist", "bubble"}) {
+        SCOPED_TRACE(driver);
+        const std::string args = "deform " + quoted(scratch / "s.nrrd") + " --driver " + driver +
+                                 " --frames 30 --checkpoint-every 4 -o ";
+        const CliResult reference =
+            run_cli(args + quoted(scratch / (driver + "_reference.nrrd")), scratch);
+        ASSERT_EQ(reference.exit_code, 0) << reference.err;
+        const std::filesystem::path out = scratch / (driver + ".nrrd");
+        const std::filesystem::path checkpoint = scratch / (driver + ".nrrd.checkpoint.bin");
+        const pid_t pid = spawn(args + quoted(out));
+        ASSERT_GT(pid, 0);
+        const bool killed = kill_when(pid, [&] { return std::filesystem::exists(checkpoint); });
+        const CliResult resumed = run_cli(args + quoted(out) + " --resume", scratch);
+        ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+        if (killed) {
+            EXPECT_NE(resumed.err.find("resuming after frame"), std::string::npos) << resumed.err;
+        }
+        EXPECT_TRUE(read_text(out) == read_text(scratch / (driver + "_reference.nrrd")));
+        EXPECT_FALSE(std::filesystem::exists(checkpoint));  // removed once complete
+    }
+}
+
+TEST(DeformResume, CorruptCheckpointAndVideoAreErrors) {
+    ScratchDir scratch;
+    ASSERT_EQ(
+        run_cli("volume generate sphere " + quoted(scratch / "s.nrrd") + " --dims 16", scratch)
+            .exit_code,
+        0);
+    const std::string args = "deform " + quoted(scratch / "s.nrrd") +
+                             " --driver twist --frames 4 -o " + quoted(scratch / "d.nrrd");
+    write(scratch / "d.nrrd.checkpoint.bin", "PLNTCKPT but nothing else that a checkpoint holds");
+    const CliResult corrupt = run_cli(args + " --resume", scratch);
+    EXPECT_EQ(corrupt.exit_code, 1) << corrupt.err;
+    EXPECT_NE(corrupt.err.find((scratch / "d.nrrd.checkpoint.bin").string()), std::string::npos)
+        << corrupt.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "d.nrrd"));
+    const CliResult video =
+        run_cli(args + " --resume --render " + quoted(scratch / "d.mp4"), scratch);
+    EXPECT_EQ(video.exit_code, 1) << video.err;
+    EXPECT_NE(video.err.find("--resume cannot continue the video"), std::string::npos) << video.err;
+}
+
 }  // namespace
 }  // namespace pliant::test

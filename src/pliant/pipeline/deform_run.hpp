@@ -6,6 +6,14 @@
 // the last frame ray-cast into a PNG. Returns the run's numbers (the JSON of `pliant deform`,
 // docs/formats.md). Throws InvalidInput / IoError / Unsupported before simulating when the
 // output cannot be written or there is nothing to deform.
+//
+// Checkpoints (io/checkpoint.hpp): every checkpoint_every frames before the last, the soft body's
+// state and the run's sums go to checkpoint_path(out) (OUT.checkpoint.bin, atomically); the
+// file is removed once the run completes. With resume, the run continues from it: the output
+// volume (and the still) are bitwise identical to an uninterrupted run's. resume without the
+// file starts from frame 0. A corrupt, truncated or foreign checkpoint (another volume, driver
+// or options) is InvalidInput naming the file. A video (`video`) cannot be continued: resume
+// with one is Unsupported, and runs that write one save no checkpoints.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -37,9 +45,14 @@ struct DeformRunOptions {
     std::array<int, 2> size{512, 512};
     std::array<double, 3> camera{30.0, 20.0, 0.0};  // azimuth, elevation (degrees), distance
     bool shading = false;
-    double step = 0.0;    // ray-casting step, world units (0: half the smallest spacing)
-    ProgressFn progress;  // after every frame (progress.hpp)
+    double step = 0.0;          // ray-casting step, world units (0: half the smallest spacing)
+    ProgressFn progress;        // after every frame (progress.hpp)
+    int checkpoint_every = 12;  // frames between checkpoints; 0: none
+    bool resume = false;        // continue from checkpoint_path(out)
 };
+
+// Where a run writing the volume `out` keeps its checkpoint: OUT.checkpoint.bin beside it.
+std::filesystem::path deform_checkpoint_path(const std::filesystem::path& out);
 
 // tf: the transfer function of a scalar source (rendering and which voxels are visible), nullptr
 // for RGBA sources.
