@@ -419,5 +419,47 @@ TEST(DeformResume, CorruptCheckpointAndVideoAreErrors) {
     EXPECT_NE(video.err.find("--resume cannot continue the video"), std::string::npos) << video.err;
 }
 
+// `pliant nerf train --iterations N` killed once its checkpoint appears and resumed exports the
+// same volume as an uninterrupted run (iteration i's rays depend only on the seed and i).
+TEST(NerfResume, KilledAndResumedTrainsTheSameVolume) {
+    ScratchDir scratch;
+    ASSERT_EQ(
+        run_cli("volume generate rgba-test " + quoted(scratch / "rt.nrrd") + " --dims 24", scratch)
+            .exit_code,
+        0);
+    ASSERT_EQ(run_cli("dataset " + quoted(scratch / "rt.nrrd") + " --views 12 --size 48x48 -o " +
+                          quoted(scratch / "ds"),
+                      scratch)
+                  .exit_code,
+              0);
+    const std::string args = "nerf train " + quoted(scratch / "ds" / "transforms_train.json") +
+                             " --iterations 600 --resolution 32 --batch 1024 "
+                             "--export-resolution 32 --checkpoint-every 100 -o ";
+    const CliResult reference = run_cli(args + quoted(scratch / "reference.nrrd"), scratch);
+    ASSERT_EQ(reference.exit_code, 0) << reference.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "reference.nrrd.checkpoint.bin"));
+    const std::filesystem::path checkpoint = scratch / "killed.nrrd.checkpoint.bin";
+    const pid_t pid = spawn(args + quoted(scratch / "killed.nrrd"));
+    ASSERT_GT(pid, 0);
+    const bool killed = kill_when(pid, [&] { return std::filesystem::exists(checkpoint); });
+    const CliResult resumed =
+        run_cli(args + quoted(scratch / "killed.nrrd") + " --resume", scratch);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    if (killed) {
+        EXPECT_NE(resumed.err.find("resuming from"), std::string::npos) << resumed.err;
+    }
+    EXPECT_TRUE(read_text(scratch / "killed.nrrd") == read_text(scratch / "reference.nrrd"));
+    // Other training options: the checkpoint is not this run's.
+    const pid_t again = spawn(args + quoted(scratch / "other.nrrd"));
+    ASSERT_GT(again, 0);
+    if (kill_when(again,
+                  [&] { return std::filesystem::exists(scratch / "other.nrrd.checkpoint.bin"); })) {
+        const CliResult other =
+            run_cli(args + quoted(scratch / "other.nrrd") + " --resume --seed 7", scratch);
+        EXPECT_EQ(other.exit_code, 1) << other.err;
+        EXPECT_NE(other.err.find("belongs to another run"), std::string::npos) << other.err;
+    }
+}
+
 }  // namespace
 }  // namespace pliant::test
