@@ -111,7 +111,8 @@ std::vector<std::string> file_names(const std::filesystem::path& dir) {
 
 // stats.json without the wall-clock times (and the resume's own note).
 nlohmann::json without_timings(nlohmann::json stats) {
-    for (const char* key : {"mean_ms_per_frame", "preview_ms_per_frame", "resumed_after_frame"}) {
+    for (const char* key : {"mean_ms_per_frame", "preview_ms_per_frame", "resumed_after_frame",
+                            "checkpoint_ms", "checkpoint_bytes"}) {
         stats.erase(key);
     }
     for (nlohmann::json& frame : stats.at("frames")) {

@@ -463,39 +463,36 @@ void LBVH::validate(std::span<const AABB> boxes) const {
 }
 
 void LBVH::save_state(ByteWriter& out) const {
-    out.put_vector(m_wide);
-    out.put(m_num_wide);
+    // The tree and its refit plan; the build's scratch (binary nodes, keys, counters) is rebuilt
+    // by the next build.
+    out.put_vector(std::span(m_wide).first(static_cast<std::size_t>(m_num_wide)));
     out.put_vector(m_level_offsets);
     out.put(m_cut_depth);
     out.put_vector(m_subtree_offsets);
     out.put_vector(m_subtree_ranges);
     out.put_vector(m_primitives);
-    out.put_vector(m_nodes);
-    out.put_vector(m_keys);
-    out.put_vector(m_counters);
-    out.put_vector(m_wide_source);
-    out.put_vector(m_slot_counts);
-    out.put(m_root);
 }
 
 void LBVH::load_state(ByteReader& in) {
     in.get_vector("bvh.wide", m_wide);
-    m_num_wide = in.get<std::int32_t>("bvh.num_wide");
-    if (m_num_wide < 0 || static_cast<std::size_t>(m_num_wide) > m_wide.size()) {
-        throw InvalidInput(fmt::format("{}: bvh.num_wide: {} of {} nodes", in.source(), m_num_wide,
-                                       m_wide.size()));
-    }
+    m_num_wide = static_cast<std::int32_t>(m_wide.size());
     in.get_vector("bvh.level_offsets", m_level_offsets);
     m_cut_depth = in.get<int>("bvh.cut_depth");
     in.get_vector("bvh.subtree_offsets", m_subtree_offsets);
     in.get_vector("bvh.subtree_ranges", m_subtree_ranges);
     in.get_vector("bvh.primitives", m_primitives);
-    in.get_vector("bvh.nodes", m_nodes);
-    in.get_vector("bvh.keys", m_keys);
-    in.get_vector("bvh.counters", m_counters);
-    in.get_vector("bvh.wide_source", m_wide_source);
-    in.get_vector("bvh.slot_counts", m_slot_counts);
-    m_root = in.get<std::int32_t>("bvh.root");
+    for (const std::int32_t offset : m_subtree_offsets) {
+        if (offset < 0 || static_cast<std::size_t>(offset) > m_subtree_ranges.size()) {
+            throw InvalidInput(fmt::format("{}: bvh.subtree_offsets: {} of {} ranges", in.source(),
+                                           offset, m_subtree_ranges.size()));
+        }
+    }
+    for (const std::array<std::int32_t, 2>& range : m_subtree_ranges) {
+        if (range[0] < 0 || range[0] > range[1] || range[1] > m_num_wide) {
+            throw InvalidInput(fmt::format("{}: bvh.subtree_ranges: [{}, {}) of {} nodes",
+                                           in.source(), range[0], range[1], m_num_wide));
+        }
+    }
 }
 
 }  // namespace pliant::bvh

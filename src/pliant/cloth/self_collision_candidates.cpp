@@ -513,13 +513,9 @@ void SelfCollisionCandidates::save_state(ByteWriter& out) const {
     out.put_vector(m_box_lo);
     out.put_vector(m_box_hi);
     out.put_vector(m_needs_path);
-    out.put_vector(m_triangle_motions);
     out.put(m_filter_margin);
     out.put_vector(m_candidates);
-    out.put_vector(m_filter_vertices);
-    out.put_vector(m_new_velocities);
     out.put_vector(m_new_path_vertices);
-    out.put_vector(m_marks);
 }
 
 void SelfCollisionCandidates::load_state(ByteReader& in) {
@@ -547,7 +543,6 @@ void SelfCollisionCandidates::load_state(ByteReader& in) {
     in.get_vector("candidates.box_lo", m_box_lo, n);
     in.get_vector("candidates.box_hi", m_box_hi, n);
     in.get_vector("candidates.needs_path", m_needs_path, n);
-    in.get_vector("candidates.triangle_motions", m_triangle_motions);
     m_filter_margin = in.get<double>("candidates.filter_margin");
     in.get_vector("candidates.candidates", m_candidates);
     for (const Candidate& c : m_candidates) {
@@ -558,10 +553,7 @@ void SelfCollisionCandidates::load_state(ByteReader& in) {
             }
         }
     }
-    in.get_vector("candidates.filter_vertices", m_filter_vertices);
-    in.get_vector("candidates.new_velocities", m_new_velocities);
     in.get_vector("candidates.new_path_vertices", m_new_path_vertices);
-    in.get_vector("candidates.marks", m_marks);
 }
 
 }  // namespace pliant::cloth

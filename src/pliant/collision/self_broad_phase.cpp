@@ -599,6 +599,8 @@ std::size_t SelfCollisionBroadPhase<Real>::memory_bytes() const {
 
 template <typename Real>
 void SelfCollisionBroadPhase<Real>::save_state(ByteWriter& out) const {
+    // Not the pairs of the last update (the caller has taken them) nor the partial update's
+    // scratch; the orphan index is rebuilt on first use.
     out.put(static_cast<std::uint64_t>(m_num_vertices));
     out.put(static_cast<std::uint64_t>(m_triangles.size()));
     out.put_vector(m_exact_vertex_boxes);
@@ -607,21 +609,12 @@ void SelfCollisionBroadPhase<Real>::save_state(ByteWriter& out) const {
     out.put_vector(m_triangle_boxes);
     m_bvh.save_state(out);
     out.put(m_needs_build);
-    out.put_vector(m_pairs.vertex_face);
-    out.put_vector(m_pairs.edge_edge);
     out.put(m_has_boxes);
     out.put(m_confirm_exact);
     out.put(m_pair_limit);
     out.put(m_pair_limit_exceeded);
     out.put_vector(m_vertex_marks);
     out.put_vector(m_triangle_marks);
-    out.put_vector(m_affected_triangles);
-    out.put_vector(m_affected_edges);
-    out.put_vector(m_orphan_offsets);
-    out.put_vector(m_orphan_indices);
-    out.put_vector(m_affected_orphans);
-    out.put_vector(m_partial_pairs.vertex_face);
-    out.put_vector(m_partial_pairs.edge_edge);
 }
 
 template <typename Real>
@@ -639,21 +632,12 @@ void SelfCollisionBroadPhase<Real>::load_state(ByteReader& in) {
     in.get_vector("broad_phase.triangle_boxes", m_triangle_boxes);
     m_bvh.load_state(in);
     m_needs_build = in.get_bool("broad_phase.needs_build");
-    in.get_vector("broad_phase.pairs.vertex_face", m_pairs.vertex_face);
-    in.get_vector("broad_phase.pairs.edge_edge", m_pairs.edge_edge);
     m_has_boxes = in.get_bool("broad_phase.has_boxes");
     m_confirm_exact = in.get_bool("broad_phase.confirm_exact");
     m_pair_limit = in.get<std::int64_t>("broad_phase.pair_limit");
     m_pair_limit_exceeded = in.get_bool("broad_phase.pair_limit_exceeded");
     in.get_vector("broad_phase.vertex_marks", m_vertex_marks);
     in.get_vector("broad_phase.triangle_marks", m_triangle_marks);
-    in.get_vector("broad_phase.affected_triangles", m_affected_triangles);
-    in.get_vector("broad_phase.affected_edges", m_affected_edges);
-    in.get_vector("broad_phase.orphan_offsets", m_orphan_offsets);
-    in.get_vector("broad_phase.orphan_indices", m_orphan_indices);
-    in.get_vector("broad_phase.affected_orphans", m_affected_orphans);
-    in.get_vector("broad_phase.partial_pairs.vertex_face", m_partial_pairs.vertex_face);
-    in.get_vector("broad_phase.partial_pairs.edge_edge", m_partial_pairs.edge_edge);
 }
 
 template class SelfCollisionBroadPhase<float>;

@@ -177,6 +177,16 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
         std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
+struct Running {
+    double sum = 0.0;
+    int count = 0;
+    void add(double x) {
+        sum += x;
+        ++count;
+    }
+    double mean() const { return count > 0 ? sum / count : 0.0; }
+};
+
 // The run's own part of a checkpoint, before the simulation's state.
 struct ClothRunTotals {
     std::int32_t frame = 0;  // the last frame written
@@ -334,9 +344,12 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     }
     int frames_done = first_frame - 1;
     nlohmann::ordered_json& per_frame = totals.per_frame;
+    Running checkpoint_ms;  // this process's checkpoints
     const auto save_checkpoint = [&] {
+        const Stopwatch watch;
         totals.frame = frames_done;
         write_cloth_checkpoint(checkpoint_path, fingerprint, totals, sim);
+        checkpoint_ms.add(watch.elapsed_ms());
     };
     // A frame that fails (the simulation diverged, or a guard such as self-collision's pair limit
     // tripped) ends the run like an interrupt: the frames before it and stats.json (with
@@ -445,6 +458,10 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     };
     if (first_frame > 1) {
         stats["resumed_after_frame"] = first_frame - 1;
+    }
+    if (checkpoint_ms.count > 0) {
+        stats["checkpoint_ms"] = checkpoint_ms.mean();
+        stats["checkpoint_bytes"] = std::filesystem::file_size(checkpoint_path, ec);
     }
     remove_stale_frames(frames_dir, frames_done, scene.frame_format);
     stats["interrupted"] = interrupted;
