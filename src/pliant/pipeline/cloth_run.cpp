@@ -433,7 +433,12 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     }
     const bool interrupted = frames_done < frames && !failure;
     if (interrupted && options.checkpoint_every > 0 && frames_done >= first_frame) {
-        save_checkpoint();  // resume continues from where the interrupt stopped
+        try {
+            save_checkpoint();  // resume continues from where the interrupt stopped
+        } catch (const IoError& e) {
+            log_warning("{}: {}; --resume continues from the previous checkpoint", scene_name,
+                        e.what());
+        }
     }
     const int frames_run = frames_done - first_frame + 1;
     nlohmann::ordered_json stats = {
