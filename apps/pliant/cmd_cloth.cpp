@@ -1,5 +1,5 @@
 // pliant cloth SCENE.json --out DIR [--frames N] [--no-preview] [--preview-size WxH]
-//              [--max-memory MIB] [--json]
+//              [--max-memory MIB] [--checkpoint-every N] [--resume] [--json]
 //
 // Simulates a cloth scene (format in docs/formats.md) with pipeline::run_cloth_scene and writes:
 //   DIR/frames/frame_0000.obj … frame_NNNN.obj (or .ply with "output": {"format": "ply"}): the
@@ -11,9 +11,10 @@
 //     `contacts`, `ccd_hits`, `intersecting_pairs` (exact count on the frame as written); and
 //     `mean_ms_per_frame` (schema in docs/formats.md). Written last, atomically.
 // Ctrl-C (SIGINT) stops the run after the frame in progress: frames, preview and stats.json so
-// far are complete, stderr says where, exit code 130. A progress bar goes to stderr when it is a
-// terminal. With --json, stdout is stats.json's
-// object; otherwise a short summary.
+// far are complete, stderr says where, exit code 130. DIR/checkpoint.bin (every
+// --checkpoint-every frames) lets --resume continue a run that was stopped or killed. A progress
+// bar goes to stderr when it is a terminal. With --json, stdout is stats.json's object; otherwise a
+// short summary.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -53,6 +54,8 @@ struct ClothCommandOptions {
     bool no_preview = false;
     std::string preview_size = "640x480";
     double max_memory_mib = 0.0;  // 0: the memory available
+    int checkpoint_every = pipeline::ClothRunOptions{}.checkpoint_every;
+    bool resume = false;
 };
 
 void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) {
@@ -73,6 +76,8 @@ void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) 
     run.preview_width = preview_size[0];
     run.preview_height = preview_size[1];
     run.max_memory_bytes = static_cast<std::uint64_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    run.checkpoint_every = options.checkpoint_every;
+    run.resume = options.resume;
     const InterruptGuard interrupt_guard;
     const nlohmann::ordered_json stats = pipeline::run_cloth_scene(scene, options.scene, out, run);
     if (global.json) {
@@ -111,6 +116,14 @@ void register_cloth(CLI::App& app, const GlobalOptions& global) {
                     "Refuse a cloth whose triangles need more memory than this, MiB (default: the "
                     "memory available: physical, or the control group's limit)")
         ->check(finite_in_range(1.0, 1e12));
+    cmd->add_option("--checkpoint-every", options->checkpoint_every,
+                    "Save DIR/checkpoint.bin every N frames, at the last frame and on Ctrl-C "
+                    "(0: never; default " +
+                        std::to_string(options->checkpoint_every) + ")")
+        ->check(CLI::Range(0, 1'000'000));
+    cmd->add_flag("--resume", options->resume,
+                  "Continue from DIR/checkpoint.bin (frames identical to an uninterrupted run); "
+                  "without one, start from frame 0");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_cloth(*options, global); });
 }

@@ -2,7 +2,7 @@
 //               [--cells B] [--full-box] [--mesh FILE.node] [--stiffness K] [--substeps N]
 //               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
 //               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB]
-//               [--mesh-out MESH.vtu] [--json]
+//               [--mesh-out MESH.vtu] [--checkpoint-every N] [--resume] [--json]
 //
 // The deformable-volume pipeline of Park & Kye 2022 on a volume file: a tet grid over it
 // (pbd::build_tet_grid: cells of B³ voxels, 5 tets each, only cells near visible voxels unless
@@ -90,6 +90,8 @@ struct DeformCommandOptions {
     double step = 0.0;
     std::array<double, 3> camera{30.0, 20.0, 0.0};
     double max_memory_mib = 0.0;  // 0: the memory available
+    int checkpoint_every = pipeline::DeformRunOptions{}.checkpoint_every;
+    bool resume = false;
 
     // The driver-specific options the user gave, for the usage check.
     std::vector<std::pair<const CLI::Option*, std::vector<std::string>>> driver_only;
@@ -186,6 +188,8 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.camera = options.camera;
     run.step = options.step;
     run.progress = frame_progress(stderr_is_terminal() && !global.json);
+    run.checkpoint_every = options.checkpoint_every;
+    run.resume = options.resume;
     const nlohmann::ordered_json result = pipeline::run_deform(source, tf ? &*tf : nullptr, run);
 
     if (global.json) {
@@ -309,6 +313,14 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->type_name("MIB")
         ->check(finite_in_range(1e-6, 1e12));
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
+    cmd->add_option("--checkpoint-every", options->checkpoint_every,
+                    "Save OUT.checkpoint.bin every N frames (0: never; not with --render; "
+                    "default " +
+                        std::to_string(options->checkpoint_every) + ")")
+        ->check(CLI::Range(0, 1'000'000));
+    cmd->add_flag("--resume", options->resume,
+                  "Continue from OUT.checkpoint.bin (the same output as an uninterrupted run); "
+                  "without one, start from frame 0");
     cmd->callback([options, &global] { run_deform_command(*options, global); });
 }
 

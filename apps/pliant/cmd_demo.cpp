@@ -337,6 +337,7 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
         pipeline::ClothRunOptions run;
         run.frames = frames;
         run.progress = progress;
+        run.checkpoint_every = 0;  // a demo's short runs are not resumed
         const nlohmann::ordered_json stats = pipeline::run_cloth_scene(scene, file, scene_dir, run);
 
         say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame, {} intersecting triangle "

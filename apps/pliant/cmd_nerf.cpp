@@ -2,6 +2,7 @@
 //                   [--stages S] [--batch B] [--export-resolution E] [--type rgba8|rgba32f]
 //                   [--threshold T] [--normalize none|max|range] [--background R,G,B] [--seed S]
 //                   [--max-memory MIB] [--downscale N] [--images DIR] [--alpha-mask]
+//                   [--checkpoint-every N] [--resume]
 // pliant nerf eval DATASET VOLUME [--background R,G,B] [--images DIR] [--max-memory MIB]
 //                  [--downscale N] [--photos DIR] [--alpha-mask] [--json]
 //
@@ -17,7 +18,8 @@
 // 0–255 alpha scale, then --normalize; default none, which keeps what the training views show).
 // A progress bar (iteration, grid resolution, batch loss and PSNR) goes to stderr when it is a
 // terminal. Ctrl-C (SIGINT) stops after the iteration in progress: the volume so far is exported
-// and written, stderr says where, exit code 130.
+// and written, stderr says where, exit code 130. VOLUME.checkpoint.bin (every --checkpoint-every
+// iterations and on Ctrl-C) lets --resume continue a stopped or killed run.
 // stdout: a summary, or with --json: output, iterations, seconds, train_psnr (last batch),
 // resolution, grid_dims, occupied_cells, volume_dims, volume_spacing, peak_rss_bytes,
 // interrupted.
@@ -73,6 +75,8 @@ struct TrainCommandOptions {
     int downscale = 1;
     std::string photos;
     bool alpha_mask = false;
+    std::int64_t checkpoint_every = 500;
+    bool resume = false;
 };
 
 // --max-memory in bytes (0: the memory available; unknown: no limit).
@@ -121,6 +125,11 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
         run.clean = co;
     }
     run.on_progress = train_progress(stderr_is_terminal());
+    if (options.checkpoint_every > 0 || options.resume) {
+        run.checkpoint = options.out + ".checkpoint.bin";
+        run.checkpoint_every = options.checkpoint_every;
+        run.resume = options.resume;
+    }
 
     pipeline::TrainRunResult result;
     {
@@ -261,6 +270,14 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->delimiter(',')
         ->check(finite_in_range(0.0, 1.0));
     train->add_option("--seed", t->seed, "Seed of the ray batches");
+    train
+        ->add_option("--checkpoint-every", t->checkpoint_every,
+                     "Save OUT.checkpoint.bin every N iterations and on Ctrl-C (0: never; "
+                     "default 500); removed once training completes")
+        ->check(CLI::Range(std::int64_t{0}, std::int64_t{1} << 40));
+    train->add_flag("--resume", t->resume,
+                    "Continue from OUT.checkpoint.bin (with --iterations: the same volume as an "
+                    "uninterrupted run); without one, start from iteration 0");
     train->add_option("--tv-density", t->tv_density, "Total-variation weight on density")
         ->check(finite_in_range(0.0, 1e9));
     train->add_option("--tv-color", t->tv_color, "Total-variation weight on colour")

@@ -462,4 +462,37 @@ void LBVH::validate(std::span<const AABB> boxes) const {
     PLIANT_CHECK_EQ(order.size(), static_cast<std::size_t>(m_num_wide));
 }
 
+void LBVH::save_state(ByteWriter& out) const {
+    // The tree and its refit plan; the build's scratch (binary nodes, keys, counters) is rebuilt
+    // by the next build.
+    out.put_vector(std::span(m_wide).first(static_cast<std::size_t>(m_num_wide)));
+    out.put_vector(m_level_offsets);
+    out.put(m_cut_depth);
+    out.put_vector(m_subtree_offsets);
+    out.put_vector(m_subtree_ranges);
+    out.put_vector(m_primitives);
+}
+
+void LBVH::load_state(ByteReader& in) {
+    in.get_vector("bvh.wide", m_wide);
+    m_num_wide = static_cast<std::int32_t>(m_wide.size());
+    in.get_vector("bvh.level_offsets", m_level_offsets);
+    m_cut_depth = in.get<int>("bvh.cut_depth");
+    in.get_vector("bvh.subtree_offsets", m_subtree_offsets);
+    in.get_vector("bvh.subtree_ranges", m_subtree_ranges);
+    in.get_vector("bvh.primitives", m_primitives);
+    for (const std::int32_t offset : m_subtree_offsets) {
+        if (offset < 0 || static_cast<std::size_t>(offset) > m_subtree_ranges.size()) {
+            throw InvalidInput(fmt::format("{}: bvh.subtree_offsets: {} of {} ranges", in.source(),
+                                           offset, m_subtree_ranges.size()));
+        }
+    }
+    for (const std::array<std::int32_t, 2>& range : m_subtree_ranges) {
+        if (range[0] < 0 || range[0] > range[1] || range[1] > m_num_wide) {
+            throw InvalidInput(fmt::format("{}: bvh.subtree_ranges: [{}, {}) of {} nodes",
+                                           in.source(), range[0], range[1], m_num_wide));
+        }
+    }
+}
+
 }  // namespace pliant::bvh

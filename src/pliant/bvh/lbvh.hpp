@@ -32,6 +32,7 @@
 #include "pliant/bvh/node.hpp"
 #include "pliant/bvh/wide_node.hpp"
 #include "pliant/core/aabb.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/radix_sort.hpp"
 
 namespace pliant::bvh {
@@ -65,6 +66,11 @@ public:
     // breadth-first order, leaf slots holding boxes[primitive], every other slot the bounds of its
     // child — and throws InternalError naming the first violation. O(n); for tests.
     void validate(std::span<const AABB> boxes) const;
+
+    // The tree and its refit plan (core/bytes.hpp), so that a run resumed from a checkpoint
+    // refits the same tree bit for bit. load_state throws InvalidInput for a truncated state.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     void compute_leaf_order(std::span<const AABB> boxes);

@@ -355,4 +355,26 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
     }
 }
 
+void CCDFailSafe::save_state(ByteWriter& out) const {
+    out.put_vector(m_deviations);
+    out.put_vector(m_window_motion);
+    out.put_vector(m_escaped);
+    out.put_vector(m_escaped_now);
+    out.put_vector(m_escape_pairs.vertex_face);
+    out.put_vector(m_escape_pairs.edge_edge);
+    out.put_vector(m_reverted);
+    out.put_vector(m_changed);
+}
+
+void CCDFailSafe::load_state(ByteReader& in) {
+    in.get_vector("fail_safe.deviations", m_deviations);
+    in.get_vector("fail_safe.window_motion", m_window_motion);
+    in.get_vector("fail_safe.escaped", m_escaped);
+    in.get_vector("fail_safe.escaped_now", m_escaped_now);
+    in.get_vector("fail_safe.escape_pairs.vertex_face", m_escape_pairs.vertex_face);
+    in.get_vector("fail_safe.escape_pairs.edge_edge", m_escape_pairs.edge_edge);
+    in.get_vector("fail_safe.reverted", m_reverted);
+    in.get_vector("fail_safe.changed", m_changed);
+}
+
 }  // namespace pliant::cloth

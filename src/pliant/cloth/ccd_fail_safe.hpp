@@ -55,6 +55,7 @@
 #include "pliant/cloth/self_collision_stats.hpp"
 #include "pliant/collision/narrow_phase.hpp"
 #include "pliant/collision/self_broad_phase.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
 
 namespace pliant::cloth {
@@ -80,6 +81,12 @@ public:
     void enforce(SelfCollisionCandidates& candidates, std::span<const Vec3d> positions_t0,
                  std::span<Vec3d> positions, std::span<Vec3d> velocities, double time_t0,
                  double time, SelfCollisionStats& stats);
+
+    // The state later steps read (core/bytes.hpp), so that a run resumed from a checkpoint
+    // continues bit for bit; load_state: InvalidInput for a state of another mesh or a
+    // truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     using FeatureVertices = detail::FeatureVertices;

@@ -374,4 +374,78 @@ void ClothModel::apply_air(double h, double t) {
         VERTEX_GRAIN);
 }
 
+void ClothModel::save_state(ByteWriter& out) const {
+    out.put_vector(m_positions);
+    out.put_vector(m_velocities);
+    out.put_vector(m_inverse_masses);
+    out.put(m_time);
+    out.put(m_step_start);
+    out.put(m_step_dt);
+    out.put(m_num_position_resets);
+    out.put_vector(m_triangle_forces);
+    out.put(m_grab.has_value());
+    if (m_grab) {
+        out.put(*m_grab);
+    }
+    out.put(static_cast<std::uint64_t>(m_obstacles.size()));
+    for (const MovingObstacle& o : m_obstacles) {
+        out.put(o.state.pose);
+        out.put(o.state.previous_pose);
+        out.put(o.current);
+        out.put(o.previous);
+    }
+    out.put(static_cast<std::uint64_t>(m_mesh_obstacles.size()));
+    for (const MovingMeshObstacle& o : m_mesh_obstacles) {
+        out.put(o.state.pose);
+        out.put(o.state.previous_pose);
+    }
+}
+
+void ClothModel::load_state(ByteReader& in) {
+    const auto n = static_cast<std::int64_t>(m_positions.size());
+    in.get_vector("model.positions", m_positions, n);
+    in.get_vector("model.velocities", m_velocities, n);
+    in.get_vector("model.inverse_masses", m_inverse_masses, n);
+    m_time = in.get<double>("model.time");
+    m_step_start = in.get<double>("model.step_start");
+    m_step_dt = in.get<double>("model.step_dt");
+    m_num_position_resets = in.get<std::int64_t>("model.num_position_resets");
+    in.get_vector("model.triangle_forces", m_triangle_forces,
+                  static_cast<std::int64_t>(m_triangle_forces.size()));
+    m_grab.reset();
+    if (in.get_bool("model.has_grab")) {
+        m_grab = in.get<Grab>("model.grab");
+        if (m_grab->vertex < 0 || m_grab->vertex >= n) {
+            throw InvalidInput(
+                fmt::format("{}: model.grab: vertex {} of {}", in.source(), m_grab->vertex, n));
+        }
+    }
+    const auto num_obstacles = in.get<std::uint64_t>("model.num_obstacles");
+    if (num_obstacles != m_obstacles.size()) {
+        throw InvalidInput(fmt::format("{}: model: {} obstacles in the state, {} in the scene",
+                                       in.source(), num_obstacles, m_obstacles.size()));
+    }
+    for (MovingObstacle& o : m_obstacles) {
+        o.state.pose = in.get<Pose>("model.obstacle.pose");
+        o.state.previous_pose = in.get<Pose>("model.obstacle.previous_pose");
+        const auto current = in.get<Obstacle>("model.obstacle.current");
+        const auto previous = in.get<Obstacle>("model.obstacle.previous");
+        if (current.index() != o.rest.index() || previous.index() != o.rest.index()) {
+            throw InvalidInput(
+                fmt::format("{}: model: an obstacle of another shape in the state", in.source()));
+        }
+        o.current = current;
+        o.previous = previous;
+    }
+    const auto num_mesh_obstacles = in.get<std::uint64_t>("model.num_mesh_obstacles");
+    if (num_mesh_obstacles != m_mesh_obstacles.size()) {
+        throw InvalidInput(fmt::format("{}: model: {} mesh obstacles in the state, {} in the scene",
+                                       in.source(), num_mesh_obstacles, m_mesh_obstacles.size()));
+    }
+    for (MovingMeshObstacle& o : m_mesh_obstacles) {
+        o.state.pose = in.get<Pose>("model.mesh_obstacle.pose");
+        o.state.previous_pose = in.get<Pose>("model.mesh_obstacle.previous_pose");
+    }
+}
+
 }  // namespace pliant::cloth

@@ -34,6 +34,7 @@
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/untangle.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/topology.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
@@ -154,6 +155,14 @@ public:
     // moved only by move_pins.
     std::span<Vec3d> mutable_positions() { return m_positions; }
     std::span<Vec3d> mutable_velocities() { return m_velocities; }
+
+    // The state that changes as the model runs (core/bytes.hpp): positions, velocities, inverse
+    // masses, time, the step in progress, the grab, the air's forces and where the obstacles
+    // are; not what the constructor and the add_/set_ calls set up (mesh, material, pins,
+    // motions, gravity, air), which a model built the same way has. load_state: InvalidInput for
+    // a state of another mesh or other obstacles, or a truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     struct MovingPins {

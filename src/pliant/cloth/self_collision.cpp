@@ -217,4 +217,20 @@ std::int64_t SelfCollision::project(std::span<Vec3d> positions,
     return contacts;
 }
 
+void SelfCollision::save_state(ByteWriter& out) const {
+    m_candidates.save_state(out);
+    m_fail_safe.save_state(out);
+    out.put(m_project_calls);
+    out.put_vector(m_measured_positions);
+    out.put_vector(m_deviations);
+}
+
+void SelfCollision::load_state(ByteReader& in) {
+    m_candidates.load_state(in);
+    m_fail_safe.load_state(in);
+    m_project_calls = in.get<std::int64_t>("self_collision.project_calls");
+    in.get_vector("self_collision.measured_positions", m_measured_positions);
+    in.get_vector("self_collision.deviations", m_deviations);
+}
+
 }  // namespace pliant::cloth

@@ -37,6 +37,7 @@
 #include "pliant/cloth/material.hpp"
 #include "pliant/cloth/self_collision_candidates.hpp"
 #include "pliant/cloth/self_collision_stats.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 
@@ -80,6 +81,12 @@ public:
     const SelfCollisionStats& stats() const { return m_stats; }
     void reset_stats() { m_stats = {}; }
     const SelfCollisionCandidates& candidates() const { return m_candidates; }
+
+    // The state later steps read (core/bytes.hpp), so that a run resumed from a checkpoint
+    // continues bit for bit; load_state: InvalidInput for a state of another mesh or a
+    // truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     using Candidate = SelfCollisionCandidates::Candidate;

@@ -496,4 +496,64 @@ const collision::FeaturePairs& SelfCollisionCandidates::search_motions(
     return *found;
 }
 
+void SelfCollisionCandidates::save_state(ByteWriter& out) const {
+    m_broad_phase.save_state(out);
+    out.put(m_has_gather);
+    out.put(m_dense_contact);
+    out.put(m_broad_phase_ready);
+    out.put(m_inflation);
+    out.put(m_window_dt);
+    out.put_vector(m_frame_samples);
+    out.put_vector(m_frame_origin);
+    out.put_vector(m_anchors);
+    out.put_vector(m_path_velocities);
+    out.put_vector(m_anchor_times);
+    out.put_vector(m_path_ends);
+    out.put_vector(m_slacks);
+    out.put_vector(m_box_lo);
+    out.put_vector(m_box_hi);
+    out.put_vector(m_needs_path);
+    out.put(m_filter_margin);
+    out.put_vector(m_candidates);
+    out.put_vector(m_new_path_vertices);
+}
+
+void SelfCollisionCandidates::load_state(ByteReader& in) {
+    m_broad_phase.load_state(in);
+    m_has_gather = in.get_bool("candidates.has_gather");
+    m_dense_contact = in.get_bool("candidates.dense_contact");
+    m_broad_phase_ready = in.get_bool("candidates.broad_phase_ready");
+    m_inflation = in.get<double>("candidates.inflation");
+    m_window_dt = in.get<double>("candidates.window_dt");
+    const auto n = static_cast<std::int64_t>(m_num_vertices);
+    in.get_vector("candidates.frame_samples", m_frame_samples);
+    for (const std::int32_t v : m_frame_samples) {
+        if (v < 0 || v >= n) {
+            throw InvalidInput(fmt::format("{}: candidates: frame sample {} of {} vertices",
+                                           in.source(), v, m_num_vertices));
+        }
+    }
+    in.get_vector("candidates.frame_origin", m_frame_origin,
+                  static_cast<std::int64_t>(m_frame_samples.size()));
+    in.get_vector("candidates.anchors", m_anchors, n);
+    in.get_vector("candidates.path_velocities", m_path_velocities, n);
+    in.get_vector("candidates.anchor_times", m_anchor_times, n);
+    in.get_vector("candidates.path_ends", m_path_ends, n);
+    in.get_vector("candidates.slacks", m_slacks, n);
+    in.get_vector("candidates.box_lo", m_box_lo, n);
+    in.get_vector("candidates.box_hi", m_box_hi, n);
+    in.get_vector("candidates.needs_path", m_needs_path, n);
+    m_filter_margin = in.get<double>("candidates.filter_margin");
+    in.get_vector("candidates.candidates", m_candidates);
+    for (const Candidate& c : m_candidates) {
+        for (const std::int32_t v : c.vertices) {
+            if (v < 0 || v >= n) {
+                throw InvalidInput(
+                    fmt::format("{}: candidates: vertex {} of {}", in.source(), v, m_num_vertices));
+            }
+        }
+    }
+    in.get_vector("candidates.new_path_vertices", m_new_path_vertices);
+}
+
 }  // namespace pliant::cloth

@@ -65,6 +65,7 @@
 #include "pliant/cloth/detail/self_collision_pairs.hpp"
 #include "pliant/cloth/self_collision_stats.hpp"
 #include "pliant/collision/self_broad_phase.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/chunked_buffer.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
@@ -215,6 +216,12 @@ public:
     double thickness() const { return m_thickness; }
     // The rounding margin of the last path search (1e-9 (1 + largest coordinate)), m.
     double filter_margin() const { return m_filter_margin; }
+
+    // The state later steps read (core/bytes.hpp), so that a run resumed from a checkpoint
+    // continues bit for bit; load_state: InvalidInput for a state of another mesh or a
+    // truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     // Throws InvalidInput when the last broad phase hit its pair limit or found more feature

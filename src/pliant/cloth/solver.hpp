@@ -133,6 +133,18 @@ public:
         return m_stepper.num_isometric_bending_constraints();
     }
 
+    // The state that changes as the solver runs (ClothModel::save_state, XPBDStepper::save_state):
+    // a solver built from the same mesh, material, obstacles and options that loads it continues
+    // bit for bit. load_state: InvalidInput for a state of another cloth or a truncated one.
+    void save_state(ByteWriter& out) const {
+        m_model.save_state(out);
+        m_stepper.save_state(out);
+    }
+    void load_state(ByteReader& in) {
+        m_model.load_state(in);
+        m_stepper.load_state(m_model, in);
+    }
+
     // The parts. The stepper was built for this model: step it with model() only.
     ClothModel& model() { return m_model; }
     const ClothModel& model() const { return m_model; }

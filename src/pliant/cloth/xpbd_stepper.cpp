@@ -459,4 +459,59 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
         [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
 }
 
+void XPBDStepper::save_state(ByteWriter& out) const {
+    out.put(static_cast<std::uint64_t>(m_num_vertices));
+    out.put(static_cast<std::uint64_t>(m_num_triangles));
+    out.put_vector(m_stretch_lambda);
+    out.put_vector(m_previous_positions);
+    out.put_vector(m_contact_depths);
+    out.put_vector(m_contact_settled);
+    out.put_vector(m_contact_normals);
+    out.put_vector(m_contact_velocities);
+    out.put(m_num_position_resets);
+    out.put_vector(m_window_start);
+    out.put(m_window_start_time);
+    out.put(m_gather_start_time);
+    out.put(m_gather_end_time);
+    out.put(m_self_collision != nullptr);
+    if (m_self_collision) {
+        m_self_collision->save_state(out);
+    }
+}
+
+void XPBDStepper::load_state(const ClothModel& model, ByteReader& in) {
+    const auto num_vertices = in.get<std::uint64_t>("stepper.num_vertices");
+    const auto num_triangles = in.get<std::uint64_t>("stepper.num_triangles");
+    if (num_vertices != m_num_vertices || num_triangles != m_num_triangles) {
+        throw InvalidInput(fmt::format(
+            "{}: cloth stepper: a state of {} vertices and {} triangles, the cloth has {} and {}",
+            in.source(), num_vertices, num_triangles, m_num_vertices, m_num_triangles));
+    }
+    const auto n = static_cast<std::int64_t>(m_num_vertices);
+    in.get_vector("stepper.stretch_lambda", m_stretch_lambda,
+                  static_cast<std::int64_t>(m_stretch_lambda.size()));
+    in.get_vector("stepper.previous_positions", m_previous_positions, n);
+    in.get_vector("stepper.contact_depths", m_contact_depths, n);
+    in.get_vector("stepper.contact_settled", m_contact_settled, n);
+    in.get_vector("stepper.contact_normals", m_contact_normals, n);
+    in.get_vector("stepper.contact_velocities", m_contact_velocities, n);
+    m_num_position_resets = in.get<std::int64_t>("stepper.num_position_resets");
+    in.get_vector("stepper.window_start", m_window_start);
+    m_window_start_time = in.get<double>("stepper.window_start_time");
+    m_gather_start_time = in.get<double>("stepper.gather_start_time");
+    m_gather_end_time = in.get<double>("stepper.gather_end_time");
+    const bool has_self_collision = in.get_bool("stepper.has_self_collision");
+    if (has_self_collision != (m_self_collision != nullptr)) {
+        throw InvalidInput(fmt::format("{}: cloth stepper: self-collision {} in the state, {} here",
+                                       in.source(), has_self_collision ? "on" : "off",
+                                       m_self_collision ? "on" : "off"));
+    }
+    if (m_self_collision) {
+        // A fresh one, so that nothing of this stepper's own start survives.
+        m_self_collision = std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(),
+                                                           model.material().thickness);
+        m_self_collision->load_state(in);
+    }
+}
+
 }  // namespace pliant::cloth

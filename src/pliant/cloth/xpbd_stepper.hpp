@@ -68,6 +68,7 @@
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/strain_hierarchy.hpp"
 #include "pliant/cloth/stretch_chains.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
 
 namespace pliant::cloth {
@@ -110,6 +111,14 @@ public:
     // Bending constraints: dihedral plus isometric (material.bending).
     std::size_t num_bending_constraints() const { return m_dihedral.size() + m_isometric.size(); }
     std::size_t num_isometric_bending_constraints() const { return m_isometric.size(); }
+
+    // The state later steps read, between steps (core/bytes.hpp): the per-substep buffers,
+    // self-collision's whole state (candidates, paths, broad phase, fail-safe) and its window
+    // and gather times; not the constraints the constructor derives from the model. A stepper
+    // built for the same model that loads it continues bit for bit. load_state: InvalidInput for
+    // a state of another mesh or a truncated one (the stepper is then unusable).
+    void save_state(ByteWriter& out) const;
+    void load_state(const ClothModel& model, ByteReader& in);
 
 private:
     // One substep of length h ending at time t_end; returns the vertices in contact with an

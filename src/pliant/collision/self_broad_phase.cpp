@@ -597,6 +597,49 @@ std::size_t SelfCollisionBroadPhase<Real>::memory_bytes() const {
            bytes(m_partial_pairs.vertex_face) + bytes(m_partial_pairs.edge_edge);
 }
 
+template <typename Real>
+void SelfCollisionBroadPhase<Real>::save_state(ByteWriter& out) const {
+    // Not the pairs of the last update (the caller has taken them) nor the partial update's
+    // scratch; the orphan index is rebuilt on first use.
+    out.put(static_cast<std::uint64_t>(m_num_vertices));
+    out.put(static_cast<std::uint64_t>(m_triangles.size()));
+    out.put_vector(m_exact_vertex_boxes);
+    out.put_vector(m_vertex_boxes);
+    out.put_vector(m_edge_boxes);
+    out.put_vector(m_triangle_boxes);
+    m_bvh.save_state(out);
+    out.put(m_needs_build);
+    out.put(m_has_boxes);
+    out.put(m_confirm_exact);
+    out.put(m_pair_limit);
+    out.put(m_pair_limit_exceeded);
+    out.put_vector(m_vertex_marks);
+    out.put_vector(m_triangle_marks);
+}
+
+template <typename Real>
+void SelfCollisionBroadPhase<Real>::load_state(ByteReader& in) {
+    const auto num_vertices = in.get<std::uint64_t>("broad_phase.num_vertices");
+    const auto num_triangles = in.get<std::uint64_t>("broad_phase.num_triangles");
+    if (num_vertices != m_num_vertices || num_triangles != m_triangles.size()) {
+        throw InvalidInput(fmt::format(
+            "{}: broad phase: a state of {} vertices and {} triangles, the mesh has {} and {}",
+            in.source(), num_vertices, num_triangles, m_num_vertices, m_triangles.size()));
+    }
+    in.get_vector("broad_phase.exact_vertex_boxes", m_exact_vertex_boxes);
+    in.get_vector("broad_phase.vertex_boxes", m_vertex_boxes);
+    in.get_vector("broad_phase.edge_boxes", m_edge_boxes);
+    in.get_vector("broad_phase.triangle_boxes", m_triangle_boxes);
+    m_bvh.load_state(in);
+    m_needs_build = in.get_bool("broad_phase.needs_build");
+    m_has_boxes = in.get_bool("broad_phase.has_boxes");
+    m_confirm_exact = in.get_bool("broad_phase.confirm_exact");
+    m_pair_limit = in.get<std::int64_t>("broad_phase.pair_limit");
+    m_pair_limit_exceeded = in.get_bool("broad_phase.pair_limit_exceeded");
+    in.get_vector("broad_phase.vertex_marks", m_vertex_marks);
+    in.get_vector("broad_phase.triangle_marks", m_triangle_marks);
+}
+
 template class SelfCollisionBroadPhase<float>;
 template class SelfCollisionBroadPhase<double>;
 

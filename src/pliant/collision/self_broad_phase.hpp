@@ -32,6 +32,7 @@
 #include "pliant/collision/feature_pairs.hpp"
 #include "pliant/collision/representative_triangles.hpp"
 #include "pliant/core/aabb.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/chunked_buffer.hpp"
 #include "pliant/core/function_ref.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -110,6 +111,13 @@ public:
     const bvh::LBVH& bvh() const { return m_bvh; }
     // Bytes held by the broad phase and its BVH (topology included).
     std::size_t memory_bytes() const;
+
+    // Everything a later update reads (boxes, the BVH, the last pairs, partial-update state;
+    // not the topology, owners and orphans the constructor derives), so that a run resumed from
+    // a checkpoint continues bit for bit (core/bytes.hpp). load_state: InvalidInput for a state
+    // of another mesh or a truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     void compute_boxes(std::span<const Vec> positions_t0, std::span<const Vec> positions_t1,

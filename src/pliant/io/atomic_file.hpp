@@ -26,4 +26,10 @@ namespace pliant::io {
 void write_file_atomically(const std::filesystem::path& path,
                            FunctionRef<void(std::ostream&)> write);
 
+// Removes the temporary files write_file_atomically leaves in `dir` (not recursively) when its
+// process is killed while writing (`<name>.tmp-<pid>-<counter>`); returns how many. For a run
+// that resumes into its own output directory: no other process may be writing there. A missing
+// directory holds none.
+int remove_stray_temporaries(const std::filesystem::path& dir);
+
 }  // namespace pliant::io

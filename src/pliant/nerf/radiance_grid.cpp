@@ -136,4 +136,30 @@ float density_raw_for_sigma(float sigma) {
     return x > 20.0 ? static_cast<float>(x) : static_cast<float>(std::log(std::expm1(x)));
 }
 
+void RadianceGrid::save_state(ByteWriter& out) const {
+    out.put(m_box.lo);
+    out.put(m_box.hi);
+    out.put(m_resolution);
+    out.put_vector(m_params);
+    out.put_vector(m_occupied);
+}
+
+void RadianceGrid::load_state(ByteReader& in, const AABBd& box, int resolution) {
+    const auto lo = in.get<Vec3d>("grid.box.lo");
+    const auto hi = in.get<Vec3d>("grid.box.hi");
+    const int stored_resolution = in.get<int>("grid.resolution");
+    if (lo != box.lo || hi != box.hi || stored_resolution != resolution) {
+        throw InvalidInput(fmt::format(
+            "{}: grid: resolution {} over ({}, {}, {})-({}, {}, {}), expected resolution {} over "
+            "the scene box",
+            in.source(), stored_resolution, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, resolution));
+    }
+    // The sizes a grid of this box and resolution has.
+    RadianceGrid grid(box, resolution, 0.0f, 0.0f);
+    in.get_vector("grid.params", grid.m_params, static_cast<std::int64_t>(grid.m_params.size()));
+    in.get_vector("grid.occupancy", grid.m_occupied,
+                  static_cast<std::int64_t>(grid.m_occupied.size()));
+    *this = std::move(grid);
+}
+
 }  // namespace pliant::nerf

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "pliant/core/aabb.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/nerf/detail/field_kernel.hpp"
 
 namespace pliant::nerf {
@@ -62,6 +63,12 @@ public:
     // The same field at another resolution: raw parameters interpolated trilinearly at the new
     // voxel centres (coarse to fine); occupancy recomputed with sigma_threshold.
     RadianceGrid resampled(int resolution, float sigma_threshold) const;
+
+    // The whole grid (box, resolution, parameters, occupancy), for checkpoints (core/bytes.hpp).
+    // load_state: InvalidInput for a truncated state or one of another box or resolution than
+    // those expected.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in, const AABBd& box, int resolution);
 
 private:
     AABBd m_box;

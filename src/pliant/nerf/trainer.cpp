@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -275,6 +276,40 @@ public:
             1024);
     }
 
+    // Everything a later iteration reads: the stage, iteration counts, last loss, the grid and
+    // Adam's moments. The gradient chunks and marks are clear between iterations.
+    void save_state(ByteWriter& out) const {
+        out.put(m_stage);
+        out.put(m_iteration);
+        out.put(m_stage_iteration);
+        out.put(m_last_loss);
+        m_grid.save_state(out);
+        out.put_vector(m_m);
+        out.put_vector(m_v);
+    }
+    void load_state(ByteReader& in) {
+        const int stage = in.get<int>("trainer.stage");
+        if (stage < 0 || stage >= m_options.stages) {
+            throw InvalidInput(fmt::format("{}: trainer.stage: {}, expected 0 to {}", in.source(),
+                                           stage, m_options.stages - 1));
+        }
+        const auto iteration = in.get<std::int64_t>("trainer.iteration");
+        const auto stage_iteration = in.get<std::int64_t>("trainer.stage_iteration");
+        if (iteration < 0 || stage_iteration < 0 || stage_iteration > iteration) {
+            throw InvalidInput(fmt::format("{}: trainer: iteration {} and {} in its stage",
+                                           in.source(), iteration, stage_iteration));
+        }
+        const double last_loss = in.get<double>("trainer.last_loss");
+        m_grid.load_state(in, m_box, stage_resolution(stage));
+        allocate();
+        in.get_vector("trainer.adam_m", m_m, static_cast<std::int64_t>(m_m.size()));
+        in.get_vector("trainer.adam_v", m_v, static_cast<std::int64_t>(m_v.size()));
+        m_stage = stage;
+        m_iteration = iteration;
+        m_stage_iteration = stage_iteration;
+        m_last_loss = last_loss;
+    }
+
     RadianceGrid& grid() { return m_grid; }
     std::int64_t iteration() const { return m_iteration; }
     double last_loss() const { return m_last_loss; }
@@ -355,7 +390,8 @@ std::size_t estimated_training_bytes(const AABBd& box, const TrainOptions& optio
 }
 
 TrainResult train(const Dataset& dataset, const TrainOptions& options,
-                  FunctionRef<bool(const TrainProgress&)> on_iteration) {
+                  FunctionRef<bool(const TrainProgress&)> on_iteration,
+                  const TrainCheckpoints& checkpoints) {
     options.validate();
     validate(dataset);
     const AABBd box = scene_box(dataset);
@@ -370,9 +406,22 @@ TrainResult train(const Dataset& dataset, const TrainOptions& options,
     }
     Trainer trainer(dataset, options);
     const Stopwatch watch;
+    double earlier_ms = 0.0;  // training time before the checkpoint resumed from
+    if (!checkpoints.resume_from.empty()) {
+        ByteReader in(checkpoints.resume_from, checkpoints.resume_source);
+        earlier_ms = in.get<double>("trainer.elapsed_ms");
+        trainer.load_state(in);
+        in.expect_end();
+    }
+    const auto save = [&] {
+        ByteWriter out;
+        out.put(earlier_ms + watch.elapsed_ms());
+        trainer.save_state(out);
+        checkpoints.save(out.bytes(), trainer.iteration());
+    };
     TrainResult result;
     for (;;) {
-        const double elapsed = watch.elapsed_ms();
+        const double elapsed = earlier_ms + watch.elapsed_ms();
         const double p = options.seconds > 0.0 ? elapsed / (1000.0 * options.seconds)
                                                : static_cast<double>(trainer.iteration()) /
                                                      static_cast<double>(options.iterations);
@@ -380,15 +429,22 @@ TrainResult train(const Dataset& dataset, const TrainOptions& options,
             break;
         }
         TrainProgress progress = trainer.step(p);
-        progress.elapsed_ms = watch.elapsed_ms();
+        progress.elapsed_ms = earlier_ms + watch.elapsed_ms();
         progress.occupied_cells = trainer.grid().num_occupied();
+        if (checkpoints.every > 0 && checkpoints.save &&
+            trainer.iteration() % checkpoints.every == 0) {
+            save();
+        }
         if (!on_iteration(progress)) {
             result.stopped = true;
+            if (checkpoints.save && checkpoints.every > 0) {
+                save();
+            }
             break;
         }
     }
     result.iterations = trainer.iteration();
-    result.elapsed_ms = watch.elapsed_ms();
+    result.elapsed_ms = earlier_ms + watch.elapsed_ms();
     result.final_loss = trainer.last_loss();
     result.grid = std::move(trainer.grid());
     return result;

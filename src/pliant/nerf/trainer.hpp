@@ -32,7 +32,11 @@
 // grid so far is returned). The kernels never print.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
 
 #include "pliant/core/function_ref.hpp"
 #include "pliant/nerf/dataset.hpp"
@@ -90,9 +94,24 @@ inline constexpr std::size_t TRAIN_BYTES_PER_VOXEL = 134;
 // voxel of RadianceGrid::dims_for(box, options.resolution)).
 std::size_t estimated_training_bytes(const AABBd& box, const TrainOptions& options);
 
+// Checkpoints of a training run: every `every` iterations (and when on_iteration stops it),
+// save(state, iteration) gets the trainer's whole state (the stage, iteration counts, grid,
+// Adam's moments and the training time so far; core/bytes.hpp layout). With resume_from
+// non-empty (such a state; resume_source names it in errors), training continues from it: the
+// rays of iteration i depend only on the seed and i, so with an iteration count (not `seconds`)
+// and the same thread count the final grid is bitwise identical to an uninterrupted run's.
+struct TrainCheckpoints {
+    std::int64_t every = 0;  // 0: no checkpoints
+    std::function<void(std::span<const std::byte> state, std::int64_t iteration)> save;
+    std::span<const std::byte> resume_from;
+    std::string resume_source;
+};
+
 // Trains a field on `dataset` (validated first; its scene box from nerf::scene_box). InvalidInput
-// when the final grid would need more than options.max_bytes.
+// when the final grid would need more than options.max_bytes, or for a resume_from state that
+// is truncated or of another grid.
 TrainResult train(const Dataset& dataset, const TrainOptions& options,
-                  FunctionRef<bool(const TrainProgress&)> on_iteration);
+                  FunctionRef<bool(const TrainProgress&)> on_iteration,
+                  const TrainCheckpoints& checkpoints = {});
 
 }  // namespace pliant::nerf

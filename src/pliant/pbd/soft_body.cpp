@@ -5,6 +5,8 @@
 // constraint_layout.hpp, inversion_guard.hpp (step 3b), projection.hpp (the kernels).
 #include "pliant/pbd/soft_body.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -492,6 +494,100 @@ SoftBodyStats SoftBody::stats() const {
     stats.ms_per_substep = s.last_substep_ms;
     stats.step_ms = s.last_step_ms;
     return stats;
+}
+
+void SoftBody::save_state(ByteWriter& out) const {
+    const State& s = *m_state;
+    out.put(static_cast<std::uint64_t>(s.positions.size()));
+    out.put(static_cast<std::uint64_t>(s.tets.size()));
+    out.put(m_time);
+    out.put_vector(s.x);
+    out.put_vector(s.previous);
+    out.put_vector(s.velocities);
+    out.put_vector(s.positions);
+    out.put_vector(s.inv_masses);
+    out.put_vector(s.pinned);
+    out.put_vector(s.edge_constraints.rest_lengths);
+    out.put_vector(s.tet_constraints.rest_volumes);
+    out.put_vector(s.inversion.tet_at_risk);
+    out.put_vector(s.inversion.colour_at_risk);
+    out.put(s.rest_modified);
+    out.put(s.kinematics_dirty);
+    out.put_vector(s.driven.vertices);
+    out.put_vector(s.driven.driver);
+    out.put(s.grab.drag.has_value());
+    if (s.grab.drag) {
+        out.put(s.grab.drag->vertex);
+        out.put(s.grab.drag->target);
+        out.put(s.grab.drag->radius);
+    }
+    out.put_vector(s.grab.vertices);
+    out.put_vector(s.grab.offsets);
+    out.put(s.grab.from);
+}
+
+void SoftBody::load_state(ByteReader& in) {
+    State& s = *m_state;
+    const auto num_vertices = in.get<std::uint64_t>("soft_body.num_vertices");
+    const auto num_tets = in.get<std::uint64_t>("soft_body.num_tets");
+    if (num_vertices != s.positions.size() || num_tets != s.tets.size()) {
+        throw InvalidInput(
+            fmt::format("{}: soft body: a state of {} vertices and {} tets, the body has {} and {}",
+                        in.source(), num_vertices, num_tets, s.positions.size(), s.tets.size()));
+    }
+    const auto n = static_cast<std::int64_t>(num_vertices);
+    const double time = in.get<double>("soft_body.time");
+    in.get_vector("soft_body.x", s.x, n);
+    in.get_vector("soft_body.previous", s.previous, n);
+    in.get_vector("soft_body.velocities", s.velocities, n);
+    in.get_vector("soft_body.positions", s.positions, n);
+    in.get_vector("soft_body.inv_masses", s.inv_masses, n);
+    in.get_vector("soft_body.pinned", s.pinned, n);
+    in.get_vector("soft_body.rest_lengths", s.edge_constraints.rest_lengths,
+                  static_cast<std::int64_t>(s.edge_constraints.rest_lengths0.size()));
+    in.get_vector("soft_body.rest_volumes", s.tet_constraints.rest_volumes,
+                  static_cast<std::int64_t>(s.tet_constraints.rest_volumes0.size()));
+    in.get_vector("soft_body.tet_at_risk", s.inversion.tet_at_risk,
+                  static_cast<std::int64_t>(s.inversion.tet_at_risk.size()));
+    in.get_vector("soft_body.colour_at_risk", s.inversion.colour_at_risk,
+                  static_cast<std::int64_t>(s.inversion.colour_at_risk.size()));
+    s.rest_modified = in.get_bool("soft_body.rest_modified");
+    s.kinematics_dirty = in.get_bool("soft_body.kinematics_dirty");
+    in.get_vector("soft_body.driven.vertices", s.driven.vertices);
+    in.get_vector("soft_body.driven.driver", s.driven.driver,
+                  static_cast<std::int64_t>(s.driven.vertices.size()));
+    const auto num_drivers = static_cast<std::int32_t>(s.drivers.size());
+    for (std::size_t i = 0; i < s.driven.vertices.size(); ++i) {
+        const std::int32_t v = s.driven.vertices[i];
+        const std::int32_t d = s.driven.driver[i];
+        if (v < 0 || v >= n || (d != detail::DRAG && (d < 0 || d >= num_drivers))) {
+            throw InvalidInput(
+                fmt::format("{}: soft body: driven vertex {} by driver {}", in.source(), v, d));
+        }
+    }
+    s.grab.drag.reset();
+    if (in.get_bool("soft_body.has_drag")) {
+        DragDriver drag;
+        drag.vertex = in.get<std::int32_t>("soft_body.drag.vertex");
+        drag.target = in.get<Vec3f>("soft_body.drag.target");
+        drag.radius = in.get<float>("soft_body.drag.radius");
+        if (drag.vertex < 0 || drag.vertex >= n) {
+            throw InvalidInput(
+                fmt::format("{}: soft body: drag vertex {} of {}", in.source(), drag.vertex, n));
+        }
+        s.grab.drag = drag;
+    }
+    in.get_vector("soft_body.grab.vertices", s.grab.vertices);
+    in.get_vector("soft_body.grab.offsets", s.grab.offsets,
+                  static_cast<std::int64_t>(s.grab.vertices.size()));
+    for (const std::int32_t v : s.grab.vertices) {
+        if (v < 0 || v >= n) {
+            throw InvalidInput(
+                fmt::format("{}: soft body: grabbed vertex {} of {}", in.source(), v, n));
+        }
+    }
+    s.grab.from = in.get<Vec3f>("soft_body.grab.from");
+    m_time = time;
 }
 
 }  // namespace pliant::pbd

@@ -79,6 +79,7 @@
 #include <span>
 #include <vector>
 
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/tet_mesh.hpp"
 #include "pliant/pbd/constraint_coloring.hpp"
@@ -169,6 +170,15 @@ public:
     // Volume ratio and inverted tets of the current positions (O(#T), parallel, deterministic),
     // with the last step's timings.
     SoftBodyStats stats() const;
+
+    // The state that changes as the body runs (core/bytes.hpp): time, positions, velocities,
+    // inverse masses and pins, the current rest lengths and volumes, the inversion guard's flags,
+    // the driven vertices and the drag; not the mesh, constraints and drivers the constructor
+    // and add_driver set up. A body built and driven the same way that loads it continues bit
+    // for bit (checkpoints, pipeline/deform_run.hpp). load_state: InvalidInput for a state of
+    // another mesh or a truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
 private:
     struct State;

@@ -14,17 +14,20 @@
 #include <span>
 #include <string>
 #include <system_error>
+#include <variant>
 #include <vector>
 
 #include "pliant/cloth/ccd_fail_safe.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/core/aabb.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/io/atomic_file.hpp"
+#include "pliant/io/checkpoint.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/output_directory.hpp"
 #include "pliant/io/video.hpp"
@@ -113,6 +116,131 @@ void require_output_files_writable(const std::filesystem::path& out, int frames,
     std::rethrow_exception(failure);  // another type: unchanged (not reached: caught above)
 }
 
+// What a cloth run's result depends on, hashed (io::run_fingerprint): the cloth as set up (rest
+// shape, start, masses), the material, the obstacles and their motions, gravity, air, fps,
+// substeps, self-collision and the frame format. Not the frame count (a resumed run may go
+// further), the preview or the thread count (results do not depend on it).
+std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimulation& sim) {
+    ByteWriter w;
+    const cloth::ClothSolver& solver = sim.solver();
+    const auto put_motion = [&](const cloth::Motion& motion) {
+        w.put(motion.pivot);
+        w.put(static_cast<std::uint64_t>(motion.keyframes.size()));
+        for (const cloth::Keyframe& k : motion.keyframes) {
+            w.put(k.time);
+            w.put(k.translate);
+            w.put(k.rotate_degrees);
+        }
+    };
+    w.put_string("pliant cloth");
+    w.put_vector(sim.setup().mesh.positions);
+    w.put_vector(solver.triangles());
+    w.put_vector(solver.positions());
+    w.put_vector(solver.velocities());
+    w.put_vector(solver.inverse_masses());
+    const cloth::ClothMaterial& m = solver.material();
+    for (const double value :
+         {m.areal_density, m.stretch_compliance, m.bend_compliance, m.strain_limit, m.damping,
+          m.thickness, m.static_friction, m.kinetic_friction, m.self_static_friction,
+          m.self_kinetic_friction}) {
+        w.put(value);
+    }
+    w.put(static_cast<std::int32_t>(m.bending));
+    w.put(static_cast<std::int32_t>(m.stretch_solver));
+    for (const cloth::PinGroup& group : scene.pins) {
+        w.put_vector(group.vertices);
+        put_motion(group.motion);
+    }
+    for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
+        w.put(static_cast<std::uint8_t>(obstacle.shape.index()));
+        std::visit([&](const auto& shape) { w.put_vector(std::span(&shape, 1)); }, obstacle.shape);
+        w.put_string(obstacle.mesh.string());
+        w.put(obstacle.mesh_placement.rotate_degrees);
+        w.put(obstacle.mesh_placement.translate);
+        put_motion(obstacle.motion);
+    }
+    for (const cloth::MovingMeshObstacle& obstacle : solver.model().mesh_obstacles()) {
+        w.put_vector(obstacle.mesh->face_normals());
+    }
+    w.put(scene.gravity);
+    w.put(scene.air.density);
+    w.put(scene.air.drag_coefficient);
+    w.put(scene.air.wind);
+    w.put(scene.air.gust_amplitude);
+    w.put(scene.air.gust_period);
+    w.put(scene.air.gust_wavelength);
+    w.put(scene.frames_per_second);
+    w.put(scene.substeps);
+    w.put(scene.self_collision);
+    w.put_string(scene.frame_format);
+    const std::span<const std::byte> bytes = w.bytes();
+    return io::run_fingerprint(
+        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+struct Running {
+    double sum = 0.0;
+    int count = 0;
+    void add(double x) {
+        sum += x;
+        ++count;
+    }
+    double mean() const { return count > 0 ? sum / count : 0.0; }
+};
+
+// The run's own part of a checkpoint, before the simulation's state.
+struct ClothRunTotals {
+    std::int32_t frame = 0;  // the last frame written
+    nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
+    double total_ms = 0.0;
+    std::int64_t worst_intersections = 0;
+    double worst_strain = 0.0;
+    double worst_strain_p99 = 0.0;
+};
+
+void write_cloth_checkpoint(const std::filesystem::path& path, std::uint64_t fingerprint,
+                            const ClothRunTotals& totals, const ClothSimulation& sim) {
+    ByteWriter w;
+    w.put(totals.frame);
+    w.put_string(totals.per_frame.dump());
+    w.put(totals.total_ms);
+    w.put(totals.worst_intersections);
+    w.put(totals.worst_strain);
+    w.put(totals.worst_strain_p99);
+    sim.save_state(w);
+    io::Checkpoint checkpoint;
+    checkpoint.kind = io::CheckpointKind::cloth;
+    checkpoint.fingerprint = fingerprint;
+    checkpoint.payload.assign(w.bytes().begin(), w.bytes().end());
+    io::write_checkpoint(path, checkpoint);
+}
+
+// Loads `checkpoint` into sim; returns the run's totals.
+ClothRunTotals load_cloth_checkpoint(const std::filesystem::path& path,
+                                     const io::Checkpoint& checkpoint, ClothSimulation& sim) {
+    ByteReader r(checkpoint.payload, path.string());
+    ClothRunTotals totals;
+    totals.frame = r.get<std::int32_t>("frame");
+    const std::string per_frame = r.get_string("per-frame stats");
+    totals.per_frame = nlohmann::ordered_json::parse(per_frame, nullptr, false);
+    if (totals.per_frame.is_discarded() || !totals.per_frame.is_array() ||
+        totals.per_frame.size() != static_cast<std::size_t>(std::max(totals.frame, 0))) {
+        throw InvalidInput(fmt::format("{}: per-frame stats: expected a JSON array of {} records",
+                                       path.string(), totals.frame));
+    }
+    totals.total_ms = r.get<double>("total ms");
+    totals.worst_intersections = r.get<std::int64_t>("max intersecting pairs");
+    totals.worst_strain = r.get<double>("max strain");
+    totals.worst_strain_p99 = r.get<double>("max strain p99");
+    sim.load_state(r);
+    r.expect_end();
+    if (sim.frame() != totals.frame) {
+        throw InvalidInput(fmt::format("{}: frame {} but the simulation's state is at frame {}",
+                                       path.string(), totals.frame, sim.frame()));
+    }
+    return totals;
+}
+
 }  // namespace
 
 nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
@@ -129,12 +257,55 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const StartState& start = sim.start();
     const std::int64_t initial_intersections = start.initial_intersections;
     const std::optional<cloth::UntangleResult>& untangled = start.untangled;
+    const std::filesystem::path checkpoint_path = out / "checkpoint.bin";
+    const std::uint64_t fingerprint = cloth_fingerprint(scene, sim);
+    // The preview's camera frames the start, also for a resumed run.
+    const std::vector<Vec3d> start_positions(solver.positions().begin(), solver.positions().end());
+
+    ClothRunTotals totals;
+    // Frame 0 as written: the input, or what untangling left of its intersections.
+    totals.worst_intersections = untangled ? untangled->final_pairs : initial_intersections;
+    std::error_code ec;
+    if (options.resume && std::filesystem::exists(checkpoint_path, ec)) {
+        const io::Checkpoint checkpoint =
+            io::read_checkpoint(checkpoint_path, io::CheckpointKind::cloth, fingerprint);
+        totals = load_cloth_checkpoint(checkpoint_path, checkpoint, sim);
+        if (totals.frame > frames) {
+            throw InvalidInput(fmt::format(
+                "{}: the checkpoint is at frame {}, after the last frame asked for ({}); ask for "
+                "at least {} frames",
+                checkpoint_path.string(), totals.frame, frames, totals.frame));
+        }
+        for (int frame = 0; frame <= totals.frame; ++frame) {
+            const std::filesystem::path file =
+                out / "frames" / frame_file_name(frame, scene.frame_format);
+            if (!std::filesystem::is_regular_file(file, ec)) {
+                throw InvalidInput(fmt::format(
+                    "{}: the checkpoint is at frame {}, but {} is missing; run without --resume "
+                    "to start over",
+                    checkpoint_path.string(), totals.frame, file.string()));
+            }
+        }
+        log_info("{}: resuming after frame {} from {}", scene_name, totals.frame,
+                 checkpoint_path.string());
+    } else if (options.resume) {
+        log_info("{}: no checkpoint at {}: starting from frame 0", scene_name,
+                 checkpoint_path.string());
+    }
+    const int first_frame = totals.frame + 1;
 
     const std::filesystem::path frames_dir = out / "frames";
     io::make_output_directory(frames_dir);
+    // A run killed while writing leaves its temporary files; an earlier run's checkpoint belongs
+    // to frames this run replaces.
+    io::remove_stray_temporaries(out);
+    io::remove_stray_temporaries(frames_dir);
+    if (!options.resume) {
+        std::filesystem::remove(checkpoint_path, ec);
+    }
     std::unique_ptr<ClothPreview> preview;
     if (options.preview) {
-        preview = std::make_unique<ClothPreview>(out, solver.positions(), sim.setup().shapes,
+        preview = std::make_unique<ClothPreview>(out, start_positions, sim.setup().shapes,
                                                  scene.frames_per_second, options.preview_width,
                                                  options.preview_height);
     }
@@ -146,7 +317,22 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             preview->add_frame(solver.positions(), solver.triangles(), solver.time());
         }
     };
-    write_frame(0);
+    // A failure to write (a full disk): the frames before it stay, stats.json describes them.
+    std::exception_ptr failure;
+    nlohmann::ordered_json failure_json;
+    bool write_failed = false;
+    if (first_frame == 1) {
+        write_frame(0);
+    } else if (preview) {
+        // The preview of the frames before the checkpoint, from the frames on disk (positions as
+        // written; obstacles at the frames' times).
+        for (int frame = 0; frame < first_frame; ++frame) {
+            const geometry::TriangleMeshD written =
+                io::read_mesh(frames_dir / frame_file_name(frame, scene.frame_format));
+            preview->add_frame(written.positions, solver.triangles(),
+                               frame / scene.frames_per_second);
+        }
+    }
 
     // One constraint iteration per substep: long substeps make cloth stretch and can make it
     // diverge (a 2 m sheet of 2 cm edges at 25 ms), whatever the scene.
@@ -157,20 +343,20 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             "far and can diverge; raise substeps (the built-in scenes use about 1 ms)",
             scene_name, substep_ms, scene.frames_per_second, scene.substeps, MAX_QUIET_SUBSTEP_MS);
     }
-    int frames_done = 0;
-    nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
-    double total_ms = 0.0;
-    // Frame 0 as written: the input, or what untangling left of its intersections.
-    std::int64_t worst_intersections = untangled ? untangled->final_pairs : initial_intersections;
-    double worst_strain = 0.0;
-    double worst_strain_p99 = 0.0;
+    int frames_done = first_frame - 1;
+    nlohmann::ordered_json& per_frame = totals.per_frame;
+    Running checkpoint_ms;  // this process's checkpoints
+    const auto save_checkpoint = [&] {
+        const Stopwatch watch;
+        totals.frame = frames_done;
+        write_cloth_checkpoint(checkpoint_path, fingerprint, totals, sim);
+        checkpoint_ms.add(watch.elapsed_ms());
+    };
     // A frame that fails (the simulation diverged, or a guard such as self-collision's pair limit
     // tripped) ends the run like an interrupt: the frames before it and stats.json (with
     // "error") are written, then the error is reported.
-    std::exception_ptr failure;
-    nlohmann::ordered_json failure_json;
     bool warned_budget = false;  // the fail-safe's budget warning is given once
-    for (int frame = 1; frame <= frames; ++frame) {
+    for (int frame = first_frame; frame <= frames; ++frame) {
         if (options.keep_going && !options.keep_going()) {
             break;
         }
@@ -184,17 +370,24 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             break;
         }
         const double ms = watch.elapsed_ms();
-        total_ms += ms;
         Stopwatch writing;
-        write_frame(frame);
+        try {
+            write_frame(frame);
+        } catch (const IoError& e) {
+            failure = std::current_exception();
+            failure_json = {{"frame", frame}, {"message", e.what()}};
+            write_failed = true;
+            break;
+        }
+        totals.total_ms += ms;
         const double write_ms = writing.elapsed_ms();
         // The independent checks on the frame as written.
         const ClothFrameCheck check = sim.check();
         const std::int64_t intersecting = check.intersecting_pairs;
-        worst_intersections = std::max(worst_intersections, intersecting);
+        totals.worst_intersections = std::max(totals.worst_intersections, intersecting);
         const cloth::StrainStats& strain = check.strain;
-        worst_strain = std::max(worst_strain, strain.max);
-        worst_strain_p99 = std::max(worst_strain_p99, strain.p99);
+        totals.worst_strain = std::max(totals.worst_strain, strain.max);
+        totals.worst_strain_p99 = std::max(totals.worst_strain_p99, strain.p99);
         nlohmann::ordered_json record = {{"frame", frame},
                                          {"ms", ms},
                                          {"step_ms", step.solve_ms},
@@ -239,10 +432,31 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         }
         per_frame.push_back(record);
         frames_done = frame;
+        if (options.checkpoint_every > 0 &&
+            (frame % options.checkpoint_every == 0 || frame == frames)) {
+            try {
+                save_checkpoint();
+            } catch (const IoError& e) {
+                failure = std::current_exception();
+                failure_json = {{"frame", frame}, {"message", e.what()}};
+                write_failed = true;
+                break;
+            }
+        }
         if (options.progress) {
-            options.progress(frame, frames, total_ms / frame);
+            options.progress(frame, frames, totals.total_ms / frame);
         }
     }
+    const bool interrupted = frames_done < frames && !failure;
+    if (interrupted && options.checkpoint_every > 0 && frames_done >= first_frame) {
+        try {
+            save_checkpoint();  // resume continues from where the interrupt stopped
+        } catch (const IoError& e) {
+            log_warning("{}: {}; --resume continues from the previous checkpoint", scene_name,
+                        e.what());
+        }
+    }
+    const int frames_run = frames_done - first_frame + 1;
     nlohmann::ordered_json stats = {
         {"scene", scene_name},
         {"vertices", mesh.positions.size()},
@@ -257,35 +471,68 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
         {"untangle", untangle_report(start)},
-        {"max_intersecting_pairs", worst_intersections},
-        {"max_strain_p99", worst_strain_p99},
-        {"max_strain", worst_strain},
+        {"max_intersecting_pairs", totals.worst_intersections},
+        {"max_strain_p99", totals.worst_strain_p99},
+        {"max_strain", totals.worst_strain},
         {"frames", per_frame},
-        {"mean_ms_per_frame", frames_done > 0 ? total_ms / frames_done : 0.0},
+        {"mean_ms_per_frame", frames_done > 0 ? totals.total_ms / frames_done : 0.0},
     };
+    if (first_frame > 1) {
+        stats["resumed_after_frame"] = first_frame - 1;
+    }
+    if (checkpoint_ms.count > 0) {
+        stats["checkpoint_ms"] = checkpoint_ms.mean();
+        stats["checkpoint_bytes"] = std::filesystem::file_size(checkpoint_path, ec);
+    }
     remove_stale_frames(frames_dir, frames_done, scene.frame_format);
-    const bool interrupted = frames_done < frames && !failure;
     stats["interrupted"] = interrupted;
     stats["error"] = failure_json;  // null after a complete run
     if (preview) {
-        stats["preview"] = preview->finish().string();
-        stats["preview_ms_per_frame"] = preview->render_ms() / (frames_done + 1);
+        try {
+            stats["preview"] = preview->finish().string();
+            stats["preview_ms_per_frame"] = preview->render_ms() / (frames_run + first_frame);
+        } catch (const IoError&) {
+            if (!failure) {
+                throw;
+            }
+            // The run already failed to write: the frames and stats.json matter more.
+        }
     }
-    io::write_file_atomically(out / "stats.json",
-                              [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
+    bool stats_written = true;
+    try {
+        io::write_file_atomically(out / "stats.json",
+                                  [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
+    } catch (const IoError& e) {
+        // No stats.json rather than one that describes other frames.
+        std::filesystem::remove(out / "stats.json", ec);
+        stats_written = false;
+        if (!failure) {
+            throw;
+        }
+        log_warning("{}: {}; stats.json removed", scene_name, e.what());
+    }
     if (failure) {
         log_info("frames 0-{} (before the failure) are in {}, stats in {}", frames_done,
                  frames_dir.string(), (out / "stats.json").string());
+        if (write_failed) {
+            rethrow_with_context(
+                failure,
+                fmt::format("{}: after frame {}: writing the output failed; frames 0-{}{} "
+                            "are kept in {}; free space and rerun with --resume: ",
+                            scene_name, frames_done, frames_done,
+                            stats_written ? " and stats.json describing them" : "", out.string()));
+        }
         rethrow_with_context(failure, fmt::format("{}: frame {}: ", scene_name, frames_done + 1));
     }
     if (interrupted) {
         throw Interrupted(
-            fmt::format("stopped after frame {} of {}; frames 0-{} in {}, {}stats in {}",
+            fmt::format("stopped after frame {} of {}; frames 0-{} in {}, {}stats in {}{}",
                         frames_done, frames, frames_done, frames_dir.string(),
                         stats.contains("preview")
                             ? fmt::format("preview {}, ", stats["preview"].get<std::string>())
                             : std::string(),
-                        (out / "stats.json").string()));
+                        (out / "stats.json").string(),
+                        options.checkpoint_every > 0 ? "; continue with --resume" : ""));
     }
     return stats;
 }

@@ -55,6 +55,21 @@ ClothFrameCheck ClothSimulation::check() const {
     return check;
 }
 
+void ClothSimulation::save_state(ByteWriter& out) const {
+    out.put(static_cast<std::int32_t>(m_frame));
+    m_solver->save_state(out);
+}
+
+void ClothSimulation::load_state(ByteReader& in) {
+    const auto frame = in.get<std::int32_t>("simulation.frame");
+    if (frame < 0) {
+        throw InvalidInput(
+            fmt::format("{}: simulation.frame: {}, expected >= 0", in.source(), frame));
+    }
+    m_solver->load_state(in);
+    m_frame = frame;
+}
+
 void ClothSimulation::reset() {
     m_solver = make_solver(m_scene, m_setup);
     if (!m_untangled_start.empty()) {

@@ -24,6 +24,7 @@
 #include "pliant/cloth/edge_strain.hpp"
 #include "pliant/cloth/scene.hpp"
 #include "pliant/cloth/solver.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/pipeline/cloth_setup.hpp"
 
@@ -60,6 +61,13 @@ public:
 
     // Counts intersecting triangle pairs exactly and measures edge strain, now.
     ClothFrameCheck check() const;
+
+    // The state that changes as the simulation runs (the frame count and the solver's
+    // ClothSolver::save_state), for checkpoints (cloth_run.hpp): a simulation made by
+    // from_scene from the same scene that loads it continues bit for bit. load_state:
+    // InvalidInput for a state of another cloth or a truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
 
     // Back to the start as from_scene prepared it (untangled positions, zero velocity), frame 0.
     // The start is not reported again.

@@ -7,9 +7,17 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <string_view>
+#include <system_error>
+#include <type_traits>
+#include <variant>
 
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/io/atomic_file.hpp"
+#include "pliant/io/checkpoint.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
@@ -32,7 +40,93 @@ struct Running {
     double mean() const { return count > 0 ? sum / count : 0.0; }
 };
 
+// The run's sums, saved in checkpoints before the soft body's state.
+struct DeformTotals {
+    std::int32_t frame = 0;  // the last frame simulated
+    Running substep_ms, step_ms, resample_ms, render_ms, frame_ms;
+    double min_ratio = std::numeric_limits<double>::infinity();
+    double max_ratio = -std::numeric_limits<double>::infinity();
+    std::int64_t max_inverted = 0;
+
+    void save(ByteWriter& w) const {
+        w.put(frame);
+        for (const Running* r : {&substep_ms, &step_ms, &resample_ms, &render_ms, &frame_ms}) {
+            w.put(r->sum);
+            w.put(r->count);
+        }
+        w.put(min_ratio);
+        w.put(max_ratio);
+        w.put(max_inverted);
+    }
+    void load(ByteReader& r) {
+        frame = r.get<std::int32_t>("frame");
+        for (Running* running : {&substep_ms, &step_ms, &resample_ms, &render_ms, &frame_ms}) {
+            running->sum = r.get<double>("timing sum");
+            running->count = r.get<int>("timing count");
+        }
+        min_ratio = r.get<double>("min volume ratio");
+        max_ratio = r.get<double>("max volume ratio");
+        max_inverted = r.get<std::int64_t>("max inverted tets");
+    }
+};
+
+// What the run's result depends on (io::run_fingerprint): the source volume, the body as built
+// (rest shape, tets, masses), its options, the driver and fps; not the frame count, the video,
+// the camera or the thread count.
+std::uint64_t deform_fingerprint(const volume::Volume& source, const pbd::SoftBody& body,
+                                 const DeformRunOptions& options) {
+    ByteWriter w;
+    w.put_string("pliant deform");
+    w.put_bytes(source.bytes());
+    w.put_vector(body.rest_positions());
+    w.put_vector(body.tets());
+    w.put_vector(body.inv_masses());
+    w.put(options.body.stiffness);
+    w.put(options.body.damping);
+    w.put(options.body.substeps);
+    w.put(options.fps);
+    w.put(static_cast<std::uint32_t>(options.driver.index()));
+    std::visit(
+        [&](const auto& d) {
+            using D = std::decay_t<decltype(d)>;
+            if constexpr (std::is_same_v<D, pbd::WaveDriver>) {
+                w.put(d.direction);
+                w.put(d.displacement);
+                w.put(d.amplitude);
+                w.put(d.wavelength);
+                w.put(d.speed);
+                w.put(d.ramp_time);
+            } else if constexpr (std::is_same_v<D, pbd::TwistDriver>) {
+                w.put(d.axis);
+                w.put(d.angle);
+                w.put(d.ramp_time);
+                w.put(d.grip);
+            } else if constexpr (std::is_same_v<D, pbd::BubbleDriver>) {
+                w.put(d.centre);
+                w.put(d.radius);
+                w.put(d.inflation);
+                w.put(d.ramp_time);
+            } else {
+                w.put(d.axis);
+                w.put(d.angle);
+                w.put(d.ramp_time);
+                w.put(d.centre.has_value());
+                w.put(d.centre.value_or(Vec3d{0.0, 0.0, 0.0}));
+            }
+        },
+        options.driver);
+    const std::span<const std::byte> bytes = w.bytes();
+    return io::run_fingerprint(
+        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
 }  // namespace
+
+std::filesystem::path deform_checkpoint_path(const std::filesystem::path& out) {
+    std::filesystem::path path = out;
+    path += ".checkpoint.bin";
+    return path;
+}
 
 nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::TransferFunction* tf,
                                   const DeformRunOptions& options) {
@@ -79,14 +173,56 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     ray_options.shading = options.shading;
     ray_options.step = options.step;
 
-    Running substep_ms, step_ms, resample_ms, render_ms, frame_ms;
-    double min_ratio = std::numeric_limits<double>::infinity();
-    double max_ratio = -std::numeric_limits<double>::infinity();
-    std::int64_t max_inverted = 0;
+    const std::filesystem::path checkpoint_path = deform_checkpoint_path(options.out);
+    const bool checkpoints = options.checkpoint_every > 0 && !video;
+    DeformTotals totals;
+    std::error_code ec;
+    const std::uint64_t fingerprint =
+        checkpoints || options.resume ? deform_fingerprint(source, body, options) : 0;
+    if (options.resume) {
+        if (video) {
+            throw Unsupported(fmt::format(
+                "--resume cannot continue the video {}: an MP4 is written in one go; run without "
+                "--resume (or without --render)",
+                options.video.string()));
+        }
+        if (std::filesystem::exists(checkpoint_path, ec)) {
+            const io::Checkpoint checkpoint =
+                io::read_checkpoint(checkpoint_path, io::CheckpointKind::deform, fingerprint);
+            ByteReader r(checkpoint.payload, checkpoint_path.string());
+            totals.load(r);
+            body.load_state(r);
+            r.expect_end();
+            if (totals.frame < 0 || totals.frame >= options.frames) {
+                throw InvalidInput(fmt::format(
+                    "{}: the checkpoint is at frame {}, expected one before the last frame ({}); "
+                    "ask for more frames or run without --resume",
+                    checkpoint_path.string(), totals.frame, options.frames));
+            }
+            log_info("deform: resuming after frame {} from {}", totals.frame,
+                     checkpoint_path.string());
+        } else {
+            log_info("deform: no checkpoint at {}: starting from frame 0",
+                     checkpoint_path.string());
+        }
+    } else {
+        std::filesystem::remove(checkpoint_path, ec);
+    }
+    io::remove_stray_temporaries(checkpoint_path.parent_path().empty()
+                                     ? std::filesystem::path(".")
+                                     : checkpoint_path.parent_path());
+    Running& substep_ms = totals.substep_ms;
+    Running& step_ms = totals.step_ms;
+    Running& resample_ms = totals.resample_ms;
+    Running& render_ms = totals.render_ms;
+    Running& frame_ms = totals.frame_ms;
+    double& min_ratio = totals.min_ratio;
+    double& max_ratio = totals.max_ratio;
+    std::int64_t& max_inverted = totals.max_inverted;
     pbd::SoftBodyStats stats;
     volume::ResampleStats resampled;
     render::Image image;
-    for (int frame = 1; frame <= options.frames; ++frame) {
+    for (int frame = totals.frame + 1; frame <= options.frames; ++frame) {
         const Stopwatch frame_clock;
         body.step(dt);
         stats = body.stats();
@@ -109,6 +245,17 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             }
         }
         frame_ms.add(frame_clock.elapsed_ms());
+        if (checkpoints && frame % options.checkpoint_every == 0 && frame < options.frames) {
+            totals.frame = frame;
+            ByteWriter w;
+            totals.save(w);
+            body.save_state(w);
+            io::Checkpoint checkpoint;
+            checkpoint.kind = io::CheckpointKind::deform;
+            checkpoint.fingerprint = fingerprint;
+            checkpoint.payload.assign(w.bytes().begin(), w.bytes().end());
+            io::write_checkpoint(checkpoint_path, checkpoint);
+        }
         if (options.progress) {
             options.progress(frame, options.frames, frame_ms.mean());
         }
@@ -123,6 +270,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     if (video) {
         video->finish();
     }
+    std::filesystem::remove(checkpoint_path, ec);  // the run is complete
 
     // How far the body moved from its rest shape (last frame), world units.
     double max_displacement = 0.0, sum_displacement = 0.0;

@@ -7,6 +7,14 @@
 // run's numbers (the JSON of `pliant deform`, docs/formats.md). Throws InvalidInput / IoError /
 // Unsupported before simulating when the output cannot be written, there is nothing to deform or
 // the grid needs more memory than max_memory_bytes allows.
+//
+// Checkpoints (io/checkpoint.hpp): every checkpoint_every frames before the last, the soft body's
+// state and the run's sums go to checkpoint_path(out) (OUT.checkpoint.bin, atomically); the
+// file is removed once the run completes. With resume, the run continues from it: the output
+// volume (and the still) are bitwise identical to an uninterrupted run's. resume without the
+// file starts from frame 0. A corrupt, truncated or foreign checkpoint (another volume, driver
+// or options) is InvalidInput naming the file. A video (`video`) cannot be continued: resume
+// with one is Unsupported, and runs that write one save no checkpoints.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -46,7 +54,12 @@ struct DeformRunOptions {
     // The most memory the run may need (bytes; memory_budget.hpp's deform_need_bytes, checked
     // before the tet grid is built); 0: the memory available.
     std::uint64_t max_memory_bytes = 0;
+    int checkpoint_every = 12;  // frames between checkpoints; 0: none
+    bool resume = false;        // continue from checkpoint_path(out)
 };
+
+// Where a run writing the volume `out` keeps its checkpoint: OUT.checkpoint.bin beside it.
+std::filesystem::path deform_checkpoint_path(const std::filesystem::path& out);
 
 // tf: the transfer function of a scalar source (rendering and which voxels are visible), nullptr
 // for RGBA sources.

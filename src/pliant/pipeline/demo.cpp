@@ -209,6 +209,7 @@ nlohmann::ordered_json untangle_demo(const std::filesystem::path& dir, const cha
         ClothRunOptions run;
         run.frames = json["frames"].get<int>();
         run.progress = progress;
+        run.checkpoint_every = 0;  // a demo's short runs are not resumed
         result.second = run_cloth_scene(result.first, path.string(), scene_dir, run);
         return result;
     };

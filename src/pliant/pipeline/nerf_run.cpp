@@ -6,13 +6,19 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <numbers>
+#include <span>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/core/log.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/io/checkpoint.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/nerf/metrics.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
@@ -82,6 +88,52 @@ nlohmann::ordered_json render_dataset(const volume::Volume& source,
     return j;
 }
 
+namespace {
+
+// What training's result depends on (io::run_fingerprint): the dataset (intrinsics, poses,
+// images, box, background) and the training options; not the thread count.
+std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainOptions& o) {
+    ByteWriter w;
+    w.put_string("pliant nerf train");
+    const nerf::Intrinsics& in = dataset.intrinsics;
+    w.put(in.width);
+    w.put(in.height);
+    for (const double v : {in.fx, in.fy, in.cx, in.cy}) {
+        w.put(v);
+    }
+    for (const nerf::View& view : dataset.views) {
+        w.put(view.camera_to_world.m);
+        w.put_vector(view.rgb);
+    }
+    w.put(dataset.box.has_value());
+    if (dataset.box) {
+        w.put(dataset.box->lo);
+        w.put(dataset.box->hi);
+    }
+    w.put(dataset.background.r);
+    w.put(dataset.background.g);
+    w.put(dataset.background.b);
+    w.put(o.resolution);
+    w.put(o.stages);
+    w.put(o.iterations);
+    w.put(o.seconds);
+    w.put(o.batch_rays);
+    for (const float v :
+         {o.lr_density, o.lr_color, o.lr_final_factor, o.tv_density, o.tv_color, o.density_init,
+          o.color_init, o.occupancy_alpha, o.render.step_voxels, o.render.min_transmittance}) {
+        w.put(v);
+    }
+    w.put(o.occupancy_interval);
+    w.put(o.warmup_iterations);
+    w.put(o.render.use_occupancy);
+    w.put(o.seed);
+    const std::span<const std::byte> bytes = w.bytes();
+    return io::run_fingerprint(
+        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+}  // namespace
+
 TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions& options,
                             FunctionRef<bool()> keep_going) {
     // The output's size, checked before a long run (the grid's is checked by nerf::train).
@@ -95,13 +147,45 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
             d[0], d[1], d[2], volume::name(options.exported.type), out_bytes / 1048576.0,
             options.exported.max_bytes / 1048576.0));
     }
-    const nerf::TrainResult result =
-        nerf::train(dataset, options.train, [&](const nerf::TrainProgress& p) {
+    nerf::TrainCheckpoints checkpoints;
+    io::Checkpoint resumed;
+    std::error_code ec;
+    if (!options.checkpoint.empty()) {
+        const std::uint64_t fingerprint = train_fingerprint(dataset, options.train);
+        if (options.resume && std::filesystem::exists(options.checkpoint, ec)) {
+            resumed =
+                io::read_checkpoint(options.checkpoint, io::CheckpointKind::nerf, fingerprint);
+            checkpoints.resume_from = resumed.payload;
+            checkpoints.resume_source = options.checkpoint.string();
+            log_info("nerf train: resuming from {}", options.checkpoint.string());
+        } else if (options.resume) {
+            log_info("nerf train: no checkpoint at {}: starting from iteration 0",
+                     options.checkpoint.string());
+        } else {
+            std::filesystem::remove(options.checkpoint, ec);
+        }
+        checkpoints.every = options.checkpoint_every;
+        checkpoints.save = [&options, fingerprint](std::span<const std::byte> state,
+                                                   std::int64_t /*iteration*/) {
+            io::Checkpoint checkpoint;
+            checkpoint.kind = io::CheckpointKind::nerf;
+            checkpoint.fingerprint = fingerprint;
+            checkpoint.payload.assign(state.begin(), state.end());
+            io::write_checkpoint(options.checkpoint, checkpoint);
+        };
+    }
+    const nerf::TrainResult result = nerf::train(
+        dataset, options.train,
+        [&](const nerf::TrainProgress& p) {
             if (options.on_progress) {
                 options.on_progress(p);
             }
             return keep_going();
-        });
+        },
+        checkpoints);
+    if (!options.checkpoint.empty() && !result.stopped) {
+        std::filesystem::remove(options.checkpoint, ec);  // training is complete
+    }
 
     TrainRunResult out;
     out.volume = nerf::export_volume(result.grid, options.exported);

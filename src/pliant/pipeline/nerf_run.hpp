@@ -51,6 +51,15 @@ struct TrainRunOptions {
     std::optional<volume::CleanOptions> clean;  // none: the exported volume as it is
     // Called after every training iteration (nerf::train's progress); empty: none.
     std::function<void(const nerf::TrainProgress&)> on_progress;
+    // Checkpoints (io/checkpoint.hpp, nerf::TrainCheckpoints): the trainer's state every
+    // checkpoint_every iterations and when stopped, to `checkpoint` (atomically; empty: none);
+    // removed once training completes. With resume, training continues from `checkpoint` when
+    // it exists (from the start otherwise): with --iterations and the same thread count the
+    // volume is bitwise identical to an uninterrupted run's. A corrupt, truncated or foreign
+    // checkpoint (another dataset or training options) is InvalidInput naming the file.
+    std::filesystem::path checkpoint;
+    std::int64_t checkpoint_every = 0;
+    bool resume = false;
 };
 
 // clang-tidy 14 cannot see that the implicit members (moving a Volume and a JSON object) do not
