@@ -184,7 +184,15 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         const double ms = watch.elapsed_ms();
         total_ms += ms;
         Stopwatch writing;
-        write_frame(frame);
+        try {
+            write_frame(frame);
+        } catch (const IoError& e) {
+            // A frame that cannot be written (a full disk) ends the run the same way; its file,
+            // if the preview failed after it, goes with the stale frames below.
+            failure = std::current_exception();
+            failure_json = {{"frame", frame}, {"message", e.what()}};
+            break;
+        }
         const double write_ms = writing.elapsed_ms();
         // The independent checks on the frame as written.
         const ClothFrameCheck check = sim.check();
@@ -251,13 +259,27 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     const bool interrupted = frames_done < frames && !failure;
     stats["interrupted"] = interrupted;
     stats["error"] = failure_json;  // null after a complete run
-    if (preview) {
-        stats["preview"] = preview->finish().string();
-        stats["preview_ms_per_frame"] = preview->render_ms() / (frames_done + 1);
-    }
-    io::write_file_atomically(out / "stats.json",
-                              [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
-    if (failure) {
+    const auto write_summary = [&] {
+        if (preview) {
+            stats["preview"] = preview->finish().string();
+            stats["preview_ms_per_frame"] = preview->render_ms() / (frames_done + 1);
+        }
+        io::write_file_atomically(out / "stats.json",
+                                  [&](std::ostream& s) { s << stats.dump(2) << '\n'; });
+    };
+    if (!failure) {
+        write_summary();
+    } else {
+        // After a failure (a full disk, say) the preview and stats.json may fail too: the first
+        // failure is the one reported, and a stats.json of an earlier run, which would describe
+        // frames that are gone, is removed.
+        try {
+            write_summary();
+        } catch (const Error& e) {
+            log_warning("{}", e.what());
+            std::error_code ignored;
+            std::filesystem::remove(out / "stats.json", ignored);
+        }
         log_info("frames 0-{} (before the failure) are in {}, stats in {}", frames_done,
                  frames_dir.string(), (out / "stats.json").string());
         rethrow_with_context(failure, fmt::format("{}: frame {}: ", scene_name, frames_done + 1));

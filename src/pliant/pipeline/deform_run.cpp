@@ -10,6 +10,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/io/output_directory.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
@@ -35,6 +36,7 @@ struct Running {
 nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::TransferFunction* tf,
                                   const DeformRunOptions& options) {
     io::check_volume_writable(options.out, source.type());  // fail before the run, not after
+    io::require_writable_file(options.out);
 
     // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.
     DeformableVolume deformable(source, tf, options.grid, options.mesh, options.body);
