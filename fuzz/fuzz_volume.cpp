@@ -23,7 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             path = pliant::fuzz::write_input("in.nii.gz", rest);
             break;
         case 1: {
-            const bool nifti2 = rest.size() >= 4 && rest.substr(0, 4) == std::string_view("\x1c\x02\0\0", 4);
+            const bool nifti2 =
+                rest.size() >= 4 && rest.substr(0, 4) == std::string_view("\x1c\x02\0\0", 4);
             const std::size_t header_size = std::min<std::size_t>(rest.size(), nifti2 ? 540 : 348);
             pliant::fuzz::write_input("in.img", rest.substr(header_size));
             path = pliant::fuzz::write_input("in.hdr", rest.substr(0, header_size));

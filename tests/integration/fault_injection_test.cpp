@@ -16,6 +16,7 @@
 // mounts need root (CAP_SYS_ADMIN); without it those cases are skipped with the reason.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/stat.h>
@@ -28,7 +29,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <random>
 #include <set>
 #include <string>
@@ -204,8 +204,7 @@ std::map<std::string, std::string> deterministic_outputs(const fs::path& dir) {
     std::map<std::string, std::string> files;
     for (const std::string& name : files_under(dir)) {
         const fs::path path(name);
-        if (path.filename() != "stats.json" && path.extension() != ".mp4" &&
-            !is_temporary(name)) {
+        if (path.filename() != "stats.json" && path.extension() != ".mp4" && !is_temporary(name)) {
             files[name] = read_text(dir / name);
         }
     }
@@ -215,9 +214,8 @@ std::map<std::string, std::string> deterministic_outputs(const fs::path& dir) {
 // A scratch volume (a 32³ sphere, float) written by `pliant volume generate`.
 fs::path make_volume(const ScratchDir& scratch, int dims = 32) {
     const fs::path volume = scratch / "in.nrrd";
-    const CliResult r = run_cli("volume generate sphere " + quoted(volume) + " --dims " +
-                                    std::to_string(dims),
-                                scratch);
+    const CliResult r = run_cli(
+        "volume generate sphere " + quoted(volume) + " --dims " + std::to_string(dims), scratch);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return volume;
 }
@@ -234,7 +232,8 @@ fs::path make_cloth_scene(const ScratchDir& scratch, const std::string& mesh = "
     write_text(scene, R"({
         "cloth": {"grid": {"size": [1.0, 1.0], "quads": [16, 16]}, "translate": [0, 0, 0.3]},
         "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.2}},
-                      {"mesh": {"file": ")" + mesh + R"("}}],
+                      {"mesh": {"file": ")" +
+                          mesh + R"("}}],
         "fps": 24, "frames": 12, "substeps": 8
     })");
     return scene;
@@ -265,8 +264,9 @@ std::vector<Writer> writers_into(const fs::path& ro, const fs::path& volume, con
          (ro / "o.mp4").string()},
         {"volume convert", "volume convert " + in + " " + quoted(ro / "v.nii.gz"),
          (ro / "v.nii.gz").string()},
-        {"nerf train", "nerf train " + quoted(dataset / "transforms_train.json") +
-                           " --iterations 20 --resolution 8 -o " + quoted(ro / "n.nrrd"),
+        {"nerf train",
+         "nerf train " + quoted(dataset / "transforms_train.json") +
+             " --iterations 20 --resolution 8 -o " + quoted(ro / "n.nrrd"),
          (ro / "n.nrrd").string()},
         {"dataset", "dataset " + in + " --views 2 --size 16x16 -o " + quoted(ro / "ds"),
          (ro / "ds").string()},
@@ -288,9 +288,9 @@ void expect_clear_errors(const std::vector<Writer>& writers, const fs::path& ro,
 }
 
 fs::path make_dataset(const ScratchDir& scratch, const fs::path& volume) {
-    const CliResult r = run_cli("dataset " + quoted(volume) + " --views 4 --size 16x16 -o " +
-                                    quoted(scratch / "ds"),
-                                scratch);
+    const CliResult r = run_cli(
+        "dataset " + quoted(volume) + " --views 4 --size 16x16 -o " + quoted(scratch / "ds"),
+        scratch);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return scratch / "ds";
 }
@@ -327,8 +327,7 @@ TEST(Faults, DirectoryWithoutWritePermissionIsAClearErrorAndWritesNothing) {
         }
         environment = "setpriv --reuid=65534 --regid=65534 --clear-groups";
     }
-    expect_clear_errors(writers_into(ro, volume, scene, dataset), ro, scratch,
-                        environment);
+    expect_clear_errors(writers_into(ro, volume, scene, dataset), ro, scratch, environment);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -370,8 +369,8 @@ private:
 // Runs `args` `runs` times while `input` is being rewritten. Each run must either succeed with
 // its output complete, or fail with `pliant: error:`, exit 1 and no output. Returns how many
 // failed (the rest succeeded).
-int run_while_rewritten(const ScratchDir& scratch, const fs::path& input,
-                        const std::string& args, const fs::path& out, int runs) {
+int run_while_rewritten(const ScratchDir& scratch, const fs::path& input, const std::string& args,
+                        const fs::path& out, int runs) {
     const Rewriter rewriter(input);
     int failed = 0;
     std::set<std::string> errors;
@@ -423,10 +422,10 @@ TEST(Faults, DatasetImageRewrittenWhileNerfTrainReadsItGivesAResultOrAClearError
 TEST(Faults, ObstacleMeshRewrittenWhileClothReadsItGivesAResultOrAClearError) {
     const ScratchDir scratch;
     const fs::path scene = make_cloth_scene(scratch);
-    run_while_rewritten(scratch, scratch / "box.obj",
-                        "cloth " + quoted(scene) + " --frames 1 --no-preview --out " +
-                            quoted(scratch / "out"),
-                        scratch / "out", 20);
+    run_while_rewritten(
+        scratch, scratch / "box.obj",
+        "cloth " + quoted(scene) + " --frames 1 --no-preview --out " + quoted(scratch / "out"),
+        scratch / "out", 20);
 }
 
 // A FIFO (or another special file) as an input: refused at once, not waited on.
@@ -491,8 +490,8 @@ void kill_at_random_points(const ScratchDir& scratch, const std::vector<std::str
         fs::remove_all(out);
         fs::create_directories(out);
         std::mt19937 random(seed);
-        const auto delay = std::chrono::microseconds(std::uniform_int_distribution<std::int64_t>(
-            0, duration.count() * 4 / 5)(random));
+        const auto delay = std::chrono::microseconds(
+            std::uniform_int_distribution<std::int64_t>(0, duration.count() * 4 / 5)(random));
         killed += run_and_kill(args, scratch / "killed.log", delay) ? 1 : 0;
         EXPECT_EQ(incomplete_outputs(out), std::vector<std::string>{});
         // A later run over what the killed one left.
@@ -513,10 +512,10 @@ void kill_at_random_points(const ScratchDir& scratch, const std::vector<std::str
 TEST(Faults, ClothKilledAtRandomPointsLeavesOnlyCompleteFiles) {
     const ScratchDir scratch;
     const fs::path scene = make_cloth_scene(scratch);
-    kill_at_random_points(scratch,
-                          {"cloth", scene.string(), "--preview-size", "64x48", "--out",
-                           (scratch / "out").string()},
-                          scratch / "out");
+    kill_at_random_points(
+        scratch,
+        {"cloth", scene.string(), "--preview-size", "64x48", "--out", (scratch / "out").string()},
+        scratch / "out");
 }
 
 TEST(Faults, DeformKilledAtRandomPointsLeavesOnlyCompleteFiles) {
@@ -575,9 +574,9 @@ TEST(Faults, FullTmpfsStopsWithAClearErrorAndNoPartialFile) {
     }
     // Cloth: 40 frames of 289 vertices (about 12 KB each) do not fit. The run stops at the
     // frame that did not fit; the frames before it are complete and stats.json lists them.
-    const CliResult r = run_cli(
-        "cloth " + quoted(scene) + " --frames 40 --no-preview --out " + quoted(full / "c"),
-        scratch);
+    const CliResult r =
+        run_cli("cloth " + quoted(scene) + " --frames 40 --no-preview --out " + quoted(full / "c"),
+                scratch);
     EXPECT_EQ(r.exit_code, 1) << r.err;
     EXPECT_NE(r.err.find("pliant: error: "), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("frame_00"), std::string::npos) << r.err;
