@@ -519,6 +519,9 @@ TEST(Faults, ClothKilledAtRandomPointsLeavesOnlyCompleteFiles) {
 }
 
 TEST(Faults, DeformKilledAtRandomPointsLeavesOnlyCompleteFiles) {
+    if (!io::ffmpeg_available()) {
+        GTEST_SKIP() << "ffmpeg is not installed: no MP4 to write";
+    }
     const ScratchDir scratch;
     const fs::path volume = make_volume(scratch, 24);
     kill_at_random_points(scratch,
@@ -529,6 +532,9 @@ TEST(Faults, DeformKilledAtRandomPointsLeavesOnlyCompleteFiles) {
 }
 
 TEST(Faults, RenderOrbitKilledAtRandomPointsLeavesOnlyCompleteFiles) {
+    if (!io::ffmpeg_available()) {
+        GTEST_SKIP() << "ffmpeg is not installed: no MP4 to write";
+    }
     const ScratchDir scratch;
     const fs::path volume = make_volume(scratch, 32);
     kill_at_random_points(scratch,
