@@ -44,6 +44,7 @@
 #include "commands.hpp"
 #include "interrupt.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/io/output_directory.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
@@ -89,6 +90,7 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     const volume::VoxelType type =
         options.type == "rgba32f" ? volume::VoxelType::rgba32f : volume::VoxelType::rgba8;
     io::check_volume_writable(options.out, type);  // fail before a long run
+    io::require_writable_file(options.out);
     pipeline::ReadNerfDatasetOptions ro;
     ro.background = {options.background[0], options.background[1], options.background[2]};
     ro.max_bytes = to_bytes(options.max_memory_mib);

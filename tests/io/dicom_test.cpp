@@ -268,6 +268,53 @@ TEST(Dicom, BrokenSeriesNameTheFiles) {
         {"memory limit"});
 }
 
+// Lengths GDCM would allocate before reading (fuzz_dicom: a 972-byte file whose element
+// (0010,0040) had VR bytes 0xBAAC made GDCM allocate 4 GB) are refused before GDCM sees the file.
+TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
+    TempDir dir;
+    const DicomSeriesSpec spec;
+    const std::vector<fs::path> files = pliant::test::write_dicom_series(dir / "s", spec, 14);
+    const std::string bytes = test::read_bytes(files[0]);
+    // Modality (0008,0060), explicit VR CS: a VR that is not two letters and a 64 KiB length.
+    const std::string modality(
+        "\x08\x00\x60\x00"
+        "CS",
+        6);
+    const std::size_t at = bytes.find(modality);
+    ASSERT_NE(at, std::string::npos);
+    std::string bad_vr = bytes;
+    bad_vr.replace(at + 4, 4, std::string("\xBA\xAC\xFF\xFF", 4));
+    test::write_bytes(dir / "bad_vr.dcm", bad_vr);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "bad_vr.dcm"}); },
+                    {"bad_vr.dcm", "not a DICOM file", "(0008,0060)", "0xBAAC"});
+    // Pixel data (7FE0,0010), explicit VR OW: a length of 4 GB in a file of a few KB.
+    const std::string pixels("\xE0\x7F\x10\x00OW\0\0", 8);
+    const std::size_t p = bytes.rfind(pixels);
+    ASSERT_NE(p, std::string::npos);
+    std::string long_pixels = bytes;
+    long_pixels.replace(p + 8, 4, std::string("\xF0\xFF\xFF\xFF", 4));
+    test::write_bytes(dir / "long.dcm", long_pixels);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "long.dcm"}); },
+                    {"long.dcm", "(7FE0,0010)", "declares 4294967280 bytes"});
+    // RLE pixel data whose header declares 26,114 segments (fuzz_dicom: GDCM read out of
+    // bounds): the first fragment's 64-byte header follows the empty offset table item.
+    DicomSeriesSpec rle_spec = spec;
+    rle_spec.syntax = gdcm::TransferSyntax::RLELossless;
+    const std::vector<fs::path> rle_files =
+        pliant::test::write_dicom_series(dir / "rle", rle_spec, 15);
+    std::string rle = test::read_bytes(rle_files[0]);
+    const std::string fragments("\xFE\xFF\x00\xE0\0\0\0\0\xFE\xFF\x00\xE0", 12);
+    const std::size_t r = rle.find(fragments);
+    ASSERT_NE(r, std::string::npos);
+    rle.replace(r + 16, 4, std::string("\x02\x66\0\0", 4));
+    test::write_bytes(dir / "rle.dcm", rle);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "rle.dcm"}); },
+                    {"rle.dcm", "declares 26114 segments, expected 1 to 15"});
+    // In a folder such files are skipped, the good ones still read.
+    fs::copy_file(dir / "long.dcm", dir / "s" / "zz_long.dcm");
+    EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);
+}
+
 TEST(Dicom, FractionalRescaleGivesFloats) {
     TempDir dir;
     DicomSeriesSpec spec;

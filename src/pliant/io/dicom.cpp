@@ -6,6 +6,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -224,6 +225,164 @@ std::vector<fs::path> candidate_files(const fs::path& dir) {
     return files;
 }
 
+// Why GDCM must not be given `file`, or nullopt. GDCM allocates an element's declared length
+// before reading it (a 972-byte file declaring 4 GB made it allocate 4 GB: fuzz_dicom), so the
+// data elements are walked first, as PS3.5 section 7 lays them out: each defined length must fit
+// in the bytes left, and an explicit VR must be two capital letters. Sequences and items are
+// entered, not skipped, so nested elements are checked too. Encapsulated pixel data ends the walk
+// (JPEG fragments are the codecs' to check), except RLE's, whose segment tables are checked; the
+// walk also stops after the file meta group for the transfer syntaxes it cannot walk (deflate,
+// explicit big endian), where GDCM is trusted as before.
+std::optional<std::string> element_length_problem(const fs::path& file) {
+    std::FILE* f = std::fopen(file.c_str(), "rb");
+    if (f == nullptr) {
+        return std::nullopt;  // GDCM reports it
+    }
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(file, ec);
+    std::array<unsigned char, 132> head{};
+    const bool part10 = !ec && std::fread(head.data(), 1, head.size(), f) == head.size() &&
+                        std::memcmp(head.data() + 128, "DICM", 4) == 0;
+    std::uintmax_t pos = part10 ? 132 : 0;
+    std::string syntax;  // (0002,0010), read when the meta group has it
+    const auto u16 = [](const unsigned char* b) {
+        return static_cast<unsigned>(b[0] | b[1] << 8);
+    };
+    const auto u32 = [](const unsigned char* b) {
+        return static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
+               static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
+    };
+    std::optional<std::string> problem;
+    int rle_fragment = -1;  // in RLE pixel data: 0 the offset table, then the fragments
+    while (!ec && pos + 8 <= size) {
+        std::array<unsigned char, 12> h{};
+        if (std::fseek(f, static_cast<long>(pos), SEEK_SET) != 0 ||
+            std::fread(h.data(), 1, std::min<std::uintmax_t>(12, size - pos), f) == 0) {
+            break;
+        }
+        const unsigned group = u16(h.data());
+        const unsigned element = u16(h.data() + 2);
+        if (group != 0x0002 &&
+            (syntax == "1.2.840.10008.1.2.1.99" || syntax == "1.2.840.10008.1.2.2")) {
+            break;  // deflated or big-endian data set
+        }
+        const bool item = group == 0xFFFE;
+        // Without a meta group (no transfer syntax) the VR bytes tell, as GDCM guesses too.
+        const bool letters = std::isupper(h[4]) != 0 && std::isupper(h[5]) != 0;
+        const bool explicit_vr =
+            !item &&
+            (group == 0x0002 || (syntax.empty() ? letters : syntax != "1.2.840.10008.1.2"));
+        std::uint32_t length = 0;
+        std::uintmax_t header = 8;
+        bool sequence = item;
+        if (explicit_vr) {
+            const char vr[3] = {static_cast<char>(h[4]), static_cast<char>(h[5]), '\0'};
+            if (!letters) {
+                problem = fmt::format(
+                    "element ({:04X},{:04X}) at byte {} has VR bytes 0x{:02X}{:02X}, expected two "
+                    "capital letters",
+                    group, element, pos, h[4], h[5]);
+                break;
+            }
+            const std::string_view v(vr, 2);
+            if (v == "OB" || v == "OD" || v == "OF" || v == "OL" || v == "OV" || v == "OW" ||
+                v == "SQ" || v == "SV" || v == "UC" || v == "UN" || v == "UR" || v == "UT" ||
+                v == "UV") {
+                if (pos + 12 > size) {
+                    problem = fmt::format("element ({:04X},{:04X}) at byte {} is cut short", group,
+                                          element, pos);
+                    break;
+                }
+                length = u32(h.data() + 8);
+                header = 12;
+            } else {
+                length = u16(h.data() + 6);
+            }
+            sequence = v == "SQ";
+            if (v == "UN" && u32(h.data() + 8) == 0xFFFFFFFFU) {
+                break;  // an unknown-VR sequence: implicit VR inside, not walked
+            }
+        } else {
+            length = u32(h.data() + 4);
+        }
+        if (rle_fragment >= 0) {
+            // RLE pixel data (PS3.5 annex G): the offset table, then fragments that each start
+            // with a 64-byte header of the segment count (1 to 15) and the segments' offsets
+            // (GDCM trusts them: 26,114 segments made it read out of bounds).
+            if (!item || element != 0xE000 || length == 0xFFFFFFFFU ||
+                length > size - pos - header) {
+                break;  // the delimiter, or a layout GDCM reports itself
+            }
+            if (rle_fragment > 0) {
+                std::array<unsigned char, 64> rle{};
+                if (length < rle.size() ||
+                    std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                    std::fread(rle.data(), 1, rle.size(), f) != rle.size()) {
+                    problem = fmt::format(
+                        "RLE fragment at byte {} is shorter than its 64-byte header", pos);
+                    break;
+                }
+                const std::uint32_t segments = u32(rle.data());
+                std::uint32_t previous = 64;
+                for (std::uint32_t i = 0; i < segments && i < 15 && !problem; ++i) {
+                    const std::uint32_t offset = u32(rle.data() + 4 + std::size_t{4} * i);
+                    if (offset < previous || offset >= length || (i == 0 && offset != 64)) {
+                        problem = fmt::format(
+                            "RLE fragment at byte {}: segment {} starts at {}, expected 64 for the "
+                            "first, then increasing offsets below the fragment's {} bytes",
+                            pos, i, offset, length);
+                    }
+                    previous = offset;
+                }
+                if (segments < 1 || segments > 15) {
+                    problem = fmt::format(
+                        "RLE fragment at byte {} declares {} segments, expected 1 to 15", pos,
+                        segments);
+                }
+                if (problem) {
+                    break;
+                }
+            }
+            ++rle_fragment;
+            pos += header + length;
+            continue;
+        }
+        if (length == 0xFFFFFFFFU) {
+            if (group == 0x7FE0 && element == 0x0010) {
+                if (syntax == "1.2.840.10008.1.2.5") {
+                    rle_fragment = 0;
+                    pos += header;
+                    continue;
+                }
+                break;  // encapsulated pixel data: fragments follow
+            }
+            pos += header;  // an undefined-length sequence or item: its elements follow
+            continue;
+        }
+        if (length > size - pos - header) {
+            problem = fmt::format(
+                "element ({:04X},{:04X}) at byte {} declares {} bytes, the file has {} left", group,
+                element, pos, length, size - pos - header);
+            break;
+        }
+        if (group == 0x0002 && element == 0x0010 && length <= 64) {
+            std::string text(length, '\0');
+            if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                std::fread(text.data(), 1, length, f) != length) {
+                break;
+            }
+            while (!text.empty() && (text.back() == '\0' || text.back() == ' ')) {
+                text.pop_back();
+            }
+            syntax = text;
+        }
+        // A sequence's or item's contents are elements: walk into them.
+        pos += header + (sequence ? 0 : length);
+    }
+    std::fclose(f);
+    return problem;
+}
+
 // Scans the headers (no pixel data). In a folder (`listed` false) files GDCM cannot parse and
 // objects without an image are skipped; in an explicit list they are errors.
 std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
@@ -235,16 +394,33 @@ std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
           SPACING_BETWEEN_SLICES, SLICE_THICKNESS}) {
         scanner.AddTag(tag);
     }
+    // Files GDCM must not see (element_length_problem) are left out of the scan: an error when
+    // listed, skipped in a folder like the files GDCM cannot parse.
     std::vector<std::string> names;
     names.reserve(files.size());
     for (const fs::path& f : files) {
+        if (const std::optional<std::string> problem = element_length_problem(f)) {
+            if (listed) {
+                throw IoError(
+                    fmt::format("{}: not a DICOM file pliant can read: {}", f.string(), *problem));
+            }
+            log_debug("{}: skipped, not a readable DICOM file: {}", f.string(), *problem);
+            names.emplace_back();
+            continue;
+        }
         names.push_back(f.string());
     }
-    scanner.Scan(names);
+    std::vector<std::string> scanned;
+    for (const std::string& name : names) {
+        if (!name.empty()) {
+            scanned.push_back(name);
+        }
+    }
+    scanner.Scan(scanned);
     std::vector<Slice> slices;
     for (std::size_t n = 0; n < files.size(); ++n) {
         const char* name = names[n].c_str();
-        if (!scanner.IsKey(name)) {
+        if (names[n].empty() || !scanner.IsKey(name)) {
             if (listed) {
                 throw IoError(fmt::format("{}: not a DICOM file (GDCM cannot parse it)", names[n]));
             }

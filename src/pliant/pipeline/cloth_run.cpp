@@ -374,6 +374,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         try {
             write_frame(frame);
         } catch (const IoError& e) {
+            // A frame that cannot be written (a full disk) ends the run the same way; its file,
+            // if the preview failed after it, goes with the stale frames below.
             failure = std::current_exception();
             failure_json = {{"frame", frame}, {"message", e.what()}};
             write_failed = true;

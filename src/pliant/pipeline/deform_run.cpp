@@ -18,6 +18,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/checkpoint.hpp"
+#include "pliant/io/output_directory.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/io/volume_io.hpp"
@@ -153,6 +154,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
                               renders ? options.size[1] : 0),
             options.max_memory_bytes > 0 ? options.max_memory_bytes : available_memory_bytes());
     }
+    io::require_writable_file(options.out);
 
     // The soft body: a grid over the volume, or a TetGen mesh in the volume's world frame.
     DeformableVolume deformable(source, tf, options.grid, options.mesh, options.body);

@@ -19,6 +19,7 @@
 #include "pliant/core/log.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/io/checkpoint.hpp"
+#include "pliant/io/output_directory.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/nerf/metrics.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
@@ -43,13 +44,8 @@ nlohmann::ordered_json render_dataset(const volume::Volume& source,
     ro.background = {options.background[0], options.background[1], options.background[2]};
     const render::RayCaster caster(source, tf, ro);
 
-    std::error_code ec;
-    std::filesystem::create_directories(dir / "train", ec);
-    std::filesystem::create_directories(dir / "test", ec);
-    if (!std::filesystem::is_directory(dir / "train") ||
-        !std::filesystem::is_directory(dir / "test")) {
-        throw IoError(fmt::format("{}: cannot create the output directories", dir.string()));
-    }
+    io::make_output_directory(dir / "train");
+    io::make_output_directory(dir / "test");
 
     const AABBd box = source.bounds();
     render::FramingOptions framing;
