@@ -111,12 +111,13 @@ TEST(PoseAlignment, MeasuresErrorsPutInByHand) {
     std::vector<Pose> estimated;
     for (int i = 0; i < 8; ++i) {
         const double a = 2.0 * std::numbers::pi * i / 8.0;
-        estimated.push_back(make_pose(axis_angle({0, 0, 1}, a), {std::cos(a), std::sin(a), 0.1 * i}));
+        estimated.push_back(
+            make_pose(axis_angle({0, 0, 1}, a), {std::cos(a), std::sin(a), 0.1 * i}));
     }
     const Mat3 r = axis_angle({1.0, 2.0, 3.0}, 0.7);
     std::vector<Pose> reference = transformed(estimated, 10.0, r, {5.0, 5.0, 5.0});
-    const Mat3 turned =
-        multiply(rotation_of(reference[3]), axis_angle({0.0, 1.0, 0.0}, 2.0 * std::numbers::pi / 180));
+    const Mat3 turned = multiply(rotation_of(reference[3]),
+                                 axis_angle({0.0, 1.0, 0.0}, 2.0 * std::numbers::pi / 180));
     reference[3] = make_pose(turned, reference[3].eye());
     const PoseComparison cmp = compare_poses(estimated, reference);
     EXPECT_NEAR(cmp.max_rotation_error_deg, 2.0, 1e-6);

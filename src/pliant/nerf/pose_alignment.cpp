@@ -135,16 +135,16 @@ Similarity align_similarity(std::span<const Vec3d> source, std::span<const Vec3d
                                        source.size(), target.size()));
     }
     if (source.size() < 3) {
-        throw InvalidInput(fmt::format(
-            "align_similarity: {} point pairs, expected at least 3 (not collinear)", source.size()));
+        throw InvalidInput(
+            fmt::format("align_similarity: {} point pairs, expected at least 3 (not collinear)",
+                        source.size()));
     }
     for (std::size_t i = 0; i < source.size(); ++i) {
         if (!is_finite(source[i]) || !is_finite(target[i])) {
-            throw InvalidInput(
-                fmt::format("align_similarity: point pair {} is not finite: ({}, {}, {}) → ({}, "
-                            "{}, {})",
-                            i, source[i].x, source[i].y, source[i].z, target[i].x, target[i].y,
-                            target[i].z));
+            throw InvalidInput(fmt::format(
+                "align_similarity: point pair {} is not finite: ({}, {}, {}) → ({}, "
+                "{}, {})",
+                i, source[i].x, source[i].y, source[i].z, target[i].x, target[i].y, target[i].z));
         }
     }
 
@@ -163,16 +163,16 @@ Similarity align_similarity(std::span<const Vec3d> source, std::span<const Vec3d
             }
         }
     }
-    if (source_var <= 1e-24 * magnitude || target_var <= 1e-24 * magnitude ||
-        source_var == 0.0 || target_var == 0.0) {
-        throw InvalidInput(
-            fmt::format("align_similarity: the {} points of the {} set all coincide", source.size(),
-                        source_var <= 1e-24 * magnitude || source_var == 0.0 ? "source" : "target"));
+    if (source_var <= 1e-24 * magnitude || target_var <= 1e-24 * magnitude || source_var == 0.0 ||
+        target_var == 0.0) {
+        throw InvalidInput(fmt::format(
+            "align_similarity: the {} points of the {} set all coincide", source.size(),
+            source_var <= 1e-24 * magnitude || source_var == 0.0 ? "source" : "target"));
     }
 
     // Step 2: Horn's matrix; its top eigenvector is the rotation's quaternion (w, x, y, z).
-    const double sxx = s[0], sxy = s[1], sxz = s[2], syx = s[3], syy = s[4], syz = s[5],
-                 szx = s[6], szy = s[7], szz = s[8];
+    const double sxx = s[0], sxy = s[1], sxz = s[2], syx = s[3], syy = s[4], syz = s[5], szx = s[6],
+                 szy = s[7], szz = s[8];
     Mat4 n{{{sxx + syy + szz, syz - szy, szx - sxz, sxy - syx},
             {syz - szy, sxx - syy - szz, sxy + syx, szx + sxz},
             {szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy},
