@@ -122,7 +122,14 @@ void bind_nerf(py::module_& m) {
                                  "Pinhole intrinsics: image size, focal lengths and principal "
                                  "point in pixels.")
         .def(py::init([](int width, int height, double fx, double fy, double cx, double cy) {
-                 return nerf::Intrinsics{width, height, fx, fy, cx, cy};
+                 nerf::Intrinsics in;
+                 in.width = width;
+                 in.height = height;
+                 in.fx = fx;
+                 in.fy = fy;
+                 in.cx = cx;
+                 in.cy = cy;
+                 return in;
              }),
              py::arg("width"), py::arg("height"), py::arg("fx"), py::arg("fy"), py::arg("cx"),
              py::arg("cy"))

@@ -37,8 +37,14 @@ Intrinsics intrinsics_from_camera(const render::Camera& camera) {
         throw InvalidInput(
             "nerf::intrinsics_from_camera: the camera is orthographic, expected perspective");
     }
-    return {camera.width(),        camera.height(),      camera.focal_pixels(),
-            camera.focal_pixels(), 0.5 * camera.width(), 0.5 * camera.height()};
+    Intrinsics in;
+    in.width = camera.width();
+    in.height = camera.height();
+    in.fx = camera.focal_pixels();
+    in.fy = camera.focal_pixels();
+    in.cx = 0.5 * camera.width();
+    in.cy = 0.5 * camera.height();
+    return in;
 }
 
 render::Camera camera_from_view(const Intrinsics& in, const Pose& pose) {

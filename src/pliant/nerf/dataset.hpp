@@ -24,12 +24,13 @@
 
 #include "pliant/core/aabb.hpp"
 #include "pliant/core/vec3.hpp"
+#include "pliant/nerf/lens.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/image.hpp"
 
 namespace pliant::nerf {
 
-// Pinhole intrinsics in pixels, shared by all views of a dataset.
+// Intrinsics in pixels: a pinhole projection through a lens model (nerf/lens.hpp).
 struct Intrinsics {
     int width = 0;
     int height = 0;
@@ -37,6 +38,7 @@ struct Intrinsics {
     double fy = 0.0;  // focal length along y, pixels
     double cx = 0.0;  // principal point, continuous pixel coordinates
     double cy = 0.0;
+    Lens lens;  // PINHOLE (no distortion) unless the dataset names a model
 };
 
 // Camera-to-world 3 × 4 matrix [R | t], row-major (m[4 r + c]).
