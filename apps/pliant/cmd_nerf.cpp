@@ -244,8 +244,8 @@ void run_poses(const PosesCommandOptions& options, const GlobalOptions& global) 
     std::printf("camera OPENCV %dx%d: fl %.2f %.2f, c %.2f %.2f, k1 %.4f k2 %.4f p1 %.5f p2 %.5f\n",
                 result.intrinsics.width, result.intrinsics.height, result.intrinsics.fx,
                 result.intrinsics.fy, result.intrinsics.cx, result.intrinsics.cy,
-                result.distortion[0], result.distortion[1], result.distortion[2],
-                result.distortion[3]);
+                result.intrinsics.lens.k1, result.intrinsics.lens.k2, result.intrinsics.lens.p1,
+                result.intrinsics.lens.p2);
     std::string times;
     for (const auto& [name, seconds] : j["seconds"].items()) {
         times += fmt::format("{} {:.1f} s, ", name, seconds.get<double>());

@@ -5,6 +5,7 @@
 // it to a few minutes; PLIANT_POSES_ALL=1 in the environment runs all 64 (the numbers of
 // docs/performance.md).
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 

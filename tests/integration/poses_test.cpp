@@ -33,7 +33,8 @@ void write_photos(const fs::path& dir, int n, int w, int h) {
     for (int i = 0; i < n; ++i) {
         render::Image image(w, h);
         for (std::size_t k = 0; k < image.pixels.size(); ++k) {
-            image.pixels[k] = static_cast<std::uint8_t>((k * 37 + static_cast<std::size_t>(i) * 11) % 251);
+            image.pixels[k] =
+                static_cast<std::uint8_t>((k * 37 + static_cast<std::size_t>(i) * 11) % 251);
         }
         io::write_png(dir / ("photo_" + std::to_string(i) + ".png"), image);
     }
@@ -58,13 +59,13 @@ TEST(PosesCli, EmptyOrMissingFolder) {
     const ScratchDir scratch;
     fs::create_directories(scratch / "empty");
     write_text(scratch / "empty" / "notes.txt", "not a photo");
-    const CliResult empty =
-        run_cli("nerf poses " + quoted(scratch / "empty") + " -o " + quoted(scratch / "out"), scratch);
+    const CliResult empty = run_cli(
+        "nerf poses " + quoted(scratch / "empty") + " -o " + quoted(scratch / "out"), scratch);
     EXPECT_EQ(empty.exit_code, 1);
     EXPECT_NE(empty.err.find("pliant: error: "), std::string::npos) << empty.err;
     EXPECT_NE(empty.err.find("no photos"), std::string::npos) << empty.err;
-    const CliResult missing =
-        run_cli("nerf poses " + quoted(scratch / "nope") + " -o " + quoted(scratch / "out"), scratch);
+    const CliResult missing = run_cli(
+        "nerf poses " + quoted(scratch / "nope") + " -o " + quoted(scratch / "out"), scratch);
     EXPECT_EQ(missing.exit_code, 1);
     EXPECT_NE(missing.err.find("does not exist"), std::string::npos) << missing.err;
     expect_no_dataset(scratch / "out");
@@ -80,7 +81,8 @@ TEST(PosesCli, UnreadablePhotosAreNamedBeforeColmapRuns) {
     write_text(photos / "broken.jpg", "\xff\xd8\xff this is no JPEG");
     write_text(photos / "empty.PNG", "");
     // COLMAP must not be started: the stand-in fails the test by leaving a mark.
-    const std::string env = fake_colmap(scratch.path(), "touch " + quoted(scratch / "ran") + "; exit 1");
+    const std::string env =
+        fake_colmap(scratch.path(), "touch " + quoted(scratch / "ran") + "; exit 1");
     const CliResult r =
         run_cli("nerf poses " + quoted(photos) + " -o " + quoted(scratch / "out"), scratch, env);
     EXPECT_EQ(r.exit_code, 1);
@@ -108,9 +110,9 @@ TEST(PosesCli, ColmapMissingSaysHowToInstallIt) {
     const ScratchDir scratch;
     write_photos(scratch / "photos", 3, 32, 24);
     fs::create_directories(scratch / "bin");
-    const CliResult r = run_cli("nerf poses " + quoted(scratch / "photos") + " -o " +
-                                    quoted(scratch / "out"),
-                                scratch, "PATH=" + quoted(scratch / "bin"));
+    const CliResult r =
+        run_cli("nerf poses " + quoted(scratch / "photos") + " -o " + quoted(scratch / "out"),
+                scratch, "PATH=" + quoted(scratch / "bin"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("apt-get install colmap"), std::string::npos) << r.err;
     expect_no_dataset(scratch / "out");
@@ -121,8 +123,9 @@ TEST(PosesCli, FailingColmapStageShowsTheEndOfItsLog) {
     write_photos(scratch / "photos", 3, 32, 24);
     const std::string env =
         fake_colmap(scratch.path(), "echo \"stand-in: $1 cannot open the database\" >&2; exit 3");
-    const CliResult r = run_cli(
-        "nerf poses " + quoted(scratch / "photos") + " -o " + quoted(scratch / "out"), scratch, env);
+    const CliResult r =
+        run_cli("nerf poses " + quoted(scratch / "photos") + " -o " + quoted(scratch / "out"),
+                scratch, env);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("COLMAP feature_extractor failed (exit code 3)"), std::string::npos)
         << r.err;

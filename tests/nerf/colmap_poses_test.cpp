@@ -75,8 +75,8 @@ TEST(ColmapPoses, SyntheticCamerasRoundTripThroughATextModel) {
     io::test::TempDir dir;
     io::write_colmap_model(dir.path(), model, io::ColmapFormat::text);
     const io::ColmapModel read = io::read_colmap_model(dir.path());
-    const ColmapTransforms t = transforms_from_colmap(
-        read, {.centre = ColmapCentre::none, .scale = ColmapScale::none});
+    const ColmapTransforms t =
+        transforms_from_colmap(read, {.centre = ColmapCentre::none, .scale = ColmapScale::none});
     ASSERT_EQ(t.frames.size(), poses.size());
     for (std::size_t i = 0; i < poses.size(); ++i) {
         EXPECT_EQ(t.frames[i].file_path, "img_" + std::to_string(10 + i) + ".jpg");
@@ -178,7 +178,8 @@ TEST(ColmapPoses, OrientUpTakesTheMeanUpToPlusZ) {
         model.images.push_back(im);
     }
     const ColmapTransforms t = transforms_from_colmap(
-        model, {.orient_up = true, .centre = ColmapCentre::camera_mean, .scale = ColmapScale::none});
+        model,
+        {.orient_up = true, .centre = ColmapCentre::camera_mean, .scale = ColmapScale::none});
     for (const ColmapFrame& f : t.frames) {
         const Vec3d y = f.camera_to_world.axis(1);
         EXPECT_NEAR(y.z, 1.0, 1e-9);

@@ -23,8 +23,8 @@ TEST(Lens, OpencvMatchesHandComputedValue) {
 
 TEST(Lens, FisheyeMatchesHandComputedValue) {
     // θ = atan(|(0.5, 0.25)|), θ_d = θ (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸), scaled by θ_d / r.
-    Lens lens{.model = LensModel::opencv_fisheye, .k1 = 0.05, .k2 = -0.01, .k3 = 0.002,
-              .k4 = -0.0003};
+    Lens lens{
+        .model = LensModel::opencv_fisheye, .k1 = 0.05, .k2 = -0.01, .k3 = 0.002, .k4 = -0.0003};
     const Point2 d = distort(lens, {0.5, 0.25});
     EXPECT_NEAR(d.x, 0.46155584206995737, 1e-15);
     EXPECT_NEAR(d.y, 0.23077792103497868, 1e-15);
@@ -68,10 +68,15 @@ TEST(Lens, UndistortInvertsDistortOverTheImage) {
     expect_round_trip({.model = LensModel::radial, .k1 = 0.08, .k2 = -0.02});
     expect_round_trip(
         {.model = LensModel::opencv, .k1 = -0.15, .k2 = 0.04, .p1 = 0.002, .p2 = -0.0015});
-    expect_round_trip({.model = LensModel::opencv, .k1 = 0.1, .k2 = 0.01, .k3 = -0.002,
-                       .k4 = 0.0005, .p1 = -0.001, .p2 = 0.001});
-    expect_round_trip({.model = LensModel::opencv_fisheye, .k1 = 0.05, .k2 = -0.01, .k3 = 0.002,
-                       .k4 = -0.0003});
+    expect_round_trip({.model = LensModel::opencv,
+                       .k1 = 0.1,
+                       .k2 = 0.01,
+                       .k3 = -0.002,
+                       .k4 = 0.0005,
+                       .p1 = -0.001,
+                       .p2 = 0.001});
+    expect_round_trip(
+        {.model = LensModel::opencv_fisheye, .k1 = 0.05, .k2 = -0.01, .k3 = 0.002, .k4 = -0.0003});
     expect_round_trip({.model = LensModel::pinhole});
 }
 
@@ -102,9 +107,9 @@ TEST(Lens, FoldBackIsReportedNotGuessed) {
 }
 
 TEST(Lens, NamesRoundTrip) {
-    for (const LensModel m : {LensModel::simple_pinhole, LensModel::pinhole,
-                              LensModel::simple_radial, LensModel::radial, LensModel::opencv,
-                              LensModel::opencv_fisheye}) {
+    for (const LensModel m :
+         {LensModel::simple_pinhole, LensModel::pinhole, LensModel::simple_radial,
+          LensModel::radial, LensModel::opencv, LensModel::opencv_fisheye}) {
         EXPECT_EQ(lens_model_from_name(lens_model_name(m)), m);
     }
     EXPECT_FALSE(lens_model_from_name("FOV").has_value());

@@ -27,7 +27,7 @@ namespace pliant::io {
 std::filesystem::path find_program(const std::string& name);
 
 struct ChildProcessResult {
-    int exit_code = 0;     // valid when !signaled && !stopped
+    int exit_code = 0;      // valid when !signaled && !stopped
     bool signaled = false;  // ended by a signal not sent by run_child_process
     int signal = 0;
     bool stopped = false;  // poll returned false and the child was killed
@@ -35,7 +35,6 @@ struct ChildProcessResult {
 };
 
 ChildProcessResult run_child_process(const std::vector<std::string>& argv,
-                                     const std::filesystem::path& log,
-                                     FunctionRef<bool()> poll);
+                                     const std::filesystem::path& log, FunctionRef<bool()> poll);
 
 }  // namespace pliant::io

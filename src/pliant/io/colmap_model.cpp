@@ -84,9 +84,9 @@ public:
     std::uint64_t count(std::string_view what, std::size_t min_record) {
         const std::uint64_t n = get<std::uint64_t>(what);
         if (n > left() / min_record) {
-            throw IoError(fmt::format(
-                "{}: {} {} would need at least {} bytes each, only {} bytes are left", m_name, n,
-                what, min_record, left()));
+            throw IoError(
+                fmt::format("{}: {} {} would need at least {} bytes each, only {} bytes are left",
+                            m_name, n, what, min_record, left()));
         }
         return n;
     }
@@ -101,8 +101,8 @@ public:
     }
     void expect_end() const {
         if (left() != 0) {
-            throw IoError(fmt::format("{}: {} unexpected bytes after the last record", m_name,
-                                      left()));
+            throw IoError(
+                fmt::format("{}: {} unexpected bytes after the last record", m_name, left()));
         }
     }
 
@@ -187,20 +187,20 @@ void check_camera(const ColmapCamera& c, const std::string& where) {
     }
     const int n = MODELS[static_cast<std::size_t>(c.model_id)].num_params;
     if (static_cast<int>(c.params.size()) != n) {
-        throw IoError(fmt::format("{}: camera {}: model {} has {} parameters, got {}", where,
-                                  c.id, MODELS[static_cast<std::size_t>(c.model_id)].name, n,
+        throw IoError(fmt::format("{}: camera {}: model {} has {} parameters, got {}", where, c.id,
+                                  MODELS[static_cast<std::size_t>(c.model_id)].name, n,
                                   c.params.size()));
     }
 }
 
 void check_quaternion(const ColmapImage& im, const std::string& where) {
-    const double n2 = im.qvec[0] * im.qvec[0] + im.qvec[1] * im.qvec[1] +
-                      im.qvec[2] * im.qvec[2] + im.qvec[3] * im.qvec[3];
+    const double n2 = im.qvec[0] * im.qvec[0] + im.qvec[1] * im.qvec[1] + im.qvec[2] * im.qvec[2] +
+                      im.qvec[3] * im.qvec[3];
     if (!(n2 > 1e-12)) {
-        throw IoError(fmt::format("{}: image {} ('{}'): quaternion ({}, {}, {}, {}) has no "
-                                  "rotation (norm ~0)",
-                                  where, im.id, im.name, im.qvec[0], im.qvec[1], im.qvec[2],
-                                  im.qvec[3]));
+        throw IoError(
+            fmt::format("{}: image {} ('{}'): quaternion ({}, {}, {}, {}) has no "
+                        "rotation (norm ~0)",
+                        where, im.id, im.name, im.qvec[0], im.qvec[1], im.qvec[2], im.qvec[3]));
     }
 }
 
@@ -220,7 +220,9 @@ std::filesystem::path file_of(const std::filesystem::path& dir, const char* stem
     return dir / (std::string(stem) + (format == ColmapFormat::binary ? ".bin" : ".txt"));
 }
 
-std::string fmt_real(double v) { return fmt::format("{:.17g}", v); }
+std::string fmt_real(double v) {
+    return fmt::format("{:.17g}", v);
+}
 
 }  // namespace
 
@@ -273,8 +275,9 @@ std::vector<ColmapCamera> parse_colmap_cameras(std::string_view content, ColmapF
             c.height = in.get<std::uint64_t>(what);
             const int np = colmap_camera_model_num_params(c.model_id);
             if (np == 0) {
-                throw IoError(fmt::format("{}: {}: camera {}: unknown camera model id {}; known: {}",
-                                          name, what, c.id, c.model_id, model_list()));
+                throw IoError(
+                    fmt::format("{}: {}: camera {}: unknown camera model id {}; known: {}", name,
+                                what, c.id, c.model_id, model_list()));
             }
             for (int k = 0; k < np; ++k) {
                 c.params.push_back(in.real(what));
@@ -289,16 +292,16 @@ std::vector<ColmapCamera> parse_colmap_cameras(std::string_view content, ColmapF
     while (const auto line = lines.next_record()) {
         const std::vector<std::string> w = detail::words(*line);
         if (w.size() < 4) {
-            throw lines.error(fmt::format(
-                "expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got {}", detail::quote(*line)));
+            throw lines.error(fmt::format("expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got {}",
+                                          detail::quote(*line)));
         }
         ColmapCamera c;
-        c.id = static_cast<std::uint32_t>(text_integer(lines, w[0], "CAMERA_ID", 0,
-                                                       std::numeric_limits<std::uint32_t>::max()));
+        c.id = static_cast<std::uint32_t>(
+            text_integer(lines, w[0], "CAMERA_ID", 0, std::numeric_limits<std::uint32_t>::max()));
         const std::optional<int> model = colmap_camera_model_id(w[1]);
         if (!model) {
-            throw lines.error(fmt::format("unknown camera model {}; known: {}",
-                                          detail::quote(w[1]), model_list()));
+            throw lines.error(fmt::format("unknown camera model {}; known: {}", detail::quote(w[1]),
+                                          model_list()));
         }
         c.model_id = *model;
         c.width = static_cast<std::uint64_t>(
@@ -357,16 +360,16 @@ std::vector<ColmapImage> parse_colmap_images(std::string_view content, ColmapFor
                             w.size(), detail::quote(*line)));
         }
         ColmapImage im;
-        im.id = static_cast<std::uint32_t>(text_integer(lines, w[0], "IMAGE_ID", 0,
-                                                        std::numeric_limits<std::uint32_t>::max()));
+        im.id = static_cast<std::uint32_t>(
+            text_integer(lines, w[0], "IMAGE_ID", 0, std::numeric_limits<std::uint32_t>::max()));
         for (int k = 0; k < 4; ++k) {
             im.qvec[static_cast<std::size_t>(k)] = text_real(lines, w[1 + k], "quaternion");
         }
         for (int k = 0; k < 3; ++k) {
             im.tvec[static_cast<std::size_t>(k)] = text_real(lines, w[5 + k], "translation");
         }
-        im.camera_id = static_cast<std::uint32_t>(text_integer(
-            lines, w[8], "CAMERA_ID", 0, std::numeric_limits<std::uint32_t>::max()));
+        im.camera_id = static_cast<std::uint32_t>(
+            text_integer(lines, w[8], "CAMERA_ID", 0, std::numeric_limits<std::uint32_t>::max()));
         im.name = w[9];
         check_quaternion(im, fmt::format("{}: line {}", name, lines.line()));
         // The points line follows unconditionally (empty when the image has none).
@@ -374,9 +377,9 @@ std::vector<ColmapImage> parse_colmap_images(std::string_view content, ColmapFor
         if (points) {
             const std::vector<std::string> p = detail::words(*points);
             if (p.size() % 3 != 0) {
-                throw lines.error(fmt::format(
-                    "image {}: POINTS2D must be X Y POINT3D_ID triples, got {} words", im.id,
-                    p.size()));
+                throw lines.error(
+                    fmt::format("image {}: POINTS2D must be X Y POINT3D_ID triples, got {} words",
+                                im.id, p.size()));
             }
             for (std::size_t k = 0; k < p.size(); k += 3) {
                 ColmapPoint2D q;
@@ -432,8 +435,8 @@ std::vector<ColmapPoint3D> parse_colmap_points(std::string_view content, ColmapF
                 w.size()));
         }
         ColmapPoint3D p;
-        p.id = static_cast<std::uint64_t>(text_integer(
-            lines, w[0], "POINT3D_ID", 0, std::numeric_limits<std::int64_t>::max()));
+        p.id = static_cast<std::uint64_t>(
+            text_integer(lines, w[0], "POINT3D_ID", 0, std::numeric_limits<std::int64_t>::max()));
         for (int k = 0; k < 3; ++k) {
             p.xyz[static_cast<std::size_t>(k)] = text_real(lines, w[1 + k], "point coordinate");
         }
@@ -462,9 +465,10 @@ void validate_colmap_model(const ColmapModel& model, std::string_view where) {
     std::unordered_map<std::uint32_t, const ColmapImage*> images;
     for (const ColmapImage& im : model.images) {
         if (model.find_camera(im.camera_id) == nullptr) {
-            throw IoError(fmt::format("{}: image {} ('{}') names camera {}, which the model does "
-                                      "not have",
-                                      where, im.id, im.name, im.camera_id));
+            throw IoError(
+                fmt::format("{}: image {} ('{}') names camera {}, which the model does "
+                            "not have",
+                            where, im.id, im.name, im.camera_id));
         }
         images.emplace(im.id, &im);
     }
@@ -483,10 +487,10 @@ void validate_colmap_model(const ColmapModel& model, std::string_view where) {
                     where, p.id, t.image_id));
             }
             if (t.point2d_index >= it->second->points2d.size()) {
-                throw IoError(fmt::format("{}: 3-D point {}: its track names 2-D point {} of image "
-                                          "{}, which has {}",
-                                          where, p.id, t.point2d_index, t.image_id,
-                                          it->second->points2d.size()));
+                throw IoError(fmt::format(
+                    "{}: 3-D point {}: its track names 2-D point {} of image "
+                    "{}, which has {}",
+                    where, p.id, t.point2d_index, t.image_id, it->second->points2d.size()));
             }
         }
     }
@@ -494,9 +498,10 @@ void validate_colmap_model(const ColmapModel& model, std::string_view where) {
         for (const ColmapPoint2D& q : im.points2d) {
             if (q.point3d_id >= 0 &&
                 point_ids.count(static_cast<std::uint64_t>(q.point3d_id)) == 0) {
-                throw IoError(fmt::format("{}: image {} ('{}'): a 2-D point names 3-D point {}, "
-                                          "which the model does not have",
-                                          where, im.id, im.name, q.point3d_id));
+                throw IoError(
+                    fmt::format("{}: image {} ('{}'): a 2-D point names 3-D point {}, "
+                                "which the model does not have",
+                                where, im.id, im.name, q.point3d_id));
             }
         }
     }
@@ -556,9 +561,8 @@ void write_colmap_model(const std::filesystem::path& dir, const ColmapModel& mod
             out << "# Camera list with one line of data per camera:\n"
                    "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n";
             for (const ColmapCamera& c : model.cameras) {
-                out << c.id << ' '
-                    << colmap_camera_model_name(c.model_id).value_or("UNKNOWN") << ' ' << c.width
-                    << ' ' << c.height;
+                out << c.id << ' ' << colmap_camera_model_name(c.model_id).value_or("UNKNOWN")
+                    << ' ' << c.width << ' ' << c.height;
                 for (const double p : c.params) {
                     out << ' ' << fmt_real(p);
                 }

@@ -41,14 +41,14 @@ namespace pliant::io {
 
 struct ColmapCamera {
     std::uint32_t id = 0;
-    int model_id = 0;        // COLMAP's id: 0 SIMPLE_PINHOLE, 1 PINHOLE, … 4 OPENCV, 5 OPENCV_FISHEYE
+    int model_id = 0;  // COLMAP's id: 0 SIMPLE_PINHOLE, 1 PINHOLE, … 4 OPENCV, 5 OPENCV_FISHEYE
     std::uint64_t width = 0;  // pixels
     std::uint64_t height = 0;
     std::vector<double> params;  // in COLMAP's order for the model (f, cx, cy, k …)
 };
 
 struct ColmapPoint2D {
-    double x = 0.0, y = 0.0;    // pixels, COLMAP's convention (top-left pixel's centre at 0.5)
+    double x = 0.0, y = 0.0;       // pixels, COLMAP's convention (top-left pixel's centre at 0.5)
     std::int64_t point3d_id = -1;  // −1: not triangulated
 };
 

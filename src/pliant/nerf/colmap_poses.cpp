@@ -106,10 +106,9 @@ Intrinsics intrinsics_from_colmap(const io::ColmapCamera& camera) {
     const std::vector<double>& p = camera.params;
     const std::string_view name = io::colmap_camera_model_name(camera.model_id).value_or("?");
     if (static_cast<int>(p.size()) != io::colmap_camera_model_num_params(camera.model_id)) {
-        throw InvalidInput(fmt::format("COLMAP camera {}: model {} needs {} parameters, got {}",
-                                       camera.id, name,
-                                       io::colmap_camera_model_num_params(camera.model_id),
-                                       p.size()));
+        throw InvalidInput(
+            fmt::format("COLMAP camera {}: model {} needs {} parameters, got {}", camera.id, name,
+                        io::colmap_camera_model_num_params(camera.model_id), p.size()));
     }
     Intrinsics in;
     in.width = static_cast<int>(camera.width);
@@ -209,9 +208,10 @@ Pose pose_from_colmap(const std::array<double, 4>& qvec, const std::array<double
     const double n =
         std::sqrt(qvec[0] * qvec[0] + qvec[1] * qvec[1] + qvec[2] * qvec[2] + qvec[3] * qvec[3]);
     if (!(n > 1e-6) || !std::isfinite(n)) {
-        throw InvalidInput(fmt::format("COLMAP quaternion ({}, {}, {}, {}): norm {} is not a "
-                                       "rotation",
-                                       qvec[0], qvec[1], qvec[2], qvec[3], n));
+        throw InvalidInput(
+            fmt::format("COLMAP quaternion ({}, {}, {}, {}): norm {} is not a "
+                        "rotation",
+                        qvec[0], qvec[1], qvec[2], qvec[3], n));
     }
     const double w = qvec[0] / n, x = qvec[1] / n, y = qvec[2] / n, z = qvec[3] / n;
     // World-to-camera rotation R (Hamilton quaternion, as COLMAP's QuaternionToRotationMatrix).
@@ -288,9 +288,9 @@ ColmapTransforms transforms_from_colmap(const io::ColmapModel& model,
         throw InvalidInput("COLMAP model: no registered images");
     }
     if (!(options.points_quantile > 0.0 && options.points_quantile <= 1.0)) {
-        throw InvalidInput(fmt::format(
-            "nerf::transforms_from_colmap: points_quantile {} must be in (0, 1]",
-            options.points_quantile));
+        throw InvalidInput(
+            fmt::format("nerf::transforms_from_colmap: points_quantile {} must be in (0, 1]",
+                        options.points_quantile));
     }
     ColmapTransforms out;
     // Step 1: frames in COLMAP's world, sorted by name.
@@ -299,16 +299,16 @@ ColmapTransforms transforms_from_colmap(const io::ColmapModel& model,
     for (const io::ColmapImage& im : model.images) {
         images.push_back(&im);
     }
-    std::sort(images.begin(), images.end(),
-              [](const io::ColmapImage* a, const io::ColmapImage* b) {
-                  return a->name != b->name ? a->name < b->name : a->id < b->id;
-              });
+    std::sort(images.begin(), images.end(), [](const io::ColmapImage* a, const io::ColmapImage* b) {
+        return a->name != b->name ? a->name < b->name : a->id < b->id;
+    });
     for (const io::ColmapImage* im : images) {
         const io::ColmapCamera* camera = model.find_camera(im->camera_id);
         if (camera == nullptr) {
-            throw InvalidInput(fmt::format("COLMAP model: image {} ('{}') names camera {}, which "
-                                           "the model does not have",
-                                           im->id, im->name, im->camera_id));
+            throw InvalidInput(
+                fmt::format("COLMAP model: image {} ('{}') names camera {}, which "
+                            "the model does not have",
+                            im->id, im->name, im->camera_id));
         }
         ColmapFrame f;
         f.file_path = im->name;
@@ -381,7 +381,8 @@ ColmapTransforms transforms_from_colmap(const io::ColmapModel& model,
         }
         const auto k = static_cast<std::size_t>(
             std::ceil(options.points_quantile * static_cast<double>(extent.size())) - 1.0);
-        const auto nth = extent.begin() + static_cast<std::ptrdiff_t>(std::min(k, extent.size() - 1));
+        const auto nth =
+            extent.begin() + static_cast<std::ptrdiff_t>(std::min(k, extent.size() - 1));
         std::nth_element(extent.begin(), nth, extent.end());
         s = *nth > 0.0 ? 1.0 / *nth : camera_scale();
     }

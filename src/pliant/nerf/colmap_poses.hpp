@@ -46,8 +46,8 @@ struct ColmapConversionOptions {
 struct ColmapFrame {
     std::string file_path;  // the image's name in the model (relative to its image directory)
     std::uint32_t image_id = 0;
-    Intrinsics intrinsics;   // of the image's camera (every frame carries its own)
-    Pose camera_to_world;    // OpenGL axes, normalized world
+    Intrinsics intrinsics;  // of the image's camera (every frame carries its own)
+    Pose camera_to_world;   // OpenGL axes, normalized world
 };
 
 struct ColmapTransforms {
@@ -55,10 +55,10 @@ struct ColmapTransforms {
     // The similarity applied to COLMAP's world: x' = world_from_colmap · [x; 1], row-major 3 × 4
     // (s · Q | −s · Q · c); nerfstudio files call the rotation part `applied_transform`.
     std::array<double, 12> world_from_colmap{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
-    Vec3d centre;                                   // c, COLMAP world
-    double scale = 1.0;                             // s
-    ColmapScale scale_used = ColmapScale::none;     // `points` may have fallen back to `cameras`
-    std::vector<Vec3d> points;                      // points3D in the normalized world
+    Vec3d centre;                                // c, COLMAP world
+    double scale = 1.0;                          // s
+    ColmapScale scale_used = ColmapScale::none;  // `points` may have fallen back to `cameras`
+    std::vector<Vec3d> points;                   // points3D in the normalized world
     std::vector<std::array<std::uint8_t, 3>> point_colors;
 };
 

@@ -91,9 +91,9 @@ void validate(const Lens& lens, std::string_view where) {
                 fmt::format("{}: distortion coefficient {} = {} is not finite", where, key, value));
         }
         if (value != 0.0 && !lens_model_uses(lens.model, key)) {
-            throw InvalidInput(fmt::format(
-                "{}: distortion coefficient {} = {} but the camera model {} has no {}", where, key,
-                value, lens_model_name(lens.model), key));
+            throw InvalidInput(
+                fmt::format("{}: distortion coefficient {} = {} but the camera model {} has no {}",
+                            where, key, value, lens_model_name(lens.model), key));
         }
     }
 }
@@ -106,12 +106,12 @@ Point2 distort(const Lens& lens, Point2 p) {
             return p;  // θ_d / r → 1
         }
         const double t = std::atan(r), t2 = t * t;
-        const double td = t * (1.0 + t2 * (lens.k1 + t2 * (lens.k2 + t2 * (lens.k3 + t2 * lens.k4))));
+        const double td =
+            t * (1.0 + t2 * (lens.k1 + t2 * (lens.k2 + t2 * (lens.k3 + t2 * lens.k4))));
         return {u * td / r, v * td / r};
     }
     const double r2 = u * u + v * v;
-    const double radial =
-        1.0 + r2 * (lens.k1 + r2 * (lens.k2 + r2 * (lens.k3 + r2 * lens.k4)));
+    const double radial = 1.0 + r2 * (lens.k1 + r2 * (lens.k2 + r2 * (lens.k3 + r2 * lens.k4)));
     return {u * radial + 2.0 * lens.p1 * u * v + lens.p2 * (r2 + 2.0 * u * u),
             v * radial + 2.0 * lens.p2 * u * v + lens.p1 * (r2 + 2.0 * v * v)};
 }
@@ -137,8 +137,8 @@ std::optional<Vec3d> undistorted_direction(const Lens& lens, Point2 d) {
             const double g =
                 t * (1.0 + t2 * (lens.k1 + t2 * (lens.k2 + t2 * (lens.k3 + t2 * lens.k4)))) - rd;
             const double dg =
-                1.0 + t2 * (3.0 * lens.k1 + t2 * (5.0 * lens.k2 + t2 * (7.0 * lens.k3 +
-                                                                         t2 * 9.0 * lens.k4)));
+                1.0 + t2 * (3.0 * lens.k1 +
+                            t2 * (5.0 * lens.k2 + t2 * (7.0 * lens.k3 + t2 * 9.0 * lens.k4)));
             if (std::fabs(g) <= NEWTON_TOLERANCE * std::max(1.0, rd)) {
                 if (!(dg > 0.0) || !(t >= 0.0) || !(t < std::numbers::pi)) {
                     return std::nullopt;
@@ -161,8 +161,7 @@ std::optional<Vec3d> undistorted_direction(const Lens& lens, Point2 d) {
     double u = d.x, v = d.y;
     for (int step = 0; step < MAX_NEWTON_STEPS; ++step) {
         const double r2 = u * u + v * v;
-        const double radial =
-            1.0 + r2 * (lens.k1 + r2 * (lens.k2 + r2 * (lens.k3 + r2 * lens.k4)));
+        const double radial = 1.0 + r2 * (lens.k1 + r2 * (lens.k2 + r2 * (lens.k3 + r2 * lens.k4)));
         const double dradial =
             lens.k1 + r2 * (2.0 * lens.k2 + r2 * (3.0 * lens.k3 + r2 * 4.0 * lens.k4));
         const double fx = u * radial + 2.0 * lens.p1 * u * v + lens.p2 * (r2 + 2.0 * u * u) - d.x;
@@ -173,7 +172,8 @@ std::optional<Vec3d> undistorted_direction(const Lens& lens, Point2 d) {
         const double e = radial + 2.0 * v * v * dradial + 2.0 * lens.p2 * u + 6.0 * lens.p1 * v;
         const double det = a * e - b * c;
         const double scale = std::max({1.0, std::fabs(d.x), std::fabs(d.y)});
-        if (std::fabs(fx) <= NEWTON_TOLERANCE * scale && std::fabs(fy) <= NEWTON_TOLERANCE * scale) {
+        if (std::fabs(fx) <= NEWTON_TOLERANCE * scale &&
+            std::fabs(fy) <= NEWTON_TOLERANCE * scale) {
             if (!(det > 0.0)) {
                 return std::nullopt;
             }

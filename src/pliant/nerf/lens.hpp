@@ -11,7 +11,8 @@
 //   SIMPLE_PINHOLE, PINHOLE   u_d = u                                        (no coefficient)
 //   SIMPLE_RADIAL             u_d = u (1 + k1 r²)                            (k1)
 //   RADIAL                    u_d = u (1 + k1 r² + k2 r⁴)                    (k1, k2)
-//   OPENCV                    u_d = u (1 + k1 r² + k2 r⁴ + k3 r⁶ + k4 r⁸) + 2 p1 u v + p2 (r² + 2 u²)
+//   OPENCV                    u_d = u (1 + k1 r² + k2 r⁴ + k3 r⁶ + k4 r⁸) + 2 p1 u v + p2 (r² + 2
+//   u²)
 //                             v_d = v (1 + …)                + 2 p2 u v + p1 (r² + 2 v²)
 //                             (COLMAP's OPENCV has k1, k2, p1, p2; nerfstudio's radial polynomial
 //                             also carries k3, k4)

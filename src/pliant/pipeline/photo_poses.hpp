@@ -17,22 +17,17 @@
 //       mapper              → out/colmap/sparse/N/ (--Mapper.ba_refine_principal_point 1
 //                           unless !options.refine_principal_point: COLMAP keeps the principal
 //                           point at the image centre by default, and a phone's is off centre)
-//       model_converter     the model registering the most photos → out/colmap/model/ as text
 //     COLMAP needs no display or OpenGL for these with use_gpu 0. A stage that fails gives IoError
 //     with the last lines of the log and the log's path.
-//   Step 3: the model is read (cameras.txt, images.txt, points3D.txt), its world-to-camera poses
-//     (quaternion qw qx qy qz and t, OpenCV axes: x right, y down, z forward) turned into
-//     camera-to-world matrices in OpenGL axes (columns y and z negated), then normalised into
-//     the dataset frame (docs/formats.md, "nerf poses output"):
-//       - centre: the point nearest (least squares) to all registered cameras' optical axes;
-//       - up: the mean of the cameras' up vectors becomes +z (the rotation is the smallest one
-//         taking it there);
-//       - scale: the median camera distance d to the centre becomes 1 / sin(θ), θ half the
-//         smaller field of view (atan of (w/2)/fx, (h/2)/fy), so the sphere a camera at distance d
-//         sees whole — where the object the cameras look at lies — is the unit sphere, inside the
-//         unit box [−1, 1]³.
+//   Step 3: the model registering the most photos is read (io/colmap_model.hpp) and turned into
+//     camera-to-world poses in OpenGL axes, normalised by nerf::transforms_from_colmap
+//     (nerf/colmap_poses.hpp) with orient_up: the mean of the cameras' up vectors becomes +z,
+//     the point nearest (least squares) to all optical axes — what the cameras look at — the
+//     origin, and the scale puts 95 % of the sparse points (the object and what it stands on,
+//     mostly) inside the unit box [−1, 1]³ (docs/formats.md, "`pliant nerf poses`").
 //     Fewer than half of the photos registered → InvalidInput naming the photos left out and what
-//     usually helps (more overlap between neighbouring photos, textured surfaces, less motion blur).
+//     usually helps (more overlap between neighbouring photos, textured surfaces, less motion
+//     blur).
 //   Step 4 (outputs, each replaced atomically): out/transforms_train.json and
 //     out/transforms_test.json (every options.test_every-th registered photo in name order, from
 //     the first, is in test; the rest in train; test_every 0 puts all in train and writes an
@@ -40,20 +35,20 @@
 //     `k2`, `p1`, `p2` and frames of `file_path` (relative to `out` when possible) and
 //     `transform_matrix` (4 × 4 camera-to-world, OpenGL axes); out/points.ply (the sparse points
 //     in the dataset frame, with colours); out/poses.json (the report below and the normalisation
-//     dataset_from_colmap: scale, rotation, translation).
+//     dataset_from_colmap: the 4 × 4 similarity from COLMAP's world).
 // Result (also `json`): photos, registered, unregistered names, mean reprojection error in pixels
 // (COLMAP's: over all observations of all points), points, seconds per stage.
 // keep_going is polled about every 50 ms while COLMAP runs; false kills COLMAP (SIGTERM, then
 // SIGKILL) and throws Interrupted; nothing is written outside out/colmap/ then.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "pliant/core/vec3.hpp"
 #include "pliant/nerf/dataset.hpp"
@@ -62,12 +57,12 @@
 namespace pliant::pipeline {
 
 struct PhotoPosesOptions {
-    int test_every = 8;           // every N-th registered photo is held out; 0: none
-    std::string matcher = "auto";  // auto | exhaustive | sequential
-    int sequential_above = 150;   // auto: sequential matching above this many photos
-    int threads = 0;              // COLMAP threads per stage; 0: all cores
+    int test_every = 8;                  // every N-th registered photo is held out; 0: none
+    std::string matcher = "auto";        // auto | exhaustive | sequential
+    int sequential_above = 150;          // auto: sequential matching above this many photos
+    int threads = 0;                     // COLMAP threads per stage; 0: all cores
     bool refine_principal_point = true;  // bundle adjustment refines cx, cy too
-    std::filesystem::path colmap;  // the COLMAP executable; empty: `colmap` on $PATH
+    std::filesystem::path colmap;        // the COLMAP executable; empty: `colmap` on $PATH
 };
 
 struct StageTime {
@@ -82,12 +77,10 @@ struct PhotoPosesResult {  // NOLINT(bugprone-exception-escape): json's default 
     double mean_reprojection_error_px = 0.0;
     std::int64_t num_points = 0;
     std::vector<StageTime> stages;
-    nerf::Intrinsics intrinsics;
-    std::array<double, 4> distortion{};  // k1, k2, p1, p2 (OPENCV)
-    // dataset frame = scale · rotation · (COLMAP world − colmap_center)
-    double scale = 1.0;
-    std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major
-    Vec3d colmap_center{};
+    nerf::Intrinsics intrinsics;  // with the OPENCV lens (k1, k2, p1, p2)
+    // dataset point = world_from_colmap · [COLMAP point; 1] (row-major 3 × 4: s · Q | −s · Q · c)
+    std::array<double, 12> world_from_colmap{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    double scale = 1.0;                    // s
     std::vector<std::string> train, test;  // photo file names in each split
     nlohmann::ordered_json json;
 };
@@ -95,8 +88,8 @@ struct PhotoPosesResult {  // NOLINT(bugprone-exception-escape): json's default 
 // Called when a stage starts: its name, its index (0-based) and the number of stages; and while
 // it runs with `fraction` in [0, 1] when COLMAP's log tells (features: files processed; mapping:
 // photos registered), −1 otherwise.
-using PhotoPosesStageFn = std::function<void(const std::string& stage, int index, int count,
-                                             double fraction)>;
+using PhotoPosesStageFn =
+    std::function<void(const std::string& stage, int index, int count, double fraction)>;
 
 PhotoPosesResult recover_photo_poses(const std::filesystem::path& photos,
                                      const std::filesystem::path& out,
