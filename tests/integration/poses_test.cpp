@@ -69,6 +69,16 @@ TEST(PosesCli, EmptyOrMissingFolder) {
     EXPECT_EQ(missing.exit_code, 1);
     EXPECT_NE(missing.err.find("does not exist"), std::string::npos) << missing.err;
     expect_no_dataset(scratch / "out");
+    // An output "folder" that is a file.
+    write_photos(scratch / "photos", 3, 32, 24);
+    write_text(scratch / "file", "x");
+    const std::string env = fake_colmap(scratch.path(), "exit 0");
+    const CliResult file_out =
+        run_cli("nerf poses " + quoted(scratch / "photos") + " -o " + quoted(scratch / "file"),
+                scratch, env);
+    EXPECT_EQ(file_out.exit_code, 1);
+    EXPECT_NE(file_out.err.find("cannot create the output directory"), std::string::npos)
+        << file_out.err;
     EXPECT_EQ(run_cli("nerf poses " + quoted(scratch / "empty"), scratch).exit_code, 2);
     EXPECT_EQ(run_cli("nerf poses x -o y --test-every -1", scratch).exit_code, 2);
     EXPECT_EQ(run_cli("nerf poses x -o y --matcher vocab", scratch).exit_code, 2);
@@ -133,6 +143,19 @@ TEST(PosesCli, FailingColmapStageShowsTheEndOfItsLog) {
         << r.err;
     EXPECT_NE(read_text(scratch / "out" / "colmap" / "log.txt").find("stand-in"),
               std::string::npos);
+    expect_no_dataset(scratch / "out");
+}
+
+TEST(PosesCli, NoModelSaysWhatUsuallyHelps) {
+    const ScratchDir scratch;
+    write_photos(scratch / "photos", 3, 32, 24);
+    const std::string env = fake_colmap(scratch.path(), "exit 0");  // every stage "succeeds"
+    const CliResult r =
+        run_cli("nerf poses " + quoted(scratch / "photos") + " -o " + quoted(scratch / "out"),
+                scratch, env);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("COLMAP registered none of the 3 photos"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("more overlap"), std::string::npos) << r.err;
     expect_no_dataset(scratch / "out");
 }
 

@@ -17,6 +17,7 @@
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/child_process.hpp"
 #include "pliant/io/colmap_model.hpp"
+#include "pliant/io/output_directory.hpp"
 #include "pliant/io/ply.hpp"
 #include "pliant/io/read_file.hpp"
 #include "pliant/nerf/colmap_poses.hpp"
@@ -232,7 +233,8 @@ PhotoPosesResult recover_photo_poses(const fs::path& photos, const fs::path& out
     stage_end("photos", t);
 
     const fs::path work = out / "colmap";
-    fs::create_directories(work);
+    io::make_output_directory(out);
+    io::make_output_directory(work);
     const fs::path database = work / "database.db";
     const fs::path sparse = work / "sparse";
     const fs::path log = work / "log.txt";
@@ -240,7 +242,6 @@ PhotoPosesResult recover_photo_poses(const fs::path& photos, const fs::path& out
     fs::remove(work / "database.db-shm");
     fs::remove(work / "database.db-wal");
     fs::remove_all(sparse);
-    fs::remove_all(work / "model");
     fs::create_directories(sparse);
     const std::string threads = std::to_string(options.threads > 0 ? options.threads : -1);
     const fs::path photo_dir = fs::absolute(photos);
