@@ -109,11 +109,13 @@ TEST(PosesColmap, RecoversTheCaptureGroundTruth) {
     EXPECT_EQ(estimated.size(), report.at("registered").get<std::size_t>());
     EXPECT_LT(report.at("mean_reprojection_error_px").get<double>(), 1.5);
     // The bar for plain COLMAP on this kind of capture: median 0.55°, worst 4.7°, centres
-    // within 6.5 % of their spread, focal 4.6 % off; these bounds leave room for the subset.
-    EXPECT_LT(cmp.median_rotation_error_deg, 1.0);
-    EXPECT_LT(cmp.max_rotation_error_deg, 5.0);
-    EXPECT_LT(cmp.max_center_error_relative(), 0.10);
-    EXPECT_LT(std::abs(focal_error), 0.05);
+    // within 6.5 % of their spread, focal 4.6 % off. With the principal point refined the subset
+    // gives 0.15°, 0.26°, 0.17 %, 0.06 % (docs/performance.md); COLMAP's centred principal point
+    // alone costs about 0.6° on every camera here, which the median bound catches.
+    EXPECT_LT(cmp.median_rotation_error_deg, 0.5);
+    EXPECT_LT(cmp.max_rotation_error_deg, 2.0);
+    EXPECT_LT(cmp.max_center_error_relative(), 0.02);
+    EXPECT_LT(std::abs(focal_error), 0.01);
     // The dataset frame: the cameras look at the origin from a distance of a few units, +z up
     // (the ground truth's up is +z too, so the alignment's rotation is near a turn about z).
     EXPECT_GT(cmp.estimated_to_reference.rotation[8], 0.99);
