@@ -212,7 +212,7 @@ TEST(NerfDataset, AbsurdSizesAreRefusedBeforeDecoding) {
 TEST(NerfDataset, DerivesASceneBoxFromTheCameras) {
     // Four cameras on a circle of radius 4 around (1, 2, 3), looking at it.
     nerf::Dataset ds;
-    ds.intrinsics = {100, 100, 100.0, 100.0, 50.0, 50.0};
+    ds.intrinsics = {100, 100, 100.0, 100.0, 50.0, 50.0, {}};
     const Vec3d c{1, 2, 3};
     for (int i = 0; i < 4; ++i) {
         const double a = i * std::numbers::pi / 2;
