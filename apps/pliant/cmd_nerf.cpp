@@ -31,6 +31,15 @@
 // compares with the dataset's images: PSNR and SSIM (nerf/metrics.hpp) per view and their means.
 // --images DIR writes the renders as DIR/<i>.png. stdout: a table, or with --json: psnr, ssim
 // (means), views [{file_path, psnr, ssim}].
+//
+// pliant nerf poses PHOTOS_DIR -o DIR [--test-every 8] [--matcher auto|exhaustive|sequential]
+//                   [--centred-principal-point] [--json]
+// poses: camera poses and one shared OPENCV lens for a folder of photos, by COLMAP
+// (pipeline/photo_poses.hpp), written as DIR/transforms_train.json, DIR/transforms_test.json
+// (nerfstudio's convention), DIR/points.ply and DIR/poses.json; COLMAP's files in DIR/colmap/.
+// Ctrl-C kills COLMAP and exits 130 without writing the dataset.
+// stdout: a summary, or with --json: photos, registered, unregistered, mean_reprojection_error_px,
+// points, train, test, matcher, seconds per stage, total_seconds, camera, dataset_from_colmap.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -49,6 +58,7 @@
 #include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
 #include "pliant/pipeline/nerf_run.hpp"
+#include "pliant/pipeline/photo_poses.hpp"
 #include "progress_bar.hpp"
 #include "validators.hpp"
 
@@ -221,6 +231,85 @@ void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
     }
 }
 
+struct PosesCommandOptions {
+    std::string photos;
+    std::string out;
+    int test_every = 8;
+    std::string matcher = "auto";
+    bool centred_principal_point = false;
+};
+
+// "\rpliant nerf poses: [2/5] features  37%" on stderr while COLMAP runs (terminals only).
+pipeline::PhotoPosesStageFn poses_progress(bool enabled) {
+    if (!enabled) {
+        return {};
+    }
+    return [](const std::string& stage, int index, int count, double fraction) {
+        if (fraction >= 0.0) {
+            std::fprintf(stderr, "\rnerf poses: [%d/%d] %-9s %3.0f%%", index + 1, count,
+                         stage.c_str(), 100.0 * fraction);
+        } else {
+            std::fprintf(stderr, "\rnerf poses: [%d/%d] %-9s     ", index + 1, count,
+                         stage.c_str());
+        }
+        std::fflush(stderr);
+    };
+}
+
+void run_poses(const PosesCommandOptions& options, const GlobalOptions& global) {
+    pipeline::PhotoPosesOptions po;
+    po.test_every = options.test_every;
+    po.matcher = options.matcher;
+    po.refine_principal_point = !options.centred_principal_point;
+    po.threads = global.threads;
+    pipeline::PhotoPosesResult result;
+    {
+        const InterruptGuard guard;
+        const bool bar = stderr_is_terminal();
+        try {
+            result =
+                pipeline::recover_photo_poses(options.photos, options.out, po, poses_progress(bar),
+                                              [] { return InterruptGuard::keep_going(); });
+        } catch (...) {
+            if (bar) {
+                std::fputs("\n", stderr);
+            }
+            throw;
+        }
+        if (bar) {
+            std::fputs("\n", stderr);
+        }
+    }
+    if (global.json) {
+        std::fputs((result.json.dump(2) + "\n").c_str(), stdout);
+        return;
+    }
+    const nlohmann::ordered_json& j = result.json;
+    std::printf("%s: registered %d/%d photos, mean reprojection error %.3f px, %lld points\n",
+                options.out.c_str(), result.num_registered, result.num_photos,
+                result.mean_reprojection_error_px, static_cast<long long>(result.num_points));
+    std::printf("camera OPENCV %dx%d: fl %.2f %.2f, c %.2f %.2f, k1 %.4f k2 %.4f p1 %.5f p2 %.5f\n",
+                result.intrinsics.width, result.intrinsics.height, result.intrinsics.fx,
+                result.intrinsics.fy, result.intrinsics.cx, result.intrinsics.cy,
+                result.intrinsics.lens.k1, result.intrinsics.lens.k2, result.intrinsics.lens.p1,
+                result.intrinsics.lens.p2);
+    std::string times;
+    for (const auto& [name, seconds] : j["seconds"].items()) {
+        times += fmt::format("{} {:.1f} s, ", name, seconds.get<double>());
+    }
+    std::printf("seconds: %stotal %.1f s\n", times.c_str(), j["total_seconds"].get<double>());
+    std::printf(
+        "wrote transforms_train.json (%zu), transforms_test.json (%zu), points.ply, "
+        "poses.json\n",
+        result.train.size(), result.test.size());
+    if (!result.unregistered.empty()) {
+        std::string names;
+        for (const std::string& n : result.unregistered) {
+            names += (names.empty() ? "" : ", ") + n;
+        }
+        std::printf("not registered: %s\n", names.c_str());
+    }
+}
 }  // namespace
 
 void register_nerf(CLI::App& app, const GlobalOptions& global) {
@@ -327,6 +416,31 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
     eval->add_flag("--alpha-mask", e->alpha_mask, "Ignore pixels of alpha 0 (besides masks)");
     eval->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     eval->callback([e, &global] { run_eval(*e, global); });
+
+    auto po = std::make_shared<PosesCommandOptions>();
+    CLI::App* poses = nerf->add_subcommand(
+        "poses", "Recover camera poses and the lens from a folder of photos with COLMAP");
+    poses->add_option("PHOTOS_DIR", po->photos, "Folder of photos (.jpg, .jpeg, .png) of one size")
+        ->required();
+    poses
+        ->add_option("-o,--output", po->out,
+                     "Output folder: transforms_train.json, transforms_test.json, points.ply, "
+                     "poses.json, colmap/")
+        ->required()
+        ->check(non_empty_path());
+    poses
+        ->add_option("--test-every", po->test_every,
+                     "Hold out every N-th registered photo for transforms_test.json (0: none)")
+        ->check(CLI::Range(0, 1000000));
+    poses
+        ->add_option("--matcher", po->matcher,
+                     "COLMAP matching: exhaustive, sequential (photos in walking order), or auto "
+                     "(sequential above 150 photos)")
+        ->check(CLI::IsMember({"auto", "exhaustive", "sequential"}));
+    poses->footer(
+        "Needs COLMAP (apt-get install colmap). Global options --threads N and --json "
+        "apply here too.");
+    poses->callback([po, &global] { run_poses(*po, global); });
 }
 
 }  // namespace pliant::cli

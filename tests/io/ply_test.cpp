@@ -199,6 +199,45 @@ TEST(Ply, WriterRejectsInvalidMeshAndKeepsTheFile) {
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"keep.ply"});
 }
 
+TEST(Ply, PointCloudWithColours) {
+    TempDir dir;
+    const std::vector<Vec3f> points{{1.5f, -2.0f, 3.25f}, {0.0f, 1e-3f, -7.0f}};
+    const std::vector<std::array<std::uint8_t, 3>> colors{{{255, 0, 17}}, {{1, 2, 3}}};
+    for (const PlyFormat format : ALL_FORMATS) {
+        SCOPED_TRACE(to_string(format));
+        write_point_cloud_ply(dir / "p.ply", points, colors, format);
+        const TriangleMeshD back = read_ply(dir / "p.ply");
+        ASSERT_EQ(back.num_vertices(), 2u);
+        EXPECT_EQ(back.num_triangles(), 0u);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            EXPECT_EQ(back.positions[i].x, static_cast<double>(points[i].x));
+            EXPECT_EQ(back.positions[i].y, static_cast<double>(points[i].y));
+            EXPECT_EQ(back.positions[i].z, static_cast<double>(points[i].z));
+        }
+    }
+    const std::string text = test::read_bytes(dir / "p.ply");  // the last format: big endian
+    EXPECT_NE(
+        text.find("element vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                  "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"),
+        std::string::npos);
+    EXPECT_EQ(text.find("element face"), std::string::npos);
+    EXPECT_EQ(text.substr(text.size() - 3), std::string("\x01\x02\x03", 3));
+    write_point_cloud_ply(dir / "a.ply", points, colors, PlyFormat::ascii);
+    EXPECT_NE(test::read_bytes(dir / "a.ply").find("end_header\n1.5 -2 3.25 255 0 17\n"),
+              std::string::npos);
+    write_point_cloud_ply(dir / "n.ply", points, {}, PlyFormat::ascii);
+    EXPECT_EQ(test::read_bytes(dir / "n.ply").find("red"), std::string::npos);
+
+    // Wrong colour count and a NaN leave the file as it was.
+    write_bytes(dir / "keep.ply", "previous");
+    EXPECT_THROW(write_point_cloud_ply(dir / "keep.ply", points, std::span(colors).first(1)),
+                 InvalidInput);
+    std::vector<Vec3f> nan = points;
+    nan[1].z = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(write_point_cloud_ply(dir / "keep.ply", nan, colors), InvalidInput);
+    EXPECT_EQ(test::read_bytes(dir / "keep.ply"), "previous");
+}
+
 TEST(Ply, WriteIntoMissingDirectoryLeavesNothing) {
     TempDir dir;
     const auto path = dir / "missing" / "mesh.ply";

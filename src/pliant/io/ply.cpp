@@ -743,4 +743,53 @@ void write_ply(const std::filesystem::path& path, const geometry::TriangleMeshD&
     write_ply_impl(path, mesh, format);
 }
 
+void write_point_cloud_ply(const std::filesystem::path& path, std::span<const Vec3f> positions,
+                           std::span<const std::array<std::uint8_t, 3>> colors, PlyFormat format) {
+    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
+        format != PlyFormat::binary_big_endian) {
+        throw InvalidInput(fmt::format(
+            "write_point_cloud_ply: {}: format ({}) is not a PlyFormat, expected one of ascii, "
+            "binary_little_endian, binary_big_endian",
+            path.string(), static_cast<int>(format)));
+    }
+    if (!colors.empty() && colors.size() != positions.size()) {
+        throw InvalidInput(
+            fmt::format("write_point_cloud_ply: {}: {} colours for {} points, expected 0 or {}",
+                        path.string(), colors.size(), positions.size(), positions.size()));
+    }
+    geometry::validate_positions(positions, path.string());
+    const bool has_colors = !colors.empty();
+    const std::string header = fmt::format(
+        "ply\nformat {} 1.0\ncomment written by pliant\nelement vertex {}\nproperty float x\n"
+        "property float y\nproperty float z\n{}end_header\n",
+        to_string(format), positions.size(),
+        has_colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "");
+    write_file_atomically(path, [&](std::ostream& out) {
+        out.write(header.data(), static_cast<std::streamsize>(header.size()));
+        fmt::memory_buffer buffer;
+        const bool swap = detail::needs_swap(
+            format == PlyFormat::binary_big_endian ? std::endian::big : std::endian::little);
+        for (std::size_t i = 0; i < positions.size(); ++i) {
+            const Vec3f& p = positions[i];
+            if (format == PlyFormat::ascii) {
+                fmt::format_to(std::back_inserter(buffer), "{:.9g} {:.9g} {:.9g}", p.x, p.y, p.z);
+                if (has_colors) {
+                    fmt::format_to(std::back_inserter(buffer), " {} {} {}", colors[i][0],
+                                   colors[i][1], colors[i][2]);
+                }
+                buffer.push_back('\n');
+            } else {
+                append_binary(buffer, p.x, swap);
+                append_binary(buffer, p.y, swap);
+                append_binary(buffer, p.z, swap);
+                if (has_colors) {
+                    buffer.append(colors[i].begin(), colors[i].end());
+                }
+            }
+            flush_if_full(buffer, out);
+        }
+        flush_if_full(buffer, out, true);
+    });
+}
+
 }  // namespace pliant::io

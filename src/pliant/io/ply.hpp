@@ -27,9 +27,18 @@
 // format reads back bit for bit. The file is replaced atomically (see atomic_file.hpp).
 // Throws InvalidInput (before touching the file) when the mesh fails geometry::validate_mesh,
 // and IoError "<path>: …" when the file cannot be written.
+//
+// write_point_cloud_ply(path, positions, colors, format) writes points only: `element vertex` with
+// `property float` x, y, z and, when `colors` is not empty, `property uchar` red, green, blue (the
+// layout of COLMAP's and nerfstudio's sparse point files); no face element. `colors` is empty or
+// has one RGB triple per position (InvalidInput otherwise, or for a NaN/Inf position, before
+// touching the file). read_ply reads the positions back.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
+#include <span>
 
 #include "pliant/geometry/triangle_mesh.hpp"
 
@@ -46,5 +55,9 @@ void write_ply(const std::filesystem::path& path, const geometry::TriangleMesh& 
                PlyFormat format = PlyFormat::binary_little_endian);
 void write_ply(const std::filesystem::path& path, const geometry::TriangleMeshD& mesh,
                PlyFormat format = PlyFormat::binary_little_endian);
+
+void write_point_cloud_ply(const std::filesystem::path& path, std::span<const Vec3f> positions,
+                           std::span<const std::array<std::uint8_t, 3>> colors,
+                           PlyFormat format = PlyFormat::binary_little_endian);
 
 }  // namespace pliant::io
