@@ -31,12 +31,14 @@
 #include <map>
 #include <random>
 #include <set>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "integration/run_cli.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/io/checkpoint.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/png.hpp"
 #include "pliant/io/video.hpp"
@@ -142,6 +144,11 @@ std::vector<std::string> incomplete_outputs(const fs::path& dir) {
                         }
                     }
                 }
+            } else if (extension == ".bin" && name.ends_with("checkpoint.bin")) {
+                // A checkpoint (--checkpoint-every): its header, size and CRC hold.
+                const std::string bytes = read_text(path);
+                io::decode_checkpoint(
+                    std::as_bytes(std::span<const char>(bytes.data(), bytes.size())), name);
             } else {
                 problems.push_back(name + ": unexpected file");
             }
@@ -204,7 +211,9 @@ std::map<std::string, std::string> deterministic_outputs(const fs::path& dir) {
     std::map<std::string, std::string> files;
     for (const std::string& name : files_under(dir)) {
         const fs::path path(name);
-        if (path.filename() != "stats.json" && path.extension() != ".mp4" && !is_temporary(name)) {
+        // stats.json and checkpoints hold timings; MP4s are not bitwise reproducible.
+        if (path.filename() != "stats.json" && path.filename() != "checkpoint.bin" &&
+            path.extension() != ".mp4" && !is_temporary(name)) {
             files[name] = read_text(dir / name);
         }
     }
