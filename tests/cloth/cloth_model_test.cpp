@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -66,6 +67,37 @@ TEST(ClothModel, MovesPinsAndObstaclesToATimeWithoutAStepper) {
     // Moving obstacles and pins is not a step: the model's time is the steps'.
     EXPECT_EQ(model.time(), 0.0);
     EXPECT_NEAR(model.nearest_obstacle({3.0, 0.0, 0.0}).distance, 1.5, 1e-12);
+}
+
+TEST(ClothModel, PinsChaseATargetThatJumpsAtABoundedSpeed) {
+    // Vertices 0 and 4 jump 1 m up at once; 4 is also in a later static group, which it follows.
+    const geometry::TriangleMeshD mesh = sheet(4, 1.0, 1.0);
+    ClothModel model(mesh, ClothMaterial{});
+    Motion jump;
+    jump.keyframes = {{0.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}},
+                      {0.001, {0.0, 0.0, 1.0}, {0.0, 0.0, 0.0}}};
+    model.add_moving_pins(std::vector<std::int32_t>{0, 4}, jump);
+    model.add_moving_pins(std::vector<std::int32_t>{4}, Motion{});
+    EXPECT_EQ(model.pin_lag().vertices, 0);
+    const double max_step = 0.3;
+    for (int step = 1; step <= 4; ++step) {
+        model.begin_step(0.1);
+        model.move_pins(0.1 * step, max_step);
+        model.end_step();
+        // At most max_step per call toward the target, then exactly on it.
+        const double expected = std::min(1.0, max_step * step);
+        EXPECT_NEAR(model.positions()[0].z, 1.0 + expected, 1e-12) << step;
+        EXPECT_EQ(model.positions()[4], mesh.positions[4]);
+        const ClothModel::PinLag lag = model.pin_lag();
+        EXPECT_EQ(lag.vertices, step < 4 ? 1 : 0) << step;
+        EXPECT_NEAR(lag.max, 1.0 - expected, 1e-12) << step;
+    }
+    EXPECT_EQ(model.positions()[0].z, 2.0);  // the target itself, not a sum of steps
+    // Without a bound, the target at once.
+    ClothModel unbounded(mesh, ClothMaterial{});
+    unbounded.add_moving_pins(std::vector<std::int32_t>{0}, jump);
+    unbounded.move_pins(0.1);
+    EXPECT_EQ(unbounded.positions()[0].z, 2.0);
 }
 
 TEST(ClothModel, GrabFollowsItsPathOverAStep) {

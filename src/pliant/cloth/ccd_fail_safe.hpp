@@ -32,7 +32,9 @@
 // simplest); later rounds test nothing. The hits are a superset of the CCD's, so the end stays
 // intersection-free; the rounds continue as above on the changed motion and end as above. The
 // price is motion: frozen vertices lose the window's motion, and where every window exceeds the
-// budget the same vertices stay frozen (a pinned row that jumps 1.6 m stays where it was).
+// budget the same vertices stay frozen (hence pins chase a jumping target and obstacles push
+// deep cloth out at a bounded speed, xpbd_stepper.cpp's CATCH_UP_IN_THICKNESS, which keeps the
+// jump ribbon within the budget).
 // stats: budget_exceeded (windows) and frozen_vertices (vertices put back after the budget was
 // spent, summed). The budget does not apply where the rounding margin exceeds the thickness
 // (coordinates beyond about 1e6 thicknesses: cloth that diverged, which the caller must see

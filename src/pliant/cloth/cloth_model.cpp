@@ -140,6 +140,13 @@ void ClothModel::add_moving_pins(std::span<const std::int32_t> vertices, const M
         throw InvalidInput(
             "cloth: pin motion: expected finite keyframes at strictly increasing times");
     }
+    // A vertex follows its last group: it leaves the earlier ones.
+    std::vector<bool> in_group(m_positions.size(), false);
+    for (const std::int32_t v : vertices) {
+        if (v >= 0 && static_cast<std::size_t>(v) < m_positions.size()) {
+            in_group[static_cast<std::size_t>(v)] = true;
+        }
+    }
     MovingPins pins;
     pins.motion = motion;
     const Pose start = motion.pose(m_time);
@@ -154,6 +161,18 @@ void ClothModel::add_moving_pins(std::span<const std::int32_t> vertices, const M
         // The rest placement that the motion's current pose maps to the vertex's position.
         pins.rest_positions.push_back(
             start.apply_inverse(m_positions[static_cast<std::size_t>(v)]));
+    }
+    for (MovingPins& earlier : m_moving_pins) {
+        std::size_t kept = 0;
+        for (std::size_t k = 0; k < earlier.vertices.size(); ++k) {
+            if (!in_group[static_cast<std::size_t>(earlier.vertices[k])]) {
+                earlier.vertices[kept] = earlier.vertices[k];
+                earlier.rest_positions[kept] = earlier.rest_positions[k];
+                ++kept;
+            }
+        }
+        earlier.vertices.resize(kept);
+        earlier.rest_positions.resize(kept);
     }
     m_moving_pins.push_back(std::move(pins));
 }
@@ -295,12 +314,18 @@ void ClothModel::begin_step(double dt) {
     }
 }
 
-void ClothModel::move_pins(double t) {
+void ClothModel::move_pins(double t, double max_step) {
     for (const MovingPins& pins : m_moving_pins) {
         const Pose pose = pins.motion.pose(t);
         parallel_for(static_cast<std::int64_t>(pins.vertices.size()), [&](std::int64_t k) {
-            m_positions[static_cast<std::size_t>(pins.vertices[static_cast<std::size_t>(k)])] =
-                pose.apply(pins.rest_positions[static_cast<std::size_t>(k)]);
+            Vec3d& x =
+                m_positions[static_cast<std::size_t>(pins.vertices[static_cast<std::size_t>(k)])];
+            const Vec3d target = pose.apply(pins.rest_positions[static_cast<std::size_t>(k)]);
+            const Vec3d to_target = target - x;
+            const double distance = norm(to_target);
+            // Within max_step (up to rounding: a relative 1e-9), the target itself, so that a
+            // chase ends on it rather than a rounding error short of it.
+            x = distance > max_step * (1.0 + 1e-9) ? x + to_target * (max_step / distance) : target;
         });
     }
     if (m_grab) {
@@ -308,6 +333,25 @@ void ClothModel::move_pins(double t) {
         m_positions[static_cast<std::size_t>(m_grab->vertex)] =
             m_grab->start + (m_grab->target - m_grab->start) * f;
     }
+}
+
+ClothModel::PinLag ClothModel::pin_lag() const {
+    PinLag lag;
+    for (const MovingPins& pins : m_moving_pins) {
+        const Pose pose = pins.motion.pose(m_time);
+        for (std::size_t k = 0; k < pins.vertices.size(); ++k) {
+            if (m_grab && m_grab->vertex == pins.vertices[k]) {
+                continue;
+            }
+            const double distance = norm(pose.apply(pins.rest_positions[k]) -
+                                         m_positions[static_cast<std::size_t>(pins.vertices[k])]);
+            if (distance > 0.0) {
+                ++lag.vertices;
+                lag.max = std::max(lag.max, distance);
+            }
+        }
+    }
+    return lag;
 }
 
 void ClothModel::move_obstacles(double t) {

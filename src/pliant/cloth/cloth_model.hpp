@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -75,7 +76,7 @@ public:
     void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle, const Motion& motion = {});
     // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
     // their current positions: move_pins(t) places them at motion.pose(t)(rest). A vertex in
-    // several groups follows the last.
+    // several groups follows the last (it leaves the earlier groups).
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
@@ -142,7 +143,20 @@ public:
     void end_step() { m_time = m_step_start + m_step_dt; }
     // Places the moving pins (their motion at time t, s) and then the grabbed vertex (on its
     // path, see grab()). Positions only: a stepper derives velocities from the motion.
-    void move_pins(double t);
+    // max_step (m, > 0): a pinned vertex moves at most that far per call, on the straight line
+    // from where it is toward its target, so a pin whose keyframes jump chases its target at
+    // that bounded speed and reaches it over several calls (its lag, pin_lag(), lives in the
+    // positions: nothing else to keep). A target within max_step (up to a relative 1e-9) is
+    // taken exactly, so pins slower than that are placed as without the bound. The grabbed
+    // vertex is not bounded.
+    void move_pins(double t, double max_step = std::numeric_limits<double>::infinity());
+    // Pinned vertices (of moving pin groups, not grabbed) that are not at their motion's target
+    // at time(), and the largest such distance (m).
+    struct PinLag {
+        std::int64_t vertices = 0;
+        double max = 0.0;  // m
+    };
+    PinLag pin_lag() const;
     // Places the obstacles at time t (s); the previous placements are kept for the obstacles'
     // surface velocities (MotionState::surface_displacement).
     void move_obstacles(double t);

@@ -31,6 +31,16 @@ constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
 // Larger moves outrun the self-collision's proximity constraints, which act once per substep
 // (docs/journal/2026-11-25-strain-limiting.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
+// With self-collision, a moving pin moves at most this fraction of the thickness per substep
+// toward its keyframed target (ClothModel::move_pins), and an obstacle undoes at most this
+// fraction of the thickness of a penetration the substep began with: pins whose keyframes jump
+// chase their target, and cloth deep inside an obstacle comes out, over several substeps instead
+// of sweeping through the cloth in one, which the self-collision fail-safe could only hold back
+// window after window (scenes/stress/jump_ribbon.json: with a whole thickness, the end the
+// ribbon starts with inside a sphere stayed caught and the budget was exceeded in every window
+// from frame 8; with half, never). The proximity constraints act once per substep, so a move
+// well under the thickness keeps them ahead of it (as STRAIN_LIMIT_MOVE).
+constexpr double CATCH_UP_IN_THICKNESS = 0.5;
 
 // Coordinates below 2^-200 m (6e-61 m: nothing cloth has is that short) become 0: the exact
 // predicates of the self-collision and of the intersection count take 0 or magnitudes from
@@ -264,7 +274,10 @@ std::int64_t XPBDStepper::substep(ClothModel& model, double h, double t_end, dou
             }
         },
         VERTEX_GRAIN);
-    model.move_pins(t_end);
+    // With self-collision, pins move at most CATCH_UP_IN_THICKNESS thickness per substep.
+    model.move_pins(t_end, m_self_collision && material.thickness > 0.0
+                               ? CATCH_UP_IN_THICKNESS * material.thickness
+                               : std::numeric_limits<double>::infinity());
     project_constraints(model, h);
     model.move_obstacles(t_end);
     const std::int64_t contacts = resolve_obstacles(model, h);
@@ -400,6 +413,21 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
     const std::span<const MovingObstacle> obstacles = model.obstacles();
     const std::span<const MovingMeshObstacle> mesh_obstacles = model.mesh_obstacles();
     const double thickness = model.material().thickness;
+    // Of a penetration the substep began with, at most this much is undone per substep (the
+    // rest stays for the next substeps): cloth given deep inside an obstacle, or left there by
+    // an obstacle that jumps, comes out at a bounded speed, as a jumping pin chases its target.
+    const double max_settle = m_self_collision && thickness > 0.0
+                                  ? CATCH_UP_IN_THICKNESS * thickness
+                                  : std::numeric_limits<double>::infinity();
+    // Holds back the part of a push of `depth` along `normal` that undoes more than max_settle of
+    // the penetration `settled` the substep began with: moves x back by it and returns it.
+    const auto bound_settle = [max_settle](Vec3d& x, const Vec3d& normal, double settled) {
+        const double excess = settled > max_settle ? settled - max_settle : 0.0;
+        if (excess > 0.0) {
+            x -= normal * excess;
+        }
+        return excess;
+    };
     return parallel_reduce(
         static_cast<std::int64_t>(positions.size()), std::int64_t{0},
         [&](std::int64_t begin, std::int64_t end) {
@@ -413,18 +441,24 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
                 }
                 const Vec3d& start = m_previous_positions[v];
                 for (const MovingObstacle& obstacle : obstacles) {
-                    const ContactCorrection contact =
-                        push_out(obstacle.current, positions[v], thickness);
-                    if (contact.depth > m_contact_depths[v]) {
-                        m_contact_depths[v] = contact.depth;
-                        m_contact_normals[v] = contact.normal;
-                        // The surface point under x moved from where the previous pose had it.
-                        m_contact_velocities[v] =
-                            obstacle.state.surface_displacement(positions[v]) * (1.0 / h);
+                    ContactCorrection contact = push_out(obstacle.current, positions[v], thickness);
+                    if (contact.depth > 0.0) {
                         // How deep the vertex already was when the substep began.
                         const double was_in =
                             thickness - surface_distance(obstacle.previous, start).distance;
-                        m_contact_settled[v] = std::clamp(was_in, 0.0, contact.depth);
+                        double settled = std::clamp(was_in, 0.0, contact.depth);
+                        const double excess = bound_settle(positions[v], contact.normal, settled);
+                        contact.depth -= excess;
+                        settled -= excess;
+                        if (contact.depth > m_contact_depths[v]) {
+                            m_contact_depths[v] = contact.depth;
+                            m_contact_normals[v] = contact.normal;
+                            // The surface point under x moved from where the previous pose had
+                            // it.
+                            m_contact_velocities[v] =
+                                obstacle.state.surface_displacement(positions[v]) * (1.0 / h);
+                            m_contact_settled[v] = settled;
+                        }
                     }
                 }
                 for (const MovingMeshObstacle& mesh : mesh_obstacles) {
@@ -438,18 +472,23 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
                     Vec3d x_rest = pose.apply_inverse(x);
                     const ContactCorrection contact =
                         push_out(*mesh.mesh, x_rest, thickness, max_depth);
-                    if (contact.depth > 0.0) {
-                        x = pose.apply(x_rest);
+                    if (!(contact.depth > 0.0)) {
+                        continue;
                     }
-                    if (contact.depth > m_contact_depths[v]) {
-                        m_contact_depths[v] = contact.depth;
-                        m_contact_normals[v] = pose.rotation.apply(contact.normal);
+                    x = pose.apply(x_rest);
+                    const Vec3d normal = pose.rotation.apply(contact.normal);
+                    const std::optional<SurfaceDistance> before = mesh.mesh->surface_distance(
+                        mesh.state.previous_pose.apply_inverse(start), max_depth);
+                    double settled =
+                        before ? std::clamp(thickness - before->distance, 0.0, contact.depth) : 0.0;
+                    const double excess = bound_settle(x, normal, settled);
+                    const double depth = contact.depth - excess;
+                    settled -= excess;
+                    if (depth > m_contact_depths[v]) {
+                        m_contact_depths[v] = depth;
+                        m_contact_normals[v] = normal;
                         m_contact_velocities[v] = swept_by_surface * (1.0 / h);
-                        const std::optional<SurfaceDistance> before = mesh.mesh->surface_distance(
-                            mesh.state.previous_pose.apply_inverse(start), max_depth);
-                        m_contact_settled[v] =
-                            before ? std::clamp(thickness - before->distance, 0.0, contact.depth)
-                                   : 0.0;
+                        m_contact_settled[v] = settled;
                     }
                 }
                 contacts += m_contact_depths[v] > 0.0 ? 1 : 0;

@@ -356,6 +356,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     // tripped) ends the run like an interrupt: the frames before it and stats.json (with
     // "error") are written, then the error is reported.
     bool warned_budget = false;  // the fail-safe's budget warning is given once
+    bool warned_lag = false;     // so is the lagging pins' warning
     for (int frame = first_frame; frame <= frames; ++frame) {
         if (options.keep_going && !options.keep_going()) {
             break;
@@ -427,6 +428,18 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                     "the substeps (stats.json: fail_safe_budget_exceeded, per frame)",
                     scene_name, frame, cloth::CCDFailSafe::pair_budget(mesh.positions.size()),
                     step.self.budget_exceeded, step.self.frozen_vertices);
+            }
+            const cloth::ClothModel::PinLag lag = sim.solver().model().pin_lag();
+            record["pins_lagging"] = lag.vertices;
+            record["pins_max_lag"] = lag.max;
+            if (lag.vertices > 0 && !warned_lag) {
+                warned_lag = true;
+                log_warning(
+                    "{}: frame {}: {} pinned vertices lag behind their keyframed target, up to "
+                    "{:.3g} m: pins chase their target at most half the thickness per substep "
+                    "(their keyframes move them faster); stats.json: pins_lagging, pins_max_lag, "
+                    "per frame",
+                    scene_name, frame, lag.vertices, lag.max);
             }
             record["gathers"] = step.self.gathers;
             record["path_updates"] = step.self.path_updates;

@@ -204,11 +204,12 @@ double reach_from(const Vec3d& pivot, std::span<const Vec3d> points,
 }
 
 // Warns about a keyframed pin group or obstacle that moves farther than the cloth's thickness in
-// one substep: contact with it is then first seen by the self-collision's fail-safe, which holds
-// vertices back instead of pushing them apart (stiff, jerky cloth; slow when it is much of the
-// cloth), and obstacles can pass through cloth between substeps (docs/formats.md, "Choosing
-// substeps", rule 1).
-void warn_fast_motion(const std::string& scene_name, const std::string& key,
+// one substep. With self-collision, such pins do not follow their keyframes: they chase their
+// target at half the thickness per substep (XPBDStepper, CATCH_UP_IN_THICKNESS) and lag behind
+// it. Such obstacles can pass through cloth between substeps (docs/formats.md, "Choosing
+// substeps", rule 1), and contact with them is first seen by the self-collision's fail-safe,
+// which holds vertices back instead of pushing them apart (stiff, jerky cloth).
+void warn_fast_motion(const std::string& scene_name, const std::string& key, bool pins,
                       const cloth::Motion& motion, double reach, const cloth::ClothScene& scene) {
     const double h = 1.0 / (scene.frames_per_second * scene.substeps);
     const double bound = scene.material.thickness;
@@ -216,14 +217,19 @@ void warn_fast_motion(const std::string& scene_name, const std::string& key,
     if (!(fastest.distance > bound)) {
         return;
     }
+    const char* consequence =
+        pins && scene.self_collision
+            ? "the pins chase their keyframed target at half the thickness per substep and lag "
+              "behind it (stats.json: pins_lagging, pins_max_lag)"
+            : "cloth it pulls or hits is caught only by the self-collision fail-safe, which holds "
+              "vertices back (stiff, slow frames)";
     log_warning(
         "{}: {}: its motion covers up to {:.3g} m in one substep ({:.3g} m/s) from t = {:.4g} s "
-        "(frame {}), more than the thickness ({:.3g} m) per substep: cloth it pulls or hits is "
-        "caught only "
-        "by the self-collision fail-safe, which holds vertices back (stiff, slow frames); spread "
-        "its keyframes over more time or raise substeps",
+        "(frame {}), more than the thickness ({:.3g} m) per substep: {}; spread its keyframes "
+        "over more time or raise substeps",
         scene_name, key, fastest.distance, fastest.distance / h, fastest.time,
-        static_cast<long long>(std::floor(fastest.time * scene.frames_per_second)) + 1, bound);
+        static_cast<long long>(std::floor(fastest.time * scene.frames_per_second)) + 1, bound,
+        consequence);
 }
 
 }  // namespace
@@ -269,7 +275,7 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
     for (std::size_t g = 0; g < scene.pins.size(); ++g) {
         const cloth::PinGroup& group = scene.pins[g];
         if (!group.motion.is_static() && !setup.pins[g].empty()) {
-            warn_fast_motion(scene_name, group.key, group.motion,
+            warn_fast_motion(scene_name, group.key, true, group.motion,
                              reach_from(group.motion.pivot, setup.mesh.positions, setup.pins[g]),
                              scene);
         }
@@ -277,7 +283,7 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
     for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
         const cloth::Motion& motion = scene.obstacles[k].motion;
         if (!motion.is_static()) {
-            warn_fast_motion(scene_name, fmt::format("obstacles[{}]", k), motion,
+            warn_fast_motion(scene_name, fmt::format("obstacles[{}]", k), false, motion,
                              reach_from(motion.pivot, setup.shapes[k].rest.positions, {}), scene);
         }
     }
@@ -291,8 +297,9 @@ StartState prepare_start(const cloth::ClothScene& scene, const std::string& scen
     if (inside.vertices > 0) {
         log_warning(
             "{}: {} of the cloth's {} vertices start inside an obstacle (the deepest {:.3g} m "
-            "in): the first substep puts them on its surface, stretching the cloth; check the "
-            "obstacles' placement and, for planes and open meshes, which side their normals face",
+            "in): the first substeps put them on its surface (with self-collision at most half "
+            "the thickness deeper per substep), stretching the cloth; check the obstacles' "
+            "placement and, for planes and open meshes, which side their normals face",
             scene_name, inside.vertices, solver.positions().size(), inside.deepest);
     }
     start.initial_intersections =
