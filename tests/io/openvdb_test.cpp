@@ -313,9 +313,18 @@ TEST(OpenVdb, BrokenInputsAreIoErrorsNamingThePath) {
         test::write_bytes(dir / "cut.vdb", good.substr(0, cut));
         EXPECT_THROW(read_volume(dir / "cut.vdb", {.max_bytes = 1U << 20}), IoError);
     }
-    // Random bytes after a valid magic number and version, and random bytes throughout.
+    // Random bytes after a valid magic number and version, and random bytes throughout. Below
+    // the root level OpenVDB allocates the chunk sizes it reads (io::bloscFromStream) before
+    // reading the chunk: a normal build turns the failed allocation into IoError, while
+    // AddressSanitizer stops the process at the allocation (allocation-size-too-big), so the
+    // flips run only without it (docs/reliability.md, OpenVDB).
     std::mt19937 rng(5);
-    for (int trial = 0; trial < 50; ++trial) {
+#if defined(__SANITIZE_ADDRESS__)
+    constexpr int FLIP_TRIALS = 0;
+#else
+    constexpr int FLIP_TRIALS = 50;
+#endif
+    for (int trial = 0; trial < FLIP_TRIALS; ++trial) {
         std::string bytes = good;
         for (int flips = 0; flips < 4; ++flips) {
             bytes[16 + rng() % (bytes.size() - 16)] = static_cast<char>(rng());
