@@ -315,6 +315,35 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);
 }
 
+// A data element header cut short at the end of the file (fuzz_dicom,
+// fuzz/findings/dicom/crash-gdcm-vr16-assert: 4 zero bytes after the pixel data) made GDCM
+// 3.0.21 abort in an assertion (gdcmVR16ExplicitDataElement.txx:46): it is refused first.
+TEST(Dicom, HeaderCutShortAtTheEndIsRefusedBeforeGdcmReadsIt) {
+    TempDir dir;
+    const DicomSeriesSpec spec;
+    const std::vector<fs::path> files = pliant::test::write_dicom_series(dir / "s", spec, 16);
+    const std::string bytes = test::read_bytes(files[0]);
+    // The finding's tail: a tag (0000,0000) and nothing after it.
+    test::write_bytes(dir / "tail4.dcm", bytes + std::string(4, '\0'));
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "tail4.dcm"}); },
+        {"tail4.dcm", "not a DICOM file pliant can read",
+         "data element at byte " + std::to_string(bytes.size()) + " is cut short: 4 bytes left"});
+    // A tag and a VR, no length.
+    test::write_bytes(dir / "tail7.dcm", bytes + std::string("\x08\x00\x70\x00LO\x00", 7));
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "tail7.dcm"}); },
+                    {"tail7.dcm", "cut short: 7 bytes left"});
+    // The fuzzer's file itself (a CT slice written by GDCM, mutated).
+    const fs::path finding =
+        fs::path(PLIANT_SOURCE_DIR) / "fuzz" / "findings" / "dicom" / "crash-gdcm-vr16-assert";
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{finding}); },
+                    {"crash-gdcm-vr16-assert", "not a DICOM file pliant can read",
+                     "byte 972 is cut short: 4 bytes left"});
+    // In a folder it is skipped; the good slices still read.
+    fs::copy_file(dir / "tail4.dcm", dir / "s" / "zz_tail4.dcm");
+    EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);
+}
+
 TEST(Dicom, FractionalRescaleGivesFloats) {
     TempDir dir;
     DicomSeriesSpec spec;
