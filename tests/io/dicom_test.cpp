@@ -310,6 +310,23 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     test::write_bytes(dir / "rle.dcm", rle);
     expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "rle.dcm"}); },
                     {"rle.dcm", "declares 26114 segments, expected 1 to 15"});
+    // A fragment whose item tag is mutated to (FFFE,9696) with 2.5 GB (fuzz_dicom: GDCM
+    // allocated the length): the items of encapsulated pixel data are walked too.
+    std::string fragment_tag = test::read_bytes(rle_files[0]);
+    fragment_tag.replace(r + 10, 6, std::string("\x96\x96\x96\x96\x96\x96", 6));
+    test::write_bytes(dir / "fragment.dcm", fragment_tag);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "fragment.dcm"}); },
+                    {"fragment.dcm", "pixel data fragment 1 at byte", "has tag (FFFE,9696)",
+                     "expected an item (FFFE,E000) or the delimiter (FFFE,E0DD)"});
+    // The delimiter after the fragments with a length (fuzz_dicom: GDCM read 0xF7000000 bytes).
+    std::string delimiter = test::read_bytes(rle_files[0]);
+    const std::size_t end = delimiter.rfind(std::string("\xFE\xFF\xDD\xE0\0\0\0\0", 8));
+    ASSERT_NE(end, std::string::npos);
+    delimiter[end + 7] = '\xF7';
+    test::write_bytes(dir / "delimiter.dcm", delimiter);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "delimiter.dcm"}); },
+        {"delimiter.dcm", "delimiter (FFFE,E0DD) at byte", "declares 4143972352 bytes"});
     // In a folder such files are skipped, the good ones still read.
     fs::copy_file(dir / "long.dcm", dir / "s" / "zz_long.dcm");
     EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);

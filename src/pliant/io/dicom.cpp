@@ -229,10 +229,10 @@ std::vector<fs::path> candidate_files(const fs::path& dir) {
 // before reading it (a 972-byte file declaring 4 GB made it allocate 4 GB: fuzz_dicom), so the
 // data elements are walked first, as PS3.5 section 7 lays them out: each defined length must fit
 // in the bytes left, and an explicit VR must be two capital letters. Sequences and items are
-// entered, not skipped, so nested elements are checked too. Encapsulated pixel data ends the walk
-// (JPEG fragments are the codecs' to check), except RLE's, whose segment tables are checked; the
-// walk also stops after the file meta group for the transfer syntaxes it cannot walk (deflate,
-// explicit big endian), where GDCM is trusted as before.
+// entered, not skipped, so nested elements are checked too. Encapsulated pixel data's items are
+// walked (what is inside a JPEG fragment is the codec's to check; RLE's segment tables are
+// checked). The walk also stops after the file meta group for the transfer syntaxes it cannot walk
+// (deflate, explicit big endian), where GDCM is trusted as before.
 std::optional<std::string> element_length_problem(const fs::path& file) {
     std::FILE* f = std::fopen(file.c_str(), "rb");
     if (f == nullptr) {
@@ -253,7 +253,8 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
     };
     std::optional<std::string> problem;
-    int rle_fragment = -1;  // in RLE pixel data: 0 the offset table, then the fragments
+    bool rle_syntax = false;  // RLE Lossless: the fragments' segment tables are checked too
+    int fragment = -1;        // in encapsulated pixel data: 0 the offset table, then the fragments
     while (!ec && pos + 8 <= size) {
         std::array<unsigned char, 12> h{};
         if (std::fseek(f, static_cast<long>(pos), SEEK_SET) != 0 ||
@@ -305,15 +306,40 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
         } else {
             length = u32(h.data() + 4);
         }
-        if (rle_fragment >= 0) {
-            // RLE pixel data (PS3.5 annex G): the offset table, then fragments that each start
-            // with a 64-byte header of the segment count (1 to 15) and the segments' offsets
-            // (GDCM trusts them: 26,114 segments made it read out of bounds).
-            if (!item || element != 0xE000 || length == 0xFFFFFFFFU ||
-                length > size - pos - header) {
-                break;  // the delimiter, or a layout GDCM reports itself
+        if (fragment >= 0) {
+            // Encapsulated pixel data (PS3.5 A.4): items (FFFE,E000) of defined length (the
+            // offset table, then the fragments) up to the delimiter (FFFE,E0DD); GDCM allocates
+            // what any other tag there declares (a fragment tag (FFFE,9696) declaring 2.5 GB:
+            // fuzz_dicom). For RLE (annex G) each fragment starts with a 64-byte header of the
+            // segment count (1 to 15) and the segments' offsets (GDCM trusts them: 26,114
+            // segments made it read out of bounds).
+            if (item && element == 0xE0DD) {
+                if (length != 0) {
+                    // GDCM reads it as a fragment of that length (fuzz_dicom: 0xF7000000).
+                    problem = fmt::format(
+                        "the pixel data's delimiter (FFFE,E0DD) at byte {} declares {} bytes, "
+                        "expected 0",
+                        pos, length);
+                    break;
+                }
+                fragment = -1;
+                pos += header;
+                continue;
             }
-            if (rle_fragment > 0) {
+            if (!item || element != 0xE000) {
+                problem = fmt::format(
+                    "pixel data fragment {} at byte {} has tag ({:04X},{:04X}), expected an item "
+                    "(FFFE,E000) or the delimiter (FFFE,E0DD)",
+                    fragment, pos, group, element);
+                break;
+            }
+            if (length == 0xFFFFFFFFU || length > size - pos - header) {
+                problem = fmt::format(
+                    "pixel data fragment {} at byte {} declares {} bytes, the file has {} left",
+                    fragment, pos, length, size - pos - header);
+                break;
+            }
+            if (rle_syntax && fragment > 0) {
                 std::array<unsigned char, 64> rle{};
                 if (length < rle.size() ||
                     std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
@@ -343,18 +369,15 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                     break;
                 }
             }
-            ++rle_fragment;
+            ++fragment;
             pos += header + length;
             continue;
         }
         if (length == 0xFFFFFFFFU) {
             if (group == 0x7FE0 && element == 0x0010) {
-                if (syntax == "1.2.840.10008.1.2.5") {
-                    rle_fragment = 0;
-                    pos += header;
-                    continue;
-                }
-                break;  // encapsulated pixel data: fragments follow
+                fragment = 0;  // encapsulated pixel data: fragments follow
+                pos += header;
+                continue;
             }
             pos += header;  // an undefined-length sequence or item: its elements follow
             continue;
@@ -375,6 +398,7 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 text.pop_back();
             }
             syntax = text;
+            rle_syntax = syntax == "1.2.840.10008.1.2.5";
         }
         // A sequence's or item's contents are elements: walk into them.
         pos += header + (sequence ? 0 : length);
