@@ -287,6 +287,16 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     test::write_bytes(dir / "bad_vr.dcm", bad_vr);
     expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "bad_vr.dcm"}); },
                     {"bad_vr.dcm", "not a DICOM file", "(0008,0060)", "0xBAAC"});
+    // Two capital letters that are no VR, in the file meta group (fuzz_dicom: "KH" in
+    // (0002,0013) made GDCM assert, gdcmFileMetaInformation.cxx:436).
+    const std::size_t version = bytes.find(std::string("\x02\x00\x13\x00SH", 6));
+    ASSERT_NE(version, std::string::npos);
+    std::string unknown_vr = bytes;
+    unknown_vr.replace(version + 4, 2, "KH");
+    test::write_bytes(dir / "unknown_vr.dcm", unknown_vr);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "unknown_vr.dcm"}); },
+        {"unknown_vr.dcm", "element (0002,0013)", "has VR 'KH', which DICOM does not define"});
     // Pixel data (7FE0,0010), explicit VR OW: a length of 4 GB in a file of a few KB.
     const std::string pixels("\xE0\x7F\x10\x00OW\0\0", 8);
     const std::size_t p = bytes.rfind(pixels);
