@@ -297,6 +297,15 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     expect_io_error(
         [&] { read_dicom_series(std::vector<fs::path>{dir / "unknown_vr.dcm"}); },
         {"unknown_vr.dcm", "element (0002,0013)", "has VR 'KH', which DICOM does not define"});
+    // Samples per Pixel 2 (fuzz_dicom: GDCM asserted, gdcmPixelFormat.h:96).
+    const std::size_t samples = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
+    ASSERT_NE(samples, std::string::npos);
+    std::string two_samples = bytes;
+    two_samples[samples + 8] = 2;
+    test::write_bytes(dir / "samples.dcm", two_samples);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "samples.dcm"}); },
+        {"samples.dcm", "Samples per Pixel (0028,0002) at byte", "is 2, expected 1, 3 or 4"});
     // Pixel data (7FE0,0010), explicit VR OW: a length of 4 GB in a file of a few KB.
     const std::string pixels("\xE0\x7F\x10\x00OW\0\0", 8);
     const std::size_t p = bytes.rfind(pixels);

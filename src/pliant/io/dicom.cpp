@@ -400,6 +400,22 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 element, pos, length, size - pos - header);
             break;
         }
+        if (group == 0x0028 && element == 0x0002 && length >= 2) {
+            // Samples per Pixel: GDCM asserts unless it is 1, 3 or 4 (gdcmPixelFormat.h:96,
+            // fuzz_dicom).
+            std::array<unsigned char, 2> spp{};
+            if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                std::fread(spp.data(), 1, spp.size(), f) != spp.size()) {
+                break;
+            }
+            const unsigned samples = u16(spp.data());
+            if (samples != 1 && samples != 3 && samples != 4) {
+                problem = fmt::format(
+                    "Samples per Pixel (0028,0002) at byte {} is {}, expected 1, 3 or 4", pos,
+                    samples);
+                break;
+            }
+        }
         if (group == 0x0002 && element == 0x0010 && length <= 64) {
             std::string text(length, '\0');
             if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
