@@ -329,6 +329,15 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     test::write_bytes(dir / "rle.dcm", rle);
     expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "rle.dcm"}); },
                     {"rle.dcm", "declares 26114 segments, expected 1 to 15"});
+    // Bits Allocated 4624 in an RLE file (fuzz_dicom: GDCM's RLE decoder asserted).
+    const std::size_t bits = rle.find(std::string("\x28\x00\x00\x01US\x02\x00", 8));
+    ASSERT_NE(bits, std::string::npos);
+    std::string odd_bits = test::read_bytes(rle_files[0]);
+    odd_bits.replace(bits + 8, 2, std::string("\x10\x12", 2));
+    test::write_bytes(dir / "bits.dcm", odd_bits);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "bits.dcm"}); },
+        {"bits.dcm", "Bits Allocated (0028,0100) at byte", "is 4624, expected 8, 16 or 32 (RLE)"});
     // A fragment whose item tag is mutated to (FFFE,9696) with 2.5 GB (fuzz_dicom: GDCM
     // allocated the length): the items of encapsulated pixel data are walked too.
     std::string fragment_tag = test::read_bytes(rle_files[0]);

@@ -400,19 +400,30 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 element, pos, length, size - pos - header);
             break;
         }
-        if (group == 0x0028 && element == 0x0002 && length >= 2) {
-            // Samples per Pixel: GDCM asserts unless it is 1, 3 or 4 (gdcmPixelFormat.h:96,
-            // fuzz_dicom).
-            std::array<unsigned char, 2> spp{};
+        if (group == 0x0028 && (element == 0x0002 || element == 0x0100) && length >= 2) {
+            // Samples per Pixel and Bits Allocated: GDCM asserts unless Samples per Pixel is 1, 3
+            // or 4 (gdcmPixelFormat.h:96), and its RLE decoder unless they are 1 or 3 and 8, 16
+            // or 32 (gdcmRLECodec.cxx:777-782; Bits Allocated 4624 gave a zero length: both
+            // fuzz_dicom). PS3.5 8.1.1: Bits Allocated is 1 or a multiple of 8.
+            std::array<unsigned char, 2> us{};
             if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
-                std::fread(spp.data(), 1, spp.size(), f) != spp.size()) {
+                std::fread(us.data(), 1, us.size(), f) != us.size()) {
                 break;
             }
-            const unsigned samples = u16(spp.data());
-            if (samples != 1 && samples != 3 && samples != 4) {
+            const unsigned value = u16(us.data());
+            if (element == 0x0002 && value != 1 && value != 3 && (value != 4 || rle_syntax)) {
+                problem =
+                    fmt::format("Samples per Pixel (0028,0002) at byte {} is {}, expected 1, 3{}",
+                                pos, value, rle_syntax ? " (RLE)" : " or 4");
+                break;
+            }
+            const bool bits_ok = rle_syntax
+                                     ? value == 8 || value == 16 || value == 32
+                                     : value == 1 || (value % 8 == 0 && value >= 8 && value <= 64);
+            if (element == 0x0100 && !bits_ok) {
                 problem = fmt::format(
-                    "Samples per Pixel (0028,0002) at byte {} is {}, expected 1, 3 or 4", pos,
-                    samples);
+                    "Bits Allocated (0028,0100) at byte {} is {}, expected {}", pos, value,
+                    rle_syntax ? "8, 16 or 32 (RLE)" : "1 or a multiple of 8 up to 64");
                 break;
             }
         }
