@@ -378,6 +378,15 @@ TEST(Dicom, HeaderCutShortAtTheEndIsRefusedBeforeGdcmReadsIt) {
     test::write_bytes(dir / "tail7.dcm", bytes + std::string("\x08\x00\x70\x00LO\x00", 7));
     expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "tail7.dcm"}); },
                     {"tail7.dcm", "cut short: 7 bytes left"});
+    // The file meta group alone (fuzz_dicom: GDCM asserted reading past it): the preamble, "DICM",
+    // the 12-byte group length element, then the group's length in bytes.
+    const std::size_t group_length =
+        static_cast<unsigned char>(bytes[140]) |
+        static_cast<std::size_t>(static_cast<unsigned char>(bytes[141])) << 8;
+    const std::string meta = bytes.substr(0, 144 + group_length);
+    test::write_bytes(dir / "meta_only.dcm", meta);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "meta_only.dcm"}); },
+                    {"meta_only.dcm", "ends after its file meta group", "no data set"});
     // The fuzzer's file itself (a CT slice written by GDCM, mutated).
     const fs::path finding =
         fs::path(PLIANT_SOURCE_DIR) / "fuzz" / "findings" / "dicom" / "crash-gdcm-vr16-assert";

@@ -253,6 +253,7 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
     };
     std::optional<std::string> problem;
+    bool data_set = false;    // an element after the file meta group was seen
     bool rle_syntax = false;  // RLE Lossless: the fragments' segment tables are checked too
     int fragment = -1;        // in encapsulated pixel data: 0 the offset table, then the fragments
     while (!ec && pos + 8 <= size) {
@@ -263,6 +264,7 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
         }
         const unsigned group = u16(h.data());
         const unsigned element = u16(h.data() + 2);
+        data_set = data_set || group != 0x0002;
         if (group != 0x0002 &&
             (syntax == "1.2.840.10008.1.2.1.99" || syntax == "1.2.840.10008.1.2.2")) {
             break;  // deflated or big-endian data set
@@ -449,6 +451,12 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
         problem = fmt::format(
             "the data element at byte {} is cut short: {} bytes left, a data element header has 8",
             pos, size - pos);
+    }
+    // A Part 10 file that ends with its meta group: GDCM's meta group reader asserts on the
+    // missing next tag (gdcmFileMetaInformation.cxx:375, fuzz_dicom).
+    if (!problem && !ec && part10 && !data_set && pos >= size) {
+        problem =
+            fmt::format("the file ends after its file meta group at byte {}: no data set", pos);
     }
     std::fclose(f);
     return problem;
