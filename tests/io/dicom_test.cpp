@@ -297,6 +297,26 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     expect_io_error(
         [&] { read_dicom_series(std::vector<fs::path>{dir / "unknown_vr.dcm"}); },
         {"unknown_vr.dcm", "element (0002,0013)", "has VR 'KH', which DICOM does not define"});
+    // A Recognition Code (0008,0010) other than ACR-NEMA's (fuzz_dicom: GDCM asserted).
+    const std::size_t study_time = bytes.find(std::string("\x08\x00\x30\x00TM", 6));
+    ASSERT_NE(study_time, std::string::npos);
+    std::string recognition = bytes;
+    recognition[study_time + 2] = '\x10';
+    test::write_bytes(dir / "recognition.dcm", recognition);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "recognition.dcm"}); },
+        {"recognition.dcm", "Recognition Code (0008,0010) at byte", "expected ACR-NEMA"});
+    // Number of Frames 0, inserted before Rows (GDCM asserts that it is not 0).
+    const std::size_t rows = bytes.find(std::string("\x28\x00\x10\x00US", 6));
+    ASSERT_NE(rows, std::string::npos);
+    std::string no_frames = bytes;
+    no_frames.insert(rows, std::string("\x28\x00\x08\x00IS\x02\x00"
+                                       "0 ",
+                                       10));
+    test::write_bytes(dir / "frames.dcm", no_frames);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "frames.dcm"}); },
+        {"frames.dcm", "Number of Frames (0028,0008) is '0'", "expected a positive integer"});
     // Samples per Pixel 2 (fuzz_dicom: GDCM asserted, gdcmPixelFormat.h:96).
     const std::size_t samples = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
     ASSERT_NE(samples, std::string::npos);

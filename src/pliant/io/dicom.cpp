@@ -429,6 +429,25 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 break;
             }
         }
+        if (group == 0x0008 && element == 0x0010) {
+            // Recognition Code (retired, ACR-NEMA): GDCM asserts that it starts with "ACR-NEMA",
+            // "ACRNEMA" or "MIPS 2.0" (gdcmPixmapReader.cxx:633; fuzz_dicom: a Study Time tag
+            // mutated into it).
+            std::array<char, 8> code{};
+            const std::size_t n = std::min<std::size_t>(length, code.size());
+            if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                std::fread(code.data(), 1, n, f) != n) {
+                break;
+            }
+            const std::string_view c(code.data(), n);
+            if (!c.starts_with("ACR-NEMA") && !c.starts_with("ACRNEMA") &&
+                !c.starts_with("MIPS 2.0")) {
+                problem = fmt::format(
+                    "Recognition Code (0008,0010) at byte {} starts with '{}', expected ACR-NEMA",
+                    pos, c);
+                break;
+            }
+        }
         if (group == 0x0002 && element == 0x0010 && length <= 64) {
             std::string text(length, '\0');
             if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
@@ -523,7 +542,21 @@ std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
         s.series_uid = text_of(value(SERIES_UID));
         s.description = text_of(value(SERIES_DESCRIPTION));
         s.modality = text_of(value(MODALITY));
-        s.frames = std::max<std::int64_t>(1, integer(value(NUMBER_OF_FRAMES)).value_or(1));
+        // GDCM asserts on a Number of Frames of 0 or one that is not a number
+        // (gdcmPixmapReader.cxx, ReadImage).
+        const char* frames = value(NUMBER_OF_FRAMES);
+        if (frames != nullptr && integer(frames).value_or(0) < 1) {
+            const std::string problem = fmt::format(
+                "{}: not a DICOM file pliant can read: Number of Frames (0028,0008) is '{}', "
+                "expected a positive integer",
+                names[n], trim(frames));
+            if (listed) {
+                throw IoError(problem);
+            }
+            log_debug("skipped: {}", problem);
+            continue;
+        }
+        s.frames = std::max<std::int64_t>(1, integer(frames).value_or(1));
         if (const auto p = numbers(value(IMAGE_POSITION), 3)) {
             s.position = Vec3d{(*p)[0], (*p)[1], (*p)[2]};
         }
