@@ -317,6 +317,17 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     expect_io_error(
         [&] { read_dicom_series(std::vector<fs::path>{dir / "frames.dcm"}); },
         {"frames.dcm", "Number of Frames (0028,0008) is '0'", "expected a positive integer"});
+    // Image Position (0020,0032) with VR PN (fuzz_dicom: gdcm::Attribute asserted on the VR).
+    const std::size_t position =
+        bytes.find(std::string("\x20\x00\x32\x00"
+                               "DS",
+                               6));
+    ASSERT_NE(position, std::string::npos);
+    std::string pn = bytes;
+    pn.replace(position + 4, 2, "PN");
+    test::write_bytes(dir / "pn.dcm", pn);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "pn.dcm"}); },
+                    {"pn.dcm", "element (0020,0032)", "has VR 'PN', expected DS"});
     // Samples per Pixel 2 (fuzz_dicom: GDCM asserted, gdcmPixelFormat.h:96).
     const std::size_t samples = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
     ASSERT_NE(samples, std::string::npos);

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "pliant/core/error.hpp"
@@ -225,6 +226,28 @@ std::vector<fs::path> candidate_files(const fs::path& dir) {
     return files;
 }
 
+// The VR (or VRs, "US or SS") of the image attributes GDCM reads through gdcm::Attribute while
+// reading an image (PS3.6); empty for other tags.
+std::string_view image_attribute_vr(unsigned group, unsigned element) {
+    static const std::map<std::pair<unsigned, unsigned>, std::string_view> VRS = {
+        {{0x0008, 0x0060}, "CS"},       {{0x0018, 0x0050}, "DS"},
+        {{0x0018, 0x0088}, "DS"},       {{0x0018, 0x1164}, "DS"},
+        {{0x0020, 0x0013}, "IS"},       {{0x0020, 0x0032}, "DS"},
+        {{0x0020, 0x0037}, "DS"},       {{0x0028, 0x0002}, "US"},
+        {{0x0028, 0x0004}, "CS"},       {{0x0028, 0x0006}, "US"},
+        {{0x0028, 0x0008}, "IS"},       {{0x0028, 0x0010}, "US"},
+        {{0x0028, 0x0011}, "US"},       {{0x0028, 0x0030}, "DS"},
+        {{0x0028, 0x0100}, "US"},       {{0x0028, 0x0101}, "US"},
+        {{0x0028, 0x0102}, "US"},       {{0x0028, 0x0103}, "US"},
+        {{0x0028, 0x0120}, "US or SS"}, {{0x0028, 0x1050}, "DS"},
+        {{0x0028, 0x1051}, "DS"},       {{0x0028, 0x1052}, "DS"},
+        {{0x0028, 0x1053}, "DS"},       {{0x0028, 0x1054}, "LO"},
+        {{0x0028, 0x1101}, "US or SS"}, {{0x0028, 0x1102}, "US or SS"},
+        {{0x0028, 0x1103}, "US or SS"}};
+    const auto it = VRS.find({group, element});
+    return it == VRS.end() ? std::string_view{} : it->second;
+}
+
 // Why GDCM must not be given `file`, or nullopt. GDCM allocates an element's declared length
 // before reading it (a 972-byte file declaring 4 GB made it allocate 4 GB: fuzz_dicom), so the
 // data elements are walked first, as PS3.5 section 7 lays them out: each defined length must fit
@@ -298,6 +321,15 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 problem = fmt::format(
                     "element ({:04X},{:04X}) at byte {} has VR '{}', which DICOM does not define",
                     group, element, pos, v);
+                break;
+            }
+            // The image attributes GDCM reads through gdcm::Attribute, which asserts that the
+            // VR is the dictionary's (gdcmAttribute.h:210: Image Position with VR PN,
+            // fuzz_dicom). UN is accepted as GDCM does.
+            if (const std::string_view want = image_attribute_vr(group, element);
+                !want.empty() && v != "UN" && want.find(v) == std::string_view::npos) {
+                problem = fmt::format("element ({:04X},{:04X}) at byte {} has VR '{}', expected {}",
+                                      group, element, pos, v, want);
                 break;
             }
             if (v == "OB" || v == "OD" || v == "OF" || v == "OL" || v == "OV" || v == "OW" ||
