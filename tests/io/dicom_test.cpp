@@ -386,6 +386,23 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     expect_io_error(
         [&] { read_dicom_series(std::vector<fs::path>{dir / "delimiter.dcm"}); },
         {"delimiter.dcm", "delimiter (FFFE,E0DD) at byte", "declares 4143972352 bytes"});
+    // A JPEG lossless fragment whose second header marker starts with 0xF5 instead of 0xFF
+    // (fuzz_dicom: a libjpeg warning, on which GDCM's JPEG codec asserts).
+    DicomSeriesSpec jpeg_spec = spec;
+    jpeg_spec.syntax = gdcm::TransferSyntax::JPEGLosslessProcess14_1;
+    std::string jpeg =
+        test::read_bytes(pliant::test::write_dicom_series(dir / "jpeg", jpeg_spec, 17)[0]);
+    const std::size_t soi = jpeg.find(std::string("\xFF\xD8\xFF", 3));
+    ASSERT_NE(soi, std::string::npos);
+    const std::size_t first = soi + 2;  // the first marker after SOI, then its length
+    const std::size_t second = first + 2 +
+                               (static_cast<unsigned char>(jpeg[first + 2]) << 8 |
+                                static_cast<unsigned char>(jpeg[first + 3]));
+    jpeg[second] = '\xF5';
+    test::write_bytes(dir / "jpeg.dcm", jpeg);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "jpeg.dcm"}); },
+                    {"jpeg.dcm", "the JPEG pixel data fragment at byte",
+                     "has byte 0xF5 at JPEG offset", "expected a marker"});
     // In a folder such files are skipped, the good ones still read.
     fs::copy_file(dir / "long.dcm", dir / "s" / "zz_long.dcm");
     EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);

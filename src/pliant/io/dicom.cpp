@@ -248,6 +248,66 @@ std::string_view image_attribute_vr(unsigned group, unsigned element) {
     return it == VRS.end() ? std::string_view{} : it->second;
 }
 
+// Why GDCM's JPEG codec must not be given the JPEG stream `j` (the first fragment of JPEG pixel
+// data), or nullopt. Its GetHeaderInfo asserts on any libjpeg warning while reading the header
+// (gdcmJPEGBITSCodec.hxx:386: a byte other than 0xFF before a marker, fuzz_dicom) and on
+// component counts it does not handle, so the markers from SOI to SOS are walked (ITU T.81
+// annex B): each a 0xFF marker (fill bytes allowed) with a length within the fragment, JFIF
+// version 1, an Adobe transform of 0 to 2, and a frame header of 1 or 3 components.
+std::optional<std::string> jpeg_header_problem(const std::vector<unsigned char>& j) {
+    if (j.size() < 4 || j[0] != 0xFF || j[1] != 0xD8) {
+        return std::string("does not start with a JPEG SOI marker");
+    }
+    std::size_t at = 2;
+    while (at < j.size()) {
+        if (j[at] != 0xFF) {
+            return fmt::format("has byte 0x{:02X} at JPEG offset {}, expected a marker", j[at], at);
+        }
+        while (at < j.size() && j[at] == 0xFF) {
+            ++at;  // fill bytes
+        }
+        if (at + 2 >= j.size()) {
+            return std::string("ends inside its JPEG header");
+        }
+        const unsigned m = j[at];
+        if (m == 0xD8 || m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {
+            ++at;
+            continue;  // no length
+        }
+        if (m == 0xD9) {
+            return std::string("ends (EOI) before its JPEG scan");
+        }
+        const std::size_t length = static_cast<std::size_t>(j[at + 1]) << 8 | j[at + 2];
+        if (length < 2 || at + 1 + length > j.size()) {
+            return fmt::format(
+                "has a JPEG marker 0xFF{:02X} of {} bytes at offset {}, beyond the "
+                "fragment",
+                m, length, at - 1);
+        }
+        const unsigned char* body = j.data() + at + 3;
+        const std::size_t n = length - 2;
+        if (m == 0xDA) {
+            return std::nullopt;  // the scan: the header is complete
+        }
+        if (m == 0xE0 && n >= 7 && std::memcmp(body, "JFIF", 5) == 0 && body[5] != 1) {
+            return fmt::format("has JFIF version {}, expected 1", body[5]);
+        }
+        if (m == 0xEE && n >= 12 && std::memcmp(body, "Adobe", 5) == 0 && body[11] > 2) {
+            return fmt::format("has Adobe transform {}, expected 0 to 2", body[11]);
+        }
+        const bool frame = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
+        if (frame &&
+            (n < 6 || (body[5] != 1 && body[5] != 3) || n != 6 + std::size_t{3} * body[5])) {
+            return fmt::format(
+                "has a JPEG frame header of {} bytes with {} components, expected "
+                "1 or 3 components",
+                n, n >= 6 ? body[5] : 0);
+        }
+        at += 1 + length;
+    }
+    return std::string("ends before its JPEG scan");
+}
+
 // Why GDCM must not be given `file`, or nullopt. GDCM allocates an element's declared length
 // before reading it (a 972-byte file declaring 4 GB made it allocate 4 GB: fuzz_dicom), so the
 // data elements are walked first, as PS3.5 section 7 lays them out: each defined length must fit
@@ -276,9 +336,11 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
     };
     std::optional<std::string> problem;
-    bool data_set = false;    // an element after the file meta group was seen
-    bool rle_syntax = false;  // RLE Lossless: the fragments' segment tables are checked too
-    int fragment = -1;        // in encapsulated pixel data: 0 the offset table, then the fragments
+    bool data_set = false;  // an element after the file meta group was seen
+    bool rle_syntax = false;
+    bool jpeg_syntax = false;  // ITU T.81 JPEG: the first fragment's header is checked  // RLE
+                               // Lossless: the fragments' segment tables are checked too
+    int fragment = -1;         // in encapsulated pixel data: 0 the offset table, then the fragments
     while (!ec && pos + 8 <= size) {
         std::array<unsigned char, 12> h{};
         if (std::fseek(f, static_cast<long>(pos), SEEK_SET) != 0 ||
@@ -384,6 +446,17 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                     "pixel data fragment {} at byte {} declares {} bytes, the file has {} left",
                     fragment, pos, length, size - pos - header);
                 break;
+            }
+            if (jpeg_syntax && fragment == 1) {
+                std::vector<unsigned char> jpeg(std::min<std::size_t>(length, 65536));
+                if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                    std::fread(jpeg.data(), 1, jpeg.size(), f) != jpeg.size()) {
+                    break;
+                }
+                if (const std::optional<std::string> why = jpeg_header_problem(jpeg)) {
+                    problem = fmt::format("the JPEG pixel data fragment at byte {} {}", pos, *why);
+                    break;
+                }
             }
             if (rle_syntax && fragment > 0) {
                 std::array<unsigned char, 64> rle{};
@@ -491,6 +564,10 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
             }
             syntax = text;
             rle_syntax = syntax == "1.2.840.10008.1.2.5";
+            // JPEG (ITU T.81) syntaxes: 1.2.840.10008.1.2.4.50 to .4.70, not JPEG-LS (.80, .81)
+            // or JPEG 2000 (.90 and up).
+            jpeg_syntax = syntax.starts_with("1.2.840.10008.1.2.4.") && syntax.size() == 22 &&
+                          syntax.substr(20) >= "50" && syntax.substr(20) <= "70";
         }
         // A sequence's or item's contents are elements: walk into them.
         pos += header + (sequence ? 0 : length);
