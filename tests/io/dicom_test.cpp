@@ -287,6 +287,56 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     test::write_bytes(dir / "bad_vr.dcm", bad_vr);
     expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "bad_vr.dcm"}); },
                     {"bad_vr.dcm", "not a DICOM file", "(0008,0060)", "0xBAAC"});
+    // Two capital letters that are no VR, in the file meta group (fuzz_dicom: "KH" in
+    // (0002,0013) made GDCM assert, gdcmFileMetaInformation.cxx:436).
+    const std::size_t version = bytes.find(std::string("\x02\x00\x13\x00SH", 6));
+    ASSERT_NE(version, std::string::npos);
+    std::string unknown_vr = bytes;
+    unknown_vr.replace(version + 4, 2, "KH");
+    test::write_bytes(dir / "unknown_vr.dcm", unknown_vr);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "unknown_vr.dcm"}); },
+        {"unknown_vr.dcm", "element (0002,0013)", "has VR 'KH', which DICOM does not define"});
+    // A Recognition Code (0008,0010) other than ACR-NEMA's (fuzz_dicom: GDCM asserted).
+    const std::size_t study_time = bytes.find(std::string("\x08\x00\x30\x00TM", 6));
+    ASSERT_NE(study_time, std::string::npos);
+    std::string recognition = bytes;
+    recognition[study_time + 2] = '\x10';
+    test::write_bytes(dir / "recognition.dcm", recognition);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "recognition.dcm"}); },
+        {"recognition.dcm", "Recognition Code (0008,0010) at byte", "expected ACR-NEMA"});
+    // Number of Frames 0, inserted before Rows (GDCM asserts that it is not 0).
+    const std::size_t rows = bytes.find(std::string("\x28\x00\x10\x00US", 6));
+    ASSERT_NE(rows, std::string::npos);
+    std::string no_frames = bytes;
+    no_frames.insert(rows, std::string("\x28\x00\x08\x00IS\x02\x00"
+                                       "0 ",
+                                       10));
+    test::write_bytes(dir / "frames.dcm", no_frames);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "frames.dcm"}); },
+        {"frames.dcm", "Number of Frames (0028,0008) is '0'", "expected a positive integer"});
+    // Image Position (0020,0032) with VR PN (fuzz_dicom: gdcm::Attribute asserted on the VR).
+    const std::size_t position =
+        bytes.find(std::string("\x20\x00\x32\x00"
+                               "DS",
+                               6));
+    ASSERT_NE(position, std::string::npos);
+    std::string pn = bytes;
+    pn.replace(position + 4, 2, "PN");
+    test::write_bytes(dir / "pn.dcm", pn);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "pn.dcm"}); },
+                    {"pn.dcm", "element (0020,0032)", "has VR 'PN', expected DS"});
+    // Samples per Pixel 2 (fuzz_dicom: GDCM asserted, gdcmPixelFormat.h:96).
+    const std::size_t samples = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
+    ASSERT_NE(samples, std::string::npos);
+    std::string two_samples = bytes;
+    two_samples[samples + 8] = 2;
+    test::write_bytes(dir / "samples.dcm", two_samples);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "samples.dcm"}); },
+        {"samples.dcm", "Samples per Pixel (0028,0002) at byte", "is 2, expected 1, 3 or 4"});
     // Pixel data (7FE0,0010), explicit VR OW: a length of 4 GB in a file of a few KB.
     const std::string pixels("\xE0\x7F\x10\x00OW\0\0", 8);
     const std::size_t p = bytes.rfind(pixels);
@@ -310,8 +360,89 @@ TEST(Dicom, ElementLengthsBeyondTheFileAreRefusedBeforeGdcmReadsThem) {
     test::write_bytes(dir / "rle.dcm", rle);
     expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "rle.dcm"}); },
                     {"rle.dcm", "declares 26114 segments, expected 1 to 15"});
+    // Bits Allocated 4624 in an RLE file (fuzz_dicom: GDCM's RLE decoder asserted).
+    const std::size_t bits = rle.find(std::string("\x28\x00\x00\x01US\x02\x00", 8));
+    ASSERT_NE(bits, std::string::npos);
+    std::string odd_bits = test::read_bytes(rle_files[0]);
+    odd_bits.replace(bits + 8, 2, std::string("\x10\x12", 2));
+    test::write_bytes(dir / "bits.dcm", odd_bits);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "bits.dcm"}); },
+        {"bits.dcm", "Bits Allocated (0028,0100) at byte", "is 4624, expected 8, 16 or 32 (RLE)"});
+    // A fragment whose item tag is mutated to (FFFE,9696) with 2.5 GB (fuzz_dicom: GDCM
+    // allocated the length): the items of encapsulated pixel data are walked too.
+    std::string fragment_tag = test::read_bytes(rle_files[0]);
+    fragment_tag.replace(r + 10, 6, std::string("\x96\x96\x96\x96\x96\x96", 6));
+    test::write_bytes(dir / "fragment.dcm", fragment_tag);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "fragment.dcm"}); },
+                    {"fragment.dcm", "pixel data fragment 1 at byte", "has tag (FFFE,9696)",
+                     "expected an item (FFFE,E000) or the delimiter (FFFE,E0DD)"});
+    // The delimiter after the fragments with a length (fuzz_dicom: GDCM read 0xF7000000 bytes).
+    std::string delimiter = test::read_bytes(rle_files[0]);
+    const std::size_t end = delimiter.rfind(std::string("\xFE\xFF\xDD\xE0\0\0\0\0", 8));
+    ASSERT_NE(end, std::string::npos);
+    delimiter[end + 7] = '\xF7';
+    test::write_bytes(dir / "delimiter.dcm", delimiter);
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "delimiter.dcm"}); },
+        {"delimiter.dcm", "delimiter (FFFE,E0DD) at byte", "declares 4143972352 bytes"});
+    // A JPEG lossless fragment whose second header marker starts with 0xF5 instead of 0xFF
+    // (fuzz_dicom: a libjpeg warning, on which GDCM's JPEG codec asserts).
+    DicomSeriesSpec jpeg_spec = spec;
+    jpeg_spec.syntax = gdcm::TransferSyntax::JPEGLosslessProcess14_1;
+    std::string jpeg =
+        test::read_bytes(pliant::test::write_dicom_series(dir / "jpeg", jpeg_spec, 17)[0]);
+    const std::size_t soi = jpeg.find(std::string("\xFF\xD8\xFF", 3));
+    ASSERT_NE(soi, std::string::npos);
+    const std::size_t first = soi + 2;  // the first marker after SOI, then its length
+    const std::size_t second = first + 2 +
+                               (static_cast<unsigned char>(jpeg[first + 2]) << 8 |
+                                static_cast<unsigned char>(jpeg[first + 3]));
+    jpeg[second] = '\xF5';
+    test::write_bytes(dir / "jpeg.dcm", jpeg);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "jpeg.dcm"}); },
+                    {"jpeg.dcm", "the JPEG pixel data fragment at byte",
+                     "has byte 0xF5 at JPEG offset", "expected a marker"});
     // In a folder such files are skipped, the good ones still read.
     fs::copy_file(dir / "long.dcm", dir / "s" / "zz_long.dcm");
+    EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);
+}
+
+// A data element header cut short at the end of the file (fuzz_dicom,
+// fuzz/findings/dicom/crash-gdcm-vr16-assert: 4 zero bytes after the pixel data) made GDCM
+// 3.0.21 abort in an assertion (gdcmVR16ExplicitDataElement.txx:46): it is refused first.
+TEST(Dicom, HeaderCutShortAtTheEndIsRefusedBeforeGdcmReadsIt) {
+    TempDir dir;
+    const DicomSeriesSpec spec;
+    const std::vector<fs::path> files = pliant::test::write_dicom_series(dir / "s", spec, 16);
+    const std::string bytes = test::read_bytes(files[0]);
+    // The finding's tail: a tag (0000,0000) and nothing after it.
+    test::write_bytes(dir / "tail4.dcm", bytes + std::string(4, '\0'));
+    expect_io_error(
+        [&] { read_dicom_series(std::vector<fs::path>{dir / "tail4.dcm"}); },
+        {"tail4.dcm", "not a DICOM file pliant can read",
+         "data element at byte " + std::to_string(bytes.size()) + " is cut short: 4 bytes left"});
+    // A tag and a VR, no length.
+    test::write_bytes(dir / "tail7.dcm", bytes + std::string("\x08\x00\x70\x00LO\x00", 7));
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "tail7.dcm"}); },
+                    {"tail7.dcm", "cut short: 7 bytes left"});
+    // The file meta group alone (fuzz_dicom: GDCM asserted reading past it): the preamble, "DICM",
+    // the 12-byte group length element, then the group's length in bytes.
+    const std::size_t group_length =
+        static_cast<unsigned char>(bytes[140]) |
+        static_cast<std::size_t>(static_cast<unsigned char>(bytes[141])) << 8;
+    const std::string meta = bytes.substr(0, 144 + group_length);
+    test::write_bytes(dir / "meta_only.dcm", meta);
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{dir / "meta_only.dcm"}); },
+                    {"meta_only.dcm", "ends after its file meta group", "no data set"});
+    // The fuzzer's file itself (a CT slice written by GDCM, mutated).
+    const fs::path finding =
+        fs::path(PLIANT_SOURCE_DIR) / "fuzz" / "findings" / "dicom" / "crash-gdcm-vr16-assert";
+    expect_io_error([&] { read_dicom_series(std::vector<fs::path>{finding}); },
+                    {"crash-gdcm-vr16-assert", "not a DICOM file pliant can read",
+                     "byte 972 is cut short: 4 bytes left"});
+    // In a folder it is skipped; the good slices still read.
+    fs::copy_file(dir / "tail4.dcm", dir / "s" / "zz_tail4.dcm");
     EXPECT_EQ(read_dicom_series(dir / "s").dims()[2], spec.slices);
 }
 

@@ -7,12 +7,16 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <map>
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/volume_io.hpp"
@@ -365,6 +369,115 @@ TEST(OpenVdb, BrokenInputsAreIoErrorsNamingThePath) {
     test::write_bytes(dir / "mask.vdb", huge_mask);
     expect_io_error([&] { read_volume(dir / "mask.vdb"); }, {"mask.vdb", "file_delayed_load"});
     EXPECT_NO_THROW(read_volume(dir / "good.vdb"));
+}
+
+// A float grid over three root children (x from -1 to 4096) with active and inactive values,
+// and a vec3s colour grid, written with every compression OpenVDB has and as half floats: the
+// tree check (every node's values and chunks, every leaf's buffer) passes what OpenVDB writes.
+TEST(OpenVdb, TreeCheckPassesEveryCompressionAndHalfFloats) {
+    TempDir dir;
+    openvdb::initialize();
+    auto density = openvdb::FloatGrid::create(0.0F);
+    density->setName("density");
+    auto colour = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0F));
+    colour->setName("color");
+    auto acc = density->getAccessor();
+    auto cacc = colour->getAccessor();
+    for (const int x : {-1, 0, 3, 4, 5, 40, 4096}) {
+        acc.setValueOn(openvdb::Coord(x, 0, 0), 0.5F + static_cast<float>(x % 7));
+        cacc.setValueOn(openvdb::Coord(x, 0, 0), openvdb::Vec3s(0.25F, 0.5F, 1.0F));
+    }
+    acc.setValueOff(openvdb::Coord(1, 0, 0), -2.0F);  // inactive values other than background
+    acc.setValueOff(openvdb::Coord(2, 0, 0), 7.0F);
+    std::vector<std::pair<std::uint32_t, std::string>> compressions = {
+        {openvdb::io::COMPRESS_NONE, "none"},
+        {openvdb::io::COMPRESS_ACTIVE_MASK, "mask"},
+        {openvdb::io::COMPRESS_ZIP, "zip"},
+        {openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK, "zip_mask"}};
+    if (openvdb::io::Archive::hasBloscCompression()) {
+        compressions.emplace_back(openvdb::io::COMPRESS_BLOSC, "blosc");
+        compressions.emplace_back(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK,
+                                  "blosc_mask");
+    }
+    for (const auto& [compression, name] : compressions) {
+        for (const bool half : {false, true}) {
+            SCOPED_TRACE(name + (half ? " half" : ""));
+            density->setSaveFloatAsHalf(half);
+            colour->setSaveFloatAsHalf(half);
+            const auto path = dir / (name + (half ? "_half" : "") + ".vdb");
+            openvdb::io::File file(path.string());
+            file.setCompression(compression);
+            file.write({density, colour});
+            file.close();
+            const Volume v = read_openvdb(path, MAX);
+            ASSERT_EQ(v.type(), VoxelType::rgba32f);
+            EXPECT_EQ(v.dims(), (volume::Dims{4098, 1, 1}));
+            const auto values = v.values<VoxelType::rgba32f>();
+            EXPECT_EQ(values[std::size_t{4097} * 4 + 3], 0.5F + 4096 % 7);  // x 4096: alpha
+            EXPECT_EQ(values[std::size_t{4} * 4 + 1], 0.5F);                // x 3: green
+        }
+    }
+}
+
+// Sizes OpenVDB takes from the tree without checking them (fuzz_openvdb: a zip chunk of
+// 0x640000001680 bytes in a leaf buffer made OpenVDB allocate it) and root children at the same
+// origin (OpenVDB drops the first without freeing it) are refused before OpenVDB reads the tree.
+TEST(OpenVdb, TreeChunksBeyondTheFileAndRepeatedRootChildrenAreRefused) {
+    TempDir dir;
+    openvdb::initialize();
+    auto density = openvdb::FloatGrid::create(0.0F);
+    density->setName("density");
+    density->getAccessor().setValueOn(openvdb::Coord(1, 1, 1), 1.0F);
+    density->getAccessor().setValueOn(openvdb::Coord(4097, 1, 1), 1.0F);
+    const auto write = [&](const std::filesystem::path& path, std::uint32_t compression) {
+        openvdb::io::File file(path.string());
+        file.setCompression(compression);
+        file.write({density});
+        file.close();
+        return test::read_bytes(path);
+    };
+    // The grid descriptor: name, type, instance parent, then the grid, block and end positions.
+    const auto positions = [](const std::string& bytes) {
+        const std::string type = "Tree_float_5_4_3";
+        const std::size_t at = bytes.find(type);
+        EXPECT_NE(at, std::string::npos);
+        std::array<std::int64_t, 3> p{};
+        std::memcpy(p.data(), bytes.data() + at + type.size() + 4, sizeof(p));
+        return p;
+    };
+    // A leaf buffer: its 64-byte value mask, the value layout byte, then the zip chunk's size.
+    std::string zipped = write(dir / "zip.vdb", openvdb::io::COMPRESS_ZIP);
+    ASSERT_NO_THROW(read_openvdb(dir / "zip.vdb", MAX));
+    const auto block = static_cast<std::size_t>(positions(zipped)[1]);
+    const std::int64_t huge = 0x640000001680;
+    zipped.replace(block + 64 + 1, 8, std::string(reinterpret_cast<const char*>(&huge), 8));
+    test::write_bytes(dir / "huge_chunk.vdb", zipped);
+    expect_io_error([&] { read_openvdb(dir / "huge_chunk.vdb", MAX); },
+                    {"huge_chunk.vdb", "broken OpenVDB file", "the compressed chunk of leaf 0",
+                     "needs 109951162783360 bytes"});
+    // A raw chunk of another size than the values (Blosc would read it into their buffer).
+    const std::int64_t raw = -4096;
+    zipped.replace(block + 64 + 1, 8, std::string(reinterpret_cast<const char*>(&raw), 8));
+    test::write_bytes(dir / "raw_chunk.vdb", zipped);
+    expect_io_error([&] { read_openvdb(dir / "raw_chunk.vdb", MAX); },
+                    {"raw_chunk.vdb", "uncompressed chunk", "has 4096 bytes, expected 2048"});
+    // The second root child's origin (4096, 0, 0), set to the first's and to one not on the
+    // root's 4096-voxel grid.
+    const std::string plain = write(dir / "plain.vdb", openvdb::io::COMPRESS_NONE);
+    const auto p = positions(plain);
+    const std::string second("\x00\x10\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00", 12);
+    const std::size_t origin = plain.find(second, static_cast<std::size_t>(p[0]));
+    ASSERT_LT(origin, static_cast<std::size_t>(p[1]));
+    std::string same = plain;
+    same.replace(origin, 12, std::string(12, '\0'));
+    test::write_bytes(dir / "same.vdb", same);
+    expect_io_error([&] { read_openvdb(dir / "same.vdb", MAX); },
+                    {"same.vdb", "root child 1 of grid 'density'", "the same as an earlier child"});
+    std::string odd = plain;
+    odd[origin] = 1;
+    test::write_bytes(dir / "odd.vdb", odd);
+    expect_io_error([&] { read_openvdb(dir / "odd.vdb", MAX); },
+                    {"odd.vdb", "origin (4097, 0, 0), expected multiples of 4096"});
 }
 
 TEST(OpenVdb, NoFloatGridAndHugeBoxesAreRefusedBeforeAllocating) {

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "pliant/core/error.hpp"
@@ -225,14 +226,96 @@ std::vector<fs::path> candidate_files(const fs::path& dir) {
     return files;
 }
 
+// The VR (or VRs, "US or SS") of the image attributes GDCM reads through gdcm::Attribute while
+// reading an image (PS3.6); empty for other tags.
+std::string_view image_attribute_vr(unsigned group, unsigned element) {
+    static const std::map<std::pair<unsigned, unsigned>, std::string_view> VRS = {
+        {{0x0008, 0x0060}, "CS"},       {{0x0018, 0x0050}, "DS"},
+        {{0x0018, 0x0088}, "DS"},       {{0x0018, 0x1164}, "DS"},
+        {{0x0020, 0x0013}, "IS"},       {{0x0020, 0x0032}, "DS"},
+        {{0x0020, 0x0037}, "DS"},       {{0x0028, 0x0002}, "US"},
+        {{0x0028, 0x0004}, "CS"},       {{0x0028, 0x0006}, "US"},
+        {{0x0028, 0x0008}, "IS"},       {{0x0028, 0x0010}, "US"},
+        {{0x0028, 0x0011}, "US"},       {{0x0028, 0x0030}, "DS"},
+        {{0x0028, 0x0100}, "US"},       {{0x0028, 0x0101}, "US"},
+        {{0x0028, 0x0102}, "US"},       {{0x0028, 0x0103}, "US"},
+        {{0x0028, 0x0120}, "US or SS"}, {{0x0028, 0x1050}, "DS"},
+        {{0x0028, 0x1051}, "DS"},       {{0x0028, 0x1052}, "DS"},
+        {{0x0028, 0x1053}, "DS"},       {{0x0028, 0x1054}, "LO"},
+        {{0x0028, 0x1101}, "US or SS"}, {{0x0028, 0x1102}, "US or SS"},
+        {{0x0028, 0x1103}, "US or SS"}};
+    const auto it = VRS.find({group, element});
+    return it == VRS.end() ? std::string_view{} : it->second;
+}
+
+// Why GDCM's JPEG codec must not be given the JPEG stream `j` (the first fragment of JPEG pixel
+// data), or nullopt. Its GetHeaderInfo asserts on any libjpeg warning while reading the header
+// (gdcmJPEGBITSCodec.hxx:386: a byte other than 0xFF before a marker, fuzz_dicom) and on
+// component counts it does not handle, so the markers from SOI to SOS are walked (ITU T.81
+// annex B): each a 0xFF marker (fill bytes allowed) with a length within the fragment, JFIF
+// version 1, an Adobe transform of 0 to 2, and a frame header of 1 or 3 components.
+std::optional<std::string> jpeg_header_problem(const std::vector<unsigned char>& j) {
+    if (j.size() < 4 || j[0] != 0xFF || j[1] != 0xD8) {
+        return std::string("does not start with a JPEG SOI marker");
+    }
+    std::size_t at = 2;
+    while (at < j.size()) {
+        if (j[at] != 0xFF) {
+            return fmt::format("has byte 0x{:02X} at JPEG offset {}, expected a marker", j[at], at);
+        }
+        while (at < j.size() && j[at] == 0xFF) {
+            ++at;  // fill bytes
+        }
+        if (at + 2 >= j.size()) {
+            return std::string("ends inside its JPEG header");
+        }
+        const unsigned m = j[at];
+        if (m == 0xD8 || m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {
+            ++at;
+            continue;  // no length
+        }
+        if (m == 0xD9) {
+            return std::string("ends (EOI) before its JPEG scan");
+        }
+        const std::size_t length = static_cast<std::size_t>(j[at + 1]) << 8 | j[at + 2];
+        if (length < 2 || at + 1 + length > j.size()) {
+            return fmt::format(
+                "has a JPEG marker 0xFF{:02X} of {} bytes at offset {}, beyond the "
+                "fragment",
+                m, length, at - 1);
+        }
+        const unsigned char* body = j.data() + at + 3;
+        const std::size_t n = length - 2;
+        if (m == 0xDA) {
+            return std::nullopt;  // the scan: the header is complete
+        }
+        if (m == 0xE0 && n >= 7 && std::memcmp(body, "JFIF", 5) == 0 && body[5] != 1) {
+            return fmt::format("has JFIF version {}, expected 1", body[5]);
+        }
+        if (m == 0xEE && n >= 12 && std::memcmp(body, "Adobe", 5) == 0 && body[11] > 2) {
+            return fmt::format("has Adobe transform {}, expected 0 to 2", body[11]);
+        }
+        const bool frame = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
+        if (frame &&
+            (n < 6 || (body[5] != 1 && body[5] != 3) || n != 6 + std::size_t{3} * body[5])) {
+            return fmt::format(
+                "has a JPEG frame header of {} bytes with {} components, expected "
+                "1 or 3 components",
+                n, n >= 6 ? body[5] : 0);
+        }
+        at += 1 + length;
+    }
+    return std::string("ends before its JPEG scan");
+}
+
 // Why GDCM must not be given `file`, or nullopt. GDCM allocates an element's declared length
 // before reading it (a 972-byte file declaring 4 GB made it allocate 4 GB: fuzz_dicom), so the
 // data elements are walked first, as PS3.5 section 7 lays them out: each defined length must fit
 // in the bytes left, and an explicit VR must be two capital letters. Sequences and items are
-// entered, not skipped, so nested elements are checked too. Encapsulated pixel data ends the walk
-// (JPEG fragments are the codecs' to check), except RLE's, whose segment tables are checked; the
-// walk also stops after the file meta group for the transfer syntaxes it cannot walk (deflate,
-// explicit big endian), where GDCM is trusted as before.
+// entered, not skipped, so nested elements are checked too. Encapsulated pixel data's items are
+// walked (what is inside a JPEG fragment is the codec's to check; RLE's segment tables are
+// checked). The walk also stops after the file meta group for the transfer syntaxes it cannot walk
+// (deflate, explicit big endian), where GDCM is trusted as before.
 std::optional<std::string> element_length_problem(const fs::path& file) {
     std::FILE* f = std::fopen(file.c_str(), "rb");
     if (f == nullptr) {
@@ -253,7 +336,11 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
     };
     std::optional<std::string> problem;
-    int rle_fragment = -1;  // in RLE pixel data: 0 the offset table, then the fragments
+    bool data_set = false;  // an element after the file meta group was seen
+    bool rle_syntax = false;
+    bool jpeg_syntax = false;  // ITU T.81 JPEG: the first fragment's header is checked  // RLE
+                               // Lossless: the fragments' segment tables are checked too
+    int fragment = -1;         // in encapsulated pixel data: 0 the offset table, then the fragments
     while (!ec && pos + 8 <= size) {
         std::array<unsigned char, 12> h{};
         if (std::fseek(f, static_cast<long>(pos), SEEK_SET) != 0 ||
@@ -262,6 +349,7 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
         }
         const unsigned group = u16(h.data());
         const unsigned element = u16(h.data() + 2);
+        data_set = data_set || group != 0x0002;
         if (group != 0x0002 &&
             (syntax == "1.2.840.10008.1.2.1.99" || syntax == "1.2.840.10008.1.2.2")) {
             break;  // deflated or big-endian data set
@@ -285,6 +373,27 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 break;
             }
             const std::string_view v(vr, 2);
+            // The VRs of PS3.5 table 6.2-1 (GDCM 3.0.21 knows them all); GDCM's reader of the
+            // file meta group asserts on any other (gdcmFileMetaInformation.cxx:436: "KH" in
+            // (0002,0013), fuzz_dicom).
+            constexpr std::string_view VRS =
+                "AE AS AT CS DA DS DT FD FL IS LO LT OB OD OF OL OV OW PN SH SL SQ SS ST SV TM UC "
+                "UI UL UN UR US UT UV";
+            if (VRS.find(v) == std::string_view::npos) {  // letters only: no match spans a space
+                problem = fmt::format(
+                    "element ({:04X},{:04X}) at byte {} has VR '{}', which DICOM does not define",
+                    group, element, pos, v);
+                break;
+            }
+            // The image attributes GDCM reads through gdcm::Attribute, which asserts that the
+            // VR is the dictionary's (gdcmAttribute.h:210: Image Position with VR PN,
+            // fuzz_dicom). UN is accepted as GDCM does.
+            if (const std::string_view want = image_attribute_vr(group, element);
+                !want.empty() && v != "UN" && want.find(v) == std::string_view::npos) {
+                problem = fmt::format("element ({:04X},{:04X}) at byte {} has VR '{}', expected {}",
+                                      group, element, pos, v, want);
+                break;
+            }
             if (v == "OB" || v == "OD" || v == "OF" || v == "OL" || v == "OV" || v == "OW" ||
                 v == "SQ" || v == "SV" || v == "UC" || v == "UN" || v == "UR" || v == "UT" ||
                 v == "UV") {
@@ -305,15 +414,51 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
         } else {
             length = u32(h.data() + 4);
         }
-        if (rle_fragment >= 0) {
-            // RLE pixel data (PS3.5 annex G): the offset table, then fragments that each start
-            // with a 64-byte header of the segment count (1 to 15) and the segments' offsets
-            // (GDCM trusts them: 26,114 segments made it read out of bounds).
-            if (!item || element != 0xE000 || length == 0xFFFFFFFFU ||
-                length > size - pos - header) {
-                break;  // the delimiter, or a layout GDCM reports itself
+        if (fragment >= 0) {
+            // Encapsulated pixel data (PS3.5 A.4): items (FFFE,E000) of defined length (the
+            // offset table, then the fragments) up to the delimiter (FFFE,E0DD); GDCM allocates
+            // what any other tag there declares (a fragment tag (FFFE,9696) declaring 2.5 GB:
+            // fuzz_dicom). For RLE (annex G) each fragment starts with a 64-byte header of the
+            // segment count (1 to 15) and the segments' offsets (GDCM trusts them: 26,114
+            // segments made it read out of bounds).
+            if (item && element == 0xE0DD) {
+                if (length != 0) {
+                    // GDCM reads it as a fragment of that length (fuzz_dicom: 0xF7000000).
+                    problem = fmt::format(
+                        "the pixel data's delimiter (FFFE,E0DD) at byte {} declares {} bytes, "
+                        "expected 0",
+                        pos, length);
+                    break;
+                }
+                fragment = -1;
+                pos += header;
+                continue;
             }
-            if (rle_fragment > 0) {
+            if (!item || element != 0xE000) {
+                problem = fmt::format(
+                    "pixel data fragment {} at byte {} has tag ({:04X},{:04X}), expected an item "
+                    "(FFFE,E000) or the delimiter (FFFE,E0DD)",
+                    fragment, pos, group, element);
+                break;
+            }
+            if (length == 0xFFFFFFFFU || length > size - pos - header) {
+                problem = fmt::format(
+                    "pixel data fragment {} at byte {} declares {} bytes, the file has {} left",
+                    fragment, pos, length, size - pos - header);
+                break;
+            }
+            if (jpeg_syntax && fragment == 1) {
+                std::vector<unsigned char> jpeg(std::min<std::size_t>(length, 65536));
+                if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                    std::fread(jpeg.data(), 1, jpeg.size(), f) != jpeg.size()) {
+                    break;
+                }
+                if (const std::optional<std::string> why = jpeg_header_problem(jpeg)) {
+                    problem = fmt::format("the JPEG pixel data fragment at byte {} {}", pos, *why);
+                    break;
+                }
+            }
+            if (rle_syntax && fragment > 0) {
                 std::array<unsigned char, 64> rle{};
                 if (length < rle.size() ||
                     std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
@@ -343,18 +488,15 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                     break;
                 }
             }
-            ++rle_fragment;
+            ++fragment;
             pos += header + length;
             continue;
         }
         if (length == 0xFFFFFFFFU) {
             if (group == 0x7FE0 && element == 0x0010) {
-                if (syntax == "1.2.840.10008.1.2.5") {
-                    rle_fragment = 0;
-                    pos += header;
-                    continue;
-                }
-                break;  // encapsulated pixel data: fragments follow
+                fragment = 0;  // encapsulated pixel data: fragments follow
+                pos += header;
+                continue;
             }
             pos += header;  // an undefined-length sequence or item: its elements follow
             continue;
@@ -364,6 +506,52 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 "element ({:04X},{:04X}) at byte {} declares {} bytes, the file has {} left", group,
                 element, pos, length, size - pos - header);
             break;
+        }
+        if (group == 0x0028 && (element == 0x0002 || element == 0x0100) && length >= 2) {
+            // Samples per Pixel and Bits Allocated: GDCM asserts unless Samples per Pixel is 1, 3
+            // or 4 (gdcmPixelFormat.h:96), and its RLE decoder unless they are 1 or 3 and 8, 16
+            // or 32 (gdcmRLECodec.cxx:777-782; Bits Allocated 4624 gave a zero length: both
+            // fuzz_dicom). PS3.5 8.1.1: Bits Allocated is 1 or a multiple of 8.
+            std::array<unsigned char, 2> us{};
+            if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                std::fread(us.data(), 1, us.size(), f) != us.size()) {
+                break;
+            }
+            const unsigned value = u16(us.data());
+            if (element == 0x0002 && value != 1 && value != 3 && (value != 4 || rle_syntax)) {
+                problem =
+                    fmt::format("Samples per Pixel (0028,0002) at byte {} is {}, expected 1, 3{}",
+                                pos, value, rle_syntax ? " (RLE)" : " or 4");
+                break;
+            }
+            const bool bits_ok = rle_syntax
+                                     ? value == 8 || value == 16 || value == 32
+                                     : value == 1 || (value % 8 == 0 && value >= 8 && value <= 64);
+            if (element == 0x0100 && !bits_ok) {
+                problem = fmt::format(
+                    "Bits Allocated (0028,0100) at byte {} is {}, expected {}", pos, value,
+                    rle_syntax ? "8, 16 or 32 (RLE)" : "1 or a multiple of 8 up to 64");
+                break;
+            }
+        }
+        if (group == 0x0008 && element == 0x0010) {
+            // Recognition Code (retired, ACR-NEMA): GDCM asserts that it starts with "ACR-NEMA",
+            // "ACRNEMA" or "MIPS 2.0" (gdcmPixmapReader.cxx:633; fuzz_dicom: a Study Time tag
+            // mutated into it).
+            std::array<char, 8> code{};
+            const std::size_t n = std::min<std::size_t>(length, code.size());
+            if (std::fseek(f, static_cast<long>(pos + header), SEEK_SET) != 0 ||
+                std::fread(code.data(), 1, n, f) != n) {
+                break;
+            }
+            const std::string_view c(code.data(), n);
+            if (!c.starts_with("ACR-NEMA") && !c.starts_with("ACRNEMA") &&
+                !c.starts_with("MIPS 2.0")) {
+                problem = fmt::format(
+                    "Recognition Code (0008,0010) at byte {} starts with '{}', expected ACR-NEMA",
+                    pos, c);
+                break;
+            }
         }
         if (group == 0x0002 && element == 0x0010 && length <= 64) {
             std::string text(length, '\0');
@@ -375,9 +563,28 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
                 text.pop_back();
             }
             syntax = text;
+            rle_syntax = syntax == "1.2.840.10008.1.2.5";
+            // JPEG (ITU T.81) syntaxes: 1.2.840.10008.1.2.4.50 to .4.70, not JPEG-LS (.80, .81)
+            // or JPEG 2000 (.90 and up).
+            jpeg_syntax = syntax.starts_with("1.2.840.10008.1.2.4.") && syntax.size() == 22 &&
+                          syntax.substr(20) >= "50" && syntax.substr(20) <= "70";
         }
         // A sequence's or item's contents are elements: walk into them.
         pos += header + (sequence ? 0 : length);
+    }
+    // 1 to 7 bytes after the last element: a header cut short. GDCM reads its tag, fails on the
+    // VR at the end of the file, and its VR16 fallback seeks back on the failed stream and
+    // asserts (gdcmVR16ExplicitDataElement.txx:46, "Should not happen"; fuzz_dicom).
+    if (!problem && !ec && pos < size && pos + 8 > size) {
+        problem = fmt::format(
+            "the data element at byte {} is cut short: {} bytes left, a data element header has 8",
+            pos, size - pos);
+    }
+    // A Part 10 file that ends with its meta group: GDCM's meta group reader asserts on the
+    // missing next tag (gdcmFileMetaInformation.cxx:375, fuzz_dicom).
+    if (!problem && !ec && part10 && !data_set && pos >= size) {
+        problem =
+            fmt::format("the file ends after its file meta group at byte {}: no data set", pos);
     }
     std::fclose(f);
     return problem;
@@ -444,7 +651,21 @@ std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
         s.series_uid = text_of(value(SERIES_UID));
         s.description = text_of(value(SERIES_DESCRIPTION));
         s.modality = text_of(value(MODALITY));
-        s.frames = std::max<std::int64_t>(1, integer(value(NUMBER_OF_FRAMES)).value_or(1));
+        // GDCM asserts on a Number of Frames of 0 or one that is not a number
+        // (gdcmPixmapReader.cxx, ReadImage).
+        const char* frames = value(NUMBER_OF_FRAMES);
+        if (frames != nullptr && integer(frames).value_or(0) < 1) {
+            const std::string problem = fmt::format(
+                "{}: not a DICOM file pliant can read: Number of Frames (0028,0008) is '{}', "
+                "expected a positive integer",
+                names[n], trim(frames));
+            if (listed) {
+                throw IoError(problem);
+            }
+            log_debug("skipped: {}", problem);
+            continue;
+        }
+        s.frames = std::max<std::int64_t>(1, integer(frames).value_or(1));
         if (const auto p = numbers(value(IMAGE_POSITION), 3)) {
             s.position = Vec3d{(*p)[0], (*p)[1], (*p)[2]};
         }

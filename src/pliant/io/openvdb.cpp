@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -159,11 +160,14 @@ std::uint64_t fixed_metadata_size(const std::string& type) {
     return it == SIZES.end() ? 0 : it->second;
 }
 
-// OpenVDB's DelayedLoadMetadata (io/DelayedLoadMetadata.cc) reads its value by the sizes inside
-// it, not by `bytes`: a leaf count, then a mask (Blosc-compressed: its size, then the bytes; or
-// one byte per leaf), then, when bytes remain, the leaves' compressed sizes (the same way, 8
-// bytes per leaf). Each part must lie within `bytes`, and every leaf takes at least its 64-byte
-// value mask in the file.
+// OpenVDB's DelayedLoadMetadata (io/DelayedLoadMetadata.cc readValue) reads its value by the
+// sizes inside it, not by `bytes`: a leaf count, then the mask (a size, then that many
+// Blosc-compressed bytes, or one byte per leaf when the size is 0), then the leaves' compressed
+// sizes the same way (8 bytes per leaf), or none when that size is 0xFFFFFFFF (as written without
+// compression). Each part must lie within `bytes`, and every leaf takes at least its 64-byte
+// value mask in the file. A Blosc part's header (its bytes 4 to 7) holds the uncompressed size
+// OpenVDB reserves before decompressing: it must be at most the part's count × size (or the 128
+// bytes OpenVDB pads a smaller part to).
 void check_delayed_load(LayoutReader& r, std::uint64_t bytes, const std::string& what,
                         std::uint64_t limit) {
     const std::uint64_t end = r.position() + bytes;
@@ -179,15 +183,36 @@ void check_delayed_load(LayoutReader& r, std::uint64_t bytes, const std::string&
     const auto part = [&](std::uint64_t bytes_per_leaf, const char* name) {
         const auto compressed =
             r.value<std::uint32_t>(fmt::format("the {} size of {}", name, what), end);
-        const std::uint64_t n = compressed > 0 ? compressed : bytes_per_leaf * leaves;
-        r.skip(n, fmt::format("the {} of {}", name, what), end);
+        if (compressed == std::numeric_limits<std::uint32_t>::max() && bytes_per_leaf == 8) {
+            return;  // no compressed sizes
+        }
+        if (compressed == 0) {
+            r.skip(bytes_per_leaf * leaves, fmt::format("the {} of {}", name, what), end);
+            return;
+        }
+        constexpr std::uint64_t BLOSC_HEADER = 16;
+        const std::uint64_t at = r.position();
+        if (compressed < BLOSC_HEADER) {
+            r.fail(fmt::format("the {} of {} at byte {} is {} bytes, less than a Blosc header",
+                               name, what, at, compressed));
+        }
+        std::array<unsigned char, BLOSC_HEADER> header{};
+        r.read(header.data(), header.size(), fmt::format("the {} of {}", name, what), end);
+        const std::uint64_t nbytes = std::uint64_t{header[4]} | std::uint64_t{header[5]} << 8 |
+                                     std::uint64_t{header[6]} << 16 |
+                                     std::uint64_t{header[7]} << 24;
+        // OpenVDB pads a part of up to 128 bytes to 128 before compressing it (io/Blosc.cc).
+        const std::uint64_t most = std::max<std::uint64_t>(bytes_per_leaf * leaves, 128);
+        if (nbytes > most) {
+            r.fail(
+                fmt::format("the {} of {} at byte {} decompresses to {} bytes, expected at "
+                            "most {} ({} leaves)",
+                            name, what, at, nbytes, most, leaves));
+        }
+        r.skip(compressed - BLOSC_HEADER, fmt::format("the {} of {}", name, what), end);
     };
-    if (leaves > 0) {
-        part(1, "mask");
-    }
-    if (r.position() < end) {
-        part(8, "compressed sizes");
-    }
+    part(1, "mask");
+    part(8, "compressed sizes");
     r.seek(end, what);
 }
 
@@ -260,11 +285,107 @@ std::uint64_t linear_map_bytes(const std::string& type) {
     return 0;
 }
 
+// How a grid's tree stores its values: the bytes of one value, of one value as written
+// (half floats for "_HalfFloat" grids), and the grid's compression flags.
+struct TreeFormat {
+    std::uint64_t value_bytes = 0;
+    std::uint64_t stored_bytes = 0;
+    std::uint32_t compression = 0;
+};
+
+// Bits set in `mask` (a node's value or child mask as stored: little-endian 64-bit words).
+std::uint64_t bits_on(const std::vector<unsigned char>& mask) {
+    std::uint64_t n = 0;
+    for (const unsigned char byte : mask) {
+        n += static_cast<std::uint64_t>(std::popcount(static_cast<unsigned>(byte)));
+    }
+    return n;
+}
+
+// One node's values as io::readCompressedValues (io/Compression.h, file format >= 222) reads
+// them: a metadata byte (0 to 6), then per its value one or two inactive values, a selection
+// mask, and the values: all `count`, or only the `active` ones when the grid's flags have
+// COMPRESS_ACTIVE_MASK and the byte is not 6 (NO_MASK_AND_ALL_VALS). Zip and Blosc chunks start
+// with their size (io::unzipFromStream, io::bloscFromStream: an int64, negative for raw bytes,
+// which must then be the values' bytes); OpenVDB allocates a positive size before reading it, so
+// it must fit in the bytes left, and Blosc reads a raw chunk into the values' buffer before
+// comparing its size.
+void check_values(LayoutReader& r, const TreeFormat& f, std::uint64_t count, std::uint64_t active,
+                  std::uint64_t limit, const std::string& what) {
+    const auto metadata = r.value<std::uint8_t>(fmt::format("the value layout of {}", what), limit);
+    if (metadata > 6) {
+        r.fail(fmt::format("{} at byte {} has value layout {}, expected 0 to 6", what,
+                           r.position() - 1, metadata));
+    }
+    if (metadata == 2 || metadata == 4 || metadata == 5) {
+        r.skip(f.value_bytes * (metadata == 5 ? 2 : 1),
+               fmt::format("the inactive values of {}", what), limit);
+    }
+    if (metadata >= 3 && metadata <= 5) {
+        r.skip(count / 8, fmt::format("the selection mask of {}", what), limit);
+    }
+    const bool only_active =
+        (f.compression & openvdb::io::COMPRESS_ACTIVE_MASK) != 0 && metadata != 6;
+    const std::uint64_t n = only_active ? active : count;
+    const bool half = f.stored_bytes != f.value_bytes;
+    if (half && n == 0) {
+        return;  // io::HalfReader reads nothing
+    }
+    const std::uint64_t bytes = n * f.stored_bytes;
+    if ((f.compression & (openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ZIP)) == 0) {
+        r.skip(bytes, fmt::format("the values of {}", what), limit);
+        return;
+    }
+    const std::uint64_t at = r.position();
+    const auto chunk = r.value<std::int64_t>(fmt::format("the chunk size of {}", what), limit);
+    if (chunk <= 0) {
+        const std::uint64_t raw = chunk == std::numeric_limits<std::int64_t>::min()
+                                      ? std::uint64_t{1} << 63
+                                      : static_cast<std::uint64_t>(-chunk);
+        if (raw != bytes) {
+            r.fail(
+                fmt::format("{}: the uncompressed chunk at byte {} has {} bytes, expected {} "
+                            "({} values of {} bytes)",
+                            what, at, raw, bytes, n, f.stored_bytes));
+        }
+        r.skip(raw, fmt::format("the values of {}", what), limit);
+        return;
+    }
+    r.skip(static_cast<std::uint64_t>(chunk), fmt::format("the compressed chunk of {}", what),
+           limit);
+}
+
+// An internal node's topology (tree/InternalNode.h readTopology): its child and value masks, its
+// values, then its children in the child mask's order: internal nodes of 16³ under the 32³ ones,
+// leaves (their 64-byte value mask) under those. Returns the leaves below it.
+std::uint64_t check_internal(LayoutReader& r, const TreeFormat& f, int log2dim, std::uint64_t limit,
+                             const std::string& what) {
+    const std::uint64_t count = std::uint64_t{1} << (3 * log2dim);
+    std::vector<unsigned char> children(count / 8);
+    std::vector<unsigned char> values(count / 8);
+    r.read(children.data(), children.size(), fmt::format("the child mask of {}", what), limit);
+    r.read(values.data(), values.size(), fmt::format("the value mask of {}", what), limit);
+    check_values(r, f, count, bits_on(values), limit, what);
+    const std::uint64_t n = bits_on(children);
+    if (log2dim == 4) {
+        r.skip(n * 64, fmt::format("the {} leaf masks under {}", n, what), limit);
+        return n;
+    }
+    std::uint64_t leaves = 0;
+    for (std::uint64_t i = 0; i < n; ++i) {
+        leaves += check_internal(r, f, 4, limit, fmt::format("internal node {} under {}", i, what));
+    }
+    return leaves;
+}
+
 // After a grid's metadata: its transform, the tree's buffer count, and the root node's
 // background, tile count and child count, which OpenVDB loops over without a bound. A tile takes
-// 12 + value + 1 bytes; a child at least 12 + two 4096-byte masks (a 32³ internal node).
-bool check_root(LayoutReader& r, const DescriptorLayout& d, std::uint64_t vbytes,
-                std::uint64_t block) {
+// 12 + value + 1 bytes; a child at least 12 + two 4096-byte masks (a 32³ internal node). Then the
+// whole tree as OpenVDB reads it: the topology up to the block position (each child at its own
+// origin, a multiple of 4096: a second child at the same origin is dropped by OpenVDB without
+// being freed), and each leaf's buffer (its value mask and values) from there to the grid's end.
+bool check_root(LayoutReader& r, const DescriptorLayout& d, const TreeFormat& f,
+                std::uint64_t block, std::uint64_t end) {
     const std::string map = r.string(fmt::format("the transform of grid '{}'", d.name), block);
     const std::uint64_t map_bytes = linear_map_bytes(map);
     if (map_bytes == 0) {
@@ -272,6 +393,7 @@ bool check_root(LayoutReader& r, const DescriptorLayout& d, std::uint64_t vbytes
     }
     r.skip(map_bytes, fmt::format("the {} of grid '{}'", map, d.name), block);
     r.value<std::int32_t>(fmt::format("the buffer count of grid '{}'", d.name), block);
+    const std::uint64_t vbytes = f.value_bytes;
     r.skip(vbytes, fmt::format("the background of grid '{}'", d.name), block);
     const auto tiles =
         r.value<std::uint32_t>(fmt::format("the tile count of grid '{}'", d.name), block);
@@ -285,6 +407,41 @@ bool check_root(LayoutReader& r, const DescriptorLayout& d, std::uint64_t vbytes
             "grid '{}' declares {} root tiles and {} children ({} bytes at least), but its "
             "topology has {} bytes left",
             d.name, tiles, children, needed, left));
+    }
+    r.skip(std::uint64_t{tiles} * (12 + vbytes + 1),
+           fmt::format("the root tiles of grid '{}'", d.name), block);
+    std::vector<std::array<std::int32_t, 3>> origins;
+    origins.reserve(children);
+    std::uint64_t leaves = 0;
+    for (std::uint32_t c = 0; c < children; ++c) {
+        const std::uint64_t at = r.position();
+        std::array<std::int32_t, 3> origin{};
+        r.read(origin.data(), sizeof(origin),
+               fmt::format("the origin of root child {} of grid '{}'", c, d.name), block);
+        for (const std::int32_t o : origin) {
+            if (o % 4096 != 0) {
+                r.fail(
+                    fmt::format("root child {} of grid '{}' at byte {} has origin ({}, {}, {}), "
+                                "expected multiples of 4096",
+                                c, d.name, at, origin[0], origin[1], origin[2]));
+            }
+        }
+        if (std::find(origins.begin(), origins.end(), origin) != origins.end()) {
+            r.fail(
+                fmt::format("root child {} of grid '{}' at byte {} has origin ({}, {}, {}), "
+                            "the same as an earlier child",
+                            c, d.name, at, origin[0], origin[1], origin[2]));
+        }
+        origins.push_back(origin);
+        leaves +=
+            check_internal(r, f, 5, block, fmt::format("root child {} of grid '{}'", c, d.name));
+    }
+    r.seek(block, fmt::format("the leaf buffers of grid '{}'", d.name));
+    std::vector<unsigned char> mask(64);
+    for (std::uint64_t l = 0; l < leaves; ++l) {
+        const std::string what = fmt::format("leaf {} of grid '{}'", l, d.name);
+        r.read(mask.data(), mask.size(), fmt::format("the value mask of {}", what), end);
+        check_values(r, f, 512, bits_on(mask), end, what);
     }
     return true;
 }
@@ -373,7 +530,12 @@ std::vector<DescriptorLayout> check_layout(const fs::path& path) {
         check_metadata(r, block, fmt::format("grid '{}'", d.name));
         const std::uint64_t vbytes = value_bytes(type);
         if (vbytes != 0 && parent.empty()) {
-            d.root_checked = check_root(r, d, vbytes, block);
+            TreeFormat f;
+            f.value_bytes = vbytes;
+            // Half floats: float and double as 2 bytes, vec3s as 3 × 2.
+            f.stored_bytes = type.ends_with("_HalfFloat") ? (vbytes == 12 ? 6 : 2) : vbytes;
+            f.compression = compression;
+            d.root_checked = check_root(r, d, f, block, static_cast<std::uint64_t>(end_pos));
         }
         grids.push_back(std::move(d));
         r.seek(static_cast<std::uint64_t>(end_pos), "the next grid descriptor");
