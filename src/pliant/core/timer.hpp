@@ -1,5 +1,5 @@
-// Wall-clock timing: Stopwatch (monotonic, milliseconds) and ScopedTimer, which adds the time of
-// a scope to a caller's accumulator (per-stage timings in stats).
+// Wall-clock timing: Stopwatch (monotonic, milliseconds), ScopedTimer, which adds the time of a
+// scope to a caller's accumulator (per-stage timings in stats), and RunningMean.
 #pragma once
 
 #include <algorithm>
@@ -32,6 +32,17 @@ public:
 private:
     double& m_accumulator;
     Stopwatch m_watch;
+};
+
+// A running sum and count of samples (per-frame timings of a run; saved in checkpoints).
+struct RunningMean {
+    double sum = 0.0;
+    int count = 0;
+    void add(double x) {
+        sum += x;
+        ++count;
+    }
+    double mean() const { return count > 0 ? sum / count : 0.0; }
 };
 
 // Median of a sample (by value; empty → 0). For reporting repeated timings.

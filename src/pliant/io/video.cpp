@@ -19,6 +19,7 @@
 #include <system_error>
 
 #include "pliant/core/error.hpp"
+#include "pliant/io/child_process.hpp"
 
 extern char** environ;  // NOLINT: POSIX, passed to the child process
 
@@ -28,11 +29,6 @@ namespace {
 
 constexpr int MAX_SIZE = 16384;
 constexpr std::size_t STDERR_TAIL_BYTES = 2000;
-
-bool is_executable_file(const std::filesystem::path& p) {
-    struct stat st {};
-    return ::stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(p.c_str(), X_OK) == 0;
-}
 
 std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
     static std::atomic<std::uint64_t> counter{0};
@@ -49,24 +45,7 @@ std::string errno_text(int error) {
 }  // namespace
 
 std::filesystem::path find_ffmpeg() {
-    const char* env = std::getenv("PATH");
-    const std::string_view path_list = env != nullptr ? env : "/usr/local/bin:/usr/bin:/bin";
-    std::size_t start = 0;
-    while (start <= path_list.size()) {
-        std::size_t end = path_list.find(':', start);
-        if (end == std::string_view::npos) {
-            end = path_list.size();
-        }
-        const std::string_view dir = path_list.substr(start, end - start);
-        if (!dir.empty()) {
-            std::filesystem::path candidate = std::filesystem::path(dir) / "ffmpeg";
-            if (is_executable_file(candidate)) {
-                return candidate;
-            }
-        }
-        start = end + 1;
-    }
-    return {};
+    return find_program("ffmpeg");
 }
 
 bool ffmpeg_available() {

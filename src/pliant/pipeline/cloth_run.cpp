@@ -178,16 +178,6 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
         std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
-struct Running {
-    double sum = 0.0;
-    int count = 0;
-    void add(double x) {
-        sum += x;
-        ++count;
-    }
-    double mean() const { return count > 0 ? sum / count : 0.0; }
-};
-
 // The run's own part of a checkpoint, before the simulation's state.
 struct ClothRunTotals {
     std::int32_t frame = 0;  // the last frame written
@@ -345,7 +335,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     }
     int frames_done = first_frame - 1;
     nlohmann::ordered_json& per_frame = totals.per_frame;
-    Running checkpoint_ms;  // this process's checkpoints
+    RunningMean checkpoint_ms;  // this process's checkpoints
     const auto save_checkpoint = [&] {
         const Stopwatch watch;
         totals.frame = frames_done;

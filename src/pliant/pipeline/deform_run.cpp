@@ -31,27 +31,17 @@
 namespace pliant::pipeline {
 namespace {
 
-struct Running {
-    double sum = 0.0;
-    int count = 0;
-    void add(double x) {
-        sum += x;
-        ++count;
-    }
-    double mean() const { return count > 0 ? sum / count : 0.0; }
-};
-
 // The run's sums, saved in checkpoints before the soft body's state.
 struct DeformTotals {
     std::int32_t frame = 0;  // the last frame simulated
-    Running substep_ms, step_ms, resample_ms, render_ms, frame_ms;
+    RunningMean substep_ms, step_ms, resample_ms, render_ms, frame_ms;
     double min_ratio = std::numeric_limits<double>::infinity();
     double max_ratio = -std::numeric_limits<double>::infinity();
     std::int64_t max_inverted = 0;
 
     void save(ByteWriter& w) const {
         w.put(frame);
-        for (const Running* r : {&substep_ms, &step_ms, &resample_ms, &render_ms, &frame_ms}) {
+        for (const RunningMean* r : {&substep_ms, &step_ms, &resample_ms, &render_ms, &frame_ms}) {
             w.put(r->sum);
             w.put(r->count);
         }
@@ -61,7 +51,7 @@ struct DeformTotals {
     }
     void load(ByteReader& r) {
         frame = r.get<std::int32_t>("frame");
-        for (Running* running : {&substep_ms, &step_ms, &resample_ms, &render_ms, &frame_ms}) {
+        for (RunningMean* running : {&substep_ms, &step_ms, &resample_ms, &render_ms, &frame_ms}) {
             running->sum = r.get<double>("timing sum");
             running->count = r.get<int>("timing count");
         }
@@ -213,11 +203,11 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     io::remove_stray_temporaries(checkpoint_path.parent_path().empty()
                                      ? std::filesystem::path(".")
                                      : checkpoint_path.parent_path());
-    Running& substep_ms = totals.substep_ms;
-    Running& step_ms = totals.step_ms;
-    Running& resample_ms = totals.resample_ms;
-    Running& render_ms = totals.render_ms;
-    Running& frame_ms = totals.frame_ms;
+    RunningMean& substep_ms = totals.substep_ms;
+    RunningMean& step_ms = totals.step_ms;
+    RunningMean& resample_ms = totals.resample_ms;
+    RunningMean& render_ms = totals.render_ms;
+    RunningMean& frame_ms = totals.frame_ms;
     double& min_ratio = totals.min_ratio;
     double& max_ratio = totals.max_ratio;
     std::int64_t& max_inverted = totals.max_inverted;
