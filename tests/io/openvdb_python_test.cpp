@@ -12,6 +12,7 @@
 
 #include "pliant/io/openvdb.hpp"
 #include "pliant/volume/volume.hpp"
+#include "support/python_readback.hpp"
 #include "support/test_files.hpp"
 
 namespace pliant::io {
@@ -21,28 +22,15 @@ using test::TempDir;
 using volume::Volume;
 using volume::VoxelType;
 
-constexpr const char* PYTHON = "/usr/bin/python3";
-
 bool has_pyopenvdb() {
-    const std::string command = std::string(PYTHON) + " -c 'import pyopenvdb' >/dev/null 2>&1";
+    const std::string command =
+        std::string(pliant::test::SYSTEM_PYTHON) + " -c 'import pyopenvdb' >/dev/null 2>&1";
     return std::system(command.c_str()) == 0;
 }
 
 // Runs the readback script on `path` and parses its JSON.
 nlohmann::json read_with_pyopenvdb(const std::filesystem::path& path) {
-    const std::string command = std::string(PYTHON) + " " + PLIANT_SOURCE_DIR +
-                                "/tests/io/openvdb_readback.py '" + path.string() + "'";
-    FILE* pipe = ::popen(command.c_str(), "r");
-    EXPECT_NE(pipe, nullptr);
-    std::string text;
-    char buffer[4096];
-    std::size_t n = 0;
-    while (pipe != nullptr && (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) {
-        text.append(buffer, n);
-    }
-    const int status = pipe != nullptr ? ::pclose(pipe) : -1;
-    EXPECT_EQ(status, 0) << command;
-    return nlohmann::json::parse(text);
+    return pliant::test::run_python_readback("tests/io/openvdb_readback.py", path);
 }
 
 // A 7 × 6 × 5 volume: a ball of varying values in an empty border, anisotropic spacing.
@@ -93,7 +81,7 @@ double channel(const Volume& v, std::int64_t n, int c) {
 
 TEST(OpenVdbPython, PyopenvdbReadsTheValuesPliantWrote) {
     if (!has_pyopenvdb()) {
-        GTEST_SKIP() << PYTHON << " has no pyopenvdb (Debian python3-openvdb)";
+        GTEST_SKIP() << pliant::test::SYSTEM_PYTHON << " has no pyopenvdb (Debian python3-openvdb)";
     }
     TempDir dir;
     for (const VoxelType type : {VoxelType::f32, VoxelType::u16, VoxelType::rgba8}) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pliant/core/error.hpp"
+#include "support/python_readback.hpp"
 #include "support/test_files.hpp"
 
 namespace pliant::io {
@@ -19,18 +20,7 @@ namespace {
 using test::TempDir;
 
 nlohmann::json read_with_python(const std::filesystem::path& path) {
-    const std::string command = std::string("/usr/bin/python3 ") + PLIANT_SOURCE_DIR +
-                                "/tests/io/vtu_readback.py '" + path.string() + "'";
-    FILE* pipe = ::popen(command.c_str(), "r");
-    EXPECT_NE(pipe, nullptr);
-    std::string text;
-    char buffer[4096];
-    std::size_t n = 0;
-    while (pipe != nullptr && (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) {
-        text.append(buffer, n);
-    }
-    EXPECT_EQ(pipe != nullptr ? ::pclose(pipe) : -1, 0) << command;
-    return nlohmann::json::parse(text);
+    return pliant::test::run_python_readback("tests/io/vtu_readback.py", path);
 }
 
 // A unit cube's corner tet and its neighbour sharing a face; the deformed copy moves vertex 3.

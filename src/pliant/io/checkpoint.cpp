@@ -56,6 +56,11 @@ std::uint64_t run_fingerprint(std::string_view text) {
     return hash;
 }
 
+std::uint64_t run_fingerprint(std::span<const std::byte> bytes) {
+    return run_fingerprint(
+        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
 std::vector<std::byte> encode_checkpoint(const Checkpoint& checkpoint) {
     ByteWriter w;
     w.put(MAGIC);

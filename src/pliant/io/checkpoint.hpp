@@ -37,9 +37,10 @@ enum class CheckpointKind : std::uint32_t { cloth = 1, deform = 2, nerf = 3 };
 // The name of a kind ("cloth", "deform", "nerf").
 std::string_view checkpoint_kind_name(CheckpointKind kind);
 
-// FNV-1a (64 bit) of `text`: the fingerprint of a run described by a canonical text (its scene
-// JSON and options dumped in a fixed order).
+// FNV-1a (64 bit) of `text`: the fingerprint of a run described by a canonical text or by the
+// bytes of its inputs and options serialized in a fixed order (core/bytes.hpp's ByteWriter).
 std::uint64_t run_fingerprint(std::string_view text);
+std::uint64_t run_fingerprint(std::span<const std::byte> bytes);
 
 struct Checkpoint {
     CheckpointKind kind = CheckpointKind::cloth;

@@ -173,9 +173,7 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     w.put(scene.substeps);
     w.put(scene.self_collision);
     w.put_string(scene.frame_format);
-    const std::span<const std::byte> bytes = w.bytes();
-    return io::run_fingerprint(
-        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    return io::run_fingerprint(w.bytes());
 }
 
 // The run's own part of a checkpoint, before the simulation's state.

@@ -106,9 +106,7 @@ std::uint64_t deform_fingerprint(const volume::Volume& source, const pbd::SoftBo
             }
         },
         options.driver);
-    const std::span<const std::byte> bytes = w.bytes();
-    return io::run_fingerprint(
-        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    return io::run_fingerprint(w.bytes());
 }
 
 }  // namespace

@@ -123,9 +123,7 @@ std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainO
     w.put(o.warmup_iterations);
     w.put(o.render.use_occupancy);
     w.put(o.seed);
-    const std::span<const std::byte> bytes = w.bytes();
-    return io::run_fingerprint(
-        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    return io::run_fingerprint(w.bytes());
 }
 
 }  // namespace
