@@ -480,6 +480,52 @@ TEST(OpenVdb, TreeChunksBeyondTheFileAndRepeatedRootChildrenAreRefused) {
                     {"odd.vdb", "origin (4097, 0, 0), expected multiples of 4096"});
 }
 
+// Bytes OpenVDB reads straight into a C++ bool (a root tile's active flag, a bool metadata
+// value): anything but 0 or 1 is undefined behaviour there, so pliant refuses it first.
+TEST(OpenVdb, BoolBytesOtherThanZeroOrOneAreRefused) {
+    TempDir dir;
+    openvdb::initialize();
+    auto density = openvdb::FloatGrid::create(0.0F);
+    density->setName("density");
+    density->insertMeta("flagged", openvdb::BoolMetadata(true));
+    density->getAccessor().setValueOn(openvdb::Coord(1, 1, 1), 1.0F);
+    // Inactive: an active tile would put 4096³ voxels into the grid's box.
+    density->tree().root().addTile(openvdb::Coord(8192, 0, 0), 2.5F, false);
+    const auto path = dir / "tile.vdb";
+    openvdb::io::File file(path.string());
+    file.setCompression(openvdb::io::COMPRESS_NONE);
+    file.write({density});
+    file.close();
+    ASSERT_NO_THROW(read_openvdb(path, MAX));
+    const std::string bytes = test::read_bytes(path);
+
+    // The tile: its origin, its value, then its active flag.
+    std::string tile(16, '\0');
+    const std::array<std::int32_t, 3> origin{8192, 0, 0};
+    const float value = 2.5F;
+    std::memcpy(tile.data(), origin.data(), 12);
+    std::memcpy(tile.data() + 12, &value, 4);
+    const std::size_t at = bytes.find(tile + '\x00');
+    ASSERT_NE(at, std::string::npos);
+    std::string bad_tile = bytes;
+    bad_tile[at + 16] = '\x40';
+    test::write_bytes(dir / "bad_tile.vdb", bad_tile);
+    expect_io_error(
+        [&] { read_openvdb(dir / "bad_tile.vdb", MAX); },
+        {"bad_tile.vdb", "root tile 0 of grid 'density'", "active flag 64", "expected 0 or 1"});
+
+    // The metadata entry: name, type "bool", size 1, value.
+    const std::string entry =
+        std::string("flagged") + std::string("\x04\0\0\0bool\x01\0\0\0\x01", 13);
+    const std::size_t meta = bytes.find(entry);
+    ASSERT_NE(meta, std::string::npos);
+    std::string bad_meta = bytes;
+    bad_meta[meta + entry.size() - 1] = '\x02';
+    test::write_bytes(dir / "bad_meta.vdb", bad_meta);
+    expect_io_error([&] { read_openvdb(dir / "bad_meta.vdb", MAX); },
+                    {"bad_meta.vdb", "metadata 'flagged'", "is bool 2, expected 0 or 1"});
+}
+
 TEST(OpenVdb, NoFloatGridAndHugeBoxesAreRefusedBeforeAllocating) {
     TempDir dir;
     openvdb::initialize();

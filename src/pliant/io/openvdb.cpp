@@ -238,6 +238,16 @@ void check_metadata(LayoutReader& r, std::uint64_t limit, std::string_view where
             check_delayed_load(r, bytes, fmt::format("{} metadata '{}'", where, name), limit);
             continue;
         }
+        if (type == "bool") {
+            // TypedMetadata<bool>::readValue reads the byte straight into a bool.
+            const auto value = r.value<std::uint8_t>(
+                fmt::format("the value of {} metadata '{}'", where, name), limit);
+            if (value > 1) {
+                r.fail(fmt::format("{} metadata '{}' at byte {} is bool {}, expected 0 or 1", where,
+                                   name, r.position() - 1, value));
+            }
+            continue;
+        }
         r.skip(bytes, fmt::format("the value of {} metadata '{}'", where, name), limit);
     }
 }
@@ -408,8 +418,16 @@ bool check_root(LayoutReader& r, const DescriptorLayout& d, const TreeFormat& f,
             "topology has {} bytes left",
             d.name, tiles, children, needed, left));
     }
-    r.skip(std::uint64_t{tiles} * (12 + vbytes + 1),
-           fmt::format("the root tiles of grid '{}'", d.name), block);
+    for (std::uint32_t t = 0; t < tiles; ++t) {
+        const std::string what = fmt::format("root tile {} of grid '{}'", t, d.name);
+        r.skip(12 + vbytes, what, block);
+        // RootNode::readTopology reads the active flag straight into a bool.
+        const auto active = r.value<std::uint8_t>(what, block);
+        if (active > 1) {
+            r.fail(fmt::format("{} at byte {} has active flag {}, expected 0 or 1", what,
+                               r.position() - 1, active));
+        }
+    }
     std::vector<std::array<std::int32_t, 3>> origins;
     origins.reserve(children);
     std::uint64_t leaves = 0;
