@@ -14,8 +14,17 @@
 #include <string_view>
 
 #include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
 
 namespace pliant::fuzz {
+
+// One thread for every parallel loop: oneTBB splits a loop's range by work stealing, so with more
+// threads its partitioner runs differently from run to run, and with it the coverage libFuzzer
+// steers by. With one, a fixed seed and input count execute the same inputs on every machine.
+inline const bool single_threaded = [] {
+    pliant::set_num_threads(1);
+    return true;
+}();
 
 // A scratch directory per process: $TMPDIR/pliant-fuzz-<pid>.
 inline const std::filesystem::path& scratch() {
