@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -26,11 +27,14 @@ inline const bool single_threaded = [] {
     return true;
 }();
 
-// A scratch directory per process: $TMPDIR/pliant-fuzz-<pid>.
+// A scratch directory per process: $TMPDIR/pliant-fuzz-<pid, 10 digits>. The fixed width keeps
+// the paths (and so the messages that name them, and the code that formats those) the same
+// length in every run.
 inline const std::filesystem::path& scratch() {
     static const std::filesystem::path dir = [] {
-        std::filesystem::path d =
-            std::filesystem::temp_directory_path() / ("pliant-fuzz-" + std::to_string(::getpid()));
+        std::string pid = std::to_string(::getpid());
+        pid.insert(0, 10 - std::min<std::size_t>(pid.size(), 10), '0');
+        std::filesystem::path d = std::filesystem::temp_directory_path() / ("pliant-fuzz-" + pid);
         std::filesystem::create_directories(d);
         return d;
     }();
