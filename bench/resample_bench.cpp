@@ -3,7 +3,10 @@
 // four face planes) on the issue-6 workload: an N³ volume (the Shepp–Logan phantom, f32, or the
 // RGBA test object, rgba8), a full-box pbd::TetGrid of cells of 4 voxels ((N/4)³ cells, 5 tets
 // each: 1.31 M tets at N = 256), rotated rigidly by 30° about z through the box centre and
-// resampled into a grid like the source.
+// resampled into a grid like the source. Kind 2 is the source system's scale (issue 29,
+// source_scale_phantom.hpp; N = 256 only): the 256³ rgba8 phantom with a grid of 64³ cells over
+// its visible voxels, twisted about z through the box centre by 0° at the bottom to 60° at the top
+// (a frame of the twist driver).
 //
 // Items processed = target voxels. Wall time (UseRealTime). Arguments: N, threads. The brute force
 // runs on one thread and checks once that its output is bitwise equal to the Resampler's (same
@@ -26,6 +29,7 @@
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/resample.hpp"
+#include "source_scale_phantom.hpp"
 
 namespace {
 
@@ -33,7 +37,7 @@ using namespace pliant;
 using volume::Volume;
 using volume::VoxelType;
 
-enum Kind : std::int64_t { PHANTOM = 0, RGBA = 1 };
+enum Kind : std::int64_t { PHANTOM = 0, RGBA = 1, SOURCE_SCALE = 2 };
 
 struct Workload {
     Volume source;
@@ -49,15 +53,23 @@ const Workload& workload(Kind kind, std::int64_t n) {
     if (!slot) {
         slot = std::make_unique<Workload>();
         Workload& w = *slot;
-        w.source = kind == PHANTOM ? volume::shepp_logan_3d({n, n, n})
-                                   : volume::rgba_test_object({n, n, n}, VoxelType::rgba8);
-        w.grid = pbd::build_tet_grid(w.source, {.cell_voxels = 4, .full_box = true});
+        if (kind == SOURCE_SCALE) {
+            const bench::SourceScaleWorkload& s = bench::source_scale_workload();
+            w.source = s.source;
+            w.grid = s.grid;
+        } else {
+            w.source = kind == PHANTOM ? volume::shepp_logan_3d({n, n, n})
+                                       : volume::rgba_test_object({n, n, n}, VoxelType::rgba8);
+            w.grid = pbd::build_tet_grid(w.source, {.cell_voxels = 4, .full_box = true});
+        }
         const AABBd box = w.source.bounds();
         const Vec3d c = (box.lo + box.hi) * 0.5;
-        const double a = 30.0 * std::numbers::pi / 180.0;
         w.deformed.resize(w.grid.mesh.positions.size());
         for (std::size_t v = 0; v < w.deformed.size(); ++v) {
             const Vec3d d = vec3_cast<double>(w.grid.mesh.positions[v]) - c;
+            const double height = (d.z + (box.hi.z - box.lo.z) * 0.5) / (box.hi.z - box.lo.z);
+            const double a =
+                (kind == SOURCE_SCALE ? 60.0 * height : 30.0) * std::numbers::pi / 180.0;
             w.deformed[v] = vec3_cast<float>(Vec3d{std::cos(a) * d.x - std::sin(a) * d.y,
                                                    std::sin(a) * d.x + std::cos(a) * d.y, d.z} +
                                              c);
@@ -175,7 +187,7 @@ void BM_Prepare(benchmark::State& state) {
     set_counters(state, w, n);
 }
 
-// Arguments: kind (0 phantom f32, 1 RGBA rgba8), N, threads.
+// Arguments: kind (0 phantom f32, 1 RGBA rgba8, 2 source scale rgba8), N, threads.
 void resample_args(benchmark::internal::Benchmark* b) {
     b->ArgNames({"rgba", "N", "threads"});
     for (const std::int64_t kind : {PHANTOM, RGBA}) {
@@ -184,6 +196,9 @@ void resample_args(benchmark::internal::Benchmark* b) {
                 b->Args({kind, n, threads});
             }
         }
+    }
+    for (const std::int64_t threads : {1, 2}) {
+        b->Args({SOURCE_SCALE, 256, threads});
     }
 }
 
@@ -194,6 +209,7 @@ void brute_force_args(benchmark::internal::Benchmark* b) {
             b->Args({kind, n});
         }
     }
+    b->Args({SOURCE_SCALE, 256});
 }
 
 BENCHMARK(BM_Resample)->Apply(resample_args)->Unit(benchmark::kMillisecond)->UseRealTime();
