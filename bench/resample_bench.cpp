@@ -29,6 +29,7 @@
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/generate.hpp"
+#include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
 #include "source_scale_phantom.hpp"
 
@@ -188,221 +189,12 @@ void BM_Prepare(benchmark::State& state) {
     set_counters(state, w, n);
 }
 
-// A route weighed for issue 29, measured here and not used by the pipeline: instead of
-// resampling the whole volume every frame, rasterize the rest coordinates of the deformed tets at
-// the nodes of a coarse grid over the target (every B-th voxel centre, B = cell_voxels) — an
-// inverse map — and let the ray caster sample the source through it (trilinear in the map, then
-// trilinear in the source). The map is exact at its nodes (each node inside a tet gets that
-// tet's affine rest coordinate; the highest tet index wins) and trilinear between them, so it
-// differs from the exact resample inside tets that the map's trilinear interpolation bends, and
-// near the deformed body's surface: a node outside every tet next to one inside takes the affine
-// map of a tet near it, extrapolated (it points outside the rest body, where the source is
-// empty); a sample with a node near no tet is 0. BM_InverseMapRoute times the
-// map's construction (one thread) and reports, against the exact resample of the same
-// deformation, the PSNR (premultiplied colour and alpha) over all voxels and over the voxels the
-// exact resample gives alpha > 0.
-struct InverseMap {
-    int b = 4;
-    std::int64_t m[3]{};
-    std::vector<double> g;  // 3 per node, source grid coordinates; NaN: no tet near the node
-    std::vector<std::int32_t> tet;  // per node: the tet holding it, −1: none
-
-    std::int64_t node(std::int64_t a, std::int64_t c1, std::int64_t c2) const {
-        return a + m[0] * (c1 + m[1] * c2);
-    }
-};
-
-// The affine map of a deformed tet in target grid coordinates: barycentric λ0..2 = rows · (x − p3)
-// (λ3 = 1 − λ0 − λ1 − λ2) and rest source coordinates r3 + Σ λk (rk − r3).
-struct TetMap {
-    Vec3d p3, r3;
-    Vec3d rows[3];  // cofactor rows / det
-    Vec3d dr[3];    // rk − r3
-    bool ok = false;
-
-    double lambda(const Vec3d& x, double l[3]) const {
-        const Vec3d d = x - p3;
-        l[0] = dot(rows[0], d);
-        l[1] = dot(rows[1], d);
-        l[2] = dot(rows[2], d);
-        return std::min({l[0], l[1], l[2], 1.0 - l[0] - l[1] - l[2]});
-    }
-    Vec3d rest(const double l[3]) const { return r3 + dr[0] * l[0] + dr[1] * l[1] + dr[2] * l[2]; }
-};
-
-TetMap tet_map(const Workload& w, std::int32_t t, const volume::detail::GridFrame& tf,
-               const volume::detail::GridFrame& sf, Vec3d p[4]) {
-    auto index_of = [](const Vec3f& x, const volume::detail::GridFrame& f) {
-        return Vec3d{(x.x - f.origin[0]) * f.inv_spacing[0] - 0.5,
-                     (x.y - f.origin[1]) * f.inv_spacing[1] - 0.5,
-                     (x.z - f.origin[2]) * f.inv_spacing[2] - 0.5};
-    };
-    const geometry::Tet& tet = w.grid.mesh.tets[static_cast<std::size_t>(t)];
-    Vec3d r[4];
-    for (int v = 0; v < 4; ++v) {
-        const auto id = static_cast<std::size_t>(tet[static_cast<std::size_t>(v)]);
-        p[v] = index_of(w.deformed[id], tf);
-        r[v] = index_of(w.grid.mesh.positions[id], sf);
-    }
-    TetMap m;
-    const Vec3d e0 = p[0] - p[3];
-    const Vec3d e1 = p[1] - p[3];
-    const Vec3d e2 = p[2] - p[3];
-    const double det = dot(e0, cross(e1, e2));
-    if (!(std::abs(det) > 0.0)) {
-        return m;
-    }
-    const double inv = 1.0 / det;
-    m.rows[0] = cross(e1, e2) * inv;
-    m.rows[1] = cross(e2, e0) * inv;
-    m.rows[2] = cross(e0, e1) * inv;
-    m.p3 = p[3];
-    m.r3 = r[3];
-    for (int k = 0; k < 3; ++k) {
-        m.dr[k] = r[k] - r[3];
-    }
-    m.ok = true;
-    return m;
-}
-
-// Pass 1: every node inside a deformed tet gets its rest coordinate (the highest tet index wins)
-// and remembers the tet. Pass 2: every node outside all tets but next to an inside node
-// (26-neighbourhood) takes the extrapolated map of the neighbours' tet with the largest smallest
-// barycentric coordinate. One thread.
-void build_inverse_map(const Workload& w, const Volume& target, InverseMap& map) {
-    const volume::detail::GridFrame tf = frame_of(target);
-    const volume::detail::GridFrame sf = frame_of(w.source);
-    const auto b = static_cast<double>(map.b);
-    for (int a = 0; a < 3; ++a) {
-        map.m[a] = (tf.n[a] - 1) / map.b + 2;
-    }
-    const auto num_nodes = static_cast<std::size_t>(map.m[0] * map.m[1] * map.m[2]);
-    map.g.assign(3 * num_nodes, std::numeric_limits<double>::quiet_NaN());
-    map.tet.assign(num_nodes, -1);
-    for (const std::int32_t t : w.resampler->kept_tets()) {
-        Vec3d p[4];
-        const TetMap m = tet_map(w, t, tf, sf, p);
-        if (!m.ok) {
-            continue;
-        }
-        std::int64_t lo[3];
-        std::int64_t hi[3];
-        bool empty = false;
-        for (int a = 0; a < 3; ++a) {
-            const double mn = std::min({p[0][a], p[1][a], p[2][a], p[3][a]});
-            const double mx = std::max({p[0][a], p[1][a], p[2][a], p[3][a]});
-            lo[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(mn / b)));
-            hi[a] =
-                std::min<std::int64_t>(map.m[a] - 1, static_cast<std::int64_t>(std::floor(mx / b)));
-            empty = empty || lo[a] > hi[a];
-        }
-        if (empty) {
-            continue;
-        }
-        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-            for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                    double l[3];
-                    const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
-                                     static_cast<double>(z) * b};
-                    if (!(m.lambda(node, l) >= -1e-9)) {
-                        continue;
-                    }
-                    const Vec3d rest = m.rest(l);
-                    const std::int64_t q = map.node(x, y, z);
-                    map.tet[static_cast<std::size_t>(q)] = t;
-                    double* out = map.g.data() + 3 * q;
-                    out[0] = rest.x;
-                    out[1] = rest.y;
-                    out[2] = rest.z;
-                }
-            }
-        }
-    }
-    const std::vector<std::int32_t> inside = map.tet;
-    for (std::int64_t z = 0; z < map.m[2]; ++z) {
-        for (std::int64_t y = 0; y < map.m[1]; ++y) {
-            for (std::int64_t x = 0; x < map.m[0]; ++x) {
-                const std::int64_t q = map.node(x, y, z);
-                if (inside[static_cast<std::size_t>(q)] >= 0) {
-                    continue;
-                }
-                const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
-                                 static_cast<double>(z) * b};
-                double best = -std::numeric_limits<double>::infinity();
-                for (std::int64_t dz = std::max<std::int64_t>(0, z - 1);
-                     dz <= std::min(map.m[2] - 1, z + 1); ++dz) {
-                    for (std::int64_t dy = std::max<std::int64_t>(0, y - 1);
-                         dy <= std::min(map.m[1] - 1, y + 1); ++dy) {
-                        for (std::int64_t dx = std::max<std::int64_t>(0, x - 1);
-                             dx <= std::min(map.m[0] - 1, x + 1); ++dx) {
-                            const std::int32_t t =
-                                inside[static_cast<std::size_t>(map.node(dx, dy, dz))];
-                            if (t < 0) {
-                                continue;
-                            }
-                            Vec3d p[4];
-                            const TetMap m = tet_map(w, t, tf, sf, p);
-                            double l[3];
-                            const double score = m.lambda(node, l);
-                            if (score > best) {
-                                best = score;
-                                const Vec3d rest = m.rest(l);
-                                double* out = map.g.data() + 3 * q;
-                                out[0] = rest.x;
-                                out[1] = rest.y;
-                                out[2] = rest.z;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
-
-// Every target voxel sampled through the map (what the ray caster would do per sample).
-void sample_through_map(const Workload& w, const InverseMap& map, Volume& target) {
-    const volume::detail::GridFrame tf = frame_of(target);
-    const volume::detail::GridFrame sf = frame_of(w.source);
-    const auto* src = reinterpret_cast<const std::uint8_t*>(w.source.bytes().data());
-    auto* dst = reinterpret_cast<std::uint8_t*>(target.bytes().data());
-    const double inv_b = 1.0 / map.b;
-    for (std::int64_t k = 0; k < tf.n[2]; ++k) {
-        for (std::int64_t j = 0; j < tf.n[1]; ++j) {
-            for (std::int64_t i = 0; i < tf.n[0]; ++i) {
-                const std::int64_t q[3] = {i / map.b, j / map.b, k / map.b};
-                const double f[3] = {static_cast<double>(i % map.b) * inv_b,
-                                     static_cast<double>(j % map.b) * inv_b,
-                                     static_cast<double>(k % map.b) * inv_b};
-                double g[3] = {0, 0, 0};
-                bool valid = true;
-                for (int corner = 0; corner < 8 && valid; ++corner) {
-                    const int cx = corner & 1;
-                    const int cy = (corner >> 1) & 1;
-                    const int cz = corner >> 2;
-                    const double weight = (cx != 0 ? f[0] : 1 - f[0]) *
-                                          (cy != 0 ? f[1] : 1 - f[1]) * (cz != 0 ? f[2] : 1 - f[2]);
-                    const double* v = map.g.data() + 3 * map.node(q[0] + cx, q[1] + cy, q[2] + cz);
-                    valid = !std::isnan(v[0]);
-                    for (int a = 0; a < 3; ++a) {
-                        g[a] += weight * v[a];
-                    }
-                }
-                std::uint8_t* out = dst + 4 * (i + tf.n[0] * (j + tf.n[1] * k));
-                float s[4] = {0, 0, 0, 0};
-                if (valid) {
-                    volume::detail::sample_trilinear<std::uint8_t, 4>(src, sf.n, g[0], g[1], g[2],
-                                                                      s);
-                }
-                for (int c = 0; c < 4; ++c) {
-                    out[c] = volume::detail::convert_sample<std::uint8_t>(s[c], 1.0f);
-                }
-            }
-        }
-    }
-}
-
+// The inverse-map route of issue 29 (volume/inverse_map.hpp; not yet used by the pipeline):
+// instead of resampling every voxel every frame, rasterize the rest coordinates of the deformed
+// tets at every 4th voxel centre and let the ray caster sample the source through that map.
+// BM_InverseMapRoute times the map's construction and reports, against the exact resample of the
+// same deformation, the PSNR (premultiplied colour and alpha) of every voxel sampled through the
+// map, over all voxels and over the voxels the exact resample gives alpha > 0.
 // PSNR (dB, peak 255) of b against a, premultiplied (r·α, g·α, b·α, α with α in [0, 1]: what a
 // ray caster composites; colour under α = 0 does not count), over all voxels or over the voxels
 // where a's alpha > 0.
@@ -430,23 +222,31 @@ double psnr_rgba8(const Volume& a, const Volume& b, bool visible_only) {
 
 void BM_InverseMapRoute(benchmark::State& state) {
     const Workload& w = workload(SOURCE_SCALE, 256);
-    set_num_threads(1);
+    set_num_threads(static_cast<int>(state.range(0)));
     Volume exact = make_target(w.source);
     w.resampler->resample(w.deformed, exact);
-    InverseMap map;
-    map.b = w.grid.cell_voxels;
+    volume::InverseMap map;
+    volume::InverseMapStats stats;
     for (auto _ : state) {
-        build_inverse_map(w, exact, map);
-        benchmark::DoNotOptimize(map.g.data());
+        stats = map.build(w.source, exact, w.grid.mesh.tets, w.grid.mesh.positions, w.deformed,
+                          {.node_voxels = w.grid.cell_voxels});
+        benchmark::DoNotOptimize(map.node_coordinates().data());
     }
     Volume through = make_target(w.source);
-    sample_through_map(w, map, through);
-    state.counters["nodes"] = static_cast<double>(map.g.size() / 3);
+    volume::resample_through(map, w.source, through);
+    state.counters["nodes"] = static_cast<double>(stats.num_nodes);
+    state.counters["inside"] = static_cast<double>(stats.num_inside);
+    state.counters["extrapolated"] = static_cast<double>(stats.num_extrapolated);
     state.counters["psnr_all_dB"] = psnr_rgba8(exact, through, false);
     state.counters["psnr_visible_dB"] = psnr_rgba8(exact, through, true);
     set_num_threads(0);
 }
-BENCHMARK(BM_InverseMapRoute)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_InverseMapRoute)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Arguments: kind (0 phantom f32, 1 RGBA rgba8, 2 source scale rgba8), N, threads.
 void resample_args(benchmark::internal::Benchmark* b) {
