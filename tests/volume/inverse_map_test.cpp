@@ -22,7 +22,9 @@ pbd::TetGrid full_grid(const Volume& v, int cell_voxels) {
     return pbd::build_tet_grid(v, {.cell_voxels = cell_voxels, .full_box = true});
 }
 
-Volume like(const Volume& v) { return Volume::allocate(v.dims(), v.type(), v.spacing(), v.origin()); }
+Volume like(const Volume& v) {
+    return Volume::allocate(v.dims(), v.type(), v.spacing(), v.origin());
+}
 
 Vec3d box_center(const Volume& v) {
     const AABBd b = v.bounds();
@@ -40,10 +42,9 @@ std::vector<Vec3f> twisted(const std::vector<Vec3f>& rest, const Volume& v, doub
         const Vec3d d = vec3_cast<double>(rest[i]) - c;
         const double h = rigid ? 1.0 : (rest[i].z - box.lo.z) / (box.hi.z - box.lo.z);
         const double a = top_degrees * h * std::numbers::pi / 180.0;
-        out[i] = vec3_cast<float>(
-            Vec3d{std::cos(a) * d.x - std::sin(a) * d.y, std::sin(a) * d.x + std::cos(a) * d.y,
-                  d.z} +
-            c);
+        out[i] = vec3_cast<float>(Vec3d{std::cos(a) * d.x - std::sin(a) * d.y,
+                                        std::sin(a) * d.x + std::cos(a) * d.y, d.z} +
+                                  c);
     }
     return out;
 }
@@ -128,8 +129,8 @@ TEST(InverseMap, TwistSampledThroughTheMapMatchesTheExactResample) {
     double sum = 0.0;
     for (std::size_t v = 0; v < x.size(); v += 4) {
         for (std::size_t c = 0; c < 4; ++c) {
-            const double d = (c < 3 ? x[v + 3] * x[v + c] : x[v + 3]) -
-                             (c < 3 ? y[v + 3] * y[v + c] : y[v + 3]);
+            const double d =
+                (c < 3 ? x[v + 3] * x[v + c] : x[v + 3]) - (c < 3 ? y[v + 3] * y[v + c] : y[v + 3]);
             sum += d * d;
         }
     }

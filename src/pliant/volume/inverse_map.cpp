@@ -38,18 +38,27 @@ struct TetMap {
 };
 
 Vec3d grid_coordinate(const Vec3f& x, const GridFrame& f) {
-    return {(x.x - f.origin[0]) * f.inv_spacing[0] - 0.5, (x.y - f.origin[1]) * f.inv_spacing[1] - 0.5,
+    return {(x.x - f.origin[0]) * f.inv_spacing[0] - 0.5,
+            (x.y - f.origin[1]) * f.inv_spacing[1] - 0.5,
             (x.z - f.origin[2]) * f.inv_spacing[2] - 0.5};
 }
 
-TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3f> rest,
-               std::span<const Vec3f> deformed, const GridFrame& tf, const GridFrame& sf,
-               Vec3d p[4]) {
+// The deformed vertices of a tet in target grid coordinates.
+void deformed_vertices(const geometry::Tet& tet, std::span<const Vec3f> deformed,
+                       const GridFrame& tf, Vec3d p[4]) {
+    for (int v = 0; v < 4; ++v) {
+        p[v] = grid_coordinate(deformed[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])],
+                               tf);
+    }
+}
+
+// The map of a tet whose deformed vertices p are known (deformed_vertices()).
+TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3f> rest, const GridFrame& sf,
+               const Vec3d p[4]) {
     Vec3d r[4];
     for (int v = 0; v < 4; ++v) {
-        const auto id = static_cast<std::size_t>(tet[static_cast<std::size_t>(v)]);
-        p[v] = grid_coordinate(deformed[id], tf);
-        r[v] = grid_coordinate(rest[id], sf);
+        r[v] =
+            grid_coordinate(rest[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])], sf);
     }
     TetMap m;
     const Vec3d e0 = p[0] - p[3];
@@ -75,7 +84,8 @@ TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3f> rest,
 void check_positions(std::span<const Vec3f> positions, const char* what) {
     for (std::size_t v = 0; v < positions.size(); ++v) {
         if (!is_finite(positions[v])) {
-            throw InvalidInput(fmt::format("volume::InverseMap::build: {}[{}] is not finite", what, v));
+            throw InvalidInput(
+                fmt::format("volume::InverseMap::build: {}[{}] is not finite", what, v));
         }
     }
 }
@@ -167,11 +177,9 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     InverseMapStats stats;
     stats.num_nodes = num_nodes;
     for (std::size_t t = 0; t < tets.size(); ++t) {
+        // Most tets hold no node: their box is tested before their map is set up.
         Vec3d p[4];
-        const TetMap m = tet_map(tets[t], rest_positions, deformed_positions, tf, sf, p);
-        if (!m.ok) {
-            continue;
-        }
+        deformed_vertices(tets[t], deformed_positions, tf, p);
         std::int64_t lo[3];
         std::int64_t hi[3];
         bool is_empty = false;
@@ -179,12 +187,15 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
             const double mn = std::min({p[0][a], p[1][a], p[2][a], p[3][a]});
             const double mx = std::max({p[0][a], p[1][a], p[2][a], p[3][a]});
             lo[a] = static_cast<std::int64_t>(std::max(0.0, std::ceil(mn / b)));
-            hi[a] = static_cast<std::int64_t>(
-                std::min(static_cast<double>(m_nodes[static_cast<std::size_t>(a)] - 1),
-                         std::floor(mx / b)));
+            hi[a] = static_cast<std::int64_t>(std::min(
+                static_cast<double>(m_nodes[static_cast<std::size_t>(a)] - 1), std::floor(mx / b)));
             is_empty = is_empty || lo[a] > hi[a];
         }
         if (is_empty) {
+            continue;
+        }
+        const TetMap m = tet_map(tets[t], rest_positions, sf, p);
+        if (!m.ok) {
             continue;
         }
         for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
@@ -231,10 +242,10 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                                 if (t < 0) {
                                     continue;
                                 }
+                                const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
                                 Vec3d p[4];
-                                const TetMap m =
-                                    tet_map(tets[static_cast<std::size_t>(t)], rest_positions,
-                                            deformed_positions, tf, sf, p);
+                                deformed_vertices(tet, deformed_positions, tf, p);
+                                const TetMap m = tet_map(tet, rest_positions, sf, p);
                                 double l[3];
                                 const double score = m.lambda(node, l);
                                 if (score > best) {
