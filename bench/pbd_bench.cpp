@@ -2,20 +2,29 @@
 // full-box tet grids of 32³ and 64³ cells (cells of 4 voxels over 128³ and 256³ volumes; 64³
 // cells = 1,310,720 tets, the issue's size), beside a naive baseline in the same binary: the same
 // constraints projected one after the other in index order (sequential Gauss–Seidel), Vec3f
-// positions and a separate inverse-mass array, one thread.
+// positions and a separate inverse-mass array, one thread. BM_SourceScaleStep: a whole 24 fps
+// frame (SoftBody::step, all substeps, drivers included) at the source system's scale (issue 29,
+// source_scale_phantom.hpp: 64³ cells over the visible voxels of a 256³ rgba8 phantom) under the
+// twist, wave and bubble drivers (stiffness 0.8), after 24 frames (so that the drivers have ramped
+// in); twist also with fewer substeps. Counters after those 24 frames: inverted tets, volume ratio
+// and the mean vertex displacement from rest (world units; the box is [−1, 1]³): fewer substeps of
+// one Gauss–Seidel sweep each carry the twist less far into the body.
 //
 //   bin/bench_pbd [--benchmark_filter=...] [--benchmark_repetitions=5]
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/volume/volume.hpp"
+#include "source_scale_phantom.hpp"
 
 namespace {
 
@@ -63,6 +72,69 @@ BENCHMARK(BM_SoftBodySubstep)
     ->Args({64, 1, 1, 8})
     ->Args({64, 2, 1, 8})
     ->Args({64, 2, 0, 8})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// args: driver (0 twist, 1 wave, 2 bubble), substeps per frame, threads.
+void BM_SourceScaleStep(benchmark::State& state) {
+    const pbd::TetGrid& grid = bench::source_scale_workload().grid;
+    set_num_threads(static_cast<int>(state.range(2)));
+    pbd::SoftBody body(grid, {.stiffness = 0.8, .substeps = static_cast<int>(state.range(1))});
+    switch (state.range(0)) {
+        case 0:
+            body.add_driver(pbd::TwistDriver{.angle = 90.0, .ramp_time = 1.0});
+            break;
+        case 1:
+            body.add_driver(pbd::WaveDriver{.amplitude = 0.05});
+            break;
+        default:
+            body.add_driver(pbd::BubbleDriver{.inflation = 2.0, .ramp_time = 0.5});
+            break;
+    }
+    constexpr double DT = 1.0 / 24.0;
+    for (int frame = 0; frame < 24; ++frame) {
+        body.step(DT);
+    }
+    // The shape after 24 frames (before the timed steps): how far the deformation has reached.
+    const pbd::SoftBodyStats stats = body.stats();
+    double displacement = 0.0;
+    for (std::size_t v = 0; v < body.positions().size(); ++v) {
+        displacement += norm(vec3_cast<double>(body.positions()[v]) -
+                             vec3_cast<double>(body.rest_positions()[v]));
+    }
+    displacement /= static_cast<double>(body.positions().size());
+    std::vector<Vec3f> before;
+    for (auto _ : state) {
+        state.PauseTiming();
+        before.assign(body.positions().begin(), body.positions().end());
+        state.ResumeTiming();
+        body.step(DT);
+    }
+    // Vertices whose position changed (bitwise) in the last step: what dirty-brick resampling
+    // could skip.
+    std::int64_t moved = 0;
+    for (std::size_t v = 0; v < before.size(); ++v) {
+        const Vec3f& p = body.positions()[v];
+        moved += p.x != before[v].x || p.y != before[v].y || p.z != before[v].z ? 1 : 0;
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(grid.mesh.num_tets()));
+    state.counters["tets"] = static_cast<double>(grid.mesh.num_tets());
+    state.counters["moved_fraction"] =
+        static_cast<double>(moved) / static_cast<double>(std::max<std::size_t>(before.size(), 1));
+    state.counters["inverted_24"] = static_cast<double>(stats.inverted_tets);
+    state.counters["volume_ratio_24"] = stats.volume_ratio;
+    state.counters["mean_displacement_24"] = displacement;
+    set_num_threads(0);
+}
+BENCHMARK(BM_SourceScaleStep)
+    ->ArgNames({"driver", "substeps", "threads"})
+    ->Args({0, 10, 1})
+    ->Args({0, 10, 2})
+    ->Args({1, 10, 1})
+    ->Args({2, 10, 1})
+    ->Args({0, 5, 1})
+    ->Args({0, 3, 1})
+    ->Args({0, 2, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

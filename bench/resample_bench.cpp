@@ -3,7 +3,10 @@
 // four face planes) on the issue-6 workload: an N³ volume (the Shepp–Logan phantom, f32, or the
 // RGBA test object, rgba8), a full-box pbd::TetGrid of cells of 4 voxels ((N/4)³ cells, 5 tets
 // each: 1.31 M tets at N = 256), rotated rigidly by 30° about z through the box centre and
-// resampled into a grid like the source.
+// resampled into a grid like the source. Kind 2 is the source system's scale (issue 29,
+// source_scale_phantom.hpp; N = 256 only): the 256³ rgba8 phantom with a grid of 64³ cells over
+// its visible voxels, twisted about z through the box centre by 0° at the bottom to 60° at the top
+// (a frame of the twist driver).
 //
 // Items processed = target voxels. Wall time (UseRealTime). Arguments: N, threads. The brute force
 // runs on one thread and checks once that its output is bitwise equal to the Resampler's (same
@@ -16,6 +19,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -25,7 +29,9 @@
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
 #include "pliant/volume/generate.hpp"
+#include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
+#include "source_scale_phantom.hpp"
 
 namespace {
 
@@ -33,7 +39,7 @@ using namespace pliant;
 using volume::Volume;
 using volume::VoxelType;
 
-enum Kind : std::int64_t { PHANTOM = 0, RGBA = 1 };
+enum Kind : std::int64_t { PHANTOM = 0, RGBA = 1, SOURCE_SCALE = 2 };
 
 struct Workload {
     Volume source;
@@ -49,15 +55,23 @@ const Workload& workload(Kind kind, std::int64_t n) {
     if (!slot) {
         slot = std::make_unique<Workload>();
         Workload& w = *slot;
-        w.source = kind == PHANTOM ? volume::shepp_logan_3d({n, n, n})
-                                   : volume::rgba_test_object({n, n, n}, VoxelType::rgba8);
-        w.grid = pbd::build_tet_grid(w.source, {.cell_voxels = 4, .full_box = true});
+        if (kind == SOURCE_SCALE) {
+            const bench::SourceScaleWorkload& s = bench::source_scale_workload();
+            w.source = s.source;
+            w.grid = s.grid;
+        } else {
+            w.source = kind == PHANTOM ? volume::shepp_logan_3d({n, n, n})
+                                       : volume::rgba_test_object({n, n, n}, VoxelType::rgba8);
+            w.grid = pbd::build_tet_grid(w.source, {.cell_voxels = 4, .full_box = true});
+        }
         const AABBd box = w.source.bounds();
         const Vec3d c = (box.lo + box.hi) * 0.5;
-        const double a = 30.0 * std::numbers::pi / 180.0;
         w.deformed.resize(w.grid.mesh.positions.size());
         for (std::size_t v = 0; v < w.deformed.size(); ++v) {
             const Vec3d d = vec3_cast<double>(w.grid.mesh.positions[v]) - c;
+            const double height = (d.z + (box.hi.z - box.lo.z) * 0.5) / (box.hi.z - box.lo.z);
+            const double a =
+                (kind == SOURCE_SCALE ? 60.0 * height : 30.0) * std::numbers::pi / 180.0;
             w.deformed[v] = vec3_cast<float>(Vec3d{std::cos(a) * d.x - std::sin(a) * d.y,
                                                    std::sin(a) * d.x + std::cos(a) * d.y, d.z} +
                                              c);
@@ -175,7 +189,66 @@ void BM_Prepare(benchmark::State& state) {
     set_counters(state, w, n);
 }
 
-// Arguments: kind (0 phantom f32, 1 RGBA rgba8), N, threads.
+// The inverse-map route of issue 29 (volume/inverse_map.hpp; not yet used by the pipeline):
+// instead of resampling every voxel every frame, rasterize the rest coordinates of the deformed
+// tets at every 4th voxel centre and let the ray caster sample the source through that map.
+// BM_InverseMapRoute times the map's construction and reports, against the exact resample of the
+// same deformation, the PSNR (premultiplied colour and alpha) of every voxel sampled through the
+// map, over all voxels and over the voxels the exact resample gives alpha > 0.
+// PSNR (dB, peak 255) of b against a, premultiplied (r·α, g·α, b·α, α with α in [0, 1]: what a
+// ray caster composites; colour under α = 0 does not count), over all voxels or over the voxels
+// where a's alpha > 0.
+double psnr_rgba8(const Volume& a, const Volume& b, bool visible_only) {
+    const auto* x = reinterpret_cast<const std::uint8_t*>(a.bytes().data());
+    const auto* y = reinterpret_cast<const std::uint8_t*>(b.bytes().data());
+    double sum = 0.0;
+    std::int64_t count = 0;
+    for (std::int64_t v = 0; v < a.num_voxels(); ++v) {
+        if (visible_only && x[4 * v + 3] == 0) {
+            continue;
+        }
+        const double ax = x[4 * v + 3] / 255.0;
+        const double ay = y[4 * v + 3] / 255.0;
+        for (int c = 0; c < 4; ++c) {
+            const double wx = c < 3 ? ax : 1.0;
+            const double wy = c < 3 ? ay : 1.0;
+            const double d = wx * x[4 * v + c] - wy * y[4 * v + c];
+            sum += d * d;
+        }
+        count += 4;
+    }
+    return count == 0 || sum == 0.0 ? 999.0 : 10.0 * std::log10(255.0 * 255.0 * count / sum);
+}
+
+void BM_InverseMapRoute(benchmark::State& state) {
+    const Workload& w = workload(SOURCE_SCALE, 256);
+    set_num_threads(static_cast<int>(state.range(0)));
+    Volume exact = make_target(w.source);
+    w.resampler->resample(w.deformed, exact);
+    volume::InverseMap map;
+    volume::InverseMapStats stats;
+    for (auto _ : state) {
+        stats = map.build(w.source, exact, w.grid.mesh.tets, w.grid.mesh.positions, w.deformed,
+                          {.node_voxels = w.grid.cell_voxels});
+        benchmark::DoNotOptimize(map.node_coordinates().data());
+    }
+    Volume through = make_target(w.source);
+    volume::resample_through(map, w.source, through);
+    state.counters["nodes"] = static_cast<double>(stats.num_nodes);
+    state.counters["inside"] = static_cast<double>(stats.num_inside);
+    state.counters["extrapolated"] = static_cast<double>(stats.num_extrapolated);
+    state.counters["psnr_all_dB"] = psnr_rgba8(exact, through, false);
+    state.counters["psnr_visible_dB"] = psnr_rgba8(exact, through, true);
+    set_num_threads(0);
+}
+BENCHMARK(BM_InverseMapRoute)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Arguments: kind (0 phantom f32, 1 RGBA rgba8, 2 source scale rgba8), N, threads.
 void resample_args(benchmark::internal::Benchmark* b) {
     b->ArgNames({"rgba", "N", "threads"});
     for (const std::int64_t kind : {PHANTOM, RGBA}) {
@@ -184,6 +257,9 @@ void resample_args(benchmark::internal::Benchmark* b) {
                 b->Args({kind, n, threads});
             }
         }
+    }
+    for (const std::int64_t threads : {1, 2}) {
+        b->Args({SOURCE_SCALE, 256, threads});
     }
 }
 
@@ -194,6 +270,7 @@ void brute_force_args(benchmark::internal::Benchmark* b) {
             b->Args({kind, n});
         }
     }
+    b->Args({SOURCE_SCALE, 256});
 }
 
 BENCHMARK(BM_Resample)->Apply(resample_args)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -463,6 +463,51 @@ TEST(Resample, Avx2AndScalarKernelsAreBitwiseIdentical) {
     }
 }
 
+TEST(Resample, Avx2Rgba8SamplerEqualsTheScalarSamplerBitwise) {
+    if (!pliant::has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    // rgba8 → rgba8 and rgba8 → rgba32f take the AVX2 rgba8 sampler: random bytes in every
+    // channel (every rounding case), odd dims, interior and boundary batches, folds.
+    Volume source =
+        Volume::allocate({37, 41, 29}, VoxelType::rgba8, {0.5, 0.75, 1.0}, {-3.0, 2.0, 1.0});
+    std::mt19937 bytes_rng(5);
+    std::uniform_int_distribution<int> byte(0, 255);
+    for (std::byte& b : source.bytes()) {
+        b = static_cast<std::byte>(byte(bytes_rng));
+    }
+    const pbd::TetGrid g = full_grid(source, 3);
+    const Resampler resampler(source, g.mesh.tets, g.mesh.positions);
+    const Vec3d c = box_center(source);
+    const AABBd box = source.bounds();
+    const double a = 25.0 * std::numbers::pi / 180.0;
+    const double rot[3][3] = {
+        {std::cos(a), -std::sin(a), 0}, {std::sin(a), std::cos(a), 0}, {0, 0, 1}};
+    std::vector<std::vector<Vec3f>> deformations = {
+        g.mesh.positions, transformed(g.mesh.positions, c, rot),
+        transformed(g.mesh.positions, c, rot, (box.hi - box.lo) * 0.2)};  // partly outside
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> jitter(-0.8f, 0.8f);
+    deformations.push_back(transformed(g.mesh.positions, c, rot));
+    for (Vec3f& p : deformations.back()) {
+        p += Vec3f{jitter(rng), jitter(rng), jitter(rng)};
+    }
+    for (const VoxelType type : {VoxelType::rgba8, VoxelType::rgba32f}) {
+        for (std::size_t d = 0; d < deformations.size(); ++d) {
+            Volume fast = like(source, type);
+            Volume plain = like(source, type);
+            const ResampleStats s_fast = resampler.resample(deformations[d], fast);
+            pliant::allow_avx2(false);
+            const ResampleStats s_plain = resampler.resample(deformations[d], plain);
+            pliant::allow_avx2(true);
+            EXPECT_GT(s_fast.num_voxels_written, 1000) << d;
+            EXPECT_EQ(s_fast.num_voxels_written, s_plain.num_voxels_written) << d;
+            EXPECT_EQ(std::memcmp(fast.bytes().data(), plain.bytes().data(), fast.size_bytes()), 0)
+                << "deformation " << d << ", target " << static_cast<int>(type);
+        }
+    }
+}
+
 TEST(Resample, Avx2SetupOfFourTetsEqualsTheScalarSetup) {
     if (!pliant::has_avx2()) {
         GTEST_SKIP() << "the CPU has no AVX2";

@@ -342,9 +342,13 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept,
     auto zero_slab = [&](std::int64_t k0, std::int64_t k1) {
         std::memset(dst + k0 * layer, 0, static_cast<std::size_t>((k1 - k0) * layer) * sizeof(D));
     };
-    // f32 → f32: 4 voxels at a time with AVX2 when the CPU has it (the same bits).
-    const bool use_avx2 = std::is_same_v<S, float> && C == 1 && std::is_same_v<D, float> &&
-                          pliant::has_avx2() &&
+    // f32 → f32 and rgba8 → rgba8 / rgba32f: 4 voxels at a time with AVX2 when the CPU has it
+    // (the same bits).
+    constexpr bool HAS_AVX2_KERNEL =
+        (std::is_same_v<S, float> && C == 1 && std::is_same_v<D, float>) ||
+        (std::is_same_v<S, std::uint8_t> && C == 4 &&
+         (std::is_same_v<D, std::uint8_t> || std::is_same_v<D, float>));
+    const bool use_avx2 = HAS_AVX2_KERNEL && pliant::has_avx2() &&
                           source.num_voxels() <= std::numeric_limits<std::int32_t>::max();
     // One loop over the batch.
     auto visit_batch = [&](const detail::SpanBatch& batch) {
@@ -352,6 +356,10 @@ SlabCounts resample_typed(std::span<const std::int32_t> kept,
         if constexpr (std::is_same_v<S, float> && C == 1 && std::is_same_v<D, float>) {
             if (use_avx2) {
                 first = detail::sample_f32_avx2(src, sf.n, batch, scale, dst);
+            }
+        } else if constexpr (HAS_AVX2_KERNEL) {
+            if (use_avx2) {
+                first = detail::sample_rgba8_avx2(src, sf.n, batch, scale, dst);
             }
         }
         // The interior sampler gives the same bits as sample_trilinear, without its bounds

@@ -1,7 +1,9 @@
 #include "pliant/volume/detail/resample_avx2.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "pliant/core/simd_dispatch.hpp"
 
@@ -192,6 +194,174 @@ PLIANT_AVX2_INLINE int sample_f32(const float* src, const std::int64_t n[3], con
         dst[batch.index[e + 1]] = out[1];
         dst[batch.index[e + 2]] = out[2];
         dst[batch.index[e + 3]] = out[3];
+    }
+    return count;
+}
+
+// The RGBA8 voxel at voxel index i (4 bytes) as the low 32 bits of a vector.
+PLIANT_AVX2_INLINE __m128i voxel_rgba8(const std::uint8_t* src, std::int32_t i) {
+    std::int32_t v = 0;
+    std::memcpy(&v, src + 4 * static_cast<std::int64_t>(i), 4);
+    return _mm_cvtsi32_si128(v);
+}
+
+// Two RGBA8 voxels (low 32 bits of a and b) as 8 floats: a's channels, then b's.
+PLIANT_AVX2_INLINE __m256 widen_pair(__m128i a, __m128i b) {
+    return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_unpacklo_epi32(a, b)));
+}
+
+// The corners (x, x + 1) of one row for the two voxels at a and b (interior: adjacent in
+// memory), as {a's corner x, b's corner x} and {a's corner x + 1, b's corner x + 1}.
+PLIANT_AVX2_INLINE void row_pair_rgba8(const std::uint8_t* src, std::int32_t a, std::int32_t b,
+                                       __m256& lo, __m256& hi) {
+    std::int64_t va = 0;
+    std::int64_t vb = 0;
+    std::memcpy(&va, src + 4 * static_cast<std::int64_t>(a), 8);
+    std::memcpy(&vb, src + 4 * static_cast<std::int64_t>(b), 8);
+    // 32-bit lanes: a0 a1 b0 b1 → a0 b0 a1 b1.
+    const __m128i x = _mm_shuffle_epi32(_mm_set_epi64x(vb, va), _MM_SHUFFLE(3, 1, 2, 0));
+    lo = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(x));
+    hi = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_unpackhi_epi64(x, x)));
+}
+
+// u + f·(v − u) on 8 floats, the lerp of sample_trilinear.
+PLIANT_AVX2_INLINE __m256 lerp8(__m256 u, __m256 v, __m256 f) {
+    return _mm256_add_ps(u, _mm256_mul_ps(f, _mm256_sub_ps(v, u)));
+}
+
+// Lanes l and l + 1 of a 4-lane vector, each repeated 4 times (one voxel's channels).
+PLIANT_AVX2_INLINE __m256 spread_pair(__m128 x, int l) {
+    const __m256i idx = _mm256_setr_epi32(l, l, l, l, l + 1, l + 1, l + 1, l + 1);
+    return _mm256_permutevar8x32_ps(_mm256_castps128_ps256(x), idx);
+}
+
+template <bool INTERIOR, typename D>
+PLIANT_AVX2_INLINE int sample_rgba8(const std::uint8_t* src, const std::int64_t n[3],
+                                    const SpanBatch& batch, float scale, D* dst) {
+    const int count = batch.num_voxels & ~3;
+    const __m256d top_x = _mm256_set1_pd(static_cast<double>(n[0] - 1));
+    const __m256d top_y = _mm256_set1_pd(static_cast<double>(n[1] - 1));
+    const __m256d top_z = _mm256_set1_pd(static_cast<double>(n[2] - 1));
+    const __m256d half = _mm256_set1_pd(-0.5);
+    const __m256d end_x = _mm256_set1_pd(static_cast<double>(n[0]) - 0.5);
+    const __m256d end_y = _mm256_set1_pd(static_cast<double>(n[1]) - 0.5);
+    const __m256d end_z = _mm256_set1_pd(static_cast<double>(n[2]) - 0.5);
+    const auto nx = static_cast<std::int32_t>(n[0]);
+    const auto nxy = static_cast<std::int32_t>(n[0] * n[1]);
+    const __m128i nx4 = _mm_set1_epi32(nx);
+    const __m128i nxy4 = _mm_set1_epi32(nxy);
+    const __m128i last_x = _mm_set1_epi32(static_cast<std::int32_t>(n[0] - 1));
+    const __m128i last_y = _mm_set1_epi32(static_cast<std::int32_t>(n[1] - 1));
+    const __m128i last_z = _mm_set1_epi32(static_cast<std::int32_t>(n[2] - 1));
+    const __m128i one = _mm_set1_epi32(1);
+    const __m256 scale8 = _mm256_set1_ps(scale);
+    const __m256 zero8 = _mm256_setzero_ps();
+    const __m256 top8 = _mm256_set1_ps(255.0f);
+    const __m256 half8 = _mm256_set1_ps(0.5f);
+    for (int e = 0; e < count; e += 4) {
+        const __m256d gx = _mm256_load_pd(batch.g[0] + e);
+        const __m256d gy = _mm256_load_pd(batch.g[1] + e);
+        const __m256d gz = _mm256_load_pd(batch.g[2] + e);
+        const Axis ax = axis<INTERIOR>(gx, top_x);
+        const Axis ay = axis<INTERIOR>(gy, top_y);
+        const Axis az = axis<INTERIOR>(gz, top_z);
+        __m128i ox = one;
+        __m128i oy = nx4;
+        __m128i oz = nxy4;
+        if constexpr (!INTERIOR) {
+            ox = _mm_and_si128(_mm_cmpgt_epi32(last_x, ax.index), one);
+            oy = _mm_and_si128(_mm_cmpgt_epi32(last_y, ay.index), nx4);
+            oz = _mm_and_si128(_mm_cmpgt_epi32(last_z, az.index), nxy4);
+        }
+        const __m128i p = _mm_add_epi32(
+            ax.index,
+            _mm_mullo_epi32(
+                nx4, _mm_add_epi32(ay.index,
+                                   _mm_mullo_epi32(_mm_set1_epi32(static_cast<std::int32_t>(n[1])),
+                                                   az.index))));
+        alignas(16) std::int32_t at[4];
+        alignas(16) std::int32_t dx[4];
+        alignas(16) std::int32_t dy[4];
+        alignas(16) std::int32_t dz[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(at), p);
+        _mm_store_si128(reinterpret_cast<__m128i*>(dx), ox);
+        _mm_store_si128(reinterpret_cast<__m128i*>(dy), oy);
+        _mm_store_si128(reinterpret_cast<__m128i*>(dz), oz);
+        __m128 in4 = _mm_castsi128_ps(_mm_set1_epi32(-1));
+        if constexpr (!INTERIOR) {
+            // 0 outside [−0.5, n − 0.5] on any axis (NaN too: ordered compares).
+            const __m256d in =
+                _mm256_and_pd(_mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(gx, half, _CMP_GE_OQ),
+                                                          _mm256_cmp_pd(gx, end_x, _CMP_LE_OQ)),
+                                            _mm256_and_pd(_mm256_cmp_pd(gy, half, _CMP_GE_OQ),
+                                                          _mm256_cmp_pd(gy, end_y, _CMP_LE_OQ))),
+                              _mm256_and_pd(_mm256_cmp_pd(gz, half, _CMP_GE_OQ),
+                                            _mm256_cmp_pd(gz, end_z, _CMP_LE_OQ)));
+            in4 = narrow_mask(in);
+        }
+        // Two voxels (lanes l, l + 1) per pass, their 4 channels side by side: each channel
+        // gets sample_trilinear's operations in its order.
+        for (int l = 0; l < 4; l += 2) {
+            const std::int32_t a = at[l];
+            const std::int32_t b = at[l + 1];
+            __m256 v000, v100, v010, v110, v001, v101, v011, v111;
+            if constexpr (INTERIOR) {
+                row_pair_rgba8(src, a, b, v000, v100);
+                row_pair_rgba8(src, a + nx, b + nx, v010, v110);
+                row_pair_rgba8(src, a + nxy, b + nxy, v001, v101);
+                row_pair_rgba8(src, a + nx + nxy, b + nx + nxy, v011, v111);
+            } else {
+                auto corner = [&](std::int32_t oa, std::int32_t ob) {
+                    return widen_pair(voxel_rgba8(src, a + oa), voxel_rgba8(src, b + ob));
+                };
+                const std::int32_t xa = dx[l];
+                const std::int32_t xb = dx[l + 1];
+                const std::int32_t ya = dy[l];
+                const std::int32_t yb = dy[l + 1];
+                const std::int32_t za = dz[l];
+                const std::int32_t zb = dz[l + 1];
+                v000 = corner(0, 0);
+                v100 = corner(xa, xb);
+                v010 = corner(ya, yb);
+                v110 = corner(ya + xa, yb + xb);
+                v001 = corner(za, zb);
+                v101 = corner(za + xa, zb + xb);
+                v011 = corner(za + ya, zb + yb);
+                v111 = corner(za + ya + xa, zb + yb + xb);
+            }
+            const __m256 fx = spread_pair(ax.fraction, l);
+            const __m256 fy = spread_pair(ay.fraction, l);
+            const __m256 fz = spread_pair(az.fraction, l);
+            const __m256 v00 = lerp8(v000, v100, fx);
+            const __m256 v10 = lerp8(v010, v110, fx);
+            const __m256 v01 = lerp8(v001, v101, fx);
+            const __m256 v11 = lerp8(v011, v111, fx);
+            const __m256 v0 = lerp8(v00, v10, fy);
+            const __m256 v1 = lerp8(v01, v11, fy);
+            __m256 v = lerp8(v0, v1, fz);
+            if constexpr (!INTERIOR) {
+                v = _mm256_and_ps(v, spread_pair(in4, l));
+            }
+            D* out_a = dst + 4 * batch.index[e + l];
+            D* out_b = dst + 4 * batch.index[e + l + 1];
+            if constexpr (std::is_same_v<D, float>) {
+                // convert_sample<float>: v · scale.
+                v = _mm256_mul_ps(v, scale8);
+                _mm_storeu_ps(out_a, _mm256_castps256_ps128(v));
+                _mm_storeu_ps(out_b, _mm256_extractf128_ps(v, 1));
+            } else {
+                // convert_sample<uint8_t>: v > 0 ? (v < 255 ? v : 255) : 0 (NaN → 0; max_ps
+                // returns its second operand unless the first is greater), + 0.5, truncated.
+                const __m256 c = _mm256_min_ps(_mm256_max_ps(v, zero8), top8);
+                const __m256i i = _mm256_cvttps_epi32(_mm256_add_ps(c, half8));
+                const __m128i w =
+                    _mm_packus_epi32(_mm256_castsi256_si128(i), _mm256_extracti128_si256(i, 1));
+                const __m128i bytes = _mm_packus_epi16(w, w);
+                const std::int64_t both = _mm_cvtsi128_si64(bytes);
+                std::memcpy(out_a, &both, 4);
+                std::memcpy(out_b, reinterpret_cast<const char*>(&both) + 4, 4);
+            }
+        }
     }
     return count;
 }
@@ -685,6 +855,18 @@ PLIANT_AVX2_FN int sample_f32_avx2(const float* src, const std::int64_t n[3],
                              : sample_f32<false>(src, n, batch, scale, dst);
 }
 
+PLIANT_AVX2_FN int sample_rgba8_avx2(const std::uint8_t* src, const std::int64_t n[3],
+                                     const SpanBatch& batch, float scale, std::uint8_t* dst) {
+    return batch.is_interior ? sample_rgba8<true>(src, n, batch, scale, dst)
+                             : sample_rgba8<false>(src, n, batch, scale, dst);
+}
+
+PLIANT_AVX2_FN int sample_rgba8_avx2(const std::uint8_t* src, const std::int64_t n[3],
+                                     const SpanBatch& batch, float scale, float* dst) {
+    return batch.is_interior ? sample_rgba8<true>(src, n, batch, scale, dst)
+                             : sample_rgba8<false>(src, n, batch, scale, dst);
+}
+
 #else  // no AVX2 on this target
 int setup_tets_avx2(const Vec3f*, const Vec3f*, const std::int32_t[4][4], const RestInfo[4],
                     const GridFrame&, const GridFrame&, TetRaster[4]) {
@@ -695,6 +877,13 @@ std::int64_t append_layers_avx2(const TetRaster&, std::int64_t k, std::int64_t, 
     return k;
 }
 int sample_f32_avx2(const float*, const std::int64_t*, const SpanBatch&, float, float*) {
+    return 0;
+}
+int sample_rgba8_avx2(const std::uint8_t*, const std::int64_t*, const SpanBatch&, float,
+                      std::uint8_t*) {
+    return 0;
+}
+int sample_rgba8_avx2(const std::uint8_t*, const std::int64_t*, const SpanBatch&, float, float*) {
     return 0;
 }
 

@@ -1,0 +1,348 @@
+#include "pliant/volume/inverse_map.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/volume/detail/resample_kernel.hpp"
+#include "pliant/volume/resample.hpp"
+
+namespace pliant::volume {
+
+namespace {
+
+using detail::GridFrame;
+
+// A deformed tet's affine map in target grid coordinates: λk = rows[k] · (x − p3) for k < 3,
+// λ3 = 1 − λ0 − λ1 − λ2, rest r = r3 + Σ λk dr[k] (source grid coordinates).
+struct TetMap {
+    Vec3d p3, r3;
+    Vec3d rows[3];
+    Vec3d dr[3];
+    bool ok = false;
+
+    // The smallest barycentric coordinate of x (≥ 0: inside); l[0..2] = λ0..2.
+    double lambda(const Vec3d& x, double l[3]) const {
+        const Vec3d d = x - p3;
+        l[0] = dot(rows[0], d);
+        l[1] = dot(rows[1], d);
+        l[2] = dot(rows[2], d);
+        return std::min({l[0], l[1], l[2], 1.0 - l[0] - l[1] - l[2]});
+    }
+    Vec3d rest(const double l[3]) const { return r3 + dr[0] * l[0] + dr[1] * l[1] + dr[2] * l[2]; }
+};
+
+Vec3d grid_coordinate(const Vec3f& x, const GridFrame& f) {
+    return {(x.x - f.origin[0]) * f.inv_spacing[0] - 0.5,
+            (x.y - f.origin[1]) * f.inv_spacing[1] - 0.5,
+            (x.z - f.origin[2]) * f.inv_spacing[2] - 0.5};
+}
+
+// The deformed vertices of a tet in target grid coordinates.
+void deformed_vertices(const geometry::Tet& tet, std::span<const Vec3f> deformed,
+                       const GridFrame& tf, Vec3d p[4]) {
+    for (int v = 0; v < 4; ++v) {
+        p[v] = grid_coordinate(deformed[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])],
+                               tf);
+    }
+}
+
+// The map of a tet whose deformed vertices p are known (deformed_vertices()).
+TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3f> rest, const GridFrame& sf,
+               const Vec3d p[4]) {
+    Vec3d r[4];
+    for (int v = 0; v < 4; ++v) {
+        r[v] =
+            grid_coordinate(rest[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])], sf);
+    }
+    TetMap m;
+    const Vec3d e0 = p[0] - p[3];
+    const Vec3d e1 = p[1] - p[3];
+    const Vec3d e2 = p[2] - p[3];
+    const double det = dot(e0, cross(e1, e2));
+    if (!(std::abs(det) > 0.0) || !std::isfinite(det)) {
+        return m;
+    }
+    const double inv = 1.0 / det;
+    m.rows[0] = cross(e1, e2) * inv;
+    m.rows[1] = cross(e2, e0) * inv;
+    m.rows[2] = cross(e0, e1) * inv;
+    m.p3 = p[3];
+    m.r3 = r[3];
+    for (int k = 0; k < 3; ++k) {
+        m.dr[k] = r[k] - r[3];
+    }
+    m.ok = true;
+    return m;
+}
+
+void check_positions(std::span<const Vec3f> positions, const char* what) {
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        if (!is_finite(positions[v])) {
+            throw InvalidInput(
+                fmt::format("volume::InverseMap::build: {}[{}] is not finite", what, v));
+        }
+    }
+}
+
+template <typename S, int C, typename D>
+void resample_through_typed(const InverseMap& map, const Volume& source, Volume& target) {
+    const GridFrame sf = detail::frame_of(source);
+    const GridFrame tf = detail::frame_of(target);
+    const S* src = reinterpret_cast<const S*>(source.bytes().data());
+    D* dst = reinterpret_cast<D*>(target.bytes().data());
+    const float scale = std::is_floating_point_v<D> && std::is_same_v<S, std::uint8_t> && C == 4
+                            ? 1.0f / 255.0f
+                            : 1.0f;
+    parallel_for(
+        tf.n[2],
+        [&](std::int64_t k) {
+            for (std::int64_t j = 0; j < tf.n[1]; ++j) {
+                for (std::int64_t i = 0; i < tf.n[0]; ++i) {
+                    const double t[3] = {static_cast<double>(i), static_cast<double>(j),
+                                         static_cast<double>(k)};
+                    double g[3];
+                    float s[C] = {};
+                    if (map.source_coordinate(t, g)) {
+                        detail::sample_trilinear<S, C>(src, sf.n, g[0], g[1], g[2], s);
+                    }
+                    D* out = dst + C * (i + tf.n[0] * (j + tf.n[1] * k));
+                    for (int c = 0; c < C; ++c) {
+                        out[c] = detail::convert_sample<D>(s[c], scale);
+                    }
+                }
+            }
+        },
+        1);
+}
+
+}  // namespace
+
+InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
+                                  std::span<const geometry::Tet> tets,
+                                  std::span<const Vec3f> rest_positions,
+                                  std::span<const Vec3f> deformed_positions,
+                                  const InverseMapOptions& options) {
+    if (source.empty() || target.empty()) {
+        throw InvalidInput("volume::InverseMap::build: the source and target must not be empty");
+    }
+    if (options.node_voxels < 1) {
+        throw InvalidInput(fmt::format("volume::InverseMap::build: node_voxels ({}) must be ≥ 1",
+                                       options.node_voxels));
+    }
+    if (rest_positions.size() != deformed_positions.size()) {
+        throw InvalidInput(fmt::format(
+            "volume::InverseMap::build: deformed_positions.size() ({}) != rest_positions.size() "
+            "({})",
+            deformed_positions.size(), rest_positions.size()));
+    }
+    const auto num_vertices = static_cast<std::int64_t>(rest_positions.size());
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+        for (const std::int32_t v : tets[t]) {
+            if (v < 0 || v >= num_vertices) {
+                throw InvalidInput(fmt::format(
+                    "volume::InverseMap::build: tet {} has vertex index {} outside [0, {})", t, v,
+                    num_vertices));
+            }
+        }
+    }
+    check_positions(rest_positions, "rest_positions");
+    check_positions(deformed_positions, "deformed_positions");
+
+    const GridFrame tf = detail::frame_of(target);
+    const GridFrame sf = detail::frame_of(source);
+    m_b = options.node_voxels;
+    const auto b = static_cast<double>(m_b);
+    for (int a = 0; a < 3; ++a) {
+        m_nodes[static_cast<std::size_t>(a)] = (tf.n[a] - 1) / m_b + 2;
+    }
+    const std::int64_t nx = m_nodes[0];
+    const std::int64_t nxy = m_nodes[0] * m_nodes[1];
+    const std::int64_t num_nodes = nxy * m_nodes[2];
+    m_g.assign(static_cast<std::size_t>(3 * num_nodes), std::numeric_limits<float>::quiet_NaN());
+    std::vector<std::int32_t> holder(static_cast<std::size_t>(num_nodes), -1);
+    auto store = [&](std::int64_t q, const Vec3d& r) {
+        float* out = m_g.data() + 3 * q;
+        out[0] = static_cast<float>(r.x);
+        out[1] = static_cast<float>(r.y);
+        out[2] = static_cast<float>(r.z);
+    };
+
+    // 1. Inside nodes, tets in index order (the highest index wins).
+    InverseMapStats stats;
+    stats.num_nodes = num_nodes;
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+        // Most tets hold no node: their box is tested before their map is set up.
+        Vec3d p[4];
+        deformed_vertices(tets[t], deformed_positions, tf, p);
+        std::int64_t lo[3];
+        std::int64_t hi[3];
+        bool is_empty = false;
+        for (int a = 0; a < 3; ++a) {
+            const double mn = std::min({p[0][a], p[1][a], p[2][a], p[3][a]});
+            const double mx = std::max({p[0][a], p[1][a], p[2][a], p[3][a]});
+            lo[a] = static_cast<std::int64_t>(std::max(0.0, std::ceil(mn / b)));
+            hi[a] = static_cast<std::int64_t>(std::min(
+                static_cast<double>(m_nodes[static_cast<std::size_t>(a)] - 1), std::floor(mx / b)));
+            is_empty = is_empty || lo[a] > hi[a];
+        }
+        if (is_empty) {
+            continue;
+        }
+        const TetMap m = tet_map(tets[t], rest_positions, sf, p);
+        if (!m.ok) {
+            continue;
+        }
+        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+            for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                    double l[3];
+                    const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
+                                     static_cast<double>(z) * b};
+                    if (!(m.lambda(node, l) >= -1e-9)) {
+                        continue;
+                    }
+                    const std::int64_t q = x + nx * y + nxy * z;
+                    holder[static_cast<std::size_t>(q)] = static_cast<std::int32_t>(t);
+                    store(q, m.rest(l));
+                }
+            }
+        }
+    }
+
+    // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated. Reads `holder` (inside
+    // nodes only), writes only its own node: parallel over layers.
+    std::vector<std::int64_t> extrapolated(static_cast<std::size_t>(m_nodes[2]), 0);
+    parallel_for(
+        m_nodes[2],
+        [&](std::int64_t z) {
+            for (std::int64_t y = 0; y < m_nodes[1]; ++y) {
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    const std::int64_t q = x + nx * y + nxy * z;
+                    if (holder[static_cast<std::size_t>(q)] >= 0) {
+                        continue;
+                    }
+                    const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
+                                     static_cast<double>(z) * b};
+                    double best = -std::numeric_limits<double>::infinity();
+                    Vec3d best_rest{};
+                    for (std::int64_t cz = std::max<std::int64_t>(0, z - 1);
+                         cz <= std::min(m_nodes[2] - 1, z + 1); ++cz) {
+                        for (std::int64_t cy = std::max<std::int64_t>(0, y - 1);
+                             cy <= std::min(m_nodes[1] - 1, y + 1); ++cy) {
+                            for (std::int64_t cx = std::max<std::int64_t>(0, x - 1);
+                                 cx <= std::min(nx - 1, x + 1); ++cx) {
+                                const std::int32_t t =
+                                    holder[static_cast<std::size_t>(cx + nx * cy + nxy * cz)];
+                                if (t < 0) {
+                                    continue;
+                                }
+                                const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
+                                Vec3d p[4];
+                                deformed_vertices(tet, deformed_positions, tf, p);
+                                const TetMap m = tet_map(tet, rest_positions, sf, p);
+                                double l[3];
+                                const double score = m.lambda(node, l);
+                                if (score > best) {
+                                    best = score;
+                                    best_rest = m.rest(l);
+                                }
+                            }
+                        }
+                    }
+                    if (best > -std::numeric_limits<double>::infinity()) {
+                        store(q, best_rest);
+                        ++extrapolated[static_cast<std::size_t>(z)];
+                    }
+                }
+            }
+        },
+        1);
+    for (const std::int32_t h : holder) {
+        stats.num_inside += h >= 0 ? 1 : 0;
+    }
+    for (const std::int64_t e : extrapolated) {
+        stats.num_extrapolated += e;
+    }
+    return stats;
+}
+
+bool InverseMap::source_coordinate(const double t[3], double out[3]) const {
+    const double inv_b = 1.0 / static_cast<double>(m_b);
+    std::int64_t q[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+        const double u = t[a] * inv_b;
+        if (!(u >= 0.0) || !(u < static_cast<double>(m_nodes[static_cast<std::size_t>(a)] - 1))) {
+            return false;
+        }
+        q[a] = static_cast<std::int64_t>(u);
+        f[a] = u - static_cast<double>(q[a]);
+    }
+    const std::int64_t nx = m_nodes[0];
+    const std::int64_t nxy = m_nodes[0] * m_nodes[1];
+    double g[3] = {0.0, 0.0, 0.0};
+    for (int corner = 0; corner < 8; ++corner) {
+        const int cx = corner & 1;
+        const int cy = (corner >> 1) & 1;
+        const int cz = corner >> 2;
+        const double w = (cx != 0 ? f[0] : 1.0 - f[0]) * (cy != 0 ? f[1] : 1.0 - f[1]) *
+                         (cz != 0 ? f[2] : 1.0 - f[2]);
+        const float* v = m_g.data() + 3 * ((q[0] + cx) + nx * (q[1] + cy) + nxy * (q[2] + cz));
+        if (std::isnan(v[0])) {
+            return false;
+        }
+        g[0] += w * v[0];
+        g[1] += w * v[1];
+        g[2] += w * v[2];
+    }
+    out[0] = g[0];
+    out[1] = g[1];
+    out[2] = g[2];
+    return true;
+}
+
+void resample_through(const InverseMap& map, const Volume& source, Volume& target) {
+    const VoxelType st = source.type();
+    const VoxelType tt = target.type();
+    if (!can_resample_into(st, tt)) {
+        throw InvalidInput(fmt::format(
+            "volume::resample_through: cannot resample a {} source into a {} target (valid: the "
+            "source type, f32 from u8/i16/u16, rgba32f from rgba8)",
+            name(st), name(tt)));
+    }
+    if (map.nodes()[0] == 0) {
+        throw InvalidInput("volume::resample_through: the map was not built");
+    }
+    switch (st) {
+        case VoxelType::u8:
+            tt == st ? resample_through_typed<std::uint8_t, 1, std::uint8_t>(map, source, target)
+                     : resample_through_typed<std::uint8_t, 1, float>(map, source, target);
+            break;
+        case VoxelType::i16:
+            tt == st ? resample_through_typed<std::int16_t, 1, std::int16_t>(map, source, target)
+                     : resample_through_typed<std::int16_t, 1, float>(map, source, target);
+            break;
+        case VoxelType::u16:
+            tt == st ? resample_through_typed<std::uint16_t, 1, std::uint16_t>(map, source, target)
+                     : resample_through_typed<std::uint16_t, 1, float>(map, source, target);
+            break;
+        case VoxelType::f32:
+            resample_through_typed<float, 1, float>(map, source, target);
+            break;
+        case VoxelType::rgba8:
+            tt == st ? resample_through_typed<std::uint8_t, 4, std::uint8_t>(map, source, target)
+                     : resample_through_typed<std::uint8_t, 4, float>(map, source, target);
+            break;
+        case VoxelType::rgba32f:
+            resample_through_typed<float, 4, float>(map, source, target);
+            break;
+    }
+}
+
+}  // namespace pliant::volume
