@@ -462,10 +462,9 @@ TEST(RayCast, DeterministicForOneAndTwoThreads) {
     EXPECT_EQ(s1.samples, s2.samples);
 }
 
-// The test above shades, which keeps it on the scalar kernel; unshaded composite views of a
-// scalar volume with a transfer function take the AVX2 march (detail::composite_avx2_fits) on
-// CPUs that have it. Those too are bit for bit the same for 1, 2 and the default thread count,
-// over images of many tiles, with and without skipping and clipped.
+// Composite views take the AVX2 march (detail::composite_avx2_fits) on CPUs that have it (the
+// test above shades, on it too). Unshaded scalar views are bit for bit the same for 1, 2 and the
+// default thread count, over images of many tiles, with and without skipping and clipped.
 TEST(RayCast, Avx2MarchDeterministicForOneAndManyThreads) {
     const Volume phantom = volume::shepp_logan_3d({48, 40, 44});
     const volume::TransferFunction tf = volume::preset("mri-brain", phantom);
@@ -551,6 +550,102 @@ TEST(RayCast, Avx2MarchMatchesTheScalarKernel) {
             }
         }
     }
+}
+
+// Every kind of composite rendering on the AVX2 march, scalar volumes shaded and RGBA volumes
+// (rgba8 and rgba32f) shaded or not, gives the scalar kernel's images and sample counts bit for
+// bit: the views of the test above (oblique, axis, inside, far away) and clipped ones, odd image
+// and volume sizes, the smallest volumes and empty ones (nothing visible), with and without
+// skipping and early termination.
+Volume rgba_of(const Volume& scalar, const char* tf, VoxelType type) {
+    const Volume rgba = volume::apply(scalar, volume::preset(tf, scalar));
+    if (type == VoxelType::rgba32f) {
+        return rgba;
+    }
+    Volume out = Volume::allocate(rgba.dims(), VoxelType::rgba8, rgba.spacing(), rgba.origin());
+    const auto in = rgba.values<VoxelType::rgba32f>();
+    const auto values = out.values<VoxelType::rgba8>();
+    for (std::size_t i = 0; i < in.size(); ++i) {
+        values[i] = static_cast<std::uint8_t>(std::lround(255.0f * in[i]));
+    }
+    return out;
+}
+
+TEST(RayCast, Avx2MarchMatchesTheScalarKernelForEveryKind) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    struct Scene {
+        std::string name;
+        Volume volume;
+        const char* tf;  // scalar volumes
+    };
+    std::vector<Scene> scenes;
+    scenes.push_back({"scalar 37x23x30", volume::shepp_logan_3d({37, 23, 30}), "mri-brain"});
+    scenes.push_back({"scalar 2x9x5", volume::shepp_logan_3d({2, 9, 5}), "grayscale"});
+    scenes.push_back({"scalar empty", Volume::allocate({9, 7, 5}, VoxelType::f32), "grayscale"});
+    scenes.push_back({"rgba32f object 33x29x31",
+                      volume::rgba_test_object({33, 29, 31}, VoxelType::rgba32f), nullptr});
+    scenes.push_back({"rgba8 object 21x18x23",
+                      volume::rgba_test_object({21, 18, 23}, VoxelType::rgba8), nullptr});
+    scenes.push_back(
+        {"rgba32f phantom 40x36x38",
+         rgba_of(volume::shepp_logan_3d({40, 36, 38}), "mri-brain", VoxelType::rgba32f), nullptr});
+    scenes.push_back({"rgba8 phantom 3x5x4",
+                      rgba_of(volume::shepp_logan_3d({3, 5, 4}), "grayscale", VoxelType::rgba8),
+                      nullptr});
+    scenes.push_back({"rgba8 2x2x2",
+                      rgba_of(volume::shepp_logan_3d({2, 2, 2}), "grayscale", VoxelType::rgba8),
+                      nullptr});
+    scenes.push_back({"rgba empty", Volume::allocate({6, 11, 7}, VoxelType::rgba8), nullptr});
+    scenes.push_back({"rgba 1x12x12 (scalar kernel only)",
+                      rgba_of(volume::shepp_logan_3d({1, 12, 12}), "grayscale", VoxelType::rgba8),
+                      nullptr});
+    std::int64_t total_samples = 0;
+    for (const Scene& scene : scenes) {
+        const Volume& v = scene.volume;
+        const volume::TransferFunction tf =
+            scene.tf != nullptr ? volume::preset(scene.tf, v) : volume::TransferFunction{};
+        const AABBd box = v.bounds();
+        const std::vector<Camera> cameras = {
+            frame_box(box, 30.0, 20.0, 53, 47),
+            frame_box(box, -120.0, -60.0, 40, 33),
+            view_camera(box, ViewAxis::neg_y, 45, 40),
+            view_camera(box, ViewAxis::pos_x, 17, 29),
+            Camera::perspective(box.center(), box.center() + Vec3d{1.0, 0.3, 0.2}, {0.0, 0.0, 1.0},
+                                90.0, 31, 31),  // inside
+            Camera::perspective(box.center() + Vec3d{30000.0, 20000.0, 10000.0}, box.center(),
+                                {0.0, 0.0, 1.0}, 0.006, 24, 24),
+        };
+        for (int shading = 0; shading < 2; ++shading) {
+            for (int variant = 0; variant < 4; ++variant) {
+                RayCastOptions o;
+                o.shading = shading != 0;
+                o.empty_space_skipping = variant != 1;
+                o.early_termination = variant == 2 ? 1.0 : 0.9;
+                if (variant == 3) {
+                    o.clip = ClipPlane{box.center(), {1.0, -0.5, 0.25}};
+                    o.step = 0.37 * v.spacing().x;
+                    o.background = {0.1f, 0.5f, 1.0f};
+                }
+                const RayCaster caster(v, scene.tf != nullptr ? &tf : nullptr, o);
+                for (std::size_t c = 0; c < cameras.size(); ++c) {
+                    Image simd, scalar;
+                    const RayCastStats s_simd = caster.render(cameras[c], simd);
+                    allow_avx2(false);
+                    const RayCastStats s_scalar = caster.render(cameras[c], scalar);
+                    allow_avx2(true);
+                    EXPECT_EQ(simd, scalar) << scene.name << " shading " << shading << " camera "
+                                            << c << " variant " << variant;
+                    EXPECT_EQ(s_simd.samples, s_scalar.samples)
+                        << scene.name << " shading " << shading << " camera " << c << " variant "
+                        << variant;
+                    total_samples += s_simd.samples;
+                }
+            }
+        }
+    }
+    EXPECT_GT(total_samples, 0);
 }
 
 // The AVX2 conversion of voxels to lookup coordinates (the ray caster's preparation) gives the

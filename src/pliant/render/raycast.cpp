@@ -404,6 +404,7 @@ void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     k.inv_step = 1.0f / k.step;
     k.step_over_unit = static_cast<float>(m_step / m_opacity_unit);
     k.threshold = static_cast<float>(m_options.early_termination);
+    k.is_rgba = m_is_rgba;
     k.is_mip = m_options.mode == RayCastMode::mip;
     k.shading = m_options.shading && !k.is_mip;
     k.skipping = m_options.empty_space_skipping;
@@ -504,7 +505,8 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_is_rgba;
     // The AVX2 march gives the scalar kernel's bits (detail/raycast_avx2.hpp): for speed only.
-    const bool use_avx2 = !is_rgba && detail::composite_avx2_fits(k);
+    // Composite rays of every kind take it; MIP the scalar kernel.
+    const bool use_avx2 = detail::composite_avx2_fits(k);
     parallel_for(
         num_tiles,
         [&](std::int64_t tile) {

@@ -82,6 +82,7 @@ struct RayCastKernel {
     float inv_step = 1.0f;
     float step_over_unit = 1.0f;  // RGBA opacity correction exponent
     float threshold = 0.99f;
+    bool is_rgba = false;  // values hold α·rgb, α per voxel (else lookup coordinates)
     bool is_mip = false;
     bool shading = false;
     bool skipping = true;
@@ -210,6 +211,12 @@ PLIANT_HOST_DEVICE inline float shade(const RayCastKernel& k, Vec3f g, Vec3f dir
     return 0.3f + 0.7f * cosine;
 }
 
+// The opacity of a step for an interpolated RGBA opacity a ∈ (0, 1] per opacity unit:
+// 1 − (1 − a)^(Δs/u), with e = Δs/u (the AVX2 march calls this too, for the same bits).
+PLIANT_HOST_DEVICE inline float rgba_step_opacity(float a, float e) {
+    return a >= 1.0f ? 1.0f : -std::expm1(e * std::log1p(-a));
+}
+
 // Classified sample with lower corner t: straight colour and opacity for one full step.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinear& t) {
@@ -219,7 +226,7 @@ PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinea
         if (!(a > 0.0f)) {
             return {0.0f, 0.0f, 0.0f, 0.0f};
         }
-        const float a_step = a >= 1.0f ? 1.0f : -std::expm1(k.step_over_unit * std::log1p(-a));
+        const float a_step = rgba_step_opacity(a, k.step_over_unit);
         const float inv = 1.0f / s.a;
         return {s.r * inv, s.g * inv, s.b * inv, a_step};
     } else {
