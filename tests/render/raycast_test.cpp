@@ -387,6 +387,53 @@ TEST(RayCast, SkippingDoesNotChangeTheImage) {
     }
 }
 
+// The occupancy test of a cell widens its value range by detail::LERP_ROUNDING only, not by a
+// whole lookup entry: a background exactly at an entry of zero opacity (the phantom's air under
+// `grayscale`, whose opacity is zero only at the range's bottom) is skipped, and images stay
+// identical. Also on random voxels against a transfer function whose opacity starts just above
+// an entry's centre, where a coarser bound would miss samples rounding into it.
+TEST(RayCast, SkippingIsExactAtTheEdgeOfZeroOpacity) {
+    const Volume phantom = volume::shepp_logan_3d({48, 40, 44});
+    const volume::TransferFunction grey = volume::preset("grayscale", phantom);
+    Volume noise = Volume::allocate({33, 30, 31}, VoxelType::f32);
+    std::uint32_t state = 12345;
+    for (float& x : noise.values<VoxelType::f32>()) {
+        state = state * 1664525u + 1013904223u;
+        x = static_cast<float>(state >> 8) / 16777216.0f;
+    }
+    noise.values<VoxelType::f32>()[0] = 0.0f;  // the range is [0, 1) at most
+    volume::TransferFunction edge;
+    edge.name = "edge";
+    edge.color = {{0.0, {1.0f, 1.0f, 1.0f}}};
+    // Opacity zero up to the entry 2048 of [0, max] and rising after it.
+    const double top = volume::value_range(noise)[1];
+    const double at = top * 2048.0 / (detail::LUT_SIZE - 1);
+    edge.opacity = {{0.0, 0.0f}, {at, 0.0f}, {top, 0.3f}};
+    for (const Camera& cam : {frame_box(phantom.bounds(), 30.0, 20.0, 64, 56),
+                              view_camera(phantom.bounds(), ViewAxis::neg_y, 48, 44)}) {
+        RayCastOptions on;
+        RayCastOptions off;
+        off.empty_space_skipping = false;
+        Image a, b;
+        const RayCastStats sa = raycast(phantom, &grey, cam, on, a);
+        const RayCastStats sb = raycast(phantom, &grey, cam, off, b);
+        EXPECT_EQ(a, b);
+        EXPECT_LT(2 * sa.samples, sb.samples);  // the air is skipped
+    }
+    const Camera cam = frame_box(noise.bounds(), -40.0, 25.0, 61, 57);
+    for (const bool shading : {false, true}) {
+        RayCastOptions on;
+        on.shading = shading;
+        on.early_termination = 1.0;
+        RayCastOptions off = on;
+        off.empty_space_skipping = false;
+        Image a, b;
+        raycast(noise, &edge, cam, on, a);
+        raycast(noise, &edge, cam, off, b);
+        EXPECT_EQ(a, b) << "shading " << shading;
+    }
+}
+
 TEST(RayCast, EmptyCubesMatchBruteForce) {
     const int cells[3] = {9, 7, 5};
     std::vector<std::uint8_t> occupied(9 * 7 * 5, 0);

@@ -323,12 +323,14 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
                         if (m_is_rgba) {
                             occupied = vmax > 0.0f;
                         } else {
-                            // Interpolated values lie in [vmin, vmax] up to a rounding of the
-                            // lerps, which may move the nearest entry by one: widened by an entry
-                            // per side.
-                            const int i0 = std::max(0, static_cast<int>(vmin + 0.5f) - 1);
+                            // Interpolated values lie in [vmin, vmax] up to the rounding of
+                            // the lerps (detail::LERP_ROUNDING): the entries nearest to that
+                            // widened range.
+                            const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
+                            const int i0 = static_cast<int>(widened_lo + 0.5f);
                             const int i1 =
-                                std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + 0.5f) + 1);
+                                std::min(detail::LUT_SIZE - 1,
+                                         static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
                             occupied = nonzero_prefix[i1 + 1] - nonzero_prefix[i0] > 0;
                         }
                         sub_mask = static_cast<std::uint8_t>(sub_mask | (occupied ? 1 << sub : 0));

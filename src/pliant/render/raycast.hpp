@@ -35,8 +35,10 @@
 //      cell c holds the samples whose lower voxel corner ⌊g⌋ is in [4c, 4c + 3] per axis, so it
 //      reads exactly the voxels [4c, 4c + 4] (its footprint). A cell is occupied when some value
 //      of its footprint has a non-zero opacity (min/max of the values against a prefix count of
-//      the lookup table's non-zero entries, widened by one entry per side for the rounding of
-//      the interpolation; max α for RGBA). For each of the 8 octants of ray directions, every
+//      the lookup table's non-zero entries, the range widened by 1/64 entry per side for the
+//      rounding of the interpolation, detail::LERP_ROUNDING; max α for RGBA). A volume whose
+//      background sits exactly at an entry of zero opacity (air at the bottom of the range under
+//      `grayscale`) is thus skipped there. For each of the 8 octants of ray directions, every
 //      empty cell stores the side s (≤ 255 cells) of the largest cube of empty cells that has it
 //      as a corner and extends towards that octant (a largest-empty-square recurrence in 3D). A
 //      sample whose cell is empty is not classified: the ray jumps to the first sample past the

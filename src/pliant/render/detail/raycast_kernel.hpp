@@ -36,6 +36,12 @@ inline constexpr int SUB_CELL = 2;    // sub-cell edge (an occupancy bit each), 
 // seen from nearby). A ray adds 2⁻¹⁸ (32 float epsilons) of the largest coordinate magnitude it
 // computes, so a camera far from the volume keeps the margin above its rounding.
 inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
+// Bound on |trilinear value − the range of its 8 voxels|, in lookup entries, for the float lerps
+// a + t·(b − a) of lookup coordinates in [0, LUT_SIZE − 1], t ∈ [0, 1]: each of the 3 levels
+// of lerps adds at most 3 roundings of 2⁻²⁴ · 4096 ≈ 2.4e-4 (and a + t·0 = a exactly), plus the
+// + 0.5 of the nearest entry: under 0.003, bounded here by 1/64 (the macro cells' occupancy
+// test widens each cell's [min, max] by it, so no sample it skips could reach an opaque entry).
+inline constexpr float LERP_ROUNDING = 1.0f / 64.0f;
 inline constexpr int TILE = 16;       // pixels per tile edge
 inline constexpr int MAX_CUBE = 255;  // largest stored empty-cube side, cells
 
