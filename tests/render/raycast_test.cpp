@@ -599,11 +599,11 @@ TEST(RayCast, Avx2MarchMatchesTheScalarKernel) {
     }
 }
 
-// Every kind of composite rendering on the AVX2 march, scalar volumes shaded and RGBA volumes
-// (rgba8 and rgba32f) shaded or not, gives the scalar kernel's images and sample counts bit for
-// bit: the views of the test above (oblique, axis, inside, far away) and clipped ones, odd image
-// and volume sizes, the smallest volumes and empty ones (nothing visible), with and without
-// skipping and early termination.
+// Every kind of rendering on the AVX2 march, composite (scalar volumes shaded, RGBA volumes
+// (rgba8 and rgba32f) shaded or not) and MIP (scalar and RGBA), gives the scalar kernel's images
+// and sample counts bit for bit: the views of the test above (oblique, axis, inside, far away) and
+// clipped ones, odd image and volume sizes, the smallest volumes and empty ones (nothing visible),
+// with and without skipping and early termination.
 Volume rgba_of(const Volume& scalar, const char* tf, VoxelType type) {
     const Volume rgba = volume::apply(scalar, volume::preset(tf, scalar));
     if (type == VoxelType::rgba32f) {
@@ -664,10 +664,12 @@ TEST(RayCast, Avx2MarchMatchesTheScalarKernelForEveryKind) {
             Camera::perspective(box.center() + Vec3d{30000.0, 20000.0, 10000.0}, box.center(),
                                 {0.0, 0.0, 1.0}, 0.006, 24, 24),
         };
-        for (int shading = 0; shading < 2; ++shading) {
+        // 0: composite, 1: composite shaded, 2: MIP.
+        for (int shading = 0; shading < 3; ++shading) {
             for (int variant = 0; variant < 4; ++variant) {
                 RayCastOptions o;
-                o.shading = shading != 0;
+                o.shading = shading == 1;
+                o.mode = shading == 2 ? RayCastMode::mip : RayCastMode::composite;
                 o.empty_space_skipping = variant != 1;
                 o.early_termination = variant == 2 ? 1.0 : 0.9;
                 if (variant == 3) {

@@ -507,7 +507,7 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_is_rgba;
     // The AVX2 march gives the scalar kernel's bits (detail/raycast_avx2.hpp): for speed only.
-    // Composite rays of every kind take it; MIP the scalar kernel.
+    // Every kind of ray takes it (composite and MIP, scalar and RGBA, shaded, clipped).
     const bool use_avx2 = detail::composite_avx2_fits(k);
     parallel_for(
         num_tiles,
@@ -519,7 +519,8 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
             std::int64_t samples = 0;
             if (use_avx2) {
                 Color colors[detail::TILE * detail::TILE];
-                samples = detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
+                samples = k.is_mip ? detail::mip_tile_avx2(k, x0, y0, x1, y1, colors)
+                                   : detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
                 for (int y = y0; y < y1; ++y) {
                     for (int x = x0; x < x1; ++x) {
                         image.set(x, y, to_rgb8(colors[(y - y0) * (x1 - x0) + (x - x0)]));

@@ -485,6 +485,46 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first,
            (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
 }
 
+// jump() for the lanes in `jumps` (empty cubes of `side` cells at cells cell_coord): the first
+// sample past the cube's far planes (pulled in by the ray's margin); n_next for the others.
+PLIANT_AVX2_INLINE __m256i jump8(const Lanes& s, const __m256i cell_coord[3], __m256i side,
+                                 __m256i jumps, __m256i n_next, __m256i num_full, __m256 t_near,
+                                 __m256 inv_step) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256i one_i = _mm256_set1_epi32(1);
+    __m256 t_exit = load(s.t_far);
+    const __m256 margin = load(s.margin);
+    for (int a = 0; a < 3; ++a) {
+        const __m256 gd = load(s.gd[a]);
+        const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
+        const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
+        const __m256 plane_pos =
+            _mm256_sub_ps(_mm256_cvtepi32_ps(
+                              _mm256_slli_epi32(_mm256_add_epi32(cell_coord[a], side), CELL_SHIFT)),
+                          margin);
+        const __m256 plane_neg = _mm256_add_ps(
+            _mm256_cvtepi32_ps(_mm256_slli_epi32(
+                _mm256_add_epi32(_mm256_sub_epi32(cell_coord[a], side), one_i), CELL_SHIFT)),
+            margin);
+        const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
+        const __m256 candidate =
+            _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
+        t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
+                                  _mm256_or_ps(is_pos, is_neg));
+    }
+    const __m256 x =
+        _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), _mm256_set1_ps(0.5f));
+    const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
+    __m256i n_end = _mm256_cvttps_epi32(x);
+    // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
+    n_end =
+        _mm256_sub_epi32(n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
+    n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
+    n_end = _mm256_max_epi32(n_end, n_next);
+    n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
+    return as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
+}
+
 // Marches the rays of queue[0, queue_size) (pixels of t) in the 8 lanes, a lane taking the next
 // ray as soon as its ray ends. REACH: each ray from its first sample to its first sample to
 // classify (march_composite's skipping, the same jumps), whose index goes to t.start[pixel] and
@@ -625,40 +665,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
             const __m256i jumps =
                 _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
             if (_mm256_movemask_ps(as_float(jumps)) != 0) {
-                // jump(): the first sample past the cube's far planes (pulled in by the margin).
-                __m256 t_exit = load(s.t_far);
-                const __m256 margin = load(s.margin);
-                for (int a = 0; a < 3; ++a) {
-                    const __m256 gd = load(s.gd[a]);
-                    const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
-                    const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
-                    const __m256 plane_pos =
-                        _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_slli_epi32(
-                                          _mm256_add_epi32(cell_coord[a], side), CELL_SHIFT)),
-                                      margin);
-                    const __m256 plane_neg = _mm256_add_ps(
-                        _mm256_cvtepi32_ps(_mm256_slli_epi32(
-                            _mm256_add_epi32(_mm256_sub_epi32(cell_coord[a], side), one_i),
-                            CELL_SHIFT)),
-                        margin);
-                    const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
-                    const __m256 candidate =
-                        _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
-                    t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
-                                              _mm256_or_ps(is_pos, is_neg));
-                }
-                const __m256 x =
-                    _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), half);
-                const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
-                __m256i n_end = _mm256_cvttps_epi32(x);
-                // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
-                n_end = _mm256_sub_epi32(
-                    n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
-                n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
-                n_end = _mm256_max_epi32(n_end, n_next);
-                n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
-                n_next =
-                    as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
+                n_next = jump8(s, cell_coord, side, jumps, n_next, num_full, t_near, inv_step);
             }
             // The sub-cell's occupancy bit, for the samples that do not jump.
             const __m256i bit = _mm256_or_si256(
@@ -808,10 +815,139 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     }
 }
 
+// The MIP march of the rays t.marched[0, t.num_marched) in the 8 lanes, as raycast_begun()'s MIP
+// branch: every sample of the ray (num_segments), skipping a sample whose cell's largest value
+// does not exceed the lane's maximum by a jump to the cell's end; the lane's maximum in s.acc
+// (−1: none), RGBA the interpolated sample that had it in s.cr, s.cg, s.cb. Colours to colors.
+template <bool IS_RGBA>
+PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* colors,
+                              std::int64_t& samples) {
+    const auto num_cells =
+        static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
+    Lanes s;
+    int pixel_of[LANES];
+    int num_live = 0;
+    int live_mask = 0;
+    int next = 0;
+    const auto end_lane = [&](int l) {
+        const Sample best_sample{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
+        colors[pixel_of[l]] = end_mip<IS_RGBA>(k, s.acc[l], best_sample);
+        samples += s.samples[l];
+    };
+    const auto refill = [&](int l) {
+        if (next < t.num_marched) {
+            const int pixel = t.marched[next++];
+            fill_lane(t, pixel, 0, num_cells, s, l);
+            s.num_full[l] = t.num_segments[pixel];
+            s.acc[l] = -1.0f;
+            pixel_of[l] = pixel;
+            live_mask |= 1 << l;
+            ++num_live;
+            return;
+        }
+        clear_lane(s, l);
+    };
+    for (int l = 0; l < LANES; ++l) {
+        refill(l);
+    }
+    const __m256 step = _mm256_set1_ps(k.step);
+    const __m256 inv_step = _mm256_set1_ps(k.inv_step);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256i one_i = _mm256_set1_epi32(1);
+    const __m256i cells_x = _mm256_set1_epi32(k.cells[0]);
+    const __m256i cells_y = _mm256_set1_epi32(k.cells[1]);
+    Grid8 grid;
+    for (int a = 0; a < 3; ++a) {
+        grid.g_max[a] = _mm256_set1_ps(k.g_max[a]);
+        grid.max_i0[a] = _mm256_set1_epi32(k.max_i0[a]);
+    }
+    grid.stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[1]));
+    grid.stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[2]));
+    grid.dy = static_cast<std::int32_t>(k.d[1]);
+    grid.dz = static_cast<std::int32_t>(k.d[2]);
+    grid.v = k.values;
+
+    // NOLINTNEXTLINE(bugprone-infinite-loop): end_lane and refill retire lanes (num_live).
+    while (num_live > 0) {
+        const __m256i live =
+            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
+                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                               _mm256_setzero_si256());
+        const __m256i n = load(s.n);
+        const __m256i num_full = load(s.num_full);
+        const __m256 t_near = load(s.t_near);
+        const __m256 tm =
+            _mm256_add_ps(t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), half), step));
+        __m256i corner[3];
+        __m256 fraction[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m256 g = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
+            locate_axis(grid, a, g, corner[a], fraction[a]);
+        }
+        __m256i n_next = _mm256_add_epi32(n, one_i);
+        __m256i classified = live;
+        __m256 best = load(s.acc);
+        if (k.skipping) {
+            const __m256i cell_coord[3] = {_mm256_srli_epi32(corner[0], CELL_SHIFT),
+                                           _mm256_srli_epi32(corner[1], CELL_SHIFT),
+                                           _mm256_srli_epi32(corner[2], CELL_SHIFT)};
+            const __m256i cell = _mm256_add_epi32(
+                cell_coord[0],
+                _mm256_mullo_epi32(
+                    cells_x,
+                    _mm256_add_epi32(cell_coord[1], _mm256_mullo_epi32(cells_y, cell_coord[2]))));
+            const __m256 cell_max = _mm256_i32gather_ps(k.cell_max, cell, 4);
+            const __m256i jumps =
+                _mm256_and_si256(live, as_int(_mm256_cmp_ps(cell_max, best, _CMP_LE_OQ)));
+            if (_mm256_movemask_ps(as_float(jumps)) != 0) {
+                n_next = jump8(s, cell_coord, one_i, jumps, n_next, num_full, t_near, inv_step);
+            }
+            classified = _mm256_andnot_si256(jumps, live);
+        }
+        if (_mm256_movemask_ps(as_float(classified)) != 0) {
+            alignas(32) std::int32_t at[LANES];
+            store(at, voxel_index8(grid, corner));
+            if constexpr (IS_RGBA) {
+                __m256 value[4];
+                interpolate_rgba8(grid, at, fraction, value);
+                const __m256 update =
+                    _mm256_and_ps(as_float(classified), _mm256_cmp_ps(value[3], best, _CMP_GT_OQ));
+                store(s.cr, _mm256_blendv_ps(load(s.cr), value[0], update));
+                store(s.cg, _mm256_blendv_ps(load(s.cg), value[1], update));
+                store(s.cb, _mm256_blendv_ps(load(s.cb), value[2], update));
+                best = _mm256_blendv_ps(best, value[3], update);
+            } else {
+                __m256 first[4], second[4];
+                const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+                for (int r = 0; r < 4; ++r) {
+                    load_pairs(grid.v + row[r], at, first[r], second[r]);
+                }
+                const __m256 value = trilinear(first, second, fraction);
+                const __m256 update =
+                    _mm256_and_ps(as_float(classified), _mm256_cmp_ps(value, best, _CMP_GT_OQ));
+                best = _mm256_blendv_ps(best, value, update);
+            }
+            store(s.acc, best);
+            store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
+        }
+        store(s.n, n_next);
+        int done_mask = _mm256_movemask_ps(
+            as_float(_mm256_andnot_si256(_mm256_cmpgt_epi32(num_full, n_next), live)));
+        while (done_mask != 0) {
+            const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
+            done_mask &= done_mask - 1;
+            end_lane(l);
+            live_mask &= ~(1 << l);
+            --num_live;
+            refill(l);
+        }
+    }
+}
+
 }  // namespace
 
 bool composite_avx2_fits(const RayCastKernel& k) {
-    if (!has_avx2() || k.is_mip || (!k.is_rgba && k.lut == nullptr)) {
+    if (!has_avx2() || (!k.is_rgba && k.lut == nullptr)) {
         return false;
     }
     const std::int64_t num_voxels = static_cast<std::int64_t>(k.n[0]) * k.n[1] * k.n[2];
@@ -900,6 +1036,49 @@ PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, 
 
 namespace {
 
+// MIP: every ray that hits the box is marched (all its segments).
+template <bool IS_RGBA>
+PLIANT_AVX2_FN std::int64_t mip_tile(const RayCastKernel& k, int x0, int y0, int x1, int y1,
+                                     Color* colors) {
+    const int tile_width = x1 - x0;
+    const auto num_cells =
+        static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
+    std::int64_t samples = 0;
+    TileRays t;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; x += LANES) {
+            const int first = (y - y0) * tile_width + (x - x0);
+            const int bits = setup_rays(k, x, y, first, num_cells, t);
+            const int count = std::min(LANES, x1 - x);
+            for (int l = 0; l < count; ++l) {
+                const int pixel = first + l;
+                if ((bits >> l & 1) != 0) {
+                    t.marched[t.num_marched++] = pixel;
+                } else if ((bits >> (LANES + l) & 1) != 0) {
+                    // Too many samples for a lane's counters: the scalar kernel.
+                    const PixelResult p = raycast_pixel<IS_RGBA>(k, x + l, y);
+                    colors[pixel] = p.color;
+                    samples += p.samples;
+                } else {
+                    colors[pixel] = k.background;
+                }
+            }
+        }
+    }
+    march_mip<IS_RGBA>(k, t, colors, samples);
+    return samples;
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN std::int64_t mip_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1, int y1,
+                                          Color* colors) {
+    return k.is_rgba ? mip_tile<true>(k, x0, y0, x1, y1, colors)
+                     : mip_tile<false>(k, x0, y0, x1, y1, colors);
+}
+
+namespace {
+
 // 4 values as doubles.
 PLIANT_AVX2_INLINE __m256d four(const std::uint8_t* in) {
     std::int32_t word;
@@ -977,6 +1156,10 @@ bool composite_avx2_fits(const RayCastKernel&) {
 }
 
 std::int64_t composite_tile_avx2(const RayCastKernel&, int, int, int, int, Color*) {
+    return 0;
+}
+
+std::int64_t mip_tile_avx2(const RayCastKernel&, int, int, int, int, Color*) {
     return 0;
 }
 

@@ -13,7 +13,8 @@
 // once, so lanes stay busy whatever their rays' lengths. The arithmetic runs 8 wide; the loads
 // stay per lane (AVX2 gathers are slow on AMD Zen), voxels in x-adjacent pairs (an RGBA pair is
 // 8 consecutive floats, one load, transposed); only the α pairs of RGBA gradients are gathered.
-// Clipping planes are applied in the rays' set-up. MIP stays on the scalar kernel.
+// Clipping planes are applied in the rays' set-up. MIP marches 8 rays the same way
+// (mip_tile_avx2), a sample's cell maximum gathered.
 #pragma once
 
 #include <cstdint>
@@ -22,9 +23,9 @@
 
 namespace pliant::render::detail {
 
-// Whether composite_tile_avx2() can render with k: composite mode (shaded or not, scalar or RGBA,
-// clipped or not), float indices into the values below 2^31 and the 8 octants' cube indices too,
-// an x extent of at least 2 voxels, and a CPU that runs AVX2 (has_avx2()).
+// Whether composite_tile_avx2() (mip_tile_avx2() for MIP) can render with k: any mode (shaded or
+// not, scalar or RGBA, clipped or not), float indices into the values below 2^31 and the 8 octants'
+// cube indices too, an x extent of at least 2 voxels, and a CPU that runs AVX2 (has_avx2()).
 bool composite_avx2_fits(const RayCastKernel& k);
 
 // raycast_pixel<k.is_rgba>(k, x, y) for every pixel (x, y) of the tile [x0, x1) × [y0, y1): its
@@ -32,6 +33,9 @@ bool composite_avx2_fits(const RayCastKernel& k);
 // samples. Precondition: composite_avx2_fits(k).
 std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1, int y1,
                                  Color* colors);
+// The same for MIP (k.is_mip): every ray's largest value, its cell-maximum skipping as the scalar
+// kernel's, bit for bit. Precondition: composite_avx2_fits(k).
+std::int64_t mip_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1, int y1, Color* colors);
 
 // lookup_coordinate(in[i], lo, scale) for i in [0, count − count mod 4), bit for bit (the same
 // double operations, 4 lanes); returns that count (the caller converts the rest). Precondition:

@@ -515,6 +515,29 @@ PLIANT_HOST_DEVICE inline Accumulated march_composite(const RayCastKernel& k, co
     return c;
 }
 
+// The pixel of a MIP ray whose largest value (scalar) or α (RGBA) is `best` (−1: nothing
+// sampled), RGBA: the interpolated opacity-weighted sample that had it.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Color end_mip(const RayCastKernel& k, float best,
+                                        const Sample& best_sample) {
+    if (best < 0.0f) {
+        return k.background;
+    }
+    Sample s{};
+    float a = 0.0f;
+    if constexpr (IS_RGBA) {
+        a = clampf(best_sample.a, 0.0f, 1.0f);
+        const float inv = best_sample.a > 0.0f ? 1.0f / best_sample.a : 0.0f;
+        s = {best_sample.r * inv, best_sample.g * inv, best_sample.b * inv, a};
+    } else {
+        const std::ptrdiff_t index = static_cast<int>(best + 0.5f);
+        s = {k.lut[4 * index], k.lut[4 * index + 1], k.lut[4 * index + 2], 0.0f};
+        a = k.lut_alpha[index];
+    }
+    return {s.r * a + (1.0f - a) * k.background.r, s.g * a + (1.0f - a) * k.background.g,
+            s.b * a + (1.0f - a) * k.background.b};
+}
+
 // Steps 3–5 of a ray that begin_ray / begin_pixel set up.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE PixelResult raycast_begun(const RayCastKernel& k, const PixelRay& p) {
@@ -549,23 +572,7 @@ PLIANT_HOST_DEVICE PixelResult raycast_begun(const RayCastKernel& k, const Pixel
             ++n;
         }
         result.samples = samples;
-        if (best < 0.0f) {
-            return result;
-        }
-        Sample s{};
-        float a = 0.0f;
-        if constexpr (IS_RGBA) {
-            a = clampf(best_sample.a, 0.0f, 1.0f);
-            const float inv = best_sample.a > 0.0f ? 1.0f / best_sample.a : 0.0f;
-            s = {best_sample.r * inv, best_sample.g * inv, best_sample.b * inv, a};
-        } else {
-            const std::ptrdiff_t index = static_cast<int>(best + 0.5f);
-            s = {k.lut[4 * index], k.lut[4 * index + 1], k.lut[4 * index + 2], 0.0f};
-            a = k.lut_alpha[index];
-        }
-        result.color = {s.r * a + (1.0f - a) * k.background.r,
-                        s.g * a + (1.0f - a) * k.background.g,
-                        s.b * a + (1.0f - a) * k.background.b};
+        result.color = end_mip<IS_RGBA>(k, best, best_sample);
         return result;
     }
 
