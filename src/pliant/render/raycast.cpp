@@ -224,6 +224,11 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
     const int channels = m_is_rgba ? 4 : 1;
     const std::int64_t total_cells = num_cells();
     m_values.resize(static_cast<std::size_t>(channels * vol.num_voxels()));
+    // The α channel alone for the gradients of shaded RGBA views (the AVX2 march's pairs).
+    m_alpha.clear();
+    if (m_is_rgba && m_options.shading && m_options.mode == RayCastMode::composite) {
+        m_alpha.resize(static_cast<std::size_t>(vol.num_voxels()));
+    }
     m_occupied.resize(static_cast<std::size_t>(total_cells));
     m_cell_max.resize(static_cast<std::size_t>(total_cells));
     m_sub_occupied.resize(static_cast<std::size_t>(total_cells));
@@ -245,7 +250,14 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
             };
             for (std::int64_t z = z0; z < own_end; ++z) {
                 for (std::int64_t y = 0; y < n[1]; ++y) {
-                    converter.convert(y, z, row_of(y, z));
+                    float* row = row_of(y, z);
+                    converter.convert(y, z, row);
+                    if (!m_alpha.empty()) {
+                        float* alpha = m_alpha.data() + n[0] * (y + n[1] * z);
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            alpha[x] = row[4 * x + 3];
+                        }
+                    }
                 }
             }
             // Per cell row: min/max of each sub-cell (sz, sy, x sub-cell j), accumulated from
@@ -394,6 +406,7 @@ void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     k.stride[1] = m_dims[0];
     k.stride[2] = m_dims[0] * m_dims[1];
     k.values = m_values.data();
+    k.alpha = m_alpha.empty() ? nullptr : m_alpha.data();
     k.lut = m_lut.data();
     k.lut_alpha = m_lut_alpha.data();
     k.sub_occupied = m_sub_occupied.data();

@@ -72,7 +72,8 @@
 // bitwise identical for 1 and N threads.
 // Cost: O(width · height · (samples + jumps) per ray); the lookup table, the macro-cell grid and
 // its empty cubes are built in O(voxels) per call, plus a float copy of the voxels (4 bytes
-// per voxel, 16 for RGBA). The kernel is in render/detail/raycast_kernel.hpp.
+// per voxel, 16 for RGBA, 20 for shaded RGBA: α apart for the gradients). The kernel is in
+// render/detail/raycast_kernel.hpp.
 #pragma once
 
 #include <array>
@@ -167,6 +168,7 @@ private:
     double m_prepare_ms = 0.0;
     std::array<int, 3> m_cells{0, 0, 0};
     std::vector<float> m_values;           // scalar: lookup coordinate per voxel; RGBA: α·rgb, α
+    std::vector<float> m_alpha;            // RGBA shaded: α per voxel (else empty)
     std::vector<float> m_lut;              // 4 per entry: r, g, b, α per step (scalar volumes)
     std::vector<float> m_lut_alpha;        // α per opacity unit, per entry (MIP)
     std::vector<std::uint8_t> m_occupied;  // per macro cell

@@ -159,6 +159,7 @@ struct Grid8 {
     __m256i stride_y, stride_z;
     std::int32_t dy, dz;  // neighbour offsets in voxels
     const float* v;
+    const float* alpha;  // RGBA shaded: α per voxel
 };
 
 // locate() along one axis: the clamp to [0, n − 1], the lower corner and the fraction.
@@ -193,20 +194,12 @@ PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& grid, __m256i index,
                                          const __m256 fraction[3]) {
     __m256 first[4], second[4];
     const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
-    if constexpr (IS_RGBA) {
-        // α of voxel i at 4 i + 3, of its x neighbour at 4 i + 7: gathered.
-        const __m256i at = _mm256_slli_epi32(index, 2);
-        for (int r = 0; r < 4; ++r) {
-            const __m256i offset = _mm256_add_epi32(at, _mm256_set1_epi32(4 * row[r]));
-            first[r] = _mm256_i32gather_ps(grid.v + 3, offset, 4);
-            second[r] = _mm256_i32gather_ps(grid.v + 7, offset, 4);
-        }
-    } else {
-        alignas(32) std::int32_t at[LANES];
-        store(at, index);
-        for (int r = 0; r < 4; ++r) {
-            load_pairs(grid.v + row[r], at, first[r], second[r]);
-        }
+    // RGBA: α apart (k.alpha, the same floats as the values' 4th channel), in x-adjacent pairs.
+    const float* v = IS_RGBA ? grid.alpha : grid.v;
+    alignas(32) std::int32_t at[LANES];
+    store(at, index);
+    for (int r = 0; r < 4; ++r) {
+        load_pairs(v + row[r], at, first[r], second[r]);
     }
     return trilinear(first, second, fraction);
 }
@@ -619,6 +612,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     grid.dy = dy;
     grid.dz = dz;
     grid.v = v;
+    grid.alpha = k.alpha;
     const float* lut = k.lut;
     const std::uint8_t* cubes = k.axis_cube != nullptr ? k.axis_cube : k.empty_cube[0];
 
@@ -866,6 +860,7 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
     grid.dy = static_cast<std::int32_t>(k.d[1]);
     grid.dz = static_cast<std::int32_t>(k.d[2]);
     grid.v = k.values;
+    grid.alpha = k.alpha;
 
     // NOLINTNEXTLINE(bugprone-infinite-loop): end_lane and refill retire lanes (num_live).
     while (num_live > 0) {
@@ -947,7 +942,8 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
 }  // namespace
 
 bool composite_avx2_fits(const RayCastKernel& k) {
-    if (!has_avx2() || (!k.is_rgba && k.lut == nullptr)) {
+    if (!has_avx2() || (!k.is_rgba && k.lut == nullptr) ||
+        (k.is_rgba && k.shading && k.alpha == nullptr)) {
         return false;
     }
     const std::int64_t num_voxels = static_cast<std::int64_t>(k.n[0]) * k.n[1] * k.n[2];

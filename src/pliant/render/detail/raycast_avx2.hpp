@@ -12,9 +12,9 @@
 // bitwise what raycast_pixel<IS_RGBA> computes. A lane whose ray ends takes the tile's next ray at
 // once, so lanes stay busy whatever their rays' lengths. The arithmetic runs 8 wide; the loads
 // stay per lane (AVX2 gathers are slow on AMD Zen), voxels in x-adjacent pairs (an RGBA pair is
-// 8 consecutive floats, one load, transposed); only the α pairs of RGBA gradients are gathered.
-// Clipping planes are applied in the rays' set-up. MIP marches 8 rays the same way
-// (mip_tile_avx2), a sample's cell maximum gathered.
+// 8 consecutive floats, one load, transposed); RGBA gradients read a copy of α alone
+// (RayCastKernel::alpha). Clipping planes are applied in the rays' set-up. MIP marches 8 rays the
+// same way (mip_tile_avx2), a sample's cell maximum gathered.
 #pragma once
 
 #include <cstdint>

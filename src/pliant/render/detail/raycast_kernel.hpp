@@ -67,6 +67,7 @@ struct RayCastKernel {
     std::int64_t stride[3] = {0, 0, 0};  // voxel index strides (1, nx, nx·ny)
     std::int64_t d[3] = {0, 0, 0};       // neighbour offsets in voxels (0 on axes of size 1)
     const float* values = nullptr;       // scalar lookup coordinates, or α·rgb, α
+    const float* alpha = nullptr;        // RGBA shaded: α per voxel (values' 4th channel), or null
     const float* lut = nullptr;
     const float* lut_alpha = nullptr;
     // Macro cells.
