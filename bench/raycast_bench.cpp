@@ -168,4 +168,28 @@ BENCHMARK(BM_ScalarKind)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The preparation of a 256³ RGBA caster (float copy, α apart when shaded, macro cells, empty
+// cubes), paid once per volume: every frame where the volume changes (`pliant deform --render`).
+// reuse 0: a new RayCaster per frame; 1: RayCaster::update of one caster (no allocation).
+void BM_RgbaPrepare(benchmark::State& state) {
+    const RgbaScene& s = rgba_scene();
+    render::RayCastOptions options;
+    options.shading = state.range(0) != 0;
+    render::RayCaster reused(s.rgba, nullptr, options);
+    for (auto _ : state) {
+        if (state.range(1) != 0) {
+            reused.update(s.rgba, nullptr);
+            benchmark::DoNotOptimize(reused.num_cells());
+        } else {
+            const render::RayCaster caster(s.rgba, nullptr, options);
+            benchmark::DoNotOptimize(caster.num_cells());
+        }
+    }
+}
+BENCHMARK(BM_RgbaPrepare)
+    ->ArgNames({"shade", "reuse"})
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace

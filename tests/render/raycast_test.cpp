@@ -738,6 +738,57 @@ TEST(RayCast, Avx2LookupCoordinatesMatchTheScalarFormula) {
     expect_lookup_coordinates_match<float>({-0.0f, 0.0f, 0.25f, 1.0f, 3.0f}, 0.0, 1.0);
 }
 
+// The AVX2 conversion of RGBA voxels (opacity-weighted colour and α, α apart) gives the scalar
+// formula's floats bit for bit: channels below 0 (−0 included), above 1, ±∞, NaN, rgba8 and
+// rgba32f, odd voxel counts.
+template <typename T>
+void expect_rgba_values_match(const std::vector<T>& in) {
+    const auto channel = [](T x) {
+        const float f = std::is_same_v<T, std::uint8_t> ? static_cast<float>(x) / 255.0f
+                                                        : static_cast<float>(x);
+        return std::isfinite(f) ? std::clamp(f, 0.0f, 1.0f) : 0.0f;
+    };
+    const std::size_t voxels = in.size() / 4;
+    for (std::size_t count = 0; count <= voxels; ++count) {
+        std::vector<float> out(4 * count, -7.0f), alpha(count, -7.0f);
+        const std::int64_t done = detail::rgba_values_avx2(
+            in.data(), static_cast<std::int64_t>(count), out.data(), alpha.data());
+        ASSERT_EQ(done, static_cast<std::int64_t>(count - count % 2));
+        for (std::size_t v = 0; v < static_cast<std::size_t>(done); ++v) {
+            const float a = channel(in[4 * v + 3]);
+            const float expected[5] = {channel(in[4 * v]) * a, channel(in[4 * v + 1]) * a,
+                                       channel(in[4 * v + 2]) * a, a, a};
+            const float got[5] = {out[4 * v], out[4 * v + 1], out[4 * v + 2], out[4 * v + 3],
+                                  alpha[v]};
+            for (int c = 0; c < 5; ++c) {
+                std::uint32_t x = 0, y = 0;
+                std::memcpy(&x, &got[c], 4);
+                std::memcpy(&y, &expected[c], 4);
+                EXPECT_EQ(x, y) << "voxel " << v << " channel " << c;
+            }
+        }
+    }
+}
+
+TEST(RayCast, Avx2RgbaValuesMatchTheScalarFormula) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    std::vector<std::uint8_t> bytes;
+    for (int i = 0; i < 4 * 13; ++i) {
+        bytes.push_back(static_cast<std::uint8_t>((i * 97 + 13) % 256));
+    }
+    bytes[3] = 0;
+    bytes[7] = 255;
+    expect_rgba_values_match(bytes);
+    const float inf = std::numeric_limits<float>::infinity();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    expect_rgba_values_match<float>({0.5f, 0.25f,  1.0f, 0.5f, -0.0f,  0.3f, 2.0f,  0.7f, -1.0f,
+                                     inf,  nan,    1.0f, 0.1f, 0.2f,   0.3f, -0.0f, 0.9f, 0.8f,
+                                     0.7f, nan,    0.4f, -inf, 1.5f,   inf,  0.3f,  0.3f, 0.3f,
+                                     0.3f, 1e-40f, 0.6f, 0.2f, 0.999f, 0.5f, 0.5f,  0.5f, 2.0f});
+}
+
 // A uniform RGBA cube (every voxel the same, so every sample inside the box is exact) seen
 // along +x, one pixel per voxel: pixel row j sees z = 31.5 − j, column i sees y = 31.5 − i.
 Volume uniform_cube() {

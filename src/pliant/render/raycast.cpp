@@ -70,7 +70,8 @@ public:
     RowConverter(const volume::Volume& v, double lo, double scale)
         : m_volume(&v), m_lo(lo), m_scale(scale), m_avx2(has_avx2()) {}
 
-    void convert(std::int64_t y, std::int64_t z, float* out) const {
+    // alpha: null, or the row's α alone (RGBA volumes).
+    void convert(std::int64_t y, std::int64_t z, float* out, float* alpha = nullptr) const {
         using volume::VoxelType;
         const volume::Dims& n = m_volume->dims();
         const std::int64_t first = n[0] * (y + n[1] * z);
@@ -88,10 +89,11 @@ public:
                 scalar_row(m_volume->values<VoxelType::f32>().data() + first, n[0], out);
                 break;
             case VoxelType::rgba8:
-                rgba_row(m_volume->values<VoxelType::rgba8>().data() + 4 * first, n[0], out);
+                rgba_row(m_volume->values<VoxelType::rgba8>().data() + 4 * first, n[0], out, alpha);
                 break;
             case VoxelType::rgba32f:
-                rgba_row(m_volume->values<VoxelType::rgba32f>().data() + 4 * first, n[0], out);
+                rgba_row(m_volume->values<VoxelType::rgba32f>().data() + 4 * first, n[0], out,
+                         alpha);
                 break;
         }
     }
@@ -106,8 +108,9 @@ private:
         }
     }
     template <typename T>
-    static void rgba_row(const T* in, std::int64_t count, float* out) {
-        for (std::int64_t v = 0; v < count; ++v) {
+    void rgba_row(const T* in, std::int64_t count, float* out, float* alpha) const {
+        std::int64_t v = m_avx2 ? detail::rgba_values_avx2(in, count, out, alpha) : 0;
+        for (; v < count; ++v) {
             float c[4];
             for (int ch = 0; ch < 4; ++ch) {
                 const float x = std::is_same_v<T, std::uint8_t>
@@ -119,6 +122,9 @@ private:
             out[4 * v + 1] = c[1] * c[3];
             out[4 * v + 2] = c[2] * c[3];
             out[4 * v + 3] = c[3];
+            if (alpha != nullptr) {
+                alpha[v] = c[3];
+            }
         }
     }
 
@@ -225,10 +231,9 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
     const std::int64_t total_cells = num_cells();
     m_values.resize(static_cast<std::size_t>(channels * vol.num_voxels()));
     // The α channel alone for the gradients of shaded RGBA views (the AVX2 march's pairs).
-    m_alpha.clear();
-    if (m_is_rgba && m_options.shading && m_options.mode == RayCastMode::composite) {
-        m_alpha.resize(static_cast<std::size_t>(vol.num_voxels()));
-    }
+    const bool alpha_apart =
+        m_is_rgba && m_options.shading && m_options.mode == RayCastMode::composite;
+    m_alpha.resize(alpha_apart ? static_cast<std::size_t>(vol.num_voxels()) : 0);
     m_occupied.resize(static_cast<std::size_t>(total_cells));
     m_cell_max.resize(static_cast<std::size_t>(total_cells));
     m_sub_occupied.resize(static_cast<std::size_t>(total_cells));
@@ -250,14 +255,9 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
             };
             for (std::int64_t z = z0; z < own_end; ++z) {
                 for (std::int64_t y = 0; y < n[1]; ++y) {
-                    float* row = row_of(y, z);
-                    converter.convert(y, z, row);
-                    if (!m_alpha.empty()) {
-                        float* alpha = m_alpha.data() + n[0] * (y + n[1] * z);
-                        for (std::int64_t x = 0; x < n[0]; ++x) {
-                            alpha[x] = row[4 * x + 3];
-                        }
-                    }
+                    float* alpha =
+                        m_alpha.empty() ? nullptr : m_alpha.data() + n[0] * (y + n[1] * z);
+                    converter.convert(y, z, row_of(y, z), alpha);
                 }
             }
             // Per cell row: min/max of each sub-cell (sz, sy, x sub-cell j), accumulated from
@@ -369,6 +369,10 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
         },
         1);
     m_prepare_ms = watch.elapsed_ms();
+}
+
+void RayCaster::update(const volume::Volume& volume, const volume::TransferFunction* tf) {
+    prepare(volume, tf);
 }
 
 void RayCaster::set_clip(const std::optional<ClipPlane>& clip) {

@@ -142,6 +142,12 @@ public:
     // InvalidInput when rgb.size() != 3 · rays.size(). Parallel over chunks of rays; bitwise
     // identical for any thread count.
     RayCastStats render_rays(std::span<const Ray> rays, std::span<float> rgb) const;
+    // Prepares another volume (and tf) with the same options, as the constructor does, reusing
+    // this caster's arrays: a volume of the same size and kind (the frames of a deformation)
+    // allocates nothing, so the pages of the float copy are not faulted in again. InvalidInput
+    // as in the constructor; after a throw the caster must not render until an update succeeds.
+    // Not to be called during a render.
+    void update(const volume::Volume& volume, const volume::TransferFunction* tf);
     // Changes the clipping plane of later renders (none: the whole volume) without preparing the
     // volume again; InvalidInput as in the constructor. Not to be called during a render.
     void set_clip(const std::optional<ClipPlane>& clip);

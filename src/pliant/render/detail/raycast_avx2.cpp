@@ -1132,6 +1132,51 @@ std::int64_t lookup_coordinates_avx2(const float* in, std::int64_t count, double
     return lookup_coordinates(in, count, lo, scale, out);
 }
 
+namespace {
+
+// The 8 channels of 2 voxels as floats in [0, 1]: c / 255 (rgba8) or the float itself.
+PLIANT_AVX2_INLINE __m256 eight(const std::uint8_t* in) {
+    return _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(
+                             _mm_loadl_epi64(reinterpret_cast<const __m128i*>(in)))),
+                         _mm256_set1_ps(255.0f));
+}
+PLIANT_AVX2_INLINE __m256 eight(const float* in) {
+    return _mm256_loadu_ps(in);
+}
+
+template <typename T>
+PLIANT_AVX2_FN std::int64_t rgba_values(const T* in, std::int64_t count, float* out, float* alpha) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    const std::int64_t end = count - count % 2;
+    for (std::int64_t v = 0; v < end; v += 2) {
+        const __m256 x = eight(in + 4 * v);
+        // std::clamp(x, 0, 1) (x < 0 ? 0 : 1 < x ? 1 : x, so −0 stays −0) when finite, else 0.
+        __m256 c = _mm256_blendv_ps(x, zero, _mm256_cmp_ps(x, zero, _CMP_LT_OQ));
+        c = _mm256_blendv_ps(c, one, _mm256_cmp_ps(one, c, _CMP_LT_OQ));
+        c = _mm256_and_ps(c, _mm256_cmp_ps(_mm256_and_ps(x, abs_mask), inf, _CMP_LT_OQ));
+        const __m256 a = _mm256_permute_ps(c, 0xFF);  // α of each voxel in its 4 channels
+        _mm256_storeu_ps(out + 4 * v, _mm256_blend_ps(_mm256_mul_ps(c, a), c, 0x88));
+        if (alpha != nullptr) {
+            alpha[v] = _mm256_cvtss_f32(a);
+            alpha[v + 1] = _mm256_cvtss_f32(_mm256_permute2f128_ps(a, a, 0x11));
+        }
+    }
+    return end;
+}
+
+}  // namespace
+
+std::int64_t rgba_values_avx2(const std::uint8_t* in, std::int64_t count, float* out,
+                              float* alpha) {
+    return rgba_values(in, count, out, alpha);
+}
+std::int64_t rgba_values_avx2(const float* in, std::int64_t count, float* out, float* alpha) {
+    return rgba_values(in, count, out, alpha);
+}
+
 #else
 
 std::int64_t lookup_coordinates_avx2(const std::uint8_t*, std::int64_t, double, double, float*) {
@@ -1144,6 +1189,13 @@ std::int64_t lookup_coordinates_avx2(const std::uint16_t*, std::int64_t, double,
     return 0;
 }
 std::int64_t lookup_coordinates_avx2(const float*, std::int64_t, double, double, float*) {
+    return 0;
+}
+
+std::int64_t rgba_values_avx2(const std::uint8_t*, std::int64_t, float*, float*) {
+    return 0;
+}
+std::int64_t rgba_values_avx2(const float*, std::int64_t, float*, float*) {
     return 0;
 }
 

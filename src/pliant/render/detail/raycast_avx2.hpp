@@ -49,4 +49,11 @@ std::int64_t lookup_coordinates_avx2(const std::uint16_t* in, std::int64_t count
 std::int64_t lookup_coordinates_avx2(const float* in, std::int64_t count, double lo, double scale,
                                      float* out);
 
+// The ray caster's RGBA voxels: for voxel v in [0, count − count mod 2) with channels c (c / 255
+// for rgba8, clamped to [0, 1] as std::clamp does, 0 when not finite) out[4v … 4v + 3] =
+// (c0·c3, c1·c3, c2·c3, c3) and, when alpha is not null, alpha[v] = c3; bit for bit the scalar
+// formula (raycast.cpp's RowConverter). Returns that count. Precondition: has_avx2().
+std::int64_t rgba_values_avx2(const std::uint8_t* in, std::int64_t count, float* out, float* alpha);
+std::int64_t rgba_values_avx2(const float* in, std::int64_t count, float* out, float* alpha);
+
 }  // namespace pliant::render::detail
