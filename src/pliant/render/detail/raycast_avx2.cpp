@@ -688,14 +688,22 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                 interpolate_rgba8(grid, at, fraction, interpolated);
                 const __m256 a = _mm256_min_ps(one, _mm256_max_ps(zero, interpolated[3]));
                 const __m256 positive = _mm256_cmp_ps(a, zero, _CMP_GT_OQ);
-                int todo = _mm256_movemask_ps(_mm256_and_ps(positive, as_float(classified)));
-                alignas(32) float a_lane[LANES];
                 alignas(32) float a_step[LANES] = {};
-                store(a_lane, a);
-                while (todo != 0) {
-                    const int l = __builtin_ctz(static_cast<unsigned>(todo));
-                    todo &= todo - 1;
-                    a_step[l] = rgba_step_opacity(a_lane[l], k.step_over_unit);
+                if (k.step_over_unit == 0.5f) {
+                    // rgba_step_opacity_half, 1 for a ≥ 1.
+                    const __m256 half_step =
+                        _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
+                    store(a_step,
+                          _mm256_blendv_ps(half_step, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ)));
+                } else {
+                    int todo = _mm256_movemask_ps(_mm256_and_ps(positive, as_float(classified)));
+                    alignas(32) float a_lane[LANES];
+                    store(a_lane, a);
+                    while (todo != 0) {
+                        const int l = __builtin_ctz(static_cast<unsigned>(todo));
+                        todo &= todo - 1;
+                        a_step[l] = rgba_step_opacity(a_lane[l], k.step_over_unit);
+                    }
                 }
                 const __m256 inv = _mm256_div_ps(one, interpolated[3]);
                 for (int c = 0; c < 3; ++c) {

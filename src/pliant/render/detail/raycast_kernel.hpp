@@ -219,9 +219,18 @@ PLIANT_HOST_DEVICE inline float shade(const RayCastKernel& k, Vec3f g, Vec3f dir
 }
 
 // The opacity of a step for an interpolated RGBA opacity a ∈ (0, 1] per opacity unit:
-// 1 − (1 − a)^(Δs/u), with e = Δs/u (the AVX2 march calls this too, for the same bits).
+// 1 − (1 − a)^(Δs/u), with e = Δs/u (the AVX2 march calls this too, for the same bits). The
+// default step, half the opacity unit (e = 1/2), is 1 − √(1 − a) = a / (1 + √(1 − a)) (no
+// cancellation for small a; correctly rounded square root and division, so the AVX2 march
+// computes it 8 wide with the same bits); other steps go through log1p and expm1.
+PLIANT_HOST_DEVICE inline float rgba_step_opacity_half(float a) {
+    return a / (1.0f + std::sqrt(1.0f - a));
+}
 PLIANT_HOST_DEVICE inline float rgba_step_opacity(float a, float e) {
-    return a >= 1.0f ? 1.0f : -std::expm1(e * std::log1p(-a));
+    if (a >= 1.0f) {
+        return 1.0f;
+    }
+    return e == 0.5f ? rgba_step_opacity_half(a) : -std::expm1(e * std::log1p(-a));
 }
 
 // Classified sample with lower corner t: straight colour and opacity for one full step.
