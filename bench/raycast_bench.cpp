@@ -83,4 +83,113 @@ BENCHMARK(BM_Orthographic)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The source system's scale (issue 29): the phantom classified by mri-brain into an RGBA volume
+// (256³ rgba32f, opacity per smallest spacing), the default step (half a voxel, as `pliant deform
+// --render`), perspective at 30°, 512²; shading off / on. And the dense transfer function of
+// issue 29 (`grayscale`: every voxel of the phantom seen) at one sample per voxel, and the
+// scalar phantom shaded and as a MIP. The preparation is timed apart: counter prepare_ms.
+struct RgbaScene {
+    volume::Volume rgba;
+    std::unique_ptr<render::RayCaster> casters[2];  // shading off, on
+};
+
+const RgbaScene& rgba_scene() {
+    static const std::unique_ptr<RgbaScene> s = [] {
+        auto out = std::make_unique<RgbaScene>();
+        const Scene& scalar = scene();
+        out->rgba = volume::apply(scalar.phantom, scalar.tf);
+        for (int shade = 0; shade < 2; ++shade) {
+            render::RayCastOptions options;
+            options.shading = shade != 0;
+            out->casters[shade] = std::make_unique<render::RayCaster>(out->rgba, nullptr, options);
+        }
+        return out;
+    }();
+    return *s;
+}
+
+void run_caster(benchmark::State& state, const render::RayCaster& caster,
+                const render::Camera& camera, bool simd) {
+    render::Image image;
+    render::RayCastStats stats;
+    allow_avx2(simd);
+    for (auto _ : state) {
+        stats = caster.render(camera, image);
+        benchmark::DoNotOptimize(image);
+    }
+    allow_avx2(true);
+    state.SetItemsProcessed(state.iterations() * camera.width() * camera.height());
+    state.counters["samples"] = static_cast<double>(stats.samples);
+    state.counters["prepare_ms"] = caster.prepare_ms();
+}
+
+void BM_Rgba(benchmark::State& state) {
+    const RgbaScene& s = rgba_scene();
+    const render::RayCaster& caster = *s.casters[state.range(0) != 0 ? 1 : 0];
+    run_caster(state, caster, render::frame_box(s.rgba.bounds(), 30.0, 20.0, SIZE, SIZE),
+               state.range(1) != 0);
+}
+BENCHMARK(BM_Rgba)
+    ->ArgNames({"shade", "simd"})
+    ->ArgsProduct({{0, 1}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// kind 0: dense (grayscale, step = spacing); 1: mri-brain shaded; 2: mri-brain MIP.
+void BM_ScalarKind(benchmark::State& state) {
+    const Scene& s = scene();
+    static const std::unique_ptr<render::RayCaster> casters[3] = {
+        [] {
+            static const volume::TransferFunction grey =
+                volume::preset("grayscale", scene().phantom);
+            render::RayCastOptions o;
+            o.step = scene().phantom.spacing().x;
+            return std::make_unique<render::RayCaster>(scene().phantom, &grey, o);
+        }(),
+        [] {
+            render::RayCastOptions o;
+            o.step = scene().phantom.spacing().x;
+            o.shading = true;
+            return std::make_unique<render::RayCaster>(scene().phantom, &scene().tf, o);
+        }(),
+        [] {
+            render::RayCastOptions o;
+            o.step = scene().phantom.spacing().x;
+            o.mode = render::RayCastMode::mip;
+            return std::make_unique<render::RayCaster>(scene().phantom, &scene().tf, o);
+        }(),
+    };
+    run_caster(state, *casters[state.range(0)],
+               render::frame_box(s.phantom.bounds(), 30.0, 20.0, SIZE, SIZE), state.range(1) != 0);
+}
+BENCHMARK(BM_ScalarKind)
+    ->ArgNames({"kind", "simd"})
+    ->ArgsProduct({{0, 1, 2}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The preparation of a 256³ RGBA caster (float copy, α apart when shaded, macro cells, empty
+// cubes), paid once per volume: every frame where the volume changes (`pliant deform --render`).
+// reuse 0: a new RayCaster per frame; 1: RayCaster::update of one caster (no allocation).
+void BM_RgbaPrepare(benchmark::State& state) {
+    const RgbaScene& s = rgba_scene();
+    render::RayCastOptions options;
+    options.shading = state.range(0) != 0;
+    render::RayCaster reused(s.rgba, nullptr, options);
+    for (auto _ : state) {
+        if (state.range(1) != 0) {
+            reused.update(s.rgba, nullptr);
+            benchmark::DoNotOptimize(reused.num_cells());
+        } else {
+            const render::RayCaster caster(s.rgba, nullptr, options);
+            benchmark::DoNotOptimize(caster.num_cells());
+        }
+    }
+}
+BENCHMARK(BM_RgbaPrepare)
+    ->ArgNames({"shade", "reuse"})
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace

@@ -387,6 +387,53 @@ TEST(RayCast, SkippingDoesNotChangeTheImage) {
     }
 }
 
+// The occupancy test of a cell widens its value range by detail::LERP_ROUNDING only, not by a
+// whole lookup entry: a background exactly at an entry of zero opacity (the phantom's air under
+// `grayscale`, whose opacity is zero only at the range's bottom) is skipped, and images stay
+// identical. Also on random voxels against a transfer function whose opacity starts just above
+// an entry's centre, where a coarser bound would miss samples rounding into it.
+TEST(RayCast, SkippingIsExactAtTheEdgeOfZeroOpacity) {
+    const Volume phantom = volume::shepp_logan_3d({48, 40, 44});
+    const volume::TransferFunction grey = volume::preset("grayscale", phantom);
+    Volume noise = Volume::allocate({33, 30, 31}, VoxelType::f32);
+    std::uint32_t state = 12345;
+    for (float& x : noise.values<VoxelType::f32>()) {
+        state = state * 1664525u + 1013904223u;
+        x = static_cast<float>(state >> 8) / 16777216.0f;
+    }
+    noise.values<VoxelType::f32>()[0] = 0.0f;  // the range is [0, 1) at most
+    volume::TransferFunction edge;
+    edge.name = "edge";
+    edge.color = {{0.0, {1.0f, 1.0f, 1.0f}}};
+    // Opacity zero up to the entry 2048 of [0, max] and rising after it.
+    const double top = volume::value_range(noise)[1];
+    const double at = top * 2048.0 / (detail::LUT_SIZE - 1);
+    edge.opacity = {{0.0, 0.0f}, {at, 0.0f}, {top, 0.3f}};
+    for (const Camera& cam : {frame_box(phantom.bounds(), 30.0, 20.0, 64, 56),
+                              view_camera(phantom.bounds(), ViewAxis::neg_y, 48, 44)}) {
+        RayCastOptions on;
+        RayCastOptions off;
+        off.empty_space_skipping = false;
+        Image a, b;
+        const RayCastStats sa = raycast(phantom, &grey, cam, on, a);
+        const RayCastStats sb = raycast(phantom, &grey, cam, off, b);
+        EXPECT_EQ(a, b);
+        EXPECT_LT(2 * sa.samples, sb.samples);  // the air is skipped
+    }
+    const Camera cam = frame_box(noise.bounds(), -40.0, 25.0, 61, 57);
+    for (const bool shading : {false, true}) {
+        RayCastOptions on;
+        on.shading = shading;
+        on.early_termination = 1.0;
+        RayCastOptions off = on;
+        off.empty_space_skipping = false;
+        Image a, b;
+        raycast(noise, &edge, cam, on, a);
+        raycast(noise, &edge, cam, off, b);
+        EXPECT_EQ(a, b) << "shading " << shading;
+    }
+}
+
 TEST(RayCast, EmptyCubesMatchBruteForce) {
     const int cells[3] = {9, 7, 5};
     std::vector<std::uint8_t> occupied(9 * 7 * 5, 0);
@@ -462,10 +509,9 @@ TEST(RayCast, DeterministicForOneAndTwoThreads) {
     EXPECT_EQ(s1.samples, s2.samples);
 }
 
-// The test above shades, which keeps it on the scalar kernel; unshaded composite views of a
-// scalar volume with a transfer function take the AVX2 march (detail::composite_avx2_fits) on
-// CPUs that have it. Those too are bit for bit the same for 1, 2 and the default thread count,
-// over images of many tiles, with and without skipping and clipped.
+// Composite views take the AVX2 march (detail::composite_avx2_fits) on CPUs that have it (the
+// test above shades, on it too). Unshaded scalar views are bit for bit the same for 1, 2 and the
+// default thread count, over images of many tiles, with and without skipping and clipped.
 TEST(RayCast, Avx2MarchDeterministicForOneAndManyThreads) {
     const Volume phantom = volume::shepp_logan_3d({48, 40, 44});
     const volume::TransferFunction tf = volume::preset("mri-brain", phantom);
@@ -553,6 +599,104 @@ TEST(RayCast, Avx2MarchMatchesTheScalarKernel) {
     }
 }
 
+// Every kind of rendering on the AVX2 march, composite (scalar volumes shaded, RGBA volumes
+// (rgba8 and rgba32f) shaded or not) and MIP (scalar and RGBA), gives the scalar kernel's images
+// and sample counts bit for bit: the views of the test above (oblique, axis, inside, far away) and
+// clipped ones, odd image and volume sizes, the smallest volumes and empty ones (nothing visible),
+// with and without skipping and early termination.
+Volume rgba_of(const Volume& scalar, const char* tf, VoxelType type) {
+    const Volume rgba = volume::apply(scalar, volume::preset(tf, scalar));
+    if (type == VoxelType::rgba32f) {
+        return rgba;
+    }
+    Volume out = Volume::allocate(rgba.dims(), VoxelType::rgba8, rgba.spacing(), rgba.origin());
+    const auto in = rgba.values<VoxelType::rgba32f>();
+    const auto values = out.values<VoxelType::rgba8>();
+    for (std::size_t i = 0; i < in.size(); ++i) {
+        values[i] = static_cast<std::uint8_t>(std::lround(255.0f * in[i]));
+    }
+    return out;
+}
+
+TEST(RayCast, Avx2MarchMatchesTheScalarKernelForEveryKind) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    struct Scene {
+        std::string name;
+        Volume volume;
+        const char* tf;  // scalar volumes
+    };
+    std::vector<Scene> scenes;
+    scenes.push_back({"scalar 37x23x30", volume::shepp_logan_3d({37, 23, 30}), "mri-brain"});
+    scenes.push_back({"scalar 2x9x5", volume::shepp_logan_3d({2, 9, 5}), "grayscale"});
+    scenes.push_back({"scalar empty", Volume::allocate({9, 7, 5}, VoxelType::f32), "grayscale"});
+    scenes.push_back({"rgba32f object 33x29x31",
+                      volume::rgba_test_object({33, 29, 31}, VoxelType::rgba32f), nullptr});
+    scenes.push_back({"rgba8 object 21x18x23",
+                      volume::rgba_test_object({21, 18, 23}, VoxelType::rgba8), nullptr});
+    scenes.push_back(
+        {"rgba32f phantom 40x36x38",
+         rgba_of(volume::shepp_logan_3d({40, 36, 38}), "mri-brain", VoxelType::rgba32f), nullptr});
+    scenes.push_back({"rgba8 phantom 3x5x4",
+                      rgba_of(volume::shepp_logan_3d({3, 5, 4}), "grayscale", VoxelType::rgba8),
+                      nullptr});
+    scenes.push_back({"rgba8 2x2x2",
+                      rgba_of(volume::shepp_logan_3d({2, 2, 2}), "grayscale", VoxelType::rgba8),
+                      nullptr});
+    scenes.push_back({"rgba empty", Volume::allocate({6, 11, 7}, VoxelType::rgba8), nullptr});
+    scenes.push_back({"rgba 1x12x12 (scalar kernel only)",
+                      rgba_of(volume::shepp_logan_3d({1, 12, 12}), "grayscale", VoxelType::rgba8),
+                      nullptr});
+    std::int64_t total_samples = 0;
+    for (const Scene& scene : scenes) {
+        const Volume& v = scene.volume;
+        const volume::TransferFunction tf =
+            scene.tf != nullptr ? volume::preset(scene.tf, v) : volume::TransferFunction{};
+        const AABBd box = v.bounds();
+        const std::vector<Camera> cameras = {
+            frame_box(box, 30.0, 20.0, 53, 47),
+            frame_box(box, -120.0, -60.0, 40, 33),
+            view_camera(box, ViewAxis::neg_y, 45, 40),
+            view_camera(box, ViewAxis::pos_x, 17, 29),
+            Camera::perspective(box.center(), box.center() + Vec3d{1.0, 0.3, 0.2}, {0.0, 0.0, 1.0},
+                                90.0, 31, 31),  // inside
+            Camera::perspective(box.center() + Vec3d{30000.0, 20000.0, 10000.0}, box.center(),
+                                {0.0, 0.0, 1.0}, 0.006, 24, 24),
+        };
+        // 0: composite, 1: composite shaded, 2: MIP.
+        for (int shading = 0; shading < 3; ++shading) {
+            for (int variant = 0; variant < 4; ++variant) {
+                RayCastOptions o;
+                o.shading = shading == 1;
+                o.mode = shading == 2 ? RayCastMode::mip : RayCastMode::composite;
+                o.empty_space_skipping = variant != 1;
+                o.early_termination = variant == 2 ? 1.0 : 0.9;
+                if (variant == 3) {
+                    o.clip = ClipPlane{box.center(), {1.0, -0.5, 0.25}};
+                    o.step = 0.37 * v.spacing().x;
+                    o.background = {0.1f, 0.5f, 1.0f};
+                }
+                const RayCaster caster(v, scene.tf != nullptr ? &tf : nullptr, o);
+                for (std::size_t c = 0; c < cameras.size(); ++c) {
+                    Image simd, scalar;
+                    const RayCastStats s_simd = caster.render(cameras[c], simd);
+                    allow_avx2(false);
+                    const RayCastStats s_scalar = caster.render(cameras[c], scalar);
+                    allow_avx2(true);
+                    EXPECT_EQ(simd, scalar) << scene.name << " shading " << shading << " camera "
+                                            << c << " variant " << variant;
+                    EXPECT_EQ(s_simd.samples, s_scalar.samples)
+                        << scene.name << " shading " << shading << " camera " << c << " variant "
+                        << variant;
+                    total_samples += s_simd.samples;
+                }
+            }
+        }
+    }
+    EXPECT_GT(total_samples, 0);
+}
+
 // The AVX2 conversion of voxels to lookup coordinates (the ray caster's preparation) gives the
 // scalar formula's floats bit for bit for every scalar voxel type: values below, inside and above
 // the range, the range's ends, ±0, ±∞ and NaN, lengths that are not a multiple of 4.
@@ -592,6 +736,57 @@ TEST(RayCast, Avx2LookupCoordinatesMatchTheScalarFormula) {
          0.999999f, std::numeric_limits<float>::denorm_min(), 0.3f, 0.7f},
         -1.0, 1.0);
     expect_lookup_coordinates_match<float>({-0.0f, 0.0f, 0.25f, 1.0f, 3.0f}, 0.0, 1.0);
+}
+
+// The AVX2 conversion of RGBA voxels (opacity-weighted colour and α, α apart) gives the scalar
+// formula's floats bit for bit: channels below 0 (−0 included), above 1, ±∞, NaN, rgba8 and
+// rgba32f, odd voxel counts.
+template <typename T>
+void expect_rgba_values_match(const std::vector<T>& in) {
+    const auto channel = [](T x) {
+        const float f = std::is_same_v<T, std::uint8_t> ? static_cast<float>(x) / 255.0f
+                                                        : static_cast<float>(x);
+        return std::isfinite(f) ? std::clamp(f, 0.0f, 1.0f) : 0.0f;
+    };
+    const std::size_t voxels = in.size() / 4;
+    for (std::size_t count = 0; count <= voxels; ++count) {
+        std::vector<float> out(4 * count, -7.0f), alpha(count, -7.0f);
+        const std::int64_t done = detail::rgba_values_avx2(
+            in.data(), static_cast<std::int64_t>(count), out.data(), alpha.data());
+        ASSERT_EQ(done, static_cast<std::int64_t>(count - count % 2));
+        for (std::size_t v = 0; v < static_cast<std::size_t>(done); ++v) {
+            const float a = channel(in[4 * v + 3]);
+            const float expected[5] = {channel(in[4 * v]) * a, channel(in[4 * v + 1]) * a,
+                                       channel(in[4 * v + 2]) * a, a, a};
+            const float got[5] = {out[4 * v], out[4 * v + 1], out[4 * v + 2], out[4 * v + 3],
+                                  alpha[v]};
+            for (int c = 0; c < 5; ++c) {
+                std::uint32_t x = 0, y = 0;
+                std::memcpy(&x, &got[c], 4);
+                std::memcpy(&y, &expected[c], 4);
+                EXPECT_EQ(x, y) << "voxel " << v << " channel " << c;
+            }
+        }
+    }
+}
+
+TEST(RayCast, Avx2RgbaValuesMatchTheScalarFormula) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "the CPU has no AVX2";
+    }
+    std::vector<std::uint8_t> bytes;
+    for (int i = 0; i < 4 * 13; ++i) {
+        bytes.push_back(static_cast<std::uint8_t>((i * 97 + 13) % 256));
+    }
+    bytes[3] = 0;
+    bytes[7] = 255;
+    expect_rgba_values_match(bytes);
+    const float inf = std::numeric_limits<float>::infinity();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    expect_rgba_values_match<float>({0.5f, 0.25f,  1.0f, 0.5f, -0.0f,  0.3f, 2.0f,  0.7f, -1.0f,
+                                     inf,  nan,    1.0f, 0.1f, 0.2f,   0.3f, -0.0f, 0.9f, 0.8f,
+                                     0.7f, nan,    0.4f, -inf, 1.5f,   inf,  0.3f,  0.3f, 0.3f,
+                                     0.3f, 1e-40f, 0.6f, 0.2f, 0.999f, 0.5f, 0.5f,  0.5f, 2.0f});
 }
 
 // A uniform RGBA cube (every voxel the same, so every sample inside the box is exact) seen

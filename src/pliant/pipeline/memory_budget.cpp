@@ -75,7 +75,8 @@ std::uint64_t ray_cast_bytes(const volume::Dims& dims, int channels) {
         voxels =
             saturating_product(voxels, static_cast<std::uint64_t>(std::max<std::int64_t>(d, 0)));
     }
-    const std::uint64_t floats = channels == 4 ? 4 : 1;
+    // RGBA: 4 floats, and a fifth (α apart) when shaded; counted always (an upper bound).
+    const std::uint64_t floats = channels == 4 ? 5 : 1;
     return saturating_sum(saturating_product(voxels, floats * sizeof(float)), voxels);
 }
 

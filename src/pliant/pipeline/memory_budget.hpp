@@ -61,8 +61,9 @@ void require_memory(const std::string& what, std::uint64_t needed_bytes, std::ui
 std::uint64_t image_bytes(std::int64_t width, std::int64_t height);
 
 // Bytes render::RayCaster prepares for a volume of `dims` with `channels` channels (1 or 4): a
-// float per voxel and channel (scalar volumes: one lookup coordinate), plus its macro-cell
-// tables (less than a byte per voxel).
+// float per voxel and channel (scalar volumes: one lookup coordinate; RGBA: one more for the α
+// copy of shaded views, counted whether shaded or not), plus its macro-cell tables (less than a
+// byte per voxel).
 std::uint64_t ray_cast_bytes(const volume::Dims& dims, int channels);
 
 // Bytes of ray-casting `source` into one image of width × height pixels at a time: the volume

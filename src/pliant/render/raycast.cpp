@@ -70,7 +70,8 @@ public:
     RowConverter(const volume::Volume& v, double lo, double scale)
         : m_volume(&v), m_lo(lo), m_scale(scale), m_avx2(has_avx2()) {}
 
-    void convert(std::int64_t y, std::int64_t z, float* out) const {
+    // alpha: null, or the row's α alone (RGBA volumes).
+    void convert(std::int64_t y, std::int64_t z, float* out, float* alpha = nullptr) const {
         using volume::VoxelType;
         const volume::Dims& n = m_volume->dims();
         const std::int64_t first = n[0] * (y + n[1] * z);
@@ -88,10 +89,11 @@ public:
                 scalar_row(m_volume->values<VoxelType::f32>().data() + first, n[0], out);
                 break;
             case VoxelType::rgba8:
-                rgba_row(m_volume->values<VoxelType::rgba8>().data() + 4 * first, n[0], out);
+                rgba_row(m_volume->values<VoxelType::rgba8>().data() + 4 * first, n[0], out, alpha);
                 break;
             case VoxelType::rgba32f:
-                rgba_row(m_volume->values<VoxelType::rgba32f>().data() + 4 * first, n[0], out);
+                rgba_row(m_volume->values<VoxelType::rgba32f>().data() + 4 * first, n[0], out,
+                         alpha);
                 break;
         }
     }
@@ -106,8 +108,9 @@ private:
         }
     }
     template <typename T>
-    static void rgba_row(const T* in, std::int64_t count, float* out) {
-        for (std::int64_t v = 0; v < count; ++v) {
+    void rgba_row(const T* in, std::int64_t count, float* out, float* alpha) const {
+        std::int64_t v = m_avx2 ? detail::rgba_values_avx2(in, count, out, alpha) : 0;
+        for (; v < count; ++v) {
             float c[4];
             for (int ch = 0; ch < 4; ++ch) {
                 const float x = std::is_same_v<T, std::uint8_t>
@@ -119,6 +122,9 @@ private:
             out[4 * v + 1] = c[1] * c[3];
             out[4 * v + 2] = c[2] * c[3];
             out[4 * v + 3] = c[3];
+            if (alpha != nullptr) {
+                alpha[v] = c[3];
+            }
         }
     }
 
@@ -224,6 +230,10 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
     const int channels = m_is_rgba ? 4 : 1;
     const std::int64_t total_cells = num_cells();
     m_values.resize(static_cast<std::size_t>(channels * vol.num_voxels()));
+    // The α channel alone for the gradients of shaded RGBA views (the AVX2 march's pairs).
+    const bool alpha_apart =
+        m_is_rgba && m_options.shading && m_options.mode == RayCastMode::composite;
+    m_alpha.resize(alpha_apart ? static_cast<std::size_t>(vol.num_voxels()) : 0);
     m_occupied.resize(static_cast<std::size_t>(total_cells));
     m_cell_max.resize(static_cast<std::size_t>(total_cells));
     m_sub_occupied.resize(static_cast<std::size_t>(total_cells));
@@ -245,7 +255,9 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
             };
             for (std::int64_t z = z0; z < own_end; ++z) {
                 for (std::int64_t y = 0; y < n[1]; ++y) {
-                    converter.convert(y, z, row_of(y, z));
+                    float* alpha =
+                        m_alpha.empty() ? nullptr : m_alpha.data() + n[0] * (y + n[1] * z);
+                    converter.convert(y, z, row_of(y, z), alpha);
                 }
             }
             // Per cell row: min/max of each sub-cell (sz, sy, x sub-cell j), accumulated from
@@ -323,12 +335,14 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
                         if (m_is_rgba) {
                             occupied = vmax > 0.0f;
                         } else {
-                            // Interpolated values lie in [vmin, vmax] up to a rounding of the
-                            // lerps, which may move the nearest entry by one: widened by an entry
-                            // per side.
-                            const int i0 = std::max(0, static_cast<int>(vmin + 0.5f) - 1);
+                            // Interpolated values lie in [vmin, vmax] up to the rounding of
+                            // the lerps (detail::LERP_ROUNDING): the entries nearest to that
+                            // widened range.
+                            const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
+                            const int i0 = static_cast<int>(widened_lo + 0.5f);
                             const int i1 =
-                                std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + 0.5f) + 1);
+                                std::min(detail::LUT_SIZE - 1,
+                                         static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
                             occupied = nonzero_prefix[i1 + 1] - nonzero_prefix[i0] > 0;
                         }
                         sub_mask = static_cast<std::uint8_t>(sub_mask | (occupied ? 1 << sub : 0));
@@ -355,6 +369,10 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
         },
         1);
     m_prepare_ms = watch.elapsed_ms();
+}
+
+void RayCaster::update(const volume::Volume& volume, const volume::TransferFunction* tf) {
+    prepare(volume, tf);
 }
 
 void RayCaster::set_clip(const std::optional<ClipPlane>& clip) {
@@ -392,6 +410,7 @@ void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     k.stride[1] = m_dims[0];
     k.stride[2] = m_dims[0] * m_dims[1];
     k.values = m_values.data();
+    k.alpha = m_alpha.empty() ? nullptr : m_alpha.data();
     k.lut = m_lut.data();
     k.lut_alpha = m_lut_alpha.data();
     k.sub_occupied = m_sub_occupied.data();
@@ -404,6 +423,7 @@ void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     k.inv_step = 1.0f / k.step;
     k.step_over_unit = static_cast<float>(m_step / m_opacity_unit);
     k.threshold = static_cast<float>(m_options.early_termination);
+    k.is_rgba = m_is_rgba;
     k.is_mip = m_options.mode == RayCastMode::mip;
     k.shading = m_options.shading && !k.is_mip;
     k.skipping = m_options.empty_space_skipping;
@@ -504,7 +524,8 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_is_rgba;
     // The AVX2 march gives the scalar kernel's bits (detail/raycast_avx2.hpp): for speed only.
-    const bool use_avx2 = !is_rgba && detail::composite_avx2_fits(k);
+    // Every kind of ray takes it (composite and MIP, scalar and RGBA, shaded, clipped).
+    const bool use_avx2 = detail::composite_avx2_fits(k);
     parallel_for(
         num_tiles,
         [&](std::int64_t tile) {
@@ -515,7 +536,8 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
             std::int64_t samples = 0;
             if (use_avx2) {
                 Color colors[detail::TILE * detail::TILE];
-                samples = detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
+                samples = k.is_mip ? detail::mip_tile_avx2(k, x0, y0, x1, y1, colors)
+                                   : detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
                 for (int y = y0; y < y1; ++y) {
                     for (int x = x0; x < x1; ++x) {
                         image.set(x, y, to_rgb8(colors[(y - y0) * (x1 - x0) + (x - x0)]));

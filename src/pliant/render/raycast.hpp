@@ -35,8 +35,10 @@
 //      cell c holds the samples whose lower voxel corner ⌊g⌋ is in [4c, 4c + 3] per axis, so it
 //      reads exactly the voxels [4c, 4c + 4] (its footprint). A cell is occupied when some value
 //      of its footprint has a non-zero opacity (min/max of the values against a prefix count of
-//      the lookup table's non-zero entries, widened by one entry per side for the rounding of
-//      the interpolation; max α for RGBA). For each of the 8 octants of ray directions, every
+//      the lookup table's non-zero entries, the range widened by 1/64 entry per side for the
+//      rounding of the interpolation, detail::LERP_ROUNDING; max α for RGBA). A volume whose
+//      background sits exactly at an entry of zero opacity (air at the bottom of the range under
+//      `grayscale`) is thus skipped there. For each of the 8 octants of ray directions, every
 //      empty cell stores the side s (≤ 255 cells) of the largest cube of empty cells that has it
 //      as a corner and extends towards that octant (a largest-empty-square recurrence in 3D). A
 //      sample whose cell is empty is not classified: the ray jumps to the first sample past the
@@ -70,7 +72,8 @@
 // bitwise identical for 1 and N threads.
 // Cost: O(width · height · (samples + jumps) per ray); the lookup table, the macro-cell grid and
 // its empty cubes are built in O(voxels) per call, plus a float copy of the voxels (4 bytes
-// per voxel, 16 for RGBA). The kernel is in render/detail/raycast_kernel.hpp.
+// per voxel, 16 for RGBA, 20 for shaded RGBA: α apart for the gradients). The kernel is in
+// render/detail/raycast_kernel.hpp.
 #pragma once
 
 #include <array>
@@ -139,6 +142,12 @@ public:
     // InvalidInput when rgb.size() != 3 · rays.size(). Parallel over chunks of rays; bitwise
     // identical for any thread count.
     RayCastStats render_rays(std::span<const Ray> rays, std::span<float> rgb) const;
+    // Prepares another volume (and tf) with the same options, as the constructor does, reusing
+    // this caster's arrays: a volume of the same size and kind (the frames of a deformation)
+    // allocates nothing, so the pages of the float copy are not faulted in again. InvalidInput
+    // as in the constructor; after a throw the caster must not render until an update succeeds.
+    // Not to be called during a render.
+    void update(const volume::Volume& volume, const volume::TransferFunction* tf);
     // Changes the clipping plane of later renders (none: the whole volume) without preparing the
     // volume again; InvalidInput as in the constructor. Not to be called during a render.
     void set_clip(const std::optional<ClipPlane>& clip);
@@ -165,6 +174,7 @@ private:
     double m_prepare_ms = 0.0;
     std::array<int, 3> m_cells{0, 0, 0};
     std::vector<float> m_values;           // scalar: lookup coordinate per voxel; RGBA: α·rgb, α
+    std::vector<float> m_alpha;            // RGBA shaded: α per voxel (else empty)
     std::vector<float> m_lut;              // 4 per entry: r, g, b, α per step (scalar volumes)
     std::vector<float> m_lut_alpha;        // α per opacity unit, per entry (MIP)
     std::vector<std::uint8_t> m_occupied;  // per macro cell

@@ -23,6 +23,7 @@ constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
 // The march state of 8 rays, one per lane (structure of arrays, reloaded every iteration: a lane
 // is refilled by scalar stores).
 struct alignas(32) Lanes {
+    float dir[3][LANES];  // world direction (shading)
     float go[3][LANES];
     float gd[3][LANES];
     float inv_gd[3][LANES];
@@ -151,10 +152,148 @@ PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
     return _mm256_castps_si256(m);
 }
 
+// The volume's constants for trilinear samples of 8 lanes.
+struct Grid8 {
+    __m256 g_max[3];
+    __m256i max_i0[3];
+    __m256i stride_y, stride_z;
+    std::int32_t dy, dz;  // neighbour offsets in voxels
+    const float* v;
+    const float* alpha;  // RGBA shaded: α per voxel
+};
+
+// locate() along one axis: the clamp to [0, n − 1], the lower corner and the fraction.
+PLIANT_AVX2_INLINE void locate_axis(const Grid8& grid, int a, __m256 g, __m256i& corner,
+                                    __m256& fraction) {
+    const __m256 c = _mm256_min_ps(grid.g_max[a], _mm256_max_ps(_mm256_setzero_ps(), g));
+    corner = _mm256_min_epi32(_mm256_cvttps_epi32(c), grid.max_i0[a]);
+    fraction = _mm256_sub_ps(c, _mm256_cvtepi32_ps(corner));
+}
+
+PLIANT_AVX2_INLINE __m256i voxel_index8(const Grid8& grid, const __m256i corner[3]) {
+    return _mm256_add_epi32(corner[0],
+                            _mm256_add_epi32(_mm256_mullo_epi32(grid.stride_y, corner[1]),
+                                             _mm256_mullo_epi32(grid.stride_z, corner[2])));
+}
+
+// lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz) of the x-lerps of the 4 rows of pairs, as
+// interpolate_scalar() and interpolate_rgba() per channel.
+PLIANT_AVX2_INLINE __m256 trilinear(const __m256 first[4], const __m256 second[4],
+                                    const __m256 fraction[3]) {
+    const __m256 c00 = lerp(first[0], second[0], fraction[0]);
+    const __m256 c10 = lerp(first[1], second[1], fraction[0]);
+    const __m256 c01 = lerp(first[2], second[2], fraction[0]);
+    const __m256 c11 = lerp(first[3], second[3], fraction[0]);
+    return lerp(lerp(c00, c10, fraction[1]), lerp(c01, c11, fraction[1]), fraction[2]);
+}
+
+// The value shading differentiates (shading_value()): the scalar, or α of an RGBA volume (only
+// the α channel of interpolate_rgba(): its channels do not mix), at voxel index `index`.
+template <bool IS_RGBA>
+PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& grid, __m256i index,
+                                         const __m256 fraction[3]) {
+    __m256 first[4], second[4];
+    const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+    // RGBA: α apart (k.alpha, the same floats as the values' 4th channel), in x-adjacent pairs.
+    const float* v = IS_RGBA ? grid.alpha : grid.v;
+    alignas(32) std::int32_t at[LANES];
+    store(at, index);
+    for (int r = 0; r < 4; ++r) {
+        load_pairs(v + row[r], at, first[r], second[r]);
+    }
+    return trilinear(first, second, fraction);
+}
+
+// shade() for 8 samples at grid positions g (lower corners and fractions of locate(g) given),
+// rays along dir: 0.3 + 0.7 |n · dir| with n the normalized central-difference gradient, 1 where
+// it vanishes. The same operations in the same order.
+template <bool IS_RGBA>
+PLIANT_AVX2_INLINE __m256 shade8(const Grid8& grid, const RayCastKernel& k, const __m256 g[3],
+                                 const __m256i corner[3], const __m256 fraction[3],
+                                 const __m256 dir[3]) {
+    __m256 gradient[3];
+    for (int a = 0; a < 3; ++a) {
+        __m256 value[2];
+        for (int side = 0; side < 2; ++side) {
+            const __m256 ga = side == 0 ? _mm256_add_ps(g[a], _mm256_set1_ps(1.0f))
+                                        : _mm256_sub_ps(g[a], _mm256_set1_ps(1.0f));
+            __m256i c[3] = {corner[0], corner[1], corner[2]};
+            __m256 f[3] = {fraction[0], fraction[1], fraction[2]};
+            locate_axis(grid, a, ga, c[a], f[a]);
+            value[side] = shading_value8<IS_RGBA>(grid, voxel_index8(grid, c), f);
+        }
+        gradient[a] =
+            _mm256_mul_ps(_mm256_sub_ps(value[0], value[1]), _mm256_set1_ps(k.inv_spacing[a]));
+    }
+    const __m256 len2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], gradient[0]),
+                                                    _mm256_mul_ps(gradient[1], gradient[1])),
+                                      _mm256_mul_ps(gradient[2], gradient[2]));
+    const __m256 dot = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(gradient[0], dir[0]), _mm256_mul_ps(gradient[1], dir[1])),
+        _mm256_mul_ps(gradient[2], dir[2]));
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    const __m256 cosine = _mm256_div_ps(_mm256_and_ps(dot, abs_mask), _mm256_sqrt_ps(len2));
+    const __m256 f =
+        _mm256_add_ps(_mm256_set1_ps(0.3f), _mm256_mul_ps(_mm256_set1_ps(0.7f), cosine));
+    const __m256 nonzero = _mm256_cmp_ps(len2, _mm256_set1_ps(1e-30f), _CMP_GT_OQ);
+    return _mm256_blendv_ps(_mm256_set1_ps(1.0f), f, nonzero);
+}
+
+// The 8 × 8 transpose: out[c] holds element c of rows[0 … 7].
+PLIANT_AVX2_INLINE void transpose8(const __m256 rows[8], __m256 out[8]) {
+    const __m256 t0 = _mm256_unpacklo_ps(rows[0], rows[1]);
+    const __m256 t1 = _mm256_unpackhi_ps(rows[0], rows[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(rows[2], rows[3]);
+    const __m256 t3 = _mm256_unpackhi_ps(rows[2], rows[3]);
+    const __m256 t4 = _mm256_unpacklo_ps(rows[4], rows[5]);
+    const __m256 t5 = _mm256_unpackhi_ps(rows[4], rows[5]);
+    const __m256 t6 = _mm256_unpacklo_ps(rows[6], rows[7]);
+    const __m256 t7 = _mm256_unpackhi_ps(rows[6], rows[7]);
+    const __m256 u0 = _mm256_shuffle_ps(t0, t2, 0x44);
+    const __m256 u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+    const __m256 u2 = _mm256_shuffle_ps(t1, t3, 0x44);
+    const __m256 u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+    const __m256 u4 = _mm256_shuffle_ps(t4, t6, 0x44);
+    const __m256 u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+    const __m256 u6 = _mm256_shuffle_ps(t5, t7, 0x44);
+    const __m256 u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+    out[0] = _mm256_permute2f128_ps(u0, u4, 0x20);
+    out[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
+    out[2] = _mm256_permute2f128_ps(u2, u6, 0x20);
+    out[3] = _mm256_permute2f128_ps(u3, u7, 0x20);
+    out[4] = _mm256_permute2f128_ps(u0, u4, 0x31);
+    out[5] = _mm256_permute2f128_ps(u1, u5, 0x31);
+    out[6] = _mm256_permute2f128_ps(u2, u6, 0x31);
+    out[7] = _mm256_permute2f128_ps(u3, u7, 0x31);
+}
+
+// interpolate_rgba() of 8 lanes at voxel indices `at`: out[c] is channel c (α·r, α·g, α·b, α).
+// A lane's x-adjacent voxel pair of a row is 8 consecutive floats: one load, then transposed.
+PLIANT_AVX2_INLINE void interpolate_rgba8(const Grid8& grid, const std::int32_t* at,
+                                          const __m256 fraction[3], __m256 out[4]) {
+    const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+    __m256 first[4][4], second[4][4];  // [channel][row]
+    for (int r = 0; r < 4; ++r) {
+        __m256 rows[LANES], t[LANES];
+        for (int l = 0; l < LANES; ++l) {
+            rows[l] = _mm256_loadu_ps(grid.v + 4 * static_cast<std::int64_t>(at[l] + row[r]));
+        }
+        transpose8(rows, t);
+        for (int c = 0; c < 4; ++c) {
+            first[c][r] = t[c];
+            second[c][r] = t[4 + c];
+        }
+    }
+    for (int c = 0; c < 4; ++c) {
+        out[c] = trilinear(first[c], second[c], fraction);
+    }
+}
+
 // Puts the ray of pixel `pixel`, marched from sample `start`, into lane l.
 void fill_lane(const TileRays& t, int pixel, std::int32_t start, std::int32_t num_cells, Lanes& s,
                int l) {
     for (int a = 0; a < 3; ++a) {
+        s.dir[a][l] = t.dir[a][pixel];
         s.go[a][l] = t.go[a][pixel];
         s.gd[a][l] = t.gd[a][pixel];
         s.inv_gd[a][l] = t.inv_gd[a][pixel];
@@ -188,6 +327,7 @@ void fill_lane(const TileRays& t, int pixel, std::int32_t start, std::int32_t nu
 // An idle lane: a ray at the grid's corner that marches nothing (its loads stay in bounds).
 void clear_lane(Lanes& s, int l) {
     for (int a = 0; a < 3; ++a) {
+        s.dir[a][l] = 0.0f;
         s.go[a][l] = 0.0f;
         s.gd[a][l] = 1.0f;
         s.inv_gd[a][l] = 1.0f;
@@ -338,6 +478,46 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first,
            (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
 }
 
+// jump() for the lanes in `jumps` (empty cubes of `side` cells at cells cell_coord): the first
+// sample past the cube's far planes (pulled in by the ray's margin); n_next for the others.
+PLIANT_AVX2_INLINE __m256i jump8(const Lanes& s, const __m256i cell_coord[3], __m256i side,
+                                 __m256i jumps, __m256i n_next, __m256i num_full, __m256 t_near,
+                                 __m256 inv_step) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256i one_i = _mm256_set1_epi32(1);
+    __m256 t_exit = load(s.t_far);
+    const __m256 margin = load(s.margin);
+    for (int a = 0; a < 3; ++a) {
+        const __m256 gd = load(s.gd[a]);
+        const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
+        const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
+        const __m256 plane_pos =
+            _mm256_sub_ps(_mm256_cvtepi32_ps(
+                              _mm256_slli_epi32(_mm256_add_epi32(cell_coord[a], side), CELL_SHIFT)),
+                          margin);
+        const __m256 plane_neg = _mm256_add_ps(
+            _mm256_cvtepi32_ps(_mm256_slli_epi32(
+                _mm256_add_epi32(_mm256_sub_epi32(cell_coord[a], side), one_i), CELL_SHIFT)),
+            margin);
+        const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
+        const __m256 candidate =
+            _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
+        t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
+                                  _mm256_or_ps(is_pos, is_neg));
+    }
+    const __m256 x =
+        _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), _mm256_set1_ps(0.5f));
+    const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
+    __m256i n_end = _mm256_cvttps_epi32(x);
+    // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
+    n_end =
+        _mm256_sub_epi32(n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
+    n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
+    n_end = _mm256_max_epi32(n_end, n_next);
+    n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
+    return as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
+}
+
 // Marches the rays of queue[0, queue_size) (pixels of t) in the 8 lanes, a lane taking the next
 // ray as soon as its ray ends. REACH: each ray from its first sample to its first sample to
 // classify (march_composite's skipping, the same jumps), whose index goes to t.start[pixel] and
@@ -345,7 +525,7 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first,
 // written behind the reading position); rays with no such sample end there (their colour to
 // colors). Otherwise: each ray from t.start[pixel] to its end, as march_composite, its colour to
 // colors. Adds the classified samples to `samples`.
-template <bool REACH>
+template <bool REACH, bool IS_RGBA, bool SHADING>
 PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::int32_t* queue,
                                 int queue_size, std::int32_t* reached, int& num_reached,
                                 Color* colors, std::int64_t& samples) {
@@ -369,7 +549,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                                    c.b + rest * k.background.b};
         } else {
             colors[pixel_of[l]] =
-                end_composite<false>(k, pixel_ray_of(t, pixel_of[l]), c, lane_samples);
+                end_composite<IS_RGBA>(k, pixel_ray_of(t, pixel_of[l]), c, lane_samples);
         }
         samples += lane_samples;
     };
@@ -417,9 +597,22 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     const __m256i stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[1]));
     const __m256i stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[2]));
     const __m256i one_i = _mm256_set1_epi32(1);
+    // Offsets of the voxel rows in the value array (floats: 4 per voxel for RGBA).
+    constexpr std::int32_t CH = IS_RGBA ? 4 : 1;
     const auto dy = static_cast<std::int32_t>(k.d[1]);
     const auto dz = static_cast<std::int32_t>(k.d[2]);
     const float* v = k.values;
+    Grid8 grid;
+    for (int a = 0; a < 3; ++a) {
+        grid.g_max[a] = g_max[a];
+        grid.max_i0[a] = max_i0[a];
+    }
+    grid.stride_y = stride_y;
+    grid.stride_z = stride_z;
+    grid.dy = dy;
+    grid.dz = dz;
+    grid.v = v;
+    grid.alpha = k.alpha;
     const float* lut = k.lut;
     const std::uint8_t* cubes = k.axis_cube != nullptr ? k.axis_cube : k.empty_cube[0];
 
@@ -438,11 +631,10 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
         // locate: clamp to [0, n − 1], lower corner min(⌊·⌋, n − 2), fractions.
         __m256i corner[3];
         __m256 fraction[3];
+        __m256 g_pos[3];
         for (int a = 0; a < 3; ++a) {
-            const __m256 g = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
-            const __m256 c = _mm256_min_ps(g_max[a], _mm256_max_ps(zero, g));
-            corner[a] = _mm256_min_epi32(_mm256_cvttps_epi32(c), max_i0[a]);
-            fraction[a] = _mm256_sub_ps(c, _mm256_cvtepi32_ps(corner[a]));
+            g_pos[a] = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
+            locate_axis(grid, a, g_pos[a], corner[a], fraction[a]);
         }
         __m256i n_next = _mm256_add_epi32(n, one_i);
         __m256i classified = live;
@@ -467,40 +659,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
             const __m256i jumps =
                 _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
             if (_mm256_movemask_ps(as_float(jumps)) != 0) {
-                // jump(): the first sample past the cube's far planes (pulled in by the margin).
-                __m256 t_exit = load(s.t_far);
-                const __m256 margin = load(s.margin);
-                for (int a = 0; a < 3; ++a) {
-                    const __m256 gd = load(s.gd[a]);
-                    const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
-                    const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
-                    const __m256 plane_pos =
-                        _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_slli_epi32(
-                                          _mm256_add_epi32(cell_coord[a], side), CELL_SHIFT)),
-                                      margin);
-                    const __m256 plane_neg = _mm256_add_ps(
-                        _mm256_cvtepi32_ps(_mm256_slli_epi32(
-                            _mm256_add_epi32(_mm256_sub_epi32(cell_coord[a], side), one_i),
-                            CELL_SHIFT)),
-                        margin);
-                    const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
-                    const __m256 candidate =
-                        _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
-                    t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
-                                              _mm256_or_ps(is_pos, is_neg));
-                }
-                const __m256 x =
-                    _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), half);
-                const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
-                __m256i n_end = _mm256_cvttps_epi32(x);
-                // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
-                n_end = _mm256_sub_epi32(
-                    n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
-                n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
-                n_end = _mm256_max_epi32(n_end, n_next);
-                n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
-                n_next =
-                    as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
+                n_next = jump8(s, cell_coord, side, jumps, n_next, num_full, t_near, inv_step);
             }
             // The sub-cell's occupancy bit, for the samples that do not jump.
             const __m256i bit = _mm256_or_si256(
@@ -517,32 +676,66 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
         }
         __m256i terminated = _mm256_setzero_si256();
         if (!REACH && _mm256_movemask_ps(as_float(classified)) != 0) {
-            // interpolate_scalar → lookup-table entry → composite().
-            const __m256i index = _mm256_add_epi32(
-                corner[0], _mm256_add_epi32(_mm256_mullo_epi32(stride_y, corner[1]),
-                                            _mm256_mullo_epi32(stride_z, corner[2])));
-            // The 4 rows of x-adjacent pairs (dx = 1) at offsets 0, dy, dz, dz + dy.
+            // classify_shaded() → composite(): straight colour and opacity of a step.
+            const __m256i index = voxel_index8(grid, corner);
             alignas(32) std::int32_t at[LANES];
-            __m256 p000, p100, p010, p110, p001, p101, p011, p111;
             store(at, index);
-            load_pairs(v, at, p000, p100);
-            load_pairs(v + dy, at, p010, p110);
-            load_pairs(v + dz, at, p001, p101);
-            load_pairs(v + dz + dy, at, p011, p111);
-            const __m256 c00 = lerp(p000, p100, fraction[0]);
-            const __m256 c10 = lerp(p010, p110, fraction[0]);
-            const __m256 c01 = lerp(p001, p101, fraction[0]);
-            const __m256 c11 = lerp(p011, p111, fraction[0]);
-            const __m256 value =
-                lerp(lerp(c00, c10, fraction[1]), lerp(c01, c11, fraction[1]), fraction[2]);
-            const __m256i entry =
-                _mm256_slli_epi32(_mm256_cvttps_epi32(_mm256_add_ps(value, half)), 2);  // 4·index
-            store(at, entry);
             __m256 rgba[4];
-            load_entries(lut, at, rgba);
+            if constexpr (IS_RGBA) {
+                // classify<true>: α clamped to [0, 1], its step opacity (libm, lane by lane),
+                // colour divided by the unclamped interpolated α.
+                __m256 interpolated[4];
+                interpolate_rgba8(grid, at, fraction, interpolated);
+                const __m256 a = _mm256_min_ps(one, _mm256_max_ps(zero, interpolated[3]));
+                const __m256 positive = _mm256_cmp_ps(a, zero, _CMP_GT_OQ);
+                alignas(32) float a_step[LANES] = {};
+                if (k.step_over_unit == 0.5f) {
+                    // rgba_step_opacity_half, 1 for a ≥ 1.
+                    const __m256 half_step =
+                        _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
+                    store(a_step,
+                          _mm256_blendv_ps(half_step, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ)));
+                } else {
+                    int todo = _mm256_movemask_ps(_mm256_and_ps(positive, as_float(classified)));
+                    alignas(32) float a_lane[LANES];
+                    store(a_lane, a);
+                    while (todo != 0) {
+                        const int l = __builtin_ctz(static_cast<unsigned>(todo));
+                        todo &= todo - 1;
+                        a_step[l] = rgba_step_opacity(a_lane[l], k.step_over_unit);
+                    }
+                }
+                const __m256 inv = _mm256_div_ps(one, interpolated[3]);
+                for (int c = 0; c < 3; ++c) {
+                    rgba[c] = _mm256_and_ps(positive, _mm256_mul_ps(interpolated[c], inv));
+                }
+                rgba[3] = _mm256_and_ps(positive, load(a_step));
+            } else {
+                // interpolate_scalar → lookup-table entry. The 4 rows of x-adjacent pairs
+                // (dx = 1) at offsets 0, dy, dz, dz + dy.
+                __m256 first[4], second[4];
+                load_pairs(v, at, first[0], second[0]);
+                load_pairs(v + dy, at, first[1], second[1]);
+                load_pairs(v + dz, at, first[2], second[2]);
+                load_pairs(v + dz + dy, at, first[3], second[3]);
+                const __m256 value = trilinear(first, second, fraction);
+                const __m256i entry = _mm256_slli_epi32(
+                    _mm256_cvttps_epi32(_mm256_add_ps(value, half)), 2);  // 4·index
+                store(at, entry);
+                load_entries(lut, at, rgba);
+            }
             const __m256 alpha = rgba[3];
             const __m256 blend =
                 _mm256_and_ps(as_float(classified), _mm256_cmp_ps(alpha, zero, _CMP_GT_OQ));
+            if constexpr (SHADING) {
+                if (_mm256_movemask_ps(blend) != 0) {
+                    const __m256 dir[3] = {load(s.dir[0]), load(s.dir[1]), load(s.dir[2])};
+                    const __m256 f = shade8<IS_RGBA>(grid, k, g_pos, corner, fraction, dir);
+                    for (int c = 0; c < 3; ++c) {
+                        rgba[c] = _mm256_mul_ps(rgba[c], f);
+                    }
+                }
+            }
             const __m256 acc = load(s.acc);
             const __m256 w = _mm256_mul_ps(_mm256_sub_ps(one, acc), alpha);
             const __m256 cr = load(s.cr);
@@ -578,7 +771,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                              ahead[0], _mm256_add_epi32(_mm256_mullo_epi32(stride_y, ahead[1]),
                                                         _mm256_mullo_epi32(stride_z, ahead[2]))));
             for (int l : index) {
-                prefetch_rows(v + l, dy, dz);
+                prefetch_rows(v + CH * static_cast<std::int64_t>(l), CH * dy, CH * dz);
             }
         }
         const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);
@@ -599,7 +792,8 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                     const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
                     done_mask &= done_mask - 1;
                     if ((to_classify >> l & 1) != 0) {
-                        prefetch_rows(v + index[l], dy, dz);
+                        prefetch_rows(v + CH * static_cast<std::int64_t>(index[l]), CH * dy,
+                                      CH * dz);
                         t.start[pixel_of[l]] = first[l];
                         reached[num_reached++] = pixel_of[l];
                     } else {
@@ -623,10 +817,141 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     }
 }
 
+// The MIP march of the rays t.marched[0, t.num_marched) in the 8 lanes, as raycast_begun()'s MIP
+// branch: every sample of the ray (num_segments), skipping a sample whose cell's largest value
+// does not exceed the lane's maximum by a jump to the cell's end; the lane's maximum in s.acc
+// (−1: none), RGBA the interpolated sample that had it in s.cr, s.cg, s.cb. Colours to colors.
+template <bool IS_RGBA>
+PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* colors,
+                              std::int64_t& samples) {
+    const auto num_cells =
+        static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
+    Lanes s;
+    int pixel_of[LANES];
+    int num_live = 0;
+    int live_mask = 0;
+    int next = 0;
+    const auto end_lane = [&](int l) {
+        const Sample best_sample{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
+        colors[pixel_of[l]] = end_mip<IS_RGBA>(k, s.acc[l], best_sample);
+        samples += s.samples[l];
+    };
+    const auto refill = [&](int l) {
+        if (next < t.num_marched) {
+            const int pixel = t.marched[next++];
+            fill_lane(t, pixel, 0, num_cells, s, l);
+            s.num_full[l] = t.num_segments[pixel];
+            s.acc[l] = -1.0f;
+            pixel_of[l] = pixel;
+            live_mask |= 1 << l;
+            ++num_live;
+            return;
+        }
+        clear_lane(s, l);
+    };
+    for (int l = 0; l < LANES; ++l) {
+        refill(l);
+    }
+    const __m256 step = _mm256_set1_ps(k.step);
+    const __m256 inv_step = _mm256_set1_ps(k.inv_step);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256i one_i = _mm256_set1_epi32(1);
+    const __m256i cells_x = _mm256_set1_epi32(k.cells[0]);
+    const __m256i cells_y = _mm256_set1_epi32(k.cells[1]);
+    Grid8 grid;
+    for (int a = 0; a < 3; ++a) {
+        grid.g_max[a] = _mm256_set1_ps(k.g_max[a]);
+        grid.max_i0[a] = _mm256_set1_epi32(k.max_i0[a]);
+    }
+    grid.stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[1]));
+    grid.stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[2]));
+    grid.dy = static_cast<std::int32_t>(k.d[1]);
+    grid.dz = static_cast<std::int32_t>(k.d[2]);
+    grid.v = k.values;
+    grid.alpha = k.alpha;
+
+    // NOLINTNEXTLINE(bugprone-infinite-loop): end_lane and refill retire lanes (num_live).
+    while (num_live > 0) {
+        const __m256i live =
+            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
+                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                               _mm256_setzero_si256());
+        const __m256i n = load(s.n);
+        const __m256i num_full = load(s.num_full);
+        const __m256 t_near = load(s.t_near);
+        const __m256 tm =
+            _mm256_add_ps(t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), half), step));
+        __m256i corner[3];
+        __m256 fraction[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m256 g = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
+            locate_axis(grid, a, g, corner[a], fraction[a]);
+        }
+        __m256i n_next = _mm256_add_epi32(n, one_i);
+        __m256i classified = live;
+        __m256 best = load(s.acc);
+        if (k.skipping) {
+            const __m256i cell_coord[3] = {_mm256_srli_epi32(corner[0], CELL_SHIFT),
+                                           _mm256_srli_epi32(corner[1], CELL_SHIFT),
+                                           _mm256_srli_epi32(corner[2], CELL_SHIFT)};
+            const __m256i cell = _mm256_add_epi32(
+                cell_coord[0],
+                _mm256_mullo_epi32(
+                    cells_x,
+                    _mm256_add_epi32(cell_coord[1], _mm256_mullo_epi32(cells_y, cell_coord[2]))));
+            const __m256 cell_max = _mm256_i32gather_ps(k.cell_max, cell, 4);
+            const __m256i jumps =
+                _mm256_and_si256(live, as_int(_mm256_cmp_ps(cell_max, best, _CMP_LE_OQ)));
+            if (_mm256_movemask_ps(as_float(jumps)) != 0) {
+                n_next = jump8(s, cell_coord, one_i, jumps, n_next, num_full, t_near, inv_step);
+            }
+            classified = _mm256_andnot_si256(jumps, live);
+        }
+        if (_mm256_movemask_ps(as_float(classified)) != 0) {
+            alignas(32) std::int32_t at[LANES];
+            store(at, voxel_index8(grid, corner));
+            if constexpr (IS_RGBA) {
+                __m256 value[4];
+                interpolate_rgba8(grid, at, fraction, value);
+                const __m256 update =
+                    _mm256_and_ps(as_float(classified), _mm256_cmp_ps(value[3], best, _CMP_GT_OQ));
+                store(s.cr, _mm256_blendv_ps(load(s.cr), value[0], update));
+                store(s.cg, _mm256_blendv_ps(load(s.cg), value[1], update));
+                store(s.cb, _mm256_blendv_ps(load(s.cb), value[2], update));
+                best = _mm256_blendv_ps(best, value[3], update);
+            } else {
+                __m256 first[4], second[4];
+                const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+                for (int r = 0; r < 4; ++r) {
+                    load_pairs(grid.v + row[r], at, first[r], second[r]);
+                }
+                const __m256 value = trilinear(first, second, fraction);
+                const __m256 update =
+                    _mm256_and_ps(as_float(classified), _mm256_cmp_ps(value, best, _CMP_GT_OQ));
+                best = _mm256_blendv_ps(best, value, update);
+            }
+            store(s.acc, best);
+            store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
+        }
+        store(s.n, n_next);
+        int done_mask = _mm256_movemask_ps(
+            as_float(_mm256_andnot_si256(_mm256_cmpgt_epi32(num_full, n_next), live)));
+        while (done_mask != 0) {
+            const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
+            done_mask &= done_mask - 1;
+            end_lane(l);
+            live_mask &= ~(1 << l);
+            --num_live;
+            refill(l);
+        }
+    }
+}
+
 }  // namespace
 
 bool composite_avx2_fits(const RayCastKernel& k) {
-    if (!has_avx2() || k.is_mip || k.shading || k.lut == nullptr) {
+    if (!has_avx2() || (!k.is_rgba && k.lut == nullptr) ||
+        (k.is_rgba && k.shading && k.alpha == nullptr)) {
         return false;
     }
     const std::int64_t num_voxels = static_cast<std::int64_t>(k.n[0]) * k.n[1] * k.n[2];
@@ -637,11 +962,16 @@ bool composite_avx2_fits(const RayCastKernel& k) {
         }
     }
     // Voxel pairs along x are loaded together: dx = 1 (an x extent of at least 2 voxels).
-    return k.d[0] == 1 && num_voxels < INDEX_LIMIT / 2 && 8 * num_cells < INDEX_LIMIT;
+    const std::int64_t floats_per_voxel = k.is_rgba ? 4 : 1;
+    return k.d[0] == 1 && floats_per_voxel * num_voxels < INDEX_LIMIT / 2 &&
+           8 * num_cells < INDEX_LIMIT;
 }
 
-PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1,
-                                                int y1, Color* colors) {
+namespace {
+
+template <bool IS_RGBA, bool SHADING>
+PLIANT_AVX2_FN std::int64_t composite_tile(const RayCastKernel& k, int x0, int y0, int x1, int y1,
+                                           Color* colors) {
     const int tile_width = x1 - x0;
     const auto num_cells =
         static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
@@ -660,14 +990,14 @@ PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, 
                     if (t.num_segments[pixel] > 1) {
                         t.marched[t.num_marched++] = pixel;
                     } else {
-                        colors[pixel] =
-                            end_composite<false>(k, pixel_ray_of(t, pixel), Accumulated{}, samples);
+                        colors[pixel] = end_composite<IS_RGBA>(k, pixel_ray_of(t, pixel),
+                                                               Accumulated{}, samples);
                     }
                 } else if ((bits >> (LANES + l) & 1) != 0) {
                     PixelRay p;  // too many samples for a lane's counters: the scalar kernel
                     begin_pixel(k, x + l, y, p);
-                    const Accumulated c = march_composite<false>(k, p, samples);
-                    colors[pixel] = end_composite<false>(k, p, c, samples);
+                    const Accumulated c = march_composite<IS_RGBA>(k, p, samples);
+                    colors[pixel] = end_composite<IS_RGBA>(k, p, c, samples);
                 } else {
                     colors[pixel] = k.background;
                 }
@@ -682,7 +1012,8 @@ PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, 
     // 2-vCPU guest), more than the ~400 instructions that the reorder buffer can run past it.
     int num_reached = 0;
     if (k.skipping) {
-        march_lanes<true>(k, t, t.marched, t.num_marched, t.marched, num_reached, colors, samples);
+        march_lanes<true, IS_RGBA, SHADING>(k, t, t.marched, t.num_marched, t.marched, num_reached,
+                                            colors, samples);
     } else {
         num_reached = t.num_marched;
         for (int q = 0; q < num_reached; ++q) {
@@ -690,8 +1021,64 @@ PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, 
         }
     }
     int unused = 0;
-    march_lanes<false>(k, t, t.marched, num_reached, nullptr, unused, colors, samples);
+    march_lanes<false, IS_RGBA, SHADING>(k, t, t.marched, num_reached, nullptr, unused, colors,
+                                         samples);
     return samples;
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN std::int64_t composite_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1,
+                                                int y1, Color* colors) {
+    if (k.is_rgba) {
+        return k.shading ? composite_tile<true, true>(k, x0, y0, x1, y1, colors)
+                         : composite_tile<true, false>(k, x0, y0, x1, y1, colors);
+    }
+    return k.shading ? composite_tile<false, true>(k, x0, y0, x1, y1, colors)
+                     : composite_tile<false, false>(k, x0, y0, x1, y1, colors);
+}
+
+namespace {
+
+// MIP: every ray that hits the box is marched (all its segments).
+template <bool IS_RGBA>
+PLIANT_AVX2_FN std::int64_t mip_tile(const RayCastKernel& k, int x0, int y0, int x1, int y1,
+                                     Color* colors) {
+    const int tile_width = x1 - x0;
+    const auto num_cells =
+        static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
+    std::int64_t samples = 0;
+    TileRays t;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; x += LANES) {
+            const int first = (y - y0) * tile_width + (x - x0);
+            const int bits = setup_rays(k, x, y, first, num_cells, t);
+            const int count = std::min(LANES, x1 - x);
+            for (int l = 0; l < count; ++l) {
+                const int pixel = first + l;
+                if ((bits >> l & 1) != 0) {
+                    t.marched[t.num_marched++] = pixel;
+                } else if ((bits >> (LANES + l) & 1) != 0) {
+                    // Too many samples for a lane's counters: the scalar kernel.
+                    const PixelResult p = raycast_pixel<IS_RGBA>(k, x + l, y);
+                    colors[pixel] = p.color;
+                    samples += p.samples;
+                } else {
+                    colors[pixel] = k.background;
+                }
+            }
+        }
+    }
+    march_mip<IS_RGBA>(k, t, colors, samples);
+    return samples;
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN std::int64_t mip_tile_avx2(const RayCastKernel& k, int x0, int y0, int x1, int y1,
+                                          Color* colors) {
+    return k.is_rgba ? mip_tile<true>(k, x0, y0, x1, y1, colors)
+                     : mip_tile<false>(k, x0, y0, x1, y1, colors);
 }
 
 namespace {
@@ -753,6 +1140,51 @@ std::int64_t lookup_coordinates_avx2(const float* in, std::int64_t count, double
     return lookup_coordinates(in, count, lo, scale, out);
 }
 
+namespace {
+
+// The 8 channels of 2 voxels as floats in [0, 1]: c / 255 (rgba8) or the float itself.
+PLIANT_AVX2_INLINE __m256 eight(const std::uint8_t* in) {
+    return _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(
+                             _mm_loadl_epi64(reinterpret_cast<const __m128i*>(in)))),
+                         _mm256_set1_ps(255.0f));
+}
+PLIANT_AVX2_INLINE __m256 eight(const float* in) {
+    return _mm256_loadu_ps(in);
+}
+
+template <typename T>
+PLIANT_AVX2_FN std::int64_t rgba_values(const T* in, std::int64_t count, float* out, float* alpha) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    const std::int64_t end = count - count % 2;
+    for (std::int64_t v = 0; v < end; v += 2) {
+        const __m256 x = eight(in + 4 * v);
+        // std::clamp(x, 0, 1) (x < 0 ? 0 : 1 < x ? 1 : x, so −0 stays −0) when finite, else 0.
+        __m256 c = _mm256_blendv_ps(x, zero, _mm256_cmp_ps(x, zero, _CMP_LT_OQ));
+        c = _mm256_blendv_ps(c, one, _mm256_cmp_ps(one, c, _CMP_LT_OQ));
+        c = _mm256_and_ps(c, _mm256_cmp_ps(_mm256_and_ps(x, abs_mask), inf, _CMP_LT_OQ));
+        const __m256 a = _mm256_permute_ps(c, 0xFF);  // α of each voxel in its 4 channels
+        _mm256_storeu_ps(out + 4 * v, _mm256_blend_ps(_mm256_mul_ps(c, a), c, 0x88));
+        if (alpha != nullptr) {
+            alpha[v] = _mm256_cvtss_f32(a);
+            alpha[v + 1] = _mm256_cvtss_f32(_mm256_permute2f128_ps(a, a, 0x11));
+        }
+    }
+    return end;
+}
+
+}  // namespace
+
+std::int64_t rgba_values_avx2(const std::uint8_t* in, std::int64_t count, float* out,
+                              float* alpha) {
+    return rgba_values(in, count, out, alpha);
+}
+std::int64_t rgba_values_avx2(const float* in, std::int64_t count, float* out, float* alpha) {
+    return rgba_values(in, count, out, alpha);
+}
+
 #else
 
 std::int64_t lookup_coordinates_avx2(const std::uint8_t*, std::int64_t, double, double, float*) {
@@ -768,11 +1200,22 @@ std::int64_t lookup_coordinates_avx2(const float*, std::int64_t, double, double,
     return 0;
 }
 
+std::int64_t rgba_values_avx2(const std::uint8_t*, std::int64_t, float*, float*) {
+    return 0;
+}
+std::int64_t rgba_values_avx2(const float*, std::int64_t, float*, float*) {
+    return 0;
+}
+
 bool composite_avx2_fits(const RayCastKernel&) {
     return false;
 }
 
 std::int64_t composite_tile_avx2(const RayCastKernel&, int, int, int, int, Color*) {
+    return 0;
+}
+
+std::int64_t mip_tile_avx2(const RayCastKernel&, int, int, int, int, Color*) {
     return 0;
 }
 

@@ -36,6 +36,12 @@ inline constexpr int SUB_CELL = 2;    // sub-cell edge (an occupancy bit each), 
 // seen from nearby). A ray adds 2⁻¹⁸ (32 float epsilons) of the largest coordinate magnitude it
 // computes, so a camera far from the volume keeps the margin above its rounding.
 inline constexpr float SKIP_MARGIN = 1.0f / 32.0f;
+// Bound on |trilinear value − the range of its 8 voxels|, in lookup entries, for the float lerps
+// a + t·(b − a) of lookup coordinates in [0, LUT_SIZE − 1], t ∈ [0, 1]: each of the 3 levels
+// of lerps adds at most 3 roundings of 2⁻²⁴ · 4096 ≈ 2.4e-4 (and a + t·0 = a exactly), plus the
+// + 0.5 of the nearest entry: under 0.003, bounded here by 1/64 (the macro cells' occupancy
+// test widens each cell's [min, max] by it, so no sample it skips could reach an opaque entry).
+inline constexpr float LERP_ROUNDING = 1.0f / 64.0f;
 inline constexpr int TILE = 16;       // pixels per tile edge
 inline constexpr int MAX_CUBE = 255;  // largest stored empty-cube side, cells
 
@@ -61,6 +67,7 @@ struct RayCastKernel {
     std::int64_t stride[3] = {0, 0, 0};  // voxel index strides (1, nx, nx·ny)
     std::int64_t d[3] = {0, 0, 0};       // neighbour offsets in voxels (0 on axes of size 1)
     const float* values = nullptr;       // scalar lookup coordinates, or α·rgb, α
+    const float* alpha = nullptr;        // RGBA shaded: α per voxel (values' 4th channel), or null
     const float* lut = nullptr;
     const float* lut_alpha = nullptr;
     // Macro cells.
@@ -82,6 +89,7 @@ struct RayCastKernel {
     float inv_step = 1.0f;
     float step_over_unit = 1.0f;  // RGBA opacity correction exponent
     float threshold = 0.99f;
+    bool is_rgba = false;  // values hold α·rgb, α per voxel (else lookup coordinates)
     bool is_mip = false;
     bool shading = false;
     bool skipping = true;
@@ -210,6 +218,21 @@ PLIANT_HOST_DEVICE inline float shade(const RayCastKernel& k, Vec3f g, Vec3f dir
     return 0.3f + 0.7f * cosine;
 }
 
+// The opacity of a step for an interpolated RGBA opacity a ∈ (0, 1] per opacity unit:
+// 1 − (1 − a)^(Δs/u), with e = Δs/u (the AVX2 march calls this too, for the same bits). The
+// default step, half the opacity unit (e = 1/2), is 1 − √(1 − a) = a / (1 + √(1 − a)) (no
+// cancellation for small a; correctly rounded square root and division, so the AVX2 march
+// computes it 8 wide with the same bits); other steps go through log1p and expm1.
+PLIANT_HOST_DEVICE inline float rgba_step_opacity_half(float a) {
+    return a / (1.0f + std::sqrt(1.0f - a));
+}
+PLIANT_HOST_DEVICE inline float rgba_step_opacity(float a, float e) {
+    if (a >= 1.0f) {
+        return 1.0f;
+    }
+    return e == 0.5f ? rgba_step_opacity_half(a) : -std::expm1(e * std::log1p(-a));
+}
+
 // Classified sample with lower corner t: straight colour and opacity for one full step.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinear& t) {
@@ -219,7 +242,7 @@ PLIANT_HOST_DEVICE inline Sample classify(const RayCastKernel& k, const Trilinea
         if (!(a > 0.0f)) {
             return {0.0f, 0.0f, 0.0f, 0.0f};
         }
-        const float a_step = a >= 1.0f ? 1.0f : -std::expm1(k.step_over_unit * std::log1p(-a));
+        const float a_step = rgba_step_opacity(a, k.step_over_unit);
         const float inv = 1.0f / s.a;
         return {s.r * inv, s.g * inv, s.b * inv, a_step};
     } else {
@@ -502,6 +525,29 @@ PLIANT_HOST_DEVICE inline Accumulated march_composite(const RayCastKernel& k, co
     return c;
 }
 
+// The pixel of a MIP ray whose largest value (scalar) or α (RGBA) is `best` (−1: nothing
+// sampled), RGBA: the interpolated opacity-weighted sample that had it.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Color end_mip(const RayCastKernel& k, float best,
+                                        const Sample& best_sample) {
+    if (best < 0.0f) {
+        return k.background;
+    }
+    Sample s{};
+    float a = 0.0f;
+    if constexpr (IS_RGBA) {
+        a = clampf(best_sample.a, 0.0f, 1.0f);
+        const float inv = best_sample.a > 0.0f ? 1.0f / best_sample.a : 0.0f;
+        s = {best_sample.r * inv, best_sample.g * inv, best_sample.b * inv, a};
+    } else {
+        const std::ptrdiff_t index = static_cast<int>(best + 0.5f);
+        s = {k.lut[4 * index], k.lut[4 * index + 1], k.lut[4 * index + 2], 0.0f};
+        a = k.lut_alpha[index];
+    }
+    return {s.r * a + (1.0f - a) * k.background.r, s.g * a + (1.0f - a) * k.background.g,
+            s.b * a + (1.0f - a) * k.background.b};
+}
+
 // Steps 3–5 of a ray that begin_ray / begin_pixel set up.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE PixelResult raycast_begun(const RayCastKernel& k, const PixelRay& p) {
@@ -536,23 +582,7 @@ PLIANT_HOST_DEVICE PixelResult raycast_begun(const RayCastKernel& k, const Pixel
             ++n;
         }
         result.samples = samples;
-        if (best < 0.0f) {
-            return result;
-        }
-        Sample s{};
-        float a = 0.0f;
-        if constexpr (IS_RGBA) {
-            a = clampf(best_sample.a, 0.0f, 1.0f);
-            const float inv = best_sample.a > 0.0f ? 1.0f / best_sample.a : 0.0f;
-            s = {best_sample.r * inv, best_sample.g * inv, best_sample.b * inv, a};
-        } else {
-            const std::ptrdiff_t index = static_cast<int>(best + 0.5f);
-            s = {k.lut[4 * index], k.lut[4 * index + 1], k.lut[4 * index + 2], 0.0f};
-            a = k.lut_alpha[index];
-        }
-        result.color = {s.r * a + (1.0f - a) * k.background.r,
-                        s.g * a + (1.0f - a) * k.background.g,
-                        s.b * a + (1.0f - a) * k.background.b};
+        result.color = end_mip<IS_RGBA>(k, best, best_sample);
         return result;
     }
 
