@@ -138,7 +138,7 @@ void VolumeSession::publish() {
     m_stats.resample_ms = m_solver_stats.resample_ms;
     m_stats.volume_ratio = m_solver_stats.volume_ratio;
     m_stats.inverted_tets = m_solver_stats.inverted_tets;
-    m_caster_dirty = true;
+    m_volume_changed = true;
     ++m_generation;
 }
 
@@ -371,6 +371,15 @@ void VolumeSession::end_drag() {
 }
 
 void VolumeSession::prepare_caster() {
+    const volume::Volume& shown = m_deformable ? m_targets[m_front] : m_source;
+    if (m_caster && !m_caster_dirty && m_volume_changed) {
+        // A new deformed frame, same options: the caster's arrays are reused.
+        m_caster->update(shown, m_is_rgba ? nullptr : &m_render_tf);
+        m_stats.prepare_ms = m_caster->prepare_ms();
+        m_stats.prepared = true;
+        m_volume_changed = false;
+        return;
+    }
     if (m_caster_dirty || !m_caster) {
         render::RayCastOptions options;
         options.step = m_options.step;
@@ -380,12 +389,12 @@ void VolumeSession::prepare_caster() {
         if (m_is_rgba) {
             options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;
         }
-        const volume::Volume& shown = m_deformable ? m_targets[m_front] : m_source;
         m_caster =
             std::make_unique<render::RayCaster>(shown, m_is_rgba ? nullptr : &m_render_tf, options);
         m_stats.prepare_ms = m_caster->prepare_ms();
         m_stats.prepared = true;
         m_caster_dirty = false;
+        m_volume_changed = false;
     }
 }
 

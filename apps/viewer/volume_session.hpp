@@ -165,7 +165,8 @@ private:
     std::array<volume::Volume, 2> m_targets;
     int m_front = 0;
     std::unique_ptr<render::RayCaster> m_caster;
-    bool m_caster_dirty = true;
+    bool m_caster_dirty = true;     // options changed: a new caster
+    bool m_volume_changed = false;  // only the shown volume changed: update() the caster
     // The published frame.
     std::vector<Vec3f> m_positions;
     double m_time = 0.0;

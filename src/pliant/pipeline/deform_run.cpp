@@ -212,6 +212,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     pbd::SoftBodyStats stats;
     volume::ResampleStats resampled;
     render::Image image;
+    std::optional<render::RayCaster> caster;
     for (int frame = totals.frame + 1; frame <= options.frames; ++frame) {
         const Stopwatch frame_clock;
         body.step(dt);
@@ -228,8 +229,14 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             resample_ms.add(clock.elapsed_ms());
         }
         if (video || (last && !options.still.empty())) {
-            const render::RayCaster caster(target, tf, ray_options);
-            render_ms.add(caster.render(camera, image).ms + caster.prepare_ms());
+            // One caster for the run: later frames have the same size and kind, so update()
+            // reuses its arrays instead of faulting in a new float copy every frame.
+            if (caster) {
+                caster->update(target, tf);
+            } else {
+                caster.emplace(target, tf, ray_options);
+            }
+            render_ms.add(caster->render(camera, image).ms + caster->prepare_ms());
             if (video) {
                 video->write(image);
             }
