@@ -187,8 +187,8 @@ TEST(ForkedCall, TheChildDoesNotFlushTheCallersBuffers) {
     std::FILE* f = std::fopen(path.c_str(), "w");
     ASSERT_NE(f, nullptr);
     std::fputs("once", f);  // buffered, not yet written
-    const ForkedResult run =
-        run_forked({}, [](ForkChannel&) {}, [](std::span<const std::byte>) {});
+    const ForkedResult run = run_forked(
+        {}, [](ForkChannel&) {}, [](std::span<const std::byte>) {});
     EXPECT_TRUE(run.completed) << run.failure;
     std::fclose(f);
     EXPECT_EQ(test::read_bytes(path), "once");

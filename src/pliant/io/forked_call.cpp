@@ -22,8 +22,10 @@
 
 // A sanitizer runtime's death callback (sanitizer/common_interface_defs.h), present only when
 // one is linked in: libFuzzer sets it to save the current input as a crash.
+// clang-format off
 // NOLINTNEXTLINE(bugprone-reserved-identifier, cert-dcl37-c, cert-dcl51-cpp, readability-identifier-naming)
 extern "C" __attribute__((weak)) void __sanitizer_set_death_callback(void (*callback)());
+// clang-format on
 
 namespace pliant::io {
 namespace {
@@ -96,8 +98,8 @@ std::size_t address_space_now() {
     } catch (const Unsupported& e) {
         send_error(FRAME_UNSUPPORTED, e.what());
     } catch (const std::bad_alloc&) {
-        const std::string what = fmt::format("out of memory (it may use {} MiB)",
-                                             limits.max_address_space >> 20);
+        const std::string what =
+            fmt::format("out of memory (it may use {} MiB)", limits.max_address_space >> 20);
         send_error(FRAME_OTHER, what.c_str());
     } catch (const std::exception& e) {
         send_error(FRAME_OTHER, e.what());
@@ -221,7 +223,8 @@ ForkedResult run_forked(const ForkLimits& limits, FunctionRef<void(ForkChannel&)
     std::array<int, 2> data{-1, -1};
     std::array<int, 2> err{-1, -1};
     if (::pipe2(data.data(), O_CLOEXEC) != 0) {
-        throw IoError(fmt::format("cannot make a pipe to a child process: {}", std::strerror(errno)));
+        throw IoError(
+            fmt::format("cannot make a pipe to a child process: {}", std::strerror(errno)));
     }
     if (::pipe2(err.data(), O_CLOEXEC) != 0) {
         const int e = errno;
@@ -258,7 +261,8 @@ ForkedResult run_forked(const ForkLimits& limits, FunctionRef<void(ForkChannel&)
     bool timed_out = false;
     std::array<std::byte, 65536> chunk{};
     while (child.data_fd >= 0 || child.err_fd >= 0) {
-        std::array<pollfd, 2> fds{pollfd{child.data_fd, POLLIN, 0}, pollfd{child.err_fd, POLLIN, 0}};
+        std::array<pollfd, 2> fds{pollfd{child.data_fd, POLLIN, 0},
+                                  pollfd{child.err_fd, POLLIN, 0}};
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
             deadline - std::chrono::steady_clock::now());
         if (left.count() <= 0) {
