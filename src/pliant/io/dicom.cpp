@@ -18,10 +18,13 @@
 #include <utility>
 #include <vector>
 
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
 #include "pliant/io/detail/text.hpp"
 #include "pliant/io/detail/volume_data.hpp"
+#include "pliant/io/forked_call.hpp"
+#include "pliant/io/shared_memory.hpp"
 #include "pliant/volume/reorient.hpp"
 
 #ifdef PLIANT_HAS_GDCM
@@ -590,17 +593,121 @@ std::optional<std::string> element_length_problem(const fs::path& file) {
     return problem;
 }
 
+// What GDCM may use in a child process (io/forked_call.hpp) beyond what the child inherits:
+// room for GDCM and the C++ runtime (more under AddressSanitizer, whose quarantine keeps freed
+// memory mapped), three times the largest file (GDCM holds its data elements, and copies while
+// decoding) and twice the largest decoded image. `seconds` bounds the time GDCM takes over one
+// file.
+ForkLimits gdcm_limits(std::uintmax_t largest_file, std::uintmax_t decoded_bytes, double seconds) {
+#if defined(__SANITIZE_ADDRESS__)
+    constexpr std::size_t BASE = std::size_t{1536} << 20;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+    constexpr std::size_t BASE = std::size_t{1536} << 20;
+#else
+    constexpr std::size_t BASE = std::size_t{512} << 20;
+#endif
+#else
+    constexpr std::size_t BASE = std::size_t{512} << 20;
+#endif
+    ForkLimits limits;
+    limits.max_address_space = BASE + 3 * static_cast<std::size_t>(largest_file) +
+                               2 * static_cast<std::size_t>(decoded_bytes);
+    limits.seconds_quiet = seconds;
+    return limits;
+}
+
+std::uintmax_t largest_file(const std::vector<std::string>& names) {
+    std::uintmax_t largest = 0;
+    for (const std::string& name : names) {
+        std::error_code ec;
+        const std::uintmax_t size = name.empty() ? 0 : fs::file_size(name, ec);
+        largest = std::max<std::uintmax_t>(largest, ec ? 0 : size);
+    }
+    return largest;
+}
+
+const std::array<gdcm::Tag, 13> SCANNED_TAGS{
+    SERIES_UID,     SERIES_DESCRIPTION,   MODALITY,        ROWS,
+    COLUMNS,        NUMBER_OF_FRAMES,     IMAGE_POSITION,  IMAGE_ORIENTATION,
+    PIXEL_SPACING,  IMAGER_PIXEL_SPACING, INSTANCE_NUMBER, SPACING_BETWEEN_SLICES,
+    SLICE_THICKNESS};
+
+// One file's values of SCANNED_TAGS as gdcm::Scanner gives them (nullopt: absent); `parsed`
+// false when GDCM could not parse the file.
+struct ScannedTags {
+    bool parsed = false;
+    std::array<std::optional<std::string>, SCANNED_TAGS.size()> values;
+};
+
+// gdcm::Scanner over `names` (empty names are left out), in a child process: GDCM asserts on
+// some hostile headers. A file on which the child dies is an IoError when `listed`, else skipped
+// with a warning (its `parsed` false), and the files after it are scanned by a new child.
+std::vector<ScannedTags> scan_tags(const std::vector<std::string>& names, bool listed,
+                                   double seconds) {
+    std::vector<ScannedTags> tags(names.size());
+    const ForkLimits limits = gdcm_limits(largest_file(names), 0, seconds);
+    std::size_t next = 0;  // the first file not scanned yet
+    while (next < names.size()) {
+        const std::size_t from = next;
+        const ForkedResult run = run_forked(
+            limits,
+            [&](ForkChannel& channel) {
+                quiet_gdcm();
+                for (std::size_t n = from; n < names.size(); ++n) {
+                    ByteWriter w;
+                    if (names[n].empty()) {
+                        w.put(false);
+                        channel.send(w.bytes());
+                        continue;
+                    }
+                    gdcm::Scanner scanner;
+                    for (const gdcm::Tag& tag : SCANNED_TAGS) {
+                        scanner.AddTag(tag);
+                    }
+                    scanner.Scan({names[n]});
+                    const bool parsed = scanner.IsKey(names[n].c_str());
+                    w.put(parsed);
+                    for (const gdcm::Tag& tag : SCANNED_TAGS) {
+                        const char* value =
+                            parsed ? scanner.GetValue(names[n].c_str(), tag) : nullptr;
+                        w.put(value != nullptr);
+                        if (value != nullptr) {
+                            w.put_string(value);
+                        }
+                    }
+                    channel.send(w.bytes());
+                }
+            },
+            [&](std::span<const std::byte> record) {
+                ByteReader r(record, "the GDCM scan");
+                ScannedTags& t = tags.at(next);
+                t.parsed = r.get_bool("parsed");
+                for (std::size_t i = 0; t.parsed && i < SCANNED_TAGS.size(); ++i) {
+                    if (r.get_bool("present")) {
+                        t.values[i] = r.get_string("value");
+                    }
+                }
+                ++next;
+            });
+        if (run.completed) {
+            break;
+        }
+        // The child died on file `next`.
+        if (listed) {
+            throw IoError(
+                fmt::format("{}: GDCM could not parse it: {}", names.at(next), run.failure));
+        }
+        log_warning("{}: skipped, GDCM could not parse it: {}", names.at(next), run.failure);
+        ++next;
+    }
+    return tags;
+}
+
 // Scans the headers (no pixel data). In a folder (`listed` false) files GDCM cannot parse and
 // objects without an image are skipped; in an explicit list they are errors.
-std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
-    quiet_gdcm();
-    gdcm::Scanner scanner;
-    for (const gdcm::Tag& tag :
-         {SERIES_UID, SERIES_DESCRIPTION, MODALITY, ROWS, COLUMNS, NUMBER_OF_FRAMES, IMAGE_POSITION,
-          IMAGE_ORIENTATION, PIXEL_SPACING, IMAGER_PIXEL_SPACING, INSTANCE_NUMBER,
-          SPACING_BETWEEN_SLICES, SLICE_THICKNESS}) {
-        scanner.AddTag(tag);
-    }
+std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed,
+                        double seconds = DicomReadOptions{}.gdcm_seconds) {
     // Files GDCM must not see (element_length_problem) are left out of the scan: an error when
     // listed, skipped in a folder like the files GDCM cannot parse.
     std::vector<std::string> names;
@@ -617,24 +724,23 @@ std::vector<Slice> scan(const std::vector<fs::path>& files, bool listed) {
         }
         names.push_back(f.string());
     }
-    std::vector<std::string> scanned;
-    for (const std::string& name : names) {
-        if (!name.empty()) {
-            scanned.push_back(name);
-        }
-    }
-    scanner.Scan(scanned);
+    const std::vector<ScannedTags> scanned = scan_tags(names, listed, seconds);
     std::vector<Slice> slices;
     for (std::size_t n = 0; n < files.size(); ++n) {
-        const char* name = names[n].c_str();
-        if (names[n].empty() || !scanner.IsKey(name)) {
+        if (names[n].empty() || !scanned[n].parsed) {
             if (listed) {
                 throw IoError(fmt::format("{}: not a DICOM file (GDCM cannot parse it)", names[n]));
             }
             continue;
         }
-        const auto value = [&](const gdcm::Tag& tag) {
-            return scanner.GetValue(name, tag);
+        const auto value = [&](const gdcm::Tag& tag) -> const char* {
+            for (std::size_t i = 0; i < SCANNED_TAGS.size(); ++i) {
+                if (SCANNED_TAGS[i] == tag) {
+                    const std::optional<std::string>& v = scanned[n].values[i];
+                    return v ? v->c_str() : nullptr;
+                }
+            }
+            return nullptr;
         };
         Slice s;
         s.file = files[n];
@@ -870,10 +976,11 @@ double stored_value(const std::byte* raw, std::size_t index, gdcm::PixelFormat::
     }
 }
 
-// The pixel data of every file, in order, into one buffer of the stored format; with each
+// The pixel data of every file, in order, in one buffer of the stored format; with each
 // file's rescale slope and intercept.
 struct Pixels {
-    std::vector<std::byte> raw;
+    SharedMemory memory;       // what the child process decoded into
+    std::span<std::byte> raw;  // the stored pixels: files × pixels per file × format.bytes
     StoredFormat format;
     std::vector<double> slopes;
     std::vector<double> intercepts;
@@ -881,85 +988,128 @@ struct Pixels {
     std::vector<double> stored_max;
 };
 
+// One file's result of read_pixels' child process.
+struct DecodedFile {
+    StoredFormat format;
+    double slope = 1.0;
+    double intercept = 0.0;
+    double lo = 0.0;  // stored values
+    double hi = 0.0;
+};
+
+// GDCM reads and decodes every file in a child process (io/forked_call.hpp), into shared memory
+// sized for 8 bytes a pixel (what is not written costs address space only): a GDCM assertion,
+// crash, runaway allocation or hang on a file is an IoError naming it.
 Pixels read_pixels(const std::vector<Slice>& slices, const volume::Dims& dims,
-                   std::size_t max_bytes, const fs::path& where) {
-    quiet_gdcm();
+                   std::size_t max_bytes, const fs::path& where, double seconds) {
     Pixels px;
     const auto per_file = static_cast<std::size_t>(dims[0] * dims[1]) *
                           static_cast<std::size_t>(slices.front().frames);
-    for (std::size_t n = 0; n < slices.size(); ++n) {
-        const fs::path& file = slices[n].file;
-        gdcm::ImageReader reader;
-        reader.SetFileName(file.c_str());
-        if (!reader.Read()) {
-            throw IoError(
-                fmt::format("{}: cannot read the DICOM image (GDCM could not parse the "
-                            "file or decode its pixel data)",
-                            file.string()));
-        }
-        const gdcm::Image& image = reader.GetImage();
-        const StoredFormat format = stored_format(file, image);
-        if (n == 0) {
-            px.format = format;
-            // The stored data and the volume (at most 4 bytes a voxel) must both fit.
-            const volume::Dims stored_dims{dims[0], dims[1],
-                                           dims[2] * static_cast<std::int64_t>(format.bytes)};
-            detail::check_declared_size(where, stored_dims, VoxelType::u8, max_bytes);
-            detail::check_declared_size(where, dims, VoxelType::f32, max_bytes);
-            px.raw.resize(per_file * slices.size() * format.bytes);
-        } else if (format.scalar != px.format.scalar) {
-            throw InvalidInput(
-                fmt::format("{}: mixed pixel formats in one series: {} stores {}, {} stores {}",
-                            where.string(), slices.front().file.filename().string(),
-                            gdcm::PixelFormat(px.format.scalar).GetScalarTypeAsString(),
-                            file.filename().string(),
-                            gdcm::PixelFormat(format.scalar).GetScalarTypeAsString()));
-        }
-        const std::int64_t frames = image.GetNumberOfDimensions() >= 3
-                                        ? static_cast<std::int64_t>(image.GetDimension(2))
-                                        : 1;
-        if (static_cast<std::int64_t>(image.GetDimension(0)) != dims[0] ||
-            static_cast<std::int64_t>(image.GetDimension(1)) != dims[1] ||
-            frames != slices[n].frames) {
-            throw InvalidInput(fmt::format("{}: the image is {}x{}x{}, its header said {}x{}x{}",
-                                           file.string(), image.GetDimension(0),
-                                           image.GetDimension(1), frames, dims[0], dims[1],
-                                           slices[n].frames));
-        }
-        const std::size_t bytes = per_file * format.bytes;
-        if (image.GetBufferLength() != bytes) {
-            throw IoError(fmt::format("{}: the decoded pixel data has {} bytes, expected {}",
-                                      file.string(), image.GetBufferLength(), bytes));
-        }
-        std::byte* out = px.raw.data() + n * bytes;
-        if (!image.GetBuffer(reinterpret_cast<char*>(out))) {
-            const char* syntax = gdcm::TransferSyntax::GetTSString(
-                reader.GetFile().GetHeader().GetDataSetTransferSyntax());
-            throw IoError(fmt::format(
-                "{}: cannot decode the DICOM pixel data (transfer syntax {}): this GDCM has no "
-                "codec for it, or the data is corrupt",
-                file.string(), syntax != nullptr ? syntax : "unknown"));
-        }
-        double lo = std::numeric_limits<double>::infinity();
-        double hi = -lo;
-        for (std::size_t i = 0; i < per_file; ++i) {
-            const double v = stored_value(out, i, format.scalar);
-            lo = std::min(lo, v);
-            hi = std::max(hi, v);
-        }
-        const double slope = image.GetSlope();
-        const double intercept = image.GetIntercept();
-        if (!std::isfinite(slope) || slope == 0.0 || !std::isfinite(intercept)) {
-            throw IoError(
-                fmt::format("{}: RescaleSlope {} / RescaleIntercept {}: expected finite "
-                            "numbers, a slope other than 0",
-                            file.string(), slope, intercept));
-        }
-        px.slopes.push_back(slope);
-        px.intercepts.push_back(intercept);
-        px.stored_min.push_back(lo);
-        px.stored_max.push_back(hi);
+    constexpr std::size_t MAX_PIXEL_BYTES = 8;
+    px.memory = SharedMemory(per_file * slices.size() * MAX_PIXEL_BYTES);
+    const std::span<std::byte> shared = px.memory.bytes();
+    std::vector<std::string> names;
+    names.reserve(slices.size());
+    for (const Slice& s : slices) {
+        names.push_back(s.file.string());
     }
+    const ForkLimits limits =
+        gdcm_limits(largest_file(names),
+                    std::min<std::uintmax_t>(per_file * MAX_PIXEL_BYTES, max_bytes), seconds);
+    // The child: each file decoded into its place, checked as it goes.
+    const auto decode_all = [&](ForkChannel& channel) {
+        quiet_gdcm();
+        StoredFormat first;
+        for (std::size_t n = 0; n < slices.size(); ++n) {
+            const fs::path& file = slices[n].file;
+            gdcm::ImageReader reader;
+            reader.SetFileName(file.c_str());
+            if (!reader.Read()) {
+                throw IoError(
+                    fmt::format("{}: cannot read the DICOM image (GDCM could not parse the "
+                                "file or decode its pixel data)",
+                                file.string()));
+            }
+            const gdcm::Image& image = reader.GetImage();
+            const StoredFormat format = stored_format(file, image);
+            if (n == 0) {
+                first = format;
+                // The stored data and the volume (at most 4 bytes a voxel) must both fit.
+                const volume::Dims stored_dims{dims[0], dims[1],
+                                               dims[2] * static_cast<std::int64_t>(format.bytes)};
+                detail::check_declared_size(where, stored_dims, VoxelType::u8, max_bytes);
+                detail::check_declared_size(where, dims, VoxelType::f32, max_bytes);
+            } else if (format.scalar != first.scalar) {
+                throw InvalidInput(
+                    fmt::format("{}: mixed pixel formats in one series: {} stores {}, {} stores {}",
+                                where.string(), slices.front().file.filename().string(),
+                                gdcm::PixelFormat(first.scalar).GetScalarTypeAsString(),
+                                file.filename().string(),
+                                gdcm::PixelFormat(format.scalar).GetScalarTypeAsString()));
+            }
+            const std::int64_t frames = image.GetNumberOfDimensions() >= 3
+                                            ? static_cast<std::int64_t>(image.GetDimension(2))
+                                            : 1;
+            if (static_cast<std::int64_t>(image.GetDimension(0)) != dims[0] ||
+                static_cast<std::int64_t>(image.GetDimension(1)) != dims[1] ||
+                frames != slices[n].frames) {
+                throw InvalidInput(
+                    fmt::format("{}: the image is {}x{}x{}, its header said {}x{}x{}",
+                                file.string(), image.GetDimension(0), image.GetDimension(1), frames,
+                                dims[0], dims[1], slices[n].frames));
+            }
+            const std::size_t bytes = per_file * format.bytes;
+            if (image.GetBufferLength() != bytes) {
+                throw IoError(fmt::format("{}: the decoded pixel data has {} bytes, expected {}",
+                                          file.string(), image.GetBufferLength(), bytes));
+            }
+            std::byte* out = shared.data() + n * bytes;
+            if (!image.GetBuffer(reinterpret_cast<char*>(out))) {
+                const char* syntax = gdcm::TransferSyntax::GetTSString(
+                    reader.GetFile().GetHeader().GetDataSetTransferSyntax());
+                throw IoError(fmt::format(
+                    "{}: cannot decode the DICOM pixel data (transfer syntax {}): this GDCM has "
+                    "no codec for it, or the data is corrupt",
+                    file.string(), syntax != nullptr ? syntax : "unknown"));
+            }
+            DecodedFile d;
+            d.format = format;
+            d.lo = std::numeric_limits<double>::infinity();
+            d.hi = -d.lo;
+            for (std::size_t i = 0; i < per_file; ++i) {
+                const double v = stored_value(out, i, format.scalar);
+                d.lo = std::min(d.lo, v);
+                d.hi = std::max(d.hi, v);
+            }
+            d.slope = image.GetSlope();
+            d.intercept = image.GetIntercept();
+            if (!std::isfinite(d.slope) || d.slope == 0.0 || !std::isfinite(d.intercept)) {
+                throw IoError(
+                    fmt::format("{}: RescaleSlope {} / RescaleIntercept {}: expected finite "
+                                "numbers, a slope other than 0",
+                                file.string(), d.slope, d.intercept));
+            }
+            ByteWriter w;
+            w.put(d);
+            channel.send(w.bytes());
+        }
+    };
+    const ForkedResult run = run_forked(limits, decode_all, [&](std::span<const std::byte> record) {
+        ByteReader r(record, "the GDCM decoding");
+        const auto d = r.get<DecodedFile>("file");
+        if (px.slopes.empty()) {
+            px.format = d.format;
+        }
+        px.slopes.push_back(d.slope);
+        px.intercepts.push_back(d.intercept);
+        px.stored_min.push_back(d.lo);
+        px.stored_max.push_back(d.hi);
+    });
+    if (!run.completed) {
+        throw IoError(fmt::format("{}: GDCM could not parse it: {}",
+                                  slices.at(px.slopes.size()).file.string(), run.failure));
+    }
+    px.raw = shared.first(per_file * slices.size() * px.format.bytes);
     return px;
 }
 
@@ -1222,18 +1372,41 @@ volume::GridPlacement slice_geometry(const fs::path& where, std::vector<Slice>& 
     return grid;
 }
 
-// One multi-frame file: GDCM's own geometry (it reads the functional groups of enhanced files).
-volume::GridPlacement multiframe_geometry(const fs::path& file) {
-    quiet_gdcm();
-    gdcm::ImageReader reader;
-    reader.SetFileName(file.c_str());
-    if (!reader.Read()) {
-        throw IoError(fmt::format("{}: cannot read the DICOM image", file.string()));
+// One multi-frame file: GDCM's own geometry (it reads the functional groups of enhanced files),
+// read in a child process like the pixels.
+volume::GridPlacement multiframe_geometry(const fs::path& file, double seconds) {
+    std::array<double, 12> g{};  // origin, direction cosines (row, column), spacing
+    bool received = false;
+    const ForkedResult run = run_forked(
+        gdcm_limits(largest_file({file.string()}), 0, seconds),
+        [&](ForkChannel& channel) {
+            quiet_gdcm();
+            gdcm::ImageReader reader;
+            reader.SetFileName(file.c_str());
+            if (!reader.Read()) {
+                throw IoError(fmt::format("{}: cannot read the DICOM image", file.string()));
+            }
+            const gdcm::Image& image = reader.GetImage();
+            std::array<double, 12> out{};
+            std::copy_n(image.GetOrigin(), 3, out.begin());
+            std::copy_n(image.GetDirectionCosines(), 6, out.begin() + 3);
+            std::copy_n(image.GetSpacing(), 3, out.begin() + 9);
+            ByteWriter w;
+            w.put(out);
+            channel.send(w.bytes());
+        },
+        [&](std::span<const std::byte> record) {
+            ByteReader r(record, "the GDCM geometry");
+            g = r.get<std::array<double, 12>>("geometry");
+            received = true;
+        });
+    if (!run.completed || !received) {
+        throw IoError(fmt::format("{}: GDCM could not parse it: {}", file.string(),
+                                  run.failure.empty() ? "no geometry" : run.failure));
     }
-    const gdcm::Image& image = reader.GetImage();
-    const double* o = image.GetOrigin();
-    const double* d = image.GetDirectionCosines();
-    const double* s = image.GetSpacing();
+    const double* o = g.data();
+    const double* d = g.data() + 3;
+    const double* s = g.data() + 9;
     const Vec3d row{d[0], d[1], d[2]};
     const Vec3d column{d[3], d[4], d[5]};
     const Vec3d normal = cross(row, column);
@@ -1252,17 +1425,19 @@ volume::GridPlacement multiframe_geometry(const fs::path& file) {
 }
 
 volume::Volume read_slices(const fs::path& where, std::vector<Slice> slices,
-                           std::size_t max_bytes) {
+                           const DicomReadOptions& options) {
+    const std::size_t max_bytes = options.max_bytes;
+    const double seconds = options.gdcm_seconds;
     const DicomSeriesInfo info = info_of(slices);
     volume::GridPlacement grid;
     if (slices.size() == 1 && slices.front().frames > 1) {
-        grid = multiframe_geometry(slices.front().file);
+        grid = multiframe_geometry(slices.front().file, seconds);
     } else {
         grid = slice_geometry(where, slices);
     }
     const volume::Dims dims = info.dims;
     detail::check_declared_size(where, dims, VoxelType::u8, max_bytes);
-    const Pixels px = read_pixels(slices, dims, max_bytes, where);
+    const Pixels px = read_pixels(slices, dims, max_bytes, where, seconds);
     volume::Volume v = rescaled(px, dims, slices.size(), max_bytes);
     return volume::place_nearest_axes(std::move(v), grid);
 }
@@ -1299,27 +1474,29 @@ volume::Volume read_dicom_series(const fs::path& path, const DicomReadOptions& o
     std::error_code ec;
     if (fs::is_directory(path, ec)) {
         const std::vector<fs::path> files = candidate_files(path);
-        return read_slices(
-            path, choose(path, by_series(scan(files, false)), options.series_uid, files.size()),
-            options.max_bytes);
+        return read_slices(path,
+                           choose(path, by_series(scan(files, false, options.gdcm_seconds)),
+                                  options.series_uid, files.size()),
+                           options);
     }
     if (!fs::exists(path, ec)) {
         throw IoError(fmt::format("{}: no such file or folder", path.string()));
     }
     // One file: the series it belongs to, from its folder (itself alone when multi-frame).
-    const std::vector<Slice> own = scan({path}, true);
+    const std::vector<Slice> own = scan({path}, true, options.gdcm_seconds);
     const Slice& self = own.front();
     if (self.frames > 1) {
-        return read_slices(path, own, options.max_bytes);
+        return read_slices(path, own, options);
     }
     const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
     const std::vector<fs::path> files = candidate_files(dir);
-    std::map<std::string, std::vector<Slice>> series = by_series(scan(files, false));
+    std::map<std::string, std::vector<Slice>> series =
+        by_series(scan(files, false, options.gdcm_seconds));
     const std::string uid = options.series_uid.empty() ? self.series_uid : options.series_uid;
     if (series.count(uid) == 0) {
         series[self.series_uid].push_back(self);  // the file's folder did not list it
     }
-    return read_slices(dir, choose(dir, std::move(series), uid, files.size()), options.max_bytes);
+    return read_slices(dir, choose(dir, std::move(series), uid, files.size()), options);
 }
 
 volume::Volume read_dicom_series(std::span<const fs::path> files, const DicomReadOptions& options) {
@@ -1327,10 +1504,11 @@ volume::Volume read_dicom_series(std::span<const fs::path> files, const DicomRea
         throw InvalidInput("read_dicom_series: no files given");
     }
     const fs::path where = files.front().parent_path();
-    return read_slices(where,
-                       choose(where, by_series(scan({files.begin(), files.end()}, true)),
-                              options.series_uid, files.size()),
-                       options.max_bytes);
+    return read_slices(
+        where,
+        choose(where, by_series(scan({files.begin(), files.end()}, true, options.gdcm_seconds)),
+               options.series_uid, files.size()),
+        options);
 }
 
 #endif

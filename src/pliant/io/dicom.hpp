@@ -61,6 +61,8 @@ struct DicomSeriesInfo {
 struct DicomReadOptions {
     std::string series_uid{};  // empty: the largest series
     std::size_t max_bytes = volume::Volume::MAX_BYTES;
+    // The longest GDCM may take over one file (seconds); its child process is killed after.
+    double gdcm_seconds = 60.0;
 };
 
 // False when pliant was built without GDCM (then the functions below throw Unsupported).
