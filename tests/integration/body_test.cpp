@@ -36,8 +36,7 @@ double winding_number(const geometry::TriangleMeshD& mesh, const Vec3d& p) {
         const double lb = norm(b);
         const double lc = norm(c);
         const double numerator = dot(a, cross(b, c));
-        const double denominator =
-            la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+        const double denominator = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
         sum += 2.0 * std::atan2(numerator, denominator);
     }
     return sum / (4.0 * std::numbers::pi);
@@ -46,11 +45,10 @@ double winding_number(const geometry::TriangleMeshD& mesh, const Vec3d& p) {
 TEST(BodyScene, ClothOnATurningBodyNeverEntersItAndStaysIntersectionFree) {
     ScratchDir scratch;
     constexpr int FRAMES = 24;  // one walk cycle of the body
-    const CliResult r =
-        run_cli("cloth " + quoted(SCENES / "stress" / "cloth_on_turning_body.json") + " --out " +
-                    quoted(scratch / "out") + " --frames " + std::to_string(FRAMES) +
-                    " --no-preview",
-                scratch);
+    const CliResult r = run_cli(
+        "cloth " + quoted(SCENES / "stress" / "cloth_on_turning_body.json") + " --out " +
+            quoted(scratch / "out") + " --frames " + std::to_string(FRAMES) + " --no-preview",
+        scratch);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const nlohmann::json stats = nlohmann::json::parse(read_text(scratch / "out" / "stats.json"));
     ASSERT_EQ(stats.at("frames").size(), static_cast<std::size_t>(FRAMES));
@@ -88,10 +86,33 @@ TEST(BodyScene, ClothOnATurningBodyNeverEntersItAndStaysIntersectionFree) {
     }
 }
 
+TEST(BodyScene, ResumedAndThreadedRunsWriteTheSameFrames) {
+    ScratchDir scratch;
+    const std::string scene = quoted(SCENES / "stress" / "cloth_on_turning_body.json");
+    const CliResult whole = run_cli("cloth " + scene + " --out " + quoted(scratch / "whole") +
+                                        " --frames 4 --no-preview --threads 2",
+                                    scratch);
+    ASSERT_EQ(whole.exit_code, 0) << whole.err;
+    const CliResult first = run_cli("cloth " + scene + " --out " + quoted(scratch / "parts") +
+                                        " --frames 2 --checkpoint-every 2 --no-preview --threads 1",
+                                    scratch);
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    const CliResult rest = run_cli("cloth " + scene + " --out " + quoted(scratch / "parts") +
+                                       " --frames 4 --resume --no-preview --threads 1",
+                                   scratch);
+    ASSERT_EQ(rest.exit_code, 0) << rest.err;
+    for (const char* name : {"frame_0002.obj", "frame_0003.obj", "frame_0004.obj"}) {
+        const std::string a = read_text(scratch / "whole" / "frames" / name);
+        EXPECT_FALSE(a.empty()) << name;
+        EXPECT_TRUE(a == read_text(scratch / "parts" / "frames" / name)) << name;
+    }
+}
+
 TEST(BodyScene, BadFrameSequencesAndAttachmentsAreClearErrors) {
     ScratchDir scratch;
-    const std::string tetrahedron = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-                                    "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+    const std::string tetrahedron =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
     std::ofstream(scratch / "a.obj") << tetrahedron;
     std::ofstream(scratch / "more.obj") << tetrahedron << "v 2 2 2\n";
     std::ofstream(scratch / "nan.obj") << "v 0 0 nan\n" << tetrahedron.substr(8);

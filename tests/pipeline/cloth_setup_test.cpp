@@ -2,9 +2,8 @@
 // frame files found by pattern or list, one topology checked, bad files named.
 #include "pliant/pipeline/cloth_setup.hpp"
 
-#include <gtest/gtest.h>
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <string>
@@ -71,19 +70,20 @@ TEST(ClothSetup, ReadsFramesByPatternAndTheSolverFollowsThem) {
     EXPECT_NEAR(end.z - start.z, 0.2, 1e-12);
     EXPECT_NEAR(end.x, start.x, 1e-12);
     // A list of files, with a count beyond them, and one of the files missing.
-    EXPECT_NE(error_of(scene_with(
-                  dir, R"({"mesh": {"frames": "body/f_%03d.obj", "start": 1, "count": 4}})"))
-                  .find("frame file " + (dir / "body/f_004.obj").string() + " is missing"),
-              std::string::npos);
+    EXPECT_NE(
+        error_of(
+            scene_with(dir, R"({"mesh": {"frames": "body/f_%03d.obj", "start": 1, "count": 4}})"))
+            .find("frame file " + (dir / "body/f_004.obj").string() + " is missing"),
+        std::string::npos);
     EXPECT_NE(error_of(scene_with(dir, R"({"mesh": {"frames": "body/g_%03d.obj"}})"))
                   .find("no file matches"),
               std::string::npos);
     EXPECT_NE(error_of(scene_with(dir, R"({"mesh": {"frames": "body/f_%03d_%d.obj"}})"))
                   .find("one frame number"),
               std::string::npos);
-    EXPECT_NE(error_of(scene_with(dir, R"({"mesh": {"frames": "body/f.obj"}})"))
-                  .find("one frame number"),
-              std::string::npos);
+    EXPECT_NE(
+        error_of(scene_with(dir, R"({"mesh": {"frames": "body/f.obj"}})")).find("one frame number"),
+        std::string::npos);
     EXPECT_NE(
         error_of(scene_with(dir, R"({"mesh": {"frames": ["body/f_001.obj", "body/nope.obj"]}})"))
             .find("nope.obj"),
@@ -96,8 +96,9 @@ TEST(ClothSetup, FramesOfAnotherTopologyOrNotFiniteAreErrors) {
     write_bytes(dir / "more.obj", tetrahedron(0.1, "v 5 5 5\n"));
     write_bytes(dir / "other.obj",
                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
-    write_bytes(dir / "nan.obj", "v 0 0 nan\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-                                 "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+    write_bytes(dir / "nan.obj",
+                "v 0 0 nan\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
     const std::string more =
         error_of(scene_with(dir, R"({"mesh": {"frames": ["a.obj", "more.obj"]}})"));
     EXPECT_NE(more.find("obstacles[0].mesh.frames: frame 1"), std::string::npos) << more;

@@ -334,7 +334,7 @@ cloth::PinGroup read_pin_group(ObjectReader& p) {
     });
     if (group.attach && !group.motion.is_static()) {
         p.fail(p.key_path("attach"),
-               "either \"attach\" or \"motion\" (attached pins follow the obstacle)", "both");
+               R"(either "attach" or "motion" (attached pins follow the obstacle))", "both");
     }
     return group;
 }
