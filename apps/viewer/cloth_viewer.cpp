@@ -38,6 +38,7 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
     MeshDrawer drawer;
     MeshBuffers cloth_buffers;
     std::vector<MeshBuffers> obstacle_buffers(session.setup().shapes.size());
+    std::vector<Vec3d> animated_positions;  // a deforming obstacle's, per drawn frame
     for (std::size_t k = 0; k < obstacle_buffers.size(); ++k) {
         const pipeline::ObstacleShape& shape = session.setup().shapes[k];
         obstacle_buffers[k].upload(shape.rest.positions, shape.rest.triangles, shape.smooth);
@@ -147,6 +148,11 @@ nlohmann::ordered_json run_cloth_view(const cloth::ClothScene& scene, const std:
         for (std::size_t k = 0; k < obstacle_buffers.size(); ++k) {
             const pipeline::ObstacleShape& shape = session.setup().shapes[k];
             Matrix4 model = identity_matrix();
+            if (shape.animation) {  // a deforming mesh: its frame at this time
+                animated_positions.resize(shape.rest.positions.size());
+                shape.animation->positions_at(session.time(), animated_positions);
+                obstacle_buffers[k].upload(animated_positions, shape.rest.triangles, shape.smooth);
+            }
             if (!shape.motion.is_static()) {
                 const cloth::Pose pose = shape.motion.pose(session.time());
                 model = rigid_matrix(pose.rotation.row, pose.pivot, pose.translate);

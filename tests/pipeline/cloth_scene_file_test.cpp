@@ -251,3 +251,81 @@ TEST(ClothScene, MissingFile) {
 
 }  // namespace
 }  // namespace pliant::pipeline
+
+namespace pliant::pipeline {
+namespace {
+
+TEST(ClothScene, ReadsDeformingObstaclesAndAttachedPins) {
+    const cloth::ClothScene scene = parse(R"({
+        "cloth": {"grid": {}},
+        "pins": [{"vertices": [1]},
+                 {"vertices": [0, 2], "attach": {"obstacle": "body", "max_distance": 0.1}},
+                 {"vertices": [3], "attach": {"obstacle": 0}}],
+        "obstacles": [{"name": "body",
+                       "mesh": {"frames": "body/frame_%04d.obj", "fps": 30, "loop": true,
+                                "start": 1, "count": 12, "translate": [0, 0, 1]}},
+                      {"mesh": {"frames": ["a.obj", "/abs/b.obj"]}}]})");
+    ASSERT_EQ(scene.obstacles.size(), 2u);
+    const cloth::SceneObstacle& body = scene.obstacles[0];
+    EXPECT_EQ(body.name, "body");
+    EXPECT_EQ(body.frames_pattern, std::filesystem::path("/scenes/body/frame_%04d.obj"));
+    EXPECT_EQ(body.frames_fps, 30.0);
+    EXPECT_TRUE(body.loop);
+    EXPECT_EQ(body.frame_start, 1);
+    EXPECT_EQ(body.frame_count, 12);
+    EXPECT_EQ(body.mesh_placement.translate, (Vec3d{0, 0, 1}));
+    const cloth::SceneObstacle& listed = scene.obstacles[1];
+    ASSERT_EQ(listed.frames.size(), 2u);
+    EXPECT_EQ(listed.frames[0], std::filesystem::path("/scenes/a.obj"));
+    EXPECT_EQ(listed.frames[1], std::filesystem::path("/abs/b.obj"));
+    EXPECT_EQ(listed.mesh, listed.frames[0]);
+    EXPECT_EQ(listed.frames_fps, 0.0);  // the scene's
+    EXPECT_FALSE(listed.loop);
+    EXPECT_FALSE(scene.pins[0].attach);
+    ASSERT_TRUE(scene.pins[1].attach);
+    EXPECT_EQ(scene.pins[1].attach->obstacle_index, 0);
+    EXPECT_EQ(scene.pins[1].attach->max_distance, 0.1);
+    EXPECT_EQ(scene.pins[2].attach->obstacle_index, 0);
+}
+
+TEST(ClothScene, BrokenDeformingObstaclesAndAttachmentsNameTheKey) {
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"mesh": {"frames": 3}}]})",
+                 {"obstacles[0].mesh.frames", "a file pattern"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"mesh": {"frames": []}}]})",
+                 {"obstacles[0].mesh.frames", "non-empty list"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"mesh": {"frames": ["a.obj", 2]}}]})",
+                 {"obstacles[0].mesh.frames[1]", "a file name"});
+    expect_error(
+        R"({"cloth": {"grid": {}}, "obstacles": [{"mesh": {"file": "a.obj", "frames": "b%d"}}]})",
+        {"obstacles[0].mesh.frames", "both"});
+    expect_error(R"({"cloth": {"grid": {}},
+                     "obstacles": [{"mesh": {"frames": "b%d.obj", "fps": 0}}]})",
+                 {"obstacles[0].mesh.fps"});
+    expect_error(R"({"cloth": {"grid": {}},
+                     "obstacles": [{"mesh": {"frames": "b%d.obj", "loop": 1}}]})",
+                 {"obstacles[0].mesh.loop", "true or false"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"mesh": {"file": "a.obj", "fps": 2}}]})",
+                 {"obstacles[0].mesh.fps", "unknown key"});
+    expect_error(R"({"cloth": {"grid": {}}, "obstacles": [{"name": "a", "sphere": {}},
+                                                          {"name": "a", "sphere": {}}]})",
+                 {"obstacles[1].name", "\"a\"", "obstacles[0]"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": {"vertices": [0], "attach": {"obstacle": "x"}},
+                     "obstacles": [{"name": "body", "mesh": {"file": "a.obj"}}]})",
+                 {"pins.attach.obstacle", "\"body\"", "got \"x\""});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": {"vertices": [0], "attach": {"obstacle": 0}},
+                     "obstacles": [{"sphere": {}}]})",
+                 {"pins.attach.obstacle", "a mesh obstacle", "an analytic shape"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": {"vertices": [0], "attach": {"obstacle": 2}},
+                     "obstacles": [{"sphere": {}}]})",
+                 {"pins.attach.obstacle", "the scene has 1 obstacles"});
+    expect_error(R"({"cloth": {"grid": {}}, "pins": {"vertices": [0], "attach": {}}})",
+                 {"pins.attach.obstacle", "nothing"});
+    expect_error(R"({"cloth": {"grid": {}},
+                     "pins": {"vertices": [0], "attach": {"obstacle": 0},
+                              "motion": {"keyframes": [{"time": 0}]}},
+                     "obstacles": [{"mesh": {"file": "a.obj"}}]})",
+                 {"pins.attach", "both"});
+}
+
+}  // namespace
+}  // namespace pliant::pipeline

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -48,6 +49,43 @@ Obstacle placed(const Obstacle& rest, const Pose& pose) {
     }
     const auto& box = std::get<BoxObstacle>(rest);
     return BoxObstacle{box.min + pose.translate, box.max + pose.translate};
+}
+
+// The orthonormal frame of a triangle (rows: the unit first edge, the unit normal's cross with
+// it, the unit normal), or the identity for a degenerate triangle.
+Rotation triangle_frame(const std::array<Vec3d, 3>& c) {
+    const Vec3d e = c[1] - c[0];
+    const Vec3d n = cross(e, c[2] - c[0]);
+    const double e_length = norm(e);
+    const double n_length = norm(n);
+    Rotation frame;
+    if (e_length > 0.0 && n_length > 0.0) {
+        frame.row[0] = e * (1.0 / e_length);
+        frame.row[2] = n * (1.0 / n_length);
+        frame.row[1] = cross(frame.row[2], frame.row[0]);
+    }
+    return frame;
+}
+
+// d in a triangle's frame, and back: a point attached to the triangle turns with it.
+Vec3d to_triangle_frame(const std::array<Vec3d, 3>& c, const Vec3d& d) {
+    return triangle_frame(c).apply(d);
+}
+Vec3d from_triangle_frame(const std::array<Vec3d, 3>& c, const Vec3d& local) {
+    return triangle_frame(c).apply_inverse(local);
+}
+
+// How far an analytic obstacle's surface moved between two placements of one shape (m): a
+// sphere's centre, a plane along its normal, a box's corner.
+double obstacle_move(const Obstacle& before, const Obstacle& after) {
+    if (const auto* plane = std::get_if<PlaneObstacle>(&after)) {
+        const auto& was = std::get<PlaneObstacle>(before);
+        return std::abs(dot(plane->point - was.point, plane->normal)) / norm(plane->normal);
+    }
+    if (const auto* sphere = std::get_if<SphereObstacle>(&after)) {
+        return norm(sphere->center - std::get<SphereObstacle>(before).center);
+    }
+    return norm(std::get<BoxObstacle>(after).min - std::get<BoxObstacle>(before).min);
 }
 
 }  // namespace
@@ -132,20 +170,37 @@ void ClothModel::add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,
         throw InvalidInput(
             "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
     }
-    m_mesh_obstacles.push_back({std::move(obstacle), MotionState(motion, m_time)});
+    m_mesh_obstacles.push_back({std::move(obstacle), MotionState(motion, m_time), {}, {}, {}});
+}
+
+std::size_t ClothModel::add_animated_mesh_obstacle(const MeshObstacle& obstacle,
+                                                   std::shared_ptr<const MeshAnimation> animation,
+                                                   const Motion& motion) {
+    if (!animation) {
+        throw InvalidInput("cloth: an animated mesh obstacle needs an animation");
+    }
+    if (animation->num_vertices() != obstacle.mesh().positions.size()) {
+        throw InvalidInput(fmt::format(
+            "cloth: animated mesh obstacle: the animation has {} vertices per frame, the mesh {}",
+            animation->num_vertices(), obstacle.mesh().positions.size()));
+    }
+    if (!motion.is_valid()) {
+        throw InvalidInput(
+            "cloth: obstacle motion: expected finite keyframes at strictly increasing times");
+    }
+    auto deforming = std::make_shared<MeshObstacle>(obstacle);
+    std::vector<Vec3d> now(animation->num_vertices());
+    animation->positions_at(m_time, now);
+    deforming->set_positions(now);
+    m_mesh_obstacles.push_back(
+        {deforming, MotionState(motion, m_time), std::move(animation), deforming, std::move(now)});
+    return m_mesh_obstacles.size() - 1;
 }
 
 void ClothModel::add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
     if (!motion.is_valid()) {
         throw InvalidInput(
             "cloth: pin motion: expected finite keyframes at strictly increasing times");
-    }
-    // A vertex follows its last group: it leaves the earlier ones.
-    std::vector<bool> in_group(m_positions.size(), false);
-    for (const std::int32_t v : vertices) {
-        if (v >= 0 && static_cast<std::size_t>(v) < m_positions.size()) {
-            in_group[static_cast<std::size_t>(v)] = true;
-        }
     }
     MovingPins pins;
     pins.motion = motion;
@@ -162,19 +217,105 @@ void ClothModel::add_moving_pins(std::span<const std::int32_t> vertices, const M
         pins.rest_positions.push_back(
             start.apply_inverse(m_positions[static_cast<std::size_t>(v)]));
     }
+    add_pin_group(std::move(pins));
+}
+
+void ClothModel::add_pin_group(MovingPins pins) {
+    // A vertex follows its last group: it leaves the earlier ones.
+    std::vector<bool> in_group(m_positions.size(), false);
+    for (const std::int32_t v : pins.vertices) {
+        in_group[static_cast<std::size_t>(v)] = true;
+    }
     for (MovingPins& earlier : m_moving_pins) {
+        const bool attached = earlier.mesh_obstacle >= 0;
         std::size_t kept = 0;
         for (std::size_t k = 0; k < earlier.vertices.size(); ++k) {
             if (!in_group[static_cast<std::size_t>(earlier.vertices[k])]) {
                 earlier.vertices[kept] = earlier.vertices[k];
                 earlier.rest_positions[kept] = earlier.rest_positions[k];
+                if (attached) {
+                    earlier.triangles[kept] = earlier.triangles[k];
+                    earlier.barycentric[kept] = earlier.barycentric[k];
+                    earlier.offsets[kept] = earlier.offsets[k];
+                }
                 ++kept;
             }
         }
         earlier.vertices.resize(kept);
         earlier.rest_positions.resize(kept);
+        if (attached) {
+            earlier.triangles.resize(kept);
+            earlier.barycentric.resize(kept);
+            earlier.offsets.resize(kept);
+        }
     }
     m_moving_pins.push_back(std::move(pins));
+}
+
+void ClothModel::add_attached_pins(std::span<const std::int32_t> vertices,
+                                   std::size_t mesh_obstacle, double max_distance) {
+    if (mesh_obstacle >= m_mesh_obstacles.size()) {
+        throw InvalidInput(fmt::format(
+            "cloth: attached pins: mesh obstacle {} out of range, expected an index below {}",
+            mesh_obstacle, m_mesh_obstacles.size()));
+    }
+    const MovingMeshObstacle& body = m_mesh_obstacles[mesh_obstacle];
+    MovingPins pins;
+    pins.mesh_obstacle = static_cast<std::int64_t>(mesh_obstacle);
+    const double reach = norm(body.mesh->bounds().extent()) + max_distance;
+    for (const std::int32_t v : vertices) {
+        if (v < 0 || static_cast<std::size_t>(v) >= m_positions.size()) {
+            throw InvalidInput(
+                fmt::format("cloth: pinned vertex {} out of range, expected an index in [0, {})", v,
+                            m_positions.size()));
+        }
+        const Vec3d& x = m_positions[static_cast<std::size_t>(v)];
+        const Vec3d x_rest = body.state.pose.apply_inverse(x);
+        const std::optional<MeshObstacle::SurfacePoint> point =
+            body.mesh->surface_point(x_rest, std::isfinite(reach) ? reach : 1e300);
+        if (!point || !(std::abs(point->surface.distance) <= max_distance)) {
+            throw InvalidInput(fmt::format(
+                "cloth: attached pins: vertex {} at ({}, {}, {}) is {} m from mesh obstacle {}'s "
+                "surface, expected at most {} m",
+                v, x.x, x.y, x.z, point ? std::abs(point->surface.distance) : reach, mesh_obstacle,
+                max_distance));
+        }
+        const geometry::Triangle& tri =
+            body.mesh->mesh().triangles[static_cast<std::size_t>(point->triangle)];
+        const std::span<const Vec3d> corners = body.mesh->mesh().positions;
+        const std::array<Vec3d, 3> c{corners[static_cast<std::size_t>(tri[0])],
+                                     corners[static_cast<std::size_t>(tri[1])],
+                                     corners[static_cast<std::size_t>(tri[2])]};
+        const Vec3d on_surface =
+            c[0] * point->barycentric.x + c[1] * point->barycentric.y + c[2] * point->barycentric.z;
+        pins.vertices.push_back(v);
+        pins.rest_positions.push_back(x_rest);
+        pins.triangles.push_back(point->triangle);
+        pins.barycentric.push_back(point->barycentric);
+        pins.offsets.push_back(to_triangle_frame(c, x_rest - on_surface));
+        m_inverse_masses[static_cast<std::size_t>(v)] = 0.0;
+    }
+    add_pin_group(std::move(pins));
+}
+
+Vec3d ClothModel::pin_target(const MovingPins& pins, const Pose& pose, std::size_t k,
+                             double t) const {
+    if (pins.mesh_obstacle < 0) {
+        return pose.apply(pins.rest_positions[k]);
+    }
+    const MovingMeshObstacle& body = m_mesh_obstacles[static_cast<std::size_t>(pins.mesh_obstacle)];
+    const geometry::Triangle& tri =
+        body.mesh->mesh().triangles[static_cast<std::size_t>(pins.triangles[k])];
+    std::array<Vec3d, 3> corners;
+    for (std::size_t c = 0; c < 3; ++c) {
+        const auto v = static_cast<std::size_t>(tri[c]);
+        corners[c] =
+            body.animation ? body.animation->position_at(v, t) : body.mesh->mesh().positions[v];
+    }
+    const Vec3d& b = pins.barycentric[k];
+    const Vec3d x = corners[0] * b.x + corners[1] * b.y + corners[2] * b.z +
+                    from_triangle_frame(corners, pins.offsets[k]);
+    return body.state.motion.pose(t).apply(x);
 }
 
 void ClothModel::set_air(const Air& air) {
@@ -320,7 +461,7 @@ void ClothModel::move_pins(double t, double max_step) {
         parallel_for(static_cast<std::int64_t>(pins.vertices.size()), [&](std::int64_t k) {
             Vec3d& x =
                 m_positions[static_cast<std::size_t>(pins.vertices[static_cast<std::size_t>(k)])];
-            const Vec3d target = pose.apply(pins.rest_positions[static_cast<std::size_t>(k)]);
+            const Vec3d target = pin_target(pins, pose, static_cast<std::size_t>(k), t);
             const Vec3d to_target = target - x;
             const double distance = norm(to_target);
             // Within max_step (up to rounding: a relative 1e-9), the target itself, so that a
@@ -343,7 +484,7 @@ ClothModel::PinLag ClothModel::pin_lag() const {
             if (m_grab && m_grab->vertex == pins.vertices[k]) {
                 continue;
             }
-            const double distance = norm(pose.apply(pins.rest_positions[k]) -
+            const double distance = norm(pin_target(pins, pose, k, m_time) -
                                          m_positions[static_cast<std::size_t>(pins.vertices[k])]);
             if (distance > 0.0) {
                 ++lag.vertices;
@@ -355,16 +496,42 @@ ClothModel::PinLag ClothModel::pin_lag() const {
 }
 
 void ClothModel::move_obstacles(double t) {
+    double step = 0.0;
     for (MovingObstacle& obstacle : m_obstacles) {
         if (!obstacle.state.motion.is_static()) {
             obstacle.state.advance(t);
             obstacle.previous = obstacle.current;
             obstacle.current = placed(obstacle.rest, obstacle.state.pose);
+            step = std::max(step, obstacle_move(obstacle.previous, obstacle.current));
         }
     }
     for (MovingMeshObstacle& mesh : m_mesh_obstacles) {
         mesh.state.advance(t);
+        if (mesh.animation) {
+            mesh.animation->positions_at(t, mesh.next_positions);
+            mesh.deforming->move_to(mesh.next_positions);
+        }
+        if (mesh.animation || !mesh.state.motion.is_static()) {
+            const std::span<const Vec3d> now = mesh.mesh->mesh().positions;
+            const std::span<const Vec3d> before = mesh.mesh->previous_positions();
+            const MotionState& s = mesh.state;
+            step = std::max(
+                step, parallel_reduce(
+                          static_cast<std::int64_t>(now.size()), 0.0,
+                          [&](std::int64_t begin, std::int64_t end) {
+                              double largest = 0.0;
+                              for (std::int64_t v = begin; v < end; ++v) {
+                                  const auto i = static_cast<std::size_t>(v);
+                                  largest =
+                                      std::max(largest, norm(s.pose.apply(now[i]) -
+                                                             s.previous_pose.apply(before[i])));
+                              }
+                              return largest;
+                          },
+                          [](double a, double b) { return std::max(a, b); }, VERTEX_GRAIN));
+        }
     }
+    m_obstacle_step = step;
 }
 
 void ClothModel::apply_air(double h, double t) {
@@ -442,6 +609,11 @@ void ClothModel::save_state(ByteWriter& out) const {
     for (const MovingMeshObstacle& o : m_mesh_obstacles) {
         out.put(o.state.pose);
         out.put(o.state.previous_pose);
+        if (o.animation) {  // where the deforming mesh is, and was at the last substep's start
+            const std::span<const Vec3d> previous = o.mesh->previous_positions();
+            out.put_vector(std::vector<Vec3d>(previous.begin(), previous.end()));
+            out.put_vector(o.mesh->mesh().positions);
+        }
     }
 }
 
@@ -489,6 +661,15 @@ void ClothModel::load_state(ByteReader& in) {
     for (MovingMeshObstacle& o : m_mesh_obstacles) {
         o.state.pose = in.get<Pose>("model.mesh_obstacle.pose");
         o.state.previous_pose = in.get<Pose>("model.mesh_obstacle.previous_pose");
+        if (o.animation) {
+            const auto n_mesh = static_cast<std::int64_t>(o.next_positions.size());
+            std::vector<Vec3d> previous;
+            std::vector<Vec3d> current;
+            in.get_vector("model.mesh_obstacle.previous_positions", previous, n_mesh);
+            in.get_vector("model.mesh_obstacle.positions", current, n_mesh);
+            o.deforming->set_positions(previous);
+            o.deforming->move_to(current);
+        }
     }
 }
 

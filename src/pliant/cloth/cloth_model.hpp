@@ -31,6 +31,7 @@
 
 #include "pliant/cloth/air.hpp"
 #include "pliant/cloth/material.hpp"
+#include "pliant/cloth/mesh_animation.hpp"
 #include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
@@ -51,10 +52,15 @@ struct MovingObstacle {
 };
 
 // A triangle-mesh obstacle at its rest placement and its rigid motion (queries run in its rest
-// frame: state.pose.apply_inverse).
+// frame: state.pose.apply_inverse). A deforming one (animation not null) is this model's own
+// copy of the mesh, moved every substep to the animation's positions (MeshObstacle::move_to: its
+// swept triangles are what cloth is kept out of), with the rigid motion on top.
 struct MovingMeshObstacle {
     std::shared_ptr<const MeshObstacle> mesh;
     MotionState state;
+    std::shared_ptr<const MeshAnimation> animation;  // null: rigid
+    std::shared_ptr<MeshObstacle> deforming;         // mesh, movable (with animation)
+    std::vector<Vec3d> next_positions;               // scratch for move_obstacles (#V)
 };
 
 class ClothModel {
@@ -74,10 +80,27 @@ public:
     // A triangle-mesh obstacle (mesh_obstacle.hpp), given at its rest placement and moved
     // rigidly by `motion`. Shared, so that several models can use one mesh.
     void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle, const Motion& motion = {});
+    // A deforming triangle-mesh obstacle: a copy of `obstacle` (its topology) whose vertices
+    // follow `animation` (mesh_animation.hpp; time 0 is the model's start), placed at time() now
+    // and moved by move_obstacles every substep, with the rigid `motion` on top. InvalidInput:
+    // no animation, an animation of another vertex count, an invalid motion. Returns the index
+    // among mesh_obstacles().
+    std::size_t add_animated_mesh_obstacle(const MeshObstacle& obstacle,
+                                           std::shared_ptr<const MeshAnimation> animation,
+                                           const Motion& motion = {});
     // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
     // their current positions: move_pins(t) places them at motion.pose(t)(rest). A vertex in
     // several groups follows the last (it leaves the earlier groups).
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
+    // Pins `vertices` to the surface of mesh obstacle `mesh_obstacle` (an index into
+    // mesh_obstacles()): each is bound to the closest point of the surface where the obstacle is
+    // now (a triangle and barycentric weights) and its offset from it in the triangle's frame,
+    // and move_pins(t) places it there as the obstacle moves, turns and deforms (the obstacle's
+    // animation and motion at t; where it is now, exactly). A vertex farther than max_distance (m)
+    // from the surface is InvalidInput (naming it and its distance), as are vertices out of range
+    // and an obstacle index out of range. Like add_moving_pins, a vertex follows its last group.
+    void add_attached_pins(std::span<const std::int32_t> vertices, std::size_t mesh_obstacle,
+                           double max_distance = std::numeric_limits<double>::infinity());
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
     void set_air(const Air& air);
@@ -158,8 +181,12 @@ public:
     };
     PinLag pin_lag() const;
     // Places the obstacles at time t (s); the previous placements are kept for the obstacles'
-    // surface velocities (MotionState::surface_displacement).
+    // surface velocities (MotionState::surface_displacement, MeshObstacle::previous_positions).
     void move_obstacles(double t);
+    // The farthest any obstacle's surface moved at the last move_obstacles (m): a sphere's
+    // centre, a plane along its normal, a box's corner, a mesh's vertices (rigid motion and
+    // deformation together). 0 before the first.
+    double obstacle_step() const { return m_obstacle_step; }
     // Adds h · (air force at time t / mass) to the free vertices' velocities (air.hpp; h the
     // substep in s, which caps the drag); nothing without air (air().is_active()). Per triangle,
     // then per vertex over its incident triangles in ascending order: the same sums for any number
@@ -183,7 +210,19 @@ private:
         std::vector<std::int32_t> vertices;
         std::vector<Vec3d> rest_positions;
         Motion motion;
+        // Attached to a mesh obstacle's surface (add_attached_pins): that obstacle's index, and
+        // per vertex its triangle, barycentric weights and offset from that surface point in the
+        // triangle's frame (first edge, normal × edge, normal; rest_positions unused); -1: moved
+        // by motion.
+        std::int64_t mesh_obstacle = -1;
+        std::vector<std::int32_t> triangles;
+        std::vector<Vec3d> barycentric;
+        std::vector<Vec3d> offsets;
     };
+    // Where pin k of `pins` belongs at time t.
+    Vec3d pin_target(const MovingPins& pins, const Pose& pose, std::size_t k, double t) const;
+    // Makes `pins` the last group: its vertices leave the earlier groups.
+    void add_pin_group(MovingPins pins);
     struct Grab {
         std::int32_t vertex = -1;
         Vec3d start;                // where the current step's path starts
@@ -209,6 +248,7 @@ private:
     std::optional<Grab> m_grab;
     std::vector<MovingObstacle> m_obstacles;
     std::vector<MovingMeshObstacle> m_mesh_obstacles;
+    double m_obstacle_step = 0.0;  // m, see obstacle_step()
 };
 
 }  // namespace pliant::cloth

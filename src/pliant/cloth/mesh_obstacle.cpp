@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "pliant/bvh/traversal.hpp"
+#include "pliant/collision/ccd.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -17,6 +18,9 @@ namespace pliant::cloth {
 namespace {
 
 constexpr std::int64_t GEOMETRY_GRAIN = 1 << 12;
+// Boxes a swept-contact query evaluates at most per triangle (collision/ccd.hpp): past it the
+// query reports a conservative hit, which only places the point on the surface.
+constexpr int SWEEP_MAX_ITERATIONS = 20'000;
 
 std::size_t index(std::int32_t i) {
     return static_cast<std::size_t>(i);
@@ -92,7 +96,48 @@ void MeshObstacle::set_positions(std::span<const Vec3d> positions) {
     }
     geometry::validate_positions(positions, "cloth::MeshObstacle::set_positions: positions");
     std::copy(positions.begin(), positions.end(), m_mesh.positions.begin());
+    m_previous_positions.clear();
+    m_max_vertex_step = 0.0;
     update_geometry();
+    m_tree.refit(m_boxes);
+    gather_leaf_corners();
+}
+
+void MeshObstacle::move_to(std::span<const Vec3d> positions) {
+    if (positions.size() != m_mesh.positions.size()) {
+        throw InvalidInput(fmt::format(
+            "cloth::MeshObstacle::move_to: positions.size() ({}) != the mesh's vertex count ({})",
+            positions.size(), m_mesh.positions.size()));
+    }
+    geometry::validate_positions(positions, "cloth::MeshObstacle::move_to: positions");
+    m_previous_positions.assign(m_mesh.positions.begin(), m_mesh.positions.end());
+    std::copy(positions.begin(), positions.end(), m_mesh.positions.begin());
+    update_geometry();
+    // Each leaf box covers its triangle at both placements, hence (by convexity) its whole sweep.
+    const std::span<const geometry::Triangle> triangles = m_mesh.triangles;
+    parallel_for(
+        static_cast<std::int64_t>(triangles.size()),
+        [&](std::int64_t t) {
+            const auto i = static_cast<std::size_t>(t);
+            AABBd box;
+            for (const std::int32_t v : triangles[i]) {
+                box.extend(m_mesh.positions[index(v)]);
+                box.extend(m_previous_positions[index(v)]);
+            }
+            m_boxes[i] = outward_float(box);
+        },
+        GEOMETRY_GRAIN);
+    m_max_vertex_step = parallel_reduce(
+        static_cast<std::int64_t>(positions.size()), 0.0,
+        [&](std::int64_t begin, std::int64_t end) {
+            double largest = 0.0;
+            for (std::int64_t v = begin; v < end; ++v) {
+                const auto i = static_cast<std::size_t>(v);
+                largest = std::max(largest, norm(m_mesh.positions[i] - m_previous_positions[i]));
+            }
+            return largest;
+        },
+        [](double a, double b) { return std::max(a, b); }, GEOMETRY_GRAIN);
     m_tree.refit(m_boxes);
     gather_leaf_corners();
 }
@@ -193,6 +238,63 @@ void MeshObstacle::update_geometry() {
 
 std::optional<SurfaceDistance> MeshObstacle::surface_distance(const Vec3d& x,
                                                               double max_distance) const {
+    const std::optional<SurfacePoint> point = closest(x, max_distance);
+    if (!point) {
+        return std::nullopt;
+    }
+    return point->surface;
+}
+
+std::optional<MeshObstacle::SurfacePoint> MeshObstacle::surface_point(const Vec3d& x,
+                                                                      double max_distance) const {
+    return closest(x, max_distance);
+}
+
+std::optional<MeshObstacle::SweptHit> MeshObstacle::sweep(const Vec3d& x_t0,
+                                                          const Vec3d& x_t1) const {
+    if (!is_finite(x_t0) || !is_finite(x_t1)) {
+        return std::nullopt;
+    }
+    AABBd segment;
+    segment.extend(x_t0);
+    segment.extend(x_t1);
+    const std::span<const Vec3d> start = previous_positions();
+    const std::span<const Vec3d> end = m_mesh.positions;
+    const std::uint32_t* primitives = m_tree.primitives().data();
+    collision::CcdOptions options;
+    options.max_iterations = SWEEP_MAX_ITERATIONS;
+    std::optional<SweptHit> best;
+    bvh::query_wide(
+        m_tree.nodes().data(), outward_float(segment), -1, [&](std::int32_t leaf, const AABB&) {
+            const auto t = static_cast<std::int32_t>(primitives[leaf]);
+            const geometry::Triangle& tri = m_mesh.triangles[index(t)];
+            const Vec3d& a0 = start[index(tri[0])];
+            const Vec3d& b0 = start[index(tri[1])];
+            const Vec3d& c0 = start[index(tri[2])];
+            // From the outside only: in front of the triangle's plane at the start.
+            if (!(dot(x_t0 - a0, cross(b0 - a0, c0 - a0)) > 0.0)) {
+                return;
+            }
+            const Vec3d& a1 = end[index(tri[0])];
+            const Vec3d& b1 = end[index(tri[1])];
+            const Vec3d& c1 = end[index(tri[2])];
+            const collision::CcdResult r =
+                collision::vertex_face_ccd(x_t0, a0, b0, c0, x_t1, a1, b1, c1, options);
+            if (!r.hit ||
+                (best && (r.toi > best->toi || (r.toi == best->toi && t > best->triangle)))) {
+                return;
+            }
+            const double s = r.toi;
+            const collision::PointTriangleProximity<double> at =
+                collision::point_triangle_proximity(x_t0 + (x_t1 - x_t0) * s, a0 + (a1 - a0) * s,
+                                                    b0 + (b1 - b0) * s, c0 + (c1 - c0) * s);
+            best = SweptHit{t, at.barycentric, s};
+        });
+    return best;
+}
+
+std::optional<MeshObstacle::SurfacePoint> MeshObstacle::closest(const Vec3d& x,
+                                                                double max_distance) const {
     if (!(max_distance >= 0.0) || !is_finite(x)) {
         return std::nullopt;
     }
@@ -240,13 +342,16 @@ std::optional<SurfaceDistance> MeshObstacle::surface_distance(const Vec3d& x,
     }
     if (best.distance > 0.0) {
         const bool inside = dot(best.normal, pseudo_normal) < 0.0;
-        return SurfaceDistance{inside ? -best.distance : best.distance,
-                               inside ? -best.normal : best.normal};
+        return SurfacePoint{SurfaceDistance{inside ? -best.distance : best.distance,
+                                            inside ? -best.normal : best.normal},
+                            best_triangle, best.barycentric};
     }
     // On the surface: the feature's own direction (the triangle's when the pseudo-normal vanishes,
     // e.g. on a degenerate triangle or a fin folded flat onto itself).
     const double length = norm(pseudo_normal);
-    return SurfaceDistance{0.0, length > 0.0 ? pseudo_normal * (1.0 / length) : best.normal};
+    return SurfacePoint{
+        SurfaceDistance{0.0, length > 0.0 ? pseudo_normal * (1.0 / length) : best.normal},
+        best_triangle, best.barycentric};
 }
 
 ContactCorrection push_out(const MeshObstacle& obstacle, Vec3d& x, double thickness,

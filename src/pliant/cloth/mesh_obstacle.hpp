@@ -34,6 +34,13 @@
 // Rigid motion (a keyframed pose) needs no set_positions: query x in the obstacle's rest frame
 // (pose.apply_inverse) and rotate the normal back; set_positions is for deforming meshes.
 //
+// Deforming meshes over a time step (a substep of the cloth solver): move_to(next) moves the
+// vertices on straight lines from where they are to `next`; the LBVH's leaf boxes then cover each
+// triangle's whole sweep, so that sweep() finds the first time a point moving on a straight line
+// meets a moving triangle (continuous collision detection, collision/ccd.hpp): nothing passes
+// through the surface between the two placements, however thin the mesh is. surface_distance
+// answers for the placement at the step's end (the boxes are looser, the answers the same).
+//
 // Units: metres (any unit, consistently). Positions are double; the LBVH's float boxes are rounded
 // outward from them, so no triangle within the radius is missed.
 // Thread safety: const member functions may run concurrently (the solver queries every cloth
@@ -66,6 +73,42 @@ public:
     // pseudo-normals and refits the LBVH (topology kept, no rebuild). O(V + T), parallel, results
     // bitwise independent of the number of threads.
     void set_positions(std::span<const Vec3d> positions);
+    // As set_positions, for one time step from the current placement (the step's start) to
+    // `positions` (its end): the leaf boxes cover both placements of each triangle (for sweep()),
+    // and previous_positions() keeps the start. max_vertex_step() is the longest vertex move.
+    void move_to(std::span<const Vec3d> positions);
+    // The placement at the last move_to's start (the current one when none ran since
+    // construction or set_positions); #V.
+    std::span<const Vec3d> previous_positions() const {
+        return m_previous_positions.empty() ? std::span<const Vec3d>(m_mesh.positions)
+                                            : std::span<const Vec3d>(m_previous_positions);
+    }
+    // The longest vertex move of the last move_to (m); 0 after construction or set_positions.
+    double max_vertex_step() const { return m_max_vertex_step; }
+
+    // surface_distance with the closest feature: the triangle and the barycentric weights (w0,
+    // w1, w2 of its corners 0, 1, 2) of the closest point.
+    struct SurfacePoint {
+        SurfaceDistance surface;
+        std::int32_t triangle = -1;
+        Vec3d barycentric{};
+    };
+    std::optional<SurfacePoint> surface_point(const Vec3d& x, double max_distance) const;
+
+    // A point moving on the straight line x_t0 → x_t1 over the last step (move_to's, the
+    // triangles moving on straight lines from previous_positions() to the current positions; a
+    // static mesh when there was none) that meets the surface from its outside (the side its
+    // triangles' normals face): the earliest such meeting (conservative: a meeting is never
+    // missed, collision::vertex_face_ccd), the triangle, the barycentric weights of the meeting
+    // point and the time of impact in [0, 1]. Meetings from behind a triangle (points leaving a
+    // closed mesh, or on the back of an open one) are not reported. Ties go to the lowest
+    // triangle. Thread safe; allocates only as the CCD's thread-local search grows.
+    struct SweptHit {
+        std::int32_t triangle = -1;
+        Vec3d barycentric{};
+        double toi = 1.0;
+    };
+    std::optional<SweptHit> sweep(const Vec3d& x_t0, const Vec3d& x_t1) const;
 
     // The point of the surface closest to x, if one is within max_distance (≥ 0, may be +inf):
     // its signed distance (|x - closest|, negative inside / behind the surface, see the header) and
@@ -97,6 +140,7 @@ public:
 private:
     void update_geometry();
     void gather_leaf_corners();
+    std::optional<SurfacePoint> closest(const Vec3d& x, double max_distance) const;
 
     geometry::TriangleMeshD m_mesh;
     bool m_closed = false;  // see enclosed_volume()
@@ -117,6 +161,9 @@ private:
     std::vector<std::array<Vec3d, 3>> m_leaf_corners;
     AABBd m_bounds;
     bvh::LBVH m_tree;
+    // The last move_to's start (empty: none since construction or set_positions).
+    std::vector<Vec3d> m_previous_positions;
+    double m_max_vertex_step = 0.0;
 };
 
 // The contact projection of push_out(const Obstacle&, …) for a mesh: when x is closer than

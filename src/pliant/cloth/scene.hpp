@@ -34,12 +34,22 @@ struct PinRegion {
     Vec3d max;
 };
 
-// Pinned vertices that move together (motion.hpp; no keyframes: they stay put).
+// Pins bound to a mesh obstacle's surface (ClothModel::add_attached_pins): the obstacle by its
+// "name" or its index in "obstacles", and how far from its surface a vertex may be (m).
+struct PinAttach {
+    std::string obstacle;  // name; empty: by index
+    std::int64_t obstacle_index = -1;
+    double max_distance = 0.05;
+};
+
+// Pinned vertices that move together (motion.hpp; no keyframes: they stay put), or that follow a
+// mesh obstacle's surface (attach).
 struct PinGroup {
     std::string key = "pins";            // where it was in the scene file, for messages
     std::vector<std::int32_t> vertices;  // indices into the cloth (all copies: see instances)
     std::vector<PinRegion> regions;
     Motion motion;
+    std::optional<PinAttach> attach;
 };
 
 // A placement: rotate about x, then y, then z (degrees, right-handed), then translate (metres).
@@ -51,10 +61,21 @@ struct Placement {
 // An obstacle: an analytic shape, or a triangle mesh file (OBJ/PLY; relative paths are relative
 // to the scene file) placed by mesh_placement; either moved by motion.
 struct SceneObstacle {
+    std::string name;  // optional; pins attach to it by name
     Obstacle shape;
     std::filesystem::path mesh;  // when not empty, the obstacle is this mesh and shape is unused
     Placement mesh_placement;
     Motion motion;
+    // A deforming mesh (mesh_animation.hpp): its frames as files of one topology, either listed
+    // or a printf pattern with one integer conversion ("body/frame_%04d.obj", relative to the
+    // scene file) numbered from frame_start (-1: 0, or 1 when there is no frame 0) for
+    // frame_count files (0: as many consecutive files as exist). mesh is then the first frame.
+    std::vector<std::filesystem::path> frames;
+    std::filesystem::path frames_pattern;
+    int frame_start = -1;
+    int frame_count = 0;
+    double frames_fps = 0.0;  // frames per second; 0: the scene's fps
+    bool loop = false;
 };
 
 struct ClothScene {

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <utility>
@@ -56,6 +57,20 @@ public:
     void add_mesh_obstacle(std::shared_ptr<const MeshObstacle> obstacle,
                            const Motion& motion = {}) {
         m_model.add_mesh_obstacle(std::move(obstacle), motion);
+    }
+    // A deforming mesh obstacle following `animation`, with `motion` on top
+    // (ClothModel::add_animated_mesh_obstacle); returns its index for add_attached_pins.
+    std::size_t add_animated_mesh_obstacle(const MeshObstacle& obstacle,
+                                           std::shared_ptr<const MeshAnimation> animation,
+                                           const Motion& motion = {}) {
+        return m_model.add_animated_mesh_obstacle(obstacle, std::move(animation), motion);
+    }
+    // Pins `vertices` to the surface of mesh obstacle `mesh_obstacle` (the order of
+    // add_mesh_obstacle and add_animated_mesh_obstacle calls): they follow it as it moves and
+    // deforms (ClothModel::add_attached_pins).
+    void add_attached_pins(std::span<const std::int32_t> vertices, std::size_t mesh_obstacle,
+                           double max_distance = std::numeric_limits<double>::infinity()) {
+        m_model.add_attached_pins(vertices, mesh_obstacle, max_distance);
     }
     // Pins `vertices` (InvalidInput when out of range) and moves them rigidly with `motion` from
     // their current positions: every substep they are placed at motion.pose(t)(rest) with the

@@ -9,6 +9,7 @@
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/cloth/isometric_bending.hpp"
+#include "pliant/cloth/mesh_contact.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -238,7 +239,12 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
             m_window_start.assign(positions.begin(), positions.end());
             m_window_start_time = window_start;
         }
-        stats.obstacle_contacts = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
+        const ObstacleTally tally = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
+        stats.obstacle_contacts = tally.contacts;
+        stats.obstacle_swept_contacts += tally.swept;
+        stats.obstacles_lagging = tally.lagging;
+        stats.obstacle_max_lag = std::max(stats.obstacle_max_lag, tally.max_lag);
+        stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
         if (m_self_collision &&
             (s % FAIL_SAFE_WINDOW == FAIL_SAFE_WINDOW - 1 || s == substeps - 1)) {
             m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time,
@@ -254,7 +260,8 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
     return stats;
 }
 
-std::int64_t XPBDStepper::substep(ClothModel& model, double h, double t_end, double& solve_ms) {
+XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, double t_end,
+                                                double& solve_ms) {
     Stopwatch watch;
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
@@ -280,7 +287,9 @@ std::int64_t XPBDStepper::substep(ClothModel& model, double h, double t_end, dou
                                : std::numeric_limits<double>::infinity());
     project_constraints(model, h);
     model.move_obstacles(t_end);
-    const std::int64_t contacts = resolve_obstacles(model, h);
+    const ObstacleTally contacts = resolve_obstacles(model, h);
+    // Vertices left behind a mesh obstacle's surface are found there next substep.
+    m_obstacle_lag = contacts.max_lag;
     solve_ms += watch.elapsed_ms();
     // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
     // may have pressed one layer into the next); a vertex pushed back into an obstacle is
@@ -404,9 +413,9 @@ void XPBDStepper::project_constraints(ClothModel& model, double h) {
         VERTEX_GRAIN);
 }
 
-std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
+XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
     if (!model.has_obstacles()) {
-        return 0;
+        return {};
     }
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<const double> inverse_masses = model.inverse_masses();
@@ -428,10 +437,14 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
         }
         return excess;
     };
+    // Of the rest of a push (beyond the vertex's own motion and the thickness), at most this
+    // much per substep: an obstacle that jumps pushes cloth out at a bounded speed (the vertex
+    // lags behind its surface) instead of sweeping it through the cloth in one substep.
+    const double max_push = max_settle;
     return parallel_reduce(
-        static_cast<std::int64_t>(positions.size()), std::int64_t{0},
+        static_cast<std::int64_t>(positions.size()), ObstacleTally{},
         [&](std::int64_t begin, std::int64_t end) {
-            std::int64_t contacts = 0;
+            ObstacleTally tally;
             for (std::int64_t i = begin; i < end; ++i) {
                 const auto v = static_cast<std::size_t>(i);
                 m_contact_depths[v] = 0.0;
@@ -440,7 +453,9 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
                     continue;
                 }
                 const Vec3d& start = m_previous_positions[v];
+                double lag = 0.0;
                 for (const MovingObstacle& obstacle : obstacles) {
+                    const Vec3d before_push = positions[v];
                     ContactCorrection contact = push_out(obstacle.current, positions[v], thickness);
                     if (contact.depth > 0.0) {
                         // How deep the vertex already was when the substep began.
@@ -450,6 +465,15 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
                         const double excess = bound_settle(positions[v], contact.normal, settled);
                         contact.depth -= excess;
                         settled -= excess;
+                        // The part of the push the obstacle's own motion asks for, bounded.
+                        const double pushed =
+                            std::max(0.0, contact.depth - settled -
+                                              (norm(before_push - start) + thickness + max_push));
+                        if (pushed > 0.0) {
+                            positions[v] -= contact.normal * pushed;
+                            contact.depth -= pushed;
+                            lag = std::max(lag, pushed);
+                        }
                         if (contact.depth > m_contact_depths[v]) {
                             m_contact_depths[v] = contact.depth;
                             m_contact_normals[v] = contact.normal;
@@ -462,40 +486,29 @@ std::int64_t XPBDStepper::resolve_obstacles(ClothModel& model, double h) {
                     }
                 }
                 for (const MovingMeshObstacle& mesh : mesh_obstacles) {
-                    // In the mesh's rest frame. A vertex can be as deep as its own motion plus
-                    // the surface's over the substep, plus the thickness.
-                    Vec3d& x = positions[v];
-                    const Vec3d swept_by_surface = mesh.state.surface_displacement(x);
-                    const double max_depth =
-                        norm(x - start) + norm(swept_by_surface) + 2.0 * thickness;
-                    const Pose& pose = mesh.state.pose;
-                    Vec3d x_rest = pose.apply_inverse(x);
-                    const ContactCorrection contact =
-                        push_out(*mesh.mesh, x_rest, thickness, max_depth);
-                    if (!(contact.depth > 0.0)) {
-                        continue;
-                    }
-                    x = pose.apply(x_rest);
-                    const Vec3d normal = pose.rotation.apply(contact.normal);
-                    const std::optional<SurfaceDistance> before = mesh.mesh->surface_distance(
-                        mesh.state.previous_pose.apply_inverse(start), max_depth);
-                    double settled =
-                        before ? std::clamp(thickness - before->distance, 0.0, contact.depth) : 0.0;
-                    const double excess = bound_settle(x, normal, settled);
-                    const double depth = contact.depth - excess;
-                    settled -= excess;
-                    if (depth > m_contact_depths[v]) {
-                        m_contact_depths[v] = depth;
-                        m_contact_normals[v] = normal;
-                        m_contact_velocities[v] = swept_by_surface * (1.0 / h);
-                        m_contact_settled[v] = settled;
+                    const MeshContact contact =
+                        resolve_mesh_contact(mesh, positions[v], start, thickness, h, max_settle,
+                                             max_push, m_obstacle_lag);
+                    tally.swept += contact.swept ? 1 : 0;
+                    lag = std::max(lag, contact.lag);
+                    if (contact.depth > m_contact_depths[v]) {
+                        m_contact_depths[v] = contact.depth;
+                        m_contact_normals[v] = contact.normal;
+                        m_contact_velocities[v] = contact.surface_velocity;
+                        m_contact_settled[v] = contact.settled;
                     }
                 }
-                contacts += m_contact_depths[v] > 0.0 ? 1 : 0;
+                tally.lagging += lag > 0.0 ? 1 : 0;
+                tally.max_lag = std::max(tally.max_lag, lag);
+                tally.contacts += m_contact_depths[v] > 0.0 ? 1 : 0;
             }
-            return contacts;
+            return tally;
         },
-        [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
+        [](const ObstacleTally& a, const ObstacleTally& b) {
+            return ObstacleTally{a.contacts + b.contacts, a.swept + b.swept, a.lagging + b.lagging,
+                                 std::max(a.max_lag, b.max_lag)};
+        },
+        VERTEX_GRAIN);
 }
 
 void XPBDStepper::save_state(ByteWriter& out) const {
@@ -512,6 +525,7 @@ void XPBDStepper::save_state(ByteWriter& out) const {
     out.put(m_window_start_time);
     out.put(m_gather_start_time);
     out.put(m_gather_end_time);
+    out.put(m_obstacle_lag);
     out.put(m_self_collision != nullptr);
     if (m_self_collision) {
         m_self_collision->save_state(out);
@@ -539,6 +553,7 @@ void XPBDStepper::load_state(const ClothModel& model, ByteReader& in) {
     m_window_start_time = in.get<double>("stepper.window_start_time");
     m_gather_start_time = in.get<double>("stepper.gather_start_time");
     m_gather_end_time = in.get<double>("stepper.gather_end_time");
+    m_obstacle_lag = in.get<double>("stepper.obstacle_lag");
     const bool has_self_collision = in.get_bool("stepper.has_self_collision");
     if (has_self_collision != (m_self_collision != nullptr)) {
         throw InvalidInput(fmt::format("{}: cloth stepper: self-collision {} in the state, {} here",

@@ -77,8 +77,17 @@ struct ClothStepStats {
     double ms = 0.0;        // wall-clock time of the step
     double solve_ms = 0.0;  // prediction, stretch, bending, air, obstacles, velocities, friction
     std::int64_t obstacle_contacts = 0;  // vertices in contact with an obstacle in the last substep
-    bool has_self_collision = false;     // the fields below are filled
-    SelfCollisionStats self;             // self_collision.hpp
+    // Vertices a mesh obstacle's swept test (mesh_contact.hpp) caught, summed over the substeps.
+    std::int64_t obstacle_swept_contacts = 0;
+    // Obstacles that jump: the farthest an obstacle's surface moved in one substep (m), the free
+    // vertices whose push out of an obstacle was bounded in the last substep (with
+    // self-collision, half the thickness per substep beyond the vertex's own motion and the
+    // thickness) and the largest push held back in a substep (m).
+    double obstacle_max_step = 0.0;
+    std::int64_t obstacles_lagging = 0;
+    double obstacle_max_lag = 0.0;
+    bool has_self_collision = false;  // the fields below are filled
+    SelfCollisionStats self;          // self_collision.hpp
 };
 
 class XPBDStepper {
@@ -121,15 +130,22 @@ public:
     void load_state(const ClothModel& model, ByteReader& in);
 
 private:
-    // One substep of length h ending at time t_end; returns the vertices in contact with an
-    // obstacle and adds the stepper's own time (not self-collision's) to solve_ms.
-    std::int64_t substep(ClothModel& model, double h, double t_end, double& solve_ms);
+    // Obstacle contacts of a substep (sums and maxima: the same for any number of threads).
+    struct ObstacleTally {
+        std::int64_t contacts = 0;  // vertices in contact
+        std::int64_t swept = 0;     // vertices a mesh obstacle's swept test caught
+        std::int64_t lagging = 0;   // vertices whose push was bounded
+        double max_lag = 0.0;       // m
+    };
+    // One substep of length h ending at time t_end; returns its obstacle contacts and adds the
+    // stepper's own time (not self-collision's) to solve_ms.
+    ObstacleTally substep(ClothModel& model, double h, double t_end, double& solve_ms);
     // Strain limits, stretch, then bending (dihedral, then isometric), colour by colour
     // (detail/constraint_kernels.hpp).
     void project_constraints(ClothModel& model, double h);
     // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
     // and the obstacle surface's velocity there for friction; returns the vertices in contact.
-    std::int64_t resolve_obstacles(ClothModel& model, double h);
+    ObstacleTally resolve_obstacles(ClothModel& model, double h);
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
@@ -164,6 +180,9 @@ private:
     std::vector<double> m_contact_settled;
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
+    // The largest push an obstacle held back in the last substep (m): how far behind a mesh
+    // obstacle's surface a vertex can be at the next (mesh_contact.hpp, extra_depth).
+    double m_obstacle_lag = 0.0;
 
     // Self-collision and its windows.
     std::unique_ptr<SelfCollision> m_self_collision;

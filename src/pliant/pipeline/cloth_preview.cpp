@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "pliant/core/timer.hpp"
 #include "pliant/io/output_directory.hpp"
 #include "pliant/io/png.hpp"
@@ -30,11 +32,17 @@ void ClothPreview::add_frame(std::span<const Vec3d> positions,
     for (std::size_t k = 0; k < m_obstacles.size(); ++k) {
         const ObstacleShape& shape = m_obstacles[k];
         std::span<const Vec3d> placed = shape.rest.positions;
-        if (!shape.motion.is_static()) {
+        if (!shape.motion.is_static() || shape.animation) {
             const cloth::Pose pose = shape.motion.pose(t);
             m_obstacle_positions[k].resize(shape.rest.positions.size());
-            for (std::size_t v = 0; v < shape.rest.positions.size(); ++v) {
-                m_obstacle_positions[k][v] = pose.apply(shape.rest.positions[v]);
+            if (shape.animation) {
+                shape.animation->positions_at(t, m_obstacle_positions[k]);
+            } else {
+                std::copy(shape.rest.positions.begin(), shape.rest.positions.end(),
+                          m_obstacle_positions[k].begin());
+            }
+            for (Vec3d& p : m_obstacle_positions[k]) {
+                p = pose.apply(p);
             }
             placed = m_obstacle_positions[k];
         }

@@ -150,6 +150,10 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     for (const cloth::PinGroup& group : scene.pins) {
         w.put_vector(group.vertices);
         put_motion(group.motion);
+        if (group.attach) {
+            w.put(group.attach->obstacle_index);
+            w.put(group.attach->max_distance);
+        }
     }
     for (const cloth::SceneObstacle& obstacle : scene.obstacles) {
         w.put(static_cast<std::uint8_t>(obstacle.shape.index()));
@@ -161,6 +165,13 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     }
     for (const cloth::MovingMeshObstacle& obstacle : solver.model().mesh_obstacles()) {
         w.put_vector(obstacle.mesh->face_normals());
+        if (obstacle.animation) {
+            w.put(obstacle.animation->fps());
+            w.put(obstacle.animation->loops());
+            for (std::size_t f = 0; f < obstacle.animation->num_frames(); ++f) {
+                w.put_vector(obstacle.animation->frame(f));
+            }
+        }
     }
     w.put(scene.gravity);
     w.put(scene.air.density);
@@ -343,8 +354,9 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
     // A frame that fails (the simulation diverged, or a guard such as self-collision's pair limit
     // tripped) ends the run like an interrupt: the frames before it and stats.json (with
     // "error") are written, then the error is reported.
-    bool warned_budget = false;  // the fail-safe's budget warning is given once
-    bool warned_lag = false;     // so is the lagging pins' warning
+    bool warned_budget = false;        // the fail-safe's budget warning is given once
+    bool warned_lag = false;           // so is the lagging pins' warning
+    bool warned_obstacle_lag = false;  // and the lagging obstacle contacts' one
     for (int frame = first_frame; frame <= frames; ++frame) {
         if (options.keep_going && !options.keep_going()) {
             break;
@@ -432,6 +444,21 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["gathers"] = step.self.gathers;
             record["path_updates"] = step.self.path_updates;
             record["new_paths"] = step.self.new_paths;
+        }
+        if (sim.solver().model().has_obstacles()) {
+            record["obstacle_max_step"] = step.obstacle_max_step;
+            record["obstacle_swept_contacts"] = step.obstacle_swept_contacts;
+            record["obstacles_lagging"] = step.obstacles_lagging;
+            record["obstacle_max_lag"] = step.obstacle_max_lag;
+            if (step.obstacle_max_lag > 0.0 && !warned_obstacle_lag) {
+                warned_obstacle_lag = true;
+                log_warning(
+                    "{}: frame {}: an obstacle moved up to {:.3g} m in one substep and pushed "
+                    "cloth out at a bounded speed (half the thickness per substep beyond the "
+                    "cloth's own motion): up to {:.3g} m of a push held back; stats.json: "
+                    "obstacle_max_step, obstacles_lagging, obstacle_max_lag, per frame",
+                    scene_name, frame, step.obstacle_max_step, step.obstacle_max_lag);
+            }
         }
         per_frame.push_back(record);
         frames_done = frame;

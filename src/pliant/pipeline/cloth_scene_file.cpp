@@ -317,6 +317,25 @@ cloth::PinGroup read_pin_group(ObjectReader& p) {
         }
     }
     p.object("motion", [&](ObjectReader& m) { group.motion = read_motion(m); });
+    p.object("attach", [&](ObjectReader& a) {
+        cloth::PinAttach attach;
+        const Json* obstacle = a.find("obstacle");
+        if (obstacle != nullptr && obstacle->is_string() && !obstacle->get<std::string>().empty()) {
+            attach.obstacle = obstacle->get<std::string>();
+        } else if (const std::optional<std::int64_t> index =
+                       obstacle != nullptr ? integer_in(*obstacle, 0, 1'000'000) : std::nullopt) {
+            attach.obstacle_index = *index;
+        } else {
+            a.fail(a.key_path("obstacle"), "an obstacle's name or its index in \"obstacles\"",
+                   obstacle == nullptr ? "nothing" : obstacle->dump());
+        }
+        attach.max_distance = a.number("max_distance", attach.max_distance, 0.0, HUGE_VALUE);
+        group.attach = attach;
+    });
+    if (group.attach && !group.motion.is_static()) {
+        p.fail(p.key_path("attach"),
+               R"(either "attach" or "motion" (attached pins follow the obstacle))", "both");
+    }
     return group;
 }
 
@@ -364,15 +383,59 @@ cloth::SceneObstacle read_obstacle(const Json& value, const std::string& name,
         obstacle = box;
     });
     kinds += r.object("mesh", [&](ObjectReader& o) {
+        const auto relative = [&](const std::string& file_name) {
+            const std::filesystem::path given(file_name);
+            return given.is_absolute() ? given : base / given;
+        };
         const Json* file = o.find("file");
-        if (file == nullptr || !file->is_string() || file->get<std::string>().empty()) {
-            o.fail(o.key_path("file"), "a file name (OBJ or PLY)",
-                   file == nullptr ? "nothing" : json_type_name(*file));
+        const Json* frames = o.find("frames");
+        if (frames != nullptr) {
+            // A deforming mesh: a pattern or a list of files.
+            if (file != nullptr) {
+                o.fail(o.key_path("frames"), R"(either "file" or "frames")", "both");
+            }
+            if (frames->is_string() && !frames->get<std::string>().empty()) {
+                scene_obstacle.frames_pattern = relative(frames->get<std::string>());
+                scene_obstacle.mesh = scene_obstacle.frames_pattern;  // until expanded
+            } else if (frames->is_array() && !frames->empty()) {
+                for (std::size_t k = 0; k < frames->size(); ++k) {
+                    const Json& f = (*frames)[k];
+                    if (!f.is_string() || f.get<std::string>().empty()) {
+                        o.fail(fmt::format("{}[{}]", o.key_path("frames"), k),
+                               "a file name (OBJ or PLY)", json_type_name(f));
+                    }
+                    scene_obstacle.frames.push_back(relative(f.get<std::string>()));
+                }
+                scene_obstacle.mesh = scene_obstacle.frames.front();
+            } else {
+                o.fail(o.key_path("frames"),
+                       R"(a file pattern ("body/frame_%04d.obj") or a non-empty list of files)",
+                       frames->dump());
+            }
+            scene_obstacle.frames_fps = o.number("fps", 0.0, 1e-3, 1e6);
+            scene_obstacle.frame_start = o.integer("start", -1, 0, 100'000'000);
+            scene_obstacle.frame_count = o.integer("count", 0, 1, 1'000'000);
+            if (const Json* loop = o.find("loop")) {
+                if (!loop->is_boolean()) {
+                    o.fail(o.key_path("loop"), "true or false", json_type_name(*loop));
+                }
+                scene_obstacle.loop = loop->get<bool>();
+            }
+        } else {
+            if (file == nullptr || !file->is_string() || file->get<std::string>().empty()) {
+                o.fail(o.key_path("file"), "a file name (OBJ or PLY)",
+                       file == nullptr ? "nothing" : json_type_name(*file));
+            }
+            scene_obstacle.mesh = relative(file->get<std::string>());
         }
-        const std::filesystem::path mesh_path(file->get<std::string>());
-        scene_obstacle.mesh = mesh_path.is_absolute() ? mesh_path : base / mesh_path;
         scene_obstacle.mesh_placement = read_placement(o);
     });
+    if (const Json* given = r.find("name")) {
+        if (!given->is_string() || given->get<std::string>().empty()) {
+            r.fail(path + ".name", "a non-empty string", json_type_name(*given));
+        }
+        scene_obstacle.name = given->get<std::string>();
+    }
     r.object("motion", [&](ObjectReader& m) { scene_obstacle.motion = read_motion(m); });
     r.finish();
     if (kinds != 1) {
@@ -385,6 +448,54 @@ cloth::SceneObstacle read_obstacle(const Json& value, const std::string& name,
                "a rotating keyframe");
     }
     return scene_obstacle;
+}
+
+// Names are unique; each attached pin group names an obstacle that is a mesh (by name or index),
+// resolved to its index.
+void resolve_attachments(cloth::ClothScene& scene, const std::string& file) {
+    for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+        for (std::size_t j = 0; j < k; ++j) {
+            if (!scene.obstacles[k].name.empty() &&
+                scene.obstacles[k].name == scene.obstacles[j].name) {
+                throw IoError(fmt::format(
+                    "{}: obstacles[{}].name: expected a name no other obstacle has, got \"{}\" "
+                    "(also obstacles[{}])",
+                    file, k, scene.obstacles[k].name, j));
+            }
+        }
+    }
+    for (cloth::PinGroup& group : scene.pins) {
+        if (!group.attach) {
+            continue;
+        }
+        cloth::PinAttach& attach = *group.attach;
+        if (!attach.obstacle.empty()) {
+            const auto found = std::find_if(
+                scene.obstacles.begin(), scene.obstacles.end(),
+                [&](const cloth::SceneObstacle& o) { return o.name == attach.obstacle; });
+            if (found == scene.obstacles.end()) {
+                std::string names;
+                for (const cloth::SceneObstacle& o : scene.obstacles) {
+                    if (!o.name.empty()) {
+                        names += fmt::format("{}\"{}\"", names.empty() ? "" : ", ", o.name);
+                    }
+                }
+                throw IoError(fmt::format(
+                    "{}: {}.attach.obstacle: expected the name of an obstacle ({}), got \"{}\"",
+                    file, group.key, names.empty() ? "none has a name" : names, attach.obstacle));
+            }
+            attach.obstacle_index = found - scene.obstacles.begin();
+        }
+        if (attach.obstacle_index >= static_cast<std::int64_t>(scene.obstacles.size()) ||
+            scene.obstacles[static_cast<std::size_t>(attach.obstacle_index)].mesh.empty()) {
+            throw IoError(fmt::format(
+                "{}: {}.attach.obstacle: expected a mesh obstacle, got obstacle {} ({})", file,
+                group.key, attach.obstacle_index,
+                attach.obstacle_index >= static_cast<std::int64_t>(scene.obstacles.size())
+                    ? fmt::format("the scene has {} obstacles", scene.obstacles.size())
+                    : "an analytic shape"));
+        }
+    }
 }
 
 }  // namespace
@@ -483,6 +594,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
                 read_obstacle((*obstacles)[k], file, fmt::format("obstacles[{}]", k), base));
         }
     }
+    resolve_attachments(scene, file);
     for (const auto& [key, flag] : {std::pair{"self_collision", &scene.self_collision},
                                     std::pair{"untangle", &scene.untangle}}) {
         if (const Json* value = root.find(key)) {

@@ -27,6 +27,9 @@ namespace pliant::pipeline {
 namespace {
 
 constexpr int SPHERE_SEGMENTS = 48;
+// A deforming obstacle whose vertices move more than this many thicknesses per substep is warned
+// about (warn_fast_deformation).
+constexpr double FAST_OBSTACLE_IN_THICKNESS = 2.0;
 
 // Applies a placement (rotation, then translation) to points, the rotation built once.
 void place(std::span<Vec3d> points, const cloth::Placement& placement) {
@@ -232,7 +235,129 @@ void warn_fast_motion(const std::string& scene_name, const std::string& key, boo
         consequence);
 }
 
+// Warns about a deforming obstacle whose vertices move more than a few thicknesses in one
+// substep: the swept test still keeps cloth out of it, but pushes are bounded with
+// self-collision (the cloth lags behind the surface, stats.json: obstacles_lagging).
+void warn_fast_deformation(const std::string& scene_name, const std::string& key,
+                           const cloth::MeshAnimation& animation, const cloth::ClothScene& scene) {
+    const double h = 1.0 / (scene.frames_per_second * scene.substeps);
+    const double step = animation.max_vertex_step(h);
+    const double bound = FAST_OBSTACLE_IN_THICKNESS * scene.material.thickness;
+    if (!(step > bound)) {
+        return;
+    }
+    log_warning(
+        "{}: {}: its frames move a vertex up to {:.3g} m in one substep ({:.3g} m/s), more than "
+        "{:g} thicknesses ({:.3g} m): cloth it hits is pushed out at a bounded speed and lags "
+        "behind its surface (stats.json: obstacle_max_step, obstacles_lagging, "
+        "obstacle_max_lag); raise substeps or slow the animation (its fps)",
+        scene_name, key, step, step / h, FAST_OBSTACLE_IN_THICKNESS, bound);
+}
+
+// A pattern with one %d or %0Nd: the text before and after it, and the width (0: none).
+struct FramePattern {
+    std::string before;
+    std::string after;
+    int width = 0;
+};
+
+FramePattern parse_frame_pattern(const std::string& pattern, const std::string& scene_name,
+                                 const std::string& key) {
+    const auto fail = [&]() {
+        throw InvalidInput(
+            fmt::format("{}: {}: \"{}\": expected a file pattern with one frame number, %d or %0Nd "
+                        "(\"body/frame_%04d.obj\")",
+                        scene_name, key, pattern));
+    };
+    const std::size_t at = pattern.find('%');
+    if (at == std::string::npos) {
+        fail();
+    }
+    std::size_t k = at + 1;
+    int width = 0;
+    if (k < pattern.size() && pattern[k] == '0') {
+        ++k;
+        while (k < pattern.size() && pattern[k] >= '0' && pattern[k] <= '9' && width < 100) {
+            width = width * 10 + (pattern[k] - '0');
+            ++k;
+        }
+        if (width == 0) {
+            fail();
+        }
+    }
+    if (k >= pattern.size() || pattern[k] != 'd' || pattern.find('%', k + 1) != std::string::npos) {
+        fail();
+    }
+    return {pattern.substr(0, at), pattern.substr(k + 1), width};
+}
+
+// Vertex positions of one frame file, checked against frame 0's topology.
+std::vector<Vec3d> read_frame(const std::filesystem::path& file,
+                              const geometry::TriangleMeshD& first, std::size_t k,
+                              const std::string& scene_name, const std::string& key) {
+    geometry::TriangleMeshD frame = read_nonempty_mesh(file, scene_name, key);
+    if (frame.positions.size() != first.positions.size() ||
+        frame.triangles.size() != first.triangles.size()) {
+        throw InvalidInput(fmt::format(
+            "{}: {}: frame {} ({}) has {} vertices and {} triangles, frame 0 has {} and {}: "
+            "expected the same mesh in every frame (one topology, moved vertices)",
+            scene_name, key, k, file.string(), frame.positions.size(), frame.triangles.size(),
+            first.positions.size(), first.triangles.size()));
+    }
+    for (std::size_t t = 0; t < frame.triangles.size(); ++t) {
+        if (frame.triangles[t] != first.triangles[t]) {
+            throw InvalidInput(fmt::format(
+                "{}: {}: frame {} ({}): triangle {} is ({}, {}, {}), in frame 0 ({}, {}, {}): "
+                "expected the same triangles in every frame",
+                scene_name, key, k, file.string(), t, frame.triangles[t][0], frame.triangles[t][1],
+                frame.triangles[t][2], first.triangles[t][0], first.triangles[t][1],
+                first.triangles[t][2]));
+        }
+    }
+    return std::move(frame.positions);
+}
+
 }  // namespace
+
+std::vector<std::filesystem::path> obstacle_frame_files(const cloth::SceneObstacle& obstacle,
+                                                        const std::string& scene_name,
+                                                        const std::string& key) {
+    if (obstacle.frames_pattern.empty()) {
+        return obstacle.frames;
+    }
+    const std::string pattern = obstacle.frames_pattern.string();
+    const FramePattern parts = parse_frame_pattern(pattern, scene_name, key);
+    const auto name = [&](std::int64_t i) {
+        return std::filesystem::path(parts.before + fmt::format("{:0{}d}", i, parts.width) +
+                                     parts.after);
+    };
+    std::int64_t start = obstacle.frame_start;
+    if (start < 0) {
+        start = std::filesystem::exists(name(0)) ? 0 : 1;
+    }
+    std::vector<std::filesystem::path> files;
+    if (obstacle.frame_count > 0) {
+        for (std::int64_t i = start; i < start + obstacle.frame_count; ++i) {
+            if (!std::filesystem::exists(name(i))) {
+                throw InvalidInput(fmt::format(
+                    "{}: {}: frame file {} is missing: expected {} files numbered from {} "
+                    "(\"count\")",
+                    scene_name, key, name(i).string(), obstacle.frame_count, start));
+            }
+            files.push_back(name(i));
+        }
+        return files;
+    }
+    for (std::int64_t i = start; std::filesystem::exists(name(i)); ++i) {
+        files.push_back(name(i));
+    }
+    if (files.empty()) {
+        throw InvalidInput(fmt::format("{}: {}: no file matches \"{}\" (tried {}{})", scene_name,
+                                       key, pattern, name(start).string(),
+                                       obstacle.frame_start < 0 ? " and " + name(0).string() : ""));
+    }
+    return files;
+}
 
 ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& scene_name,
                             std::uint64_t max_memory_bytes) {
@@ -253,13 +378,36 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
         const cloth::SceneObstacle& obstacle = scene.obstacles[k];
         if (obstacle.mesh.empty()) {
             setup.mesh_obstacles.push_back(nullptr);
+            setup.animations.push_back(nullptr);
             setup.shapes.push_back(obstacle_shape(obstacle, nullptr, centre, plane_half_size));
             continue;
         }
-        geometry::TriangleMeshD shape = read_nonempty_mesh(
-            obstacle.mesh, scene_name, fmt::format("obstacles[{}].mesh.file", k));
+        const bool deforming = !obstacle.frames.empty() || !obstacle.frames_pattern.empty();
+        const std::string key =
+            fmt::format("obstacles[{}].mesh.{}", k, deforming ? "frames" : "file");
+        const std::vector<std::filesystem::path> frame_files =
+            deforming ? obstacle_frame_files(obstacle, scene_name, key)
+                      : std::vector<std::filesystem::path>{};
+        geometry::TriangleMeshD shape =
+            read_nonempty_mesh(deforming ? frame_files.front() : obstacle.mesh, scene_name, key);
+        std::shared_ptr<const cloth::MeshAnimation> animation;
+        if (deforming) {
+            std::vector<std::vector<Vec3d>> frames;
+            const geometry::TriangleMeshD first = shape;
+            for (std::size_t f = 0; f < frame_files.size(); ++f) {
+                frames.push_back(f == 0 ? first.positions
+                                        : read_frame(frame_files[f], first, f, scene_name, key));
+                place(frames.back(), obstacle.mesh_placement);
+            }
+            animation = std::make_shared<const cloth::MeshAnimation>(
+                std::move(frames),
+                obstacle.frames_fps > 0.0 ? obstacle.frames_fps : scene.frames_per_second,
+                obstacle.loop);
+        }
         place(shape.positions, obstacle.mesh_placement);
+        setup.animations.push_back(animation);
         setup.shapes.push_back(obstacle_shape(obstacle, &shape, centre, plane_half_size));
+        setup.shapes.back().animation = animation;
         auto mesh_obstacle = std::make_shared<const cloth::MeshObstacle>(std::move(shape));
         if (const std::optional<double> volume = mesh_obstacle->enclosed_volume();
             volume && *volume < 0.0) {
@@ -285,6 +433,10 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
         if (!motion.is_static()) {
             warn_fast_motion(scene_name, fmt::format("obstacles[{}]", k), false, motion,
                              reach_from(motion.pivot, setup.shapes[k].rest.positions, {}), scene);
+        }
+        if (setup.animations[k]) {
+            warn_fast_deformation(scene_name, fmt::format("obstacles[{}]", k), *setup.animations[k],
+                                  scene);
         }
     }
     return setup;
@@ -352,14 +504,34 @@ std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                                                 const ClothSetup& setup) {
     auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, scene.material);
     for (std::size_t g = 0; g < scene.pins.size(); ++g) {
-        solver->add_moving_pins(setup.pins[g], scene.pins[g].motion);
+        if (!scene.pins[g].attach) {
+            solver->add_moving_pins(setup.pins[g], scene.pins[g].motion);
+        }
     }
+    std::vector<std::size_t> mesh_index(scene.obstacles.size(), 0);
+    std::size_t num_meshes = 0;
     for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
         const cloth::SceneObstacle& obstacle = scene.obstacles[k];
-        if (setup.mesh_obstacles[k]) {
+        if (setup.animations[k]) {
+            solver->add_animated_mesh_obstacle(*setup.mesh_obstacles[k], setup.animations[k],
+                                               obstacle.motion);
+            mesh_index[k] = num_meshes++;
+        } else if (setup.mesh_obstacles[k]) {
             solver->add_mesh_obstacle(setup.mesh_obstacles[k], obstacle.motion);
+            mesh_index[k] = num_meshes++;
         } else {
             solver->add_obstacle(obstacle.shape, obstacle.motion);
+        }
+    }
+    for (std::size_t g = 0; g < scene.pins.size(); ++g) {
+        if (const std::optional<cloth::PinAttach>& attach = scene.pins[g].attach) {
+            try {
+                solver->add_attached_pins(
+                    setup.pins[g], mesh_index[static_cast<std::size_t>(attach->obstacle_index)],
+                    attach->max_distance);
+            } catch (const InvalidInput& e) {
+                throw InvalidInput(fmt::format("{}.attach: {}", scene.pins[g].key, e.what()));
+            }
         }
     }
     solver->set_gravity(scene.gravity);

@@ -13,11 +13,13 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "pliant/cloth/mesh_animation.hpp"
 #include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/scene.hpp"
@@ -28,10 +30,12 @@
 
 namespace pliant::pipeline {
 
-// An obstacle as drawn: its triangles at the rest placement and its motion.
+// An obstacle as drawn: its triangles at the rest placement and its motion (and, for a deforming
+// mesh, its animation: rest holds frame 0).
 struct ObstacleShape {
     geometry::TriangleMeshD rest;
     cloth::Motion motion;
+    std::shared_ptr<const cloth::MeshAnimation> animation;
     bool smooth = true;   // false for boxes, planes and meshes (flat shading)
     bool bounded = true;  // false for planes: left out of the camera's framing
 };
@@ -41,6 +45,8 @@ struct ClothSetup {
     std::vector<std::vector<std::int32_t>> pins;  // per scene pin group, its vertices
     // Per scene obstacle: the mesh obstacle (null for analytic shapes), shared between solvers.
     std::vector<std::shared_ptr<const cloth::MeshObstacle>> mesh_obstacles;
+    // Per scene obstacle: the animation of a deforming mesh (its "frames"), else null.
+    std::vector<std::shared_ptr<const cloth::MeshAnimation>> animations;
     std::vector<ObstacleShape> shapes;  // per scene obstacle
 };
 
@@ -50,7 +56,8 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
                             std::uint64_t max_memory_bytes = 0);
 
 // A solver at the scene's start: material, pins with their motion, obstacles, gravity, air and
-// self-collision as the scene says.
+// self-collision as the scene says. Pin groups attached to an obstacle are added after the
+// obstacles (a vertex in a moving and an attached group follows the attached one).
 std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                                                 const ClothSetup& setup);
 
@@ -80,6 +87,14 @@ nlohmann::ordered_json untangle_report(const StartState& start);
 // The box a camera frames: the cloth's points and the bounded obstacles' rest shapes (plane
 // squares are as large as the scene, so they are left out).
 AABBd framing_box(std::span<const Vec3d> cloth, const std::vector<ObstacleShape>& obstacles);
+
+// The files of a deforming mesh obstacle's frames: its list, or its pattern expanded (from
+// frame_start, or 0, or 1 when there is no file 0; frame_count files, or as many consecutive ones
+// as exist). InvalidInput naming `key` for a pattern without exactly one integer conversion
+// (%d or %0Nd), a pattern that matches no file, a missing frame of a given count.
+std::vector<std::filesystem::path> obstacle_frame_files(const cloth::SceneObstacle& obstacle,
+                                                        const std::string& scene_name,
+                                                        const std::string& key);
 
 // The shape of one obstacle as drawn: a UV sphere, a box, a plane's square (half size
 // `plane_half_size`, centred at the point of the plane closest to `centre`), or the mesh as given

@@ -1,0 +1,273 @@
+// Deforming mesh obstacles in the cloth solver (mesh_contact.hpp, MeshObstacle::move_to / sweep,
+// ClothModel::add_animated_mesh_obstacle / add_attached_pins): no tunnelling through a fast thin
+// body, friction relative to the surface's own motion, pins that follow a deforming surface,
+// bounded pushes from an obstacle that jumps, threads and resume.
+#include "pliant/cloth/mesh_contact.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pliant/cloth/mesh_animation.hpp"
+#include "pliant/cloth/mesh_obstacle.hpp"
+#include "pliant/cloth/solver.hpp"
+#include "pliant/core/bytes.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/geometry/generate.hpp"
+#include "support/sheets.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+using geometry::TriangleMeshD;
+
+// The frames of `mesh` moved by f(p, k) for k = 0 .. num_frames - 1.
+template <typename Move>
+std::shared_ptr<const MeshAnimation> animate(const TriangleMeshD& mesh, int num_frames, double fps,
+                                             bool loop, Move&& move) {
+    std::vector<std::vector<Vec3d>> frames;
+    for (int k = 0; k < num_frames; ++k) {
+        frames.emplace_back();
+        for (const Vec3d& p : mesh.positions) {
+            frames.back().push_back(move(p, k));
+        }
+    }
+    return std::make_shared<const MeshAnimation>(std::move(frames), fps, loop);
+}
+
+ClothMaterial material(double friction = 0.0) {
+    ClothMaterial m;
+    m.thickness = 0.005;
+    m.static_friction = friction;
+    m.kinetic_friction = friction;
+    return m;
+}
+
+TEST(MeshObstacle, SweepFindsAPointThatAMovingTriangleSweepsOver) {
+    MeshObstacle plate(geometry::make_box({-1.0, -1.0, -0.102}, {1.0, 1.0, -0.1}));
+    ASSERT_GT(plate.enclosed_volume().value(), 0.0);
+    std::vector<Vec3d> up(plate.mesh().positions);
+    for (Vec3d& p : up) {
+        p.z += 0.2;  // top face from z = -0.1 to z = 0.1, past a point at z = 0
+    }
+    plate.move_to(up);
+    EXPECT_NEAR(plate.max_vertex_step(), 0.2, 1e-15);
+    const Vec3d x{0.1, 0.2, 0.0};
+    // Where the plate is now, the point is below it and outside: static contact sees nothing.
+    EXPECT_GT(plate.surface_distance(x, 1.0)->distance, 0.09);
+    const auto hit = plate.sweep(x, x);
+    ASSERT_TRUE(hit);
+    EXPECT_NEAR(hit->toi, 0.5, 1e-5);  // the top face reaches z = 0 halfway
+    const auto& tri = plate.mesh().triangles[static_cast<std::size_t>(hit->triangle)];
+    const Vec3d met =
+        plate.mesh().positions[static_cast<std::size_t>(tri[0])] * hit->barycentric.x +
+        plate.mesh().positions[static_cast<std::size_t>(tri[1])] * hit->barycentric.y +
+        plate.mesh().positions[static_cast<std::size_t>(tri[2])] * hit->barycentric.z;
+    EXPECT_NEAR(met.x, 0.1, 1e-6);
+    EXPECT_NEAR(met.y, 0.2, 1e-6);
+    EXPECT_NEAR(met.z, 0.1, 1e-12);  // on the top face at the step's end
+    // A point beside the plate's path, or leaving it from behind, is not reported.
+    EXPECT_FALSE(plate.sweep({3.0, 0.0, 0.0}, {3.0, 0.0, 0.0}));
+    EXPECT_FALSE(plate.sweep({0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}).has_value() &&
+                 plate.sweep({0.0, 0.0, -0.101}, {0.0, 0.0, -0.101}).has_value());
+    EXPECT_THROW(plate.move_to(std::vector<Vec3d>(3)), InvalidInput);
+}
+
+// A 2 mm plate rising at 40 m/s (40 mm per 1 ms substep) through a sheet at rest.
+struct RisingPlate {
+    TriangleMeshD plate = geometry::make_box({-1.0, -1.0, -0.102}, {1.0, 1.0, -0.1});
+    std::shared_ptr<const MeshAnimation> animation =
+        animate(plate, 2, 100.0, false, [](Vec3d p, int k) {
+            return p + Vec3d{0, 0, 0.4 * k};
+        });
+    double top_at_end = 0.3;
+};
+
+TEST(MeshContact, AFastThinObstacleDoesNotTunnelThroughTheCloth) {
+    const RisingPlate rising;
+    const TriangleMeshD sheet = test::flat_sheet(4, 0.2, 0.0);
+    ClothSolver solver(sheet, material());
+    solver.set_gravity({0.0, 0.0, 0.0});
+    solver.add_animated_mesh_obstacle(MeshObstacle(rising.plate), rising.animation);
+    const ClothStepStats stats = solver.step(0.01, 10);  // frame 1 of the plate: top at 0.3
+    EXPECT_GT(stats.obstacle_swept_contacts, 0);
+    EXPECT_NEAR(stats.obstacle_max_step, 0.04, 1e-9);
+    for (const Vec3d& p : solver.positions()) {
+        EXPECT_GE(p.z, rising.top_at_end + 0.99 * 0.005);
+    }
+
+    // The baseline: static contact only (push out of the plate where it is at each substep's
+    // end, within twice the thickness) leaves the cloth below the plate: it passed through.
+    MeshObstacle plate(rising.plate);
+    std::vector<Vec3d> cloth(sheet.positions);
+    std::vector<Vec3d> placed(rising.plate.positions.size());
+    for (int s = 1; s <= 10; ++s) {
+        rising.animation->positions_at(s * 0.001, placed);
+        plate.set_positions(placed);
+        for (Vec3d& x : cloth) {
+            push_out(plate, x, 0.005, 0.01);
+        }
+    }
+    for (const Vec3d& p : cloth) {
+        EXPECT_LT(p.z, rising.top_at_end - 0.002);  // below the plate's bottom face
+    }
+}
+
+// Friction carries cloth resting on a slab whose vertices move along x at 0.5 m/s.
+double drift_on_moving_slab(double friction) {
+    const TriangleMeshD slab = geometry::make_box({-1.0, -1.0, -0.2}, {1.0, 1.0, 0.0});
+    const auto sliding = animate(slab, 2, 1.0, false, [](Vec3d p, int k) {
+        return p + Vec3d{0.5 * k, 0, 0};
+    });
+    const TriangleMeshD sheet = test::flat_sheet(4, 0.2, 0.005);
+    ClothSolver solver(sheet, material(friction));
+    solver.add_animated_mesh_obstacle(MeshObstacle(slab), sliding);
+    for (int frame = 0; frame < 24; ++frame) {
+        solver.step(1.0 / 24.0, 20);
+    }
+    double x = 0.0;
+    for (const Vec3d& p : solver.positions()) {
+        x += p.x;
+    }
+    return x / static_cast<double>(solver.positions().size());
+}
+
+TEST(MeshContact, FrictionDragsTheClothWithTheSurfacesOwnMotion) {
+    const double with = drift_on_moving_slab(1.0);
+    const double without = drift_on_moving_slab(0.0);
+    EXPECT_GT(with, 0.4);  // the slab moved 0.5 m
+    EXPECT_LT(with, 0.55);
+    EXPECT_LT(std::abs(without), 0.02);
+}
+
+TEST(MeshContact, AttachedPinsFollowADeformingBody) {
+    // A box that grows by half and rises 0.3 m over 1 s; a sheet 1 cm above its top face.
+    const TriangleMeshD body = geometry::make_box({-0.2, -0.2, -0.2}, {0.2, 0.2, 0.2});
+    const auto growing = animate(body, 2, 1.0, false, [](Vec3d p, int k) {
+        return k == 0 ? p : p * 1.5 + Vec3d{0.0, 0.0, 0.3};
+    });
+    const TriangleMeshD sheet = test::flat_sheet(4, 0.2, 0.21);
+    ClothSolver solver(sheet, material());
+    const std::size_t index = solver.add_animated_mesh_obstacle(MeshObstacle(body), growing);
+    const std::vector<std::int32_t> attached{0, 1, 2, 3, 4};
+    solver.add_attached_pins(attached, index, 0.02);
+    for (int frame = 0; frame < 12; ++frame) {
+        solver.step(1.0 / 24.0, 10);
+    }
+    // At t = 0.5 s the body is scaled by 1.25 and raised 0.15 m: its top face at z = 0.4.
+    for (const std::int32_t v : attached) {
+        const Vec3d& rest = sheet.positions[static_cast<std::size_t>(v)];
+        const Vec3d& now = solver.positions()[static_cast<std::size_t>(v)];
+        EXPECT_NEAR(now.x, 1.25 * rest.x, 1e-12) << v;
+        EXPECT_NEAR(now.y, 1.25 * rest.y, 1e-12) << v;
+        EXPECT_NEAR(now.z, 0.4 + 0.01, 1e-12) << v;
+    }
+    EXPECT_EQ(solver.model().pin_lag().vertices, 0);
+    // Too far from the surface, or a wrong obstacle: errors naming them.
+    ClothSolver far(test::flat_sheet(4, 0.2, 0.5), material());
+    far.add_animated_mesh_obstacle(MeshObstacle(body), growing);
+    try {
+        far.add_attached_pins(attached, 0, 0.02);
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex 0"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("expected at most 0.02 m"), std::string::npos);
+    }
+    EXPECT_THROW(far.add_attached_pins(attached, 1, 0.02), InvalidInput);
+}
+
+TEST(MeshContact, AnObstacleThatJumpsPushesClothOutAtABoundedSpeed) {
+    // A slab under resting cloth jumps 0.3 m within one frame (15 mm per substep, three
+    // thicknesses), then stays.
+    const TriangleMeshD slab = geometry::make_box({-1.0, -1.0, -0.4}, {1.0, 1.0, 0.0});
+    const auto jump = animate(slab, 2, 24.0, false, [](Vec3d p, int k) {
+        return p + Vec3d{0, 0, 0.3 * k};
+    });
+    ClothSolver solver(test::flat_sheet(8, 0.2, 0.004), material(0.5));
+    solver.add_animated_mesh_obstacle(MeshObstacle(slab), jump);
+    solver.enable_self_collision(true);
+    // One substep: the slab rises 15 mm under cloth resting 4 mm above it; the cloth, at rest,
+    // is pushed at most the 1 mm it was within the thickness plus the thickness and a half
+    // (7.5 mm), and lags behind the surface.
+    const double h = 1.0 / 480.0;
+    std::vector<Vec3d> before(solver.positions().begin(), solver.positions().end());
+    const ClothStepStats first = solver.step(h, 1);
+    EXPECT_NEAR(first.obstacle_max_step, 0.015, 1e-9);
+    EXPECT_GT(first.obstacle_max_lag, 0.0);
+    EXPECT_GT(first.obstacles_lagging, 0);
+    double moved = 0.0;
+    for (std::size_t v = 0; v < before.size(); ++v) {
+        moved = std::max(moved, norm(solver.positions()[v] - before[v]));
+    }
+    EXPECT_LE(moved, 0.0085 + 9.81 * h * h + 1e-12);
+    EXPECT_GT(moved, 0.008);
+    // The rest of the jump's frame: the cloth keeps up with the surface within a few substeps.
+    for (int s = 1; s < 20; ++s) {
+        solver.step(h, 1);
+    }
+    // The slab holds still from then on: the cloth comes out on top and stops lagging.
+    ClothStepStats last;
+    for (int frame = 0; frame < 24; ++frame) {
+        last = solver.step(1.0 / 24.0, 20);
+    }
+    EXPECT_EQ(last.obstacles_lagging, 0);
+    for (const Vec3d& p : solver.positions()) {
+        EXPECT_GT(p.z, 0.3);
+    }
+}
+
+// A sheet falling onto a turning, bending body (a box whose top leans as it deforms), with
+// self-collision and friction: the result after `frames` frames.
+std::unique_ptr<ClothSolver> bending_body_scene() {
+    const TriangleMeshD body = geometry::make_box({-0.3, -0.3, -0.5}, {0.3, 0.3, 0.0});
+    const auto bending = animate(body, 4, 12.0, true, [](Vec3d p, int k) {
+        const double lean = 0.05 * std::sin(k * 1.5707963267948966);
+        return p + Vec3d{lean * (p.z + 0.5), 0.0, 0.0};
+    });
+    auto solver = std::make_unique<ClothSolver>(test::flat_sheet(12, 0.5, 0.05), material(0.3));
+    solver->add_animated_mesh_obstacle(MeshObstacle(body), bending);
+    solver->enable_self_collision(true);
+    return solver;
+}
+
+TEST(MeshContact, ThreadsAndResumeGiveTheSameBits) {
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        auto solver = bending_body_scene();
+        for (int frame = 0; frame < 6; ++frame) {
+            solver->step(1.0 / 24.0, 10);
+        }
+        set_num_threads(0);
+        return std::vector<Vec3d>(solver->positions().begin(), solver->positions().end());
+    };
+    const std::vector<Vec3d> one = run(1);
+    const std::vector<Vec3d> four = run(4);
+    ASSERT_EQ(one.size(), four.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), four.data(), one.size() * sizeof(Vec3d)));
+
+    // Saved after 3 frames and loaded into a new solver: the same 3 frames after.
+    auto first = bending_body_scene();
+    for (int frame = 0; frame < 3; ++frame) {
+        first->step(1.0 / 24.0, 10);
+    }
+    ByteWriter out;
+    first->save_state(out);
+    auto resumed = bending_body_scene();
+    ByteReader in(out.bytes(), "state");
+    resumed->load_state(in);
+    for (int frame = 0; frame < 3; ++frame) {
+        resumed->step(1.0 / 24.0, 10);
+    }
+    const std::span<const Vec3d> again = resumed->positions();
+    ASSERT_EQ(again.size(), one.size());
+    EXPECT_EQ(0, std::memcmp(again.data(), one.data(), one.size() * sizeof(Vec3d)));
+}
+
+}  // namespace
+}  // namespace pliant::cloth
