@@ -77,6 +77,7 @@ struct ClothStepStats {
     double ms = 0.0;        // wall-clock time of the step
     double solve_ms = 0.0;  // prediction, stretch, bending, air, obstacles, velocities, friction
     std::int64_t obstacle_contacts = 0;  // vertices in contact with an obstacle in the last substep
+    std::int64_t solver_sweeps = 0;      // VBD (vbd_stepper.hpp): sweeps over the vertices; else 0
     bool has_self_collision = false;     // the fields below are filled
     SelfCollisionStats self;             // self_collision.hpp
 };

@@ -147,6 +147,11 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     }
     w.put(static_cast<std::int32_t>(m.bending));
     w.put(static_cast<std::int32_t>(m.stretch_solver));
+    w.put(scene.vbd.has_value());
+    if (scene.vbd) {
+        w.put(static_cast<std::int32_t>(scene.vbd->iterations));
+        w.put(scene.vbd->chebyshev_rho);
+    }
     for (const cloth::PinGroup& group : scene.pins) {
         w.put_vector(group.vertices);
         put_motion(group.motion);
