@@ -145,7 +145,9 @@ VBDStepper::VBDStepper(const ClothModel& model, const VBDOptions& options)
         if (vertices[0] == vertices[1]) {
             continue;
         }
-        const auto at = [&](std::int32_t v) { return rest[static_cast<std::size_t>(v)]; };
+        const auto at = [&](std::int32_t v) {
+            return rest[static_cast<std::size_t>(v)];
+        };
         Hinge hinge;
         if (const auto stencil = isometric_bending_stencil(at(vertices[0]), at(vertices[1]),
                                                            at(vertices[2]), at(vertices[3]))) {
@@ -197,6 +199,7 @@ VBDStepper::VBDStepper(const ClothModel& model, const VBDOptions& options)
     m_start.resize(n);
     m_inertia.resize(n);
     m_hinge_normals.resize(m_hinges.size());
+    m_hinge_b.resize(m_hinges.size());
 }
 
 void VBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
@@ -292,8 +295,10 @@ bool VBDStepper::push_out_of_obstacles(const ClothModel& model, Vec3d& x, const 
     bool touched = false;
     for (const MovingObstacle& obstacle : model.obstacles()) {
         const ContactCorrection contact = push_out(obstacle.current, x, thickness);
-        if (contact.depth > 0.0 || surface_distance(obstacle.current, x).distance <=
-                                       thickness * (1.0 + 1e-9)) {
+        // Touching: moved now, or (for the contact report) already at the thickness.
+        if (contact.depth > 0.0 ||
+            (normal != nullptr &&
+             surface_distance(obstacle.current, x).distance <= thickness * (1.0 + 1e-9))) {
             if (!touched || contact.depth > deepest) {
                 deepest = contact.depth;
                 if (normal != nullptr) {
@@ -342,7 +347,8 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
     // Springs: E = ½ k (l − L)², ∂E/∂x_i = k (l − L) n, ∂²E/∂x_i² = k (n nᵀ + (1 − L/l)(I − n nᵀ)),
     // the second term clamped at 0 for compressed springs (positive semi-definite).
     for (auto s = m_spring_first[v]; s < m_spring_first[v + 1]; ++s) {
-        const Vec3d d = xi - x[static_cast<std::size_t>(m_spring_other[static_cast<std::size_t>(s)])];
+        const Vec3d d =
+            xi - x[static_cast<std::size_t>(m_spring_other[static_cast<std::size_t>(s)])];
         const double l = norm(d);
         if (!(l > 0.0)) {
             continue;
@@ -359,28 +365,24 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
         const auto ref = static_cast<std::size_t>(m_hinge_refs[static_cast<std::size_t>(r)]);
         const std::size_t hinge_index = ref / 4;
         const std::size_t k = ref % 4;
-        const std::array<std::int32_t, 4>& hv = m_hinge_vertices[hinge_index];
         const Hinge& hinge = m_hinges[hinge_index];
-        const Vec3d& x0 = x[static_cast<std::size_t>(hv[0])];
-        const Vec3d& x1 = x[static_cast<std::size_t>(hv[1])];
-        const Vec3d& x2 = x[static_cast<std::size_t>(hv[2])];
-        const Vec3d& x3 = x[static_cast<std::size_t>(hv[3])];
         double c = 0.0;
         Vec3d gradient;
         if (hinge.is_dihedral) {
-            const DihedralAngle angle = dihedral_angle(x0, x1, x2, x3);
+            const std::array<std::int32_t, 4>& hv = m_hinge_vertices[hinge_index];
+            const DihedralAngle angle = dihedral_angle(
+                x[static_cast<std::size_t>(hv[0])], x[static_cast<std::size_t>(hv[1])],
+                x[static_cast<std::size_t>(hv[2])], x[static_cast<std::size_t>(hv[3])]);
             if (!angle.is_valid) {
                 continue;
             }
             c = angle.angle - hinge.rest_angle;
             gradient = angle.gradient[k];
         } else {
-            // C = n̂ · Σ K_k x_k, n = K_0 n_A + K_1 n_B (isometric_bending.hpp), n̂ as at the
-            // sweep's start.
+            // C = n̂ · b, b = Σ K_k x_k kept up to date as the hinge's vertices move, n = K_0 n_A
+            // + K_1 n_B (isometric_bending.hpp) as at the sweep's start.
             const Vec3d& n_hat = m_hinge_normals[hinge_index];
-            const Vec3d b = (x0 - x2) * hinge.k[0] + (x1 - x2) * hinge.k[1] +
-                            (x3 - x2) * hinge.k[3];
-            c = dot(n_hat, b);
+            c = dot(n_hat, m_hinge_b[hinge_index]);
             gradient = n_hat * hinge.k[k];
         }
         f -= gradient * (k_bend * c);
@@ -389,6 +391,24 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
     Vec3d step;
     if (solve(hessian, f, step)) {
         x[v] = xi + step;
+    }
+}
+
+void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
+                               std::span<Vec3d> x) {
+    const Vec3d before = x[v];
+    solve_vertex(model, v, h, x);
+    if (model.has_obstacles()) {
+        push_out_of_obstacles(model, x[v], m_start[v], h, nullptr, nullptr);
+    }
+    // No other vertex of this colour shares a hinge with v: b is updated without races.
+    const Vec3d moved = x[v] - before;
+    for (auto r = m_hinge_first[v]; r < m_hinge_first[v + 1]; ++r) {
+        const auto ref = static_cast<std::size_t>(m_hinge_refs[static_cast<std::size_t>(r)]);
+        const Hinge& hinge = m_hinges[ref / 4];
+        if (!hinge.is_dihedral) {
+            m_hinge_b[ref / 4] += moved * hinge.k[ref % 4];
+        }
     }
 }
 
@@ -406,9 +426,11 @@ void VBDStepper::update_hinge_normals(std::span<const Vec3d> x) {
             const Vec3d& x1 = x[static_cast<std::size_t>(hv[1])];
             const Vec3d& x2 = x[static_cast<std::size_t>(hv[2])];
             const Vec3d& x3 = x[static_cast<std::size_t>(hv[3])];
-            const Vec3d n = cross(x2 - x0, x3 - x0) * hinge.k[0] + cross(x3 - x1, x2 - x1) * hinge.k[1];
+            const Vec3d n =
+                cross(x2 - x0, x3 - x0) * hinge.k[0] + cross(x3 - x1, x2 - x1) * hinge.k[1];
             const double length = norm(n);
             m_hinge_normals[h] = length > 0.0 ? n * (1.0 / length) : Vec3d{0.0, 0.0, 0.0};
+            m_hinge_b[h] = (x0 - x2) * hinge.k[0] + (x1 - x2) * hinge.k[1] + (x3 - x2) * hinge.k[3];
         },
         VERTEX_GRAIN);
 }
@@ -465,11 +487,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                 [&](std::int64_t i) {
                     const auto v = static_cast<std::size_t>(color[static_cast<std::size_t>(i)]);
                     if (inverse_masses[v] > 0.0) {
-                        solve_vertex(model, v, h, positions);
-                        if (has_obstacles) {
-                            push_out_of_obstacles(model, positions[v], m_start[v], h, nullptr,
-                                                  nullptr);
-                        }
+                        update_vertex(model, v, h, positions);
                     }
                 },
                 VERTEX_GRAIN);
@@ -521,10 +539,9 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                         if (outward > 0.0) {
                             relative -= normal * outward;
                         }
-                        velocity = surface_velocity +
-                                   apply_friction(relative, normal, normal_speed,
-                                                  material.static_friction,
-                                                  material.kinetic_friction);
+                        velocity = surface_velocity + apply_friction(relative, normal, normal_speed,
+                                                                     material.static_friction,
+                                                                     material.kinetic_friction);
                         ++touching;
                     }
                 }
@@ -567,9 +584,9 @@ void VBDStepper::load_state(const ClothModel& model, ByteReader& in) {
     m_gather_end_time = in.get<double>("vbd.gather_end_time");
     const bool has_self_collision = in.get_bool("vbd.has_self_collision");
     if (has_self_collision != (m_self_collision != nullptr)) {
-        throw InvalidInput(fmt::format("{}: cloth vbd stepper: self-collision {} in the state, {} here",
-                                       in.source(), has_self_collision ? "on" : "off",
-                                       m_self_collision ? "on" : "off"));
+        throw InvalidInput(fmt::format(
+            "{}: cloth vbd stepper: self-collision {} in the state, {} here", in.source(),
+            has_self_collision ? "on" : "off", m_self_collision ? "on" : "off"));
     }
     if (m_self_collision) {
         m_self_collision = std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(),

@@ -87,6 +87,8 @@ private:
     // The Newton step of vertex v (free) toward the minimum of G with its neighbours held, then
     // the obstacles' push.
     void solve_vertex(const ClothModel& model, std::size_t v, double h, std::span<Vec3d> x) const;
+    // solve_vertex, the obstacles' push, and the hinges' b updated by the vertex's move.
+    void update_vertex(const ClothModel& model, std::size_t v, double h, std::span<Vec3d> x);
     // Moves x (at `start` when the substep began) out of every obstacle (thickness); returns
     // whether it touches one, with the deepest contact's normal and surface velocity (m/s over h)
     // when normal is not null.
@@ -111,6 +113,7 @@ private:
     std::vector<std::array<std::int32_t, 4>> m_hinge_vertices;  // x0, x1, x2, x3 (dihedral.hpp)
     std::vector<Hinge> m_hinges;
     std::vector<Vec3d> m_hinge_normals;  // per hinge, n̂ at the sweep's start (isometric ones)
+    std::vector<Vec3d> m_hinge_b;        // per hinge, b = Σ K_k x_k now (isometric ones)
     VertexColoring m_coloring;
 
     // Per substep.

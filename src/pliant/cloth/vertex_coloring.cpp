@@ -50,14 +50,16 @@ VertexColoring color_vertices(std::int64_t num_vertices, std::span<const std::in
             const auto k = static_cast<std::size_t>(elements_of[static_cast<std::size_t>(e)]);
             for (auto i = element_offsets[k]; i < element_offsets[k + 1]; ++i) {
                 const std::int32_t c =
-                    coloring.color_of[static_cast<std::size_t>(vertices[static_cast<std::size_t>(i)])];
+                    coloring
+                        .color_of[static_cast<std::size_t>(vertices[static_cast<std::size_t>(i)])];
                 if (c >= 0) {
                     mark[static_cast<std::size_t>(c)] = static_cast<std::int64_t>(v);
                 }
             }
         }
         std::int32_t c = 0;
-        while (c < num_colors && mark[static_cast<std::size_t>(c)] == static_cast<std::int64_t>(v)) {
+        while (c < num_colors &&
+               mark[static_cast<std::size_t>(c)] == static_cast<std::int64_t>(v)) {
             ++c;
         }
         if (c == num_colors) {
