@@ -170,13 +170,15 @@ VBDStepper::VBDStepper(const ClothModel& model, const VBDOptions& options)
         m_hinge_first[v + 1] += m_hinge_first[v];
     }
     m_hinge_refs.resize(static_cast<std::size_t>(m_hinge_first[n]));
+    m_hinge_ref_k.resize(m_hinge_refs.size());
     {
         std::vector<std::int32_t> fill(m_hinge_first.begin(), m_hinge_first.end() - 1);
         for (std::size_t h = 0; h < m_hinge_vertices.size(); ++h) {
             for (std::size_t k = 0; k < 4; ++k) {
                 const auto v = static_cast<std::size_t>(m_hinge_vertices[h][k]);
-                m_hinge_refs[static_cast<std::size_t>(fill[v]++)] =
-                    static_cast<std::int32_t>(h * 4 + k);
+                const auto slot = static_cast<std::size_t>(fill[v]++);
+                m_hinge_refs[slot] = static_cast<std::int32_t>(h * 4 + k);
+                m_hinge_ref_k[slot] = m_hinges[h].is_dihedral ? 0.0 : m_hinges[h].k[k];
             }
         }
     }
@@ -198,8 +200,7 @@ VBDStepper::VBDStepper(const ClothModel& model, const VBDOptions& options)
 
     m_start.resize(n);
     m_inertia.resize(n);
-    m_hinge_normals.resize(m_hinges.size());
-    m_hinge_b.resize(m_hinges.size());
+    m_hinge_state.resize(m_hinges.size());
 }
 
 void VBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
@@ -365,10 +366,14 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
         const auto ref = static_cast<std::size_t>(m_hinge_refs[static_cast<std::size_t>(r)]);
         const std::size_t hinge_index = ref / 4;
         const std::size_t k = ref % 4;
-        const Hinge& hinge = m_hinges[hinge_index];
         double c = 0.0;
         Vec3d gradient;
-        if (hinge.is_dihedral) {
+        const double k_weight = m_hinge_ref_k[static_cast<std::size_t>(r)];
+        if (k_weight == 0.0) {
+            const Hinge& hinge = m_hinges[hinge_index];
+            if (!hinge.is_dihedral) {
+                continue;  // an isometric hinge with no weight on this vertex
+            }
             const std::array<std::int32_t, 4>& hv = m_hinge_vertices[hinge_index];
             const DihedralAngle angle = dihedral_angle(
                 x[static_cast<std::size_t>(hv[0])], x[static_cast<std::size_t>(hv[1])],
@@ -381,9 +386,9 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
         } else {
             // C = n̂ · b, b = Σ K_k x_k kept up to date as the hinge's vertices move, n = K_0 n_A
             // + K_1 n_B (isometric_bending.hpp) as at the sweep's start.
-            const Vec3d& n_hat = m_hinge_normals[hinge_index];
-            c = dot(n_hat, m_hinge_b[hinge_index]);
-            gradient = n_hat * hinge.k[k];
+            const HingeState& state = m_hinge_state[hinge_index];
+            c = dot(state.normal, state.b);
+            gradient = state.normal * k_weight;
         }
         f -= gradient * (k_bend * c);
         hessian.add_outer(gradient, k_bend);
@@ -405,9 +410,9 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
     const Vec3d moved = x[v] - before;
     for (auto r = m_hinge_first[v]; r < m_hinge_first[v + 1]; ++r) {
         const auto ref = static_cast<std::size_t>(m_hinge_refs[static_cast<std::size_t>(r)]);
-        const Hinge& hinge = m_hinges[ref / 4];
-        if (!hinge.is_dihedral) {
-            m_hinge_b[ref / 4] += moved * hinge.k[ref % 4];
+        const double k_weight = m_hinge_ref_k[static_cast<std::size_t>(r)];
+        if (k_weight != 0.0) {
+            m_hinge_state[ref / 4].b += moved * k_weight;
         }
     }
 }
@@ -429,8 +434,8 @@ void VBDStepper::update_hinge_normals(std::span<const Vec3d> x) {
             const Vec3d n =
                 cross(x2 - x0, x3 - x0) * hinge.k[0] + cross(x3 - x1, x2 - x1) * hinge.k[1];
             const double length = norm(n);
-            m_hinge_normals[h] = length > 0.0 ? n * (1.0 / length) : Vec3d{0.0, 0.0, 0.0};
-            m_hinge_b[h] = (x0 - x2) * hinge.k[0] + (x1 - x2) * hinge.k[1] + (x3 - x2) * hinge.k[3];
+            m_hinge_state[h].normal = length > 0.0 ? n * (1.0 / length) : Vec3d{0.0, 0.0, 0.0};
+            m_hinge_state[h].b = (x0 - x2) * hinge.k[0] + (x1 - x2) * hinge.k[1] + (x3 - x2) * hinge.k[3];
         },
         VERTEX_GRAIN);
 }

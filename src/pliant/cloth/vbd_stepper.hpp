@@ -112,8 +112,14 @@ private:
     std::vector<std::int32_t> m_hinge_refs;
     std::vector<std::array<std::int32_t, 4>> m_hinge_vertices;  // x0, x1, x2, x3 (dihedral.hpp)
     std::vector<Hinge> m_hinges;
-    std::vector<Vec3d> m_hinge_normals;  // per hinge, n̂ at the sweep's start (isometric ones)
-    std::vector<Vec3d> m_hinge_b;        // per hinge, b = Σ K_k x_k now (isometric ones)
+    // Per hinge reference, the vertex's isometric weight K_k (0 for a dihedral hinge).
+    std::vector<double> m_hinge_ref_k;
+    // Per isometric hinge: n̂ at the sweep's start and b = Σ K_k x_k now.
+    struct HingeState {
+        Vec3d normal;
+        Vec3d b;
+    };
+    std::vector<HingeState> m_hinge_state;
     VertexColoring m_coloring;
 
     // Per substep.
