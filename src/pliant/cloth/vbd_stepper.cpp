@@ -435,7 +435,8 @@ void VBDStepper::update_hinge_normals(std::span<const Vec3d> x) {
                 cross(x2 - x0, x3 - x0) * hinge.k[0] + cross(x3 - x1, x2 - x1) * hinge.k[1];
             const double length = norm(n);
             m_hinge_state[h].normal = length > 0.0 ? n * (1.0 / length) : Vec3d{0.0, 0.0, 0.0};
-            m_hinge_state[h].b = (x0 - x2) * hinge.k[0] + (x1 - x2) * hinge.k[1] + (x3 - x2) * hinge.k[3];
+            m_hinge_state[h].b =
+                (x0 - x2) * hinge.k[0] + (x1 - x2) * hinge.k[1] + (x3 - x2) * hinge.k[3];
         },
         VERTEX_GRAIN);
 }
