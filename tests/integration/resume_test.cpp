@@ -140,8 +140,10 @@ void expect_same_run(const std::filesystem::path& reference, const std::filesyst
 
 class ClothResume : public ::testing::Test {
 protected:
+    virtual std::string scene() const { return SCENE; }
+
     void SetUp() override {
-        write(scratch / "scene.json", SCENE);
+        write(scratch / "scene.json", scene());
         const CliResult r = run_cli(
             cloth_args(scratch, "scene.json", "reference", "--checkpoint-every 0"), scratch);
         ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -184,6 +186,30 @@ TEST_F(ClothResume, KilledAfterKFramesResumesBitwiseIdentical) {
         if (k >= 3) {
             EXPECT_TRUE(stats.contains("resumed_after_frame"));
         }
+    }
+}
+
+// The same with the Vertex Block Descent stepper (cloth/vbd_stepper.hpp).
+class ClothResumeVBD : public ClothResume {
+protected:
+    std::string scene() const override {
+        std::string text = SCENE;
+        text.insert(text.rfind('}'), R"(, "solver": {"type": "vbd", "iterations": 5})");
+        return text;
+    }
+};
+
+TEST_F(ClothResumeVBD, KilledAfterKFramesResumesBitwiseIdentical) {
+    for (const int k : {1, 4, 9}) {
+        SCOPED_TRACE("killed once frame " + std::to_string(k) + " appeared");
+        const std::string out = "killed_" + std::to_string(k);
+        const std::filesystem::path frame =
+            scratch / out / "frames" / fmt::format("frame_{:04d}.obj", k);
+        const pid_t pid = spawn(cloth_args(scratch, "scene.json", out, "--checkpoint-every 2"));
+        ASSERT_GT(pid, 0);
+        EXPECT_TRUE(kill_when(pid, [&] { return std::filesystem::exists(frame); }));
+        resume(out);
+        expect_same_run(scratch / "reference", scratch / out);
     }
 }
 

@@ -71,6 +71,20 @@ TEST(ClothScene, ReadsEveryKey) {
     EXPECT_FALSE(scene.untangle);
 }
 
+TEST(ClothScene, ReadsTheSolver) {
+    EXPECT_FALSE(parse(R"({"cloth": {"grid": {}}})").vbd);
+    EXPECT_FALSE(parse(R"({"cloth": {"grid": {}}, "solver": "xpbd"})").vbd);
+    const cloth::ClothScene plain = parse(R"({"cloth": {"grid": {}}, "solver": "vbd"})");
+    ASSERT_TRUE(plain.vbd);
+    EXPECT_EQ(plain.vbd->iterations, cloth::VBDOptions{}.iterations);
+    const cloth::ClothScene tuned = parse(R"({"cloth": {"grid": {}},
+        "solver": {"type": "vbd", "iterations": 4, "chebyshev_rho": 0.5}})");
+    ASSERT_TRUE(tuned.vbd);
+    EXPECT_EQ(tuned.vbd->iterations, 4);
+    EXPECT_EQ(tuned.vbd->chebyshev_rho, 0.5);
+    EXPECT_FALSE(parse(R"({"cloth": {"grid": {}}, "solver": {"type": "xpbd"}})").vbd);
+}
+
 TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     const cloth::ClothScene scene = parse(R"({"cloth": {"mesh": "shirt.obj"}})");
     EXPECT_FALSE(scene.grid.has_value());
@@ -123,6 +137,15 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
                  {"material.stretch_solver", "\"chains\", \"edges\"", "\"chain\""});
     expect_error(R"({"cloth": {"grid": {}}, "material": {"stretch_solver": null}})",
                  {"material.stretch_solver", "\"edges\""});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "pbd"})",
+                 {"solver", "\"vbd\", \"xpbd\"", "\"pbd\""});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": 3})", {"solver", "\"xpbd\""});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": {"type": "vbd", "iterations": 0}})",
+                 {"solver.iterations", "0"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": {"chebyshev_rho": 1.5}})",
+                 {"solver.chebyshev_rho", "1.5"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": {"iteration": 3}})",
+                 {"solver.iteration", "unknown key"});
     expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0]})",
                  {"gravity", "3 numbers", "2 elements"});
     expect_error(R"({"cloth": {"grid": {}}, "frames": 1.5})", {"frames", "an integer"});

@@ -17,6 +17,7 @@
 #include "pliant/cloth/material.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
+#include "pliant/cloth/vbd_stepper.hpp"
 #include "pliant/core/vec3.hpp"
 
 namespace pliant::cloth {
@@ -95,6 +96,9 @@ struct ClothScene {
 
     ClothMaterial material;
     bool self_collision = true;  // cloth/self_collision.hpp
+    // The time stepper: XPBD (xpbd_stepper.hpp) when empty, else Vertex Block Descent with these
+    // options (vbd_stepper.hpp).
+    std::optional<VBDOptions> vbd;
     // Cloth that starts intersecting itself is untangled before the first frame (untangle.hpp).
     bool untangle = true;
     std::vector<SceneObstacle> obstacles;

@@ -29,6 +29,7 @@
 #include "pliant/cloth/obstacles.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/untangle.hpp"
+#include "pliant/cloth/vbd_stepper.hpp"
 #include "pliant/cloth/xpbd_stepper.hpp"
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
@@ -89,7 +90,20 @@ public:
     // CCD fail-safe at the end of every window of substeps, so that no step ends with
     // intersecting triangles when it started without. Off by default. InvalidInput when the
     // thickness exceeds 4 median edge lengths.
-    void enable_self_collision(bool enabled) { m_stepper.enable_self_collision(m_model, enabled); }
+    void enable_self_collision(bool enabled) {
+        m_stepper.enable_self_collision(m_model, enabled);
+        if (m_vbd) {
+            m_vbd->enable_self_collision(m_model, enabled);
+        }
+    }
+    // Steps with Vertex Block Descent (vbd_stepper.hpp) from now on instead of XPBD, with
+    // self-collision as the XPBD stepper has it. InvalidInput for invalid options.
+    void use_vbd(const VBDOptions& options) {
+        m_vbd = std::make_unique<VBDStepper>(m_model, options);
+        m_vbd->enable_self_collision(m_model, m_stepper.has_self_collision());
+    }
+    // The VBD stepper (use_vbd), or null when XPBD steps.
+    const VBDStepper* vbd() const { return m_vbd.get(); }
 
     // Moves the cloth out of its own intersections (untangle.hpp; pinned vertices stay): for
     // input that intersects itself, before the first step (the fail-safe keeps cloth
@@ -128,7 +142,9 @@ public:
 
     // Advances the cloth by dt seconds in `substeps` equal substeps (dt > 0, substeps >= 1; else
     // InvalidInput).
-    ClothStepStats step(double dt, int substeps) { return m_stepper.step(m_model, dt, substeps); }
+    ClothStepStats step(double dt, int substeps) {
+        return m_vbd ? m_vbd->step(m_model, dt, substeps) : m_stepper.step(m_model, dt, substeps);
+    }
 
     double time() const { return m_model.time(); }  // s since the start
     std::span<const Vec3d> positions() const { return m_model.positions(); }
@@ -153,11 +169,19 @@ public:
     // bit for bit. load_state: InvalidInput for a state of another cloth or a truncated one.
     void save_state(ByteWriter& out) const {
         m_model.save_state(out);
-        m_stepper.save_state(out);
+        if (m_vbd) {
+            m_vbd->save_state(out);
+        } else {
+            m_stepper.save_state(out);
+        }
     }
     void load_state(ByteReader& in) {
         m_model.load_state(in);
-        m_stepper.load_state(m_model, in);
+        if (m_vbd) {
+            m_vbd->load_state(m_model, in);
+        } else {
+            m_stepper.load_state(m_model, in);
+        }
     }
 
     // The parts. The stepper was built for this model: step it with model() only.
@@ -169,6 +193,7 @@ public:
 private:
     ClothModel m_model;
     XPBDStepper m_stepper;
+    std::unique_ptr<VBDStepper> m_vbd;  // steps instead of m_stepper when set
 };
 
 }  // namespace pliant::cloth

@@ -147,6 +147,11 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     }
     w.put(static_cast<std::int32_t>(m.bending));
     w.put(static_cast<std::int32_t>(m.stretch_solver));
+    w.put(scene.vbd.has_value());
+    if (scene.vbd) {
+        w.put(static_cast<std::int32_t>(scene.vbd->iterations));
+        w.put(scene.vbd->chebyshev_rho);
+    }
     for (const cloth::PinGroup& group : scene.pins) {
         w.put_vector(group.vertices);
         put_motion(group.motion);
@@ -399,6 +404,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                          {"narrow_ms", step.self.narrow_ms},
                                          {"response_ms", step.self.response_ms},
                                          {"obstacle_contacts", step.obstacle_contacts},
+                                         {"solver_sweeps", step.solver_sweeps},
                                          {"intersecting_pairs", intersecting},
                                          {"strain_p90", strain.p90},
                                          {"strain_p99", strain.p99},
@@ -498,6 +504,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"strain_limits", solver.num_strain_limits()},
         {"fps", scene.frames_per_second},
         {"substeps", scene.substeps},
+        {"solver", scene.vbd ? "vbd" : "xpbd"},
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
         {"untangle", untangle_report(start)},

@@ -604,6 +604,22 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             *flag = value->get<bool>();
         }
     }
+    if (const Json* solver = root.find("solver")) {
+        // "xpbd", "vbd", or {"type": "vbd", "iterations": N, "chebyshev_rho": r}.
+        if (solver->is_object()) {
+            root.object("solver", [&](ObjectReader& s) {
+                if (s.text("type", "vbd", {"xpbd", "vbd"}) == "vbd") {
+                    cloth::VBDOptions options;
+                    options.iterations = s.integer("iterations", options.iterations, 1, 10'000);
+                    options.chebyshev_rho =
+                        s.number("chebyshev_rho", options.chebyshev_rho, 0.0, 0.999);
+                    scene.vbd = options;
+                }
+            });
+        } else if (root.text("solver", "xpbd", {"xpbd", "vbd"}) == "vbd") {
+            scene.vbd = cloth::VBDOptions{};
+        }
+    }
     scene.gravity = root.vector("gravity", scene.gravity);
     root.object("air", [&](ObjectReader& a) { scene.air = read_air(a); });
     scene.frames_per_second = root.number("fps", scene.frames_per_second, 1e-3, 1e6);

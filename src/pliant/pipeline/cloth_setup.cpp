@@ -537,6 +537,9 @@ std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
     solver->set_gravity(scene.gravity);
     solver->set_air(scene.air);
     solver->enable_self_collision(scene.self_collision);
+    if (scene.vbd) {
+        solver->use_vbd(*scene.vbd);
+    }
     return solver;
 }
 

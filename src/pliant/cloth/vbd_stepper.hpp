@@ -1,0 +1,137 @@
+// VBDStepper: advances a ClothModel (cloth_model.hpp) by Vertex Block Descent (A. H. Chen,
+// M. Macklin, C. Bi, Y. Liu, T.-Y. Kim, "Vertex Block Descent", SIGGRAPH 2024).
+//
+// Every substep h ending at time t minimises the variational (backward Euler) energy
+//   G(x) = Σ_i m_i / (2 h²) |x_i − y_i|² + E(x),  y = x_t + h v_t + h² g  (inertia, §3.1)
+// by block coordinate descent over the vertices: for each vertex i, with its neighbours held,
+// one Newton step on its 3 unknowns, H_i Δx_i = f_i (§3.2, eq. 8–9), with
+//   f_i = −(m_i / h²)(x_i − y_i) − Σ ∂E/∂x_i,   H_i = (m_i / h²) I + Σ ∂²E/∂x_i²
+// (each term's Hessian made positive semi-definite). E has, per mesh edge, a spring
+// ½ k (|x_i − x_j| − L)², k = 1 / material.stretch_compliance (XPBD's compliance is the inverse of
+// this stiffness: the same material), and per hinge (two triangles sharing an edge) ½ k_b C²,
+// k_b = 1 / material.bend_compliance, with C the isometric model's normal part on hinges flat at
+// rest (isometric_bending.hpp; Gauss-Newton Hessian k_b K_k² n̂ n̂ᵀ) and C = θ − θ_rest on the
+// others (dihedral.hpp; Gauss-Newton). Vertices are coloured (vertex_coloring.hpp) so that no two
+// of a colour share an edge or hinge; a colour's vertices are updated in parallel, colour after
+// colour (Gauss-Seidel), so results are bitwise identical for 1 and N threads. After its Newton
+// step a vertex is pushed `thickness` out of the obstacles (a projected block descent step).
+// Optional Chebyshev semi-iterative acceleration over the sweeps (§3.5; options.chebyshev_rho).
+//
+// After the sweeps: the cloth's own contacts (self-collision: the same proximity projection and
+// CCD fail-safe as XPBDStepper, self_collision.hpp, with a window of one substep), then
+// v = (x − x_t) / h; at obstacle contacts the velocity relative to the surface loses its outward
+// normal part (inelastic) and Coulomb friction acts on its tangential part, bounded by the
+// normal speed the contact took away (obstacles.hpp, apply_friction); then v *= max(0, 1 − damping
+// h).
+//
+// Units: SI. Not thread safe (one stepper per thread); step() parallelises internally.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "pliant/cloth/cloth_model.hpp"
+#include "pliant/cloth/self_collision.hpp"
+#include "pliant/cloth/vertex_coloring.hpp"
+#include "pliant/cloth/xpbd_stepper.hpp"
+#include "pliant/core/bytes.hpp"
+#include "pliant/core/vec3.hpp"
+
+namespace pliant::cloth {
+
+struct VBDOptions {
+    // Block descent sweeps (every vertex once) per substep, >= 1.
+    int iterations = 10;
+    // Chebyshev acceleration's estimate of the sweeps' spectral radius, in [0, 1): 0 is off.
+    double chebyshev_rho = 0.0;
+};
+
+class VBDStepper {
+public:
+    // The springs and hinges of `model`'s rest shape and the vertex colouring. InvalidInput for
+    // invalid options.
+    explicit VBDStepper(const ClothModel& model, const VBDOptions& options = {});
+
+    // Self-collision handling as XPBDStepper::enable_self_collision (same limits).
+    void enable_self_collision(const ClothModel& model, bool enabled);
+    bool has_self_collision() const { return m_self_collision != nullptr; }
+
+    // Advances `model` by dt seconds in `substeps` substeps of options().iterations sweeps each.
+    // InvalidInput: dt not finite and > 0, substeps < 1, a model of other vertex or triangle
+    // counts.
+    ClothStepStats step(ClothModel& model, double dt, int substeps);
+
+    const VBDOptions& options() const { return m_options; }
+    std::int32_t num_colors() const { return m_coloring.num_colors(); }
+    std::size_t num_springs() const { return m_spring_rest.size() / 2; }
+    std::size_t num_hinges() const { return m_hinge_vertices.size(); }
+
+    // The state later steps read (self-collision's and its gather times); a stepper built for the
+    // same model that loads it continues bit for bit. load_state: InvalidInput for a state of
+    // another mesh or a truncated one.
+    void save_state(ByteWriter& out) const;
+    void load_state(const ClothModel& model, ByteReader& in);
+
+private:
+    struct Hinge {
+        std::array<double, 4> k{};  // isometric stencil (1/m), or unused for a dihedral hinge
+        double rest_angle = 0.0;    // dihedral hinges (rad)
+        bool is_dihedral = false;
+    };
+
+    // One substep of length h ending at t_end; returns the vertices in contact with an obstacle.
+    std::int64_t substep(ClothModel& model, double h, double t_end, double& solve_ms);
+    // The Newton step of vertex v (free) toward the minimum of G with its neighbours held, then
+    // the obstacles' push.
+    void solve_vertex(const ClothModel& model, std::size_t v, double h, std::span<Vec3d> x) const;
+    // solve_vertex, the obstacles' push, and the hinges' b updated by the vertex's move.
+    void update_vertex(const ClothModel& model, std::size_t v, double h, std::span<Vec3d> x);
+    // Moves x (at `start` when the substep began) out of every obstacle (thickness); returns
+    // whether it touches one, with the deepest contact's normal and surface velocity (m/s over h)
+    // when normal is not null.
+    bool push_out_of_obstacles(const ClothModel& model, Vec3d& x, const Vec3d& start, double h,
+                               Vec3d* normal, Vec3d* surface_velocity) const;
+    void restart_self_collision(const ClothModel& model);
+    // The unit normals n̂ of the isometric hinges at positions x (zero for degenerate ones).
+    void update_hinge_normals(std::span<const Vec3d> x);
+
+    VBDOptions m_options;
+    std::size_t m_num_vertices = 0;
+    std::size_t m_num_triangles = 0;
+    std::vector<double> m_rest_lengths;  // per mesh edge
+
+    // Per vertex (CSR): its springs as (other vertex, rest length) and its hinges as hinge index
+    // · 4 + its place in the hinge.
+    std::vector<std::int32_t> m_spring_first;
+    std::vector<std::int32_t> m_spring_other;
+    std::vector<double> m_spring_rest;
+    std::vector<std::int32_t> m_hinge_first;
+    std::vector<std::int32_t> m_hinge_refs;
+    std::vector<std::array<std::int32_t, 4>> m_hinge_vertices;  // x0, x1, x2, x3 (dihedral.hpp)
+    std::vector<Hinge> m_hinges;
+    // Per hinge reference, the vertex's isometric weight K_k (0 for a dihedral hinge).
+    std::vector<double> m_hinge_ref_k;
+    // Per isometric hinge: n̂ at the sweep's start and b = Σ K_k x_k now.
+    struct HingeState {
+        Vec3d normal;
+        Vec3d b;
+    };
+    std::vector<HingeState> m_hinge_state;
+    VertexColoring m_coloring;
+
+    // Per substep.
+    std::vector<Vec3d> m_start;     // x_t
+    std::vector<Vec3d> m_inertia;   // y
+    std::vector<Vec3d> m_previous;  // Chebyshev: the iterate two sweeps back
+    std::vector<Vec3d> m_current;   // Chebyshev: the iterate one sweep back
+
+    std::unique_ptr<SelfCollision> m_self_collision;
+    std::int64_t m_num_position_resets = 0;
+    double m_gather_start_time = 0.0;
+    double m_gather_end_time = -std::numeric_limits<double>::infinity();
+};
+
+}  // namespace pliant::cloth
