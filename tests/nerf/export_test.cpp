@@ -109,7 +109,8 @@ TEST(Export, RayCastExportReproducesTheTrainingViews) {
 }
 
 // A scene as a capture sees it: a table top (a dense slab over the whole box, z ∈ [0.25, 0.3])
-// with a ball on it (centre (0.4, 0.6, 0.45), radius 0.15) in the box [0, 1]³, world units.
+// with a ball on it (centre (0.4, 0.6, 0.45), radius 0.15) and a small floater in the air (centre
+// (0.9, 0.1, 0.9), radius 0.03) in the box [0, 1]³, world units.
 RadianceGrid table_and_ball(int resolution) {
     RadianceGrid g(AABBd{{0, 0, 0}, {1, 1, 1}}, resolution, -12.0f, 0.0f);
     const auto& d = g.dims();
@@ -120,7 +121,8 @@ RadianceGrid table_and_ball(int resolution) {
                 const Vec3d c{(i + 0.5) / d[0], (j + 0.5) / d[1], (k + 0.5) / d[2]};
                 const bool table = c.z >= 0.25 && c.z <= 0.3;
                 const bool ball = norm(c - Vec3d{0.4, 0.6, 0.45}) <= 0.15;
-                if (table || ball) {
+                const bool floater = norm(c - Vec3d{0.9, 0.1, 0.9}) <= 0.03;
+                if (table || ball || floater) {
                     p[4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k))] =
                         density_raw_for_sigma(400.0f);
                 }
@@ -146,6 +148,10 @@ TEST(AutoCrop, KeepsTheObjectAndDropsTheTable) {
     EXPECT_LT(crop.lo.z, 0.3 + 3 * voxel);
     EXPECT_LT(crop.hi.x - crop.lo.x, 0.45);
     EXPECT_GT(crop.lo.x, 0.15);
+    // The floater is left out.
+    EXPECT_LT(crop.hi.x, 0.7);
+    EXPECT_GT(crop.lo.y, 0.3);
+    EXPECT_LT(crop.hi.z, 0.7);
 
     // The exported volume covers the crop and holds the ball but no table voxel.
     ExportOptions o;

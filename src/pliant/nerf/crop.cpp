@@ -34,17 +34,46 @@ AABBd auto_crop(const RadianceGrid& grid, const AutoCropOptions& options) {
         }
         bottom = top + 2;  // one voxel above the plane's top slice
     }
-    // Per-axis voxel coordinates of the solid voxels above the plane.
-    std::vector<std::int64_t> coords[3];
-    for (std::int64_t k = bottom; k < nz; ++k) {
-        for (std::int64_t j = 0; j < ny; ++j) {
-            for (std::int64_t i = 0; i < nx; ++i) {
-                if (solid[i + nx * (j + ny * k)] != 0) {
-                    coords[0].push_back(i);
-                    coords[1].push_back(j);
-                    coords[2].push_back(k);
+    // Connected components (6-neighbours) of the solid voxels above the plane, labelled in
+    // scan order by a breadth-first search.
+    const std::int64_t sy = nx, sz = nx * ny;
+    std::vector<std::int32_t> label(solid.size(), -1);
+    std::vector<std::int64_t> sizes;
+    std::vector<std::int64_t> queue;
+    for (std::int64_t v = bottom * sz; v < nx * ny * nz; ++v) {
+        if (solid[v] == 0 || label[v] >= 0) {
+            continue;
+        }
+        const auto id = static_cast<std::int32_t>(sizes.size());
+        std::int64_t size = 0;
+        queue.assign(1, v);
+        label[v] = id;
+        while (!queue.empty()) {
+            const std::int64_t u = queue.back();
+            queue.pop_back();
+            ++size;
+            const std::int64_t i = u % nx, j = (u / sy) % ny, k = u / sz;
+            const std::int64_t next[6][2] = {{i > 0, u - 1},       {i + 1 < nx, u + 1},
+                                             {j > 0, u - sy},      {j + 1 < ny, u + sy},
+                                             {k > bottom, u - sz}, {k + 1 < nz, u + sz}};
+            for (const auto& [ok, w] : next) {
+                if (ok != 0 && solid[w] != 0 && label[w] < 0) {
+                    label[w] = id;
+                    queue.push_back(w);
                 }
             }
+        }
+        sizes.push_back(size);
+    }
+    const std::int64_t largest = sizes.empty() ? 0 : *std::max_element(sizes.begin(), sizes.end());
+    // Per-axis voxel coordinates of the voxels of the kept components.
+    std::vector<std::int64_t> coords[3];
+    for (std::int64_t v = bottom * sz; v < nx * ny * nz; ++v) {
+        if (label[v] >= 0 && static_cast<double>(sizes[static_cast<std::size_t>(label[v])]) >=
+                                 options.component_fraction * static_cast<double>(largest)) {
+            coords[0].push_back(v % nx);
+            coords[1].push_back((v / sy) % ny);
+            coords[2].push_back(v / sz);
         }
     }
     const AABBd& box = grid.box();

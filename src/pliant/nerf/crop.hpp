@@ -10,9 +10,11 @@
 //      plane_fraction of its slice's voxels, it is a table top or floor: the slices from k* up
 //      while n_k ≥ n_k* / 2 are the plane, and the crop starts one voxel above them. Otherwise
 //      the crop starts at the box's bottom.
-//   3. The object: the solid voxels above the plane; on each axis the crop spans their quantiles
-//      [quantile, 1 − quantile] (so that a few floaters do not stretch it), widened by margin
-//      (a fraction of that span) on both sides and clipped to the grid's box.
+//   3. The object: the connected components (6-neighbours) of the solid voxels above the plane
+//      holding at least component_fraction of the largest one's voxels (the object's parts, not
+//      the floaters a few views leave in the air); on each axis the crop spans their voxels'
+//      quantiles [quantile, 1 − quantile], widened by margin (a fraction of that span) on both
+//      sides (not below the plane) and clipped to the grid's box.
 // No solid voxel above the plane: the grid's box. Deterministic (sequential counts).
 #pragma once
 
@@ -24,6 +26,7 @@ namespace pliant::nerf {
 struct AutoCropOptions {
     float alpha_threshold = 20.0f / 255.0f;  // the paper's middle cleaning threshold
     float plane_fraction = 0.2f;             // of a z-slice's voxels, (0, 1]
+    double component_fraction = 0.05;        // [0, 1]
     double quantile = 0.002;                 // [0, 0.5)
     double margin = 0.05;                    // ≥ 0
 };
