@@ -93,6 +93,7 @@ struct TrainCommandOptions {
     std::int64_t checkpoint_every = 500;
     bool resume = false;
     int environment = 0;
+    float sparsity = 0.0f;
     std::string test;
     std::string compare;
     std::string crop;
@@ -171,6 +172,7 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     to.tv_color = options.tv_color;
     to.lr_density = to.lr_color = to.lr_environment = options.lr;
     to.environment_width = options.environment;
+    to.sparsity = options.sparsity;
     if (options.iterations > 0) {
         to.iterations = options.iterations;
     } else {

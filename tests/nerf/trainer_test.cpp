@@ -228,6 +228,12 @@ TEST(EnvironmentMap, InterpolatesBilinearlyAndWrapsAround) {
     env.color(back, rgb);
     EXPECT_FLOAT_EQ(rgb[0], 0.5f);  // sigmoid(0)
     EXPECT_THROW(EnvironmentMap(7, 0.0f), InvalidInput);
+    TrainOptions o;
+    o.environment_width = 7;
+    EXPECT_THROW(o.validate(), InvalidInput);
+    o.environment_width = 8;
+    o.sparsity = -1.0f;
+    EXPECT_THROW(o.validate(), InvalidInput);
 }
 
 // Views of a ball against a sky: a field with a learned environment map reproduces held-out
@@ -254,8 +260,8 @@ TEST(Trainer, LearnedEnvironmentExplainsTheBackground) {
     EXPECT_GT(learned_psnr, plain_psnr + 15.0) << plain_psnr;
 }
 
-// With an environment map: 1 and 2 threads give the same bits, and a run resumed from a
-// checkpoint the same bits as an uninterrupted one.
+// With an environment map and the sparsity prior: 1 and 2 threads give the same bits, and a run
+// resumed from a checkpoint the same bits as an uninterrupted one.
 TEST(Trainer, EnvironmentIsDeterministicAndResumesBitwise) {
     const RadianceGrid truth = ball_field(16);
     const Dataset ds = make_sky_dataset(truth, sky(8), 8, 16, 0.0);
@@ -263,6 +269,7 @@ TEST(Trainer, EnvironmentIsDeterministicAndResumesBitwise) {
     o.iterations = 60;
     o.resolution = 16;
     o.environment_width = 8;
+    o.sparsity = 1e-4f;
     const auto none = [](const TrainProgress&) {
         return true;
     };

@@ -129,6 +129,8 @@ public:
         const render::Color bgc = m_dataset.background;
         const float bg[3] = {bgc.r, bgc.g, bgc.b};
         const bool learn_env = !m_env.empty();
+        const float sparsity = m_options.sparsity;
+        const float sparsity_norm = sparsity / static_cast<float>(batch);
         const double norm = 1.0 / (3.0 * batch);
         const Intrinsics& in = m_dataset.intrinsics;
         const std::uint64_t base = static_cast<std::uint64_t>(m_iteration) * batch;
@@ -173,6 +175,24 @@ public:
                     detail::backward(g, chunk.samples.data(),
                                      static_cast<int>(chunk.samples.size()), out.rgb, gc,
                                      [&](std::int32_t v, const float d[4]) { chunk.add(v, d); });
+                    if (sparsity > 0.0f) {
+                        // Cauchy sparsity prior per sample: (λ / batch) log(1 + 2 τ²), τ = σ δ.
+                        for (const detail::SampleRecord& rec : chunk.samples) {
+                            const float sp = detail::softplus(rec.s);
+                            const float tau = sp * detail::DENSITY_SCALE * rec.length;
+                            const float d_s = sparsity_norm * 4.0f * tau /
+                                              (1.0f + 2.0f * tau * tau) * rec.length *
+                                              detail::DENSITY_SCALE * detail::sigmoid(rec.s);
+                            float wt[8];
+                            detail::corner_weights(rec.corner, wt);
+                            std::int32_t o[8];
+                            detail::corner_offsets(g, o);
+                            for (int q = 0; q < 8; ++q) {
+                                const float dq[4] = {wt[q] * d_s, 0.0f, 0.0f, 0.0f};
+                                chunk.add(rec.corner.base + o[q], dq);
+                            }
+                        }
+                    }
                     if (learn_env) {
                         // ∂L/∂raw = T_end · g ⊙ B (1 − B) · bilinear weight.
                         float d[3];
@@ -445,6 +465,9 @@ void TrainOptions::validate() const {
     if (environment_width != 0 &&
         (environment_width < 2 || environment_width > 4096 || environment_width % 2 != 0)) {
         fail("environment_width", environment_width, "0 or an even value in [2, 4096]");
+    }
+    if (!(sparsity >= 0.0f) || !std::isfinite(sparsity)) {
+        fail("sparsity", sparsity, "a finite value >= 0");
     }
     if (!(lr_environment >= 0.0f)) {
         fail("lr_environment", lr_environment, ">= 0");

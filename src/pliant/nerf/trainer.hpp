@@ -72,6 +72,10 @@ struct TrainOptions {
     // texels, bias correction over all iterations).
     int environment_width = 0;
     float lr_environment = 0.1f;
+    // Weight λ of a sparsity prior on density (Plenoxels' Cauchy loss on real scenes): the loss
+    // gains (λ / batch_rays) Σ_samples log(1 + 2 τ²), τ = σ δ the sample's optical thickness,
+    // pushing the air between the cameras and the object empty (≥ 0; 0: off).
+    float sparsity = 0.0f;
     std::uint64_t seed = 1;
     std::size_t max_bytes = std::size_t{16} << 30;  // memory limit of the final grid (bytes)
 

@@ -124,6 +124,10 @@ std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainO
     w.put(o.warmup_iterations);
     w.put(o.render.use_occupancy);
     w.put(o.seed);
+    if (o.sparsity > 0.0f) {  // likewise
+        w.put_string("sparsity");
+        w.put(o.sparsity);
+    }
     if (o.environment_width > 0) {  // older checkpoints (no environment) keep their fingerprint
         w.put_string("environment");
         w.put(o.environment_width);
