@@ -446,6 +446,11 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
                      "Learn the background of rays leaving the box as an environment map W "
                      "texels around (photos of a room; 0: the constant --background)")
         ->check(CLI::Range(0, 4096));
+    train
+        ->add_option("--sparsity", t->sparsity,
+                     "Weight of a sparsity prior on density (empties the air of photo captures; "
+                     "0: off)")
+        ->check(finite_in_range(0.0, 1e9));
     train->add_option("--test", t->test,
                       "Held-out views (transforms_test.json): score the trained field on them "
                       "(test_psnr, test_ssim)");
