@@ -10,10 +10,11 @@ CMAKE_ARGS ?=
 PLIANT := $(BUILD_DIR)/bin/pliant
 
 .DEFAULT_GOAL := help
-.PHONY: help deps configure build demo test bench format clean
+.PHONY: help deps configure build demo demo-photos test bench format clean
 
 help:
 	@echo "make demo    install deps, build (Release, $(BUILD_DIR)), run the demo into $(OUT_DIR)"
+	@echo "make demo-photos  only the demo's photo path (COLMAP): photos -> poses -> field -> object"
 	@echo "make test    install deps, build, run all tests (ctest)"
 	@echo "make build   install deps, configure and build everything (no tests run)"
 	@echo "make bench   build, then run '$(PLIANT) bench bvh'"
@@ -37,7 +38,13 @@ build: configure
 demo: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target pliant
 	$(PLIANT) demo --out $(OUT_DIR)
-	@echo "make demo: outputs in $(OUT_DIR)/ (folded_sheet.ply, folded_sheet_t1.ply; drape/, twist/, pile/, flag/: preview.mp4 (watch these), frames/*.obj, stats.json; untangle/: preview.mp4 (the drape untangled after falling through itself), fall/preview.mp4, crossing/preview.mp4 (two sheets crossing, untangled); volume/: volume.png, turntable.mp4; deform/: twist.mp4; nerf/: compare.png, twist.mp4; summary.json)"
+	scripts/demo-photos $(PLIANT) $(OUT_DIR)/photos
+	@echo "make demo: outputs in $(OUT_DIR)/ (folded_sheet.ply, folded_sheet_t1.ply; drape/, twist/, pile/, flag/: preview.mp4 (watch these), frames/*.obj, stats.json; untangle/: preview.mp4 (the drape untangled after falling through itself), fall/preview.mp4, crossing/preview.mp4 (two sheets crossing, untangled); volume/: volume.png, turntable.mp4; deform/: twist.mp4; nerf/: compare.png, twist.mp4; summary.json; photos/: compare.png (held-out photos above the reconstruction), object.png (the cropped object))"
+
+# From photos (data/capture, COLMAP poses) to the object's RGBA volume; skipped without COLMAP.
+demo-photos: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target pliant
+	scripts/demo-photos $(PLIANT) $(OUT_DIR)/photos
 
 test: build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j$(JOBS)

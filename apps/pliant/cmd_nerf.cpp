@@ -46,9 +46,13 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "interrupt.hpp"
@@ -88,7 +92,47 @@ struct TrainCommandOptions {
     bool alpha_mask = false;
     std::int64_t checkpoint_every = 500;
     bool resume = false;
+    int environment = 0;
+    float sparsity = 0.0f;
+    std::string test;
+    std::string compare;
+    std::string crop;
 };
+
+// --crop: "auto" or six numbers x0,y0,z0,x1,y1,z1 with min < max (UsageError otherwise).
+void parse_crop(const std::string& text, pipeline::TrainRunOptions& run) {
+    if (text.empty()) {
+        return;
+    }
+    if (text == "auto") {
+        run.auto_crop = true;
+        return;
+    }
+    std::vector<double> v;
+    std::size_t begin = 0;
+    while (begin <= text.size()) {
+        const std::size_t end = std::min(text.find(',', begin), text.size());
+        const std::string item = text.substr(begin, end - begin);
+        char* stop = nullptr;
+        const double x = std::strtod(item.c_str(), &stop);
+        if (item.empty() || stop != item.c_str() + item.size() || !std::isfinite(x)) {
+            throw CLI::ValidationError(
+                "--crop",
+                fmt::format("--crop: '{}' is not a number; expected auto or x0,y0,z0,x1,y1,z1",
+                            item));
+        }
+        v.push_back(x);
+        begin = end + 1;
+    }
+    if (v.size() != 6 || !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) {
+        throw CLI::ValidationError(
+            "--crop",
+            fmt::format(
+                "--crop: '{}', expected auto or x0,y0,z0,x1,y1,z1 with x0 < x1, y0 < y1, z0 < z1",
+                text));
+    }
+    run.crop = AABBd{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
+}
 
 // --max-memory in bytes (0: the memory available; unknown: no limit).
 std::size_t to_bytes(double mib) {
@@ -108,8 +152,15 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     ro.images_dir = options.photos;
     ro.alpha_mask = options.alpha_mask;
     const nerf::Dataset dataset = pipeline::read_nerf_dataset(options.transforms, ro);
+    std::optional<nerf::Dataset> test;
+    if (!options.test.empty()) {
+        test = pipeline::read_nerf_dataset(options.test, ro);
+    }
 
     pipeline::TrainRunOptions run;
+    parse_crop(options.crop, run);
+    run.test = test ? &*test : nullptr;
+    run.compare = options.compare;
     nerf::TrainOptions& to = run.train;
     to.max_bytes = to_bytes(options.max_memory_mib);
     run.exported.max_bytes = to.max_bytes;
@@ -119,7 +170,9 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     to.seed = options.seed;
     to.tv_density = options.tv_density;
     to.tv_color = options.tv_color;
-    to.lr_density = to.lr_color = options.lr;
+    to.lr_density = to.lr_color = to.lr_environment = options.lr;
+    to.environment_width = options.environment;
+    to.sparsity = options.sparsity;
     if (options.iterations > 0) {
         to.iterations = options.iterations;
     } else {
@@ -388,6 +441,26 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
     train->add_option("--images,--photos", t->photos,
                       "A COLMAP model's photos (default: <model>/../../images)");
     train->add_flag("--alpha-mask", t->alpha_mask, "Ignore pixels of alpha 0 (besides masks)");
+    train
+        ->add_option("--environment", t->environment,
+                     "Learn the background of rays leaving the box as an environment map W "
+                     "texels around (photos of a room; 0: the constant --background)")
+        ->check(CLI::Range(0, 4096));
+    train
+        ->add_option("--sparsity", t->sparsity,
+                     "Weight of a sparsity prior on density (empties the air of photo captures; "
+                     "0: off)")
+        ->check(finite_in_range(0.0, 1e9));
+    train->add_option("--test", t->test,
+                      "Held-out views (transforms_test.json): score the trained field on them "
+                      "(test_psnr, test_ssim)");
+    train->add_option("--compare", t->compare,
+                      "With --test: write a PNG of held-out photos above their renders");
+    train
+        ->add_option("--crop", t->crop,
+                     "Export only this box of the dataset's frame, or 'auto': the object above "
+                     "the table (nerf/crop.hpp)")
+        ->type_name("auto|X0,Y0,Z0,X1,Y1,Z1");
     train->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     train->callback([t, &global] { run_train(*t, global); });
 

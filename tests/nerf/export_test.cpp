@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "pliant/core/error.hpp"
+#include "pliant/nerf/crop.hpp"
 #include "pliant/nerf/metrics.hpp"
 #include "pliant/nerf/trainer.hpp"
 #include "pliant/render/raycast.hpp"
@@ -105,6 +106,109 @@ TEST(Export, RayCastExportReproducesTheTrainingViews) {
     // interpolates raw parameters, and it stops rays at A > 0.99.
     EXPECT_GT(sum / views, 25.0);
     RecordProperty("psnr", std::to_string(sum / views));
+}
+
+// A scene as a capture sees it: a table top (a dense slab over the whole box, z ∈ [0.25, 0.3])
+// with a ball on it (centre (0.4, 0.6, 0.45), radius 0.15) and a small floater in the air (centre
+// (0.9, 0.1, 0.9), radius 0.03) in the box [0, 1]³, world units.
+RadianceGrid table_and_ball(int resolution) {
+    RadianceGrid g(AABBd{{0, 0, 0}, {1, 1, 1}}, resolution, -12.0f, 0.0f);
+    const auto& d = g.dims();
+    auto p = g.params();
+    for (int k = 0; k < d[2]; ++k) {
+        for (int j = 0; j < d[1]; ++j) {
+            for (int i = 0; i < d[0]; ++i) {
+                const Vec3d c{(i + 0.5) / d[0], (j + 0.5) / d[1], (k + 0.5) / d[2]};
+                const bool table = c.z >= 0.25 && c.z <= 0.3;
+                const bool ball = norm(c - Vec3d{0.4, 0.6, 0.45}) <= 0.15;
+                const bool floater = norm(c - Vec3d{0.9, 0.1, 0.9}) <= 0.03;
+                if (table || ball || floater) {
+                    p[4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k))] =
+                        density_raw_for_sigma(400.0f);
+                }
+            }
+        }
+    }
+    g.update_occupancy(1e-3f);
+    return g;
+}
+
+TEST(AutoCrop, KeepsTheObjectAndDropsTheTable) {
+    const RadianceGrid grid = table_and_ball(64);
+    const AABBd crop = auto_crop(grid, AutoCropOptions{});
+    // The ball above the table top (z > 0.3) lies inside, within a few voxels' margin.
+    const double voxel = 1.0 / 64.0;
+    EXPECT_LE(crop.lo.x, 0.25 + voxel);
+    EXPECT_GE(crop.hi.x, 0.55 - voxel);
+    EXPECT_LE(crop.lo.y, 0.45 + voxel);
+    EXPECT_GE(crop.hi.y, 0.75 - voxel);
+    EXPECT_GE(crop.hi.z, 0.6 - voxel);
+    // The table is outside: the crop starts above its top, and is not as wide as the table.
+    EXPECT_GT(crop.lo.z, 0.3);
+    EXPECT_LT(crop.lo.z, 0.3 + 3 * voxel);
+    EXPECT_LT(crop.hi.x - crop.lo.x, 0.45);
+    EXPECT_GT(crop.lo.x, 0.15);
+    // The floater is left out.
+    EXPECT_LT(crop.hi.x, 0.7);
+    EXPECT_GT(crop.lo.y, 0.3);
+    EXPECT_LT(crop.hi.z, 0.7);
+
+    // The exported volume covers the crop and holds the ball but no table voxel.
+    ExportOptions o;
+    o.resolution = 48;
+    o.box = crop;
+    const volume::Volume v = export_volume(grid, o);
+    EXPECT_NEAR(v.bounds().lo.x, crop.lo.x, 1e-12);
+    EXPECT_NEAR(v.bounds().hi.z, crop.hi.z, 1e-9);
+    const auto rgba = v.values<volume::VoxelType::rgba8>();
+    std::int64_t opaque = 0;
+    for (std::int64_t k = 0; k < v.dims()[2]; ++k) {
+        for (std::int64_t j = 0; j < v.dims()[1]; ++j) {
+            for (std::int64_t i = 0; i < v.dims()[0]; ++i) {
+                if (rgba[4 * v.index(i, j, k) + 3] > 128) {
+                    ++opaque;
+                    EXPECT_LT(norm(v.voxel_center(i, j, k) - Vec3d{0.4, 0.6, 0.45}), 0.17);
+                }
+            }
+        }
+    }
+    EXPECT_GT(opaque, 0);
+}
+
+TEST(AutoCrop, WithoutATableKeepsAllOfTheObject) {
+    RadianceGrid grid = table_and_ball(32);
+    // Remove the table: only the ball remains.
+    const auto& d = grid.dims();
+    auto p = grid.params();
+    for (int k = 0; k < d[2]; ++k) {
+        const double z = (k + 0.5) / d[2];
+        for (std::int64_t v = static_cast<std::int64_t>(k) * d[0] * d[1];
+             z >= 0.25 && z <= 0.3 && v < static_cast<std::int64_t>(k + 1) * d[0] * d[1]; ++v) {
+            p[4 * v] = -12.0f;
+        }
+    }
+    grid.update_occupancy(1e-3f);
+    const AABBd crop = auto_crop(grid, AutoCropOptions{});
+    EXPECT_LE(crop.lo.z, 0.3);
+    EXPECT_GE(crop.hi.z, 0.6 - 1.0 / 32);
+    // An empty field: the whole box.
+    const RadianceGrid empty(AABBd{{0, 0, 0}, {1, 1, 1}}, 8, -12.0f, 0.0f);
+    const AABBd all = auto_crop(empty, AutoCropOptions{});
+    EXPECT_EQ(all.lo, (Vec3d{0, 0, 0}));
+    EXPECT_EQ(all.hi, (Vec3d{1, 1, 1}));
+}
+
+TEST(Export, OutsideTheGridIsEmptyAndBadBoxesAreRefused) {
+    const RadianceGrid grid(AABBd{{0, 0, 0}, {1, 1, 1}}, 8, density_raw_for_sigma(50.0f), 0.0f);
+    ExportOptions o;
+    o.resolution = 4;
+    o.box = AABBd{{0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}};  // half of each axis outside
+    const volume::Volume v = export_volume(grid, o);
+    const auto rgba = v.values<volume::VoxelType::rgba8>();
+    EXPECT_GT(rgba[4 * v.index(0, 0, 0) + 3], 0);
+    EXPECT_EQ(rgba[4 * v.index(3, 3, 3) + 3], 0);
+    o.box = AABBd{{0, 0, 0}, {1, 0, 1}};
+    EXPECT_THROW(export_volume(grid, o), InvalidInput);
 }
 
 }  // namespace

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include "pliant/core/error.hpp"
@@ -154,6 +156,160 @@ TEST(Trainer, RefusesAGridAboveTheMemoryLimitBeforeAllocating) {
     o.resolution = 24;
     o.iterations = 2;
     EXPECT_EQ(train(ds, o, [](const TrainProgress&) { return true; }).iterations, 2);
+}
+
+// A sky: a colour varying with the direction (reddish up, greenish towards +x).
+EnvironmentMap sky(int width) {
+    EnvironmentMap env(width, 0.0f);
+    const double pi = std::numbers::pi;
+    auto p = env.params();
+    for (int j = 0; j < env.height(); ++j) {
+        for (int i = 0; i < env.width(); ++i) {
+            const double phi = (i + 0.5) / env.width() * 2.0 * pi - pi;
+            const double theta = (j + 0.5) / env.height() * pi;
+            const std::size_t t = 3 * (i + static_cast<std::size_t>(env.width()) * j);
+            p[t] = static_cast<float>(2.0 * std::cos(theta));
+            p[t + 1] = static_cast<float>(2.0 * std::sin(theta) * std::cos(phi));
+            p[t + 2] = -0.5f;
+        }
+    }
+    return env;
+}
+
+Dataset make_sky_dataset(const RadianceGrid& truth, const EnvironmentMap& env, int views, int size,
+                         double offset) {
+    Dataset ds = make_dataset(truth, views, size, offset);
+    render::FramingOptions framing;
+    framing.margin = 2.0;  // much of each view is sky
+    for (int i = 0; i < views; ++i) {
+        const double z = 1.0 - (2.0 * i + 1.0) / views;
+        const render::Camera cam =
+            render::frame_box(truth.box(), i * 137.508 + offset,
+                              std::asin(z) * 180.0 / std::numbers::pi, size, size, framing);
+        ds.intrinsics = intrinsics_from_camera(cam);
+        View& v = ds.views[static_cast<std::size_t>(i)];
+        v.camera_to_world = pose_from_camera(cam);
+        v.rgb = render_view(truth, env, ds.intrinsics, v.camera_to_world, ds.background);
+    }
+    return ds;
+}
+
+double mean_psnr(const TrainResult& r, const Dataset& ds) {
+    double sum = 0.0;
+    for (const View& v : ds.views) {
+        sum += psnr(
+            render_view(r.grid, r.environment, ds.intrinsics, v.camera_to_world, ds.background),
+            v.rgb);
+    }
+    return sum / static_cast<double>(ds.views.size());
+}
+
+TEST(EnvironmentMap, InterpolatesBilinearlyAndWrapsAround) {
+    EnvironmentMap env(8, 0.0f);
+    EXPECT_EQ(env.height(), 4);
+    for (const float dx : {-1.0f, -0.3f, 0.0f, 0.7f}) {
+        const float d[3] = {dx, std::sqrt(1.0f - dx * dx) * (dx < 0 ? -1.0f : 1.0f), 0.0f};
+        const EnvironmentTexels t = env.locate(d);
+        float sum = 0.0f;
+        for (int q = 0; q < 4; ++q) {
+            EXPECT_GE(t.index[q], 0);
+            EXPECT_LT(t.index[q], env.num_texels());
+            sum += t.weight[q];
+        }
+        EXPECT_NEAR(sum, 1.0f, 1e-6f);
+    }
+    // Straight behind (φ = ±π): between the last and the first column.
+    const float back[3] = {-1.0f, 0.0f, 0.0f};
+    const EnvironmentTexels t = env.locate(back);
+    EXPECT_EQ(t.index[0] % 8, 7);
+    EXPECT_EQ(t.index[1] % 8, 0);
+    EXPECT_NEAR(t.weight[0], t.weight[1], 1e-5f);
+    float rgb[3];
+    env.color(back, rgb);
+    EXPECT_FLOAT_EQ(rgb[0], 0.5f);  // sigmoid(0)
+    EXPECT_THROW(EnvironmentMap(7, 0.0f), InvalidInput);
+    TrainOptions o;
+    o.environment_width = 7;
+    EXPECT_THROW(o.validate(), InvalidInput);
+    o.environment_width = 8;
+    o.sparsity = -1.0f;
+    EXPECT_THROW(o.validate(), InvalidInput);
+}
+
+// Views of a ball against a sky: a field with a learned environment map reproduces held-out
+// views far better than one whose rays end on a constant colour.
+TEST(Trainer, LearnedEnvironmentExplainsTheBackground) {
+    const RadianceGrid truth = ball_field(24);
+    const EnvironmentMap env = sky(16);
+    const Dataset train_set = make_sky_dataset(truth, env, 24, 24, 0.0);
+    const Dataset test_set = make_sky_dataset(truth, env, 6, 24, 60.0);
+    TrainOptions o = tiny_options();
+    const auto none = [](const TrainProgress&) {
+        return true;
+    };
+    const TrainResult plain = train(train_set, o, none);
+    o.environment_width = 16;
+    const TrainResult learned = train(train_set, o, none);
+    ASSERT_FALSE(learned.environment.empty());
+    const double plain_psnr = mean_psnr(plain, test_set);
+    const double learned_psnr = mean_psnr(learned, test_set);
+    RecordProperty("plain_psnr", std::to_string(plain_psnr));
+    RecordProperty("learned_psnr", std::to_string(learned_psnr));
+    // Measured: 40.5 dB with the map, 6.9 dB without.
+    EXPECT_GT(learned_psnr, 32.0);
+    EXPECT_GT(learned_psnr, plain_psnr + 15.0) << plain_psnr;
+}
+
+// With an environment map and the sparsity prior: 1 and 2 threads give the same bits, and a run
+// resumed from a checkpoint the same bits as an uninterrupted one.
+TEST(Trainer, EnvironmentIsDeterministicAndResumesBitwise) {
+    const RadianceGrid truth = ball_field(16);
+    const Dataset ds = make_sky_dataset(truth, sky(8), 8, 16, 0.0);
+    TrainOptions o = tiny_options();
+    o.iterations = 60;
+    o.resolution = 16;
+    o.environment_width = 8;
+    o.sparsity = 1e-4f;
+    const auto none = [](const TrainProgress&) {
+        return true;
+    };
+    std::vector<std::byte> state;
+    TrainCheckpoints save;
+    save.every = 25;
+    save.save = [&](std::span<const std::byte> s, std::int64_t iteration) {
+        if (iteration == 25) {
+            state.assign(s.begin(), s.end());
+        }
+    };
+    set_num_threads(1);
+    const TrainResult a = train(ds, o, none, save);
+    set_num_threads(2);
+    const TrainResult b = train(ds, o, none);
+    ASSERT_FALSE(state.empty());
+    TrainCheckpoints resume;
+    resume.resume_from = state;
+    resume.resume_source = "state";
+    const TrainResult c = train(ds, o, none, resume);
+    set_num_threads(0);
+    for (const TrainResult* r : {&b, &c}) {
+        ASSERT_EQ(a.grid.params().size(), r->grid.params().size());
+        EXPECT_TRUE(
+            std::equal(a.grid.params().begin(), a.grid.params().end(), r->grid.params().begin()));
+        ASSERT_EQ(a.environment.params().size(), r->environment.params().size());
+        EXPECT_TRUE(std::equal(a.environment.params().begin(), a.environment.params().end(),
+                               r->environment.params().begin()));
+        EXPECT_EQ(a.final_loss, r->final_loss);
+    }
+    // A state without the environment map does not resume a run with one.
+    o.environment_width = 0;
+    std::vector<std::byte> plain_state;
+    save.save = [&](std::span<const std::byte> s, std::int64_t) {
+        plain_state.assign(s.begin(), s.end());
+    };
+    (void)train(ds, o, none, save);
+    o.environment_width = 8;
+    resume.resume_from = plain_state;
+    EXPECT_THROW(train(ds, o, none, resume), InvalidInput);
 }
 
 }  // namespace

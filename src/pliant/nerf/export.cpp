@@ -37,8 +37,15 @@ volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& opti
             fmt::format("nerf::export_volume: voxel type {}, expected rgba8 or rgba32f",
                         volume::name(options.type)));
     }
-    const AABBd& box = grid.box();
+    const AABBd box = options.box.value_or(grid.box());
     const Vec3d e = box.extent();
+    if (box.is_empty() || !is_finite(box.lo) || !is_finite(box.hi) || !(e.x > 0.0) ||
+        !(e.y > 0.0) || !(e.z > 0.0)) {
+        throw InvalidInput(fmt::format(
+            "nerf::export_volume: box [({}, {}, {}), ({}, {}, {})], expected a finite box with "
+            "min < max on every axis",
+            box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z));
+    }
     const volume::Dims dims = export_dims(box, options.resolution);
     Vec3d spacing;
     for (int a = 0; a < 3; ++a) {
@@ -61,9 +68,13 @@ volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& opti
                     const Vec3d u = grid.normalized_from_world(out.voxel_center(i, j, k));
                     const float uf[3] = {static_cast<float>(u.x), static_cast<float>(u.y),
                                          static_cast<float>(u.z)};
+                    bool inside = true;
+                    for (int a = 0; a < 3; ++a) {
+                        inside = inside && uf[a] >= 0.0f && uf[a] <= g.extent[a];
+                    }
                     const detail::Corner c = detail::locate(g, uf);
                     float rgba[4] = {0, 0, 0, 0};
-                    if (g.occupied[c.base] != 0) {
+                    if (inside && g.occupied[c.base] != 0) {
                         float raw[4];
                         detail::interpolate(g, c, raw);
                         rgba[3] = static_cast<float>(

@@ -15,6 +15,8 @@
 // volume::clean (threshold 5/20/35, alpha normalization) is applied by the caller afterwards.
 #pragma once
 
+#include <optional>
+
 #include "pliant/nerf/radiance_grid.hpp"
 #include "pliant/volume/volume.hpp"
 
@@ -24,6 +26,10 @@ struct ExportOptions {
     int resolution = 256;                               // voxels along the longest side, [1, 2048]
     volume::VoxelType type = volume::VoxelType::rgba8;  // rgba8 or rgba32f
     std::size_t max_bytes = volume::Volume::MAX_BYTES;  // memory limit of the exported volume
+    // The exported region (world units, the dataset's frame; e.g. nerf::auto_crop's): the volume
+    // covers it as described above for the grid's box; voxels outside the grid's box are empty
+    // (α = 0). none: the grid's box.
+    std::optional<AABBd> box;
 };
 
 // The exported volume's dims over `box` (see above) and its voxel bytes; for checking a run's
@@ -31,8 +37,8 @@ struct ExportOptions {
 volume::Dims export_dims(const AABBd& box, int resolution);
 std::size_t export_bytes(const AABBd& box, const ExportOptions& options);
 
-// InvalidInput for a resolution out of range, a scalar voxel type or a volume larger than
-// options.max_bytes.
+// InvalidInput for a resolution out of range, a scalar voxel type, an empty or non-finite
+// options.box, or a volume larger than options.max_bytes.
 volume::Volume export_volume(const RadianceGrid& grid, const ExportOptions& options = {});
 
 }  // namespace pliant::nerf

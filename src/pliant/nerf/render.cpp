@@ -17,6 +17,12 @@ NormalizedRay normalize_ray(const RadianceGrid& grid, const render::Ray& world_r
 std::vector<float> render_view(const RadianceGrid& grid, const Intrinsics& intrinsics,
                                const Pose& pose, render::Color background,
                                const FieldRenderOptions& options) {
+    return render_view(grid, EnvironmentMap{}, intrinsics, pose, background, options);
+}
+
+std::vector<float> render_view(const RadianceGrid& grid, const EnvironmentMap& environment,
+                               const Intrinsics& intrinsics, const Pose& pose,
+                               render::Color background, const FieldRenderOptions& options) {
     const int w = intrinsics.width, h = intrinsics.height;
     std::vector<float> rgb(3 * static_cast<std::size_t>(w) * h);
     const detail::GridView g = grid.view(options.use_occupancy);
@@ -28,8 +34,12 @@ std::vector<float> render_view(const RadianceGrid& grid, const Intrinsics& intri
             for (int x = 0; x < w; ++x) {
                 const NormalizedRay r =
                     normalize_ray(grid, view_ray(intrinsics, pose, x + 0.5, y + 0.5));
+                float ray_bg[3] = {bg[0], bg[1], bg[2]};
+                if (!environment.empty()) {
+                    environment.color(r.direction, ray_bg);
+                }
                 const detail::RayOutput out =
-                    detail::march(g, r.origin, r.direction, step, bg, options.min_transmittance,
+                    detail::march(g, r.origin, r.direction, step, ray_bg, options.min_transmittance,
                                   [](const detail::SampleRecord&) {});
                 float* p = rgb.data() + 3 * (y * w + x);
                 p[0] = out.rgb[0];

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pliant/nerf/dataset.hpp"
+#include "pliant/nerf/environment_map.hpp"
 #include "pliant/nerf/radiance_grid.hpp"
 
 namespace pliant::nerf {
@@ -31,6 +32,11 @@ NormalizedRay normalize_ray(const RadianceGrid& grid, const render::Ray& world_r
 std::vector<float> render_view(const RadianceGrid& grid, const Intrinsics& intrinsics,
                                const Pose& pose, render::Color background,
                                const FieldRenderOptions& options = {});
+// The same over a learned background: each ray ends on environment's colour in its direction
+// (environment_map.hpp); an empty map means `background`.
+std::vector<float> render_view(const RadianceGrid& grid, const EnvironmentMap& environment,
+                               const Intrinsics& intrinsics, const Pose& pose,
+                               render::Color background, const FieldRenderOptions& options = {});
 
 // L = (1 / (3 n)) Σ_rays Σ_channels (C − target)² over n rays (targets: 3 per ray), computed
 // sequentially; ∂L/∂params is ADDED to grad (4 · num_voxels floats). Returns L. InvalidInput

@@ -35,6 +35,7 @@ struct GradientChunk {
     std::vector<std::uint8_t> touched;
     std::vector<std::int32_t> list;
     std::vector<detail::SampleRecord> samples;  // scratch: one ray's records
+    std::vector<float> env_grad;                // 3 per environment texel (empty: none)
     double loss = 0.0;
     std::int64_t num_samples = 0;
 
@@ -64,6 +65,15 @@ public:
         m_sigma_threshold = std::max(threshold, 1e-12f);
         m_grid = RadianceGrid(m_box, stage_resolution(0), options.density_init, options.color_init);
         allocate();
+        if (options.environment_width > 0) {
+            m_env = EnvironmentMap(options.environment_width, options.color_init);
+            const std::size_t n = m_env.params().size();
+            m_env_m.assign(n, 0.0f);
+            m_env_v.assign(n, 0.0f);
+            for (GradientChunk& c : m_chunks) {
+                c.env_grad.assign(n, 0.0f);
+            }
+        }
         const Intrinsics& in = dataset.intrinsics;
         m_pixels_per_view = static_cast<std::uint64_t>(in.width) * in.height;
         m_num_pixels = m_pixels_per_view * dataset.views.size();
@@ -118,6 +128,9 @@ public:
         const float step_length = m_options.render.step_voxels * m_grid.voxel_size();
         const render::Color bgc = m_dataset.background;
         const float bg[3] = {bgc.r, bgc.g, bgc.b};
+        const bool learn_env = !m_env.empty();
+        const float sparsity = m_options.sparsity;
+        const float sparsity_norm = sparsity / static_cast<float>(batch);
         const double norm = 1.0 / (3.0 * batch);
         const Intrinsics& in = m_dataset.intrinsics;
         const std::uint64_t base = static_cast<std::uint64_t>(m_iteration) * batch;
@@ -141,8 +154,14 @@ public:
                         normalize_ray(m_grid, view_ray(intrinsics_of(m_dataset, view),
                                                        view.camera_to_world, x + 0.5, y + 0.5));
                     chunk.samples.clear();
+                    EnvironmentTexels texels;
+                    float ray_bg[3] = {bg[0], bg[1], bg[2]};
+                    if (learn_env) {
+                        texels = m_env.locate(ray.direction);
+                        m_env.color(texels, ray_bg);
+                    }
                     const detail::RayOutput out = detail::march(
-                        g, ray.origin, ray.direction, step_length, bg,
+                        g, ray.origin, ray.direction, step_length, ray_bg,
                         m_options.render.min_transmittance,
                         [&](const detail::SampleRecord& s) { chunk.samples.push_back(s); });
                     chunk.num_samples += out.samples;
@@ -156,6 +175,38 @@ public:
                     detail::backward(g, chunk.samples.data(),
                                      static_cast<int>(chunk.samples.size()), out.rgb, gc,
                                      [&](std::int32_t v, const float d[4]) { chunk.add(v, d); });
+                    if (sparsity > 0.0f) {
+                        // Cauchy sparsity prior per sample: (λ / batch) log(1 + 2 τ²), τ = σ δ.
+                        for (const detail::SampleRecord& rec : chunk.samples) {
+                            const float sp = detail::softplus(rec.s);
+                            const float tau = sp * detail::DENSITY_SCALE * rec.length;
+                            const float d_s = sparsity_norm * 4.0f * tau /
+                                              (1.0f + 2.0f * tau * tau) * rec.length *
+                                              detail::DENSITY_SCALE * detail::sigmoid(rec.s);
+                            float wt[8];
+                            detail::corner_weights(rec.corner, wt);
+                            std::int32_t o[8];
+                            detail::corner_offsets(g, o);
+                            for (int q = 0; q < 8; ++q) {
+                                const float dq[4] = {wt[q] * d_s, 0.0f, 0.0f, 0.0f};
+                                chunk.add(rec.corner.base + o[q], dq);
+                            }
+                        }
+                    }
+                    if (learn_env) {
+                        // ∂L/∂raw = T_end · g ⊙ B (1 − B) · bilinear weight.
+                        float d[3];
+                        for (int k = 0; k < 3; ++k) {
+                            d[k] = out.transmittance * gc[k] * ray_bg[k] * (1.0f - ray_bg[k]);
+                        }
+                        for (int q = 0; q < 4; ++q) {
+                            float* e = chunk.env_grad.data() +
+                                       3 * static_cast<std::int64_t>(texels.index[q]);
+                            for (int k = 0; k < 3; ++k) {
+                                e[k] += texels.weight[q] * d[k];
+                            }
+                        }
+                    }
                 }
             });
         double loss = 0.0;
@@ -177,6 +228,9 @@ public:
             c.list.clear();
         }
         update(p);
+        if (learn_env) {
+            update_environment(p);
+        }
 
         TrainProgress progress;
         progress.iteration = ++m_iteration;
@@ -276,6 +330,30 @@ public:
             1024);
     }
 
+    // Adam on every texel of the environment map: the chunks' gradients summed in chunk order,
+    // bias correction over all iterations (the map lives through every stage).
+    void update_environment(double p) {
+        const float lr =
+            m_options.lr_environment * std::pow(m_options.lr_final_factor, static_cast<float>(p));
+        const float t = static_cast<float>(m_iteration + 1);
+        const float correction1 = 1.0f - std::pow(BETA1, t);
+        const float correction2 = 1.0f - std::pow(BETA2, t);
+        float* params = m_env.params().data();
+        const std::size_t n = m_env.params().size();
+        for (std::size_t a = 0; a < n; ++a) {
+            float gq = 0.0f;
+            for (GradientChunk& c : m_chunks) {
+                gq += c.env_grad[a];
+                c.env_grad[a] = 0.0f;
+            }
+            m_env_m[a] = BETA1 * m_env_m[a] + (1.0f - BETA1) * gq;
+            m_env_v[a] = BETA2 * m_env_v[a] + (1.0f - BETA2) * gq * gq;
+            const float mh = m_env_m[a] / correction1;
+            const float vh = m_env_v[a] / correction2;
+            params[a] -= lr * mh / (std::sqrt(vh) + EPSILON);
+        }
+    }
+
     // Everything a later iteration reads: the stage, iteration counts, last loss, the grid and
     // Adam's moments. The gradient chunks and marks are clear between iterations.
     void save_state(ByteWriter& out) const {
@@ -286,6 +364,11 @@ public:
         m_grid.save_state(out);
         out.put_vector(m_m);
         out.put_vector(m_v);
+        if (!m_env.empty()) {
+            m_env.save_state(out);
+            out.put_vector(m_env_m);
+            out.put_vector(m_env_v);
+        }
     }
     void load_state(ByteReader& in) {
         const int stage = in.get<int>("trainer.stage");
@@ -304,6 +387,13 @@ public:
         allocate();
         in.get_vector("trainer.adam_m", m_m, static_cast<std::int64_t>(m_m.size()));
         in.get_vector("trainer.adam_v", m_v, static_cast<std::int64_t>(m_v.size()));
+        if (!m_env.empty()) {
+            m_env.load_state(in, m_options.environment_width);
+            in.get_vector("trainer.environment_adam_m", m_env_m,
+                          static_cast<std::int64_t>(m_env_m.size()));
+            in.get_vector("trainer.environment_adam_v", m_env_v,
+                          static_cast<std::int64_t>(m_env_v.size()));
+        }
         m_stage = stage;
         m_iteration = iteration;
         m_stage_iteration = stage_iteration;
@@ -311,6 +401,7 @@ public:
     }
 
     RadianceGrid& grid() { return m_grid; }
+    EnvironmentMap& environment() { return m_env; }
     std::int64_t iteration() const { return m_iteration; }
     double last_loss() const { return m_last_loss; }
 
@@ -321,6 +412,8 @@ private:
     float m_sigma_threshold = 0.0f;
     RadianceGrid m_grid;
     std::vector<float> m_m, m_v;
+    EnvironmentMap m_env;
+    std::vector<float> m_env_m, m_env_v;
     std::vector<std::uint8_t> m_mark;
     std::vector<std::int32_t> m_union;
     std::array<GradientChunk, NUM_CHUNKS> m_chunks;
@@ -368,6 +461,16 @@ void TrainOptions::validate() const {
     }
     if (!(occupancy_alpha >= 0.0f && occupancy_alpha < 1.0f)) {
         fail("occupancy_alpha", occupancy_alpha, "[0, 1)");
+    }
+    if (environment_width != 0 &&
+        (environment_width < 2 || environment_width > 4096 || environment_width % 2 != 0)) {
+        fail("environment_width", environment_width, "0 or an even value in [2, 4096]");
+    }
+    if (!(sparsity >= 0.0f) || !std::isfinite(sparsity)) {
+        fail("sparsity", sparsity, "a finite value >= 0");
+    }
+    if (!(lr_environment >= 0.0f)) {
+        fail("lr_environment", lr_environment, ">= 0");
     }
     if (occupancy_interval < 1) {
         fail("occupancy_interval", occupancy_interval, ">= 1");
@@ -447,6 +550,7 @@ TrainResult train(const Dataset& dataset, const TrainOptions& options,
     result.elapsed_ms = earlier_ms + watch.elapsed_ms();
     result.final_loss = trainer.last_loss();
     result.grid = std::move(trainer.grid());
+    result.environment = std::move(trainer.environment());
     return result;
 }
 

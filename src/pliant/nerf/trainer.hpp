@@ -19,6 +19,9 @@
 //     initial value: pruning then would freeze the scene empty).
 //   - Batches: batch_rays pixels drawn uniformly over all pixels of all views by a counter-based
 //     hash of (seed, iteration, ray index): the same rays for any number of threads.
+//   - Background: the dataset's constant colour, or a learned environment map over ray
+//     directions (TrainOptions::environment_width; environment_map.hpp) composited behind the
+//     box's transmittance; its gradient is gathered per chunk like the grid's.
 //   - Determinism: rays are cut into 4 fixed chunks; each chunk scatters gradients into its own
 //     dense buffer and records the voxels it touched; the buffers are summed per voxel in chunk
 //     order. Results are bitwise identical for 1 and N threads (with a fixed iteration count;
@@ -40,6 +43,7 @@
 
 #include "pliant/core/function_ref.hpp"
 #include "pliant/nerf/dataset.hpp"
+#include "pliant/nerf/environment_map.hpp"
 #include "pliant/nerf/radiance_grid.hpp"
 #include "pliant/nerf/render.hpp"
 
@@ -62,6 +66,16 @@ struct TrainOptions {
     int occupancy_interval = 16;     // iterations between occupancy refreshes (≥ 1)
     int warmup_iterations = 128;     // iterations (over all stages) before the first refresh
     FieldRenderOptions render;       // step and early termination while training
+    // Background of rays leaving the box: 0 the dataset's constant colour; > 0 a learned
+    // EnvironmentMap (environment_map.hpp) this many texels around (even, [2, 4096]), raw values
+    // starting at color_init, Adam at lr_environment (decaying as the others; dense over the
+    // texels, bias correction over all iterations).
+    int environment_width = 0;
+    float lr_environment = 0.1f;
+    // Weight λ of a sparsity prior on density (Plenoxels' Cauchy loss on real scenes): the loss
+    // gains (λ / batch_rays) Σ_samples log(1 + 2 τ²), τ = σ δ the sample's optical thickness,
+    // pushing the air between the cameras and the object empty (≥ 0; 0: off).
+    float sparsity = 0.0f;
     std::uint64_t seed = 1;
     std::size_t max_bytes = std::size_t{16} << 30;  // memory limit of the final grid (bytes)
 
@@ -82,6 +96,7 @@ struct TrainProgress {
 
 struct TrainResult {
     RadianceGrid grid;
+    EnvironmentMap environment;  // empty unless TrainOptions::environment_width > 0
     std::int64_t iterations = 0;
     double elapsed_ms = 0.0;
     double final_loss = 0.0;  // the last batch's MSE
@@ -95,11 +110,12 @@ inline constexpr std::size_t TRAIN_BYTES_PER_VOXEL = 134;
 std::size_t estimated_training_bytes(const AABBd& box, const TrainOptions& options);
 
 // Checkpoints of a training run: every `every` iterations (and when on_iteration stops it),
-// save(state, iteration) gets the trainer's whole state (the stage, iteration counts, grid,
-// Adam's moments and the training time so far; core/bytes.hpp layout). With resume_from
-// non-empty (such a state; resume_source names it in errors), training continues from it: the
-// rays of iteration i depend only on the seed and i, so with an iteration count (not `seconds`)
-// and the same thread count the final grid is bitwise identical to an uninterrupted run's.
+// save(state, iteration) gets the trainer's whole state (the stage, iteration counts, grid, the
+// environment map, Adam's moments and the training time so far; core/bytes.hpp layout). With
+// resume_from non-empty (such a state; resume_source names it in errors), training continues from
+// it: the rays of iteration i depend only on the seed and i, so with an iteration count (not
+// `seconds`) and the same thread count the final grid is bitwise identical to an uninterrupted
+// run's.
 struct TrainCheckpoints {
     std::int64_t every = 0;  // 0: no checkpoints
     std::function<void(std::span<const std::byte> state, std::int64_t iteration)> save;

@@ -21,6 +21,7 @@
 #include "pliant/io/checkpoint.hpp"
 #include "pliant/io/output_directory.hpp"
 #include "pliant/io/png.hpp"
+#include "pliant/nerf/crop.hpp"
 #include "pliant/nerf/metrics.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
 #include "pliant/render/camera.hpp"
@@ -123,6 +124,15 @@ std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainO
     w.put(o.warmup_iterations);
     w.put(o.render.use_occupancy);
     w.put(o.seed);
+    if (o.sparsity > 0.0f) {  // likewise
+        w.put_string("sparsity");
+        w.put(o.sparsity);
+    }
+    if (o.environment_width > 0) {  // older checkpoints (no environment) keep their fingerprint
+        w.put_string("environment");
+        w.put(o.environment_width);
+        w.put(o.lr_environment);
+    }
     return io::run_fingerprint(w.bytes());
 }
 
@@ -131,7 +141,12 @@ std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainO
 TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions& options,
                             FunctionRef<bool()> keep_going) {
     // The output's size, checked before a long run (the grid's is checked by nerf::train).
-    const AABBd box = nerf::scene_box(dataset);
+    // --crop auto: at most a cube of the box's largest side at the export resolution.
+    AABBd box = options.crop.value_or(nerf::scene_box(dataset));
+    if (options.auto_crop && !options.crop) {
+        const Vec3d e = box.extent();
+        box.hi = box.lo + Vec3d{1, 1, 1} * std::max({e.x, e.y, e.z});
+    }
     const std::size_t out_bytes = nerf::export_bytes(box, options.exported);
     if (out_bytes > options.exported.max_bytes) {
         const volume::Dims d = nerf::export_dims(box, options.exported.resolution);
@@ -182,7 +197,19 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
     }
 
     TrainRunResult out;
-    out.volume = nerf::export_volume(result.grid, options.exported);
+    nlohmann::ordered_json test_json;
+    if (options.test != nullptr) {
+        const render::Color b = dataset.background;
+        test_json = evaluate_field(*options.test, result.grid, result.environment, {b.r, b.g, b.b},
+                                   options.compare);
+    }
+    nerf::ExportOptions exported = options.exported;
+    if (options.crop) {
+        exported.box = options.crop;
+    } else if (options.auto_crop) {
+        exported.box = nerf::auto_crop(result.grid, nerf::AutoCropOptions{});
+    }
+    out.volume = nerf::export_volume(result.grid, exported);
     if (options.clean) {
         volume::clean(out.volume, *options.clean);
     }
@@ -200,10 +227,38 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
     j["volume_spacing"] = {vol.spacing().x, vol.spacing().y, vol.spacing().z};
     j["peak_rss_bytes"] = peak_rss_bytes();
     j["interrupted"] = result.stopped;
+    if (exported.box) {
+        const AABBd& c = *exported.box;
+        j["crop"] = {{c.lo.x, c.lo.y, c.lo.z}, {c.hi.x, c.hi.y, c.hi.z}};
+    }
+    if (options.test != nullptr) {
+        j["test_psnr"] = test_json["psnr"];
+        j["test_ssim"] = test_json["ssim"];
+        j["test_views"] = test_json["views"];
+    }
     return out;
 }
 
 namespace {
+
+// PSNR over the view's unmasked pixels; masked pixels of `rgb` set to the reference (for SSIM).
+double masked_psnr(std::vector<float>& rgb, const nerf::View& v) {
+    if (v.mask.empty()) {
+        return nerf::psnr(rgb, v.rgb);
+    }
+    std::vector<float> kept, kept_ref;
+    for (std::size_t q = 0; q < v.mask.size(); ++q) {
+        for (std::size_t c = 0; c < 3; ++c) {
+            if (v.mask[q] != 0) {
+                kept.push_back(rgb[3 * q + c]);
+                kept_ref.push_back(v.rgb[3 * q + c]);
+            } else {
+                rgb[3 * q + c] = v.rgb[3 * q + c];
+            }
+        }
+    }
+    return kept.empty() ? 0.0 : nerf::psnr(kept, kept_ref);
+}
 
 // Whether render::Camera models these intrinsics (nerf::camera_from_view's conditions).
 bool fits_ray_caster_camera(const nerf::Intrinsics& in) {
@@ -264,24 +319,8 @@ nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volum
             render_view_rays(caster, in, v.camera_to_world, image);
         }
         std::vector<float> rgb = nerf::from_image(image);
-        double p = 0.0;
-        if (v.mask.empty()) {
-            p = nerf::psnr(rgb, v.rgb);
-        } else {
-            // Masked pixels: left out of PSNR, and equal to the reference for SSIM's windows.
-            std::vector<float> kept, kept_ref;
-            for (std::size_t q = 0; q < v.mask.size(); ++q) {
-                for (std::size_t c = 0; c < 3; ++c) {
-                    if (v.mask[q] != 0) {
-                        kept.push_back(rgb[3 * q + c]);
-                        kept_ref.push_back(v.rgb[3 * q + c]);
-                    } else {
-                        rgb[3 * q + c] = v.rgb[3 * q + c];
-                    }
-                }
-            }
-            p = kept.empty() ? 0.0 : nerf::psnr(kept, kept_ref);
-        }
+        // Masked pixels: left out of PSNR, and equal to the reference for SSIM's windows.
+        const double p = masked_psnr(rgb, v);
         const double s = nerf::ssim(rgb, v.rgb, image.width, image.height);
         sum_psnr += p;
         sum_ssim += s;
@@ -298,6 +337,64 @@ nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volum
     nlohmann::ordered_json j;
     j["psnr"] = sum_psnr / n;
     j["ssim"] = sum_ssim / n;
+    j["views"] = views;
+    return j;
+}
+
+nlohmann::ordered_json evaluate_field(const nerf::Dataset& dataset, const nerf::RadianceGrid& grid,
+                                      const nerf::EnvironmentMap& environment,
+                                      const std::array<float, 3>& background,
+                                      const std::filesystem::path& compare_png) {
+    const render::Color bg{background[0], background[1], background[2]};
+    nlohmann::ordered_json views = nlohmann::ordered_json::array();
+    double sum_psnr = 0.0, sum_ssim = 0.0;
+    const std::size_t n = dataset.views.size();
+    const std::size_t columns = std::min<std::size_t>(4, n);
+    const int w = dataset.intrinsics.width, h = dataset.intrinsics.height;
+    render::Image strip(static_cast<int>(columns) * w, 2 * h);
+    for (std::size_t i = 0; i < n; ++i) {
+        const nerf::View& v = dataset.views[i];
+        const nerf::Intrinsics& in = nerf::intrinsics_of(dataset, v);
+        std::vector<float> rgb =
+            nerf::render_view(grid, environment, in, v.camera_to_world, bg, {});
+        nerf::View render_as_view;
+        render_as_view.rgb = rgb;
+        const render::Image rendered = nerf::to_image(in, render_as_view);
+        const render::Image photo = nerf::to_image(in, v);
+        const double p = masked_psnr(rgb, v);
+        const double s = nerf::ssim(rgb, v.rgb, in.width, in.height);
+        sum_psnr += p;
+        sum_ssim += s;
+        nlohmann::ordered_json e;
+        e["file_path"] = v.name;
+        e["psnr"] = p;
+        e["ssim"] = s;
+        views.push_back(e);
+        // Columns at views 0, n/4, n/2, 3n/4 (for n ≥ 4).
+        for (std::size_t c = 0; c < columns; ++c) {
+            if (c * n / columns != i) {
+                continue;
+            }
+            for (int y = 0; y < h; ++y) {
+                for (int x = 0; x < w; ++x) {
+                    const std::size_t src = 3 * (static_cast<std::size_t>(y) * w + x);
+                    const std::size_t top =
+                        3 * (static_cast<std::size_t>(y) * strip.width + c * w + x);
+                    const std::size_t bottom = top + 3 * static_cast<std::size_t>(h) * strip.width;
+                    for (int q = 0; q < 3; ++q) {
+                        strip.pixels[top + q] = photo.pixels[src + q];
+                        strip.pixels[bottom + q] = rendered.pixels[src + q];
+                    }
+                }
+            }
+        }
+    }
+    if (!compare_png.empty() && columns > 0) {
+        io::write_png(compare_png, strip);
+    }
+    nlohmann::ordered_json j;
+    j["psnr"] = n > 0 ? sum_psnr / static_cast<double>(n) : 0.0;
+    j["ssim"] = n > 0 ? sum_ssim / static_cast<double>(n) : 0.0;
     j["views"] = views;
     return j;
 }

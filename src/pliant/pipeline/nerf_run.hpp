@@ -17,7 +17,9 @@
 
 #include "pliant/core/function_ref.hpp"
 #include "pliant/nerf/dataset.hpp"
+#include "pliant/nerf/environment_map.hpp"
 #include "pliant/nerf/export.hpp"
+#include "pliant/nerf/render.hpp"
 #include "pliant/nerf/trainer.hpp"
 #include "pliant/volume/clean.hpp"
 #include "pliant/volume/transfer_function.hpp"
@@ -60,6 +62,16 @@ struct TrainRunOptions {
     std::filesystem::path checkpoint;
     std::int64_t checkpoint_every = 0;
     bool resume = false;
+    // Held-out views (e.g. transforms_test.json, read as `dataset` was): after training, the
+    // field itself — with its learned environment map, or over the dataset's background — is
+    // rendered from them and scored (evaluate_field), into json["test"]; compare: that
+    // function's side-by-side PNG. nullptr: none.
+    const nerf::Dataset* test = nullptr;
+    std::filesystem::path compare;
+    // The exported region: none the scene box; a box in the dataset's frame; auto_crop the
+    // object found by nerf::auto_crop (nerf/crop.hpp) in the trained field.
+    std::optional<AABBd> crop;
+    bool auto_crop = false;
 };
 
 // clang-tidy 14 cannot see that the implicit members (moving a Volume and a JSON object) do not
@@ -77,6 +89,16 @@ struct TrainRunResult {           // NOLINT(bugprone-exception-escape)
 // when the exported volume would exceed options.exported.max_bytes.
 TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions& options,
                             FunctionRef<bool()> keep_going);
+
+// Renders the trained field (nerf::render_view with `environment`, or over `background` when it
+// is empty) from every view of `dataset` and compares with the views' images as evaluate_volume
+// does (masks likewise). With compare_png: up to 4 views evenly spaced in the list, each a column
+// of the photo above its render, written atomically. Returns {psnr, ssim, views: [{file_path,
+// psnr, ssim}]}.
+nlohmann::ordered_json evaluate_field(const nerf::Dataset& dataset, const nerf::RadianceGrid& grid,
+                                      const nerf::EnvironmentMap& environment,
+                                      const std::array<float, 3>& background,
+                                      const std::filesystem::path& compare_png = {});
 
 // Ray-casts the RGBA `volume` (render::RayCaster's defaults) from every view of `dataset` over
 // `background` and compares with the views' images: views that render::Camera models (square

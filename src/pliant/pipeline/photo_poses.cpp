@@ -383,6 +383,9 @@ PhotoPosesResult recover_photo_poses(const fs::path& photos, const fs::path& out
     base["k2"] = in.lens.k2;
     base["p1"] = in.lens.p1;
     base["p2"] = in.lens.p2;
+    // The scene box `nerf train` reconstructs: the unit box the normalization fills with the
+    // sparse points; rays leaving it see the background (--environment).
+    base["aabb"] = {{-1.0, -1.0, -1.0}, {1.0, 1.0, 1.0}};
     nlohmann::ordered_json train = base, test = base;
     train["frames"] = nlohmann::ordered_json::array();
     test["frames"] = nlohmann::ordered_json::array();

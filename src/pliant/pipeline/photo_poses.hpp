@@ -32,7 +32,8 @@
 //     out/transforms_test.json (every options.test_every-th registered photo in name order, from
 //     the first, is in test; the rest in train; test_every 0 puts all in train and writes an
 //     empty test list), with `camera_model` "OPENCV", `fl_x`, `fl_y`, `cx`, `cy`, `w`, `h`, `k1`,
-//     `k2`, `p1`, `p2` and frames of `file_path` (relative to `out` when possible) and
+//     `k2`, `p1`, `p2`, `aabb` [[−1, −1, −1], [1, 1, 1]] (the unit box above: the scene box
+//     `nerf train` reconstructs) and frames of `file_path` (relative to `out` when possible) and
 //     `transform_matrix` (4 × 4 camera-to-world, OpenGL axes); out/points.ply (the sparse points
 //     in the dataset frame, with colours); out/poses.json (the report below and the normalisation
 //     dataset_from_colmap: the 4 × 4 similarity from COLMAP's world).
