@@ -27,8 +27,8 @@ void chebyshev_begin(const Float4* x, std::span<Vec3f> current, std::span<Vec3f>
         VERTEX_GRAIN);
 }
 
-void chebyshev_update(Float4* x, std::span<Vec3f> current, std::span<Vec3f> previous,
-                      float omega, float gamma) {
+void chebyshev_update(Float4* x, std::span<Vec3f> current, std::span<Vec3f> previous, float omega,
+                      float gamma) {
     parallel_for(
         static_cast<std::int64_t>(current.size()),
         [&](std::int64_t i) {

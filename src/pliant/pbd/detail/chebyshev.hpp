@@ -32,7 +32,7 @@ void chebyshev_begin(const Float4* x, std::span<Vec3f> current, std::span<Vec3f>
 // After the sweep of iteration k: x (#V, holding q̂^{k+1}) becomes q^{k+1} for free vertices
 // (x.w > 0); previous (q^{k−1}, #V) becomes q^k and current (q^k, #V) becomes q^{k+1}.
 // omega: ω_{k+1}; gamma: γ.
-void chebyshev_update(Float4* x, std::span<Vec3f> current, std::span<Vec3f> previous,
-                      float omega, float gamma);
+void chebyshev_update(Float4* x, std::span<Vec3f> current, std::span<Vec3f> previous, float omega,
+                      float gamma);
 
 }  // namespace pliant::pbd::detail
