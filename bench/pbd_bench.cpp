@@ -75,34 +75,103 @@ BENCHMARK(BM_SoftBodySubstep)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// args: driver (0 twist, 1 wave, 2 bubble), substeps per frame, threads.
-void BM_SourceScaleStep(benchmark::State& state) {
+// The source-scale body under driver d (0 twist, 1 wave, 2 bubble, 3 mouse drag) with solver
+// options o (stiffness 0.8), after 24 frames; the drag pulls the vertex nearest to the box's
+// corner (1, 1, 1) (with the vertices within 0.25) 0.3 along −x over the first 12 frames.
+pbd::SoftBody source_scale_body(int d, pbd::SoftBodyOptions o) {
     const pbd::TetGrid& grid = bench::source_scale_workload().grid;
-    set_num_threads(static_cast<int>(state.range(2)));
-    pbd::SoftBody body(grid, {.stiffness = 0.8, .substeps = static_cast<int>(state.range(1))});
-    switch (state.range(0)) {
+    o.stiffness = 0.8;
+    pbd::SoftBody body(grid, o);
+    switch (d) {
         case 0:
             body.add_driver(pbd::TwistDriver{.angle = 90.0, .ramp_time = 1.0});
             break;
         case 1:
             body.add_driver(pbd::WaveDriver{.amplitude = 0.05});
             break;
-        default:
+        case 2:
             body.add_driver(pbd::BubbleDriver{.inflation = 2.0, .ramp_time = 0.5});
             break;
+        default:
+            break;
+    }
+    std::int32_t grabbed = 0;
+    Vec3f start{};
+    if (d == 3) {
+        float best = 1e30f;
+        const auto rest = body.rest_positions();
+        for (std::size_t v = 0; v < rest.size(); ++v) {
+            const float dist = squared_norm(rest[v] - Vec3f{1.0f, 1.0f, 1.0f});
+            if (dist < best) {
+                best = dist;
+                grabbed = static_cast<std::int32_t>(v);
+            }
+        }
+        start = rest[static_cast<std::size_t>(grabbed)];
     }
     constexpr double DT = 1.0 / 24.0;
     for (int frame = 0; frame < 24; ++frame) {
+        if (d == 3) {
+            const float f = static_cast<float>(std::min(frame + 1, 12)) / 12.0f;
+            body.set_drag(grabbed, start - Vec3f{0.3f * f, 0.0f, 0.0f}, 0.25f);
+        }
         body.step(DT);
     }
-    // The shape after 24 frames (before the timed steps): how far the deformation has reached.
-    const pbd::SoftBodyStats stats = body.stats();
+    return body;
+}
+
+double mean_displacement(const pbd::SoftBody& body) {
     double displacement = 0.0;
     for (std::size_t v = 0; v < body.positions().size(); ++v) {
         displacement += norm(vec3_cast<double>(body.positions()[v]) -
                              vec3_cast<double>(body.rest_positions()[v]));
     }
-    displacement /= static_cast<double>(body.positions().size());
+    return displacement / static_cast<double>(std::max<std::size_t>(body.positions().size(), 1));
+}
+
+// Mean distance of the body's vertices from the 10-substep reference body's (world units).
+double mean_distance(const pbd::SoftBody& a, const pbd::SoftBody& b) {
+    double sum = 0.0;
+    for (std::size_t v = 0; v < a.positions().size(); ++v) {
+        sum += norm(vec3_cast<double>(a.positions()[v]) - vec3_cast<double>(b.positions()[v]));
+    }
+    return sum / static_cast<double>(std::max<std::size_t>(a.positions().size(), 1));
+}
+
+// The reference: 10 substeps of one plain sweep (today's default), per driver.
+const pbd::SoftBody& reference_body(int d) {
+    static std::map<int, std::unique_ptr<pbd::SoftBody>> bodies;
+    auto& b = bodies[d];
+    if (!b) {
+        b = std::make_unique<pbd::SoftBody>(source_scale_body(d, {.substeps = 10}));
+    }
+    return *b;
+}
+
+// args: driver (0 twist, 1 wave, 2 bubble, 3 drag), substeps per frame, threads, iterations per
+// substep, Chebyshev ρ and γ in percent (0 and 100: plain). Counters after 24 frames: inverted
+// tets, volume ratio, mean displacement from rest, and (for the accelerated or reduced solvers)
+// the ratio of that displacement to the 10-substep reference's and the mean distance from the
+// reference's vertices.
+void BM_SourceScaleStep(benchmark::State& state) {
+    const pbd::TetGrid& grid = bench::source_scale_workload().grid;
+    const int d = static_cast<int>(state.range(0));
+    set_num_threads(static_cast<int>(state.range(2)));
+    const pbd::SoftBodyOptions options{
+        .substeps = static_cast<int>(state.range(1)),
+        .iterations = static_cast<int>(state.range(3)),
+        .chebyshev_rho = static_cast<double>(state.range(4)) / 100.0,
+        .chebyshev_gamma = static_cast<double>(state.range(5)) / 100.0};
+    pbd::SoftBody body = source_scale_body(d, options);
+    constexpr double DT = 1.0 / 24.0;
+    // The shape after 24 frames (before the timed steps): how far the deformation has reached.
+    const pbd::SoftBodyStats stats = body.stats();
+    const double displacement = mean_displacement(body);
+    if (options.substeps != 10 || options.iterations != 1 || options.chebyshev_rho > 0.0) {
+        const pbd::SoftBody& reference = reference_body(d);
+        state.counters["displacement_vs_ref"] = displacement / mean_displacement(reference);
+        state.counters["distance_to_ref"] = mean_distance(body, reference);
+    }
     std::vector<Vec3f> before;
     for (auto _ : state) {
         state.PauseTiming();
@@ -127,14 +196,31 @@ void BM_SourceScaleStep(benchmark::State& state) {
     set_num_threads(0);
 }
 BENCHMARK(BM_SourceScaleStep)
-    ->ArgNames({"driver", "substeps", "threads"})
-    ->Args({0, 10, 1})
-    ->Args({0, 10, 2})
-    ->Args({1, 10, 1})
-    ->Args({2, 10, 1})
-    ->Args({0, 5, 1})
-    ->Args({0, 3, 1})
-    ->Args({0, 2, 1})
+    ->ArgNames({"driver", "substeps", "threads", "iters", "rho", "gamma"})
+    ->Args({0, 10, 1, 1, 0, 100})
+    ->Args({0, 10, 2, 1, 0, 100})
+    ->Args({1, 10, 1, 1, 0, 100})
+    ->Args({2, 10, 1, 1, 0, 100})
+    ->Args({3, 10, 1, 1, 0, 100})
+    ->Args({0, 5, 1, 1, 0, 100})
+    ->Args({0, 3, 1, 1, 0, 100})
+    ->Args({0, 2, 1, 1, 0, 100})
+    ->Args({0, 2, 1, 3, 0, 100})
+    ->Args({0, 2, 1, 3, 97, 90})
+    ->Args({0, 3, 1, 2, 90, 100})
+    ->Args({0, 1, 1, 6, 97, 90})
+    ->Args({0, 2, 1, 4, 0, 100})
+    ->Args({0, 2, 1, 4, 97, 90})
+    ->Args({0, 1, 1, 8, 0, 100})
+    ->Args({0, 1, 1, 8, 99, 90})
+    ->Args({0, 1, 1, 8, 99, 100})
+    ->Args({0, 1, 1, 8, 98, 90})
+    ->Args({0, 2, 1, 4, 98, 90})
+    ->Args({0, 20, 1, 1, 0, 100})
+    ->Args({1, 2, 1, 4, 97, 90})
+    ->Args({2, 2, 1, 4, 97, 90})
+    ->Args({3, 2, 1, 4, 97, 90})
+    ->Args({0, 2, 2, 4, 97, 90})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

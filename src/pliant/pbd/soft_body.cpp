@@ -16,6 +16,7 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/pbd/detail/chebyshev.hpp"
 #include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/constraint_sweep.hpp"
 #include "pliant/pbd/detail/driver_apply.hpp"
@@ -49,6 +50,15 @@ void validate_options(const SoftBodyOptions& o) {
     }
     if (o.substeps < 1) {
         fail("substeps", o.substeps, ">= 1");
+    }
+    if (o.iterations < 1) {
+        fail("iterations", o.iterations, ">= 1");
+    }
+    if (!(o.chebyshev_rho >= 0.0 && o.chebyshev_rho < 1.0)) {
+        fail("chebyshev_rho", o.chebyshev_rho, "in [0, 1)");
+    }
+    if (!(o.chebyshev_gamma > 0.0 && o.chebyshev_gamma <= 1.0)) {
+        fail("chebyshev_gamma", o.chebyshev_gamma, "in (0, 1]");
     }
     if (!is_finite(o.gravity)) {
         throw InvalidInput("pbd::SoftBody: options.gravity must be finite");
@@ -173,6 +183,9 @@ struct SoftBody::State {
     std::vector<Vec3f> positions;
     std::vector<float> inv_masses;     // 1/kg; 0 = pinned or in no tet
     std::vector<std::uint8_t> pinned;  // 1 = pinned
+    // #V each, within a substep only (detail/chebyshev.hpp): q^k and q^(k-1) of the iterations.
+    std::vector<Vec3f> chebyshev_current;
+    std::vector<Vec3f> chebyshev_previous;
 
     std::vector<Driver> drivers;
     bool has_rest_drivers = false;
@@ -407,6 +420,18 @@ void SoftBody::step(double dt) {
     // The kernels give the same bits (projection_avx2.hpp): the choice is for speed only.
     const bool use_avx2 = pliant::has_avx2();
     Float4* x = s.x.data();
+    // Iterations (soft_body.hpp): ω of each iteration, rounded once; no pass when plain.
+    const bool accelerate = m_options.chebyshev_rho > 0.0 || m_options.chebyshev_gamma < 1.0;
+    std::vector<float> omegas(static_cast<std::size_t>(m_options.iterations));
+    for (int it = 0; it < m_options.iterations; ++it) {
+        omegas[static_cast<std::size_t>(it)] =
+            static_cast<float>(detail::chebyshev_omega(it, m_options.chebyshev_rho));
+    }
+    const auto gamma = static_cast<float>(m_options.chebyshev_gamma);
+    if (accelerate && s.chebyshev_current.size() != s.x.size()) {
+        s.chebyshev_current.resize(s.x.size());
+        s.chebyshev_previous.resize(s.x.size());
+    }
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
         // Step 1 (soft_body.hpp): predict; after the first substep, fused into the previous
@@ -419,13 +444,24 @@ void SoftBody::step(double dt) {
                                           m_time + h * (sub + 1),
                                           static_cast<float>(sub + 1) / static_cast<float>(n));
         }
-        // Step 2: edge lengths, colour by colour.
-        detail::project_edges(x, s.edge_constraints, k.edges, use_avx2);
-        // Step 3: tet volumes, colour by colour, flagging the tets at risk of inversion; 3b: the
-        // inversion guard on them.
-        detail::project_tets(x, s.tet_constraints, k.volumes, use_avx2, s.inversion.tet_at_risk,
-                             s.inversion.colour_at_risk);
-        detail::guard_flagged_tets(x, s.tet_constraints, s.inversion);
+        if (accelerate) {
+            detail::chebyshev_begin(x, s.chebyshev_current, s.chebyshev_previous);
+        }
+        for (int it = 0; it < m_options.iterations; ++it) {
+            // Step 2: edge lengths, colour by colour.
+            detail::project_edges(x, s.edge_constraints, k.edges, use_avx2);
+            // Step 3: tet volumes, colour by colour, flagging the tets at risk of inversion; 3b:
+            // the inversion guard on them.
+            detail::project_tets(x, s.tet_constraints, k.volumes, use_avx2, s.inversion.tet_at_risk,
+                                 s.inversion.colour_at_risk);
+            detail::guard_flagged_tets(x, s.tet_constraints, s.inversion);
+            // Iterations: Chebyshev's extrapolation of the free vertices, between sweeps (the
+            // last sweep and its guard have the last word, so no extrapolation inverts a tet).
+            if (accelerate && it + 1 < m_options.iterations) {
+                detail::chebyshev_update(x, s.chebyshev_current, s.chebyshev_previous,
+                                         omegas[static_cast<std::size_t>(it)], gamma);
+            }
+        }
         // Step 4: velocities from the motion, damped; with the next substep's prediction, or
         // after the last substep stored with the positions.
         if (sub + 1 < n) {
