@@ -251,3 +251,67 @@ TEST(ClothScene, MissingFile) {
 
 }  // namespace
 }  // namespace pliant::pipeline
+
+namespace pliant::pipeline {
+namespace {
+
+TEST(ClothScene, MaterialPresetsAndPhysicalStiffness) {
+    const cloth::ClothScene denim = parse(R"({"cloth": {"grid": {}}, "material": "denim"})");
+    EXPECT_EQ(denim.material_preset, "denim");
+    EXPECT_DOUBLE_EQ(denim.material.areal_density, 0.40);
+    ASSERT_TRUE(denim.stretch_stiffness && denim.bend_stiffness);
+    EXPECT_DOUBLE_EQ(*denim.stretch_stiffness, 1.5e4);
+
+    // A preset as a start, with overrides; a compliance replaces the preset's stiffness.
+    const cloth::ClothScene silk = parse(R"({"cloth": {"grid": {}}, "material":
+        {"preset": "silk", "areal_density": 0.08, "bend_compliance": 2, "thickness": 0.003}})");
+    EXPECT_DOUBLE_EQ(silk.material.areal_density, 0.08);
+    EXPECT_DOUBLE_EQ(silk.material.thickness, 0.003);
+    EXPECT_TRUE(silk.stretch_stiffness);
+    EXPECT_FALSE(silk.bend_stiffness);
+    EXPECT_DOUBLE_EQ(silk.material.bend_compliance, 2.0);
+
+    const cloth::ClothScene custom = parse(
+        R"({"cloth": {"grid": {}}, "material": {"stretch_stiffness": 500, "bend_stiffness": 1e-4}})");
+    EXPECT_EQ(custom.material_preset, "");
+    EXPECT_DOUBLE_EQ(*custom.stretch_stiffness, 500.0);
+    EXPECT_DOUBLE_EQ(*custom.bend_stiffness, 1e-4);
+
+    const cloth::ClothScene plain = parse(R"({"cloth": {"grid": {}}})");
+    EXPECT_FALSE(plain.stretch_stiffness || plain.bend_stiffness);
+
+    expect_error(R"({"cloth": {"grid": {}}, "material": "wool"})",
+                 {"material", "a material preset", "\"cotton\"", "got \"wool\""});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"preset": "Denim"}})",
+                 {"material.preset", "got \"Denim\""});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"preset": 3}})",
+                 {"material.preset", "a material preset name", "got an integer"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": 3})",
+                 {"material", "a material preset name or an object", "got an integer"});
+    expect_error(
+        R"({"cloth": {"grid": {}}, "material": {"stretch_stiffness": 1, "stretch_compliance": 1}})",
+        {"material.stretch_stiffness", "either it or stretch_compliance", "got both"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"bend_stiffness": 0}})",
+                 {"material.bend_stiffness", "got 0"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"bend_stiffness": "stiff"}})",
+                 {"material.bend_stiffness", "a number"});
+}
+
+TEST(ClothScene, MeshUnitsAndScale) {
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj"}})").mesh_scale, 1.0);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "units": "cm"}})").mesh_scale, 0.01);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "units": "mm"}})").mesh_scale, 0.001);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "units": "m"}})").mesh_scale, 1.0);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "scale": 0.0254}})").mesh_scale, 0.0254);
+    expect_error(R"({"cloth": {"mesh": "a.obj", "units": "inch"}})",
+                 {"cloth.units", R"("cm", "m", "mm")", "got \"inch\""});
+    expect_error(R"({"cloth": {"mesh": "a.obj", "units": "cm", "scale": 2}})",
+                 {"cloth.scale", "either it or \"units\"", "got both"});
+    expect_error(R"({"cloth": {"mesh": "a.obj", "scale": 0}})", {"cloth.scale", "got 0"});
+    expect_error(R"({"cloth": {"mesh": "a.obj", "scale": "big"}})", {"cloth.scale", "a number"});
+    expect_error(R"({"cloth": {"grid": {}, "units": "cm"}})",
+                 {"cloth.units", "a cloth \"mesh\"", "got a grid"});
+}
+
+}  // namespace
+}  // namespace pliant::pipeline

@@ -61,6 +61,9 @@ struct ClothScene {
     // The cloth: a grid, or a mesh file (OBJ/PLY; relative paths are relative to the scene file).
     std::optional<GridSheet> grid;
     std::filesystem::path mesh;
+    // Metres per unit of the mesh file's coordinates ("units": "m" 1, "cm" 0.01, "mm" 0.001, or
+    // "scale"), applied to the file's positions before the transform below (which is in metres).
+    double mesh_scale = 1.0;
     // Applied to the cloth's vertices in this order: rotate about x, then y, then z (degrees,
     // right-handed), then translate (metres).
     Vec3d rotate_degrees{0.0, 0.0, 0.0};
@@ -73,6 +76,12 @@ struct ClothScene {
     std::vector<PinGroup> pins;
 
     ClothMaterial material;
+    // The fabric in physical units (material_preset.hpp), when the scene gives it: a preset's name
+    // ("" for none) and the tensile stiffness (N/m) and bending rigidity (N·m) that replace
+    // material's stretch and bend compliances once the mesh is known (pipeline::load_cloth_setup).
+    std::string material_preset;
+    std::optional<double> stretch_stiffness;
+    std::optional<double> bend_stiffness;
     bool self_collision = true;  // cloth/self_collision.hpp
     // Cloth that starts intersecting itself is untangled before the first frame (untangle.hpp).
     bool untangle = true;

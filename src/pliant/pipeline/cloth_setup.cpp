@@ -13,6 +13,7 @@
 #include <utility>
 #include <variant>
 
+#include "pliant/cloth/material_preset.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
@@ -72,6 +73,57 @@ std::int64_t vertices_on_others(std::span<const Vec3d> positions) {
     return doubled;
 }
 
+// Warns when the cloth's size (the diagonal of its box) is implausible for a garment or sheet,
+// or its mean edge length is far from the thickness (units or scale wrong, or a thickness that
+// either swallows the triangles or lets them pass through each other between substeps).
+void warn_implausible_size(const cloth::ClothScene& scene, const std::string& scene_name,
+                           const geometry::TriangleMeshD& mesh) {
+    AABBd box;
+    for (const Vec3d& p : mesh.positions) {
+        box.extend(p);
+    }
+    const double size = norm(box.hi - box.lo);
+    const std::string what =
+        scene.grid ? std::string("cloth.grid") : fmt::format("cloth.mesh {}", scene.mesh.string());
+    const std::string hint = scene.grid ? "check cloth.grid.size"
+                                        : fmt::format(
+                                              "check the file's units (cloth.units or "
+                                              "cloth.scale; read as {:g} m per unit)",
+                                              scene.mesh_scale);
+    if (size > MAX_PLAUSIBLE_CLOTH_SIZE || size < MIN_PLAUSIBLE_CLOTH_SIZE) {
+        log_warning(
+            "{}: {} is {:.4g} m across, implausible for cloth (expected {:g} m to {:g} m): "
+            "{}",
+            scene_name, what, size, MIN_PLAUSIBLE_CLOTH_SIZE, MAX_PLAUSIBLE_CLOTH_SIZE, hint);
+    }
+    double sum = 0.0;
+    for (const geometry::Triangle& t : mesh.triangles) {
+        for (int k = 0; k < 3; ++k) {
+            sum += norm(
+                mesh.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])] -
+                mesh.positions[static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)])]);
+        }
+    }
+    const double edge = mesh.triangles.empty() ? 0.0 : sum / (3.0 * mesh.triangles.size());
+    const double thickness = scene.material.thickness;
+    if (edge > 0.0 && thickness > 0.0 &&
+        (thickness > edge * MAX_THICKNESS_PER_EDGE || thickness < edge * MIN_THICKNESS_PER_EDGE)) {
+        log_warning(
+            "{}: {}: the thickness {:g} m is {:.3g} times the mean edge length {:.4g} m (expected "
+            "{:g} to {:g}): {}; {}",
+            scene_name, what, thickness, thickness / edge, edge, MIN_THICKNESS_PER_EDGE,
+            MAX_THICKNESS_PER_EDGE,
+            thickness > edge * MAX_THICKNESS_PER_EDGE
+                ? "every vertex is in contact with its neighbours' triangles and self-collision "
+                  "holds the cloth stiff"
+                : "cloth moving more than the thickness per substep depends on the CCD fail-safe "
+                  "alone",
+            scene.grid
+                ? std::string("check material.thickness and cloth.grid")
+                : "check material.thickness and " + hint.substr(std::string("check ").size()));
+    }
+}
+
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name,
                                    std::uint64_t max_memory_bytes) {
@@ -92,6 +144,9 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
             static_cast<float>(scene.grid->size[1])));
     } else {
         mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
+        for (Vec3d& p : mesh.positions) {
+            p = p * scene.mesh_scale;
+        }
         require_cloth_fits_in_memory(
             fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
             mesh.triangles.size() * copies_of_the_cloth, scene.self_collision, max_memory_bytes);
@@ -120,6 +175,7 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
                 scene_name, doubled, mesh.positions.size());
         }
     }
+    warn_implausible_size(scene, scene_name, mesh);
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);
     if (scene.instances.empty()) {
@@ -239,6 +295,16 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
     ClothSetup setup;
     setup.mesh = load_cloth(scene, scene_name,
                             max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes());
+    // Physical stiffnesses become compliances for this mesh (material_preset.hpp).
+    setup.material = scene.material;
+    if (scene.stretch_stiffness) {
+        setup.material.stretch_compliance = cloth::stretch_compliance_for(
+            *scene.stretch_stiffness, setup.mesh.positions, setup.mesh.triangles);
+    }
+    if (scene.bend_stiffness) {
+        setup.material.bend_compliance = cloth::bend_compliance_for(
+            *scene.bend_stiffness, setup.mesh.positions, setup.mesh.triangles);
+    }
     for (const cloth::PinGroup& group : scene.pins) {
         setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
     }
@@ -350,7 +416,7 @@ nlohmann::ordered_json untangle_report(const StartState& start) {
 
 std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                                                 const ClothSetup& setup) {
-    auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, scene.material);
+    auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, setup.material);
     for (std::size_t g = 0; g < scene.pins.size(); ++g) {
         solver->add_moving_pins(setup.pins[g], scene.pins[g].motion);
     }

@@ -36,8 +36,18 @@ struct ObstacleShape {
     bool bounded = true;  // false for planes: left out of the camera's framing
 };
 
+// A cloth whose box diagonal lies outside [MIN, MAX] metres gets a warning (units or scale
+// wrong), and so does a thickness outside [MIN, MAX] times the mean edge length.
+inline constexpr double MIN_PLAUSIBLE_CLOTH_SIZE = 0.01;
+inline constexpr double MAX_PLAUSIBLE_CLOTH_SIZE = 10.0;
+inline constexpr double MIN_THICKNESS_PER_EDGE = 0.01;
+inline constexpr double MAX_THICKNESS_PER_EDGE = 0.5;
+
 struct ClothSetup {
-    geometry::TriangleMeshD mesh;                 // the cloth at the start, all instances
+    geometry::TriangleMeshD mesh;  // the cloth at the start, all instances
+    // The scene's material with its physical stiffnesses (scene.stretch_stiffness,
+    // scene.bend_stiffness) turned into compliances for this mesh.
+    cloth::ClothMaterial material;
     std::vector<std::vector<std::int32_t>> pins;  // per scene pin group, its vertices
     // Per scene obstacle: the mesh obstacle (null for analytic shapes), shared between solvers.
     std::vector<std::shared_ptr<const cloth::MeshObstacle>> mesh_obstacles;
