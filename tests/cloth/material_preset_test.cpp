@@ -27,8 +27,8 @@ struct HangingStrip {
 };
 
 HangingStrip hanging_strip(int nx, int ny, double width, double length) {
-    const geometry::TriangleMesh grid = geometry::make_grid_sheet(
-        nx, ny, static_cast<float>(width), static_cast<float>(length));
+    const geometry::TriangleMesh grid =
+        geometry::make_grid_sheet(nx, ny, static_cast<float>(width), static_cast<float>(length));
     HangingStrip strip;
     strip.mesh.triangles = grid.triangles;
     for (std::size_t v = 0; v < grid.positions.size(); ++v) {
@@ -81,8 +81,7 @@ TEST(MaterialPreset, AllPresetsExistWithPositiveValues) {
     EXPECT_LT(fabric_preset("silk")->bend_stiffness, fabric_preset("cotton")->bend_stiffness);
     EXPECT_LT(fabric_preset("cotton")->bend_stiffness, fabric_preset("denim")->bend_stiffness);
     EXPECT_LT(fabric_preset("denim")->bend_stiffness, fabric_preset("leather")->bend_stiffness);
-    EXPECT_LT(fabric_preset("rubber")->stretch_stiffness,
-              fabric_preset("silk")->stretch_stiffness);
+    EXPECT_LT(fabric_preset("rubber")->stretch_stiffness, fabric_preset("silk")->stretch_stiffness);
     EXPECT_LT(fabric_preset("silk")->areal_density, fabric_preset("denim")->areal_density);
 }
 
@@ -130,8 +129,8 @@ TEST(MaterialPreset, RejectsInvalidStiffness) {
 TEST(MaterialPreset, HangingStripStretchesAsTheStiffnessSays) {
     const double length = 1.0;
     FabricProperties soft{0.2, 100.0, 1e-6};
-    const double expected = soft.areal_density * GRAVITY * length * length /
-                            (2.0 * soft.stretch_stiffness);  // 9.8 mm
+    const double expected =
+        soft.areal_density * GRAVITY * length * length / (2.0 * soft.stretch_stiffness);  // 9.8 mm
     const HangingStrip coarse = hanging_strip(4, 20, 0.2, length);
     const HangingStrip fine = hanging_strip(8, 40, 0.2, length);
     const double soft_coarse = elongation(coarse, settled_material(soft, coarse), 72);
@@ -139,14 +138,16 @@ TEST(MaterialPreset, HangingStripStretchesAsTheStiffnessSays) {
     EXPECT_NEAR(soft_coarse / expected, 1.0, 0.1) << soft_coarse << " m";
     EXPECT_NEAR(soft_fine / soft_coarse, 1.0, 0.1) << soft_fine << " vs " << soft_coarse;
 
-    const double rubber = elongation(coarse, settled_material(*fabric_preset("rubber"), coarse), 72);
+    const double rubber =
+        elongation(coarse, settled_material(*fabric_preset("rubber"), coarse), 72);
     const double denim = elongation(coarse, settled_material(*fabric_preset("denim"), coarse), 72);
     const FabricProperties r = *fabric_preset("rubber");
     EXPECT_NEAR(rubber / (r.areal_density * GRAVITY / (2.0 * r.stretch_stiffness)), 1.0, 0.15);
     EXPECT_LT(denim, 0.5 * rubber) << denim << " vs " << rubber;
     EXPECT_LT(rubber, soft_coarse);
-    std::printf("elongation (mm): expected %.2f, soft coarse %.2f, fine %.2f, rubber %.3f, denim %.3f\n",
-                expected * 1e3, soft_coarse * 1e3, soft_fine * 1e3, rubber * 1e3, denim * 1e3);
+    std::printf(
+        "elongation (mm): expected %.2f, soft coarse %.2f, fine %.2f, rubber %.3f, denim %.3f\n",
+        expected * 1e3, soft_coarse * 1e3, soft_fine * 1e3, rubber * 1e3, denim * 1e3);
 }
 
 }  // namespace

@@ -118,11 +118,11 @@ TEST(GarmentSetup, PresetsBecomeCompliancesForTheMesh) {
     EXPECT_DOUBLE_EQ(denim.material.stretch_compliance,
                      cloth::stretch_compliance_for(d.stretch_stiffness, denim.mesh.positions,
                                                    denim.mesh.triangles));
-    EXPECT_DOUBLE_EQ(denim.material.bend_compliance,
-                     cloth::bend_compliance_for(d.bend_stiffness, denim.mesh.positions,
-                                                denim.mesh.triangles));
-    const ClothSetup plain = load(R"({"grid": {"size": [1, 1], "quads": [20, 20]}})",
-                                  R"({"stretch_compliance": 2e-6})");
+    EXPECT_DOUBLE_EQ(
+        denim.material.bend_compliance,
+        cloth::bend_compliance_for(d.bend_stiffness, denim.mesh.positions, denim.mesh.triangles));
+    const ClothSetup plain =
+        load(R"({"grid": {"size": [1, 1], "quads": [20, 20]}})", R"({"stretch_compliance": 2e-6})");
     EXPECT_DOUBLE_EQ(plain.material.stretch_compliance, 2e-6);
     EXPECT_DOUBLE_EQ(plain.material.bend_compliance, cloth::ClothMaterial{}.bend_compliance);
 }

@@ -40,13 +40,15 @@ constexpr std::array<Preset, 5> PRESETS{{
 
 void require_positive(double value, const char* what) {
     if (!(value > 0.0) || !std::isfinite(value)) {
-        throw InvalidInput(fmt::format("cloth material: {}: expected a finite number > 0, got {}",
-                                       what, value));
+        throw InvalidInput(
+            fmt::format("cloth material: {}: expected a finite number > 0, got {}", what, value));
     }
 }
 
 double triangle_area(std::span<const Vec3d> x, const geometry::Triangle& t) {
-    const auto at = [&](int k) { return x[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])]; };
+    const auto at = [&](int k) {
+        return x[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+    };
     return 0.5 * norm(cross(at(1) - at(0), at(2) - at(0)));
 }
 
@@ -65,7 +67,8 @@ std::vector<EdgeMeasure> edge_measures(std::span<const Vec3d> x,
     out.reserve(topology.num_edges());
     for (std::size_t e = 0; e < topology.num_edges(); ++e) {
         const geometry::Edge& edge = topology.edges[e];
-        EdgeMeasure m{squared_norm(x[static_cast<std::size_t>(edge[1])] - x[static_cast<std::size_t>(edge[0])]),
+        EdgeMeasure m{squared_norm(x[static_cast<std::size_t>(edge[1])] -
+                                   x[static_cast<std::size_t>(edge[0])]),
                       0.0, 0};
         for (const std::int32_t t : topology.triangles_of_edge(static_cast<std::int32_t>(e))) {
             m.area += triangle_area(x, triangles[static_cast<std::size_t>(t)]);

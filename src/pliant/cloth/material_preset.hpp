@@ -36,9 +36,9 @@
 namespace pliant::cloth {
 
 struct FabricProperties {
-    double areal_density = 0.15;      // kg/m²
-    double stretch_stiffness = 1e4;   // N/m: tensile force per unit width per unit strain
-    double bend_stiffness = 1e-5;     // N·m: bending moment per unit width per unit curvature
+    double areal_density = 0.15;     // kg/m²
+    double stretch_stiffness = 1e4;  // N/m: tensile force per unit width per unit strain
+    double bend_stiffness = 1e-5;    // N·m: bending moment per unit width per unit curvature
 };
 
 inline constexpr double BEND_HINGE_FACTOR = 1.5;
