@@ -69,14 +69,16 @@ TEST(ObjPolygons, ReadsFacesUvsNormalsGroupsAndMaterials) {
     EXPECT_EQ(m.num_corners(0), 4u);
     EXPECT_EQ(m.num_corners(1), 3u);
     EXPECT_EQ(m.num_corners(2), 5u);
-    EXPECT_EQ(m.corner_uvs[4], 1);      // face 2's first corner: 2/2/1
+    EXPECT_EQ(m.corner_uvs[4], 1);  // face 2's first corner: 2/2/1
     EXPECT_EQ(m.corner_normals[4], 0);
     EXPECT_EQ(m.corner_vertices[7], 4);  // -4 of 8 vertices is vertex 5
     EXPECT_EQ(m.corner_uvs[7], -1);
     EXPECT_EQ(m.corner_normals[7], -1);
     ASSERT_EQ(m.material_libraries.size(), 1u);
     EXPECT_EQ(m.material_libraries[0], "shirt.mtl");
-    const auto name = [&](std::int32_t i) { return i < 0 ? std::string() : m.names[static_cast<std::size_t>(i)]; };
+    const auto name = [&](std::int32_t i) {
+        return i < 0 ? std::string() : m.names[static_cast<std::size_t>(i)];
+    };
     EXPECT_EQ(name(m.face_tags[0].object), "shirt");
     EXPECT_EQ(name(m.face_tags[0].group), "front");
     EXPECT_EQ(name(m.face_tags[0].material), "cotton_red");
@@ -95,8 +97,10 @@ TEST(ObjPolygons, TriangulatesQuadsAndNgonsCoveringTheirArea) {
     ASSERT_EQ(t.triangles.size(), 2u + 1u + 3u);
     EXPECT_EQ(faces, (std::vector<std::int32_t>{0, 0, 1, 2, 2, 2}));
     for (const geometry::Triangle& tri : t.triangles) {  // the input's winding: normals +z
-        const Vec3d n = cross(t.positions[static_cast<std::size_t>(tri[1])] - t.positions[static_cast<std::size_t>(tri[0])],
-                              t.positions[static_cast<std::size_t>(tri[2])] - t.positions[static_cast<std::size_t>(tri[0])]);
+        const Vec3d n = cross(t.positions[static_cast<std::size_t>(tri[1])] -
+                                  t.positions[static_cast<std::size_t>(tri[0])],
+                              t.positions[static_cast<std::size_t>(tri[2])] -
+                                  t.positions[static_cast<std::size_t>(tri[0])]);
         EXPECT_GT(n.z, 0.0);
     }
     // Shoelace areas: quad 1, triangle 0.5, pentagon (5, 6, 7, 8, 3) 1.875.
@@ -107,8 +111,9 @@ TEST(ObjPolygons, EarClipsConcavePolygons) {
     // An L-shaped hexagon of area 3, listed from a reflex corner: a fan from corner 1 would cover
     // area outside it.
     const TempDir dir;
-    write_bytes(dir / "l.obj", "v 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nv 2 1 0\n"
-                               "f 1 2 3 4 5 6\n");
+    write_bytes(dir / "l.obj",
+                "v 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nv 2 1 0\n"
+                "f 1 2 3 4 5 6\n");
     const geometry::TriangleMeshD t = triangulate(read_obj_polygons(dir / "l.obj"));
     ASSERT_EQ(t.triangles.size(), 4u);
     EXPECT_NEAR(area(t), 3.0, 1e-12);
@@ -125,7 +130,8 @@ TEST(ObjPolygons, WritesTheInputsFacesWithNewPositions) {
     write_obj_polygons(dir / "out.obj", m, moved);
     const std::string text = read_bytes(dir / "out.obj");
     EXPECT_NE(text.find("mtllib shirt.mtl\n"), std::string::npos) << text;
-    EXPECT_NE(text.find("o shirt\ng front\ns 1\nusemtl cotton_red\nf 1/1/1 2/2/2 3/3/3 4/4/4\nf 2/2/2 5/1/5 3/3/3\n"
+    EXPECT_NE(text.find("o shirt\ng front\ns 1\nusemtl cotton_red\nf 1/1/1 2/2/2 3/3/3 4/4/4\nf "
+                        "2/2/2 5/1/5 3/3/3\n"
                         "g back sleeve\nusemtl cotton_blue\nf 5//5 6//6 7//7 8//8 3//3\n"),
               std::string::npos)
         << text;
@@ -175,7 +181,8 @@ TEST(ObjPolygons, ForwardReferencesAndCrLfAreAccepted) {
 
 TEST(ObjPolygons, BrokenFilesNameTheLine) {
     const TempDir dir;
-    const auto expect = [&](const std::string& text, std::initializer_list<std::string_view> parts) {
+    const auto expect = [&](const std::string& text,
+                            std::initializer_list<std::string_view> parts) {
         write_bytes(dir / "b.obj", text);
         expect_io_error([&] { read_obj_polygons(dir / "b.obj"); }, parts);
     };

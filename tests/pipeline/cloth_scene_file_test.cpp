@@ -313,5 +313,43 @@ TEST(ClothScene, MeshUnitsAndScale) {
                  {"cloth.units", "a cloth \"mesh\"", "got a grid"});
 }
 
+TEST(ClothScene, SeamsAndPointCache) {
+    const cloth::ClothScene scene = parse(R"({"cloth": {"grid": {}},
+        "seams": [{"a": [0, 1, 2], "b": [9, 8, 7]},
+                  {"a": {"from": 10, "to": 13}, "b": {"from": 23, "to": 20}, "seconds": 0.25}],
+        "output": {"point_cache": "pc2"}})");
+    ASSERT_EQ(scene.seams.size(), 2u);
+    EXPECT_EQ(scene.seams[0].a, (std::vector<std::int32_t>{0, 1, 2}));
+    EXPECT_EQ(scene.seams[0].b, (std::vector<std::int32_t>{9, 8, 7}));
+    EXPECT_DOUBLE_EQ(scene.seams[0].seconds, 1.0);
+    EXPECT_EQ(scene.seams[1].a, (std::vector<std::int32_t>{10, 11, 12, 13}));
+    EXPECT_EQ(scene.seams[1].b, (std::vector<std::int32_t>{23, 22, 21, 20}));
+    EXPECT_DOUBLE_EQ(scene.seams[1].seconds, 0.25);
+    EXPECT_EQ(scene.seams[1].key, "seams[1]");
+    EXPECT_EQ(scene.point_cache, "pc2");
+    EXPECT_EQ(parse(R"({"cloth": {"grid": {}}, "output": {"point_cache": null}})").point_cache, "");
+
+    const std::string head = R"({"cloth": {"grid": {}}, "seams": )";
+    expect_error(head + R"([{"a": [0, 1], "b": [2]}]})",
+                 {"seams[0].b", "as many vertices as a (2)", "got 1"});
+    expect_error(head + R"([{"a": [0]}]})", {"seams[0].b", "a required list", "got nothing"});
+    expect_error(head + R"([{"a": [], "b": []}]})", {"seams[0].a", "at least one vertex"});
+    expect_error(head + R"([{"a": [-1], "b": [2]}]})", {"seams[0].a[0]", "a vertex index", "-1"});
+    expect_error(head + R"([{"a": [0.5], "b": [2]}]})", {"seams[0].a[0]", "0.5"});
+    expect_error(head + R"([{"a": "0-3", "b": [2]}]})",
+                 {"seams[0].a", "a list of vertex indices", "string"});
+    expect_error(head + R"([{"a": {"from": 3}, "b": [2]}]})",
+                 {"seams[0].a", R"(both "from" and "to")"});
+    expect_error(head + R"([{"a": {"from": 0, "to": 2, "step": 1}, "b": [2]}]})",
+                 {"seams[0].a.step", "a known key"});
+    expect_error(head + R"([{"a": {"from": 0, "to": 20000000}, "b": [2]}]})",
+                 {"seams[0].a", "at most 10,000,000"});
+    expect_error(head + R"([{"a": [0], "b": [1], "seconds": 0}]})", {"seams[0].seconds", "got 0"});
+    expect_error(head + R"([{"a": [0], "b": [1], "glue": 1}]})", {"seams[0].glue", "a known key"});
+    expect_error(head + R"({"a": [0], "b": [1]}})", {"seams", "an array"});
+    expect_error(R"({"cloth": {"grid": {}}, "output": {"point_cache": "mdd"}})",
+                 {"output.point_cache", R"(one of "pc2")", "got \"mdd\""});
+}
+
 }  // namespace
 }  // namespace pliant::pipeline

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pliant/cloth/material_preset.hpp"
+#include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/obj.hpp"
@@ -125,6 +126,29 @@ TEST(GarmentSetup, PresetsBecomeCompliancesForTheMesh) {
         load(R"({"grid": {"size": [1, 1], "quads": [20, 20]}})", R"({"stretch_compliance": 2e-6})");
     EXPECT_DOUBLE_EQ(plain.material.stretch_compliance, 2e-6);
     EXPECT_DOUBLE_EQ(plain.material.bend_compliance, cloth::ClothMaterial{}.bend_compliance);
+}
+
+TEST(GarmentSetup, SeamVerticesOutsideTheClothAreRefused) {
+    const std::string grid = R"({"cloth": {"grid": {"size": [1, 1], "quads": [2, 2]}}, "seams": )";
+    const auto expect = [&](const std::string& seams, std::initializer_list<std::string> parts) {
+        const cloth::ClothScene scene = parse_cloth_scene(grid + seams + "}", "g.json", "/");
+        try {
+            load_cloth_setup(scene, "g.json");
+            ADD_FAILURE() << "no error for " << seams;
+        } catch (const InvalidInput& e) {
+            for (const std::string& part : parts) {
+                EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+            }
+        }
+    };
+    expect(R"([{"a": [0, 1], "b": [2, 9]}])",
+           {"g.json", "seams[0].b[1]", "vertex 9 out of range", "[0, 9)"});
+    expect(R"([{"a": [0], "b": [2]}, {"a": [4, 5], "b": [6, 5]}])",
+           {"seams[1]", "pair 1", "vertex 5 is sewn to itself"});
+    const cloth::ClothScene ok =
+        parse_cloth_scene(grid + R"([{"a": [0], "b": [8]}]})", "g.json", "/");
+    const ClothSetup setup = load_cloth_setup(ok, "g.json");
+    EXPECT_EQ(make_solver(ok, setup)->model().seams().num_pairs(), 1u);
 }
 
 }  // namespace

@@ -34,6 +34,7 @@
 #include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
+#include "pliant/cloth/seams.hpp"
 #include "pliant/cloth/untangle.hpp"
 #include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
@@ -79,6 +80,14 @@ public:
     // several groups follows the last (it leaves the earlier groups).
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion);
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    // Sews a[k] to b[k] (seams.hpp): pulled together over `seconds` from time 0, from their
+    // current distance down to the material's thickness, then held there. InvalidInput as
+    // Seams::add says.
+    void add_seam(std::span<const std::int32_t> a, std::span<const std::int32_t> b,
+                  double seconds) {
+        m_seams.add(a, b, seconds, m_material.thickness, m_positions);
+    }
+    const Seams& seams() const { return m_seams; }
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
     void set_air(const Air& air);
     // Replaces the velocities (m/s, #V, finite; else InvalidInput).
@@ -209,6 +218,7 @@ private:
     std::optional<Grab> m_grab;
     std::vector<MovingObstacle> m_obstacles;
     std::vector<MovingMeshObstacle> m_mesh_obstacles;
+    Seams m_seams;
 };
 
 }  // namespace pliant::cloth

@@ -42,6 +42,15 @@ struct PinGroup {
     Motion motion;
 };
 
+// Panels sewn together (seams.hpp): a[k] to b[k], vertex indices into the cloth (all copies, as
+// pins), pulled together over `seconds` from the start, then held.
+struct SceneSeam {
+    std::string key = "seams[0]";  // where it was in the scene file, for messages
+    std::vector<std::int32_t> a;
+    std::vector<std::int32_t> b;
+    double seconds = 1.0;
+};
+
 // A placement: rotate about x, then y, then z (degrees, right-handed), then translate (metres).
 struct Placement {
     Vec3d rotate_degrees{0.0, 0.0, 0.0};
@@ -74,6 +83,7 @@ struct ClothScene {
     std::vector<Placement> instances;
 
     std::vector<PinGroup> pins;
+    std::vector<SceneSeam> seams;
 
     ClothMaterial material;
     // The fabric in physical units (material_preset.hpp), when the scene gives it: a preset's name
@@ -97,6 +107,8 @@ struct ClothScene {
     int substeps = 40;
 
     std::string frame_format = "obj";  // "obj" or "ply"
+    // "pc2": also DIR/cloth.pc2, every frame in one point cache (io/pc2.hpp); "": none.
+    std::string point_cache;
 };
 
 }  // namespace pliant::cloth

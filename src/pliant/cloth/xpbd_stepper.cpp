@@ -279,6 +279,7 @@ std::int64_t XPBDStepper::substep(ClothModel& model, double h, double t_end, dou
                                ? CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
     project_constraints(model, h);
+    model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     model.move_obstacles(t_end);
     const std::int64_t contacts = resolve_obstacles(model, h);
     solve_ms += watch.elapsed_ms();

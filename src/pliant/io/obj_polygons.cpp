@@ -79,9 +79,10 @@ public:
         }
         check_forward_references();
         if (m_mesh.num_faces() == 0) {
-            throw IoError(fmt::format("{}: expected at least one face ('f'), got {} vertices and "
-                                      "no faces",
-                                      m_path.string(), m_mesh.positions.size()));
+            throw IoError(
+                fmt::format("{}: expected at least one face ('f'), got {} vertices and "
+                            "no faces",
+                            m_path.string(), m_mesh.positions.size()));
         }
         return std::move(m_mesh);
     }
@@ -147,8 +148,7 @@ private:
                 start = i + 1;
             }
         }
-        if (parts[0].empty() || (n == 2 && parts[1].empty()) ||
-            (n == 3 && parts[2].empty())) {
+        if (parts[0].empty() || (n == 2 && parts[1].empty()) || (n == 3 && parts[2].empty())) {
             fail(fmt::format("face corner {}: expected v, v/vt, v//vn or v/vt/vn",
                              detail::quote(token)));
         }
@@ -216,10 +216,10 @@ private:
             for (std::size_t k = first; k < m_mesh.corner_vertices.size(); ++k) {
                 for (std::size_t j = k + 1; j < m_mesh.corner_vertices.size(); ++j) {
                     if (m_mesh.corner_vertices[k] == m_mesh.corner_vertices[j]) {
-                        fail(fmt::format("a face repeats vertex {} (corners {} and {}), expected "
-                                         "distinct vertices",
-                                         m_mesh.corner_vertices[k] + 1, k - first + 1,
-                                         j - first + 1));
+                        fail(fmt::format(
+                            "a face repeats vertex {} (corners {} and {}), expected "
+                            "distinct vertices",
+                            m_mesh.corner_vertices[k] + 1, k - first + 1, j - first + 1));
                     }
                 }
             }
@@ -242,9 +242,10 @@ private:
     void check_forward_references() const {
         const auto check = [&](std::int32_t max, std::size_t count, const char* what) {
             if (max >= 0 && static_cast<std::size_t>(max) >= count) {
-                throw IoError(fmt::format("{}: face {} index {} is out of range, expected 1 <= "
-                                          "index <= {} (the number of {}s)",
-                                          m_path.string(), what, max + 1, count, what));
+                throw IoError(
+                    fmt::format("{}: face {} index {} is out of range, expected 1 <= "
+                                "index <= {} (the number of {}s)",
+                                m_path.string(), what, max + 1, count, what));
             }
         };
         check(m_max_vertex, m_mesh.positions.size(), "vertex");
@@ -294,7 +295,7 @@ bool ear_clip(const std::vector<Vec3d>& points, std::vector<std::array<int, 3>>&
     std::vector<std::array<double, 2>> p(n);
     for (std::size_t i = 0; i < n; ++i) {
         const Vec3d& q = points[i];
-        p[i] = drop == 0 ? std::array<double, 2>{q.y, q.z}
+        p[i] = drop == 0   ? std::array<double, 2>{q.y, q.z}
                : drop == 1 ? std::array<double, 2>{q.z, q.x}
                            : std::array<double, 2>{q.x, q.y};
     }
@@ -317,7 +318,8 @@ bool ear_clip(const std::vector<Vec3d>& points, std::vector<std::array<int, 3>>&
                 if (d == a || d == b || d == c) {
                     continue;
                 }
-                if (sign * cross2(p[a], p[b], p[d]) >= 0.0 && sign * cross2(p[b], p[c], p[d]) >= 0.0 &&
+                if (sign * cross2(p[a], p[b], p[d]) >= 0.0 &&
+                    sign * cross2(p[b], p[c], p[d]) >= 0.0 &&
                     sign * cross2(p[c], p[a], p[d]) >= 0.0) {
                     empty = false;
                     break;
@@ -356,7 +358,9 @@ geometry::TriangleMeshD triangulate(const PolygonMesh& mesh,
     for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
         const std::int32_t* v = mesh.corner_vertices.data() + mesh.face_starts[f];
         const std::size_t n = mesh.num_corners(f);
-        const auto at = [&](int k) { return mesh.positions[static_cast<std::size_t>(v[k])]; };
+        const auto at = [&](int k) {
+            return mesh.positions[static_cast<std::size_t>(v[k])];
+        };
         local.clear();
         if (n == 3) {
             local.push_back({0, 1, 2});

@@ -63,10 +63,10 @@ struct PolygonMesh {
     std::vector<std::int32_t> corner_normals;   // 0-based, -1: none
     // Per face, the statements in effect: indices into `names`, -1 before the first.
     struct FaceTags {
-        std::int32_t object = -1;    // `o`
-        std::int32_t group = -1;     // `g`
+        std::int32_t object = -1;     // `o`
+        std::int32_t group = -1;      // `g`
         std::int32_t smoothing = -1;  // `s`
-        std::int32_t material = -1;  // `usemtl`
+        std::int32_t material = -1;   // `usemtl`
     };
     std::vector<FaceTags> face_tags;
     std::vector<std::string> names;               // the statements' text after the keyword

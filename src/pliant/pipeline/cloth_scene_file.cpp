@@ -364,6 +364,65 @@ cloth::PinGroup read_pin_group(ObjectReader& p) {
     return group;
 }
 
+// One side of a seam: vertex indices, or {"from": i, "to": j} (i, i ± 1, …, j inclusive).
+std::vector<std::int32_t> read_seam_side(ObjectReader& r, const std::string& key) {
+    const Json* side = r.find(key);
+    const std::string where = r.key_path(key);
+    if (side == nullptr) {
+        r.fail(where, "a required list of vertex indices or {\"from\": i, \"to\": j}", "nothing");
+    }
+    std::vector<std::int32_t> out;
+    constexpr std::int64_t MAX_INDEX = std::numeric_limits<std::int32_t>::max();
+    if (side->is_array()) {
+        for (std::size_t k = 0; k < side->size(); ++k) {
+            const std::optional<std::int64_t> v = integer_in((*side)[k], 0, MAX_INDEX);
+            if (!v) {
+                r.fail(fmt::format("{}[{}]", where, k), "a vertex index (an integer >= 0)",
+                       (*side)[k].dump());
+            }
+            out.push_back(static_cast<std::int32_t>(*v));
+        }
+    } else if (side->is_object()) {
+        ObjectReader range(*side, r.name(), where);
+        const std::int64_t from = range.integer("from", -1, 0, std::numeric_limits<int>::max());
+        const std::int64_t to = range.integer("to", -1, 0, std::numeric_limits<int>::max());
+        if (!range.has("from") || !range.has("to")) {
+            r.fail(where, R"(both "from" and "to")", range.has("from") ? "only from" : "not from");
+        }
+        range.finish();
+        if (std::abs(to - from) >= 10'000'000) {
+            r.fail(where, "a range of at most 10,000,000 vertices",
+                   fmt::format("{} to {}", from, to));
+        }
+        const std::int64_t step = to >= from ? 1 : -1;
+        for (std::int64_t v = from;; v += step) {
+            out.push_back(static_cast<std::int32_t>(v));
+            if (v == to) {
+                break;
+            }
+        }
+    } else {
+        r.fail(where, "a list of vertex indices or {\"from\": i, \"to\": j}",
+               json_type_name(*side));
+    }
+    if (out.empty()) {
+        r.fail(where, "at least one vertex", "an empty list");
+    }
+    return out;
+}
+
+cloth::SceneSeam read_seam(ObjectReader& r) {
+    cloth::SceneSeam seam;
+    seam.a = read_seam_side(r, "a");
+    seam.b = read_seam_side(r, "b");
+    if (seam.a.size() != seam.b.size()) {
+        r.fail(r.key_path("b"), fmt::format("as many vertices as a ({})", seam.a.size()),
+               fmt::format("{}", seam.b.size()));
+    }
+    seam.seconds = r.number("seconds", seam.seconds, 1e-6, 1e6);
+    return seam;
+}
+
 cloth::Air read_air(ObjectReader& r) {
     cloth::Air air;
     air.density = r.number("density", 1.2, 0.0, HUGE_VALUE);
@@ -534,6 +593,14 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             group.finish();
         }
     }
+    if (const Json* seams = root.array("seams")) {
+        for (std::size_t k = 0; k < seams->size(); ++k) {
+            ObjectReader seam((*seams)[k], file, fmt::format("seams[{}]", k));
+            scene.seams.push_back(read_seam(seam));
+            scene.seams.back().key = fmt::format("seams[{}]", k);
+            seam.finish();
+        }
+    }
     // "material": a preset's name, or an object (optionally starting from a "preset").
     if (const Json* material = root.find("material");
         material != nullptr && material->is_string()) {
@@ -568,6 +635,9 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
     scene.substeps = root.integer("substeps", scene.substeps, 1, 100'000);
     root.object("output", [&](ObjectReader& o) {
         scene.frame_format = o.text("format", scene.frame_format, {"obj", "ply"});
+        if (const Json* cache = o.find("point_cache"); cache != nullptr && !cache->is_null()) {
+            scene.point_cache = o.text("point_cache", "", {"pc2"});
+        }
     });
     root.finish();
     return scene;

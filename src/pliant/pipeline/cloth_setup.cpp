@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <tuple>
@@ -39,11 +41,21 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
 
 // A mesh file's triangles, or an error naming the scene key when it has none or a coordinate
 // beyond pipeline::MAX_SCENE_COORDINATE (a run would end as "diverged" at its first frame).
+// With `polygons`, an OBJ file is read as polygons (kept there) and triangulated.
 geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
-                                           const std::string& scene_name, const std::string& key) {
+                                           const std::string& scene_name, const std::string& key,
+                                           std::optional<io::PolygonMesh>* polygons = nullptr) {
     geometry::TriangleMeshD mesh;
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     try {
-        mesh = io::read_mesh(file);
+        if (polygons != nullptr && extension == ".obj") {
+            *polygons = io::read_obj_polygons(file);
+            mesh = io::triangulate(**polygons);
+        } else {
+            mesh = io::read_mesh(file);
+        }
     } catch (const InvalidInput& e) {  // a file without triangles: say which key named it
         throw InvalidInput(fmt::format("{}: {}: {}", scene_name, key, e.what()));
     }
@@ -126,7 +138,8 @@ void warn_implausible_size(const cloth::ClothScene& scene, const std::string& sc
 
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name,
-                                   std::uint64_t max_memory_bytes) {
+                                   std::uint64_t max_memory_bytes,
+                                   std::optional<io::PolygonMesh>& garment) {
     geometry::TriangleMeshD mesh;
     const std::uint64_t copies_of_the_cloth = std::max<std::size_t>(scene.instances.size(), 1);
     const std::string instances =
@@ -143,7 +156,7 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
             scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
             static_cast<float>(scene.grid->size[1])));
     } else {
-        mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
+        mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh", &garment);
         for (Vec3d& p : mesh.positions) {
             p = p * scene.mesh_scale;
         }
@@ -178,6 +191,30 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
     warn_implausible_size(scene, scene_name, mesh);
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);
+    if (garment) {
+        garment->positions = mesh.positions;
+        if (!scene.instances.empty()) {  // the faces once per copy (vertex offsets as below)
+            const io::PolygonMesh one = *garment;
+            for (std::size_t k = 1; k < scene.instances.size(); ++k) {
+                const auto offset = static_cast<std::int32_t>(k * one.positions.size());
+                const auto corner_offset =
+                    static_cast<std::int32_t>(garment->corner_vertices.size());
+                for (std::size_t c = 0; c < one.corner_vertices.size(); ++c) {
+                    garment->corner_vertices.push_back(one.corner_vertices[c] + offset);
+                }
+                garment->corner_uvs.insert(garment->corner_uvs.end(), one.corner_uvs.begin(),
+                                           one.corner_uvs.end());
+                garment->corner_normals.insert(garment->corner_normals.end(),
+                                               one.corner_normals.begin(),
+                                               one.corner_normals.end());
+                for (std::size_t f = 1; f < one.face_starts.size(); ++f) {
+                    garment->face_starts.push_back(one.face_starts[f] + corner_offset);
+                }
+                garment->face_tags.insert(garment->face_tags.end(), one.face_tags.begin(),
+                                          one.face_tags.end());
+            }
+        }
+    }
     if (scene.instances.empty()) {
         return mesh;
     }
@@ -294,7 +331,29 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
                             std::uint64_t max_memory_bytes) {
     ClothSetup setup;
     setup.mesh = load_cloth(scene, scene_name,
-                            max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes());
+                            max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes(),
+                            setup.garment);
+    if (setup.garment) {
+        setup.garment->positions = setup.mesh.positions;
+    }
+    for (const cloth::SceneSeam& seam : scene.seams) {
+        for (const auto& [side, vertices] : {std::pair{"a", &seam.a}, std::pair{"b", &seam.b}}) {
+            for (std::size_t k = 0; k < vertices->size(); ++k) {
+                const std::int32_t v = (*vertices)[k];
+                if (static_cast<std::size_t>(v) >= setup.mesh.positions.size()) {
+                    throw InvalidInput(fmt::format(
+                        "{}: {}.{}[{}]: vertex {} out of range, expected an index in [0, {}) "
+                        "(the cloth's vertices{})",
+                        scene_name, seam.key, side, k, v, setup.mesh.positions.size(),
+                        scene.instances.empty() ? "" : ", all instances"));
+                }
+                if (v == (side[0] == 'a' ? seam.b : seam.a)[k]) {
+                    throw InvalidInput(fmt::format("{}: {}: pair {}: vertex {} is sewn to itself",
+                                                   scene_name, seam.key, k, v));
+                }
+            }
+        }
+    }
     // Physical stiffnesses become compliances for this mesh (material_preset.hpp).
     setup.material = scene.material;
     if (scene.stretch_stiffness) {
@@ -427,6 +486,9 @@ std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
         } else {
             solver->add_obstacle(obstacle.shape, obstacle.motion);
         }
+    }
+    for (const cloth::SceneSeam& seam : scene.seams) {
+        solver->add_seam(seam.a, seam.b, seam.seconds);
     }
     solver->set_gravity(scene.gravity);
     solver->set_air(scene.air);
