@@ -69,8 +69,8 @@ TEST(Seams, PanelsSewnEdgeToEdgeCloseWithoutIntersecting) {
             mesh.positions.push_back({p.x + shift, p.y, 0.0});
         }
         for (const geometry::Triangle& t : panel.triangles) {
-            mesh.triangles.push_back({t[0] + k * per_panel, t[1] + k * per_panel,
-                                      t[2] + k * per_panel});
+            mesh.triangles.push_back(
+                {t[0] + k * per_panel, t[1] + k * per_panel, t[2] + k * per_panel});
         }
     }
     // The left panel's right column (x = +0.2 - 0.25) to the right panel's left column.

@@ -90,8 +90,8 @@ std::vector<float> v_lines(const std::string& text) {
             double y = 0;
             double z = 0;
             v >> x >> y >> z;
-            out.insert(out.end(), {static_cast<float>(x), static_cast<float>(y),
-                                   static_cast<float>(z)});
+            out.insert(out.end(),
+                       {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
         }
     }
     return out;
@@ -115,7 +115,8 @@ TEST(GarmentCommand, FramesKeepTheGarmentAndThePointCacheHoldsThem) {
     write(scratch / "scene.json", R"({
         "cloth": {"mesh": "skirt.obj", "units": "cm"},
         "material": "cotton",
-        "seams": [{"a": [)" + a + R"(], "b": [)" + b + R"(], "seconds": 0.2}],
+        "seams": [{"a": [)" + a + R"(], "b": [)" +
+                                      b + R"(], "seconds": 0.2}],
         "pins": {"vertices": [0, 20]},
         "fps": 24, "frames": 6, "substeps": 20,
         "output": {"point_cache": "pc2"}

@@ -13,9 +13,9 @@ namespace pliant::cloth {
 void Seams::add(std::span<const std::int32_t> a, std::span<const std::int32_t> b, double seconds,
                 double gap, std::span<const Vec3d> positions) {
     if (a.size() != b.size()) {
-        throw InvalidInput(fmt::format(
-            "seam: expected as many vertices on side b as on side a, got {} and {}", a.size(),
-            b.size()));
+        throw InvalidInput(
+            fmt::format("seam: expected as many vertices on side b as on side a, got {} and {}",
+                        a.size(), b.size()));
     }
     if (a.empty()) {
         throw InvalidInput("seam: expected at least one vertex pair, got none");

@@ -30,9 +30,10 @@ void write_pc2(const std::filesystem::path& path, std::int64_t num_points, std::
                double start_frame, FunctionRef<void(std::int64_t, std::span<Vec3f>)> sample) {
     constexpr std::int64_t MAX = std::numeric_limits<std::int32_t>::max();
     if (num_points < 0 || num_points > MAX || num_samples < 0 || num_samples > MAX) {
-        throw InvalidInput(fmt::format("{}: expected at most 2^31 - 1 points and samples, got {} "
-                                       "points and {} samples",
-                                       path.string(), num_points, num_samples));
+        throw InvalidInput(
+            fmt::format("{}: expected at most 2^31 - 1 points and samples, got {} "
+                        "points and {} samples",
+                        path.string(), num_points, num_samples));
     }
     write_file_atomically(path, [&](std::ostream& out) {
         out.write("POINTCACHE2\0", 12);
@@ -46,8 +47,8 @@ void write_pc2(const std::filesystem::path& path, std::int64_t num_points, std::
             sample(s, points);
             for (const Vec3f& p : points) {
                 if (!is_finite(p)) {
-                    throw InvalidInput(fmt::format("{}: sample {}: a position is not finite",
-                                                   path.string(), s));
+                    throw InvalidInput(
+                        fmt::format("{}: sample {}: a position is not finite", path.string(), s));
                 }
             }
             out.write(reinterpret_cast<const char*>(points.data()),

@@ -25,14 +25,16 @@ int copy_material_libraries(const io::PolygonMesh& garment, const std::filesyste
     for (const std::string& line : garment.material_libraries) {
         for (const std::string& name : io::detail::words(line)) {
             const std::filesystem::path source = source_dir / name;
-            const std::filesystem::path target = frames_dir / std::filesystem::path(name).filename();
+            const std::filesystem::path target =
+                frames_dir / std::filesystem::path(name).filename();
             std::string bytes;
             try {
                 bytes = io::read_file(source);
             } catch (const IoError& e) {
-                log_warning("{}: the garment's material library {} is not copied beside the "
-                            "frames: {}",
-                            scene_name, name, e.what());
+                log_warning(
+                    "{}: the garment's material library {} is not copied beside the "
+                    "frames: {}",
+                    scene_name, name, e.what());
                 continue;
             }
             std::error_code ec;
@@ -57,20 +59,18 @@ void write_point_cache_from_frames(const std::filesystem::path& path, int last_f
                                    const std::function<std::filesystem::path(int)>& frame_file) {
     const geometry::TriangleMeshD first = io::read_mesh(frame_file(0));
     const auto num_points = static_cast<std::int64_t>(first.positions.size());
-    io::write_pc2(path, num_points, last_frame + 1, 0.0,
-                  [&](std::int64_t s, std::span<Vec3f> out) {
-                      const geometry::TriangleMeshD frame =
-                          s == 0 ? first : io::read_mesh(frame_file(static_cast<int>(s)));
-                      if (frame.positions.size() != out.size()) {
-                          throw InvalidInput(fmt::format(
-                              "{}: {} vertices, expected {} (frame 0's) for the point cache",
-                              frame_file(static_cast<int>(s)).string(), frame.positions.size(),
-                              out.size()));
-                      }
-                      for (std::size_t v = 0; v < out.size(); ++v) {
-                          out[v] = vec3_cast<float>(frame.positions[v]);
-                      }
-                  });
+    io::write_pc2(path, num_points, last_frame + 1, 0.0, [&](std::int64_t s, std::span<Vec3f> out) {
+        const geometry::TriangleMeshD frame =
+            s == 0 ? first : io::read_mesh(frame_file(static_cast<int>(s)));
+        if (frame.positions.size() != out.size()) {
+            throw InvalidInput(fmt::format(
+                "{}: {} vertices, expected {} (frame 0's) for the point cache",
+                frame_file(static_cast<int>(s)).string(), frame.positions.size(), out.size()));
+        }
+        for (std::size_t v = 0; v < out.size(); ++v) {
+            out[v] = vec3_cast<float>(frame.positions[v]);
+        }
+    });
 }
 
 }  // namespace pliant::pipeline

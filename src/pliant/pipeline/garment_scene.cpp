@@ -12,6 +12,8 @@
 #include "pliant/core/vec3.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/output_directory.hpp"
+#include "pliant/pipeline/cloth_run.hpp"
+#include "pliant/pipeline/cloth_scene_file.hpp"
 
 namespace pliant::pipeline {
 namespace {
@@ -61,7 +63,9 @@ std::string body_obj() {
     fmt::format_to(out, "v 0 0 {}\nv 0 0 {}\n", BODY_PROFILE.front()[0], BODY_PROFILE.back()[0]);
     const int bottom = rings * BODY_SEGMENTS + 1;  // 1-based
     const int top = bottom + 1;
-    const auto at = [](int ring, int s) { return ring * BODY_SEGMENTS + (s % BODY_SEGMENTS) + 1; };
+    const auto at = [](int ring, int s) {
+        return ring * BODY_SEGMENTS + (s % BODY_SEGMENTS) + 1;
+    };
     for (int ring = 0; ring + 1 < rings; ++ring) {
         for (int s = 0; s < BODY_SEGMENTS; ++s) {  // outward: counter-clockwise from outside
             fmt::format_to(out, "f {} {} {} {}\n", at(ring, s), at(ring, s + 1),
@@ -87,18 +91,21 @@ struct Skirt {
 Skirt skirt_obj(const SkirtOptions& o) {
     Skirt skirt;
     auto out = std::back_inserter(skirt.obj);
-    fmt::format_to(out, "# pliant's built-in A-line skirt: two panels (metres)\nmtllib skirt.mtl\n"
-                        "o skirt\n");
+    fmt::format_to(out,
+                   "# pliant's built-in A-line skirt: two panels (metres)\nmtllib skirt.mtl\n"
+                   "o skirt\n");
     const int nu = o.quads_around;
     const int nv = o.quads_down;
     const double span = PI - 2.0 * SEAM_GAP_ANGLE;
-    const double slant = std::hypot(SKIRT_TOP_Z - SKIRT_BOTTOM_Z,
-                                    SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS);
+    const double slant =
+        std::hypot(SKIRT_TOP_Z - SKIRT_BOTTOM_Z, SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS);
     // The developed cone: distance from the apex s = r · slant / (r_bottom - r_top), angle
     // ψ = φ · (r_bottom - r_top) / slant.
     const double k = (SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS) / slant;
     const double s_max = SKIRT_BOTTOM_RADIUS / k;
-    const auto index = [&](int panel, int i, int j) { return panel * (nu + 1) * (nv + 1) + j * (nu + 1) + i; };
+    const auto index = [&](int panel, int i, int j) {
+        return panel * (nu + 1) * (nv + 1) + j * (nu + 1) + i;
+    };
     for (int panel = 0; panel < 2; ++panel) {
         const double first = panel == 0 ? PI + SEAM_GAP_ANGLE : SEAM_GAP_ANGLE;
         for (int j = 0; j <= nv; ++j) {
@@ -127,7 +134,8 @@ Skirt skirt_obj(const SkirtOptions& o) {
         for (int j = 0; j < nv; ++j) {
             for (int i = 0; i < nu; ++i) {
                 // Outward normals: (i, j) → (i, j + 1) → (i + 1, j + 1) → (i + 1, j).
-                const std::array<std::array<int, 2>, 4> c{{{i, j}, {i, j + 1}, {i + 1, j + 1}, {i + 1, j}}};
+                const std::array<std::array<int, 2>, 4> c{
+                    {{i, j}, {i, j + 1}, {i + 1, j + 1}, {i + 1, j}}};
                 fmt::format_to(out, "f");
                 for (const auto& [ci, cj] : c) {
                     fmt::format_to(out, " {}/{}", index(panel, ci, cj) + 1, cj * (nu + 1) + ci + 1);
@@ -162,8 +170,9 @@ std::filesystem::path write_skirt_scene(const std::filesystem::path& dir,
     io::make_output_directory(dir);
     const Skirt skirt = skirt_obj(options);
     write_text(dir / "skirt.obj", skirt.obj);
-    write_text(dir / "skirt.mtl", "newmtl cotton_front\nKd 0.70 0.20 0.25\n"
-                                  "newmtl cotton_back\nKd 0.60 0.15 0.20\n");
+    write_text(dir / "skirt.mtl",
+               "newmtl cotton_front\nKd 0.70 0.20 0.25\n"
+               "newmtl cotton_back\nKd 0.60 0.15 0.20\n");
     write_text(dir / "body.obj", body_obj());
     const std::string scene = fmt::format(
         R"({{
@@ -185,6 +194,17 @@ std::filesystem::path write_skirt_scene(const std::filesystem::path& dir,
         int_list(skirt.seam_a), int_list(skirt.seam_b), SEW_SECONDS, options.frames);
     write_text(dir / "scene.json", scene);
     return dir / "scene.json";
+}
+
+nlohmann::ordered_json garment_demo(const std::filesystem::path& dir, int frames,
+                                    const ProgressFn& progress) {
+    const std::filesystem::path path = write_skirt_scene(dir);
+    const cloth::ClothScene scene = read_cloth_scene(path);
+    ClothRunOptions run;
+    run.frames = frames;
+    run.progress = progress;
+    run.checkpoint_every = 0;  // a demo's short runs are not resumed
+    return run_cloth_scene(scene, path.string(), dir, run);
 }
 
 }  // namespace pliant::pipeline

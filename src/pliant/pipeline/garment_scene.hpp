@@ -11,7 +11,11 @@
 // Throws IoError when dir cannot be written.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
+
+#include "pliant/pipeline/progress.hpp"
 
 namespace pliant::pipeline {
 
@@ -24,5 +28,11 @@ struct SkirtOptions {
 
 std::filesystem::path write_skirt_scene(const std::filesystem::path& dir,
                                         const SkirtOptions& options = {});
+
+// The demo's garment step: the skirt scene written to DIR (write_skirt_scene) and run there by
+// run_cloth_scene (frames, preview, cloth.pc2, stats.json) for `frames` frames; returns
+// stats.json's object.
+nlohmann::ordered_json garment_demo(const std::filesystem::path& dir, int frames,
+                                    const ProgressFn& progress);
 
 }  // namespace pliant::pipeline
