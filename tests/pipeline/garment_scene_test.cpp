@@ -31,9 +31,9 @@ TEST(GarmentScene, SkirtIsSewnAndStaysIntersectionFree) {
     const int frames = keep != nullptr ? scene.frames : 12;
     for (int f = 1; f <= frames; ++f) {
         sim.step();
-        ASSERT_EQ(collision::count_intersecting_pairs(sim.solver().positions(),
-                                                      sim.solver().triangles()),
-                  0)
+        ASSERT_EQ(
+            collision::count_intersecting_pairs(sim.solver().positions(), sim.solver().triangles()),
+            0)
             << "frame " << f;
         if (f >= 6) {  // sewn in 0.1 s (2.4 frames)
             EXPECT_LT(seams.max_opening(sim.solver().positions()), 0.002) << "frame " << f;
@@ -46,7 +46,8 @@ TEST(GarmentScene, SkirtIsSewnAndStaysIntersectionFree) {
 TEST(GarmentScene, CheckedInFilesAreTheGenerators) {
     const io::test::TempDir temp;
     write_skirt_scene(temp.path());
-    const std::filesystem::path checked_in = std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes" / "garment";
+    const std::filesystem::path checked_in =
+        std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes" / "garment";
     for (const char* name : {"scene.json", "skirt.obj", "skirt.mtl", "body.obj"}) {
         EXPECT_EQ(io::test::read_bytes(checked_in / name), io::test::read_bytes(temp / name))
             << name;

@@ -78,12 +78,6 @@ public:
             pos = next;
         }
         check_forward_references();
-        if (m_mesh.num_faces() == 0) {
-            throw IoError(
-                fmt::format("{}: expected at least one face ('f'), got {} vertices and "
-                            "no faces",
-                            m_path.string(), m_mesh.positions.size()));
-        }
         return std::move(m_mesh);
     }
 

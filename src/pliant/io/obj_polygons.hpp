@@ -22,8 +22,8 @@
 // Throws IoError "<path>: line <n>: <what is wrong>, expected <x>, got <y>" for a missing or
 // unreadable file, a statement with too few or unparsable numbers, a NaN/Inf value, a face with
 // fewer than 3 corners or repeating a vertex, a malformed corner, an index 0 or outside the
-// elements it refers to, more than 2^31 - 1 elements of a kind, and (without a line) a file with
-// no face.
+// elements it refers to and more than 2^31 - 1 elements of a kind. A file without faces gives a
+// mesh without faces (callers that need a surface check num_faces()).
 //
 // triangulate(mesh, face_of_triangle): triangles in face order; a triangle stays; a quad is split
 // along its shorter diagonal (ties: 0-2); larger polygons by ear clipping in the plane of their

@@ -369,7 +369,7 @@ std::vector<std::int32_t> read_seam_side(ObjectReader& r, const std::string& key
     const Json* side = r.find(key);
     const std::string where = r.key_path(key);
     if (side == nullptr) {
-        r.fail(where, "a required list of vertex indices or {\"from\": i, \"to\": j}", "nothing");
+        r.fail(where, R"(a required list of vertex indices or {"from": i, "to": j})", "nothing");
     }
     std::vector<std::int32_t> out;
     constexpr std::int64_t MAX_INDEX = std::numeric_limits<std::int32_t>::max();
@@ -402,8 +402,7 @@ std::vector<std::int32_t> read_seam_side(ObjectReader& r, const std::string& key
             }
         }
     } else {
-        r.fail(where, "a list of vertex indices or {\"from\": i, \"to\": j}",
-               json_type_name(*side));
+        r.fail(where, R"(a list of vertex indices or {"from": i, "to": j})", json_type_name(*side));
     }
     if (out.empty()) {
         r.fail(where, "at least one vertex", "an empty list");

@@ -53,6 +53,12 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
         if (polygons != nullptr && extension == ".obj") {
             *polygons = io::read_obj_polygons(file);
             mesh = io::triangulate(**polygons);
+            if (mesh.triangles.empty()) {  // as io::read_mesh says it
+                throw InvalidInput(fmt::format(
+                    "{}: expected a mesh with at least one triangle, got {} vertices and no "
+                    "triangles",
+                    file.string(), mesh.positions.size()));
+            }
         } else {
             mesh = io::read_mesh(file);
         }
@@ -199,8 +205,8 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
                 const auto offset = static_cast<std::int32_t>(k * one.positions.size());
                 const auto corner_offset =
                     static_cast<std::int32_t>(garment->corner_vertices.size());
-                for (std::size_t c = 0; c < one.corner_vertices.size(); ++c) {
-                    garment->corner_vertices.push_back(one.corner_vertices[c] + offset);
+                for (const std::int32_t v : one.corner_vertices) {
+                    garment->corner_vertices.push_back(v + offset);
                 }
                 garment->corner_uvs.insert(garment->corner_uvs.end(), one.corner_uvs.begin(),
                                            one.corner_uvs.end());
