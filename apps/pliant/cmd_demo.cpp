@@ -76,6 +76,7 @@
 #include "pliant/pipeline/cloth_scene_file.hpp"
 #include "pliant/pipeline/deform_run.hpp"
 #include "pliant/pipeline/demo.hpp"
+#include "pliant/pipeline/garment_scene.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
 #include "pliant/pipeline/nerf_run.hpp"
 #include "pliant/render/camera.hpp"
@@ -353,6 +354,29 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
                                         {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
                                         {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
                                         {"preview", pipeline::preview_of(stats)}};
+    }
+
+    // Step 4a: a skirt sewn from two flat panels on a turning mannequin (garment_scene.hpp).
+    {
+        const std::filesystem::path garment_dir = dir / "garment";
+        const int frames = options.cloth_frames >= 0 ? options.cloth_frames : 96;
+        say(quiet, fmt::format("a skirt of two panels sewn on a turning mannequin "
+                               "({}/scene.json): {} frames:\n",
+                               garment_dir.string(), frames));
+        const nlohmann::ordered_json stats = pipeline::garment_demo(garment_dir, frames, progress);
+        say(quiet, fmt::format("  {} triangles, {:.1f} ms per frame, {} intersecting triangle "
+                               "pairs in the worst frame; preview {}\n  reproduce: pliant cloth "
+                               "{}/scene.json --out DIR\n\n",
+                               pipeline::thousands(stats["triangles"].get<std::int64_t>()),
+                               stats["mean_ms_per_frame"].get<double>(),
+                               stats["max_intersecting_pairs"].get<std::int64_t>(),
+                               shown(pipeline::preview_of(stats)), garment_dir.string()));
+        cloth_summary["garment"] = {{"dir", garment_dir.string()},
+                                    {"frames", frames},
+                                    {"triangles", stats["triangles"]},
+                                    {"mean_ms_per_frame", stats["mean_ms_per_frame"]},
+                                    {"max_intersecting_pairs", stats["max_intersecting_pairs"]},
+                                    {"preview", pipeline::preview_of(stats)}};
     }
 
     // Step 4b: untangling the drape after it fell through itself without self-collision.

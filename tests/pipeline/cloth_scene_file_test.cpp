@@ -350,5 +350,101 @@ TEST(ClothScene, BrokenDeformingObstaclesAndAttachmentsNameTheKey) {
                  {"pins.attach", "both"});
 }
 
+TEST(ClothScene, MaterialPresetsAndPhysicalStiffness) {
+    const cloth::ClothScene denim = parse(R"({"cloth": {"grid": {}}, "material": "denim"})");
+    EXPECT_EQ(denim.material_preset, "denim");
+    EXPECT_DOUBLE_EQ(denim.material.areal_density, 0.40);
+    ASSERT_TRUE(denim.stretch_stiffness && denim.bend_stiffness);
+    EXPECT_DOUBLE_EQ(*denim.stretch_stiffness, 1.5e4);
+
+    // A preset as a start, with overrides; a compliance replaces the preset's stiffness.
+    const cloth::ClothScene silk = parse(R"({"cloth": {"grid": {}}, "material":
+        {"preset": "silk", "areal_density": 0.08, "bend_compliance": 2, "thickness": 0.003}})");
+    EXPECT_DOUBLE_EQ(silk.material.areal_density, 0.08);
+    EXPECT_DOUBLE_EQ(silk.material.thickness, 0.003);
+    EXPECT_TRUE(silk.stretch_stiffness);
+    EXPECT_FALSE(silk.bend_stiffness);
+    EXPECT_DOUBLE_EQ(silk.material.bend_compliance, 2.0);
+
+    const cloth::ClothScene custom = parse(
+        R"({"cloth": {"grid": {}}, "material": {"stretch_stiffness": 500, "bend_stiffness": 1e-4}})");
+    EXPECT_EQ(custom.material_preset, "");
+    EXPECT_DOUBLE_EQ(*custom.stretch_stiffness, 500.0);
+    EXPECT_DOUBLE_EQ(*custom.bend_stiffness, 1e-4);
+
+    const cloth::ClothScene plain = parse(R"({"cloth": {"grid": {}}})");
+    EXPECT_FALSE(plain.stretch_stiffness || plain.bend_stiffness);
+
+    expect_error(R"({"cloth": {"grid": {}}, "material": "wool"})",
+                 {"material", "a material preset", "\"cotton\"", "got \"wool\""});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"preset": "Denim"}})",
+                 {"material.preset", "got \"Denim\""});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"preset": 3}})",
+                 {"material.preset", "a material preset name", "got an integer"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": 3})",
+                 {"material", "a material preset name or an object", "got an integer"});
+    expect_error(
+        R"({"cloth": {"grid": {}}, "material": {"stretch_stiffness": 1, "stretch_compliance": 1}})",
+        {"material.stretch_stiffness", "either it or stretch_compliance", "got both"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"bend_stiffness": 0}})",
+                 {"material.bend_stiffness", "got 0"});
+    expect_error(R"({"cloth": {"grid": {}}, "material": {"bend_stiffness": "stiff"}})",
+                 {"material.bend_stiffness", "a number"});
+}
+
+TEST(ClothScene, MeshUnitsAndScale) {
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj"}})").mesh_scale, 1.0);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "units": "cm"}})").mesh_scale, 0.01);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "units": "mm"}})").mesh_scale, 0.001);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "units": "m"}})").mesh_scale, 1.0);
+    EXPECT_DOUBLE_EQ(parse(R"({"cloth": {"mesh": "a.obj", "scale": 0.0254}})").mesh_scale, 0.0254);
+    expect_error(R"({"cloth": {"mesh": "a.obj", "units": "inch"}})",
+                 {"cloth.units", R"("cm", "m", "mm")", "got \"inch\""});
+    expect_error(R"({"cloth": {"mesh": "a.obj", "units": "cm", "scale": 2}})",
+                 {"cloth.scale", "either it or \"units\"", "got both"});
+    expect_error(R"({"cloth": {"mesh": "a.obj", "scale": 0}})", {"cloth.scale", "got 0"});
+    expect_error(R"({"cloth": {"mesh": "a.obj", "scale": "big"}})", {"cloth.scale", "a number"});
+    expect_error(R"({"cloth": {"grid": {}, "units": "cm"}})",
+                 {"cloth.units", "a cloth \"mesh\"", "got a grid"});
+}
+
+TEST(ClothScene, SeamsAndPointCache) {
+    const cloth::ClothScene scene = parse(R"({"cloth": {"grid": {}},
+        "seams": [{"a": [0, 1, 2], "b": [9, 8, 7]},
+                  {"a": {"from": 10, "to": 13}, "b": {"from": 23, "to": 20}, "seconds": 0.25}],
+        "output": {"point_cache": "pc2"}})");
+    ASSERT_EQ(scene.seams.size(), 2u);
+    EXPECT_EQ(scene.seams[0].a, (std::vector<std::int32_t>{0, 1, 2}));
+    EXPECT_EQ(scene.seams[0].b, (std::vector<std::int32_t>{9, 8, 7}));
+    EXPECT_DOUBLE_EQ(scene.seams[0].seconds, 1.0);
+    EXPECT_EQ(scene.seams[1].a, (std::vector<std::int32_t>{10, 11, 12, 13}));
+    EXPECT_EQ(scene.seams[1].b, (std::vector<std::int32_t>{23, 22, 21, 20}));
+    EXPECT_DOUBLE_EQ(scene.seams[1].seconds, 0.25);
+    EXPECT_EQ(scene.seams[1].key, "seams[1]");
+    EXPECT_EQ(scene.point_cache, "pc2");
+    EXPECT_EQ(parse(R"({"cloth": {"grid": {}}, "output": {"point_cache": null}})").point_cache, "");
+
+    const std::string head = R"({"cloth": {"grid": {}}, "seams": )";
+    expect_error(head + R"([{"a": [0, 1], "b": [2]}]})",
+                 {"seams[0].b", "as many vertices as a (2)", "got 1"});
+    expect_error(head + R"([{"a": [0]}]})", {"seams[0].b", "a required list", "got nothing"});
+    expect_error(head + R"([{"a": [], "b": []}]})", {"seams[0].a", "at least one vertex"});
+    expect_error(head + R"([{"a": [-1], "b": [2]}]})", {"seams[0].a[0]", "a vertex index", "-1"});
+    expect_error(head + R"([{"a": [0.5], "b": [2]}]})", {"seams[0].a[0]", "0.5"});
+    expect_error(head + R"([{"a": "0-3", "b": [2]}]})",
+                 {"seams[0].a", "a list of vertex indices", "string"});
+    expect_error(head + R"([{"a": {"from": 3}, "b": [2]}]})",
+                 {"seams[0].a", R"(both "from" and "to")"});
+    expect_error(head + R"([{"a": {"from": 0, "to": 2, "step": 1}, "b": [2]}]})",
+                 {"seams[0].a.step", "a known key"});
+    expect_error(head + R"([{"a": {"from": 0, "to": 20000000}, "b": [2]}]})",
+                 {"seams[0].a", "at most 10,000,000"});
+    expect_error(head + R"([{"a": [0], "b": [1], "seconds": 0}]})", {"seams[0].seconds", "got 0"});
+    expect_error(head + R"([{"a": [0], "b": [1], "glue": 1}]})", {"seams[0].glue", "a known key"});
+    expect_error(head + R"({"a": [0], "b": [1]}})", {"seams", "an array"});
+    expect_error(R"({"cloth": {"grid": {}}, "output": {"point_cache": "mdd"}})",
+                 {"output.point_cache", R"(one of "pc2")", "got \"mdd\""});
+}
+
 }  // namespace
 }  // namespace pliant::pipeline

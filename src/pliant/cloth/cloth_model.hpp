@@ -35,6 +35,7 @@
 #include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/motion.hpp"
 #include "pliant/cloth/obstacles.hpp"
+#include "pliant/cloth/seams.hpp"
 #include "pliant/cloth/untangle.hpp"
 #include "pliant/core/bytes.hpp"
 #include "pliant/core/vec3.hpp"
@@ -102,6 +103,14 @@ public:
     void add_attached_pins(std::span<const std::int32_t> vertices, std::size_t mesh_obstacle,
                            double max_distance = std::numeric_limits<double>::infinity());
     void set_gravity(const Vec3d& gravity) { m_gravity = gravity; }  // m/s², default (0, 0, -9.81)
+    // Sews a[k] to b[k] (seams.hpp): pulled together over `seconds` from time 0, from their
+    // current distance down to the material's thickness, then held there. InvalidInput as
+    // Seams::add says.
+    void add_seam(std::span<const std::int32_t> a, std::span<const std::int32_t> b,
+                  double seconds) {
+        m_seams.add(a, b, seconds, m_material.thickness, m_positions);
+    }
+    const Seams& seams() const { return m_seams; }
     // Wind and drag (air.hpp); InvalidInput for negative or non-finite values.
     void set_air(const Air& air);
     // Replaces the velocities (m/s, #V, finite; else InvalidInput).
@@ -249,6 +258,7 @@ private:
     std::vector<MovingObstacle> m_obstacles;
     std::vector<MovingMeshObstacle> m_mesh_obstacles;
     double m_obstacle_step = 0.0;  // m, see obstacle_step()
+    Seams m_seams;
 };
 
 }  // namespace pliant::cloth

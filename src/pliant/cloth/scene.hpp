@@ -53,6 +53,15 @@ struct PinGroup {
     std::optional<PinAttach> attach;
 };
 
+// Panels sewn together (seams.hpp): a[k] to b[k], vertex indices into the cloth (all copies, as
+// pins), pulled together over `seconds` from the start, then held.
+struct SceneSeam {
+    std::string key = "seams[0]";  // where it was in the scene file, for messages
+    std::vector<std::int32_t> a;
+    std::vector<std::int32_t> b;
+    double seconds = 1.0;
+};
+
 // A placement: rotate about x, then y, then z (degrees, right-handed), then translate (metres).
 struct Placement {
     Vec3d rotate_degrees{0.0, 0.0, 0.0};
@@ -83,6 +92,9 @@ struct ClothScene {
     // The cloth: a grid, or a mesh file (OBJ/PLY; relative paths are relative to the scene file).
     std::optional<GridSheet> grid;
     std::filesystem::path mesh;
+    // Metres per unit of the mesh file's coordinates ("units": "m" 1, "cm" 0.01, "mm" 0.001, or
+    // "scale"), applied to the file's positions before the transform below (which is in metres).
+    double mesh_scale = 1.0;
     // Applied to the cloth's vertices in this order: rotate about x, then y, then z (degrees,
     // right-handed), then translate (metres).
     Vec3d rotate_degrees{0.0, 0.0, 0.0};
@@ -93,8 +105,15 @@ struct ClothScene {
     std::vector<Placement> instances;
 
     std::vector<PinGroup> pins;
+    std::vector<SceneSeam> seams;
 
     ClothMaterial material;
+    // The fabric in physical units (material_preset.hpp), when the scene gives it: a preset's name
+    // ("" for none) and the tensile stiffness (N/m) and bending rigidity (N·m) that replace
+    // material's stretch and bend compliances once the mesh is known (pipeline::load_cloth_setup).
+    std::string material_preset;
+    std::optional<double> stretch_stiffness;
+    std::optional<double> bend_stiffness;
     bool self_collision = true;  // cloth/self_collision.hpp
     // The time stepper: XPBD (xpbd_stepper.hpp) when empty, else Vertex Block Descent with these
     // options (vbd_stepper.hpp).
@@ -113,6 +132,8 @@ struct ClothScene {
     int substeps = 40;
 
     std::string frame_format = "obj";  // "obj" or "ply"
+    // "pc2": also DIR/cloth.pc2, every frame in one point cache (io/pc2.hpp); "": none.
+    std::string point_cache;
 };
 
 }  // namespace pliant::cloth

@@ -79,6 +79,11 @@ public:
     void add_moving_pins(std::span<const std::int32_t> vertices, const Motion& motion) {
         m_model.add_moving_pins(vertices, motion);
     }
+    // Sews a[k] to b[k] over `seconds` (ClothModel::add_seam, seams.hpp).
+    void add_seam(std::span<const std::int32_t> a, std::span<const std::int32_t> b,
+                  double seconds) {
+        m_model.add_seam(a, b, seconds);
+    }
     // m/s², default (0, 0, -9.81)
     void set_gravity(const Vec3d& gravity) { m_model.set_gravity(gravity); }
     // Replaces the velocities (m/s, #V, finite; else InvalidInput), e.g. an initial motion or a

@@ -517,6 +517,8 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                 VERTEX_GRAIN);
         }
     }
+    // Seams are hard constraints, projected after the block descent as the XPBD stepper does.
+    model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     solve_ms += watch.elapsed_ms();
     if (m_self_collision) {
         m_self_collision->project(positions, m_start, inverse_masses, material, t_end, h);

@@ -286,6 +286,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
                                ? CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
     project_constraints(model, h);
+    model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     model.move_obstacles(t_end);
     const ObstacleTally contacts = resolve_obstacles(model, h);
     // Vertices left behind a mesh obstacle's surface are found there next substep.

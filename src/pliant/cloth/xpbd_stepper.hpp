@@ -17,6 +17,7 @@
 //      (isometric_bending.hpp), on the others C = θ - θ_rest, θ the dihedral angle
 //      (dihedral.hpp); for each constraint Δλ = -C / (Σ w_k |∇C_k|² + α / h²), x_k += w_k ∇C_k Δλ
 //      (λ starts at 0 every substep: one iteration per substep);
+//   3b. seams (seams.hpp), pair after pair;
 //   4. obstacles, placed at t (ClothModel::move_obstacles): every vertex is pushed `thickness`
 //      away from every obstacle (obstacles.hpp, mesh_obstacle.hpp);
 //   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; the CCD

@@ -34,6 +34,7 @@
 #include "pliant/pipeline/cloth_preview.hpp"
 #include "pliant/pipeline/cloth_setup.hpp"
 #include "pliant/pipeline/cloth_simulation.hpp"
+#include "pliant/pipeline/garment_output.hpp"
 
 namespace pliant::pipeline {
 namespace {
@@ -178,6 +179,14 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
             }
         }
     }
+    for (const cloth::SceneSeam& seam : scene.seams) {
+        w.put_vector(seam.a);
+        w.put_vector(seam.b);
+        w.put(seam.seconds);
+    }
+    if (sim.setup().garment) {  // the frames' faces
+        w.put_vector(sim.setup().garment->corner_vertices);
+    }
     w.put(scene.gravity);
     w.put(scene.air.density);
     w.put(scene.air.drag_coefficient);
@@ -314,9 +323,23 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                                  options.preview_height);
     }
     geometry::TriangleMeshD state{mesh.positions, mesh.triangles};
+    // A garment read as polygons is written with its own faces, UVs, groups and materials
+    // (OBJ frames; PLY frames are triangles), its material libraries beside the frames.
+    const std::optional<io::PolygonMesh>& garment = sim.setup().garment;
+    const bool polygon_frames = garment && scene.frame_format == "obj";
+    if (polygon_frames) {
+        copy_material_libraries(*garment, scene.mesh.parent_path(), frames_dir, scene_name);
+    }
+    const std::filesystem::path point_cache_path = out / "cloth.pc2";
+    std::filesystem::remove(point_cache_path, ec);  // rebuilt when this run completes
     const auto write_frame = [&](int frame) {
-        state.positions.assign(solver.positions().begin(), solver.positions().end());
-        io::write_mesh(frames_dir / frame_file_name(frame, scene.frame_format), state);
+        const std::filesystem::path file = frames_dir / frame_file_name(frame, scene.frame_format);
+        if (polygon_frames) {
+            io::write_obj_polygons(file, *garment, solver.positions());
+        } else {
+            state.positions.assign(solver.positions().begin(), solver.positions().end());
+            io::write_mesh(file, state);
+        }
         if (preview) {
             preview->add_frame(solver.positions(), solver.triangles(), solver.time());
         }
@@ -522,6 +545,17 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         stats["checkpoint_bytes"] = std::filesystem::file_size(checkpoint_path, ec);
     }
     remove_stale_frames(frames_dir, frames_done, scene.frame_format);
+    if (scene.point_cache == "pc2" && !failure && !interrupted && frames_done == frames) {
+        try {
+            write_point_cache_from_frames(point_cache_path, frames_done, [&](int frame) {
+                return frames_dir / frame_file_name(frame, scene.frame_format);
+            });
+            stats["point_cache"] = point_cache_path.string();
+        } catch (const Error& e) {  // the frames are complete: report, keep stats.json
+            log_warning("{}: the point cache was not written: {}", scene_name, e.what());
+            stats["point_cache"] = nullptr;
+        }
+    }
     stats["interrupted"] = interrupted;
     stats["error"] = failure_json;  // null after a complete run
     if (preview) {

@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 
+#include "pliant/cloth/material_preset.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/io/json_text.hpp"
 #include "pliant/io/read_file.hpp"
@@ -229,10 +230,53 @@ private:
 
 constexpr double HUGE_VALUE = 1e12;
 
-void read_material(ObjectReader& r, cloth::ClothMaterial& m) {
+// Starts the scene's fabric from a preset (material_preset.hpp): its density and stiffnesses.
+void apply_preset(ObjectReader& r, const std::string& key, const std::string& name,
+                  cloth::ClothScene& scene) {
+    const std::optional<cloth::FabricProperties> fabric = cloth::fabric_preset(name);
+    if (!fabric) {
+        std::string list;
+        for (const std::string& n : cloth::fabric_preset_names()) {
+            list += fmt::format("{}\"{}\"", list.empty() ? "" : ", ", n);
+        }
+        r.fail(key, fmt::format("a material preset ({})", list), fmt::format("\"{}\"", name));
+    }
+    scene.material_preset = name;
+    scene.material.areal_density = fabric->areal_density;
+    scene.stretch_stiffness = fabric->stretch_stiffness;
+    scene.bend_stiffness = fabric->bend_stiffness;
+}
+
+// A stiffness in physical units, or the compliance it replaces (not both).
+void read_stiffness(ObjectReader& r, const std::string& stiffness_key,
+                    const std::string& compliance_key, std::optional<double>& stiffness,
+                    double& compliance) {
+    if (r.has(stiffness_key) && r.has(compliance_key)) {
+        r.fail(r.key_path(stiffness_key), fmt::format("either it or {}", compliance_key), "both");
+    }
+    if (r.has(compliance_key)) {
+        compliance = r.number(compliance_key, compliance, 0.0, HUGE_VALUE);
+        stiffness.reset();
+    }
+    if (r.has(stiffness_key)) {
+        stiffness = r.number(stiffness_key, 0.0, 1e-12, HUGE_VALUE);
+    }
+    r.find(stiffness_key);
+    r.find(compliance_key);
+}
+
+void read_material(ObjectReader& r, cloth::ClothScene& scene) {
+    cloth::ClothMaterial& m = scene.material;
+    if (const Json* preset = r.find("preset")) {
+        if (!preset->is_string()) {
+            r.fail(r.key_path("preset"), "a material preset name", json_type_name(*preset));
+        }
+        apply_preset(r, r.key_path("preset"), preset->get<std::string>(), scene);
+    }
     m.areal_density = r.number("areal_density", m.areal_density, 1e-9, HUGE_VALUE);
-    m.stretch_compliance = r.number("stretch_compliance", m.stretch_compliance, 0.0, HUGE_VALUE);
-    m.bend_compliance = r.number("bend_compliance", m.bend_compliance, 0.0, HUGE_VALUE);
+    read_stiffness(r, "stretch_stiffness", "stretch_compliance", scene.stretch_stiffness,
+                   m.stretch_compliance);
+    read_stiffness(r, "bend_stiffness", "bend_compliance", scene.bend_stiffness, m.bend_compliance);
     const bool dihedral = m.bending == cloth::BendingModel::dihedral;
     m.bending = r.text("bending", dihedral ? "dihedral" : "isometric", {"dihedral", "isometric"}) ==
                         "dihedral"
@@ -337,6 +381,64 @@ cloth::PinGroup read_pin_group(ObjectReader& p) {
                R"(either "attach" or "motion" (attached pins follow the obstacle))", "both");
     }
     return group;
+}
+
+// One side of a seam: vertex indices, or {"from": i, "to": j} (i, i ± 1, …, j inclusive).
+std::vector<std::int32_t> read_seam_side(ObjectReader& r, const std::string& key) {
+    const Json* side = r.find(key);
+    const std::string where = r.key_path(key);
+    if (side == nullptr) {
+        r.fail(where, R"(a required list of vertex indices or {"from": i, "to": j})", "nothing");
+    }
+    std::vector<std::int32_t> out;
+    constexpr std::int64_t MAX_INDEX = std::numeric_limits<std::int32_t>::max();
+    if (side->is_array()) {
+        for (std::size_t k = 0; k < side->size(); ++k) {
+            const std::optional<std::int64_t> v = integer_in((*side)[k], 0, MAX_INDEX);
+            if (!v) {
+                r.fail(fmt::format("{}[{}]", where, k), "a vertex index (an integer >= 0)",
+                       (*side)[k].dump());
+            }
+            out.push_back(static_cast<std::int32_t>(*v));
+        }
+    } else if (side->is_object()) {
+        ObjectReader range(*side, r.name(), where);
+        const std::int64_t from = range.integer("from", -1, 0, std::numeric_limits<int>::max());
+        const std::int64_t to = range.integer("to", -1, 0, std::numeric_limits<int>::max());
+        if (!range.has("from") || !range.has("to")) {
+            r.fail(where, R"(both "from" and "to")", range.has("from") ? "only from" : "not from");
+        }
+        range.finish();
+        if (std::abs(to - from) >= 10'000'000) {
+            r.fail(where, "a range of at most 10,000,000 vertices",
+                   fmt::format("{} to {}", from, to));
+        }
+        const std::int64_t step = to >= from ? 1 : -1;
+        for (std::int64_t v = from;; v += step) {
+            out.push_back(static_cast<std::int32_t>(v));
+            if (v == to) {
+                break;
+            }
+        }
+    } else {
+        r.fail(where, R"(a list of vertex indices or {"from": i, "to": j})", json_type_name(*side));
+    }
+    if (out.empty()) {
+        r.fail(where, "at least one vertex", "an empty list");
+    }
+    return out;
+}
+
+cloth::SceneSeam read_seam(ObjectReader& r) {
+    cloth::SceneSeam seam;
+    seam.a = read_seam_side(r, "a");
+    seam.b = read_seam_side(r, "b");
+    if (seam.a.size() != seam.b.size()) {
+        r.fail(r.key_path("b"), fmt::format("as many vertices as a ({})", seam.a.size()),
+               fmt::format("{}", seam.b.size()));
+    }
+    seam.seconds = r.number("seconds", seam.seconds, 1e-6, 1e6);
+    return seam;
 }
 
 cloth::Air read_air(ObjectReader& r) {
@@ -554,6 +656,20 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             const std::filesystem::path path(mesh->get<std::string>());
             scene.mesh = path.is_absolute() ? path : base / path;
         }
+        const bool has_units = c.has("units");
+        const std::string units = c.text("units", "m", {"m", "cm", "mm"});
+        scene.mesh_scale = units == "cm" ? 0.01 : units == "mm" ? 0.001 : 1.0;
+        if (c.has("scale")) {
+            if (has_units) {
+                c.fail(c.key_path("scale"), R"(either it or "units")", "both");
+            }
+            scene.mesh_scale = c.number("scale", 1.0, 1e-9, 1e9);
+        }
+        c.find("scale");
+        if ((has_units || c.has("scale")) && mesh == nullptr) {
+            c.fail(c.key_path(has_units ? "units" : "scale"),
+                   R"(a cloth "mesh" (grids are sized in metres))", "a grid");
+        }
         if (has_grid == (mesh != nullptr)) {
             c.fail("cloth", R"(exactly one of "grid" and "mesh")", has_grid ? "both" : "neither");
         }
@@ -587,7 +703,26 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             group.finish();
         }
     }
-    root.object("material", [&](ObjectReader& m) { read_material(m, scene.material); });
+    if (const Json* seams = root.array("seams")) {
+        for (std::size_t k = 0; k < seams->size(); ++k) {
+            ObjectReader seam((*seams)[k], file, fmt::format("seams[{}]", k));
+            scene.seams.push_back(read_seam(seam));
+            scene.seams.back().key = fmt::format("seams[{}]", k);
+            seam.finish();
+        }
+    }
+    // "material": a preset's name, or an object (optionally starting from a "preset").
+    if (const Json* material = root.find("material");
+        material != nullptr && material->is_string()) {
+        apply_preset(root, "material", material->get<std::string>(), scene);
+    } else if (material != nullptr) {
+        if (!material->is_object()) {
+            root.fail("material", "a material preset name or an object", json_type_name(*material));
+        }
+        ObjectReader m(*material, file, "material");
+        read_material(m, scene);
+        m.finish();
+    }
     if (const Json* obstacles = root.array("obstacles")) {
         for (std::size_t k = 0; k < obstacles->size(); ++k) {
             scene.obstacles.push_back(
@@ -627,6 +762,9 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
     scene.substeps = root.integer("substeps", scene.substeps, 1, 100'000);
     root.object("output", [&](ObjectReader& o) {
         scene.frame_format = o.text("format", scene.frame_format, {"obj", "ply"});
+        if (const Json* cache = o.find("point_cache"); cache != nullptr && !cache->is_null()) {
+            scene.point_cache = o.text("point_cache", "", {"pc2"});
+        }
     });
     root.finish();
     return scene;

@@ -3,16 +3,19 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <tuple>
 #include <utility>
 #include <variant>
 
+#include "pliant/cloth/material_preset.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
@@ -41,11 +44,27 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
 
 // A mesh file's triangles, or an error naming the scene key when it has none or a coordinate
 // beyond pipeline::MAX_SCENE_COORDINATE (a run would end as "diverged" at its first frame).
+// With `polygons`, an OBJ file is read as polygons (kept there) and triangulated.
 geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
-                                           const std::string& scene_name, const std::string& key) {
+                                           const std::string& scene_name, const std::string& key,
+                                           std::optional<io::PolygonMesh>* polygons = nullptr) {
     geometry::TriangleMeshD mesh;
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     try {
-        mesh = io::read_mesh(file);
+        if (polygons != nullptr && extension == ".obj") {
+            *polygons = io::read_obj_polygons(file);
+            mesh = io::triangulate(**polygons);
+            if (mesh.triangles.empty()) {  // as io::read_mesh says it
+                throw InvalidInput(fmt::format(
+                    "{}: expected a mesh with at least one triangle, got {} vertices and no "
+                    "triangles",
+                    file.string(), mesh.positions.size()));
+            }
+        } else {
+            mesh = io::read_mesh(file);
+        }
     } catch (const InvalidInput& e) {  // a file without triangles: say which key named it
         throw InvalidInput(fmt::format("{}: {}: {}", scene_name, key, e.what()));
     }
@@ -75,9 +94,61 @@ std::int64_t vertices_on_others(std::span<const Vec3d> positions) {
     return doubled;
 }
 
+// Warns when the cloth's size (the diagonal of its box) is implausible for a garment or sheet,
+// or its mean edge length is far from the thickness (units or scale wrong, or a thickness that
+// either swallows the triangles or lets them pass through each other between substeps).
+void warn_implausible_size(const cloth::ClothScene& scene, const std::string& scene_name,
+                           const geometry::TriangleMeshD& mesh) {
+    AABBd box;
+    for (const Vec3d& p : mesh.positions) {
+        box.extend(p);
+    }
+    const double size = norm(box.hi - box.lo);
+    const std::string what =
+        scene.grid ? std::string("cloth.grid") : fmt::format("cloth.mesh {}", scene.mesh.string());
+    const std::string hint = scene.grid ? "check cloth.grid.size"
+                                        : fmt::format(
+                                              "check the file's units (cloth.units or "
+                                              "cloth.scale; read as {:g} m per unit)",
+                                              scene.mesh_scale);
+    if (size > MAX_PLAUSIBLE_CLOTH_SIZE || size < MIN_PLAUSIBLE_CLOTH_SIZE) {
+        log_warning(
+            "{}: {} is {:.4g} m across, implausible for cloth (expected {:g} m to {:g} m): "
+            "{}",
+            scene_name, what, size, MIN_PLAUSIBLE_CLOTH_SIZE, MAX_PLAUSIBLE_CLOTH_SIZE, hint);
+    }
+    double sum = 0.0;
+    for (const geometry::Triangle& t : mesh.triangles) {
+        for (int k = 0; k < 3; ++k) {
+            sum += norm(
+                mesh.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])] -
+                mesh.positions[static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)])]);
+        }
+    }
+    const double edge = mesh.triangles.empty() ? 0.0 : sum / (3.0 * mesh.triangles.size());
+    const double thickness = scene.material.thickness;
+    if (edge > 0.0 && thickness > 0.0 &&
+        (thickness > edge * MAX_THICKNESS_PER_EDGE || thickness < edge * MIN_THICKNESS_PER_EDGE)) {
+        log_warning(
+            "{}: {}: the thickness {:g} m is {:.3g} times the mean edge length {:.4g} m (expected "
+            "{:g} to {:g}): {}; {}",
+            scene_name, what, thickness, thickness / edge, edge, MIN_THICKNESS_PER_EDGE,
+            MAX_THICKNESS_PER_EDGE,
+            thickness > edge * MAX_THICKNESS_PER_EDGE
+                ? "every vertex is in contact with its neighbours' triangles and self-collision "
+                  "holds the cloth stiff"
+                : "cloth moving more than the thickness per substep depends on the CCD fail-safe "
+                  "alone",
+            scene.grid
+                ? std::string("check material.thickness and cloth.grid")
+                : "check material.thickness and " + hint.substr(std::string("check ").size()));
+    }
+}
+
 // The cloth as simulated: the grid or mesh, transformed, then copied once per instance.
 geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::string& scene_name,
-                                   std::uint64_t max_memory_bytes) {
+                                   std::uint64_t max_memory_bytes,
+                                   std::optional<io::PolygonMesh>& garment) {
     geometry::TriangleMeshD mesh;
     const std::uint64_t copies_of_the_cloth = std::max<std::size_t>(scene.instances.size(), 1);
     const std::string instances =
@@ -94,7 +165,10 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
             scene.grid->quads[0], scene.grid->quads[1], static_cast<float>(scene.grid->size[0]),
             static_cast<float>(scene.grid->size[1])));
     } else {
-        mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh");
+        mesh = read_nonempty_mesh(scene.mesh, scene_name, "cloth.mesh", &garment);
+        for (Vec3d& p : mesh.positions) {
+            p = p * scene.mesh_scale;
+        }
         require_cloth_fits_in_memory(
             fmt::format("{}: cloth.mesh {}{}", scene_name, scene.mesh.string(), instances),
             mesh.triangles.size() * copies_of_the_cloth, scene.self_collision, max_memory_bytes);
@@ -123,8 +197,33 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
                 scene_name, doubled, mesh.positions.size());
         }
     }
+    warn_implausible_size(scene, scene_name, mesh);
     const cloth::Placement transform{scene.rotate_degrees, scene.translate};
     place(mesh.positions, transform);
+    if (garment) {
+        garment->positions = mesh.positions;
+        if (!scene.instances.empty()) {  // the faces once per copy (vertex offsets as below)
+            const io::PolygonMesh one = *garment;
+            for (std::size_t k = 1; k < scene.instances.size(); ++k) {
+                const auto offset = static_cast<std::int32_t>(k * one.positions.size());
+                const auto corner_offset =
+                    static_cast<std::int32_t>(garment->corner_vertices.size());
+                for (const std::int32_t v : one.corner_vertices) {
+                    garment->corner_vertices.push_back(v + offset);
+                }
+                garment->corner_uvs.insert(garment->corner_uvs.end(), one.corner_uvs.begin(),
+                                           one.corner_uvs.end());
+                garment->corner_normals.insert(garment->corner_normals.end(),
+                                               one.corner_normals.begin(),
+                                               one.corner_normals.end());
+                for (std::size_t f = 1; f < one.face_starts.size(); ++f) {
+                    garment->face_starts.push_back(one.face_starts[f] + corner_offset);
+                }
+                garment->face_tags.insert(garment->face_tags.end(), one.face_tags.begin(),
+                                          one.face_tags.end());
+            }
+        }
+    }
     if (scene.instances.empty()) {
         return mesh;
     }
@@ -363,7 +462,39 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
                             std::uint64_t max_memory_bytes) {
     ClothSetup setup;
     setup.mesh = load_cloth(scene, scene_name,
-                            max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes());
+                            max_memory_bytes > 0 ? max_memory_bytes : available_memory_bytes(),
+                            setup.garment);
+    if (setup.garment) {
+        setup.garment->positions = setup.mesh.positions;
+    }
+    for (const cloth::SceneSeam& seam : scene.seams) {
+        for (const auto& [side, vertices] : {std::pair{"a", &seam.a}, std::pair{"b", &seam.b}}) {
+            for (std::size_t k = 0; k < vertices->size(); ++k) {
+                const std::int32_t v = (*vertices)[k];
+                if (static_cast<std::size_t>(v) >= setup.mesh.positions.size()) {
+                    throw InvalidInput(fmt::format(
+                        "{}: {}.{}[{}]: vertex {} out of range, expected an index in [0, {}) "
+                        "(the cloth's vertices{})",
+                        scene_name, seam.key, side, k, v, setup.mesh.positions.size(),
+                        scene.instances.empty() ? "" : ", all instances"));
+                }
+                if (v == (side[0] == 'a' ? seam.b : seam.a)[k]) {
+                    throw InvalidInput(fmt::format("{}: {}: pair {}: vertex {} is sewn to itself",
+                                                   scene_name, seam.key, k, v));
+                }
+            }
+        }
+    }
+    // Physical stiffnesses become compliances for this mesh (material_preset.hpp).
+    setup.material = scene.material;
+    if (scene.stretch_stiffness) {
+        setup.material.stretch_compliance = cloth::stretch_compliance_for(
+            *scene.stretch_stiffness, setup.mesh.positions, setup.mesh.triangles);
+    }
+    if (scene.bend_stiffness) {
+        setup.material.bend_compliance = cloth::bend_compliance_for(
+            *scene.bend_stiffness, setup.mesh.positions, setup.mesh.triangles);
+    }
     for (const cloth::PinGroup& group : scene.pins) {
         setup.pins.push_back(pinned_vertices(group, setup.mesh, scene_name));
     }
@@ -502,7 +633,7 @@ nlohmann::ordered_json untangle_report(const StartState& start) {
 
 std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                                                 const ClothSetup& setup) {
-    auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, scene.material);
+    auto solver = std::make_unique<cloth::ClothSolver>(setup.mesh, setup.material);
     for (std::size_t g = 0; g < scene.pins.size(); ++g) {
         if (!scene.pins[g].attach) {
             solver->add_moving_pins(setup.pins[g], scene.pins[g].motion);
@@ -533,6 +664,9 @@ std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
                 throw InvalidInput(fmt::format("{}.attach: {}", scene.pins[g].key, e.what()));
             }
         }
+    }
+    for (const cloth::SceneSeam& seam : scene.seams) {
+        solver->add_seam(seam.a, seam.b, seam.seconds);
     }
     solver->set_gravity(scene.gravity);
     solver->set_air(scene.air);

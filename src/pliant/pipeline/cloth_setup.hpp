@@ -27,6 +27,7 @@
 #include "pliant/cloth/untangle.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
+#include "pliant/io/obj_polygons.hpp"
 
 namespace pliant::pipeline {
 
@@ -40,8 +41,21 @@ struct ObstacleShape {
     bool bounded = true;  // false for planes: left out of the camera's framing
 };
 
+// A cloth whose box diagonal lies outside [MIN, MAX] metres gets a warning (units or scale
+// wrong), and so does a thickness outside [MIN, MAX] times the mean edge length.
+inline constexpr double MIN_PLAUSIBLE_CLOTH_SIZE = 0.01;
+inline constexpr double MAX_PLAUSIBLE_CLOTH_SIZE = 10.0;
+inline constexpr double MIN_THICKNESS_PER_EDGE = 0.01;
+inline constexpr double MAX_THICKNESS_PER_EDGE = 0.5;
+
 struct ClothSetup {
-    geometry::TriangleMeshD mesh;                 // the cloth at the start, all instances
+    geometry::TriangleMeshD mesh;  // the cloth at the start, all instances
+    // A cloth read from an OBJ file as its polygons (io/obj_polygons.hpp), all instances, its
+    // vertices those of `mesh`: frames are written with its faces, UVs, groups and materials.
+    std::optional<io::PolygonMesh> garment;
+    // The scene's material with its physical stiffnesses (scene.stretch_stiffness,
+    // scene.bend_stiffness) turned into compliances for this mesh.
+    cloth::ClothMaterial material;
     std::vector<std::vector<std::int32_t>> pins;  // per scene pin group, its vertices
     // Per scene obstacle: the mesh obstacle (null for analytic shapes), shared between solvers.
     std::vector<std::shared_ptr<const cloth::MeshObstacle>> mesh_obstacles;

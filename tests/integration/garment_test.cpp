@@ -1,0 +1,222 @@
+// `pliant cloth` on a garment: an OBJ in centimetres with quads, UVs, normals, groups and a
+// material library, two panels sewn together, a fabric preset; frames keep the input's faces,
+// the material library is copied beside them, and cloth.pc2 holds every frame.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "run_cli.hpp"
+
+namespace pliant::test {
+namespace {
+
+void write(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream(path) << text;
+}
+
+// Two panels of N × N quads, 20 cm square, 5 cm apart along x, in centimetres; UVs per vertex,
+// one normal, groups "left"/"right", materials "red"/"blue".
+constexpr int N = 4;
+std::string garment_obj() {
+    std::ostringstream obj;
+    obj << "mtllib skirt.mtl\no skirt\n";
+    for (int panel = 0; panel < 2; ++panel) {
+        for (int j = 0; j <= N; ++j) {
+            for (int i = 0; i <= N; ++i) {
+                obj << "v " << (panel * 25.0 + i * 20.0 / N) << " " << (j * 20.0 / N) << " 50\n";
+            }
+        }
+    }
+    for (int j = 0; j <= N; ++j) {
+        for (int i = 0; i <= N; ++i) {
+            obj << "vt " << static_cast<double>(i) / N << " " << static_cast<double>(j) / N << "\n";
+        }
+    }
+    obj << "vn 0 0 1\n";
+    for (int panel = 0; panel < 2; ++panel) {
+        obj << (panel == 0 ? "g left\nusemtl red\n" : "g right\nusemtl blue\n");
+        const int base = panel * (N + 1) * (N + 1);
+        for (int j = 0; j < N; ++j) {
+            for (int i = 0; i < N; ++i) {
+                const int c[4] = {j * (N + 1) + i, j * (N + 1) + i + 1, (j + 1) * (N + 1) + i + 1,
+                                  (j + 1) * (N + 1) + i};
+                obj << "f";
+                for (const int k : c) {
+                    obj << " " << base + k + 1 << "/" << k + 1 << "/1";
+                }
+                obj << "\n";
+            }
+        }
+    }
+    return obj.str();
+}
+
+// The `f` (corners as v/vt: the normals are recomputed per vertex), `g`, `o`, `usemtl` and
+// `mtllib` lines of an OBJ, in order.
+std::vector<std::string> structure(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("f ", 0) == 0) {
+            std::istringstream corners(line.substr(2));
+            std::string face = "f";
+            for (std::string c; corners >> c;) {
+                face.push_back(' ');
+                face.append(c, 0, c.rfind('/'));
+            }
+            lines.push_back(face);
+        } else if (line.rfind("g ", 0) == 0 || line.rfind("o ", 0) == 0 ||
+                   line.rfind("usemtl ", 0) == 0 || line.rfind("mtllib ", 0) == 0) {
+            lines.push_back(line);
+        }
+    }
+    return lines;
+}
+
+std::vector<float> v_lines(const std::string& text) {
+    std::vector<float> out;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("v ", 0) == 0) {
+            std::istringstream v(line.substr(2));
+            double x = 0;
+            double y = 0;
+            double z = 0;
+            v >> x >> y >> z;
+            out.insert(out.end(),
+                       {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+        }
+    }
+    return out;
+}
+
+TEST(GarmentCommand, FramesKeepTheGarmentAndThePointCacheHoldsThem) {
+    ScratchDir scratch;
+    write(scratch / "skirt.obj", garment_obj());
+    write(scratch / "skirt.mtl", "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\n");
+    // The left panel's right column sewn to the right panel's left column.
+    std::string a;
+    std::string b;
+    for (int j = 0; j <= N; ++j) {
+        if (j > 0) {
+            a.append(", ");
+            b.append(", ");
+        }
+        a.append(std::to_string(j * (N + 1) + N));
+        b.append(std::to_string((N + 1) * (N + 1) + j * (N + 1)));
+    }
+    write(scratch / "scene.json", R"({
+        "cloth": {"mesh": "skirt.obj", "units": "cm"},
+        "material": "cotton",
+        "seams": [{"a": [)" + a + R"(], "b": [)" +
+                                      b + R"(], "seconds": 0.2}],
+        "pins": {"vertices": [0, 20]},
+        "fps": 24, "frames": 6, "substeps": 20,
+        "output": {"point_cache": "pc2"}
+    })");
+    const CliResult r = run_cli("--json cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --no-preview",
+                                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;  // units given: no warning
+    const nlohmann::json stats = nlohmann::json::parse(r.out);
+    EXPECT_EQ(stats.at("max_intersecting_pairs"), 0);
+
+    const std::string input = read_text(scratch / "skirt.obj");
+    const std::filesystem::path frames = scratch / "out" / "frames";
+    const std::string first = read_text(frames / "frame_0000.obj");
+    const std::string last = read_text(frames / "frame_0006.obj");
+    EXPECT_EQ(structure(first), structure(input));
+    EXPECT_EQ(structure(last), structure(input));
+    EXPECT_NE(last.find("\nvt 0.25 0.5\n"), std::string::npos);
+    EXPECT_NE(last.find("\nvn "), std::string::npos);
+    EXPECT_EQ(read_text(frames / "skirt.mtl"), read_text(scratch / "skirt.mtl"));
+    // Frame 0 in metres: centimetres scaled.
+    const std::vector<float> start = v_lines(first);
+    EXPECT_FLOAT_EQ(start[2], 0.5F);
+    EXPECT_FLOAT_EQ(start[3 * N], 0.2F);
+
+    // The seam pulled the panels together (5 cm apart at the start).
+    const std::vector<float> end = v_lines(last);
+    const auto gap = [&](const std::vector<float>& p, int j) {
+        const int va = j * (N + 1) + N;
+        const int vb = (N + 1) * (N + 1) + j * (N + 1);
+        const float dx = p[3 * vb] - p[3 * va];
+        const float dy = p[3 * vb + 1] - p[3 * va + 1];
+        const float dz = p[3 * vb + 2] - p[3 * va + 2];
+        return std::sqrt(dx * dx + dy * dy + dz * dz);
+    };
+    EXPECT_NEAR(gap(start, 2), 0.05F, 1e-6F);
+    EXPECT_LT(gap(end, 2), 0.01F);
+
+    // cloth.pc2: header, then 7 samples; the last is frame 6 as float.
+    ASSERT_EQ(stats.at("point_cache"), (scratch / "out" / "cloth.pc2").string());
+    const std::string pc2 = read_text(scratch / "out" / "cloth.pc2");
+    const std::size_t points = 2 * (N + 1) * (N + 1);
+    ASSERT_EQ(pc2.size(), 32 + 7 * points * 12);
+    EXPECT_EQ(pc2.substr(0, 12), std::string("POINTCACHE2\0", 12));
+    std::int32_t header[2];
+    std::memcpy(header, pc2.data() + 12, 8);
+    EXPECT_EQ(header[0], 1);
+    EXPECT_EQ(header[1], static_cast<std::int32_t>(points));
+    float rates[2];
+    std::memcpy(rates, pc2.data() + 20, 8);
+    EXPECT_EQ(rates[0], 0.0F);
+    EXPECT_EQ(rates[1], 1.0F);
+    std::int32_t samples = 0;
+    std::memcpy(&samples, pc2.data() + 28, 4);
+    EXPECT_EQ(samples, 7);
+    std::vector<float> cached(3 * points);
+    std::memcpy(cached.data(), pc2.data() + 32 + 6 * points * 12, points * 12);
+    EXPECT_EQ(cached, end);
+}
+
+TEST(GarmentCommand, CentimetresWithoutUnitsWarn) {
+    ScratchDir scratch;
+    write(scratch / "skirt.obj", garment_obj());
+    write(scratch / "scene.json", R"({"cloth": {"mesh": "skirt.obj"}, "frames": 0})");
+    const CliResult r = run_cli("cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --no-preview",
+                                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("implausible for cloth"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("cloth.units"), std::string::npos) << r.err;
+    // The material library is missing: a warning, the frames keep the mtllib line.
+    EXPECT_NE(r.err.find("skirt.mtl is not copied"), std::string::npos) << r.err;
+    EXPECT_NE(read_text(scratch / "out" / "frames" / "frame_0000.obj").find("mtllib skirt.mtl"),
+              std::string::npos);
+}
+
+// The built-in skirt (scenes/garment): bitwise the same frames and point cache for 1 and 2
+// threads, and after a resume.
+TEST(GarmentCommand, SkirtIsDeterministicAndResumes) {
+    ScratchDir scratch;
+    const std::filesystem::path scene =
+        std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes" / "garment" / "scene.json";
+    const auto run = [&](const std::string& options) {
+        const CliResult r = run_cli("cloth " + quoted(scene) + " --no-preview " + options, scratch);
+        EXPECT_EQ(r.exit_code, 0) << r.err;
+    };
+    run("--threads 1 --frames 4 --out " + quoted(scratch / "one"));
+    run("--threads 2 --frames 4 --out " + quoted(scratch / "two"));
+    run("--frames 2 --checkpoint-every 2 --out " + quoted(scratch / "resumed"));
+    run("--frames 4 --resume --out " + quoted(scratch / "resumed"));
+    const std::string last = read_text(scratch / "one" / "frames" / "frame_0004.obj");
+    ASSERT_FALSE(last.empty());
+    EXPECT_EQ(read_text(scratch / "two" / "frames" / "frame_0004.obj"), last);
+    EXPECT_EQ(read_text(scratch / "resumed" / "frames" / "frame_0004.obj"), last);
+    const std::string cache = read_text(scratch / "one" / "cloth.pc2");
+    EXPECT_EQ(cache.size(), 32U + 5U * 1250U * 12U);
+    EXPECT_EQ(read_text(scratch / "two" / "cloth.pc2"), cache);
+    EXPECT_EQ(read_text(scratch / "resumed" / "cloth.pc2"), cache);
+}
+
+}  // namespace
+}  // namespace pliant::test
