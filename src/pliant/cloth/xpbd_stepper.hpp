@@ -87,7 +87,7 @@ struct ClothStepStats {
     double obstacle_max_step = 0.0;
     std::int64_t obstacles_lagging = 0;
     double obstacle_max_lag = 0.0;
-    std::int64_t solver_sweeps = 0;  // VBD (vbd_stepper.hpp): sweeps over the vertices; else 0
+    std::int64_t solver_sweeps = 0;   // VBD (vbd_stepper.hpp): sweeps over the vertices; else 0
     bool has_self_collision = false;  // the fields below are filled
     SelfCollisionStats self;          // self_collision.hpp
 };

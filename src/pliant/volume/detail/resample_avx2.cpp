@@ -210,6 +210,12 @@ PLIANT_AVX2_INLINE __m256 widen_pair(__m128i a, __m128i b) {
     return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_unpacklo_epi32(a, b)));
 }
 
+// The voxels at a and b (any two) as 8 floats: a's channels, then b's.
+PLIANT_AVX2_INLINE __m256 corner_pair_rgba8(const std::uint8_t* src, std::int32_t a,
+                                            std::int32_t b) {
+    return widen_pair(voxel_rgba8(src, a), voxel_rgba8(src, b));
+}
+
 // The corners (x, x + 1) of one row for the two voxels at a and b (interior: adjacent in
 // memory), as {a's corner x, b's corner x} and {a's corner x + 1, b's corner x + 1}.
 PLIANT_AVX2_INLINE void row_pair_rgba8(const std::uint8_t* src, std::int32_t a, std::int32_t b,
@@ -311,23 +317,21 @@ PLIANT_AVX2_INLINE int sample_rgba8(const std::uint8_t* src, const std::int64_t 
                 row_pair_rgba8(src, a + nxy, b + nxy, v001, v101);
                 row_pair_rgba8(src, a + nx + nxy, b + nx + nxy, v011, v111);
             } else {
-                auto corner = [&](std::int32_t oa, std::int32_t ob) {
-                    return widen_pair(voxel_rgba8(src, a + oa), voxel_rgba8(src, b + ob));
-                };
+                // (No lambda here: a lambda does not inherit the function's AVX2 target.)
                 const std::int32_t xa = dx[l];
                 const std::int32_t xb = dx[l + 1];
                 const std::int32_t ya = dy[l];
                 const std::int32_t yb = dy[l + 1];
                 const std::int32_t za = dz[l];
                 const std::int32_t zb = dz[l + 1];
-                v000 = corner(0, 0);
-                v100 = corner(xa, xb);
-                v010 = corner(ya, yb);
-                v110 = corner(ya + xa, yb + xb);
-                v001 = corner(za, zb);
-                v101 = corner(za + xa, zb + xb);
-                v011 = corner(za + ya, zb + yb);
-                v111 = corner(za + ya + xa, zb + yb + xb);
+                v000 = corner_pair_rgba8(src, a, b);
+                v100 = corner_pair_rgba8(src, a + xa, b + xb);
+                v010 = corner_pair_rgba8(src, a + ya, b + yb);
+                v110 = corner_pair_rgba8(src, a + ya + xa, b + yb + xb);
+                v001 = corner_pair_rgba8(src, a + za, b + zb);
+                v101 = corner_pair_rgba8(src, a + za + xa, b + zb + xb);
+                v011 = corner_pair_rgba8(src, a + za + ya, b + zb + yb);
+                v111 = corner_pair_rgba8(src, a + za + ya + xa, b + zb + yb + xb);
             }
             const __m256 fx = spread_pair(ax.fraction, l);
             const __m256 fy = spread_pair(ay.fraction, l);
