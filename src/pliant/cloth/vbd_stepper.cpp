@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pliant/cloth/detail/stepper_checks.hpp"
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/cloth/isometric_bending.hpp"
 #include "pliant/core/error.hpp"
@@ -16,11 +17,6 @@ namespace pliant::cloth {
 namespace {
 
 constexpr std::int64_t VERTEX_GRAIN = 1024;
-// As XPBDStepper: self-collision needs a thickness of at most this many median edge lengths.
-constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
-// As XPBDStepper: with self-collision a moving pin moves at most this fraction of the thickness
-// per substep toward its target, so that it does not sweep through the cloth.
-constexpr double CATCH_UP_IN_THICKNESS = 0.5;
 // Stiffnesses of rigid (zero-compliance) springs and hinges: 1 / this compliance.
 constexpr double MIN_COMPLIANCE = 1e-12;
 
@@ -207,22 +203,7 @@ void VBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
     if (!enabled) {
         m_self_collision.reset();
     } else if (!m_self_collision) {
-        const double thickness = model.material().thickness;
-        if (!m_rest_lengths.empty()) {
-            std::vector<double> lengths = m_rest_lengths;
-            const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-            std::nth_element(lengths.begin(), middle, lengths.end());
-            if (thickness > MAX_THICKNESS_IN_EDGES * *middle) {
-                throw InvalidInput(fmt::format(
-                    "cloth: self-collision: material.thickness ({} m) is {:.1f} times the "
-                    "median edge length ({:.3g} m), expected at most {}: every triangle would be "
-                    "within reach of hundreds of others; use a smaller thickness or a coarser "
-                    "mesh, or turn self_collision off",
-                    thickness, thickness / *middle, *middle, MAX_THICKNESS_IN_EDGES));
-            }
-        }
-        m_self_collision =
-            std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(), thickness);
+        m_self_collision = detail::make_self_collision(model, m_rest_lengths);
         m_num_position_resets = model.num_position_resets();
         m_gather_end_time = -std::numeric_limits<double>::infinity();
     }
@@ -236,17 +217,7 @@ void VBDStepper::restart_self_collision(const ClothModel& model) {
 }
 
 ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
-    if (!(dt > 0.0) || !std::isfinite(dt) || substeps < 1) {
-        throw InvalidInput(fmt::format(
-            "cloth step: expected dt > 0 (finite) and substeps >= 1, got dt {} and substeps {}", dt,
-            substeps));
-    }
-    if (model.num_vertices() != m_num_vertices || model.triangles().size() != m_num_triangles) {
-        throw InvalidInput(fmt::format(
-            "cloth step: the model has {} vertices and {} triangles, the stepper was built for {} "
-            "and {}",
-            model.num_vertices(), model.triangles().size(), m_num_vertices, m_num_triangles));
-    }
+    detail::check_step(model, dt, substeps, m_num_vertices, m_num_triangles);
     if (m_self_collision && m_num_position_resets != model.num_position_resets()) {
         restart_self_collision(model);
     }
@@ -465,7 +436,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         },
         VERTEX_GRAIN);
     model.move_pins(t_end, m_self_collision && material.thickness > 0.0
-                               ? CATCH_UP_IN_THICKNESS * material.thickness
+                               ? detail::CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
     model.move_obstacles(t_end);
     const bool has_obstacles = model.has_obstacles();

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/cloth/detail/stepper_checks.hpp"
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/cloth/isometric_bending.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
@@ -23,25 +24,11 @@ constexpr std::int64_t CHAIN_PACKET_GRAIN = 2;
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
 constexpr int FAIL_SAFE_WINDOW = 4;
-// Self-collision needs a thickness of at most this many median edge lengths: with more, every
-// triangle is within reach of hundreds of others (in a flat sheet about 2π (thickness / edge)²),
-// and a broad phase costs gigabytes (a 5 cm sheet of 134 × 134 quads under 5 mm: 24 GB).
-constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
 // A strain limit moves its two vertices by at most this fraction of the thickness per substep
 // (per limit: a vertex in several limits can move several times that; strain_hierarchy.hpp).
 // Larger moves outrun the self-collision's proximity constraints, which act once per substep
 // (docs/journal/2026-11-25-strain-limiting.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
-// With self-collision, a moving pin moves at most this fraction of the thickness per substep
-// toward its keyframed target (ClothModel::move_pins), and an obstacle undoes at most this
-// fraction of the thickness of a penetration the substep began with: pins whose keyframes jump
-// chase their target, and cloth deep inside an obstacle comes out, over several substeps instead
-// of sweeping through the cloth in one, which the self-collision fail-safe could only hold back
-// window after window (scenes/stress/jump_ribbon.json: with a whole thickness, the end the
-// ribbon starts with inside a sphere stayed caught and the budget was exceeded in every window
-// from frame 8; with half, never). The proximity constraints act once per substep, so a move
-// well under the thickness keeps them ahead of it (as STRAIN_LIMIT_MOVE).
-constexpr double CATCH_UP_IN_THICKNESS = 0.5;
 
 // Coordinates below 2^-200 m (6e-61 m: nothing cloth has is that short) become 0: the exact
 // predicates of the self-collision and of the intersection count take 0 or magnitudes from
@@ -162,22 +149,7 @@ void XPBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
     if (!enabled) {
         m_self_collision.reset();
     } else if (!m_self_collision) {
-        const double thickness = model.material().thickness;
-        if (!m_rest_lengths.empty()) {
-            std::vector<double> lengths = m_rest_lengths;
-            const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-            std::nth_element(lengths.begin(), middle, lengths.end());
-            if (thickness > MAX_THICKNESS_IN_EDGES * *middle) {
-                throw InvalidInput(fmt::format(
-                    "cloth: self-collision: material.thickness ({} m) is {:.1f} times the "
-                    "median edge length ({:.3g} m), expected at most {}: every triangle would be "
-                    "within reach of hundreds of others; use a smaller thickness or a coarser "
-                    "mesh, or turn self_collision off",
-                    thickness, thickness / *middle, *middle, MAX_THICKNESS_IN_EDGES));
-            }
-        }
-        m_self_collision =
-            std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(), thickness);
+        m_self_collision = detail::make_self_collision(model, m_rest_lengths);
         m_num_position_resets = model.num_position_resets();
         m_gather_end_time = -std::numeric_limits<double>::infinity();
     }
@@ -191,17 +163,7 @@ void XPBDStepper::restart_self_collision(const ClothModel& model) {
 }
 
 ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
-    if (!(dt > 0.0) || !std::isfinite(dt) || substeps < 1) {
-        throw InvalidInput(fmt::format(
-            "cloth step: expected dt > 0 (finite) and substeps >= 1, got dt {} and substeps {}", dt,
-            substeps));
-    }
-    if (model.num_vertices() != m_num_vertices || model.triangles().size() != m_num_triangles) {
-        throw InvalidInput(fmt::format(
-            "cloth step: the model has {} vertices and {} triangles, the stepper was built for {} "
-            "and {}",
-            model.num_vertices(), model.triangles().size(), m_num_vertices, m_num_triangles));
-    }
+    detail::check_step(model, dt, substeps, m_num_vertices, m_num_triangles);
     if (m_self_collision && m_num_position_resets != model.num_position_resets()) {
         restart_self_collision(model);
     }
@@ -283,7 +245,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         VERTEX_GRAIN);
     // With self-collision, pins move at most CATCH_UP_IN_THICKNESS thickness per substep.
     model.move_pins(t_end, m_self_collision && material.thickness > 0.0
-                               ? CATCH_UP_IN_THICKNESS * material.thickness
+                               ? detail::CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
     project_constraints(model, h);
     model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
@@ -427,7 +389,7 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
     // rest stays for the next substeps): cloth given deep inside an obstacle, or left there by
     // an obstacle that jumps, comes out at a bounded speed, as a jumping pin chases its target.
     const double max_settle = m_self_collision && thickness > 0.0
-                                  ? CATCH_UP_IN_THICKNESS * thickness
+                                  ? detail::CATCH_UP_IN_THICKNESS * thickness
                                   : std::numeric_limits<double>::infinity();
     // Holds back the part of a push of `depth` along `normal` that undoes more than max_settle of
     // the penetration `settled` the substep began with: moves x back by it and returns it.
