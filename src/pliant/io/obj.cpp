@@ -29,28 +29,6 @@ struct ObjScan {
     std::uint64_t num_triangles = 0;  // sum of (n - 2) over the faces
 };
 
-bool is_space(char c) {
-    return c == ' ' || c == '\t';
-}
-
-// Splits on spaces and tabs, as tinyobjloader does.
-void split_tokens(std::string_view text, std::vector<std::string_view>& tokens) {
-    tokens.clear();
-    std::size_t i = 0;
-    while (i < text.size()) {
-        while (i < text.size() && is_space(text[i])) {
-            ++i;
-        }
-        const std::size_t start = i;
-        while (i < text.size() && !is_space(text[i])) {
-            ++i;
-        }
-        if (i > start) {
-            tokens.push_back(text.substr(start, i - start));
-        }
-    }
-}
-
 // Validates the `v` and `f` lines and reads the coordinates at double precision. Lines end at
 // \n, \r\n or \r, and a line is a `v` / `f` line when it starts (after spaces and tabs) with
 // "v" / "f" and a space or tab: the same rules as tinyobjloader, so both see the same vertices.
@@ -86,15 +64,15 @@ ObjScan scan_obj(std::string_view text, const std::filesystem::path& path) {
                 fail(fmt::format("not a text OBJ file: byte 0x{:02x} in column {}", byte, k + 1));
             }
         }
-        while (!line.empty() && is_space(line.front())) {
+        while (!line.empty() && detail::is_blank(line.front())) {
             line.remove_prefix(1);
         }
-        if (line.size() < 2 || !is_space(line[1])) {
+        if (line.size() < 2 || !detail::is_blank(line[1])) {
             continue;
         }
 
         if (line[0] == 'v') {
-            split_tokens(line.substr(2), tokens);
+            detail::split_blank_tokens(line.substr(2), tokens);
             if (tokens.size() < 3) {
                 fail(fmt::format("vertex {} has {} coordinates, expected 3 (x y z)",
                                  scan.positions.size() + 1, tokens.size()));
@@ -112,7 +90,7 @@ ObjScan scan_obj(std::string_view text, const std::filesystem::path& path) {
             }
             scan.positions.push_back(p);
         } else if (line[0] == 'f') {
-            split_tokens(line.substr(2), tokens);
+            detail::split_blank_tokens(line.substr(2), tokens);
             if (tokens.size() < 3) {
                 fail(fmt::format("face has {} vertices, expected at least 3", tokens.size()));
             }

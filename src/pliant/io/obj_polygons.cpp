@@ -25,35 +25,14 @@ namespace {
 
 constexpr std::int64_t MAX_ELEMENTS = std::numeric_limits<std::int32_t>::max();
 
-bool is_space(char c) {
-    return c == ' ' || c == '\t';
-}
-
 std::string_view trim_spaces(std::string_view s) {
-    while (!s.empty() && (is_space(s.front()) || s.front() == '\f' || s.front() == '\v')) {
+    while (!s.empty() && (detail::is_blank(s.front()) || s.front() == '\f' || s.front() == '\v')) {
         s.remove_prefix(1);
     }
-    while (!s.empty() && (is_space(s.back()) || s.back() == '\f' || s.back() == '\v')) {
+    while (!s.empty() && (detail::is_blank(s.back()) || s.back() == '\f' || s.back() == '\v')) {
         s.remove_suffix(1);
     }
     return s;
-}
-
-void split_tokens(std::string_view text, std::vector<std::string_view>& tokens) {
-    tokens.clear();
-    std::size_t i = 0;
-    while (i < text.size()) {
-        while (i < text.size() && is_space(text[i])) {
-            ++i;
-        }
-        const std::size_t start = i;
-        while (i < text.size() && !is_space(text[i])) {
-            ++i;
-        }
-        if (i > start) {
-            tokens.push_back(text.substr(start, i - start));
-        }
-    }
 }
 
 class Parser {
@@ -167,7 +146,7 @@ private:
         if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) {
             line = line.substr(0, hash);
         }
-        split_tokens(line, m_tokens);
+        detail::split_blank_tokens(line, m_tokens);
         if (m_tokens.empty()) {
             return;
         }

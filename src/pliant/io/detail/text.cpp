@@ -129,4 +129,21 @@ std::vector<std::string> words(std::string_view text) {
     return out;
 }
 
+void split_blank_tokens(std::string_view text, std::vector<std::string_view>& tokens) {
+    tokens.clear();
+    std::size_t i = 0;
+    while (i < text.size()) {
+        while (i < text.size() && is_blank(text[i])) {
+            ++i;
+        }
+        const std::size_t start = i;
+        while (i < text.size() && !is_blank(text[i])) {
+            ++i;
+        }
+        if (i > start) {
+            tokens.push_back(text.substr(start, i - start));
+        }
+    }
+}
+
 }  // namespace pliant::io::detail

@@ -33,4 +33,12 @@ std::string lower(std::string text);
 // The white-space separated words of `text`.
 std::vector<std::string> words(std::string_view text);
 
+// A space or a tab: what separates the tokens of an OBJ line.
+inline bool is_blank(char c) {
+    return c == ' ' || c == '\t';
+}
+// The tokens of `text` split on spaces and tabs (as tinyobjloader does) into `tokens`, which is
+// cleared first; views into `text`.
+void split_blank_tokens(std::string_view text, std::vector<std::string_view>& tokens);
+
 }  // namespace pliant::io::detail
