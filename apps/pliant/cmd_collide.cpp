@@ -197,12 +197,7 @@ void register_collide(CLI::App& app, const GlobalOptions& global) {
                   "Also count the intersecting pairs of triangles that share no vertex, decided "
                   "exactly (in MESH, and in MESH_T1 with --to): intersecting_pairs, "
                   "intersecting_pairs_t1, intersections_ms");
-    cmd->add_option("--max-memory", options->max_memory_mib,
-                    "Refuse a mesh whose broad phase needs more memory than this, MiB, before it "
-                    "allocates (default: the memory available: physical, or the control group's "
-                    "limit)")
-        ->type_name("MIB")
-        ->check(finite_in_range(1e-6, 1e12));
+    add_max_memory_option(*cmd, options->max_memory_mib, "a mesh whose broad phase needs");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_collide(*options, global); });
 }

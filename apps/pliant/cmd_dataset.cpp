@@ -118,12 +118,7 @@ void register_dataset(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--step", options->step,
                     "Ray-casting step, world units (default 0: half the smallest spacing)")
         ->check(finite_in_range(0.0, 1e30));
-    cmd->add_option("--max-memory", options->max_memory_mib,
-                    "Refuse a volume and views that need more memory than this, MiB, before "
-                    "allocating (default: the memory available: physical, or the control group's "
-                    "limit)")
-        ->type_name("MIB")
-        ->check(finite_in_range(1e-6, 1e12));
+    add_max_memory_option(*cmd, options->max_memory_mib, "a volume and views that need");
     cmd->add_option("-o,--output", options->out, "Output directory")
         ->required()
         ->check(non_empty_path());

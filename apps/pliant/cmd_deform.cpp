@@ -306,12 +306,7 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->type_name("AZ,EL,DIST")
         ->delimiter(',')
         ->check(finite_in_range(-1e6, 1e6));
-    cmd->add_option("--max-memory", options->max_memory_mib,
-                    "Refuse a volume and tet grid that need more memory than this, MiB, before "
-                    "allocating (default: the memory available: physical, or the control group's "
-                    "limit)")
-        ->type_name("MIB")
-        ->check(finite_in_range(1e-6, 1e12));
+    add_max_memory_option(*cmd, options->max_memory_mib, "a volume and tet grid that need");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->add_option("--checkpoint-every", options->checkpoint_every,
                     "Save OUT.checkpoint.bin every N frames (0: never; not with --render; "

@@ -241,12 +241,7 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--orbit", options->orbit, "Turntable of N frames around +z (MP4)")
         ->check(CLI::Range(1, 100000))
         ->excludes(view);
-    cmd->add_option("--max-memory", options->max_memory_mib,
-                    "Refuse a volume and image that need more memory than this, MiB, before "
-                    "allocating (default: the memory available: physical, or the control group's "
-                    "limit)")
-        ->type_name("MIB")
-        ->check(finite_in_range(1e-6, 1e12));
+    add_max_memory_option(*cmd, options->max_memory_mib, "a volume and image that need");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_render(*options, global); });
 }

@@ -54,4 +54,14 @@ const CLI::Validator& non_empty_path() {
     return VALIDATOR;
 }
 
+CLI::Option* add_max_memory_option(CLI::App& cmd, double& mib, const std::string& what) {
+    return cmd
+        .add_option("--max-memory", mib,
+                    "Refuse " + what +
+                        " more memory than this, MiB, before allocating (default: the memory "
+                        "available: physical, or the control group's limit)")
+        ->type_name("MIB")
+        ->check(finite_in_range(1e-6, 1e12));
+}
+
 }  // namespace pliant::cli

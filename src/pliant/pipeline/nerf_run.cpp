@@ -260,6 +260,39 @@ double masked_psnr(std::vector<float>& rgb, const nerf::View& v) {
     return kept.empty() ? 0.0 : nerf::psnr(kept, kept_ref);
 }
 
+// Each view's PSNR (unmasked pixels) and SSIM, and their means, as `nerf eval` and
+// `nerf train --test` report them.
+class ViewScores {
+public:
+    // Scores a render (linear RGB, width × height) against the view; masked pixels of `rgb` are
+    // set to the reference.
+    void add(const nerf::View& v, std::vector<float>& rgb, int width, int height) {
+        const double p = masked_psnr(rgb, v);
+        const double s = nerf::ssim(rgb, v.rgb, width, height);
+        m_sum_psnr += p;
+        m_sum_ssim += s;
+        nlohmann::ordered_json e;
+        e["file_path"] = v.name;
+        e["psnr"] = p;
+        e["ssim"] = s;
+        m_views.push_back(e);
+    }
+    // {"psnr", "ssim": the means (0 without views), "views": [{"file_path", "psnr", "ssim"}]}.
+    nlohmann::ordered_json json() const {
+        const double n = static_cast<double>(m_views.size());
+        nlohmann::ordered_json j;
+        j["psnr"] = n > 0 ? m_sum_psnr / n : 0.0;
+        j["ssim"] = n > 0 ? m_sum_ssim / n : 0.0;
+        j["views"] = m_views;
+        return j;
+    }
+
+private:
+    nlohmann::ordered_json m_views = nlohmann::ordered_json::array();
+    double m_sum_psnr = 0.0;
+    double m_sum_ssim = 0.0;
+};
+
 // Whether render::Camera models these intrinsics (nerf::camera_from_view's conditions).
 bool fits_ray_caster_camera(const nerf::Intrinsics& in) {
     return in.lens.is_identity() && std::fabs(in.fx - in.fy) <= 1e-6 * in.fx &&
@@ -307,8 +340,7 @@ nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volum
             throw IoError(fmt::format("{}: cannot create the directory", images_dir.string()));
         }
     }
-    nlohmann::ordered_json views = nlohmann::ordered_json::array();
-    double sum_psnr = 0.0, sum_ssim = 0.0;
+    ViewScores scores;
     render::Image image;
     for (std::size_t i = 0; i < dataset.views.size(); ++i) {
         const nerf::View& v = dataset.views[i];
@@ -320,25 +352,12 @@ nlohmann::ordered_json evaluate_volume(const nerf::Dataset& dataset, const volum
         }
         std::vector<float> rgb = nerf::from_image(image);
         // Masked pixels: left out of PSNR, and equal to the reference for SSIM's windows.
-        const double p = masked_psnr(rgb, v);
-        const double s = nerf::ssim(rgb, v.rgb, image.width, image.height);
-        sum_psnr += p;
-        sum_ssim += s;
-        nlohmann::ordered_json e;
-        e["file_path"] = v.name;
-        e["psnr"] = p;
-        e["ssim"] = s;
-        views.push_back(e);
+        scores.add(v, rgb, image.width, image.height);
         if (!images_dir.empty()) {
             io::write_png(images_dir / fmt::format("{}.png", i), image);
         }
     }
-    const double n = static_cast<double>(dataset.views.size());
-    nlohmann::ordered_json j;
-    j["psnr"] = sum_psnr / n;
-    j["ssim"] = sum_ssim / n;
-    j["views"] = views;
-    return j;
+    return scores.json();
 }
 
 nlohmann::ordered_json evaluate_field(const nerf::Dataset& dataset, const nerf::RadianceGrid& grid,
@@ -346,8 +365,7 @@ nlohmann::ordered_json evaluate_field(const nerf::Dataset& dataset, const nerf::
                                       const std::array<float, 3>& background,
                                       const std::filesystem::path& compare_png) {
     const render::Color bg{background[0], background[1], background[2]};
-    nlohmann::ordered_json views = nlohmann::ordered_json::array();
-    double sum_psnr = 0.0, sum_ssim = 0.0;
+    ViewScores scores;
     const std::size_t n = dataset.views.size();
     const std::size_t columns = std::min<std::size_t>(4, n);
     const int w = dataset.intrinsics.width, h = dataset.intrinsics.height;
@@ -361,15 +379,7 @@ nlohmann::ordered_json evaluate_field(const nerf::Dataset& dataset, const nerf::
         render_as_view.rgb = rgb;
         const render::Image rendered = nerf::to_image(in, render_as_view);
         const render::Image photo = nerf::to_image(in, v);
-        const double p = masked_psnr(rgb, v);
-        const double s = nerf::ssim(rgb, v.rgb, in.width, in.height);
-        sum_psnr += p;
-        sum_ssim += s;
-        nlohmann::ordered_json e;
-        e["file_path"] = v.name;
-        e["psnr"] = p;
-        e["ssim"] = s;
-        views.push_back(e);
+        scores.add(v, rgb, in.width, in.height);
         // Columns at views 0, n/4, n/2, 3n/4 (for n ≥ 4).
         for (std::size_t c = 0; c < columns; ++c) {
             if (c * n / columns != i) {
@@ -392,11 +402,7 @@ nlohmann::ordered_json evaluate_field(const nerf::Dataset& dataset, const nerf::
     if (!compare_png.empty() && columns > 0) {
         io::write_png(compare_png, strip);
     }
-    nlohmann::ordered_json j;
-    j["psnr"] = n > 0 ? sum_psnr / static_cast<double>(n) : 0.0;
-    j["ssim"] = n > 0 ? sum_ssim / static_cast<double>(n) : 0.0;
-    j["views"] = views;
-    return j;
+    return scores.json();
 }
 
 }  // namespace pliant::pipeline
