@@ -106,8 +106,8 @@ struct Renders {
 Renders render_both(const volume::Volume& source, const volume::TransferFunction* tf,
                     const Deformed& d, const RayCastOptions& options, int size) {
     const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, size, size);
-    volume::Volume target = volume::Volume::allocate(source.dims(), source.type(),
-                                                     source.spacing(), source.origin());
+    volume::Volume target =
+        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
     const volume::Resampler resampler(source, d.grid.mesh.tets, d.grid.mesh.positions,
                                       volume::ResampleOptions{.tf = tf});
     resampler.resample(d.positions, target);
@@ -167,8 +167,8 @@ TEST(MappedRayCast, TranslationMatchesTheAnalyticImage) {
             RayCaster(moved, nullptr, options).render(camera, analytic);
             const double db_map = psnr(analytic, r.mapped);
             const double db_exact = psnr(analytic, r.exact);
-            std::cout << "translation " << shift << " voxel, shading " << shading
-                      << ": map " << db_map << " dB, exact resample " << db_exact
+            std::cout << "translation " << shift << " voxel, shading " << shading << ": map "
+                      << db_map << " dB, exact resample " << db_exact
                       << " dB against the analytic image\n";
             EXPECT_GT(db_map, shading ? 38.0 : 50.0);
             if (shift == 1.0f) {
@@ -222,8 +222,8 @@ TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     const volume::Volume& source = rgba64();
     const Deformed d = deform(source, nullptr, Drive::twist, 12);
     const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 96, 96);
-    const volume::Volume target = volume::Volume::allocate(source.dims(), source.type(),
-                                                           source.spacing(), source.origin());
+    const volume::Volume target =
+        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
     volume::InverseMap map;
     map.build(source, target, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
     for (const bool shading : {false, true}) {
@@ -254,8 +254,8 @@ TEST(MappedRayCast, EarlyTerminationStillWorks) {
     const Deformed d = deform(source, nullptr, Drive::wave, 6);
     RayCastOptions options;
     const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 64, 64);
-    const volume::Volume target = volume::Volume::allocate(source.dims(), source.type(),
-                                                           source.spacing(), source.origin());
+    const volume::Volume target =
+        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
     volume::InverseMap map;
     map.build(source, target, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
     MappedRayCaster early(source, nullptr, target, options);

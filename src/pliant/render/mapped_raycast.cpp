@@ -69,7 +69,8 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         m_blocks[static_cast<std::size_t>(a)] = (n[a] + BLOCK - 1) / BLOCK;
     }
     const std::int64_t num_blocks = m_blocks[0] * m_blocks[1] * m_blocks[2];
-    m_block_min.assign(static_cast<std::size_t>(num_blocks), std::numeric_limits<float>::infinity());
+    m_block_min.assign(static_cast<std::size_t>(num_blocks),
+                       std::numeric_limits<float>::infinity());
     m_block_max.assign(static_cast<std::size_t>(num_blocks),
                        -std::numeric_limits<float>::infinity());
     const int channels = m_source->m_is_rgba ? 4 : 1;
@@ -81,7 +82,8 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             for (std::int64_t z = bz * BLOCK; z < std::min(n[2], (bz + 1) * BLOCK); ++z) {
                 for (std::int64_t y = 0; y < n[1]; ++y) {
                     const float* row = values + channels * n[0] * (y + n[1] * z) + channel;
-                    const std::int64_t first = m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
+                    const std::int64_t first =
+                        m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
                     for (std::int64_t x = 0; x < n[0]; ++x) {
                         const float v = row[channels * x];
                         const auto b = static_cast<std::size_t>(first + (x >> BLOCK_SHIFT));
@@ -130,7 +132,8 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     }
     m_map = &map;
     for (int a = 0; a < 3; ++a) {
-        m_cells[static_cast<std::size_t>(a)] = static_cast<int>(nodes[static_cast<std::size_t>(a)] - 1);
+        m_cells[static_cast<std::size_t>(a)] =
+            static_cast<int>(nodes[static_cast<std::size_t>(a)] - 1);
     }
     const std::int64_t cx_n = m_cells[0], cy_n = m_cells[1], cz_n = m_cells[2];
     const auto total = static_cast<std::size_t>(cx_n * cy_n * cz_n);
@@ -175,11 +178,10 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                             break;
                         }
                         const std::int64_t max_i0 = std::max<std::int64_t>(0, sn[a] - 2);
-                        const std::int64_t v0 = std::min(
-                            static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
+                        const std::int64_t v0 =
+                            std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
                         const std::int64_t v1 =
-                            std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)),
-                                     max_i0) +
+                            std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
                             (sn[a] > 1 ? 1 : 0);
                         b0[a] = v0 >> BLOCK_SHIFT;
                         b1[a] = v1 >> BLOCK_SHIFT;
@@ -224,10 +226,9 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     parallel_for(
         8,
         [&](std::int64_t octant) {
-            detail::empty_cubes(
-                m_visible, m_cells.data(), static_cast<int>(octant),
-                std::span<std::uint8_t>(m_empty_cube).subspan(static_cast<std::size_t>(octant) * total,
-                                                              total));
+            detail::empty_cubes(m_visible, m_cells.data(), static_cast<int>(octant),
+                                std::span<std::uint8_t>(m_empty_cube)
+                                    .subspan(static_cast<std::size_t>(octant) * total, total));
         },
         1);
     m_map_ms = watch.elapsed_ms();
@@ -256,8 +257,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         k.n[a] = static_cast<int>(m_target_dims[static_cast<std::size_t>(a)]);
         k.g_max[a] = static_cast<float>(k.n[a] - 1);
         k.max_i0[a] = std::max(0, k.n[a] - 2);
-        m.source_hi[a] =
-            static_cast<float>(m_source_dims[static_cast<std::size_t>(a)]) - 0.5f;
+        m.source_hi[a] = static_cast<float>(m_source_dims[static_cast<std::size_t>(a)]) - 0.5f;
         m.cells[a] = m_cells[static_cast<std::size_t>(a)];
     }
     k.shading = m_options.shading;
@@ -277,7 +277,8 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.inv_b = 1.0f / m.b;
     m.occupancy = m_occupancy.data();
     for (int octant = 0; octant < 8; ++octant) {
-        m.empty_cube[octant] = m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
+        m.empty_cube[octant] =
+            m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
     }
 
     image = Image(k.width, k.height);

@@ -31,7 +31,7 @@ struct MappedKernel {
     // The source volume as a RayCaster prepares it (values, alpha, lookup table, step opacity);
     // its camera and macro-cell fields are unused.
     RayCastKernel source;
-    const float* nodes = nullptr;  // 3 floats per node (InverseMap::node_coordinates())
+    const float* nodes = nullptr;             // 3 floats per node (InverseMap::node_coordinates())
     std::int64_t node_stride[3] = {0, 0, 0};  // in nodes: 1, nx, nx·ny
     int cells[3] = {0, 0, 0};                 // map cells per axis: nodes − 1
     float b = 4.0f;                           // node_voxels
@@ -65,8 +65,7 @@ PLIANT_HOST_DEVICE inline MapCell locate_map(const MappedKernel& m, Vec3f g) {
 // jacobian is not null, its derivatives along the target's grid axes: jacobian[a] = ∂g/∂t_a.
 PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapCell& c,
                                                Vec3f* jacobian) {
-    const float* p =
-        m.nodes + 3 * (c.q[0] + m.node_stride[1] * c.q[1] + m.node_stride[2] * c.q[2]);
+    const float* p = m.nodes + 3 * (c.q[0] + m.node_stride[1] * c.q[1] + m.node_stride[2] * c.q[2]);
     const std::int64_t dx = 3, dy = 3 * m.node_stride[1], dz = 3 * m.node_stride[2];
     const std::int64_t off[8] = {0, dx, dy, dy + dx, dz, dz + dx, dz + dy, dz + dy + dx};
     const float fx = c.f[0], fy = c.f[1], fz = c.f[2];
@@ -106,7 +105,8 @@ PLIANT_HOST_DEVICE inline bool in_source(const MappedKernel& m, Vec3f g) {
 // one target voxel apart, each taken in the source at g ± ∂g/∂t_a (the map linearized at the
 // sample). Zero opacity outside the source box.
 template <bool IS_RGBA>
-PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c, Vec3f dir) {
+PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c,
+                                                 Vec3f dir) {
     const RayCastKernel& s = m.source;
     Vec3f jac[3];
     const Vec3f g = map_coordinate(m, c, m.target.shading ? jac : nullptr);
@@ -226,8 +226,7 @@ PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j)
         }
     }
     const float rest = 1.0f - c.a;
-    return {{c.r + rest * k.background.r, c.g + rest * k.background.g,
-             c.b + rest * k.background.b},
+    return {{c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b},
             samples};
 }
 
