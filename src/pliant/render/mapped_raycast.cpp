@@ -16,8 +16,8 @@ namespace pliant::render {
 
 namespace {
 
-constexpr int BLOCK = 4;        // source occupancy blocks, voxels per edge
-constexpr int BLOCK_SHIFT = 2;  // log2(BLOCK)
+constexpr int BLOCK = 2;        // source occupancy blocks, voxels per edge
+constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
 // Source grid units the box of a map cell's node values is widened by: far above the rounding
 // of the float trilinear interpolation of coordinates below a few thousand.
 constexpr float HULL_MARGIN = 1.0f / 32.0f;
@@ -46,7 +46,8 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
     source_options.step = default_step(target, options);
     source_options.opacity_unit =
         options.opacity_unit > 0.0 ? options.opacity_unit : smallest(target.spacing());
-    source_options.shading = false;  // the gradients are taken here, not by the source's march
+    // The gradients are taken here, not by the source's march; shading keeps the α copy of RGBA
+    // sources for them.
     source_options.clip.reset();
     m_source = std::make_unique<RayCaster>(source, tf, source_options);
     m_step = m_source->step();

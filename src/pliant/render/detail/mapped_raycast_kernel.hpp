@@ -100,6 +100,25 @@ PLIANT_HOST_DEVICE inline bool in_source(const MappedKernel& m, Vec3f g) {
            g.z >= -0.5f && g.z <= m.source_hi[2];
 }
 
+// The shaded value at source grid coordinate g: shading_value<IS_RGBA>(s, g), bit for bit; for
+// RGBA from the α copy (s.alpha, 4 bytes per voxel) when the source has one.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline float mapped_shading_value(const RayCastKernel& s, Vec3f g) {
+    if constexpr (IS_RGBA) {
+        if (s.alpha != nullptr) {
+            const Trilinear t = locate(s, g);
+            const float* p = s.alpha + voxel_index(s, t);
+            const std::int64_t dx = s.d[0], dy = s.d[1], dz = s.d[2];
+            const float c00 = lerp(p[0], p[dx], t.fx);
+            const float c10 = lerp(p[dy], p[dy + dx], t.fx);
+            const float c01 = lerp(p[dz], p[dz + dx], t.fx);
+            const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
+            return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+        }
+    }
+    return shading_value<IS_RGBA>(s, g);
+}
+
 // The classified sample of map cell c (straight colour, opacity for a full step), shaded when
 // the options ask: the gradient of the shaded value in the target frame by central differences
 // one target voxel apart, each taken in the source at g ± ∂g/∂t_a (the map linearized at the
@@ -116,12 +135,15 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
     Sample out = classify<IS_RGBA>(s, locate(s, g));
     if (out.a > 0.0f && m.target.shading) {
         const Vec3f& inv = m.target.inv_spacing;
-        const float gx =
-            (shading_value<IS_RGBA>(s, g + jac[0]) - shading_value<IS_RGBA>(s, g - jac[0])) * inv.x;
-        const float gy =
-            (shading_value<IS_RGBA>(s, g + jac[1]) - shading_value<IS_RGBA>(s, g - jac[1])) * inv.y;
-        const float gz =
-            (shading_value<IS_RGBA>(s, g + jac[2]) - shading_value<IS_RGBA>(s, g - jac[2])) * inv.z;
+        const float gx = (mapped_shading_value<IS_RGBA>(s, g + jac[0]) -
+                          mapped_shading_value<IS_RGBA>(s, g - jac[0])) *
+                         inv.x;
+        const float gy = (mapped_shading_value<IS_RGBA>(s, g + jac[1]) -
+                          mapped_shading_value<IS_RGBA>(s, g - jac[1])) *
+                         inv.y;
+        const float gz = (mapped_shading_value<IS_RGBA>(s, g + jac[2]) -
+                          mapped_shading_value<IS_RGBA>(s, g - jac[2])) *
+                         inv.z;
         const float len2 = gx * gx + gy * gy + gz * gz;
         if (len2 > 1e-30f) {
             const float cosine = std::fabs(gx * dir.x + gy * dir.y + gz * dir.z) / std::sqrt(len2);
