@@ -70,9 +70,9 @@ double psnr(const render::Image& a, const render::Image& b) {
         const double d = static_cast<double>(a.pixels[i]) - static_cast<double>(b.pixels[i]);
         sum += d * d;
     }
-    return sum == 0.0 ? 999.0
-                      : 10.0 * std::log10(255.0 * 255.0 * static_cast<double>(a.pixels.size()) /
-                                          sum);
+    return sum == 0.0
+               ? 999.0
+               : 10.0 * std::log10(255.0 * 255.0 * static_cast<double>(a.pixels.size()) / sum);
 }
 
 // The body under driver d after 24 frames (bench_pbd's source_scale_body).
@@ -135,27 +135,30 @@ int main(int argc, char** argv) {
     set_num_threads(threads);
     const bench::SourceScaleWorkload& w = bench::source_scale_workload();
     const volume::Volume& source = w.source;
-    const render::Camera camera = render::orbit_camera(source.bounds(), 30.0, 20.0, 0.0, size, size);
+    const render::Camera camera =
+        render::orbit_camera(source.bounds(), 30.0, 20.0, 0.0, size, size);
     render::RayCastOptions options;
     options.shading = shading;
     Stage prepare_map{"map route: source preparation (once)"};
     std::optional<render::MappedRayCaster> mapped;
     timed(prepare_map, [&] { mapped.emplace(source, nullptr, source, options); });
     const volume::Resampler resampler(source, w.grid.mesh.tets, w.grid.mesh.positions);
-    volume::Volume target = volume::Volume::allocate(source.dims(), source.type(),
-                                                     source.spacing(), source.origin());
+    volume::Volume target =
+        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
     std::optional<render::RayCaster> caster;
 
     if (json) {
-        std::printf("{\"tets\": %zu, \"size\": %d, \"shading\": %s, \"threads\": %d, "
-                    "\"map_prepare_ms\": %.2f, \"drivers\": [",
-                    w.grid.mesh.tets.size(), size, shading ? "true" : "false",
-                    num_threads(), prepare_map.wall);
+        std::printf(
+            "{\"tets\": %zu, \"size\": %d, \"shading\": %s, \"threads\": %d, "
+            "\"map_prepare_ms\": %.2f, \"drivers\": [",
+            w.grid.mesh.tets.size(), size, shading ? "true" : "false", num_threads(),
+            prepare_map.wall);
     } else {
-        std::printf("source scale: 256^3 rgba8, %zu tets, %dx%d, %s, %d threads; map route's "
-                    "source preparation (once) %.1f ms\n",
-                    w.grid.mesh.tets.size(), size, size, shading ? "shaded" : "unshaded",
-                    num_threads(), prepare_map.wall);
+        std::printf(
+            "source scale: 256^3 rgba8, %zu tets, %dx%d, %s, %d threads; map route's "
+            "source preparation (once) %.1f ms\n",
+            w.grid.mesh.tets.size(), size, size, shading ? "shaded" : "unshaded", num_threads(),
+            prepare_map.wall);
     }
     for (std::size_t di = 0; di < drivers.size(); ++di) {
         const int d = drivers[di];
@@ -208,37 +211,41 @@ int main(int argc, char** argv) {
                     caster.emplace(target, nullptr, options);
                 }
             });
-            timed(render_exact, [&] { exact_samples = caster->render(camera, exact_image).samples; });
+            timed(render_exact,
+                  [&] { exact_samples = caster->render(camera, exact_image).samples; });
             timed(build, [&] {
-                map.build(source, source, w.grid.mesh.tets, w.grid.mesh.positions,
-                          body.positions(), {.node_voxels = w.grid.cell_voxels});
+                map.build(source, source, w.grid.mesh.tets, w.grid.mesh.positions, body.positions(),
+                          {.node_voxels = w.grid.cell_voxels});
             });
             timed(set_map, [&] { mapped->set_map(map); });
             timed(render_map, [&] { map_samples = mapped->render(camera, map_image).samples; });
         }
         const double db = psnr(exact_image, map_image);
-        const Stage* stages[] = {&step, &resample, &update, &render_exact, &build, &set_map,
-                                 &render_map};
-        const double exact_wall = (step.wall + resample.wall + update.wall + render_exact.wall) / frames;
+        const Stage* stages[] = {&step,  &resample, &update,    &render_exact,
+                                 &build, &set_map,  &render_map};
+        const double exact_wall =
+            (step.wall + resample.wall + update.wall + render_exact.wall) / frames;
         const double exact_cpu = (step.cpu + resample.cpu + update.cpu + render_exact.cpu) / frames;
         const double map_wall = (step.wall + build.wall + set_map.wall + render_map.wall) / frames;
         const double map_cpu = (step.cpu + build.cpu + set_map.cpu + render_map.cpu) / frames;
         if (json) {
-            std::printf("%s{\"driver\": \"%s\", \"frames\": %d, \"inverted\": %lld, "
-                        "\"exact_samples\": %lld, \"map_samples\": %lld, \"psnr_map_vs_exact_db\": "
-                        "%.2f, \"visible_cells\": %lld, \"cells\": %lld, \"stages\": {",
-                        di == 0 ? "" : ", ", names[static_cast<std::size_t>(d)].c_str(), frames,
-                        static_cast<long long>(body.stats().inverted_tets),
-                        static_cast<long long>(exact_samples), static_cast<long long>(map_samples),
-                        db, static_cast<long long>(mapped->num_visible_cells()),
-                        static_cast<long long>(mapped->num_cells()));
+            std::printf(
+                "%s{\"driver\": \"%s\", \"frames\": %d, \"inverted\": %lld, "
+                "\"exact_samples\": %lld, \"map_samples\": %lld, \"psnr_map_vs_exact_db\": "
+                "%.2f, \"visible_cells\": %lld, \"cells\": %lld, \"stages\": {",
+                di == 0 ? "" : ", ", names[static_cast<std::size_t>(d)].c_str(), frames,
+                static_cast<long long>(body.stats().inverted_tets),
+                static_cast<long long>(exact_samples), static_cast<long long>(map_samples), db,
+                static_cast<long long>(mapped->num_visible_cells()),
+                static_cast<long long>(mapped->num_cells()));
             for (std::size_t s = 0; s < std::size(stages); ++s) {
                 std::printf("%s\"%s\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}", s == 0 ? "" : ", ",
                             stages[s]->name, stages[s]->wall / frames, stages[s]->cpu / frames);
             }
-            std::printf("}, \"exact_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}, "
-                        "\"map_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}}",
-                        exact_wall, exact_cpu, map_wall, map_cpu);
+            std::printf(
+                "}, \"exact_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}, "
+                "\"map_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}}",
+                exact_wall, exact_cpu, map_wall, map_cpu);
         } else {
             std::printf("\n%s: %d timed frames after 24, %lld inverted tets\n",
                         names[static_cast<std::size_t>(d)].c_str(), frames,
@@ -251,11 +258,12 @@ int main(int argc, char** argv) {
                         exact_cpu, 1e3 / exact_wall);
             std::printf("  %-36s %10.1f %10.1f  (%.1f fps)\n", "whole frame, map", map_wall,
                         map_cpu, 1e3 / map_wall);
-            std::printf("  samples: exact %lld, map %lld; map cells visible %lld of %lld; PSNR "
-                        "map vs exact %.2f dB\n",
-                        static_cast<long long>(exact_samples), static_cast<long long>(map_samples),
-                        static_cast<long long>(mapped->num_visible_cells()),
-                        static_cast<long long>(mapped->num_cells()), db);
+            std::printf(
+                "  samples: exact %lld, map %lld; map cells visible %lld of %lld; PSNR "
+                "map vs exact %.2f dB\n",
+                static_cast<long long>(exact_samples), static_cast<long long>(map_samples),
+                static_cast<long long>(mapped->num_visible_cells()),
+                static_cast<long long>(mapped->num_cells()), db);
         }
     }
     if (json) {
