@@ -16,7 +16,7 @@ namespace pliant::render {
 
 namespace {
 
-constexpr int BLOCK = 2;        // source occupancy blocks, voxels per edge
+constexpr int BLOCK = 2;        // scalar sources' occupancy blocks, voxels per edge
 constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
 // Source grid units the box of a map cell's node values is widened by: far above the rounding
 // of the float trilinear interpolation of coordinates below a few thousand.
@@ -64,37 +64,65 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
                 m_nonzero_prefix[e] + (m_source->m_lut[4 * e + 3] > 0.0f ? 1 : 0);
         }
     }
-    // Per source block of 4³ voxels: min and max of the lookup coordinates, or of α.
     const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
-    for (int a = 0; a < 3; ++a) {
-        m_blocks[static_cast<std::size_t>(a)] = (n[a] + BLOCK - 1) / BLOCK;
-    }
-    const std::int64_t num_blocks = m_blocks[0] * m_blocks[1] * m_blocks[2];
-    m_block_min.assign(static_cast<std::size_t>(num_blocks),
-                       std::numeric_limits<float>::infinity());
-    m_block_max.assign(static_cast<std::size_t>(num_blocks),
-                       -std::numeric_limits<float>::infinity());
-    const int channels = m_source->m_is_rgba ? 4 : 1;
-    const int channel = m_source->m_is_rgba ? 3 : 0;
     const float* values = m_source->m_values.data();
-    parallel_for(
-        m_blocks[2],
-        [&](std::int64_t bz) {
-            for (std::int64_t z = bz * BLOCK; z < std::min(n[2], (bz + 1) * BLOCK); ++z) {
-                for (std::int64_t y = 0; y < n[1]; ++y) {
-                    const float* row = values + channels * n[0] * (y + n[1] * z) + channel;
-                    const std::int64_t first =
-                        m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
-                    for (std::int64_t x = 0; x < n[0]; ++x) {
-                        const float v = row[channels * x];
-                        const auto b = static_cast<std::size_t>(first + (x >> BLOCK_SHIFT));
-                        m_block_min[b] = std::min(m_block_min[b], v);
-                        m_block_max[b] = std::max(m_block_max[b], v);
+    if (!m_source->m_is_rgba) {
+        // Per source block of 2³ voxels: min and max of the lookup coordinates.
+        for (int a = 0; a < 3; ++a) {
+            m_blocks[static_cast<std::size_t>(a)] = (n[a] + BLOCK - 1) / BLOCK;
+        }
+        const std::int64_t num_blocks = m_blocks[0] * m_blocks[1] * m_blocks[2];
+        m_block_min.assign(static_cast<std::size_t>(num_blocks),
+                           std::numeric_limits<float>::infinity());
+        m_block_max.assign(static_cast<std::size_t>(num_blocks),
+                           -std::numeric_limits<float>::infinity());
+        parallel_for(
+            m_blocks[2],
+            [&](std::int64_t bz) {
+                for (std::int64_t z = bz * BLOCK; z < std::min(n[2], (bz + 1) * BLOCK); ++z) {
+                    for (std::int64_t y = 0; y < n[1]; ++y) {
+                        const float* row = values + n[0] * (y + n[1] * z);
+                        const std::int64_t first =
+                            m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            const auto b = static_cast<std::size_t>(first + (x >> BLOCK_SHIFT));
+                            m_block_min[b] = std::min(m_block_min[b], row[x]);
+                            m_block_max[b] = std::max(m_block_max[b], row[x]);
+                        }
                     }
                 }
+            },
+            1);
+    }
+    if (m_source->m_is_rgba) {
+        // Summed-volume table of the voxels with α > 0: m_sat[(x + 1) + sx (y + 1) + sxy (z + 1)]
+        // counts those in [0, x] × [0, y] × [0, z] (row and layer 0 are zeros).
+        const std::int64_t sx = n[0] + 1, sxy = sx * (n[1] + 1);
+        m_sat.assign(static_cast<std::size_t>(sxy * (n[2] + 1)), 0);
+        parallel_for(
+            n[2],
+            [&](std::int64_t z) {
+                std::int32_t* layer = m_sat.data() + sxy * (z + 1);
+                for (std::int64_t y = 0; y < n[1]; ++y) {
+                    const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
+                    std::int32_t* out = layer + sx * (y + 1);
+                    const std::int32_t* above = layer + sx * y;
+                    std::int32_t run = 0;
+                    for (std::int64_t x = 0; x < n[0]; ++x) {
+                        run += row[4 * x] > 0.0f ? 1 : 0;
+                        out[x + 1] = run + above[x + 1];
+                    }
+                }
+            },
+            1);
+        for (std::int64_t z = 1; z < n[2]; ++z) {
+            std::int32_t* layer = m_sat.data() + sxy * (z + 1);
+            const std::int32_t* below = layer - sxy;
+            for (std::int64_t i = 0; i < sxy; ++i) {
+                layer[i] += below[i];
             }
-        },
-        1);
+        }
+    }
     m_prepare_ms = watch.elapsed_ms();
 }
 
@@ -112,6 +140,61 @@ std::int64_t MappedRayCaster::num_visible_cells() const {
         count += v;
     }
     return count;
+}
+
+bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
+    // The source voxels samples in the box [lo, hi] (source grid coordinates) can read.
+    std::int64_t v0[3] = {0, 0, 0};
+    std::int64_t v1[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t n = m_source_dims[static_cast<std::size_t>(a)];
+        const auto last = static_cast<float>(n - 1);
+        const float l = lo[a] - HULL_MARGIN;
+        const float h = hi[a] + HULL_MARGIN;
+        if (h < -0.5f || l > last + 0.5f) {
+            return false;  // every sample outside the source: transparent
+        }
+        const std::int64_t max_i0 = std::max<std::int64_t>(0, n - 2);
+        v0[a] = std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
+        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
+                (n > 1 ? 1 : 0);
+    }
+    if (m_source->m_is_rgba) {
+        // Voxels with α > 0 in the box, from the summed-volume table.
+        const std::int64_t sx = m_source_dims[0] + 1;
+        const std::int64_t sxy = sx * (m_source_dims[1] + 1);
+        const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+            return static_cast<std::int64_t>(m_sat[static_cast<std::size_t>(x + sx * y + sxy * z)]);
+        };
+        const std::int64_t x0 = v0[0], y0 = v0[1], z0 = v0[2];
+        const std::int64_t x1 = v1[0] + 1, y1 = v1[1] + 1, z1 = v1[2] + 1;
+        const std::int64_t count = at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) -
+                                   at(x1, y1, z0) + at(x0, y0, z1) + at(x0, y1, z0) +
+                                   at(x1, y0, z0) - at(x0, y0, z0);
+        return count > 0;
+    }
+    float vmin = std::numeric_limits<float>::infinity();
+    float vmax = -std::numeric_limits<float>::infinity();
+    for (std::int64_t z = v0[2] >> BLOCK_SHIFT; z <= v1[2] >> BLOCK_SHIFT; ++z) {
+        for (std::int64_t y = v0[1] >> BLOCK_SHIFT; y <= v1[1] >> BLOCK_SHIFT; ++y) {
+            const std::int64_t row = m_blocks[0] * (y + m_blocks[1] * z);
+            for (std::int64_t x = v0[0] >> BLOCK_SHIFT; x <= v1[0] >> BLOCK_SHIFT; ++x) {
+                const auto k = static_cast<std::size_t>(row + x);
+                vmin = std::min(vmin, m_block_min[k]);
+                vmax = std::max(vmax, m_block_max[k]);
+            }
+        }
+    }
+    if (!(vmin <= vmax)) {
+        return false;
+    }
+    const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
+    const int i0 = static_cast<int>(widened_lo + 0.5f);
+    const int i1 =
+        std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
+    return m_nonzero_prefix[static_cast<std::size_t>(i1) + 1] -
+               m_nonzero_prefix[static_cast<std::size_t>(i0)] >
+           0;
 }
 
 void MappedRayCaster::set_map(const volume::InverseMap& map) {
@@ -143,8 +226,6 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
-    const bool is_rgba = m_source->m_is_rgba;
-    const std::int64_t sn[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
     parallel_for(
         cz_n,
         [&](std::int64_t cz) {
@@ -166,54 +247,7 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                         }
                     }
                     std::uint8_t bits = valid ? detail::MAP_CELL_VALID : 0;
-                    // The source voxels the cell's samples can read, per axis.
-                    std::int64_t b0[3] = {0, 0, 0};
-                    std::int64_t b1[3] = {0, 0, 0};
-                    bool inside = valid;
-                    for (int a = 0; a < 3 && inside; ++a) {
-                        const auto last = static_cast<float>(sn[a] - 1);
-                        const float l = lo[a] - HULL_MARGIN;
-                        const float h = hi[a] + HULL_MARGIN;
-                        if (h < -0.5f || l > last + 0.5f) {
-                            inside = false;  // every sample outside the source: transparent
-                            break;
-                        }
-                        const std::int64_t max_i0 = std::max<std::int64_t>(0, sn[a] - 2);
-                        const std::int64_t v0 =
-                            std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
-                        const std::int64_t v1 =
-                            std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
-                            (sn[a] > 1 ? 1 : 0);
-                        b0[a] = v0 >> BLOCK_SHIFT;
-                        b1[a] = v1 >> BLOCK_SHIFT;
-                    }
-                    bool visible = false;
-                    if (inside) {
-                        float vmin = std::numeric_limits<float>::infinity();
-                        float vmax = -std::numeric_limits<float>::infinity();
-                        for (std::int64_t z = b0[2]; z <= b1[2]; ++z) {
-                            for (std::int64_t y = b0[1]; y <= b1[1]; ++y) {
-                                const std::int64_t row = m_blocks[0] * (y + m_blocks[1] * z);
-                                for (std::int64_t x = b0[0]; x <= b1[0]; ++x) {
-                                    const auto k = static_cast<std::size_t>(row + x);
-                                    vmin = std::min(vmin, m_block_min[k]);
-                                    vmax = std::max(vmax, m_block_max[k]);
-                                }
-                            }
-                        }
-                        if (is_rgba) {
-                            visible = vmax > 0.0f;
-                        } else if (vmin <= vmax) {
-                            const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
-                            const int i0 = static_cast<int>(widened_lo + 0.5f);
-                            const int i1 =
-                                std::min(detail::LUT_SIZE - 1,
-                                         static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
-                            visible = m_nonzero_prefix[static_cast<std::size_t>(i1) + 1] -
-                                          m_nonzero_prefix[static_cast<std::size_t>(i0)] >
-                                      0;
-                        }
-                    }
+                    bool visible = valid && hull_visible(lo, hi);
                     if (visible) {
                         bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
                     }
