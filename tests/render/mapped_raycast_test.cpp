@@ -10,6 +10,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/render/raycast.hpp"
@@ -246,6 +247,36 @@ TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
         EXPECT_EQ(a.pixels, c.pixels) << "1 and 2 threads differ";
         EXPECT_EQ(sa.samples, sc.samples);
         EXPECT_LT(sa.samples, sb.samples);
+    }
+}
+
+// The AVX2 batches are the scalar kernel's bits: images and sample counts, shaded or not, at the
+// default step (Δs/u = 1/2) and another.
+TEST(MappedRayCast, Avx2BatchesMatchTheScalarKernel) {
+    const volume::Volume& source = rgba64();
+    const Deformed d = deform(source, nullptr, Drive::twist, 12);
+    const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 96, 96);
+    volume::InverseMap map;
+    map.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+    if (!has_avx2()) {
+        GTEST_SKIP() << "no AVX2 on this CPU";
+    }
+    for (const double step : {0.0, 0.7 * source.spacing().x}) {
+        for (const bool shading : {false, true}) {
+            RayCastOptions options;
+            options.shading = shading;
+            options.step = step;
+            MappedRayCaster caster(source, nullptr, source, options);
+            caster.set_map(map);
+            Image simd, scalar;
+            const RayCastStats a = caster.render(camera, simd);
+            allow_avx2(false);
+            const RayCastStats b = caster.render(camera, scalar);
+            allow_avx2(true);
+            EXPECT_EQ(simd.pixels, scalar.pixels) << "step " << step << ", shading " << shading;
+            EXPECT_EQ(a.samples, b.samples);
+            EXPECT_GT(a.samples, 0);
+        }
     }
 }
 

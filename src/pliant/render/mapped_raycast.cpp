@@ -10,6 +10,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/render/detail/mapped_raycast_avx2.hpp"
 #include "pliant/render/detail/mapped_raycast_kernel.hpp"
 
 namespace pliant::render {
@@ -322,6 +323,8 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     const std::int64_t num_tiles = static_cast<std::int64_t>(tiles_x) * tiles_y;
     std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_source->m_is_rgba;
+    // The AVX2 batches give the scalar batches' bits (detail/mapped_raycast_avx2.hpp).
+    const bool use_avx2 = detail::mapped_avx2_fits(m);
     parallel_for(
         num_tiles,
         [&](std::int64_t tile) {
@@ -332,8 +335,11 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             std::int64_t samples = 0;
             for (int y = y0; y < y1; ++y) {
                 for (int x = x0; x < x1; ++x) {
-                    const detail::PixelResult p = is_rgba ? detail::mapped_pixel<true>(m, x, y)
-                                                          : detail::mapped_pixel<false>(m, x, y);
+                    const detail::PixelResult p =
+                        use_avx2 ? detail::mapped_pixel<true>(m, x, y, detail::Avx2Batch{})
+                        : is_rgba
+                            ? detail::mapped_pixel<true>(m, x, y, detail::ScalarBatch<true>{})
+                            : detail::mapped_pixel<false>(m, x, y, detail::ScalarBatch<false>{});
                     image.set(x, y, to_rgb8(p.color));
                     samples += p.samples;
                 }

@@ -183,11 +183,29 @@ PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const Gri
     return std::max(n_end, n + 1);
 }
 
-// A composite pixel through the map: the march of march_composite() and the end of
-// end_composite(), with samples taken by mapped_classify(). Samples in a cell without a valid
-// map (a node outside and away from the deformed body) are transparent and not counted.
+// Samples are classified in batches of up to MAP_BATCH along a ray (the AVX2 path classifies a
+// batch 8 wide, detail/mapped_raycast_avx2.hpp), then composited in order; a batch's samples
+// past the early termination are classified (and counted) but not composited.
+inline constexpr int MAP_BATCH = 8;
+
+// mapped_classify<IS_RGBA>() of each of the count ≤ MAP_BATCH cells (the scalar batch).
 template <bool IS_RGBA>
-PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j) {
+struct ScalarBatch {
+    PLIANT_HOST_DEVICE void operator()(const MappedKernel& m, const MapCell* cells, int count,
+                                       Vec3f dir, Sample* out) const {
+        for (int i = 0; i < count; ++i) {
+            out[i] = mapped_classify<IS_RGBA>(m, cells[i], dir);
+        }
+    }
+};
+
+// A composite pixel through the map: the march of march_composite() and the end of
+// end_composite(), with samples classified by `batch` (ScalarBatch, or the AVX2 one: the same
+// bits). Samples in a cell without a valid map (a node outside and away from the deformed body)
+// are transparent and not counted.
+template <bool IS_RGBA, typename Batch>
+PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j,
+                                            const Batch& batch) {
     const RayCastKernel& k = m.target;
     PixelRay p;
     if (!begin_pixel(k, i, j, p)) {
@@ -206,30 +224,44 @@ PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j)
     std::int64_t samples = 0;
     Accumulated c;
     std::int64_t n = 0;
-    while (n < p.num_full) {
-        const MapCell cell = locate_map(m, sample_position(k, r, n));
-        if (k.skipping) {
-            int side = cubes[0][cell.index];
-            for (int q = 1; q < num_cubes && side > 0; ++q) {
-                side = std::max<int>(side, cubes[q][cell.index]);
-            }
-            if (side > 0) {
-                n = map_jump(m, r, cell, side, n, p.num_full);
+    bool terminated = false;
+    while (n < p.num_full && !terminated) {
+        MapCell cells[MAP_BATCH];
+        int count = 0;
+        while (n < p.num_full && count < MAP_BATCH) {
+            const MapCell cell = locate_map(m, sample_position(k, r, n));
+            if (k.skipping) {
+                int side = cubes[0][cell.index];
+                for (int q = 1; q < num_cubes && side > 0; ++q) {
+                    side = std::max<int>(side, cubes[q][cell.index]);
+                }
+                if (side > 0) {
+                    n = map_jump(m, r, cell, side, n, p.num_full);
+                    continue;
+                }
+            } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
+                ++n;
                 continue;
             }
-        } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
+            cells[count++] = cell;
             ++n;
-            continue;
         }
-        ++samples;
-        const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
-        if (s.a > 0.0f) {
-            composite(s, s.a, c.r, c.g, c.b, c.a);
-            if (c.a > k.threshold) {
-                break;
+        if (count == 0) {
+            break;
+        }
+        Sample batch_samples[MAP_BATCH];
+        batch(m, cells, count, p.dir, batch_samples);
+        samples += count;
+        for (int b = 0; b < count; ++b) {
+            const Sample& s = batch_samples[b];
+            if (s.a > 0.0f) {
+                composite(s, s.a, c.r, c.g, c.b, c.a);
+                if (c.a > k.threshold) {
+                    terminated = true;
+                    break;
+                }
             }
         }
-        ++n;
     }
     const float partial = p.length - static_cast<float>(p.num_segments - 1) * k.step;
     if (!(c.a > k.threshold) && partial > 0.0f) {
