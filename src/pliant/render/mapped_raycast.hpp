@@ -38,7 +38,10 @@
 //   - Composite mode only (MIP through the map: InvalidInput).
 // Cost per frame: set_map() is O(map cells) (parallel over layers) plus the empty cubes; a sample
 // costs one more trilinear interpolation of 3 floats (the map) than RayCaster's, and shaded
-// samples read their 6 gradient samples in the source. Scalar kernel only (no AVX2 march yet).
+// samples read their 6 gradient samples in the source. Samples are classified in batches of 8
+// along a ray, then composited in order (a batch's samples past the early termination are
+// classified and counted, not composited); RGBA sources on a CPU with AVX2 classify a batch 8
+// wide (detail/mapped_raycast_avx2.hpp), bitwise the scalar batch.
 // Determinism: 16 × 16 tiles through core/parallel, every pixel the same float operations:
 // bitwise identical images for 1 and N threads.
 #pragma once

@@ -149,8 +149,8 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
     const float* p[LANES];
     alignas(32) float fx[LANES], fy[LANES], fz[LANES];
     for (int l = 0; l < LANES; ++l) {
-        p[l] = m.nodes +
-               3 * (c[l].q[0] + m.node_stride[1] * c[l].q[1] + m.node_stride[2] * c[l].q[2]);
+        p[l] =
+            m.nodes + 3 * (c[l].q[0] + m.node_stride[1] * c[l].q[1] + m.node_stride[2] * c[l].q[2]);
         fx[l] = c[l].f[0];
         fy[l] = c[l].f[1];
         fz[l] = c[l].f[2];
@@ -173,12 +173,10 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
         const __m256 y1 = lerp8(e2, e3, f1);
         g[ch] = lerp8(y0, y1, f2);
         if (m.target.shading) {
-            jac[0][ch] = _mm256_mul_ps(lerp8(lerp8(_mm256_sub_ps(v[1], v[0]),
-                                                   _mm256_sub_ps(v[3], v[2]), f1),
-                                             lerp8(_mm256_sub_ps(v[5], v[4]),
-                                                   _mm256_sub_ps(v[7], v[6]), f1),
-                                             f2),
-                                       inv_b);
+            jac[0][ch] = _mm256_mul_ps(
+                lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f1),
+                      lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f1), f2),
+                inv_b);
             jac[1][ch] =
                 _mm256_mul_ps(lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f2), inv_b);
             jac[2][ch] = _mm256_mul_ps(_mm256_sub_ps(y1, y0), inv_b);
@@ -188,8 +186,8 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
     __m256 inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
     for (int a = 0; a < 3; ++a) {
         inside = _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(-0.5f), _CMP_GE_OQ));
-        inside = _mm256_and_ps(
-            inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(m.source_hi[a]), _CMP_LE_OQ));
+        inside =
+            _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(m.source_hi[a]), _CMP_LE_OQ));
     }
     // 3. classify<true>(s, locate(s, g)).
     Source8 src;
@@ -209,10 +207,12 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
     rgba8(s.values, src, at, fraction, rgba);
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 a = clamp8(rgba[3], _mm256_setzero_ps(), one);
-    const __m256 positive = _mm256_and_ps(inside, _mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ));
+    const __m256 positive =
+        _mm256_and_ps(inside, _mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ));
     __m256 a_step;
     if (s.step_over_unit == 0.5f) {
-        const __m256 half = _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
+        const __m256 half =
+            _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
         a_step = _mm256_blendv_ps(half, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ));
     } else {
         alignas(32) float av[LANES], st[LANES];
@@ -228,7 +228,8 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
         color[ch] = _mm256_mul_ps(rgba[ch], inv);
     }
     // 4. Shading (mapped_classify()): central differences through the map's Jacobian.
-    const __m256 shaded = _mm256_and_ps(positive, _mm256_cmp_ps(a_step, _mm256_setzero_ps(), _CMP_GT_OQ));
+    const __m256 shaded =
+        _mm256_and_ps(positive, _mm256_cmp_ps(a_step, _mm256_setzero_ps(), _CMP_GT_OQ));
     if (m.target.shading && _mm256_movemask_ps(shaded) != 0) {
         __m256 gradient[3];
         for (int axis = 0; axis < 3; ++axis) {
@@ -241,18 +242,19 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
                 _mm256_mul_ps(_mm256_sub_ps(alpha8(s.alpha, src, gp), alpha8(s.alpha, src, gm)),
                               _mm256_set1_ps(m.target.inv_spacing[axis]));
         }
-        const __m256 len2 =
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], gradient[0]),
-                                        _mm256_mul_ps(gradient[1], gradient[1])),
-                          _mm256_mul_ps(gradient[2], gradient[2]));
-        const __m256 dot = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(gradient[0], _mm256_set1_ps(dir.x)),
-                          _mm256_mul_ps(gradient[1], _mm256_set1_ps(dir.y))),
-            _mm256_mul_ps(gradient[2], _mm256_set1_ps(dir.z)));
+        const __m256 len2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], gradient[0]),
+                                                        _mm256_mul_ps(gradient[1], gradient[1])),
+                                          _mm256_mul_ps(gradient[2], gradient[2]));
+        const __m256 dot =
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], _mm256_set1_ps(dir.x)),
+                                        _mm256_mul_ps(gradient[1], _mm256_set1_ps(dir.y))),
+                          _mm256_mul_ps(gradient[2], _mm256_set1_ps(dir.z)));
         const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
         const __m256 cosine = _mm256_div_ps(_mm256_and_ps(dot, abs_mask), _mm256_sqrt_ps(len2));
-        const __m256 f = _mm256_add_ps(_mm256_set1_ps(0.3f), _mm256_mul_ps(_mm256_set1_ps(0.7f), cosine));
-        const __m256 use = _mm256_and_ps(shaded, _mm256_cmp_ps(len2, _mm256_set1_ps(1e-30f), _CMP_GT_OQ));
+        const __m256 f =
+            _mm256_add_ps(_mm256_set1_ps(0.3f), _mm256_mul_ps(_mm256_set1_ps(0.7f), cosine));
+        const __m256 use =
+            _mm256_and_ps(shaded, _mm256_cmp_ps(len2, _mm256_set1_ps(1e-30f), _CMP_GT_OQ));
         for (__m256& ch : color) {
             ch = _mm256_blendv_ps(ch, _mm256_mul_ps(ch, f), use);
         }
