@@ -3,6 +3,7 @@
 //               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
 //               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB]
 //               [--mesh-out MESH.vtu] [--checkpoint-every N] [--resume] [--json]
+//               [--shading] [--resample exact|map]
 //
 // The deformable-volume pipeline of Park & Kye 2022 on a volume file: a tet grid over it
 // (pbd::build_tet_grid: cells of B³ voxels, 5 tets each, only cells near visible voxels unless
@@ -10,6 +11,8 @@
 // one driver for N frames of 1/fps seconds, then resampled back into a grid like the source
 // (volume::Resampler) and written to OUT (any writable volume format, io/volume_io.hpp). With
 // --render, every frame is resampled and ray-cast (render::RayCaster) into an MP4 at --fps.
+// --resample map renders the frames through their inverse map instead (render::MappedRayCaster:
+// no resample per frame; OUT is still the exact resample); --shading shades the frames.
 // VOLUME may be a DICOM folder (--series UID picks a series, default the largest); an oblique
 // volume is resampled to an axis-aligned grid first (one info line on stderr).
 //
@@ -92,6 +95,8 @@ struct DeformCommandOptions {
     double max_memory_mib = 0.0;  // 0: the memory available
     int checkpoint_every = pipeline::DeformRunOptions{}.checkpoint_every;
     bool resume = false;
+    bool shading = false;
+    std::string resample = "exact";
 
     // The driver-specific options the user gave, for the usage check.
     std::vector<std::pair<const CLI::Option*, std::vector<std::string>>> driver_only;
@@ -187,6 +192,8 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.mesh_out = options.mesh_out;
     run.camera = options.camera;
     run.step = options.step;
+    run.shading = options.shading;
+    run.resample = pipeline::parse_resample_mode(options.resample);
     run.progress = frame_progress(stderr_is_terminal() && !global.json);
     run.checkpoint_every = options.checkpoint_every;
     run.resume = options.resume;
@@ -306,6 +313,11 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->type_name("AZ,EL,DIST")
         ->delimiter(',')
         ->check(finite_in_range(-1e6, 1e6));
+    cmd->add_flag("--shading", options->shading, "Video: gradient (headlight) shading");
+    cmd->add_option("--resample", options->resample,
+                    "Video: render each frame from its exact resample (exact, default) or "
+                    "through its inverse map without resampling (map)")
+        ->check(CLI::IsMember({"exact", "map"}));
     add_max_memory_option(*cmd, options->max_memory_mib, "a volume and tet grid that need");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->add_option("--checkpoint-every", options->checkpoint_every,

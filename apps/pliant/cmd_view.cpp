@@ -3,7 +3,7 @@
 //                                [--threshold T] [--clip PX,PY,PZ,NX,NY,NZ] [--shading] [--step S]
 //                                [--preview-divisor D] [--deform [--driver none|wave|twist|bubble]
 //                                [--stiffness K] [--cells B] [--substeps N] [--fps F]
-//                                [--drag-radius R]] [--max-memory MIB]
+//                                [--drag-radius R] [--resample exact|map]] [--max-memory MIB]
 // view options: [--size WxH] [--camera AZ,EL,DIST] [--frames N [--screenshot FILE.png]]
 //               [--no-ui] [--paused] [--sync] [--msaa N]
 //
@@ -12,7 +12,8 @@
 // obstacles shaded like the preview; the left button grabs a cloth vertex and drags it. `volume`
 // shows the library's ray caster live, with transfer function presets, opacity scale, the
 // cleaning threshold and a clipping plane; --deform adds the tet grid + XPBD soft body +
-// resampling of `pliant deform`, drivers and mouse drag.
+// resampling of `pliant deform`, drivers and mouse drag (--resample map: each frame ray-cast
+// through its inverse map instead of resampled, as `pliant deform --resample map`).
 //   --camera AZ,EL,DIST  azimuth, elevation (degrees, render::frame_box's convention) and distance
 //                 from the target (world units; 0 frames the scene), the camera of `pliant render
 //                 --camera` (volume default 30,20,0; cloth default -60,25,0 as the cloth preview).
@@ -38,6 +39,7 @@
 #include "option_values.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/pipeline/cloth_scene_file.hpp"
+#include "pliant/pipeline/deformable_volume.hpp"
 #include "validators.hpp"
 #include "view_options.hpp"
 #ifdef PLIANT_HAS_VIEWER
@@ -55,6 +57,7 @@ struct ViewCommandOptions {
     std::string screenshot;
     std::array<double, 6> clip{};
     std::string driver = "none";
+    std::string resample = "exact";
     bool no_ui = false;
 };
 
@@ -161,14 +164,16 @@ void run_view_volume(const ViewCommandOptions& o, viewer::VolumeViewOptions opti
             render::ClipPlane{{o.clip[0], o.clip[1], o.clip[2]}, {o.clip[3], o.clip[4], o.clip[5]}};
     }
     options.session.driver.kind = viewer::parse_driver_kind(o.driver);
+    options.session.resample = pipeline::parse_resample_mode(o.resample);
     const bool deform_only = cmd->count("--driver") + cmd->count("--stiffness") +
                                  cmd->count("--cells") + cmd->count("--substeps") +
-                                 cmd->count("--fps") + cmd->count("--drag-radius") >
+                                 cmd->count("--fps") + cmd->count("--drag-radius") +
+                                 cmd->count("--resample") >
                              0;
     if (deform_only && !options.session.deform) {
         throw CLI::ValidationError("--deform",
-                                   "--driver, --stiffness, --cells, --substeps, --fps and "
-                                   "--drag-radius apply with --deform only");
+                                   "--driver, --stiffness, --cells, --substeps, --fps, "
+                                   "--drag-radius and --resample apply with --deform only");
     }
 #ifdef PLIANT_HAS_VIEWER
     print_summary(viewer::run_volume_view(o.input, options), global);
@@ -245,6 +250,10 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                   "Deform the volume: tet grid, XPBD soft body, resampling every frame");
     vol->add_option("--driver", volume_o->driver, "Initial driver (with --deform)")
         ->check(CLI::IsMember({"none", "wave", "twist", "bubble"}));
+    vol->add_option("--resample", volume_o->resample,
+                    "Show each frame from its exact resample (exact, default) or through its "
+                    "inverse map without resampling (map; with --deform)")
+        ->check(CLI::IsMember({"exact", "map"}));
     vol->add_option("--stiffness", s.body.stiffness, "PBD stiffness in (0, 1] (default 1)")
         ->check(finite_in_range(1e-6, 1.0));
     vol->add_option("--cells", s.grid.cell_voxels, "Voxels per tet-grid cell side (default 4)")

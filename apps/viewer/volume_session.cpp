@@ -116,17 +116,29 @@ void VolumeSession::build_deformable() {
     m_deformable = std::make_unique<pipeline::DeformableVolume>(
         m_source, m_is_rgba ? nullptr : &m_visibility_tf, m_options.grid, std::filesystem::path(),
         m_options.body);
-    m_targets[0] = m_deformable->target_like();
-    m_targets[1] = m_deformable->target_like();
+    if (m_options.resample == pipeline::ResampleMode::exact) {
+        m_targets[0] = m_deformable->target_like();
+        m_targets[1] = m_deformable->target_like();
+    }
+    m_mapped.reset();
+    m_caster_dirty = true;
     m_front = 0;
     apply_driver();
     resample_front();
 }
 
-void VolumeSession::resample_front() {
+void VolumeSession::fill(int buffer) {
     const Stopwatch watch;
-    m_deformable->resample(m_targets[m_front]);
+    if (m_options.resample == pipeline::ResampleMode::map) {
+        m_deformable->build_map(m_maps[static_cast<std::size_t>(buffer)]);
+    } else {
+        m_deformable->resample(m_targets[static_cast<std::size_t>(buffer)]);
+    }
     m_solver_stats.resample_ms = watch.elapsed_ms();
+}
+
+void VolumeSession::resample_front() {
+    fill(m_front);
     publish();
 }
 
@@ -225,7 +237,11 @@ void VolumeSession::set_threshold(double threshold) {
 
 void VolumeSession::set_clip(const std::optional<render::ClipPlane>& clip) {
     prepare_caster();
-    m_caster->set_clip(clip);  // validates
+    if (uses_map()) {
+        m_mapped->set_clip(clip);  // validates
+    } else {
+        m_caster->set_clip(clip);  // validates
+    }
     m_options.clip = clip;
     ++m_generation;
 }
@@ -298,17 +314,15 @@ bool VolumeSession::start_step() {
     }
     apply_pending_drag();
     const double dt = 1.0 / m_options.fps;
-    volume::Volume& back = m_targets[1 - m_front];
-    m_task.start([this, dt, &back] {
+    const int back = 1 - m_front;
+    m_task.start([this, dt, back] {
         pbd::SoftBody& body = m_deformable->body();
         body.step(dt);
         const pbd::SoftBodyStats stats = body.stats();
         m_solver_stats.step_ms = stats.step_ms;
         m_solver_stats.volume_ratio = stats.volume_ratio;
         m_solver_stats.inverted_tets = stats.inverted_tets;
-        const Stopwatch watch;
-        m_deformable->resample(back);
-        m_solver_stats.resample_ms = watch.elapsed_ms();
+        fill(back);
     });
     return true;
 }
@@ -371,6 +385,32 @@ void VolumeSession::end_drag() {
 }
 
 void VolumeSession::prepare_caster() {
+    if (uses_map()) {
+        const volume::InverseMap& map = m_maps[static_cast<std::size_t>(m_front)];
+        if (m_caster_dirty || !m_mapped) {
+            render::RayCastOptions options;
+            options.step = m_options.step;
+            options.shading = m_options.shading;
+            options.clip = m_options.clip;
+            options.background = m_options.background;
+            if (m_is_rgba) {
+                options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;
+            }
+            m_mapped = std::make_unique<render::MappedRayCaster>(
+                m_source, m_is_rgba ? nullptr : &m_render_tf, m_source, options);
+            m_mapped->set_map(map);
+            m_stats.prepare_ms = m_mapped->prepare_ms() + m_mapped->map_ms();
+        } else if (m_volume_changed) {
+            m_mapped->set_map(map);
+            m_stats.prepare_ms = m_mapped->map_ms();
+        } else {
+            return;
+        }
+        m_stats.prepared = true;
+        m_caster_dirty = false;
+        m_volume_changed = false;
+        return;
+    }
     const volume::Volume& shown = m_deformable ? m_targets[m_front] : m_source;
     if (m_caster && !m_caster_dirty && m_volume_changed) {
         // A new deformed frame, same options: the caster's arrays are reused.
@@ -401,7 +441,8 @@ void VolumeSession::prepare_caster() {
 render::RayCastStats VolumeSession::render(const render::Camera& camera, render::Image& image) {
     m_stats.prepared = false;
     prepare_caster();
-    const render::RayCastStats stats = m_caster->render(camera, image);
+    const render::RayCastStats stats =
+        uses_map() ? m_mapped->render(camera, image) : m_caster->render(camera, image);
     m_stats.render_ms = stats.ms;
     m_stats.samples = stats.samples;
     return stats;

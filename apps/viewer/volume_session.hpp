@@ -22,9 +22,11 @@
 //     radius follow the cursor in the view plane (SoftBody::set_drag).
 //
 // Every frame of a deforming volume: SoftBody::step(1 / fps), resampling into a grid like the
-// source, a new RayCaster over it, one render. Static volumes prepare the RayCaster only when
-// the transfer function, opacity or threshold change. Not thread safe; the library calls
-// parallelise internally and stay deterministic.
+// source, a new RayCaster over it, one render; or with resample = map, the frame's inverse map
+// (DeformableVolume::build_map, double-buffered like the resampled volumes) and one render of
+// the source through it (render::MappedRayCaster, the source prepared once). Static volumes prepare
+// the RayCaster only when the transfer function, opacity or threshold change. Not thread safe; the
+// library calls parallelise internally and stay deterministic.
 #pragma once
 
 #include <array>
@@ -41,7 +43,9 @@
 #include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/image.hpp"
+#include "pliant/render/mapped_raycast.hpp"
 #include "pliant/render/raycast.hpp"
+#include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "pliant/volume/volume.hpp"
 
@@ -75,11 +79,12 @@ struct VolumeSessionOptions {
     DriverSettings driver{};
     double fps = 24.0;          // a frame simulates 1 / fps seconds
     double drag_radius = 0.05;  // box units (fraction of the volume's largest side)
+    pipeline::ResampleMode resample = pipeline::ResampleMode::exact;  // how frames are shown
 };
 
 struct VolumeFrameStats {
     double step_ms = 0.0;      // soft body, last frame
-    double resample_ms = 0.0;  // last resampling
+    double resample_ms = 0.0;  // last resampling (or inverse map, resample = map)
     double prepare_ms = 0.0;   // last RayCaster preparation
     bool prepared = false;     // the last render() prepared a RayCaster
     double render_ms = 0.0;    // last render
@@ -151,6 +156,11 @@ private:
     void resample_front();  // the body as it is, into the shown buffer, published
     void apply_pending_drag();
     void require_deformable(const char* what) const;
+    bool uses_map() const {
+        return m_deformable != nullptr && m_options.resample == pipeline::ResampleMode::map;
+    }
+    // The body's current positions into the shown buffer (resampled volume or inverse map).
+    void fill(int buffer);
 
     volume::Volume m_original;  // as read (RGBA: before the threshold)
     volume::Volume m_source;    // what is deformed and shown (RGBA: thresholded copy)
@@ -164,6 +174,9 @@ private:
     // frame in flight.
     std::array<volume::Volume, 2> m_targets;
     int m_front = 0;
+    // resample = map: the frames' inverse maps (the same double buffer) and their caster.
+    std::array<volume::InverseMap, 2> m_maps;
+    std::unique_ptr<render::MappedRayCaster> m_mapped;
     std::unique_ptr<render::RayCaster> m_caster;
     bool m_caster_dirty = true;     // options changed: a new caster
     bool m_volume_changed = false;  // only the shown volume changed: update() the caster

@@ -154,6 +154,46 @@ TEST(DeformCommand, TwistKeepsVolumeAndWritesAVideo) {
     }
 }
 
+// --resample map renders the frames through their inverse map; the output volume is the exact
+// resample either way, bit for bit.
+TEST(DeformCommand, RendersThroughTheInverseMap) {
+    ScratchDir scratch;
+    ASSERT_EQ(
+        run_cli("volume generate rgba-test " + quoted(scratch / "rt.nrrd") + " --dims 24", scratch)
+            .exit_code,
+        0);
+    const bool has_ffmpeg = std::system("command -v ffmpeg >/dev/null 2>&1") == 0;
+    for (const char* mode : {"exact", "map"}) {
+        SCOPED_TRACE(mode);
+        const std::string name = mode;
+        const std::string video =
+            has_ffmpeg ? " --render " + quoted(scratch / (name + ".mp4")) + " --size 64x48" : "";
+        const CliResult r = run_cli("--json deform " + quoted(scratch / "rt.nrrd") +
+                                        " --driver twist --angle 60 --cells 3 --frames 6 "
+                                        "--shading --resample " +
+                                        name + " -o " + quoted(scratch / (name + ".nrrd")) + video,
+                                    scratch);
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        const nlohmann::json json = nlohmann::json::parse(r.out);
+        EXPECT_EQ(json.at("resample_mode"), name);
+        if (has_ffmpeg) {
+            EXPECT_GT(std::filesystem::file_size(scratch / (name + ".mp4")), 1000u);
+            EXPECT_EQ(json.at("map_ms").get<double>() > 0.0, name == "map");
+        }
+    }
+    const Volume exact = io::read_volume(scratch / "exact.nrrd");
+    const Volume map = io::read_volume(scratch / "map.nrrd");
+    EXPECT_TRUE(std::equal(exact.bytes().begin(), exact.bytes().end(), map.bytes().begin(),
+                           map.bytes().end()));
+    const CliResult bad =
+        run_cli("deform " + quoted(scratch / "rt.nrrd") + " --driver twist --resample nearest -o " +
+                    quoted(scratch / "bad.nrrd"),
+                scratch);
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("--resample"), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd"));
+}
+
 TEST(DeformCommand, DeformsATetGenMesh) {
     ScratchDir scratch;
     ASSERT_EQ(

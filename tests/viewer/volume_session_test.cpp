@@ -202,6 +202,45 @@ TEST(VolumeSession, BackgroundFramesPublishTheSameVolumes) {
     EXPECT_NEAR(background.time(), 5.0 / 24.0, 1e-12);
 }
 
+// resample = map: the frames through their inverse maps, double-buffered like the resampled
+// volumes (background frames = foreground frames), near the exact route's image; a clipping
+// plane and shading reach the mapped caster.
+TEST(VolumeSession, RendersThroughTheInverseMap) {
+    const Volume phantom = volume::shepp_logan_3d(DIMS);
+    const render::Camera camera = camera_for(phantom, 64, 64);
+    VolumeSessionOptions options{.tf = "mri-brain", .deform = true};
+    options.driver.kind = DriverKind::twist;
+    options.driver.twist.ramp_time = 0.2;
+    VolumeSession exact(phantom, options);
+    options.resample = pipeline::ResampleMode::map;
+    VolumeSession background(phantom, options);
+    VolumeSession foreground(phantom, options);
+    render::Image before, during, after, expected, exact_image;
+    for (int f = 1; f <= 4; ++f) {
+        background.render(camera, before);
+        ASSERT_TRUE(background.start_step());
+        background.render(camera, during);
+        EXPECT_EQ(during, before);
+        while (!background.finish_step(false)) {
+        }
+        foreground.step();
+        exact.step();
+        background.render(camera, after);
+        foreground.render(camera, expected);
+        EXPECT_EQ(after, expected) << "frame " << f;
+    }
+    EXPECT_NE(after, before);
+    exact.render(camera, exact_image);
+    EXPECT_LT(differing_pixels(exact_image, after), static_cast<int>(after.pixels.size() / 3));
+    render::Image clipped, shaded;
+    foreground.set_clip(render::ClipPlane{phantom.bounds().center(), {1.0, 0.0, 0.0}});
+    foreground.render(camera, clipped);
+    EXPECT_GT(differing_pixels(clipped, after), 100);
+    foreground.set_shading(true);
+    foreground.render(camera, shaded);
+    EXPECT_GT(differing_pixels(shaded, clipped), 100);
+}
+
 TEST(VolumeSession, ErrorsNameTheProblem) {
     const Volume phantom = volume::shepp_logan_3d({8, 8, 8});
     EXPECT_THROW(VolumeSession(phantom, {.opacity_scale = 0.0}), InvalidInput);

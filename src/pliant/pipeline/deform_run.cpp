@@ -26,6 +26,7 @@
 #include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/render/camera.hpp"
+#include "pliant/render/mapped_raycast.hpp"
 #include "pliant/render/raycast.hpp"
 
 namespace pliant::pipeline {
@@ -213,6 +214,9 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     volume::ResampleStats resampled;
     render::Image image;
     std::optional<render::RayCaster> caster;
+    std::optional<render::MappedRayCaster> mapped;
+    volume::InverseMap map;
+    RunningMean map_ms;
     for (int frame = totals.frame + 1; frame <= options.frames; ++frame) {
         const Stopwatch frame_clock;
         body.step(dt);
@@ -223,12 +227,27 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         max_ratio = std::max(max_ratio, stats.volume_ratio);
         max_inverted = std::max(max_inverted, stats.inverted_tets);
         const bool last = frame == options.frames;
-        if (video || last) {
+        const bool renders = video || (last && !options.still.empty());
+        if (renders && options.resample == ResampleMode::map) {
+            // The frame through its inverse map: no resample, the source prepared once.
+            const Stopwatch clock;
+            deformable.build_map(map);
+            if (!mapped) {
+                mapped.emplace(source, tf, source, ray_options);
+            }
+            mapped->set_map(map);
+            map_ms.add(clock.elapsed_ms());
+            render_ms.add(mapped->render(camera, image).ms);
+            if (video) {
+                video->write(image);
+            }
+        }
+        if (last || (video && options.resample == ResampleMode::exact)) {
             const Stopwatch clock;
             resampled = deformable.resample(target);
             resample_ms.add(clock.elapsed_ms());
         }
-        if (video || (last && !options.still.empty())) {
+        if (renders && options.resample == ResampleMode::exact) {
             // One caster for the run: later frames have the same size and kind, so update()
             // reuses its arrays instead of faulting in a new float copy every frame.
             if (caster) {
@@ -294,6 +313,8 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             {"ms_per_substep", substep_ms.mean()},
             {"step_ms", step_ms.mean()},
             {"resample_ms", resample_ms.mean()},
+            {"resample_mode", name(options.resample)},
+            {"map_ms", map_ms.mean()},
             {"render_ms", render_ms.mean()},
             {"ms_per_frame", frame_ms.mean()},
             {"volume_ratio", stats.volume_ratio},

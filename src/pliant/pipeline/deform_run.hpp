@@ -26,6 +26,7 @@
 #include "pliant/pbd/drivers.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/pipeline/progress.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "pliant/volume/volume.hpp"
@@ -49,6 +50,9 @@ struct DeformRunOptions {
     std::array<int, 2> size{512, 512};
     std::array<double, 3> camera{30.0, 20.0, 0.0};  // azimuth, elevation (degrees), distance
     bool shading = false;
+    // How rendered frames (video, still) are made: resampled (exact) or through the inverse map
+    // (deformable_volume.hpp). The output volume is always the exact resample.
+    ResampleMode resample = ResampleMode::exact;
     double step = 0.0;    // ray-casting step, world units (0: half the smallest spacing)
     ProgressFn progress;  // after every frame (progress.hpp)
     // The most memory the run may need (bytes; memory_budget.hpp's deform_need_bytes, checked

@@ -49,6 +49,25 @@ volume::Volume DeformableVolume::target_like() const {
                                     m_source->origin());
 }
 
+volume::InverseMapStats DeformableVolume::build_map(volume::InverseMap& map) const {
+    return map.build(*m_source, *m_source, rest().tets, rest().positions, m_body->positions(),
+                     {.node_voxels = m_grid ? m_grid->cell_voxels : 4});
+}
+
+ResampleMode parse_resample_mode(const std::string& text) {
+    if (text == "exact") {
+        return ResampleMode::exact;
+    }
+    if (text == "map") {
+        return ResampleMode::map;
+    }
+    throw InvalidInput(fmt::format("resample mode '{}' is not one of exact, map", text));
+}
+
+const char* name(ResampleMode mode) {
+    return mode == ResampleMode::map ? "map" : "exact";
+}
+
 volume::ResampleStats DeformableVolume::resample(volume::Volume& target) const {
     return m_resampler->resample(m_body->positions(), target);
 }

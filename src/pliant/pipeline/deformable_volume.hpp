@@ -15,15 +15,28 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include "pliant/geometry/tet_mesh.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::pipeline {
+
+// How a deformed frame is shown: `exact` resamples every voxel (volume::Resampler) and ray-casts
+// the result (render::RayCaster); `map` builds the frame's inverse map (volume::InverseMap, one
+// node every cell_voxels voxels) and ray-casts the source through it (render::MappedRayCaster),
+// which interpolates once where the exact route interpolates twice (docs/performance.md compares
+// them).
+enum class ResampleMode { exact, map };
+
+// "exact" or "map"; InvalidInput naming both otherwise.
+ResampleMode parse_resample_mode(const std::string& text);
+const char* name(ResampleMode mode);
 
 class DeformableVolume {
 public:
@@ -52,6 +65,10 @@ public:
     volume::Volume target_like() const;
     // The body's current positions resampled into `target` (volume::Resampler::resample).
     volume::ResampleStats resample(volume::Volume& target) const;
+    // The body's current positions as an inverse map over the source's frame (target_like()'s),
+    // one node every cell_voxels voxels of the grid (4 for a TetGen mesh): what
+    // render::MappedRayCaster(source, tf, source, …) renders.
+    volume::InverseMapStats build_map(volume::InverseMap& map) const;
 
 private:
     const volume::Volume* m_source;

@@ -159,6 +159,8 @@ public:
     std::int64_t num_occupied_cells() const;                // macro cells with some opacity
 
 private:
+    friend class MappedRayCaster;  // samples the source's prepared arrays (mapped_raycast.hpp)
+
     // The constructor's work: validation, then the float copy, lookup table, macro cells and
     // empty cubes.
     void prepare(const volume::Volume& volume, const volume::TransferFunction* tf);

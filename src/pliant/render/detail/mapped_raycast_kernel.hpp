@@ -1,0 +1,287 @@
+// The per-pixel kernel of render::MappedRayCaster (render/mapped_raycast.hpp documents the
+// algorithm): the composite march of raycast_kernel.hpp in the deformed (target) frame, every
+// sample taken from the rest (source) volume at the source grid coordinate an InverseMap gives.
+// A pure function of the pixel index over trivially copyable data (GPU-style).
+//
+// Map cells: node cell q (per axis) of the map holds the target grid coordinates [B·q, B·q + B)
+// (B = node_voxels); a sample at target grid coordinate t (clamped to [0, n − 1] as locate()
+// clamps) is interpolated in node cell q = min(⌊t / B⌋, cells − 1) with fraction t / B − q.
+// The occupancy test of a sample is that same cell, and empty-space jumps leave a cube of empty
+// cells through its far planes pulled in by the ray's margin, as raycast_kernel.hpp's jump().
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+
+#include "pliant/core/host_device.hpp"
+#include "pliant/render/detail/raycast_kernel.hpp"
+
+namespace pliant::render::detail {
+
+// Occupancy bits of a map cell.
+inline constexpr std::uint8_t MAP_CELL_VALID = 1;    // its 8 nodes hold source coordinates
+inline constexpr std::uint8_t MAP_CELL_VISIBLE = 2;  // some sample in it may have opacity
+
+struct MappedKernel {
+    // Camera, the target frame (n, inv_spacing, grid_offset, clamp bounds) and the options;
+    // its volume fields are unused.
+    RayCastKernel target;
+    // The source volume as a RayCaster prepares it (values, alpha, lookup table, step opacity);
+    // its camera and macro-cell fields are unused.
+    RayCastKernel source;
+    const float* nodes = nullptr;             // 3 floats per node (InverseMap::node_coordinates())
+    std::int64_t node_stride[3] = {0, 0, 0};  // in nodes: 1, nx, nx·ny
+    int cells[3] = {0, 0, 0};                 // map cells per axis: nodes − 1
+    float b = 4.0f;                           // node_voxels
+    float inv_b = 0.25f;
+    const std::uint8_t* occupancy = nullptr;  // per map cell: MAP_CELL_* bits
+    const std::uint8_t* empty_cube[8] = {};   // per octant, per map cell (empty_cubes())
+    float source_hi[3] = {0.0f, 0.0f, 0.0f};  // the source box [−0.5, n − 0.5] per axis
+};
+static_assert(std::is_trivially_copyable_v<MappedKernel>);
+
+// A sample's map cell and the fraction within it.
+struct MapCell {
+    int q[3];
+    float f[3];
+    std::int64_t index;  // cell index (x fastest)
+};
+
+PLIANT_HOST_DEVICE inline MapCell locate_map(const MappedKernel& m, Vec3f g) {
+    MapCell c{};
+    for (int a = 0; a < 3; ++a) {
+        const float x = clampf(g[a], 0.0f, m.target.g_max[a]) * m.inv_b;
+        c.q[a] = std::min(static_cast<int>(x), m.cells[a] - 1);
+        c.f[a] = x - static_cast<float>(c.q[a]);
+    }
+    c.index = c.q[0] + static_cast<std::int64_t>(m.cells[0]) *
+                           (c.q[1] + static_cast<std::int64_t>(m.cells[1]) * c.q[2]);
+    return c;
+}
+
+// The source grid coordinate of the sample in map cell c (trilinear in the 8 nodes) and, when
+// jacobian is not null, its derivatives along the target's grid axes: jacobian[a] = ∂g/∂t_a.
+PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapCell& c,
+                                               Vec3f* jacobian) {
+    const float* p = m.nodes + 3 * (c.q[0] + m.node_stride[1] * c.q[1] + m.node_stride[2] * c.q[2]);
+    const std::int64_t dx = 3, dy = 3 * m.node_stride[1], dz = 3 * m.node_stride[2];
+    const std::int64_t off[8] = {0, dx, dy, dy + dx, dz, dz + dx, dz + dy, dz + dy + dx};
+    const float fx = c.f[0], fy = c.f[1], fz = c.f[2];
+    Vec3f out;
+    for (int ch = 0; ch < 3; ++ch) {
+        float v[8];
+        for (int i = 0; i < 8; ++i) {
+            v[i] = p[off[i] + ch];
+        }
+        const float e0 = lerp(v[0], v[1], fx);
+        const float e1 = lerp(v[2], v[3], fx);
+        const float e2 = lerp(v[4], v[5], fx);
+        const float e3 = lerp(v[6], v[7], fx);
+        const float f0 = lerp(e0, e1, fy);
+        const float f1 = lerp(e2, e3, fy);
+        out[ch] = lerp(f0, f1, fz);
+        if (jacobian != nullptr) {
+            jacobian[0][ch] =
+                lerp(lerp(v[1] - v[0], v[3] - v[2], fy), lerp(v[5] - v[4], v[7] - v[6], fy), fz) *
+                m.inv_b;
+            jacobian[1][ch] = lerp(e1 - e0, e3 - e2, fz) * m.inv_b;
+            jacobian[2][ch] = (f1 - f0) * m.inv_b;
+        }
+    }
+    return out;
+}
+
+// Whether source grid coordinate g lies in the source box (outside it the source is 0, as the
+// resampler samples it).
+PLIANT_HOST_DEVICE inline bool in_source(const MappedKernel& m, Vec3f g) {
+    return g.x >= -0.5f && g.x <= m.source_hi[0] && g.y >= -0.5f && g.y <= m.source_hi[1] &&
+           g.z >= -0.5f && g.z <= m.source_hi[2];
+}
+
+// The shaded value at source grid coordinate g: shading_value<IS_RGBA>(s, g), bit for bit; for
+// RGBA from the α copy (s.alpha, 4 bytes per voxel) when the source has one.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline float mapped_shading_value(const RayCastKernel& s, Vec3f g) {
+    if constexpr (IS_RGBA) {
+        if (s.alpha != nullptr) {
+            const Trilinear t = locate(s, g);
+            const float* p = s.alpha + voxel_index(s, t);
+            const std::int64_t dx = s.d[0], dy = s.d[1], dz = s.d[2];
+            const float c00 = lerp(p[0], p[dx], t.fx);
+            const float c10 = lerp(p[dy], p[dy + dx], t.fx);
+            const float c01 = lerp(p[dz], p[dz + dx], t.fx);
+            const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
+            return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+        }
+    }
+    return shading_value<IS_RGBA>(s, g);
+}
+
+// The classified sample of map cell c (straight colour, opacity for a full step), shaded when
+// the options ask: the gradient of the shaded value in the target frame by central differences
+// one target voxel apart, each taken in the source at g ± ∂g/∂t_a (the map linearized at the
+// sample). Zero opacity outside the source box.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c,
+                                                 Vec3f dir) {
+    const RayCastKernel& s = m.source;
+    Vec3f jac[3];
+    const Vec3f g = map_coordinate(m, c, m.target.shading ? jac : nullptr);
+    if (!in_source(m, g)) {
+        return {0.0f, 0.0f, 0.0f, 0.0f};
+    }
+    Sample out = classify<IS_RGBA>(s, locate(s, g));
+    if (out.a > 0.0f && m.target.shading) {
+        const Vec3f& inv = m.target.inv_spacing;
+        const float gx = (mapped_shading_value<IS_RGBA>(s, g + jac[0]) -
+                          mapped_shading_value<IS_RGBA>(s, g - jac[0])) *
+                         inv.x;
+        const float gy = (mapped_shading_value<IS_RGBA>(s, g + jac[1]) -
+                          mapped_shading_value<IS_RGBA>(s, g - jac[1])) *
+                         inv.y;
+        const float gz = (mapped_shading_value<IS_RGBA>(s, g + jac[2]) -
+                          mapped_shading_value<IS_RGBA>(s, g - jac[2])) *
+                         inv.z;
+        const float len2 = gx * gx + gy * gy + gz * gz;
+        if (len2 > 1e-30f) {
+            const float cosine = std::fabs(gx * dir.x + gy * dir.y + gz * dir.z) / std::sqrt(len2);
+            const float f = 0.3f + 0.7f * cosine;
+            out.r *= f;
+            out.g *= f;
+            out.b *= f;
+        }
+    }
+    return out;
+}
+
+// jump() for map cells: the first sample past the cube of `side` empty map cells that has c as
+// its corner and extends along the ray, at least n + 1.
+PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const GridRay& r,
+                                                const MapCell& c, int side, std::int64_t n,
+                                                std::int64_t num_full) {
+    float t_exit = r.t_far;
+    for (int a = 0; a < 3; ++a) {
+        if (r.gd[a] > 0.0f) {
+            const float plane = static_cast<float>(c.q[a] + side) * m.b - r.margin;
+            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
+        } else if (r.gd[a] < 0.0f) {
+            const float plane = static_cast<float>(c.q[a] - side + 1) * m.b + r.margin;
+            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
+        }
+    }
+    const float x = (t_exit - r.t_near) * m.target.inv_step - 0.5f;
+    if (!(x < static_cast<float>(num_full))) {
+        return num_full;
+    }
+    std::int64_t n_end = 0;
+    if (x > 0.0f) {
+        n_end = static_cast<std::int64_t>(x);
+        n_end += static_cast<float>(n_end) < x ? 1 : 0;
+    }
+    return std::max(n_end, n + 1);
+}
+
+// Samples are classified in batches of up to MAP_BATCH along a ray (the AVX2 path classifies a
+// batch 8 wide, detail/mapped_raycast_avx2.hpp), then composited in order; a batch's samples
+// past the early termination are classified (and counted) but not composited.
+inline constexpr int MAP_BATCH = 8;
+
+// mapped_classify<IS_RGBA>() of each of the count ≤ MAP_BATCH cells (the scalar batch).
+template <bool IS_RGBA>
+struct ScalarBatch {
+    PLIANT_HOST_DEVICE void operator()(const MappedKernel& m, const MapCell* cells, int count,
+                                       Vec3f dir, Sample* out) const {
+        for (int i = 0; i < count; ++i) {
+            out[i] = mapped_classify<IS_RGBA>(m, cells[i], dir);
+        }
+    }
+};
+
+// A composite pixel through the map: the march of march_composite() and the end of
+// end_composite(), with samples classified by `batch` (ScalarBatch, or the AVX2 one: the same
+// bits). Samples in a cell without a valid map (a node outside and away from the deformed body)
+// are transparent and not counted.
+template <bool IS_RGBA, typename Batch>
+PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j,
+                                            const Batch& batch) {
+    const RayCastKernel& k = m.target;
+    PixelRay p;
+    if (!begin_pixel(k, i, j, p)) {
+        return PixelResult{k.background, 0};
+    }
+    const GridRay& r = p.r;
+    const int octant = octant_of(r);
+    const std::uint8_t* cubes[4] = {m.empty_cube[octant], nullptr, nullptr, nullptr};
+    int num_cubes = 1;
+    const int zero = zero_axes_of(r);
+    for (int flip = 1; flip < 8; ++flip) {
+        if ((flip & ~zero) == 0 && num_cubes < 4) {
+            cubes[num_cubes++] = m.empty_cube[octant ^ flip];
+        }
+    }
+    std::int64_t samples = 0;
+    Accumulated c;
+    std::int64_t n = 0;
+    bool terminated = false;
+    while (n < p.num_full && !terminated) {
+        MapCell cells[MAP_BATCH];
+        int count = 0;
+        while (n < p.num_full && count < MAP_BATCH) {
+            const MapCell cell = locate_map(m, sample_position(k, r, n));
+            if (k.skipping) {
+                int side = cubes[0][cell.index];
+                for (int q = 1; q < num_cubes && side > 0; ++q) {
+                    side = std::max<int>(side, cubes[q][cell.index]);
+                }
+                if (side > 0) {
+                    n = map_jump(m, r, cell, side, n, p.num_full);
+                    continue;
+                }
+            } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
+                ++n;
+                continue;
+            }
+            cells[count++] = cell;
+            ++n;
+        }
+        if (count == 0) {
+            break;
+        }
+        Sample batch_samples[MAP_BATCH];
+        batch(m, cells, count, p.dir, batch_samples);
+        samples += count;
+        for (int b = 0; b < count; ++b) {
+            const Sample& s = batch_samples[b];
+            if (s.a > 0.0f) {
+                composite(s, s.a, c.r, c.g, c.b, c.a);
+                if (c.a > k.threshold) {
+                    terminated = true;
+                    break;
+                }
+            }
+        }
+    }
+    const float partial = p.length - static_cast<float>(p.num_segments - 1) * k.step;
+    if (!(c.a > k.threshold) && partial > 0.0f) {
+        const float tm =
+            r.t_near + static_cast<float>(p.num_segments - 1) * k.step + 0.5f * partial;
+        const MapCell cell = locate_map(m, r.go + tm * r.gd);
+        const std::uint8_t need = k.skipping ? MAP_CELL_VISIBLE : MAP_CELL_VALID;
+        if ((m.occupancy[cell.index] & need) != 0) {
+            ++samples;
+            const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
+            if (s.a > 0.0f) {
+                const float ratio = partial / k.step;
+                const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
+                composite(s, a, c.r, c.g, c.b, c.a);
+            }
+        }
+    }
+    const float rest = 1.0f - c.a;
+    return {{c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b},
+            samples};
+}
+
+}  // namespace pliant::render::detail

@@ -1,0 +1,358 @@
+#include "pliant/render/mapped_raycast.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <span>
+
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+#include "pliant/render/detail/mapped_raycast_avx2.hpp"
+#include "pliant/render/detail/mapped_raycast_kernel.hpp"
+
+namespace pliant::render {
+
+namespace {
+
+constexpr int BLOCK = 2;        // scalar sources' occupancy blocks, voxels per edge
+constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
+// Source grid units the box of a map cell's node values is widened by: far above the rounding
+// of the float trilinear interpolation of coordinates below a few thousand.
+constexpr float HULL_MARGIN = 1.0f / 32.0f;
+
+double smallest(const Vec3d& s) {
+    return std::min({s.x, s.y, s.z});
+}
+
+}  // namespace
+
+MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::TransferFunction* tf,
+                                 const volume::Volume& target, const RayCastOptions& options)
+    : m_options(options) {
+    const Stopwatch watch;
+    if (target.empty()) {
+        throw InvalidInput("raycast through a map: the target frame is empty (no voxels)");
+    }
+    if (options.mode != RayCastMode::composite) {
+        throw InvalidInput(
+            "raycast through a map: only composite rendering is supported (got mip); resample "
+            "the volume instead");
+    }
+    // The source prepared with the target's step and opacity unit (those of a RayCaster of the
+    // resampled target).
+    RayCastOptions source_options = options;
+    source_options.step = default_step(target, options);
+    source_options.opacity_unit =
+        options.opacity_unit > 0.0 ? options.opacity_unit : smallest(target.spacing());
+    // The gradients are taken here, not by the source's march; shading keeps the α copy of RGBA
+    // sources for them.
+    source_options.clip.reset();
+    m_source = std::make_unique<RayCaster>(source, tf, source_options);
+    m_step = m_source->step();
+    m_source_dims = source.dims();
+    m_target_dims = target.dims();
+    m_target_spacing = target.spacing();
+    m_target_origin = target.origin();
+
+    // Lookup entries with opacity (scalar sources), as RayCaster's cell test counts them.
+    m_nonzero_prefix.fill(0);
+    if (!m_source->m_is_rgba) {
+        for (std::size_t e = 0; e < static_cast<std::size_t>(detail::LUT_SIZE); ++e) {
+            m_nonzero_prefix[e + 1] =
+                m_nonzero_prefix[e] + (m_source->m_lut[4 * e + 3] > 0.0f ? 1 : 0);
+        }
+    }
+    const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
+    const float* values = m_source->m_values.data();
+    if (!m_source->m_is_rgba) {
+        // Per source block of 2³ voxels: min and max of the lookup coordinates.
+        for (int a = 0; a < 3; ++a) {
+            m_blocks[static_cast<std::size_t>(a)] = (n[a] + BLOCK - 1) / BLOCK;
+        }
+        const std::int64_t num_blocks = m_blocks[0] * m_blocks[1] * m_blocks[2];
+        m_block_min.assign(static_cast<std::size_t>(num_blocks),
+                           std::numeric_limits<float>::infinity());
+        m_block_max.assign(static_cast<std::size_t>(num_blocks),
+                           -std::numeric_limits<float>::infinity());
+        parallel_for(
+            m_blocks[2],
+            [&](std::int64_t bz) {
+                for (std::int64_t z = bz * BLOCK; z < std::min(n[2], (bz + 1) * BLOCK); ++z) {
+                    for (std::int64_t y = 0; y < n[1]; ++y) {
+                        const float* row = values + n[0] * (y + n[1] * z);
+                        const std::int64_t first =
+                            m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            const auto b = static_cast<std::size_t>(first + (x >> BLOCK_SHIFT));
+                            m_block_min[b] = std::min(m_block_min[b], row[x]);
+                            m_block_max[b] = std::max(m_block_max[b], row[x]);
+                        }
+                    }
+                }
+            },
+            1);
+    }
+    if (m_source->m_is_rgba) {
+        // Summed-volume table of the voxels with α > 0: m_sat[(x + 1) + sx (y + 1) + sxy (z + 1)]
+        // counts those in [0, x] × [0, y] × [0, z] (row and layer 0 are zeros).
+        const std::int64_t sx = n[0] + 1, sxy = sx * (n[1] + 1);
+        m_sat.assign(static_cast<std::size_t>(sxy * (n[2] + 1)), 0);
+        parallel_for(
+            n[2],
+            [&](std::int64_t z) {
+                std::int32_t* layer = m_sat.data() + sxy * (z + 1);
+                for (std::int64_t y = 0; y < n[1]; ++y) {
+                    const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
+                    std::int32_t* out = layer + sx * (y + 1);
+                    const std::int32_t* above = layer + sx * y;
+                    std::int32_t run = 0;
+                    for (std::int64_t x = 0; x < n[0]; ++x) {
+                        run += row[4 * x] > 0.0f ? 1 : 0;
+                        out[x + 1] = run + above[x + 1];
+                    }
+                }
+            },
+            1);
+        for (std::int64_t z = 1; z < n[2]; ++z) {
+            std::int32_t* layer = m_sat.data() + sxy * (z + 1);
+            const std::int32_t* below = layer - sxy;
+            for (std::int64_t i = 0; i < sxy; ++i) {
+                layer[i] += below[i];
+            }
+        }
+    }
+    m_prepare_ms = watch.elapsed_ms();
+}
+
+MappedRayCaster::~MappedRayCaster() = default;
+
+void MappedRayCaster::set_clip(const std::optional<ClipPlane>& clip) {
+    m_source->set_clip(clip);  // validates
+    m_source->set_clip(std::nullopt);
+    m_options.clip = clip;
+}
+
+std::int64_t MappedRayCaster::num_visible_cells() const {
+    std::int64_t count = 0;
+    for (const std::uint8_t v : m_visible) {
+        count += v;
+    }
+    return count;
+}
+
+bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
+    // The source voxels samples in the box [lo, hi] (source grid coordinates) can read.
+    std::int64_t v0[3] = {0, 0, 0};
+    std::int64_t v1[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t n = m_source_dims[static_cast<std::size_t>(a)];
+        const auto last = static_cast<float>(n - 1);
+        const float l = lo[a] - HULL_MARGIN;
+        const float h = hi[a] + HULL_MARGIN;
+        if (h < -0.5f || l > last + 0.5f) {
+            return false;  // every sample outside the source: transparent
+        }
+        const std::int64_t max_i0 = std::max<std::int64_t>(0, n - 2);
+        v0[a] = std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
+        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
+                (n > 1 ? 1 : 0);
+    }
+    if (m_source->m_is_rgba) {
+        // Voxels with α > 0 in the box, from the summed-volume table.
+        const std::int64_t sx = m_source_dims[0] + 1;
+        const std::int64_t sxy = sx * (m_source_dims[1] + 1);
+        const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+            return static_cast<std::int64_t>(m_sat[static_cast<std::size_t>(x + sx * y + sxy * z)]);
+        };
+        const std::int64_t x0 = v0[0], y0 = v0[1], z0 = v0[2];
+        const std::int64_t x1 = v1[0] + 1, y1 = v1[1] + 1, z1 = v1[2] + 1;
+        const std::int64_t count = at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) -
+                                   at(x1, y1, z0) + at(x0, y0, z1) + at(x0, y1, z0) +
+                                   at(x1, y0, z0) - at(x0, y0, z0);
+        return count > 0;
+    }
+    float vmin = std::numeric_limits<float>::infinity();
+    float vmax = -std::numeric_limits<float>::infinity();
+    for (std::int64_t z = v0[2] >> BLOCK_SHIFT; z <= v1[2] >> BLOCK_SHIFT; ++z) {
+        for (std::int64_t y = v0[1] >> BLOCK_SHIFT; y <= v1[1] >> BLOCK_SHIFT; ++y) {
+            const std::int64_t row = m_blocks[0] * (y + m_blocks[1] * z);
+            for (std::int64_t x = v0[0] >> BLOCK_SHIFT; x <= v1[0] >> BLOCK_SHIFT; ++x) {
+                const auto k = static_cast<std::size_t>(row + x);
+                vmin = std::min(vmin, m_block_min[k]);
+                vmax = std::max(vmax, m_block_max[k]);
+            }
+        }
+    }
+    if (!(vmin <= vmax)) {
+        return false;
+    }
+    const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
+    const int i0 = static_cast<int>(widened_lo + 0.5f);
+    const int i1 =
+        std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
+    return m_nonzero_prefix[static_cast<std::size_t>(i1) + 1] -
+               m_nonzero_prefix[static_cast<std::size_t>(i0)] >
+           0;
+}
+
+void MappedRayCaster::set_map(const volume::InverseMap& map) {
+    const Stopwatch watch;
+    const std::array<std::int64_t, 3>& nodes = map.nodes();
+    const int b = map.node_voxels();
+    if (nodes[0] == 0) {
+        throw InvalidInput("raycast through a map: the map was not built");
+    }
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t expected = (m_target_dims[static_cast<std::size_t>(a)] - 1) / b + 2;
+        if (nodes[static_cast<std::size_t>(a)] != expected) {
+            throw InvalidInput(fmt::format(
+                "raycast through a map: the map has {} nodes along axis {}, expected {} for the "
+                "target's {} voxels at {} voxels per node",
+                nodes[static_cast<std::size_t>(a)], a, expected,
+                m_target_dims[static_cast<std::size_t>(a)], b));
+        }
+    }
+    m_map = &map;
+    for (int a = 0; a < 3; ++a) {
+        m_cells[static_cast<std::size_t>(a)] =
+            static_cast<int>(nodes[static_cast<std::size_t>(a)] - 1);
+    }
+    const std::int64_t cx_n = m_cells[0], cy_n = m_cells[1], cz_n = m_cells[2];
+    const auto total = static_cast<std::size_t>(cx_n * cy_n * cz_n);
+    m_occupancy.resize(total);
+    m_visible.resize(total);
+    const float* g = map.node_coordinates().data();
+    const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
+    const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
+    parallel_for(
+        cz_n,
+        [&](std::int64_t cz) {
+            for (std::int64_t cy = 0; cy < cy_n; ++cy) {
+                for (std::int64_t cx = 0; cx < cx_n; ++cx) {
+                    const auto cell = static_cast<std::size_t>(cx + cx_n * (cy + cy_n * cz));
+                    const std::int64_t base = cx + nx * cy + nxy * cz;
+                    float lo[3] = {std::numeric_limits<float>::infinity(),
+                                   std::numeric_limits<float>::infinity(),
+                                   std::numeric_limits<float>::infinity()};
+                    float hi[3] = {-lo[0], -lo[1], -lo[2]};
+                    bool valid = true;
+                    for (const std::int64_t o : off) {
+                        const float* v = g + 3 * (base + o);
+                        valid = valid && !std::isnan(v[0]);
+                        for (int a = 0; a < 3; ++a) {
+                            lo[a] = std::min(lo[a], v[a]);
+                            hi[a] = std::max(hi[a], v[a]);
+                        }
+                    }
+                    std::uint8_t bits = valid ? detail::MAP_CELL_VALID : 0;
+                    bool visible = valid && hull_visible(lo, hi);
+                    if (visible) {
+                        bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
+                    }
+                    m_occupancy[cell] = bits;
+                    m_visible[cell] = visible ? 1 : 0;
+                }
+            }
+        },
+        1);
+    m_empty_cube.resize(8 * total);
+    parallel_for(
+        8,
+        [&](std::int64_t octant) {
+            detail::empty_cubes(m_visible, m_cells.data(), static_cast<int>(octant),
+                                std::span<std::uint8_t>(m_empty_cube)
+                                    .subspan(static_cast<std::size_t>(octant) * total, total));
+        },
+        1);
+    m_map_ms = watch.elapsed_ms();
+}
+
+RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
+    if (m_map == nullptr) {
+        throw InvalidInput("raycast through a map: set_map() was not called");
+    }
+    const Stopwatch watch;
+    detail::MappedKernel m;
+    m_source->fill_kernel(m.source);
+    detail::RayCastKernel& k = m.target;
+    k = m.source;  // options (step, opacity correction, threshold, background, skipping)
+    k.width = camera.width();
+    k.height = camera.height();
+    k.is_perspective = camera.projection() == Projection::perspective;
+    k.eye = vec3_cast<float>(camera.eye() - m_target_origin);
+    k.forward = vec3_cast<float>(camera.forward());
+    k.right = vec3_cast<float>(camera.right());
+    k.up = vec3_cast<float>(camera.up());
+    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+    const Vec3d inv{1.0 / m_target_spacing.x, 1.0 / m_target_spacing.y, 1.0 / m_target_spacing.z};
+    k.inv_spacing = vec3_cast<float>(inv);
+    for (int a = 0; a < 3; ++a) {
+        k.n[a] = static_cast<int>(m_target_dims[static_cast<std::size_t>(a)]);
+        k.g_max[a] = static_cast<float>(k.n[a] - 1);
+        k.max_i0[a] = std::max(0, k.n[a] - 2);
+        m.source_hi[a] = static_cast<float>(m_source_dims[static_cast<std::size_t>(a)]) - 0.5f;
+        m.cells[a] = m_cells[static_cast<std::size_t>(a)];
+    }
+    k.shading = m_options.shading;
+    k.skipping = m_options.empty_space_skipping;
+    k.has_clip = false;
+    if (m_options.clip) {
+        const Vec3d nrm = m_options.clip->normal / norm(m_options.clip->normal);
+        k.has_clip = true;
+        k.clip_normal = vec3_cast<float>(nrm);
+        k.clip_offset = static_cast<float>(dot(nrm, m_options.clip->point - m_target_origin));
+    }
+    m.nodes = m_map->node_coordinates().data();
+    m.node_stride[0] = 1;
+    m.node_stride[1] = m_map->nodes()[0];
+    m.node_stride[2] = m_map->nodes()[0] * m_map->nodes()[1];
+    m.b = static_cast<float>(m_map->node_voxels());
+    m.inv_b = 1.0f / m.b;
+    m.occupancy = m_occupancy.data();
+    for (int octant = 0; octant < 8; ++octant) {
+        m.empty_cube[octant] =
+            m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
+    }
+
+    image = Image(k.width, k.height);
+    const int tiles_x = (k.width + detail::TILE - 1) / detail::TILE;
+    const int tiles_y = (k.height + detail::TILE - 1) / detail::TILE;
+    const std::int64_t num_tiles = static_cast<std::int64_t>(tiles_x) * tiles_y;
+    std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
+    const bool is_rgba = m_source->m_is_rgba;
+    // The AVX2 batches give the scalar batches' bits (detail/mapped_raycast_avx2.hpp).
+    const bool use_avx2 = detail::mapped_avx2_fits(m);
+    parallel_for(
+        num_tiles,
+        [&](std::int64_t tile) {
+            const int x0 = static_cast<int>(tile % tiles_x) * detail::TILE;
+            const int y0 = static_cast<int>(tile / tiles_x) * detail::TILE;
+            const int x1 = std::min(x0 + detail::TILE, k.width);
+            const int y1 = std::min(y0 + detail::TILE, k.height);
+            std::int64_t samples = 0;
+            for (int y = y0; y < y1; ++y) {
+                for (int x = x0; x < x1; ++x) {
+                    const detail::PixelResult p =
+                        use_avx2 ? detail::mapped_pixel<true>(m, x, y, detail::Avx2Batch{})
+                        : is_rgba
+                            ? detail::mapped_pixel<true>(m, x, y, detail::ScalarBatch<true>{})
+                            : detail::mapped_pixel<false>(m, x, y, detail::ScalarBatch<false>{});
+                    image.set(x, y, to_rgb8(p.color));
+                    samples += p.samples;
+                }
+            }
+            tile_samples[static_cast<std::size_t>(tile)] = samples;
+        },
+        1);
+    RayCastStats stats;
+    for (const std::int64_t s : tile_samples) {
+        stats.samples += s;
+    }
+    stats.ms = watch.elapsed_ms();
+    return stats;
+}
+
+}  // namespace pliant::render
