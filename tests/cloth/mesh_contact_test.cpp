@@ -231,6 +231,25 @@ TEST(MeshContact, ABladeBetweenTheVerticesIsCaughtByTheEdges) {
     }
     EXPECT_EQ(cloth, sheet.positions);
     EXPECT_GT(crossing_edges(cloth, topology, high), 0);
+
+    // A finer sheet (many edges per thread): the same bits for 1 and 4 threads.
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        ClothSolver fine(test::flat_sheet(40, 0.2, 0.0), material());
+        fine.set_gravity({0.0, 0.0, 0.0});
+        const TriangleMeshD between = blade(0.0275, -0.25, 0.2);  // 2.5 mm from two columns
+        fine.add_animated_mesh_obstacle(MeshObstacle(between),
+                                        animate(between, 2, 100.0, false, [](Vec3d p, int k) {
+                                            return p + Vec3d{0, 0, 0.15 * k};
+                                        }));
+        EXPECT_GT(fine.step(0.01, 10).obstacle_edge_contacts, 0);
+        set_num_threads(0);
+        return std::vector<Vec3d>(fine.positions().begin(), fine.positions().end());
+    };
+    const std::vector<Vec3d> one = run(1);
+    const std::vector<Vec3d> four = run(4);
+    ASSERT_EQ(one.size(), four.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), four.data(), one.size() * sizeof(Vec3d)));
 }
 
 TEST(MeshContact, FrictionDragsTheClothWithTheSurfacesOwnMotion) {

@@ -2,10 +2,10 @@
 // needs no Python: one closed, outward-wound (counter-clockwise seen from outside) triangle mesh
 // per phase of a walk cycle, the same vertices and triangles at every phase, in metres, +z up,
 // feet at z = 0, facing -y. Parts: a torso (an elliptic capsule, half-axes 0.17 m across, along
-// x, and 0.1054 m deep, along y, from the hips at z = 0.95 m to the shoulders at 1.45 m), a head, two legs and two
-// arms (capsules). At phase p ∈ [0, 1) the legs swing ±swing_degrees · sin 2πp about the hip
-// joints in opposite phase, the arms swing against the legs (0.8 of it), the hips turn
-// turn_degrees · sin 2πp about z, the chest half as much the other way, and the torso twists
+// x, and 0.1054 m deep, along y, from the hips at z = 0.95 m to the shoulders at 1.45 m), a head,
+// two legs and two arms (capsules). At phase p ∈ [0, 1) the legs swing ±swing_degrees · sin 2πp
+// about the hip joints in opposite phase, the arms swing against the legs (0.8 of it), the hips
+// turn turn_degrees · sin 2πp about z, the chest half as much the other way, and the torso twists
 // smoothly between them (a deformation, not a rigid motion). Phase 0 stands straight. The parts
 // overlap where they join: a point is inside the body when it is inside any part (generalized
 // winding number ≥ 1).
