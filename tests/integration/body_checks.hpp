@@ -7,9 +7,9 @@
 //     Van Oosterom and Strackee's formula; w ≥ 1 inside some part of a body of closed, outward
 //     parts, 0 outside.
 //   edges_crossing(cloth, body): the cloth's edges (of its triangles) that cross a triangle of
-//     the body: the segment's ends strictly on opposite sides of the triangle's plane and the
-//     line through them strictly inside its three edges (orientation signs in double; a box test
-//     first).
+//     the body (edges_crossing(body, cloth): the body's edges through the cloth's triangles): the
+//     segment's ends strictly on opposite sides of the triangle's plane and the line through them
+//     strictly inside its three edges (orientation signs in double; a box test first).
 #pragma once
 
 #include <algorithm>

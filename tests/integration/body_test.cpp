@@ -58,6 +58,7 @@ TEST(BodyScene, ClothOnATurningBodyNeverEntersItAndStaysIntersectionFree) {
         const geometry::TriangleMeshD body = io::read_mesh(SCENES / "stress" / "body" / name);
         EXPECT_EQ(vertices_inside(cloth, body), 0) << "frame " << f << ": cloth vertices inside";
         EXPECT_EQ(edges_crossing(cloth, body), 0) << "frame " << f << ": cloth edges through it";
+        EXPECT_EQ(edges_crossing(body, cloth), 0) << "frame " << f << ": body edges through cloth";
     }
 }
 
