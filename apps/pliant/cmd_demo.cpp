@@ -356,11 +356,11 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
                                         {"preview", pipeline::preview_of(stats)}};
     }
 
-    // Step 4a: a skirt sewn from two flat panels on a turning mannequin (garment_scene.hpp).
+    // Step 4a: a skirt sewn from two flat panels on a walking mannequin (garment_scene.hpp).
     {
         const std::filesystem::path garment_dir = dir / "garment";
         const int frames = options.cloth_frames >= 0 ? options.cloth_frames : 96;
-        say(quiet, fmt::format("a skirt of two panels sewn on a turning mannequin "
+        say(quiet, fmt::format("a skirt of two panels sewn on a walking mannequin "
                                "({}/scene.json): {} frames:\n",
                                garment_dir.string(), frames));
         const nlohmann::ordered_json stats = pipeline::garment_demo(garment_dir, frames, progress);

@@ -126,6 +126,7 @@ the attributes below can be changed before the scene is simulated.
         .def_readonly("solve_ms", &cloth::ClothStepStats::solve_ms)
         .def_readonly("obstacle_contacts", &cloth::ClothStepStats::obstacle_contacts)
         .def_readonly("obstacle_swept_contacts", &cloth::ClothStepStats::obstacle_swept_contacts)
+        .def_readonly("obstacle_edge_contacts", &cloth::ClothStepStats::obstacle_edge_contacts)
         .def_readonly("obstacle_max_step", &cloth::ClothStepStats::obstacle_max_step)
         .def_readonly("obstacles_lagging", &cloth::ClothStepStats::obstacles_lagging)
         .def_readonly("obstacle_max_lag", &cloth::ClothStepStats::obstacle_max_lag)

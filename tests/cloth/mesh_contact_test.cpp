@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -136,6 +137,119 @@ double drift_on_moving_slab(double friction) {
         x += p.x;
     }
     return x / static_cast<double>(solver.positions().size());
+}
+
+// A closed blade (a triangular prism, 2 mm thick at its base, its ridge along y at x = x_ridge)
+// with its base at z = base and its ridge at base + height.
+TriangleMeshD blade(double x_ridge, double base, double height) {
+    constexpr double W = 0.001;  // half the base's width
+    TriangleMeshD mesh;
+    for (const double y : {-0.3, 0.3}) {
+        mesh.positions.push_back({x_ridge - W, y, base});
+        mesh.positions.push_back({x_ridge + W, y, base});
+        mesh.positions.push_back({x_ridge, y, base + height});
+    }
+    mesh.triangles = {{0, 1, 2}, {3, 5, 4}, {0, 3, 4}, {0, 4, 1},
+                      {0, 2, 5}, {0, 5, 3}, {1, 4, 5}, {1, 5, 2}};
+    return mesh;
+}
+
+double orient(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+    return dot(b - a, cross(c - a, d - a));
+}
+
+// Segment pq crosses triangle abc (strictly: p and q on opposite sides of its plane, the line
+// through p and q inside its three edges).
+bool crosses(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const double sp = orient(a, b, c, p);
+    const double sq = orient(a, b, c, q);
+    if (!(sp * sq < 0.0)) {
+        return false;
+    }
+    const double e0 = orient(p, q, a, b);
+    const double e1 = orient(p, q, b, c);
+    const double e2 = orient(p, q, c, a);
+    return (e0 > 0.0 && e1 > 0.0 && e2 > 0.0) || (e0 < 0.0 && e1 < 0.0 && e2 < 0.0);
+}
+
+// Cloth edges that cross a triangle of `obstacle`.
+int crossing_edges(std::span<const Vec3d> cloth, const geometry::MeshTopology& topology,
+                   const TriangleMeshD& obstacle) {
+    int count = 0;
+    for (const geometry::Edge& e : topology.edges) {
+        for (const geometry::Triangle& t : obstacle.triangles) {
+            if (crosses(cloth[static_cast<std::size_t>(e[0])],
+                        cloth[static_cast<std::size_t>(e[1])],
+                        obstacle.positions[static_cast<std::size_t>(t[0])],
+                        obstacle.positions[static_cast<std::size_t>(t[1])],
+                        obstacle.positions[static_cast<std::size_t>(t[2])])) {
+                ++count;
+                break;
+            }
+        }
+    }
+    return count;
+}
+
+// A blade rising through a sheet between two columns of its vertices (5 cm apart, the blade at
+// 2.5 cm from each, 5 times the thickness): no vertex comes near it, so vertex-face contact
+// alone lets it pass through the sheet's edges; the edge pass lifts the sheet over its ridge.
+TEST(MeshContact, ABladeBetweenTheVerticesIsCaughtByTheEdges) {
+    const TriangleMeshD sheet = test::flat_sheet(4, 0.2, 0.0);  // x, y in {-0.1, -0.05, ..., 0.1}
+    const TriangleMeshD low = blade(0.025, -0.25, 0.2);         // ridge 5 cm below the sheet
+    const auto rising = animate(low, 2, 100.0, false, [](Vec3d p, int k) {
+        return p + Vec3d{0, 0, 0.15 * k};  // ridge 10 cm above the sheet at 0.01 s
+    });
+    ClothSolver solver(sheet, material());
+    solver.set_gravity({0.0, 0.0, 0.0});
+    solver.add_animated_mesh_obstacle(MeshObstacle(low), rising);
+    EXPECT_GT(solver.step(0.01, 10).obstacle_edge_contacts, 0);
+    TriangleMeshD high = low;
+    rising->positions_at(0.01, high.positions);
+    const geometry::MeshTopology& topology = solver.model().topology();
+    EXPECT_EQ(crossing_edges(solver.positions(), topology, high), 0);
+    double top = -1.0;
+    for (const Vec3d& p : solver.positions()) {
+        top = std::max(top, p.z);
+    }
+    EXPECT_GT(top, 0.1);  // carried up on the ridge
+
+    // The baseline: vertex-face contact alone (the same substeps, vertices pushed out of the
+    // blade where it is, within its swept path) leaves the blade through the sheet.
+    MeshObstacle moving(low);
+    std::vector<Vec3d> cloth(sheet.positions);
+    std::vector<Vec3d> placed(low.positions.size());
+    for (int s = 1; s <= 10; ++s) {
+        rising->positions_at(s * 0.001, placed);
+        moving.move_to(placed);
+        for (Vec3d& x : cloth) {
+            if (const auto hit = moving.sweep(x, x)) {
+                x.z = 1.0;  // never happens: the blade passes 2.5 cm from every vertex
+            }
+            push_out(moving, x, 0.005, 0.02);
+        }
+    }
+    EXPECT_EQ(cloth, sheet.positions);
+    EXPECT_GT(crossing_edges(cloth, topology, high), 0);
+
+    // A finer sheet (many edges per thread): the same bits for 1 and 4 threads.
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        ClothSolver fine(test::flat_sheet(40, 0.2, 0.0), material());
+        fine.set_gravity({0.0, 0.0, 0.0});
+        const TriangleMeshD between = blade(0.0275, -0.25, 0.2);  // 2.5 mm from two columns
+        fine.add_animated_mesh_obstacle(MeshObstacle(between),
+                                        animate(between, 2, 100.0, false, [](Vec3d p, int k) {
+                                            return p + Vec3d{0, 0, 0.15 * k};
+                                        }));
+        EXPECT_GT(fine.step(0.01, 10).obstacle_edge_contacts, 0);
+        set_num_threads(0);
+        return std::vector<Vec3d>(fine.positions().begin(), fine.positions().end());
+    };
+    const std::vector<Vec3d> one = run(1);
+    const std::vector<Vec3d> four = run(4);
+    ASSERT_EQ(one.size(), four.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), four.data(), one.size() * sizeof(Vec3d)));
 }
 
 TEST(MeshContact, FrictionDragsTheClothWithTheSurfacesOwnMotion) {

@@ -1,10 +1,8 @@
 // A sheet falling onto an animated, deforming mannequin (scenes/stress/cloth_on_turning_body.json,
-// made by scripts/make-body): every written frame is intersection-free by the exact check and no
-// cloth vertex is inside the body, judged independently of the solver by the generalized winding
-// number of the body's closed surface at that frame's time (A. Jacobson, L. Kavan,
-// O. Sorkine-Hornung, "Robust Inside-Outside Segmentation using Generalized Winding Numbers", ACM
-// TOG 32(4), 2013: w(p) = Σ Ω_t(p) / 4π over the triangles, Ω the signed solid angle by
-// Van Oosterom and Strackee's formula; w ≥ 1 inside some part of the body, 0 outside).
+// made by scripts/make-body): every written frame is intersection-free by the exact check, no
+// cloth vertex is inside the body and no cloth edge crosses its surface, judged independently of
+// the solver (body_checks.hpp: the generalized winding number of the body's closed surface at
+// that frame's time, exact segment-triangle tests).
 // Also the bad frame sequences and attachments a user can write, through the command line.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -17,6 +15,7 @@
 #include <numbers>
 #include <string>
 
+#include "integration/body_checks.hpp"
 #include "integration/run_cli.hpp"
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
@@ -25,22 +24,6 @@ namespace pliant::test {
 namespace {
 
 const std::filesystem::path SCENES = std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes";
-
-double winding_number(const geometry::TriangleMeshD& mesh, const Vec3d& p) {
-    double sum = 0.0;
-    for (const geometry::Triangle& t : mesh.triangles) {
-        const Vec3d a = mesh.positions[static_cast<std::size_t>(t[0])] - p;
-        const Vec3d b = mesh.positions[static_cast<std::size_t>(t[1])] - p;
-        const Vec3d c = mesh.positions[static_cast<std::size_t>(t[2])] - p;
-        const double la = norm(a);
-        const double lb = norm(b);
-        const double lc = norm(c);
-        const double numerator = dot(a, cross(b, c));
-        const double denominator = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-        sum += 2.0 * std::atan2(numerator, denominator);
-    }
-    return sum / (4.0 * std::numbers::pi);
-}
 
 TEST(BodyScene, ClothOnATurningBodyNeverEntersItAndStaysIntersectionFree) {
     ScratchDir scratch;
@@ -73,16 +56,9 @@ TEST(BodyScene, ClothOnATurningBodyNeverEntersItAndStaysIntersectionFree) {
         const geometry::TriangleMeshD cloth = io::read_mesh(scratch / "out" / "frames" / name);
         std::snprintf(name, sizeof name, "frame_%04d.obj", f % 24);
         const geometry::TriangleMeshD body = io::read_mesh(SCENES / "stress" / "body" / name);
-        int inside = 0;
-        double deepest = 0.0;
-        for (const Vec3d& p : cloth.positions) {
-            const double w = winding_number(body, p);
-            if (w > 0.5) {
-                ++inside;
-                deepest = std::max(deepest, w);
-            }
-        }
-        EXPECT_EQ(inside, 0) << "frame " << f << ": cloth vertices inside the body";
+        EXPECT_EQ(vertices_inside(cloth, body), 0) << "frame " << f << ": cloth vertices inside";
+        EXPECT_EQ(edges_crossing(cloth, body), 0) << "frame " << f << ": cloth edges through it";
+        EXPECT_EQ(edges_crossing(body, cloth), 0) << "frame " << f << ": body edges through cloth";
     }
 }
 

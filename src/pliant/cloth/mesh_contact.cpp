@@ -4,6 +4,8 @@
 #include <cmath>
 #include <optional>
 
+#include "pliant/core/parallel.hpp"
+
 namespace pliant::cloth {
 namespace {
 
@@ -90,6 +92,108 @@ MeshContact resolve_mesh_contact(const MovingMeshObstacle& obstacle, Vec3d& x, c
     const Vec3d p_end = barycentric_point(now, tri, barycentric);
     contact.surface_velocity = (pose.apply(p_end) - previous_pose.apply(p_start)) * (1.0 / h);
     return contact;
+}
+
+std::int64_t resolve_mesh_edge_contacts(const MovingMeshObstacle& obstacle,
+                                        std::span<Vec3d> positions, std::span<const Vec3d> start,
+                                        std::span<const Vec3d> before_contact,
+                                        std::span<const double> inverse_masses,
+                                        std::span<const geometry::Edge> edges, double thickness,
+                                        double max_push, MeshEdgeContactScratch& scratch) {
+    constexpr std::int64_t EDGE_GRAIN = 256;
+    const MeshObstacle& mesh = *obstacle.mesh;
+    const Pose& pose = obstacle.state.pose;
+    const Pose& previous_pose = obstacle.state.previous_pose;
+    const std::span<const Vec3d> now = mesh.mesh().positions;
+    scratch.corrections.resize(edges.size());
+    scratch.has_correction.assign(edges.size(), 0);
+    scratch.sums.assign(positions.size(), Vec3d{});
+    scratch.counts.assign(positions.size(), 0);
+
+    // Step 1: per cloth edge, its correction.
+    parallel_for(
+        static_cast<std::int64_t>(edges.size()),
+        [&](std::int64_t i) {
+            const auto k = static_cast<std::size_t>(i);
+            const auto a = static_cast<std::size_t>(edges[k][0]);
+            const auto b = static_cast<std::size_t>(edges[k][1]);
+            const double wa = inverse_masses[a];
+            const double wb = inverse_masses[b];
+            if (!(wa > 0.0) && !(wb > 0.0)) {
+                return;
+            }
+            const Vec3d pa = pose.apply_inverse(positions[a]);
+            const Vec3d pb = pose.apply_inverse(positions[b]);
+            const Vec3d pa0 = previous_pose.apply_inverse(start[a]);
+            const Vec3d pb0 = previous_pose.apply_inverse(start[b]);
+            const std::optional<MeshObstacle::EdgeHit> hit = mesh.sweep_edge(pa0, pb0, pa, pb);
+            if (!hit) {
+                return;
+            }
+            const geometry::Edge& edge = mesh.edges()[static_cast<std::size_t>(hit->edge)];
+            const Vec3d n_sum = mesh.edge_normals()[static_cast<std::size_t>(hit->edge)];
+            const double n_length = norm(n_sum);
+            if (!(n_length > 0.0)) {
+                return;
+            }
+            const Vec3d n = n_sum * (1.0 / n_length);
+            const Vec3d o = now[static_cast<std::size_t>(edge[0])] * (1.0 - hit->t) +
+                            now[static_cast<std::size_t>(edge[1])] * hit->t;
+            const double s = hit->s;
+            const double c = dot(pa * (1.0 - s) + pb * s - o, n) - thickness;
+            const double denominator = wa * (1.0 - s) * (1.0 - s) + wb * s * s;
+            if (!(c < 0.0) || !(denominator > 0.0)) {
+                return;
+            }
+            // As for vertices: the point's whole correction in this substep (the vertex pass's
+            // and this one) at most its own motion, the thickness and max_push.
+            const auto point = [s](const Vec3d& xa, const Vec3d& xb) {
+                return xa * (1.0 - s) + xb * s;
+            };
+            const Vec3d free_move =
+                point(before_contact[a], before_contact[b]) - point(start[a], start[b]);
+            const Vec3d pushed =
+                point(positions[a], positions[b]) - point(before_contact[a], before_contact[b]);
+            const double allowed = norm(free_move) + thickness + max_push - norm(pushed);
+            if (!(allowed > 0.0)) {
+                return;
+            }
+            const double lambda = std::min(-c, allowed) / denominator;
+            const Vec3d world_n = pose.rotation.apply(n);
+            scratch.corrections[k] = {world_n * (wa * (1.0 - s) * lambda),
+                                      world_n * (wb * s * lambda)};
+            scratch.has_correction[k] = 1;
+        },
+        EDGE_GRAIN);
+
+    // Step 2: averaged per vertex, summed in edge order.
+    std::int64_t corrected = 0;
+    for (std::size_t k = 0; k < edges.size(); ++k) {
+        if (scratch.has_correction[k] == 0) {
+            continue;
+        }
+        ++corrected;
+        for (std::size_t end = 0; end < 2; ++end) {
+            const auto v = static_cast<std::size_t>(edges[k][end]);
+            if (inverse_masses[v] > 0.0) {
+                scratch.sums[v] += scratch.corrections[k][end];
+                ++scratch.counts[v];
+            }
+        }
+    }
+    if (corrected == 0) {
+        return 0;
+    }
+    parallel_for(
+        static_cast<std::int64_t>(positions.size()),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            if (scratch.counts[v] > 0) {
+                positions[v] += scratch.sums[v] * (1.0 / scratch.counts[v]);
+            }
+        },
+        EDGE_GRAIN);
+    return corrected;
 }
 
 }  // namespace pliant::cloth

@@ -23,11 +23,33 @@
 // The surface velocity is that of the closest surface point: (pose p_end - previous_pose
 // p_start) / h, p the same barycentric point of the contact's triangle at both placements.
 //
+// Edges (resolve_mesh_edge_contacts): a thin part of the surface (a ridge, a finger, the
+// mannequin's arm) can pass between two cloth vertices without either coming near it. After the
+// vertex contacts, every cloth edge moving from its substep start to its place now (both ends
+// in the rest frame as above) is swept against the moving surface's edges
+// (MeshObstacle::sweep_edge: edge-edge CCD, entering meetings only). For a meeting at s along
+// the cloth edge (a, b) and t along the surface edge, with n the surface edge's unit
+// pseudo-normal at the substep's end and o its point t there, the constraint
+//   C = (x_a + s (x_b - x_a) - o) · n - thickness ≥ 0
+// is projected as a PBD contact with the ends' inverse masses w: x_a += w_a (1 - s) λ n,
+// x_b += w_b s λ n, λ = -C / (w_a (1 - s)² + w_b s²): the cloth edge's point goes `thickness`
+// outside the surface edge, the edge lifted over the ridge. Corrections are computed per edge
+// in parallel and averaged per vertex (Jacobi) in edge order: the same bits for any number of
+// threads. As for vertices (3 above), the point's whole correction in the substep (the vertex
+// pass's and the edge pass's, from `before_contact`, the positions before the vertex pass) is at
+// most its own motion from the start to before_contact + thickness + max_push.
+//
 // Units: metres, seconds. Thread safe for distinct vertices (const obstacle).
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
 #include "pliant/cloth/cloth_model.hpp"
 #include "pliant/core/vec3.hpp"
+#include "pliant/geometry/topology.hpp"
 
 namespace pliant::cloth {
 
@@ -45,5 +67,26 @@ struct MeshContact {
 MeshContact resolve_mesh_contact(const MovingMeshObstacle& obstacle, Vec3d& x, const Vec3d& start,
                                  double thickness, double h, double max_settle, double max_push,
                                  double extra_depth);
+
+// Buffers resolve_mesh_edge_contacts reuses from substep to substep.
+struct MeshEdgeContactScratch {
+    std::vector<std::array<Vec3d, 2>> corrections;  // #E, world frame (m)
+    std::vector<std::uint8_t> has_correction;       // #E
+    std::vector<Vec3d> sums;                        // #V
+    std::vector<std::int32_t> counts;               // #V
+};
+
+// The edge pass of the header: cloth `edges` (#E vertex pairs into positions) moving from
+// `start` (#V, the substep's start) to `positions` (#V, moved in place; before_contact: #V, the
+// positions before the vertex pass) against `obstacle`;
+// inverse_masses (#V; 0: the vertex does not move). Returns the cloth edges corrected.
+// thickness, max_push ≥ 0 (m; max_push +inf: unbounded). Parallel; bitwise the same for any number
+// of threads.
+std::int64_t resolve_mesh_edge_contacts(const MovingMeshObstacle& obstacle,
+                                        std::span<Vec3d> positions, std::span<const Vec3d> start,
+                                        std::span<const Vec3d> before_contact,
+                                        std::span<const double> inverse_masses,
+                                        std::span<const geometry::Edge> edges, double thickness,
+                                        double max_push, MeshEdgeContactScratch& scratch);
 
 }  // namespace pliant::cloth

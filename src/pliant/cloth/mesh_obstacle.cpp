@@ -9,6 +9,7 @@
 #include "pliant/bvh/traversal.hpp"
 #include "pliant/collision/ccd.hpp"
 #include "pliant/collision/point_triangle.hpp"
+#include "pliant/collision/segment_segment.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/topology.hpp"
@@ -57,6 +58,7 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
                        runs_forward(topology.edge_triangles[static_cast<std::size_t>(begin) + 1],
                                     topology.edges[e]);
     }
+    m_edges = std::move(topology.edges);
     m_triangle_edges = std::move(topology.triangle_edges);
     m_edge_triangle_offsets = std::move(topology.edge_triangle_offsets);
     m_edge_triangles = std::move(topology.edge_triangles);
@@ -65,7 +67,7 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     m_face_normals.resize(m_mesh.triangles.size());
     m_corner_angles.resize(m_mesh.triangles.size());
     m_boxes.resize(m_mesh.triangles.size());
-    m_edge_normals.resize(topology.edges.size());
+    m_edge_normals.resize(m_edges.size());
     m_vertex_normals.resize(m_mesh.positions.size());
     update_geometry();
     m_tree.build(m_boxes);
@@ -289,6 +291,85 @@ std::optional<MeshObstacle::SweptHit> MeshObstacle::sweep(const Vec3d& x_t0,
                 collision::point_triangle_proximity(x_t0 + (x_t1 - x_t0) * s, a0 + (a1 - a0) * s,
                                                     b0 + (b1 - b0) * s, c0 + (c1 - c0) * s);
             best = SweptHit{t, at.barycentric, s};
+        });
+    return best;
+}
+
+std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0, const Vec3d& q_t0,
+                                                              const Vec3d& p_t1,
+                                                              const Vec3d& q_t1) const {
+    if (!is_finite(p_t0) || !is_finite(q_t0) || !is_finite(p_t1) || !is_finite(q_t1)) {
+        return std::nullopt;
+    }
+    AABBd swept;
+    for (const Vec3d& x : {p_t0, q_t0, p_t1, q_t1}) {
+        swept.extend(x);
+    }
+    const std::span<const Vec3d> start = previous_positions();
+    const std::span<const Vec3d> end = m_mesh.positions;
+    const std::uint32_t* primitives = m_tree.primitives().data();
+    collision::CcdOptions options;
+    options.max_iterations = SWEEP_MAX_ITERATIONS;
+    std::optional<EdgeHit> best;
+    bvh::query_wide(
+        m_tree.nodes().data(), outward_float(swept), -1, [&](std::int32_t leaf, const AABB&) {
+            const auto t = static_cast<std::int32_t>(primitives[leaf]);
+            for (const std::int32_t e : m_triangle_edges[index(t)]) {
+                const std::size_t ei = index(e);
+                // Each edge once: from its first triangle.
+                if (m_edge_triangles[index(m_edge_triangle_offsets[ei])] != t) {
+                    continue;
+                }
+                const geometry::Edge& edge = m_edges[ei];
+                const Vec3d& a0 = start[index(edge[0])];
+                const Vec3d& b0 = start[index(edge[1])];
+                const Vec3d& a1 = end[index(edge[0])];
+                const Vec3d& b1 = end[index(edge[1])];
+                AABBd edge_box;
+                for (const Vec3d& x : {a0, b0, a1, b1}) {
+                    edge_box.extend(x);
+                }
+                if (!overlaps(edge_box, swept)) {
+                    continue;
+                }
+                const collision::CcdResult r =
+                    collision::edge_edge_ccd(p_t0, q_t0, a0, b0, p_t1, q_t1, a1, b1, options);
+                if (!r.hit ||
+                    (best && (r.toi > best->toi || (r.toi == best->toi && e > best->edge)))) {
+                    continue;
+                }
+                const double u = r.toi;
+                const Vec3d p = p_t0 + (p_t1 - p_t0) * u;
+                const Vec3d q = q_t0 + (q_t1 - q_t0) * u;
+                const Vec3d a = a0 + (a1 - a0) * u;
+                const Vec3d b = b0 + (b1 - b0) * u;
+                const collision::SegmentSegmentProximity<double> at =
+                    collision::segment_segment_proximity(p, q, a, b);
+                // Entering: the cloth point's motion relative to the surface point's, against
+                // the edge's pseudo-normal at the meeting.
+                Vec3d normal{};
+                for (std::int32_t k = m_edge_triangle_offsets[ei];
+                     k < m_edge_triangle_offsets[ei + 1]; ++k) {
+                    const geometry::Triangle& tri =
+                        m_mesh.triangles[index(m_edge_triangles[index(k)])];
+                    Vec3d c[3];
+                    for (std::size_t j = 0; j < 3; ++j) {
+                        const Vec3d& x0 = start[index(tri[j])];
+                        c[j] = x0 + (end[index(tri[j])] - x0) * u;
+                    }
+                    const Vec3d n = cross(c[1] - c[0], c[2] - c[0]);
+                    const double length = norm(n);
+                    if (length > 0.0) {
+                        normal += n * (1.0 / length);
+                    }
+                }
+                const Vec3d cloth_motion = (p_t1 - p_t0) * (1.0 - at.s) + (q_t1 - q_t0) * at.s;
+                const Vec3d surface_motion = (a1 - a0) * (1.0 - at.t) + (b1 - b0) * at.t;
+                if (!(dot(cloth_motion - surface_motion, normal) < 0.0)) {
+                    continue;
+                }
+                best = EdgeHit{e, r.toi, at.s, at.t};
+            }
         });
     return best;
 }

@@ -110,6 +110,25 @@ public:
     };
     std::optional<SweptHit> sweep(const Vec3d& x_t0, const Vec3d& x_t1) const;
 
+    // An edge (a cloth edge) whose ends move on straight lines from (p_t0, q_t0) to (p_t1, q_t1)
+    // over the last step (as sweep's point) that meets one of the surface's edges while entering
+    // the surface: at the meeting, the edge's point moves toward the inside of the surface edge
+    // (relative to it, against the edge's pseudo-normal, the sum of its triangles' normals at
+    // that time). That is what vertex-face contact misses: a thin part of the surface (a ridge, a
+    // finger) passing between the cloth's vertices. The earliest such meeting (conservative,
+    // collision::edge_edge_ccd), the surface edge (an index into edges()), the time of impact in
+    // [0, 1] and the parameters of the meeting points: s along p → q, t along the surface
+    // edge's first → second vertex. Ties go to the lowest edge. Each surface edge is tested once
+    // (from its first triangle); the LBVH's swept leaf boxes find the candidates. Thread safe.
+    struct EdgeHit {
+        std::int32_t edge = -1;
+        double toi = 1.0;
+        double s = 0.0;
+        double t = 0.0;
+    };
+    std::optional<EdgeHit> sweep_edge(const Vec3d& p_t0, const Vec3d& q_t0, const Vec3d& p_t1,
+                                      const Vec3d& q_t1) const;
+
     // The point of the surface closest to x, if one is within max_distance (≥ 0, may be +inf):
     // its signed distance (|x - closest|, negative inside / behind the surface, see the header) and
     // the unit outward normal there — (x - closest) / distance outside, its opposite inside, and
@@ -136,6 +155,8 @@ public:
     std::span<const Vec3d> vertex_normals() const { return m_vertex_normals; }
     // triangle_edges()[t][k]: the edge between corners k and (k + 1) % 3 of triangle t.
     std::span<const std::array<std::int32_t, 3>> triangle_edges() const { return m_triangle_edges; }
+    // The surface's edges (#E, each once, vertex indices ascending), indexed like edge_normals().
+    std::span<const geometry::Edge> edges() const { return m_edges; }
 
 private:
     void update_geometry();
@@ -145,6 +166,7 @@ private:
     geometry::TriangleMeshD m_mesh;
     bool m_closed = false;  // see enclosed_volume()
     // Topology (fixed): edges of each triangle; triangles of each edge and vertex (CSR).
+    std::vector<geometry::Edge> m_edges;
     std::vector<std::array<std::int32_t, 3>> m_triangle_edges;
     std::vector<std::int32_t> m_edge_triangle_offsets;
     std::vector<std::int32_t> m_edge_triangles;

@@ -204,6 +204,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         const ObstacleTally tally = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
         stats.obstacle_contacts = tally.contacts;
         stats.obstacle_swept_contacts += tally.swept;
+        stats.obstacle_edge_contacts += tally.edges;
         stats.obstacles_lagging = tally.lagging;
         stats.obstacle_max_lag = std::max(stats.obstacle_max_lag, tally.max_lag);
         stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
@@ -404,7 +405,10 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
     // much per substep: an obstacle that jumps pushes cloth out at a bounded speed (the vertex
     // lags behind its surface) instead of sweeping it through the cloth in one substep.
     const double max_push = max_settle;
-    return parallel_reduce(
+    if (!mesh_obstacles.empty()) {
+        m_before_contacts.assign(positions.begin(), positions.end());
+    }
+    ObstacleTally total = parallel_reduce(
         static_cast<std::int64_t>(positions.size()), ObstacleTally{},
         [&](std::int64_t begin, std::int64_t end) {
             ObstacleTally tally;
@@ -468,10 +472,17 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
             return tally;
         },
         [](const ObstacleTally& a, const ObstacleTally& b) {
-            return ObstacleTally{a.contacts + b.contacts, a.swept + b.swept, a.lagging + b.lagging,
-                                 std::max(a.max_lag, b.max_lag)};
+            return ObstacleTally{a.contacts + b.contacts, a.swept + b.swept, 0,
+                                 a.lagging + b.lagging, std::max(a.max_lag, b.max_lag)};
         },
         VERTEX_GRAIN);
+    // Then the cloth's edges against the mesh obstacles' edges.
+    for (const MovingMeshObstacle& mesh : mesh_obstacles) {
+        total.edges += resolve_mesh_edge_contacts(
+            mesh, positions, m_previous_positions, m_before_contacts, inverse_masses,
+            model.topology().edges, thickness, max_push, m_edge_contacts);
+    }
+    return total;
 }
 
 void XPBDStepper::save_state(ByteWriter& out) const {

@@ -66,6 +66,7 @@
 #include "pliant/cloth/cloth_model.hpp"
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/cloth/mesh_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/strain_hierarchy.hpp"
 #include "pliant/cloth/stretch_chains.hpp"
@@ -80,6 +81,9 @@ struct ClothStepStats {
     std::int64_t obstacle_contacts = 0;  // vertices in contact with an obstacle in the last substep
     // Vertices a mesh obstacle's swept test (mesh_contact.hpp) caught, summed over the substeps.
     std::int64_t obstacle_swept_contacts = 0;
+    // Cloth edges a mesh obstacle's edges met while entering it (mesh_contact.hpp,
+    // resolve_mesh_edge_contacts) and that were lifted out, summed over the substeps.
+    std::int64_t obstacle_edge_contacts = 0;
     // Obstacles that jump: the farthest an obstacle's surface moved in one substep (m), the free
     // vertices whose push out of an obstacle was bounded in the last substep (with
     // self-collision, half the thickness per substep beyond the vertex's own motion and the
@@ -136,6 +140,7 @@ private:
     struct ObstacleTally {
         std::int64_t contacts = 0;  // vertices in contact
         std::int64_t swept = 0;     // vertices a mesh obstacle's swept test caught
+        std::int64_t edges = 0;     // cloth edges a mesh obstacle's edges met (edge pass)
         std::int64_t lagging = 0;   // vertices whose push was bounded
         double max_lag = 0.0;       // m
     };
@@ -182,6 +187,8 @@ private:
     std::vector<double> m_contact_settled;
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
+    MeshEdgeContactScratch m_edge_contacts;   // mesh obstacles' edge pass (mesh_contact.hpp)
+    std::vector<Vec3d> m_before_contacts;     // positions before the obstacle pass (with meshes)
     // The largest push an obstacle held back in the last substep (m): how far behind a mesh
     // obstacle's surface a vertex can be at the next (mesh_contact.hpp, extra_depth).
     double m_obstacle_lag = 0.0;

@@ -97,6 +97,66 @@ std::int64_t vertices_on_others(std::span<const Vec3d> positions) {
 // Warns when the cloth's size (the diagonal of its box) is implausible for a garment or sheet,
 // or its mean edge length is far from the thickness (units or scale wrong, or a thickness that
 // either swallows the triangles or lets them pass through each other between substeps).
+// Warns about seams that will leave the cloth stretched: its rest shape is the shape it is given
+// in, so two panels placed a gap apart are that gap too short once sewn, and the seam (held with
+// compliance 0) puts about half the gap into the edges beside each of its vertices. Names the
+// worst pair when that strain exceeds MAX_SEAM_STRAIN.
+constexpr double MAX_SEAM_STRAIN = 0.05;
+
+void warn_seam_stretch(const cloth::ClothScene& scene, const std::string& scene_name,
+                       const geometry::TriangleMeshD& mesh) {
+    if (scene.seams.empty()) {
+        return;
+    }
+    // Mean length of the edges at each vertex (each triangle's two edges at it).
+    std::vector<double> sum(mesh.positions.size(), 0.0);
+    std::vector<int> count(mesh.positions.size(), 0);
+    for (const geometry::Triangle& t : mesh.triangles) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            const auto a = static_cast<std::size_t>(t[k]);
+            const auto b = static_cast<std::size_t>(t[(k + 1) % 3]);
+            const double length = norm(mesh.positions[a] - mesh.positions[b]);
+            sum[a] += length;
+            sum[b] += length;
+            ++count[a];
+            ++count[b];
+        }
+    }
+    const auto mean_edge = [&](std::size_t v) {
+        return count[v] > 0 ? sum[v] / count[v] : 0.0;
+    };
+    for (const cloth::SceneSeam& seam : scene.seams) {
+        double worst = 0.0;
+        std::size_t worst_pair = 0;
+        double worst_gap = 0.0;
+        for (std::size_t k = 0; k < std::min(seam.a.size(), seam.b.size()); ++k) {
+            const auto a = static_cast<std::size_t>(seam.a[k]);
+            const auto b = static_cast<std::size_t>(seam.b[k]);
+            const double gap =
+                norm(mesh.positions[a] - mesh.positions[b]) - scene.material.thickness;
+            const double edge = std::min(mean_edge(a), mean_edge(b));
+            const double strain = edge > 0.0 ? 0.5 * gap / edge : 0.0;
+            if (strain > worst) {
+                worst = strain;
+                worst_pair = k;
+                worst_gap = gap;
+            }
+        }
+        if (worst > MAX_SEAM_STRAIN) {
+            const double edge = std::min(mean_edge(static_cast<std::size_t>(seam.a[worst_pair])),
+                                         mean_edge(static_cast<std::size_t>(seam.b[worst_pair])));
+            log_warning(
+                "{}: {}: pair {} (vertices {} and {}) is {:.3g} m farther apart than the "
+                "thickness it is sewn to; the cloth's rest shape is as placed, so sewing stretches "
+                "the edges beside it by about {:.0f} % (expected at most {:.0f} %): place the "
+                "panels at most {:.2g} m apart at their seams",
+                scene_name, seam.key, worst_pair, seam.a[worst_pair], seam.b[worst_pair], worst_gap,
+                100.0 * worst, 100.0 * MAX_SEAM_STRAIN,
+                scene.material.thickness + 2.0 * MAX_SEAM_STRAIN * edge);
+        }
+    }
+}
+
 void warn_implausible_size(const cloth::ClothScene& scene, const std::string& scene_name,
                            const geometry::TriangleMeshD& mesh) {
     AABBd box;
@@ -485,6 +545,7 @@ ClothSetup load_cloth_setup(const cloth::ClothScene& scene, const std::string& s
             }
         }
     }
+    warn_seam_stretch(scene, scene_name, setup.mesh);
     // Physical stiffnesses become compliances for this mesh (material_preset.hpp).
     setup.material = scene.material;
     if (scene.stretch_stiffness) {

@@ -14,34 +14,32 @@
 #include "pliant/io/output_directory.hpp"
 #include "pliant/pipeline/cloth_run.hpp"
 #include "pliant/pipeline/cloth_scene_file.hpp"
+#include "pliant/pipeline/mannequin.hpp"
 
 namespace pliant::pipeline {
 namespace {
 
 constexpr double PI = std::numbers::pi;
 
-// The body's profile: (height m, radius m), bottom to top.
-constexpr std::array<std::array<double, 2>, 9> BODY_PROFILE{{
-    {0.30, 0.150},
-    {0.60, 0.165},
-    {0.80, 0.180},  // hips
-    {0.92, 0.165},
-    {1.02, 0.130},  // waist
-    {1.15, 0.135},
-    {1.30, 0.160},  // chest
-    {1.42, 0.140},
-    {1.48, 0.090},
-}};
-constexpr int BODY_SEGMENTS = 48;
+// The body: scripts/make-body's walking mannequin (mannequin.hpp), low poly, a walk cycle of
+// BODY_FRAMES frames at BODY_FPS (1.5 s), interpolated by the solver in between.
+constexpr MannequinOptions BODY{.segments = 10, .turn_degrees = 25.0, .swing_degrees = 20.0};
+constexpr int BODY_FRAMES = 12;
+constexpr double BODY_FPS = 8.0;
 
-// The skirt: a cone's frustum from the waistband (top) to the hem.
+// The skirt: from the waistband (top), an ellipse just outside the torso's (0.17 m across,
+// 0.1054 m deep), to the hem, a circle.
 constexpr double SKIRT_TOP_Z = 1.04;
-constexpr double SKIRT_TOP_RADIUS = 0.15;
-constexpr double SKIRT_BOTTOM_Z = 0.45;
+constexpr double SKIRT_TOP_A = 0.17 + 0.008;
+constexpr double SKIRT_TOP_B = 0.17 * 0.62 + 0.008;
+constexpr double SKIRT_BOTTOM_Z = 0.50;
 constexpr double SKIRT_BOTTOM_RADIUS = 0.30;
-// Each panel leaves this angle (radians) open at either side: the seams close it.
-constexpr double SEAM_GAP_ANGLE = 0.04;
+// The panels are placed this far apart (m) at the side seams (at x = ±a), 1 mm more than the
+// thickness the seams close to: the panels' rest lengths are their placed lengths, so a wider
+// gap would leave the sewn skirt stretched around by it, all of it in the edges beside the seams.
+constexpr double SEAM_OPENING = 0.006;
 constexpr double SEW_SECONDS = 0.1;
+constexpr double THICKNESS = 0.005;
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
     io::write_file_atomically(path, [&](std::ostream& out) {
@@ -49,40 +47,11 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
     });
 }
 
-std::string body_obj() {
-    std::string obj = "# pliant's built-in mannequin: a closed surface of revolution (metres)\n";
-    auto out = std::back_inserter(obj);
-    for (const auto& [z, r] : BODY_PROFILE) {
-        for (int s = 0; s < BODY_SEGMENTS; ++s) {
-            const double phi = 2.0 * PI * s / BODY_SEGMENTS;
-            fmt::format_to(out, "v {:.6f} {:.6f} {:.6f}\n", r * std::cos(phi), r * std::sin(phi),
-                           z);
-        }
-    }
-    const int rings = static_cast<int>(BODY_PROFILE.size());
-    fmt::format_to(out, "v 0 0 {}\nv 0 0 {}\n", BODY_PROFILE.front()[0], BODY_PROFILE.back()[0]);
-    const int bottom = rings * BODY_SEGMENTS + 1;  // 1-based
-    const int top = bottom + 1;
-    const auto at = [](int ring, int s) {
-        return ring * BODY_SEGMENTS + (s % BODY_SEGMENTS) + 1;
-    };
-    for (int ring = 0; ring + 1 < rings; ++ring) {
-        for (int s = 0; s < BODY_SEGMENTS; ++s) {  // outward: counter-clockwise from outside
-            fmt::format_to(out, "f {} {} {} {}\n", at(ring, s), at(ring, s + 1),
-                           at(ring + 1, s + 1), at(ring + 1, s));
-        }
-    }
-    for (int s = 0; s < BODY_SEGMENTS; ++s) {
-        fmt::format_to(out, "f {} {} {}\n", bottom, at(0, s + 1), at(0, s));
-        fmt::format_to(out, "f {} {} {}\n", top, at(rings - 1, s), at(rings - 1, s + 1));
-    }
-    return obj;
-}
-
 struct Skirt {
     std::string obj;
     std::vector<int> seam_a;  // 0-based vertex indices
     std::vector<int> seam_b;
+    std::vector<int> waistband;  // the top rows, attached to the body
 };
 
 // Front panel (y < 0) and back panel (y > 0), vertex (i, j) at angle step i around and step j
@@ -96,34 +65,43 @@ Skirt skirt_obj(const SkirtOptions& o) {
                    "o skirt\n");
     const int nu = o.quads_around;
     const int nv = o.quads_down;
-    const double span = PI - 2.0 * SEAM_GAP_ANGLE;
-    const double slant =
-        std::hypot(SKIRT_TOP_Z - SKIRT_BOTTOM_Z, SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS);
-    // The developed cone: distance from the apex s = r · slant / (r_bottom - r_top), angle
-    // ψ = φ · (r_bottom - r_top) / slant.
-    const double k = (SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS) / slant;
-    const double s_max = SKIRT_BOTTOM_RADIUS / k;
+    // Row j: an ellipse of half-axes a (along x) and b (along y) at height z; each panel leaves
+    // the angle gap(j) open at either side, SEAM_OPENING / 2 along the ellipse (whose speed at
+    // x = ±a is b).
+    const auto row = [&](int j) {
+        const double v = static_cast<double>(j) / nv;
+        return std::array<double, 3>{SKIRT_TOP_Z + (SKIRT_BOTTOM_Z - SKIRT_TOP_Z) * v,
+                                     SKIRT_TOP_A + (SKIRT_BOTTOM_RADIUS - SKIRT_TOP_A) * v,
+                                     SKIRT_TOP_B + (SKIRT_BOTTOM_RADIUS - SKIRT_TOP_B) * v};
+    };
     const auto index = [&](int panel, int i, int j) {
         return panel * (nu + 1) * (nv + 1) + j * (nu + 1) + i;
     };
     for (int panel = 0; panel < 2; ++panel) {
-        const double first = panel == 0 ? PI + SEAM_GAP_ANGLE : SEAM_GAP_ANGLE;
         for (int j = 0; j <= nv; ++j) {
-            const double v = static_cast<double>(j) / nv;
-            const double z = SKIRT_TOP_Z + (SKIRT_BOTTOM_Z - SKIRT_TOP_Z) * v;
-            const double r = SKIRT_TOP_RADIUS + (SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS) * v;
+            const auto [z, a, b] = row(j);
+            const double gap = 0.5 * SEAM_OPENING / b;
+            const double first = (panel == 0 ? PI : 0.0) + gap;
+            const double span = PI - 2.0 * gap;
             for (int i = 0; i <= nu; ++i) {
                 const double phi = first + span * i / nu;
-                fmt::format_to(out, "v {:.6f} {:.6f} {:.6f}\n", r * std::cos(phi),
-                               r * std::sin(phi), z);
+                fmt::format_to(out, "v {:.6f} {:.6f} {:.6f}\n", a * std::cos(phi),
+                               b * std::sin(phi), z);
             }
         }
     }
-    for (int j = 0; j <= nv; ++j) {  // the flat pattern, shared by both panels
-        const double r = SKIRT_TOP_RADIUS + (SKIRT_BOTTOM_RADIUS - SKIRT_TOP_RADIUS) * j / nv;
+    // The flat pattern, shared by both panels: the developed cone of the mean radius
+    // (r = (a + b) / 2), at distance s = r · slant / (r_bottom - r_top) from the apex and angle
+    // ψ = φ · (r_bottom - r_top) / slant.
+    const double r_top = 0.5 * (SKIRT_TOP_A + SKIRT_TOP_B);
+    const double slant = std::hypot(SKIRT_TOP_Z - SKIRT_BOTTOM_Z, SKIRT_BOTTOM_RADIUS - r_top);
+    const double k = (SKIRT_BOTTOM_RADIUS - r_top) / slant;
+    const double s_max = SKIRT_BOTTOM_RADIUS / k;
+    for (int j = 0; j <= nv; ++j) {
+        const double r = r_top + (SKIRT_BOTTOM_RADIUS - r_top) * j / nv;
         const double s = r / k;
         for (int i = 0; i <= nu; ++i) {
-            const double psi = (span * i / nu - 0.5 * span) * k;
+            const double psi = (PI * i / nu - 0.5 * PI) * k;
             fmt::format_to(out, "vt {:.6f} {:.6f}\n", 0.5 + 0.5 * s * std::sin(psi) / s_max,
                            1.0 - s * std::cos(psi) / s_max);
         }
@@ -152,6 +130,11 @@ Skirt skirt_obj(const SkirtOptions& o) {
         skirt.seam_a.push_back(index(0, 0, j));
         skirt.seam_b.push_back(index(1, nu, j));
     }
+    for (int panel = 0; panel < 2; ++panel) {
+        for (int i = 0; i <= nu; ++i) {
+            skirt.waistband.push_back(index(panel, i, 0));
+        }
+    }
     return skirt;
 }
 
@@ -173,25 +156,31 @@ std::filesystem::path write_skirt_scene(const std::filesystem::path& dir,
     write_text(dir / "skirt.mtl",
                "newmtl cotton_front\nKd 0.70 0.20 0.25\n"
                "newmtl cotton_back\nKd 0.60 0.15 0.20\n");
-    write_text(dir / "body.obj", body_obj());
+    io::make_output_directory(dir / "body");
+    for (int k = 0; k < BODY_FRAMES; ++k) {
+        write_text(dir / "body" / fmt::format("frame_{:04d}.obj", k),
+                   mesh_obj(mannequin_at(static_cast<double>(k) / BODY_FRAMES, BODY),
+                            fmt::format("pliant's walking mannequin (scripts/make-body --frames {} "
+                                        "--fps {} --segments {} --turn {} --swing {}), frame {}",
+                                        BODY_FRAMES, BODY_FPS, BODY.segments, BODY.turn_degrees,
+                                        BODY.swing_degrees, k)));
+    }
     const std::string scene = fmt::format(
         R"({{
   "cloth": {{"mesh": "skirt.obj", "units": "m"}},
-  "material": {{"preset": "cotton", "thickness": 0.005}},
+  "material": {{"preset": "cotton", "thickness": {}}},
   "seams": [{{"a": [{}], "b": [{}], "seconds": {}}}],
+  "pins": {{"vertices": [{}], "attach": {{"obstacle": "body", "max_distance": 0.02}}}},
   "obstacles": [{{
-    "mesh": {{"file": "body.obj"}},
-    "motion": {{"pivot": [0, 0, 0], "keyframes": [
-      {{"time": 1.0, "rotate_degrees": [0, 0, 0]}},
-      {{"time": 2.0, "rotate_degrees": [0, 0, 40]}},
-      {{"time": 3.0, "rotate_degrees": [0, 0, -40]}},
-      {{"time": 4.0, "rotate_degrees": [0, 0, 0]}}]}}
+    "name": "body",
+    "mesh": {{"frames": "body/frame_%04d.obj", "fps": {}, "loop": true}}
   }}],
   "fps": 24, "frames": {}, "substeps": 40,
   "output": {{"format": "obj", "point_cache": "pc2"}}
 }}
 )",
-        int_list(skirt.seam_a), int_list(skirt.seam_b), SEW_SECONDS, options.frames);
+        THICKNESS, int_list(skirt.seam_a), int_list(skirt.seam_b), SEW_SECONDS,
+        int_list(skirt.waistband), BODY_FPS, options.frames);
     write_text(dir / "scene.json", scene);
     return dir / "scene.json";
 }

@@ -1,14 +1,14 @@
 // The built-in garment scene: an A-line skirt made of two flat-pattern panels (front and back,
 // quads with UVs from the developed pattern, groups and materials), placed around a mannequin as
-// garment tools arrange panels (each panel wrapped on a cone around the body, which a flat pattern
-// of a cone's frustum fits without stretching), sewn together along both sides in the first
-// 0.1 s, then resting on the hips of a body that turns left and right.
+// garment tools arrange panels, sewn together along both sides in the first 0.1 s, its
+// waistband attached to the body (pins.attach), on a body that walks in place: legs swinging
+// into the skirt, hips turning and the torso twisting (a deforming obstacle).
 //
-// write_skirt_scene(dir) writes dir/scene.json, dir/skirt.obj (+ skirt.mtl) and dir/body.obj and
-// returns the scene's path; `pliant cloth` runs it like any scene. The body is a closed surface
-// of revolution (waist 0.13 m at 1.02 m, hips 0.18 m at 0.80 m) moved rigidly by the scene's
-// obstacle motion ("obstacles"[0]): an animated body replaces it with that one obstacle entry.
-// Throws IoError when dir cannot be written.
+// write_skirt_scene(dir) writes dir/scene.json, dir/skirt.obj (+ skirt.mtl) and the body's walk
+// cycle dir/body/frame_0000.obj .. frame_0011.obj (mannequin.hpp: scripts/make-body's mannequin
+// at 10 segments, turn 25°, swing 20°; 12 frames at 8 fps, looped, interpolated between
+// frames) and returns the scene's path; `pliant cloth` runs it like any scene. Throws IoError
+// when dir cannot be written.
 #pragma once
 
 #include <nlohmann/json.hpp>
