@@ -208,7 +208,8 @@ Volume smooth_scalar(const volume::Dims& n) {
                 const double y = (static_cast<double>(j) + 0.5) / s[1];
                 const double z = (static_cast<double>(k) + 0.5) / s[2];
                 const auto blob = [&](double cx, double cy, double cz, double r) {
-                    const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy) + (z - cz) * (z - cz);
+                    const double d2 =
+                        (x - cx) * (x - cx) + (y - cy) * (y - cy) + (z - cz) * (z - cz);
                     return std::exp(-d2 / (r * r));
                 };
                 values[static_cast<std::size_t>(v.index(i, j, k))] = static_cast<float>(
@@ -230,8 +231,8 @@ Volume smooth_rgba(const volume::Dims& n) {
                 const double x = (static_cast<double>(i) + 0.5) / static_cast<double>(n[0]);
                 const double y = (static_cast<double>(j) + 0.5) / static_cast<double>(n[1]);
                 const double z = (static_cast<double>(k) + 0.5) / static_cast<double>(n[2]);
-                const double d2 = (x - 0.45) * (x - 0.45) + (y - 0.55) * (y - 0.55) +
-                                  (z - 0.5) * (z - 0.5);
+                const double d2 =
+                    (x - 0.45) * (x - 0.45) + (y - 0.55) * (y - 0.55) + (z - 0.5) * (z - 0.5);
                 float* out = &values[static_cast<std::size_t>(4 * v.index(i, j, k))];
                 out[0] = static_cast<float>(x);
                 out[1] = static_cast<float>(0.5 + 0.5 * std::sin(6.0 * y));
@@ -298,8 +299,8 @@ TEST(RayCastOblique, MatchesAFineAxisAlignedResampling) {
     double lowest[2] = {1e9, 1e9};
     for (const Scene& scene : scenes) {
         const Volume& source = scene.volume;
-        const volume::TransferFunction tf = scene.tf != nullptr ? volume::preset(scene.tf, source)
-                                                                : volume::TransferFunction{};
+        const volume::TransferFunction tf =
+            scene.tf != nullptr ? volume::preset(scene.tf, source) : volume::TransferFunction{};
         for (const Turn& turn : turns) {
             const Volume oblique = turned(source, rotation(turn.axis, turn.degrees));
             const Volume reference = fine_reference(oblique, source.spacing().x / 3.0);
@@ -371,9 +372,9 @@ std::vector<ObliqueScene> oblique_scenes() {
                  turned(volume::shepp_logan_3d({37, 23, 30}), rotation({1, 0, 0}, 5.0))});
     s.push_back({"phantom 25° skew",
                  turned(volume::shepp_logan_3d({28, 31, 26}), rotation({1, 2, 3}, 25.0))});
-    s.push_back({"rgba8 object 40° skew",
-                 turned(volume::rgba_test_object({27, 25, 29}, VoxelType::rgba8),
-                        rotation({-2, 1, 0.5}, 40.0))});
+    s.push_back(
+        {"rgba8 object 40° skew", turned(volume::rgba_test_object({27, 25, 29}, VoxelType::rgba8),
+                                         rotation({-2, 1, 0.5}, 40.0))});
     return s;
 }
 
