@@ -4,7 +4,6 @@
 // says so, and renders nearly the same picture. pliant dataset renders it as it lies too, its
 // `aabb` the world box.
 #include <gtest/gtest.h>
-
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -64,9 +63,9 @@ TEST(RenderObliqueCli, TiltedNiftiRendersInWorldSpaceWithoutResampling) {
         .render(render::orbit_camera(v.world_bounds(), 30.0, 20.0, 90.0, 64, 56), expected);
     EXPECT_EQ(image, expected);
 
-    const CliResult resampled = run_cli("render " + quoted(path) + common +
-                                            " --axis-aligned -o " + quoted(scratch / "r.png"),
-                                        scratch);
+    const CliResult resampled = run_cli(
+        "render " + quoted(path) + common + " --axis-aligned -o " + quoted(scratch / "r.png"),
+        scratch);
     ASSERT_EQ(resampled.exit_code, 0) << resampled.err;
     EXPECT_NE(resampled.err.find("oblique"), std::string::npos) << resampled.err;
     EXPECT_NE(resampled.err.find("resampled"), std::string::npos) << resampled.err;
@@ -97,8 +96,8 @@ TEST(RenderObliqueCli, AxisAlignedFlagLeavesAnAxisAlignedVolumeAlone) {
     const ScratchDir scratch;
     const auto path = scratch / "straight.nrrd";
     io::write_volume(path, volume::shepp_logan_3d({24, 24, 24}));
-    const CliResult a =
-        run_cli("render " + quoted(path) + " --size 40x40 -o " + quoted(scratch / "a.png"), scratch);
+    const CliResult a = run_cli(
+        "render " + quoted(path) + " --size 40x40 -o " + quoted(scratch / "a.png"), scratch);
     const CliResult b = run_cli(
         "render " + quoted(path) + " --size 40x40 --axis-aligned -o " + quoted(scratch / "b.png"),
         scratch);
