@@ -42,8 +42,9 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     // An oblique volume is shown as it lies (the ray caster works in world space); --deform
     // resamples it onto an axis-aligned grid first, as `pliant deform` does (its tet grid and
     // drivers are built on the axis-aligned box).
-    read.orientation =
-        options.session.deform ? io::Orientation::axis_aligned : io::Orientation::keep;
+    read.orientation = options.session.deform || options.axis_aligned
+                           ? io::Orientation::axis_aligned
+                           : io::Orientation::keep;
     VolumeSession session(io::read_volume(volume_path, read), options.session);
     const ViewRunOptions& run = options.run;
     // The overlay is a panel docked at the window's left; the image has the requested size

@@ -358,8 +358,8 @@ TEST(ViewCli, DeformingVolumeRunsAndChanges) {
 }
 
 // An oblique volume (a phantom turned 5°, NIfTI) is shown as it lies, as `pliant render` renders
-// it (no resampling, no info line); with --deform it is resampled to an axis-aligned grid first,
-// as `pliant deform` does, and says so.
+// it (no resampling, no info line); with --deform (as `pliant deform`) or --axis-aligned it is
+// resampled to an axis-aligned grid first, and says so.
 TEST(ViewCli, ObliqueVolumeScreenshotMatchesPliantRender) {
     if (!has_xvfb()) {
         GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb xauth)";
@@ -391,6 +391,12 @@ TEST(ViewCli, ObliqueVolumeScreenshotMatchesPliantRender) {
                                           scratch);
     ASSERT_EQ(deform.exit_code, 0) << deform.err;
     EXPECT_NE(deform.err.find("resampled"), std::string::npos) << deform.err;
+    const CliResult resampled = run_headless(
+        "view volume " + volume + common + " --frames 1 --axis-aligned --no-ui --screenshot " +
+            quoted(scratch / "resampled.png"),
+        scratch);
+    ASSERT_EQ(resampled.exit_code, 0) << resampled.err;
+    EXPECT_NE(resampled.err.find("resampled"), std::string::npos) << resampled.err;
 }
 
 #endif  // PLIANT_HAS_VIEWER
