@@ -12,11 +12,11 @@
 //   - DIR/train/r_<i>.png, DIR/test/r_<i>.png (RGB, the background composited),
 //     DIR/transforms_train.json, DIR/transforms_test.json (io/nerf_dataset.hpp: camera_angle_x,
 //     fl_x …, the volume's box as `aabb`, OpenGL camera-to-world matrices).
-// --series, --tf, --step, --background as for `pliant render` (an oblique volume is resampled to
-// an axis-aligned grid first). --max-memory MiB: the volume, the ray caster's tables and one image
-// (views are written one at a time) may take at most this (default: the memory available); more is
-// refused before allocating and before anything is written. stdout: a summary, or with --json:
-// output, views, train, test, width, height, ms.
+// --series, --tf, --step, --background as for `pliant render` (an oblique volume is rendered as
+// it lies, in world space; `aabb` is its world box, Volume::world_bounds). --max-memory MiB: the
+// volume, the ray caster's tables and one image (views are written one at a time) may take at most
+// this (default: the memory available); more is refused before allocating and before anything is
+// written. stdout: a summary, or with --json: output, views, train, test, width, height, ms.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -58,6 +58,7 @@ void run_dataset(const DatasetCommandOptions& options, const GlobalOptions& glob
                              pipeline::image_bytes(size[0], size[1]), memory_limit);
     io::ReadVolumeOptions read;
     read.series_uid = options.series;
+    read.orientation = io::Orientation::keep;  // the ray caster renders it in world space
     if (memory_limit > 0) {
         read.max_bytes = static_cast<std::size_t>(memory_limit);
     }

@@ -250,6 +250,7 @@ void run_eval(const EvalCommandOptions& options, const GlobalOptions& global) {
     const nerf::Dataset dataset = pipeline::read_nerf_dataset(options.transforms, ro);
     io::ReadVolumeOptions rv;
     rv.max_bytes = ro.max_bytes;
+    rv.orientation = io::Orientation::keep;  // rendered at the views' poses in world space
     const volume::Volume vol = io::read_volume(options.volume, rv);
     if (volume::channels(vol.type()) != 4) {
         throw InvalidInput(fmt::format("{}: a {} volume; nerf eval needs an RGBA volume",

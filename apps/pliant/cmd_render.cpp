@@ -1,18 +1,22 @@
 // pliant render VOLUME [--series UID] [--tf FILE|PRESET] [--view AXIS | --camera AZ,EL,DIST]
 // [--size WxH]
-//               [--step S] [--opacity-unit U] [--background R,G,B] [--mip] [--shading]
+//               [--axis-aligned] [--step S] [--opacity-unit U] [--background R,G,B] [--mip]
+//               [--shading]
 //               [--clip PX,PY,PZ,NX,NY,NZ]
 //               -o OUT.png | --orbit N -o OUT.mp4   [--max-memory MIB] [--json]
 //
 // Ray-casts a volume file (io/volume_io.hpp: NRRD, NIfTI, MetaImage, raw + JSON, .inv3, a DICOM
 // folder or file) with render::RayCaster (render/raycast.hpp) and writes a PNG, or with --orbit N
 // an MP4 turntable of N frames around +z (azimuth advancing 360°/N per frame, 24 frames per
-// second) through ffmpeg. An oblique volume is resampled to an axis-aligned grid first (one info
-// line on stderr; io::Orientation).
+// second) through ffmpeg. An oblique volume (a grid turned in the world, a tilted scan) is
+// rendered as it lies, in world space (render/raycast.hpp, "Oriented volumes"); cameras frame its
+// world box (Volume::world_bounds).
+//   --axis-aligned  resample an oblique volume onto an axis-aligned grid first instead
+//                 (io::Orientation::axis_aligned: trilinear, one info line on stderr).
 //   --series UID  the DICOM series to read when the folder holds several (default: the largest).
 //   --tf          a preset name (ct-bone, ct-skin, mri-brain, grayscale) or a transfer function
 //                 JSON file (docs/formats.md); default grayscale. Ignored for RGBA volumes.
-//   --view AXIS   orthographic, looking along ±x/±y/±z, the volume's box filling the image
+//   --view AXIS   orthographic, looking along ±x/±y/±z, the volume's world box filling the image
 //                 (render::view_camera); without --size the longer side is 512 pixels and the
 //                 other follows the box's aspect.
 //   --camera      perspective from azimuth, elevation (degrees, render::frame_box's convention)
@@ -73,6 +77,7 @@ struct RenderCommandOptions {
     bool has_clip = false;
     std::string out;
     int orbit = 0;
+    bool axis_aligned = false;
     double max_memory_mib = 0.0;  // 0: the memory available
 };
 
@@ -99,6 +104,7 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
                              pipeline::image_bytes(size[0], size[1]), memory_limit);
     io::ReadVolumeOptions read;
     read.series_uid = options.series;
+    read.orientation = options.axis_aligned ? io::Orientation::axis_aligned : io::Orientation::keep;
     if (memory_limit > 0) {
         read.max_bytes = static_cast<std::size_t>(memory_limit);
     }
@@ -122,7 +128,7 @@ void run_render(const RenderCommandOptions& options, const GlobalOptions& global
     }
     const render::RayCaster caster(vol, is_rgba ? nullptr : &tf, ro);
 
-    const AABBd box = vol.bounds();
+    const AABBd box = vol.world_bounds();
     const auto camera_for = [&](double azimuth) {
         if (!options.view.empty()) {
             return render::view_camera(box, render::parse_view_axis(options.view.c_str()), size[0],
@@ -241,6 +247,9 @@ void register_render(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--orbit", options->orbit, "Turntable of N frames around +z (MP4)")
         ->check(CLI::Range(1, 100000))
         ->excludes(view);
+    cmd->add_flag("--axis-aligned", options->axis_aligned,
+                  "Resample an oblique volume onto an axis-aligned grid first (trilinear) instead "
+                  "of rendering its grid as it lies");
     add_max_memory_option(*cmd, options->max_memory_mib, "a volume and image that need");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->callback([options, &global] { run_render(*options, global); });

@@ -1,6 +1,7 @@
 // pliant view cloth SCENE.json  [view options] [--substeps-per-frame S] [--check-every N]
 // pliant view volume VOLUME      [view options] [--tf PRESET|FILE] [--opacity-scale S]
 //                                [--threshold T] [--clip PX,PY,PZ,NX,NY,NZ] [--shading] [--step S]
+//                                [--axis-aligned]
 //                                [--preview-divisor D] [--deform [--driver none|wave|twist|bubble]
 //                                [--stiffness K] [--cells B] [--substeps N] [--fps F]
 //                                [--drag-radius R] [--resample exact|map]] [--max-memory MIB]
@@ -13,7 +14,9 @@
 // shows the library's ray caster live, with transfer function presets, opacity scale, the
 // cleaning threshold and a clipping plane; --deform adds the tet grid + XPBD soft body +
 // resampling of `pliant deform`, drivers and mouse drag (--resample map: each frame ray-cast
-// through its inverse map instead of resampled, as `pliant deform --resample map`).
+// through its inverse map instead of resampled, as `pliant deform --resample map`). An oblique
+// volume is shown as it lies (as `pliant render`); --axis-aligned, and --deform (as `pliant
+// deform`), resample it onto an axis-aligned grid first.
 //   --camera AZ,EL,DIST  azimuth, elevation (degrees, render::frame_box's convention) and distance
 //                 from the target (world units; 0 frames the scene), the camera of `pliant render
 //                 --camera` (volume default 30,20,0; cloth default -60,25,0 as the cloth preview).
@@ -246,6 +249,9 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                     "While interacting, ray-cast at 1/D of the resolution per axis (default 2; 1: "
                     "always full)")
         ->check(CLI::Range(1, 64));
+    vol->add_flag("--axis-aligned", volume_options->axis_aligned,
+                  "Resample an oblique volume onto an axis-aligned grid first (trilinear) instead "
+                  "of showing it as it lies (--deform always does)");
     vol->add_flag("--deform", s.deform,
                   "Deform the volume: tet grid, XPBD soft body, resampling every frame");
     vol->add_option("--driver", volume_o->driver, "Initial driver (with --deform)")

@@ -39,6 +39,9 @@ struct VolumeViewOptions {
     // the window's resolution per axis (≥ 1; 1: always full); the full image follows when idle.
     int preview_divisor = 2;
     double max_memory_mib = 16384.0;  // largest volume to read
+    // Resample an oblique volume onto an axis-aligned grid first (io::Orientation::axis_aligned)
+    // instead of showing it as it lies; --deform always does.
+    bool axis_aligned = false;
 };
 
 }  // namespace pliant::viewer

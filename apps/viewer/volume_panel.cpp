@@ -176,9 +176,9 @@ void draw_volume_panel(VolumeSession& session, VolumeViewState& state, const Fra
         changed |= ImGui::SliderFloat("position", &state.clip_position, -1.0f, 1.0f, "%.2f");
         if (changed) {
             apply([&] {
-                session.set_clip(state.clip_enabled
-                                     ? std::optional(plane_from_clip_fields(state, source.bounds()))
-                                     : std::nullopt);
+                session.set_clip(state.clip_enabled ? std::optional(plane_from_clip_fields(
+                                                          state, source.world_bounds()))
+                                                    : std::nullopt);
             });
         }
     }

@@ -39,6 +39,12 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     }
     io::ReadVolumeOptions read;
     read.max_bytes = static_cast<std::size_t>(options.max_memory_mib * 1024.0 * 1024.0);
+    // An oblique volume is shown as it lies (the ray caster works in world space); --deform
+    // resamples it onto an axis-aligned grid first, as `pliant deform` does (its tet grid and
+    // drivers are built on the axis-aligned box).
+    read.orientation = options.session.deform || options.axis_aligned
+                           ? io::Orientation::axis_aligned
+                           : io::Orientation::keep;
     VolumeSession session(io::read_volume(volume_path, read), options.session);
     const ViewRunOptions& run = options.run;
     // The overlay is a panel docked at the window's left; the image has the requested size
@@ -52,7 +58,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     int window_width = 0, height = 0;
     window.framebuffer_size(window_width, height);
     int width = std::max(1, window_width - panel);  // the image's viewport
-    const AABBd box = session.source().bounds();
+    const AABBd box = session.source().world_bounds();
     OrbitController controller(box, run.azimuth, run.elevation, run.distance, width, height);
 
     VolumeViewState state;

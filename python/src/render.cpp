@@ -117,7 +117,7 @@ Pixel (i, j) is column i, row j from the top-left; its centre is (i + 0.5, j + 0
             py::arg("box"), py::arg("azimuth"), py::arg("elevation"), py::arg("width"),
             py::arg("height"), py::kw_only(), py::arg("projection") = "perspective",
             py::arg("fov_y_degrees") = 30.0, py::arg("margin") = 1.1,
-            "A camera looking at the centre of `box` ((lo, hi), e.g. Volume.bounds) from "
+            "A camera looking at the centre of `box` ((lo, hi), e.g. Volume.world_bounds) from "
             "(azimuth, elevation) in degrees, far enough for the whole box to fit.")
         .def_static("orbit", &render::orbit_camera, py::arg("box"), py::arg("azimuth"),
                     py::arg("elevation"), py::arg("distance"), py::arg("width"), py::arg("height"),

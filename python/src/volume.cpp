@@ -23,6 +23,7 @@
 #include "pliant/io/volume_io.hpp"
 #include "pliant/volume/clean.hpp"
 #include "pliant/volume/generate.hpp"
+#include "pliant/volume/reorient.hpp"
 #include "pliant/volume/transfer_function.hpp"
 
 namespace pliant::python {
@@ -119,7 +120,8 @@ void bind_volume(py::module_& m) {
 A regular grid of voxels placed in the world (volume::Volume), owning its data.
 
 dims: (nx, ny, nz). type: 'u8', 'i16', 'u16', 'f32' (scalars) or 'rgba8', 'rgba32f' (straight
-colour and opacity per opacity unit). Voxel (i, j, k) is centred at origin + (i + 0.5) spacing.
+colour and opacity per opacity unit). Voxel (i, j, k) is centred at origin + D (i + 0.5) spacing,
+D the direction (the identity unless the grid is oblique; see `direction`).
 array: the voxels as a writeable numpy view of the volume's memory (no copy), shape (nz, ny, nx)
 for scalars and (nz, ny, nx, 4) for RGBA, so array[k, j, i] is voxel (i, j, k).
 )doc")
@@ -147,7 +149,23 @@ for scalars and (nz, ny, nx, 4) for RGBA, so array[k, j, i] is voxel (i, j, k).
         .def_property("origin", &Volume::origin, &Volume::set_origin,
                       "the corner of the voxel box (world units)")
         .def_property_readonly("bounds", &Volume::bounds,
-                               "((xmin, ymin, zmin), (xmax, ymax, zmax)): the box the voxels cover")
+                               "((xmin, ymin, zmin), (xmax, ymax, zmax)): the box the voxels cover "
+                               "(for an oblique volume: in the grid's own frame)")
+        .def_property(
+            "direction",
+            [](const Volume& v) {
+                const volume::Direction& d = v.direction();
+                return py::make_tuple(d[0], d[1], d[2]);
+            },
+            [](Volume& v, const volume::Direction& d) { v.set_direction(d); },
+            "The world directions of the i, j and k axes: three unit, orthogonal vectors (the "
+            "columns of the rotation world_from_grid), the identity for an axis-aligned volume. "
+            "The ray caster renders an oblique volume as it lies in world space.")
+        .def_property_readonly("is_axis_aligned", &Volume::is_axis_aligned,
+                               "True when the direction is exactly the identity")
+        .def_property_readonly("world_bounds", &Volume::world_bounds,
+                               "The smallest world box holding the (possibly turned) voxel box: "
+                               "what cameras frame")
         .def_property_readonly("num_voxels", &Volume::num_voxels)
         .def_property_readonly("size_bytes", &Volume::size_bytes)
         .def("voxel_center", &Volume::voxel_center, py::arg("i"), py::arg("j"), py::arg("k"))
@@ -161,13 +179,35 @@ for scalars and (nz, ny, nx, 4) for RGBA, so array[k, j, i] is voxel (i, j, k).
 
     m.def(
         "read_volume",
-        [](const std::filesystem::path& path, std::size_t max_bytes) {
-            return io::read_volume(path, {.max_bytes = max_bytes});
+        [](const std::filesystem::path& path, std::size_t max_bytes,
+           const std::string& orientation) {
+            if (orientation != "axis_aligned" && orientation != "keep") {
+                throw InvalidInput(fmt::format(
+                    "read_volume: orientation '{}': expected 'axis_aligned' or 'keep'",
+                    orientation));
+            }
+            return io::read_volume(
+                path, {.max_bytes = max_bytes,
+                       .orientation = orientation == "keep" ? io::Orientation::keep
+                                                            : io::Orientation::axis_aligned});
         },
         py::arg("path"), py::arg("max_bytes") = Volume::MAX_BYTES,
+        py::arg("orientation") = "axis_aligned", py::call_guard<py::gil_scoped_release>(),
+        "Reads .nrrd, .nhdr, .nii, .nii.gz, .hdr, .mha, .mhd, .vdb, .json/.raw, .inv3 or DICOM by "
+        "extension. An oblique grid: orientation 'axis_aligned' resamples it onto an "
+        "axis-aligned grid (trilinear), 'keep' keeps its direction (the ray caster renders it as "
+        "it lies). IoError for broken files, Unsupported for features pliant does not read.");
+    m.def(
+        "resample_to_axis_aligned",
+        [](const Volume& v, const Vec3d& spacing, double outside) {
+            return volume::resample_to_axis_aligned(
+                v, {.spacing = spacing, .outside = outside});
+        },
+        py::arg("volume"), py::arg("spacing") = Vec3d{0, 0, 0}, py::arg("outside") = 0.0,
         py::call_guard<py::gil_scoped_release>(),
-        "Reads .nrrd, .nhdr, .nii, .nii.gz, .hdr, .json/.raw or .inv3 by extension. IoError for "
-        "broken files, Unsupported for features pliant does not read.");
+        "An axis-aligned volume covering an oblique one (volume::resample_to_axis_aligned: "
+        "trilinear; spacing (0, 0, 0): the smallest spacing on every axis; `outside`: the value "
+        "beyond the oblique box).");
     m.def(
         "write_volume",
         [](const std::filesystem::path& path, const Volume& v, bool gzip) {

@@ -1,8 +1,8 @@
 // DICOM and oblique volumes end to end: the bar of issue 32 — a CT series written in shuffled
 // file order with RescaleIntercept −1024 reads with the right size, spacing and HU range and
-// renders — plus series listing and choice, conversion, a tilted series (resampled, said on
-// stderr) and a broken one (exit 1 naming the problem). The series are written by GDCM in the
-// test (tests/io/dicom_series.hpp).
+// renders — plus series listing and choice, conversion, a tilted series (rendered as it lies;
+// resampled on request or for deform, said on stderr) and a broken one (exit 1 naming the problem).
+// The series are written by GDCM in the test (tests/io/dicom_series.hpp).
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -106,7 +106,7 @@ TEST(DicomCli, ConvertKeepsVoxelsAndPlacement) {
     }
 }
 
-TEST(DicomCli, TiltedSeriesIsResampledWithANote) {
+TEST(DicomCli, TiltedSeriesRendersAsItLiesOrResampledOnRequest) {
     const ScratchDir scratch;
     DicomSeriesSpec spec;
     const double t = 5.0 * std::numbers::pi / 180.0;
@@ -120,13 +120,20 @@ TEST(DicomCli, TiltedSeriesIsResampledWithANote) {
                     quoted(scratch / "t.png"),
                 scratch);
     ASSERT_EQ(render.exit_code, 0) << render.err;
-    EXPECT_NE(render.err.find("oblique"), std::string::npos) << render.err;
-    EXPECT_NE(render.err.find("resampled"), std::string::npos) << render.err;
+    EXPECT_EQ(render.err.find("resampled"), std::string::npos) << render.err;
+    const CliResult resampled =
+        run_cli("render " + quoted(scratch / "tilted") +
+                    " --tf ct-bone --size 32x32 --axis-aligned -o " + quoted(scratch / "r.png"),
+                scratch);
+    ASSERT_EQ(resampled.exit_code, 0) << resampled.err;
+    EXPECT_NE(resampled.err.find("oblique"), std::string::npos) << resampled.err;
+    EXPECT_NE(resampled.err.find("resampled"), std::string::npos) << resampled.err;
     const CliResult deform = run_cli("deform " + quoted(scratch / "tilted") +
                                          " --driver rotate --angle 10 --frames 2 --cells 8 -o " +
                                          quoted(scratch / "d.nrrd"),
                                      scratch);
     EXPECT_EQ(deform.exit_code, 0) << deform.err;
+    EXPECT_NE(deform.err.find("resampled"), std::string::npos) << deform.err;
 }
 
 TEST(ObliqueCli, NiftiTiltedBy5DegreesIsReadNotRefused) {
@@ -151,7 +158,7 @@ TEST(ObliqueCli, NiftiTiltedBy5DegreesIsReadNotRefused) {
                                          " --size 32x32 -o " + quoted(scratch / "t.png"),
                                      scratch);
     ASSERT_EQ(render.exit_code, 0) << render.err;
-    EXPECT_NE(render.err.find("resampled"), std::string::npos) << render.err;
+    EXPECT_EQ(render.err.find("resampled"), std::string::npos) << render.err;  // as it lies
     EXPECT_NE(io::read_png(scratch / "t.png"), render::Image(32, 32));
     // Converted, the direction goes along (MetaImage here).
     ASSERT_EQ(run_cli("volume convert " + quoted(scratch / "tilted.nii.gz") + " " +

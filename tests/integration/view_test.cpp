@@ -357,6 +357,48 @@ TEST(ViewCli, DeformingVolumeRunsAndChanges) {
     EXPECT_LT(psnr(io::read_png(scratch / "rest.png"), io::read_png(scratch / "twist.png")), 40.0);
 }
 
+// An oblique volume (a phantom turned 5°, NIfTI) is shown as it lies, as `pliant render` renders
+// it (no resampling, no info line); with --deform (as `pliant deform`) or --axis-aligned it is
+// resampled to an axis-aligned grid first, and says so.
+TEST(ViewCli, ObliqueVolumeScreenshotMatchesPliantRender) {
+    if (!has_xvfb()) {
+        GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb xauth)";
+    }
+    const ScratchDir scratch;
+    volume::Volume v = volume::shepp_logan_3d({40, 36, 32});
+    const double t = 5.0 * std::acos(-1.0) / 180.0;
+    v.set_direction(
+        {Vec3d{std::cos(t), 0, -std::sin(t)}, Vec3d{0, 1, 0}, Vec3d{std::sin(t), 0, std::cos(t)}});
+    io::write_volume(scratch / "tilted.nii.gz", v);
+    const std::string volume = quoted(scratch / "tilted.nii.gz");
+    const std::string common = " --tf mri-brain --camera 30,20,0 --size 160x128";
+    const CliResult offline =
+        run_cli("render " + volume + common + " -o " + quoted(scratch / "reference.png"), scratch);
+    ASSERT_EQ(offline.exit_code, 0) << offline.err;
+    const CliResult r =
+        run_headless("view volume " + volume + common + " --frames 2 --no-ui --screenshot " +
+                         quoted(scratch / "volume.png"),
+                     scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("resampled"), std::string::npos) << r.err;
+    const double db =
+        psnr(io::read_png(scratch / "volume.png"), io::read_png(scratch / "reference.png"));
+    std::printf("oblique volume screenshot vs pliant render: %.2f dB\n", db);
+    EXPECT_GE(db, 25.0);
+    const CliResult deform = run_headless("view volume " + volume + common +
+                                              " --frames 1 --deform --no-ui --screenshot " +
+                                              quoted(scratch / "deform.png"),
+                                          scratch);
+    ASSERT_EQ(deform.exit_code, 0) << deform.err;
+    EXPECT_NE(deform.err.find("resampled"), std::string::npos) << deform.err;
+    const CliResult resampled = run_headless(
+        "view volume " + volume + common + " --frames 1 --axis-aligned --no-ui --screenshot " +
+            quoted(scratch / "resampled.png"),
+        scratch);
+    ASSERT_EQ(resampled.exit_code, 0) << resampled.err;
+    EXPECT_NE(resampled.err.find("resampled"), std::string::npos) << resampled.err;
+}
+
 #endif  // PLIANT_HAS_VIEWER
 
 }  // namespace

@@ -15,7 +15,7 @@
 // ImagePositionPatient) are converted; the world is RAS+ (LPS files are converted). Grids are
 // re-indexed to the nearest axes (exact flips and axis swaps); an oblique grid keeps its
 // direction, and read_volume resamples it to an axis-aligned grid unless
-// ReadVolumeOptions::orientation is keep.
+// ReadVolumeOptions::orientation is keep (render, dataset, view and volume info keep it).
 //
 // Limits: every reader checks the declared size against ReadVolumeOptions::max_bytes and against
 // the bytes actually in the file BEFORE allocating. Errors: IoError "<path>: <what>, expected X,
@@ -37,7 +37,8 @@ namespace pliant::io {
 enum class Orientation {
     // Resample it onto an axis-aligned grid covering it (volume::resample_to_axis_aligned at its
     // smallest spacing; outside: the smallest value of a scalar volume, 0 for RGBA) and say so
-    // once through log_info. What the ray caster, tet grids and the deform pipeline need.
+    // once through log_info. What tet grids and the deform pipeline need (the ray caster renders
+    // an oriented volume as it lies: `pliant render` reads with keep).
     axis_aligned,
     // Return it with its direction (volume info, conversion between formats that hold it).
     keep,

@@ -48,7 +48,7 @@ nlohmann::ordered_json render_dataset(const volume::Volume& source,
     io::make_output_directory(dir / "train");
     io::make_output_directory(dir / "test");
 
-    const AABBd box = source.bounds();
+    const AABBd box = source.world_bounds();  // an oblique volume is rendered in world space
     render::FramingOptions framing;
     framing.fov_y_degrees = options.fov;
     std::vector<std::string> names[2];

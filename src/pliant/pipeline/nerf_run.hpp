@@ -37,11 +37,12 @@ struct DatasetRunOptions {
 };
 
 // Renders `options.views` views of `source` on a Fibonacci sphere (view i at height
-// z_i = 1 − (2 i + 1) / N, azimuth i · 137.508°), each framing the volume's box
-// (render::frame_box), into dir/train/r_<i>.png and dir/test/r_<i>.png with
-// dir/transforms_train.json and dir/transforms_test.json (the box as `aabb`). tf: the transfer
-// function of a scalar source, nullptr for RGBA. Returns {output, views, train, test, width,
-// height, ms}. IoError when the directories cannot be made.
+// z_i = 1 − (2 i + 1) / N, azimuth i · 137.508°), each framing the volume's world box
+// (Volume::world_bounds, render::frame_box; an oblique volume is rendered as it lies), into
+// dir/train/r_<i>.png and dir/test/r_<i>.png with dir/transforms_train.json and
+// dir/transforms_test.json (the box as `aabb`). tf: the transfer function of a scalar source,
+// nullptr for RGBA. Returns {output, views, train, test, width, height, ms}. IoError when the
+// directories cannot be made.
 nlohmann::ordered_json render_dataset(const volume::Volume& source,
                                       const volume::TransferFunction* tf,
                                       const DatasetRunOptions& options,

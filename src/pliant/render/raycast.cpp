@@ -191,6 +191,7 @@ void RayCaster::prepare(const volume::Volume& vol, const volume::TransferFunctio
     m_dims = vol.dims();
     m_spacing = vol.spacing();
     m_origin = vol.origin();
+    m_direction = vol.direction();
     m_step = default_step(vol, m_options);
     m_opacity_unit = m_options.opacity_unit > 0.0 ? m_options.opacity_unit : smallest(m_spacing);
 
@@ -394,6 +395,14 @@ std::int64_t RayCaster::num_occupied_cells() const {
     return count;
 }
 
+Vec3d RayCaster::grid_from_world(const Vec3d& v) const {
+    if (m_direction == volume::IDENTITY_DIRECTION) {
+        return v;
+    }
+    // D is orthogonal: its inverse is its transpose, whose rows are D's columns.
+    return {dot(m_direction[0], v), dot(m_direction[1], v), dot(m_direction[2], v)};
+}
+
 void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     const Vec3d inv{1.0 / m_spacing.x, 1.0 / m_spacing.y, 1.0 / m_spacing.z};
     k.inv_spacing = vec3_cast<float>(inv);
@@ -430,10 +439,11 @@ void RayCaster::fill_kernel(detail::RayCastKernel& k) const {
     k.background = m_options.background;
     k.grid_offset = {-0.5f, -0.5f, -0.5f};
     if (m_options.clip) {
-        // In the kernel's frame (world relative to the volume's origin), unit normal.
+        // In the kernel's frame (relative to the volume's origin, in the grid's axes), unit
+        // normal; the offset dot(n, point − origin) is the same in either frame.
         const Vec3d n = m_options.clip->normal / norm(m_options.clip->normal);
         k.has_clip = true;
-        k.clip_normal = vec3_cast<float>(n);
+        k.clip_normal = vec3_cast<float>(grid_from_world(n));
         k.clip_offset = static_cast<float>(dot(n, m_options.clip->point - m_origin));
     }
 }
@@ -460,9 +470,10 @@ RayCastStats RayCaster::render_rays(std::span<const Ray> rays, std::span<float> 
             std::int64_t samples = 0;
             for (std::int64_t i = chunk * CHUNK; i < std::min(n, (chunk + 1) * CHUNK); ++i) {
                 const Ray& ray = rays[static_cast<std::size_t>(i)];
-                // Relative to the volume's origin, as render() does with the eye.
-                const Vec3f origin = vec3_cast<float>(ray.origin - m_origin);
-                const Vec3f dir = vec3_cast<float>(ray.direction);
+                // Relative to the volume's origin, in the grid's frame, as render() does with
+                // the eye.
+                const Vec3f origin = vec3_cast<float>(grid_from_world(ray.origin - m_origin));
+                const Vec3f dir = vec3_cast<float>(grid_from_world(ray.direction));
                 const detail::PixelResult p = is_rgba ? detail::raycast_ray<true>(k, origin, dir)
                                                       : detail::raycast_ray<false>(k, origin, dir);
                 rgb[static_cast<std::size_t>(3 * i)] = p.color.r;
@@ -488,11 +499,13 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
     k.height = camera.height();
     k.is_perspective = camera.projection() == Projection::perspective;
     // Positions are taken relative to the volume's origin (in double, then float), so volumes
-    // far from the world origin keep float precision: grid g = (p − origin) / spacing − 0.5.
-    k.eye = vec3_cast<float>(camera.eye() - m_origin);
-    k.forward = vec3_cast<float>(camera.forward());
-    k.right = vec3_cast<float>(camera.right());
-    k.up = vec3_cast<float>(camera.up());
+    // far from the world origin keep float precision, and into the grid's frame (the camera
+    // turned by Dᵀ about the origin, an exact rigid motion in double): grid
+    // g = Dᵀ (p − origin) / spacing − 0.5.
+    k.eye = vec3_cast<float>(grid_from_world(camera.eye() - m_origin));
+    k.forward = vec3_cast<float>(grid_from_world(camera.forward()));
+    k.right = vec3_cast<float>(grid_from_world(camera.right()));
+    k.up = vec3_cast<float>(grid_from_world(camera.up()));
     k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
     fill_kernel(k);
     // An orthographic axis view: the cubes of its octants merged once per frame (O(cells), a

@@ -4,15 +4,15 @@
 //
 //   const volume::Volume head = volume::shepp_logan_3d({256, 256, 256});
 //   const volume::TransferFunction tf = volume::preset("mri-brain", head);
-//   const render::Camera cam = render::frame_box(head.bounds(), 30, 20, 512, 512);
+//   const render::Camera cam = render::frame_box(head.world_bounds(), 30, 20, 512, 512);
 //   render::Image image;
 //   const render::RayCastStats stats = render::raycast(head, &tf, cam, {}, image);
 //
 // Algorithm (per pixel, render::detail::raycast_pixel, a pure function of the pixel index over
 // trivially copyable data, GPU-style):
 //   1. The pixel-centre ray (Camera::pixel_ray) is clipped against the volume's box
-//      [origin, origin + dims · spacing] (slab test), t ∈ [max(t_near, 0), t_far]: a camera
-//      inside the volume starts at its eye.
+//      [origin, origin + dims · spacing] (slab test; in the grid's frame for oriented volumes),
+//      t ∈ [max(t_near, 0), t_far]: a camera inside the volume starts at its eye.
 //   2. The clipped chord of length D is cut into N = ⌈D / Δs⌉ segments of the step Δs (world
 //      units), the last one shortened to D − (N − 1)Δs; each segment is represented by the sample
 //      at its midpoint. Sample positions depend only on the ray, never on skipping.
@@ -51,6 +51,15 @@
 //      voxels), and a sample in an empty sub-cell is skipped alone. The occupancy test of a sample
 //      uses the same integer corner its interpolation reads, and skipped samples contribute
 //      nothing, so images are identical with or without skipping.
+//   Oriented volumes (Volume::direction() D not the identity, an oblique scan): the kernel works
+//   in the grid's own frame, where the volume is the axis-aligned box above. Each ray's origin
+//   and direction (render: the camera's eye, forward, right and up; render_rays: the caller's
+//   rays) and the clipping plane's normal are taken there by the inverse rigid motion
+//   p ↦ Dᵀ (p − origin), in double before the cast to float; lengths, the step, the opacity
+//   unit and |n · d| are unchanged by it, so steps 2–5 and shading are exactly those of an
+//   axis-aligned volume, and the image is the volume rendered in world space without resampling.
+//   An axis-aligned volume (D = I) skips the transform: its images are bit for bit unchanged.
+//   Frame such a volume with Volume::world_bounds() (bounds() is its box in the grid's frame).
 //   Clipping plane (optional): the half-space (p − point) · normal ≥ 0 is kept: step 1 also cuts
 //   the ray to it (t ≥ or ≤ the plane's crossing; a ray parallel to the plane is kept whole or
 //   missed), so the chord of step 2 is the kept part and a uniform medium renders
@@ -166,10 +175,15 @@ private:
     void prepare(const volume::Volume& volume, const volume::TransferFunction* tf);
     // The kernel's volume, table and option fields (everything but the camera's).
     void fill_kernel(detail::RayCastKernel& k) const;
+    // A world vector in the grid's frame: Dᵀ v (v itself when the volume is axis-aligned).
+    Vec3d grid_from_world(const Vec3d& v) const;
 
     RayCastOptions m_options;
     volume::Dims m_dims{0, 0, 0};
     Vec3d m_spacing, m_origin;
+    // The volume's direction (volume/volume.hpp): rays, eyes and clip planes are taken into the
+    // grid's frame by grid_from_world; the identity leaves them exactly as given.
+    volume::Direction m_direction = volume::IDENTITY_DIRECTION;
     bool m_is_rgba = false;
     double m_step = 0.0;
     double m_opacity_unit = 0.0;

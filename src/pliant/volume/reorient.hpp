@@ -10,8 +10,8 @@
 // (an axis more than ~1e-6 rad from every world axis), and then its direction is kept.
 //
 // resample_to_axis_aligned turns an oriented volume into an axis-aligned one covering it:
-// trilinear interpolation, for the kernels that work in the grid's frame (ray casting, tet grids,
-// deformed-mesh resampling).
+// trilinear interpolation, for the kernels that work in the grid's frame (tet grids, deformed-mesh
+// resampling; the ray caster renders oriented volumes as they lie, or these on request).
 #pragma once
 
 #include <array>

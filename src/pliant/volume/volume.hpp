@@ -13,9 +13,9 @@
 //
 // Orientation: the readers keep a file's direction cosines (io/volume_io.hpp), re-indexed so that
 // each grid axis is the one nearest to +x, +y, +z (flips and axis swaps are exact and free), so D
-// is the identity unless the grid is truly oblique. Kernels that work in the grid's frame (the
-// ray caster, tet grids, resampling of deformed meshes) need an axis-aligned volume:
-// volume/reorient.hpp resamples an oriented one.
+// is the identity unless the grid is truly oblique. The ray caster renders an oriented volume in
+// world space (render/raycast.hpp); tet grids and the resampling of deformed meshes work in the
+// grid's frame and need an axis-aligned volume: volume/reorient.hpp resamples an oriented one.
 //
 // Voxel types: scalar u8, i16, u16, f32 (one channel: intensity, CT Hounsfield units, …) and
 // RGBA u8, f32 (four channels, interleaved r, g, b, a per voxel: colour and opacity, opacity per
