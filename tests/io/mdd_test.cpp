@@ -97,14 +97,14 @@ TEST(Mdd, BadArgumentsAndFailuresLeaveNoFile) {
 
     // A failure mid-stream keeps the earlier file whole and leaves no temporary.
     write_bytes(path, "earlier");
-    EXPECT_THROW(write_mdd(path, 3, 5, 24.0,
-                           [](std::int64_t f, std::span<Vec3f> out) {
-                               for (Vec3f& p : out) {
-                                   p = {0.0f, 0.0f,
-                                        f == 3 ? std::numeric_limits<float>::infinity() : 1.0f};
-                               }
-                           }),
-                 InvalidInput);
+    EXPECT_THROW(
+        write_mdd(path, 3, 5, 24.0,
+                  [](std::int64_t f, std::span<Vec3f> out) {
+                      for (Vec3f& p : out) {
+                          p = {0.0f, 0.0f, f == 3 ? std::numeric_limits<float>::infinity() : 1.0f};
+                      }
+                  }),
+        InvalidInput);
     EXPECT_THROW(write_mdd(path, 3, 5, 24.0,
                            [](std::int64_t f, std::span<Vec3f>) {
                                if (f == 2) {

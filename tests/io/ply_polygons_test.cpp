@@ -95,8 +95,7 @@ end_header
 0 1
 )";
 
-PolygonMesh read_text(const TempDir& dir, const std::string& text,
-                      const char* name = "g.ply") {
+PolygonMesh read_text(const TempDir& dir, const std::string& text, const char* name = "g.ply") {
     write_bytes(dir / name, text);
     return read_ply_polygons(dir / name);
 }
@@ -110,8 +109,7 @@ TEST(PlyPolygons, ReadsPolygonsUvsNormalsAndProperties) {
     EXPECT_EQ(m.num_corners(0), 4u);
     EXPECT_EQ(m.num_corners(1), 3u);
     EXPECT_EQ(m.num_corners(2), 5u);
-    EXPECT_EQ(m.corner_vertices,
-              (std::vector<std::int32_t>{0, 1, 2, 3, 1, 4, 2, 4, 5, 6, 7, 2}));
+    EXPECT_EQ(m.corner_vertices, (std::vector<std::int32_t>{0, 1, 2, 3, 1, 4, 2, 4, 5, 6, 7, 2}));
     // Per-vertex UVs: one per vertex, each corner refers to its vertex's.
     ASSERT_EQ(m.uvs.size(), 8u);
     EXPECT_EQ(m.uvs[5], (std::array<double, 2>{1.0, 0.25}));
@@ -123,8 +121,7 @@ TEST(PlyPolygons, ReadsPolygonsUvsNormalsAndProperties) {
     ASSERT_EQ(m.vertex_attributes.size(), 1u);
     EXPECT_EQ(m.vertex_attributes[0].name, "red");
     EXPECT_EQ(m.vertex_attributes[0].type, "uchar");
-    EXPECT_EQ(m.vertex_attributes[0].values,
-              (std::vector<double>{10, 20, 30, 40, 50, 60, 70, 80}));
+    EXPECT_EQ(m.vertex_attributes[0].values, (std::vector<double>{10, 20, 30, 40, 50, 60, 70, 80}));
     ASSERT_EQ(m.face_attributes.size(), 1u);
     EXPECT_EQ(m.face_attributes[0].name, "flags");
     EXPECT_EQ(m.face_attributes[0].type, "int");
@@ -142,13 +139,13 @@ TEST(PlyPolygons, UvPropertyNamesAndMissingUvs) {
     const TempDir dir;
     for (const auto& [u, v] : {std::pair{"u", "v"}, std::pair{"texture_u", "texture_v"},
                                std::pair{"texture_s", "texture_t"}}) {
-        const PolygonMesh m = read_text(
-            dir, fmt::format("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                             "property float y\nproperty float z\nproperty double {}\n"
-                             "property double {}\nelement face 1\n"
-                             "property list uchar uint vertex_index\nend_header\n"
-                             "0 0 0 0.125 0.5\n1 0 0 0.25 0.5\n0 1 0 0.5 0.75\n3 0 1 2\n",
-                             u, v));
+        const PolygonMesh m =
+            read_text(dir, fmt::format("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                       "property float y\nproperty float z\nproperty double {}\n"
+                                       "property double {}\nelement face 1\n"
+                                       "property list uchar uint vertex_index\nend_header\n"
+                                       "0 0 0 0.125 0.5\n1 0 0 0.25 0.5\n0 1 0 0.5 0.75\n3 0 1 2\n",
+                                       u, v));
         ASSERT_EQ(m.uvs.size(), 3u) << u;
         EXPECT_EQ(m.uvs[2], (std::array<double, 2>{0.5, 0.75})) << u;
         EXPECT_EQ(m.corner_uvs, (std::vector<std::int32_t>{0, 1, 2})) << u;
@@ -170,13 +167,13 @@ TEST(PlyPolygons, UvPropertyNamesAndMissingUvs) {
 
 TEST(PlyPolygons, PerCornerTexcoordTakesPrecedence) {
     const TempDir dir;
-    const PolygonMesh m = read_text(
-        dir,
-        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-        "property float z\nproperty float s\nproperty float t\nelement face 2\n"
-        "property list uchar float texcoord\nproperty list uchar int vertex_indices\n"
-        "end_header\n0 0 0 9 9\n1 0 0 9 9\n1 1 0 9 9\n0 1 0 9 9\n"
-        "6 0 0 1 0 1 1 3 0 1 2\n6 0.5 0.5 0.25 0.25 0 0.5 3 0 2 3\n");
+    const PolygonMesh m =
+        read_text(dir,
+                  "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                  "property float z\nproperty float s\nproperty float t\nelement face 2\n"
+                  "property list uchar float texcoord\nproperty list uchar int vertex_indices\n"
+                  "end_header\n0 0 0 9 9\n1 0 0 9 9\n1 1 0 9 9\n0 1 0 9 9\n"
+                  "6 0 0 1 0 1 1 3 0 1 2\n6 0.5 0.5 0.25 0.25 0 0.5 3 0 2 3\n");
     ASSERT_EQ(m.num_faces(), 2u);
     ASSERT_EQ(m.uvs.size(), 6u);  // one per corner
     EXPECT_EQ(m.corner_uvs, (std::vector<std::int32_t>{0, 1, 2, 3, 4, 5}));
@@ -301,13 +298,13 @@ TEST(PlyPolygons, BigEndianBinaryWithAttributes) {
     data.put(1.0, 1.0, 0.0).put<float>(0.75f, 1.0f).put<std::int16_t>(5);
     data.put(0.0, 1.0, 0.0).put<float>(0.25f, 1.0f).put<std::int16_t>(6);
     data.put<std::uint16_t>(4).put<std::uint32_t>(0, 1, 2, 3).put<double>(2.5);
-    const PolygonMesh m = read_text(
-        dir,
-        "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\n"
-        "property double y\nproperty double z\nproperty float texture_u\n"
-        "property float texture_v\nproperty short quality\nelement face 1\n"
-        "property list ushort uint vertex_indices\nproperty double weight\nend_header\n" +
-            data.str());
+    const PolygonMesh m =
+        read_text(dir,
+                  "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\n"
+                  "property double y\nproperty double z\nproperty float texture_u\n"
+                  "property float texture_v\nproperty short quality\nelement face 1\n"
+                  "property list ushort uint vertex_indices\nproperty double weight\nend_header\n" +
+                      data.str());
     EXPECT_EQ(m.positions[2], (Vec3d{1.0, 1.0, 0.0}));
     EXPECT_EQ(m.uvs[1], (std::array<double, 2>{0.75, 0.5}));
     EXPECT_EQ(m.vertex_attributes[0].values, (std::vector<double>{-3, 4, 5, 6}));
@@ -409,8 +406,9 @@ TEST_F(PlyPolygonsBroken, MismatchedPropertyLists) {
     const std::string head =
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
         "property float z\nelement face 1\nproperty list uchar int vertex_indices\n";
-    expect_broken(head + "property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
-                         "3 0 1 2 4 0 0 1 0\n",
+    expect_broken(head +
+                      "property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                      "3 0 1 2 4 0 0 1 0\n",
                   {"face 0 has 4 texcoord values for 3 corners, expected 6"});
     expect_broken(head + "property float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1\n",
                   {"property 'texcoord' of element 'face' is a scalar"});
@@ -423,12 +421,14 @@ TEST_F(PlyPolygonsBroken, MismatchedPropertyLists) {
         "property float z\nelement face 1\nproperty list uchar float vertex_indices\n"
         "end_header\n",
         {"item type float, expected an integer type"});
-    expect_broken("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                  "end_header\n",
-                  {"element 'vertex' has no property 'z'"});
-    expect_broken("ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\n"
-                  "end_header\n",
-                  {"no vertex element"});
+    expect_broken(
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "end_header\n",
+        {"element 'vertex' has no property 'z'"});
+    expect_broken(
+        "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\n"
+        "end_header\n",
+        {"no vertex element"});
 }
 
 TEST_F(PlyPolygonsBroken, HugeCountsAndListsFailBeforeAllocating) {

@@ -160,8 +160,7 @@ Layout check_layout(const PlyHeader& header, const Diagnostics& diag, PolygonMes
         const PlyProperty& property = vertices.properties[p];
         if (vertex_slots[p].role == Role::skip && !property.is_list) {
             vertex_slots[p] = {Role::vertex_attribute, mesh.vertex_attributes.size()};
-            mesh.vertex_attributes.push_back(
-                {property.name, detail::to_string(property.type), {}});
+            mesh.vertex_attributes.push_back({property.name, detail::to_string(property.type), {}});
         }
     }
 
@@ -285,7 +284,8 @@ public:
         : m_data(data),
           m_diag(diag),
           m_swap(detail::needs_swap(format == PlyFormat::binary_big_endian ? std::endian::big
-                                                                            : std::endian::little)) {}
+                                                                           : std::endian::little)) {
+    }
 
     void begin_record(const PlyElement& /*element*/, std::uint64_t /*record*/) {}
     void end_record(const PlyElement& /*element*/, std::uint64_t /*record*/) {}
@@ -514,8 +514,7 @@ public:
     }
 
 private:
-    void decode_record(const PlyElement& element, const std::vector<Slot>& slots,
-                       std::uint64_t r) {
+    void decode_record(const PlyElement& element, const std::vector<Slot>& slots, std::uint64_t r) {
         for (std::size_t p = 0; p < element.properties.size(); ++p) {
             const PlyProperty& property = element.properties[p];
             const Slot slot = slots[p];
@@ -613,8 +612,8 @@ private:
         }
         for (std::size_t k = 0; k < corners.size(); ++k) {
             if (corners[k] < 0 || corners[k] >= num_vertices) {
-                m_diag.fail("face {} corner {} has vertex index {}, expected 0 <= index < {}", f,
-                            k, corners[k], m_mesh.positions.size());
+                m_diag.fail("face {} corner {} has vertex index {}, expected 0 <= index < {}", f, k,
+                            corners[k], m_mesh.positions.size());
             }
         }
         // Distinct corners: sorted copy (a polygon may have many corners).
@@ -811,13 +810,11 @@ void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& me
         for (std::size_t c = 0; c < mesh.corner_vertices.size() && per_vertex_uvs; ++c) {
             const std::int32_t t = mesh.corner_uvs[c];
             const auto v = static_cast<std::size_t>(mesh.corner_vertices[c]);
-            if (t < 0) {
-                per_vertex_uvs = false;
-            } else if (!is_set[v]) {
+            if (t >= 0 && !is_set[v]) {
                 vertex_uvs[v] = mesh.uvs[static_cast<std::size_t>(t)];
                 is_set[v] = true;
-            } else if (vertex_uvs[v] != mesh.uvs[static_cast<std::size_t>(t)]) {
-                per_vertex_uvs = false;
+            } else {
+                per_vertex_uvs = t >= 0 && vertex_uvs[v] == mesh.uvs[static_cast<std::size_t>(t)];
             }
         }
     }
@@ -851,9 +848,8 @@ void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& me
     header += "end_header\n";
 
     // Step 3: the data, streamed.
-    const bool swap = detail::needs_swap(format == PlyFormat::binary_big_endian
-                                             ? std::endian::big
-                                             : std::endian::little);
+    const bool swap = detail::needs_swap(
+        format == PlyFormat::binary_big_endian ? std::endian::big : std::endian::little);
     const bool is_ascii = format == PlyFormat::ascii;
     write_file_atomically(path, [&](std::ostream& out) {
         out.write(header.data(), static_cast<std::streamsize>(header.size()));
@@ -868,7 +864,9 @@ void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& me
             }
         };
         // ASCII values are written with a leading space; each record drops its first one.
-        const auto begin_record = [&] { return buffer.size() + (is_ascii ? 1 : 0); };
+        const auto begin_record = [&] {
+            return buffer.size() + (is_ascii ? 1 : 0);
+        };
         const auto trim_first_space = [&](std::size_t at) {
             if (is_ascii && at <= buffer.size()) {
                 std::copy(buffer.begin() + static_cast<std::ptrdiff_t>(at), buffer.end(),
@@ -908,9 +906,8 @@ void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& me
                              swap);
                 for (std::size_t c = first; c < last; ++c) {
                     const std::int32_t t = mesh.corner_uvs[c];
-                    const std::array<double, 2> uv =
-                        t >= 0 ? mesh.uvs[static_cast<std::size_t>(t)]
-                               : std::array<double, 2>{0.0, 0.0};
+                    const std::array<double, 2> uv = t >= 0 ? mesh.uvs[static_cast<std::size_t>(t)]
+                                                            : std::array<double, 2>{0.0, 0.0};
                     append_value(buffer, uv[0], PlyScalar::float32, format, swap);
                     append_value(buffer, uv[1], PlyScalar::float32, format, swap);
                 }
