@@ -55,9 +55,9 @@ TEST(BlenderReadback, PlyGarmentFramesAndMddCache) {
 
     const std::filesystem::path script =
         std::filesystem::path(PLIANT_SOURCE_DIR) / "tests" / "integration" / "blender_readback.py";
-    const std::string command = "blender -b --factory-startup --python " + quoted(script) +
-                                " -- " + quoted(scratch / "out") + " >" +
-                                quoted(scratch / "blender.txt") + " 2>&1";
+    const std::string command = "blender -b --factory-startup --python " + quoted(script) + " -- " +
+                                quoted(scratch / "out") + " >" + quoted(scratch / "blender.txt") +
+                                " 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << read_text(scratch / "blender.txt");
     std::map<std::string, std::string> seen;
     std::istringstream lines(read_text(scratch / "blender.txt"));

@@ -313,6 +313,22 @@ TEST(GarmentCommand, QuadPlyGarmentGivesPlyFramesAndAnMddCache) {
             EXPECT_EQ(std::bit_cast<float>(big_endian_word(mdd, at + 8)), static_cast<float>(p.z));
         }
     }
+
+    // Interrupted after frame 2 and resumed on 2 threads: the same frames and cache, bitwise.
+    const std::string scene = quoted(scratch / "scene.json");
+    ASSERT_EQ(run_cli("cloth " + scene + " --no-preview --frames 2 --checkpoint-every 2 --out " +
+                          quoted(scratch / "resumed"),
+                      scratch)
+                  .exit_code,
+              0);
+    const CliResult resumed =
+        run_cli("cloth " + scene + " --no-preview --resume --threads 2 --out " +
+                    quoted(scratch / "resumed"),
+                scratch);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_EQ(read_text(scratch / "resumed" / "frames" / "frame_0004.ply"),
+              read_text(frames / "frame_0004.ply"));
+    EXPECT_EQ(read_text(scratch / "resumed" / "cloth.mdd"), mdd);
 }
 
 }  // namespace
