@@ -332,6 +332,11 @@ TEST(PlyPolygons, WriterRejectsBadInputAndKeepsTheFile) {
                   std::string::npos)
             << e.what();
     }
+    PolygonMesh out_of_range = m;
+    out_of_range.vertex_attributes[0].values[2] = 256.0;  // uchar
+    EXPECT_THROW(write_ply_polygons(path, out_of_range, m.positions), InvalidInput);
+    out_of_range.vertex_attributes[0].values[2] = 2.5;
+    EXPECT_THROW(write_ply_polygons(path, out_of_range, m.positions), InvalidInput);
     PolygonMesh bad_type = m;
     bad_type.face_attributes[0].type = "int64";
     EXPECT_THROW(write_ply_polygons(path, bad_type, m.positions), InvalidInput);

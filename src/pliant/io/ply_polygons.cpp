@@ -746,6 +746,22 @@ std::vector<PlyScalar> check_attributes(const std::vector<PolygonMesh::Attribute
                                            path.string(), what, attribute.name,
                                            attribute.values.size(), count));
         }
+        for (std::size_t k = 0; k < attribute.values.size(); ++k) {
+            const double value = attribute.values[k];
+            bool fits = true;
+            if (detail::is_integer(*type)) {
+                const IntegerRange range = integer_range(*type);
+                fits = value == std::floor(value) && value >= static_cast<double>(range.min) &&
+                       value <= static_cast<double>(range.max);
+            } else if (*type == PlyScalar::float32 && std::isfinite(value)) {
+                fits = std::abs(value) <= static_cast<double>(std::numeric_limits<float>::max());
+            }
+            if (!fits) {
+                throw InvalidInput(
+                    fmt::format("{}: {} attribute '{}' value {} is {}, expected a {} value",
+                                path.string(), what, attribute.name, k, value, attribute.type));
+            }
+        }
         types.push_back(*type);
     }
     return types;

@@ -36,8 +36,8 @@
 // without a UV get (0, 0)), then the face attributes. Binary formats read back bit for bit for
 // positions; ASCII prints doubles with 17 and floats with 9 significant digits. The file is
 // replaced atomically (atomic_file.hpp). InvalidInput (before touching the file) when positions
-// has another size or a non-finite value, or an attribute has the wrong number of values or an
-// unknown type; IoError when the file cannot be written.
+// has another size or a non-finite value, or an attribute has the wrong number of values, an
+// unknown type or a value its type cannot hold; IoError when the file cannot be written.
 #pragma once
 
 #include <filesystem>
