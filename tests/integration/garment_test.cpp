@@ -1,9 +1,12 @@
 // `pliant cloth` on a garment: an OBJ in centimetres with quads, UVs, normals, groups and a
 // material library, two panels sewn together, a fabric preset; frames keep the input's faces,
-// the material library is copied beside them, and cloth.pc2 holds every frame.
+// the material library is copied beside them, and cloth.pc2 holds every frame. A quad PLY garment
+// with UVs and properties gives PLY frames with the same faces, UVs and properties, and cloth.mdd
+// holds every frame.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +20,7 @@
 #include "pliant/geometry/triangle_mesh.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/obj_polygons.hpp"
+#include "pliant/io/ply_polygons.hpp"
 #include "run_cli.hpp"
 
 namespace pliant::test {
@@ -278,6 +282,115 @@ TEST(GarmentCommand, SkirtIsDeterministicAndResumes) {
     EXPECT_EQ(cache.size(), 32U + 5U * 1250U * 12U);
     EXPECT_EQ(read_text(scratch / "two" / "cloth.pc2"), cache);
     EXPECT_EQ(read_text(scratch / "resumed" / "cloth.pc2"), cache);
+}
+
+// One panel of M × M quads, 40 cm square, 50 cm up, as an ASCII PLY: UVs (s, t) and a float
+// `quality` per vertex, a uchar `panel` per face.
+constexpr int M = 4;
+std::string garment_ply() {
+    std::ostringstream ply;
+    ply << "ply\nformat ascii 1.0\nelement vertex " << (M + 1) * (M + 1)
+        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float s\n"
+           "property float t\nproperty float quality\nelement face "
+        << M * M << "\nproperty list uchar int vertex_indices\nproperty uchar panel\nend_header\n";
+    for (int j = 0; j <= M; ++j) {
+        for (int i = 0; i <= M; ++i) {
+            ply << i * 0.4 / M << " " << j * 0.4 / M << " 0.5 " << static_cast<double>(i) / M << " "
+                << static_cast<double>(j) / M << " " << j * (M + 1) + i << "\n";
+        }
+    }
+    for (int j = 0; j < M; ++j) {
+        for (int i = 0; i < M; ++i) {
+            ply << "4 " << j * (M + 1) + i << " " << j * (M + 1) + i + 1 << " "
+                << (j + 1) * (M + 1) + i + 1 << " " << (j + 1) * (M + 1) + i << " " << (i + j) % 3
+                << "\n";
+        }
+    }
+    return ply.str();
+}
+
+// Big-endian words of an MDD file, decoded byte by byte.
+std::uint32_t big_endian_word(const std::string& bytes, std::size_t at) {
+    std::uint32_t w = 0;
+    for (std::size_t k = 0; k < 4; ++k) {
+        w = (w << 8) | static_cast<unsigned char>(bytes.at(at + k));
+    }
+    return w;
+}
+
+TEST(GarmentCommand, QuadPlyGarmentGivesPlyFramesAndAnMddCache) {
+    ScratchDir scratch;
+    write(scratch / "panel.ply", garment_ply());
+    write(scratch / "scene.json", R"({
+        "cloth": {"mesh": "panel.ply"},
+        "pins": {"vertices": [20, 24]},
+        "fps": 24, "frames": 4, "substeps": 20,
+        "output": {"format": "ply", "point_cache": "mdd"}
+    })");
+    const CliResult r = run_cli("--json cloth " + quoted(scratch / "scene.json") + " --out " +
+                                    quoted(scratch / "out") + " --no-preview",
+                                scratch);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(r.out);
+    EXPECT_EQ(stats.at("max_intersecting_pairs"), 0);
+    ASSERT_EQ(stats.at("point_cache"), (scratch / "out" / "cloth.mdd").string());
+
+    // Every frame: binary little-endian PLY with the input's quads, UVs and properties.
+    const io::PolygonMesh input = io::read_ply_polygons(scratch / "panel.ply");
+    const std::filesystem::path frames = scratch / "out" / "frames";
+    std::vector<io::PolygonMesh> written;
+    for (int f = 0; f <= 4; ++f) {
+        const std::filesystem::path file = frames / ("frame_000" + std::to_string(f) + ".ply");
+        EXPECT_EQ(read_text(file).rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
+        written.push_back(io::read_ply_polygons(file));
+        const io::PolygonMesh& m = written.back();
+        EXPECT_EQ(m.face_starts, input.face_starts) << f;
+        EXPECT_EQ(m.corner_vertices, input.corner_vertices) << f;
+        EXPECT_EQ(m.uvs, input.uvs) << f;
+        EXPECT_EQ(m.corner_uvs, input.corner_uvs) << f;
+        ASSERT_EQ(m.vertex_attributes.size(), 1u);
+        EXPECT_EQ(m.vertex_attributes[0].values, input.vertex_attributes[0].values);
+        ASSERT_EQ(m.face_attributes.size(), 1u);
+        EXPECT_EQ(m.face_attributes[0].name, "panel");
+        EXPECT_EQ(m.face_attributes[0].values, input.face_attributes[0].values);
+        EXPECT_EQ(m.normals.size(), input.positions.size());  // recomputed, written
+    }
+    EXPECT_EQ(written[0].positions, input.positions);
+    EXPECT_LT(written[4].positions[0].z, 0.5 - 0.05);  // the free corner fell
+
+    // cloth.mdd: 5 frames, times f / 24 s, each frame's positions as float.
+    const std::string mdd = read_text(scratch / "out" / "cloth.mdd");
+    const std::size_t points = (M + 1) * (M + 1);
+    ASSERT_EQ(mdd.size(), 8 + 5 * 4 + 5 * points * 12);
+    EXPECT_EQ(big_endian_word(mdd, 0), 5u);
+    EXPECT_EQ(big_endian_word(mdd, 4), points);
+    for (std::size_t f = 0; f < 5; ++f) {
+        EXPECT_EQ(std::bit_cast<float>(big_endian_word(mdd, 8 + 4 * f)),
+                  static_cast<float>(static_cast<double>(f) / 24.0));
+        for (std::size_t v = 0; v < points; ++v) {
+            const std::size_t at = 28 + 12 * (f * points + v);
+            const Vec3d& p = written[f].positions[v];
+            EXPECT_EQ(std::bit_cast<float>(big_endian_word(mdd, at)), static_cast<float>(p.x));
+            EXPECT_EQ(std::bit_cast<float>(big_endian_word(mdd, at + 4)), static_cast<float>(p.y));
+            EXPECT_EQ(std::bit_cast<float>(big_endian_word(mdd, at + 8)), static_cast<float>(p.z));
+        }
+    }
+
+    // Interrupted after frame 2 and resumed on 2 threads: the same frames and cache, bitwise.
+    const std::string scene = quoted(scratch / "scene.json");
+    ASSERT_EQ(run_cli("cloth " + scene + " --no-preview --frames 2 --checkpoint-every 2 --out " +
+                          quoted(scratch / "resumed"),
+                      scratch)
+                  .exit_code,
+              0);
+    const CliResult resumed =
+        run_cli("cloth " + scene + " --no-preview --resume --threads 2 --out " +
+                    quoted(scratch / "resumed"),
+                scratch);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_EQ(read_text(scratch / "resumed" / "frames" / "frame_0004.ply"),
+              read_text(frames / "frame_0004.ply"));
+    EXPECT_EQ(read_text(scratch / "resumed" / "cloth.mdd"), mdd);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "pliant/core/log.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/io/obj.hpp"
+#include "pliant/io/ply_polygons.hpp"
 #include "pliant/pipeline/cloth_scene_file.hpp"
 #include "pliant/pipeline/cloth_setup.hpp"
 #include "support/test_files.hpp"
@@ -149,6 +150,36 @@ TEST(GarmentSetup, SeamVerticesOutsideTheClothAreRefused) {
         parse_cloth_scene(grid + R"([{"a": [0], "b": [8]}]})", "g.json", "/");
     const ClothSetup setup = load_cloth_setup(ok, "g.json");
     EXPECT_EQ(make_solver(ok, setup)->model().seams().num_pairs(), 1u);
+}
+
+// A PLY garment is read as polygons with its UVs and properties; instances repeat its faces,
+// UVs and properties per copy, so that frames of all copies can be written as PLY.
+TEST(GarmentSetup, PlyGarmentWithInstancesKeepsFacesUvsAndProperties) {
+    const io::test::TempDir dir;
+    io::test::write_bytes(
+        dir / "quad.ply",
+        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+        "property float z\nproperty float u\nproperty float v\nproperty uchar red\n"
+        "element face 2\nproperty list uchar int vertex_indices\nproperty short id\n"
+        "end_header\n0 0 0 0 0 1\n0.2 0 0 1 0 2\n0.2 0.2 0 1 1 3\n0 0.2 0 0 1 4\n"
+        "0.3 0.1 0 1 0.5 5\n4 0 1 2 3 7\n3 1 4 2 8\n");
+    const ClothSetup setup = load(R"({"mesh": ")" + (dir / "quad.ply").string() +
+                                  R"(", "instances": [{}, {"translate": [0, 0, 0.5]}]})");
+    EXPECT_EQ(setup.mesh.triangles.size(), 6u);  // (2 + 1) per copy
+    ASSERT_TRUE(setup.garment);
+    const io::PolygonMesh& g = *setup.garment;
+    ASSERT_EQ(g.num_faces(), 4u);
+    EXPECT_EQ(g.corner_vertices,
+              (std::vector<std::int32_t>{0, 1, 2, 3, 1, 4, 2, 5, 6, 7, 8, 6, 9, 7}));
+    EXPECT_EQ(g.corner_uvs, (std::vector<std::int32_t>{0, 1, 2, 3, 1, 4, 2, 0, 1, 2, 3, 1, 4, 2}));
+    ASSERT_EQ(g.vertex_attributes.size(), 1u);
+    EXPECT_EQ(g.vertex_attributes[0].values, (std::vector<double>{1, 2, 3, 4, 5, 1, 2, 3, 4, 5}));
+    ASSERT_EQ(g.face_attributes.size(), 1u);
+    EXPECT_EQ(g.face_attributes[0].values, (std::vector<double>{7, 8, 7, 8}));
+    EXPECT_EQ(g.positions, setup.mesh.positions);
+    io::write_ply_polygons(dir / "frame.ply", g, setup.mesh.positions);
+    EXPECT_EQ(io::read_ply_polygons(dir / "frame.ply").face_attributes[0].values,
+              g.face_attributes[0].values);
 }
 
 }  // namespace

@@ -132,7 +132,8 @@ struct ClothScene {
     int substeps = 40;
 
     std::string frame_format = "obj";  // "obj" or "ply"
-    // "pc2": also DIR/cloth.pc2, every frame in one point cache (io/pc2.hpp); "": none.
+    // "pc2" or "mdd": also DIR/cloth.pc2 or DIR/cloth.mdd, every frame in one point cache
+    // (io/pc2.hpp, io/mdd.hpp); "": none.
     std::string point_cache;
 };
 

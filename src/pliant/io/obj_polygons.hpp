@@ -71,6 +71,17 @@ struct PolygonMesh {
     std::vector<FaceTags> face_tags;
     std::vector<std::string> names;               // the statements' text after the keyword
     std::vector<std::string> material_libraries;  // `mtllib` lines' text after the keyword
+    // Scalar vertex and face properties of a PLY file besides its geometry (a vertex colour
+    // `red`, a face `flags` …), kept to be written back by write_ply_polygons (ply_polygons.hpp);
+    // empty for OBJ. `type` is the PLY type name ("uchar", "float" …); `values` holds #V (vertex)
+    // or #F (face) values, each exact for its type.
+    struct Attribute {
+        std::string name;
+        std::string type;
+        std::vector<double> values;
+    };
+    std::vector<Attribute> vertex_attributes;
+    std::vector<Attribute> face_attributes;
 
     std::size_t num_faces() const { return face_starts.size() - 1; }
     std::size_t num_corners(std::size_t face) const {

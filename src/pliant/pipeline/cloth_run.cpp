@@ -30,6 +30,7 @@
 #include "pliant/io/checkpoint.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/output_directory.hpp"
+#include "pliant/io/ply_polygons.hpp"
 #include "pliant/io/video.hpp"
 #include "pliant/pipeline/cloth_preview.hpp"
 #include "pliant/pipeline/cloth_setup.hpp"
@@ -323,19 +324,22 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                                  options.preview_height);
     }
     geometry::TriangleMeshD state{mesh.positions, mesh.triangles};
-    // A garment read as polygons is written with its own faces, UVs, groups and materials
-    // (OBJ frames; PLY frames are triangles), its material libraries beside the frames.
+    // A garment read as polygons (OBJ or PLY) is written with its own faces, UVs, groups and
+    // materials (OBJ frames, its material libraries beside them) or faces, UVs and properties
+    // (PLY frames).
     const std::optional<io::PolygonMesh>& garment = sim.setup().garment;
-    const bool polygon_frames = garment && scene.frame_format == "obj";
-    if (polygon_frames) {
+    if (garment && scene.frame_format == "obj") {
         copy_material_libraries(*garment, scene.mesh.parent_path(), frames_dir, scene_name);
     }
-    const std::filesystem::path point_cache_path = out / "cloth.pc2";
-    std::filesystem::remove(point_cache_path, ec);  // rebuilt when this run completes
+    for (const char* kind : {"pc2", "mdd"}) {  // rebuilt when this run completes
+        std::filesystem::remove(out / point_cache_file_name(kind), ec);
+    }
     const auto write_frame = [&](int frame) {
         const std::filesystem::path file = frames_dir / frame_file_name(frame, scene.frame_format);
-        if (polygon_frames) {
+        if (garment && scene.frame_format == "obj") {
             io::write_obj_polygons(file, *garment, solver.positions());
+        } else if (garment) {
+            io::write_ply_polygons(file, *garment, solver.positions());
         } else {
             state.positions.assign(solver.positions().begin(), solver.positions().end());
             io::write_mesh(file, state);
@@ -546,11 +550,13 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         stats["checkpoint_bytes"] = std::filesystem::file_size(checkpoint_path, ec);
     }
     remove_stale_frames(frames_dir, frames_done, scene.frame_format);
-    if (scene.point_cache == "pc2" && !failure && !interrupted && frames_done == frames) {
+    if (!scene.point_cache.empty() && !failure && !interrupted && frames_done == frames) {
+        const std::filesystem::path point_cache_path =
+            out / point_cache_file_name(scene.point_cache);
         try {
-            write_point_cache_from_frames(point_cache_path, frames_done, [&](int frame) {
-                return frames_dir / frame_file_name(frame, scene.frame_format);
-            });
+            write_point_cache_from_frames(
+                point_cache_path, scene.point_cache, frames_done, scene.frames_per_second,
+                [&](int frame) { return frames_dir / frame_file_name(frame, scene.frame_format); });
             stats["point_cache"] = point_cache_path.string();
         } catch (const Error& e) {  // the frames are complete: report, keep stats.json
             log_warning("{}: the point cache was not written: {}", scene_name, e.what());

@@ -763,7 +763,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
     root.object("output", [&](ObjectReader& o) {
         scene.frame_format = o.text("format", scene.frame_format, {"obj", "ply"});
         if (const Json* cache = o.find("point_cache"); cache != nullptr && !cache->is_null()) {
-            scene.point_cache = o.text("point_cache", "", {"pc2"});
+            scene.point_cache = o.text("point_cache", "", {"pc2", "mdd"});
         }
     });
     root.finish();

@@ -23,6 +23,7 @@
 #include "pliant/geometry/topology.hpp"
 #include "pliant/geometry/validate.hpp"
 #include "pliant/io/mesh_io.hpp"
+#include "pliant/io/ply_polygons.hpp"
 #include "pliant/pipeline/cloth_scene_file.hpp"
 #include "pliant/pipeline/memory_budget.hpp"
 
@@ -44,7 +45,7 @@ void place(std::span<Vec3d> points, const cloth::Placement& placement) {
 
 // A mesh file's triangles, or an error naming the scene key when it has none or a coordinate
 // beyond pipeline::MAX_SCENE_COORDINATE (a run would end as "diverged" at its first frame).
-// With `polygons`, an OBJ file is read as polygons (kept there) and triangulated.
+// With `polygons`, an OBJ or PLY file is read as polygons (kept there) and triangulated.
 geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
                                            const std::string& scene_name, const std::string& key,
                                            std::optional<io::PolygonMesh>* polygons = nullptr) {
@@ -53,8 +54,9 @@ geometry::TriangleMeshD read_nonempty_mesh(const std::filesystem::path& file,
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     try {
-        if (polygons != nullptr && extension == ".obj") {
-            *polygons = io::read_obj_polygons(file);
+        if (polygons != nullptr && (extension == ".obj" || extension == ".ply")) {
+            *polygons =
+                extension == ".obj" ? io::read_obj_polygons(file) : io::read_ply_polygons(file);
             mesh = io::triangulate(**polygons);
             if (mesh.triangles.empty()) {  // as io::read_mesh says it
                 throw InvalidInput(fmt::format(
@@ -281,6 +283,16 @@ geometry::TriangleMeshD load_cloth(const cloth::ClothScene& scene, const std::st
                 }
                 garment->face_tags.insert(garment->face_tags.end(), one.face_tags.begin(),
                                           one.face_tags.end());
+                for (std::size_t a = 0; a < one.vertex_attributes.size(); ++a) {
+                    const std::vector<double>& values = one.vertex_attributes[a].values;
+                    std::vector<double>& all = garment->vertex_attributes[a].values;
+                    all.insert(all.end(), values.begin(), values.end());
+                }
+                for (std::size_t a = 0; a < one.face_attributes.size(); ++a) {
+                    const std::vector<double>& values = one.face_attributes[a].values;
+                    std::vector<double>& all = garment->face_attributes[a].values;
+                    all.insert(all.end(), values.begin(), values.end());
+                }
             }
         }
     }

@@ -50,8 +50,9 @@ inline constexpr double MAX_THICKNESS_PER_EDGE = 0.5;
 
 struct ClothSetup {
     geometry::TriangleMeshD mesh;  // the cloth at the start, all instances
-    // A cloth read from an OBJ file as its polygons (io/obj_polygons.hpp), all instances, its
-    // vertices those of `mesh`: frames are written with its faces, UVs, groups and materials.
+    // A cloth read from an OBJ or PLY file as its polygons (io/obj_polygons.hpp,
+    // io/ply_polygons.hpp), all instances, its vertices those of `mesh`: frames are written with
+    // its faces, UVs, groups, materials and PLY properties.
     std::optional<io::PolygonMesh> garment;
     // The scene's material with its physical stiffnesses (scene.stretch_stiffness,
     // scene.bend_stiffness) turned into compliances for this mesh.

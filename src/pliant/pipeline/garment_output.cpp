@@ -12,6 +12,7 @@
 #include "pliant/core/log.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/text.hpp"
+#include "pliant/io/mdd.hpp"
 #include "pliant/io/mesh_io.hpp"
 #include "pliant/io/pc2.hpp"
 #include "pliant/io/read_file.hpp"
@@ -55,11 +56,21 @@ int copy_material_libraries(const io::PolygonMesh& garment, const std::filesyste
     return copied;
 }
 
-void write_point_cache_from_frames(const std::filesystem::path& path, int last_frame,
+std::string point_cache_file_name(const std::string& kind) {
+    if (kind != "pc2" && kind != "mdd") {
+        throw InvalidInput(
+            fmt::format("point cache '{}': unknown kind, expected one of pc2, mdd", kind));
+    }
+    return "cloth." + kind;
+}
+
+void write_point_cache_from_frames(const std::filesystem::path& path, const std::string& kind,
+                                   int last_frame, double frames_per_second,
                                    const std::function<std::filesystem::path(int)>& frame_file) {
+    point_cache_file_name(kind);  // checks the kind
     const geometry::TriangleMeshD first = io::read_mesh(frame_file(0));
     const auto num_points = static_cast<std::int64_t>(first.positions.size());
-    io::write_pc2(path, num_points, last_frame + 1, 0.0, [&](std::int64_t s, std::span<Vec3f> out) {
+    const auto sample = [&](std::int64_t s, std::span<Vec3f> out) {
         const geometry::TriangleMeshD frame =
             s == 0 ? first : io::read_mesh(frame_file(static_cast<int>(s)));
         if (frame.positions.size() != out.size()) {
@@ -70,7 +81,12 @@ void write_point_cache_from_frames(const std::filesystem::path& path, int last_f
         for (std::size_t v = 0; v < out.size(); ++v) {
             out[v] = vec3_cast<float>(frame.positions[v]);
         }
-    });
+    };
+    if (kind == "pc2") {
+        io::write_pc2(path, num_points, last_frame + 1, 0.0, sample);
+    } else {
+        io::write_mdd(path, num_points, last_frame + 1, frames_per_second, sample);
+    }
 }
 
 }  // namespace pliant::pipeline
