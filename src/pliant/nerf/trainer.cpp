@@ -11,12 +11,15 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/nerf/camera_refinement.hpp"
 
 namespace pliant::nerf {
 
 namespace {
 
 constexpr int NUM_CHUNKS = 4;
+constexpr int CAMERA_PARAMS = 6;    // per view: ω (3), τ (3)
+constexpr int EXPOSURE_PARAMS = 6;  // per view: gain (3), bias (3)
 constexpr float BETA1 = 0.9f;
 constexpr float BETA2 = 0.99f;
 constexpr float EPSILON = 1e-15f;
@@ -36,6 +39,9 @@ struct GradientChunk {
     std::vector<std::int32_t> list;
     std::vector<detail::SampleRecord> samples;  // scratch: one ray's records
     std::vector<float> env_grad;                // 3 per environment texel (empty: none)
+    std::vector<double> camera_grad;            // CAMERA_PARAMS per view (empty: none)
+    std::vector<double> exposure_grad;          // EXPOSURE_PARAMS per view (empty: none)
+    double focal_grad = 0.0;
     double loss = 0.0;
     std::int64_t num_samples = 0;
 
@@ -74,6 +80,24 @@ public:
                 c.env_grad.assign(n, 0.0f);
             }
         }
+        const std::size_t views = dataset.views.size();
+        if (options.refine_poses || options.refine_focal) {
+            m_camera.assign(CAMERA_PARAMS * views, 0.0f);
+            m_camera_m.assign(m_camera.size(), 0.0f);
+            m_camera_v.assign(m_camera.size(), 0.0f);
+            for (GradientChunk& c : m_chunks) {
+                c.camera_grad.assign(m_camera.size(), 0.0);
+            }
+        }
+        if (options.exposure) {
+            m_exposure.assign(EXPOSURE_PARAMS * views, 0.0f);
+            m_exposure_m.assign(m_exposure.size(), 0.0f);
+            m_exposure_v.assign(m_exposure.size(), 0.0f);
+            for (GradientChunk& c : m_chunks) {
+                c.exposure_grad.assign(m_exposure.size(), 0.0);
+            }
+        }
+        m_scale = m_grid.scale();
         const Intrinsics& in = dataset.intrinsics;
         m_pixels_per_view = static_cast<std::uint64_t>(in.width) * in.height;
         m_num_pixels = m_pixels_per_view * dataset.views.size();
@@ -101,6 +125,42 @@ public:
             c.resize(n);
         }
         m_stage_iteration = 0;
+    }
+
+    bool refining() const { return !m_camera.empty(); }
+
+    // The views' cameras with the current refinement (m_poses, m_intrinsics).
+    void refine_cameras() {
+        const std::size_t n = m_dataset.views.size();
+        m_poses.resize(n);
+        m_intrinsics.resize(n);
+        const double f = std::exp(static_cast<double>(m_log_focal));
+        for (std::size_t i = 0; i < n; ++i) {
+            const View& view = m_dataset.views[i];
+            const float* c = m_camera.data() + CAMERA_PARAMS * i;
+            m_poses[i] = refined_pose(view.camera_to_world, Vec3d{c[0], c[1], c[2]},
+                                      m_scale * Vec3d{c[3], c[4], c[5]});
+            m_intrinsics[i] = intrinsics_of(m_dataset, view);
+            m_intrinsics[i].fx *= f;
+            m_intrinsics[i].fy *= f;
+        }
+    }
+
+    // The refined poses and focal scale (refining() only).
+    std::vector<Pose> refined_poses() {
+        refine_cameras();
+        return m_poses;
+    }
+    double focal_scale() const { return std::exp(static_cast<double>(m_log_focal)); }
+    std::vector<ViewExposure> exposures() const {
+        std::vector<ViewExposure> out(m_exposure.size() / EXPOSURE_PARAMS);
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            for (int k = 0; k < 3; ++k) {
+                out[i].gain[k] = m_exposure[EXPOSURE_PARAMS * i + k];
+                out[i].bias[k] = m_exposure[EXPOSURE_PARAMS * i + 3 + k];
+            }
+        }
+        return out;
     }
 
     // One iteration at progress p; returns the batch's MSE.
@@ -134,6 +194,11 @@ public:
         const double norm = 1.0 / (3.0 * batch);
         const Intrinsics& in = m_dataset.intrinsics;
         const std::uint64_t base = static_cast<std::uint64_t>(m_iteration) * batch;
+        const bool refine = refining() && p >= m_options.refine_start;
+        if (refining()) {
+            refine_cameras();
+        }
+        const bool exposure = m_options.exposure;
         parallel_for_chunks(
             batch, grain, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
                 GradientChunk& chunk = m_chunks[static_cast<std::size_t>(c)];
@@ -143,7 +208,8 @@ public:
                     const std::uint64_t h =
                         splitmix64(m_options.seed * 0x632be59bd9b4e019ULL + base + r);
                     const std::uint64_t pixel = h % m_num_pixels;
-                    const View& view = m_dataset.views[pixel / m_pixels_per_view];
+                    const std::size_t vi = pixel / m_pixels_per_view;
+                    const View& view = m_dataset.views[vi];
                     const std::uint64_t local = pixel % m_pixels_per_view;
                     const int x = static_cast<int>(local % in.width);
                     const int y = static_cast<int>(local / in.width);
@@ -151,8 +217,11 @@ public:
                         continue;  // an ignored pixel: no loss, no gradient
                     }
                     const NormalizedRay ray =
-                        normalize_ray(m_grid, view_ray(intrinsics_of(m_dataset, view),
-                                                       view.camera_to_world, x + 0.5, y + 0.5));
+                        refining() ? normalize_ray(m_grid, view_ray(m_intrinsics[vi], m_poses[vi],
+                                                                    x + 0.5, y + 0.5))
+                                   : normalize_ray(
+                                         m_grid, view_ray(intrinsics_of(m_dataset, view),
+                                                          view.camera_to_world, x + 0.5, y + 0.5));
                     chunk.samples.clear();
                     EnvironmentTexels texels;
                     float ray_bg[3] = {bg[0], bg[1], bg[2]};
@@ -167,14 +236,44 @@ public:
                     chunk.num_samples += out.samples;
                     const float* target = view.rgb.data() + 3 * local;
                     float gc[3];
-                    for (int k = 0; k < 3; ++k) {
-                        const double e = static_cast<double>(out.rgb[k]) - target[k];
-                        chunk.loss += e * e * norm;
-                        gc[k] = static_cast<float>(2.0 * e * norm);
+                    if (exposure) {
+                        // Compared colour (1 + gain) ⊙ C + bias.
+                        const float* xp = m_exposure.data() + EXPOSURE_PARAMS * vi;
+                        double* xg = chunk.exposure_grad.data() + EXPOSURE_PARAMS * vi;
+                        for (int k = 0; k < 3; ++k) {
+                            const double gain = 1.0 + static_cast<double>(xp[k]);
+                            const double e =
+                                gain * out.rgb[k] + xp[3 + k] - static_cast<double>(target[k]);
+                            chunk.loss += e * e * norm;
+                            const double de = 2.0 * e * norm;
+                            xg[k] += de * out.rgb[k];
+                            xg[3 + k] += de;
+                            gc[k] = static_cast<float>(de * gain);
+                        }
+                    } else {
+                        for (int k = 0; k < 3; ++k) {
+                            const double e = static_cast<double>(out.rgb[k]) - target[k];
+                            chunk.loss += e * e * norm;
+                            gc[k] = static_cast<float>(2.0 * e * norm);
+                        }
                     }
-                    detail::backward(g, chunk.samples.data(),
-                                     static_cast<int>(chunk.samples.size()), out.rgb, gc,
-                                     [&](std::int32_t v, const float d[4]) { chunk.add(v, d); });
+                    float go[3] = {0, 0, 0}, gd[3] = {0, 0, 0};
+                    detail::backward(
+                        g, chunk.samples.data(), static_cast<int>(chunk.samples.size()), out.rgb,
+                        gc, [&](std::int32_t v, const float d[4]) { chunk.add(v, d); },
+                        [&](const detail::SampleRecord& rec, const float d[4]) {
+                            if (refine) {
+                                float pg[3];
+                                detail::position_gradient(g, rec.corner, d, pg);
+                                for (int k = 0; k < 3; ++k) {
+                                    go[k] += pg[k];
+                                    gd[k] += rec.t * pg[k];
+                                }
+                            }
+                        });
+                    if (refine) {
+                        accumulate_camera(chunk, vi, ray, go, gd);
+                    }
                     if (sparsity > 0.0f) {
                         // Cauchy sparsity prior per sample: (λ / batch) log(1 + 2 τ²), τ = σ δ.
                         for (const detail::SampleRecord& rec : chunk.samples) {
@@ -230,6 +329,12 @@ public:
         update(p);
         if (learn_env) {
             update_environment(p);
+        }
+        if (refine) {
+            update_camera(p);
+        }
+        if (exposure) {
+            update_exposure(p);
         }
 
         TrainProgress progress;
@@ -330,6 +435,95 @@ public:
             1024);
     }
 
+    // ∂L/∂(ω, τ) of view vi and ∂L/∂φ from ∂L/∂o and ∂L/∂d of one ray (unit direction d):
+    //   τ: ∂L/∂o (normalized units);  ω: d × ∂L/∂d (the direction turns as δd = δω × d);
+    //   φ: the camera-frame direction D = d / (−d · z) (z the camera's unit back axis, so D's
+    //      component along −z is 1) changes with the focal scale as ∂D/∂φ = −(D + z), and
+    //      ∂L/∂D = (g_d − (g_d · d) d) / |D|.
+    void accumulate_camera(GradientChunk& chunk, std::size_t vi, const NormalizedRay& ray,
+                           const float go[3], const float gd[3]) const {
+        const Vec3d d{ray.direction[0], ray.direction[1], ray.direction[2]};
+        const Vec3d g_d{gd[0], gd[1], gd[2]};
+        double* cg = chunk.camera_grad.data() + CAMERA_PARAMS * vi;
+        if (m_options.refine_poses) {
+            const Vec3d w = cross(d, g_d);
+            cg[0] += w.x;
+            cg[1] += w.y;
+            cg[2] += w.z;
+            cg[3] += go[0];
+            cg[4] += go[1];
+            cg[5] += go[2];
+        }
+        if (m_options.refine_focal) {
+            const Vec3d axis_z = m_poses[vi].axis(2);
+            const Vec3d z = axis_z / norm(axis_z);
+            const double along = -dot(d, z);
+            if (along > 1e-6) {
+                const Vec3d big_d = d / along;
+                const Vec3d g_perp = g_d - dot(g_d, d) * d;
+                chunk.focal_grad -= dot(g_perp, big_d + z) / norm(big_d);
+            }
+        }
+    }
+
+    // Adam on the camera deltas (chunks summed in chunk order; bias correction over the
+    // refinement's iterations).
+    void update_camera(double p) {
+        ++m_camera_iteration;
+        const float decay = std::pow(m_options.lr_final_factor, static_cast<float>(p));
+        const float t = static_cast<float>(m_camera_iteration);
+        const float correction1 = 1.0f - std::pow(BETA1, t);
+        const float correction2 = 1.0f - std::pow(BETA2, t);
+        const auto adam = [&](float& x, float& m, float& v, float gq, float lr) {
+            m = BETA1 * m + (1.0f - BETA1) * gq;
+            v = BETA2 * v + (1.0f - BETA2) * gq * gq;
+            x -= lr * (m / correction1) / (std::sqrt(v / correction2) + 1e-12f);
+        };
+        if (m_options.refine_poses) {
+            const float lr = m_options.lr_pose * decay;
+            for (std::size_t a = 0; a < m_camera.size(); ++a) {
+                double gq = 0.0;
+                for (GradientChunk& c : m_chunks) {
+                    gq += c.camera_grad[a];
+                    c.camera_grad[a] = 0.0;
+                }
+                adam(m_camera[a], m_camera_m[a], m_camera_v[a], static_cast<float>(gq), lr);
+            }
+        }
+        if (m_options.refine_focal) {
+            double gq = 0.0;
+            for (GradientChunk& c : m_chunks) {
+                gq += c.focal_grad;
+                c.focal_grad = 0.0;
+            }
+            adam(m_log_focal, m_focal_m, m_focal_v, static_cast<float>(gq),
+                 m_options.lr_focal * decay);
+        }
+    }
+
+    // Adam on the exposures, with the prior's gradient 2 λ x (bias correction over all
+    // iterations).
+    void update_exposure(double p) {
+        const float lr =
+            m_options.lr_exposure * std::pow(m_options.lr_final_factor, static_cast<float>(p));
+        const float t = static_cast<float>(m_iteration + 1);
+        const float correction1 = 1.0f - std::pow(BETA1, t);
+        const float correction2 = 1.0f - std::pow(BETA2, t);
+        const float prior = 2.0f * m_options.exposure_prior;
+        for (std::size_t a = 0; a < m_exposure.size(); ++a) {
+            double gq = 0.0;
+            for (GradientChunk& c : m_chunks) {
+                gq += c.exposure_grad[a];
+                c.exposure_grad[a] = 0.0;
+            }
+            const float g = static_cast<float>(gq) + prior * m_exposure[a];
+            m_exposure_m[a] = BETA1 * m_exposure_m[a] + (1.0f - BETA1) * g;
+            m_exposure_v[a] = BETA2 * m_exposure_v[a] + (1.0f - BETA2) * g * g;
+            m_exposure[a] -= lr * (m_exposure_m[a] / correction1) /
+                             (std::sqrt(m_exposure_v[a] / correction2) + 1e-12f);
+        }
+    }
+
     // Adam on every texel of the environment map: the chunks' gradients summed in chunk order,
     // bias correction over all iterations (the map lives through every stage).
     void update_environment(double p) {
@@ -369,6 +563,20 @@ public:
             out.put_vector(m_env_m);
             out.put_vector(m_env_v);
         }
+        if (refining()) {
+            out.put(m_camera_iteration);
+            out.put_vector(m_camera);
+            out.put_vector(m_camera_m);
+            out.put_vector(m_camera_v);
+            out.put(m_log_focal);
+            out.put(m_focal_m);
+            out.put(m_focal_v);
+        }
+        if (m_options.exposure) {
+            out.put_vector(m_exposure);
+            out.put_vector(m_exposure_m);
+            out.put_vector(m_exposure_v);
+        }
     }
     void load_state(ByteReader& in) {
         const int stage = in.get<int>("trainer.stage");
@@ -394,6 +602,22 @@ public:
             in.get_vector("trainer.environment_adam_v", m_env_v,
                           static_cast<std::int64_t>(m_env_v.size()));
         }
+        if (refining()) {
+            m_camera_iteration = in.get<std::int64_t>("trainer.camera_iteration");
+            const auto n = static_cast<std::int64_t>(m_camera.size());
+            in.get_vector("trainer.camera", m_camera, n);
+            in.get_vector("trainer.camera_adam_m", m_camera_m, n);
+            in.get_vector("trainer.camera_adam_v", m_camera_v, n);
+            m_log_focal = in.get<float>("trainer.log_focal");
+            m_focal_m = in.get<float>("trainer.focal_adam_m");
+            m_focal_v = in.get<float>("trainer.focal_adam_v");
+        }
+        if (m_options.exposure) {
+            const auto n = static_cast<std::int64_t>(m_exposure.size());
+            in.get_vector("trainer.exposure", m_exposure, n);
+            in.get_vector("trainer.exposure_adam_m", m_exposure_m, n);
+            in.get_vector("trainer.exposure_adam_v", m_exposure_v, n);
+        }
         m_stage = stage;
         m_iteration = iteration;
         m_stage_iteration = stage_iteration;
@@ -414,6 +638,13 @@ private:
     std::vector<float> m_m, m_v;
     EnvironmentMap m_env;
     std::vector<float> m_env_m, m_env_v;
+    double m_scale = 1.0;  // the box's largest side: world units per normalized unit
+    std::vector<float> m_camera, m_camera_m, m_camera_v;  // CAMERA_PARAMS per view
+    float m_log_focal = 0.0f, m_focal_m = 0.0f, m_focal_v = 0.0f;
+    std::int64_t m_camera_iteration = 0;
+    std::vector<Pose> m_poses;             // the refined cameras of this iteration
+    std::vector<Intrinsics> m_intrinsics;  // …
+    std::vector<float> m_exposure, m_exposure_m, m_exposure_v;  // EXPOSURE_PARAMS per view
     std::vector<std::uint8_t> m_mark;
     std::vector<std::int32_t> m_union;
     std::array<GradientChunk, NUM_CHUNKS> m_chunks;
@@ -471,6 +702,15 @@ void TrainOptions::validate() const {
     }
     if (!(lr_environment >= 0.0f)) {
         fail("lr_environment", lr_environment, ">= 0");
+    }
+    if (!(lr_exposure >= 0.0f) || !(exposure_prior >= 0.0f) || !std::isfinite(exposure_prior)) {
+        fail("lr_exposure / exposure_prior", lr_exposure, "finite values >= 0");
+    }
+    if (!(lr_pose >= 0.0f) || !(lr_focal >= 0.0f)) {
+        fail("lr_pose / lr_focal", lr_pose, ">= 0");
+    }
+    if (!(refine_start >= 0.0 && refine_start <= 1.0)) {
+        fail("refine_start", refine_start, "[0, 1]");
     }
     if (occupancy_interval < 1) {
         fail("occupancy_interval", occupancy_interval, ">= 1");
@@ -551,6 +791,11 @@ TrainResult train(const Dataset& dataset, const TrainOptions& options,
     result.final_loss = trainer.last_loss();
     result.grid = std::move(trainer.grid());
     result.environment = std::move(trainer.environment());
+    result.exposure = trainer.exposures();
+    if (options.refine_poses || options.refine_focal) {
+        result.poses = trainer.refined_poses();
+        result.focal_scale = trainer.focal_scale();
+    }
     return result;
 }
 
