@@ -94,6 +94,7 @@ struct TrainCommandOptions {
     bool resume = false;
     int environment = 0;
     float sparsity = 0.0f;
+    float distortion = 0.0f;
     bool exposure = false;
     bool refine_poses = false;
     bool refine_focal = false;
@@ -177,6 +178,7 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     to.lr_density = to.lr_color = to.lr_environment = options.lr;
     to.environment_width = options.environment;
     to.sparsity = options.sparsity;
+    to.distortion = options.distortion;
     to.exposure = options.exposure;
     to.refine_poses = options.refine_poses;
     to.refine_focal = options.refine_focal;
@@ -458,6 +460,10 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
         ->add_option("--sparsity", t->sparsity,
                      "Weight of a sparsity prior on density (empties the air of photo captures; "
                      "0: off)")
+        ->check(finite_in_range(0.0, 1e9));
+    train
+        ->add_option("--distortion", t->distortion,
+                     "Weight of Mip-NeRF 360's distortion loss (against floaters; 0: off)")
         ->check(finite_in_range(0.0, 1e9));
     train->add_flag("--exposure", t->exposure,
                     "Learn a gain and bias per photo and channel (exposure, white balance)");

@@ -52,9 +52,8 @@ Dataset make_dataset(const RadianceGrid& truth, int views, int size, double offs
     ds.box = truth.box();
     for (int i = 0; i < views; ++i) {
         const double z = 1.0 - (2.0 * i + 1.0) / views;
-        const render::Camera cam = render::frame_box(truth.box(), i * 137.508 + offset,
-                                                     std::asin(z) * 180.0 / std::numbers::pi,
-                                                     size, size);
+        const render::Camera cam = render::frame_box(
+            truth.box(), i * 137.508 + offset, std::asin(z) * 180.0 / std::numbers::pi, size, size);
         ds.intrinsics = intrinsics_from_camera(cam);
         View v;
         v.name = "view" + std::to_string(i);
@@ -151,8 +150,8 @@ TEST(CameraRefinement, PositionGradientMatchesFiniteDifferences) {
                 v[a] += static_cast<float>(sgn == 0 ? h : -h);
                 float raw[4];
                 detail::interpolate(g, detail::locate(g, v), raw);
-                f[sgn] = d_raw[0] * raw[0] + d_raw[1] * raw[1] + d_raw[2] * raw[2] +
-                         d_raw[3] * raw[3];
+                f[sgn] =
+                    d_raw[0] * raw[0] + d_raw[1] * raw[1] + d_raw[2] * raw[2] + d_raw[3] * raw[3];
             }
             EXPECT_NEAR(grad[a], (f[0] - f[1]) / (2 * h), 2e-2 * (1.0 + std::fabs(grad[a])))
                 << "axis " << a;
@@ -186,11 +185,12 @@ TEST(Exposure, PerViewGainsAreFitMuchBetterWithIt) {
         double sum = 0.0;
         for (std::size_t i = 0; i < train_set.views.size(); ++i) {
             const View& v = train_set.views[i];
-            std::vector<float> rgb = render_view(r.grid, train_set.intrinsics, v.camera_to_world,
-                                                 train_set.background);
+            std::vector<float> rgb =
+                render_view(r.grid, train_set.intrinsics, v.camera_to_world, train_set.background);
             if (!r.exposure.empty()) {
                 for (std::size_t p = 0; p < rgb.size(); ++p) {
-                    rgb[p] = (1.0f + r.exposure[i].gain[p % 3]) * rgb[p] + r.exposure[i].bias[p % 3];
+                    rgb[p] =
+                        (1.0f + r.exposure[i].gain[p % 3]) * rgb[p] + r.exposure[i].bias[p % 3];
                 }
             }
             sum += psnr(rgb, v.rgb);
@@ -249,7 +249,7 @@ TEST(CameraRefinement, PerturbedPosesMoveTowardTheTruth) {
     EXPECT_LT(std::fabs(r.focal_scale * 1.03 - 1.0), 0.7 * 0.03) << r.focal_scale;
 }
 
-// Exposure and refinement: 1 and 2 threads give the same bits; a run resumed from a checkpoint
+// Exposure, refinement and the distortion loss: 1 and 2 threads give the same bits; a run resumed from a checkpoint
 // the same bits as an uninterrupted one.
 TEST(CameraRefinement, IsDeterministicAndResumesBitwise) {
     const RadianceGrid truth = ball_field(16);
@@ -260,6 +260,7 @@ TEST(CameraRefinement, IsDeterministicAndResumesBitwise) {
     o.exposure = true;
     o.refine_poses = true;
     o.refine_focal = true;
+    o.distortion = 0.01f;
     std::vector<std::byte> state;
     TrainCheckpoints save;
     save.every = 25;

@@ -24,9 +24,8 @@ std::array<double, 9> rotation_from_axis_angle(const Vec3d& omega) {
     const double x = omega.x, y = omega.y, z = omega.z;
     // [ω]x and [ω]x² = ω ωᵀ − θ² I.
     const std::array<double, 9> k{0, -z, y, z, 0, -x, -y, x, 0};
-    const std::array<double, 9> k2{x * x - theta2, x * y,          x * z,
-                                   x * y,          y * y - theta2, y * z,
-                                   x * z,          y * z,          z * z - theta2};
+    const std::array<double, 9> k2{x * x - theta2, x * y, x * z, x * y,         y * y - theta2,
+                                   y * z,          x * z, y * z, z * z - theta2};
     std::array<double, 9> r{};
     for (int i = 0; i < 9; ++i) {
         r[i] = (i % 4 == 0 ? 1.0 : 0.0) + a * k[i] + b * k2[i];

@@ -42,6 +42,7 @@ struct GradientChunk {
     std::vector<double> camera_grad;            // CAMERA_PARAMS per view (empty: none)
     std::vector<double> exposure_grad;          // EXPOSURE_PARAMS per view (empty: none)
     double focal_grad = 0.0;
+    std::vector<double> scratch_w, scratch_g;  // scratch: one ray's weights and ∂L/∂w
     double loss = 0.0;
     std::int64_t num_samples = 0;
 
@@ -191,6 +192,8 @@ public:
         const bool learn_env = !m_env.empty();
         const float sparsity = m_options.sparsity;
         const float sparsity_norm = sparsity / static_cast<float>(batch);
+        const float distortion = m_options.distortion;
+        const float distortion_norm = distortion / static_cast<float>(batch);
         const double norm = 1.0 / (3.0 * batch);
         const Intrinsics& in = m_dataset.intrinsics;
         const std::uint64_t base = static_cast<std::uint64_t>(m_iteration) * batch;
@@ -291,6 +294,9 @@ public:
                                 chunk.add(rec.corner.base + o[q], dq);
                             }
                         }
+                    }
+                    if (distortion > 0.0f) {
+                        add_distortion_gradient(g, chunk, distortion_norm);
                     }
                     if (learn_env) {
                         // ∂L/∂raw = T_end · g ⊙ B (1 − B) · bilinear weight.
@@ -435,6 +441,63 @@ public:
             1024);
     }
 
+    // The distortion loss's gradient for the ray whose samples are in chunk.samples (in order):
+    // with W_<i, M_<i the prefix sums of w_j and w_j m_j (and W_>i, M_>i the suffix sums),
+    //   g_i = ∂L/∂w_i = 2 (m_i W_<i − M_<i + M_>i − m_i W_>i) + ⅔ w_i δ_i,
+    // then through w_i = T_i α_i as the colour is (field_kernel.hpp's backward with the scalar
+    // "colour" g_i, no background): ∂L/∂σ_k = δ_k (T_{k+1} g_k − Σ_{j>k} w_j g_j).
+    void add_distortion_gradient(const detail::GridView& g, GradientChunk& chunk,
+                                 float weight) const {
+        const std::vector<detail::SampleRecord>& rec = chunk.samples;
+        const std::size_t n = rec.size();
+        if (n < 2) {
+            return;
+        }
+        std::vector<double>& w = chunk.scratch_w;
+        std::vector<double>& gw = chunk.scratch_g;
+        w.resize(n);
+        gw.resize(n);
+        double T = 1.0, total_w = 0.0, total_wm = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            w[i] = T * rec[i].alpha;
+            T *= 1.0 - rec[i].alpha;
+            total_w += w[i];
+            total_wm += w[i] * rec[i].t;
+        }
+        double below_w = 0.0, below_wm = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const double m = rec[i].t;
+            const double above_w = total_w - below_w - w[i];
+            const double above_wm = total_wm - below_wm - w[i] * m;
+            gw[i] = 2.0 * (m * below_w - below_wm + above_wm - m * above_w) +
+                    (2.0 / 3.0) * w[i] * rec[i].length;
+            below_w += w[i];
+            below_wm += w[i] * m;
+        }
+        double suffix = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            suffix += w[i] * gw[i];
+        }
+        std::int32_t o[8];
+        detail::corner_offsets(g, o);
+        T = 1.0;
+        for (std::size_t k = 0; k < n; ++k) {
+            const detail::SampleRecord& r = rec[k];
+            suffix -= w[k] * gw[k];
+            const double t_next = T * (1.0 - r.alpha);
+            const double d_sigma = r.length * (t_next * gw[k] - suffix);
+            const auto d_s =
+                static_cast<float>(weight * d_sigma * detail::DENSITY_SCALE * detail::sigmoid(r.s));
+            float wt[8];
+            detail::corner_weights(r.corner, wt);
+            for (int q = 0; q < 8; ++q) {
+                const float dq[4] = {wt[q] * d_s, 0.0f, 0.0f, 0.0f};
+                chunk.add(r.corner.base + o[q], dq);
+            }
+            T = t_next;
+        }
+    }
+
     // ∂L/∂(ω, τ) of view vi and ∂L/∂φ from ∂L/∂o and ∂L/∂d of one ray (unit direction d):
     //   τ: ∂L/∂o (normalized units);  ω: d × ∂L/∂d (the direction turns as δd = δω × d);
     //   φ: the camera-frame direction D = d / (−d · z) (z the camera's unit back axis, so D's
@@ -502,7 +565,7 @@ public:
     }
 
     // Adam on the exposures, with the prior's gradient 2 λ x (bias correction over all
-    // iterations).
+    // iterations), then the mean over the views subtracted.
     void update_exposure(double p) {
         const float lr =
             m_options.lr_exposure * std::pow(m_options.lr_final_factor, static_cast<float>(p));
@@ -521,6 +584,20 @@ public:
             m_exposure_v[a] = BETA2 * m_exposure_v[a] + (1.0f - BETA2) * g * g;
             m_exposure[a] -= lr * (m_exposure_m[a] / correction1) /
                              (std::sqrt(m_exposure_v[a] / correction2) + 1e-12f);
+        }
+        // The gauge: a gain shared by all views trades against the field's colours, so the
+        // parameters are kept at zero mean over the views (the held-out views' identity is
+        // then the training views' mean exposure).
+        const std::size_t views = m_exposure.size() / EXPOSURE_PARAMS;
+        for (int k = 0; k < EXPOSURE_PARAMS; ++k) {
+            double mean = 0.0;
+            for (std::size_t i = 0; i < views; ++i) {
+                mean += m_exposure[EXPOSURE_PARAMS * i + k];
+            }
+            mean /= static_cast<double>(views);
+            for (std::size_t i = 0; i < views; ++i) {
+                m_exposure[EXPOSURE_PARAMS * i + k] -= static_cast<float>(mean);
+            }
         }
     }
 
@@ -702,6 +779,9 @@ void TrainOptions::validate() const {
     }
     if (!(lr_environment >= 0.0f)) {
         fail("lr_environment", lr_environment, ">= 0");
+    }
+    if (!(distortion >= 0.0f) || !std::isfinite(distortion)) {
+        fail("distortion", distortion, "a finite value >= 0");
     }
     if (!(lr_exposure >= 0.0f) || !(exposure_prior >= 0.0f) || !std::isfinite(exposure_prior)) {
         fail("lr_exposure / exposure_prior", lr_exposure, "finite values >= 0");

@@ -78,12 +78,18 @@ struct TrainOptions {
     // gains (λ / batch_rays) Σ_samples log(1 + 2 τ²), τ = σ δ the sample's optical thickness,
     // pushing the air between the cameras and the object empty (≥ 0; 0: off).
     float sparsity = 0.0f;
+    // Weight λ of Mip-NeRF 360's distortion loss (Barron et al. 2022, eq. 15) per ray, against
+    // floaters: (λ / batch_rays) Σ_rays [Σ_i Σ_j w_i w_j |m_i − m_j| + ⅓ Σ_i w_i² δ_i], w_i the
+    // samples' compositing weights, m_i their midpoints and δ_i their lengths (normalized
+    // units); it pulls each ray's weight into one compact interval (≥ 0; 0: off).
+    float distortion = 0.0f;
     // Per-view exposure compensation (photos whose exposure or white balance differ): the
     // rendered colour C of training view i is compared as (1 + g_i) ⊙ C + b_i (per channel; 6
     // parameters per view, zero at start, Adam at lr_exposure decaying as the others), and the
-    // loss gains exposure_prior · Σ_i (|g_i|² + |b_i|²), which pulls toward the identity (and
-    // fixes the scale that the field's colours and the gains share). Held-out views are scored
-    // with the identity.
+    // loss gains exposure_prior · Σ_i (|g_i|² + |b_i|²), which pulls toward the identity; after
+    // each step the mean over the views is subtracted from each parameter (a gain shared by all
+    // views is the field's colour, not an exposure). Held-out views are scored with the
+    // identity, which is the views' mean exposure.
     bool exposure = false;
     float lr_exposure = 1e-2f;
     float exposure_prior = 1e-4f;

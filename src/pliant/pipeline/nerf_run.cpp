@@ -135,6 +135,10 @@ std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainO
         w.put(o.environment_width);
         w.put(o.lr_environment);
     }
+    if (o.distortion > 0.0f) {  // likewise
+        w.put_string("distortion");
+        w.put(o.distortion);
+    }
     if (o.exposure) {  // likewise
         w.put_string("exposure");
         w.put(o.lr_exposure);
