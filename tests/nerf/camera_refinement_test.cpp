@@ -249,8 +249,8 @@ TEST(CameraRefinement, PerturbedPosesMoveTowardTheTruth) {
     EXPECT_LT(std::fabs(r.focal_scale * 1.03 - 1.0), 0.7 * 0.03) << r.focal_scale;
 }
 
-// Exposure, refinement and the distortion loss: 1 and 2 threads give the same bits; a run resumed from a checkpoint
-// the same bits as an uninterrupted one.
+// Exposure, refinement and the distortion loss: 1 and 2 threads give the same bits; a run resumed
+// from a checkpoint the same bits as an uninterrupted one.
 TEST(CameraRefinement, IsDeterministicAndResumesBitwise) {
     const RadianceGrid truth = ball_field(16);
     const Dataset ds = make_dataset(truth, 8, 16, 0.0);
