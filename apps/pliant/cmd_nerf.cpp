@@ -94,6 +94,11 @@ struct TrainCommandOptions {
     bool resume = false;
     int environment = 0;
     float sparsity = 0.0f;
+    float distortion = 0.0f;
+    bool exposure = false;
+    bool refine_poses = false;
+    bool refine_focal = false;
+    std::string refined_poses;
     std::string test;
     std::string compare;
     std::string crop;
@@ -173,6 +178,11 @@ void run_train(const TrainCommandOptions& options, const GlobalOptions& global) 
     to.lr_density = to.lr_color = to.lr_environment = options.lr;
     to.environment_width = options.environment;
     to.sparsity = options.sparsity;
+    to.distortion = options.distortion;
+    to.exposure = options.exposure;
+    to.refine_poses = options.refine_poses;
+    to.refine_focal = options.refine_focal;
+    run.refined_poses = options.refined_poses;
     if (options.iterations > 0) {
         to.iterations = options.iterations;
     } else {
@@ -452,6 +462,19 @@ void register_nerf(CLI::App& app, const GlobalOptions& global) {
                      "Weight of a sparsity prior on density (empties the air of photo captures; "
                      "0: off)")
         ->check(finite_in_range(0.0, 1e9));
+    train
+        ->add_option("--distortion", t->distortion,
+                     "Weight of Mip-NeRF 360's distortion loss (against floaters; 0: off)")
+        ->check(finite_in_range(0.0, 1e9));
+    train->add_flag("--exposure", t->exposure,
+                    "Learn a gain and bias per photo and channel (exposure, white balance)");
+    train->add_flag("--refine-poses", t->refine_poses,
+                    "Refine each training photo's pose (rotation, position) while training");
+    train->add_flag("--refine-focal", t->refine_focal,
+                    "Refine the focal length (one scale for all photos) while training");
+    train->add_option("--refined-poses", t->refined_poses,
+                      "With --refine-poses/--refine-focal: write the refined training cameras "
+                      "as a transforms.json");
     train->add_option("--test", t->test,
                       "Held-out views (transforms_test.json): score the trained field on them "
                       "(test_psnr, test_ssim)");

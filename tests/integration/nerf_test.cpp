@@ -134,6 +134,51 @@ TEST(NerfCli, EnvironmentTestScoresAndCrop) {
     }
 }
 
+// --exposure, --refine-poses, --refine-focal, --distortion: the run reports its refinement,
+// writes the refined cameras as a transforms file that reads back, and (exact poses, one
+// exposure) scores held-out views about as well as a plain run; a negative weight is a usage
+// error.
+TEST(NerfCli, ExposureAndCameraRefinement) {
+    const ScratchDir scratch;
+    const std::filesystem::path volume = scratch / "phantom.nrrd";
+    io::write_volume(volume, volume::shepp_logan_3d({24, 24, 24}));
+    ASSERT_EQ(run_cli("dataset " + quoted(volume) +
+                          " --tf mri-brain --views 30 --size 24x24 --test-every 5 -o " +
+                          quoted(scratch / "ds"),
+                      scratch)
+                  .exit_code,
+              0);
+    const std::string train = "--json nerf train " + quoted(scratch / "ds/transforms_train.json") +
+                              " --test " + quoted(scratch / "ds/transforms_test.json") +
+                              " --iterations 300 --resolution 24 --batch 1024 "
+                              "--export-resolution 32 --checkpoint-every 0 -o ";
+    const CliResult plain = run_cli(train + quoted(scratch / "plain.nrrd"), scratch);
+    ASSERT_EQ(plain.exit_code, 0) << plain.err;
+    const CliResult refined =
+        run_cli(train + quoted(scratch / "refined.nrrd") +
+                    " --exposure --refine-poses --refine-focal --distortion 0.001 "
+                    "--refined-poses " +
+                    quoted(scratch / "ds/refined.json"),
+                scratch);
+    ASSERT_EQ(refined.exit_code, 0) << refined.err;
+    const auto pj = nlohmann::json::parse(plain.out);
+    const auto rj = nlohmann::json::parse(refined.out);
+    ASSERT_TRUE(rj.contains("focal_scale"));
+    EXPECT_NEAR(rj["focal_scale"].get<double>(), 1.0, 0.02);
+    EXPECT_LT(rj["pose_change_deg"].get<double>(), 1.0);
+    EXPECT_LT(rj["exposure_gain"].get<double>(), 0.05);
+    EXPECT_GT(rj["test_psnr"].get<double>(), pj["test_psnr"].get<double>() - 1.0)
+        << pj["test_psnr"];
+    EXPECT_FALSE(pj.contains("focal_scale"));
+    const nerf::Dataset back = pipeline::read_nerf_dataset(scratch / "ds/refined.json");
+    EXPECT_EQ(back.views.size(), 24u);
+
+    const CliResult bad =
+        run_cli(train + quoted(scratch / "bad.nrrd") + " --distortion -1", scratch);
+    EXPECT_EQ(bad.exit_code, 2) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd"));
+}
+
 TEST(NerfCli, ColmapModelsLensesAndDownscale) {
     // The dataset's training views as a COLMAP text model (sparse/0) beside its photos; a test
     // split with an off-centre principal point and a lens, which nerf eval used to refuse.

@@ -11,12 +11,15 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/nerf/camera_refinement.hpp"
 
 namespace pliant::nerf {
 
 namespace {
 
 constexpr int NUM_CHUNKS = 4;
+constexpr int CAMERA_PARAMS = 6;    // per view: ω (3), τ (3)
+constexpr int EXPOSURE_PARAMS = 6;  // per view: gain (3), bias (3)
 constexpr float BETA1 = 0.9f;
 constexpr float BETA2 = 0.99f;
 constexpr float EPSILON = 1e-15f;
@@ -36,6 +39,10 @@ struct GradientChunk {
     std::vector<std::int32_t> list;
     std::vector<detail::SampleRecord> samples;  // scratch: one ray's records
     std::vector<float> env_grad;                // 3 per environment texel (empty: none)
+    std::vector<double> camera_grad;            // CAMERA_PARAMS per view (empty: none)
+    std::vector<double> exposure_grad;          // EXPOSURE_PARAMS per view (empty: none)
+    double focal_grad = 0.0;
+    std::vector<double> scratch_w, scratch_g;  // scratch: one ray's weights and ∂L/∂w
     double loss = 0.0;
     std::int64_t num_samples = 0;
 
@@ -74,6 +81,24 @@ public:
                 c.env_grad.assign(n, 0.0f);
             }
         }
+        const std::size_t views = dataset.views.size();
+        if (options.refine_poses || options.refine_focal) {
+            m_camera.assign(CAMERA_PARAMS * views, 0.0f);
+            m_camera_m.assign(m_camera.size(), 0.0f);
+            m_camera_v.assign(m_camera.size(), 0.0f);
+            for (GradientChunk& c : m_chunks) {
+                c.camera_grad.assign(m_camera.size(), 0.0);
+            }
+        }
+        if (options.exposure) {
+            m_exposure.assign(EXPOSURE_PARAMS * views, 0.0f);
+            m_exposure_m.assign(m_exposure.size(), 0.0f);
+            m_exposure_v.assign(m_exposure.size(), 0.0f);
+            for (GradientChunk& c : m_chunks) {
+                c.exposure_grad.assign(m_exposure.size(), 0.0);
+            }
+        }
+        m_scale = m_grid.scale();
         const Intrinsics& in = dataset.intrinsics;
         m_pixels_per_view = static_cast<std::uint64_t>(in.width) * in.height;
         m_num_pixels = m_pixels_per_view * dataset.views.size();
@@ -101,6 +126,42 @@ public:
             c.resize(n);
         }
         m_stage_iteration = 0;
+    }
+
+    bool refining() const { return !m_camera.empty(); }
+
+    // The views' cameras with the current refinement (m_poses, m_intrinsics).
+    void refine_cameras() {
+        const std::size_t n = m_dataset.views.size();
+        m_poses.resize(n);
+        m_intrinsics.resize(n);
+        const double f = std::exp(static_cast<double>(m_log_focal));
+        for (std::size_t i = 0; i < n; ++i) {
+            const View& view = m_dataset.views[i];
+            const float* c = m_camera.data() + CAMERA_PARAMS * i;
+            m_poses[i] = refined_pose(view.camera_to_world, Vec3d{c[0], c[1], c[2]},
+                                      m_scale * Vec3d{c[3], c[4], c[5]});
+            m_intrinsics[i] = intrinsics_of(m_dataset, view);
+            m_intrinsics[i].fx *= f;
+            m_intrinsics[i].fy *= f;
+        }
+    }
+
+    // The refined poses and focal scale (refining() only).
+    std::vector<Pose> refined_poses() {
+        refine_cameras();
+        return m_poses;
+    }
+    double focal_scale() const { return std::exp(static_cast<double>(m_log_focal)); }
+    std::vector<ViewExposure> exposures() const {
+        std::vector<ViewExposure> out(m_exposure.size() / EXPOSURE_PARAMS);
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            for (int k = 0; k < 3; ++k) {
+                out[i].gain[k] = m_exposure[EXPOSURE_PARAMS * i + k];
+                out[i].bias[k] = m_exposure[EXPOSURE_PARAMS * i + 3 + k];
+            }
+        }
+        return out;
     }
 
     // One iteration at progress p; returns the batch's MSE.
@@ -131,9 +192,16 @@ public:
         const bool learn_env = !m_env.empty();
         const float sparsity = m_options.sparsity;
         const float sparsity_norm = sparsity / static_cast<float>(batch);
+        const float distortion = m_options.distortion;
+        const float distortion_norm = distortion / static_cast<float>(batch);
         const double norm = 1.0 / (3.0 * batch);
         const Intrinsics& in = m_dataset.intrinsics;
         const std::uint64_t base = static_cast<std::uint64_t>(m_iteration) * batch;
+        const bool refine = refining() && p >= m_options.refine_start;
+        if (refining()) {
+            refine_cameras();
+        }
+        const bool exposure = m_options.exposure;
         parallel_for_chunks(
             batch, grain, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
                 GradientChunk& chunk = m_chunks[static_cast<std::size_t>(c)];
@@ -143,7 +211,8 @@ public:
                     const std::uint64_t h =
                         splitmix64(m_options.seed * 0x632be59bd9b4e019ULL + base + r);
                     const std::uint64_t pixel = h % m_num_pixels;
-                    const View& view = m_dataset.views[pixel / m_pixels_per_view];
+                    const std::size_t vi = pixel / m_pixels_per_view;
+                    const View& view = m_dataset.views[vi];
                     const std::uint64_t local = pixel % m_pixels_per_view;
                     const int x = static_cast<int>(local % in.width);
                     const int y = static_cast<int>(local / in.width);
@@ -151,8 +220,11 @@ public:
                         continue;  // an ignored pixel: no loss, no gradient
                     }
                     const NormalizedRay ray =
-                        normalize_ray(m_grid, view_ray(intrinsics_of(m_dataset, view),
-                                                       view.camera_to_world, x + 0.5, y + 0.5));
+                        refining() ? normalize_ray(m_grid, view_ray(m_intrinsics[vi], m_poses[vi],
+                                                                    x + 0.5, y + 0.5))
+                                   : normalize_ray(
+                                         m_grid, view_ray(intrinsics_of(m_dataset, view),
+                                                          view.camera_to_world, x + 0.5, y + 0.5));
                     chunk.samples.clear();
                     EnvironmentTexels texels;
                     float ray_bg[3] = {bg[0], bg[1], bg[2]};
@@ -167,14 +239,44 @@ public:
                     chunk.num_samples += out.samples;
                     const float* target = view.rgb.data() + 3 * local;
                     float gc[3];
-                    for (int k = 0; k < 3; ++k) {
-                        const double e = static_cast<double>(out.rgb[k]) - target[k];
-                        chunk.loss += e * e * norm;
-                        gc[k] = static_cast<float>(2.0 * e * norm);
+                    if (exposure) {
+                        // Compared colour (1 + gain) ⊙ C + bias.
+                        const float* xp = m_exposure.data() + EXPOSURE_PARAMS * vi;
+                        double* xg = chunk.exposure_grad.data() + EXPOSURE_PARAMS * vi;
+                        for (int k = 0; k < 3; ++k) {
+                            const double gain = 1.0 + static_cast<double>(xp[k]);
+                            const double e =
+                                gain * out.rgb[k] + xp[3 + k] - static_cast<double>(target[k]);
+                            chunk.loss += e * e * norm;
+                            const double de = 2.0 * e * norm;
+                            xg[k] += de * out.rgb[k];
+                            xg[3 + k] += de;
+                            gc[k] = static_cast<float>(de * gain);
+                        }
+                    } else {
+                        for (int k = 0; k < 3; ++k) {
+                            const double e = static_cast<double>(out.rgb[k]) - target[k];
+                            chunk.loss += e * e * norm;
+                            gc[k] = static_cast<float>(2.0 * e * norm);
+                        }
                     }
-                    detail::backward(g, chunk.samples.data(),
-                                     static_cast<int>(chunk.samples.size()), out.rgb, gc,
-                                     [&](std::int32_t v, const float d[4]) { chunk.add(v, d); });
+                    float go[3] = {0, 0, 0}, gd[3] = {0, 0, 0};
+                    detail::backward(
+                        g, chunk.samples.data(), static_cast<int>(chunk.samples.size()), out.rgb,
+                        gc, [&](std::int32_t v, const float d[4]) { chunk.add(v, d); },
+                        [&](const detail::SampleRecord& rec, const float d[4]) {
+                            if (refine) {
+                                float pg[3];
+                                detail::position_gradient(g, rec.corner, d, pg);
+                                for (int k = 0; k < 3; ++k) {
+                                    go[k] += pg[k];
+                                    gd[k] += rec.t * pg[k];
+                                }
+                            }
+                        });
+                    if (refine) {
+                        accumulate_camera(chunk, vi, ray, go, gd);
+                    }
                     if (sparsity > 0.0f) {
                         // Cauchy sparsity prior per sample: (λ / batch) log(1 + 2 τ²), τ = σ δ.
                         for (const detail::SampleRecord& rec : chunk.samples) {
@@ -192,6 +294,9 @@ public:
                                 chunk.add(rec.corner.base + o[q], dq);
                             }
                         }
+                    }
+                    if (distortion > 0.0f) {
+                        add_distortion_gradient(g, chunk, distortion_norm);
                     }
                     if (learn_env) {
                         // ∂L/∂raw = T_end · g ⊙ B (1 − B) · bilinear weight.
@@ -230,6 +335,12 @@ public:
         update(p);
         if (learn_env) {
             update_environment(p);
+        }
+        if (refine) {
+            update_camera(p);
+        }
+        if (exposure) {
+            update_exposure(p);
         }
 
         TrainProgress progress;
@@ -330,6 +441,166 @@ public:
             1024);
     }
 
+    // The distortion loss's gradient for the ray whose samples are in chunk.samples (in order):
+    // with W_<i, M_<i the prefix sums of w_j and w_j m_j (and W_>i, M_>i the suffix sums),
+    //   g_i = ∂L/∂w_i = 2 (m_i W_<i − M_<i + M_>i − m_i W_>i) + ⅔ w_i δ_i,
+    // then through w_i = T_i α_i as the colour is (field_kernel.hpp's backward with the scalar
+    // "colour" g_i, no background): ∂L/∂σ_k = δ_k (T_{k+1} g_k − Σ_{j>k} w_j g_j).
+    void add_distortion_gradient(const detail::GridView& g, GradientChunk& chunk,
+                                 float weight) const {
+        const std::vector<detail::SampleRecord>& rec = chunk.samples;
+        const std::size_t n = rec.size();
+        if (n < 2) {
+            return;
+        }
+        std::vector<double>& w = chunk.scratch_w;
+        std::vector<double>& gw = chunk.scratch_g;
+        w.resize(n);
+        gw.resize(n);
+        double T = 1.0, total_w = 0.0, total_wm = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            w[i] = T * rec[i].alpha;
+            T *= 1.0 - rec[i].alpha;
+            total_w += w[i];
+            total_wm += w[i] * rec[i].t;
+        }
+        double below_w = 0.0, below_wm = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const double m = rec[i].t;
+            const double above_w = total_w - below_w - w[i];
+            const double above_wm = total_wm - below_wm - w[i] * m;
+            gw[i] = 2.0 * (m * below_w - below_wm + above_wm - m * above_w) +
+                    (2.0 / 3.0) * w[i] * rec[i].length;
+            below_w += w[i];
+            below_wm += w[i] * m;
+        }
+        double suffix = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            suffix += w[i] * gw[i];
+        }
+        std::int32_t o[8];
+        detail::corner_offsets(g, o);
+        T = 1.0;
+        for (std::size_t k = 0; k < n; ++k) {
+            const detail::SampleRecord& r = rec[k];
+            suffix -= w[k] * gw[k];
+            const double t_next = T * (1.0 - r.alpha);
+            const double d_sigma = r.length * (t_next * gw[k] - suffix);
+            const auto d_s =
+                static_cast<float>(weight * d_sigma * detail::DENSITY_SCALE * detail::sigmoid(r.s));
+            float wt[8];
+            detail::corner_weights(r.corner, wt);
+            for (int q = 0; q < 8; ++q) {
+                const float dq[4] = {wt[q] * d_s, 0.0f, 0.0f, 0.0f};
+                chunk.add(r.corner.base + o[q], dq);
+            }
+            T = t_next;
+        }
+    }
+
+    // ∂L/∂(ω, τ) of view vi and ∂L/∂φ from ∂L/∂o and ∂L/∂d of one ray (unit direction d):
+    //   τ: ∂L/∂o (normalized units);  ω: d × ∂L/∂d (the direction turns as δd = δω × d);
+    //   φ: the camera-frame direction D = d / (−d · z) (z the camera's unit back axis, so D's
+    //      component along −z is 1) changes with the focal scale as ∂D/∂φ = −(D + z), and
+    //      ∂L/∂D = (g_d − (g_d · d) d) / |D|.
+    void accumulate_camera(GradientChunk& chunk, std::size_t vi, const NormalizedRay& ray,
+                           const float go[3], const float gd[3]) const {
+        const Vec3d d{ray.direction[0], ray.direction[1], ray.direction[2]};
+        const Vec3d g_d{gd[0], gd[1], gd[2]};
+        double* cg = chunk.camera_grad.data() + CAMERA_PARAMS * vi;
+        if (m_options.refine_poses) {
+            const Vec3d w = cross(d, g_d);
+            cg[0] += w.x;
+            cg[1] += w.y;
+            cg[2] += w.z;
+            cg[3] += go[0];
+            cg[4] += go[1];
+            cg[5] += go[2];
+        }
+        if (m_options.refine_focal) {
+            const Vec3d axis_z = m_poses[vi].axis(2);
+            const Vec3d z = axis_z / norm(axis_z);
+            const double along = -dot(d, z);
+            if (along > 1e-6) {
+                const Vec3d big_d = d / along;
+                const Vec3d g_perp = g_d - dot(g_d, d) * d;
+                chunk.focal_grad -= dot(g_perp, big_d + z) / norm(big_d);
+            }
+        }
+    }
+
+    // Adam on the camera deltas (chunks summed in chunk order; bias correction over the
+    // refinement's iterations).
+    void update_camera(double p) {
+        ++m_camera_iteration;
+        const float decay = std::pow(m_options.lr_final_factor, static_cast<float>(p));
+        const float t = static_cast<float>(m_camera_iteration);
+        const float correction1 = 1.0f - std::pow(BETA1, t);
+        const float correction2 = 1.0f - std::pow(BETA2, t);
+        const auto adam = [&](float& x, float& m, float& v, float gq, float lr) {
+            m = BETA1 * m + (1.0f - BETA1) * gq;
+            v = BETA2 * v + (1.0f - BETA2) * gq * gq;
+            x -= lr * (m / correction1) / (std::sqrt(v / correction2) + 1e-12f);
+        };
+        if (m_options.refine_poses) {
+            const float lr = m_options.lr_pose * decay;
+            for (std::size_t a = 0; a < m_camera.size(); ++a) {
+                double gq = 0.0;
+                for (GradientChunk& c : m_chunks) {
+                    gq += c.camera_grad[a];
+                    c.camera_grad[a] = 0.0;
+                }
+                adam(m_camera[a], m_camera_m[a], m_camera_v[a], static_cast<float>(gq), lr);
+            }
+        }
+        if (m_options.refine_focal) {
+            double gq = 0.0;
+            for (GradientChunk& c : m_chunks) {
+                gq += c.focal_grad;
+                c.focal_grad = 0.0;
+            }
+            adam(m_log_focal, m_focal_m, m_focal_v, static_cast<float>(gq),
+                 m_options.lr_focal * decay);
+        }
+    }
+
+    // Adam on the exposures, with the prior's gradient 2 λ x (bias correction over all
+    // iterations), then the mean over the views subtracted.
+    void update_exposure(double p) {
+        const float lr =
+            m_options.lr_exposure * std::pow(m_options.lr_final_factor, static_cast<float>(p));
+        const float t = static_cast<float>(m_iteration + 1);
+        const float correction1 = 1.0f - std::pow(BETA1, t);
+        const float correction2 = 1.0f - std::pow(BETA2, t);
+        const float prior = 2.0f * m_options.exposure_prior;
+        for (std::size_t a = 0; a < m_exposure.size(); ++a) {
+            double gq = 0.0;
+            for (GradientChunk& c : m_chunks) {
+                gq += c.exposure_grad[a];
+                c.exposure_grad[a] = 0.0;
+            }
+            const float g = static_cast<float>(gq) + prior * m_exposure[a];
+            m_exposure_m[a] = BETA1 * m_exposure_m[a] + (1.0f - BETA1) * g;
+            m_exposure_v[a] = BETA2 * m_exposure_v[a] + (1.0f - BETA2) * g * g;
+            m_exposure[a] -= lr * (m_exposure_m[a] / correction1) /
+                             (std::sqrt(m_exposure_v[a] / correction2) + 1e-12f);
+        }
+        // The gauge: a gain shared by all views trades against the field's colours, so the
+        // parameters are kept at zero mean over the views (the held-out views' identity is
+        // then the training views' mean exposure).
+        const std::size_t views = m_exposure.size() / EXPOSURE_PARAMS;
+        for (int k = 0; k < EXPOSURE_PARAMS; ++k) {
+            double mean = 0.0;
+            for (std::size_t i = 0; i < views; ++i) {
+                mean += m_exposure[EXPOSURE_PARAMS * i + k];
+            }
+            mean /= static_cast<double>(views);
+            for (std::size_t i = 0; i < views; ++i) {
+                m_exposure[EXPOSURE_PARAMS * i + k] -= static_cast<float>(mean);
+            }
+        }
+    }
+
     // Adam on every texel of the environment map: the chunks' gradients summed in chunk order,
     // bias correction over all iterations (the map lives through every stage).
     void update_environment(double p) {
@@ -369,6 +640,20 @@ public:
             out.put_vector(m_env_m);
             out.put_vector(m_env_v);
         }
+        if (refining()) {
+            out.put(m_camera_iteration);
+            out.put_vector(m_camera);
+            out.put_vector(m_camera_m);
+            out.put_vector(m_camera_v);
+            out.put(m_log_focal);
+            out.put(m_focal_m);
+            out.put(m_focal_v);
+        }
+        if (m_options.exposure) {
+            out.put_vector(m_exposure);
+            out.put_vector(m_exposure_m);
+            out.put_vector(m_exposure_v);
+        }
     }
     void load_state(ByteReader& in) {
         const int stage = in.get<int>("trainer.stage");
@@ -394,6 +679,22 @@ public:
             in.get_vector("trainer.environment_adam_v", m_env_v,
                           static_cast<std::int64_t>(m_env_v.size()));
         }
+        if (refining()) {
+            m_camera_iteration = in.get<std::int64_t>("trainer.camera_iteration");
+            const auto n = static_cast<std::int64_t>(m_camera.size());
+            in.get_vector("trainer.camera", m_camera, n);
+            in.get_vector("trainer.camera_adam_m", m_camera_m, n);
+            in.get_vector("trainer.camera_adam_v", m_camera_v, n);
+            m_log_focal = in.get<float>("trainer.log_focal");
+            m_focal_m = in.get<float>("trainer.focal_adam_m");
+            m_focal_v = in.get<float>("trainer.focal_adam_v");
+        }
+        if (m_options.exposure) {
+            const auto n = static_cast<std::int64_t>(m_exposure.size());
+            in.get_vector("trainer.exposure", m_exposure, n);
+            in.get_vector("trainer.exposure_adam_m", m_exposure_m, n);
+            in.get_vector("trainer.exposure_adam_v", m_exposure_v, n);
+        }
         m_stage = stage;
         m_iteration = iteration;
         m_stage_iteration = stage_iteration;
@@ -414,6 +715,13 @@ private:
     std::vector<float> m_m, m_v;
     EnvironmentMap m_env;
     std::vector<float> m_env_m, m_env_v;
+    double m_scale = 1.0;  // the box's largest side: world units per normalized unit
+    std::vector<float> m_camera, m_camera_m, m_camera_v;  // CAMERA_PARAMS per view
+    float m_log_focal = 0.0f, m_focal_m = 0.0f, m_focal_v = 0.0f;
+    std::int64_t m_camera_iteration = 0;
+    std::vector<Pose> m_poses;             // the refined cameras of this iteration
+    std::vector<Intrinsics> m_intrinsics;  // …
+    std::vector<float> m_exposure, m_exposure_m, m_exposure_v;  // EXPOSURE_PARAMS per view
     std::vector<std::uint8_t> m_mark;
     std::vector<std::int32_t> m_union;
     std::array<GradientChunk, NUM_CHUNKS> m_chunks;
@@ -471,6 +779,18 @@ void TrainOptions::validate() const {
     }
     if (!(lr_environment >= 0.0f)) {
         fail("lr_environment", lr_environment, ">= 0");
+    }
+    if (!(distortion >= 0.0f) || !std::isfinite(distortion)) {
+        fail("distortion", distortion, "a finite value >= 0");
+    }
+    if (!(lr_exposure >= 0.0f) || !(exposure_prior >= 0.0f) || !std::isfinite(exposure_prior)) {
+        fail("lr_exposure / exposure_prior", lr_exposure, "finite values >= 0");
+    }
+    if (!(lr_pose >= 0.0f) || !(lr_focal >= 0.0f)) {
+        fail("lr_pose / lr_focal", lr_pose, ">= 0");
+    }
+    if (!(refine_start >= 0.0 && refine_start <= 1.0)) {
+        fail("refine_start", refine_start, "[0, 1]");
     }
     if (occupancy_interval < 1) {
         fail("occupancy_interval", occupancy_interval, ">= 1");
@@ -551,6 +871,11 @@ TrainResult train(const Dataset& dataset, const TrainOptions& options,
     result.final_loss = trainer.last_loss();
     result.grid = std::move(trainer.grid());
     result.environment = std::move(trainer.environment());
+    result.exposure = trainer.exposures();
+    if (options.refine_poses || options.refine_focal) {
+        result.poses = trainer.refined_poses();
+        result.focal_scale = trainer.focal_scale();
+    }
     return result;
 }
 

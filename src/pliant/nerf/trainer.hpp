@@ -35,11 +35,13 @@
 // grid so far is returned). The kernels never print.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "pliant/core/function_ref.hpp"
 #include "pliant/nerf/dataset.hpp"
@@ -76,6 +78,34 @@ struct TrainOptions {
     // gains (λ / batch_rays) Σ_samples log(1 + 2 τ²), τ = σ δ the sample's optical thickness,
     // pushing the air between the cameras and the object empty (≥ 0; 0: off).
     float sparsity = 0.0f;
+    // Weight λ of Mip-NeRF 360's distortion loss (Barron et al. 2022, eq. 15) per ray, against
+    // floaters: (λ / batch_rays) Σ_rays [Σ_i Σ_j w_i w_j |m_i − m_j| + ⅓ Σ_i w_i² δ_i], w_i the
+    // samples' compositing weights, m_i their midpoints and δ_i their lengths (normalized
+    // units); it pulls each ray's weight into one compact interval (≥ 0; 0: off).
+    float distortion = 0.0f;
+    // Per-view exposure compensation (photos whose exposure or white balance differ): the
+    // rendered colour C of training view i is compared as (1 + g_i) ⊙ C + b_i (per channel; 6
+    // parameters per view, zero at start, Adam at lr_exposure decaying as the others), and the
+    // loss gains exposure_prior · Σ_i (|g_i|² + |b_i|²), which pulls toward the identity; after
+    // each step the mean over the views is subtracted from each parameter (a gain shared by all
+    // views is the field's colour, not an exposure). Held-out views are scored with the
+    // identity, which is the views' mean exposure.
+    bool exposure = false;
+    float lr_exposure = 1e-2f;
+    float exposure_prior = 1e-4f;
+    // Camera refinement while training (nerfstudio's camera optimizer): per training view a
+    // rotation ω (so(3), radians, about the view's eye, applied on the left: R' = exp(ω) R) and a
+    // translation τ of the eye (normalized units of the scene box, world axes), zero at start;
+    // with refine_focal one log-scale of the focal lengths shared by all views (fx' = fx e^φ).
+    // Gradients through the ray's origin and direction (∂L/∂u of the trilinear field at each
+    // sample, u = o + t d; the clipped chord and the background's dependence on the direction are
+    // held fixed). Adam at lr_pose / lr_focal, decaying as the others, from progress
+    // refine_start on (the field takes shape first).
+    bool refine_poses = false;
+    bool refine_focal = false;
+    float lr_pose = 1e-3f;
+    float lr_focal = 2e-4f;
+    double refine_start = 0.1;
     std::uint64_t seed = 1;
     std::size_t max_bytes = std::size_t{16} << 30;  // memory limit of the final grid (bytes)
 
@@ -94,9 +124,20 @@ struct TrainProgress {
     double elapsed_ms = 0.0;
 };
 
+// A training view's learned exposure: compared colour = (1 + gain) ⊙ C + bias.
+struct ViewExposure {
+    std::array<float, 3> gain{0, 0, 0};
+    std::array<float, 3> bias{0, 0, 0};
+};
+
 struct TrainResult {
     RadianceGrid grid;
-    EnvironmentMap environment;  // empty unless TrainOptions::environment_width > 0
+    EnvironmentMap environment;          // empty unless TrainOptions::environment_width > 0
+    std::vector<ViewExposure> exposure;  // per training view; empty unless TrainOptions::exposure
+    // The training views' refined camera-to-world poses (refine_poses; empty otherwise) and the
+    // focal lengths' refined scale e^φ (1 without refine_focal).
+    std::vector<Pose> poses;
+    double focal_scale = 1.0;
     std::int64_t iterations = 0;
     double elapsed_ms = 0.0;
     double final_loss = 0.0;  // the last batch's MSE

@@ -21,8 +21,10 @@
 #include "pliant/io/checkpoint.hpp"
 #include "pliant/io/output_directory.hpp"
 #include "pliant/io/png.hpp"
+#include "pliant/nerf/camera_refinement.hpp"
 #include "pliant/nerf/crop.hpp"
 #include "pliant/nerf/metrics.hpp"
+#include "pliant/nerf/pose_alignment.hpp"
 #include "pliant/pipeline/nerf_dataset_file.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/raycast.hpp"
@@ -133,7 +135,65 @@ std::uint64_t train_fingerprint(const nerf::Dataset& dataset, const nerf::TrainO
         w.put(o.environment_width);
         w.put(o.lr_environment);
     }
+    if (o.distortion > 0.0f) {  // likewise
+        w.put_string("distortion");
+        w.put(o.distortion);
+    }
+    if (o.exposure) {  // likewise
+        w.put_string("exposure");
+        w.put(o.lr_exposure);
+        w.put(o.exposure_prior);
+    }
+    if (o.refine_poses || o.refine_focal) {
+        w.put_string("refine");
+        w.put(o.refine_poses);
+        w.put(o.refine_focal);
+        w.put(o.lr_pose);
+        w.put(o.lr_focal);
+        w.put(o.refine_start);
+    }
     return io::run_fingerprint(w.bytes());
+}
+
+// The held-out views moved by the training views' refinement (nerf::transfer_refinement) with
+// the refined focal scale.
+nerf::Dataset refined_test_views(const nerf::Dataset& train, const nerf::TrainResult& result,
+                                 const nerf::Dataset& test) {
+    std::vector<nerf::Pose> original, poses;
+    for (const nerf::View& v : train.views) {
+        original.push_back(v.camera_to_world);
+    }
+    for (const nerf::View& v : test.views) {
+        poses.push_back(v.camera_to_world);
+    }
+    const std::vector<nerf::Pose> moved = nerf::transfer_refinement(original, result.poses, poses);
+    nerf::Dataset out = test;
+    const auto scale = [&](nerf::Intrinsics& in) {
+        in.fx *= result.focal_scale;
+        in.fy *= result.focal_scale;
+    };
+    scale(out.intrinsics);
+    for (std::size_t i = 0; i < out.views.size(); ++i) {
+        out.views[i].camera_to_world = moved[i];
+        if (out.views[i].intrinsics) {
+            scale(*out.views[i].intrinsics);
+        }
+    }
+    return out;
+}
+
+// The training views' refined cameras as a transforms.json (write_transforms: the images are
+// not rewritten; file_path names them as the dataset did).
+void write_refined_poses(const nerf::Dataset& train, const nerf::TrainResult& result,
+                         const std::filesystem::path& path) {
+    nerf::Intrinsics in = train.intrinsics;
+    in.fx *= result.focal_scale;
+    in.fy *= result.focal_scale;
+    std::vector<std::string> names;
+    for (const nerf::View& v : train.views) {
+        names.push_back(v.name);
+    }
+    write_transforms(path, in, names, result.poses, train.box);
 }
 
 }  // namespace
@@ -200,8 +260,17 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
     nlohmann::ordered_json test_json;
     if (options.test != nullptr) {
         const render::Color b = dataset.background;
-        test_json = evaluate_field(*options.test, result.grid, result.environment, {b.r, b.g, b.b},
-                                   options.compare);
+        if (result.poses.empty()) {
+            test_json = evaluate_field(*options.test, result.grid, result.environment,
+                                       {b.r, b.g, b.b}, options.compare);
+        } else {
+            const nerf::Dataset moved = refined_test_views(dataset, result, *options.test);
+            test_json = evaluate_field(moved, result.grid, result.environment, {b.r, b.g, b.b},
+                                       options.compare);
+        }
+    }
+    if (!options.refined_poses.empty() && !result.poses.empty()) {
+        write_refined_poses(dataset, result, options.refined_poses);
     }
     nerf::ExportOptions exported = options.exported;
     if (options.crop) {
@@ -230,6 +299,30 @@ TrainRunResult train_volume(const nerf::Dataset& dataset, const TrainRunOptions&
     if (exported.box) {
         const AABBd& c = *exported.box;
         j["crop"] = {{c.lo.x, c.lo.y, c.lo.z}, {c.hi.x, c.hi.y, c.hi.z}};
+    }
+    if (!result.poses.empty()) {
+        j["focal_scale"] = result.focal_scale;
+        double sum_angle = 0.0, sum_move = 0.0;
+        for (std::size_t i = 0; i < result.poses.size(); ++i) {
+            const nerf::Pose& a = dataset.views[i].camera_to_world;
+            sum_angle += nerf::rotation_angle_deg(a, result.poses[i]);
+            sum_move += norm(result.poses[i].eye() - a.eye());
+        }
+        const double n = static_cast<double>(result.poses.size());
+        j["pose_change_deg"] = sum_angle / n;  // mean over the training views
+        j["pose_change_eye"] = sum_move / n;   // mean, world units
+    }
+    if (!result.exposure.empty()) {
+        double sum_gain = 0.0, sum_bias = 0.0;
+        for (const nerf::ViewExposure& e : result.exposure) {
+            for (int k = 0; k < 3; ++k) {
+                sum_gain += std::fabs(e.gain[k]);
+                sum_bias += std::fabs(e.bias[k]);
+            }
+        }
+        const double n = 3.0 * static_cast<double>(result.exposure.size());
+        j["exposure_gain"] = sum_gain / n;  // mean |gain − 1| over views and channels
+        j["exposure_bias"] = sum_bias / n;  // mean |bias|
     }
     if (options.test != nullptr) {
         j["test_psnr"] = test_json["psnr"];

@@ -73,6 +73,11 @@ struct TrainRunOptions {
     // object found by nerf::auto_crop (nerf/crop.hpp) in the trained field.
     std::optional<AABBd> crop;
     bool auto_crop = false;
+    // With camera refinement (train.refine_poses / refine_focal): the held-out views are scored
+    // from their poses moved by nerf::transfer_refinement and with the refined focal lengths;
+    // refined_poses (non-empty): the training views' refined cameras written there as a
+    // transforms.json (nerf_dataset_file.hpp's write_transforms; file_path as read).
+    std::filesystem::path refined_poses;
 };
 
 // clang-tidy 14 cannot see that the implicit members (moving a Volume and a JSON object) do not

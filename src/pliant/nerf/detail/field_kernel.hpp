@@ -65,6 +65,7 @@ struct SampleRecord {
     float s = 0.0f;       // interpolated raw density
     float alpha = 0.0f;   // 1 − exp(−σ δ_k)
     float length = 0.0f;  // δ_k
+    float t = 0.0f;       // the sample's distance along the ray (normalized units)
     float c[3] = {0, 0, 0};
 };
 
@@ -198,6 +199,7 @@ PLIANT_HOST_DEVICE RayOutput march(const GridView& g, const float o[3], const fl
             const float sigma = softplus(raw[0]) * DENSITY_SCALE;
             r.alpha = 1.0f - std::exp(-sigma * len);
             r.length = len;
+            r.t = t;
             r.c[0] = sigmoid(raw[1]);
             r.c[1] = sigmoid(raw[2]);
             r.c[2] = sigmoid(raw[3]);
@@ -220,12 +222,40 @@ PLIANT_HOST_DEVICE RayOutput march(const GridView& g, const float o[3], const fl
     return out;
 }
 
+// ∂(raw parameters)/∂u contracted with d_raw = ∂L/∂(s, a_r, a_g, a_b) at a sample: the spatial
+// gradient of the trilinear interpolation, ∂L/∂u_a = to_grid_a Σ_ch d_raw_ch Σ_q p_q,ch ∂w_q/∂f_a
+// (the clamp at the faces' half voxels is not differentiated). Used to refine camera poses.
+PLIANT_HOST_DEVICE inline void position_gradient(const GridView& g, const Corner& c,
+                                                 const float d_raw[4], float out[3]) {
+    std::int32_t o[8];
+    corner_offsets(g, o);
+    float dot[8];
+    for (int q = 0; q < 8; ++q) {
+        const float* p = g.params + 4 * static_cast<std::int64_t>(c.base + o[q]);
+        dot[q] = d_raw[0] * p[0] + d_raw[1] * p[1] + d_raw[2] * p[2] + d_raw[3] * p[3];
+    }
+    const float x1 = c.f[0], y1 = c.f[1], z1 = c.f[2];
+    const float x0 = 1.0f - x1, y0 = 1.0f - y1, z0 = 1.0f - z1;
+    // Corner q = dx + 2 dy + 4 dz (corner_weights' order).
+    out[0] = ((dot[1] - dot[0]) * y0 * z0 + (dot[3] - dot[2]) * y1 * z0 +
+              (dot[5] - dot[4]) * y0 * z1 + (dot[7] - dot[6]) * y1 * z1) *
+             g.to_grid[0];
+    out[1] = ((dot[2] - dot[0]) * x0 * z0 + (dot[3] - dot[1]) * x1 * z0 +
+              (dot[6] - dot[4]) * x0 * z1 + (dot[7] - dot[5]) * x1 * z1) *
+             g.to_grid[1];
+    out[2] = ((dot[4] - dot[0]) * x0 * y0 + (dot[5] - dot[1]) * x1 * y0 +
+              (dot[6] - dot[2]) * x0 * y1 + (dot[7] - dot[3]) * x1 * y1) *
+             g.to_grid[2];
+}
+
 // Backward pass of one ray: the samples march() recorded (n of them, in order), the ray's
 // output colour C (with background) and g = ∂L/∂C. scatter(voxel, d[4]) receives ∂L/∂(raw
-// parameters) of each corner voxel (8 calls per sample).
-template <typename Scatter>
+// parameters) of each corner voxel (8 calls per sample); per_sample(record, d_raw[4]) receives
+// ∂L/∂(interpolated raw parameters) of each sample, before the scatter.
+template <typename Scatter, typename PerSample>
 PLIANT_HOST_DEVICE void backward(const GridView& g, const SampleRecord* samples, int n,
-                                 const float C[3], const float grad_c[3], Scatter&& scatter) {
+                                 const float C[3], const float grad_c[3], Scatter&& scatter,
+                                 PerSample&& per_sample) {
     std::int32_t o[8];
     corner_offsets(g, o);
     // Running sums in double: S_k = C − prefix cancels.
@@ -249,6 +279,7 @@ PLIANT_HOST_DEVICE void backward(const GridView& g, const SampleRecord* samples,
         for (int c = 0; c < 3; ++c) {
             d[1 + c] = static_cast<float>(w * grad_c[c] * r.c[c] * (1.0 - r.c[c]));
         }
+        per_sample(r, d);
         float wt[8];
         corner_weights(r.corner, wt);
         for (int q = 0; q < 8; ++q) {
@@ -257,6 +288,13 @@ PLIANT_HOST_DEVICE void backward(const GridView& g, const SampleRecord* samples,
         }
         T = T_next;
     }
+}
+
+// backward() without the per-sample callback.
+template <typename Scatter>
+PLIANT_HOST_DEVICE void backward(const GridView& g, const SampleRecord* samples, int n,
+                                 const float C[3], const float grad_c[3], Scatter&& scatter) {
+    backward(g, samples, n, C, grad_c, scatter, [](const SampleRecord&, const float*) {});
 }
 
 }  // namespace pliant::nerf::detail
