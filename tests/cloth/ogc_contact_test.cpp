@@ -18,7 +18,7 @@ namespace {
 // Two triangles 4 mm apart: a vertex of the upper one above the lower one's interior.
 struct TwoTriangles {
     std::vector<geometry::Triangle> triangles{{0, 1, 2}, {3, 4, 5}};
-    std::vector<Vec3d> x{{0.0, 0.0, 0.0},   {0.1, 0.0, 0.0},   {0.0, 0.1, 0.0},
+    std::vector<Vec3d> x{{0.0, 0.0, 0.0},     {0.1, 0.0, 0.0},   {0.0, 0.1, 0.0},
                          {0.02, 0.02, 0.004}, {0.2, 0.02, 0.05}, {0.02, 0.2, 0.05}};
 };
 
@@ -77,12 +77,12 @@ TEST(OgcContact, RejectsBadOptions) {
     EXPECT_THROW(OgcContact(t.triangles, 6, OgcOptions{}, 0.0, 1.0), InvalidInput);
     EXPECT_THROW(OgcContact(t.triangles, 6, OgcOptions{}, 0.005, 0.0), InvalidInput);
     for (const auto& change : std::vector<void (*)(OgcOptions&)>{
-             [](OgcOptions& o) { o.bound_share = 0.5; },
-             [](OgcOptions& o) { o.bound_share = 0.0; },
+             [](OgcOptions& o) { o.bound_share = 0.5; }, [](OgcOptions& o) { o.bound_share = 0.0; },
              [](OgcOptions& o) { o.query_factor = 0.9; },
-             [](OgcOptions& o) { o.redetect_share = 1.5; },
-             [](OgcOptions& o) { o.radius = -1.0; },
-             [](OgcOptions& o) { o.stiffness = std::numeric_limits<double>::infinity(); }}) {
+             [](OgcOptions& o) { o.redetect_share = 1.5; }, [](OgcOptions& o) { o.radius = -1.0; },
+             [](OgcOptions& o) {
+                 o.stiffness = std::numeric_limits<double>::infinity();
+             }}) {
         OgcOptions options;
         change(options);
         EXPECT_THROW(OgcContact::check_options(options), InvalidInput);
