@@ -97,13 +97,15 @@ TEST(ClothScene, ReadsTheContact) {
     EXPECT_EQ(ogc.vbd->ogc->bound_share, cloth::OgcOptions{}.bound_share);
     const cloth::ClothScene tuned = parse(R"({"cloth": {"grid": {}}, "solver": "vbd",
         "contact": {"type": "ogc", "radius": 0.004, "query_factor": 3, "bound_share": 0.2,
-                    "redetect_share": 0.05, "stiffness": 1000}})");
+                    "redetect_share": 0.05, "stiffness": 1000, "audit": false}})");
     ASSERT_TRUE(tuned.vbd && tuned.vbd->ogc);
     EXPECT_EQ(tuned.vbd->ogc->radius, 0.004);
     EXPECT_EQ(tuned.vbd->ogc->query_factor, 3.0);
     EXPECT_EQ(tuned.vbd->ogc->bound_share, 0.2);
     EXPECT_EQ(tuned.vbd->ogc->redetect_share, 0.05);
     EXPECT_EQ(tuned.vbd->ogc->stiffness, 1000.0);
+    EXPECT_FALSE(tuned.vbd->ogc->audit);
+    EXPECT_TRUE(ogc.vbd->ogc->audit);
 }
 
 TEST(ClothScene, RejectsBadContact) {
@@ -123,6 +125,8 @@ TEST(ClothScene, RejectsBadContact) {
                  {"contact.redetect_share", "2"});
     expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"stiffness": "hard"}})",
                  {"contact.stiffness", "a number", "string"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"audit": 1}})",
+                 {"contact.audit", "true or false"});
     expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"radiuss": 1}})",
                  {"contact.radiuss", "unknown key"});
 }

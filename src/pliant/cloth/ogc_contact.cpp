@@ -9,6 +9,7 @@
 #include "pliant/collision/segment_segment.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
 
 namespace pliant::cloth {
 namespace {
@@ -72,7 +73,8 @@ OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_
       m_broad_phase(triangles, num_vertices),
       m_triangles(triangles.begin(), triangles.end()) {
     check_options(options);
-    if (!(radius > 0.0 && std::isfinite(radius)) || !(stiffness > 0.0 && std::isfinite(stiffness))) {
+    if (!(radius > 0.0 && std::isfinite(radius)) ||
+        !(stiffness > 0.0 && std::isfinite(stiffness))) {
         throw InvalidInput(fmt::format(
             "cloth: ogc contact: expected a contact radius > 0 m (the thickness when radius is 0) "
             "and a stiffness > 0 N/m, got {} and {}",
@@ -83,6 +85,7 @@ OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_
 }
 
 void OgcContact::detect(std::span<const Vec3d> x) {
+    const Stopwatch watch;
     // Built from scratch at every detection, so that the pairs' order (and the contact forces'
     // summation order) depends on x only: a resumed run detects the same.
     m_broad_phase.request_rebuild();
@@ -130,8 +133,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
                 const Vec3d& q1 = x[static_cast<std::size_t>(b[1])];
                 const auto prox = collision::segment_segment_proximity(p0, p1, q0, q1);
                 m_distances[slot] = prox.distance;
-                m_geometry[slot] = {p0 + (p1 - p0) * prox.s, q0 + (q1 - q0) * prox.t,
-                                    prox.normal};
+                m_geometry[slot] = {p0 + (p1 - p0) * prox.s, q0 + (q1 - q0) * prox.t, prox.normal};
             }
         },
         PAIR_GRAIN);
@@ -184,6 +186,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_shift = {0.0, 0.0, 0.0};
     m_has_detection = true;
     ++m_detections;
+    m_detect_ms += watch.elapsed_ms();
 }
 
 bool OgcContact::set_shift(std::span<const Vec3d> predicted,
@@ -271,7 +274,8 @@ void OgcContact::snapshot(std::span<const Vec3d> x) {
     parallel_for(
         static_cast<std::int64_t>(m_contact_vertices.size()),
         [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
+            const auto v =
+                static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
             m_snapshot[v] = x[v];
         },
         PAIR_GRAIN);

@@ -21,11 +21,11 @@
 //        bound's damping). Two features that stay on their sides of one fixed plane do not touch.
 //      The set is convex and holds x_v + S. truncate() shortens a vertex's move, from a point of
 //      its set, to the farthest point of the set on the move's segment (the paper's truncation of
-//      the displacement, with an exact line search on the ball and the planes). Every vertex moves from a point of
-//      its set to a point of its set, alone or with others of its colour; and between substeps all
-//      vertices move together from their sets at S to their sets at S': every configuration in
-//      between lies in the sets at a shift between (the sets are convex), so no two features ever
-//      touch: the cloth stays intersection-free for any motion the solver makes.
+//      the displacement, with an exact line search on the ball and the planes). Every vertex moves
+//      from a point of its set to a point of its set, alone or with others of its colour; and
+//      between substeps all vertices move together from their sets at S to their sets at S': every
+//      configuration in between lies in the sets at a shift between (the sets are convex), so no
+//      two features ever touch: the cloth stays intersection-free for any motion the solver makes.
 //   frame shift. Distances do not change when every vertex is translated by the same vector, so
 //      the sets are centred at the detection's positions plus a shift S shared by all vertices:
 //      set_shift() takes the componentwise median, over every 16th free vertex, of a predicted
@@ -76,6 +76,8 @@ struct OgcOptions {
     double redetect_share = 0.01;
     // Contact stiffness k_c (N/m); 0: the stretch springs' stiffness (1 / stretch compliance).
     double stiffness = 0.0;
+    // Keep the CCD fail-safe as an audit (VBDStepper, vbd_stepper.hpp).
+    bool audit = true;
 };
 
 class OgcContact {
@@ -143,6 +145,8 @@ public:
     std::span<const Pair> pairs() const { return m_pairs; }
     // Detections since construction.
     std::int64_t detections() const { return m_detections; }
+    // Wall-clock time of the detections since construction (ms).
+    double detect_ms() const { return m_detect_ms; }
 
     // The state later steps read: the detection's positions (the pairs and planes are derived
     // from them); load_state: InvalidInput for another mesh or a truncated state.
@@ -161,6 +165,7 @@ private:
 
     bool m_has_detection = false;
     std::int64_t m_detections = 0;
+    double m_detect_ms = 0.0;
     std::int64_t m_close_pairs = 0;
     std::vector<Vec3d> m_detected;  // #V, positions at the detection
     Vec3d m_shift{0.0, 0.0, 0.0};

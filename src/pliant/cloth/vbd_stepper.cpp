@@ -215,8 +215,9 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
     const std::int64_t detections_before = m_ogc ? m_ogc->detections() : 0;
+    const double detect_ms_before = m_ogc ? m_ogc->detect_ms() : 0.0;
     if (m_ogc) {
-        m_step_start.assign(positions.begin(), positions.end());
+        m_audit_start.assign(positions.begin(), positions.end());
         const std::span<const double> inverse_masses = model.inverse_masses();
         m_num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
                                    [](double w) { return w > 0.0; });
@@ -240,14 +241,13 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
         stats.solver_sweeps += m_options.iterations;
     }
     if (m_ogc) {
-        // The audit: the CCD fail-safe over the step's whole motion.
-        const std::int64_t reverted = m_self_collision->stats().reverted_vertices;
-        m_self_collision->enforce(m_step_start, positions, velocities, start_time, start_time + dt);
-        if (m_self_collision->stats().reverted_vertices != reverted) {
+        // The audit's last window ends with the step; vertices it put back left their sets.
+        if (m_options.ogc->audit && audit(positions, velocities)) {
             m_ogc->invalidate();
         }
         stats.has_ogc = true;
         stats.ogc_detections = m_ogc->detections() - detections_before;
+        stats.ogc_detect_ms = m_ogc->detect_ms() - detect_ms_before;
         stats.ogc_truncated = m_step_truncated;
         stats.ogc_pairs = static_cast<std::int64_t>(m_ogc->num_pairs());
         stats.ogc_close_pairs = m_ogc->close_pairs();
@@ -408,12 +408,29 @@ void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
         VERTEX_GRAIN);
 }
 
-bool VBDStepper::redetect_if_needed(std::span<const Vec3d> x) {
+bool VBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
+    const std::int64_t reverted = m_self_collision->stats().reverted_vertices;
+    m_self_collision->enforce(m_audit_start, x, velocities);
+    m_audit_start.assign(x.begin(), x.end());
+    return m_self_collision->stats().reverted_vertices != reverted;
+}
+
+void VBDStepper::detect(std::span<Vec3d> x) {
+    if (m_options.ogc->audit) {
+        // The window since the last detection (or the step's start) ends here; the velocities
+        // of vertices it puts back are set at the substep's end, from their positions.
+        m_audit_velocities.assign(x.size(), Vec3d{0.0, 0.0, 0.0});
+        audit(x, m_audit_velocities);
+    }
+    m_ogc->detect(x);
+}
+
+bool VBDStepper::redetect_if_needed(std::span<Vec3d> x) {
     const std::int64_t truncated = m_sweep_truncated.exchange(0);
     m_step_truncated += truncated;
     if (static_cast<double>(truncated) >
         m_options.ogc->redetect_share * static_cast<double>(m_num_free)) {
-        m_ogc->detect(x);
+        detect(x);
         return true;
     }
     return false;
@@ -451,7 +468,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
     const ClothMaterial& material = model.material();
     const auto n = static_cast<std::int64_t>(positions.size());
     if (m_ogc && !m_ogc->has_detection()) {
-        m_ogc->detect(positions);  // x_t, intersection-free
+        detect(positions);  // x_t, intersection-free
     }
     model.apply_air(h, t_end - h);
     const Vec3d gravity = model.gravity();

@@ -30,9 +30,11 @@
 // the vertex's bound, and a detection runs before a substep without one and after every sweep
 // (or prediction) in which more than ogc.redetect_share of the free vertices hit their bound. No
 // proximity projection and no per-substep fail-safe: the bounds keep the cloth intersection-free.
-// The CCD fail-safe (ccd_fail_safe.hpp) stays as an audit over each step's whole motion (its
-// stats: ccd_pairs, ccd_hits, reverted_vertices); a vertex it puts back makes the next substep
-// detect again.
+// With ogc.audit, the CCD fail-safe (ccd_fail_safe.hpp) stays as an audit and a fail-safe over
+// windows that end at every detection and at the step's end (its stats: ccd_pairs, ccd_hits,
+// reverted_vertices). Within a window every vertex stays in its feasible set, so the straight
+// motion from the window's start to its end is free of contact (ogc_contact.hpp) and the CCD
+// should clear it; a vertex it puts back at the step's end makes the next substep detect again.
 //
 // Units: SI. Not thread safe (one stepper per thread); step() parallelises internally.
 #pragma once
@@ -119,7 +121,12 @@ private:
                       std::span<const double> inverse_masses);
     // OGC: after a sweep or the prediction, detects again (returns true) when too many vertices
     // hit their bound.
-    bool redetect_if_needed(std::span<const Vec3d> x);
+    bool redetect_if_needed(std::span<Vec3d> x);
+    // OGC: the audit's window ends at x (ogc.audit), then a detection at x.
+    void detect(std::span<Vec3d> x);
+    // OGC: the CCD fail-safe over the motion from m_audit_start to x (velocities: of the vertices
+    // it puts back, set to zero); returns whether it put any back. The next window starts at x.
+    bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
     // The unit normals n̂ of the isometric hinges at positions x (zero for degenerate ones).
     void update_hinge_normals(std::span<const Vec3d> x);
 
@@ -155,8 +162,11 @@ private:
 
     std::unique_ptr<SelfCollision> m_self_collision;
     std::unique_ptr<OgcContact> m_ogc;
-    std::vector<Vec3d> m_step_start;  // OGC: positions at the step's start (the audit's window)
-    std::int64_t m_num_free = 0;      // OGC: free vertices (inverse mass > 0) in this step
+    // OGC: positions where the audit's window starts (the step's start or the last detection),
+    // and scratch velocities for an audit within a substep.
+    std::vector<Vec3d> m_audit_start;
+    std::vector<Vec3d> m_audit_velocities;
+    std::int64_t m_num_free = 0;  // OGC: free vertices (inverse mass > 0) in this step
     std::atomic<std::int64_t> m_sweep_truncated{0};  // OGC: vertices held back in this sweep
     std::int64_t m_step_truncated = 0;               // OGC: summed over this step
     std::int64_t m_num_position_resets = 0;

@@ -98,6 +98,7 @@ struct ClothStepStats {
     std::int64_t ogc_truncated = 0;
     std::int64_t ogc_pairs = 0;
     std::int64_t ogc_close_pairs = 0;
+    double ogc_detect_ms = 0.0;  // the detections' time
 };
 
 class XPBDStepper {

@@ -159,6 +159,7 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
                  {o.radius, o.query_factor, o.bound_share, o.redetect_share, o.stiffness}) {
                 w.put(value);
             }
+            w.put(o.audit);
         }
     }
     for (const cloth::PinGroup& group : scene.pins) {
@@ -486,6 +487,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                 record["ogc_truncated_vertices"] = step.ogc_truncated;
                 record["ogc_pairs"] = step.ogc_pairs;
                 record["ogc_close_pairs"] = step.ogc_close_pairs;
+                record["ogc_detect_ms"] = step.ogc_detect_ms;
             }
         }
         if (sim.solver().model().has_obstacles()) {

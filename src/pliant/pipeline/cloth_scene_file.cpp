@@ -769,6 +769,12 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
                     o.bound_share = c.number("bound_share", o.bound_share, 1e-3, 0.49);
                     o.redetect_share = c.number("redetect_share", o.redetect_share, 0.0, 1.0);
                     o.stiffness = c.number("stiffness", o.stiffness, 0.0, 1e15);
+                    if (const Json* audit = c.find("audit")) {
+                        if (!audit->is_boolean()) {
+                            c.fail("contact.audit", "true or false", json_type_name(*audit));
+                        }
+                        o.audit = audit->get<bool>();
+                    }
                     ogc = o;
                 }
             });
@@ -777,8 +783,7 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
         }
         if (ogc) {
             if (!scene.vbd) {
-                root.fail("contact", "\"solver\": \"vbd\" with \"contact\": \"ogc\"",
-                          "the xpbd solver");
+                root.fail("contact", R"("solver": "vbd" with "contact": "ogc")", "the xpbd solver");
             }
             scene.vbd->ogc = ogc;
         }
