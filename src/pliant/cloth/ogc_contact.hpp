@@ -46,6 +46,9 @@
 //      detect() again when they exceed redetect_share of the free vertices; a settled sheet keeps
 //      one detection for many substeps.
 //
+// Pinned vertices follow their pins untruncated: a pin that moves a vertex out of its set can make
+// the cloth touch itself, which only the CCD audit (vbd_stepper.hpp) catches.
+//
 // Units: metres. Not thread safe except truncate() and add_forces() (const, read only).
 #pragma once
 
