@@ -118,7 +118,7 @@ nlohmann::json without_timings(nlohmann::json stats) {
     for (nlohmann::json& frame : stats.at("frames")) {
         for (const char* key :
              {"ms", "step_ms", "refit_ms", "traverse_ms", "narrow_ms", "response_ms", "check_ms",
-              "write_ms", "gather_ms", "project_ms", "ccd_ms"}) {
+              "write_ms", "gather_ms", "project_ms", "ccd_ms", "ogc_detect_ms"}) {
             frame.erase(key);
         }
     }
