@@ -118,7 +118,7 @@ nlohmann::json without_timings(nlohmann::json stats) {
     for (nlohmann::json& frame : stats.at("frames")) {
         for (const char* key :
              {"ms", "step_ms", "refit_ms", "traverse_ms", "narrow_ms", "response_ms", "check_ms",
-              "write_ms", "gather_ms", "project_ms", "ccd_ms"}) {
+              "write_ms", "gather_ms", "project_ms", "ccd_ms", "ogc_detect_ms"}) {
             frame.erase(key);
         }
     }
@@ -148,12 +148,12 @@ protected:
             cloth_args(scratch, "scene.json", "reference", "--checkpoint-every 0"), scratch);
         ASSERT_EQ(r.exit_code, 0) << r.err;
         ASSERT_FALSE(std::filesystem::exists(scratch / "reference" / "checkpoint.bin"));
-        // The scene exercises self-collision: the sheets touch.
+        // The scene exercises self-collision: the sheets touch (OGC: pairs within its radius).
         const nlohmann::json stats =
             nlohmann::json::parse(read_text(scratch / "reference" / "stats.json"));
         int contacts = 0;
         for (const nlohmann::json& frame : stats.at("frames")) {
-            contacts += frame.at("contacts").get<int>();
+            contacts += frame.at("contacts").get<int>() + frame.value("ogc_close_pairs", 0);
         }
         ASSERT_GT(contacts, 0);
     }
@@ -200,6 +200,31 @@ protected:
 };
 
 TEST_F(ClothResumeVBD, KilledAfterKFramesResumesBitwiseIdentical) {
+    for (const int k : {1, 4, 9}) {
+        SCOPED_TRACE("killed once frame " + std::to_string(k) + " appeared");
+        const std::string out = "killed_" + std::to_string(k);
+        const std::filesystem::path frame =
+            scratch / out / "frames" / fmt::format("frame_{:04d}.obj", k);
+        const pid_t pid = spawn(cloth_args(scratch, "scene.json", out, "--checkpoint-every 2"));
+        ASSERT_GT(pid, 0);
+        EXPECT_TRUE(kill_when(pid, [&] { return std::filesystem::exists(frame); }));
+        resume(out);
+        expect_same_run(scratch / "reference", scratch / out);
+    }
+}
+
+// The same with OGC contact (cloth/ogc_contact.hpp).
+class ClothResumeOGC : public ClothResume {
+protected:
+    std::string scene() const override {
+        std::string text = SCENE;
+        text.insert(text.rfind('}'),
+                    R"(, "solver": {"type": "vbd", "iterations": 5}, "contact": "ogc")");
+        return text;
+    }
+};
+
+TEST_F(ClothResumeOGC, KilledAfterKFramesResumesBitwiseIdentical) {
     for (const int k : {1, 4, 9}) {
         SCOPED_TRACE("killed once frame " + std::to_string(k) + " appeared");
         const std::string out = "killed_" + std::to_string(k);

@@ -85,6 +85,52 @@ TEST(ClothScene, ReadsTheSolver) {
     EXPECT_FALSE(parse(R"({"cloth": {"grid": {}}, "solver": {"type": "xpbd"}})").vbd);
 }
 
+TEST(ClothScene, ReadsTheContact) {
+    const cloth::ClothScene plain = parse(R"({"cloth": {"grid": {}}, "solver": "vbd"})");
+    EXPECT_FALSE(plain.vbd->ogc);
+    const cloth::ClothScene proximity =
+        parse(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": "proximity"})");
+    EXPECT_FALSE(proximity.vbd->ogc);
+    const cloth::ClothScene ogc =
+        parse(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": "ogc"})");
+    ASSERT_TRUE(ogc.vbd && ogc.vbd->ogc);
+    EXPECT_EQ(ogc.vbd->ogc->bound_share, cloth::OgcOptions{}.bound_share);
+    const cloth::ClothScene tuned = parse(R"({"cloth": {"grid": {}}, "solver": "vbd",
+        "contact": {"type": "ogc", "radius": 0.004, "query_factor": 3, "bound_share": 0.2,
+                    "redetect_share": 0.05, "stiffness": 1000, "audit": false}})");
+    ASSERT_TRUE(tuned.vbd && tuned.vbd->ogc);
+    EXPECT_EQ(tuned.vbd->ogc->radius, 0.004);
+    EXPECT_EQ(tuned.vbd->ogc->query_factor, 3.0);
+    EXPECT_EQ(tuned.vbd->ogc->bound_share, 0.2);
+    EXPECT_EQ(tuned.vbd->ogc->redetect_share, 0.05);
+    EXPECT_EQ(tuned.vbd->ogc->stiffness, 1000.0);
+    EXPECT_FALSE(tuned.vbd->ogc->audit);
+    EXPECT_TRUE(ogc.vbd->ogc->audit);
+}
+
+TEST(ClothScene, RejectsBadContact) {
+    expect_error(R"({"cloth": {"grid": {}}, "contact": "ogc"})",
+                 {"contact", "\"solver\": \"vbd\"", "xpbd"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": "ipc"})",
+                 {"contact", "\"ogc\", \"proximity\"", "\"ipc\""});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": 1})",
+                 {"contact", "\"ogc\"", "an integer"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"bound_share": 0.5}})",
+                 {"contact.bound_share", "0.5"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"radius": -1}})",
+                 {"contact.radius", "-1"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"query_factor": 0.5}})",
+                 {"contact.query_factor", "0.5"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"redetect_share": 2}})",
+                 {"contact.redetect_share", "2"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"stiffness": "hard"}})",
+                 {"contact.stiffness", "a number", "string"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"audit": 1}})",
+                 {"contact.audit", "true or false"});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": {"radiuss": 1}})",
+                 {"contact.radiuss", "unknown key"});
+}
+
 TEST(ClothScene, DefaultsAndRelativeMeshPath) {
     const cloth::ClothScene scene = parse(R"({"cloth": {"mesh": "shirt.obj"}})");
     EXPECT_FALSE(scene.grid.has_value());

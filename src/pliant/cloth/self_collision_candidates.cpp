@@ -535,14 +535,28 @@ void SelfCollisionCandidates::load_state(ByteReader& in) {
     }
     in.get_vector("candidates.frame_origin", m_frame_origin,
                   static_cast<std::int64_t>(m_frame_samples.size()));
-    in.get_vector("candidates.anchors", m_anchors, n);
-    in.get_vector("candidates.path_velocities", m_path_velocities, n);
-    in.get_vector("candidates.anchor_times", m_anchor_times, n);
-    in.get_vector("candidates.path_ends", m_path_ends, n);
-    in.get_vector("candidates.slacks", m_slacks, n);
-    in.get_vector("candidates.box_lo", m_box_lo, n);
-    in.get_vector("candidates.box_hi", m_box_hi, n);
-    in.get_vector("candidates.needs_path", m_needs_path, n);
+    // Per vertex, or empty where no prepare() ran yet (a fail-safe without paths fills some).
+    const auto per_vertex = [&](const char* field, auto& values) {
+        in.get_vector(field, values);
+        if (!values.empty() && static_cast<std::int64_t>(values.size()) != n) {
+            throw InvalidInput(fmt::format("{}: {}: expected {} elements, got {}", in.source(),
+                                           field, n, values.size()));
+        }
+    };
+    per_vertex("candidates.anchors", m_anchors);
+    per_vertex("candidates.path_velocities", m_path_velocities);
+    per_vertex("candidates.anchor_times", m_anchor_times);
+    per_vertex("candidates.path_ends", m_path_ends);
+    per_vertex("candidates.slacks", m_slacks);
+    per_vertex("candidates.box_lo", m_box_lo);
+    per_vertex("candidates.box_hi", m_box_hi);
+    per_vertex("candidates.needs_path", m_needs_path);
+    if (m_has_gather && (m_anchors.empty() || m_path_velocities.empty() || m_anchor_times.empty() ||
+                         m_path_ends.empty() || m_slacks.empty() || m_box_lo.empty() ||
+                         m_box_hi.empty() || m_needs_path.empty())) {
+        throw InvalidInput(
+            fmt::format("{}: candidates: paths without per-vertex state", in.source()));
+    }
     m_filter_margin = in.get<double>("candidates.filter_margin");
     in.get_vector("candidates.candidates", m_candidates);
     for (const Candidate& c : m_candidates) {

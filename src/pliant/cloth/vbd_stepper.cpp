@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "pliant/cloth/detail/stepper_checks.hpp"
+#include "pliant/cloth/detail/sym3.hpp"
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/cloth/isometric_bending.hpp"
 #include "pliant/core/error.hpp"
@@ -19,45 +20,11 @@ namespace {
 constexpr std::int64_t VERTEX_GRAIN = 1024;
 // Stiffnesses of rigid (zero-compliance) springs and hinges: 1 / this compliance.
 constexpr double MIN_COMPLIANCE = 1e-12;
+// OGC: detections at most per substep to bring the prediction within the bounds.
+constexpr int MAX_PREDICTION_DETECTIONS = 8;
 
-// A symmetric 3 × 3 matrix: xx, yy, zz, xy, xz, yz.
-struct Sym3 {
-    double xx = 0.0, yy = 0.0, zz = 0.0, xy = 0.0, xz = 0.0, yz = 0.0;
-
-    void add_diagonal(double s) {
-        xx += s;
-        yy += s;
-        zz += s;
-    }
-    // += s · a aᵀ
-    void add_outer(const Vec3d& a, double s) {
-        xx += s * a.x * a.x;
-        yy += s * a.y * a.y;
-        zz += s * a.z * a.z;
-        xy += s * a.x * a.y;
-        xz += s * a.x * a.z;
-        yz += s * a.y * a.z;
-    }
-};
-
-// Solves H d = f by the adjugate; false when H is (numerically) singular.
-bool solve(const Sym3& h, const Vec3d& f, Vec3d& d) {
-    const double c00 = h.yy * h.zz - h.yz * h.yz;
-    const double c01 = h.xz * h.yz - h.xy * h.zz;
-    const double c02 = h.xy * h.yz - h.xz * h.yy;
-    const double det = h.xx * c00 + h.xy * c01 + h.xz * c02;
-    const double scale = std::abs(h.xx) + std::abs(h.yy) + std::abs(h.zz);
-    if (!(std::abs(det) > 1e-30 * scale * scale * scale)) {
-        return false;
-    }
-    const double c11 = h.xx * h.zz - h.xz * h.xz;
-    const double c12 = h.xy * h.xz - h.xx * h.yz;
-    const double c22 = h.xx * h.yy - h.xy * h.xy;
-    const double inv = 1.0 / det;
-    d = {(c00 * f.x + c01 * f.y + c02 * f.z) * inv, (c01 * f.x + c11 * f.y + c12 * f.z) * inv,
-         (c02 * f.x + c12 * f.y + c22 * f.z) * inv};
-    return true;
-}
+using detail::solve;
+using detail::Sym3;
 
 // Chebyshev's weight for sweep `k` (0-based; Chen et al. 2024, §3.5, after Wang 2015).
 double chebyshev_omega(int k, double rho, double previous) {
@@ -80,6 +47,9 @@ VBDStepper::VBDStepper(const ClothModel& model, const VBDOptions& options)
         throw InvalidInput(fmt::format(
             "cloth: vbd: expected iterations >= 1 and 0 <= chebyshev_rho < 1, got {} and {}",
             options.iterations, options.chebyshev_rho));
+    }
+    if (options.ogc) {
+        OgcContact::check_options(*options.ogc);
     }
     const std::size_t n = model.num_vertices();
     const std::span<const Vec3d> rest = model.rest_positions();
@@ -207,12 +177,22 @@ void VBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
         m_num_position_resets = model.num_position_resets();
         m_gather_end_time = -std::numeric_limits<double>::infinity();
     }
+    m_ogc.reset();
+    if (enabled && m_options.ogc) {
+        const OgcOptions& ogc = *m_options.ogc;
+        const ClothMaterial& material = model.material();
+        m_ogc = std::make_unique<OgcContact>(
+            model.triangles(), model.num_vertices(), ogc,
+            ogc.radius > 0.0 ? ogc.radius : material.thickness,
+            ogc.stiffness > 0.0 ? ogc.stiffness
+                                : 1.0 / std::max(material.stretch_compliance, MIN_COMPLIANCE));
+    }
 }
 
 void VBDStepper::restart_self_collision(const ClothModel& model) {
     if (m_self_collision) {
         m_self_collision.reset();
-        enable_self_collision(model, true);
+        enable_self_collision(model, true);  // a new OGC contact too: it detects first
     }
 }
 
@@ -234,9 +214,18 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     model.begin_step(dt);
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
+    const std::int64_t detections_before = m_ogc ? m_ogc->detections() : 0;
+    const double detect_ms_before = m_ogc ? m_ogc->detect_ms() : 0.0;
+    if (m_ogc) {
+        m_audit_start.assign(positions.begin(), positions.end());
+        const std::span<const double> inverse_masses = model.inverse_masses();
+        m_num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
+                                   [](double w) { return w > 0.0; });
+        m_step_truncated = 0;
+    }
     for (int s = 0; s < substeps; ++s) {
         const double window_start = start_time + s * h;
-        if (m_self_collision) {
+        if (m_self_collision && !m_ogc) {
             const double window_end = start_time + (s + 1) * h;
             const double slop = 1e-6 * h;
             if (window_start < m_gather_start_time - slop ||
@@ -250,6 +239,18 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
         }
         stats.obstacle_contacts = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
         stats.solver_sweeps += m_options.iterations;
+    }
+    if (m_ogc) {
+        // The audit's last window ends with the step; vertices it put back left their sets.
+        if (m_options.ogc->audit && audit(positions, velocities)) {
+            m_ogc->invalidate();
+        }
+        stats.has_ogc = true;
+        stats.ogc_detections = m_ogc->detections() - detections_before;
+        stats.ogc_detect_ms = m_ogc->detect_ms() - detect_ms_before;
+        stats.ogc_truncated = m_step_truncated;
+        stats.ogc_pairs = static_cast<std::int64_t>(m_ogc->num_pairs());
+        stats.ogc_close_pairs = m_ogc->close_pairs();
     }
     model.end_step();
     if (m_self_collision) {
@@ -364,6 +365,9 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
         f -= gradient * (k_bend * c);
         hessian.add_outer(gradient, k_bend);
     }
+    if (m_ogc) {
+        m_ogc->add_forces(v, xi, f, hessian);
+    }
     Vec3d step;
     if (solve(hessian, f, step)) {
         x[v] = xi + step;
@@ -377,6 +381,9 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
     if (model.has_obstacles()) {
         push_out_of_obstacles(model, x[v], m_start[v], h, nullptr, nullptr);
     }
+    if (m_ogc && m_ogc->truncate(v, before, x[v])) {
+        m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+    }
     // No other vertex of this colour shares a hinge with v: b is updated without races.
     const Vec3d moved = x[v] - before;
     for (auto r = m_hinge_first[v]; r < m_hinge_first[v + 1]; ++r) {
@@ -386,6 +393,47 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
             m_hinge_state[ref / 4].b += moved * k_weight;
         }
     }
+}
+
+void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
+                              std::span<const double> inverse_masses) {
+    parallel_for(
+        static_cast<std::int64_t>(x.size()),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            if (inverse_masses[v] > 0.0 && m_ogc->truncate(v, from[v], x[v])) {
+                m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+            }
+        },
+        VERTEX_GRAIN);
+}
+
+bool VBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
+    const std::int64_t reverted = m_self_collision->stats().reverted_vertices;
+    m_self_collision->enforce(m_audit_start, x, velocities);
+    m_audit_start.assign(x.begin(), x.end());
+    return m_self_collision->stats().reverted_vertices != reverted;
+}
+
+void VBDStepper::detect(std::span<Vec3d> x) {
+    if (m_options.ogc->audit) {
+        // The window since the last detection (or the step's start) ends here; the velocities
+        // of vertices it puts back are set at the substep's end, from their positions.
+        m_audit_velocities.assign(x.size(), Vec3d{0.0, 0.0, 0.0});
+        audit(x, m_audit_velocities);
+    }
+    m_ogc->detect(x);
+}
+
+bool VBDStepper::redetect_if_needed(std::span<Vec3d> x) {
+    const std::int64_t truncated = m_sweep_truncated.exchange(0);
+    m_step_truncated += truncated;
+    if (static_cast<double>(truncated) >
+        m_options.ogc->redetect_share * static_cast<double>(m_num_free)) {
+        detect(x);
+        return true;
+    }
+    return false;
 }
 
 void VBDStepper::update_hinge_normals(std::span<const Vec3d> x) {
@@ -419,6 +467,9 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
     const std::span<const double> inverse_masses = model.inverse_masses();
     const ClothMaterial& material = model.material();
     const auto n = static_cast<std::int64_t>(positions.size());
+    if (m_ogc && !m_ogc->has_detection()) {
+        detect(positions);  // x_t, intersection-free
+    }
     model.apply_air(h, t_end - h);
     const Vec3d gravity = model.gravity();
     // Inertia y = x + h v + h² g, also the first iterate.
@@ -449,6 +500,34 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
             }
         },
         VERTEX_GRAIN);
+    if (m_ogc) {
+        // The frame shift from the prediction, then every vertex within its bound.
+        m_ogc->set_shift(positions, inverse_masses);
+        m_sweep_truncated = 0;
+        truncate_all(m_start, positions, inverse_masses);
+        // Where many were held back, detect again and move toward the prediction once more: each
+        // detection lets every vertex go up to its bound further (the block descent alone would
+        // need many sweeps to translate a sheet against its bending).
+        for (int round = 0; round < MAX_PREDICTION_DETECTIONS && redetect_if_needed(positions);
+             ++round) {
+            parallel_for(
+                n,
+                [&](std::int64_t i) {
+                    const auto v = static_cast<std::size_t>(i);
+                    if (inverse_masses[v] > 0.0) {
+                        Vec3d x = m_inertia[v];
+                        if (has_obstacles) {
+                            push_out_of_obstacles(model, x, m_start[v], h, nullptr, nullptr);
+                        }
+                        if (m_ogc->truncate(v, positions[v], x)) {
+                            m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+                        }
+                        positions[v] = x;
+                    }
+                },
+                VERTEX_GRAIN);
+        }
+    }
     const bool chebyshev = m_options.chebyshev_rho > 0.0;
     if (chebyshev) {
         m_previous.assign(positions.begin(), positions.end());
@@ -457,6 +536,9 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
     double omega = 1.0;
     for (int k = 0; k < m_options.iterations; ++k) {
         update_hinge_normals(positions);
+        if (m_ogc) {
+            m_ogc->snapshot(positions);
+        }
         for (std::int32_t c = 0; c < m_coloring.num_colors(); ++c) {
             const std::span<const std::int32_t> color = m_coloring.color(c);
             parallel_for(
@@ -476,10 +558,14 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                 [&](std::int64_t i) {
                     const auto v = static_cast<std::size_t>(i);
                     if (inverse_masses[v] > 0.0 && k > 0) {
+                        const Vec3d from = positions[v];
                         positions[v] = m_previous[v] + (positions[v] - m_previous[v]) * omega;
                         if (has_obstacles) {
                             push_out_of_obstacles(model, positions[v], m_start[v], h, nullptr,
                                                   nullptr);
+                        }
+                        if (m_ogc && m_ogc->truncate(v, from, positions[v])) {
+                            m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
                         }
                     }
                     m_previous[v] = m_current[v];
@@ -487,11 +573,21 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                 },
                 VERTEX_GRAIN);
         }
+        if (m_ogc) {
+            redetect_if_needed(positions);
+        }
     }
     // Seams are hard constraints, projected after the block descent as the XPBD stepper does.
+    if (m_ogc && !model.seams().empty()) {
+        m_previous.assign(positions.begin(), positions.end());  // where the seams move them from
+    }
     model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
+    if (m_ogc && !model.seams().empty()) {
+        truncate_all(m_previous, positions, inverse_masses);
+        redetect_if_needed(positions);
+    }
     solve_ms += watch.elapsed_ms();
-    if (m_self_collision) {
+    if (m_self_collision && !m_ogc) {
         m_self_collision->project(positions, m_start, inverse_masses, material, t_end, h);
     }
     watch.restart();
@@ -529,7 +625,10 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
             return touching;
         },
         [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
-    if (m_self_collision) {
+    if (m_ogc) {
+        m_ogc->remove_separating_velocity(positions, velocities, inverse_masses);
+    }
+    if (m_self_collision && !m_ogc) {
         // The window (this substep) ends with the fail-safe over its motion.
         m_self_collision->enforce(m_start, positions, velocities, t_end - h, t_end);
     }
@@ -546,6 +645,10 @@ void VBDStepper::save_state(ByteWriter& out) const {
     out.put(m_self_collision != nullptr);
     if (m_self_collision) {
         m_self_collision->save_state(out);
+    }
+    out.put(m_ogc != nullptr);
+    if (m_ogc) {
+        m_ogc->save_state(out);
     }
 }
 
@@ -571,6 +674,16 @@ void VBDStepper::load_state(const ClothModel& model, ByteReader& in) {
         m_self_collision = std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(),
                                                            model.material().thickness);
         m_self_collision->load_state(in);
+    }
+    const bool has_ogc = in.get_bool("vbd.has_ogc");
+    if (has_ogc != (m_ogc != nullptr)) {
+        throw InvalidInput(
+            fmt::format("{}: cloth vbd stepper: ogc contact {} in the state, {} here", in.source(),
+                        has_ogc ? "on" : "off", m_ogc ? "on" : "off"));
+    }
+    if (m_ogc) {
+        enable_self_collision(model, true);  // a fresh OGC contact
+        m_ogc->load_state(in);
     }
 }
 

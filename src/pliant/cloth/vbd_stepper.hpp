@@ -24,16 +24,31 @@
 // normal speed the contact took away (obstacles.hpp, apply_friction); then v *= max(0, 1 − damping
 // h).
 //
+// With options.ogc, self-contact is Offset Geometric Contact instead (ogc_contact.hpp): its
+// contact energy joins every vertex's Newton step, every move of a vertex (the prediction, each
+// Newton step after the obstacles' push, the Chebyshev extrapolation, the seams) is truncated to
+// the vertex's bound, and a detection runs before a substep without one and after every sweep
+// (or prediction) in which more than ogc.redetect_share of the free vertices hit their bound. No
+// proximity projection and no per-substep fail-safe: the bounds keep the cloth intersection-free.
+// With ogc.audit, the CCD fail-safe (ccd_fail_safe.hpp) stays as an audit and a fail-safe over
+// windows that end at every detection and at the step's end (its stats: ccd_pairs, ccd_hits,
+// reverted_vertices). Within a window every vertex stays in its feasible set, so the straight
+// motion from the window's start to its end is free of contact (ogc_contact.hpp) and the CCD
+// should clear it; a vertex it puts back at the step's end makes the next substep detect again.
+//
 // Units: SI. Not thread safe (one stepper per thread); step() parallelises internally.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "pliant/cloth/cloth_model.hpp"
+#include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/vertex_coloring.hpp"
 #include "pliant/cloth/xpbd_stepper.hpp"
@@ -47,6 +62,9 @@ struct VBDOptions {
     int iterations = 10;
     // Chebyshev acceleration's estimate of the sweeps' spectral radius, in [0, 1): 0 is off.
     double chebyshev_rho = 0.0;
+    // Self-contact by Offset Geometric Contact (ogc_contact.hpp) when set, else the XPBD path's
+    // proximity projection and per-substep fail-safe.
+    std::optional<OgcOptions> ogc;
 };
 
 class VBDStepper {
@@ -58,6 +76,8 @@ public:
     // Self-collision handling as XPBDStepper::enable_self_collision (same limits).
     void enable_self_collision(const ClothModel& model, bool enabled);
     bool has_self_collision() const { return m_self_collision != nullptr; }
+    // The OGC contact (options().ogc with self-collision on), or null.
+    const OgcContact* ogc() const { return m_ogc.get(); }
 
     // Advances `model` by dt seconds in `substeps` substeps of options().iterations sweeps each.
     // InvalidInput: dt not finite and > 0, substeps < 1, a model of other vertex or triangle
@@ -95,6 +115,18 @@ private:
     bool push_out_of_obstacles(const ClothModel& model, Vec3d& x, const Vec3d& start, double h,
                                Vec3d* normal, Vec3d* surface_velocity) const;
     void restart_self_collision(const ClothModel& model);
+    // OGC: truncates every free vertex's move from `from` to x to its bound (counted in
+    // m_sweep_truncated).
+    void truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
+                      std::span<const double> inverse_masses);
+    // OGC: after a sweep or the prediction, detects again (returns true) when too many vertices
+    // hit their bound.
+    bool redetect_if_needed(std::span<Vec3d> x);
+    // OGC: the audit's window ends at x (ogc.audit), then a detection at x.
+    void detect(std::span<Vec3d> x);
+    // OGC: the CCD fail-safe over the motion from m_audit_start to x (velocities: of the vertices
+    // it puts back, set to zero); returns whether it put any back. The next window starts at x.
+    bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
     // The unit normals n̂ of the isometric hinges at positions x (zero for degenerate ones).
     void update_hinge_normals(std::span<const Vec3d> x);
 
@@ -129,6 +161,14 @@ private:
     std::vector<Vec3d> m_current;   // Chebyshev: the iterate one sweep back
 
     std::unique_ptr<SelfCollision> m_self_collision;
+    std::unique_ptr<OgcContact> m_ogc;
+    // OGC: positions where the audit's window starts (the step's start or the last detection),
+    // and scratch velocities for an audit within a substep.
+    std::vector<Vec3d> m_audit_start;
+    std::vector<Vec3d> m_audit_velocities;
+    std::int64_t m_num_free = 0;  // OGC: free vertices (inverse mass > 0) in this step
+    std::atomic<std::int64_t> m_sweep_truncated{0};  // OGC: vertices held back in this sweep
+    std::int64_t m_step_truncated = 0;               // OGC: summed over this step
     std::int64_t m_num_position_resets = 0;
     double m_gather_start_time = 0.0;
     double m_gather_end_time = -std::numeric_limits<double>::infinity();

@@ -94,6 +94,15 @@ struct ClothStepStats {
     std::int64_t solver_sweeps = 0;   // VBD (vbd_stepper.hpp): sweeps over the vertices; else 0
     bool has_self_collision = false;  // the fields below are filled
     SelfCollisionStats self;          // self_collision.hpp
+    // VBD with OGC contact (ogc_contact.hpp): detections in the step, vertices held back by their
+    // bounds (summed over moves), pairs within the query radius and within the contact radius at
+    // the last detection.
+    bool has_ogc = false;
+    std::int64_t ogc_detections = 0;
+    std::int64_t ogc_truncated = 0;
+    std::int64_t ogc_pairs = 0;
+    std::int64_t ogc_close_pairs = 0;
+    double ogc_detect_ms = 0.0;  // the detections' time
 };
 
 class XPBDStepper {

@@ -153,6 +153,15 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     if (scene.vbd) {
         w.put(static_cast<std::int32_t>(scene.vbd->iterations));
         w.put(scene.vbd->chebyshev_rho);
+        w.put(scene.vbd->ogc.has_value());
+        if (scene.vbd->ogc) {
+            const cloth::OgcOptions& o = *scene.vbd->ogc;
+            for (const double value :
+                 {o.radius, o.query_factor, o.bound_share, o.redetect_share, o.stiffness}) {
+                w.put(value);
+            }
+            w.put(o.audit);
+        }
     }
     for (const cloth::PinGroup& group : scene.pins) {
         w.put_vector(group.vertices);
@@ -477,6 +486,13 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["gathers"] = step.self.gathers;
             record["path_updates"] = step.self.path_updates;
             record["new_paths"] = step.self.new_paths;
+            if (step.has_ogc) {
+                record["ogc_detections"] = step.ogc_detections;
+                record["ogc_truncated_vertices"] = step.ogc_truncated;
+                record["ogc_pairs"] = step.ogc_pairs;
+                record["ogc_close_pairs"] = step.ogc_close_pairs;
+                record["ogc_detect_ms"] = step.ogc_detect_ms;
+            }
         }
         if (sim.solver().model().has_obstacles()) {
             record["obstacle_max_step"] = step.obstacle_max_step;
@@ -533,6 +549,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"fps", scene.frames_per_second},
         {"substeps", scene.substeps},
         {"solver", scene.vbd ? "vbd" : "xpbd"},
+        {"contact", scene.vbd && scene.vbd->ogc ? "ogc" : "proximity"},
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
         {"untangle", untangle_report(start)},

@@ -755,6 +755,39 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
             scene.vbd = cloth::VBDOptions{};
         }
     }
+    if (const Json* contact = root.find("contact")) {
+        // "proximity" (the default), "ogc", or {"type": "ogc", "radius": r, "query_factor": q,
+        // "bound_share": g, "redetect_share": s, "stiffness": k} (cloth/ogc_contact.hpp); OGC
+        // needs the VBD solver.
+        std::optional<cloth::OgcOptions> ogc;
+        if (contact->is_object()) {
+            root.object("contact", [&](ObjectReader& c) {
+                if (c.text("type", "ogc", {"proximity", "ogc"}) == "ogc") {
+                    cloth::OgcOptions o;
+                    o.radius = c.number("radius", o.radius, 0.0, 1e3);
+                    o.query_factor = c.number("query_factor", o.query_factor, 1.0, 100.0);
+                    o.bound_share = c.number("bound_share", o.bound_share, 1e-3, 0.49);
+                    o.redetect_share = c.number("redetect_share", o.redetect_share, 0.0, 1.0);
+                    o.stiffness = c.number("stiffness", o.stiffness, 0.0, 1e15);
+                    if (const Json* audit = c.find("audit")) {
+                        if (!audit->is_boolean()) {
+                            c.fail("contact.audit", "true or false", json_type_name(*audit));
+                        }
+                        o.audit = audit->get<bool>();
+                    }
+                    ogc = o;
+                }
+            });
+        } else if (root.text("contact", "proximity", {"proximity", "ogc"}) == "ogc") {
+            ogc = cloth::OgcOptions{};
+        }
+        if (ogc) {
+            if (!scene.vbd) {
+                root.fail("contact", R"("solver": "vbd" with "contact": "ogc")", "the xpbd solver");
+            }
+            scene.vbd->ogc = ogc;
+        }
+    }
     scene.gravity = root.vector("gravity", scene.gravity);
     root.object("air", [&](ObjectReader& a) { scene.air = read_air(a); });
     scene.frames_per_second = root.number("fps", scene.frames_per_second, 1e-3, 1e6);

@@ -1,0 +1,365 @@
+#include "pliant/cloth/ogc_contact.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "pliant/collision/point_triangle.hpp"
+#include "pliant/collision/segment_segment.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "pliant/core/timer.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t PAIR_GRAIN = 2048;
+// The broad phase's memory guard (collision/self_broad_phase.hpp): triangle pairs per triangle.
+constexpr std::int64_t PAIR_LIMIT = 64;
+// Every SHIFT_SAMPLE-th free vertex takes part in the frame shift's median.
+constexpr std::size_t SHIFT_SAMPLE = 16;
+
+double median(std::vector<double>& values) {
+    const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), middle, values.end());
+    return *middle;
+}
+
+// Distance, normal and signed weights (first feature +, second −) of a pair at positions p.
+struct PairGeometry {
+    double distance;
+    Vec3d normal;
+    std::array<double, 4> weights;
+};
+
+PairGeometry pair_geometry(const OgcContact::Pair& pair, const std::array<Vec3d, 4>& p) {
+    if (pair.is_edge_edge) {
+        const auto prox = collision::segment_segment_proximity(p[0], p[1], p[2], p[3]);
+        return {prox.distance, prox.normal, {1.0 - prox.s, prox.s, -(1.0 - prox.t), -prox.t}};
+    }
+    const auto prox = collision::point_triangle_proximity(p[0], p[1], p[2], p[3]);
+    return {prox.distance,
+            prox.normal,
+            {1.0, -prox.barycentric.x, -prox.barycentric.y, -prox.barycentric.z}};
+}
+
+}  // namespace
+
+void OgcContact::check_options(const OgcOptions& options) {
+    const auto finite_at_least = [](double value, double low) {
+        return std::isfinite(value) && value >= low;
+    };
+    if (!finite_at_least(options.radius, 0.0) || !finite_at_least(options.query_factor, 1.0) ||
+        !(options.bound_share > 0.0 && options.bound_share < 0.5) ||
+        !(options.redetect_share >= 0.0 && options.redetect_share <= 1.0) ||
+        !finite_at_least(options.stiffness, 0.0)) {
+        throw InvalidInput(fmt::format(
+            "cloth: ogc contact: expected radius >= 0, query_factor >= 1, 0 < bound_share < 0.5, "
+            "0 <= redetect_share <= 1 and stiffness >= 0, got {}, {}, {}, {} and {}",
+            options.radius, options.query_factor, options.bound_share, options.redetect_share,
+            options.stiffness));
+    }
+}
+
+OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
+                       const OgcOptions& options, double radius, double stiffness)
+    : m_options(options),
+      m_num_vertices(num_vertices),
+      m_radius(radius),
+      m_query_radius(radius * options.query_factor),
+      m_ball_radius(radius * options.query_factor * options.bound_share),
+      m_stiffness(stiffness),
+      m_broad_phase(triangles, num_vertices),
+      m_triangles(triangles.begin(), triangles.end()) {
+    check_options(options);
+    if (!(radius > 0.0 && std::isfinite(radius)) ||
+        !(stiffness > 0.0 && std::isfinite(stiffness))) {
+        throw InvalidInput(fmt::format(
+            "cloth: ogc contact: expected a contact radius > 0 m (the thickness when radius is 0) "
+            "and a stiffness > 0 N/m, got {} and {}",
+            radius, stiffness));
+    }
+    m_broad_phase.set_pair_limit(PAIR_LIMIT);
+    m_snapshot.resize(num_vertices);
+}
+
+void OgcContact::detect(std::span<const Vec3d> x) {
+    const Stopwatch watch;
+    // Built from scratch at every detection, so that the pairs' order (and the contact forces'
+    // summation order) depends on x only: a resumed run detects the same.
+    m_broad_phase.request_rebuild();
+    const collision::FeaturePairs& found = m_broad_phase.update(x, x, 0.5 * m_query_radius);
+    if (m_broad_phase.pair_limit_exceeded()) {
+        m_has_detection = false;
+        throw InvalidInput(fmt::format(
+            "cloth: ogc contact: more than {} triangle pairs per triangle within the query radius "
+            "{} m (the simulation diverged, or layers are packed far closer than the radius)",
+            PAIR_LIMIT, m_query_radius));
+    }
+    const std::span<const geometry::Edge> edges = m_broad_phase.topology().edges;
+    const std::span<const geometry::Triangle> triangles = m_triangles;
+    const auto num_vf = static_cast<std::int64_t>(found.vertex_face.size());
+    const auto total = num_vf + static_cast<std::int64_t>(found.edge_edge.size());
+    m_distances.resize(static_cast<std::size_t>(total));
+    m_geometry.resize(static_cast<std::size_t>(total));
+    std::vector<Pair> candidates(static_cast<std::size_t>(total));
+    // Closest points: geometry[i] = {point of the first feature, of the second, normal from the
+    // second toward the first}.
+    parallel_for(
+        total,
+        [&](std::int64_t i) {
+            const auto slot = static_cast<std::size_t>(i);
+            Pair& pair = candidates[slot];
+            if (i < num_vf) {
+                const collision::VertexFacePair& vf = found.vertex_face[slot];
+                const geometry::Triangle& t = triangles[static_cast<std::size_t>(vf.face)];
+                pair = {{vf.vertex, t[0], t[1], t[2]}, false};
+                const Vec3d& p = x[static_cast<std::size_t>(vf.vertex)];
+                const auto prox = collision::point_triangle_proximity(
+                    p, x[static_cast<std::size_t>(t[0])], x[static_cast<std::size_t>(t[1])],
+                    x[static_cast<std::size_t>(t[2])]);
+                m_distances[slot] = prox.distance;
+                m_geometry[slot] = {p, p - prox.normal * prox.distance, prox.normal};
+            } else {
+                const collision::EdgeEdgePair& ee =
+                    found.edge_edge[static_cast<std::size_t>(i - num_vf)];
+                const geometry::Edge& a = edges[static_cast<std::size_t>(ee.edge_a)];
+                const geometry::Edge& b = edges[static_cast<std::size_t>(ee.edge_b)];
+                pair = {{a[0], a[1], b[0], b[1]}, true};
+                const Vec3d& p0 = x[static_cast<std::size_t>(a[0])];
+                const Vec3d& p1 = x[static_cast<std::size_t>(a[1])];
+                const Vec3d& q0 = x[static_cast<std::size_t>(b[0])];
+                const Vec3d& q1 = x[static_cast<std::size_t>(b[1])];
+                const auto prox = collision::segment_segment_proximity(p0, p1, q0, q1);
+                m_distances[slot] = prox.distance;
+                m_geometry[slot] = {p0 + (p1 - p0) * prox.s, q0 + (q1 - q0) * prox.t, prox.normal};
+            }
+        },
+        PAIR_GRAIN);
+
+    // Kept pairs, then per vertex (CSR, in pair order) a plane and a reference each.
+    m_pairs.clear();
+    m_close_pairs = 0;
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (m_distances[i] < m_query_radius) {
+            kept.push_back(i);
+            m_pairs.push_back(candidates[i]);
+            m_close_pairs += m_distances[i] < m_radius ? 1 : 0;
+        }
+    }
+    m_pair_first.assign(m_num_vertices + 1, 0);
+    for (const Pair& pair : m_pairs) {
+        for (const std::int32_t v : pair.v) {
+            ++m_pair_first[static_cast<std::size_t>(v) + 1];
+        }
+    }
+    for (std::size_t v = 0; v < m_num_vertices; ++v) {
+        m_pair_first[v + 1] += m_pair_first[v];
+    }
+    m_pair_refs.resize(static_cast<std::size_t>(m_pair_first[m_num_vertices]));
+    m_planes.resize(m_pair_refs.size());
+    std::vector<std::int32_t> fill(m_pair_first.begin(), m_pair_first.end() - 1);
+    for (std::size_t p = 0; p < m_pairs.size(); ++p) {
+        const std::size_t i = kept[p];
+        const std::array<Vec3d, 3>& g = m_geometry[i];
+        const Vec3d& n = g[2];
+        const Vec3d middle = (g[0] + g[1]) * 0.5;
+        const double keep = PLANE_MARGIN * 0.5 * m_distances[i];
+        const int num_first = m_pairs[p].is_edge_edge ? 2 : 1;
+        for (int k = 0; k < 4; ++k) {
+            const auto v = static_cast<std::size_t>(m_pairs[p].v[k]);
+            const auto slot = static_cast<std::size_t>(fill[v]++);
+            m_pair_refs[slot] = static_cast<std::int32_t>(p * 4 + static_cast<std::size_t>(k));
+            const Vec3d side = k < num_first ? n : n * -1.0;
+            m_planes[slot] = {side, dot(side, middle) + keep};
+        }
+    }
+    m_contact_vertices.clear();
+    for (std::size_t v = 0; v < m_num_vertices; ++v) {
+        if (m_pair_first[v + 1] > m_pair_first[v]) {
+            m_contact_vertices.push_back(static_cast<std::int32_t>(v));
+        }
+    }
+    m_detected.assign(x.begin(), x.end());
+    m_shift = {0.0, 0.0, 0.0};
+    m_has_detection = true;
+    ++m_detections;
+    m_detect_ms += watch.elapsed_ms();
+}
+
+bool OgcContact::set_shift(std::span<const Vec3d> predicted,
+                           std::span<const double> inverse_masses) {
+    std::vector<double> dx;
+    std::vector<double> dy;
+    std::vector<double> dz;
+    for (std::size_t v = 0, seen = 0; v < m_num_vertices; ++v) {
+        if (inverse_masses[v] > 0.0 && seen++ % SHIFT_SAMPLE == 0) {
+            const Vec3d d = predicted[v] - m_detected[v];
+            dx.push_back(d.x);
+            dy.push_back(d.y);
+            dz.push_back(d.z);
+        }
+    }
+    if (dx.empty()) {
+        return false;
+    }
+    const Vec3d previous = m_shift;
+    m_shift = {median(dx), median(dy), median(dz)};
+    const std::int64_t outside = parallel_reduce(
+        static_cast<std::int64_t>(m_num_vertices), std::int64_t{0},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::int64_t count = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                count += inverse_masses[v] > 0.0 && !feasible(v, predicted[v]) ? 1 : 0;
+            }
+            return count;
+        },
+        [](std::int64_t a, std::int64_t b) { return a + b; }, PAIR_GRAIN);
+    if (outside > 0) {
+        m_shift = previous;
+        return false;
+    }
+    return true;
+}
+
+bool OgcContact::truncate(std::size_t v, const Vec3d& from, Vec3d& x) const {
+    const Vec3d centre = m_detected[v] + m_shift;
+    const Vec3d start = feasible(v, from) ? from : centre;
+    const Vec3d move = x - start;
+    double t = 1.0;
+    if (norm(x - centre) > m_ball_radius) {
+        // |start − centre + t move| = b, the root in [0, 1] (start is inside: c <= 0).
+        const Vec3d s = start - centre;
+        const double a = dot(move, move);
+        const double b = dot(s, move);
+        const double c = dot(s, s) - m_ball_radius * m_ball_radius;
+        t = a > 0.0 ? std::clamp((-b + std::sqrt(std::max(0.0, b * b - a * c))) / a, 0.0, 1.0)
+                    : 0.0;
+    }
+    const Vec3d local_start = start - m_shift;
+    const Vec3d local_end = x - m_shift;
+    for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+        const Plane& plane = m_planes[static_cast<std::size_t>(k)];
+        const double end = dot(plane.normal, local_end) - plane.offset;
+        if (end < 0.0) {
+            const double begin = dot(plane.normal, local_start) - plane.offset;
+            t = std::min(t, begin > 0.0 ? begin / (begin - end) : 0.0);
+        }
+    }
+    if (t < 1.0) {
+        x = start + move * t;
+        return true;
+    }
+    return false;
+}
+
+bool OgcContact::feasible(std::size_t v, const Vec3d& x) const {
+    const double slop = 1e-12 * (1.0 + norm(x));
+    if (norm(x - m_detected[v] - m_shift) > m_ball_radius + slop) {
+        return false;
+    }
+    for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+        const Plane& plane = m_planes[static_cast<std::size_t>(k)];
+        if (dot(plane.normal, x - m_shift) - plane.offset < -slop) {
+            return false;
+        }
+    }
+    return true;
+}
+
+void OgcContact::snapshot(std::span<const Vec3d> x) {
+    parallel_for(
+        static_cast<std::int64_t>(m_contact_vertices.size()),
+        [&](std::int64_t i) {
+            const auto v =
+                static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
+            m_snapshot[v] = x[v];
+        },
+        PAIR_GRAIN);
+}
+
+void OgcContact::add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force,
+                            detail::Sym3& hessian) const {
+    for (auto r = m_pair_first[v]; r < m_pair_first[v + 1]; ++r) {
+        const auto ref = static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(r)]);
+        const Pair& pair = m_pairs[ref / 4];
+        const std::size_t k = ref % 4;
+        std::array<Vec3d, 4> p;
+        for (std::size_t j = 0; j < 4; ++j) {
+            p[j] = j == k ? x_v : m_snapshot[static_cast<std::size_t>(pair.v[j])];
+        }
+        const PairGeometry g = pair_geometry(pair, p);
+        const double distance = g.distance;
+        const double weight = g.weights[k];
+        const Vec3d& normal = g.normal;
+        if (distance < m_radius && weight != 0.0) {
+            // E = ½ k_c (r − d)², ∂d/∂x_v = weight · n̂.
+            force += normal * (m_stiffness * (m_radius - distance) * weight);
+            hessian.add_outer(normal, m_stiffness * weight * weight);
+        }
+    }
+}
+
+std::int64_t OgcContact::remove_separating_velocity(std::span<const Vec3d> x,
+                                                    std::span<Vec3d> velocities,
+                                                    std::span<const double> inverse_masses) const {
+    std::int64_t changed = 0;
+    for (const Pair& pair : m_pairs) {
+        std::array<Vec3d, 4> p;
+        for (std::size_t j = 0; j < 4; ++j) {
+            p[j] = x[static_cast<std::size_t>(pair.v[j])];
+        }
+        const PairGeometry g = pair_geometry(pair, p);
+        if (!(g.distance < m_radius)) {
+            continue;
+        }
+        double separating = 0.0;
+        double weight = 0.0;
+        for (std::size_t j = 0; j < 4; ++j) {
+            const auto v = static_cast<std::size_t>(pair.v[j]);
+            separating += g.weights[j] * dot(velocities[v], g.normal);
+            weight += g.weights[j] * g.weights[j] * inverse_masses[v];
+        }
+        if (separating > 0.0 && weight > 0.0) {
+            const double impulse = separating / weight;
+            for (std::size_t j = 0; j < 4; ++j) {
+                const auto v = static_cast<std::size_t>(pair.v[j]);
+                velocities[v] -= g.normal * (impulse * g.weights[j] * inverse_masses[v]);
+            }
+            ++changed;
+        }
+    }
+    return changed;
+}
+
+void OgcContact::save_state(ByteWriter& out) const {
+    out.put(static_cast<std::uint64_t>(m_num_vertices));
+    out.put(m_has_detection);
+    out.put(m_detections);
+    if (m_has_detection) {
+        out.put_vector(m_detected);
+    }
+}
+
+void OgcContact::load_state(ByteReader& in) {
+    const auto num_vertices = in.get<std::uint64_t>("ogc.num_vertices");
+    if (num_vertices != m_num_vertices) {
+        throw InvalidInput(fmt::format("{}: ogc contact: a state of {} vertices, the cloth has {}",
+                                       in.source(), num_vertices, m_num_vertices));
+    }
+    const bool has_detection = in.get_bool("ogc.has_detection");
+    const auto detections = in.get<std::int64_t>("ogc.detections");
+    if (has_detection) {
+        std::vector<Vec3d> detected;
+        in.get_vector("ogc.detected", detected, static_cast<std::int64_t>(m_num_vertices));
+        detect(detected);
+    } else {
+        m_has_detection = false;
+    }
+    m_detections = detections;
+}
+
+}  // namespace pliant::cloth

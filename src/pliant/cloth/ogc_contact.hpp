@@ -1,0 +1,188 @@
+// OgcContact: the cloth's self-contact for the VBD stepper (vbd_stepper.hpp) by Offset Geometric
+// Contact (A. H. Chen, J. Hsu, Z. Liu, M. Macklin, Y. Yang, C. Yuksel, "Offset Geometric
+// Contact", SIGGRAPH 2025): a contact energy on the offset geometry in every vertex's Newton step,
+// and per-vertex conservative displacement bounds that keep the cloth free of intersections
+// without continuous collision detection.
+//
+//   detection (detect(x), x intersection-free): every non-incident vertex-face and edge-edge
+//      pair (collision/self_broad_phase.hpp: LBVH + representative triangles + orphan sets, boxes
+//      grown by r_q / 2) whose distance d at x is below the query radius r_q = query_factor · r.
+//      Each kept pair has a separating plane: normal n̂ along the closest points (from the second
+//      feature to the first), through their midpoint c; every vertex of the first feature lies at
+//      least d / 2 on n̂'s side, every vertex of the second at least d / 2 on the other (the plane
+//      that halves the segment of closest points of two convex sets separates them).
+//   bounds. Vertex v's feasible set at a frame shift S (below) is the intersection of
+//      - the ball of radius b = bound_share · r_q around x_v + S (the paper's b_v = γ_p d_min,v
+//        with d_min,v capped at r_q, §4: pairs farther than r_q at detection, each of whose
+//        vertices moves at most b < r_q / 2, stay at least (1 − 2 bound_share) r_q > 0 apart);
+//      - for every detected pair of v, the half-space of its side of the pair's plane, less
+//        PLANE_MARGIN · d / 2 (planar truncation: the paper's refinement that bounds only the
+//        motion toward the contact, so a vertex slides along a contact without the isotropic
+//        bound's damping). Two features that stay on their sides of one fixed plane do not touch.
+//      The set is convex and holds x_v + S. truncate() shortens a vertex's move, from a point of
+//      its set, to the farthest point of the set on the move's segment (the paper's truncation of
+//      the displacement, with an exact line search on the ball and the planes). Every vertex moves
+//      from a point of its set to a point of its set, alone or with others of its colour; and
+//      between substeps all vertices move together from their sets at S to their sets at S': every
+//      configuration in between lies in the sets at a shift between (the sets are convex), so no
+//      two features ever touch: the cloth stays intersection-free for any motion the solver makes.
+//   frame shift. Distances do not change when every vertex is translated by the same vector, so
+//      the sets are centred at the detection's positions plus a shift S shared by all vertices:
+//      set_shift() takes the componentwise median, over every 16th free vertex, of a predicted
+//      position less its detection position, when every free vertex's prediction lies in its set
+//      at that shift (a falling sheet keeps its detection); else S stays as it was (the vertices'
+//      positions are in their sets at S; moving all sets by a shift some vertices do not follow
+//      would drag those along). Between substeps every vertex moves from its set at S to its set
+//      at S' (the sets are translates of one convex set, so every point between lies in the set
+//      at the shift between).
+//   contact energy (§3): for a detected pair at distance d < r (current positions),
+//      E = ½ k_c (r − d)², quadratic and barrier-free; on vertex i of the pair with weight w_i of
+//      the closest point (barycentric or segment parameter, sign by the feature's side) the force
+//      is k_c (r − d) w_i n̂ and the Hessian k_c w_i² n̂ n̂ᵀ (Gauss-Newton, positive
+//      semi-definite). The partners' positions are read from a snapshot taken at the start of each
+//      sweep (snapshot()), so that vertices of one colour solved in parallel read no position
+//      another thread writes: results are bitwise identical for 1 and N threads.
+//   re-detection: the caller counts the vertices truncate() held back in a sweep and calls
+//      detect() again when they exceed redetect_share of the free vertices; a settled sheet keeps
+//      one detection for many substeps.
+//
+// Pinned vertices follow their pins untruncated: a pin that moves a vertex out of its set can make
+// the cloth touch itself, which only the CCD audit (vbd_stepper.hpp) catches.
+//
+// Units: metres. Not thread safe except truncate() and add_forces() (const, read only).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pliant/cloth/detail/sym3.hpp"
+#include "pliant/collision/self_broad_phase.hpp"
+#include "pliant/core/bytes.hpp"
+#include "pliant/core/vec3.hpp"
+#include "pliant/geometry/triangle_mesh.hpp"
+
+namespace pliant::cloth {
+
+struct OgcOptions {
+    // Contact radius r (m); 0: the material's thickness.
+    double radius = 0.0;
+    // Query radius r_q = query_factor · r, >= 1. With bound_share, pairs not detected stay at
+    // least (1 − 2 bound_share) r_q apart: the defaults keep every pair that can come within r
+    // under the contact energy.
+    double query_factor = 2.0;
+    // The ball's radius bound_share · r_q, in (0, 0.5).
+    double bound_share = 0.25;
+    // Re-detect when more than this share of the free vertices hit their bound in a sweep, in
+    // [0, 1].
+    double redetect_share = 0.01;
+    // Contact stiffness k_c (N/m); 0: the stretch springs' stiffness (1 / stretch compliance).
+    double stiffness = 0.0;
+    // Keep the CCD fail-safe as an audit (VBDStepper, vbd_stepper.hpp).
+    bool audit = true;
+};
+
+class OgcContact {
+public:
+    // A plane of a vertex's feasible set: dot(normal, x − S) >= offset.
+    struct Plane {
+        Vec3d normal;
+        double offset;
+    };
+    // A detected pair: VF (vertex, face's three) or EE (edge a's two, edge b's two).
+    struct Pair {
+        std::int32_t v[4];
+        bool is_edge_edge;
+    };
+
+    // The fraction of d / 2 a vertex keeps from its pair's plane.
+    static constexpr double PLANE_MARGIN = 0.1;
+
+    // triangles: #T, indices into [0, num_vertices); radius r (m, > 0); stiffness k_c (N/m, > 0).
+    // InvalidInput for options out of range.
+    OgcContact(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
+               const OgcOptions& options, double radius, double stiffness);
+
+    // InvalidInput unless radius >= 0, query_factor >= 1, 0 < bound_share < 0.5,
+    // 0 <= redetect_share <= 1 and stiffness >= 0 (all finite).
+    static void check_options(const OgcOptions& options);
+
+    // Detection at x (#V, intersection-free): pairs, planes; the shift restarts at zero.
+    // InvalidInput when the pairs exceed the memory guard (a diverged simulation).
+    void detect(std::span<const Vec3d> x);
+    bool has_detection() const { return m_has_detection; }
+    // The next substep must detect first (after a fail-safe moved vertices).
+    void invalidate() { m_has_detection = false; }
+
+    // S from predicted positions (#V) of the free vertices (inverse_masses > 0): the median
+    // shift when every free vertex's prediction lies in its set at that shift (returns true),
+    // else S stays (a shift that some vertices do not follow would drag them along).
+    bool set_shift(std::span<const Vec3d> predicted, std::span<const double> inverse_masses);
+    // Vertex v's move from `from` (in its feasible set) to x, truncated where it leaves the set:
+    // x becomes the farthest point of the segment inside the set (from the set's centre when
+    // `from` is outside it); returns whether x moved.
+    bool truncate(std::size_t v, const Vec3d& from, Vec3d& x) const;
+    // Whether x lies in v's feasible set.
+    bool feasible(std::size_t v, const Vec3d& x) const;
+    // The positions of the vertices in contact pairs (#V) for add_forces(), once per sweep.
+    void snapshot(std::span<const Vec3d> x);
+    // Adds the contact energy's force (−∂E/∂x_v) and Hessian on vertex v at x_v (its partners at
+    // the snapshot).
+    void add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force, detail::Sym3& hessian) const;
+
+    // Inelastic contact: for every detected pair closer than r at positions x (#V), the part of
+    // the velocities' relative normal motion that separates the pair is removed (an impulse split
+    // by the closest point's weights and the inverse masses), pair after pair in their order.
+    // Velocities only: the bounds are untouched. Returns the pairs changed.
+    std::int64_t remove_separating_velocity(std::span<const Vec3d> x, std::span<Vec3d> velocities,
+                                            std::span<const double> inverse_masses) const;
+
+    double radius() const { return m_radius; }
+    double query_radius() const { return m_query_radius; }
+    double ball_radius() const { return m_ball_radius; }
+    const OgcOptions& options() const { return m_options; }
+    std::size_t num_pairs() const { return m_pairs.size(); }
+    // Pairs closer than r at the last detection.
+    std::int64_t close_pairs() const { return m_close_pairs; }
+    std::span<const Pair> pairs() const { return m_pairs; }
+    // Detections since construction.
+    std::int64_t detections() const { return m_detections; }
+    // Wall-clock time of the detections since construction (ms).
+    double detect_ms() const { return m_detect_ms; }
+
+    // The state later steps read: the detection's positions (the pairs and planes are derived
+    // from them); load_state: InvalidInput for another mesh or a truncated state.
+    void save_state(ByteWriter& out) const;
+    void load_state(ByteReader& in);
+
+private:
+    OgcOptions m_options;
+    std::size_t m_num_vertices;
+    double m_radius;
+    double m_query_radius;
+    double m_ball_radius;
+    double m_stiffness;
+    collision::SelfCollisionBroadPhase<double> m_broad_phase;
+    std::vector<geometry::Triangle> m_triangles;
+
+    bool m_has_detection = false;
+    std::int64_t m_detections = 0;
+    double m_detect_ms = 0.0;
+    std::int64_t m_close_pairs = 0;
+    std::vector<Vec3d> m_detected;  // #V, positions at the detection
+    Vec3d m_shift{0.0, 0.0, 0.0};
+    std::vector<Pair> m_pairs;
+    // Per vertex (CSR): its planes, and its pairs as pair index · 4 + its place in the pair.
+    std::vector<std::int32_t> m_plane_first;
+    std::vector<Plane> m_planes;
+    std::vector<std::int32_t> m_pair_first;
+    std::vector<std::int32_t> m_pair_refs;
+    std::vector<std::int32_t> m_contact_vertices;  // vertices in some pair, ascending
+    std::vector<Vec3d> m_snapshot;                 // #V, valid at m_contact_vertices
+    // Scratch for detection.
+    std::vector<double> m_distances;
+    std::vector<std::array<Vec3d, 3>> m_geometry;  // per broad-phase pair: points and normal
+};
+
+}  // namespace pliant::cloth

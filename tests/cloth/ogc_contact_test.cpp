@@ -1,0 +1,191 @@
+#include "pliant/cloth/ogc_contact.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "pliant/cloth/solver.hpp"
+#include "pliant/collision/intersecting_pairs.hpp"
+#include "pliant/collision/point_triangle.hpp"
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
+#include "support/sheets.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+// Two triangles 4 mm apart: a vertex of the upper one above the lower one's interior.
+struct TwoTriangles {
+    std::vector<geometry::Triangle> triangles{{0, 1, 2}, {3, 4, 5}};
+    std::vector<Vec3d> x{{0.0, 0.0, 0.0},     {0.1, 0.0, 0.0},   {0.0, 0.1, 0.0},
+                         {0.02, 0.02, 0.004}, {0.2, 0.02, 0.05}, {0.02, 0.2, 0.05}};
+};
+
+TEST(OgcContact, TruncationKeepsAVertexOnItsSideOfThePlane) {
+    TwoTriangles t;
+    OgcContact contact(t.triangles, t.x.size(), OgcOptions{}, 0.005, 100.0);
+    contact.detect(t.x);
+    ASSERT_TRUE(contact.has_detection());
+    EXPECT_GE(contact.num_pairs(), 1U);
+    EXPECT_EQ(contact.close_pairs(), 1);  // vertex 3 to triangle 0
+    // Pushed straight through the lower triangle: held above its plane, in its feasible set.
+    Vec3d x = {0.02, 0.02, -0.004};
+    EXPECT_TRUE(contact.truncate(3, t.x[3], x));
+    EXPECT_GT(x.z, 0.0);
+    EXPECT_TRUE(contact.feasible(3, x));
+    // Sliding along the contact is not held back (planar truncation): the ball is 2.5 mm.
+    Vec3d slide = {0.022, 0.021, 0.004};
+    EXPECT_FALSE(contact.truncate(3, t.x[3], slide));
+    // Random moves of every vertex, each truncated: the triangles never touch.
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> offset(-0.01, 0.01);
+    for (int trial = 0; trial < 2000; ++trial) {
+        std::vector<Vec3d> y = t.x;
+        for (std::size_t v = 0; v < y.size(); ++v) {
+            const Vec3d from = y[v];
+            y[v] += Vec3d{offset(random), offset(random), offset(random)};
+            contact.truncate(v, from, y[v]);
+            ASSERT_TRUE(contact.feasible(v, y[v]));
+        }
+        const auto prox = collision::point_triangle_proximity(y[3], y[0], y[1], y[2]);
+        ASSERT_GT(prox.distance, 0.0) << trial;
+        ASSERT_EQ(collision::count_intersecting_pairs(y, t.triangles), 0) << trial;
+    }
+}
+
+TEST(OgcContact, ShiftMovesTheFeasibleSetsTogether) {
+    TwoTriangles t;
+    OgcContact contact(t.triangles, t.x.size(), OgcOptions{}, 0.005, 100.0);
+    contact.detect(t.x);
+    // Everything translated by 1 m: within the sets once the shift follows.
+    std::vector<Vec3d> moved = t.x;
+    for (Vec3d& p : moved) {
+        p += Vec3d{0.0, 0.0, -1.0};
+    }
+    EXPECT_FALSE(contact.feasible(0, moved[0]));
+    const std::vector<double> inverse_masses(t.x.size(), 1.0);
+    contact.set_shift(moved, inverse_masses);
+    for (std::size_t v = 0; v < moved.size(); ++v) {
+        Vec3d p = moved[v];
+        EXPECT_FALSE(contact.truncate(v, moved[v], p)) << v;
+    }
+}
+
+TEST(OgcContact, RejectsBadOptions) {
+    TwoTriangles t;
+    EXPECT_THROW(OgcContact(t.triangles, 6, OgcOptions{}, 0.0, 1.0), InvalidInput);
+    EXPECT_THROW(OgcContact(t.triangles, 6, OgcOptions{}, 0.005, 0.0), InvalidInput);
+    for (const auto& change : std::vector<void (*)(OgcOptions&)>{
+             [](OgcOptions& o) { o.bound_share = 0.5; }, [](OgcOptions& o) { o.bound_share = 0.0; },
+             [](OgcOptions& o) { o.query_factor = 0.9; },
+             [](OgcOptions& o) { o.redetect_share = 1.5; }, [](OgcOptions& o) { o.radius = -1.0; },
+             [](OgcOptions& o) {
+                 o.stiffness = std::numeric_limits<double>::infinity();
+             }}) {
+        OgcOptions options;
+        change(options);
+        EXPECT_THROW(OgcContact::check_options(options), InvalidInput);
+        const ClothModel model(test::flat_sheet(2, 1.0, 0.0), ClothMaterial{});
+        VBDOptions vbd;
+        vbd.ogc = options;
+        EXPECT_THROW(VBDStepper(model, vbd), InvalidInput);
+    }
+}
+
+VBDOptions ogc_options() {
+    VBDOptions options;
+    options.ogc = OgcOptions{};
+    return options;
+}
+
+// Two sheets 2 cm apart on a plane (the lower one at the thickness above it), the upper one thrown
+// down at 2 m/s, and gravity.
+std::unique_ptr<ClothSolver> colliding_sheets(int n) {
+    geometry::TriangleMeshD mesh = test::flat_sheet(n, 0.5, 0.005);
+    const geometry::TriangleMeshD upper = test::flat_sheet(n, 0.5, 0.025);
+    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+    for (const Vec3d& p : upper.positions) {
+        mesh.positions.push_back(p + Vec3d{0.013, 0.007, 0.0});
+    }
+    for (const geometry::Triangle& t : upper.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    auto solver = std::make_unique<ClothSolver>(mesh, ClothMaterial{});
+    solver->add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+    std::vector<Vec3d> velocities(mesh.positions.size());
+    for (std::size_t v = static_cast<std::size_t>(offset); v < velocities.size(); ++v) {
+        velocities[v] = {0.0, 0.0, -2.0};
+    }
+    solver->set_velocities(velocities);
+    solver->enable_self_collision(true);
+    solver->use_vbd(ogc_options());
+    return solver;
+}
+
+TEST(OgcContact, SheetsPushedTogetherNeverIntersect) {
+    auto solver = colliding_sheets(16);
+    ASSERT_NE(solver->vbd()->ogc(), nullptr);
+    std::int64_t close = 0;
+    for (int f = 0; f < 12; ++f) {
+        const ClothStepStats stats = solver->step(1.0 / 24.0, 8);
+        ASSERT_TRUE(stats.has_ogc);
+        close = std::max(close, stats.ogc_close_pairs);
+        // The bounds alone kept them apart: the CCD audit put nothing back.
+        EXPECT_EQ(stats.self.reverted_vertices, 0) << "frame " << f;
+    }
+    EXPECT_GT(close, 0);  // the upper one rests on the lower one
+}
+
+TEST(OgcContact, SettledSheetDetectsLessThanOncePerSubstep) {
+    ClothSolver solver(test::flat_sheet(16, 1.0, 0.02), ClothMaterial{});
+    solver.add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
+    solver.enable_self_collision(true);
+    solver.use_vbd(ogc_options());
+    const int substeps = 8;
+    std::int64_t early = 0;
+    std::int64_t late = 0;
+    for (int f = 0; f < 48; ++f) {
+        const ClothStepStats stats = solver.step(1.0 / 24.0, substeps);
+        (f < 24 ? early : late) += stats.ogc_detections;
+    }
+    // Resting on the plane for the last 24 frames: far fewer detections than substeps.
+    EXPECT_LT(late, 24 * substeps / 8);
+    EXPECT_GE(early, 1);
+}
+
+TEST(OgcContact, BitwiseIdenticalForOneAndTwoThreads) {
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        auto solver = colliding_sheets(12);
+        for (int f = 0; f < 8; ++f) {
+            solver->step(1.0 / 24.0, 6);
+        }
+        set_num_threads(0);
+        return std::vector<Vec3d>(solver->positions().begin(), solver->positions().end());
+    };
+    EXPECT_EQ(run(1), run(2));
+}
+
+TEST(OgcContact, SavedStateContinuesBitForBit) {
+    auto a = colliding_sheets(10);
+    for (int f = 0; f < 4; ++f) {
+        a->step(1.0 / 24.0, 6);
+    }
+    ByteWriter out;
+    a->save_state(out);
+    auto b = colliding_sheets(10);
+    ByteReader in(out.bytes(), "state");
+    b->load_state(in);
+    for (int f = 0; f < 6; ++f) {
+        a->step(1.0 / 24.0, 6);
+        b->step(1.0 / 24.0, 6);
+    }
+    for (std::size_t v = 0; v < a->positions().size(); ++v) {
+        ASSERT_EQ(a->positions()[v], b->positions()[v]) << v;
+        ASSERT_EQ(a->velocities()[v], b->velocities()[v]) << v;
+    }
+}
+
+}  // namespace
+}  // namespace pliant::cloth
