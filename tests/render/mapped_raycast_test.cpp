@@ -18,6 +18,7 @@
 #include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "support/images.hpp"
 
 namespace pliant::render {
 namespace {
@@ -36,17 +37,7 @@ volume::Volume rgba_phantom(std::int64_t n) {
     return out;
 }
 
-double psnr(const Image& a, const Image& b) {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-        const double d = static_cast<double>(a.pixels[i]) - static_cast<double>(b.pixels[i]);
-        sum += d * d;
-    }
-    if (sum == 0.0) {
-        return 999.0;
-    }
-    return 10.0 * std::log10(255.0 * 255.0 * static_cast<double>(a.pixels.size()) / sum);
-}
+using test::psnr;
 
 enum class Drive { none, wave, twist, bubble, drag };
 
