@@ -106,14 +106,7 @@ template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline float mapped_shading_value(const RayCastKernel& s, Vec3f g) {
     if constexpr (IS_RGBA) {
         if (s.alpha != nullptr) {
-            const Trilinear t = locate(s, g);
-            const float* p = s.alpha + voxel_index(s, t);
-            const std::int64_t dx = s.d[0], dy = s.d[1], dz = s.d[2];
-            const float c00 = lerp(p[0], p[dx], t.fx);
-            const float c10 = lerp(p[dy], p[dy + dx], t.fx);
-            const float c01 = lerp(p[dz], p[dz + dx], t.fx);
-            const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
-            return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+            return interpolate_float(s, s.alpha, locate(s, g));
         }
     }
     return shading_value<IS_RGBA>(s, g);

@@ -156,14 +156,21 @@ PLIANT_HOST_DEVICE inline std::int64_t cell_of(const RayCastKernel& k, const Tri
                 static_cast<std::int64_t>(k.cells[1]) * (t.iz >> CELL_SHIFT));
 }
 
-PLIANT_HOST_DEVICE inline float interpolate_scalar(const RayCastKernel& k, const Trilinear& t) {
-    const float* p = k.values + voxel_index(k, t);
+// The trilinear value at t of `values`, one float per voxel of k's grid (the scalars, or the α
+// copy of an RGBA volume).
+PLIANT_HOST_DEVICE inline float interpolate_float(const RayCastKernel& k, const float* values,
+                                                  const Trilinear& t) {
+    const float* p = values + voxel_index(k, t);
     const std::int64_t dx = k.d[0], dy = k.d[1], dz = k.d[2];
     const float c00 = lerp(p[0], p[dx], t.fx);
     const float c10 = lerp(p[dy], p[dy + dx], t.fx);
     const float c01 = lerp(p[dz], p[dz + dx], t.fx);
     const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
     return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+}
+
+PLIANT_HOST_DEVICE inline float interpolate_scalar(const RayCastKernel& k, const Trilinear& t) {
+    return interpolate_float(k, k.values, t);
 }
 
 PLIANT_HOST_DEVICE inline Sample interpolate_rgba(const RayCastKernel& k, const Trilinear& t) {
