@@ -114,6 +114,16 @@ Renders render_both(const volume::Volume& source, const volume::TransferFunction
     return r;
 }
 
+// The RGBA source itself, rendered by RayCaster from azimuth `azimuth` (degrees), elevation 20°,
+// at size × size: render_both()'s camera turned about +z.
+Image render_source(const volume::Volume& source, const RayCastOptions& options, double azimuth,
+                    int size) {
+    Image image;
+    RayCaster(source, nullptr, options)
+        .render(orbit_camera(source.bounds(), azimuth, 20.0, 0.0, size, size), image);
+    return image;
+}
+
 const volume::Volume& rgba64() {
     static const volume::Volume v = rgba_phantom(64);
     return v;
@@ -126,9 +136,7 @@ TEST(MappedRayCast, IdentityGivesTheSourceRender) {
         RayCastOptions options;
         options.shading = shading;
         const Renders r = render_both(source, nullptr, d, options, 96);
-        Image direct;
-        RayCaster(source, nullptr, options)
-            .render(orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 96, 96), direct);
+        const Image direct = render_source(source, options, 30.0, 96);
         const double db = psnr(direct, r.mapped);
         std::cout << "identity, shading " << shading << ": " << db << " dB against the source\n";
         EXPECT_GT(db, 50.0);
@@ -191,9 +199,7 @@ TEST(MappedRayCast, RotationIsCloserToTheAnalyticImageThanTheResample) {
         RayCastOptions options;
         options.shading = shading;
         const Renders r = render_both(source, nullptr, d, options, 128);
-        Image analytic;
-        RayCaster(source, nullptr, options)
-            .render(orbit_camera(source.bounds(), 30.0 - theta, 20.0, 0.0, 128, 128), analytic);
+        const Image analytic = render_source(source, options, 30.0 - theta, 128);
         const double db_map = psnr(analytic, r.mapped);
         const double db_exact = psnr(analytic, r.exact);
         std::cout << "rotation " << theta << "°, shading " << shading << ": map " << db_map
