@@ -34,6 +34,7 @@
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
+#include "source_scale_body.hpp"
 #include "source_scale_phantom.hpp"
 
 namespace {
@@ -73,21 +74,6 @@ double psnr(const render::Image& a, const render::Image& b) {
     return sum == 0.0
                ? 999.0
                : 10.0 * std::log10(255.0 * 255.0 * static_cast<double>(a.pixels.size()) / sum);
-}
-
-// The body under driver d after 24 frames (bench_pbd's source_scale_body).
-struct Driven {
-    pbd::SoftBody body;
-    std::int32_t grabbed = 0;
-    Vec3f start{};
-};
-
-void drive(pbd::SoftBody& body, int d, int frame, std::int32_t grabbed, Vec3f start) {
-    if (d == 3) {
-        const float f = static_cast<float>(std::min(frame + 1, 12)) / 12.0f;
-        body.set_drag(grabbed, start - Vec3f{0.3f * f, 0.0f, 0.0f}, 0.25f);
-    }
-    body.step(1.0 / 24.0);
 }
 
 }  // namespace
@@ -162,37 +148,11 @@ int main(int argc, char** argv) {
     }
     for (std::size_t di = 0; di < drivers.size(); ++di) {
         const int d = drivers[di];
-        pbd::SoftBody body(w.grid, {.stiffness = 0.8});
-        switch (d) {
-            case 0:
-                body.add_driver(pbd::TwistDriver{.angle = 90.0, .ramp_time = 1.0});
-                break;
-            case 1:
-                body.add_driver(pbd::WaveDriver{.amplitude = 0.05});
-                break;
-            case 2:
-                body.add_driver(pbd::BubbleDriver{.inflation = 2.0, .ramp_time = 0.5});
-                break;
-            default:
-                break;
-        }
-        std::int32_t grabbed = 0;
-        Vec3f start{};
-        if (d == 3) {
-            float best = 1e30f;
-            const auto rest = body.rest_positions();
-            for (std::size_t v = 0; v < rest.size(); ++v) {
-                const float dist = squared_norm(rest[v] - Vec3f{1.0f, 1.0f, 1.0f});
-                if (dist < best) {
-                    best = dist;
-                    grabbed = static_cast<std::int32_t>(v);
-                }
-            }
-            start = rest[static_cast<std::size_t>(grabbed)];
-        }
+        bench::DrivenBody driven = bench::source_scale_driven_body(d, {});
+        pbd::SoftBody& body = driven.body;
         int frame = 0;
         for (; frame < 24; ++frame) {
-            drive(body, d, frame, grabbed, start);
+            driven.step(frame);
         }
         Stage step{"step (10 substeps)"}, resample{"exact: resample"},
             update{"exact: RayCaster prepare/update"}, render_exact{"exact: render"},
@@ -202,7 +162,7 @@ int main(int argc, char** argv) {
         std::int64_t exact_samples = 0, map_samples = 0;
         volume::InverseMap map;
         for (int f = 0; f < frames; ++f, ++frame) {
-            timed(step, [&] { drive(body, d, frame, grabbed, start); });
+            timed(step, [&] { driven.step(frame); });
             timed(resample, [&] { resampler.resample(body.positions(), target); });
             timed(update, [&] {
                 if (caster) {

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "pliant/core/parallel.hpp"
@@ -24,6 +25,7 @@
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/volume/volume.hpp"
+#include "source_scale_body.hpp"
 #include "source_scale_phantom.hpp"
 
 namespace {
@@ -75,49 +77,14 @@ BENCHMARK(BM_SoftBodySubstep)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The source-scale body under driver d (0 twist, 1 wave, 2 bubble, 3 mouse drag) with solver
-// options o (stiffness 0.8), after 24 frames; the drag pulls the vertex nearest to the box's
-// corner (1, 1, 1) (with the vertices within 0.25) 0.3 along −x over the first 12 frames.
+// The source-scale body under driver d with solver options o (source_scale_body.hpp), after 24
+// frames.
 pbd::SoftBody source_scale_body(int d, pbd::SoftBodyOptions o) {
-    const pbd::TetGrid& grid = bench::source_scale_workload().grid;
-    o.stiffness = 0.8;
-    pbd::SoftBody body(grid, o);
-    switch (d) {
-        case 0:
-            body.add_driver(pbd::TwistDriver{.angle = 90.0, .ramp_time = 1.0});
-            break;
-        case 1:
-            body.add_driver(pbd::WaveDriver{.amplitude = 0.05});
-            break;
-        case 2:
-            body.add_driver(pbd::BubbleDriver{.inflation = 2.0, .ramp_time = 0.5});
-            break;
-        default:
-            break;
-    }
-    std::int32_t grabbed = 0;
-    Vec3f start{};
-    if (d == 3) {
-        float best = 1e30f;
-        const auto rest = body.rest_positions();
-        for (std::size_t v = 0; v < rest.size(); ++v) {
-            const float dist = squared_norm(rest[v] - Vec3f{1.0f, 1.0f, 1.0f});
-            if (dist < best) {
-                best = dist;
-                grabbed = static_cast<std::int32_t>(v);
-            }
-        }
-        start = rest[static_cast<std::size_t>(grabbed)];
-    }
-    constexpr double DT = 1.0 / 24.0;
+    bench::DrivenBody driven = bench::source_scale_driven_body(d, o);
     for (int frame = 0; frame < 24; ++frame) {
-        if (d == 3) {
-            const float f = static_cast<float>(std::min(frame + 1, 12)) / 12.0f;
-            body.set_drag(grabbed, start - Vec3f{0.3f * f, 0.0f, 0.0f}, 0.25f);
-        }
-        body.step(DT);
+        driven.step(frame);
     }
-    return body;
+    return std::move(driven.body);
 }
 
 double mean_displacement(const pbd::SoftBody& body) {

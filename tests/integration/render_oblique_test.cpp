@@ -18,6 +18,7 @@
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "run_cli.hpp"
+#include "support/images.hpp"
 
 namespace pliant::test {
 namespace {
@@ -31,16 +32,6 @@ std::filesystem::path write_tilted(const ScratchDir& scratch) {
     const std::filesystem::path path = scratch / "tilted.nii.gz";
     io::write_volume(path, v);
     return path;
-}
-
-double psnr(const render::Image& a, const render::Image& b) {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-        const double e = static_cast<double>(a.pixels[i]) - static_cast<double>(b.pixels[i]);
-        sum += e * e;
-    }
-    const double mse = sum / static_cast<double>(a.pixels.size());
-    return mse == 0.0 ? 200.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 
 TEST(RenderObliqueCli, TiltedNiftiRendersInWorldSpaceWithoutResampling) {

@@ -18,6 +18,7 @@
 #include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "support/images.hpp"
 
 namespace pliant::render {
 namespace {
@@ -36,17 +37,7 @@ volume::Volume rgba_phantom(std::int64_t n) {
     return out;
 }
 
-double psnr(const Image& a, const Image& b) {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-        const double d = static_cast<double>(a.pixels[i]) - static_cast<double>(b.pixels[i]);
-        sum += d * d;
-    }
-    if (sum == 0.0) {
-        return 999.0;
-    }
-    return 10.0 * std::log10(255.0 * 255.0 * static_cast<double>(a.pixels.size()) / sum);
-}
+using test::psnr;
 
 enum class Drive { none, wave, twist, bubble, drag };
 
@@ -123,6 +114,16 @@ Renders render_both(const volume::Volume& source, const volume::TransferFunction
     return r;
 }
 
+// The RGBA source itself, rendered by RayCaster from azimuth `azimuth` (degrees), elevation 20°,
+// at size × size: render_both()'s camera turned about +z.
+Image render_source(const volume::Volume& source, const RayCastOptions& options, double azimuth,
+                    int size) {
+    Image image;
+    RayCaster(source, nullptr, options)
+        .render(orbit_camera(source.bounds(), azimuth, 20.0, 0.0, size, size), image);
+    return image;
+}
+
 const volume::Volume& rgba64() {
     static const volume::Volume v = rgba_phantom(64);
     return v;
@@ -135,9 +136,7 @@ TEST(MappedRayCast, IdentityGivesTheSourceRender) {
         RayCastOptions options;
         options.shading = shading;
         const Renders r = render_both(source, nullptr, d, options, 96);
-        Image direct;
-        RayCaster(source, nullptr, options)
-            .render(orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 96, 96), direct);
+        const Image direct = render_source(source, options, 30.0, 96);
         const double db = psnr(direct, r.mapped);
         std::cout << "identity, shading " << shading << ": " << db << " dB against the source\n";
         EXPECT_GT(db, 50.0);
@@ -200,9 +199,7 @@ TEST(MappedRayCast, RotationIsCloserToTheAnalyticImageThanTheResample) {
         RayCastOptions options;
         options.shading = shading;
         const Renders r = render_both(source, nullptr, d, options, 128);
-        Image analytic;
-        RayCaster(source, nullptr, options)
-            .render(orbit_camera(source.bounds(), 30.0 - theta, 20.0, 0.0, 128, 128), analytic);
+        const Image analytic = render_source(source, options, 30.0 - theta, 128);
         const double db_map = psnr(analytic, r.mapped);
         const double db_exact = psnr(analytic, r.exact);
         std::cout << "rotation " << theta << "°, shading " << shading << ": map " << db_map

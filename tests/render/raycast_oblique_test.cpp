@@ -20,6 +20,7 @@
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/reorient.hpp"
 #include "pliant/volume/transfer_function.hpp"
+#include "support/images.hpp"
 
 namespace pliant::render {
 namespace {
@@ -56,17 +57,7 @@ Volume turned(Volume v, const Direction& d) {
     return v;
 }
 
-double psnr(const Image& a, const Image& b) {
-    EXPECT_EQ(a.width, b.width);
-    EXPECT_EQ(a.height, b.height);
-    double sum = 0.0;
-    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-        const double e = static_cast<double>(a.pixels[i]) - static_cast<double>(b.pixels[i]);
-        sum += e * e;
-    }
-    const double mse = sum / static_cast<double>(a.pixels.size());
-    return mse == 0.0 ? 200.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
-}
+using test::psnr;
 
 // Pixels with a channel differing by more than `levels` (of 255).
 int pixels_differing(const Image& a, const Image& b, int levels) {
@@ -467,22 +458,10 @@ TEST(RayCastOblique, CallerRaysMatchTheCameraPixels) {
     const Camera cam = frame_box(v.world_bounds(), 50.0, 30.0, 48, 40);
     Image image;
     caster.render(cam, image);
-    std::vector<Ray> rays;
-    for (int j = 0; j < cam.height(); ++j) {
-        for (int i = 0; i < cam.width(); ++i) {
-            rays.push_back(cam.pixel_ray(i, j));
-        }
-    }
+    const std::vector<Ray> rays = test::pixel_rays(cam);
     std::vector<float> rgb(3 * rays.size());
     EXPECT_GT(caster.render_rays(rays, rgb).samples, 0);
-    int worst = 0;
-    for (std::size_t p = 0; p < rays.size(); ++p) {
-        const Rgb8 c = to_rgb8({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]});
-        worst = std::max({worst, std::abs(c.r - image.pixels[3 * p]),
-                          std::abs(c.g - image.pixels[3 * p + 1]),
-                          std::abs(c.b - image.pixels[3 * p + 2])});
-    }
-    EXPECT_LE(worst, 1);
+    EXPECT_LE(test::max_level_difference(rgb, image), 1);
 }
 
 }  // namespace

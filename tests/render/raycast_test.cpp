@@ -17,6 +17,7 @@
 #include "pliant/render/detail/raycast_avx2.hpp"
 #include "pliant/render/detail/raycast_kernel.hpp"
 #include "pliant/volume/generate.hpp"
+#include "support/images.hpp"
 
 namespace pliant::render {
 namespace {
@@ -103,23 +104,11 @@ TEST(RayCast, CallerRaysMatchTheCameraPixels) {
     const RayCaster caster(ball, nullptr, options);
     Image image;
     caster.render(cam, image);
-    std::vector<Ray> rays;
-    for (int j = 0; j < cam.height(); ++j) {
-        for (int i = 0; i < cam.width(); ++i) {
-            rays.push_back(cam.pixel_ray(i, j));
-        }
-    }
+    const std::vector<Ray> rays = test::pixel_rays(cam);
     std::vector<float> rgb(3 * rays.size());
     const RayCastStats stats = caster.render_rays(rays, rgb);
     EXPECT_GT(stats.samples, 0);
-    int worst = 0;
-    for (std::size_t p = 0; p < rays.size(); ++p) {
-        const Rgb8 c = to_rgb8({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]});
-        worst = std::max({worst, std::abs(c.r - image.pixels[3 * p]),
-                          std::abs(c.g - image.pixels[3 * p + 1]),
-                          std::abs(c.b - image.pixels[3 * p + 2])});
-    }
-    EXPECT_LE(worst, 1);
+    EXPECT_LE(test::max_level_difference(rgb, image), 1);
     std::vector<float> wrong(5);
     EXPECT_THROW(caster.render_rays(rays, wrong), InvalidInput);
 }

@@ -12,6 +12,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/render/detail/mapped_raycast_avx2.hpp"
 #include "pliant/render/detail/mapped_raycast_kernel.hpp"
+#include "pliant/render/detail/tiles.hpp"
 
 namespace pliant::render {
 
@@ -318,39 +319,24 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     }
 
     image = Image(k.width, k.height);
-    const int tiles_x = (k.width + detail::TILE - 1) / detail::TILE;
-    const int tiles_y = (k.height + detail::TILE - 1) / detail::TILE;
-    const std::int64_t num_tiles = static_cast<std::int64_t>(tiles_x) * tiles_y;
-    std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_source->m_is_rgba;
     // The AVX2 batches give the scalar batches' bits (detail/mapped_raycast_avx2.hpp).
     const bool use_avx2 = detail::mapped_avx2_fits(m);
-    parallel_for(
-        num_tiles,
-        [&](std::int64_t tile) {
-            const int x0 = static_cast<int>(tile % tiles_x) * detail::TILE;
-            const int y0 = static_cast<int>(tile / tiles_x) * detail::TILE;
-            const int x1 = std::min(x0 + detail::TILE, k.width);
-            const int y1 = std::min(y0 + detail::TILE, k.height);
-            std::int64_t samples = 0;
-            for (int y = y0; y < y1; ++y) {
-                for (int x = x0; x < x1; ++x) {
-                    const detail::PixelResult p =
-                        use_avx2 ? detail::mapped_pixel<true>(m, x, y, detail::Avx2Batch{})
-                        : is_rgba
-                            ? detail::mapped_pixel<true>(m, x, y, detail::ScalarBatch<true>{})
-                            : detail::mapped_pixel<false>(m, x, y, detail::ScalarBatch<false>{});
-                    image.set(x, y, to_rgb8(p.color));
-                    samples += p.samples;
-                }
-            }
-            tile_samples[static_cast<std::size_t>(tile)] = samples;
-        },
-        1);
     RayCastStats stats;
-    for (const std::int64_t s : tile_samples) {
-        stats.samples += s;
-    }
+    stats.samples = detail::render_tiles(k.width, k.height, [&](int x0, int y0, int x1, int y1) {
+        std::int64_t samples = 0;
+        for (int y = y0; y < y1; ++y) {
+            for (int x = x0; x < x1; ++x) {
+                const detail::PixelResult p =
+                    use_avx2  ? detail::mapped_pixel<true>(m, x, y, detail::Avx2Batch{})
+                    : is_rgba ? detail::mapped_pixel<true>(m, x, y, detail::ScalarBatch<true>{})
+                              : detail::mapped_pixel<false>(m, x, y, detail::ScalarBatch<false>{});
+                image.set(x, y, to_rgb8(p.color));
+                samples += p.samples;
+            }
+        }
+        return samples;
+    });
     stats.ms = watch.elapsed_ms();
     return stats;
 }

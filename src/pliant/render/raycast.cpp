@@ -21,6 +21,7 @@
 #include "pliant/core/timer.hpp"
 #include "pliant/render/detail/raycast_avx2.hpp"
 #include "pliant/render/detail/raycast_kernel.hpp"
+#include "pliant/render/detail/tiles.hpp"
 
 namespace pliant::render {
 
@@ -531,49 +532,34 @@ RayCastStats RayCaster::render(const Camera& camera, Image& image) const {
         }
     }
     image = Image(k.width, k.height);
-    const int tiles_x = (k.width + detail::TILE - 1) / detail::TILE;
-    const int tiles_y = (k.height + detail::TILE - 1) / detail::TILE;
-    const std::int64_t num_tiles = static_cast<std::int64_t>(tiles_x) * tiles_y;
-    std::vector<std::int64_t> tile_samples(static_cast<std::size_t>(num_tiles), 0);
     const bool is_rgba = m_is_rgba;
     // The AVX2 march gives the scalar kernel's bits (detail/raycast_avx2.hpp): for speed only.
     // Every kind of ray takes it (composite and MIP, scalar and RGBA, shaded, clipped).
     const bool use_avx2 = detail::composite_avx2_fits(k);
-    parallel_for(
-        num_tiles,
-        [&](std::int64_t tile) {
-            const int x0 = static_cast<int>(tile % tiles_x) * detail::TILE;
-            const int y0 = static_cast<int>(tile / tiles_x) * detail::TILE;
-            const int x1 = std::min(x0 + detail::TILE, k.width);
-            const int y1 = std::min(y0 + detail::TILE, k.height);
-            std::int64_t samples = 0;
-            if (use_avx2) {
-                Color colors[detail::TILE * detail::TILE];
-                samples = k.is_mip ? detail::mip_tile_avx2(k, x0, y0, x1, y1, colors)
-                                   : detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
-                for (int y = y0; y < y1; ++y) {
-                    for (int x = x0; x < x1; ++x) {
-                        image.set(x, y, to_rgb8(colors[(y - y0) * (x1 - x0) + (x - x0)]));
-                    }
-                }
-            } else {
-                for (int y = y0; y < y1; ++y) {
-                    for (int x = x0; x < x1; ++x) {
-                        const detail::PixelResult p = is_rgba
-                                                          ? detail::raycast_pixel<true>(k, x, y)
-                                                          : detail::raycast_pixel<false>(k, x, y);
-                        image.set(x, y, to_rgb8(p.color));
-                        samples += p.samples;
-                    }
+    RayCastStats stats;
+    stats.samples = detail::render_tiles(k.width, k.height, [&](int x0, int y0, int x1, int y1) {
+        std::int64_t samples = 0;
+        if (use_avx2) {
+            Color colors[detail::TILE * detail::TILE];
+            samples = k.is_mip ? detail::mip_tile_avx2(k, x0, y0, x1, y1, colors)
+                               : detail::composite_tile_avx2(k, x0, y0, x1, y1, colors);
+            for (int y = y0; y < y1; ++y) {
+                for (int x = x0; x < x1; ++x) {
+                    image.set(x, y, to_rgb8(colors[(y - y0) * (x1 - x0) + (x - x0)]));
                 }
             }
-            tile_samples[static_cast<std::size_t>(tile)] = samples;
-        },
-        1);
-    RayCastStats stats;
-    for (const std::int64_t s : tile_samples) {
-        stats.samples += s;
-    }
+        } else {
+            for (int y = y0; y < y1; ++y) {
+                for (int x = x0; x < x1; ++x) {
+                    const detail::PixelResult p = is_rgba ? detail::raycast_pixel<true>(k, x, y)
+                                                          : detail::raycast_pixel<false>(k, x, y);
+                    image.set(x, y, to_rgb8(p.color));
+                    samples += p.samples;
+                }
+            }
+        }
+        return samples;
+    });
     stats.ms = watch.elapsed_ms();
     return stats;
 }

@@ -3,10 +3,7 @@
 #include <cstdint>
 
 #include "pliant/core/simd_dispatch.hpp"
-
-#if defined(PLIANT_HAS_AVX2_TARGET)
-#include <immintrin.h>
-#endif
+#include "pliant/render/detail/grid8_avx2.hpp"
 
 namespace pliant::render::detail {
 
@@ -14,99 +11,8 @@ namespace pliant::render::detail {
 
 namespace {
 
-constexpr int LANES = 8;
-
-PLIANT_AVX2_INLINE __m256 lerp8(__m256 a, __m256 b, __m256 t) {
-    return _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a)));
-}
-
-// clampf(v, lo, hi) lane by lane: max(lo, v) keeps v where v < lo is false (NaN too), then
-// min(hi, ·) keeps it where hi < it is false.
-PLIANT_AVX2_INLINE __m256 clamp8(__m256 v, __m256 lo, __m256 hi) {
-    return _mm256_min_ps(hi, _mm256_max_ps(lo, v));
-}
-
-// The 8 × 8 transpose: out[c] holds element c of rows[0 … 7].
-PLIANT_AVX2_INLINE void transpose8(const __m256 rows[8], __m256 out[8]) {
-    const __m256 t0 = _mm256_unpacklo_ps(rows[0], rows[1]);
-    const __m256 t1 = _mm256_unpackhi_ps(rows[0], rows[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(rows[2], rows[3]);
-    const __m256 t3 = _mm256_unpackhi_ps(rows[2], rows[3]);
-    const __m256 t4 = _mm256_unpacklo_ps(rows[4], rows[5]);
-    const __m256 t5 = _mm256_unpackhi_ps(rows[4], rows[5]);
-    const __m256 t6 = _mm256_unpacklo_ps(rows[6], rows[7]);
-    const __m256 t7 = _mm256_unpackhi_ps(rows[6], rows[7]);
-    const __m256 u0 = _mm256_shuffle_ps(t0, t2, 0x44);
-    const __m256 u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
-    const __m256 u2 = _mm256_shuffle_ps(t1, t3, 0x44);
-    const __m256 u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
-    const __m256 u4 = _mm256_shuffle_ps(t4, t6, 0x44);
-    const __m256 u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
-    const __m256 u6 = _mm256_shuffle_ps(t5, t7, 0x44);
-    const __m256 u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
-    out[0] = _mm256_permute2f128_ps(u0, u4, 0x20);
-    out[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
-    out[2] = _mm256_permute2f128_ps(u2, u6, 0x20);
-    out[3] = _mm256_permute2f128_ps(u3, u7, 0x20);
-    out[4] = _mm256_permute2f128_ps(u0, u4, 0x31);
-    out[5] = _mm256_permute2f128_ps(u1, u5, 0x31);
-    out[6] = _mm256_permute2f128_ps(u2, u6, 0x31);
-    out[7] = _mm256_permute2f128_ps(u3, u7, 0x31);
-}
-
-// The source's constants for locate() and trilinear reads of 8 lanes.
-struct Source8 {
-    __m256 g_max[3];
-    __m256i max_i0[3];
-    __m256i stride_y, stride_z;
-    std::int32_t dx, dy, dz;  // neighbour offsets in voxels
-};
-
-// locate(s, g) of 8 lanes: voxel indices of the lower corners and the fractions.
-PLIANT_AVX2_INLINE __m256i locate8(const Source8& s, const __m256 g[3], __m256 fraction[3]) {
-    __m256i corner[3];
-    for (int a = 0; a < 3; ++a) {
-        const __m256 c = clamp8(g[a], _mm256_setzero_ps(), s.g_max[a]);
-        corner[a] = _mm256_min_epi32(_mm256_cvttps_epi32(c), s.max_i0[a]);
-        fraction[a] = _mm256_sub_ps(c, _mm256_cvtepi32_ps(corner[a]));
-    }
-    return _mm256_add_epi32(corner[0], _mm256_add_epi32(_mm256_mullo_epi32(s.stride_y, corner[1]),
-                                                        _mm256_mullo_epi32(s.stride_z, corner[2])));
-}
-
-// lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz) of the x-lerps of 4 rows of pairs.
-PLIANT_AVX2_INLINE __m256 trilinear8(const __m256 first[4], const __m256 second[4],
-                                     const __m256 fraction[3]) {
-    const __m256 c00 = lerp8(first[0], second[0], fraction[0]);
-    const __m256 c10 = lerp8(first[1], second[1], fraction[0]);
-    const __m256 c01 = lerp8(first[2], second[2], fraction[0]);
-    const __m256 c11 = lerp8(first[3], second[3], fraction[0]);
-    return lerp8(lerp8(c00, c10, fraction[1]), lerp8(c01, c11, fraction[1]), fraction[2]);
-}
-
-// interpolate_rgba() of 8 lanes at voxel indices at[]: out[c] is channel c.
-PLIANT_AVX2_INLINE void rgba8(const float* values, const Source8& s, const std::int32_t* at,
-                              const __m256 fraction[3], __m256 out[4]) {
-    const std::int32_t row[4] = {0, s.dy, s.dz, s.dz + s.dy};
-    __m256 first[4][4], second[4][4];  // [channel][row]
-    for (int r = 0; r < 4; ++r) {
-        __m256 rows[LANES], t[LANES];
-        for (int l = 0; l < LANES; ++l) {
-            rows[l] = _mm256_loadu_ps(values + 4 * static_cast<std::int64_t>(at[l] + row[r]));
-        }
-        transpose8(rows, t);
-        for (int c = 0; c < 4; ++c) {
-            first[c][r] = t[c];
-            second[c][r] = t[4 + c];
-        }
-    }
-    for (int c = 0; c < 4; ++c) {
-        out[c] = trilinear8(first[c], second[c], fraction);
-    }
-}
-
 // The α trilinear of mapped_shading_value<true>() at g, 8 lanes.
-PLIANT_AVX2_INLINE __m256 alpha8(const float* alpha, const Source8& s, const __m256 g[3]) {
+PLIANT_AVX2_INLINE __m256 alpha8(const Grid8& s, const __m256 g[3]) {
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
     _mm256_store_si256(reinterpret_cast<__m256i*>(at), locate8(s, g, fraction));
@@ -115,7 +21,7 @@ PLIANT_AVX2_INLINE __m256 alpha8(const float* alpha, const Source8& s, const __m
     for (int r = 0; r < 4; ++r) {
         alignas(32) float a[LANES], b[LANES];
         for (int l = 0; l < LANES; ++l) {
-            const float* p = alpha + at[l] + row[r];
+            const float* p = s.alpha + at[l] + row[r];
             a[l] = p[0];
             b[l] = p[s.dx];
         }
@@ -190,21 +96,13 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
             _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(m.source_hi[a]), _CMP_LE_OQ));
     }
     // 3. classify<true>(s, locate(s, g)).
-    Source8 src;
-    for (int a = 0; a < 3; ++a) {
-        src.g_max[a] = _mm256_set1_ps(s.g_max[a]);
-        src.max_i0[a] = _mm256_set1_epi32(s.max_i0[a]);
-    }
-    src.stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(s.stride[1]));
-    src.stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(s.stride[2]));
-    src.dx = static_cast<std::int32_t>(s.d[0]);
-    src.dy = static_cast<std::int32_t>(s.d[1]);
-    src.dz = static_cast<std::int32_t>(s.d[2]);
+    Grid8 src;
+    load_grid8(s, src);
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
     _mm256_store_si256(reinterpret_cast<__m256i*>(at), locate8(src, g, fraction));
     __m256 rgba[4];
-    rgba8(s.values, src, at, fraction, rgba);
+    interpolate_rgba8(src, at, fraction, rgba);
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 a = clamp8(rgba[3], _mm256_setzero_ps(), one);
     const __m256 positive =
@@ -238,23 +136,14 @@ PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* c
                 gp[ch] = _mm256_add_ps(g[ch], jac[axis][ch]);
                 gm[ch] = _mm256_sub_ps(g[ch], jac[axis][ch]);
             }
-            gradient[axis] =
-                _mm256_mul_ps(_mm256_sub_ps(alpha8(s.alpha, src, gp), alpha8(s.alpha, src, gm)),
-                              _mm256_set1_ps(m.target.inv_spacing[axis]));
+            gradient[axis] = _mm256_mul_ps(_mm256_sub_ps(alpha8(src, gp), alpha8(src, gm)),
+                                           _mm256_set1_ps(m.target.inv_spacing[axis]));
         }
-        const __m256 len2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], gradient[0]),
-                                                        _mm256_mul_ps(gradient[1], gradient[1])),
-                                          _mm256_mul_ps(gradient[2], gradient[2]));
-        const __m256 dot =
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], _mm256_set1_ps(dir.x)),
-                                        _mm256_mul_ps(gradient[1], _mm256_set1_ps(dir.y))),
-                          _mm256_mul_ps(gradient[2], _mm256_set1_ps(dir.z)));
-        const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
-        const __m256 cosine = _mm256_div_ps(_mm256_and_ps(dot, abs_mask), _mm256_sqrt_ps(len2));
-        const __m256 f =
-            _mm256_add_ps(_mm256_set1_ps(0.3f), _mm256_mul_ps(_mm256_set1_ps(0.7f), cosine));
-        const __m256 use =
-            _mm256_and_ps(shaded, _mm256_cmp_ps(len2, _mm256_set1_ps(1e-30f), _CMP_GT_OQ));
+        const __m256 dir8[3] = {_mm256_set1_ps(dir.x), _mm256_set1_ps(dir.y),
+                                _mm256_set1_ps(dir.z)};
+        __m256 nonzero;
+        const __m256 f = shade_factor8(gradient, dir8, nonzero);
+        const __m256 use = _mm256_and_ps(shaded, nonzero);
         for (__m256& ch : color) {
             ch = _mm256_blendv_ps(ch, _mm256_mul_ps(ch, f), use);
         }

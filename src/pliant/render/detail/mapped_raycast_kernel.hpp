@@ -106,14 +106,7 @@ template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline float mapped_shading_value(const RayCastKernel& s, Vec3f g) {
     if constexpr (IS_RGBA) {
         if (s.alpha != nullptr) {
-            const Trilinear t = locate(s, g);
-            const float* p = s.alpha + voxel_index(s, t);
-            const std::int64_t dx = s.d[0], dy = s.d[1], dz = s.d[2];
-            const float c00 = lerp(p[0], p[dx], t.fx);
-            const float c10 = lerp(p[dy], p[dy + dx], t.fx);
-            const float c01 = lerp(p[dz], p[dz + dx], t.fx);
-            const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
-            return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+            return interpolate_float(s, s.alpha, locate(s, g));
         }
     }
     return shading_value<IS_RGBA>(s, g);
@@ -161,26 +154,12 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
 PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const GridRay& r,
                                                 const MapCell& c, int side, std::int64_t n,
                                                 std::int64_t num_full) {
-    float t_exit = r.t_far;
+    float exit_pos[3], exit_neg[3];
     for (int a = 0; a < 3; ++a) {
-        if (r.gd[a] > 0.0f) {
-            const float plane = static_cast<float>(c.q[a] + side) * m.b - r.margin;
-            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
-        } else if (r.gd[a] < 0.0f) {
-            const float plane = static_cast<float>(c.q[a] - side + 1) * m.b + r.margin;
-            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
-        }
+        exit_pos[a] = static_cast<float>(c.q[a] + side) * m.b;
+        exit_neg[a] = static_cast<float>(c.q[a] - side + 1) * m.b;
     }
-    const float x = (t_exit - r.t_near) * m.target.inv_step - 0.5f;
-    if (!(x < static_cast<float>(num_full))) {
-        return num_full;
-    }
-    std::int64_t n_end = 0;
-    if (x > 0.0f) {
-        n_end = static_cast<std::int64_t>(x);
-        n_end += static_cast<float>(n_end) < x ? 1 : 0;
-    }
-    return std::max(n_end, n + 1);
+    return sample_past_exit(r, exit_pos, exit_neg, m.target.inv_step, n, num_full);
 }
 
 // Samples are classified in batches of up to MAP_BATCH along a ray (the AVX2 path classifies a

@@ -6,10 +6,7 @@
 #include <limits>
 
 #include "pliant/core/simd_dispatch.hpp"
-
-#if defined(PLIANT_HAS_AVX2_TARGET)
-#include <immintrin.h>
-#endif
+#include "pliant/render/detail/grid8_avx2.hpp"
 
 namespace pliant::render::detail {
 
@@ -17,7 +14,6 @@ namespace pliant::render::detail {
 
 namespace {
 
-constexpr int LANES = 8;
 constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
 
 // The march state of 8 rays, one per lane (structure of arrays, reloaded every iteration: a lane
@@ -87,9 +83,6 @@ PLIANT_AVX2_INLINE void store(float* p, __m256 v) {
 PLIANT_AVX2_INLINE void store(std::int32_t* p, __m256i v) {
     _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
 }
-PLIANT_AVX2_INLINE __m256 lerp(__m256 a, __m256 b, __m256 t) {
-    return _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a)));
-}
 // Per-lane loads instead of AVX2 gathers: on AMD Zen a gather of 8 floats costs as much as about
 // 20 scalar loads even from L1, and x-adjacent voxels are loaded in pairs.
 
@@ -152,41 +145,6 @@ PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
     return _mm256_castps_si256(m);
 }
 
-// The volume's constants for trilinear samples of 8 lanes.
-struct Grid8 {
-    __m256 g_max[3];
-    __m256i max_i0[3];
-    __m256i stride_y, stride_z;
-    std::int32_t dy, dz;  // neighbour offsets in voxels
-    const float* v;
-    const float* alpha;  // RGBA shaded: α per voxel
-};
-
-// locate() along one axis: the clamp to [0, n − 1], the lower corner and the fraction.
-PLIANT_AVX2_INLINE void locate_axis(const Grid8& grid, int a, __m256 g, __m256i& corner,
-                                    __m256& fraction) {
-    const __m256 c = _mm256_min_ps(grid.g_max[a], _mm256_max_ps(_mm256_setzero_ps(), g));
-    corner = _mm256_min_epi32(_mm256_cvttps_epi32(c), grid.max_i0[a]);
-    fraction = _mm256_sub_ps(c, _mm256_cvtepi32_ps(corner));
-}
-
-PLIANT_AVX2_INLINE __m256i voxel_index8(const Grid8& grid, const __m256i corner[3]) {
-    return _mm256_add_epi32(corner[0],
-                            _mm256_add_epi32(_mm256_mullo_epi32(grid.stride_y, corner[1]),
-                                             _mm256_mullo_epi32(grid.stride_z, corner[2])));
-}
-
-// lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz) of the x-lerps of the 4 rows of pairs, as
-// interpolate_scalar() and interpolate_rgba() per channel.
-PLIANT_AVX2_INLINE __m256 trilinear(const __m256 first[4], const __m256 second[4],
-                                    const __m256 fraction[3]) {
-    const __m256 c00 = lerp(first[0], second[0], fraction[0]);
-    const __m256 c10 = lerp(first[1], second[1], fraction[0]);
-    const __m256 c01 = lerp(first[2], second[2], fraction[0]);
-    const __m256 c11 = lerp(first[3], second[3], fraction[0]);
-    return lerp(lerp(c00, c10, fraction[1]), lerp(c01, c11, fraction[1]), fraction[2]);
-}
-
 // The value shading differentiates (shading_value()): the scalar, or α of an RGBA volume (only
 // the α channel of interpolate_rgba(): its channels do not mix), at voxel index `index`.
 template <bool IS_RGBA>
@@ -201,7 +159,7 @@ PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& grid, __m256i index,
     for (int r = 0; r < 4; ++r) {
         load_pairs(v + row[r], at, first[r], second[r]);
     }
-    return trilinear(first, second, fraction);
+    return trilinear8(first, second, fraction);
 }
 
 // shade() for 8 samples at grid positions g (lower corners and fractions of locate(g) given),
@@ -219,74 +177,15 @@ PLIANT_AVX2_INLINE __m256 shade8(const Grid8& grid, const RayCastKernel& k, cons
                                         : _mm256_sub_ps(g[a], _mm256_set1_ps(1.0f));
             __m256i c[3] = {corner[0], corner[1], corner[2]};
             __m256 f[3] = {fraction[0], fraction[1], fraction[2]};
-            locate_axis(grid, a, ga, c[a], f[a]);
+            locate_axis8(grid, a, ga, c[a], f[a]);
             value[side] = shading_value8<IS_RGBA>(grid, voxel_index8(grid, c), f);
         }
         gradient[a] =
             _mm256_mul_ps(_mm256_sub_ps(value[0], value[1]), _mm256_set1_ps(k.inv_spacing[a]));
     }
-    const __m256 len2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(gradient[0], gradient[0]),
-                                                    _mm256_mul_ps(gradient[1], gradient[1])),
-                                      _mm256_mul_ps(gradient[2], gradient[2]));
-    const __m256 dot = _mm256_add_ps(
-        _mm256_add_ps(_mm256_mul_ps(gradient[0], dir[0]), _mm256_mul_ps(gradient[1], dir[1])),
-        _mm256_mul_ps(gradient[2], dir[2]));
-    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
-    const __m256 cosine = _mm256_div_ps(_mm256_and_ps(dot, abs_mask), _mm256_sqrt_ps(len2));
-    const __m256 f =
-        _mm256_add_ps(_mm256_set1_ps(0.3f), _mm256_mul_ps(_mm256_set1_ps(0.7f), cosine));
-    const __m256 nonzero = _mm256_cmp_ps(len2, _mm256_set1_ps(1e-30f), _CMP_GT_OQ);
+    __m256 nonzero;
+    const __m256 f = shade_factor8(gradient, dir, nonzero);
     return _mm256_blendv_ps(_mm256_set1_ps(1.0f), f, nonzero);
-}
-
-// The 8 × 8 transpose: out[c] holds element c of rows[0 … 7].
-PLIANT_AVX2_INLINE void transpose8(const __m256 rows[8], __m256 out[8]) {
-    const __m256 t0 = _mm256_unpacklo_ps(rows[0], rows[1]);
-    const __m256 t1 = _mm256_unpackhi_ps(rows[0], rows[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(rows[2], rows[3]);
-    const __m256 t3 = _mm256_unpackhi_ps(rows[2], rows[3]);
-    const __m256 t4 = _mm256_unpacklo_ps(rows[4], rows[5]);
-    const __m256 t5 = _mm256_unpackhi_ps(rows[4], rows[5]);
-    const __m256 t6 = _mm256_unpacklo_ps(rows[6], rows[7]);
-    const __m256 t7 = _mm256_unpackhi_ps(rows[6], rows[7]);
-    const __m256 u0 = _mm256_shuffle_ps(t0, t2, 0x44);
-    const __m256 u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
-    const __m256 u2 = _mm256_shuffle_ps(t1, t3, 0x44);
-    const __m256 u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
-    const __m256 u4 = _mm256_shuffle_ps(t4, t6, 0x44);
-    const __m256 u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
-    const __m256 u6 = _mm256_shuffle_ps(t5, t7, 0x44);
-    const __m256 u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
-    out[0] = _mm256_permute2f128_ps(u0, u4, 0x20);
-    out[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
-    out[2] = _mm256_permute2f128_ps(u2, u6, 0x20);
-    out[3] = _mm256_permute2f128_ps(u3, u7, 0x20);
-    out[4] = _mm256_permute2f128_ps(u0, u4, 0x31);
-    out[5] = _mm256_permute2f128_ps(u1, u5, 0x31);
-    out[6] = _mm256_permute2f128_ps(u2, u6, 0x31);
-    out[7] = _mm256_permute2f128_ps(u3, u7, 0x31);
-}
-
-// interpolate_rgba() of 8 lanes at voxel indices `at`: out[c] is channel c (α·r, α·g, α·b, α).
-// A lane's x-adjacent voxel pair of a row is 8 consecutive floats: one load, then transposed.
-PLIANT_AVX2_INLINE void interpolate_rgba8(const Grid8& grid, const std::int32_t* at,
-                                          const __m256 fraction[3], __m256 out[4]) {
-    const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
-    __m256 first[4][4], second[4][4];  // [channel][row]
-    for (int r = 0; r < 4; ++r) {
-        __m256 rows[LANES], t[LANES];
-        for (int l = 0; l < LANES; ++l) {
-            rows[l] = _mm256_loadu_ps(grid.v + 4 * static_cast<std::int64_t>(at[l] + row[r]));
-        }
-        transpose8(rows, t);
-        for (int c = 0; c < 4; ++c) {
-            first[c][r] = t[c];
-            second[c][r] = t[4 + c];
-        }
-    }
-    for (int c = 0; c < 4; ++c) {
-        out[c] = trilinear(first[c], second[c], fraction);
-    }
 }
 
 // Puts the ray of pixel `pixel`, marched from sample `start`, into lane l.
@@ -603,16 +502,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     const auto dz = static_cast<std::int32_t>(k.d[2]);
     const float* v = k.values;
     Grid8 grid;
-    for (int a = 0; a < 3; ++a) {
-        grid.g_max[a] = g_max[a];
-        grid.max_i0[a] = max_i0[a];
-    }
-    grid.stride_y = stride_y;
-    grid.stride_z = stride_z;
-    grid.dy = dy;
-    grid.dz = dz;
-    grid.v = v;
-    grid.alpha = k.alpha;
+    load_grid8(k, grid);
     const float* lut = k.lut;
     const std::uint8_t* cubes = k.axis_cube != nullptr ? k.axis_cube : k.empty_cube[0];
 
@@ -634,7 +524,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
         __m256 g_pos[3];
         for (int a = 0; a < 3; ++a) {
             g_pos[a] = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
-            locate_axis(grid, a, g_pos[a], corner[a], fraction[a]);
+            locate_axis8(grid, a, g_pos[a], corner[a], fraction[a]);
         }
         __m256i n_next = _mm256_add_epi32(n, one_i);
         __m256i classified = live;
@@ -718,7 +608,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                 load_pairs(v + dy, at, first[1], second[1]);
                 load_pairs(v + dz, at, first[2], second[2]);
                 load_pairs(v + dz + dy, at, first[3], second[3]);
-                const __m256 value = trilinear(first, second, fraction);
+                const __m256 value = trilinear8(first, second, fraction);
                 const __m256i entry = _mm256_slli_epi32(
                     _mm256_cvttps_epi32(_mm256_add_ps(value, half)), 2);  // 4·index
                 store(at, entry);
@@ -859,16 +749,7 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
     const __m256i cells_x = _mm256_set1_epi32(k.cells[0]);
     const __m256i cells_y = _mm256_set1_epi32(k.cells[1]);
     Grid8 grid;
-    for (int a = 0; a < 3; ++a) {
-        grid.g_max[a] = _mm256_set1_ps(k.g_max[a]);
-        grid.max_i0[a] = _mm256_set1_epi32(k.max_i0[a]);
-    }
-    grid.stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[1]));
-    grid.stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[2]));
-    grid.dy = static_cast<std::int32_t>(k.d[1]);
-    grid.dz = static_cast<std::int32_t>(k.d[2]);
-    grid.v = k.values;
-    grid.alpha = k.alpha;
+    load_grid8(k, grid);
 
     // NOLINTNEXTLINE(bugprone-infinite-loop): end_lane and refill retire lanes (num_live).
     while (num_live > 0) {
@@ -885,7 +766,7 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
         __m256 fraction[3];
         for (int a = 0; a < 3; ++a) {
             const __m256 g = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
-            locate_axis(grid, a, g, corner[a], fraction[a]);
+            locate_axis8(grid, a, g, corner[a], fraction[a]);
         }
         __m256i n_next = _mm256_add_epi32(n, one_i);
         __m256i classified = live;
@@ -925,7 +806,7 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
                 for (int r = 0; r < 4; ++r) {
                     load_pairs(grid.v + row[r], at, first[r], second[r]);
                 }
-                const __m256 value = trilinear(first, second, fraction);
+                const __m256 value = trilinear8(first, second, fraction);
                 const __m256 update =
                     _mm256_and_ps(as_float(classified), _mm256_cmp_ps(value, best, _CMP_GT_OQ));
                 best = _mm256_blendv_ps(best, value, update);

@@ -156,14 +156,21 @@ PLIANT_HOST_DEVICE inline std::int64_t cell_of(const RayCastKernel& k, const Tri
                 static_cast<std::int64_t>(k.cells[1]) * (t.iz >> CELL_SHIFT));
 }
 
-PLIANT_HOST_DEVICE inline float interpolate_scalar(const RayCastKernel& k, const Trilinear& t) {
-    const float* p = k.values + voxel_index(k, t);
+// The trilinear value at t of `values`, one float per voxel of k's grid (the scalars, or the α
+// copy of an RGBA volume).
+PLIANT_HOST_DEVICE inline float interpolate_float(const RayCastKernel& k, const float* values,
+                                                  const Trilinear& t) {
+    const float* p = values + voxel_index(k, t);
     const std::int64_t dx = k.d[0], dy = k.d[1], dz = k.d[2];
     const float c00 = lerp(p[0], p[dx], t.fx);
     const float c10 = lerp(p[dy], p[dy + dx], t.fx);
     const float c01 = lerp(p[dz], p[dz + dx], t.fx);
     const float c11 = lerp(p[dz + dy], p[dz + dy + dx], t.fx);
     return lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+}
+
+PLIANT_HOST_DEVICE inline float interpolate_scalar(const RayCastKernel& k, const Trilinear& t) {
+    return interpolate_float(k, k.values, t);
 }
 
 PLIANT_HOST_DEVICE inline Sample interpolate_rgba(const RayCastKernel& k, const Trilinear& t) {
@@ -345,29 +352,24 @@ PLIANT_HOST_DEVICE inline bool clip_ray(const RayCastKernel& k, Vec3f origin, Ve
     return true;
 }
 
-// Empty-space jump from sample n (lower corner t, in an empty cell): the index of the first
-// sample that may lie outside the cube of `side` cells (all empty) that has t's cell as its
-// corner and extends along the ray's direction, at least n + 1. The cube's far planes along the ray
-// are pulled in by the ray's margin, so every sample strictly between n and the result lies inside
-// the cube despite rounding; the cube's extent beyond the grid is harmless (the clamp maps samples
-// there onto the grid's border cells, which are within the cube too).
-PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRay& r,
-                                            const Trilinear& t, int side, std::int64_t n,
-                                            std::int64_t num_full) {
-    const int c[3] = {t.ix >> CELL_SHIFT, t.iy >> CELL_SHIFT, t.iz >> CELL_SHIFT};
+// The index of the first sample that may lie outside a box along ray r, at least n + 1: the box's
+// far plane along axis a is at exit_pos[a] where r.gd[a] > 0 and at exit_neg[a] where
+// r.gd[a] < 0 (grid coordinates). The far planes are pulled in by the ray's margin, so every
+// sample strictly between n and the result lies inside the box despite rounding.
+PLIANT_HOST_DEVICE inline std::int64_t sample_past_exit(const GridRay& r, const float exit_pos[3],
+                                                        const float exit_neg[3], float inv_step,
+                                                        std::int64_t n, std::int64_t num_full) {
     float t_exit = r.t_far;
     for (int a = 0; a < 3; ++a) {
         if (r.gd[a] > 0.0f) {
-            const float plane = static_cast<float>((c[a] + side) * CELL) - r.margin;
-            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
+            t_exit = std::min(t_exit, (exit_pos[a] - r.margin - r.go[a]) * r.inv_gd[a]);
         } else if (r.gd[a] < 0.0f) {
-            const float plane = static_cast<float>((c[a] - side + 1) * CELL) + r.margin;
-            t_exit = std::min(t_exit, (plane - r.go[a]) * r.inv_gd[a]);
+            t_exit = std::min(t_exit, (exit_neg[a] + r.margin - r.go[a]) * r.inv_gd[a]);
         }
     }
     // Samples m with midpoint t_near + (m + 0.5)Δs before t_exit: m < x = (t_exit − t_near)/Δs −
     // 0.5, so the first one past is ⌈x⌉ (computed without a call to ceilf).
-    const float x = (t_exit - r.t_near) * k.inv_step - 0.5f;
+    const float x = (t_exit - r.t_near) * inv_step - 0.5f;
     if (!(x < static_cast<float>(num_full))) {
         return num_full;
     }
@@ -377,6 +379,23 @@ PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRa
         n_end += static_cast<float>(n_end) < x ? 1 : 0;
     }
     return std::max(n_end, n + 1);
+}
+
+// Empty-space jump from sample n (lower corner t, in an empty cell): the index of the first
+// sample that may lie outside the cube of `side` cells (all empty) that has t's cell as its
+// corner and extends along the ray's direction, at least n + 1 (sample_past_exit()). The cube's
+// extent beyond the grid is harmless (the clamp maps samples there onto the grid's border cells,
+// which are within the cube too).
+PLIANT_HOST_DEVICE inline std::int64_t jump(const RayCastKernel& k, const GridRay& r,
+                                            const Trilinear& t, int side, std::int64_t n,
+                                            std::int64_t num_full) {
+    const int c[3] = {t.ix >> CELL_SHIFT, t.iy >> CELL_SHIFT, t.iz >> CELL_SHIFT};
+    float exit_pos[3], exit_neg[3];
+    for (int a = 0; a < 3; ++a) {
+        exit_pos[a] = static_cast<float>((c[a] + side) * CELL);
+        exit_neg[a] = static_cast<float>((c[a] - side + 1) * CELL);
+    }
+    return sample_past_exit(r, exit_pos, exit_neg, k.inv_step, n, num_full);
 }
 
 // Adds a classified sample (straight colour, opacity a) behind the accumulated (c, acc).
