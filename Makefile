@@ -39,7 +39,7 @@ demo: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target pliant
 	$(PLIANT) demo --out $(OUT_DIR)
 	scripts/demo-photos $(PLIANT) $(OUT_DIR)/photos
-	@echo "make demo: outputs in $(OUT_DIR)/ (folded_sheet.ply, folded_sheet_t1.ply; drape/, twist/, pile/, flag/, garment/: preview.mp4 (watch these), frames/*.obj, stats.json (garment/: also cloth.pc2); untangle/: preview.mp4 (the drape untangled after falling through itself), fall/preview.mp4, crossing/preview.mp4 (two sheets crossing, untangled); volume/: volume.png, turntable.mp4; deform/: twist.mp4; nerf/: compare.png, twist.mp4; summary.json; photos/: compare.png (held-out photos above the reconstruction), object.png (the cropped object))"
+	@echo "make demo: outputs in $(OUT_DIR)/ (folded_sheet.ply, folded_sheet_t1.ply; drape/, twist/, pile/, flag/, garment/: preview.mp4 (watch these), frames/*.obj, stats.json (garment/: also cloth.pc2); untangle/: preview.mp4 (the drape untangled after falling through itself), fall/preview.mp4, crossing/preview.mp4 (two sheets crossing, untangled); volume/: volume.png, turntable.mp4; deform/: twist.mp4; nerf/: compare.png, twist.mp4; summary.json; photos/: compare.png (held-out photos above the reconstruction), object.png (the cropped object), twist.mp4 (it twisted))"
 
 # From photos (data/capture, COLMAP poses) to the object's RGBA volume; skipped without COLMAP.
 demo-photos: configure

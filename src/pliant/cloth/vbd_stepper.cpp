@@ -223,6 +223,9 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
                                    [](double w) { return w > 0.0; });
         m_step_truncated = 0;
     }
+    m_step_swept = 0;
+    m_step_edges = 0;
+    m_step_max_lag = 0.0;
     for (int s = 0; s < substeps; ++s) {
         const double window_start = start_time + s * h;
         if (m_self_collision && !m_ogc) {
@@ -238,8 +241,13 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
             }
         }
         stats.obstacle_contacts = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
+        stats.obstacles_lagging = m_substep_lagging;
+        stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
         stats.solver_sweeps += m_options.iterations;
     }
+    stats.obstacle_swept_contacts = m_step_swept;
+    stats.obstacle_edge_contacts = m_step_edges;
+    stats.obstacle_max_lag = m_step_max_lag;
     if (m_ogc) {
         // The audit's last window ends with the step; vertices it put back left their sets.
         if (m_options.ogc->audit && audit(positions, velocities)) {
@@ -259,6 +267,65 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     }
     stats.ms = watch.elapsed_ms();
     return stats;
+}
+
+void VBDStepper::resolve_mesh_obstacles(const ClothModel& model, std::span<Vec3d> positions,
+                                        double h) {
+    const std::span<const MovingMeshObstacle> meshes = model.mesh_obstacles();
+    const std::span<const double> inverse_masses = model.inverse_masses();
+    const double thickness = model.material().thickness;
+    // The bounds of the XPBD stepper (xpbd_stepper.cpp, resolve_obstacles): with self-collision a
+    // jumping surface pushes cloth out at a bounded speed instead of through the cloth.
+    const double max_push = m_self_collision && thickness > 0.0
+                                ? detail::CATCH_UP_IN_THICKNESS * thickness
+                                : std::numeric_limits<double>::infinity();
+    const double max_settle = max_push;
+    m_before_mesh_contacts.assign(positions.begin(), positions.end());
+    m_mesh_contacts.assign(positions.size(), MeshContact{});
+    struct Tally {
+        std::int64_t swept = 0;
+        std::int64_t lagging = 0;
+        double max_lag = 0.0;
+    };
+    const Tally tally = parallel_reduce(
+        static_cast<std::int64_t>(positions.size()), Tally{},
+        [&](std::int64_t begin, std::int64_t end) {
+            Tally part;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                if (!(inverse_masses[v] > 0.0)) {
+                    continue;
+                }
+                double lag = 0.0;
+                for (const MovingMeshObstacle& mesh : meshes) {
+                    const MeshContact contact =
+                        resolve_mesh_contact(mesh, positions[v], m_start[v], thickness, h,
+                                             max_settle, max_push, m_obstacle_lag);
+                    part.swept += contact.swept ? 1 : 0;
+                    lag = std::max(lag, contact.lag);
+                    if (contact.depth > m_mesh_contacts[v].depth) {
+                        m_mesh_contacts[v] = contact;
+                    }
+                }
+                part.lagging += lag > 0.0 ? 1 : 0;
+                part.max_lag = std::max(part.max_lag, lag);
+            }
+            return part;
+        },
+        [](const Tally& a, const Tally& b) {
+            return Tally{a.swept + b.swept, a.lagging + b.lagging, std::max(a.max_lag, b.max_lag)};
+        },
+        VERTEX_GRAIN);
+    for (const MovingMeshObstacle& mesh : meshes) {
+        m_step_edges += resolve_mesh_edge_contacts(mesh, positions, m_start, m_before_mesh_contacts,
+                                                   inverse_masses, model.topology().edges,
+                                                   thickness, max_push, m_mesh_edge_contacts);
+    }
+    m_step_swept += tally.swept;
+    m_substep_lagging = tally.lagging;
+    m_step_max_lag = std::max(m_step_max_lag, tally.max_lag);
+    // Vertices left behind the surface are found there next substep.
+    m_obstacle_lag = tally.max_lag;
 }
 
 bool VBDStepper::push_out_of_obstacles(const ClothModel& model, Vec3d& x, const Vec3d& start,
@@ -586,6 +653,14 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         truncate_all(m_previous, positions, inverse_masses);
         redetect_if_needed(positions);
     }
+    m_substep_lagging = 0;
+    if (!model.mesh_obstacles().empty()) {
+        resolve_mesh_obstacles(model, positions, h);
+        if (m_ogc) {
+            truncate_all(m_before_mesh_contacts, positions, inverse_masses);
+            redetect_if_needed(positions);
+        }
+    }
     solve_ms += watch.elapsed_ms();
     if (m_self_collision && !m_ogc) {
         m_self_collision->project(positions, m_start, inverse_masses, material, t_end, h);
@@ -603,8 +678,14 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                     Vec3d normal;
                     Vec3d surface_velocity;
                     Vec3d x = positions[v];
-                    if (push_out_of_obstacles(model, x, m_start[v], h, &normal,
-                                              &surface_velocity)) {
+                    bool touched =
+                        push_out_of_obstacles(model, x, m_start[v], h, &normal, &surface_velocity);
+                    if (!touched && !m_mesh_contacts.empty() && m_mesh_contacts[v].depth > 0.0) {
+                        normal = m_mesh_contacts[v].normal;
+                        surface_velocity = m_mesh_contacts[v].surface_velocity;
+                        touched = true;
+                    }
+                    if (touched) {
                         // The normal speed the contact took from the inertial motion bounds the
                         // friction; the outward relative normal velocity is dropped (inelastic).
                         const double normal_speed =
@@ -650,6 +731,7 @@ void VBDStepper::save_state(ByteWriter& out) const {
     if (m_ogc) {
         m_ogc->save_state(out);
     }
+    out.put(m_obstacle_lag);
 }
 
 void VBDStepper::load_state(const ClothModel& model, ByteReader& in) {
@@ -685,6 +767,7 @@ void VBDStepper::load_state(const ClothModel& model, ByteReader& in) {
         enable_self_collision(model, true);  // a fresh OGC contact
         m_ogc->load_state(in);
     }
+    m_obstacle_lag = in.get<double>("vbd.obstacle_lag");
 }
 
 }  // namespace pliant::cloth

@@ -17,12 +17,15 @@
 // step a vertex is pushed `thickness` out of the obstacles (a projected block descent step).
 // Optional Chebyshev semi-iterative acceleration over the sweeps (§3.5; options.chebyshev_rho).
 //
-// After the sweeps: the cloth's own contacts (self-collision: the same proximity projection and
-// CCD fail-safe as XPBDStepper, self_collision.hpp, with a window of one substep), then
+// After the sweeps: mesh obstacles over the whole substep (mesh_contact.hpp, as XPBDStepper: each
+// vertex's path swept against the moving triangles, then each cloth edge against the surface's
+// edges, pushes bounded the same way), since the sweeps' push sees only where the surface is at
+// the substep's end; then the cloth's own contacts (self-collision: the same proximity projection
+// and CCD fail-safe as XPBDStepper, self_collision.hpp, with a window of one substep), then
 // v = (x − x_t) / h; at obstacle contacts the velocity relative to the surface loses its outward
 // normal part (inelastic) and Coulomb friction acts on its tangential part, bounded by the
-// normal speed the contact took away (obstacles.hpp, apply_friction); then v *= max(0, 1 − damping
-// h).
+// normal speed the contact took away (obstacles.hpp, apply_friction); then
+// v *= max(0, 1 − damping h).
 //
 // With options.ogc, self-contact is Offset Geometric Contact instead (ogc_contact.hpp): its
 // contact energy joins every vertex's Newton step, every move of a vertex (the prediction, each
@@ -45,9 +48,11 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "pliant/cloth/cloth_model.hpp"
+#include "pliant/cloth/mesh_contact.hpp"
 #include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/vertex_coloring.hpp"
@@ -112,6 +117,11 @@ private:
     // Moves x (at `start` when the substep began) out of every obstacle (thickness); returns
     // whether it touches one, with the deepest contact's normal and surface velocity (m/s over h)
     // when normal is not null.
+    // Mesh obstacles over the whole substep (mesh_contact.hpp: the swept vertex pass, then the
+    // edge pass), after the block descent: its projection sees only where the surface is at the
+    // substep's end, so a surface moving faster than the cloth, or a ridge passing between two
+    // vertices, would cross it. Fills m_mesh_contacts (friction) and adds to the tallies.
+    void resolve_mesh_obstacles(const ClothModel& model, std::span<Vec3d> positions, double h);
     bool push_out_of_obstacles(const ClothModel& model, Vec3d& x, const Vec3d& start, double h,
                                Vec3d* normal, Vec3d* surface_velocity) const;
     void restart_self_collision(const ClothModel& model);
@@ -159,6 +169,18 @@ private:
     std::vector<Vec3d> m_inertia;   // y
     std::vector<Vec3d> m_previous;  // Chebyshev: the iterate two sweeps back
     std::vector<Vec3d> m_current;   // Chebyshev: the iterate one sweep back
+
+    // Mesh obstacles (resolve_mesh_obstacles): per vertex the substep's contact (depth 0: none),
+    // the positions before the pass, the edge pass's buffers, the largest lag of the last
+    // substep (m; saved with the state) and this step's tallies.
+    std::vector<MeshContact> m_mesh_contacts;
+    std::vector<Vec3d> m_before_mesh_contacts;
+    MeshEdgeContactScratch m_mesh_edge_contacts;
+    double m_obstacle_lag = 0.0;
+    std::int64_t m_step_swept = 0;
+    std::int64_t m_step_edges = 0;
+    std::int64_t m_substep_lagging = 0;
+    double m_step_max_lag = 0.0;
 
     std::unique_ptr<SelfCollision> m_self_collision;
     std::unique_ptr<OgcContact> m_ogc;
