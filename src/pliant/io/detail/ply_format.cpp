@@ -62,8 +62,7 @@ PlyMeshElements find_mesh_elements(const PlyHeader& header, const PlyDiagnostics
     return found;
 }
 
-void check_counts_fit(const PlyHeader& header, std::size_t data_bytes,
-                      const PlyDiagnostics& diag) {
+void check_counts_fit(const PlyHeader& header, std::size_t data_bytes, const PlyDiagnostics& diag) {
     const bool is_ascii = header.format == PlyFormat::ascii;
     std::uint64_t remaining = data_bytes;
     for (const PlyElement& element : header.elements) {
@@ -222,11 +221,11 @@ double PlyTextCursor::value(PlyScalar type, const PlyElement& element, std::uint
                 quote(text));
         }
     }
-    m_diag.fail("bad value for property '{}'{} of element '{}' record {}, expected {} {}, got {}",
-                property.name, part, element.name, record,
-                status == ParseStatus::out_of_range ? "a value in the range of"
-                                                    : "a number of type",
-                to_string(type), quote(text));
+    m_diag.fail(
+        "bad value for property '{}'{} of element '{}' record {}, expected {} {}, got {}",
+        property.name, part, element.name, record,
+        status == ParseStatus::out_of_range ? "a value in the range of" : "a number of type",
+        to_string(type), quote(text));
 }
 
 bool PlyTextCursor::next_record() {
