@@ -13,6 +13,7 @@
 #include <string>
 #include <type_traits>
 
+#include "io/ply_bytes.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/geometry/validate.hpp"
 #include "support/test_files.hpp"
@@ -23,41 +24,11 @@ namespace {
 using geometry::Triangle;
 using geometry::TriangleMesh;
 using geometry::TriangleMeshD;
+using test::ALL_FORMATS;
+using test::Bytes;
 using test::expect_io_error;
 using test::TempDir;
 using test::write_bytes;
-
-// Binary data built by hand, value by value, in a chosen byte order.
-class Bytes {
-public:
-    explicit Bytes(std::endian order) : m_order(order) {}
-
-    // Appends the values, all as type T.
-    template <typename T, typename... Rest>
-    Bytes& put(T first, Rest... rest) {
-        put_one(first);
-        (put_one(static_cast<T>(rest)), ...);
-        return *this;
-    }
-    const std::string& str() const { return m_bytes; }
-
-private:
-    template <typename T>
-    void put_one(T value) {
-        unsigned char raw[sizeof(T)];
-        std::memcpy(raw, &value, sizeof(T));
-        if (m_order != std::endian::native) {
-            std::reverse(raw, raw + sizeof(T));
-        }
-        m_bytes.append(reinterpret_cast<const char*>(raw), sizeof(T));
-    }
-
-    std::endian m_order;
-    std::string m_bytes;
-};
-
-constexpr PlyFormat ALL_FORMATS[] = {PlyFormat::ascii, PlyFormat::binary_little_endian,
-                                     PlyFormat::binary_big_endian};
 
 // A unit square as two triangles, in the ASCII layout most tests start from.
 constexpr const char* ASCII_SQUARE =
