@@ -117,5 +117,28 @@ TEST(Mdd, BadArgumentsAndFailuresLeaveNoFile) {
     EXPECT_THROW(write_mdd(dir / "missing" / "c.mdd", 1, 1, 24.0, fill), IoError);
 }
 
+TEST(Mdd, ErrorsNameTheFileAndTheFrame) {
+    const TempDir dir;
+    const auto path = dir / "c.mdd";
+    const auto message = [](const auto& call) {
+        try {
+            call();
+        } catch (const InvalidInput& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_EQ(message([&] { write_mdd(path, 5, -2, 24.0, [](std::int64_t, std::span<Vec3f>) {}); }),
+              path.string() +
+                  ": expected at most 2^31 - 1 points and frames, got 5 points and -2 frames");
+    EXPECT_EQ(message([&] {
+                  write_mdd(path, 2, 3, 24.0, [](std::int64_t f, std::span<Vec3f> out) {
+                      out[1] = {f == 1 ? std::numeric_limits<float>::infinity() : 0.0f, 0.0f, 0.0f};
+                  });
+              }),
+              path.string() + ": frame 1: a position is not finite");
+    EXPECT_TRUE(dir.entries().empty());
+}
+
 }  // namespace
 }  // namespace pliant::io
