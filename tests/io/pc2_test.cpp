@@ -88,9 +88,10 @@ TEST(Pc2, BadArgumentsAndFailuresLeaveNoFile) {
         write_pc2(path, 5, -2, 0.0, fill);
         ADD_FAILURE() << "-2 samples were accepted";
     } catch (const InvalidInput& e) {
-        EXPECT_EQ(std::string(e.what()),
-                  path.string() +
-                      ": expected at most 2^31 - 1 points and samples, got 5 points and -2 samples");
+        EXPECT_EQ(
+            std::string(e.what()),
+            path.string() +
+                ": expected at most 2^31 - 1 points and samples, got 5 points and -2 samples");
     }
     EXPECT_TRUE(dir.entries().empty());
 
