@@ -28,8 +28,8 @@ void for_each_point_cache_frame(const std::filesystem::path& path, std::int64_t 
         source(f, points);
         for (const Vec3f& p : points) {
             if (!is_finite(p)) {
-                throw InvalidInput(fmt::format("{}: {} {}: a position is not finite",
-                                               path.string(), frame_word, f));
+                throw InvalidInput(fmt::format("{}: {} {}: a position is not finite", path.string(),
+                                               frame_word, f));
             }
         }
         sink(f, points);
