@@ -294,6 +294,15 @@ TEST(PlyPolygons, WriterRejectsBadInputAndKeepsTheFile) {
     std::vector<Vec3d> nan = m.positions;
     nan[4].y = std::numeric_limits<double>::quiet_NaN();
     EXPECT_THROW(write_ply_polygons(path, m, nan), InvalidInput);
+    try {
+        write_ply_polygons(path, m, m.positions, static_cast<PlyFormat>(7));
+        ADD_FAILURE() << "accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "write_ply_polygons: " + path.string() +
+                      ": format (7) is not a PlyFormat, expected one of ascii, "
+                      "binary_little_endian, binary_big_endian");
+    }
     PolygonMesh short_attribute = m;
     short_attribute.vertex_attributes[0].values.pop_back();
     try {

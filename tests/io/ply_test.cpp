@@ -170,6 +170,32 @@ TEST(Ply, WriterRejectsInvalidMeshAndKeepsTheFile) {
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"keep.ply"});
 }
 
+TEST(Ply, WritersNameAnUnknownFormat) {
+    TempDir dir;
+    const auto path = dir / "never.ply";
+    const auto message = [](const auto& call) {
+        try {
+            call();
+        } catch (const InvalidInput& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    const auto expected = [&](const char* function) {
+        return fmt::format(
+            "{}: {}: format (7) is not a PlyFormat, expected one of ascii, binary_little_endian, "
+            "binary_big_endian",
+            function, path.string());
+    };
+    const auto bad = static_cast<PlyFormat>(7);
+    const TriangleMesh mesh = geometry::make_grid_sheet(2, 2, 1.0f, 1.0f);
+    EXPECT_EQ(message([&] { write_ply(path, mesh, bad); }), expected("write_ply"));
+    const std::vector<Vec3f> points{{0.0f, 0.0f, 0.0f}};
+    EXPECT_EQ(message([&] { write_point_cloud_ply(path, points, {}, bad); }),
+              expected("write_point_cloud_ply"));
+    EXPECT_TRUE(dir.entries().empty());
+}
+
 TEST(Ply, PointCloudWithColours) {
     TempDir dir;
     const std::vector<Vec3f> points{{1.5f, -2.0f, 3.25f}, {0.0f, 1e-3f, -7.0f}};

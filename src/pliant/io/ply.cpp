@@ -54,10 +54,7 @@ MeshLayout check_layout(const PlyHeader& header, const Diagnostics& diag) {
     const detail::PlyMeshElements found = detail::find_mesh_elements(header, diag);
     layout.vertex_element = found.vertex_element;
     layout.face_element = found.face_element;
-    layout.roles.resize(header.elements.size());
-    for (std::size_t e = 0; e < header.elements.size(); ++e) {
-        layout.roles[e].assign(header.elements[e].properties.size(), Role::skip);
-    }
+    layout.roles = detail::per_property(header, Role::skip);
     layout.num_vertices = static_cast<std::int64_t>(header.elements[found.vertex_element].count);
     constexpr std::array<Role, 3> AXES{Role::x, Role::y, Role::z};
     for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -367,13 +364,7 @@ void append_binary(fmt::memory_buffer& buffer, T value, bool swap) {
 template <typename Real>
 void write_ply_impl(const std::filesystem::path& path,
                     const geometry::BasicTriangleMesh<Real>& mesh, PlyFormat format) {
-    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
-        format != PlyFormat::binary_big_endian) {
-        throw InvalidInput(
-            fmt::format("write_ply: {}: format ({}) is not a PlyFormat, expected one of ascii, "
-                        "binary_little_endian, binary_big_endian",
-                        path.string(), static_cast<int>(format)));
-    }
+    detail::check_write_format(format, "write_ply", path);
     geometry::validate_mesh(mesh, path.string());
 
     constexpr bool IS_FLOAT = std::is_same_v<Real, float>;
@@ -488,13 +479,7 @@ void write_ply(const std::filesystem::path& path, const geometry::TriangleMeshD&
 
 void write_point_cloud_ply(const std::filesystem::path& path, std::span<const Vec3f> positions,
                            std::span<const std::array<std::uint8_t, 3>> colors, PlyFormat format) {
-    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
-        format != PlyFormat::binary_big_endian) {
-        throw InvalidInput(fmt::format(
-            "write_point_cloud_ply: {}: format ({}) is not a PlyFormat, expected one of ascii, "
-            "binary_little_endian, binary_big_endian",
-            path.string(), static_cast<int>(format)));
-    }
+    detail::check_write_format(format, "write_point_cloud_ply", path);
     if (!colors.empty() && colors.size() != positions.size()) {
         throw InvalidInput(
             fmt::format("write_point_cloud_ply: {}: {} colours for {} points, expected 0 or {}",

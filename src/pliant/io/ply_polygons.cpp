@@ -86,10 +86,7 @@ Layout check_layout(const PlyHeader& header, const Diagnostics& diag, PolygonMes
     const detail::PlyMeshElements found = detail::find_mesh_elements(header, diag);
     layout.vertex_element = found.vertex_element;
     layout.face_element = found.face_element;
-    layout.slots.resize(header.elements.size());
-    for (std::size_t e = 0; e < header.elements.size(); ++e) {
-        layout.slots[e].assign(header.elements[e].properties.size(), Slot{});
-    }
+    layout.slots = detail::per_property(header, Slot{});
 
     // Vertices: positions, one UV pair, normals, the other scalars as attributes.
     const PlyElement& vertices = header.elements[found.vertex_element];
@@ -557,13 +554,7 @@ PolygonMesh read_ply_polygons(const std::filesystem::path& path) {
 void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& mesh,
                         std::span<const Vec3d> positions, PlyFormat format) {
     // Step 1: checks, normals and the UV layout, before touching the file.
-    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
-        format != PlyFormat::binary_big_endian) {
-        throw InvalidInput(
-            fmt::format("write_ply_polygons: {}: format ({}) is not a PlyFormat, expected one of "
-                        "ascii, binary_little_endian, binary_big_endian",
-                        path.string(), static_cast<int>(format)));
-    }
+    detail::check_write_format(format, "write_ply_polygons", path);
     if (positions.size() != mesh.positions.size()) {
         throw InvalidInput(fmt::format("{}: expected {} positions (the mesh's vertices), got {}",
                                        path.string(), mesh.positions.size(), positions.size()));

@@ -83,6 +83,16 @@ void check_counts_fit(const PlyHeader& header, std::size_t data_bytes, const Ply
     }
 }
 
+void check_write_format(PlyFormat format, const char* function, const std::filesystem::path& path) {
+    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
+        format != PlyFormat::binary_big_endian) {
+        throw InvalidInput(
+            fmt::format("{}: {}: format ({}) is not a PlyFormat, expected one of ascii, "
+                        "binary_little_endian, binary_big_endian",
+                        function, path.string(), static_cast<int>(format)));
+    }
+}
+
 bool needs_swap(PlyFormat format) {
     return needs_swap(format == PlyFormat::binary_big_endian ? std::endian::big
                                                              : std::endian::little);

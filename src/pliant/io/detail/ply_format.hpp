@@ -14,6 +14,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/detail/ply_header.hpp"
@@ -56,10 +57,24 @@ struct PlyMeshElements {
 // 2^31 - 1 vertices.
 PlyMeshElements find_mesh_elements(const PlyHeader& header, const PlyDiagnostics& diag);
 
+// One `value` per property of every element: table[element][property], in header order.
+template <typename T>
+std::vector<std::vector<T>> per_property(const PlyHeader& header, const T& value) {
+    std::vector<std::vector<T>> table(header.elements.size());
+    for (std::size_t e = 0; e < header.elements.size(); ++e) {
+        table[e].assign(header.elements[e].properties.size(), value);
+    }
+    return table;
+}
+
 // Refuses element counts that the data section cannot hold, before anything is allocated: a
 // binary record takes at least min_record_bytes(), an ASCII record of k values at least 2k bytes
 // (k tokens, each followed by a space or newline, except at the very end of the file).
 void check_counts_fit(const PlyHeader& header, std::size_t data_bytes, const PlyDiagnostics& diag);
+
+// Throws InvalidInput "<function>: <path>: format (<n>) is not a PlyFormat, expected one of …"
+// for a value outside the enum (a writer's check before it touches the file).
+void check_write_format(PlyFormat format, const char* function, const std::filesystem::path& path);
 
 // Whether binary data of `format` must be byte-swapped on this machine.
 bool needs_swap(PlyFormat format);
