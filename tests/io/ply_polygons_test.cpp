@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "io/ply_bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/io/obj_polygons.hpp"
 #include "pliant/io/ply.hpp"
@@ -22,41 +23,12 @@
 namespace pliant::io {
 namespace {
 
+using test::ALL_FORMATS;
+using test::Bytes;
 using test::expect_io_error;
 using test::read_bytes;
 using test::TempDir;
 using test::write_bytes;
-
-// Binary data built by hand, value by value, in a chosen byte order.
-class Bytes {
-public:
-    explicit Bytes(std::endian order) : m_order(order) {}
-
-    template <typename T, typename... Rest>
-    Bytes& put(T first, Rest... rest) {
-        put_one(first);
-        (put_one(static_cast<T>(rest)), ...);
-        return *this;
-    }
-    const std::string& str() const { return m_bytes; }
-
-private:
-    template <typename T>
-    void put_one(T value) {
-        unsigned char raw[sizeof(T)];
-        std::memcpy(raw, &value, sizeof(T));
-        if (m_order != std::endian::native) {
-            std::reverse(raw, raw + sizeof(T));
-        }
-        m_bytes.append(reinterpret_cast<const char*>(raw), sizeof(T));
-    }
-
-    std::endian m_order;
-    std::string m_bytes;
-};
-
-constexpr PlyFormat ALL_FORMATS[] = {PlyFormat::ascii, PlyFormat::binary_little_endian,
-                                     PlyFormat::binary_big_endian};
 
 // A quad, a triangle and a pentagon in the z = 0 plane with per-vertex UVs (s, t), normals that
 // point the wrong way, a vertex colour and a face property, as MeshLab or Blender write them.
@@ -322,6 +294,15 @@ TEST(PlyPolygons, WriterRejectsBadInputAndKeepsTheFile) {
     std::vector<Vec3d> nan = m.positions;
     nan[4].y = std::numeric_limits<double>::quiet_NaN();
     EXPECT_THROW(write_ply_polygons(path, m, nan), InvalidInput);
+    try {
+        write_ply_polygons(path, m, m.positions, static_cast<PlyFormat>(7));
+        ADD_FAILURE() << "accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "write_ply_polygons: " + path.string() +
+                      ": format (7) is not a PlyFormat, expected one of ascii, "
+                      "binary_little_endian, binary_big_endian");
+    }
     PolygonMesh short_attribute = m;
     short_attribute.vertex_attributes[0].values.pop_back();
     try {

@@ -13,6 +13,7 @@
 #include <string>
 #include <type_traits>
 
+#include "io/ply_bytes.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/geometry/validate.hpp"
 #include "support/test_files.hpp"
@@ -23,41 +24,11 @@ namespace {
 using geometry::Triangle;
 using geometry::TriangleMesh;
 using geometry::TriangleMeshD;
+using test::ALL_FORMATS;
+using test::Bytes;
 using test::expect_io_error;
 using test::TempDir;
 using test::write_bytes;
-
-// Binary data built by hand, value by value, in a chosen byte order.
-class Bytes {
-public:
-    explicit Bytes(std::endian order) : m_order(order) {}
-
-    // Appends the values, all as type T.
-    template <typename T, typename... Rest>
-    Bytes& put(T first, Rest... rest) {
-        put_one(first);
-        (put_one(static_cast<T>(rest)), ...);
-        return *this;
-    }
-    const std::string& str() const { return m_bytes; }
-
-private:
-    template <typename T>
-    void put_one(T value) {
-        unsigned char raw[sizeof(T)];
-        std::memcpy(raw, &value, sizeof(T));
-        if (m_order != std::endian::native) {
-            std::reverse(raw, raw + sizeof(T));
-        }
-        m_bytes.append(reinterpret_cast<const char*>(raw), sizeof(T));
-    }
-
-    std::endian m_order;
-    std::string m_bytes;
-};
-
-constexpr PlyFormat ALL_FORMATS[] = {PlyFormat::ascii, PlyFormat::binary_little_endian,
-                                     PlyFormat::binary_big_endian};
 
 // A unit square as two triangles, in the ASCII layout most tests start from.
 constexpr const char* ASCII_SQUARE =
@@ -197,6 +168,32 @@ TEST(Ply, WriterRejectsInvalidMeshAndKeepsTheFile) {
     EXPECT_THROW(write_ply(path, mesh, static_cast<PlyFormat>(7)), InvalidInput);
     EXPECT_EQ(test::read_bytes(path), "previous");
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"keep.ply"});
+}
+
+TEST(Ply, WritersNameAnUnknownFormat) {
+    TempDir dir;
+    const auto path = dir / "never.ply";
+    const auto message = [](const auto& call) {
+        try {
+            call();
+        } catch (const InvalidInput& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    const auto expected = [&](const char* function) {
+        return fmt::format(
+            "{}: {}: format (7) is not a PlyFormat, expected one of ascii, binary_little_endian, "
+            "binary_big_endian",
+            function, path.string());
+    };
+    const auto bad = static_cast<PlyFormat>(7);
+    const TriangleMesh mesh = geometry::make_grid_sheet(2, 2, 1.0f, 1.0f);
+    EXPECT_EQ(message([&] { write_ply(path, mesh, bad); }), expected("write_ply"));
+    const std::vector<Vec3f> points{{0.0f, 0.0f, 0.0f}};
+    EXPECT_EQ(message([&] { write_point_cloud_ply(path, points, {}, bad); }),
+              expected("write_point_cloud_ply"));
+    EXPECT_TRUE(dir.entries().empty());
 }
 
 TEST(Ply, PointCloudWithColours) {

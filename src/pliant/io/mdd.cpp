@@ -5,13 +5,13 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <ostream>
 #include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/byte_order.hpp"
+#include "pliant/io/detail/point_cache.hpp"
 
 namespace pliant::io {
 namespace {
@@ -20,22 +20,16 @@ constexpr bool SWAP = detail::needs_swap(std::endian::big);
 
 template <typename T>
 void put(std::vector<char>& buffer, T value) {
-    char bytes[sizeof(T)];
-    detail::store(bytes, value, SWAP);
-    buffer.insert(buffer.end(), bytes, bytes + sizeof(T));
+    const std::size_t at = buffer.size();
+    buffer.resize(at + sizeof(T));
+    detail::store(buffer.data() + at, value, SWAP);
 }
 
 }  // namespace
 
 void write_mdd(const std::filesystem::path& path, std::int64_t num_points, std::int64_t num_frames,
                double frames_per_second, FunctionRef<void(std::int64_t, std::span<Vec3f>)> frame) {
-    constexpr std::int64_t MAX = std::numeric_limits<std::int32_t>::max();
-    if (num_points < 0 || num_points > MAX || num_frames < 0 || num_frames > MAX) {
-        throw InvalidInput(
-            fmt::format("{}: expected at most 2^31 - 1 points and frames, got {} points and {} "
-                        "frames",
-                        path.string(), num_points, num_frames));
-    }
+    detail::check_point_cache_counts(path, num_points, num_frames, "frame");
     if (!std::isfinite(frames_per_second) || !(frames_per_second > 0.0)) {
         throw InvalidInput(fmt::format("{}: frames_per_second is {}, expected a finite value > 0",
                                        path.string(), frames_per_second));
@@ -51,21 +45,17 @@ void write_mdd(const std::filesystem::path& path, std::int64_t num_points, std::
                 buffer.clear();
             }
         }
-        std::vector<Vec3f> points(static_cast<std::size_t>(num_points));
-        for (std::int64_t f = 0; f < num_frames; ++f) {
-            frame(f, points);
-            for (const Vec3f& p : points) {
-                if (!is_finite(p)) {
-                    throw InvalidInput(
-                        fmt::format("{}: frame {}: a position is not finite", path.string(), f));
+        detail::for_each_point_cache_frame(
+            path, num_points, num_frames, "frame", frame,
+            [&](std::int64_t /*f*/, std::span<const Vec3f> points) {
+                for (const Vec3f& p : points) {
+                    put(buffer, p.x);
+                    put(buffer, p.y);
+                    put(buffer, p.z);
                 }
-                put(buffer, p.x);
-                put(buffer, p.y);
-                put(buffer, p.z);
-            }
-            out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-            buffer.clear();
-        }
+                out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+                buffer.clear();
+            });
         out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
     });
 }

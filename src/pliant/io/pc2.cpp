@@ -5,12 +5,12 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
-#include <limits>
 #include <ostream>
 #include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
+#include "pliant/io/detail/point_cache.hpp"
 
 namespace pliant::io {
 namespace {
@@ -28,13 +28,7 @@ void put(std::ostream& out, T value) {
 
 void write_pc2(const std::filesystem::path& path, std::int64_t num_points, std::int64_t num_samples,
                double start_frame, FunctionRef<void(std::int64_t, std::span<Vec3f>)> sample) {
-    constexpr std::int64_t MAX = std::numeric_limits<std::int32_t>::max();
-    if (num_points < 0 || num_points > MAX || num_samples < 0 || num_samples > MAX) {
-        throw InvalidInput(
-            fmt::format("{}: expected at most 2^31 - 1 points and samples, got {} "
-                        "points and {} samples",
-                        path.string(), num_points, num_samples));
-    }
+    detail::check_point_cache_counts(path, num_points, num_samples, "sample");
     write_file_atomically(path, [&](std::ostream& out) {
         out.write("POINTCACHE2\0", 12);
         put<std::int32_t>(out, 1);
@@ -42,18 +36,12 @@ void write_pc2(const std::filesystem::path& path, std::int64_t num_points, std::
         put(out, static_cast<float>(start_frame));
         put(out, 1.0F);
         put(out, static_cast<std::int32_t>(num_samples));
-        std::vector<Vec3f> points(static_cast<std::size_t>(num_points));
-        for (std::int64_t s = 0; s < num_samples; ++s) {
-            sample(s, points);
-            for (const Vec3f& p : points) {
-                if (!is_finite(p)) {
-                    throw InvalidInput(
-                        fmt::format("{}: sample {}: a position is not finite", path.string(), s));
-                }
-            }
-            out.write(reinterpret_cast<const char*>(points.data()),
-                      static_cast<std::streamsize>(points.size() * sizeof(Vec3f)));
-        }
+        detail::for_each_point_cache_frame(
+            path, num_points, num_samples, "sample", sample,
+            [&](std::int64_t /*s*/, std::span<const Vec3f> points) {
+                out.write(reinterpret_cast<const char*>(points.data()),
+                          static_cast<std::streamsize>(points.size() * sizeof(Vec3f)));
+            });
     });
 }
 

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cstdint>
 #include <iterator>
 #include <limits>
@@ -19,12 +18,13 @@
 #include "pliant/geometry/validate.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/byte_order.hpp"
+#include "pliant/io/detail/ply_format.hpp"
 #include "pliant/io/detail/ply_header.hpp"
-#include "pliant/io/detail/text.hpp"
 #include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
 
+using detail::load_value;
 using detail::PlyElement;
 using detail::PlyHeader;
 using detail::PlyProperty;
@@ -39,26 +39,7 @@ namespace {
 // What the reader does with a property's values.
 enum class Role : std::uint8_t { skip, x, y, z, indices };
 
-// Formats "<path>: [line <n>: ]<message>" errors. The line is set while decoding ASCII data.
-class Diagnostics {
-public:
-    explicit Diagnostics(const std::filesystem::path& path) : m_path(path.string()) {}
-
-    void set_line(std::size_t line) { m_line = line; }
-
-    template <typename... Args>
-    [[noreturn]] void fail(fmt::format_string<Args...> format, Args&&... args) const {
-        const std::string message = fmt::format(format, std::forward<Args>(args)...);
-        if (m_line > 0) {
-            throw IoError(fmt::format("{}: line {}: {}", m_path, m_line, message));
-        }
-        throw IoError(fmt::format("{}: {}", m_path, message));
-    }
-
-private:
-    std::string m_path;
-    std::size_t m_line = 0;  // 0: binary data, no line
-};
+using Diagnostics = detail::PlyDiagnostics;
 
 // The layout facts the decoders need, checked once against the header.
 struct MeshLayout {
@@ -70,85 +51,19 @@ struct MeshLayout {
 
 MeshLayout check_layout(const PlyHeader& header, const Diagnostics& diag) {
     MeshLayout layout;
-    const std::optional<std::size_t> vertex = header.find("vertex");
-    if (!vertex) {
-        diag.fail("PLY header has no vertex element, expected 'element vertex <count>'");
+    const detail::PlyMeshElements found = detail::find_mesh_elements(header, diag);
+    layout.vertex_element = found.vertex_element;
+    layout.face_element = found.face_element;
+    layout.roles = detail::per_property(header, Role::skip);
+    layout.num_vertices = static_cast<std::int64_t>(header.elements[found.vertex_element].count);
+    constexpr std::array<Role, 3> AXES{Role::x, Role::y, Role::z};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+        layout.roles[found.vertex_element][found.xyz[axis]] = AXES[axis];
     }
-    layout.vertex_element = *vertex;
-    layout.face_element = header.find("face");
-    layout.roles.resize(header.elements.size());
-    for (std::size_t e = 0; e < header.elements.size(); ++e) {
-        layout.roles[e].assign(header.elements[e].properties.size(), Role::skip);
-    }
-
-    const PlyElement& vertices = header.elements[*vertex];
-    constexpr std::uint64_t MAX_VERTICES = std::numeric_limits<std::int32_t>::max();
-    if (vertices.count > MAX_VERTICES) {
-        diag.fail("line {}: element 'vertex' has {} vertices, expected at most {} (32-bit indices)",
-                  vertices.line, vertices.count, MAX_VERTICES);
-    }
-    layout.num_vertices = static_cast<std::int64_t>(vertices.count);
-    constexpr std::array<std::pair<const char*, Role>, 3> AXES{
-        {{"x", Role::x}, {"y", Role::y}, {"z", Role::z}}};
-    for (const auto& [name, role] : AXES) {
-        const std::optional<std::size_t> p = vertices.find(name);
-        if (!p) {
-            diag.fail(
-                "element 'vertex' has no property '{}', expected scalar properties x, y and z",
-                name);
-        }
-        if (vertices.properties[*p].is_list) {
-            diag.fail("property '{}' of element 'vertex' is a list, expected a scalar", name);
-        }
-        layout.roles[*vertex][*p] = role;
-    }
-
     if (layout.face_element) {
-        const PlyElement& faces = header.elements[*layout.face_element];
-        std::optional<std::size_t> p = faces.find("vertex_indices");
-        if (!p) {
-            p = faces.find("vertex_index");
-        }
-        if (!p) {
-            diag.fail(
-                "element 'face' has no property 'vertex_indices', expected a list property "
-                "named vertex_indices or vertex_index");
-        }
-        const PlyProperty& indices = faces.properties[*p];
-        if (!indices.is_list) {
-            diag.fail("property '{}' of element 'face' is a scalar, expected a list", indices.name);
-        }
-        if (!detail::is_integer(indices.type)) {
-            diag.fail("list '{}' of element 'face' has item type {}, expected an integer type",
-                      indices.name, detail::to_string(indices.type));
-        }
-        layout.roles[*layout.face_element][*p] = Role::indices;
+        layout.roles[*layout.face_element][found.indices] = Role::indices;
     }
     return layout;
-}
-
-// Refuses element counts that the data section cannot hold, before anything is allocated: a
-// binary record takes at least min_record_bytes(), an ASCII record of k values at least 2k bytes
-// (k tokens, each followed by a space or newline, except at the very end of the file).
-void check_counts_fit(const PlyHeader& header, std::size_t data_bytes, const Diagnostics& diag) {
-    const bool is_ascii = header.format == PlyFormat::ascii;
-    std::uint64_t remaining = data_bytes;
-    for (const PlyElement& element : header.elements) {
-        const std::uint64_t min_bytes =
-            is_ascii ? 2 * element.min_record_tokens() : element.min_record_bytes();
-        if (min_bytes == 0) {
-            continue;
-        }
-        const std::uint64_t capacity =
-            is_ascii ? (remaining + 1) / min_bytes : remaining / min_bytes;
-        if (element.count > capacity) {
-            diag.fail(
-                "line {}: truncated data or wrong count: element '{}' declares {} records "
-                "of at least {} bytes, expected at most {} in the {} bytes of data left",
-                element.line, element.name, element.count, min_bytes, capacity, remaining);
-        }
-        remaining -= std::min(remaining, element.count * min_bytes);
-    }
 }
 
 // Appends the fan (c0, ci, ci+1) of one polygon after checking its corners.
@@ -188,29 +103,6 @@ void check_vertex(const Vec3d& p, std::uint64_t vertex, const Diagnostics& diag)
 
 // --- binary ----------------------------------------------------------------------------------
 
-// Every PLY scalar converts exactly to double (integers are at most 32 bits).
-double load_value(const char* p, PlyScalar type, bool swap) {
-    switch (type) {
-        case PlyScalar::int8:
-            return detail::load<std::int8_t>(p, swap);
-        case PlyScalar::uint8:
-            return detail::load<std::uint8_t>(p, swap);
-        case PlyScalar::int16:
-            return detail::load<std::int16_t>(p, swap);
-        case PlyScalar::uint16:
-            return detail::load<std::uint16_t>(p, swap);
-        case PlyScalar::int32:
-            return detail::load<std::int32_t>(p, swap);
-        case PlyScalar::uint32:
-            return detail::load<std::uint32_t>(p, swap);
-        case PlyScalar::float32:
-            return static_cast<double>(detail::load<float>(p, swap));
-        case PlyScalar::float64:
-            return detail::load<double>(p, swap);
-    }
-    return 0.0;
-}
-
 // Decodes the binary data section in place; `data` is everything after end_header.
 class BinaryDecoder {
 public:
@@ -221,9 +113,7 @@ public:
           m_data(data),
           m_diag(diag),
           m_mesh(mesh),
-          m_swap(detail::needs_swap(header.format == PlyFormat::binary_big_endian
-                                        ? std::endian::big
-                                        : std::endian::little)) {}
+          m_swap(detail::needs_swap(header.format)) {}
 
     void run() {
         for (std::size_t e = 0; e < m_header.elements.size(); ++e) {
@@ -239,12 +129,7 @@ public:
                 }
             }
         }
-        if (m_pos != m_data.size()) {
-            m_diag.fail(
-                "{} bytes of unexpected data after the last element, expected the end of "
-                "the file (do the header's counts and types match the data?)",
-                m_data.size() - m_pos);
-        }
+        detail::check_binary_end(m_data.size() - m_pos, m_diag);
     }
 
 private:
@@ -339,14 +224,8 @@ private:
             }
             const char* count_bytes =
                 take(detail::size_of(property.count_type), element, r, property);
-            const double count = load_value(count_bytes, property.count_type, m_swap);
-            if (count < 0) {
-                m_diag.fail(
-                    "list '{}' of element '{}' record {} has length {}, expected a "
-                    "non-negative length",
-                    property.name, element.name, r, count);
-            }
-            const auto length = static_cast<std::uint64_t>(count);
+            const std::uint64_t length = detail::list_length(
+                load_value(count_bytes, property.count_type, m_swap), element, r, property, m_diag);
             const std::size_t item_size = detail::size_of(property.type);
             if (length > (m_data.size() - m_pos) / item_size) {
                 truncated(element, r, property, length * item_size);
@@ -380,10 +259,8 @@ private:
 
     [[noreturn]] void truncated(const PlyElement& element, std::uint64_t record,
                                 const PlyProperty& property, std::uint64_t num_bytes) const {
-        m_diag.fail(
-            "truncated binary data in element '{}' record {} of {}, expected {} bytes "
-            "for property '{}', got {}",
-            element.name, record, element.count, num_bytes, property.name, m_data.size() - m_pos);
+        detail::fail_truncated_binary(element, record, property, num_bytes, m_data.size() - m_pos,
+                                      m_diag);
     }
 
     const PlyHeader& m_header;
@@ -398,77 +275,13 @@ private:
 
 // --- ASCII -----------------------------------------------------------------------------------
 
-// Walks ASCII data: one record per line, values separated by spaces or tabs.
-class TextCursor {
-public:
-    TextCursor(std::string_view data, std::size_t first_line) : m_data(data), m_line(first_line) {}
-
-    // Moves to the start of the next non-blank line; false at the end of the data.
-    bool next_record() {
-        while (m_pos < m_data.size()) {
-            const char c = m_data[m_pos];
-            if (c == '\n') {
-                ++m_line;
-            } else if (!is_blank(c)) {
-                return true;
-            }
-            ++m_pos;
-        }
-        return false;
-    }
-
-    // The next value on the current line; empty at the end of the line or the data.
-    std::string_view token() {
-        while (m_pos < m_data.size() && is_blank(m_data[m_pos])) {
-            ++m_pos;
-        }
-        const std::size_t start = m_pos;
-        while (m_pos < m_data.size() && !is_blank(m_data[m_pos]) && m_data[m_pos] != '\n') {
-            ++m_pos;
-        }
-        return m_data.substr(start, m_pos - start);
-    }
-
-    bool at_end() const { return m_pos >= m_data.size(); }
-    std::size_t line() const { return m_line; }
-
-private:
-    static bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
-
-    std::string_view m_data;
-    std::size_t m_pos = 0;
-    std::size_t m_line;
-};
-
-struct IntegerRange {
-    std::int64_t min;
-    std::int64_t max;
-};
-
-IntegerRange integer_range(PlyScalar type) {
-    switch (type) {
-        case PlyScalar::int8:
-            return {INT8_MIN, INT8_MAX};
-        case PlyScalar::uint8:
-            return {0, UINT8_MAX};
-        case PlyScalar::int16:
-            return {INT16_MIN, INT16_MAX};
-        case PlyScalar::uint16:
-            return {0, UINT16_MAX};
-        case PlyScalar::int32:
-            return {INT32_MIN, INT32_MAX};
-        default:
-            return {0, UINT32_MAX};
-    }
-}
-
 class AsciiDecoder {
 public:
     AsciiDecoder(const PlyHeader& header, const MeshLayout& layout, std::string_view data,
                  Diagnostics& diag, geometry::TriangleMeshD& mesh)
         : m_header(header),
           m_layout(layout),
-          m_cursor(data, header.num_lines + 1),
+          m_cursor(data, header.num_lines + 1, diag),
           m_diag(diag),
           m_mesh(mesh) {}
 
@@ -482,46 +295,29 @@ public:
                 decode_record(element, m_layout.roles[e], r, e == m_layout.vertex_element);
             }
         }
-        if (m_cursor.next_record()) {
-            m_diag.set_line(m_cursor.line());
-            m_diag.fail(
-                "unexpected data after the last element, expected the end of the file, "
-                "got {}",
-                detail::quote(m_cursor.token()));
-        }
+        m_cursor.finish();
     }
 
 private:
     void decode_record(const PlyElement& element, const std::vector<Role>& roles, std::uint64_t r,
                        bool is_vertex) {
-        if (!m_cursor.next_record()) {
-            m_diag.set_line(m_cursor.line());
-            m_diag.fail("truncated data, expected {} records of element '{}', got {}",
-                        element.count, element.name, r);
-        }
-        m_diag.set_line(m_cursor.line());
+        m_cursor.begin_record(element, r);
         Vec3d position;
         for (std::size_t p = 0; p < element.properties.size(); ++p) {
             const PlyProperty& property = element.properties[p];
             if (!property.is_list) {
-                const double value = parse_value(property.type, element, r, property, "");
+                const double value = m_cursor.value(property.type, element, r, property, "");
                 if (roles[p] != Role::skip) {
                     position[static_cast<int>(roles[p]) - 1] = value;
                 }
                 continue;
             }
-            const double count =
-                parse_value(property.count_type, element, r, property, " list length");
-            if (count < 0) {
-                m_diag.fail(
-                    "list '{}' of element '{}' record {} has length {}, expected a "
-                    "non-negative length",
-                    property.name, element.name, r, count);
-            }
-            const auto length = static_cast<std::uint64_t>(count);
+            const std::uint64_t length = detail::list_length(
+                m_cursor.value(property.count_type, element, r, property, " list length"), element,
+                r, property, m_diag);
             m_corners.clear();
             for (std::uint64_t k = 0; k < length; ++k) {
-                const double item = parse_value(property.type, element, r, property, " item");
+                const double item = m_cursor.value(property.type, element, r, property, " item");
                 if (roles[p] == Role::indices) {
                     m_corners.push_back(static_cast<std::int64_t>(item));
                 }
@@ -530,71 +326,16 @@ private:
                 add_face(m_corners, r, m_layout.num_vertices, m_diag, m_mesh.triangles);
             }
         }
-        const std::string_view extra = m_cursor.token();
-        if (!extra.empty()) {
-            m_diag.fail("extra value {} after element '{}' record {}, expected the end of the line",
-                        detail::quote(extra), element.name, r);
-        }
+        m_cursor.end_record(element, r);
         if (is_vertex) {
             check_vertex(position, r, m_diag);
             m_mesh.positions[r] = position;
         }
     }
 
-    // Parses the next token as `type`; every PLY scalar fits a double exactly.
-    double parse_value(PlyScalar type, const PlyElement& element, std::uint64_t r,
-                       const PlyProperty& property, std::string_view part) {
-        const std::string_view token = m_cursor.token();
-        if (token.empty()) {
-            m_diag.fail(
-                "{}data in element '{}' record {}, expected a {} value for property "
-                "'{}'{}, got the end of the {}",
-                m_cursor.at_end() ? "truncated " : "missing ", element.name, r,
-                detail::to_string(type), property.name, part, m_cursor.at_end() ? "file" : "line");
-        }
-        detail::ParseStatus status = detail::ParseStatus::ok;
-        if (type == PlyScalar::float32) {
-            float value = 0;
-            status = detail::parse_real(token, value);
-            if (status == detail::ParseStatus::ok) {
-                return value;
-            }
-        } else if (type == PlyScalar::float64) {
-            double value = 0;
-            status = detail::parse_real(token, value);
-            if (status == detail::ParseStatus::ok) {
-                return value;
-            }
-        } else {
-            std::int64_t value = 0;
-            status = detail::parse_integer(token, value);
-            const IntegerRange range = integer_range(type);
-            if (status == detail::ParseStatus::ok) {
-                if (value >= range.min && value <= range.max) {
-                    return static_cast<double>(value);
-                }
-                status = detail::ParseStatus::out_of_range;
-            }
-            if (status == detail::ParseStatus::out_of_range) {
-                m_diag.fail(
-                    "bad value for property '{}'{} of element '{}' record {}, expected a "
-                    "{} in [{}, {}], got {}",
-                    property.name, part, element.name, r, detail::to_string(type), range.min,
-                    range.max, detail::quote(token));
-            }
-        }
-        m_diag.fail(
-            "bad value for property '{}'{} of element '{}' record {}, expected {} {}, "
-            "got {}",
-            property.name, part, element.name, r,
-            status == detail::ParseStatus::out_of_range ? "a value in the range of"
-                                                        : "a number of type",
-            detail::to_string(type), detail::quote(token));
-    }
-
     const PlyHeader& m_header;
     const MeshLayout& m_layout;
-    TextCursor m_cursor;
+    detail::PlyTextCursor m_cursor;
     Diagnostics& m_diag;
     geometry::TriangleMeshD& m_mesh;
     std::vector<std::int64_t> m_corners;  // scratch: one face's indices
@@ -623,13 +364,7 @@ void append_binary(fmt::memory_buffer& buffer, T value, bool swap) {
 template <typename Real>
 void write_ply_impl(const std::filesystem::path& path,
                     const geometry::BasicTriangleMesh<Real>& mesh, PlyFormat format) {
-    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
-        format != PlyFormat::binary_big_endian) {
-        throw InvalidInput(
-            fmt::format("write_ply: {}: format ({}) is not a PlyFormat, expected one of ascii, "
-                        "binary_little_endian, binary_big_endian",
-                        path.string(), static_cast<int>(format)));
-    }
+    detail::check_write_format(format, "write_ply", path);
     geometry::validate_mesh(mesh, path.string());
 
     constexpr bool IS_FLOAT = std::is_same_v<Real, float>;
@@ -659,8 +394,7 @@ void write_ply_impl(const std::filesystem::path& path,
                 flush_if_full(buffer, out);
             }
         } else {
-            const bool swap = detail::needs_swap(
-                format == PlyFormat::binary_big_endian ? std::endian::big : std::endian::little);
+            const bool swap = detail::needs_swap(format);
             for (const Vec3<Real>& p : mesh.positions) {
                 append_binary(buffer, p.x, swap);
                 append_binary(buffer, p.y, swap);
@@ -701,7 +435,7 @@ geometry::TriangleMeshD read_ply(const std::filesystem::path& path) {
     Diagnostics diag(path);
     const MeshLayout layout = check_layout(header, diag);
     const std::string_view data = std::string_view(bytes).substr(header.data_offset);
-    check_counts_fit(header, data.size(), diag);
+    detail::check_counts_fit(header, data.size(), diag);
 
     // Step 2: decode from memory.
     geometry::TriangleMeshD mesh;
@@ -745,13 +479,7 @@ void write_ply(const std::filesystem::path& path, const geometry::TriangleMeshD&
 
 void write_point_cloud_ply(const std::filesystem::path& path, std::span<const Vec3f> positions,
                            std::span<const std::array<std::uint8_t, 3>> colors, PlyFormat format) {
-    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
-        format != PlyFormat::binary_big_endian) {
-        throw InvalidInput(fmt::format(
-            "write_point_cloud_ply: {}: format ({}) is not a PlyFormat, expected one of ascii, "
-            "binary_little_endian, binary_big_endian",
-            path.string(), static_cast<int>(format)));
-    }
+    detail::check_write_format(format, "write_point_cloud_ply", path);
     if (!colors.empty() && colors.size() != positions.size()) {
         throw InvalidInput(
             fmt::format("write_point_cloud_ply: {}: {} colours for {} points, expected 0 or {}",
@@ -767,8 +495,7 @@ void write_point_cloud_ply(const std::filesystem::path& path, std::span<const Ve
     write_file_atomically(path, [&](std::ostream& out) {
         out.write(header.data(), static_cast<std::streamsize>(header.size()));
         fmt::memory_buffer buffer;
-        const bool swap = detail::needs_swap(
-            format == PlyFormat::binary_big_endian ? std::endian::big : std::endian::little);
+        const bool swap = detail::needs_swap(format);
         for (std::size_t i = 0; i < positions.size(); ++i) {
             const Vec3f& p = positions[i];
             if (format == PlyFormat::ascii) {

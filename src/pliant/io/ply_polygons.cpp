@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <iterator>
@@ -20,8 +19,8 @@
 #include "pliant/geometry/validate.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/byte_order.hpp"
+#include "pliant/io/detail/ply_format.hpp"
 #include "pliant/io/detail/ply_header.hpp"
-#include "pliant/io/detail/text.hpp"
 #include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
@@ -61,26 +60,7 @@ struct Slot {
     std::size_t attribute = 0;  // vertex_attribute, face_attribute: index into the mesh's list
 };
 
-// Formats "<path>: [line <n>: ]<message>" errors. The line is set while decoding ASCII data.
-class Diagnostics {
-public:
-    explicit Diagnostics(const std::filesystem::path& path) : m_path(path.string()) {}
-
-    void set_line(std::size_t line) { m_line = line; }
-
-    template <typename... Args>
-    [[noreturn]] void fail(fmt::format_string<Args...> format, Args&&... args) const {
-        const std::string message = fmt::format(format, std::forward<Args>(args)...);
-        if (m_line > 0) {
-            throw IoError(fmt::format("{}: line {}: {}", m_path, m_line, message));
-        }
-        throw IoError(fmt::format("{}: {}", m_path, message));
-    }
-
-private:
-    std::string m_path;
-    std::size_t m_line = 0;  // 0: binary data, no line
-};
+using Diagnostics = detail::PlyDiagnostics;
 
 struct Layout {
     std::size_t vertex_element = 0;
@@ -103,37 +83,17 @@ std::optional<std::size_t> find_scalar(const PlyElement& element, std::string_vi
 // Assigns every property a role and declares the kept attributes in `mesh`.
 Layout check_layout(const PlyHeader& header, const Diagnostics& diag, PolygonMesh& mesh) {
     Layout layout;
-    const std::optional<std::size_t> vertex = header.find("vertex");
-    if (!vertex) {
-        diag.fail("PLY header has no vertex element, expected 'element vertex <count>'");
-    }
-    layout.vertex_element = *vertex;
-    layout.face_element = header.find("face");
-    layout.slots.resize(header.elements.size());
-    for (std::size_t e = 0; e < header.elements.size(); ++e) {
-        layout.slots[e].assign(header.elements[e].properties.size(), Slot{});
-    }
+    const detail::PlyMeshElements found = detail::find_mesh_elements(header, diag);
+    layout.vertex_element = found.vertex_element;
+    layout.face_element = found.face_element;
+    layout.slots = detail::per_property(header, Slot{});
 
     // Vertices: positions, one UV pair, normals, the other scalars as attributes.
-    const PlyElement& vertices = header.elements[*vertex];
-    if (vertices.count > static_cast<std::uint64_t>(MAX_INDEX)) {
-        diag.fail("line {}: element 'vertex' has {} vertices, expected at most {} (32-bit indices)",
-                  vertices.line, vertices.count, MAX_INDEX);
-    }
-    std::vector<Slot>& vertex_slots = layout.slots[*vertex];
-    constexpr std::array<std::pair<const char*, Role>, 3> AXES{
-        {{"x", Role::x}, {"y", Role::y}, {"z", Role::z}}};
-    for (const auto& [name, role] : AXES) {
-        const std::optional<std::size_t> p = vertices.find(name);
-        if (!p) {
-            diag.fail(
-                "element 'vertex' has no property '{}', expected scalar properties x, y and z",
-                name);
-        }
-        if (vertices.properties[*p].is_list) {
-            diag.fail("property '{}' of element 'vertex' is a list, expected a scalar", name);
-        }
-        vertex_slots[*p].role = role;
+    const PlyElement& vertices = header.elements[found.vertex_element];
+    std::vector<Slot>& vertex_slots = layout.slots[found.vertex_element];
+    constexpr std::array<Role, 3> AXES{Role::x, Role::y, Role::z};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+        vertex_slots[found.xyz[axis]].role = AXES[axis];
     }
     constexpr std::array<std::pair<const char*, const char*>, 4> UV_NAMES{
         {{"s", "t"}, {"u", "v"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}}};
@@ -168,24 +128,7 @@ Layout check_layout(const PlyHeader& header, const Diagnostics& diag, PolygonMes
     if (layout.face_element) {
         const PlyElement& faces = header.elements[*layout.face_element];
         std::vector<Slot>& face_slots = layout.slots[*layout.face_element];
-        std::optional<std::size_t> p = faces.find("vertex_indices");
-        if (!p) {
-            p = faces.find("vertex_index");
-        }
-        if (!p) {
-            diag.fail(
-                "element 'face' has no property 'vertex_indices', expected a list property "
-                "named vertex_indices or vertex_index");
-        }
-        const PlyProperty& indices = faces.properties[*p];
-        if (!indices.is_list) {
-            diag.fail("property '{}' of element 'face' is a scalar, expected a list", indices.name);
-        }
-        if (!detail::is_integer(indices.type)) {
-            diag.fail("list '{}' of element 'face' has item type {}, expected an integer type",
-                      indices.name, detail::to_string(indices.type));
-        }
-        face_slots[*p].role = Role::indices;
+        face_slots[found.indices].role = Role::indices;
         if (const std::optional<std::size_t> t = faces.find("texcoord")) {
             if (!faces.properties[*t].is_list) {
                 diag.fail(
@@ -207,85 +150,11 @@ Layout check_layout(const PlyHeader& header, const Diagnostics& diag, PolygonMes
     return layout;
 }
 
-// Refuses element counts that the data section cannot hold, before anything is allocated: a
-// binary record takes at least min_record_bytes(), an ASCII record of k values at least 2k bytes
-// (k tokens, each followed by a space or newline, except at the very end of the file). The same
-// rule as read_ply's.
-void check_counts_fit(const PlyHeader& header, std::size_t data_bytes, const Diagnostics& diag) {
-    const bool is_ascii = header.format == PlyFormat::ascii;
-    std::uint64_t remaining = data_bytes;
-    for (const PlyElement& element : header.elements) {
-        const std::uint64_t min_bytes =
-            is_ascii ? 2 * element.min_record_tokens() : element.min_record_bytes();
-        if (min_bytes == 0) {
-            continue;
-        }
-        const std::uint64_t capacity =
-            is_ascii ? (remaining + 1) / min_bytes : remaining / min_bytes;
-        if (element.count > capacity) {
-            diag.fail(
-                "line {}: truncated data or wrong count: element '{}' declares {} records "
-                "of at least {} bytes, expected at most {} in the {} bytes of data left",
-                element.line, element.name, element.count, min_bytes, capacity, remaining);
-        }
-        remaining -= std::min(remaining, element.count * min_bytes);
-    }
-}
-
-// Every PLY scalar converts exactly to double (integers are at most 32 bits).
-double load_value(const char* p, PlyScalar type, bool swap) {
-    switch (type) {
-        case PlyScalar::int8:
-            return detail::load<std::int8_t>(p, swap);
-        case PlyScalar::uint8:
-            return detail::load<std::uint8_t>(p, swap);
-        case PlyScalar::int16:
-            return detail::load<std::int16_t>(p, swap);
-        case PlyScalar::uint16:
-            return detail::load<std::uint16_t>(p, swap);
-        case PlyScalar::int32:
-            return detail::load<std::int32_t>(p, swap);
-        case PlyScalar::uint32:
-            return detail::load<std::uint32_t>(p, swap);
-        case PlyScalar::float32:
-            return static_cast<double>(detail::load<float>(p, swap));
-        case PlyScalar::float64:
-            return detail::load<double>(p, swap);
-    }
-    return 0.0;
-}
-
-struct IntegerRange {
-    std::int64_t min;
-    std::int64_t max;
-};
-
-IntegerRange integer_range(PlyScalar type) {
-    switch (type) {
-        case PlyScalar::int8:
-            return {INT8_MIN, INT8_MAX};
-        case PlyScalar::uint8:
-            return {0, UINT8_MAX};
-        case PlyScalar::int16:
-            return {INT16_MIN, INT16_MAX};
-        case PlyScalar::uint16:
-            return {0, UINT16_MAX};
-        case PlyScalar::int32:
-            return {INT32_MIN, INT32_MAX};
-        default:
-            return {0, UINT32_MAX};
-    }
-}
-
 // Binary data: values in file order from `data` (everything after end_header).
 class BinarySource {
 public:
     BinarySource(std::string_view data, PlyFormat format, const Diagnostics& diag)
-        : m_data(data),
-          m_diag(diag),
-          m_swap(detail::needs_swap(format == PlyFormat::binary_big_endian ? std::endian::big
-                                                                           : std::endian::little)) {
-    }
+        : m_data(data), m_diag(diag), m_swap(detail::needs_swap(format)) {}
 
     void begin_record(const PlyElement& /*element*/, std::uint64_t /*record*/) {}
     void end_record(const PlyElement& /*element*/, std::uint64_t /*record*/) {}
@@ -296,7 +165,7 @@ public:
         if (size > m_data.size() - m_pos) {
             truncated(element, record, property, size);
         }
-        const double v = load_value(m_data.data() + m_pos, type, m_swap);
+        const double v = detail::load_value(m_data.data() + m_pos, type, m_swap);
         m_pos += size;
         return v;
     }
@@ -316,22 +185,13 @@ public:
         m_pos += static_cast<std::size_t>(length) * detail::size_of(property.type);
     }
 
-    void finish() const {
-        if (m_pos != m_data.size()) {
-            m_diag.fail(
-                "{} bytes of unexpected data after the last element, expected the end of "
-                "the file (do the header's counts and types match the data?)",
-                m_data.size() - m_pos);
-        }
-    }
+    void finish() const { detail::check_binary_end(m_data.size() - m_pos, m_diag); }
 
 private:
     [[noreturn]] void truncated(const PlyElement& element, std::uint64_t record,
                                 const PlyProperty& property, std::uint64_t num_bytes) const {
-        m_diag.fail(
-            "truncated binary data in element '{}' record {} of {}, expected {} bytes "
-            "for property '{}', got {}",
-            element.name, record, element.count, num_bytes, property.name, m_data.size() - m_pos);
+        detail::fail_truncated_binary(element, record, property, num_bytes, m_data.size() - m_pos,
+                                      m_diag);
     }
 
     std::string_view m_data;
@@ -344,73 +204,17 @@ private:
 class AsciiSource {
 public:
     AsciiSource(std::string_view data, std::size_t first_line, Diagnostics& diag)
-        : m_data(data), m_line(first_line), m_diag(diag) {}
+        : m_cursor(data, first_line, diag) {}
 
     void begin_record(const PlyElement& element, std::uint64_t record) {
-        if (!next_record()) {
-            m_diag.set_line(m_line);
-            m_diag.fail("truncated data, expected {} records of element '{}', got {}",
-                        element.count, element.name, record);
-        }
-        m_diag.set_line(m_line);
+        m_cursor.begin_record(element, record);
     }
-
     void end_record(const PlyElement& element, std::uint64_t record) {
-        const std::string_view extra = token();
-        if (!extra.empty()) {
-            m_diag.fail("extra value {} after element '{}' record {}, expected the end of the line",
-                        detail::quote(extra), element.name, record);
-        }
+        m_cursor.end_record(element, record);
     }
-
-    // Parses the next token as `type`; every PLY scalar fits a double exactly.
     double value(PlyScalar type, const PlyElement& element, std::uint64_t record,
                  const PlyProperty& property, std::string_view part) {
-        const std::string_view text = token();
-        if (text.empty()) {
-            m_diag.fail(
-                "{}data in element '{}' record {}, expected a {} value for property "
-                "'{}'{}, got the end of the {}",
-                at_end() ? "truncated " : "missing ", element.name, record, detail::to_string(type),
-                property.name, part, at_end() ? "file" : "line");
-        }
-        detail::ParseStatus status = detail::ParseStatus::ok;
-        if (type == PlyScalar::float32) {
-            float v = 0;
-            status = detail::parse_real(text, v);
-            if (status == detail::ParseStatus::ok) {
-                return v;
-            }
-        } else if (type == PlyScalar::float64) {
-            double v = 0;
-            status = detail::parse_real(text, v);
-            if (status == detail::ParseStatus::ok) {
-                return v;
-            }
-        } else {
-            std::int64_t v = 0;
-            status = detail::parse_integer(text, v);
-            const IntegerRange range = integer_range(type);
-            if (status == detail::ParseStatus::ok) {
-                if (v >= range.min && v <= range.max) {
-                    return static_cast<double>(v);
-                }
-                status = detail::ParseStatus::out_of_range;
-            }
-            if (status == detail::ParseStatus::out_of_range) {
-                m_diag.fail(
-                    "bad value for property '{}'{} of element '{}' record {}, expected a "
-                    "{} in [{}, {}], got {}",
-                    property.name, part, element.name, record, detail::to_string(type), range.min,
-                    range.max, detail::quote(text));
-            }
-        }
-        m_diag.fail(
-            "bad value for property '{}'{} of element '{}' record {}, expected {} {}, got {}",
-            property.name, part, element.name, record,
-            status == detail::ParseStatus::out_of_range ? "a value in the range of"
-                                                        : "a number of type",
-            detail::to_string(type), detail::quote(text));
+        return m_cursor.value(type, element, record, property, part);
     }
 
     // A list's items are read one token at a time: a length beyond the line fails at its end.
@@ -420,52 +224,14 @@ public:
     void skip_list(std::uint64_t length, const PlyElement& element, std::uint64_t record,
                    const PlyProperty& property) {
         for (std::uint64_t k = 0; k < length; ++k) {
-            value(property.type, element, record, property, " item");
+            m_cursor.value(property.type, element, record, property, " item");
         }
     }
 
-    void finish() {
-        if (next_record()) {
-            m_diag.set_line(m_line);
-            m_diag.fail(
-                "unexpected data after the last element, expected the end of the file, got {}",
-                detail::quote(token()));
-        }
-    }
+    void finish() { m_cursor.finish(); }
 
 private:
-    static bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
-
-    bool next_record() {
-        while (m_pos < m_data.size()) {
-            const char c = m_data[m_pos];
-            if (c == '\n') {
-                ++m_line;
-            } else if (!is_blank(c)) {
-                return true;
-            }
-            ++m_pos;
-        }
-        return false;
-    }
-
-    std::string_view token() {
-        while (m_pos < m_data.size() && is_blank(m_data[m_pos])) {
-            ++m_pos;
-        }
-        const std::size_t start = m_pos;
-        while (m_pos < m_data.size() && !is_blank(m_data[m_pos]) && m_data[m_pos] != '\n') {
-            ++m_pos;
-        }
-        return m_data.substr(start, m_pos - start);
-    }
-
-    bool at_end() const { return m_pos >= m_data.size(); }
-
-    std::string_view m_data;
-    std::size_t m_pos = 0;
-    std::size_t m_line;
-    Diagnostics& m_diag;
+    detail::PlyTextCursor m_cursor;
 };
 
 // Walks every record of every element through a Source (BinarySource or AsciiSource) and builds
@@ -523,15 +289,9 @@ private:
                 store(slot, r, value);
                 continue;
             }
-            const double count =
-                m_source.value(property.count_type, element, r, property, " list length");
-            if (count < 0) {
-                m_diag.fail(
-                    "list '{}' of element '{}' record {} has length {}, expected a "
-                    "non-negative length",
-                    property.name, element.name, r, count);
-            }
-            const auto length = static_cast<std::uint64_t>(count);
+            const std::uint64_t length = detail::list_length(
+                m_source.value(property.count_type, element, r, property, " list length"), element,
+                r, property, m_diag);
             if (slot.role == Role::skip) {
                 m_source.skip_list(length, element, r, property);
                 continue;
@@ -750,7 +510,7 @@ std::vector<PlyScalar> check_attributes(const std::vector<PolygonMesh::Attribute
             const double value = attribute.values[k];
             bool fits = true;
             if (detail::is_integer(*type)) {
-                const IntegerRange range = integer_range(*type);
+                const detail::IntegerRange range = detail::integer_range(*type);
                 fits = value == std::floor(value) && value >= static_cast<double>(range.min) &&
                        value <= static_cast<double>(range.max);
             } else if (*type == PlyScalar::float32 && std::isfinite(value)) {
@@ -778,7 +538,7 @@ PolygonMesh read_ply_polygons(const std::filesystem::path& path) {
     PolygonMesh mesh;
     const Layout layout = check_layout(header, diag, mesh);
     const std::string_view data = std::string_view(bytes).substr(header.data_offset);
-    check_counts_fit(header, data.size(), diag);
+    detail::check_counts_fit(header, data.size(), diag);
 
     // Step 2: decode from memory.
     if (header.format == PlyFormat::ascii) {
@@ -794,13 +554,7 @@ PolygonMesh read_ply_polygons(const std::filesystem::path& path) {
 void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& mesh,
                         std::span<const Vec3d> positions, PlyFormat format) {
     // Step 1: checks, normals and the UV layout, before touching the file.
-    if (format != PlyFormat::ascii && format != PlyFormat::binary_little_endian &&
-        format != PlyFormat::binary_big_endian) {
-        throw InvalidInput(
-            fmt::format("write_ply_polygons: {}: format ({}) is not a PlyFormat, expected one of "
-                        "ascii, binary_little_endian, binary_big_endian",
-                        path.string(), static_cast<int>(format)));
-    }
+    detail::check_write_format(format, "write_ply_polygons", path);
     if (positions.size() != mesh.positions.size()) {
         throw InvalidInput(fmt::format("{}: expected {} positions (the mesh's vertices), got {}",
                                        path.string(), mesh.positions.size(), positions.size()));
@@ -864,8 +618,7 @@ void write_ply_polygons(const std::filesystem::path& path, const PolygonMesh& me
     header += "end_header\n";
 
     // Step 3: the data, streamed.
-    const bool swap = detail::needs_swap(
-        format == PlyFormat::binary_big_endian ? std::endian::big : std::endian::little);
+    const bool swap = detail::needs_swap(format);
     const bool is_ascii = format == PlyFormat::ascii;
     write_file_atomically(path, [&](std::ostream& out) {
         out.write(header.data(), static_cast<std::streamsize>(header.size()));
