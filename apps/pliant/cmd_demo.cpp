@@ -460,13 +460,15 @@ void run_demo(const DemoOptions& options, const GlobalOptions& global) {
                 "moved copy\n  {:<27}each cloth scene: preview.mp4 (watch these), frames (OBJ), "
                 "stats.json\n  {:<27}the drape untangled after falling through itself: preview.mp4 "
                 "(watch it), fall/preview.mp4 (the fall), scene.json, stats.json; crossing/ "
-                "(two sheets crossing like an X, untangled): preview.mp4\n  {:<27}the "
+                "(two sheets crossing like an X, untangled): preview.mp4\n  {:<27}a skirt of "
+                "two sewn panels on a walking mannequin: preview.mp4 (watch it), frames (OBJ with "
+                "the panels' quads and UVs), cloth.pc2, scene.json, stats.json\n  {:<27}the "
                 "ray-cast volume: volume.png, turntable.mp4\n  {:<27}the "
                 "twisted volume: twist.mp4 (watch it), twist.png, twisted.nrrd\n  {:<27}from "
                 "images: dataset/, reconstructed.nrrd, compare.png (look at it), cleaned.nrrd, "
                 "twist.mp4 (watch it)\n  {:<27}every number above\n",
                 dir.string(), sheet_path.filename().string(), sheet_t1_path.filename().string(),
-                "drape/ twist/ pile/ flag/", "untangle/", "volume/", "deform/", "nerf/",
+                "drape/ twist/ pile/ flag/", "untangle/", "garment/", "volume/", "deform/", "nerf/",
                 summary_path.filename().string()));
     }
     if (!table.ok()) {
