@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "ball_scene.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/nerf/metrics.hpp"
@@ -17,63 +18,12 @@
 namespace pliant::nerf {
 namespace {
 
-// Ground truth: a coloured ball (red core, blue shell) in a unit box.
+using test::make_dataset;
+using test::mean_psnr;
+using test::tiny_options;
+
 RadianceGrid ball_field(int resolution) {
-    RadianceGrid g(AABBd{{0, 0, 0}, {1, 1, 1}}, resolution, -12.0f, 0.0f);
-    const auto& d = g.dims();
-    auto p = g.params();
-    for (int k = 0; k < d[2]; ++k) {
-        for (int j = 0; j < d[1]; ++j) {
-            for (int i = 0; i < d[0]; ++i) {
-                const Vec3d c{(i + 0.5) / d[0] - 0.5, (j + 0.5) / d[1] - 0.5,
-                              (k + 0.5) / d[2] - 0.5};
-                const double r = norm(c);
-                const std::size_t v = 4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k));
-                if (r < 0.35) {
-                    p[v] = density_raw_for_sigma(r < 0.2 ? 8.0f : 3.0f);
-                    p[v + 1] = r < 0.2 ? 2.0f : -2.0f;
-                    p[v + 2] = -1.0f;
-                    p[v + 3] = r < 0.2 ? -2.0f : 2.0f;
-                }
-            }
-        }
-    }
-    return g;
-}
-
-Dataset make_dataset(const RadianceGrid& truth, int views, int size, double offset) {
-    Dataset ds;
-    ds.box = truth.box();
-    for (int i = 0; i < views; ++i) {
-        const double z = 1.0 - (2.0 * i + 1.0) / views;
-        const double az = (i * 137.508 + offset);
-        const render::Camera cam =
-            render::frame_box(truth.box(), az, std::asin(z) * 180.0 / std::numbers::pi, size, size);
-        ds.intrinsics = intrinsics_from_camera(cam);
-        View v;
-        v.name = "view" + std::to_string(i);
-        v.camera_to_world = pose_from_camera(cam);
-        v.rgb = render_view(truth, ds.intrinsics, v.camera_to_world, ds.background);
-        ds.views.push_back(std::move(v));
-    }
-    return ds;
-}
-
-double mean_psnr(const RadianceGrid& grid, const Dataset& ds) {
-    double sum = 0.0;
-    for (const View& v : ds.views) {
-        sum += psnr(render_view(grid, ds.intrinsics, v.camera_to_world, ds.background), v.rgb);
-    }
-    return sum / static_cast<double>(ds.views.size());
-}
-
-TrainOptions tiny_options() {
-    TrainOptions o;
-    o.resolution = 24;
-    o.stages = 2;
-    o.iterations = 300;
-    o.batch_rays = 512;
-    return o;
+    return test::ball_field(resolution, false);
 }
 
 TEST(Trainer, TinySceneConvergesOnTrainAndHeldOutViews) {

@@ -1,0 +1,84 @@
+// Tiny synthetic radiance-field scenes for the trainer's tests: a ground-truth ball field, views
+// rendered from it around the box, and the mean PSNR of a field over those views.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+#include <string>
+#include <utility>
+
+#include "pliant/nerf/metrics.hpp"
+#include "pliant/nerf/render.hpp"
+#include "pliant/nerf/trainer.hpp"
+#include "pliant/render/camera.hpp"
+
+namespace pliant::nerf::test {
+
+// A coloured ball in the unit box: a red core (r < 0.2, σ 8) and a blue shell (r < 0.35, σ 3);
+// `banded` adds a green band (|z| < 0.08 or |x − 0.1| < 0.06), texture that pins poses down.
+inline RadianceGrid ball_field(int resolution, bool banded = false) {
+    RadianceGrid g(AABBd{{0, 0, 0}, {1, 1, 1}}, resolution, -12.0f, 0.0f);
+    const auto& d = g.dims();
+    auto p = g.params();
+    for (int k = 0; k < d[2]; ++k) {
+        for (int j = 0; j < d[1]; ++j) {
+            for (int i = 0; i < d[0]; ++i) {
+                const Vec3d c{(i + 0.5) / d[0] - 0.5, (j + 0.5) / d[1] - 0.5,
+                              (k + 0.5) / d[2] - 0.5};
+                const double r = norm(c);
+                const std::size_t v = 4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k));
+                if (r < 0.35) {
+                    const bool band =
+                        banded && (std::fabs(c.z) < 0.08 || std::fabs(c.x - 0.1) < 0.06);
+                    p[v] = density_raw_for_sigma(r < 0.2 ? 8.0f : 3.0f);
+                    p[v + 1] = r < 0.2 ? 2.0f : -2.0f;
+                    p[v + 2] = band ? 2.5f : -1.0f;
+                    p[v + 3] = r < 0.2 ? -2.0f : 2.0f;
+                }
+            }
+        }
+    }
+    return g;
+}
+
+// `views` square views of `size` pixels rendered from `truth`, on a Fibonacci sphere around its
+// box (azimuths start at `offset` degrees).
+inline Dataset make_dataset(const RadianceGrid& truth, int views, int size, double offset) {
+    Dataset ds;
+    ds.box = truth.box();
+    for (int i = 0; i < views; ++i) {
+        const double z = 1.0 - (2.0 * i + 1.0) / views;
+        const double az = (i * 137.508 + offset);
+        const render::Camera cam =
+            render::frame_box(truth.box(), az, std::asin(z) * 180.0 / std::numbers::pi, size, size);
+        ds.intrinsics = intrinsics_from_camera(cam);
+        View v;
+        v.name = "view" + std::to_string(i);
+        v.camera_to_world = pose_from_camera(cam);
+        v.rgb = render_view(truth, ds.intrinsics, v.camera_to_world, ds.background);
+        ds.views.push_back(std::move(v));
+    }
+    return ds;
+}
+
+// The mean PSNR (dB) of `grid` rendered at the views of `ds` against their images.
+inline double mean_psnr(const RadianceGrid& grid, const Dataset& ds) {
+    double sum = 0.0;
+    for (const View& v : ds.views) {
+        sum += psnr(render_view(grid, ds.intrinsics, v.camera_to_world, ds.background), v.rgb);
+    }
+    return sum / static_cast<double>(ds.views.size());
+}
+
+// A training run small enough for a unit test: 24³, two stages, 300 iterations of 512 rays.
+inline TrainOptions tiny_options() {
+    TrainOptions o;
+    o.resolution = 24;
+    o.stages = 2;
+    o.iterations = 300;
+    o.batch_rays = 512;
+    return o;
+}
+
+}  // namespace pliant::nerf::test
