@@ -4,10 +4,15 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <numbers>
+#include <span>
 #include <string>
 #include <utility>
+#include <vector>
 
+#include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
 #include "pliant/nerf/metrics.hpp"
 #include "pliant/nerf/render.hpp"
 #include "pliant/nerf/trainer.hpp"
@@ -79,6 +84,64 @@ inline TrainOptions tiny_options() {
     o.iterations = 300;
     o.batch_rays = 512;
     return o;
+}
+
+// One training run three ways: on 1 thread (saving its state at iteration 25), on 2 threads, and
+// resumed from that state: a test checks the three give the same bits.
+struct ThreadsAndResume {
+    TrainResult one_thread;
+    TrainResult two_threads;
+    TrainResult resumed;
+};
+
+inline ThreadsAndResume train_threads_and_resume(const Dataset& ds, const TrainOptions& o) {
+    const auto none = [](const TrainProgress&) {
+        return true;
+    };
+    std::vector<std::byte> state;
+    TrainCheckpoints save;
+    save.every = 25;
+    save.save = [&](std::span<const std::byte> s, std::int64_t iteration) {
+        if (iteration == 25) {
+            state.assign(s.begin(), s.end());
+        }
+    };
+    set_num_threads(1);
+    TrainResult one = train(ds, o, none, save);
+    set_num_threads(2);
+    TrainResult two = train(ds, o, none);
+    if (state.empty()) {
+        set_num_threads(0);
+        throw InternalError("train_threads_and_resume: no state saved at iteration 25");
+    }
+    TrainCheckpoints resume;
+    resume.resume_from = state;
+    resume.resume_source = "state";
+    TrainResult resumed = train(ds, o, none, resume);
+    set_num_threads(0);
+    return {std::move(one), std::move(two), std::move(resumed)};
+}
+
+// The state a run of `o` saves last (every 25 iterations), and a run of `o` resumed from `state`.
+inline std::vector<std::byte> last_state(const Dataset& ds, const TrainOptions& o) {
+    std::vector<std::byte> state;
+    TrainCheckpoints save;
+    save.every = 25;
+    save.save = [&](std::span<const std::byte> s, std::int64_t) {
+        state.assign(s.begin(), s.end());
+    };
+    (void)train(
+        ds, o, [](const TrainProgress&) { return true; }, save);
+    return state;
+}
+
+inline TrainResult train_resumed(const Dataset& ds, const TrainOptions& o,
+                                 std::span<const std::byte> state) {
+    TrainCheckpoints resume;
+    resume.resume_from = state;
+    resume.resume_source = "state";
+    return train(
+        ds, o, [](const TrainProgress&) { return true; }, resume);
 }
 
 }  // namespace pliant::nerf::test

@@ -211,24 +211,10 @@ TEST(CameraRefinement, IsDeterministicAndResumesBitwise) {
     o.refine_poses = true;
     o.refine_focal = true;
     o.distortion = 0.01f;
-    std::vector<std::byte> state;
-    TrainCheckpoints save;
-    save.every = 25;
-    save.save = [&](std::span<const std::byte> s, std::int64_t iteration) {
-        if (iteration == 25) {
-            state.assign(s.begin(), s.end());
-        }
-    };
-    set_num_threads(1);
-    const TrainResult a = train(ds, o, none, save);
-    set_num_threads(2);
-    const TrainResult b = train(ds, o, none);
-    ASSERT_FALSE(state.empty());
-    TrainCheckpoints resume;
-    resume.resume_from = state;
-    resume.resume_source = "state";
-    const TrainResult c = train(ds, o, none, resume);
-    set_num_threads(0);
+    const test::ThreadsAndResume runs = test::train_threads_and_resume(ds, o);
+    const TrainResult& a = runs.one_thread;
+    const TrainResult& b = runs.two_threads;
+    const TrainResult& c = runs.resumed;
     for (const TrainResult* r : {&b, &c}) {
         EXPECT_TRUE(
             std::equal(a.grid.params().begin(), a.grid.params().end(), r->grid.params().begin()));
@@ -247,14 +233,9 @@ TEST(CameraRefinement, IsDeterministicAndResumesBitwise) {
     EXPECT_NE(a.focal_scale, 1.0);
     // A state without the refinement does not resume a run with it.
     o.refine_poses = o.refine_focal = false;
-    std::vector<std::byte> plain_state;
-    save.save = [&](std::span<const std::byte> s, std::int64_t) {
-        plain_state.assign(s.begin(), s.end());
-    };
-    (void)train(ds, o, none, save);
+    const std::vector<std::byte> plain_state = test::last_state(ds, o);
     o.refine_poses = true;
-    resume.resume_from = plain_state;
-    EXPECT_THROW(train(ds, o, none, resume), InvalidInput);
+    EXPECT_THROW(test::train_resumed(ds, o, plain_state), InvalidInput);
 }
 
 }  // namespace

@@ -220,27 +220,10 @@ TEST(Trainer, EnvironmentIsDeterministicAndResumesBitwise) {
     o.resolution = 16;
     o.environment_width = 8;
     o.sparsity = 1e-4f;
-    const auto none = [](const TrainProgress&) {
-        return true;
-    };
-    std::vector<std::byte> state;
-    TrainCheckpoints save;
-    save.every = 25;
-    save.save = [&](std::span<const std::byte> s, std::int64_t iteration) {
-        if (iteration == 25) {
-            state.assign(s.begin(), s.end());
-        }
-    };
-    set_num_threads(1);
-    const TrainResult a = train(ds, o, none, save);
-    set_num_threads(2);
-    const TrainResult b = train(ds, o, none);
-    ASSERT_FALSE(state.empty());
-    TrainCheckpoints resume;
-    resume.resume_from = state;
-    resume.resume_source = "state";
-    const TrainResult c = train(ds, o, none, resume);
-    set_num_threads(0);
+    const test::ThreadsAndResume runs = test::train_threads_and_resume(ds, o);
+    const TrainResult& a = runs.one_thread;
+    const TrainResult& b = runs.two_threads;
+    const TrainResult& c = runs.resumed;
     for (const TrainResult* r : {&b, &c}) {
         ASSERT_EQ(a.grid.params().size(), r->grid.params().size());
         EXPECT_TRUE(
@@ -252,14 +235,9 @@ TEST(Trainer, EnvironmentIsDeterministicAndResumesBitwise) {
     }
     // A state without the environment map does not resume a run with one.
     o.environment_width = 0;
-    std::vector<std::byte> plain_state;
-    save.save = [&](std::span<const std::byte> s, std::int64_t) {
-        plain_state.assign(s.begin(), s.end());
-    };
-    (void)train(ds, o, none, save);
+    const std::vector<std::byte> plain_state = test::last_state(ds, o);
     o.environment_width = 8;
-    resume.resume_from = plain_state;
-    EXPECT_THROW(train(ds, o, none, resume), InvalidInput);
+    EXPECT_THROW(test::train_resumed(ds, o, plain_state), InvalidInput);
 }
 
 }  // namespace
