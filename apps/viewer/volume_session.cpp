@@ -384,18 +384,23 @@ void VolumeSession::end_drag() {
     }
 }
 
+render::RayCastOptions VolumeSession::caster_options() const {
+    render::RayCastOptions options;
+    options.step = m_options.step;
+    options.shading = m_options.shading;
+    options.clip = m_options.clip;
+    options.background = m_options.background;
+    if (m_is_rgba) {
+        options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;
+    }
+    return options;
+}
+
 void VolumeSession::prepare_caster() {
     if (uses_map()) {
         const volume::InverseMap& map = m_maps[static_cast<std::size_t>(m_front)];
         if (m_caster_dirty || !m_mapped) {
-            render::RayCastOptions options;
-            options.step = m_options.step;
-            options.shading = m_options.shading;
-            options.clip = m_options.clip;
-            options.background = m_options.background;
-            if (m_is_rgba) {
-                options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;
-            }
+            const render::RayCastOptions options = caster_options();
             m_mapped = std::make_unique<render::MappedRayCaster>(
                 m_source, m_is_rgba ? nullptr : &m_render_tf, m_source, options);
             m_mapped->set_map(map);
@@ -421,14 +426,7 @@ void VolumeSession::prepare_caster() {
         return;
     }
     if (m_caster_dirty || !m_caster) {
-        render::RayCastOptions options;
-        options.step = m_options.step;
-        options.shading = m_options.shading;
-        options.clip = m_options.clip;
-        options.background = m_options.background;
-        if (m_is_rgba) {
-            options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;
-        }
+        const render::RayCastOptions options = caster_options();
         m_caster =
             std::make_unique<render::RayCaster>(shown, m_is_rgba ? nullptr : &m_render_tf, options);
         m_stats.prepare_ms = m_caster->prepare_ms();

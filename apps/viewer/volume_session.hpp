@@ -149,6 +149,8 @@ private:
     void build_deformable();
     void apply_driver();
     // The RayCaster for the current state (built when something it prepares changed).
+    // The ray-casting options of the session's current view settings.
+    render::RayCastOptions caster_options() const;
     void prepare_caster();
     // Waits for a frame in flight and publishes it.
     void settle();
