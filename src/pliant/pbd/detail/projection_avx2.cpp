@@ -269,6 +269,106 @@ PLIANT_AVX2_FN std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
     return k;
 }
 
+namespace {
+
+// The lanes l < n of 8 (n ≤ 8) as a mask for _mm256_maskload_ps / _mm256_maskstore_ps.
+PLIANT_AVX2_INLINE __m256i lane_mask(std::int64_t n) {
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(n)), lanes);
+}
+
+// Vertices i .. i + 8 of p (every lane; masked lanes read 0).
+PLIANT_AVX2_INLINE Lanes8 load_soa(const SoaPositions& p, std::int64_t i) {
+    return {_mm256_loadu_ps(p.x + i), _mm256_loadu_ps(p.y + i), _mm256_loadu_ps(p.z + i),
+            _mm256_loadu_ps(p.w + i)};
+}
+PLIANT_AVX2_INLINE Lanes8 load_soa(const SoaPositions& p, std::int64_t i, __m256i mask) {
+    return {_mm256_maskload_ps(p.x + i, mask), _mm256_maskload_ps(p.y + i, mask),
+            _mm256_maskload_ps(p.z + i, mask), _mm256_maskload_ps(p.w + i, mask)};
+}
+// Positions only: w does not change.
+PLIANT_AVX2_INLINE void store_soa(const SoaPositions& p, std::int64_t i, const Lanes8& l) {
+    _mm256_storeu_ps(p.x + i, l.x);
+    _mm256_storeu_ps(p.y + i, l.y);
+    _mm256_storeu_ps(p.z + i, l.z);
+}
+PLIANT_AVX2_INLINE void store_soa(const SoaPositions& p, std::int64_t i, const Lanes8& l,
+                                  __m256i mask) {
+    _mm256_maskstore_ps(p.x + i, mask, l.x);
+    _mm256_maskstore_ps(p.y + i, mask, l.y);
+    _mm256_maskstore_ps(p.z + i, mask, l.z);
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN void project_edge_run_soa_avx2(const SoaPositions& p, std::int32_t a, std::int32_t b,
+                                              const float* rest_lengths, std::int64_t count,
+                                              float inv_k, float alpha) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        Lanes8 la = load_soa(p, a + k);
+        Lanes8 lb = load_soa(p, b + k);
+        project_edges8(la, lb, rest_lengths + k, inv_k8, alpha8);
+        store_soa(p, a + k, la);
+        store_soa(p, b + k, lb);
+    }
+    if (k < count) {
+        // Masked lanes: w = 0, so their edges are invalid (s = 0) and not stored.
+        const __m256i mask = lane_mask(count - k);
+        float lengths[8];
+        _mm256_storeu_ps(lengths, _mm256_maskload_ps(rest_lengths + k, mask));
+        Lanes8 la = load_soa(p, a + k, mask);
+        Lanes8 lb = load_soa(p, b + k, mask);
+        project_edges8(la, lb, lengths, inv_k8, alpha8);
+        store_soa(p, a + k, la, mask);
+        store_soa(p, b + k, lb, mask);
+    }
+}
+
+PLIANT_AVX2_FN void project_tet_run_soa_avx2(const SoaPositions& p, const geometry::Tet& first,
+                                             const float* rest_volumes, std::uint8_t* at_risk,
+                                             std::int64_t count, float inv_k, float alpha,
+                                             std::int64_t& num_at_risk) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    std::int64_t flagged = 0;  // a local: the stores below may alias num_at_risk
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        Lanes8 p0 = load_soa(p, first[0] + k);
+        Lanes8 p1 = load_soa(p, first[1] + k);
+        Lanes8 p2 = load_soa(p, first[2] + k);
+        Lanes8 p3 = load_soa(p, first[3] + k);
+        flag_at_risk(project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8), at_risk + k,
+                     flagged);
+        store_soa(p, first[0] + k, p0);
+        store_soa(p, first[1] + k, p1);
+        store_soa(p, first[2] + k, p2);
+        store_soa(p, first[3] + k, p3);
+    }
+    if (k < count) {
+        // Masked lanes: w = 0 and V0 = 0, so they move nothing and are not at risk (0 < 0 is
+        // false); the mask drops them anyway.
+        const std::int64_t n = count - k;
+        const __m256i mask = lane_mask(n);
+        float volumes[8];
+        _mm256_storeu_ps(volumes, _mm256_maskload_ps(rest_volumes + k, mask));
+        Lanes8 p0 = load_soa(p, first[0] + k, mask);
+        Lanes8 p1 = load_soa(p, first[1] + k, mask);
+        Lanes8 p2 = load_soa(p, first[2] + k, mask);
+        Lanes8 p3 = load_soa(p, first[3] + k, mask);
+        const int risk = project_tets8(p0, p1, p2, p3, volumes, inv_k8, alpha8) &
+                         ((1 << static_cast<int>(n)) - 1);
+        flag_at_risk(risk, at_risk + k, flagged);
+        store_soa(p, first[0] + k, p0, mask);
+        store_soa(p, first[1] + k, p1, mask);
+        store_soa(p, first[2] + k, p2, mask);
+        store_soa(p, first[3] + k, p3, mask);
+    }
+    num_at_risk += flagged;
+}
+
 #else  // no AVX2 on this target
 std::int64_t project_edges_avx2(Float4*, const std::array<std::int32_t, 2>*, const float*,
                                 std::int64_t, float, float) {
@@ -287,6 +387,11 @@ std::int64_t project_edge_run_avx2(Float4*, std::int64_t, std::int32_t, std::int
                                    std::int64_t, float, float) {
     return 0;
 }
+
+void project_edge_run_soa_avx2(const SoaPositions&, std::int32_t, std::int32_t, const float*,
+                               std::int64_t, float, float) {}
+void project_tet_run_soa_avx2(const SoaPositions&, const geometry::Tet&, const float*,
+                              std::uint8_t*, std::int64_t, float, float, std::int64_t&) {}
 
 #endif
 

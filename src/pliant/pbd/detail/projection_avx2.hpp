@@ -42,4 +42,27 @@ std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
                                   std::int64_t count, float inv_k, float alpha,
                                   std::int64_t& num_at_risk);
 
+// Positions and this substep's inverse masses as four arrays (structure of arrays, world units),
+// indexed by the lattice sweep's solver index (lattice_sweep.hpp).
+struct SoaPositions {
+    float* x = nullptr;
+    float* y = nullptr;
+    float* z = nullptr;
+    float* w = nullptr;
+};
+
+// A run of edges on SoaPositions: edge q ∈ [0, count) joins a + q and b + q, `rest_lengths`
+// parallel to them. Projects all count, 8 at a time, the last count mod 8 in masked lanes (the
+// arithmetic of project_edge lane by lane).
+void project_edge_run_soa_avx2(const SoaPositions& p, std::int32_t a, std::int32_t b,
+                               const float* rest_lengths, std::int64_t count, float inv_k,
+                               float alpha);
+
+// A run of tets on SoaPositions: tet q ∈ [0, count) has vertices first[m] + q, `rest_volumes` and
+// at_risk parallel to them. Projects all count as above, flags the tets at risk (at_risk[q] = 1,
+// the others untouched) and adds their number to num_at_risk.
+void project_tet_run_soa_avx2(const SoaPositions& p, const geometry::Tet& first,
+                              const float* rest_volumes, std::uint8_t* at_risk, std::int64_t count,
+                              float inv_k, float alpha, std::int64_t& num_at_risk);
+
 }  // namespace pliant::pbd::detail
