@@ -264,7 +264,7 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
     s.edge_constraints =
         detail::layout_edge_constraints(std::move(edge_coloring), s.edges, s.rest, grid);
     s.tet_constraints =
-        detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, nv, grid);
+        detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, grid);
     if (grid != nullptr) {
         s.lattice = detail::build_lattice_sweep(*grid, s.edge_constraints, s.tet_constraints);
     }

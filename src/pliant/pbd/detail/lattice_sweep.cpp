@@ -137,23 +137,6 @@ std::vector<std::int32_t> layer_keys(const TetGrid& grid,
     return keys;
 }
 
-// Calls project_run(q, n, run) on the pieces of the runs covering constraints [b, e) of a colour
-// (indices within the colour; begin: the colour's first constraint).
-template <typename ProjectRun>
-void for_run_pieces(const LatticeRun* runs, const std::int64_t* run_begins, std::int64_t num_runs,
-                    std::int64_t begin, std::int64_t count, std::int64_t b, std::int64_t e,
-                    const ProjectRun& project_run) {
-    // The run holding constraint b (its begin is the last ≤ begin + b).
-    std::int64_t r =
-        std::upper_bound(run_begins, run_begins + num_runs, begin + b) - run_begins - 1;
-    for (std::int64_t q = b; q < e; ++r) {
-        const std::int64_t run_end = r + 1 < num_runs ? run_begins[r + 1] - begin : count;
-        const std::int64_t n = std::min(e, run_end) - q;
-        project_run(q, n, runs[r], static_cast<std::int32_t>(begin + q - runs[r].begin));
-        q += n;
-    }
-}
-
 }  // namespace
 
 LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
@@ -168,10 +151,6 @@ LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
     std::vector<float>* tet_rest[] = {&tets.rest_volumes0, &tets.rest_volumes};
     reorder_into_runs<4>(tets.coloring, layer_keys(grid, tets.vertices), tets.vertices, tet_rest,
                          solver_index, out.tet_runs, out.tet_run_begins, out.tet_run_offsets);
-    edges.runs.clear();
-    edges.run_begins.clear();
-    edges.run_offsets.clear();
-    tets.runs.clear();
     const std::size_t nv = out.vertex_of.size();
     out.x.resize(nv);
     out.y.resize(nv);
@@ -198,54 +177,47 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
         },
         VERTEX_GRAIN);
 
+    // The runs of colour c.
+    const auto colour_runs = [](const ConstraintColoring& coloring,
+                                const std::vector<LatticeRun>& runs,
+                                const std::vector<std::int64_t>& run_begins,
+                                const std::vector<std::int64_t>& run_offsets, std::int32_t c) {
+        const auto colour = static_cast<std::size_t>(c);
+        const std::int64_t r0 = run_offsets[colour];
+        return LatticeRuns{runs.data() + r0, run_begins.data() + r0, run_offsets[colour + 1] - r0,
+                           coloring.offsets[colour],
+                           coloring.offsets[colour + 1] - coloring.offsets[colour]};
+    };
+
     // Step 2: edges.
     sweep_colours(
         edges.blocking, edges.coloring, [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-            const auto colour = static_cast<std::size_t>(c);
-            const std::int64_t begin = edges.coloring.offsets[colour];
-            const std::int64_t count = edges.coloring.offsets[colour + 1] - begin;
-            const float* lengths = edges.rest_lengths.data() + begin;
-            const std::int64_t r0 = sweep.edge_run_offsets[colour];
-            const std::int64_t num_runs = sweep.edge_run_offsets[colour + 1] - r0;
+            const LatticeRuns runs = colour_runs(edges.coloring, sweep.edge_runs,
+                                                 sweep.edge_run_begins, sweep.edge_run_offsets, c);
+            const float* lengths = edges.rest_lengths.data() + runs.begin;
             parallel_for_chunks(
                 hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    for_run_pieces(
-                        sweep.edge_runs.data() + r0, sweep.edge_run_begins.data() + r0, num_runs,
-                        begin, count, lo + b, lo + e,
-                        [&](std::int64_t q, std::int64_t n, const LatticeRun& run, std::int32_t o) {
-                            project_edge_run_soa_avx2(p, run.first[0] + o, run.first[1] + o,
-                                                      lengths + q, n, edge_stiffness.inv_k,
-                                                      edge_stiffness.alpha);
-                        });
+                    project_edge_runs_soa_avx2(p, runs, lo + b, lo + e, lengths,
+                                               edge_stiffness.inv_k, edge_stiffness.alpha);
                 });
         });
 
     // Step 3: tets, flagging those at risk.
     sweep_colours(
         tets.blocking, tets.coloring, [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-            const auto colour = static_cast<std::size_t>(c);
-            const std::int64_t begin = tets.coloring.offsets[colour];
-            const std::int64_t count = tets.coloring.offsets[colour + 1] - begin;
-            const float* volumes = tets.rest_volumes.data() + begin;
-            std::uint8_t* at_risk = tet_at_risk.data() + begin;
-            const std::int64_t r0 = sweep.tet_run_offsets[colour];
-            const std::int64_t num_runs = sweep.tet_run_offsets[colour + 1] - r0;
+            const LatticeRuns runs = colour_runs(tets.coloring, sweep.tet_runs,
+                                                 sweep.tet_run_begins, sweep.tet_run_offsets, c);
+            const float* volumes = tets.rest_volumes.data() + runs.begin;
+            std::uint8_t* at_risk = tet_at_risk.data() + runs.begin;
             parallel_for_chunks(
                 hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     std::int64_t num_at_risk = 0;
-                    for_run_pieces(
-                        sweep.tet_runs.data() + r0, sweep.tet_run_begins.data() + r0, num_runs,
-                        begin, count, lo + b, lo + e,
-                        [&](std::int64_t q, std::int64_t n, const LatticeRun& run, std::int32_t o) {
-                            const geometry::Tet first{run.first[0] + o, run.first[1] + o,
-                                                      run.first[2] + o, run.first[3] + o};
-                            project_tet_run_soa_avx2(p, first, volumes + q, at_risk + q, n,
-                                                     tet_stiffness.inv_k, tet_stiffness.alpha,
-                                                     num_at_risk);
-                        });
+                    project_tet_runs_soa_avx2(p, runs, lo + b, lo + e, volumes, at_risk,
+                                              tet_stiffness.inv_k, tet_stiffness.alpha,
+                                              num_at_risk);
                     if (num_at_risk > 0) {
-                        // Chunks of one colour may set it concurrently: idempotent, relaxed.
-                        std::atomic_ref<std::uint8_t>(colour_at_risk[colour])
+                        // Chunks of one colour may set it concurrently: idempotent.
+                        std::atomic_ref<std::uint8_t>(colour_at_risk[static_cast<std::size_t>(c)])
                             .store(1, std::memory_order_relaxed);
                     }
                 });

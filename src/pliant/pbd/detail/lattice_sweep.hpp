@@ -25,21 +25,15 @@
 #include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/constraint_sweep.hpp"
 #include "pliant/pbd/detail/projection.hpp"
+#include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 
 namespace pliant::pbd::detail {
 
-// A run of constraints of one colour: constraint q ∈ [begin, next run's begin) has vertices
-// first[m] + (q − begin) in the solver order (edges: m = 0, 1).
-struct LatticeRun {
-    std::int64_t begin = 0;
-    geometry::Tet first{};
-};
-
 struct LatticeSweep {
     std::vector<std::int32_t> vertex_of;  // #V: the vertex at each solver index
-    // Runs of colour c at runs[run_offsets[c] .. run_offsets[c + 1]), run_begins[r] =
-    // runs[r].begin.
+    // Runs (projection_avx2.hpp) of colour c at runs[run_offsets[c] .. run_offsets[c + 1]),
+    // run_begins[r] = runs[r].begin.
     std::vector<LatticeRun> edge_runs;
     std::vector<std::int64_t> edge_run_begins;
     std::vector<std::int64_t> edge_run_offsets;
@@ -52,8 +46,8 @@ struct LatticeSweep {
 
 // The sweep of a grid's constraints (laid out by constraint_layout.hpp for that grid): reorders
 // edges' and tets' constraints (vertices and rest data, current and at construction) within each
-// colour and layer key, and builds the runs. The layouts' lattice runs (EdgeRun, TetRun) no longer
-// match and are cleared; the other sweeps (SSE, scalar) read the vertices and stay valid.
+// colour and layer key, and builds the runs. The other sweeps (constraint_sweep.hpp: SSE, scalar)
+// read the vertices and stay valid.
 LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges, TetConstraints& tets);
 
 // Steps 2 and 3 on x (#V, world units, packed with the substep's inverse mass; read and written):
