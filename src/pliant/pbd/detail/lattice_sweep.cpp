@@ -196,7 +196,7 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
                                                  sweep.edge_run_begins, sweep.edge_run_offsets, c);
             const float* lengths = edges.rest_lengths.data() + runs.begin;
             parallel_for_chunks(
-                hi - lo, EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                hi - lo, LATTICE_EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     project_edge_runs_soa_avx2(p, runs, lo + b, lo + e, lengths,
                                                edge_stiffness.inv_k, edge_stiffness.alpha);
                 });
@@ -210,7 +210,7 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
             const float* volumes = tets.rest_volumes.data() + runs.begin;
             std::uint8_t* at_risk = tet_at_risk.data() + runs.begin;
             parallel_for_chunks(
-                hi - lo, TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                hi - lo, LATTICE_TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
                     std::int64_t num_at_risk = 0;
                     project_tet_runs_soa_avx2(p, runs, lo + b, lo + e, volumes, at_risk,
                                               tet_stiffness.inv_k, tet_stiffness.alpha,
