@@ -37,8 +37,7 @@ EdgeConstraints grid_edges(const TetGrid& grid) {
 }
 
 TetConstraints grid_tets(const TetGrid& grid) {
-    return layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid),
-                                  std::ssize(grid.mesh.positions), &grid);
+    return layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid), &grid);
 }
 
 TEST(ConstraintLayout, EdgesOfAColourAreTheColouringsWithTheirRestLengths) {
@@ -72,72 +71,11 @@ TEST(ConstraintLayout, EdgesOfAColourAreTheColouringsWithTheirRestLengths) {
     }
 }
 
-TEST(ConstraintLayout, EdgeRunsGiveEveryEdgesVertices) {
-    for (const bool full_box : {true, false}) {
-        const EdgeConstraints laid = grid_edges(grid_over({12, 10, 22}, full_box));
-        const ConstraintColoring& coloring = laid.coloring;
-        ASSERT_EQ(laid.run_offsets.size(), static_cast<std::size_t>(coloring.num_colors()) + 1);
-        ASSERT_EQ(laid.run_offsets.back(), std::ssize(laid.runs));
-        ASSERT_EQ(laid.run_begins.size(), laid.runs.size());
-        std::int64_t longer_than_one = 0;
-        for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
-            const std::int64_t r0 = laid.run_offsets[static_cast<std::size_t>(c)];
-            const std::int64_t r1 = laid.run_offsets[static_cast<std::size_t>(c) + 1];
-            ASSERT_LT(r0, r1) << "colour " << c;
-            EXPECT_EQ(laid.runs[static_cast<std::size_t>(r0)].begin,
-                      coloring.offsets[static_cast<std::size_t>(c)]);
-            for (std::int64_t r = r0; r < r1; ++r) {
-                const EdgeRun& run = laid.runs[static_cast<std::size_t>(r)];
-                EXPECT_EQ(laid.run_begins[static_cast<std::size_t>(r)], run.begin);
-                EXPECT_TRUE(run.stride == 1 || run.stride == 2);
-                const std::int64_t end = r + 1 < r1
-                                             ? laid.runs[static_cast<std::size_t>(r) + 1].begin
-                                             : coloring.offsets[static_cast<std::size_t>(c) + 1];
-                ASSERT_LT(run.begin, end);
-                longer_than_one += end - run.begin > 1 ? 1 : 0;
-                for (std::int64_t q = run.begin; q < end; ++q) {
-                    const std::int64_t a = run.first + run.stride * (q - run.begin);
-                    const auto& e = laid.vertices[static_cast<std::size_t>(q)];
-                    ASSERT_EQ(e[0], a) << "colour " << c << " run " << r << " edge " << q;
-                    ASSERT_EQ(e[1], a + run.span) << "colour " << c << " run " << r;
-                }
-            }
-        }
-        EXPECT_GT(longer_than_one, 0);
-    }
-}
-
-TEST(ConstraintLayout, TetRunsOnAFullBoxGiveEveryTetsVertices) {
-    const TetGrid grid = grid_over({12, 10, 22}, true);
-    const TetConstraints laid = grid_tets(grid);
-    ASSERT_EQ(laid.runs.size(), static_cast<std::size_t>(laid.coloring.num_colors()));
-    EXPECT_EQ(laid.lattice_x, grid.cells[0] + 1);
-    EXPECT_EQ(laid.lattice_xy, laid.lattice_x * (grid.cells[1] + 1));
-    for (std::int32_t c = 0; c < laid.coloring.num_colors(); ++c) {
-        const TetRun& r = laid.runs[static_cast<std::size_t>(c)];
-        const std::int64_t begin = laid.coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count = laid.coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        ASSERT_EQ(r.ni * r.nj * r.nk, count);
-        for (std::int64_t q = 0; q < count; ++q) {
-            const std::int64_t a = q % r.ni;
-            const std::int64_t b = (q / r.ni) % r.nj;
-            const std::int64_t k = q / (r.ni * r.nj);
-            const std::int64_t base =
-                r.i0 + 2 * a + laid.lattice_x * (r.j0 + 2 * b) + laid.lattice_xy * (r.k0 + 2 * k);
-            const geometry::Tet& t = laid.vertices[static_cast<std::size_t>(begin + q)];
-            for (std::size_t m = 0; m < 4; ++m) {
-                ASSERT_EQ(t[m], base + r.offsets[m]) << "colour " << c << " tet " << q;
-            }
-        }
-    }
-}
-
 TEST(ConstraintLayout, TetsInColourOrderWithTheirRestVolumes) {
     for (const bool full_box : {true, false}) {
         const TetGrid grid = grid_over({12, 10, 22}, full_box);
         const std::vector<double> volumes = rest_volumes(grid);
         const TetConstraints laid = grid_tets(grid);
-        EXPECT_EQ(laid.runs.empty(), !full_box);  // runs need every lattice vertex
         ASSERT_EQ(laid.rest_volumes, laid.rest_volumes0);
         for (std::size_t k = 0; k < laid.coloring.order.size(); ++k) {
             const auto t = static_cast<std::size_t>(laid.coloring.order[k]);
@@ -147,18 +85,14 @@ TEST(ConstraintLayout, TetsInColourOrderWithTheirRestVolumes) {
     }
 }
 
-TEST(ConstraintLayout, OtherMeshesHaveNoRunsAndNoBlocking) {
+TEST(ConstraintLayout, OtherMeshesHaveNoBlocking) {
     const TetGrid grid = grid_over({8, 8, 8}, true);
     const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
     const EdgeConstraints laid_edges =
         layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions, nullptr);
     const TetConstraints laid_tets =
-        layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid),
-                               std::ssize(grid.mesh.positions), nullptr);
-    EXPECT_TRUE(laid_edges.runs.empty());
-    EXPECT_TRUE(laid_edges.run_offsets.empty());
+        layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, rest_volumes(grid), nullptr);
     EXPECT_EQ(laid_edges.blocking.num_layers, 0);
-    EXPECT_TRUE(laid_tets.runs.empty());
     EXPECT_EQ(laid_tets.blocking.num_layers, 0);
     // Without a grid the edges keep the colouring's order.
     for (std::size_t k = 0; k < laid_edges.coloring.order.size(); ++k) {

@@ -62,8 +62,8 @@ TEST(ConstraintSweep, BlockedSweepKeepsTheColourOrderAtEveryVertex) {
         const EdgeConstraints laid_edges = layout_edge_constraints(
             color_grid_edges(grid, edges), edges, grid.mesh.positions, &grid);
         const std::vector<double> volumes(grid.mesh.tets.size(), 1.0);
-        const TetConstraints laid_tets = layout_tet_constraints(
-            color_grid_tets(grid), grid.mesh.tets, volumes, std::ssize(grid.mesh.positions), &grid);
+        const TetConstraints laid_tets =
+            layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, volumes, &grid);
         ASSERT_GT(laid_edges.blocking.num_layers, 2 * LAYERS_PER_SLAB);
         ASSERT_GT(laid_tets.blocking.num_layers, 2 * LAYERS_PER_SLAB);
         EXPECT_GT(laid_edges.blocking.max_skew, 0);  // else the ordering is not at stake

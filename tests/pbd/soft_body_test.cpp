@@ -18,6 +18,7 @@
 #include "pliant/pbd/detail/projection.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/volume/volume.hpp"
+#include "support/tet_grids.hpp"
 
 namespace pliant::pbd {
 namespace {
@@ -362,13 +363,17 @@ TEST(SoftBody, PinnedVerticesStayBitwisePut) {
     EXPECT_GT(moved, 0.05);
 }
 
-std::vector<Vec3f> run_threads(int threads, bool use_grid) {
+// ball: a ball of cells (not a full box: the lattice-row segments and gather segments of the
+// sweep, constraint_layout.hpp) instead of the full box.
+std::vector<Vec3f> run_threads(int threads, bool use_grid, bool ball = false) {
     set_num_threads(threads);
     // 20³ cells: 40,000 tets, 1,000 per colour; with cells of 1 voxel per colour > 1 chunk at
-    // 24³ cells (69,120 tets, 1,728 per colour).
+    // 24³ cells (69,120 tets, 1,728 per colour). The ball: 36³ cells of 1 voxel, 11,000 of them
+    // active.
     const volume::Volume v = volume::Volume::allocate({24, 24, 24}, volume::VoxelType::u8,
                                                       {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
-    const TetGrid grid = build_tet_grid(v, {.cell_voxels = 1, .full_box = true});
+    const TetGrid grid = ball ? test::ball_tet_grid({36, 36, 36}, false, 1)
+                              : build_tet_grid(v, {.cell_voxels = 1, .full_box = true});
     SoftBody body = use_grid ? SoftBody(grid, {.stiffness = 0.8, .substeps = 4})
                              : SoftBody(grid.mesh, {.stiffness = 0.8, .substeps = 4});
     body.add_driver(TwistDriver{.angle = 60.0, .ramp_time = 0.2});
@@ -384,14 +389,17 @@ std::vector<Vec3f> run_threads(int threads, bool use_grid) {
 
 TEST(SoftBody, OneAndTwoThreadsAreBitwiseIdentical) {
     for (const bool use_grid : {true, false}) {
-        const std::vector<Vec3f> one = run_threads(1, use_grid);
-        const std::vector<Vec3f> two = run_threads(2, use_grid);
-        ASSERT_EQ(one.size(), two.size());
-        std::size_t differing = 0;
-        for (std::size_t i = 0; i < one.size(); ++i) {
-            differing += std::memcmp(&one[i], &two[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+        for (const bool ball : {false, true}) {
+            const std::vector<Vec3f> one = run_threads(1, use_grid, ball);
+            const std::vector<Vec3f> two = run_threads(2, use_grid, ball);
+            ASSERT_EQ(one.size(), two.size());
+            std::size_t differing = 0;
+            for (std::size_t i = 0; i < one.size(); ++i) {
+                differing += std::memcmp(&one[i], &two[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+            }
+            EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring")
+                                     << (ball ? ", ball" : ", full box");
         }
-        EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring");
     }
 }
 
@@ -400,16 +408,19 @@ TEST(SoftBody, AVX2AndSSEKernelsAreBitwiseIdentical) {
     // indices, SSE, scalar. Without AVX2 on the machine both runs take the SSE kernels.
     std::printf("AVX2: %s\n", pliant::has_avx2() ? "yes" : "no");
     for (const bool use_grid : {true, false}) {
-        const std::vector<Vec3f> avx2 = run_threads(2, use_grid);
-        pliant::allow_avx2(false);
-        const std::vector<Vec3f> sse = run_threads(2, use_grid);
-        pliant::allow_avx2(true);
-        ASSERT_EQ(avx2.size(), sse.size());
-        std::size_t differing = 0;
-        for (std::size_t i = 0; i < avx2.size(); ++i) {
-            differing += std::memcmp(&avx2[i], &sse[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+        for (const bool ball : {false, true}) {
+            const std::vector<Vec3f> avx2 = run_threads(2, use_grid, ball);
+            pliant::allow_avx2(false);
+            const std::vector<Vec3f> sse = run_threads(2, use_grid, ball);
+            pliant::allow_avx2(true);
+            ASSERT_EQ(avx2.size(), sse.size());
+            std::size_t differing = 0;
+            for (std::size_t i = 0; i < avx2.size(); ++i) {
+                differing += std::memcmp(&avx2[i], &sse[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+            }
+            EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring")
+                                     << (ball ? ", ball" : ", full box");
         }
-        EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring");
     }
 }
 
@@ -537,6 +548,43 @@ TEST(SoftBody, MatchesThePlainColourByColourMethodBitwise) {
             EXPECT_EQ(guard_acted, max_speed > 10.0f) << "speeds up to " << max_speed;
         }
     }
+    set_num_threads(0);
+}
+
+TEST(SoftBody, MatchesThePlainMethodBitwiseWithoutAFullBox) {
+    // A ball of cells: the sweep's lattice-row segments, gather segments and gather runs of edges
+    // (constraint_layout.hpp) against the plain method, 1 and 2 threads, with and without AVX2;
+    // at 60 units/s the guard acts.
+    const TetGrid grid = test::ball_tet_grid({40, 36, 30}, false);
+    for (const float max_speed : {3.0f, 60.0f}) {
+        std::mt19937 rng(5);
+        std::uniform_real_distribution<float> speed(-max_speed, max_speed);
+        std::vector<Vec3f> velocities(grid.mesh.num_vertices());
+        for (Vec3f& v : velocities) {
+            v = {speed(rng), speed(rng), speed(rng)};
+        }
+        for (const int threads : {1, 2}) {
+            for (const bool avx2 : {true, false}) {
+                set_num_threads(threads);
+                pliant::allow_avx2(avx2);
+                SoftBody body(grid, {.stiffness = 0.8, .substeps = 3});
+                body.set_velocities(velocities);
+                const std::vector<Vec3f> expected =
+                    reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
+                body.step(1.0 / FPS);
+                body.step(1.0 / FPS);
+                std::size_t differing = 0;
+                for (std::size_t i = 0; i < expected.size(); ++i) {
+                    differing +=
+                        std::memcmp(&expected[i], &body.positions()[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+                }
+                EXPECT_EQ(differing, 0u)
+                    << threads << " threads, AVX2 " << avx2 << ", speeds up to " << max_speed;
+                EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
+            }
+        }
+    }
+    pliant::allow_avx2(true);
     set_num_threads(0);
 }
 

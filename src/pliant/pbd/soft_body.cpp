@@ -23,6 +23,7 @@
 #include "pliant/pbd/detail/driver_eval.hpp"
 #include "pliant/pbd/detail/integration.hpp"
 #include "pliant/pbd/detail/inversion_guard.hpp"
+#include "pliant/pbd/detail/lattice_sweep.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 
 namespace pliant::pbd {
@@ -173,6 +174,8 @@ struct SoftBody::State {
     detail::EdgeConstraints edge_constraints;
     detail::TetConstraints tet_constraints;
     detail::InversionFlags inversion;  // tets flagged for the inversion guard (step 3b)
+    // On a TetGrid: the AVX2 sweep over the solver order (lattice_sweep.hpp); no vertex otherwise.
+    detail::LatticeSweep lattice;
 
     // #V each. x: positions and this substep's inverse mass (0 for pinned and driven vertices);
     // previous: x's positions at the substep's start; velocities: world units / s, those of the
@@ -261,7 +264,10 @@ SoftBody::SoftBody(const geometry::TetMesh& rest, const SoftBodyOptions& options
     s.edge_constraints =
         detail::layout_edge_constraints(std::move(edge_coloring), s.edges, s.rest, grid);
     s.tet_constraints =
-        detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, nv, grid);
+        detail::layout_tet_constraints(std::move(tet_coloring), s.tets, rest_volume, grid);
+    if (grid != nullptr) {
+        s.lattice = detail::build_lattice_sweep(*grid, s.edge_constraints, s.tet_constraints);
+    }
     s.inversion = detail::unflagged(s.tet_constraints);
 
     // Step 5: state.
@@ -419,6 +425,7 @@ void SoftBody::step(double dt) {
     const SubstepConstants k = substep_constants(m_options, h);
     // The kernels give the same bits (projection_avx2.hpp): the choice is for speed only.
     const bool use_avx2 = pliant::has_avx2();
+    const bool use_lattice = use_avx2 && !s.lattice.vertex_of.empty();
     Float4* x = s.x.data();
     // Iterations (soft_body.hpp): ω of each iteration, rounded once; no pass when plain.
     const bool accelerate = m_options.chebyshev_rho > 0.0 || m_options.chebyshev_gamma < 1.0;
@@ -448,12 +455,18 @@ void SoftBody::step(double dt) {
             detail::chebyshev_begin(x, s.chebyshev_current, s.chebyshev_previous);
         }
         for (int it = 0; it < m_options.iterations; ++it) {
-            // Step 2: edge lengths, colour by colour.
-            detail::project_edges(x, s.edge_constraints, k.edges, use_avx2);
-            // Step 3: tet volumes, colour by colour, flagging the tets at risk of inversion; 3b:
-            // the inversion guard on them.
-            detail::project_tets(x, s.tet_constraints, k.volumes, use_avx2, s.inversion.tet_at_risk,
-                                 s.inversion.colour_at_risk);
+            // Step 2: edge lengths, colour by colour; step 3: tet volumes, colour by colour,
+            // flagging the tets at risk of inversion (on a grid with AVX2 both in the solver
+            // order, the same bits); 3b: the inversion guard on them.
+            if (use_lattice) {
+                detail::project_lattice(x, s.lattice, s.edge_constraints, s.tet_constraints,
+                                        k.edges, k.volumes, s.inversion.tet_at_risk,
+                                        s.inversion.colour_at_risk);
+            } else {
+                detail::project_edges(x, s.edge_constraints, k.edges, use_avx2);
+                detail::project_tets(x, s.tet_constraints, k.volumes, use_avx2,
+                                     s.inversion.tet_at_risk, s.inversion.colour_at_risk);
+            }
             detail::guard_flagged_tets(x, s.tet_constraints, s.inversion);
             // Iterations: Chebyshev's extrapolation of the free vertices, between sweeps (the
             // last sweep and its guard have the last word, so no extrapolation inverts a tet).

@@ -69,7 +69,9 @@
 // otherwise); colours run one after the other (Gauss–Seidel across colours), the constraints of
 // a colour in parallel, 4 (SSE) or 8 (AVX2, chosen at run time) at a time. On a TetGrid the sweep
 // is blocked in slabs of lattice layers for cache reuse, with the results of the colour-by-colour
-// order (two constraints sharing a vertex are projected in the order of their colours). The
+// order (two constraints sharing a vertex are projected in the order of their colours), and with
+// AVX2 it runs on positions in float arrays in a solver order where a colour's constraints form
+// runs of consecutive vertices (detail/lattice_sweep.hpp: plain vector loads, no transposes). The
 // guard runs on one thread over the few flagged tets, flagged by index with the same float
 // comparison in every kernel. Results are bitwise identical for any number of threads and for
 // either SIMD width (the same arithmetic, no FMA).

@@ -17,57 +17,6 @@ std::vector<std::int32_t> vertex_layers(const TetGrid& grid) {
     return vertex_z;
 }
 
-// The runs of every tet colour (tet_vertices in colour order) when the grid keeps every lattice
-// vertex (full box) and every colour is the run its lattice predicts, checked tet by tet; empty
-// otherwise.
-std::vector<TetRun> find_tet_runs(const TetGrid& grid, const ConstraintColoring& coloring,
-                                  std::span<const geometry::Tet> tet_vertices,
-                                  std::int64_t num_vertices) {
-    const std::int64_t nx = grid.cells[0];
-    const std::int64_t ny = grid.cells[1];
-    const std::int64_t nz = grid.cells[2];
-    const std::int64_t lx = nx + 1;
-    const std::int64_t lxy = lx * (ny + 1);
-    if (num_vertices != lxy * (nz + 1) || tet_vertices.empty()) {
-        return {};
-    }
-    std::vector<TetRun> runs(static_cast<std::size_t>(coloring.num_colors()));
-    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
-        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
-        const std::int64_t count = coloring.offsets[static_cast<std::size_t>(c) + 1] - begin;
-        const std::int64_t cell = grid.tet_cell[static_cast<std::size_t>(
-            coloring.order[static_cast<std::size_t>(begin)])];
-        TetRun& r = runs[static_cast<std::size_t>(c)];
-        r.i0 = cell % nx;
-        r.j0 = (cell / nx) % ny;
-        r.k0 = cell / (nx * ny);
-        r.ni = (nx - r.i0 + 1) / 2;
-        r.nj = (ny - r.j0 + 1) / 2;
-        r.nk = (nz - r.k0 + 1) / 2;
-        if (r.i0 > 1 || r.j0 > 1 || r.k0 > 1 || r.ni * r.nj * r.nk != count) {
-            return {};
-        }
-        const std::int64_t base0 = r.i0 + lx * r.j0 + lxy * r.k0;
-        const geometry::Tet& first = tet_vertices[static_cast<std::size_t>(begin)];
-        for (std::size_t m = 0; m < 4; ++m) {
-            r.offsets[m] = static_cast<std::int32_t>(first[m] - base0);
-        }
-        for (std::int64_t q = 0; q < count; ++q) {
-            const std::int64_t a = q % r.ni;
-            const std::int64_t b = (q / r.ni) % r.nj;
-            const std::int64_t k = q / (r.ni * r.nj);
-            const std::int64_t base = r.i0 + 2 * a + lx * (r.j0 + 2 * b) + lxy * (r.k0 + 2 * k);
-            const geometry::Tet& t = tet_vertices[static_cast<std::size_t>(begin + q)];
-            for (std::size_t m = 0; m < 4; ++m) {
-                if (t[m] != base + r.offsets[m]) {
-                    return {};
-                }
-            }
-        }
-    }
-    return runs;
-}
-
 // The blocking of constraints (in colour order, sorted by key within each colour; vertex_z:
 // lattice z per vertex); none when a key is out of order or a vertex lies outside layers z, z + 1
 // of a constraint holding it, or for more than 64 colours.
@@ -139,18 +88,15 @@ LayerBlocking block_layers(const ConstraintColoring& coloring,
 }
 
 // Within each colour, orders the edges (and their rest lengths) by layer (the lower lattice z of
-// their vertices), then direction b − a, then a (the order within a colour does not change a
-// result: its edges share no vertex), and cuts them into runs of equal direction and equal steps
-// of a.
-void sort_edges_into_runs(const ConstraintColoring& coloring,
-                          const std::vector<std::int32_t>& vertex_z,
-                          std::vector<std::array<std::int32_t, 2>>& edges,
-                          std::vector<float>& rest_lengths, std::vector<EdgeRun>& runs,
-                          std::vector<std::int64_t>& run_offsets) {
+// their vertices), stably (the order within a colour does not change a result: its edges share no
+// vertex).
+void sort_edges_by_layer(const ConstraintColoring& coloring,
+                         const std::vector<std::int32_t>& vertex_z,
+                         std::vector<std::array<std::int32_t, 2>>& edges,
+                         std::vector<float>& rest_lengths) {
     std::vector<std::int64_t> perm;
     std::vector<std::array<std::int32_t, 2>> sorted_edges;
     std::vector<float> sorted_lengths;
-    run_offsets.assign(1, 0);
     for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
         const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
         const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
@@ -158,42 +104,23 @@ void sort_edges_into_runs(const ConstraintColoring& coloring,
         for (std::int64_t q = begin; q < end; ++q) {
             perm[static_cast<std::size_t>(q - begin)] = q;
         }
-        const auto edge = [&](std::int64_t q) -> const std::array<std::int32_t, 2>& {
-            return edges[static_cast<std::size_t>(q)];
-        };
         const auto layer = [&](std::int64_t q) {
-            return std::min(vertex_z[static_cast<std::size_t>(edge(q)[0])],
-                            vertex_z[static_cast<std::size_t>(edge(q)[1])]);
+            const auto& e = edges[static_cast<std::size_t>(q)];
+            return std::min(vertex_z[static_cast<std::size_t>(e[0])],
+                            vertex_z[static_cast<std::size_t>(e[1])]);
         };
-        std::stable_sort(perm.begin(), perm.end(), [&](std::int64_t p, std::int64_t q) {
-            return std::pair(layer(p), edge(p)[1] - edge(p)[0]) <
-                   std::pair(layer(q), edge(q)[1] - edge(q)[0]);
-        });
+        std::stable_sort(perm.begin(), perm.end(),
+                         [&](std::int64_t p, std::int64_t q) { return layer(p) < layer(q); });
         sorted_edges.clear();
         sorted_lengths.clear();
         for (const std::int64_t q : perm) {
-            sorted_edges.push_back(edge(q));
+            sorted_edges.push_back(edges[static_cast<std::size_t>(q)]);
             sorted_lengths.push_back(rest_lengths[static_cast<std::size_t>(q)]);
         }
         std::copy(sorted_edges.begin(), sorted_edges.end(),
                   edges.begin() + static_cast<std::ptrdiff_t>(begin));
         std::copy(sorted_lengths.begin(), sorted_lengths.end(),
                   rest_lengths.begin() + static_cast<std::ptrdiff_t>(begin));
-        for (std::int64_t q = begin; q < end;) {
-            EdgeRun run{q, edge(q)[0], 1, edge(q)[1] - edge(q)[0]};
-            std::int64_t next = q + 1;
-            if (next < end && edge(next)[1] - edge(next)[0] == run.span &&
-                (edge(next)[0] - run.first == 1 || edge(next)[0] - run.first == 2)) {
-                run.stride = edge(next)[0] - run.first;
-                while (next < end && edge(next)[1] - edge(next)[0] == run.span &&
-                       edge(next)[0] == run.first + run.stride * (next - q)) {
-                    ++next;
-                }
-            }
-            runs.push_back(run);
-            q = next;
-        }
-        run_offsets.push_back(static_cast<std::int64_t>(runs.size()));
     }
 }
 }  // namespace
@@ -217,11 +144,7 @@ EdgeConstraints layout_edge_constraints(ConstraintColoring coloring,
         return out;
     }
     const std::vector<std::int32_t> vertex_z = vertex_layers(*grid);
-    sort_edges_into_runs(out.coloring, vertex_z, out.vertices, out.rest_lengths0, out.runs,
-                         out.run_offsets);
-    for (const EdgeRun& r : out.runs) {
-        out.run_begins.push_back(r.begin);
-    }
+    sort_edges_by_layer(out.coloring, vertex_z, out.vertices, out.rest_lengths0);
     out.rest_lengths = out.rest_lengths0;
     std::vector<std::int32_t> keys(out.vertices.size());
     for (std::size_t k = 0; k < keys.size(); ++k) {
@@ -235,8 +158,7 @@ EdgeConstraints layout_edge_constraints(ConstraintColoring coloring,
 
 TetConstraints layout_tet_constraints(ConstraintColoring coloring,
                                       std::span<const geometry::Tet> tets,
-                                      std::span<const double> rest_volumes,
-                                      std::int64_t num_vertices, const TetGrid* grid) {
+                                      std::span<const double> rest_volumes, const TetGrid* grid) {
     TetConstraints out;
     out.coloring = std::move(coloring);
     out.vertices.resize(tets.size());
@@ -258,9 +180,6 @@ TetConstraints layout_tet_constraints(ConstraintColoring coloring,
             grid->tet_cell[static_cast<std::size_t>(out.coloring.order[k])] / cells_xy);
     }
     out.blocking = block_layers(out.coloring, out.vertices, keys, grid->cells[2], vertex_z);
-    out.runs = find_tet_runs(*grid, out.coloring, out.vertices, num_vertices);
-    out.lattice_x = std::int64_t{grid->cells[0]} + 1;
-    out.lattice_xy = out.lattice_x * (std::int64_t{grid->cells[1]} + 1);
     return out;
 }
 

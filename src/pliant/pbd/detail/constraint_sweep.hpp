@@ -2,9 +2,9 @@
 // constraint once, colour after colour (Gauss–Seidel across colours), the constraints of a colour
 // in parallel (they share no vertex) in fixed chunks (grains.hpp), 8 at a time (AVX2, when
 // use_avx2), 4 (SSE) or 1 (projection.hpp, projection_avx2.hpp: the same bits). On a TetGrid the
-// sweep is layer-blocked (constraint_layout.hpp, LayerBlocking) and the AVX2 kernels take the
-// lattice runs. The result is bitwise that of the plain colour-by-colour sweep with the scalar
-// kernels, for any number of threads and either SIMD width.
+// sweep is layer-blocked (constraint_layout.hpp, LayerBlocking); with AVX2 a grid's body takes
+// lattice_sweep.hpp instead. The result is bitwise that of the plain colour-by-colour sweep with
+// the scalar kernels, for any number of threads and either SIMD width.
 //
 // x: #V positions (world units) packed with this substep's inverse mass (Float4 {x, y, z, w}; w = 0
 // for pinned and driven vertices), read and written. Not thread safe on one x; parallel inside.

@@ -11,5 +11,10 @@ namespace pliant::pbd::detail {
 inline constexpr std::int64_t VERTEX_GRAIN = 4096;  // vertices per chunk
 inline constexpr std::int64_t EDGE_GRAIN = 2048;    // edge constraints per chunk
 inline constexpr std::int64_t TET_GRAIN = 1024;     // tet constraints per chunk
+// The lattice sweep's (lattice_sweep.hpp): a layer-blocked slab of one colour holds about 2,000
+// edges and 800 tets at 64³ cells, so that smaller chunks give each of 2 threads work in every
+// slab (with the grains above most slabs were one chunk, one thread).
+inline constexpr std::int64_t LATTICE_EDGE_GRAIN = 512;
+inline constexpr std::int64_t LATTICE_TET_GRAIN = 256;
 
 }  // namespace pliant::pbd::detail

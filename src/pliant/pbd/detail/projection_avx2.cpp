@@ -1,5 +1,7 @@
 #include "pliant/pbd/detail/projection_avx2.hpp"
 
+#include <algorithm>
+
 #include "pliant/core/simd_dispatch.hpp"
 
 #if defined(PLIANT_HAS_AVX2_TARGET)
@@ -90,26 +92,6 @@ PLIANT_AVX2_INLINE void project_edges8(Lanes8& a, Lanes8& b, const float* rest_l
     b.z = sub(b.z, mul(sb, dz));
 }
 
-// Edge run with a constant stride: lane l at pa[STRIDE l] and pa[STRIDE l + span].
-template <int STRIDE>
-PLIANT_AVX2_INLINE std::int64_t edge_run(Float4* x, std::int64_t first, std::int32_t span,
-                                         const float* rest_lengths, std::int64_t count,
-                                         __m256 inv_k8, __m256 alpha8) {
-    static constexpr std::int32_t LANES[8] = {0,          STRIDE,     2 * STRIDE, 3 * STRIDE,
-                                              4 * STRIDE, 5 * STRIDE, 6 * STRIDE, 7 * STRIDE};
-    std::int64_t k = 0;
-    for (; k + 8 <= count; k += 8) {
-        Float4* pa = x + first + STRIDE * k;
-        Float4* pb = pa + span;
-        Lanes8 a = load8(pa, LANES);
-        Lanes8 b = load8(pb, LANES);
-        project_edges8(a, b, rest_lengths + k, inv_k8, alpha8);
-        store8(pa, LANES, a);
-        store8(pb, LANES, b);
-    }
-    return k;
-}
-
 }  // namespace
 
 PLIANT_AVX2_FN std::int64_t project_edges_avx2(Float4* x, const std::array<std::int32_t, 2>* e,
@@ -132,16 +114,6 @@ PLIANT_AVX2_FN std::int64_t project_edges_avx2(Float4* x, const std::array<std::
         store8(x, ib, b);
     }
     return k;
-}
-
-PLIANT_AVX2_FN std::int64_t project_edge_run_avx2(Float4* x, std::int64_t first,
-                                                  std::int32_t stride, std::int32_t span,
-                                                  const float* rest_lengths, std::int64_t count,
-                                                  float inv_k, float alpha) {
-    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
-    const __m256 alpha8 = _mm256_set1_ps(alpha);
-    return stride == 2 ? edge_run<2>(x, first, span, rest_lengths, count, inv_k8, alpha8)
-                       : edge_run<1>(x, first, span, rest_lengths, count, inv_k8, alpha8);
 }
 
 namespace {
@@ -238,35 +210,147 @@ PLIANT_AVX2_FN std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t,
     return k;
 }
 
-PLIANT_AVX2_FN std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
-                                                 const std::array<std::int32_t, 4>& offsets,
-                                                 const float* rest_volumes, std::uint8_t* at_risk,
-                                                 std::int64_t count, float inv_k, float alpha,
-                                                 std::int64_t& num_at_risk) {
-    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
-    const __m256 alpha8 = _mm256_set1_ps(alpha);
-    // Lane l is tet base + 2 l: constant displacements from one pointer per corner.
-    static constexpr std::int32_t LANES[8] = {0, 2, 4, 6, 8, 10, 12, 14};
-    std::int64_t flagged = 0;
+namespace {
+
+// The lanes l < n of 8 (n ≤ 8) as a mask for _mm256_maskload_ps / _mm256_maskstore_ps.
+PLIANT_AVX2_INLINE __m256i lane_mask(std::int64_t n) {
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(n)), lanes);
+}
+
+// Vertices i .. i + 8 of p (every lane; masked lanes read 0).
+PLIANT_AVX2_INLINE Lanes8 load_soa(const SoaPositions& p, std::int64_t i) {
+    return {_mm256_loadu_ps(p.x + i), _mm256_loadu_ps(p.y + i), _mm256_loadu_ps(p.z + i),
+            _mm256_loadu_ps(p.w + i)};
+}
+PLIANT_AVX2_INLINE Lanes8 load_soa(const SoaPositions& p, std::int64_t i, __m256i mask) {
+    return {_mm256_maskload_ps(p.x + i, mask), _mm256_maskload_ps(p.y + i, mask),
+            _mm256_maskload_ps(p.z + i, mask), _mm256_maskload_ps(p.w + i, mask)};
+}
+// Positions only: w does not change.
+PLIANT_AVX2_INLINE void store_soa(const SoaPositions& p, std::int64_t i, const Lanes8& l) {
+    _mm256_storeu_ps(p.x + i, l.x);
+    _mm256_storeu_ps(p.y + i, l.y);
+    _mm256_storeu_ps(p.z + i, l.z);
+}
+PLIANT_AVX2_INLINE void store_soa(const SoaPositions& p, std::int64_t i, const Lanes8& l,
+                                  __m256i mask) {
+    _mm256_maskstore_ps(p.x + i, mask, l.x);
+    _mm256_maskstore_ps(p.y + i, mask, l.y);
+    _mm256_maskstore_ps(p.z + i, mask, l.z);
+}
+
+// A run of edges: edge q ∈ [0, count) joins a + q and b + q.
+PLIANT_AVX2_INLINE void edge_run_soa(const SoaPositions& p, std::int64_t a, std::int64_t b,
+                                     const float* rest_lengths, std::int64_t count, __m256 inv_k8,
+                                     __m256 alpha8) {
     std::int64_t k = 0;
     for (; k + 8 <= count; k += 8) {
-        Float4* c0 = x + base + 2 * k + offsets[0];
-        Float4* c1 = x + base + 2 * k + offsets[1];
-        Float4* c2 = x + base + 2 * k + offsets[2];
-        Float4* c3 = x + base + 2 * k + offsets[3];
-        Lanes8 p0 = load8(c0, LANES);
-        Lanes8 p1 = load8(c1, LANES);
-        Lanes8 p2 = load8(c2, LANES);
-        Lanes8 p3 = load8(c3, LANES);
+        Lanes8 la = load_soa(p, a + k);
+        Lanes8 lb = load_soa(p, b + k);
+        project_edges8(la, lb, rest_lengths + k, inv_k8, alpha8);
+        store_soa(p, a + k, la);
+        store_soa(p, b + k, lb);
+    }
+    if (k < count) {
+        // Masked lanes: w = 0, so their edges are invalid (s = 0) and not stored.
+        const __m256i mask = lane_mask(count - k);
+        float lengths[8];
+        _mm256_storeu_ps(lengths, _mm256_maskload_ps(rest_lengths + k, mask));
+        Lanes8 la = load_soa(p, a + k, mask);
+        Lanes8 lb = load_soa(p, b + k, mask);
+        project_edges8(la, lb, lengths, inv_k8, alpha8);
+        store_soa(p, a + k, la, mask);
+        store_soa(p, b + k, lb, mask);
+    }
+}
+
+// A run of tets: tet q ∈ [0, count) has vertices first[m] + q.
+PLIANT_AVX2_INLINE void tet_run_soa(const SoaPositions& p, const std::array<std::int64_t, 4>& first,
+                                    const float* rest_volumes, std::uint8_t* at_risk,
+                                    std::int64_t count, __m256 inv_k8, __m256 alpha8,
+                                    std::int64_t& flagged) {
+    std::int64_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+        Lanes8 p0 = load_soa(p, first[0] + k);
+        Lanes8 p1 = load_soa(p, first[1] + k);
+        Lanes8 p2 = load_soa(p, first[2] + k);
+        Lanes8 p3 = load_soa(p, first[3] + k);
         flag_at_risk(project_tets8(p0, p1, p2, p3, rest_volumes + k, inv_k8, alpha8), at_risk + k,
                      flagged);
-        store8(c0, LANES, p0);
-        store8(c1, LANES, p1);
-        store8(c2, LANES, p2);
-        store8(c3, LANES, p3);
+        store_soa(p, first[0] + k, p0);
+        store_soa(p, first[1] + k, p1);
+        store_soa(p, first[2] + k, p2);
+        store_soa(p, first[3] + k, p3);
     }
+    if (k < count) {
+        // Masked lanes: w = 0 and V0 = 0, so they move nothing and are not at risk (0 < 0 is
+        // false); the mask drops them anyway.
+        const std::int64_t n = count - k;
+        const __m256i mask = lane_mask(n);
+        float volumes[8];
+        _mm256_storeu_ps(volumes, _mm256_maskload_ps(rest_volumes + k, mask));
+        Lanes8 p0 = load_soa(p, first[0] + k, mask);
+        Lanes8 p1 = load_soa(p, first[1] + k, mask);
+        Lanes8 p2 = load_soa(p, first[2] + k, mask);
+        Lanes8 p3 = load_soa(p, first[3] + k, mask);
+        const int risk = project_tets8(p0, p1, p2, p3, volumes, inv_k8, alpha8) &
+                         ((1 << static_cast<int>(n)) - 1);
+        flag_at_risk(risk, at_risk + k, flagged);
+        store_soa(p, first[0] + k, p0, mask);
+        store_soa(p, first[1] + k, p1, mask);
+        store_soa(p, first[2] + k, p2, mask);
+        store_soa(p, first[3] + k, p3, mask);
+    }
+}
+
+// Calls project_run(q, n, run, o) on the pieces of the runs covering constraints [b, e) of a
+// colour (indices within it): constraints q .. q + n of run `run`, from its (o)th.
+template <typename ProjectRun>
+PLIANT_AVX2_INLINE void for_run_pieces(const LatticeRuns& runs, std::int64_t b, std::int64_t e,
+                                       const ProjectRun& project_run) {
+    // The run holding constraint b (its begin is the last ≤ begin + b).
+    std::int64_t r =
+        std::upper_bound(runs.run_begins, runs.run_begins + runs.num_runs, runs.begin + b) -
+        runs.run_begins - 1;
+    for (std::int64_t q = b; q < e; ++r) {
+        const std::int64_t run_end =
+            r + 1 < runs.num_runs ? runs.run_begins[r + 1] - runs.begin : runs.count;
+        const std::int64_t n = std::min(e, run_end) - q;
+        project_run(q, n, runs.runs[r], runs.begin + q - runs.runs[r].begin);
+        q += n;
+    }
+}
+
+}  // namespace
+
+PLIANT_AVX2_FN void project_edge_runs_soa_avx2(const SoaPositions& p, const LatticeRuns& runs,
+                                               std::int64_t b, std::int64_t e,
+                                               const float* rest_lengths, float inv_k,
+                                               float alpha) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    for_run_pieces(runs, b, e,
+                   [&](std::int64_t q, std::int64_t n, const LatticeRun& run, std::int64_t o) {
+                       edge_run_soa(p, run.first[0] + o, run.first[1] + o, rest_lengths + q, n,
+                                    inv_k8, alpha8);
+                   });
+}
+
+PLIANT_AVX2_FN void project_tet_runs_soa_avx2(const SoaPositions& p, const LatticeRuns& runs,
+                                              std::int64_t b, std::int64_t e,
+                                              const float* rest_volumes, std::uint8_t* at_risk,
+                                              float inv_k, float alpha, std::int64_t& num_at_risk) {
+    const __m256 inv_k8 = _mm256_set1_ps(inv_k);
+    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    std::int64_t flagged = 0;  // a local: the stores may alias num_at_risk
+    for_run_pieces(
+        runs, b, e, [&](std::int64_t q, std::int64_t n, const LatticeRun& run, std::int64_t o) {
+            const std::array<std::int64_t, 4> first{run.first[0] + o, run.first[1] + o,
+                                                    run.first[2] + o, run.first[3] + o};
+            tet_run_soa(p, first, rest_volumes + q, at_risk + q, n, inv_k8, alpha8, flagged);
+        });
     num_at_risk += flagged;
-    return k;
 }
 
 #else  // no AVX2 on this target
@@ -278,15 +362,10 @@ std::int64_t project_tets_avx2(Float4*, const geometry::Tet*, const float*, std:
                                std::int64_t, float, float, std::int64_t&) {
     return 0;
 }
-std::int64_t project_tet_run_avx2(Float4*, std::int64_t, const std::array<std::int32_t, 4>&,
-                                  const float*, std::uint8_t*, std::int64_t, float, float,
-                                  std::int64_t&) {
-    return 0;
-}
-std::int64_t project_edge_run_avx2(Float4*, std::int64_t, std::int32_t, std::int32_t, const float*,
-                                   std::int64_t, float, float) {
-    return 0;
-}
+void project_edge_runs_soa_avx2(const SoaPositions&, const LatticeRuns&, std::int64_t, std::int64_t,
+                                const float*, float, float) {}
+void project_tet_runs_soa_avx2(const SoaPositions&, const LatticeRuns&, std::int64_t, std::int64_t,
+                               const float*, std::uint8_t*, float, float, std::int64_t&) {}
 
 #endif
 

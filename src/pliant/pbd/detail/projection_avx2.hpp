@@ -26,20 +26,43 @@ std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t, const float* r
                                std::uint8_t* at_risk, std::int64_t count, float inv_k, float alpha,
                                std::int64_t& num_at_risk);
 
-// A run of edges: edge q joins first + stride q and first + stride q + span (stride 1 or 2),
-// `rest_lengths` parallel to them. Projects the first count − count mod 8 and returns that number.
-std::int64_t project_edge_run_avx2(Float4* x, std::int64_t first, std::int32_t stride,
-                                   std::int32_t span, const float* rest_lengths, std::int64_t count,
-                                   float inv_k, float alpha);
+// Positions and this substep's inverse masses as four arrays (structure of arrays, world units),
+// indexed by the lattice sweep's solver index (lattice_sweep.hpp).
+struct SoaPositions {
+    float* x = nullptr;
+    float* y = nullptr;
+    float* z = nullptr;
+    float* w = nullptr;
+};
 
-// Tets of a regular lattice (TetGrid full box, vertex index = lattice index): tet q of the run has
-// vertices base + 2 q + offsets[m] (every other cell along x), `rest_volumes` parallel to them.
-// Projects the first count − count mod 8 and returns that number, and flags the tets at risk in
-// at_risk, as above.
-std::int64_t project_tet_run_avx2(Float4* x, std::int64_t base,
-                                  const std::array<std::int32_t, 4>& offsets,
-                                  const float* rest_volumes, std::uint8_t* at_risk,
-                                  std::int64_t count, float inv_k, float alpha,
-                                  std::int64_t& num_at_risk);
+// A run of constraints of one colour in the solver order (lattice_sweep.hpp): constraint
+// q ∈ [begin, next run's begin) has vertices first[m] + (q − begin) (edges: m = 0, 1).
+struct LatticeRun {
+    std::int64_t begin = 0;
+    geometry::Tet first{};
+};
+
+// The runs of one colour: runs[0 .. num_runs), run_begins[r] = runs[r].begin, the colour's
+// constraints [begin, begin + count) in the colour order.
+struct LatticeRuns {
+    const LatticeRun* runs = nullptr;
+    const std::int64_t* run_begins = nullptr;
+    std::int64_t num_runs = 0;
+    std::int64_t begin = 0;
+    std::int64_t count = 0;
+};
+
+// Edges [b, e) of a colour (indices within it) on SoaPositions, `rest_lengths` the colour's:
+// every run's piece in [b, e) 8 at a time, its last count mod 8 in masked lanes (the arithmetic
+// of project_edge lane by lane).
+void project_edge_runs_soa_avx2(const SoaPositions& p, const LatticeRuns& runs, std::int64_t b,
+                                std::int64_t e, const float* rest_lengths, float inv_k,
+                                float alpha);
+
+// Tets [b, e) of a colour the same way, `rest_volumes` and at_risk the colour's: flags the tets at
+// risk (at_risk[q] = 1, the others untouched) and adds their number to num_at_risk.
+void project_tet_runs_soa_avx2(const SoaPositions& p, const LatticeRuns& runs, std::int64_t b,
+                               std::int64_t e, const float* rest_volumes, std::uint8_t* at_risk,
+                               float inv_k, float alpha, std::int64_t& num_at_risk);
 
 }  // namespace pliant::pbd::detail

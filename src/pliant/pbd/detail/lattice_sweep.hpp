@@ -1,0 +1,61 @@
+// The soft body's constraint sweep on a TetGrid with AVX2 (soft_body.hpp, steps 2 and 3): the
+// vertices in a solver order where the constraints of a colour form runs of consecutive vertices,
+// positions as four float arrays (structure of arrays), so that 8 constraints load and store
+// their vertices with plain vector loads instead of transposing 16-byte vertices.
+//
+// Solver order: lattice rows (z, then y), within a row the kept vertices of even lattice x, then
+// those of odd x. The cells of one parity class along a row step by 2 in x, so a corner of their
+// tets, and the ends of their edges, step by one in the solver order. Within each colour and each
+// layer key (constraint_layout.hpp, LayerBlocking) the constraints are reordered (with their rest
+// data) so that runs of constraints whose every vertex steps by one are consecutive; a run of any
+// length is projected 8 at a time, its last count mod 8 in masked lanes. The order within a colour
+// changes no result (its constraints share no vertex), the layer keys and so the blocking stay,
+// and the kernels are project_edges8 / project_tets8's arithmetic: results are bitwise those of
+// the plain colour-by-colour sweep (constraint_sweep.hpp), for any number of threads.
+//
+// A substep's sweep copies x into the arrays, runs the blocked edge and tet sweeps on them, and
+// copies the positions back (#V each way, parallel).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pliant/geometry/tet_mesh.hpp"
+#include "pliant/pbd/detail/constraint_layout.hpp"
+#include "pliant/pbd/detail/constraint_sweep.hpp"
+#include "pliant/pbd/detail/projection.hpp"
+#include "pliant/pbd/detail/projection_avx2.hpp"
+#include "pliant/pbd/tet_grid.hpp"
+
+namespace pliant::pbd::detail {
+
+struct LatticeSweep {
+    std::vector<std::int32_t> vertex_of;  // #V: the vertex at each solver index
+    // Runs (projection_avx2.hpp) of colour c at runs[run_offsets[c] .. run_offsets[c + 1]),
+    // run_begins[r] = runs[r].begin.
+    std::vector<LatticeRun> edge_runs;
+    std::vector<std::int64_t> edge_run_begins;
+    std::vector<std::int64_t> edge_run_offsets;
+    std::vector<LatticeRun> tet_runs;
+    std::vector<std::int64_t> tet_run_begins;
+    std::vector<std::int64_t> tet_run_offsets;
+    // #V each, solver order: the substep's positions (world units) and inverse masses.
+    std::vector<float> x, y, z, w;
+};
+
+// The sweep of a grid's constraints (laid out by constraint_layout.hpp for that grid): reorders
+// edges' and tets' constraints (vertices and rest data, current and at construction) within each
+// colour and layer key, and builds the runs. The other sweeps (constraint_sweep.hpp: SSE, scalar)
+// read the vertices and stay valid.
+LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges, TetConstraints& tets);
+
+// Steps 2 and 3 on x (#V, world units, packed with the substep's inverse mass; read and written):
+// every edge, then every tet, in the order of sweep_colours, flagging the tets at risk as
+// project_tets does. Requires AVX2 (pliant::has_avx2()).
+void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edges,
+                     const TetConstraints& tets, ConstraintStiffness edge_stiffness,
+                     ConstraintStiffness tet_stiffness, std::span<std::uint8_t> tet_at_risk,
+                     std::span<std::uint8_t> colour_at_risk);
+
+}  // namespace pliant::pbd::detail
