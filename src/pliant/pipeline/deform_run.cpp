@@ -64,11 +64,13 @@ struct DeformTotals {
 
 // What the run's result depends on (io::run_fingerprint): the source volume, the body as built
 // (rest shape, tets, masses), its options, the driver and fps; not the frame count, the video,
-// the camera or the thread count.
+// the camera or the thread count. The state saves the constraints' rest data and inversion flags
+// in the solver's constraint order (pbd/detail/lattice_sweep.hpp); the tag names that order, so a
+// checkpoint saved in another order is refused instead of resumed with its data misplaced.
 std::uint64_t deform_fingerprint(const volume::Volume& source, const pbd::SoftBody& body,
                                  const DeformRunOptions& options) {
     ByteWriter w;
-    w.put_string("pliant deform");
+    w.put_string("pliant deform, constraints in lattice-run order");
     w.put_bytes(source.bytes());
     w.put_vector(body.rest_positions());
     w.put_vector(body.tets());
