@@ -1,6 +1,8 @@
 #include "pliant/render/detail/mapped_raycast_avx2.hpp"
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/detail/grid8_avx2.hpp"
@@ -29,6 +31,10 @@ struct alignas(32) MapLanes {
     // octants of a ray with zero direction components (the octant's own when there are fewer).
     std::int32_t cube[LANES];
     std::int32_t more[3][LANES];
+    // The source coordinate of the lane's last classified sample and its index (−2: none), for
+    // the prefetch of the sample after next.
+    float last_g[3][LANES];
+    std::int32_t last_n[LANES];
 };
 
 PLIANT_AVX2_INLINE __m256 load(const float* p) {
@@ -71,6 +77,7 @@ void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
     s.n[l] = 0;
     s.num_full[l] = static_cast<std::int32_t>(p.num_full);
     s.samples[l] = 0;
+    s.last_n[l] = -2;
     const int octant = octant_of(p.r);
     s.cube[l] = octant * num_cells;
     for (auto& m : s.more) {
@@ -96,10 +103,151 @@ void clear_lane(MapLanes& s, int l) {
     s.t_near[l] = s.t_far[l] = s.margin[l] = 0.0f;
     s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
     s.n[l] = s.num_full[l] = s.samples[l] = 0;
+    s.last_n[l] = -2;
     s.cube[l] = 0;
     for (auto& m : s.more) {
         m[l] = 0;
     }
+}
+
+// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7, lane by lane in the same operations
+// (raycast_avx2.cpp's ray set-up, composite rays), into out[l]. Returns bit l set when lane l's
+// ray hits the box with fewer than 2^30 segments (out[l] set), bit 8 + l when it hits with more
+// (for the scalar code), neither when it misses.
+PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, PixelRay* out) {
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    const __m256 inv_focal = _mm256_set1_ps(k.inv_focal);
+    // pixel_ray(): (i + 0.5 − 0.5·width)·inv_focal, (0.5·height − (j + 0.5))·inv_focal.
+    const __m256 fi = _mm256_cvtepi32_ps(
+        _mm256_add_epi32(_mm256_set1_epi32(x), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+    const __m256 cx = _mm256_mul_ps(
+        _mm256_sub_ps(_mm256_add_ps(fi, half), _mm256_set1_ps(0.5f * static_cast<float>(k.width))),
+        inv_focal);
+    const __m256 cy =
+        _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(0.5f * static_cast<float>(k.height)),
+                                    _mm256_add_ps(_mm256_set1_ps(static_cast<float>(y)), half)),
+                      inv_focal);
+    __m256 origin[3], dir[3];
+    if (k.is_perspective) {
+        __m256 v[3];
+        for (int a = 0; a < 3; ++a) {
+            v[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.forward[a]),
+                                               _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
+                                 _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
+        }
+        const __m256 length = _mm256_sqrt_ps(
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(v[0], v[0]), _mm256_mul_ps(v[1], v[1])),
+                          _mm256_mul_ps(v[2], v[2])));
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = _mm256_set1_ps(k.eye[a]);
+            dir[a] = _mm256_div_ps(v[a], length);
+        }
+    } else {
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.eye[a]),
+                                                    _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
+                                      _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
+            dir[a] = _mm256_set1_ps(k.forward[a]);
+        }
+    }
+    // clip_ray(): the slab test per axis, then the clipping plane.
+    __m256 go[3], gd[3];
+    alignas(32) float inv_gd[3][LANES];
+    __m256 t_near = zero;
+    __m256 t_far = inf;
+    __m256 miss = zero;
+    for (int a = 0; a < 3; ++a) {
+        const __m256 inv_spacing = _mm256_set1_ps(k.inv_spacing[a]);
+        go[a] =
+            _mm256_add_ps(_mm256_mul_ps(origin[a], inv_spacing), _mm256_set1_ps(k.grid_offset[a]));
+        gd[a] = _mm256_mul_ps(dir[a], inv_spacing);
+        const __m256 lo = _mm256_set1_ps(-0.5f);
+        const __m256 hi = _mm256_set1_ps(static_cast<float>(k.n[a]) - 0.5f);
+        const __m256 is_zero = _mm256_cmp_ps(gd[a], zero, _CMP_EQ_OQ);
+        const __m256 outside = _mm256_or_ps(_mm256_cmp_ps(go[a], lo, _CMP_LT_OQ),
+                                            _mm256_cmp_ps(go[a], hi, _CMP_GT_OQ));
+        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, outside));
+        const __m256 inv =
+            _mm256_blendv_ps(_mm256_div_ps(_mm256_set1_ps(1.0f), gd[a]), inf, is_zero);
+        store(inv_gd[a], inv);
+        const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(lo, go[a]), inv);
+        const __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(hi, go[a]), inv);
+        const __m256 swap = _mm256_cmp_ps(t0, t1, _CMP_GT_OQ);
+        const __m256 t_lo = _mm256_blendv_ps(t0, t1, swap);
+        const __m256 t_hi = _mm256_blendv_ps(t1, t0, swap);
+        // std::max(t_near, t_lo) and std::min(t_far, t_hi), on the lanes with a non-zero component.
+        t_near = _mm256_blendv_ps(_mm256_max_ps(t_lo, t_near), t_near, is_zero);
+        t_far = _mm256_blendv_ps(_mm256_min_ps(t_hi, t_far), t_far, is_zero);
+    }
+    if (k.has_clip) {
+        const __m256 n[3] = {_mm256_set1_ps(k.clip_normal.x), _mm256_set1_ps(k.clip_normal.y),
+                             _mm256_set1_ps(k.clip_normal.z)};
+        const __m256 a = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], origin[0]),
+                                                                   _mm256_mul_ps(n[1], origin[1])),
+                                                     _mm256_mul_ps(n[2], origin[2])),
+                                       _mm256_set1_ps(k.clip_offset));
+        const __m256 s =
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], dir[0]), _mm256_mul_ps(n[1], dir[1])),
+                          _mm256_mul_ps(n[2], dir[2]));
+        const __m256 crossing = _mm256_div_ps(_mm256_xor_ps(a, _mm256_set1_ps(-0.0f)), s);
+        const __m256 is_pos = _mm256_cmp_ps(s, zero, _CMP_GT_OQ);
+        const __m256 is_neg = _mm256_cmp_ps(s, zero, _CMP_LT_OQ);
+        t_near = _mm256_blendv_ps(t_near, _mm256_max_ps(crossing, t_near), is_pos);
+        t_far = _mm256_blendv_ps(t_far, _mm256_min_ps(crossing, t_far), is_neg);
+        const __m256 is_zero = _mm256_cmp_ps(s, zero, _CMP_EQ_OQ);
+        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, _mm256_cmp_ps(a, zero, _CMP_LT_OQ)));
+    }
+    const __m256 hit = _mm256_andnot_ps(miss, _mm256_cmp_ps(t_near, t_far, _CMP_LT_OQ));
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    const __m256 magnitude = _mm256_add_ps(
+        _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(go[0], abs_mask), _mm256_and_ps(go[1], abs_mask)),
+                      _mm256_and_ps(go[2], abs_mask)),
+        _mm256_mul_ps(t_far, _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(gd[0], abs_mask),
+                                                         _mm256_and_ps(gd[1], abs_mask)),
+                                           _mm256_and_ps(gd[2], abs_mask))));
+    const __m256 margin = _mm256_add_ps(_mm256_set1_ps(SKIP_MARGIN),
+                                        _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
+    // begin_pixel(): N = max(1, ⌈length / Δs⌉) segments.
+    const __m256 length = _mm256_sub_ps(t_far, t_near);
+    const __m256 segments = _mm256_ceil_ps(_mm256_div_ps(length, _mm256_set1_ps(k.step)));
+    const __m256 fits = _mm256_cmp_ps(segments, _mm256_set1_ps(1073741824.0f), _CMP_LT_OQ);
+    const __m256i num_segments =
+        _mm256_max_epi32(_mm256_cvttps_epi32(_mm256_and_ps(segments, fits)), _mm256_set1_epi32(1));
+    alignas(32) float v_dir[3][LANES], v_go[3][LANES], v_gd[3][LANES];
+    alignas(32) float v_near[LANES], v_far[LANES], v_margin[LANES], v_length[LANES];
+    alignas(32) std::int32_t v_segments[LANES];
+    for (int a = 0; a < 3; ++a) {
+        store(v_dir[a], dir[a]);
+        store(v_go[a], go[a]);
+        store(v_gd[a], gd[a]);
+    }
+    store(v_near, t_near);
+    store(v_far, t_far);
+    store(v_margin, margin);
+    store(v_length, length);
+    store(v_segments, num_segments);
+    const int hits = _mm256_movemask_ps(_mm256_and_ps(hit, fits));
+    for (int l = 0; l < LANES; ++l) {
+        if ((hits >> l & 1) == 0) {
+            continue;
+        }
+        PixelRay& p = out[l];
+        for (int a = 0; a < 3; ++a) {
+            p.dir[a] = v_dir[a][l];
+            p.r.go[a] = v_go[a][l];
+            p.r.gd[a] = v_gd[a][l];
+            p.r.inv_gd[a] = inv_gd[a][l];
+        }
+        p.r.t_near = v_near[l];
+        p.r.t_far = v_far[l];
+        p.r.margin = v_margin[l];
+        p.length = v_length[l];
+        p.num_segments = v_segments[l];
+        p.num_full = p.num_segments - 1;
+    }
+    return hits | (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
 }
 
 // (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
@@ -140,7 +288,7 @@ PLIANT_AVX2_INLINE __m256 alpha8(const Grid8& s, const __m256 g[3]) {
 template <bool SHADING>
 PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const __m256i q[3],
                                   const __m256 f[3], __m256 mask, const __m256 dir8[3],
-                                  __m256 out[4]) {
+                                  __m256 out[4], __m256 source[3]) {
     const RayCastKernel& s = m.source;
     // 1. The map: the 8 nodes of each lane's cell, per channel, then the trilinear value and
     // (shading) its derivatives, as map_coordinate().
@@ -197,6 +345,7 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         inside =
             _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(m.source_hi[a]), _CMP_LE_OQ));
         g[a] = _mm256_and_ps(g[a], mask);
+        source[a] = g[a];
     }
     // 3. classify<true>(s, locate(s, g)).
     __m256 fraction[3];
@@ -308,18 +457,27 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     std::int32_t queue[TILE * TILE];
     int queue_size = 0;
     for (int y = y0; y < y1; ++y) {
-        for (int x = x0; x < x1; ++x) {
-            const int pixel = (y - y0) * tile_width + (x - x0);
-            PixelRay& p = rays[pixel];
-            if (!begin_pixel(k, x, y, p)) {
-                colors[pixel] = k.background;
-            } else if (p.num_full == 0) {
-                colors[pixel] = mapped_end<true>(m, p, Accumulated{}, samples);
-            } else if (p.num_full >= MAX_LANE_SAMPLES) {
-                const Accumulated c = mapped_march<true>(m, p, samples);
-                colors[pixel] = mapped_end<true>(m, p, c, samples);
-            } else {
-                queue[queue_size++] = pixel;
+        for (int x = x0; x < x1; x += LANES) {
+            PixelRay group[LANES];
+            const int bits = setup_rays(k, x, y, group);
+            const int count = std::min(LANES, x1 - x);
+            for (int l = 0; l < count; ++l) {
+                const int pixel = (y - y0) * tile_width + (x + l - x0);
+                PixelRay& p = rays[pixel];
+                if ((bits >> l & 1) != 0) {
+                    p = group[l];
+                } else if ((bits >> (LANES + l) & 1) == 0 || !begin_pixel(k, x + l, y, p)) {
+                    colors[pixel] = k.background;
+                    continue;
+                }
+                if (p.num_full == 0) {
+                    colors[pixel] = mapped_end<true>(m, p, Accumulated{}, samples);
+                } else if (p.num_full >= MAX_LANE_SAMPLES) {
+                    const Accumulated c = mapped_march<true>(m, p, samples);
+                    colors[pixel] = mapped_end<true>(m, p, c, samples);
+                } else {
+                    queue[queue_size++] = pixel;
+                }
             }
         }
     }
@@ -437,8 +595,40 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         __m256i terminated = _mm256_setzero_si256();
         if (_mm256_movemask_ps(as_float(classified)) != 0) {
             const __m256 dir8[3] = {load(s.dir[0]), load(s.dir[1]), load(s.dir[2])};
-            __m256 rgba[4];
-            classify8<SHADING>(m, src, q, f, as_float(classified), dir8, rgba);
+            __m256 rgba[4], g[3];
+            classify8<SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g);
+            // Prefetch: the voxel rows of the sample after next, extrapolated from this sample's
+            // source coordinate and the last one's when they are consecutive samples.
+            const __m256i consecutive = _mm256_and_si256(
+                classified, _mm256_cmpeq_epi32(load(s.last_n), _mm256_sub_epi32(n, one_i)));
+            int ahead_mask = _mm256_movemask_ps(as_float(consecutive));
+            if (ahead_mask != 0) {
+                __m256i corner[3];
+                for (int a = 0; a < 3; ++a) {
+                    const __m256 ahead =
+                        _mm256_add_ps(g[a], _mm256_mul_ps(_mm256_set1_ps(2.0f),
+                                                          _mm256_sub_ps(g[a], load(s.last_g[a]))));
+                    __m256 unused;
+                    locate_axis8(src, a, ahead, corner[a], unused);
+                }
+                alignas(32) std::int32_t index[LANES];
+                store(index, voxel_index8(src, corner));
+                const std::int64_t dy = 4 * std::int64_t{src.dy};
+                const std::int64_t dz = 4 * std::int64_t{src.dz};
+                while (ahead_mask != 0) {
+                    const int l = __builtin_ctz(static_cast<unsigned>(ahead_mask));
+                    ahead_mask &= ahead_mask - 1;
+                    const float* v = src.v + 4 * static_cast<std::int64_t>(index[l]);
+                    _mm_prefetch(reinterpret_cast<const char*>(v), _MM_HINT_T0);
+                    _mm_prefetch(reinterpret_cast<const char*>(v + dy), _MM_HINT_T0);
+                    _mm_prefetch(reinterpret_cast<const char*>(v + dz), _MM_HINT_T0);
+                    _mm_prefetch(reinterpret_cast<const char*>(v + dz + dy), _MM_HINT_T0);
+                }
+            }
+            for (int a = 0; a < 3; ++a) {
+                store(s.last_g[a], _mm256_blendv_ps(load(s.last_g[a]), g[a], as_float(classified)));
+            }
+            store(s.last_n, _mm256_blendv_epi8(load(s.last_n), n, classified));
             // composite(): front to back, the samples with opacity.
             const __m256 blend =
                 _mm256_and_ps(as_float(classified), _mm256_cmp_ps(rgba[3], zero, _CMP_GT_OQ));
