@@ -268,24 +268,47 @@ PLIANT_AVX2_INLINE void load_pairs(const float* v, const std::int32_t* index, __
     second = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
 }
 
-// The α trilinear of mapped_shading_value<true>() at g, 8 lanes (x-adjacent pairs: dx = 1).
-PLIANT_AVX2_INLINE __m256 alpha8(const Grid8& s, const __m256 g[3]) {
+// mapped_shading_value<IS_RGBA>() at g, 8 lanes: the trilinear scalar, or α from the α copy
+// (x-adjacent pairs: dx = 1).
+template <bool IS_RGBA>
+PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& s, const __m256 g[3]) {
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
     store(at, locate8(s, g, fraction));
     const std::int32_t row[4] = {0, s.dy, s.dz, s.dz + s.dy};
+    const float* v = IS_RGBA ? s.alpha : s.v;
     __m256 first[4], second[4];
     for (int r = 0; r < 4; ++r) {
-        load_pairs(s.alpha + row[r], at, first[r], second[r]);
+        load_pairs(v + row[r], at, first[r], second[r]);
     }
     return trilinear8(first, second, fraction);
 }
 
-// mapped_classify<true>() of 8 samples in map cells q (fractions f) for rays along dir: out[0 … 2]
-// the straight colour (shaded when SHADING), out[3] the step opacity, all 0 where the sample has
-// no opacity (outside the source box, or α ≤ 0). Lanes outside `mask` are sampled at source
-// coordinate 0 (their loads stay in bounds; their results are not used).
-template <bool SHADING>
+// The 4 floats at lut + offset[l] per lane, transposed: out[c] holds component c of the 8 lanes.
+PLIANT_AVX2_INLINE __m256 entry_row(const float* lut, const std::int32_t* offset, int l) {
+    return _mm256_set_m128(_mm_loadu_ps(lut + offset[l + 4]), _mm_loadu_ps(lut + offset[l]));
+}
+PLIANT_AVX2_INLINE void load_entries(const float* lut, const std::int32_t* offset, __m256 out[4]) {
+    const __m256 r0 = entry_row(lut, offset, 0);  // lanes 0 | 4
+    const __m256 r1 = entry_row(lut, offset, 1);
+    const __m256 r2 = entry_row(lut, offset, 2);
+    const __m256 r3 = entry_row(lut, offset, 3);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);
+    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);
+    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);
+    out[0] = _mm256_shuffle_ps(t0, t1, 0x44);
+    out[1] = _mm256_shuffle_ps(t0, t1, 0xEE);
+    out[2] = _mm256_shuffle_ps(t2, t3, 0x44);
+    out[3] = _mm256_shuffle_ps(t2, t3, 0xEE);
+}
+
+// mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
+// out[0 … 2] the straight colour (shaded when SHADING), out[3] the step opacity (RGBA) or the
+// lookup entry's, all 0 where the sample has no opacity (outside the source box, or none). Lanes
+// outside `mask` are sampled at source coordinate 0 (their loads stay in bounds; their results are
+// not used).
+template <bool IS_RGBA, bool SHADING>
 PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const __m256i q[3],
                                   const __m256 f[3], __m256 mask, const __m256 dir8[3],
                                   __m256 out[4], __m256 source[3]) {
@@ -347,39 +370,59 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         g[a] = _mm256_and_ps(g[a], mask);
         source[a] = g[a];
     }
-    // 3. classify<true>(s, locate(s, g)).
+    // 3. classify<IS_RGBA>(s, locate(s, g)).
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
     store(at, locate8(src, g, fraction));
-    __m256 rgba[4];
-    interpolate_rgba8(src, at, fraction, rgba);
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 zero = _mm256_setzero_ps();
-    const __m256 a = clamp8(rgba[3], zero, one);
-    const __m256 positive = _mm256_and_ps(inside, _mm256_cmp_ps(a, zero, _CMP_GT_OQ));
-    __m256 a_step;
-    if (s.step_over_unit == 0.5f) {
-        const __m256 half =
-            _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
-        a_step = _mm256_blendv_ps(half, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ));
-    } else {
-        alignas(32) float av[LANES];
-        alignas(32) float st[LANES] = {};
-        store(av, a);
-        int todo = _mm256_movemask_ps(positive);
-        while (todo != 0) {
-            const int l = __builtin_ctz(static_cast<unsigned>(todo));
-            todo &= todo - 1;
-            st[l] = rgba_step_opacity(av[l], s.step_over_unit);
+    __m256 positive;
+    if constexpr (IS_RGBA) {
+        __m256 rgba[4];
+        interpolate_rgba8(src, at, fraction, rgba);
+        const __m256 a = clamp8(rgba[3], zero, one);
+        positive = _mm256_and_ps(inside, _mm256_cmp_ps(a, zero, _CMP_GT_OQ));
+        __m256 a_step;
+        if (s.step_over_unit == 0.5f) {
+            const __m256 half =
+                _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
+            a_step = _mm256_blendv_ps(half, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ));
+        } else {
+            alignas(32) float av[LANES];
+            alignas(32) float st[LANES] = {};
+            store(av, a);
+            int todo = _mm256_movemask_ps(positive);
+            while (todo != 0) {
+                const int l = __builtin_ctz(static_cast<unsigned>(todo));
+                todo &= todo - 1;
+                st[l] = rgba_step_opacity(av[l], s.step_over_unit);
+            }
+            a_step = load(st);
         }
-        a_step = load(st);
+        const __m256 inv = _mm256_div_ps(one, rgba[3]);
+        for (int ch = 0; ch < 3; ++ch) {
+            out[ch] = _mm256_and_ps(positive, _mm256_mul_ps(rgba[ch], inv));
+        }
+        out[3] = _mm256_and_ps(positive, a_step);
+    } else {
+        // The trilinear lookup coordinate, then the lookup-table entry ⌊value + 0.5⌋.
+        __m256 low[4], high[4];  // x-adjacent pairs of the 4 rows
+        const std::int32_t voxel_row[4] = {0, src.dy, src.dz, src.dz + src.dy};
+        for (int r = 0; r < 4; ++r) {
+            load_pairs(src.v + voxel_row[r], at, low[r], high[r]);
+        }
+        const __m256 value = trilinear8(low, high, fraction);
+        alignas(32) std::int32_t entry[LANES];
+        store(entry, _mm256_slli_epi32(
+                         _mm256_cvttps_epi32(_mm256_add_ps(value, _mm256_set1_ps(0.5f))), 2));
+        __m256 e[4];
+        load_entries(s.lut, entry, e);
+        positive = _mm256_and_ps(inside, _mm256_cmp_ps(e[3], zero, _CMP_GT_OQ));
+        for (int ch = 0; ch < 4; ++ch) {
+            out[ch] = _mm256_and_ps(positive, e[ch]);
+        }
     }
-    a_step = _mm256_and_ps(positive, a_step);
-    const __m256 inv = _mm256_div_ps(one, rgba[3]);
-    for (int ch = 0; ch < 3; ++ch) {
-        out[ch] = _mm256_and_ps(positive, _mm256_mul_ps(rgba[ch], inv));
-    }
-    out[3] = a_step;
+    const __m256 a_step = out[3];
     // 4. Shading (mapped_classify()): central differences through the map's Jacobian, for the
     // samples with opacity.
     if constexpr (SHADING) {
@@ -392,7 +435,8 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
                     gp[ch] = _mm256_add_ps(g[ch], jac[axis][ch]);
                     gm[ch] = _mm256_sub_ps(g[ch], jac[axis][ch]);
                 }
-                gradient[axis] = _mm256_mul_ps(_mm256_sub_ps(alpha8(src, gp), alpha8(src, gm)),
+                gradient[axis] = _mm256_mul_ps(_mm256_sub_ps(shading_value8<IS_RGBA>(src, gp),
+                                                             shading_value8<IS_RGBA>(src, gm)),
                                                _mm256_set1_ps(m.target.inv_spacing[axis]));
             }
             __m256 nonzero;
@@ -443,7 +487,7 @@ PLIANT_AVX2_INLINE __m256i map_jump8(const MapLanes& s, const __m256i q[3], __m2
     return as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
 }
 
-template <bool SHADING>
+template <bool IS_RGBA, bool SHADING>
 PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, int x1, int y1,
                                         Color* colors) {
     const RayCastKernel& k = m.target;
@@ -471,10 +515,10 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                     continue;
                 }
                 if (p.num_full == 0) {
-                    colors[pixel] = mapped_end<true>(m, p, Accumulated{}, samples);
+                    colors[pixel] = mapped_end<IS_RGBA>(m, p, Accumulated{}, samples);
                 } else if (p.num_full >= MAX_LANE_SAMPLES) {
-                    const Accumulated c = mapped_march<true>(m, p, samples);
-                    colors[pixel] = mapped_end<true>(m, p, c, samples);
+                    const Accumulated c = mapped_march<IS_RGBA>(m, p, samples);
+                    colors[pixel] = mapped_end<IS_RGBA>(m, p, c, samples);
                 } else {
                     queue[queue_size++] = pixel;
                 }
@@ -493,7 +537,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     const auto end_lane = [&](int l) {
         std::int64_t lane_samples = s.samples[l];
         const Accumulated c{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
-        colors[pixel_of[l]] = mapped_end<true>(m, rays[pixel_of[l]], c, lane_samples);
+        colors[pixel_of[l]] = mapped_end<IS_RGBA>(m, rays[pixel_of[l]], c, lane_samples);
         samples += lane_samples;
     };
     const auto refill = [&](int l) {
@@ -596,7 +640,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         if (_mm256_movemask_ps(as_float(classified)) != 0) {
             const __m256 dir8[3] = {load(s.dir[0]), load(s.dir[1]), load(s.dir[2])};
             __m256 rgba[4], g[3];
-            classify8<SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g);
+            classify8<IS_RGBA, SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g);
             // Prefetch: the voxel rows of the sample after next, extrapolated from this sample's
             // source coordinate and the last one's when they are consecutive samples.
             const __m256i consecutive = _mm256_and_si256(
@@ -613,12 +657,13 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                 }
                 alignas(32) std::int32_t index[LANES];
                 store(index, voxel_index8(src, corner));
-                const std::int64_t dy = 4 * std::int64_t{src.dy};
-                const std::int64_t dz = 4 * std::int64_t{src.dz};
+                constexpr std::int64_t CH = IS_RGBA ? 4 : 1;  // floats per voxel
+                const std::int64_t dy = CH * std::int64_t{src.dy};
+                const std::int64_t dz = CH * std::int64_t{src.dz};
                 while (ahead_mask != 0) {
                     const int l = __builtin_ctz(static_cast<unsigned>(ahead_mask));
                     ahead_mask &= ahead_mask - 1;
-                    const float* v = src.v + 4 * static_cast<std::int64_t>(index[l]);
+                    const float* v = src.v + CH * static_cast<std::int64_t>(index[l]);
                     _mm_prefetch(reinterpret_cast<const char*>(v), _MM_HINT_T0);
                     _mm_prefetch(reinterpret_cast<const char*>(v + dy), _MM_HINT_T0);
                     _mm_prefetch(reinterpret_cast<const char*>(v + dz), _MM_HINT_T0);
@@ -673,14 +718,20 @@ bool mapped_avx2_fits(const MappedKernel& m) {
             return false;
         }
     }
-    return has_avx2() && s.is_rgba && s.d[0] == 1 && 4 * voxels < INDEX_LIMIT / 2 &&
-           8 * num_cells < INDEX_LIMIT && (!m.target.shading || s.alpha != nullptr);
+    const std::int64_t floats_per_voxel = s.is_rgba ? 4 : 1;
+    return has_avx2() && (s.is_rgba || s.lut != nullptr) && s.d[0] == 1 &&
+           floats_per_voxel * voxels < INDEX_LIMIT / 2 && 8 * num_cells < INDEX_LIMIT &&
+           (!s.is_rgba || !m.target.shading || s.alpha != nullptr);
 }
 
 PLIANT_AVX2_FN std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1,
                                              Color* colors) {
-    return m.target.shading ? mapped_tile<true>(m, x0, y0, x1, y1, colors)
-                            : mapped_tile<false>(m, x0, y0, x1, y1, colors);
+    if (m.source.is_rgba) {
+        return m.target.shading ? mapped_tile<true, true>(m, x0, y0, x1, y1, colors)
+                                : mapped_tile<true, false>(m, x0, y0, x1, y1, colors);
+    }
+    return m.target.shading ? mapped_tile<false, true>(m, x0, y0, x1, y1, colors)
+                            : mapped_tile<false, false>(m, x0, y0, x1, y1, colors);
 }
 
 #else
