@@ -52,11 +52,9 @@ void tet_vertices(const geometry::Tet& tet, std::span<const Vec3d> grid, Vec3d p
     }
 }
 
-// The map of a tet from its deformed vertices p (target grid coordinates) and its rest vertices
-// (source grid coordinates, per vertex).
-TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3d> rest_grid, const Vec3d p[4]) {
-    Vec3d r[4];
-    tet_vertices(tet, rest_grid, r);
+// The barycentric rows of a tet from its deformed vertices p (target grid coordinates); ok is
+// false for a degenerate tet. The rest part (r3, dr) is left unset.
+TetMap tet_frame(const Vec3d p[4]) {
     TetMap m;
     const Vec3d e0 = p[0] - p[3];
     const Vec3d e1 = p[1] - p[3];
@@ -70,11 +68,23 @@ TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3d> rest_grid, const
     m.rows[1] = cross(e2, e0) * inv;
     m.rows[2] = cross(e0, e1) * inv;
     m.p3 = p[3];
+    m.ok = true;
+    return m;
+}
+
+// The map of a tet from its deformed vertices p and its rest vertices (source grid coordinates,
+// per vertex).
+TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3d> rest_grid, const Vec3d p[4]) {
+    TetMap m = tet_frame(p);
+    if (!m.ok) {
+        return m;
+    }
+    Vec3d r[4];
+    tet_vertices(tet, rest_grid, r);
     m.r3 = r[3];
     for (int k = 0; k < 3; ++k) {
         m.dr[k] = r[k] - r[3];
     }
-    m.ok = true;
     return m;
 }
 
@@ -216,7 +226,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
             if (is_empty) {
                 return;
             }
-            const TetMap m = tet_map(tet, rest_grid, p);
+            const TetMap m = tet_frame(p);  // λ only: the rest part is taken in (b)
             if (!m.ok) {
                 return;
             }
