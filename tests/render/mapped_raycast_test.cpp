@@ -278,34 +278,82 @@ TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     }
 }
 
-// The AVX2 batches are the scalar kernel's bits: images and sample counts, shaded or not, at the
-// default step (Δs/u = 1/2) and another.
-TEST(MappedRayCast, Avx2BatchesMatchTheScalarKernel) {
-    const volume::Volume& source = rgba64();
-    const Deformed d = deform(source, nullptr, Drive::twist, 12);
-    const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 96, 96);
+// The AVX2 march (8 rays per vector) is the scalar kernel's bits: images and sample counts, for
+// every kind the mapped caster renders: RGBA and scalar sources (through a transfer function),
+// shaded or not, at the default step (Δs/u = 1/2) and another, clipped, without skipping,
+// without early termination, and along an axis (rays with zero direction components jump by
+// the cubes of several octants).
+void expect_avx2_matches_scalar(const volume::Volume& source, const volume::TransferFunction* tf) {
+    const Deformed d = deform(source, tf, Drive::twist, 12);
     volume::InverseMap map;
     map.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+    const AABBd box = source.bounds();
+    const Vec3d centre = 0.5 * (box.lo + box.hi);
+    const Camera orbit = orbit_camera(box, 30.0, 20.0, 0.0, 96, 96);
+    const Camera axis =
+        Camera::orthographic(centre + Vec3d{0.0, 0.0, 2.0 * (box.hi.z - box.lo.z)}, centre,
+                             {0.0, 1.0, 0.0}, 1.2 * (box.hi.y - box.lo.y), 64, 64);
+    struct Case {
+        const char* name;
+        double step = 0.0;
+        bool shading = false;
+        bool clip = false;
+        bool skipping = true;
+        double termination = 0.99;
+        const Camera* camera = nullptr;
+    };
+    const double other_step = 0.7 * source.spacing().x;
+    const Case cases[] = {
+        {"unshaded", 0.0, false, false, true, 0.99, &orbit},
+        {"shaded", 0.0, true, false, true, 0.99, &orbit},
+        {"unshaded, other step", other_step, false, false, true, 0.99, &orbit},
+        {"shaded, other step", other_step, true, false, true, 0.99, &orbit},
+        {"clipped", 0.0, true, true, true, 0.99, &orbit},
+        {"no skipping", 0.0, true, false, false, 0.99, &orbit},
+        {"no early termination", 0.0, false, false, true, 1.0, &orbit},
+        {"axis view", 0.0, true, false, true, 0.99, &axis},
+    };
+    for (const Case& c : cases) {
+        RayCastOptions options;
+        options.shading = c.shading;
+        options.step = c.step;
+        options.empty_space_skipping = c.skipping;
+        options.early_termination = c.termination;
+        if (c.clip) {
+            options.clip = ClipPlane{centre, {1.0, 0.5, -0.25}};
+        }
+        MappedRayCaster caster(source, tf, source, options);
+        caster.set_map(map);
+        Image simd, scalar;
+        const RayCastStats a = caster.render(*c.camera, simd);
+        allow_avx2(false);
+        const RayCastStats b = caster.render(*c.camera, scalar);
+        allow_avx2(true);
+        EXPECT_EQ(simd.pixels, scalar.pixels) << c.name;
+        EXPECT_EQ(a.samples, b.samples) << c.name;
+        EXPECT_GT(a.samples, 0) << c.name;
+        std::int64_t lit = 0;  // pixels the source makes visible at all
+        for (const std::uint8_t v : simd.pixels) {
+            lit += v > 0 ? 1 : 0;
+        }
+        EXPECT_GT(lit, 0) << c.name;
+    }
+}
+
+TEST(MappedRayCast, Avx2MarchMatchesTheScalarKernelOnRgba) {
     if (!has_avx2()) {
         GTEST_SKIP() << "no AVX2 on this CPU";
     }
-    for (const double step : {0.0, 0.7 * source.spacing().x}) {
-        for (const bool shading : {false, true}) {
-            RayCastOptions options;
-            options.shading = shading;
-            options.step = step;
-            MappedRayCaster caster(source, nullptr, source, options);
-            caster.set_map(map);
-            Image simd, scalar;
-            const RayCastStats a = caster.render(camera, simd);
-            allow_avx2(false);
-            const RayCastStats b = caster.render(camera, scalar);
-            allow_avx2(true);
-            EXPECT_EQ(simd.pixels, scalar.pixels) << "step " << step << ", shading " << shading;
-            EXPECT_EQ(a.samples, b.samples);
-            EXPECT_GT(a.samples, 0);
-        }
+    expect_avx2_matches_scalar(rgba64(), nullptr);
+}
+
+TEST(MappedRayCast, Avx2MarchMatchesTheScalarKernelOnScalars) {
+    if (!has_avx2()) {
+        GTEST_SKIP() << "no AVX2 on this CPU";
     }
+    const volume::Volume source = volume::shepp_logan_3d({48, 40, 44});
+    const volume::TransferFunction tf = volume::preset("mri-brain", source);
+    expect_avx2_matches_scalar(source, &tf);
 }
 
 TEST(MappedRayCast, EarlyTerminationStillWorks) {

@@ -156,6 +156,43 @@ TEST(InverseMap, OneAndTwoThreadsGiveTheSameMap) {
               0);
 }
 
+// Deformed tets that overlap (every vertex jittered by up to 0.8 cells, many tets inverted): a
+// node inside several takes the map of the highest tet index, whatever order the tasks visit
+// them in, so 1, 2 and 3 threads build the same bits.
+TEST(InverseMap, OverlappingTetsGiveTheSameMapOnAnyThreadCount) {
+    const Volume source = shepp_logan_3d({36, 40, 32});
+    const pbd::TetGrid g = full_grid(source, 4);
+    std::vector<Vec3f> deformed = g.mesh.positions;
+    std::uint32_t state = 12345u;
+    const auto jitter = [&] {
+        state = state * 1664525u + 1013904223u;
+        return (static_cast<float>(state >> 8) / 16777216.0f - 0.5f) * 1.6f * 4.0f;
+    };
+    for (Vec3f& p : deformed) {
+        p.x += jitter() * static_cast<float>(source.spacing().x);
+        p.y += jitter() * static_cast<float>(source.spacing().y);
+        p.z += jitter() * static_cast<float>(source.spacing().z);
+    }
+    InverseMap maps[3];
+    InverseMapStats stats[3];
+    for (int threads = 1; threads <= 3; ++threads) {
+        set_num_threads(threads);
+        stats[threads - 1] =
+            maps[threads - 1].build(source, source, g.mesh.tets, g.mesh.positions, deformed);
+    }
+    set_num_threads(0);
+    EXPECT_GT(stats[0].num_inside, 0);
+    for (int i = 1; i < 3; ++i) {
+        EXPECT_EQ(stats[i].num_inside, stats[0].num_inside);
+        EXPECT_EQ(stats[i].num_extrapolated, stats[0].num_extrapolated);
+        ASSERT_EQ(maps[i].node_coordinates().size(), maps[0].node_coordinates().size());
+        EXPECT_EQ(std::memcmp(maps[i].node_coordinates().data(), maps[0].node_coordinates().data(),
+                              maps[0].node_coordinates().size_bytes()),
+                  0)
+            << i + 1 << " threads";
+    }
+}
+
 TEST(InverseMap, PointsFarFromTheBodyAndOutsideTheNodesHaveNoSource) {
     const Volume source = shepp_logan_3d({32, 32, 32});
     const pbd::TetGrid g = full_grid(source, 4);

@@ -259,6 +259,21 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
+    // The nodes padded to 4 floats (the AVX2 march loads a node pair as 8 floats).
+    m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
+    parallel_for(
+        nodes[2],
+        [&](std::int64_t z) {
+            for (std::int64_t q = nxy * z; q < nxy * (z + 1); ++q) {
+                const float* in = g + 3 * q;
+                float* out = m_nodes4.data() + 4 * q;
+                out[0] = in[0];
+                out[1] = in[1];
+                out[2] = in[2];
+                out[3] = 0.0f;
+            }
+        },
+        1);
     m_empty_cube.resize(8 * total);
     parallel_for(
         8,
@@ -307,6 +322,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         k.clip_offset = static_cast<float>(dot(nrm, m_options.clip->point - m_target_origin));
     }
     m.nodes = m_map->node_coordinates().data();
+    m.nodes4 = m_nodes4.data();
     m.node_stride[0] = 1;
     m.node_stride[1] = m_map->nodes()[0];
     m.node_stride[2] = m_map->nodes()[0] * m_map->nodes()[1];
@@ -320,17 +336,25 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
 
     image = Image(k.width, k.height);
     const bool is_rgba = m_source->m_is_rgba;
-    // The AVX2 batches give the scalar batches' bits (detail/mapped_raycast_avx2.hpp).
+    // The AVX2 march gives the scalar kernel's bits (detail/mapped_raycast_avx2.hpp).
     const bool use_avx2 = detail::mapped_avx2_fits(m);
     RayCastStats stats;
     stats.samples = detail::render_tiles(k.width, k.height, [&](int x0, int y0, int x1, int y1) {
         std::int64_t samples = 0;
+        if (use_avx2) {
+            Color colors[detail::TILE * detail::TILE];
+            samples = detail::mapped_tile_avx2(m, x0, y0, x1, y1, colors);
+            for (int y = y0; y < y1; ++y) {
+                for (int x = x0; x < x1; ++x) {
+                    image.set(x, y, to_rgb8(colors[(y - y0) * (x1 - x0) + (x - x0)]));
+                }
+            }
+            return samples;
+        }
         for (int y = y0; y < y1; ++y) {
             for (int x = x0; x < x1; ++x) {
-                const detail::PixelResult p =
-                    use_avx2  ? detail::mapped_pixel<true>(m, x, y, detail::Avx2Batch{})
-                    : is_rgba ? detail::mapped_pixel<true>(m, x, y, detail::ScalarBatch<true>{})
-                              : detail::mapped_pixel<false>(m, x, y, detail::ScalarBatch<false>{});
+                const detail::PixelResult p = is_rgba ? detail::mapped_pixel<true>(m, x, y)
+                                                      : detail::mapped_pixel<false>(m, x, y);
                 image.set(x, y, to_rgb8(p.color));
                 samples += p.samples;
             }

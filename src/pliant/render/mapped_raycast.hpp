@@ -36,12 +36,13 @@
 //     skipping (tested). No sub-cell bits: 2³ sub-cells cut the samples at the source scale from
 //     1.62 M to 1.30 M but their hulls cost set_map 26 ms more CPU than they saved the render.
 //   - Composite mode only (MIP through the map: InvalidInput).
-// Cost per frame: set_map() is O(map cells) (parallel over layers) plus the empty cubes; a sample
-// costs one more trilinear interpolation of 3 floats (the map) than RayCaster's, and shaded
-// samples read their 6 gradient samples in the source. Samples are classified in batches of 8
-// along a ray, then composited in order (a batch's samples past the early termination are
-// classified and counted, not composited); RGBA sources on a CPU with AVX2 classify a batch 8
-// wide (detail/mapped_raycast_avx2.hpp), bitwise the scalar batch.
+// Cost per frame: set_map() is O(map cells) (parallel over layers) plus the empty cubes and a
+// copy of the nodes padded to 4 floats; a sample costs one more trilinear interpolation of 3
+// floats (the map) than RayCaster's, and shaded samples read their 6 gradient samples in the
+// source. A ray's march ends at its early termination (no sample past it is classified). RGBA
+// and scalar sources on a CPU with AVX2 march 8 rays per vector, a lane refilled from the tile's
+// rays as soon as its ray ends (detail/mapped_raycast_avx2.hpp), bitwise the scalar kernel
+// (images and sample counts).
 // Determinism: 16 × 16 tiles through core/parallel, every pixel the same float operations:
 // bitwise identical images for 1 and N threads.
 #pragma once
@@ -114,6 +115,7 @@ private:
     // RGBA: summed-volume table of the source voxels with α > 0 ((n + 1)³, zeros first).
     std::vector<std::int32_t> m_sat;
     std::vector<std::uint8_t> m_empty_cube;  // 8 octants × map cells
+    std::vector<float> m_nodes4;             // the map's nodes, 4 floats each (x, y, z, 0)
 };
 
 }  // namespace pliant::render

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -43,23 +45,16 @@ Vec3d grid_coordinate(const Vec3f& x, const GridFrame& f) {
             (x.z - f.origin[2]) * f.inv_spacing[2] - 0.5};
 }
 
-// The deformed vertices of a tet in target grid coordinates.
-void deformed_vertices(const geometry::Tet& tet, std::span<const Vec3f> deformed,
-                       const GridFrame& tf, Vec3d p[4]) {
+// The vertices of a tet from per-vertex grid coordinates (grid_coordinate() of each vertex).
+void tet_vertices(const geometry::Tet& tet, std::span<const Vec3d> grid, Vec3d p[4]) {
     for (int v = 0; v < 4; ++v) {
-        p[v] = grid_coordinate(deformed[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])],
-                               tf);
+        p[v] = grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
     }
 }
 
-// The map of a tet whose deformed vertices p are known (deformed_vertices()).
-TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3f> rest, const GridFrame& sf,
-               const Vec3d p[4]) {
-    Vec3d r[4];
-    for (int v = 0; v < 4; ++v) {
-        r[v] =
-            grid_coordinate(rest[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])], sf);
-    }
+// The barycentric rows of a tet from its deformed vertices p (target grid coordinates); ok is
+// false for a degenerate tet. The rest part (r3, dr) is left unset.
+TetMap tet_frame(const Vec3d p[4]) {
     TetMap m;
     const Vec3d e0 = p[0] - p[3];
     const Vec3d e1 = p[1] - p[3];
@@ -73,12 +68,37 @@ TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3f> rest, const Grid
     m.rows[1] = cross(e2, e0) * inv;
     m.rows[2] = cross(e0, e1) * inv;
     m.p3 = p[3];
+    m.ok = true;
+    return m;
+}
+
+// The map of a tet from its deformed vertices p and its rest vertices (source grid coordinates,
+// per vertex).
+TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3d> rest_grid, const Vec3d p[4]) {
+    TetMap m = tet_frame(p);
+    if (!m.ok) {
+        return m;
+    }
+    Vec3d r[4];
+    tet_vertices(tet, rest_grid, r);
     m.r3 = r[3];
     for (int k = 0; k < 3; ++k) {
         m.dr[k] = r[k] - r[3];
     }
-    m.ok = true;
     return m;
+}
+
+// The node range [lo, hi] along axis a that the box of deformed vertices p covers (nodes at
+// B·i, clamped to the grid of `nodes` nodes); empty when lo > hi. inv_b: 1 / B when that is exact
+// (B a power of two: x · inv_b has the bits of x / B), else 0 (divided).
+void node_range(const Vec3d p[4], int a, double b, double inv_b, std::int64_t nodes,
+                std::int64_t& lo, std::int64_t& hi) {
+    const double mn = std::min({p[0][a], p[1][a], p[2][a], p[3][a]});
+    const double mx = std::max({p[0][a], p[1][a], p[2][a], p[3][a]});
+    const double lo_nodes = inv_b > 0.0 ? mn * inv_b : mn / b;
+    const double hi_nodes = inv_b > 0.0 ? mx * inv_b : mx / b;
+    lo = static_cast<std::int64_t>(std::max(0.0, std::ceil(lo_nodes)));
+    hi = static_cast<std::int64_t>(std::min(static_cast<double>(nodes - 1), std::floor(hi_nodes)));
 }
 
 void check_positions(std::span<const Vec3f> positions, const char* what) {
@@ -158,6 +178,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const GridFrame sf = detail::frame_of(source);
     m_b = options.node_voxels;
     const auto b = static_cast<double>(m_b);
+    const double exact_inv_b = std::has_single_bit(static_cast<unsigned>(m_b)) ? 1.0 / b : 0.0;
     for (int a = 0; a < 3; ++a) {
         m_nodes[static_cast<std::size_t>(a)] = (tf.n[a] - 1) / m_b + 2;
     }
@@ -173,47 +194,86 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
         out[2] = static_cast<float>(r.z);
     };
 
-    // 1. Inside nodes, tets in index order (the highest index wins).
+    // 0. Every vertex in grid coordinates: deformed in the target's, rest in the source's.
+    std::vector<Vec3d> deformed_grid(deformed_positions.size());
+    std::vector<Vec3d> rest_grid(rest_positions.size());
+    parallel_for(static_cast<std::int64_t>(deformed_positions.size()), [&](std::int64_t v) {
+        const auto i = static_cast<std::size_t>(v);
+        deformed_grid[i] = grid_coordinate(deformed_positions[i], tf);
+        rest_grid[i] = grid_coordinate(rest_positions[i], sf);
+    });
+
+    // 1. Inside nodes: the highest index of the tets holding a node wins, a rule independent of
+    // the order tets are visited in. (a) Every tet, in parallel, raises the holder of each node it
+    // holds to its index (an atomic maximum); (b) every held node, in parallel, takes its
+    // holder's map.
     InverseMapStats stats;
     stats.num_nodes = num_nodes;
-    for (std::size_t t = 0; t < tets.size(); ++t) {
-        // Most tets hold no node: their box is tested before their map is set up.
-        Vec3d p[4];
-        deformed_vertices(tets[t], deformed_positions, tf, p);
-        std::int64_t lo[3];
-        std::int64_t hi[3];
-        bool is_empty = false;
-        for (int a = 0; a < 3; ++a) {
-            const double mn = std::min({p[0][a], p[1][a], p[2][a], p[3][a]});
-            const double mx = std::max({p[0][a], p[1][a], p[2][a], p[3][a]});
-            lo[a] = static_cast<std::int64_t>(std::max(0.0, std::ceil(mn / b)));
-            hi[a] = static_cast<std::int64_t>(std::min(
-                static_cast<double>(m_nodes[static_cast<std::size_t>(a)] - 1), std::floor(mx / b)));
-            is_empty = is_empty || lo[a] > hi[a];
-        }
-        if (is_empty) {
-            continue;
-        }
-        const TetMap m = tet_map(tets[t], rest_positions, sf, p);
-        if (!m.ok) {
-            continue;
-        }
-        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-            for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+    parallel_for(
+        static_cast<std::int64_t>(tets.size()),
+        [&](std::int64_t t) {
+            const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
+            Vec3d p[4];
+            tet_vertices(tet, deformed_grid, p);
+            std::int64_t lo[3], hi[3];
+            bool is_empty = false;
+            for (int a = 0; a < 3; ++a) {
+                node_range(p, a, b, exact_inv_b, m_nodes[static_cast<std::size_t>(a)], lo[a],
+                           hi[a]);
+                is_empty = is_empty || lo[a] > hi[a];
+            }
+            // Most tets hold no node: their box is tested before their map is set up.
+            if (is_empty) {
+                return;
+            }
+            const TetMap m = tet_frame(p);  // λ only: the rest part is taken in (b)
+            if (!m.ok) {
+                return;
+            }
+            for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                    for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                        double l[3];
+                        const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
+                                         static_cast<double>(z) * b};
+                        if (!(m.lambda(node, l) >= -1e-9)) {
+                            continue;
+                        }
+                        std::atomic_ref<std::int32_t> h(
+                            holder[static_cast<std::size_t>(x + nx * y + nxy * z)]);
+                        std::int32_t current = h.load(std::memory_order_relaxed);
+                        const auto index = static_cast<std::int32_t>(t);
+                        while (current < index && !h.compare_exchange_weak(
+                                                      current, index, std::memory_order_relaxed)) {
+                        }
+                    }
+                }
+            }
+        },
+        1024);
+    parallel_for(
+        m_nodes[2],
+        [&](std::int64_t z) {
+            for (std::int64_t y = 0; y < m_nodes[1]; ++y) {
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    const std::int64_t q = x + nx * y + nxy * z;
+                    const std::int32_t t = holder[static_cast<std::size_t>(q)];
+                    if (t < 0) {
+                        continue;
+                    }
+                    const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
+                    Vec3d p[4];
+                    tet_vertices(tet, deformed_grid, p);
+                    const TetMap m = tet_map(tet, rest_grid, p);
                     double l[3];
                     const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
                                      static_cast<double>(z) * b};
-                    if (!(m.lambda(node, l) >= -1e-9)) {
-                        continue;
-                    }
-                    const std::int64_t q = x + nx * y + nxy * z;
-                    holder[static_cast<std::size_t>(q)] = static_cast<std::int32_t>(t);
+                    m.lambda(node, l);
                     store(q, m.rest(l));
                 }
             }
-        }
-    }
+        },
+        1);
 
     // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated. Reads `holder` (inside
     // nodes only), writes only its own node: parallel over layers.
@@ -244,8 +304,8 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                                 }
                                 const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
                                 Vec3d p[4];
-                                deformed_vertices(tet, deformed_positions, tf, p);
-                                const TetMap m = tet_map(tet, rest_positions, sf, p);
+                                tet_vertices(tet, deformed_grid, p);
+                                const TetMap m = tet_map(tet, rest_grid, p);
                                 double l[3];
                                 const double score = m.lambda(node, l);
                                 if (score > best) {

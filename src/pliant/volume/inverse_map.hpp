@@ -23,9 +23,11 @@
 // it only where neighbouring tets' maps differ (second order in the deformation's curvature);
 // tests/volume/inverse_map_test.cpp measures it against the exact resampler.
 //
-// Cost: O(#T) for the inside nodes (one thread, tets in index order) and O(#nodes) for the
-// extrapolated ones (parallel over node layers). Deterministic: the same map for any number of
-// threads. Not thread safe to build; const access from many threads is.
+// Cost: O(#V + #T) for the inside nodes (parallel over tets: each raises the holder of the
+// nodes it holds to its index, an atomic maximum; then parallel over nodes: each takes its
+// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers).
+// Deterministic: the same map for any number of threads. Not thread safe to build; const access
+// from many threads is.
 #pragma once
 
 #include <array>

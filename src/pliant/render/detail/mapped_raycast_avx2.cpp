@@ -1,6 +1,8 @@
 #include "pliant/render/detail/mapped_raycast_avx2.hpp"
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/detail/grid8_avx2.hpp"
@@ -11,24 +13,698 @@ namespace pliant::render::detail {
 
 namespace {
 
-// The α trilinear of mapped_shading_value<true>() at g, 8 lanes.
-PLIANT_AVX2_INLINE __m256 alpha8(const Grid8& s, const __m256 g[3]) {
+constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
+// Rays with this many full samples or more are marched by the scalar kernel (int32 counters).
+constexpr std::int64_t MAX_LANE_SAMPLES = std::int64_t{1} << 30;
+
+// The march state of 8 rays, one per lane (structure of arrays, reloaded every iteration: a lane
+// is refilled by scalar stores).
+struct alignas(32) MapLanes {
+    float dir[3][LANES];  // world direction (shading)
+    float go[3][LANES];
+    float gd[3][LANES];
+    float inv_gd[3][LANES];
+    float t_near[LANES], t_far[LANES], margin[LANES];
+    float cr[LANES], cg[LANES], cb[LANES], acc[LANES];
+    std::int32_t n[LANES], num_full[LANES], samples[LANES];
+    // Offset of the lane's octant in the empty cubes (octant · cells), and of the up to 3 more
+    // octants of a ray with zero direction components (the octant's own when there are fewer).
+    std::int32_t cube[LANES];
+    std::int32_t more[3][LANES];
+    // The source coordinate of the lane's last classified sample and its index (−2: none), for
+    // the prefetch of the sample after next.
+    float last_g[3][LANES];
+    std::int32_t last_n[LANES];
+};
+
+PLIANT_AVX2_INLINE __m256 load(const float* p) {
+    return _mm256_load_ps(p);
+}
+PLIANT_AVX2_INLINE __m256i load(const std::int32_t* p) {
+    return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
+}
+PLIANT_AVX2_INLINE void store(float* p, __m256 v) {
+    _mm256_store_ps(p, v);
+}
+PLIANT_AVX2_INLINE void store(std::int32_t* p, __m256i v) {
+    _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
+}
+PLIANT_AVX2_INLINE __m256 as_float(__m256i m) {
+    return _mm256_castsi256_ps(m);
+}
+PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
+    return _mm256_castps_si256(m);
+}
+
+// base[index[l]] per lane l (bytes).
+PLIANT_AVX2_INLINE __m256i load_bytes(const std::uint8_t* base, const std::int32_t* index) {
+    return _mm256_setr_epi32(base[index[0]], base[index[1]], base[index[2]], base[index[3]],
+                             base[index[4]], base[index[5]], base[index[6]], base[index[7]]);
+}
+
+// Puts ray p into lane l, marched from its first sample.
+void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
+    for (int a = 0; a < 3; ++a) {
+        s.dir[a][l] = p.dir[a];
+        s.go[a][l] = p.r.go[a];
+        s.gd[a][l] = p.r.gd[a];
+        s.inv_gd[a][l] = p.r.inv_gd[a];
+    }
+    s.t_near[l] = p.r.t_near;
+    s.t_far[l] = p.r.t_far;
+    s.margin[l] = p.r.margin;
+    s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
+    s.n[l] = 0;
+    s.num_full[l] = static_cast<std::int32_t>(p.num_full);
+    s.samples[l] = 0;
+    s.last_n[l] = -2;
+    const int octant = octant_of(p.r);
+    s.cube[l] = octant * num_cells;
+    for (auto& m : s.more) {
+        m[l] = s.cube[l];
+    }
+    const int zero = zero_axes_of(p.r);
+    int num_more = 0;
+    for (int flip = 1; flip < 8; ++flip) {
+        if ((flip & ~zero) == 0 && num_more < 3) {
+            s.more[num_more++][l] = (octant ^ flip) * num_cells;
+        }
+    }
+}
+
+// An idle lane: a ray at the grid's corner that marches nothing (its loads stay in bounds).
+void clear_lane(MapLanes& s, int l) {
+    for (int a = 0; a < 3; ++a) {
+        s.dir[a][l] = 0.0f;
+        s.go[a][l] = 0.0f;
+        s.gd[a][l] = 1.0f;
+        s.inv_gd[a][l] = 1.0f;
+    }
+    s.t_near[l] = s.t_far[l] = s.margin[l] = 0.0f;
+    s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
+    s.n[l] = s.num_full[l] = s.samples[l] = 0;
+    s.last_n[l] = -2;
+    s.cube[l] = 0;
+    for (auto& m : s.more) {
+        m[l] = 0;
+    }
+}
+
+// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7, lane by lane in the same operations
+// (raycast_avx2.cpp's ray set-up, composite rays), into out[l]. Returns bit l set when lane l's
+// ray hits the box with fewer than 2^30 segments (out[l] set), bit 8 + l when it hits with more
+// (for the scalar code), neither when it misses.
+PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, PixelRay* out) {
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    const __m256 inv_focal = _mm256_set1_ps(k.inv_focal);
+    // pixel_ray(): (i + 0.5 − 0.5·width)·inv_focal, (0.5·height − (j + 0.5))·inv_focal.
+    const __m256 fi = _mm256_cvtepi32_ps(
+        _mm256_add_epi32(_mm256_set1_epi32(x), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+    const __m256 cx = _mm256_mul_ps(
+        _mm256_sub_ps(_mm256_add_ps(fi, half), _mm256_set1_ps(0.5f * static_cast<float>(k.width))),
+        inv_focal);
+    const __m256 cy =
+        _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(0.5f * static_cast<float>(k.height)),
+                                    _mm256_add_ps(_mm256_set1_ps(static_cast<float>(y)), half)),
+                      inv_focal);
+    __m256 origin[3], dir[3];
+    if (k.is_perspective) {
+        __m256 v[3];
+        for (int a = 0; a < 3; ++a) {
+            v[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.forward[a]),
+                                               _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
+                                 _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
+        }
+        const __m256 length = _mm256_sqrt_ps(
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(v[0], v[0]), _mm256_mul_ps(v[1], v[1])),
+                          _mm256_mul_ps(v[2], v[2])));
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = _mm256_set1_ps(k.eye[a]);
+            dir[a] = _mm256_div_ps(v[a], length);
+        }
+    } else {
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.eye[a]),
+                                                    _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
+                                      _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
+            dir[a] = _mm256_set1_ps(k.forward[a]);
+        }
+    }
+    // clip_ray(): the slab test per axis, then the clipping plane.
+    __m256 go[3], gd[3];
+    alignas(32) float inv_gd[3][LANES];
+    __m256 t_near = zero;
+    __m256 t_far = inf;
+    __m256 miss = zero;
+    for (int a = 0; a < 3; ++a) {
+        const __m256 inv_spacing = _mm256_set1_ps(k.inv_spacing[a]);
+        go[a] =
+            _mm256_add_ps(_mm256_mul_ps(origin[a], inv_spacing), _mm256_set1_ps(k.grid_offset[a]));
+        gd[a] = _mm256_mul_ps(dir[a], inv_spacing);
+        const __m256 lo = _mm256_set1_ps(-0.5f);
+        const __m256 hi = _mm256_set1_ps(static_cast<float>(k.n[a]) - 0.5f);
+        const __m256 is_zero = _mm256_cmp_ps(gd[a], zero, _CMP_EQ_OQ);
+        const __m256 outside = _mm256_or_ps(_mm256_cmp_ps(go[a], lo, _CMP_LT_OQ),
+                                            _mm256_cmp_ps(go[a], hi, _CMP_GT_OQ));
+        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, outside));
+        const __m256 inv =
+            _mm256_blendv_ps(_mm256_div_ps(_mm256_set1_ps(1.0f), gd[a]), inf, is_zero);
+        store(inv_gd[a], inv);
+        const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(lo, go[a]), inv);
+        const __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(hi, go[a]), inv);
+        const __m256 swap = _mm256_cmp_ps(t0, t1, _CMP_GT_OQ);
+        const __m256 t_lo = _mm256_blendv_ps(t0, t1, swap);
+        const __m256 t_hi = _mm256_blendv_ps(t1, t0, swap);
+        // std::max(t_near, t_lo) and std::min(t_far, t_hi), on the lanes with a non-zero component.
+        t_near = _mm256_blendv_ps(_mm256_max_ps(t_lo, t_near), t_near, is_zero);
+        t_far = _mm256_blendv_ps(_mm256_min_ps(t_hi, t_far), t_far, is_zero);
+    }
+    if (k.has_clip) {
+        const __m256 n[3] = {_mm256_set1_ps(k.clip_normal.x), _mm256_set1_ps(k.clip_normal.y),
+                             _mm256_set1_ps(k.clip_normal.z)};
+        const __m256 a = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], origin[0]),
+                                                                   _mm256_mul_ps(n[1], origin[1])),
+                                                     _mm256_mul_ps(n[2], origin[2])),
+                                       _mm256_set1_ps(k.clip_offset));
+        const __m256 s =
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], dir[0]), _mm256_mul_ps(n[1], dir[1])),
+                          _mm256_mul_ps(n[2], dir[2]));
+        const __m256 crossing = _mm256_div_ps(_mm256_xor_ps(a, _mm256_set1_ps(-0.0f)), s);
+        const __m256 is_pos = _mm256_cmp_ps(s, zero, _CMP_GT_OQ);
+        const __m256 is_neg = _mm256_cmp_ps(s, zero, _CMP_LT_OQ);
+        t_near = _mm256_blendv_ps(t_near, _mm256_max_ps(crossing, t_near), is_pos);
+        t_far = _mm256_blendv_ps(t_far, _mm256_min_ps(crossing, t_far), is_neg);
+        const __m256 is_zero = _mm256_cmp_ps(s, zero, _CMP_EQ_OQ);
+        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, _mm256_cmp_ps(a, zero, _CMP_LT_OQ)));
+    }
+    const __m256 hit = _mm256_andnot_ps(miss, _mm256_cmp_ps(t_near, t_far, _CMP_LT_OQ));
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    const __m256 magnitude = _mm256_add_ps(
+        _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(go[0], abs_mask), _mm256_and_ps(go[1], abs_mask)),
+                      _mm256_and_ps(go[2], abs_mask)),
+        _mm256_mul_ps(t_far, _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(gd[0], abs_mask),
+                                                         _mm256_and_ps(gd[1], abs_mask)),
+                                           _mm256_and_ps(gd[2], abs_mask))));
+    const __m256 margin = _mm256_add_ps(_mm256_set1_ps(SKIP_MARGIN),
+                                        _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
+    // begin_pixel(): N = max(1, ⌈length / Δs⌉) segments.
+    const __m256 length = _mm256_sub_ps(t_far, t_near);
+    const __m256 segments = _mm256_ceil_ps(_mm256_div_ps(length, _mm256_set1_ps(k.step)));
+    const __m256 fits = _mm256_cmp_ps(segments, _mm256_set1_ps(1073741824.0f), _CMP_LT_OQ);
+    const __m256i num_segments =
+        _mm256_max_epi32(_mm256_cvttps_epi32(_mm256_and_ps(segments, fits)), _mm256_set1_epi32(1));
+    alignas(32) float v_dir[3][LANES], v_go[3][LANES], v_gd[3][LANES];
+    alignas(32) float v_near[LANES], v_far[LANES], v_margin[LANES], v_length[LANES];
+    alignas(32) std::int32_t v_segments[LANES];
+    for (int a = 0; a < 3; ++a) {
+        store(v_dir[a], dir[a]);
+        store(v_go[a], go[a]);
+        store(v_gd[a], gd[a]);
+    }
+    store(v_near, t_near);
+    store(v_far, t_far);
+    store(v_margin, margin);
+    store(v_length, length);
+    store(v_segments, num_segments);
+    const int hits = _mm256_movemask_ps(_mm256_and_ps(hit, fits));
+    for (int l = 0; l < LANES; ++l) {
+        if ((hits >> l & 1) == 0) {
+            continue;
+        }
+        PixelRay& p = out[l];
+        for (int a = 0; a < 3; ++a) {
+            p.dir[a] = v_dir[a][l];
+            p.r.go[a] = v_go[a][l];
+            p.r.gd[a] = v_gd[a][l];
+            p.r.inv_gd[a] = inv_gd[a][l];
+        }
+        p.r.t_near = v_near[l];
+        p.r.t_far = v_far[l];
+        p.r.margin = v_margin[l];
+        p.length = v_length[l];
+        p.num_segments = v_segments[l];
+        p.num_full = p.num_segments - 1;
+    }
+    return hits | (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
+}
+
+// (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
+PLIANT_AVX2_INLINE __m128 two_pairs(const float* v, std::int32_t i0, std::int32_t i1) {
+    const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + i0)));
+    return _mm_loadh_pi(low, reinterpret_cast<const __m64*>(v + i1));
+}
+
+// The pairs (v[index[l]], v[index[l] + 1]) of the 8 lanes as the vectors of their first and
+// second elements.
+PLIANT_AVX2_INLINE void load_pairs(const float* v, const std::int32_t* index, __m256& first,
+                                   __m256& second) {
+    const __m256 a =
+        _mm256_set_m128(two_pairs(v, index[4], index[5]), two_pairs(v, index[0], index[1]));
+    const __m256 b =
+        _mm256_set_m128(two_pairs(v, index[6], index[7]), two_pairs(v, index[2], index[3]));
+    first = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
+    second = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
+}
+
+// mapped_shading_value<IS_RGBA>() at g, 8 lanes: the trilinear scalar, or α from the α copy
+// (x-adjacent pairs: dx = 1).
+template <bool IS_RGBA>
+PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& s, const __m256 g[3]) {
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(at), locate8(s, g, fraction));
+    store(at, locate8(s, g, fraction));
     const std::int32_t row[4] = {0, s.dy, s.dz, s.dz + s.dy};
+    const float* v = IS_RGBA ? s.alpha : s.v;
     __m256 first[4], second[4];
     for (int r = 0; r < 4; ++r) {
-        alignas(32) float a[LANES], b[LANES];
-        for (int l = 0; l < LANES; ++l) {
-            const float* p = s.alpha + at[l] + row[r];
-            a[l] = p[0];
-            b[l] = p[s.dx];
-        }
-        first[r] = _mm256_load_ps(a);
-        second[r] = _mm256_load_ps(b);
+        load_pairs(v + row[r], at, first[r], second[r]);
     }
     return trilinear8(first, second, fraction);
+}
+
+// The 4 floats at lut + offset[l] per lane, transposed: out[c] holds component c of the 8 lanes.
+PLIANT_AVX2_INLINE __m256 entry_row(const float* lut, const std::int32_t* offset, int l) {
+    return _mm256_set_m128(_mm_loadu_ps(lut + offset[l + 4]), _mm_loadu_ps(lut + offset[l]));
+}
+PLIANT_AVX2_INLINE void load_entries(const float* lut, const std::int32_t* offset, __m256 out[4]) {
+    const __m256 r0 = entry_row(lut, offset, 0);  // lanes 0 | 4
+    const __m256 r1 = entry_row(lut, offset, 1);
+    const __m256 r2 = entry_row(lut, offset, 2);
+    const __m256 r3 = entry_row(lut, offset, 3);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);
+    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);
+    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);
+    out[0] = _mm256_shuffle_ps(t0, t1, 0x44);
+    out[1] = _mm256_shuffle_ps(t0, t1, 0xEE);
+    out[2] = _mm256_shuffle_ps(t2, t3, 0x44);
+    out[3] = _mm256_shuffle_ps(t2, t3, 0xEE);
+}
+
+// mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
+// out[0 … 2] the straight colour (shaded when SHADING), out[3] the step opacity (RGBA) or the
+// lookup entry's, all 0 where the sample has no opacity (outside the source box, or none). Lanes
+// outside `mask` are sampled at source coordinate 0 (their loads stay in bounds; their results are
+// not used).
+template <bool IS_RGBA, bool SHADING>
+PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const __m256i q[3],
+                                  const __m256 f[3], __m256 mask, const __m256 dir8[3],
+                                  __m256 out[4], __m256 source[3]) {
+    const RayCastKernel& s = m.source;
+    // 1. The map: the 8 nodes of each lane's cell, per channel, then the trilinear value and
+    // (shading) its derivatives, as map_coordinate().
+    alignas(32) std::int32_t qa[3][LANES];
+    for (int a = 0; a < 3; ++a) {
+        store(qa[a], q[a]);
+    }
+    // A lane's x-adjacent node pair of a row is 8 consecutive floats of the padded copy (4 per
+    // node): one load per row, transposed.
+    const std::int64_t row[4] = {0, m.node_stride[1], m.node_stride[2],
+                                 m.node_stride[2] + m.node_stride[1]};
+    std::int64_t first[LANES];
+    for (int l = 0; l < LANES; ++l) {
+        first[l] = qa[0][l] + m.node_stride[1] * qa[1][l] + m.node_stride[2] * qa[2][l];
+    }
+    __m256 node[4][8];  // [row][channel of the first node 0 … 3, of the second 4 … 7]
+    for (int r = 0; r < 4; ++r) {
+        __m256 rows[LANES];
+        for (int l = 0; l < LANES; ++l) {
+            rows[l] = _mm256_loadu_ps(m.nodes4 + 4 * (first[l] + row[r]));
+        }
+        transpose8(rows, node[r]);
+    }
+    const __m256 inv_b = _mm256_set1_ps(m.inv_b);
+    __m256 g[3], jac[3][3];
+    for (int ch = 0; ch < 3; ++ch) {
+        const __m256 v[8] = {node[0][ch], node[0][4 + ch], node[1][ch], node[1][4 + ch],
+                             node[2][ch], node[2][4 + ch], node[3][ch], node[3][4 + ch]};
+        const __m256 e0 = lerp8(v[0], v[1], f[0]);
+        const __m256 e1 = lerp8(v[2], v[3], f[0]);
+        const __m256 e2 = lerp8(v[4], v[5], f[0]);
+        const __m256 e3 = lerp8(v[6], v[7], f[0]);
+        const __m256 y0 = lerp8(e0, e1, f[1]);
+        const __m256 y1 = lerp8(e2, e3, f[1]);
+        g[ch] = lerp8(y0, y1, f[2]);
+        if constexpr (SHADING) {
+            jac[0][ch] = _mm256_and_ps(
+                mask,
+                _mm256_mul_ps(
+                    lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f[1]),
+                          lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f[1]), f[2]),
+                    inv_b));
+            jac[1][ch] = _mm256_and_ps(
+                mask,
+                _mm256_mul_ps(lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f[2]), inv_b));
+            jac[2][ch] = _mm256_and_ps(mask, _mm256_mul_ps(_mm256_sub_ps(y1, y0), inv_b));
+        }
+    }
+    // 2. In the source box (in_source()); lanes outside the mask at 0 (a cell without a valid map
+    // interpolates NaN).
+    __m256 inside = mask;
+    for (int a = 0; a < 3; ++a) {
+        inside = _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(-0.5f), _CMP_GE_OQ));
+        inside =
+            _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(m.source_hi[a]), _CMP_LE_OQ));
+        g[a] = _mm256_and_ps(g[a], mask);
+        source[a] = g[a];
+    }
+    // 3. classify<IS_RGBA>(s, locate(s, g)).
+    __m256 fraction[3];
+    alignas(32) std::int32_t at[LANES];
+    store(at, locate8(src, g, fraction));
+    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 positive;
+    if constexpr (IS_RGBA) {
+        __m256 rgba[4];
+        interpolate_rgba8(src, at, fraction, rgba);
+        const __m256 a = clamp8(rgba[3], zero, one);
+        positive = _mm256_and_ps(inside, _mm256_cmp_ps(a, zero, _CMP_GT_OQ));
+        __m256 a_step;
+        if (s.step_over_unit == 0.5f) {
+            const __m256 half =
+                _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
+            a_step = _mm256_blendv_ps(half, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ));
+        } else {
+            alignas(32) float av[LANES];
+            alignas(32) float st[LANES] = {};
+            store(av, a);
+            int todo = _mm256_movemask_ps(positive);
+            while (todo != 0) {
+                const int l = __builtin_ctz(static_cast<unsigned>(todo));
+                todo &= todo - 1;
+                st[l] = rgba_step_opacity(av[l], s.step_over_unit);
+            }
+            a_step = load(st);
+        }
+        const __m256 inv = _mm256_div_ps(one, rgba[3]);
+        for (int ch = 0; ch < 3; ++ch) {
+            out[ch] = _mm256_and_ps(positive, _mm256_mul_ps(rgba[ch], inv));
+        }
+        out[3] = _mm256_and_ps(positive, a_step);
+    } else {
+        // The trilinear lookup coordinate, then the lookup-table entry ⌊value + 0.5⌋.
+        __m256 low[4], high[4];  // x-adjacent pairs of the 4 rows
+        const std::int32_t voxel_row[4] = {0, src.dy, src.dz, src.dz + src.dy};
+        for (int r = 0; r < 4; ++r) {
+            load_pairs(src.v + voxel_row[r], at, low[r], high[r]);
+        }
+        const __m256 value = trilinear8(low, high, fraction);
+        alignas(32) std::int32_t entry[LANES];
+        store(entry, _mm256_slli_epi32(
+                         _mm256_cvttps_epi32(_mm256_add_ps(value, _mm256_set1_ps(0.5f))), 2));
+        __m256 e[4];
+        load_entries(s.lut, entry, e);
+        positive = _mm256_and_ps(inside, _mm256_cmp_ps(e[3], zero, _CMP_GT_OQ));
+        for (int ch = 0; ch < 4; ++ch) {
+            out[ch] = _mm256_and_ps(positive, e[ch]);
+        }
+    }
+    const __m256 a_step = out[3];
+    // 4. Shading (mapped_classify()): central differences through the map's Jacobian, for the
+    // samples with opacity.
+    if constexpr (SHADING) {
+        const __m256 shaded = _mm256_cmp_ps(a_step, zero, _CMP_GT_OQ);
+        if (_mm256_movemask_ps(shaded) != 0) {
+            __m256 gradient[3];
+            for (int axis = 0; axis < 3; ++axis) {
+                __m256 gp[3], gm[3];
+                for (int ch = 0; ch < 3; ++ch) {
+                    gp[ch] = _mm256_add_ps(g[ch], jac[axis][ch]);
+                    gm[ch] = _mm256_sub_ps(g[ch], jac[axis][ch]);
+                }
+                gradient[axis] = _mm256_mul_ps(_mm256_sub_ps(shading_value8<IS_RGBA>(src, gp),
+                                                             shading_value8<IS_RGBA>(src, gm)),
+                                               _mm256_set1_ps(m.target.inv_spacing[axis]));
+            }
+            __m256 nonzero;
+            const __m256 factor = shade_factor8(gradient, dir8, nonzero);
+            const __m256 use = _mm256_and_ps(shaded, nonzero);
+            for (int ch = 0; ch < 3; ++ch) {
+                out[ch] = _mm256_blendv_ps(out[ch], _mm256_mul_ps(out[ch], factor), use);
+            }
+        }
+    }
+}
+
+// map_jump() for the lanes in `jumps` (empty cubes of `side` map cells at cells q): the first
+// sample past the cube's far planes (pulled in by the ray's margin); n_next for the others.
+PLIANT_AVX2_INLINE __m256i map_jump8(const MapLanes& s, const __m256i q[3], __m256i side, __m256 b,
+                                     __m256i jumps, __m256i n_next, __m256i num_full, __m256 t_near,
+                                     __m256 inv_step) {
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256i one_i = _mm256_set1_epi32(1);
+    __m256 t_exit = load(s.t_far);
+    const __m256 margin = load(s.margin);
+    for (int a = 0; a < 3; ++a) {
+        const __m256 gd = load(s.gd[a]);
+        const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
+        const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
+        const __m256 plane_pos = _mm256_sub_ps(
+            _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(q[a], side)), b), margin);
+        const __m256 plane_neg = _mm256_add_ps(
+            _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_sub_epi32(q[a], side), one_i)),
+                          b),
+            margin);
+        const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
+        const __m256 candidate =
+            _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
+        t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
+                                  _mm256_or_ps(is_pos, is_neg));
+    }
+    const __m256 x =
+        _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), _mm256_set1_ps(0.5f));
+    const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
+    __m256i n_end = _mm256_cvttps_epi32(x);
+    // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
+    n_end =
+        _mm256_sub_epi32(n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
+    n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
+    n_end = _mm256_max_epi32(n_end, n_next);
+    n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
+    return as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
+}
+
+template <bool IS_RGBA, bool SHADING>
+PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, int x1, int y1,
+                                        Color* colors) {
+    const RayCastKernel& k = m.target;
+    const int tile_width = x1 - x0;
+    const auto num_cells =
+        static_cast<std::int32_t>(static_cast<std::int64_t>(m.cells[0]) * m.cells[1] * m.cells[2]);
+    std::int64_t samples = 0;
+
+    // 1. The tile's rays; those with samples to march are queued for the lanes.
+    PixelRay rays[TILE * TILE];
+    std::int32_t queue[TILE * TILE];
+    int queue_size = 0;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; x += LANES) {
+            PixelRay group[LANES];
+            const int bits = setup_rays(k, x, y, group);
+            const int count = std::min(LANES, x1 - x);
+            for (int l = 0; l < count; ++l) {
+                const int pixel = (y - y0) * tile_width + (x + l - x0);
+                PixelRay& p = rays[pixel];
+                if ((bits >> l & 1) != 0) {
+                    p = group[l];
+                } else if ((bits >> (LANES + l) & 1) == 0 || !begin_pixel(k, x + l, y, p)) {
+                    colors[pixel] = k.background;
+                    continue;
+                }
+                if (p.num_full == 0) {
+                    colors[pixel] = mapped_end<IS_RGBA>(m, p, Accumulated{}, samples);
+                } else if (p.num_full >= MAX_LANE_SAMPLES) {
+                    const Accumulated c = mapped_march<IS_RGBA>(m, p, samples);
+                    colors[pixel] = mapped_end<IS_RGBA>(m, p, c, samples);
+                } else {
+                    queue[queue_size++] = pixel;
+                }
+            }
+        }
+    }
+
+    // 2. The queued rays in the 8 lanes, a lane taking the next ray as soon as its ray ends.
+    MapLanes s;
+    int pixel_of[LANES];
+    int num_live = 0;    // lanes with a ray
+    int live_mask = 0;   // bit l: lane l has a ray
+    int more_count = 0;  // live lanes whose rays have zero direction components
+    int more_mask = 0;
+    int next = 0;
+    const auto end_lane = [&](int l) {
+        std::int64_t lane_samples = s.samples[l];
+        const Accumulated c{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
+        colors[pixel_of[l]] = mapped_end<IS_RGBA>(m, rays[pixel_of[l]], c, lane_samples);
+        samples += lane_samples;
+    };
+    const auto refill = [&](int l) {
+        if (next < queue_size) {
+            const int pixel = queue[next++];
+            const PixelRay& p = rays[pixel];
+            fill_lane(p, num_cells, s, l);
+            pixel_of[l] = pixel;
+            live_mask |= 1 << l;
+            ++num_live;
+            const bool has_more = zero_axes_of(p.r) != 0;
+            more_mask = has_more ? more_mask | (1 << l) : more_mask & ~(1 << l);
+            more_count += has_more ? 1 : 0;
+            return;
+        }
+        clear_lane(s, l);
+    };
+    const auto release = [&](int l) {
+        live_mask &= ~(1 << l);
+        --num_live;
+        if ((more_mask & (1 << l)) != 0) {
+            more_mask &= ~(1 << l);
+            --more_count;
+        }
+        refill(l);
+    };
+    for (int l = 0; l < LANES; ++l) {
+        refill(l);
+    }
+
+    const __m256 step = _mm256_set1_ps(k.step);
+    const __m256 inv_step = _mm256_set1_ps(k.inv_step);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 threshold = _mm256_set1_ps(k.threshold);
+    const __m256 b = _mm256_set1_ps(m.b);
+    const __m256 inv_b = _mm256_set1_ps(m.inv_b);
+    const __m256 g_max[3] = {_mm256_set1_ps(k.g_max[0]), _mm256_set1_ps(k.g_max[1]),
+                             _mm256_set1_ps(k.g_max[2])};
+    const __m256i last_cell[3] = {_mm256_set1_epi32(m.cells[0] - 1),
+                                  _mm256_set1_epi32(m.cells[1] - 1),
+                                  _mm256_set1_epi32(m.cells[2] - 1)};
+    const __m256i cells_x = _mm256_set1_epi32(m.cells[0]);
+    const __m256i cells_y = _mm256_set1_epi32(m.cells[1]);
+    const __m256i one_i = _mm256_set1_epi32(1);
+    Grid8 src;
+    load_grid8(m.source, src);
+    const std::uint8_t* cubes = m.empty_cube[0];
+
+    // NOLINTNEXTLINE(bugprone-infinite-loop): the lambdas above retire lanes (num_live).
+    while (num_live > 0) {
+        const __m256i live =
+            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
+                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                               _mm256_setzero_si256());
+        const __m256i n = load(s.n);
+        const __m256i num_full = load(s.num_full);
+        // sample_position(): go + (t_near + (n + 0.5)·Δs)·gd; locate_map(): the clamp to
+        // [0, n − 1], the map cell min(⌊t / B⌋, cells − 1) and the fraction.
+        const __m256 t_near = load(s.t_near);
+        const __m256 tm =
+            _mm256_add_ps(t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), half), step));
+        __m256i q[3];
+        __m256 f[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m256 g = _mm256_add_ps(load(s.go[a]), _mm256_mul_ps(tm, load(s.gd[a])));
+            const __m256 x = _mm256_mul_ps(clamp8(g, zero, g_max[a]), inv_b);
+            q[a] = _mm256_min_epi32(_mm256_cvttps_epi32(x), last_cell[a]);
+            f[a] = _mm256_sub_ps(x, _mm256_cvtepi32_ps(q[a]));
+        }
+        const __m256i cell = _mm256_add_epi32(
+            q[0],
+            _mm256_mullo_epi32(cells_x, _mm256_add_epi32(q[1], _mm256_mullo_epi32(cells_y, q[2]))));
+        __m256i n_next = _mm256_add_epi32(n, one_i);
+        __m256i classified;
+        alignas(32) std::int32_t at[LANES];
+        if (k.skipping) {
+            store(at, _mm256_add_epi32(load(s.cube), cell));
+            __m256i side = load_bytes(cubes, at);
+            if (more_count > 0) {
+                for (auto& more : s.more) {
+                    store(at, _mm256_add_epi32(load(more), cell));
+                    side = _mm256_max_epi32(side, load_bytes(cubes, at));
+                }
+            }
+            const __m256i jumps =
+                _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
+            if (_mm256_movemask_ps(as_float(jumps)) != 0) {
+                n_next = map_jump8(s, q, side, b, jumps, n_next, num_full, t_near, inv_step);
+            }
+            classified = _mm256_andnot_si256(jumps, live);
+        } else {
+            store(at, cell);
+            const __m256i valid =
+                _mm256_and_si256(load_bytes(m.occupancy, at), _mm256_set1_epi32(MAP_CELL_VALID));
+            classified = _mm256_and_si256(live, _mm256_cmpgt_epi32(valid, _mm256_setzero_si256()));
+        }
+        __m256i terminated = _mm256_setzero_si256();
+        if (_mm256_movemask_ps(as_float(classified)) != 0) {
+            const __m256 dir8[3] = {load(s.dir[0]), load(s.dir[1]), load(s.dir[2])};
+            __m256 rgba[4], g[3];
+            classify8<IS_RGBA, SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g);
+            // Prefetch: the voxel rows of the sample after next, extrapolated from this sample's
+            // source coordinate and the last one's when they are consecutive samples.
+            const __m256i consecutive = _mm256_and_si256(
+                classified, _mm256_cmpeq_epi32(load(s.last_n), _mm256_sub_epi32(n, one_i)));
+            int ahead_mask = _mm256_movemask_ps(as_float(consecutive));
+            if (ahead_mask != 0) {
+                __m256i corner[3];
+                for (int a = 0; a < 3; ++a) {
+                    const __m256 ahead =
+                        _mm256_add_ps(g[a], _mm256_mul_ps(_mm256_set1_ps(2.0f),
+                                                          _mm256_sub_ps(g[a], load(s.last_g[a]))));
+                    __m256 unused;
+                    locate_axis8(src, a, ahead, corner[a], unused);
+                }
+                alignas(32) std::int32_t index[LANES];
+                store(index, voxel_index8(src, corner));
+                constexpr std::int64_t CH = IS_RGBA ? 4 : 1;  // floats per voxel
+                const std::int64_t dy = CH * std::int64_t{src.dy};
+                const std::int64_t dz = CH * std::int64_t{src.dz};
+                while (ahead_mask != 0) {
+                    const int l = __builtin_ctz(static_cast<unsigned>(ahead_mask));
+                    ahead_mask &= ahead_mask - 1;
+                    const float* v = src.v + CH * static_cast<std::int64_t>(index[l]);
+                    _mm_prefetch(reinterpret_cast<const char*>(v), _MM_HINT_T0);
+                    _mm_prefetch(reinterpret_cast<const char*>(v + dy), _MM_HINT_T0);
+                    _mm_prefetch(reinterpret_cast<const char*>(v + dz), _MM_HINT_T0);
+                    _mm_prefetch(reinterpret_cast<const char*>(v + dz + dy), _MM_HINT_T0);
+                }
+            }
+            for (int a = 0; a < 3; ++a) {
+                store(s.last_g[a], _mm256_blendv_ps(load(s.last_g[a]), g[a], as_float(classified)));
+            }
+            store(s.last_n, _mm256_blendv_epi8(load(s.last_n), n, classified));
+            // composite(): front to back, the samples with opacity.
+            const __m256 blend =
+                _mm256_and_ps(as_float(classified), _mm256_cmp_ps(rgba[3], zero, _CMP_GT_OQ));
+            const __m256 acc = load(s.acc);
+            const __m256 w = _mm256_mul_ps(_mm256_sub_ps(one, acc), rgba[3]);
+            const __m256 cr = load(s.cr);
+            const __m256 cg = load(s.cg);
+            const __m256 cb = load(s.cb);
+            store(s.cr, _mm256_blendv_ps(cr, _mm256_add_ps(cr, _mm256_mul_ps(w, rgba[0])), blend));
+            store(s.cg, _mm256_blendv_ps(cg, _mm256_add_ps(cg, _mm256_mul_ps(w, rgba[1])), blend));
+            store(s.cb, _mm256_blendv_ps(cb, _mm256_add_ps(cb, _mm256_mul_ps(w, rgba[2])), blend));
+            const __m256 acc_next = _mm256_blendv_ps(acc, _mm256_add_ps(acc, w), blend);
+            store(s.acc, acc_next);
+            terminated =
+                as_int(_mm256_and_ps(blend, _mm256_cmp_ps(acc_next, threshold, _CMP_GT_OQ)));
+            store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
+        }
+        store(s.n, n_next);
+        // Done: opaque (accumulated opacity above the threshold), or no sample left.
+        const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);
+        const __m256i done =
+            _mm256_andnot_si256(_mm256_andnot_si256(terminated, more_to_march), live);
+        int done_mask = _mm256_movemask_ps(as_float(done));
+        while (done_mask != 0) {
+            const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
+            done_mask &= done_mask - 1;
+            end_lane(l);
+            release(l);
+        }
+    }
+    return samples;
 }
 
 }  // namespace
@@ -36,128 +712,26 @@ PLIANT_AVX2_INLINE __m256 alpha8(const Grid8& s, const __m256 g[3]) {
 bool mapped_avx2_fits(const MappedKernel& m) {
     const RayCastKernel& s = m.source;
     const std::int64_t voxels = static_cast<std::int64_t>(s.n[0]) * s.n[1] * s.n[2];
-    return has_avx2() && s.is_rgba && s.n[0] >= 2 && 4 * voxels < (std::int64_t{1} << 31) &&
-           (!m.target.shading || s.alpha != nullptr);
+    const std::int64_t num_cells = static_cast<std::int64_t>(m.cells[0]) * m.cells[1] * m.cells[2];
+    for (int o = 0; o < 8; ++o) {
+        if (m.empty_cube[o] != m.empty_cube[0] + o * num_cells) {
+            return false;
+        }
+    }
+    const std::int64_t floats_per_voxel = s.is_rgba ? 4 : 1;
+    return has_avx2() && (s.is_rgba || s.lut != nullptr) && s.d[0] == 1 &&
+           floats_per_voxel * voxels < INDEX_LIMIT / 2 && 8 * num_cells < INDEX_LIMIT &&
+           (!s.is_rgba || !m.target.shading || s.alpha != nullptr);
 }
 
-PLIANT_AVX2_FN void mapped_classify_avx2(const MappedKernel& m, const MapCell* cells, int count,
-                                         Vec3f dir, Sample* out) {
-    const RayCastKernel& s = m.source;
-    // Lanes past count repeat the first cell (their results are dropped).
-    MapCell c[LANES];
-    for (int l = 0; l < LANES; ++l) {
-        c[l] = cells[l < count ? l : 0];
+PLIANT_AVX2_FN std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1,
+                                             Color* colors) {
+    if (m.source.is_rgba) {
+        return m.target.shading ? mapped_tile<true, true>(m, x0, y0, x1, y1, colors)
+                                : mapped_tile<true, false>(m, x0, y0, x1, y1, colors);
     }
-    // 1. The map: the 8 nodes of each lane's cell, per channel, then the trilinear value and
-    // (shading) its derivatives, as map_coordinate().
-    const std::int64_t dx = 3, dy = 3 * m.node_stride[1], dz = 3 * m.node_stride[2];
-    const std::int64_t off[8] = {0, dx, dy, dy + dx, dz, dz + dx, dz + dy, dz + dy + dx};
-    const float* p[LANES];
-    alignas(32) float fx[LANES], fy[LANES], fz[LANES];
-    for (int l = 0; l < LANES; ++l) {
-        p[l] =
-            m.nodes + 3 * (c[l].q[0] + m.node_stride[1] * c[l].q[1] + m.node_stride[2] * c[l].q[2]);
-        fx[l] = c[l].f[0];
-        fy[l] = c[l].f[1];
-        fz[l] = c[l].f[2];
-    }
-    const __m256 f0 = _mm256_load_ps(fx), f1 = _mm256_load_ps(fy), f2 = _mm256_load_ps(fz);
-    const __m256 inv_b = _mm256_set1_ps(m.inv_b);
-    __m256 g[3], jac[3][3];
-    for (int ch = 0; ch < 3; ++ch) {
-        __m256 v[8];
-        for (int i = 0; i < 8; ++i) {
-            const std::int64_t o = off[i] + ch;
-            v[i] = _mm256_setr_ps(p[0][o], p[1][o], p[2][o], p[3][o], p[4][o], p[5][o], p[6][o],
-                                  p[7][o]);
-        }
-        const __m256 e0 = lerp8(v[0], v[1], f0);
-        const __m256 e1 = lerp8(v[2], v[3], f0);
-        const __m256 e2 = lerp8(v[4], v[5], f0);
-        const __m256 e3 = lerp8(v[6], v[7], f0);
-        const __m256 y0 = lerp8(e0, e1, f1);
-        const __m256 y1 = lerp8(e2, e3, f1);
-        g[ch] = lerp8(y0, y1, f2);
-        if (m.target.shading) {
-            jac[0][ch] = _mm256_mul_ps(
-                lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f1),
-                      lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f1), f2),
-                inv_b);
-            jac[1][ch] =
-                _mm256_mul_ps(lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f2), inv_b);
-            jac[2][ch] = _mm256_mul_ps(_mm256_sub_ps(y1, y0), inv_b);
-        }
-    }
-    // 2. In the source box (in_source()).
-    __m256 inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-    for (int a = 0; a < 3; ++a) {
-        inside = _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(-0.5f), _CMP_GE_OQ));
-        inside =
-            _mm256_and_ps(inside, _mm256_cmp_ps(g[a], _mm256_set1_ps(m.source_hi[a]), _CMP_LE_OQ));
-    }
-    // 3. classify<true>(s, locate(s, g)).
-    Grid8 src;
-    load_grid8(s, src);
-    __m256 fraction[3];
-    alignas(32) std::int32_t at[LANES];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(at), locate8(src, g, fraction));
-    __m256 rgba[4];
-    interpolate_rgba8(src, at, fraction, rgba);
-    const __m256 one = _mm256_set1_ps(1.0f);
-    const __m256 a = clamp8(rgba[3], _mm256_setzero_ps(), one);
-    const __m256 positive =
-        _mm256_and_ps(inside, _mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ));
-    __m256 a_step;
-    if (s.step_over_unit == 0.5f) {
-        const __m256 half =
-            _mm256_div_ps(a, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_sub_ps(one, a))));
-        a_step = _mm256_blendv_ps(half, one, _mm256_cmp_ps(a, one, _CMP_GE_OQ));
-    } else {
-        alignas(32) float av[LANES], st[LANES];
-        _mm256_store_ps(av, a);
-        for (int l = 0; l < LANES; ++l) {
-            st[l] = av[l] > 0.0f ? rgba_step_opacity(av[l], s.step_over_unit) : 0.0f;
-        }
-        a_step = _mm256_load_ps(st);
-    }
-    const __m256 inv = _mm256_div_ps(one, rgba[3]);
-    __m256 color[3];
-    for (int ch = 0; ch < 3; ++ch) {
-        color[ch] = _mm256_mul_ps(rgba[ch], inv);
-    }
-    // 4. Shading (mapped_classify()): central differences through the map's Jacobian.
-    const __m256 shaded =
-        _mm256_and_ps(positive, _mm256_cmp_ps(a_step, _mm256_setzero_ps(), _CMP_GT_OQ));
-    if (m.target.shading && _mm256_movemask_ps(shaded) != 0) {
-        __m256 gradient[3];
-        for (int axis = 0; axis < 3; ++axis) {
-            __m256 gp[3], gm[3];
-            for (int ch = 0; ch < 3; ++ch) {
-                gp[ch] = _mm256_add_ps(g[ch], jac[axis][ch]);
-                gm[ch] = _mm256_sub_ps(g[ch], jac[axis][ch]);
-            }
-            gradient[axis] = _mm256_mul_ps(_mm256_sub_ps(alpha8(src, gp), alpha8(src, gm)),
-                                           _mm256_set1_ps(m.target.inv_spacing[axis]));
-        }
-        const __m256 dir8[3] = {_mm256_set1_ps(dir.x), _mm256_set1_ps(dir.y),
-                                _mm256_set1_ps(dir.z)};
-        __m256 nonzero;
-        const __m256 f = shade_factor8(gradient, dir8, nonzero);
-        const __m256 use = _mm256_and_ps(shaded, nonzero);
-        for (__m256& ch : color) {
-            ch = _mm256_blendv_ps(ch, _mm256_mul_ps(ch, f), use);
-        }
-    }
-    alignas(32) float r[LANES], gg[LANES], b[LANES], al[LANES], ok[LANES];
-    _mm256_store_ps(r, color[0]);
-    _mm256_store_ps(gg, color[1]);
-    _mm256_store_ps(b, color[2]);
-    _mm256_store_ps(al, a_step);
-    _mm256_store_ps(ok, positive);
-    for (int l = 0; l < count; ++l) {
-        // ok: all bits set (a NaN, != 0) where the sample has opacity, else +0.
-        out[l] = ok[l] != 0.0f ? Sample{r[l], gg[l], b[l], al[l]} : Sample{0.0f, 0.0f, 0.0f, 0.0f};
-    }
+    return m.target.shading ? mapped_tile<false, true>(m, x0, y0, x1, y1, colors)
+                            : mapped_tile<false, false>(m, x0, y0, x1, y1, colors);
 }
 
 #else
@@ -166,9 +740,8 @@ bool mapped_avx2_fits(const MappedKernel&) {
     return false;
 }
 
-void mapped_classify_avx2(const MappedKernel& m, const MapCell* cells, int count, Vec3f dir,
-                          Sample* out) {
-    ScalarBatch<true>{}(m, cells, count, dir, out);
+std::int64_t mapped_tile_avx2(const MappedKernel&, int, int, int, int, Color*) {
+    return 0;
 }
 
 #endif

@@ -32,6 +32,7 @@ struct MappedKernel {
     // its camera and macro-cell fields are unused.
     RayCastKernel source;
     const float* nodes = nullptr;             // 3 floats per node (InverseMap::node_coordinates())
+    const float* nodes4 = nullptr;            // the same padded to 4 floats (x, y, z, 0) per node
     std::int64_t node_stride[3] = {0, 0, 0};  // in nodes: 1, nx, nx·ny
     int cells[3] = {0, 0, 0};                 // map cells per axis: nodes − 1
     float b = 4.0f;                           // node_voxels
@@ -162,86 +163,15 @@ PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const Gri
     return sample_past_exit(r, exit_pos, exit_neg, m.target.inv_step, n, num_full);
 }
 
-// Samples are classified in batches of up to MAP_BATCH along a ray (the AVX2 path classifies a
-// batch 8 wide, detail/mapped_raycast_avx2.hpp), then composited in order; a batch's samples
-// past the early termination are classified (and counted) but not composited.
-inline constexpr int MAP_BATCH = 8;
-
-// mapped_classify<IS_RGBA>() of each of the count ≤ MAP_BATCH cells (the scalar batch).
+// The end of a composite ray through the map after its march (end_composite() through the map):
+// the shortened last segment when the ray is not opaque and that sample's cell is valid (visible
+// when skipping), then the background behind. Adds the last sample, when classified, to
+// `samples`.
 template <bool IS_RGBA>
-struct ScalarBatch {
-    PLIANT_HOST_DEVICE void operator()(const MappedKernel& m, const MapCell* cells, int count,
-                                       Vec3f dir, Sample* out) const {
-        for (int i = 0; i < count; ++i) {
-            out[i] = mapped_classify<IS_RGBA>(m, cells[i], dir);
-        }
-    }
-};
-
-// A composite pixel through the map: the march of march_composite() and the end of
-// end_composite(), with samples classified by `batch` (ScalarBatch, or the AVX2 one: the same
-// bits). Samples in a cell without a valid map (a node outside and away from the deformed body)
-// are transparent and not counted.
-template <bool IS_RGBA, typename Batch>
-PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j,
-                                            const Batch& batch) {
+PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay& p, Accumulated c,
+                                           std::int64_t& samples) {
     const RayCastKernel& k = m.target;
-    PixelRay p;
-    if (!begin_pixel(k, i, j, p)) {
-        return PixelResult{k.background, 0};
-    }
     const GridRay& r = p.r;
-    const int octant = octant_of(r);
-    const std::uint8_t* cubes[4] = {m.empty_cube[octant], nullptr, nullptr, nullptr};
-    int num_cubes = 1;
-    const int zero = zero_axes_of(r);
-    for (int flip = 1; flip < 8; ++flip) {
-        if ((flip & ~zero) == 0 && num_cubes < 4) {
-            cubes[num_cubes++] = m.empty_cube[octant ^ flip];
-        }
-    }
-    std::int64_t samples = 0;
-    Accumulated c;
-    std::int64_t n = 0;
-    bool terminated = false;
-    while (n < p.num_full && !terminated) {
-        MapCell cells[MAP_BATCH];
-        int count = 0;
-        while (n < p.num_full && count < MAP_BATCH) {
-            const MapCell cell = locate_map(m, sample_position(k, r, n));
-            if (k.skipping) {
-                int side = cubes[0][cell.index];
-                for (int q = 1; q < num_cubes && side > 0; ++q) {
-                    side = std::max<int>(side, cubes[q][cell.index]);
-                }
-                if (side > 0) {
-                    n = map_jump(m, r, cell, side, n, p.num_full);
-                    continue;
-                }
-            } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
-                ++n;
-                continue;
-            }
-            cells[count++] = cell;
-            ++n;
-        }
-        if (count == 0) {
-            break;
-        }
-        Sample batch_samples[MAP_BATCH];
-        batch(m, cells, count, p.dir, batch_samples);
-        samples += count;
-        for (int b = 0; b < count; ++b) {
-            const Sample& s = batch_samples[b];
-            if (s.a > 0.0f) {
-                composite(s, s.a, c.r, c.g, c.b, c.a);
-                if (c.a > k.threshold) {
-                    terminated = true;
-                    break;
-                }
-            }
-        }
-    }
     const float partial = p.length - static_cast<float>(p.num_segments - 1) * k.step;
     if (!(c.a > k.threshold) && partial > 0.0f) {
         const float tm =
@@ -259,8 +189,70 @@ PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j,
         }
     }
     const float rest = 1.0f - c.a;
-    return {{c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b},
-            samples};
+    return {c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b};
+}
+
+// The march of a composite ray through the map (march_composite() through the map): its
+// p.num_full samples front to back; a sample in an empty map cell jumps over the cube of empty
+// cells its cell starts towards the ray's octant(s) (skipping), or, without skipping, a sample in
+// a cell without a valid map (a node outside and away from the deformed body) is passed over,
+// transparent and not counted. Stops when the opacity exceeds the threshold. Adds the classified
+// samples to `samples`.
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const PixelRay& p,
+                                                   std::int64_t& samples) {
+    const RayCastKernel& k = m.target;
+    const GridRay& r = p.r;
+    const int octant = octant_of(r);
+    const std::uint8_t* cubes[4] = {m.empty_cube[octant], nullptr, nullptr, nullptr};
+    int num_cubes = 1;
+    const int zero = zero_axes_of(r);
+    for (int flip = 1; flip < 8; ++flip) {
+        if ((flip & ~zero) == 0 && num_cubes < 4) {
+            cubes[num_cubes++] = m.empty_cube[octant ^ flip];
+        }
+    }
+    Accumulated c;
+    std::int64_t n = 0;
+    while (n < p.num_full) {
+        const MapCell cell = locate_map(m, sample_position(k, r, n));
+        if (k.skipping) {
+            int side = cubes[0][cell.index];
+            for (int q = 1; q < num_cubes && side > 0; ++q) {
+                side = std::max<int>(side, cubes[q][cell.index]);
+            }
+            if (side > 0) {
+                n = map_jump(m, r, cell, side, n, p.num_full);
+                continue;
+            }
+        } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
+            ++n;
+            continue;
+        }
+        ++samples;
+        ++n;
+        const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
+        if (s.a > 0.0f) {
+            composite(s, s.a, c.r, c.g, c.b, c.a);
+            if (c.a > k.threshold) {
+                break;
+            }
+        }
+    }
+    return c;
+}
+
+// A composite pixel through the map: mapped_march(), then mapped_end().
+template <bool IS_RGBA>
+PLIANT_HOST_DEVICE PixelResult mapped_pixel(const MappedKernel& m, int i, int j) {
+    PixelRay p;
+    if (!begin_pixel(m.target, i, j, p)) {
+        return PixelResult{m.target.background, 0};
+    }
+    std::int64_t samples = 0;
+    const Accumulated c = mapped_march<IS_RGBA>(m, p, samples);
+    const Color color = mapped_end<IS_RGBA>(m, p, c, samples);
+    return {color, samples};
 }
 
 }  // namespace pliant::render::detail
