@@ -4,7 +4,8 @@
 // the same order without FMA (core/simd_dispatch.hpp), so results are bitwise the scalar ones.
 // Every function carries PLIANT_AVX2_INLINE (the AVX2 target and always_inline): a helper
 // without the target inside an AVX2 function breaks the portable build (scripts/check-portable).
-// Voxels are loaded per lane (no gathers, see raycast_avx2.hpp).
+// Voxels, voxel pairs, bytes and lookup-table entries are loaded per lane (no gathers, see
+// raycast_avx2.hpp).
 #pragma once
 
 #include <cstdint>
@@ -28,6 +29,72 @@ PLIANT_AVX2_INLINE __m256 lerp8(__m256 a, __m256 b, __m256 t) {
 // min(hi, ·) keeps it where hi < it is false.
 PLIANT_AVX2_INLINE __m256 clamp8(__m256 v, __m256 lo, __m256 hi) {
     return _mm256_min_ps(hi, _mm256_max_ps(lo, v));
+}
+
+PLIANT_AVX2_INLINE __m256 load(const float* p) {
+    return _mm256_load_ps(p);
+}
+PLIANT_AVX2_INLINE __m256i load(const std::int32_t* p) {
+    return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
+}
+PLIANT_AVX2_INLINE void store(float* p, __m256 v) {
+    _mm256_store_ps(p, v);
+}
+PLIANT_AVX2_INLINE void store(std::int32_t* p, __m256i v) {
+    _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
+}
+// Per-lane loads instead of AVX2 gathers: on AMD Zen a gather of 8 floats costs as much as about
+// 20 scalar loads even from L1, and x-adjacent voxels are loaded in pairs.
+
+// base[index[l]] per lane l (bytes).
+PLIANT_AVX2_INLINE __m256i load_bytes(const std::uint8_t* base, const std::int32_t* index) {
+    return _mm256_setr_epi32(base[index[0]], base[index[1]], base[index[2]], base[index[3]],
+                             base[index[4]], base[index[5]], base[index[6]], base[index[7]]);
+}
+
+// (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
+PLIANT_AVX2_INLINE __m128 two_pairs(const float* v, std::int32_t i0, std::int32_t i1) {
+    const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + i0)));
+    return _mm_loadh_pi(low, reinterpret_cast<const __m64*>(v + i1));
+}
+
+// The pairs (v[index[l]], v[index[l] + 1]) of the 8 lanes as the vectors of their first and
+// second elements.
+PLIANT_AVX2_INLINE void load_pairs(const float* v, const std::int32_t* index, __m256& first,
+                                   __m256& second) {
+    // a = x0 y0 x1 y1 | x4 y4 x5 y5, b = x2 y2 x3 y3 | x6 y6 x7 y7.
+    const __m256 a =
+        _mm256_set_m128(two_pairs(v, index[4], index[5]), two_pairs(v, index[0], index[1]));
+    const __m256 b =
+        _mm256_set_m128(two_pairs(v, index[6], index[7]), two_pairs(v, index[2], index[3]));
+    first = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
+    second = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
+}
+
+// The 4 floats at lut + offset[l] per lane, transposed: out[c] holds component c of the 8 lanes.
+PLIANT_AVX2_INLINE __m256 entry_row(const float* lut, const std::int32_t* offset, int l) {
+    return _mm256_set_m128(_mm_loadu_ps(lut + offset[l + 4]), _mm_loadu_ps(lut + offset[l]));
+}
+PLIANT_AVX2_INLINE void load_entries(const float* lut, const std::int32_t* offset, __m256 out[4]) {
+    const __m256 r0 = entry_row(lut, offset, 0);  // lanes 0 | 4
+    const __m256 r1 = entry_row(lut, offset, 1);
+    const __m256 r2 = entry_row(lut, offset, 2);
+    const __m256 r3 = entry_row(lut, offset, 3);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);
+    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);
+    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);
+    out[0] = _mm256_shuffle_ps(t0, t1, 0x44);
+    out[1] = _mm256_shuffle_ps(t0, t1, 0xEE);
+    out[2] = _mm256_shuffle_ps(t2, t3, 0x44);
+    out[3] = _mm256_shuffle_ps(t2, t3, 0xEE);
+}
+
+PLIANT_AVX2_INLINE __m256 as_float(__m256i m) {
+    return _mm256_castsi256_ps(m);
+}
+PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
+    return _mm256_castps_si256(m);
 }
 
 // The 8 × 8 transpose: out[c] holds element c of rows[0 … 7].

@@ -6,6 +6,7 @@
 
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/detail/grid8_avx2.hpp"
+#include "pliant/render/detail/ray_setup8_avx2.hpp"
 
 namespace pliant::render::detail {
 
@@ -36,31 +37,6 @@ struct alignas(32) MapLanes {
     float last_g[3][LANES];
     std::int32_t last_n[LANES];
 };
-
-PLIANT_AVX2_INLINE __m256 load(const float* p) {
-    return _mm256_load_ps(p);
-}
-PLIANT_AVX2_INLINE __m256i load(const std::int32_t* p) {
-    return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
-}
-PLIANT_AVX2_INLINE void store(float* p, __m256 v) {
-    _mm256_store_ps(p, v);
-}
-PLIANT_AVX2_INLINE void store(std::int32_t* p, __m256i v) {
-    _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
-}
-PLIANT_AVX2_INLINE __m256 as_float(__m256i m) {
-    return _mm256_castsi256_ps(m);
-}
-PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
-    return _mm256_castps_si256(m);
-}
-
-// base[index[l]] per lane l (bytes).
-PLIANT_AVX2_INLINE __m256i load_bytes(const std::uint8_t* base, const std::int32_t* index) {
-    return _mm256_setr_epi32(base[index[0]], base[index[1]], base[index[2]], base[index[3]],
-                             base[index[4]], base[index[5]], base[index[6]], base[index[7]]);
-}
 
 // Puts ray p into lane l, marched from its first sample.
 void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
@@ -110,125 +86,26 @@ void clear_lane(MapLanes& s, int l) {
     }
 }
 
-// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7, lane by lane in the same operations
-// (raycast_avx2.cpp's ray set-up, composite rays), into out[l]. Returns bit l set when lane l's
-// ray hits the box with fewer than 2^30 segments (out[l] set), bit 8 + l when it hits with more
-// (for the scalar code), neither when it misses.
+// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7 (begin_pixels8()), into out[l]. Returns bit
+// l set when lane l's ray hits the box with fewer than 2^30 segments (out[l] set), bit 8 + l when
+// it hits with more (for the scalar code), neither when it misses.
 PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, PixelRay* out) {
-    const __m256 half = _mm256_set1_ps(0.5f);
-    const __m256 zero = _mm256_setzero_ps();
-    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-    const __m256 inv_focal = _mm256_set1_ps(k.inv_focal);
-    // pixel_ray(): (i + 0.5 − 0.5·width)·inv_focal, (0.5·height − (j + 0.5))·inv_focal.
-    const __m256 fi = _mm256_cvtepi32_ps(
-        _mm256_add_epi32(_mm256_set1_epi32(x), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
-    const __m256 cx = _mm256_mul_ps(
-        _mm256_sub_ps(_mm256_add_ps(fi, half), _mm256_set1_ps(0.5f * static_cast<float>(k.width))),
-        inv_focal);
-    const __m256 cy =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(0.5f * static_cast<float>(k.height)),
-                                    _mm256_add_ps(_mm256_set1_ps(static_cast<float>(y)), half)),
-                      inv_focal);
-    __m256 origin[3], dir[3];
-    if (k.is_perspective) {
-        __m256 v[3];
-        for (int a = 0; a < 3; ++a) {
-            v[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.forward[a]),
-                                               _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
-                                 _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
-        }
-        const __m256 length = _mm256_sqrt_ps(
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(v[0], v[0]), _mm256_mul_ps(v[1], v[1])),
-                          _mm256_mul_ps(v[2], v[2])));
-        for (int a = 0; a < 3; ++a) {
-            origin[a] = _mm256_set1_ps(k.eye[a]);
-            dir[a] = _mm256_div_ps(v[a], length);
-        }
-    } else {
-        for (int a = 0; a < 3; ++a) {
-            origin[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.eye[a]),
-                                                    _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
-                                      _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
-            dir[a] = _mm256_set1_ps(k.forward[a]);
-        }
-    }
-    // clip_ray(): the slab test per axis, then the clipping plane.
-    __m256 go[3], gd[3];
-    alignas(32) float inv_gd[3][LANES];
-    __m256 t_near = zero;
-    __m256 t_far = inf;
-    __m256 miss = zero;
-    for (int a = 0; a < 3; ++a) {
-        const __m256 inv_spacing = _mm256_set1_ps(k.inv_spacing[a]);
-        go[a] =
-            _mm256_add_ps(_mm256_mul_ps(origin[a], inv_spacing), _mm256_set1_ps(k.grid_offset[a]));
-        gd[a] = _mm256_mul_ps(dir[a], inv_spacing);
-        const __m256 lo = _mm256_set1_ps(-0.5f);
-        const __m256 hi = _mm256_set1_ps(static_cast<float>(k.n[a]) - 0.5f);
-        const __m256 is_zero = _mm256_cmp_ps(gd[a], zero, _CMP_EQ_OQ);
-        const __m256 outside = _mm256_or_ps(_mm256_cmp_ps(go[a], lo, _CMP_LT_OQ),
-                                            _mm256_cmp_ps(go[a], hi, _CMP_GT_OQ));
-        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, outside));
-        const __m256 inv =
-            _mm256_blendv_ps(_mm256_div_ps(_mm256_set1_ps(1.0f), gd[a]), inf, is_zero);
-        store(inv_gd[a], inv);
-        const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(lo, go[a]), inv);
-        const __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(hi, go[a]), inv);
-        const __m256 swap = _mm256_cmp_ps(t0, t1, _CMP_GT_OQ);
-        const __m256 t_lo = _mm256_blendv_ps(t0, t1, swap);
-        const __m256 t_hi = _mm256_blendv_ps(t1, t0, swap);
-        // std::max(t_near, t_lo) and std::min(t_far, t_hi), on the lanes with a non-zero component.
-        t_near = _mm256_blendv_ps(_mm256_max_ps(t_lo, t_near), t_near, is_zero);
-        t_far = _mm256_blendv_ps(_mm256_min_ps(t_hi, t_far), t_far, is_zero);
-    }
-    if (k.has_clip) {
-        const __m256 n[3] = {_mm256_set1_ps(k.clip_normal.x), _mm256_set1_ps(k.clip_normal.y),
-                             _mm256_set1_ps(k.clip_normal.z)};
-        const __m256 a = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], origin[0]),
-                                                                   _mm256_mul_ps(n[1], origin[1])),
-                                                     _mm256_mul_ps(n[2], origin[2])),
-                                       _mm256_set1_ps(k.clip_offset));
-        const __m256 s =
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], dir[0]), _mm256_mul_ps(n[1], dir[1])),
-                          _mm256_mul_ps(n[2], dir[2]));
-        const __m256 crossing = _mm256_div_ps(_mm256_xor_ps(a, _mm256_set1_ps(-0.0f)), s);
-        const __m256 is_pos = _mm256_cmp_ps(s, zero, _CMP_GT_OQ);
-        const __m256 is_neg = _mm256_cmp_ps(s, zero, _CMP_LT_OQ);
-        t_near = _mm256_blendv_ps(t_near, _mm256_max_ps(crossing, t_near), is_pos);
-        t_far = _mm256_blendv_ps(t_far, _mm256_min_ps(crossing, t_far), is_neg);
-        const __m256 is_zero = _mm256_cmp_ps(s, zero, _CMP_EQ_OQ);
-        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, _mm256_cmp_ps(a, zero, _CMP_LT_OQ)));
-    }
-    const __m256 hit = _mm256_andnot_ps(miss, _mm256_cmp_ps(t_near, t_far, _CMP_LT_OQ));
-    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
-    const __m256 magnitude = _mm256_add_ps(
-        _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(go[0], abs_mask), _mm256_and_ps(go[1], abs_mask)),
-                      _mm256_and_ps(go[2], abs_mask)),
-        _mm256_mul_ps(t_far, _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(gd[0], abs_mask),
-                                                         _mm256_and_ps(gd[1], abs_mask)),
-                                           _mm256_and_ps(gd[2], abs_mask))));
-    const __m256 margin = _mm256_add_ps(_mm256_set1_ps(SKIP_MARGIN),
-                                        _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
-    // begin_pixel(): N = max(1, ⌈length / Δs⌉) segments.
-    const __m256 length = _mm256_sub_ps(t_far, t_near);
-    const __m256 segments = _mm256_ceil_ps(_mm256_div_ps(length, _mm256_set1_ps(k.step)));
-    const __m256 fits = _mm256_cmp_ps(segments, _mm256_set1_ps(1073741824.0f), _CMP_LT_OQ);
-    const __m256i num_segments =
-        _mm256_max_epi32(_mm256_cvttps_epi32(_mm256_and_ps(segments, fits)), _mm256_set1_epi32(1));
-    alignas(32) float v_dir[3][LANES], v_go[3][LANES], v_gd[3][LANES];
+    const Rays8 rays = begin_pixels8(k, x, y);
+    alignas(32) float v_dir[3][LANES], v_go[3][LANES], v_gd[3][LANES], inv_gd[3][LANES];
     alignas(32) float v_near[LANES], v_far[LANES], v_margin[LANES], v_length[LANES];
     alignas(32) std::int32_t v_segments[LANES];
     for (int a = 0; a < 3; ++a) {
-        store(v_dir[a], dir[a]);
-        store(v_go[a], go[a]);
-        store(v_gd[a], gd[a]);
+        store(v_dir[a], rays.dir[a]);
+        store(v_go[a], rays.go[a]);
+        store(v_gd[a], rays.gd[a]);
+        store(inv_gd[a], rays.inv_gd[a]);
     }
-    store(v_near, t_near);
-    store(v_far, t_far);
-    store(v_margin, margin);
-    store(v_length, length);
-    store(v_segments, num_segments);
-    const int hits = _mm256_movemask_ps(_mm256_and_ps(hit, fits));
+    store(v_near, rays.t_near);
+    store(v_far, rays.t_far);
+    store(v_margin, rays.margin);
+    store(v_length, rays.length);
+    store(v_segments, rays.num_segments);
+    const int hits = rays.hits;
     for (int l = 0; l < LANES; ++l) {
         if ((hits >> l & 1) == 0) {
             continue;
@@ -247,25 +124,7 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, PixelRay* ou
         p.num_segments = v_segments[l];
         p.num_full = p.num_segments - 1;
     }
-    return hits | (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
-}
-
-// (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
-PLIANT_AVX2_INLINE __m128 two_pairs(const float* v, std::int32_t i0, std::int32_t i1) {
-    const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + i0)));
-    return _mm_loadh_pi(low, reinterpret_cast<const __m64*>(v + i1));
-}
-
-// The pairs (v[index[l]], v[index[l] + 1]) of the 8 lanes as the vectors of their first and
-// second elements.
-PLIANT_AVX2_INLINE void load_pairs(const float* v, const std::int32_t* index, __m256& first,
-                                   __m256& second) {
-    const __m256 a =
-        _mm256_set_m128(two_pairs(v, index[4], index[5]), two_pairs(v, index[0], index[1]));
-    const __m256 b =
-        _mm256_set_m128(two_pairs(v, index[6], index[7]), two_pairs(v, index[2], index[3]));
-    first = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
-    second = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
+    return hits | (rays.too_long << LANES);
 }
 
 // mapped_shading_value<IS_RGBA>() at g, 8 lanes: the trilinear scalar, or α from the α copy
@@ -282,25 +141,6 @@ PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& s, const __m256 g[3]) {
         load_pairs(v + row[r], at, first[r], second[r]);
     }
     return trilinear8(first, second, fraction);
-}
-
-// The 4 floats at lut + offset[l] per lane, transposed: out[c] holds component c of the 8 lanes.
-PLIANT_AVX2_INLINE __m256 entry_row(const float* lut, const std::int32_t* offset, int l) {
-    return _mm256_set_m128(_mm_loadu_ps(lut + offset[l + 4]), _mm_loadu_ps(lut + offset[l]));
-}
-PLIANT_AVX2_INLINE void load_entries(const float* lut, const std::int32_t* offset, __m256 out[4]) {
-    const __m256 r0 = entry_row(lut, offset, 0);  // lanes 0 | 4
-    const __m256 r1 = entry_row(lut, offset, 1);
-    const __m256 r2 = entry_row(lut, offset, 2);
-    const __m256 r3 = entry_row(lut, offset, 3);
-    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);
-    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);
-    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);
-    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);
-    out[0] = _mm256_shuffle_ps(t0, t1, 0x44);
-    out[1] = _mm256_shuffle_ps(t0, t1, 0xEE);
-    out[2] = _mm256_shuffle_ps(t2, t3, 0x44);
-    out[3] = _mm256_shuffle_ps(t2, t3, 0xEE);
 }
 
 // mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:

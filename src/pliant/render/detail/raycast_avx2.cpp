@@ -7,6 +7,7 @@
 
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/detail/grid8_avx2.hpp"
+#include "pliant/render/detail/ray_setup8_avx2.hpp"
 
 namespace pliant::render::detail {
 
@@ -71,78 +72,12 @@ PixelRay pixel_ray_of(const TileRays& t, int pixel) {
     return p;
 }
 
-PLIANT_AVX2_INLINE __m256 load(const float* p) {
-    return _mm256_load_ps(p);
-}
-PLIANT_AVX2_INLINE __m256i load(const std::int32_t* p) {
-    return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
-}
-PLIANT_AVX2_INLINE void store(float* p, __m256 v) {
-    _mm256_store_ps(p, v);
-}
-PLIANT_AVX2_INLINE void store(std::int32_t* p, __m256i v) {
-    _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
-}
-// Per-lane loads instead of AVX2 gathers: on AMD Zen a gather of 8 floats costs as much as about
-// 20 scalar loads even from L1, and x-adjacent voxels are loaded in pairs.
-
-// base[index[l]] per lane l (bytes).
-PLIANT_AVX2_INLINE __m256i load_bytes(const std::uint8_t* base, const std::int32_t* index) {
-    return _mm256_setr_epi32(base[index[0]], base[index[1]], base[index[2]], base[index[3]],
-                             base[index[4]], base[index[5]], base[index[6]], base[index[7]]);
-}
-
 // The 4 rows of voxel pairs a sample with lower corner p reads (p, p + dy, p + dz, p + dz + dy).
 PLIANT_AVX2_INLINE void prefetch_rows(const float* p, std::int32_t dy, std::int32_t dz) {
     _mm_prefetch(reinterpret_cast<const char*>(p), _MM_HINT_T0);
     _mm_prefetch(reinterpret_cast<const char*>(p + dy), _MM_HINT_T0);
     _mm_prefetch(reinterpret_cast<const char*>(p + dz), _MM_HINT_T0);
     _mm_prefetch(reinterpret_cast<const char*>(p + dz + dy), _MM_HINT_T0);
-}
-
-// (v[i0], v[i0 + 1], v[i1], v[i1 + 1]).
-PLIANT_AVX2_INLINE __m128 two_pairs(const float* v, std::int32_t i0, std::int32_t i1) {
-    const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + i0)));
-    return _mm_loadh_pi(low, reinterpret_cast<const __m64*>(v + i1));
-}
-
-// The pairs (v[index[l]], v[index[l] + 1]) of the 8 lanes as the vectors of their first and
-// second elements.
-PLIANT_AVX2_INLINE void load_pairs(const float* v, const std::int32_t* index, __m256& first,
-                                   __m256& second) {
-    // a = x0 y0 x1 y1 | x4 y4 x5 y5, b = x2 y2 x3 y3 | x6 y6 x7 y7.
-    const __m256 a =
-        _mm256_set_m128(two_pairs(v, index[4], index[5]), two_pairs(v, index[0], index[1]));
-    const __m256 b =
-        _mm256_set_m128(two_pairs(v, index[6], index[7]), two_pairs(v, index[2], index[3]));
-    first = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
-    second = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
-}
-
-// The 4 floats at lut + offset[l] per lane, transposed: out[c] holds component c of the 8 lanes.
-PLIANT_AVX2_INLINE __m256 entry_row(const float* lut, const std::int32_t* offset, int l) {
-    return _mm256_set_m128(_mm_loadu_ps(lut + offset[l + 4]), _mm_loadu_ps(lut + offset[l]));
-}
-PLIANT_AVX2_INLINE void load_entries(const float* lut, const std::int32_t* offset, __m256 out[4]) {
-    const __m256 r0 = entry_row(lut, offset, 0);  // lanes 0 | 4
-    const __m256 r1 = entry_row(lut, offset, 1);
-    const __m256 r2 = entry_row(lut, offset, 2);
-    const __m256 r3 = entry_row(lut, offset, 3);
-    const __m256 t0 = _mm256_unpacklo_ps(r0, r1);
-    const __m256 t1 = _mm256_unpacklo_ps(r2, r3);
-    const __m256 t2 = _mm256_unpackhi_ps(r0, r1);
-    const __m256 t3 = _mm256_unpackhi_ps(r2, r3);
-    out[0] = _mm256_shuffle_ps(t0, t1, 0x44);
-    out[1] = _mm256_shuffle_ps(t0, t1, 0xEE);
-    out[2] = _mm256_shuffle_ps(t2, t3, 0x44);
-    out[3] = _mm256_shuffle_ps(t2, t3, 0xEE);
-}
-
-PLIANT_AVX2_INLINE __m256 as_float(__m256i m) {
-    return _mm256_castsi256_ps(m);
-}
-PLIANT_AVX2_INLINE __m256i as_int(__m256 m) {
-    return _mm256_castps_si256(m);
 }
 
 // The value shading differentiates (shading_value()): the scalar, or α of an RGBA volume (only
@@ -245,115 +180,20 @@ void clear_lane(Lanes& s, int l) {
 // segments, bit 8 + l when it hits with more (for the scalar code), neither when it misses.
 PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first,
                               std::int32_t num_cells, TileRays& t) {
-    const __m256 half = _mm256_set1_ps(0.5f);
+    const Rays8 rays = begin_pixels8(k, x, y);
     const __m256 zero = _mm256_setzero_ps();
-    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-    const __m256 inv_focal = _mm256_set1_ps(k.inv_focal);
-    // pixel_ray(): (i + 0.5 − 0.5·width)·inv_focal, (0.5·height − (j + 0.5))·inv_focal.
-    const __m256 fi = _mm256_cvtepi32_ps(
-        _mm256_add_epi32(_mm256_set1_epi32(x), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
-    const __m256 cx = _mm256_mul_ps(
-        _mm256_sub_ps(_mm256_add_ps(fi, half), _mm256_set1_ps(0.5f * static_cast<float>(k.width))),
-        inv_focal);
-    const __m256 cy =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(0.5f * static_cast<float>(k.height)),
-                                    _mm256_add_ps(_mm256_set1_ps(static_cast<float>(y)), half)),
-                      inv_focal);
-    __m256 origin[3], dir[3];
-    if (k.is_perspective) {
-        __m256 v[3];
-        for (int a = 0; a < 3; ++a) {
-            v[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.forward[a]),
-                                               _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
-                                 _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
-        }
-        const __m256 length = _mm256_sqrt_ps(
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(v[0], v[0]), _mm256_mul_ps(v[1], v[1])),
-                          _mm256_mul_ps(v[2], v[2])));
-        for (int a = 0; a < 3; ++a) {
-            origin[a] = _mm256_set1_ps(k.eye[a]);
-            dir[a] = _mm256_div_ps(v[a], length);
-        }
-    } else {
-        for (int a = 0; a < 3; ++a) {
-            origin[a] = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k.eye[a]),
-                                                    _mm256_mul_ps(cx, _mm256_set1_ps(k.right[a]))),
-                                      _mm256_mul_ps(cy, _mm256_set1_ps(k.up[a])));
-            dir[a] = _mm256_set1_ps(k.forward[a]);
-        }
-    }
-    // clip_ray(): the slab test per axis, then the clipping plane.
-    __m256 go[3], gd[3];
-    __m256 t_near = zero;
-    __m256 t_far = inf;
-    __m256 miss = zero;
+    const __m256* gd = rays.gd;
     for (int a = 0; a < 3; ++a) {
-        const __m256 inv_spacing = _mm256_set1_ps(k.inv_spacing[a]);
-        go[a] =
-            _mm256_add_ps(_mm256_mul_ps(origin[a], inv_spacing), _mm256_set1_ps(k.grid_offset[a]));
-        gd[a] = _mm256_mul_ps(dir[a], inv_spacing);
-        const __m256 lo = _mm256_set1_ps(-0.5f);
-        const __m256 hi = _mm256_set1_ps(static_cast<float>(k.n[a]) - 0.5f);
-        const __m256 is_zero = _mm256_cmp_ps(gd[a], zero, _CMP_EQ_OQ);
-        const __m256 outside = _mm256_or_ps(_mm256_cmp_ps(go[a], lo, _CMP_LT_OQ),
-                                            _mm256_cmp_ps(go[a], hi, _CMP_GT_OQ));
-        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, outside));
-        const __m256 inv =
-            _mm256_blendv_ps(_mm256_div_ps(_mm256_set1_ps(1.0f), gd[a]), inf, is_zero);
-        _mm256_storeu_ps(t.inv_gd[a] + first, inv);
-        const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(lo, go[a]), inv);
-        const __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(hi, go[a]), inv);
-        const __m256 swap = _mm256_cmp_ps(t0, t1, _CMP_GT_OQ);
-        const __m256 t_lo = _mm256_blendv_ps(t0, t1, swap);
-        const __m256 t_hi = _mm256_blendv_ps(t1, t0, swap);
-        // std::max(t_near, t_lo) and std::min(t_far, t_hi), on the lanes with a non-zero component.
-        t_near = _mm256_blendv_ps(_mm256_max_ps(t_lo, t_near), t_near, is_zero);
-        t_far = _mm256_blendv_ps(_mm256_min_ps(t_hi, t_far), t_far, is_zero);
+        _mm256_storeu_ps(t.dir[a] + first, rays.dir[a]);
+        _mm256_storeu_ps(t.go[a] + first, rays.go[a]);
+        _mm256_storeu_ps(t.gd[a] + first, rays.gd[a]);
+        _mm256_storeu_ps(t.inv_gd[a] + first, rays.inv_gd[a]);
     }
-    if (k.has_clip) {
-        const __m256 n[3] = {_mm256_set1_ps(k.clip_normal.x), _mm256_set1_ps(k.clip_normal.y),
-                             _mm256_set1_ps(k.clip_normal.z)};
-        const __m256 a = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], origin[0]),
-                                                                   _mm256_mul_ps(n[1], origin[1])),
-                                                     _mm256_mul_ps(n[2], origin[2])),
-                                       _mm256_set1_ps(k.clip_offset));
-        const __m256 s =
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], dir[0]), _mm256_mul_ps(n[1], dir[1])),
-                          _mm256_mul_ps(n[2], dir[2]));
-        const __m256 crossing = _mm256_div_ps(_mm256_xor_ps(a, _mm256_set1_ps(-0.0f)), s);
-        const __m256 is_pos = _mm256_cmp_ps(s, zero, _CMP_GT_OQ);
-        const __m256 is_neg = _mm256_cmp_ps(s, zero, _CMP_LT_OQ);
-        t_near = _mm256_blendv_ps(t_near, _mm256_max_ps(crossing, t_near), is_pos);
-        t_far = _mm256_blendv_ps(t_far, _mm256_min_ps(crossing, t_far), is_neg);
-        const __m256 is_zero = _mm256_cmp_ps(s, zero, _CMP_EQ_OQ);
-        miss = _mm256_or_ps(miss, _mm256_and_ps(is_zero, _mm256_cmp_ps(a, zero, _CMP_LT_OQ)));
-    }
-    const __m256 hit = _mm256_andnot_ps(miss, _mm256_cmp_ps(t_near, t_far, _CMP_LT_OQ));
-    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
-    const __m256 magnitude = _mm256_add_ps(
-        _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(go[0], abs_mask), _mm256_and_ps(go[1], abs_mask)),
-                      _mm256_and_ps(go[2], abs_mask)),
-        _mm256_mul_ps(t_far, _mm256_max_ps(_mm256_max_ps(_mm256_and_ps(gd[0], abs_mask),
-                                                         _mm256_and_ps(gd[1], abs_mask)),
-                                           _mm256_and_ps(gd[2], abs_mask))));
-    const __m256 margin = _mm256_add_ps(_mm256_set1_ps(SKIP_MARGIN),
-                                        _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
-    // begin_pixel(): N = max(1, ⌈length / Δs⌉) segments.
-    const __m256 length = _mm256_sub_ps(t_far, t_near);
-    const __m256 segments = _mm256_ceil_ps(_mm256_div_ps(length, _mm256_set1_ps(k.step)));
-    const __m256 fits = _mm256_cmp_ps(segments, _mm256_set1_ps(1073741824.0f), _CMP_LT_OQ);
-    const __m256i num_segments =
-        _mm256_max_epi32(_mm256_cvttps_epi32(_mm256_and_ps(segments, fits)), _mm256_set1_epi32(1));
-    for (int a = 0; a < 3; ++a) {
-        _mm256_storeu_ps(t.dir[a] + first, dir[a]);
-        _mm256_storeu_ps(t.go[a] + first, go[a]);
-        _mm256_storeu_ps(t.gd[a] + first, gd[a]);
-    }
-    _mm256_storeu_ps(t.t_near + first, t_near);
-    _mm256_storeu_ps(t.t_far + first, t_far);
-    _mm256_storeu_ps(t.margin + first, margin);
-    _mm256_storeu_ps(t.length + first, length);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(t.num_segments + first), num_segments);
+    _mm256_storeu_ps(t.t_near + first, rays.t_near);
+    _mm256_storeu_ps(t.t_far + first, rays.t_far);
+    _mm256_storeu_ps(t.margin + first, rays.margin);
+    _mm256_storeu_ps(t.length + first, rays.length);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(t.num_segments + first), rays.num_segments);
     if (k.axis_cube != nullptr) {
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(t.cube + first), _mm256_setzero_si256());
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(t.has_more + first), _mm256_setzero_si256());
@@ -373,8 +213,7 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first,
                             _mm256_mullo_epi32(octant, _mm256_set1_epi32(num_cells)));
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(t.has_more + first), as_int(has_zero));
     }
-    return _mm256_movemask_ps(_mm256_and_ps(hit, fits)) |
-           (_mm256_movemask_ps(_mm256_andnot_ps(fits, hit)) << LANES);
+    return rays.hits | (rays.too_long << LANES);
 }
 
 // jump() for the lanes in `jumps` (empty cubes of `side` cells at cells cell_coord): the first
