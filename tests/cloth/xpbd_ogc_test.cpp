@@ -44,20 +44,19 @@ std::unique_ptr<ClothSolver> colliding_sheets(int n) {
 TEST(XPBDOgc, SheetsPushedTogetherNeverIntersect) {
     auto solver = colliding_sheets(16);
     ASSERT_NE(solver->stepper().ogc(), nullptr);
-    std::int64_t close = 0;
+    std::int64_t near = 0;
     for (int f = 0; f < 12; ++f) {
         const ClothStepStats stats = solver->step(1.0 / 24.0, 16);
         ASSERT_TRUE(stats.has_ogc);
-        close = std::max(close, stats.ogc_close_pairs);
+        near = std::max(near, stats.ogc_pairs);
         // The bounds alone kept them apart: the CCD audit put nothing back, and no pair of
         // triangles intersects.
         EXPECT_EQ(stats.self.reverted_vertices, 0) << "frame " << f;
         EXPECT_EQ(stats.self.contacts, 0) << "frame " << f;  // no proximity projection
-        ASSERT_EQ(collision::count_intersecting_pairs(solver->positions(), solver->triangles()),
-                  0)
+        ASSERT_EQ(collision::count_intersecting_pairs(solver->positions(), solver->triangles()), 0)
             << "frame " << f;
     }
-    EXPECT_GT(close, 0);  // the upper one rests on the lower one
+    EXPECT_GT(near, 0);  // the upper one rests on the lower one, within the query radius
     // Resting: the upper sheet lies about a contact radius above the lower one.
     const std::size_t top = solver->positions().size() - 1;
     EXPECT_GT(solver->positions()[top].z, 0.005 + 0.5 * 0.005);

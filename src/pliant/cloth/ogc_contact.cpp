@@ -141,6 +141,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     // Kept pairs, then per vertex (CSR, in pair order) a plane and a reference each.
     m_pairs.clear();
     m_pair_normals.clear();
+    m_pair_distances.clear();
     m_close_pairs = 0;
     std::vector<std::size_t> kept;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
@@ -148,6 +149,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
             kept.push_back(i);
             m_pairs.push_back(candidates[i]);
             m_pair_normals.push_back(m_geometry[i][2]);
+            m_pair_distances.push_back(m_distances[i]);
             m_close_pairs += m_distances[i] < m_radius ? 1 : 0;
         }
     }
@@ -330,11 +332,33 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
         }
         return g;
     };
+    m_deviations.resize(m_num_vertices);
+    parallel_for(
+        static_cast<std::int64_t>(m_contact_vertices.size()),
+        [&](std::int64_t i) {
+            const auto v =
+                static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
+            m_deviations[v] = norm(x[v] - m_detected[v] - m_shift);
+        },
+        PAIR_GRAIN);
     m_close.resize(m_pairs.size());
     parallel_for(
         static_cast<std::int64_t>(m_pairs.size()),
         [&](std::int64_t i) {
             const auto slot = static_cast<std::size_t>(i);
+            const Pair& pair = m_pairs[slot];
+            const auto deviation = [&](std::size_t j) {
+                return m_deviations[static_cast<std::size_t>(pair.v[j])];
+            };
+            const double first =
+                pair.is_edge_edge ? std::max(deviation(0), deviation(1)) : deviation(0);
+            const double second = pair.is_edge_edge
+                                      ? std::max(deviation(2), deviation(3))
+                                      : std::max({deviation(1), deviation(2), deviation(3)});
+            if (m_pair_distances[slot] - first - second >= m_radius) {
+                m_close[slot] = 0;
+                return;
+            }
             m_close[slot] = contact(slot).distance < m_radius ? 1 : 0;
         },
         PAIR_GRAIN);

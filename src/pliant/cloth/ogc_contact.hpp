@@ -143,7 +143,9 @@ public:
     // closest points' unless it points against the detection's (the features crossed the
     // detection's plane: the pair is pushed back along the detection's normal). Pairs closer than
     // r are found in parallel, then pushed sequentially in pair order: bitwise identical for any
-    // number of threads. Returns the pairs pushed.
+    // number of threads. A pair whose distance at the detection less its features' largest
+    // deviations from the shifted detection (a feature's distance moves by at most that) is at
+    // least r is skipped without a proximity test. Returns the pairs pushed.
     std::int64_t project(std::span<Vec3d> x, std::span<const Vec3d> previous,
                          std::span<const double> inverse_masses, double static_friction,
                          double kinetic_friction);
@@ -191,8 +193,10 @@ private:
     std::vector<Vec3d> m_detected;  // #V, positions at the detection
     Vec3d m_shift{0.0, 0.0, 0.0};
     std::vector<Pair> m_pairs;
-    std::vector<Vec3d> m_pair_normals;  // per pair, its normal at the detection
-    std::vector<std::uint8_t> m_close;  // project(): per pair, closer than r
+    std::vector<Vec3d> m_pair_normals;     // per pair, its normal at the detection
+    std::vector<double> m_pair_distances;  // per pair, its distance at the detection
+    std::vector<double> m_deviations;      // project(): |x_v − (detected_v + S)| per vertex
+    std::vector<std::uint8_t> m_close;     // project(): per pair, closer than r
     // Per vertex (CSR): its planes, and its pairs as pair index · 4 + its place in the pair.
     std::vector<std::int32_t> m_plane_first;
     std::vector<Plane> m_planes;

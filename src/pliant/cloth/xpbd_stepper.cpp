@@ -29,9 +29,6 @@ constexpr int FAIL_SAFE_WINDOW = 4;
 // Larger moves outrun the self-collision's proximity constraints, which act once per substep
 // (docs/journal/2026-11-25-strain-limiting.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
-// OGC: detections at most per substep's prediction (each lets the held-back vertices go up to
-// their bound further toward the prediction).
-constexpr int MAX_PREDICTION_DETECTIONS = 2;
 // OGC: the contact stiffness OgcContact asks for is not used by XPBD's hard contact constraint.
 constexpr double OGC_UNUSED_STIFFNESS = 1.0;
 
@@ -214,10 +211,11 @@ bool XPBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
     return m_self_collision->stats().reverted_vertices != reverted;
 }
 
-bool XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
-    const bool put_back = m_ogc->options().audit && audit(x, velocities);
+void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
+    if (m_ogc->options().audit) {
+        audit(x, velocities);
+    }
     m_ogc->detect(x);
-    return put_back;
 }
 
 ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
@@ -333,32 +331,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
                                ? detail::CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
     if (m_ogc) {
-        // The frame shift from the prediction, then every free vertex within its bound; where
-        // many were held back, detect again and move toward the prediction once more.
+        // The frame shift from the prediction, then every free vertex within its bound.
         m_ogc->set_shift(positions, inverse_masses);
-        std::int64_t truncated = truncate_all(m_previous_positions, positions, inverse_masses);
-        m_step_truncated += truncated;
-        for (int round = 0; round < MAX_PREDICTION_DETECTIONS && needs_detection(truncated);
-             ++round) {
-            solve_ms += watch.elapsed_ms();
-            const bool put_back = detect(positions, velocities);
-            watch.restart();
-            if (put_back) {
-                break;  // the audit's positions stand
-            }
-            m_ogc_from.assign(positions.begin(), positions.end());
-            parallel_for(
-                n,
-                [&](std::int64_t i) {
-                    const auto v = static_cast<std::size_t>(i);
-                    if (inverse_masses[v] > 0.0) {
-                        positions[v] = m_previous_positions[v] + velocities[v] * h;
-                    }
-                },
-                VERTEX_GRAIN);
-            truncated = truncate_all(m_ogc_from, positions, inverse_masses);
-            m_step_truncated += truncated;
-        }
+        m_substep_truncated = truncate_all(m_previous_positions, positions, inverse_masses);
         m_ogc_from.assign(positions.begin(), positions.end());
     }
     project_constraints(model, h);
@@ -371,13 +346,13 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
     // may have pressed one layer into the next); a vertex pushed back into an obstacle is
     // pushed out again next substep, while layers that pass through each other stay entangled.
-    std::int64_t ogc_truncated = 0;
     if (m_ogc) {
         watch.restart();
         m_ogc->project(positions, m_previous_positions, inverse_masses,
                        material.self_static_friction, material.self_kinetic_friction);
-        ogc_truncated = truncate_all(m_ogc_from, positions, inverse_masses);
-        m_step_truncated += ogc_truncated;
+        // Vertices held back in the prediction or here (a vertex held back in both counts twice).
+        m_substep_truncated += truncate_all(m_ogc_from, positions, inverse_masses);
+        m_step_truncated += m_substep_truncated;
         solve_ms += watch.elapsed_ms();
     } else if (m_self_collision) {
         m_self_collision->project(positions, m_previous_positions, inverse_masses, material, t_end,
@@ -406,7 +381,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         },
         VERTEX_GRAIN);
     solve_ms += watch.elapsed_ms();
-    if (m_ogc && needs_detection(ogc_truncated)) {
+    if (m_ogc && needs_detection(m_substep_truncated)) {
         detect(positions, velocities);
     }
     return contacts;

@@ -34,18 +34,17 @@
 // With OGC contact (set_ogc; ogc_contact.hpp: Offset Geometric Contact, Chen et al., SIGGRAPH
 // 2025), self-collision is instead: a detection (pairs within the query radius, their separating
 // planes, each vertex's conservative bound) before a substep without one; after 1, the frame
-// shift from the prediction and every free vertex's move truncated to its bound (where more than
-// redetect_share of the free vertices were held back, a detection at the truncated positions and
-// the prediction truncated again, at most MAX_PREDICTION_DETECTIONS times); after 4, every
+// shift from the prediction and every free vertex's move truncated to its bound; after 4, every
 // detected pair closer than the contact radius pushed apart to it (OgcContact::project, with the
 // self-friction), then every free vertex's move since the truncated prediction truncated again;
-// after 5, a detection when more than redetect_share of the free vertices were held back in that
-// last truncation. Every vertex stays in its feasible set between detections, so the cloth stays
-// intersection-free for any motion the substeps make, with no gather and no per-window fail-safe:
-// the cost follows how far the cloth moves, not the substep count. With ogc.audit the CCD
-// fail-safe (ccd_fail_safe.hpp) runs as an audit and a fail-safe over windows that end at every
-// detection and at the step's end (its stats: ccd_pairs, ccd_hits, reverted_vertices); a vertex
-// it puts back at the step's end makes the next substep detect first.
+// after 5, a detection when the vertices held back in the substep's two truncations (a vertex
+// held back in both counts twice) exceed redetect_share of the free vertices. Every vertex stays in
+// its feasible set between detections, so the cloth stays intersection-free for any motion the
+// substeps make, with no gather and no per-window fail-safe: the cost follows how far the cloth
+// moves, not the substep count. With ogc.audit the CCD fail-safe (ccd_fail_safe.hpp) runs as an
+// audit and a fail-safe over windows that end at every detection and at the step's end (its stats:
+// ccd_pairs, ccd_hits, reverted_vertices); a vertex it puts back at the step's end makes the next
+// substep detect first.
 //
 // Constraints of a kind are projected colour by colour (constraint_coloring.hpp), each colour in
 // parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads. The
@@ -196,8 +195,8 @@ private:
     // OGC: whether `truncated` vertices held back call for a new detection.
     bool needs_detection(std::int64_t truncated) const;
     // OGC: the audit's window ends at x (ogc.audit; velocities of the vertices it puts back are
-    // set to zero), then a detection at x; returns whether the audit put any vertex back.
-    bool detect(std::span<Vec3d> x, std::span<Vec3d> velocities);
+    // set to zero), then a detection at x.
+    void detect(std::span<Vec3d> x, std::span<Vec3d> velocities);
     // OGC: the CCD fail-safe over the motion from m_audit_start to x; returns whether it put any
     // vertex back. The next window starts at x.
     bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
@@ -257,6 +256,7 @@ private:
     std::vector<Vec3d> m_ogc_from;
     std::int64_t m_num_free = 0;
     std::int64_t m_step_truncated = 0;
+    std::int64_t m_substep_truncated = 0;
 };
 
 }  // namespace pliant::cloth
