@@ -106,11 +106,30 @@ TEST(ClothScene, ReadsTheContact) {
     EXPECT_EQ(tuned.vbd->ogc->stiffness, 1000.0);
     EXPECT_FALSE(tuned.vbd->ogc->audit);
     EXPECT_TRUE(ogc.vbd->ogc->audit);
+    EXPECT_FALSE(ogc.xpbd_ogc);
+    // With the XPBD solver (the default) the options go to xpbd_ogc.
+    const cloth::ClothScene xpbd = parse(R"({"cloth": {"grid": {}}, "contact": "ogc"})");
+    EXPECT_FALSE(xpbd.vbd);
+    ASSERT_TRUE(xpbd.xpbd_ogc);
+    EXPECT_EQ(xpbd.xpbd_ogc->bound_share, cloth::OgcOptions{}.bound_share);
+    const cloth::ClothScene xpbd_tuned = parse(R"({"cloth": {"grid": {}}, "solver": "xpbd",
+        "contact": {"type": "ogc", "query_factor": 4, "redetect_share": 0.1, "audit": false}})");
+    ASSERT_TRUE(xpbd_tuned.xpbd_ogc);
+    EXPECT_EQ(xpbd_tuned.xpbd_ogc->query_factor, 4.0);
+    EXPECT_EQ(xpbd_tuned.xpbd_ogc->redetect_share, 0.1);
+    EXPECT_FALSE(xpbd_tuned.xpbd_ogc->audit);
+    EXPECT_FALSE(parse(R"({"cloth": {"grid": {}}, "contact": "proximity"})").xpbd_ogc);
 }
 
 TEST(ClothScene, RejectsBadContact) {
-    expect_error(R"({"cloth": {"grid": {}}, "contact": "ogc"})",
-                 {"contact", "\"solver\": \"vbd\"", "xpbd"});
+    expect_error(R"({"cloth": {"grid": {}}, "contact": "ipc"})",
+                 {"contact", "\"ogc\", \"proximity\"", "\"ipc\""});
+    expect_error(R"({"cloth": {"grid": {}}, "solver": "xpbd", "contact": {"bound_share": 0}})",
+                 {"contact.bound_share", "0"});
+    expect_error(R"({"cloth": {"grid": {}}, "contact": {"type": "ogc", "audit": 1}})",
+                 {"contact.audit", "true or false"});
+    expect_error(R"({"cloth": {"grid": {}}, "contact": {"type": "ogc", "stiffness": -1}})",
+                 {"contact.stiffness", "-1"});
     expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": "ipc"})",
                  {"contact", "\"ogc\", \"proximity\"", "\"ipc\""});
     expect_error(R"({"cloth": {"grid": {}}, "solver": "vbd", "contact": 1})",

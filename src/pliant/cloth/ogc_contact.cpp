@@ -140,12 +140,16 @@ void OgcContact::detect(std::span<const Vec3d> x) {
 
     // Kept pairs, then per vertex (CSR, in pair order) a plane and a reference each.
     m_pairs.clear();
+    m_pair_normals.clear();
+    m_pair_distances.clear();
     m_close_pairs = 0;
     std::vector<std::size_t> kept;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
         if (m_distances[i] < m_query_radius) {
             kept.push_back(i);
             m_pairs.push_back(candidates[i]);
+            m_pair_normals.push_back(m_geometry[i][2]);
+            m_pair_distances.push_back(m_distances[i]);
             m_close_pairs += m_distances[i] < m_radius ? 1 : 0;
         }
     }
@@ -303,6 +307,109 @@ void OgcContact::add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force,
     }
 }
 
+std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> previous,
+                                 std::span<const double> inverse_masses, double static_friction,
+                                 double kinetic_friction) {
+    const auto gather = [&](const Pair& pair) {
+        std::array<Vec3d, 4> p;
+        for (std::size_t j = 0; j < 4; ++j) {
+            p[j] = x[static_cast<std::size_t>(pair.v[j])];
+        }
+        return p;
+    };
+    // The pair's geometry now, with the normal on the detection's side.
+    const auto contact = [&](std::size_t i) {
+        const Pair& pair = m_pairs[i];
+        PairGeometry g = pair_geometry(pair, gather(pair));
+        const Vec3d& detected = m_pair_normals[i];
+        if (dot(g.normal, detected) < 0.0) {
+            Vec3d gap{0.0, 0.0, 0.0};
+            for (std::size_t j = 0; j < 4; ++j) {
+                gap += x[static_cast<std::size_t>(pair.v[j])] * g.weights[j];
+            }
+            g.normal = detected;
+            g.distance = dot(gap, detected);
+        }
+        return g;
+    };
+    m_deviations.resize(m_num_vertices);
+    parallel_for(
+        static_cast<std::int64_t>(m_contact_vertices.size()),
+        [&](std::int64_t i) {
+            const auto v =
+                static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
+            m_deviations[v] = norm(x[v] - m_detected[v] - m_shift);
+        },
+        PAIR_GRAIN);
+    m_close.resize(m_pairs.size());
+    parallel_for(
+        static_cast<std::int64_t>(m_pairs.size()),
+        [&](std::int64_t i) {
+            const auto slot = static_cast<std::size_t>(i);
+            const Pair& pair = m_pairs[slot];
+            const auto deviation = [&](std::size_t j) {
+                return m_deviations[static_cast<std::size_t>(pair.v[j])];
+            };
+            const double first =
+                pair.is_edge_edge ? std::max(deviation(0), deviation(1)) : deviation(0);
+            const double second = pair.is_edge_edge
+                                      ? std::max(deviation(2), deviation(3))
+                                      : std::max({deviation(1), deviation(2), deviation(3)});
+            if (m_pair_distances[slot] - first - second >= m_radius) {
+                m_close[slot] = 0;
+                return;
+            }
+            m_close[slot] = contact(slot).distance < m_radius ? 1 : 0;
+        },
+        PAIR_GRAIN);
+    // Moves the pair's vertices along `direction` so that their weighted difference grows by
+    // `amount`.
+    const auto separate = [&](const Pair& pair, const std::array<double, 4>& weights,
+                              const Vec3d& direction, double amount) {
+        double denominator = 0.0;
+        for (std::size_t j = 0; j < 4; ++j) {
+            denominator +=
+                inverse_masses[static_cast<std::size_t>(pair.v[j])] * weights[j] * weights[j];
+        }
+        if (!(denominator > 0.0)) {
+            return;
+        }
+        const double lambda = amount / denominator;
+        for (std::size_t j = 0; j < 4; ++j) {
+            const auto v = static_cast<std::size_t>(pair.v[j]);
+            x[v] += direction * (inverse_masses[v] * weights[j] * lambda);
+        }
+    };
+    std::int64_t pushed = 0;
+    for (std::size_t i = 0; i < m_pairs.size(); ++i) {
+        if (m_close[i] == 0) {
+            continue;
+        }
+        const Pair& pair = m_pairs[i];
+        const PairGeometry g = contact(i);
+        if (!(g.distance < m_radius)) {
+            continue;
+        }
+        const double gap = m_radius - g.distance;
+        separate(pair, g.weights, g.normal, gap);
+        ++pushed;
+        Vec3d relative{0.0, 0.0, 0.0};
+        for (std::size_t j = 0; j < 4; ++j) {
+            const auto v = static_cast<std::size_t>(pair.v[j]);
+            relative += (x[v] - previous[v]) * g.weights[j];
+        }
+        const Vec3d tangential = relative - g.normal * dot(relative, g.normal);
+        const double slide = norm(tangential);
+        if (!(slide > 0.0)) {
+            continue;
+        }
+        const double removed =
+            slide <= static_friction * gap ? slide : std::min(slide, kinetic_friction * gap);
+        separate(pair, g.weights, tangential * (-1.0 / slide), removed);
+    }
+    return pushed;
+}
+
 std::int64_t OgcContact::remove_separating_velocity(std::span<const Vec3d> x,
                                                     std::span<Vec3d> velocities,
                                                     std::span<const double> inverse_masses) const {
@@ -341,6 +448,7 @@ void OgcContact::save_state(ByteWriter& out) const {
     out.put(m_detections);
     if (m_has_detection) {
         out.put_vector(m_detected);
+        out.put(m_shift);
     }
 }
 
@@ -356,6 +464,12 @@ void OgcContact::load_state(ByteReader& in) {
         std::vector<Vec3d> detected;
         in.get_vector("ogc.detected", detected, static_cast<std::int64_t>(m_num_vertices));
         detect(detected);
+        const auto shift = in.get<Vec3d>("ogc.shift");
+        if (!std::isfinite(shift.x) || !std::isfinite(shift.y) || !std::isfinite(shift.z)) {
+            throw InvalidInput(
+                fmt::format("{}: ogc contact: a frame shift that is not finite", in.source()));
+        }
+        m_shift = shift;
     } else {
         m_has_detection = false;
     }

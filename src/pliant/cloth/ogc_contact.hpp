@@ -46,6 +46,10 @@
 //      detect() again when they exceed redetect_share of the free vertices; a settled sheet keeps
 //      one detection for many substeps.
 //
+// XPBD (xpbd_stepper.hpp) uses the detection and the bounds with a hard constraint instead of the
+// energy: project() pushes every detected pair closer than r apart to r along its normal (XPBD
+// with zero compliance, as the proximity projection of self_collision.hpp), pair after pair.
+//
 // Pinned vertices follow their pins untruncated: a pin that moves a vertex out of its set can make
 // the cloth touch itself, which only the CCD audit (vbd_stepper.hpp) catches.
 //
@@ -131,6 +135,21 @@ public:
     // the snapshot).
     void add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force, detail::Sym3& hessian) const;
 
+    // XPBD's contact constraint: every detected pair closer than r at positions x (#V) is pushed
+    // apart to r along its normal, the push split by the closest point's weights and the inverse
+    // masses (Δλ = (r − d) / Σ w_k b_k²), then Coulomb friction on the pair's relative tangential
+    // motion since `previous` (#V): cancelled when at most static_friction × the push, else
+    // shortened by kinetic_friction × the push (self_collision.hpp's rule). The normal is the
+    // closest points' unless it points against the detection's (the features crossed the
+    // detection's plane: the pair is pushed back along the detection's normal). Pairs closer than
+    // r are found in parallel, then pushed sequentially in pair order: bitwise identical for any
+    // number of threads. A pair whose distance at the detection less its features' largest
+    // deviations from the shifted detection (a feature's distance moves by at most that) is at
+    // least r is skipped without a proximity test. Returns the pairs pushed.
+    std::int64_t project(std::span<Vec3d> x, std::span<const Vec3d> previous,
+                         std::span<const double> inverse_masses, double static_friction,
+                         double kinetic_friction);
+
     // Inelastic contact: for every detected pair closer than r at positions x (#V), the part of
     // the velocities' relative normal motion that separates the pair is removed (an impulse split
     // by the closest point's weights and the inverse masses), pair after pair in their order.
@@ -152,7 +171,8 @@ public:
     double detect_ms() const { return m_detect_ms; }
 
     // The state later steps read: the detection's positions (the pairs and planes are derived
-    // from them); load_state: InvalidInput for another mesh or a truncated state.
+    // from them) and the frame shift; load_state: InvalidInput for another mesh or a truncated
+    // state.
     void save_state(ByteWriter& out) const;
     void load_state(ByteReader& in);
 
@@ -173,6 +193,10 @@ private:
     std::vector<Vec3d> m_detected;  // #V, positions at the detection
     Vec3d m_shift{0.0, 0.0, 0.0};
     std::vector<Pair> m_pairs;
+    std::vector<Vec3d> m_pair_normals;     // per pair, its normal at the detection
+    std::vector<double> m_pair_distances;  // per pair, its distance at the detection
+    std::vector<double> m_deviations;      // project(): |x_v − (detected_v + S)| per vertex
+    std::vector<std::uint8_t> m_close;     // project(): per pair, closer than r
     // Per vertex (CSR): its planes, and its pairs as pair index · 4 + its place in the pair.
     std::vector<std::int32_t> m_plane_first;
     std::vector<Plane> m_planes;

@@ -118,6 +118,9 @@ struct ClothScene {
     // The time stepper: XPBD (xpbd_stepper.hpp) when empty, else Vertex Block Descent with these
     // options (vbd_stepper.hpp).
     std::optional<VBDOptions> vbd;
+    // XPBD's self-contact by Offset Geometric Contact (ogc_contact.hpp, XPBDStepper::set_ogc)
+    // when set; with VBD the options are vbd->ogc.
+    std::optional<OgcOptions> xpbd_ogc;
     // Cloth that starts intersecting itself is untangled before the first frame (untangle.hpp).
     bool untangle = true;
     std::vector<SceneObstacle> obstacles;

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <utility>
 
@@ -106,6 +107,12 @@ public:
     void use_vbd(const VBDOptions& options) {
         m_vbd = std::make_unique<VBDStepper>(m_model, options);
         m_vbd->enable_self_collision(m_model, m_stepper.has_self_collision());
+    }
+    // Self-contact of the XPBD stepper by Offset Geometric Contact (ogc_contact.hpp,
+    // XPBDStepper::set_ogc) instead of the proximity constraints, or the proximity path again
+    // (nullopt). InvalidInput for invalid options.
+    void use_xpbd_ogc(const std::optional<OgcOptions>& options) {
+        m_stepper.set_ogc(m_model, options);
     }
     // The VBD stepper (use_vbd), or null when XPBD steps.
     const VBDStepper* vbd() const { return m_vbd.get(); }

@@ -29,6 +29,8 @@ constexpr int FAIL_SAFE_WINDOW = 4;
 // Larger moves outrun the self-collision's proximity constraints, which act once per substep
 // (docs/journal/2026-11-25-strain-limiting.md).
 constexpr double STRAIN_LIMIT_MOVE = 0.1;
+// OGC: the contact stiffness OgcContact asks for is not used by XPBD's hard contact constraint.
+constexpr double OGC_UNUSED_STIFFNESS = 1.0;
 
 // Coordinates below 2^-200 m (6e-61 m: nothing cloth has is that short) become 0: the exact
 // predicates of the self-collision and of the intersection count take 0 or magnitudes from
@@ -153,6 +155,14 @@ void XPBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
         m_num_position_resets = model.num_position_resets();
         m_gather_end_time = -std::numeric_limits<double>::infinity();
     }
+    m_ogc.reset();
+    if (enabled && m_ogc_options) {
+        const OgcOptions& ogc = *m_ogc_options;
+        m_ogc = std::make_unique<OgcContact>(
+            model.triangles(), model.num_vertices(), ogc,
+            ogc.radius > 0.0 ? ogc.radius : model.material().thickness,
+            ogc.stiffness > 0.0 ? ogc.stiffness : OGC_UNUSED_STIFFNESS);
+    }
 }
 
 void XPBDStepper::restart_self_collision(const ClothModel& model) {
@@ -160,6 +170,52 @@ void XPBDStepper::restart_self_collision(const ClothModel& model) {
         m_self_collision.reset();
         enable_self_collision(model, true);
     }
+}
+
+void XPBDStepper::set_ogc(const ClothModel& model, const std::optional<OgcOptions>& options) {
+    if (options) {
+        OgcContact::check_options(*options);
+    }
+    m_ogc_options = options;
+    enable_self_collision(model, false);
+    m_ogc.reset();
+    enable_self_collision(model, true);
+}
+
+std::int64_t XPBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
+                                       std::span<const double> inverse_masses) const {
+    return parallel_reduce(
+        static_cast<std::int64_t>(x.size()), std::int64_t{0},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::int64_t count = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                if (inverse_masses[v] > 0.0 && m_ogc->truncate(v, from[v], x[v])) {
+                    ++count;
+                }
+            }
+            return count;
+        },
+        [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
+}
+
+bool XPBDStepper::needs_detection(std::int64_t truncated) const {
+    return static_cast<double>(truncated) >
+           m_ogc->options().redetect_share * static_cast<double>(m_num_free);
+}
+
+bool XPBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
+    const std::int64_t reverted = m_self_collision->stats().reverted_vertices;
+    m_self_collision->enforce(m_audit_start, x, velocities);
+    m_audit_start.assign(x.begin(), x.end());
+    return m_self_collision->stats().reverted_vertices != reverted;
+}
+
+void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
+    if (m_ogc->options().audit) {
+        audit(x, velocities);
+    }
+    m_ogc->detect(x);
 }
 
 ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
@@ -183,8 +239,17 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
     model.begin_step(dt);
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
+    const std::int64_t detections_before = m_ogc ? m_ogc->detections() : 0;
+    const double detect_ms_before = m_ogc ? m_ogc->detect_ms() : 0.0;
+    if (m_ogc) {
+        m_audit_start.assign(positions.begin(), positions.end());
+        const std::span<const double> inverse_masses = model.inverse_masses();
+        m_num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
+                                   [](double w) { return w > 0.0; });
+        m_step_truncated = 0;
+    }
     for (int s = 0; s < substeps; ++s) {
-        if (m_self_collision && s % FAIL_SAFE_WINDOW == 0) {
+        if (m_self_collision && !m_ogc && s % FAIL_SAFE_WINDOW == 0) {
             // A new gather unless the last one's span covers this window (times compared to a
             // millionth of a substep: steps sum their times differently).
             const double window_start = start_time + s * h;
@@ -208,11 +273,23 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         stats.obstacles_lagging = tally.lagging;
         stats.obstacle_max_lag = std::max(stats.obstacle_max_lag, tally.max_lag);
         stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
-        if (m_self_collision &&
+        if (m_self_collision && !m_ogc &&
             (s % FAIL_SAFE_WINDOW == FAIL_SAFE_WINDOW - 1 || s == substeps - 1)) {
             m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time,
                                       start_time + (s + 1) * h);
         }
+    }
+    if (m_ogc) {
+        // The audit's last window ends with the step; vertices it put back left their sets.
+        if (m_ogc->options().audit && audit(positions, velocities)) {
+            m_ogc->invalidate();
+        }
+        stats.has_ogc = true;
+        stats.ogc_detections = m_ogc->detections() - detections_before;
+        stats.ogc_detect_ms = m_ogc->detect_ms() - detect_ms_before;
+        stats.ogc_truncated = m_step_truncated;
+        stats.ogc_pairs = static_cast<std::int64_t>(m_ogc->num_pairs());
+        stats.ogc_close_pairs = m_ogc->close_pairs();
     }
     model.end_step();
     if (m_self_collision) {
@@ -231,6 +308,11 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     const std::span<const double> inverse_masses = model.inverse_masses();
     const ClothMaterial& material = model.material();
     const auto n = static_cast<std::int64_t>(positions.size());
+    if (m_ogc && !m_ogc->has_detection()) {
+        solve_ms += watch.elapsed_ms();
+        detect(positions, velocities);  // x_t, intersection-free
+        watch.restart();
+    }
     model.apply_air(h, t_end - h);
     const Vec3d gravity = model.gravity();
     parallel_for(
@@ -248,6 +330,12 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     model.move_pins(t_end, m_self_collision && material.thickness > 0.0
                                ? detail::CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
+    if (m_ogc) {
+        // The frame shift from the prediction, then every free vertex within its bound.
+        m_ogc->set_shift(positions, inverse_masses);
+        m_substep_truncated = truncate_all(m_previous_positions, positions, inverse_masses);
+        m_ogc_from.assign(positions.begin(), positions.end());
+    }
     project_constraints(model, h);
     model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     model.move_obstacles(t_end);
@@ -258,7 +346,15 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
     // may have pressed one layer into the next); a vertex pushed back into an obstacle is
     // pushed out again next substep, while layers that pass through each other stay entangled.
-    if (m_self_collision) {
+    if (m_ogc) {
+        watch.restart();
+        m_ogc->project(positions, m_previous_positions, inverse_masses,
+                       material.self_static_friction, material.self_kinetic_friction);
+        // Vertices held back in the prediction or here (a vertex held back in both counts twice).
+        m_substep_truncated += truncate_all(m_ogc_from, positions, inverse_masses);
+        m_step_truncated += m_substep_truncated;
+        solve_ms += watch.elapsed_ms();
+    } else if (m_self_collision) {
         m_self_collision->project(positions, m_previous_positions, inverse_masses, material, t_end,
                                   h);
     }
@@ -285,6 +381,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         },
         VERTEX_GRAIN);
     solve_ms += watch.elapsed_ms();
+    if (m_ogc && needs_detection(m_substep_truncated)) {
+        detect(positions, velocities);
+    }
     return contacts;
 }
 
@@ -504,6 +603,10 @@ void XPBDStepper::save_state(ByteWriter& out) const {
     if (m_self_collision) {
         m_self_collision->save_state(out);
     }
+    out.put(m_ogc != nullptr);
+    if (m_ogc) {
+        m_ogc->save_state(out);
+    }
 }
 
 void XPBDStepper::load_state(const ClothModel& model, ByteReader& in) {
@@ -539,6 +642,17 @@ void XPBDStepper::load_state(const ClothModel& model, ByteReader& in) {
         m_self_collision = std::make_unique<SelfCollision>(model.triangles(), model.num_vertices(),
                                                            model.material().thickness);
         m_self_collision->load_state(in);
+    }
+    const bool has_ogc = in.get_bool("stepper.has_ogc");
+    if (has_ogc != (m_ogc != nullptr)) {
+        throw InvalidInput(fmt::format("{}: cloth stepper: ogc contact {} in the state, {} here",
+                                       in.source(), has_ogc ? "on" : "off", m_ogc ? "on" : "off"));
+    }
+    if (m_ogc) {
+        m_ogc =
+            std::make_unique<OgcContact>(model.triangles(), model.num_vertices(), m_ogc->options(),
+                                         m_ogc->radius(), OGC_UNUSED_STIFFNESS);
+        m_ogc->load_state(in);
     }
 }
 

@@ -31,6 +31,21 @@
 //      (obstacles.hpp: at the velocity level, friction never cancels a constraint's correction,
 //      which positional friction does, locking stretched cloth on a rough surface); then v *=
 //      max(0, 1 - damping h).
+// With OGC contact (set_ogc; ogc_contact.hpp: Offset Geometric Contact, Chen et al., SIGGRAPH
+// 2025), self-collision is instead: a detection (pairs within the query radius, their separating
+// planes, each vertex's conservative bound) before a substep without one; after 1, the frame
+// shift from the prediction and every free vertex's move truncated to its bound; after 4, every
+// detected pair closer than the contact radius pushed apart to it (OgcContact::project, with the
+// self-friction), then every free vertex's move since the truncated prediction truncated again;
+// after 5, a detection when the vertices held back in the substep's two truncations (a vertex
+// held back in both counts twice) exceed redetect_share of the free vertices. Every vertex stays in
+// its feasible set between detections, so the cloth stays intersection-free for any motion the
+// substeps make, with no gather and no per-window fail-safe: the cost follows how far the cloth
+// moves, not the substep count. With ogc.audit the CCD fail-safe (ccd_fail_safe.hpp) runs as an
+// audit and a fail-safe over windows that end at every detection and at the step's end (its stats:
+// ccd_pairs, ccd_hits, reverted_vertices); a vertex it puts back at the step's end makes the next
+// substep detect first.
+//
 // Constraints of a kind are projected colour by colour (constraint_coloring.hpp), each colour in
 // parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads. The
 // projections are the kernels of detail/constraint_kernels.hpp (four constraints at a time with
@@ -60,6 +75,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -67,6 +83,7 @@
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
+#include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/strain_hierarchy.hpp"
 #include "pliant/cloth/stretch_chains.hpp"
@@ -118,6 +135,12 @@ public:
     // thickness exceeds 4 median edge lengths (every triangle within reach of hundreds).
     void enable_self_collision(const ClothModel& model, bool enabled);
     bool has_self_collision() const { return m_self_collision != nullptr; }
+    // Self-contact by Offset Geometric Contact instead of the proximity constraints and gathers
+    // (the header's "With OGC contact") while self-collision is on; nullopt: the proximity path.
+    // InvalidInput for invalid options (OgcContact::check_options). Self-collision starts over.
+    void set_ogc(const ClothModel& model, const std::optional<OgcOptions>& options);
+    // The OGC contact (set_ogc with self-collision on), or null.
+    const OgcContact* ogc() const { return m_ogc.get(); }
 
     // Advances `model` (the one the stepper was built from) by dt seconds in `substeps` equal
     // substeps. InvalidInput: dt not finite and > 0, substeps < 1, a model of other vertex or
@@ -165,6 +188,18 @@ private:
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
+    // OGC: truncates every free vertex's move from `from` to x to its bound; returns the
+    // vertices held back.
+    std::int64_t truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
+                              std::span<const double> inverse_masses) const;
+    // OGC: whether `truncated` vertices held back call for a new detection.
+    bool needs_detection(std::int64_t truncated) const;
+    // OGC: the audit's window ends at x (ogc.audit; velocities of the vertices it puts back are
+    // set to zero), then a detection at x.
+    void detect(std::span<Vec3d> x, std::span<Vec3d> velocities);
+    // OGC: the CCD fail-safe over the motion from m_audit_start to x; returns whether it put any
+    // vertex back. The next window starts at x.
+    bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
 
     std::size_t m_num_vertices = 0;
     std::size_t m_num_triangles = 0;
@@ -211,6 +246,17 @@ private:
     // that steps of one window each gather at the same substeps as longer steps.
     double m_gather_start_time = 0.0;
     double m_gather_end_time = -std::numeric_limits<double>::infinity();  // none yet
+
+    // OGC contact (set_ogc): its options, the contact (with self-collision on), where the audit's
+    // window starts (the step's start or the last detection), the truncated prediction of the
+    // substep, the free vertices and the vertices held back in this step.
+    std::optional<OgcOptions> m_ogc_options;
+    std::unique_ptr<OgcContact> m_ogc;
+    std::vector<Vec3d> m_audit_start;
+    std::vector<Vec3d> m_ogc_from;
+    std::int64_t m_num_free = 0;
+    std::int64_t m_step_truncated = 0;
+    std::int64_t m_substep_truncated = 0;
 };
 
 }  // namespace pliant::cloth

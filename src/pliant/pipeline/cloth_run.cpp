@@ -163,6 +163,15 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
             w.put(o.audit);
         }
     }
+    if (scene.xpbd_ogc) {
+        const cloth::OgcOptions& o = *scene.xpbd_ogc;
+        w.put_string("xpbd ogc");
+        for (const double value :
+             {o.radius, o.query_factor, o.bound_share, o.redetect_share, o.stiffness}) {
+            w.put(value);
+        }
+        w.put(o.audit);
+    }
     for (const cloth::PinGroup& group : scene.pins) {
         w.put_vector(group.vertices);
         put_motion(group.motion);
@@ -549,7 +558,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"fps", scene.frames_per_second},
         {"substeps", scene.substeps},
         {"solver", scene.vbd ? "vbd" : "xpbd"},
-        {"contact", scene.vbd && scene.vbd->ogc ? "ogc" : "proximity"},
+        {"contact", (scene.vbd && scene.vbd->ogc) || scene.xpbd_ogc ? "ogc" : "proximity"},
         {"threads", num_threads()},
         {"initial_intersecting_pairs", initial_intersections},
         {"untangle", untangle_report(start)},

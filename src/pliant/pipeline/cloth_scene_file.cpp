@@ -757,8 +757,8 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
     }
     if (const Json* contact = root.find("contact")) {
         // "proximity" (the default), "ogc", or {"type": "ogc", "radius": r, "query_factor": q,
-        // "bound_share": g, "redetect_share": s, "stiffness": k} (cloth/ogc_contact.hpp); OGC
-        // needs the VBD solver.
+        // "bound_share": g, "redetect_share": s, "stiffness": k, "audit": b}
+        // (cloth/ogc_contact.hpp), for either solver.
         std::optional<cloth::OgcOptions> ogc;
         if (contact->is_object()) {
             root.object("contact", [&](ObjectReader& c) {
@@ -781,11 +781,10 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
         } else if (root.text("contact", "proximity", {"proximity", "ogc"}) == "ogc") {
             ogc = cloth::OgcOptions{};
         }
-        if (ogc) {
-            if (!scene.vbd) {
-                root.fail("contact", R"("solver": "vbd" with "contact": "ogc")", "the xpbd solver");
-            }
+        if (ogc && scene.vbd) {
             scene.vbd->ogc = ogc;
+        } else if (ogc) {
+            scene.xpbd_ogc = ogc;
         }
     }
     scene.gravity = root.vector("gravity", scene.gravity);

@@ -746,6 +746,8 @@ std::unique_ptr<cloth::ClothSolver> make_solver(const cloth::ClothScene& scene,
     solver->enable_self_collision(scene.self_collision);
     if (scene.vbd) {
         solver->use_vbd(*scene.vbd);
+    } else if (scene.xpbd_ogc) {
+        solver->use_xpbd_ogc(scene.xpbd_ogc);
     }
     return solver;
 }
