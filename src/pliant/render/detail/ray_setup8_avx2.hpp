@@ -124,7 +124,7 @@ PLIANT_AVX2_INLINE Rays8 begin_pixels8(const RayCastKernel& k, int x, int y) {
                                                          _mm256_and_ps(gd[1], abs_mask)),
                                            _mm256_and_ps(gd[2], abs_mask))));
     out.margin = _mm256_add_ps(_mm256_set1_ps(SKIP_MARGIN),
-                                        _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
+                               _mm256_mul_ps(magnitude, _mm256_set1_ps(1.0f / 262144.0f)));
     // begin_pixel(): N = max(1, ⌈length / Δs⌉) segments.
     out.length = _mm256_sub_ps(t_far, t_near);
     const __m256 segments = _mm256_ceil_ps(_mm256_div_ps(out.length, _mm256_set1_ps(k.step)));
