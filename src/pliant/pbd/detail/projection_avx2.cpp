@@ -304,23 +304,41 @@ PLIANT_AVX2_INLINE void tet_run_soa(const SoaPositions& p, const std::array<std:
     }
 }
 
-// Calls project_run(q, n, run, o) on the pieces of the runs covering constraints [b, e) of a
-// colour (indices within it): constraints q .. q + n of run `run`, from its (o)th.
-template <typename ProjectRun>
-PLIANT_AVX2_INLINE void for_run_pieces(const LatticeRuns& runs, std::int64_t b, std::int64_t e,
-                                       const ProjectRun& project_run) {
-    // The run holding constraint b (its begin is the last ≤ begin + b).
-    std::int64_t r =
-        std::upper_bound(runs.run_begins, runs.run_begins + runs.num_runs, runs.begin + b) -
-        runs.run_begins - 1;
-    for (std::int64_t q = b; q < e; ++r) {
+// The pieces of the runs covering constraints [b, e) of a colour (indices within it), in order:
+// constraints q .. q + n of run `run`, from its (o)th. Plain code (no intrinsics), so the AVX2
+// functions below inline it in every build (a lambda inside them would lack their target).
+struct RunPiece {
+    std::int64_t q = 0, n = 0, o = 0;
+    const LatticeRun* run = nullptr;
+};
+class RunPieces {
+public:
+    RunPieces(const LatticeRuns& runs, std::int64_t b, std::int64_t e)
+        : m_runs(runs),
+          m_q(b),
+          m_e(e),
+          // The run holding constraint b (its begin is the last ≤ begin + b).
+          m_r(std::upper_bound(runs.run_begins, runs.run_begins + runs.num_runs, runs.begin + b) -
+              runs.run_begins - 1) {}
+    bool next(RunPiece& piece) {
+        if (m_q >= m_e) {
+            return false;
+        }
         const std::int64_t run_end =
-            r + 1 < runs.num_runs ? runs.run_begins[r + 1] - runs.begin : runs.count;
-        const std::int64_t n = std::min(e, run_end) - q;
-        project_run(q, n, runs.runs[r], runs.begin + q - runs.runs[r].begin);
-        q += n;
+            m_r + 1 < m_runs.num_runs ? m_runs.run_begins[m_r + 1] - m_runs.begin : m_runs.count;
+        piece.q = m_q;
+        piece.n = std::min(m_e, run_end) - m_q;
+        piece.run = &m_runs.runs[m_r];
+        piece.o = m_runs.begin + m_q - m_runs.runs[m_r].begin;
+        m_q += piece.n;
+        ++m_r;
+        return true;
     }
-}
+
+private:
+    const LatticeRuns& m_runs;
+    std::int64_t m_q, m_e, m_r;
+};
 
 }  // namespace
 
@@ -330,11 +348,11 @@ PLIANT_AVX2_FN void project_edge_runs_soa_avx2(const SoaPositions& p, const Latt
                                                float alpha) {
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
     const __m256 alpha8 = _mm256_set1_ps(alpha);
-    for_run_pieces(runs, b, e,
-                   [&](std::int64_t q, std::int64_t n, const LatticeRun& run, std::int64_t o) {
-                       edge_run_soa(p, run.first[0] + o, run.first[1] + o, rest_lengths + q, n,
-                                    inv_k8, alpha8);
-                   });
+    RunPieces pieces(runs, b, e);
+    for (RunPiece c; pieces.next(c);) {
+        edge_run_soa(p, c.run->first[0] + c.o, c.run->first[1] + c.o, rest_lengths + c.q, c.n,
+                     inv_k8, alpha8);
+    }
 }
 
 PLIANT_AVX2_FN void project_tet_runs_soa_avx2(const SoaPositions& p, const LatticeRuns& runs,
@@ -344,12 +362,12 @@ PLIANT_AVX2_FN void project_tet_runs_soa_avx2(const SoaPositions& p, const Latti
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
     const __m256 alpha8 = _mm256_set1_ps(alpha);
     std::int64_t flagged = 0;  // a local: the stores may alias num_at_risk
-    for_run_pieces(
-        runs, b, e, [&](std::int64_t q, std::int64_t n, const LatticeRun& run, std::int64_t o) {
-            const std::array<std::int64_t, 4> first{run.first[0] + o, run.first[1] + o,
-                                                    run.first[2] + o, run.first[3] + o};
-            tet_run_soa(p, first, rest_volumes + q, at_risk + q, n, inv_k8, alpha8, flagged);
-        });
+    RunPieces pieces(runs, b, e);
+    for (RunPiece c; pieces.next(c);) {
+        const std::array<std::int64_t, 4> first{c.run->first[0] + c.o, c.run->first[1] + c.o,
+                                                c.run->first[2] + c.o, c.run->first[3] + c.o};
+        tet_run_soa(p, first, rest_volumes + c.q, at_risk + c.q, c.n, inv_k8, alpha8, flagged);
+    }
     num_at_risk += flagged;
 }
 
