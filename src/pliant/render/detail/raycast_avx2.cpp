@@ -199,9 +199,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
         const Accumulated c{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
         if (c.a > k.threshold) {
             // Opaque: end_composite() adds the background behind, no last segment.
-            const float rest = 1.0f - c.a;
-            colors[slots.pixel_of[l]] = {c.r + rest * k.background.r, c.g + rest * k.background.g,
-                                         c.b + rest * k.background.b};
+            colors[slots.pixel_of[l]] = over_background(k, c);
         } else {
             colors[slots.pixel_of[l]] =
                 end_composite<IS_RGBA>(k, pixel_ray_of(t, slots.pixel_of[l]), c, lane_samples);
