@@ -1,5 +1,5 @@
-// A scene and checks shared by the OGC contact tests of the VBD stepper (ogc_contact_test.cpp)
-// and of the XPBD stepper (xpbd_ogc_test.cpp).
+// A scene and checks shared by the cloth solver tests: the OGC contact tests of the VBD stepper
+// (ogc_contact_test.cpp) and of the XPBD stepper (xpbd_ogc_test.cpp), and vbd_stepper_test.cpp.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -52,12 +52,12 @@ std::vector<Vec3d> positions_after_8_frames(const Make& make, int threads, int s
     return {solver->positions().begin(), solver->positions().end()};
 }
 
-// make()'s solver run 4 frames, its state saved and loaded into a second one, then both run 6
-// more frames (`substeps` substeps each): positions and velocities equal bit for bit.
+// make()'s solver run `frames_before` frames, its state saved and loaded into a second one, then
+// both run 6 more frames (`substeps` substeps each): positions and velocities equal bit for bit.
 template <class Make>
-void expect_saved_state_continues_bit_for_bit(const Make& make, int substeps) {
+void expect_saved_state_continues_bit_for_bit(const Make& make, int frames_before, int substeps) {
     auto a = make();
-    for (int f = 0; f < 4; ++f) {
+    for (int f = 0; f < frames_before; ++f) {
         a->step(1.0 / 24.0, substeps);
     }
     ByteWriter out;
