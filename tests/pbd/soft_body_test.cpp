@@ -526,6 +526,18 @@ std::vector<Vec3f> reference_steps(const SoftBody& body, std::vector<Vec3f> x, s
     return x;
 }
 
+// body (fresh from grid) given `velocities` and stepped twice at 1 / FPS; returns the plain
+// method's positions for the same two steps (reference_steps()).
+std::vector<Vec3f> step_twice_beside_reference(SoftBody& body, const TetGrid& grid,
+                                               const std::vector<Vec3f>& velocities) {
+    body.set_velocities(velocities);
+    std::vector<Vec3f> expected =
+        reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
+    body.step(1.0 / FPS);
+    body.step(1.0 / FPS);
+    return expected;
+}
+
 TEST(SoftBody, MatchesThePlainColourByColourMethodBitwise) {
     // The solver's SIMD kernels, lattice runs, layer-blocked sweep, fused vertex passes and
     // inversion guard against the plain method: a grid of 6 × 5 × 11 cells (slabs, runs,
@@ -541,11 +553,7 @@ TEST(SoftBody, MatchesThePlainColourByColourMethodBitwise) {
         for (const int threads : {1, 2}) {
             set_num_threads(threads);
             SoftBody body(grid, {.stiffness = 0.8, .substeps = 3, .gravity = {0.0, -9.81, 0.0}});
-            body.set_velocities(velocities);
-            const std::vector<Vec3f> expected =
-                reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
-            body.step(1.0 / FPS);
-            body.step(1.0 / FPS);
+            const std::vector<Vec3f> expected = step_twice_beside_reference(body, grid, velocities);
             EXPECT_EQ(count_differing(expected, body.positions()), 0u)
                 << threads << " threads, speeds up to " << max_speed;
             EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
@@ -572,11 +580,8 @@ TEST(SoftBody, MatchesThePlainMethodBitwiseWithoutAFullBox) {
                 set_num_threads(threads);
                 pliant::allow_avx2(avx2);
                 SoftBody body(grid, {.stiffness = 0.8, .substeps = 3});
-                body.set_velocities(velocities);
                 const std::vector<Vec3f> expected =
-                    reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
-                body.step(1.0 / FPS);
-                body.step(1.0 / FPS);
+                    step_twice_beside_reference(body, grid, velocities);
                 EXPECT_EQ(count_differing(expected, body.positions()), 0u)
                     << threads << " threads, AVX2 " << avx2 << ", speeds up to " << max_speed;
                 EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
