@@ -2,14 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <random>
 #include <vector>
 
+#include "cloth/solver_checks.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/core/error.hpp"
-#include "pliant/core/parallel.hpp"
 #include "support/sheets.hpp"
 
 namespace pliant::cloth {
@@ -99,26 +100,9 @@ VBDOptions ogc_options() {
     return options;
 }
 
-// Two sheets 2 cm apart on a plane (the lower one at the thickness above it), the upper one thrown
-// down at 2 m/s, and gravity.
+// colliding_sheets() with VBD and OGC contact.
 std::unique_ptr<ClothSolver> colliding_sheets(int n) {
-    geometry::TriangleMeshD mesh = test::flat_sheet(n, 0.5, 0.005);
-    const geometry::TriangleMeshD upper = test::flat_sheet(n, 0.5, 0.025);
-    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
-    for (const Vec3d& p : upper.positions) {
-        mesh.positions.push_back(p + Vec3d{0.013, 0.007, 0.0});
-    }
-    for (const geometry::Triangle& t : upper.triangles) {
-        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    }
-    auto solver = std::make_unique<ClothSolver>(mesh, ClothMaterial{});
-    solver->add_obstacle(PlaneObstacle{{0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}});
-    std::vector<Vec3d> velocities(mesh.positions.size());
-    for (std::size_t v = static_cast<std::size_t>(offset); v < velocities.size(); ++v) {
-        velocities[v] = {0.0, 0.0, -2.0};
-    }
-    solver->set_velocities(velocities);
-    solver->enable_self_collision(true);
+    auto solver = test::colliding_sheets(n);
     solver->use_vbd(ogc_options());
     return solver;
 }
@@ -155,36 +139,15 @@ TEST(OgcContact, SettledSheetDetectsLessThanOncePerSubstep) {
 }
 
 TEST(OgcContact, BitwiseIdenticalForOneAndTwoThreads) {
-    const auto run = [&](int threads) {
-        set_num_threads(threads);
-        auto solver = colliding_sheets(12);
-        for (int f = 0; f < 8; ++f) {
-            solver->step(1.0 / 24.0, 6);
-        }
-        set_num_threads(0);
-        return std::vector<Vec3d>(solver->positions().begin(), solver->positions().end());
+    const auto make = [] {
+        return colliding_sheets(12);
     };
-    EXPECT_EQ(run(1), run(2));
+    EXPECT_EQ(test::positions_after_8_frames(make, 1, 6),
+              test::positions_after_8_frames(make, 2, 6));
 }
 
 TEST(OgcContact, SavedStateContinuesBitForBit) {
-    auto a = colliding_sheets(10);
-    for (int f = 0; f < 4; ++f) {
-        a->step(1.0 / 24.0, 6);
-    }
-    ByteWriter out;
-    a->save_state(out);
-    auto b = colliding_sheets(10);
-    ByteReader in(out.bytes(), "state");
-    b->load_state(in);
-    for (int f = 0; f < 6; ++f) {
-        a->step(1.0 / 24.0, 6);
-        b->step(1.0 / 24.0, 6);
-    }
-    for (std::size_t v = 0; v < a->positions().size(); ++v) {
-        ASSERT_EQ(a->positions()[v], b->positions()[v]) << v;
-        ASSERT_EQ(a->velocities()[v], b->velocities()[v]) << v;
-    }
+    test::expect_saved_state_continues_bit_for_bit([] { return colliding_sheets(10); }, 4, 6);
 }
 
 }  // namespace

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <vector>
 
+#include "cloth/solver_checks.hpp"
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/error.hpp"
@@ -71,8 +73,8 @@ double gradient_norm(const ClothModel& model, const std::vector<Vec3d>& y, doubl
 }
 
 TEST(VBDStepper, SweepsDescendToTheImplicitEulerSolution) {
-    // A sheet pinned along one side starts falling: one substep's sweeps must drive the gradient
-    // of the incremental potential toward zero (bending made negligible).
+    // A sheet pinned along one side starts falling: one substep's sweeps must drive the
+    // gradient of the incremental potential toward zero (bending made negligible).
     ClothMaterial material;
     material.damping = 0.0;
     material.stretch_compliance = 1e-3;  // k = 1000 N/m
@@ -133,8 +135,8 @@ TEST(VBDStepper, ChebyshevAccelerationConvergesToTheSameSolution) {
         return d;
     };
     const std::vector<Vec3d> solution = run(4000, 0.0);
-    // (Whether it converges faster depends on the problem: on the drape it does, on this hanging
-    // corner not; docs/performance.md.)
+    // (Whether it converges faster depends on the problem: on the drape it does, on this
+    // hanging corner not; docs/performance.md.)
     EXPECT_LT(distance(run(3000, 0.9), solution), 1e-6);
     EXPECT_GT(distance(run(10, 0.9), solution), 1e-4);
 }
@@ -193,23 +195,7 @@ TEST(VBDStepper, SavedStateContinuesBitForBit) {
         solver->use_vbd(VBDOptions{});
         return solver;
     };
-    auto a = make();
-    for (int f = 0; f < 10; ++f) {
-        a->step(1.0 / 24.0, 6);
-    }
-    ByteWriter out;
-    a->save_state(out);
-    auto b = make();
-    ByteReader in(out.bytes(), "state");
-    b->load_state(in);
-    for (int f = 0; f < 6; ++f) {
-        a->step(1.0 / 24.0, 6);
-        b->step(1.0 / 24.0, 6);
-    }
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-        ASSERT_EQ(a->positions()[v], b->positions()[v]) << v;
-        ASSERT_EQ(a->velocities()[v], b->velocities()[v]) << v;
-    }
+    test::expect_saved_state_continues_bit_for_bit(make, 10, 6);
 }
 
 TEST(VBDStepper, RejectsBadOptionsAndModels) {

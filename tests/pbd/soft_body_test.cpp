@@ -9,7 +9,9 @@
 #include <cstring>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
@@ -53,6 +55,26 @@ double kinetic_energy_per_mass(const SoftBody& body) {
         sum += 0.5 * squared_norm(vec3_cast<double>(v));
     }
     return sum / static_cast<double>(body.velocities().size());
+}
+
+// How many of the positions a[i], b[i] (a.size() ≤ b.size()) differ bitwise.
+std::size_t count_differing(std::span<const Vec3f> a, std::span<const Vec3f> b) {
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        differing += std::memcmp(&a[i], &b[i], sizeof(Vec3f)) != 0 ? 1 : 0;
+    }
+    return differing;
+}
+
+// n velocities, each component uniform in [−max_speed, max_speed] from std::mt19937(seed).
+std::vector<Vec3f> random_velocities(std::size_t n, float max_speed, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> speed(-max_speed, max_speed);
+    std::vector<Vec3f> velocities(n);
+    for (Vec3f& v : velocities) {
+        v = {speed(rng), speed(rng), speed(rng)};
+    }
+    return velocities;
 }
 
 TEST(SoftBody, RestBodyStaysAtRest) {
@@ -393,12 +415,9 @@ TEST(SoftBody, OneAndTwoThreadsAreBitwiseIdentical) {
             const std::vector<Vec3f> one = run_threads(1, use_grid, ball);
             const std::vector<Vec3f> two = run_threads(2, use_grid, ball);
             ASSERT_EQ(one.size(), two.size());
-            std::size_t differing = 0;
-            for (std::size_t i = 0; i < one.size(); ++i) {
-                differing += std::memcmp(&one[i], &two[i], sizeof(Vec3f)) != 0 ? 1 : 0;
-            }
-            EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring")
-                                     << (ball ? ", ball" : ", full box");
+            EXPECT_EQ(count_differing(one, two), 0u)
+                << (use_grid ? "grid colouring" : "greedy colouring")
+                << (ball ? ", ball" : ", full box");
         }
     }
 }
@@ -414,12 +433,9 @@ TEST(SoftBody, AVX2AndSSEKernelsAreBitwiseIdentical) {
             const std::vector<Vec3f> sse = run_threads(2, use_grid, ball);
             pliant::allow_avx2(true);
             ASSERT_EQ(avx2.size(), sse.size());
-            std::size_t differing = 0;
-            for (std::size_t i = 0; i < avx2.size(); ++i) {
-                differing += std::memcmp(&avx2[i], &sse[i], sizeof(Vec3f)) != 0 ? 1 : 0;
-            }
-            EXPECT_EQ(differing, 0u) << (use_grid ? "grid colouring" : "greedy colouring")
-                                     << (ball ? ", ball" : ", full box");
+            EXPECT_EQ(count_differing(avx2, sse), 0u)
+                << (use_grid ? "grid colouring" : "greedy colouring")
+                << (ball ? ", ball" : ", full box");
         }
     }
 }
@@ -510,6 +526,18 @@ std::vector<Vec3f> reference_steps(const SoftBody& body, std::vector<Vec3f> x, s
     return x;
 }
 
+// body (fresh from grid) given `velocities` and stepped twice at 1 / FPS; returns the plain
+// method's positions for the same two steps (reference_steps()).
+std::vector<Vec3f> step_twice_beside_reference(SoftBody& body, const TetGrid& grid,
+                                               const std::vector<Vec3f>& velocities) {
+    body.set_velocities(velocities);
+    std::vector<Vec3f> expected =
+        reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
+    body.step(1.0 / FPS);
+    body.step(1.0 / FPS);
+    return expected;
+}
+
 TEST(SoftBody, MatchesThePlainColourByColourMethodBitwise) {
     // The solver's SIMD kernels, lattice runs, layer-blocked sweep, fused vertex passes and
     // inversion guard against the plain method: a grid of 6 × 5 × 11 cells (slabs, runs,
@@ -520,26 +548,14 @@ TEST(SoftBody, MatchesThePlainColourByColourMethodBitwise) {
                                                         {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
     const TetGrid grid = build_tet_grid(vol, {.cell_voxels = 2, .full_box = true});
     for (const float max_speed : {3.0f, 60.0f}) {
-        std::mt19937 rng(11);
-        std::uniform_real_distribution<float> speed(-max_speed, max_speed);
-        std::vector<Vec3f> velocities(grid.mesh.num_vertices());
-        for (Vec3f& v : velocities) {
-            v = {speed(rng), speed(rng), speed(rng)};
-        }
+        const std::vector<Vec3f> velocities =
+            random_velocities(grid.mesh.num_vertices(), max_speed, 11);
         for (const int threads : {1, 2}) {
             set_num_threads(threads);
             SoftBody body(grid, {.stiffness = 0.8, .substeps = 3, .gravity = {0.0, -9.81, 0.0}});
-            body.set_velocities(velocities);
-            const std::vector<Vec3f> expected =
-                reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
-            body.step(1.0 / FPS);
-            body.step(1.0 / FPS);
-            std::size_t differing = 0;
-            for (std::size_t i = 0; i < expected.size(); ++i) {
-                differing +=
-                    std::memcmp(&expected[i], &body.positions()[i], sizeof(Vec3f)) != 0 ? 1 : 0;
-            }
-            EXPECT_EQ(differing, 0u) << threads << " threads, speeds up to " << max_speed;
+            const std::vector<Vec3f> expected = step_twice_beside_reference(body, grid, velocities);
+            EXPECT_EQ(count_differing(expected, body.positions()), 0u)
+                << threads << " threads, speeds up to " << max_speed;
             EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
             const std::vector<Vec3f> unguarded =
                 reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS, false);
@@ -557,28 +573,16 @@ TEST(SoftBody, MatchesThePlainMethodBitwiseWithoutAFullBox) {
     // at 60 units/s the guard acts.
     const TetGrid grid = test::ball_tet_grid({40, 36, 30}, false);
     for (const float max_speed : {3.0f, 60.0f}) {
-        std::mt19937 rng(5);
-        std::uniform_real_distribution<float> speed(-max_speed, max_speed);
-        std::vector<Vec3f> velocities(grid.mesh.num_vertices());
-        for (Vec3f& v : velocities) {
-            v = {speed(rng), speed(rng), speed(rng)};
-        }
+        const std::vector<Vec3f> velocities =
+            random_velocities(grid.mesh.num_vertices(), max_speed, 5);
         for (const int threads : {1, 2}) {
             for (const bool avx2 : {true, false}) {
                 set_num_threads(threads);
                 pliant::allow_avx2(avx2);
                 SoftBody body(grid, {.stiffness = 0.8, .substeps = 3});
-                body.set_velocities(velocities);
                 const std::vector<Vec3f> expected =
-                    reference_steps(body, grid.mesh.positions, velocities, 2, 1.0 / FPS);
-                body.step(1.0 / FPS);
-                body.step(1.0 / FPS);
-                std::size_t differing = 0;
-                for (std::size_t i = 0; i < expected.size(); ++i) {
-                    differing +=
-                        std::memcmp(&expected[i], &body.positions()[i], sizeof(Vec3f)) != 0 ? 1 : 0;
-                }
-                EXPECT_EQ(differing, 0u)
+                    step_twice_beside_reference(body, grid, velocities);
+                EXPECT_EQ(count_differing(expected, body.positions()), 0u)
                     << threads << " threads, AVX2 " << avx2 << ", speeds up to " << max_speed;
                 EXPECT_GT(mean_edge_strain(body), 1e-3);  // it moved
             }

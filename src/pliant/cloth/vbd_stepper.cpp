@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pliant/cloth/detail/ogc_step.hpp"
 #include "pliant/cloth/detail/stepper_checks.hpp"
 #include "pliant/cloth/detail/sym3.hpp"
 #include "pliant/cloth/dihedral.hpp"
@@ -214,13 +215,10 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     model.begin_step(dt);
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
-    const std::int64_t detections_before = m_ogc ? m_ogc->detections() : 0;
-    const double detect_ms_before = m_ogc ? m_ogc->detect_ms() : 0.0;
+    detail::OgcStepStart ogc_start;
     if (m_ogc) {
-        m_audit_start.assign(positions.begin(), positions.end());
-        const std::span<const double> inverse_masses = model.inverse_masses();
-        m_num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
-                                   [](double w) { return w > 0.0; });
+        ogc_start = detail::begin_ogc_step(*m_ogc, positions, model.inverse_masses(), m_audit_start,
+                                           m_num_free);
         m_step_truncated = 0;
     }
     m_step_swept = 0;
@@ -253,12 +251,7 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
         if (m_options.ogc->audit && audit(positions, velocities)) {
             m_ogc->invalidate();
         }
-        stats.has_ogc = true;
-        stats.ogc_detections = m_ogc->detections() - detections_before;
-        stats.ogc_detect_ms = m_ogc->detect_ms() - detect_ms_before;
-        stats.ogc_truncated = m_step_truncated;
-        stats.ogc_pairs = static_cast<std::int64_t>(m_ogc->num_pairs());
-        stats.ogc_close_pairs = m_ogc->close_pairs();
+        detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, stats);
     }
     model.end_step();
     if (m_self_collision) {
@@ -476,10 +469,7 @@ void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
 }
 
 bool VBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
-    const std::int64_t reverted = m_self_collision->stats().reverted_vertices;
-    m_self_collision->enforce(m_audit_start, x, velocities);
-    m_audit_start.assign(x.begin(), x.end());
-    return m_self_collision->stats().reverted_vertices != reverted;
+    return detail::audit_ogc_window(*m_self_collision, m_audit_start, x, velocities);
 }
 
 void VBDStepper::detect(std::span<Vec3d> x) {

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/cloth/detail/ogc_step.hpp"
 #include "pliant/cloth/detail/stepper_checks.hpp"
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/cloth/isometric_bending.hpp"
@@ -205,10 +206,7 @@ bool XPBDStepper::needs_detection(std::int64_t truncated) const {
 }
 
 bool XPBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
-    const std::int64_t reverted = m_self_collision->stats().reverted_vertices;
-    m_self_collision->enforce(m_audit_start, x, velocities);
-    m_audit_start.assign(x.begin(), x.end());
-    return m_self_collision->stats().reverted_vertices != reverted;
+    return detail::audit_ogc_window(*m_self_collision, m_audit_start, x, velocities);
 }
 
 void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
@@ -239,13 +237,10 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
     model.begin_step(dt);
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
-    const std::int64_t detections_before = m_ogc ? m_ogc->detections() : 0;
-    const double detect_ms_before = m_ogc ? m_ogc->detect_ms() : 0.0;
+    detail::OgcStepStart ogc_start;
     if (m_ogc) {
-        m_audit_start.assign(positions.begin(), positions.end());
-        const std::span<const double> inverse_masses = model.inverse_masses();
-        m_num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
-                                   [](double w) { return w > 0.0; });
+        ogc_start = detail::begin_ogc_step(*m_ogc, positions, model.inverse_masses(), m_audit_start,
+                                           m_num_free);
         m_step_truncated = 0;
     }
     for (int s = 0; s < substeps; ++s) {
@@ -284,12 +279,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         if (m_ogc->options().audit && audit(positions, velocities)) {
             m_ogc->invalidate();
         }
-        stats.has_ogc = true;
-        stats.ogc_detections = m_ogc->detections() - detections_before;
-        stats.ogc_detect_ms = m_ogc->detect_ms() - detect_ms_before;
-        stats.ogc_truncated = m_step_truncated;
-        stats.ogc_pairs = static_cast<std::int64_t>(m_ogc->num_pairs());
-        stats.ogc_close_pairs = m_ogc->close_pairs();
+        detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, stats);
     }
     model.end_step();
     if (m_self_collision) {

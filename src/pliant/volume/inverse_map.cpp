@@ -202,6 +202,18 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
         deformed_grid[i] = grid_coordinate(deformed_positions[i], tf);
         rest_grid[i] = grid_coordinate(rest_positions[i], sf);
     });
+    // Node (x, y, z) in target grid coordinates.
+    const auto node_at = [b](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return Vec3d{static_cast<double>(x) * b, static_cast<double>(y) * b,
+                     static_cast<double>(z) * b};
+    };
+    // The map of tet t (its deformed frame and rest part).
+    const auto map_of = [&](std::int32_t t) {
+        const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
+        Vec3d p[4];
+        tet_vertices(tet, deformed_grid, p);
+        return tet_map(tet, rest_grid, p);
+    };
 
     // 1. Inside nodes: the highest index of the tets holding a node wins, a rule independent of
     // the order tets are visited in. (a) Every tet, in parallel, raises the holder of each node it
@@ -234,9 +246,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                 for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
                     for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
                         double l[3];
-                        const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
-                                         static_cast<double>(z) * b};
-                        if (!(m.lambda(node, l) >= -1e-9)) {
+                        if (!(m.lambda(node_at(x, y, z), l) >= -1e-9)) {
                             continue;
                         }
                         std::atomic_ref<std::int32_t> h(
@@ -261,14 +271,9 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                     if (t < 0) {
                         continue;
                     }
-                    const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-                    Vec3d p[4];
-                    tet_vertices(tet, deformed_grid, p);
-                    const TetMap m = tet_map(tet, rest_grid, p);
+                    const TetMap m = map_of(t);
                     double l[3];
-                    const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
-                                     static_cast<double>(z) * b};
-                    m.lambda(node, l);
+                    m.lambda(node_at(x, y, z), l);
                     store(q, m.rest(l));
                 }
             }
@@ -287,8 +292,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                     if (holder[static_cast<std::size_t>(q)] >= 0) {
                         continue;
                     }
-                    const Vec3d node{static_cast<double>(x) * b, static_cast<double>(y) * b,
-                                     static_cast<double>(z) * b};
+                    const Vec3d node = node_at(x, y, z);
                     double best = -std::numeric_limits<double>::infinity();
                     Vec3d best_rest{};
                     for (std::int64_t cz = std::max<std::int64_t>(0, z - 1);
@@ -302,10 +306,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                                 if (t < 0) {
                                     continue;
                                 }
-                                const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-                                Vec3d p[4];
-                                tet_vertices(tet, deformed_grid, p);
-                                const TetMap m = tet_map(tet, rest_grid, p);
+                                const TetMap m = map_of(t);
                                 double l[3];
                                 const double score = m.lambda(node, l);
                                 if (score > best) {

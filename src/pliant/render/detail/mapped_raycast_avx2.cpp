@@ -6,6 +6,7 @@
 
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/detail/grid8_avx2.hpp"
+#include "pliant/render/detail/lanes8_avx2.hpp"
 #include "pliant/render/detail/ray_setup8_avx2.hpp"
 
 namespace pliant::render::detail {
@@ -18,22 +19,9 @@ constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
 // Rays with this many full samples or more are marched by the scalar kernel (int32 counters).
 constexpr std::int64_t MAX_LANE_SAMPLES = std::int64_t{1} << 30;
 
-// The march state of 8 rays, one per lane (structure of arrays, reloaded every iteration: a lane
-// is refilled by scalar stores).
-struct alignas(32) MapLanes {
-    float dir[3][LANES];  // world direction (shading)
-    float go[3][LANES];
-    float gd[3][LANES];
-    float inv_gd[3][LANES];
-    float t_near[LANES], t_far[LANES], margin[LANES];
-    float cr[LANES], cg[LANES], cb[LANES], acc[LANES];
-    std::int32_t n[LANES], num_full[LANES], samples[LANES];
-    // Offset of the lane's octant in the empty cubes (octant · cells), and of the up to 3 more
-    // octants of a ray with zero direction components (the octant's own when there are fewer).
-    std::int32_t cube[LANES];
-    std::int32_t more[3][LANES];
-    // The source coordinate of the lane's last classified sample and its index (−2: none), for
-    // the prefetch of the sample after next.
+// The march state of 8 rays (Lanes) and, per lane, the source coordinate of the lane's last
+// classified sample and its index (−2: none), for the prefetch of the sample after next.
+struct alignas(32) MapLanes : Lanes {
     float last_g[3][LANES];
     std::int32_t last_n[LANES];
 };
@@ -59,31 +47,13 @@ void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
     for (auto& m : s.more) {
         m[l] = s.cube[l];
     }
-    const int zero = zero_axes_of(p.r);
-    int num_more = 0;
-    for (int flip = 1; flip < 8; ++flip) {
-        if ((flip & ~zero) == 0 && num_more < 3) {
-            s.more[num_more++][l] = (octant ^ flip) * num_cells;
-        }
-    }
+    set_more_octants(s, l, octant, zero_axes_of(p.r), num_cells);
 }
 
-// An idle lane: a ray at the grid's corner that marches nothing (its loads stay in bounds).
-void clear_lane(MapLanes& s, int l) {
-    for (int a = 0; a < 3; ++a) {
-        s.dir[a][l] = 0.0f;
-        s.go[a][l] = 0.0f;
-        s.gd[a][l] = 1.0f;
-        s.inv_gd[a][l] = 1.0f;
-    }
-    s.t_near[l] = s.t_far[l] = s.margin[l] = 0.0f;
-    s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
-    s.n[l] = s.num_full[l] = s.samples[l] = 0;
+// An idle lane (clear_lane()) with no classified sample.
+void clear_map_lane(MapLanes& s, int l) {
+    clear_lane(s, l);
     s.last_n[l] = -2;
-    s.cube[l] = 0;
-    for (auto& m : s.more) {
-        m[l] = 0;
-    }
 }
 
 // begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7 (begin_pixels8()), into out[l]. Returns bit
@@ -289,44 +259,6 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     }
 }
 
-// map_jump() for the lanes in `jumps` (empty cubes of `side` map cells at cells q): the first
-// sample past the cube's far planes (pulled in by the ray's margin); n_next for the others.
-PLIANT_AVX2_INLINE __m256i map_jump8(const MapLanes& s, const __m256i q[3], __m256i side, __m256 b,
-                                     __m256i jumps, __m256i n_next, __m256i num_full, __m256 t_near,
-                                     __m256 inv_step) {
-    const __m256 zero = _mm256_setzero_ps();
-    const __m256i one_i = _mm256_set1_epi32(1);
-    __m256 t_exit = load(s.t_far);
-    const __m256 margin = load(s.margin);
-    for (int a = 0; a < 3; ++a) {
-        const __m256 gd = load(s.gd[a]);
-        const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
-        const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
-        const __m256 plane_pos = _mm256_sub_ps(
-            _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(q[a], side)), b), margin);
-        const __m256 plane_neg = _mm256_add_ps(
-            _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_sub_epi32(q[a], side), one_i)),
-                          b),
-            margin);
-        const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
-        const __m256 candidate =
-            _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
-        t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
-                                  _mm256_or_ps(is_pos, is_neg));
-    }
-    const __m256 x =
-        _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), _mm256_set1_ps(0.5f));
-    const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
-    __m256i n_end = _mm256_cvttps_epi32(x);
-    // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
-    n_end =
-        _mm256_sub_epi32(n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
-    n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
-    n_end = _mm256_max_epi32(n_end, n_next);
-    n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
-    return as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
-}
-
 template <bool IS_RGBA, bool SHADING>
 PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, int x1, int y1,
                                         Color* colors) {
@@ -368,40 +300,26 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
 
     // 2. The queued rays in the 8 lanes, a lane taking the next ray as soon as its ray ends.
     MapLanes s;
-    int pixel_of[LANES];
-    int num_live = 0;    // lanes with a ray
-    int live_mask = 0;   // bit l: lane l has a ray
-    int more_count = 0;  // live lanes whose rays have zero direction components
-    int more_mask = 0;
-    int next = 0;
+    LaneSlots slots;
     const auto end_lane = [&](int l) {
         std::int64_t lane_samples = s.samples[l];
         const Accumulated c{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
-        colors[pixel_of[l]] = mapped_end<IS_RGBA>(m, rays[pixel_of[l]], c, lane_samples);
+        colors[slots.pixel_of[l]] =
+            mapped_end<IS_RGBA>(m, rays[slots.pixel_of[l]], c, lane_samples);
         samples += lane_samples;
     };
     const auto refill = [&](int l) {
-        if (next < queue_size) {
-            const int pixel = queue[next++];
+        if (slots.next < queue_size) {
+            const int pixel = queue[slots.next++];
             const PixelRay& p = rays[pixel];
             fill_lane(p, num_cells, s, l);
-            pixel_of[l] = pixel;
-            live_mask |= 1 << l;
-            ++num_live;
-            const bool has_more = zero_axes_of(p.r) != 0;
-            more_mask = has_more ? more_mask | (1 << l) : more_mask & ~(1 << l);
-            more_count += has_more ? 1 : 0;
+            slots.take(l, pixel, zero_axes_of(p.r) != 0);
             return;
         }
-        clear_lane(s, l);
+        clear_map_lane(s, l);
     };
     const auto release = [&](int l) {
-        live_mask &= ~(1 << l);
-        --num_live;
-        if ((more_mask & (1 << l)) != 0) {
-            more_mask &= ~(1 << l);
-            --more_count;
-        }
+        slots.free(l);
         refill(l);
     };
     for (int l = 0; l < LANES; ++l) {
@@ -411,7 +329,6 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     const __m256 step = _mm256_set1_ps(k.step);
     const __m256 inv_step = _mm256_set1_ps(k.inv_step);
     const __m256 half = _mm256_set1_ps(0.5f);
-    const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 zero = _mm256_setzero_ps();
     const __m256 threshold = _mm256_set1_ps(k.threshold);
     const __m256 b = _mm256_set1_ps(m.b);
@@ -429,11 +346,8 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     const std::uint8_t* cubes = m.empty_cube[0];
 
     // NOLINTNEXTLINE(bugprone-infinite-loop): the lambdas above retire lanes (num_live).
-    while (num_live > 0) {
-        const __m256i live =
-            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
-                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-                               _mm256_setzero_si256());
+    while (slots.num_live > 0) {
+        const __m256i live = lanes_of8(slots.live_mask);
         const __m256i n = load(s.n);
         const __m256i num_full = load(s.num_full);
         // sample_position(): go + (t_near + (n + 0.5)·Δs)·gd; locate_map(): the clamp to
@@ -456,18 +370,11 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         __m256i classified;
         alignas(32) std::int32_t at[LANES];
         if (k.skipping) {
-            store(at, _mm256_add_epi32(load(s.cube), cell));
-            __m256i side = load_bytes(cubes, at);
-            if (more_count > 0) {
-                for (auto& more : s.more) {
-                    store(at, _mm256_add_epi32(load(more), cell));
-                    side = _mm256_max_epi32(side, load_bytes(cubes, at));
-                }
-            }
+            const __m256i side = cube_side8(s, cubes, cubes, cell, slots.more_count > 0);
             const __m256i jumps =
                 _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
             if (_mm256_movemask_ps(as_float(jumps)) != 0) {
-                n_next = map_jump8(s, q, side, b, jumps, n_next, num_full, t_near, inv_step);
+                n_next = jump8(s, q, side, b, jumps, n_next, num_full, t_near, inv_step);
             }
             classified = _mm256_andnot_si256(jumps, live);
         } else {
@@ -517,19 +424,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
             // composite(): front to back, the samples with opacity.
             const __m256 blend =
                 _mm256_and_ps(as_float(classified), _mm256_cmp_ps(rgba[3], zero, _CMP_GT_OQ));
-            const __m256 acc = load(s.acc);
-            const __m256 w = _mm256_mul_ps(_mm256_sub_ps(one, acc), rgba[3]);
-            const __m256 cr = load(s.cr);
-            const __m256 cg = load(s.cg);
-            const __m256 cb = load(s.cb);
-            store(s.cr, _mm256_blendv_ps(cr, _mm256_add_ps(cr, _mm256_mul_ps(w, rgba[0])), blend));
-            store(s.cg, _mm256_blendv_ps(cg, _mm256_add_ps(cg, _mm256_mul_ps(w, rgba[1])), blend));
-            store(s.cb, _mm256_blendv_ps(cb, _mm256_add_ps(cb, _mm256_mul_ps(w, rgba[2])), blend));
-            const __m256 acc_next = _mm256_blendv_ps(acc, _mm256_add_ps(acc, w), blend);
-            store(s.acc, acc_next);
-            terminated =
-                as_int(_mm256_and_ps(blend, _mm256_cmp_ps(acc_next, threshold, _CMP_GT_OQ)));
-            store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
+            terminated = composite8(s, rgba, blend, classified, threshold);
         }
         store(s.n, n_next);
         // Done: opaque (accumulated opacity above the threshold), or no sample left.

@@ -181,15 +181,10 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
         if ((m.occupancy[cell.index] & need) != 0) {
             ++samples;
             const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
-            if (s.a > 0.0f) {
-                const float ratio = partial / k.step;
-                const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
-                composite(s, a, c.r, c.g, c.b, c.a);
-            }
+            composite_last(s, partial, k.step, c);
         }
     }
-    const float rest = 1.0f - c.a;
-    return {c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b};
+    return over_background(k, c);
 }
 
 // The march of a composite ray through the map (march_composite() through the map): its

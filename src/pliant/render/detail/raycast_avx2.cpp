@@ -7,6 +7,7 @@
 
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/render/detail/grid8_avx2.hpp"
+#include "pliant/render/detail/lanes8_avx2.hpp"
 #include "pliant/render/detail/ray_setup8_avx2.hpp"
 
 namespace pliant::render::detail {
@@ -16,23 +17,6 @@ namespace pliant::render::detail {
 namespace {
 
 constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
-
-// The march state of 8 rays, one per lane (structure of arrays, reloaded every iteration: a lane
-// is refilled by scalar stores).
-struct alignas(32) Lanes {
-    float dir[3][LANES];  // world direction (shading)
-    float go[3][LANES];
-    float gd[3][LANES];
-    float inv_gd[3][LANES];
-    float t_near[LANES], t_far[LANES], margin[LANES];
-    float cr[LANES], cg[LANES], cb[LANES], acc[LANES];
-    std::int32_t n[LANES], num_full[LANES], samples[LANES];
-    // Index of the lane's empty-cube byte for cell 0 in k.empty_cube[0] (octant · cells), and of
-    // the up to 3 more octants of a ray with zero direction components (the octant's own when
-    // there are fewer).
-    std::int32_t cube[LANES];
-    std::int32_t more[3][LANES];
-};
 
 // The rays of a tile's pixels (begin_pixel's results, by pixel index in the tile; 8 entries of
 // slack for the last group of a row), and the pixels whose rays have samples to march, in order.
@@ -149,29 +133,7 @@ void fill_lane(const TileRays& t, int pixel, std::int32_t start, std::int32_t nu
         const int octant = (gd[0] < 0.0f ? 1 : 0) | (gd[1] < 0.0f ? 2 : 0) | (gd[2] < 0.0f ? 4 : 0);
         const int zero =
             (gd[0] == 0.0f ? 1 : 0) | (gd[1] == 0.0f ? 2 : 0) | (gd[2] == 0.0f ? 4 : 0);
-        int num_more = 0;
-        for (int flip = 1; flip < 8; ++flip) {
-            if ((flip & ~zero) == 0 && num_more < 3) {
-                s.more[num_more++][l] = (octant ^ flip) * num_cells;
-            }
-        }
-    }
-}
-
-// An idle lane: a ray at the grid's corner that marches nothing (its loads stay in bounds).
-void clear_lane(Lanes& s, int l) {
-    for (int a = 0; a < 3; ++a) {
-        s.dir[a][l] = 0.0f;
-        s.go[a][l] = 0.0f;
-        s.gd[a][l] = 1.0f;
-        s.inv_gd[a][l] = 1.0f;
-    }
-    s.t_near[l] = s.t_far[l] = s.margin[l] = 0.0f;
-    s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
-    s.n[l] = s.num_full[l] = s.samples[l] = 0;
-    s.cube[l] = 0;
-    for (auto& m : s.more) {
-        m[l] = 0;
+        set_more_octants(s, l, octant, zero, num_cells);
     }
 }
 
@@ -216,46 +178,6 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, int first,
     return rays.hits | (rays.too_long << LANES);
 }
 
-// jump() for the lanes in `jumps` (empty cubes of `side` cells at cells cell_coord): the first
-// sample past the cube's far planes (pulled in by the ray's margin); n_next for the others.
-PLIANT_AVX2_INLINE __m256i jump8(const Lanes& s, const __m256i cell_coord[3], __m256i side,
-                                 __m256i jumps, __m256i n_next, __m256i num_full, __m256 t_near,
-                                 __m256 inv_step) {
-    const __m256 zero = _mm256_setzero_ps();
-    const __m256i one_i = _mm256_set1_epi32(1);
-    __m256 t_exit = load(s.t_far);
-    const __m256 margin = load(s.margin);
-    for (int a = 0; a < 3; ++a) {
-        const __m256 gd = load(s.gd[a]);
-        const __m256 is_pos = _mm256_cmp_ps(gd, zero, _CMP_GT_OQ);
-        const __m256 is_neg = _mm256_cmp_ps(gd, zero, _CMP_LT_OQ);
-        const __m256 plane_pos =
-            _mm256_sub_ps(_mm256_cvtepi32_ps(
-                              _mm256_slli_epi32(_mm256_add_epi32(cell_coord[a], side), CELL_SHIFT)),
-                          margin);
-        const __m256 plane_neg = _mm256_add_ps(
-            _mm256_cvtepi32_ps(_mm256_slli_epi32(
-                _mm256_add_epi32(_mm256_sub_epi32(cell_coord[a], side), one_i), CELL_SHIFT)),
-            margin);
-        const __m256 plane = _mm256_blendv_ps(plane_neg, plane_pos, is_pos);
-        const __m256 candidate =
-            _mm256_mul_ps(_mm256_sub_ps(plane, load(s.go[a])), load(s.inv_gd[a]));
-        t_exit = _mm256_blendv_ps(t_exit, _mm256_min_ps(candidate, t_exit),
-                                  _mm256_or_ps(is_pos, is_neg));
-    }
-    const __m256 x =
-        _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t_exit, t_near), inv_step), _mm256_set1_ps(0.5f));
-    const __m256 past_end = _mm256_cmp_ps(x, _mm256_cvtepi32_ps(num_full), _CMP_NLT_UQ);
-    __m256i n_end = _mm256_cvttps_epi32(x);
-    // n_end += (float(n_end) < x): subtracting the all-ones mask adds 1.
-    n_end =
-        _mm256_sub_epi32(n_end, as_int(_mm256_cmp_ps(_mm256_cvtepi32_ps(n_end), x, _CMP_LT_OQ)));
-    n_end = _mm256_and_si256(n_end, as_int(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
-    n_end = _mm256_max_epi32(n_end, n_next);
-    n_end = as_int(_mm256_blendv_ps(as_float(n_end), as_float(num_full), past_end));
-    return as_int(_mm256_blendv_ps(as_float(n_next), as_float(n_end), as_float(jumps)));
-}
-
 // Marches the rays of queue[0, queue_size) (pixels of t) in the 8 lanes, a lane taking the next
 // ray as soon as its ray ends. REACH: each ray from its first sample to its first sample to
 // classify (march_composite's skipping, the same jumps), whose index goes to t.start[pixel] and
@@ -270,50 +192,33 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     const auto num_cells =
         static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
     Lanes s;
-    int pixel_of[LANES];
-    int num_live = 0;    // lanes with a ray
-    int live_mask = 0;   // bit l: lane l has a ray
-    int more_count = 0;  // live lanes whose rays have zero direction components
-    int more_mask = 0;   // bit l: lane l's ray has zero direction components
-    int next = 0;        // next entry of the queue
+    LaneSlots slots;
     // Ends the ray of lane l, its march done, and writes its colour.
     const auto end_lane = [&](int l) {
         std::int64_t lane_samples = s.samples[l];
         const Accumulated c{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
         if (c.a > k.threshold) {
             // Opaque: end_composite() adds the background behind, no last segment.
-            const float rest = 1.0f - c.a;
-            colors[pixel_of[l]] = {c.r + rest * k.background.r, c.g + rest * k.background.g,
-                                   c.b + rest * k.background.b};
+            colors[slots.pixel_of[l]] = over_background(k, c);
         } else {
-            colors[pixel_of[l]] =
-                end_composite<IS_RGBA>(k, pixel_ray_of(t, pixel_of[l]), c, lane_samples);
+            colors[slots.pixel_of[l]] =
+                end_composite<IS_RGBA>(k, pixel_ray_of(t, slots.pixel_of[l]), c, lane_samples);
         }
         samples += lane_samples;
     };
     // Gives lane l the next queued ray, or clears it when none is left.
     const auto refill = [&](int l) {
-        if (next < queue_size) {
-            const int pixel = queue[next++];
+        if (slots.next < queue_size) {
+            const int pixel = queue[slots.next++];
             fill_lane(t, pixel, REACH ? 0 : t.start[pixel], num_cells, s, l);
-            pixel_of[l] = pixel;
-            live_mask |= 1 << l;
-            ++num_live;
-            const bool has_more = t.has_more[pixel] != 0;
-            more_mask = has_more ? more_mask | (1 << l) : more_mask & ~(1 << l);
-            more_count += has_more ? 1 : 0;
+            slots.take(l, pixel, t.has_more[pixel] != 0);
             return;
         }
         clear_lane(s, l);
     };
     // Frees lane l (its ray reached its first sample or ended) and refills it.
     const auto release = [&](int l) {
-        live_mask &= ~(1 << l);
-        --num_live;
-        if ((more_mask & (1 << l)) != 0) {
-            more_mask &= ~(1 << l);
-            --more_count;
-        }
+        slots.free(l);
         refill(l);
     };
     for (int l = 0; l < LANES; ++l) {
@@ -332,6 +237,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                                _mm256_set1_epi32(k.max_i0[2])};
     const __m256i cells_x = _mm256_set1_epi32(k.cells[0]);
     const __m256i cells_y = _mm256_set1_epi32(k.cells[1]);
+    const __m256 cell_size = _mm256_set1_ps(static_cast<float>(CELL));
     const __m256i stride_y = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[1]));
     const __m256i stride_z = _mm256_set1_epi32(static_cast<std::int32_t>(k.stride[2]));
     const __m256i one_i = _mm256_set1_epi32(1);
@@ -345,12 +251,9 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
     const float* lut = k.lut;
     const std::uint8_t* cubes = k.axis_cube != nullptr ? k.axis_cube : k.empty_cube[0];
 
-    // NOLINTNEXTLINE(bugprone-infinite-loop): the lambdas below retire lanes (num_live).
-    while (num_live > 0) {
-        const __m256i live =
-            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
-                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-                               _mm256_setzero_si256());
+    // NOLINTNEXTLINE(bugprone-infinite-loop): the lambdas above retire lanes (num_live).
+    while (slots.num_live > 0) {
+        const __m256i live = lanes_of8(slots.live_mask);
         const __m256i n = load(s.n);
         const __m256i num_full = load(s.num_full);
         // sample_position: go + (t_near + (n + 0.5)·Δs)·gd.
@@ -376,19 +279,12 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                 _mm256_mullo_epi32(
                     cells_x,
                     _mm256_add_epi32(cell_coord[1], _mm256_mullo_epi32(cells_y, cell_coord[2]))));
-            alignas(32) std::int32_t at[LANES];
-            store(at, _mm256_add_epi32(load(s.cube), cell));
-            __m256i side = load_bytes(cubes, at);
-            if (more_count > 0) {
-                for (auto& m : s.more) {
-                    store(at, _mm256_add_epi32(load(m), cell));
-                    side = _mm256_max_epi32(side, load_bytes(k.empty_cube[0], at));
-                }
-            }
+            const __m256i side = cube_side8(s, cubes, k.empty_cube[0], cell, slots.more_count > 0);
             const __m256i jumps =
                 _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
             if (_mm256_movemask_ps(as_float(jumps)) != 0) {
-                n_next = jump8(s, cell_coord, side, jumps, n_next, num_full, t_near, inv_step);
+                n_next = jump8(s, cell_coord, side, cell_size, jumps, n_next, num_full, t_near,
+                               inv_step);
             }
             // The sub-cell's occupancy bit, for the samples that do not jump.
             const __m256i bit = _mm256_or_si256(
@@ -397,6 +293,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                     _mm256_slli_epi32(_mm256_and_si256(_mm256_srli_epi32(corner[1], 1), one_i), 1),
                     _mm256_slli_epi32(_mm256_and_si256(_mm256_srli_epi32(corner[2], 1), one_i),
                                       2)));
+            alignas(32) std::int32_t at[LANES];
             store(at, cell);
             const __m256i sub = load_bytes(k.sub_occupied, at);
             const __m256i occupied = _mm256_cmpgt_epi32(
@@ -465,19 +362,7 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                     }
                 }
             }
-            const __m256 acc = load(s.acc);
-            const __m256 w = _mm256_mul_ps(_mm256_sub_ps(one, acc), alpha);
-            const __m256 cr = load(s.cr);
-            const __m256 cg = load(s.cg);
-            const __m256 cb = load(s.cb);
-            store(s.cr, _mm256_blendv_ps(cr, _mm256_add_ps(cr, _mm256_mul_ps(w, rgba[0])), blend));
-            store(s.cg, _mm256_blendv_ps(cg, _mm256_add_ps(cg, _mm256_mul_ps(w, rgba[1])), blend));
-            store(s.cb, _mm256_blendv_ps(cb, _mm256_add_ps(cb, _mm256_mul_ps(w, rgba[2])), blend));
-            const __m256 acc_next = _mm256_blendv_ps(acc, _mm256_add_ps(acc, w), blend);
-            store(s.acc, acc_next);
-            terminated =
-                as_int(_mm256_and_ps(blend, _mm256_cmp_ps(acc_next, threshold, _CMP_GT_OQ)));
-            store(s.samples, _mm256_sub_epi32(load(s.samples), classified));
+            terminated = composite8(s, rgba, blend, classified, threshold);
         }
         store(s.n, n_next);
         if constexpr (!REACH) {
@@ -523,8 +408,8 @@ PLIANT_AVX2_FN void march_lanes(const RayCastKernel& k, TileRays& t, const std::
                     if ((to_classify >> l & 1) != 0) {
                         prefetch_rows(v + CH * static_cast<std::int64_t>(index[l]), CH * dy,
                                       CH * dz);
-                        t.start[pixel_of[l]] = first[l];
-                        reached[num_reached++] = pixel_of[l];
+                        t.start[slots.pixel_of[l]] = first[l];
+                        reached[num_reached++] = slots.pixel_of[l];
                     } else {
                         end_lane(l);
                     }
@@ -556,24 +441,19 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
     const auto num_cells =
         static_cast<std::int32_t>(static_cast<std::int64_t>(k.cells[0]) * k.cells[1] * k.cells[2]);
     Lanes s;
-    int pixel_of[LANES];
-    int num_live = 0;
-    int live_mask = 0;
-    int next = 0;
+    LaneSlots slots;
     const auto end_lane = [&](int l) {
         const Sample best_sample{s.cr[l], s.cg[l], s.cb[l], s.acc[l]};
-        colors[pixel_of[l]] = end_mip<IS_RGBA>(k, s.acc[l], best_sample);
+        colors[slots.pixel_of[l]] = end_mip<IS_RGBA>(k, s.acc[l], best_sample);
         samples += s.samples[l];
     };
     const auto refill = [&](int l) {
-        if (next < t.num_marched) {
-            const int pixel = t.marched[next++];
+        if (slots.next < t.num_marched) {
+            const int pixel = t.marched[slots.next++];
             fill_lane(t, pixel, 0, num_cells, s, l);
             s.num_full[l] = t.num_segments[pixel];
             s.acc[l] = -1.0f;
-            pixel_of[l] = pixel;
-            live_mask |= 1 << l;
-            ++num_live;
+            slots.take(l, pixel, false);
             return;
         }
         clear_lane(s, l);
@@ -587,15 +467,13 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
     const __m256i one_i = _mm256_set1_epi32(1);
     const __m256i cells_x = _mm256_set1_epi32(k.cells[0]);
     const __m256i cells_y = _mm256_set1_epi32(k.cells[1]);
+    const __m256 cell_size = _mm256_set1_ps(static_cast<float>(CELL));
     Grid8 grid;
     load_grid8(k, grid);
 
     // NOLINTNEXTLINE(bugprone-infinite-loop): end_lane and refill retire lanes (num_live).
-    while (num_live > 0) {
-        const __m256i live =
-            _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live_mask),
-                                                _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-                               _mm256_setzero_si256());
+    while (slots.num_live > 0) {
+        const __m256i live = lanes_of8(slots.live_mask);
         const __m256i n = load(s.n);
         const __m256i num_full = load(s.num_full);
         const __m256 t_near = load(s.t_near);
@@ -623,7 +501,8 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
             const __m256i jumps =
                 _mm256_and_si256(live, as_int(_mm256_cmp_ps(cell_max, best, _CMP_LE_OQ)));
             if (_mm256_movemask_ps(as_float(jumps)) != 0) {
-                n_next = jump8(s, cell_coord, one_i, jumps, n_next, num_full, t_near, inv_step);
+                n_next = jump8(s, cell_coord, one_i, cell_size, jumps, n_next, num_full, t_near,
+                               inv_step);
             }
             classified = _mm256_andnot_si256(jumps, live);
         }
@@ -660,8 +539,7 @@ PLIANT_AVX2_FN void march_mip(const RayCastKernel& k, const TileRays& t, Color* 
             const int l = __builtin_ctz(static_cast<unsigned>(done_mask));
             done_mask &= done_mask - 1;
             end_lane(l);
-            live_mask &= ~(1 << l);
-            --num_live;
+            slots.free(l);
             refill(l);
         }
     }

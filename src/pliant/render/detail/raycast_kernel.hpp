@@ -451,6 +451,23 @@ struct Accumulated {
     float r = 0.0f, g = 0.0f, b = 0.0f, a = 0.0f;
 };
 
+// Sample s composited behind c over the shortened last segment of a ray, of length `partial`
+// (0 < partial ≤ step): opacity α = 1 − (1 − α_Δs)^(partial / Δs).
+PLIANT_HOST_DEVICE inline void composite_last(const Sample& s, float partial, float step,
+                                              Accumulated& c) {
+    if (s.a > 0.0f) {
+        const float ratio = partial / step;
+        const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
+        composite(s, a, c.r, c.g, c.b, c.a);
+    }
+}
+
+// The colour of c in front of the kernel's background.
+PLIANT_HOST_DEVICE inline Color over_background(const RayCastKernel& k, const Accumulated& c) {
+    const float rest = 1.0f - c.a;
+    return {c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b};
+}
+
 // The end of a composite ray after its march of p.num_full samples (or its early termination):
 // the shortened last segment, of length ℓ, with α = 1 − (1 − α_Δs)^(ℓ / Δs), then the background
 // behind. Adds the last sample, when classified, to `samples`.
@@ -468,15 +485,10 @@ PLIANT_HOST_DEVICE inline Color end_composite(const RayCastKernel& k, const Pixe
         if (!k.skipping || k.empty_cube[0][cell_of(k, t)] == 0) {
             ++samples;
             const Sample s = classify_shaded<IS_RGBA>(k, t, g, p.dir);
-            if (s.a > 0.0f) {
-                const float ratio = partial / k.step;
-                const float a = s.a >= 1.0f ? 1.0f : -std::expm1(ratio * std::log1p(-s.a));
-                composite(s, a, c.r, c.g, c.b, c.a);
-            }
+            composite_last(s, partial, k.step, c);
         }
     }
-    const float rest = 1.0f - c.a;
-    return {c.r + rest * k.background.r, c.g + rest * k.background.g, c.b + rest * k.background.b};
+    return over_background(k, c);
 }
 
 // The octant of a ray's direction (bit a set: component a negative) and its zero components

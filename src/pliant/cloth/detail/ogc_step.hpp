@@ -1,0 +1,40 @@
+// A step with Offset Geometric Contact (ogc_contact.hpp) as every cloth stepper (XPBDStepper,
+// VBDStepper) runs it: at the step's start the counters and the audit's first window, the CCD
+// audit of a window's motion, and at the step's end its statistics.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pliant/cloth/ogc_contact.hpp"
+#include "pliant/cloth/self_collision.hpp"
+#include "pliant/cloth/xpbd_stepper.hpp"
+#include "pliant/core/vec3.hpp"
+
+namespace pliant::cloth::detail {
+
+// The contact's counters at a step's start (ogc_step_stats() reports the step's share).
+struct OgcStepStart {
+    std::int64_t detections = 0;
+    double detect_ms = 0.0;
+};
+
+// Starts a step: the audit's first window starts at `positions` (into audit_start), num_free
+// becomes the number of free vertices (inverse mass > 0, what the re-detection share is of).
+OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positions,
+                            std::span<const double> inverse_masses, std::vector<Vec3d>& audit_start,
+                            std::int64_t& num_free);
+
+// The CCD fail-safe over the motion from audit_start to x (velocities of the vertices it puts
+// back set as SelfCollision::enforce does), then the next window starts at x. Returns whether it
+// put any vertex back.
+bool audit_ogc_window(SelfCollision& self_collision, std::vector<Vec3d>& audit_start,
+                      std::span<Vec3d> x, std::span<Vec3d> velocities);
+
+// The step's OGC statistics into stats (has_ogc, detections and their time since `start`, the
+// `truncated` moves, the pairs of the last detection).
+void ogc_step_stats(const OgcContact& ogc, const OgcStepStart& start, std::int64_t truncated,
+                    ClothStepStats& stats);
+
+}  // namespace pliant::cloth::detail
