@@ -180,13 +180,9 @@ void VBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
     }
     m_ogc.reset();
     if (enabled && m_options.ogc) {
-        const OgcOptions& ogc = *m_options.ogc;
-        const ClothMaterial& material = model.material();
-        m_ogc = std::make_unique<OgcContact>(
-            model.triangles(), model.num_vertices(), ogc,
-            ogc.radius > 0.0 ? ogc.radius : material.thickness,
-            ogc.stiffness > 0.0 ? ogc.stiffness
-                                : 1.0 / std::max(material.stretch_compliance, MIN_COMPLIANCE));
+        m_ogc = detail::make_ogc_contact(
+            model, *m_options.ogc,
+            1.0 / std::max(model.material().stretch_compliance, MIN_COMPLIANCE));
     }
 }
 
@@ -457,15 +453,8 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
 
 void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
                               std::span<const double> inverse_masses) {
-    parallel_for(
-        static_cast<std::int64_t>(x.size()),
-        [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(i);
-            if (inverse_masses[v] > 0.0 && m_ogc->truncate(v, from[v], x[v])) {
-                m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
-            }
-        },
-        VERTEX_GRAIN);
+    m_sweep_truncated.fetch_add(detail::truncate_moves(*m_ogc, from, x, inverse_masses),
+                                std::memory_order_relaxed);
 }
 
 bool VBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {

@@ -158,11 +158,7 @@ void XPBDStepper::enable_self_collision(const ClothModel& model, bool enabled) {
     }
     m_ogc.reset();
     if (enabled && m_ogc_options) {
-        const OgcOptions& ogc = *m_ogc_options;
-        m_ogc = std::make_unique<OgcContact>(
-            model.triangles(), model.num_vertices(), ogc,
-            ogc.radius > 0.0 ? ogc.radius : model.material().thickness,
-            ogc.stiffness > 0.0 ? ogc.stiffness : OGC_UNUSED_STIFFNESS);
+        m_ogc = detail::make_ogc_contact(model, *m_ogc_options, OGC_UNUSED_STIFFNESS);
     }
 }
 
@@ -179,25 +175,7 @@ void XPBDStepper::set_ogc(const ClothModel& model, const std::optional<OgcOption
     }
     m_ogc_options = options;
     enable_self_collision(model, false);
-    m_ogc.reset();
     enable_self_collision(model, true);
-}
-
-std::int64_t XPBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
-                                       std::span<const double> inverse_masses) const {
-    return parallel_reduce(
-        static_cast<std::int64_t>(x.size()), std::int64_t{0},
-        [&](std::int64_t begin, std::int64_t end) {
-            std::int64_t count = 0;
-            for (std::int64_t i = begin; i < end; ++i) {
-                const auto v = static_cast<std::size_t>(i);
-                if (inverse_masses[v] > 0.0 && m_ogc->truncate(v, from[v], x[v])) {
-                    ++count;
-                }
-            }
-            return count;
-        },
-        [](std::int64_t a, std::int64_t b) { return a + b; }, VERTEX_GRAIN);
 }
 
 bool XPBDStepper::needs_detection(std::int64_t truncated) const {
@@ -323,7 +301,8 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     if (m_ogc) {
         // The frame shift from the prediction, then every free vertex within its bound.
         m_ogc->set_shift(positions, inverse_masses);
-        m_substep_truncated = truncate_all(m_previous_positions, positions, inverse_masses);
+        m_substep_truncated =
+            detail::truncate_moves(*m_ogc, m_previous_positions, positions, inverse_masses);
         m_ogc_from.assign(positions.begin(), positions.end());
     }
     project_constraints(model, h);
@@ -341,7 +320,8 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         m_ogc->project(positions, m_previous_positions, inverse_masses,
                        material.self_static_friction, material.self_kinetic_friction);
         // Vertices held back in the prediction or here (a vertex held back in both counts twice).
-        m_substep_truncated += truncate_all(m_ogc_from, positions, inverse_masses);
+        m_substep_truncated +=
+            detail::truncate_moves(*m_ogc, m_ogc_from, positions, inverse_masses);
         m_step_truncated += m_substep_truncated;
         solve_ms += watch.elapsed_ms();
     } else if (m_self_collision) {
@@ -639,9 +619,6 @@ void XPBDStepper::load_state(const ClothModel& model, ByteReader& in) {
                                        in.source(), has_ogc ? "on" : "off", m_ogc ? "on" : "off"));
     }
     if (m_ogc) {
-        m_ogc =
-            std::make_unique<OgcContact>(model.triangles(), model.num_vertices(), m_ogc->options(),
-                                         m_ogc->radius(), OGC_UNUSED_STIFFNESS);
         m_ogc->load_state(in);
     }
 }

@@ -188,10 +188,6 @@ private:
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
-    // OGC: truncates every free vertex's move from `from` to x to its bound; returns the
-    // vertices held back.
-    std::int64_t truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
-                              std::span<const double> inverse_masses) const;
     // OGC: whether `truncated` vertices held back call for a new detection.
     bool needs_detection(std::int64_t truncated) const;
     // OGC: the audit's window ends at x (ogc.audit; velocities of the vertices it puts back are

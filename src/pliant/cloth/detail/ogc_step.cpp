@@ -2,7 +2,38 @@
 
 #include <algorithm>
 
+#include "pliant/core/parallel.hpp"
+
 namespace pliant::cloth::detail {
+
+namespace {
+constexpr std::int64_t TRUNCATE_GRAIN = 2048;
+}  // namespace
+
+std::unique_ptr<OgcContact> make_ogc_contact(const ClothModel& model, const OgcOptions& options,
+                                             double default_stiffness) {
+    return std::make_unique<OgcContact>(
+        model.triangles(), model.num_vertices(), options,
+        options.radius > 0.0 ? options.radius : model.material().thickness,
+        options.stiffness > 0.0 ? options.stiffness : default_stiffness);
+}
+
+std::int64_t truncate_moves(const OgcContact& ogc, std::span<const Vec3d> from, std::span<Vec3d> x,
+                            std::span<const double> inverse_masses) {
+    return parallel_reduce(
+        static_cast<std::int64_t>(x.size()), std::int64_t{0},
+        [&](std::int64_t begin, std::int64_t end) {
+            std::int64_t count = 0;
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                if (inverse_masses[v] > 0.0 && ogc.truncate(v, from[v], x[v])) {
+                    ++count;
+                }
+            }
+            return count;
+        },
+        [](std::int64_t a, std::int64_t b) { return a + b; }, TRUNCATE_GRAIN);
+}
 
 OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positions,
                             std::span<const double> inverse_masses, std::vector<Vec3d>& audit_start,

@@ -4,9 +4,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
+#include "pliant/cloth/cloth_model.hpp"
 #include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/xpbd_stepper.hpp"
@@ -19,6 +21,16 @@ struct OgcStepStart {
     std::int64_t detections = 0;
     double detect_ms = 0.0;
 };
+
+// The contact of a stepper's cloth: radius options.radius, or the material's thickness when 0;
+// stiffness options.stiffness, or default_stiffness when 0 (N/m).
+std::unique_ptr<OgcContact> make_ogc_contact(const ClothModel& model, const OgcOptions& options,
+                                             double default_stiffness);
+
+// Truncates every free vertex's move from `from` to x to its bound (OgcContact::truncate, in
+// parallel: each vertex alone); returns the vertices held back.
+std::int64_t truncate_moves(const OgcContact& ogc, std::span<const Vec3d> from, std::span<Vec3d> x,
+                            std::span<const double> inverse_masses);
 
 // Starts a step: the audit's first window starts at `positions` (into audit_start), num_free
 // becomes the number of free vertices (inverse mass > 0, what the re-detection share is of).
