@@ -1,5 +1,6 @@
-// Tiny synthetic radiance-field scenes for the trainer's tests: a ground-truth ball field, views
-// rendered from it around the box, and the mean PSNR of a field over those views.
+// Tiny synthetic radiance-field scenes for the nerf tests: fields over the unit box, a
+// ground-truth ball field, views rendered from it around the box, and the mean PSNR of a field
+// over those views.
 #pragma once
 
 #include <cmath>
@@ -20,31 +21,38 @@
 
 namespace pliant::nerf::test {
 
-// A coloured ball in the unit box: a red core (r < 0.2, σ 8) and a blue shell (r < 0.35, σ 3);
-// `banded` adds a green band (|z| < 0.08 or |x − 0.1| < 0.06), texture that pins poses down.
-inline RadianceGrid ball_field(int resolution, bool banded = false) {
+// A field over the unit box at `resolution`, empty but where set(c, q) writes the 4 raw
+// parameters q[0 … 3] of the cell centred at c ∈ [0, 1]³.
+template <typename Set>
+RadianceGrid unit_box_field(int resolution, const Set& set) {
     RadianceGrid g(AABBd{{0, 0, 0}, {1, 1, 1}}, resolution, -12.0f, 0.0f);
     const auto& d = g.dims();
     auto p = g.params();
     for (int k = 0; k < d[2]; ++k) {
         for (int j = 0; j < d[1]; ++j) {
             for (int i = 0; i < d[0]; ++i) {
-                const Vec3d c{(i + 0.5) / d[0] - 0.5, (j + 0.5) / d[1] - 0.5,
-                              (k + 0.5) / d[2] - 0.5};
-                const double r = norm(c);
-                const std::size_t v = 4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k));
-                if (r < 0.35) {
-                    const bool band =
-                        banded && (std::fabs(c.z) < 0.08 || std::fabs(c.x - 0.1) < 0.06);
-                    p[v] = density_raw_for_sigma(r < 0.2 ? 8.0f : 3.0f);
-                    p[v + 1] = r < 0.2 ? 2.0f : -2.0f;
-                    p[v + 2] = band ? 2.5f : -1.0f;
-                    p[v + 3] = r < 0.2 ? -2.0f : 2.0f;
-                }
+                const Vec3d c{(i + 0.5) / d[0], (j + 0.5) / d[1], (k + 0.5) / d[2]};
+                set(c, &p[4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k))]);
             }
         }
     }
     return g;
+}
+
+// A coloured ball in the unit box: a red core (r < 0.2, σ 8) and a blue shell (r < 0.35, σ 3);
+// `banded` adds a green band (|z| < 0.08 or |x − 0.1| < 0.06), texture that pins poses down.
+inline RadianceGrid ball_field(int resolution, bool banded = false) {
+    return unit_box_field(resolution, [banded](const Vec3d& centre, float* q) {
+        const Vec3d c = centre - Vec3d{0.5, 0.5, 0.5};
+        const double r = norm(c);
+        if (r < 0.35) {
+            const bool band = banded && (std::fabs(c.z) < 0.08 || std::fabs(c.x - 0.1) < 0.06);
+            q[0] = density_raw_for_sigma(r < 0.2 ? 8.0f : 3.0f);
+            q[1] = r < 0.2 ? 2.0f : -2.0f;
+            q[2] = band ? 2.5f : -1.0f;
+            q[3] = r < 0.2 ? -2.0f : 2.0f;
+        }
+    });
 }
 
 // `views` square views of `size` pixels rendered from `truth`, on a Fibonacci sphere around its

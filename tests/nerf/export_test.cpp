@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "ball_scene.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/nerf/crop.hpp"
 #include "pliant/nerf/metrics.hpp"
@@ -112,23 +113,14 @@ TEST(Export, RayCastExportReproducesTheTrainingViews) {
 // with a ball on it (centre (0.4, 0.6, 0.45), radius 0.15) and a small floater in the air (centre
 // (0.9, 0.1, 0.9), radius 0.03) in the box [0, 1]³, world units.
 RadianceGrid table_and_ball(int resolution) {
-    RadianceGrid g(AABBd{{0, 0, 0}, {1, 1, 1}}, resolution, -12.0f, 0.0f);
-    const auto& d = g.dims();
-    auto p = g.params();
-    for (int k = 0; k < d[2]; ++k) {
-        for (int j = 0; j < d[1]; ++j) {
-            for (int i = 0; i < d[0]; ++i) {
-                const Vec3d c{(i + 0.5) / d[0], (j + 0.5) / d[1], (k + 0.5) / d[2]};
-                const bool table = c.z >= 0.25 && c.z <= 0.3;
-                const bool ball = norm(c - Vec3d{0.4, 0.6, 0.45}) <= 0.15;
-                const bool floater = norm(c - Vec3d{0.9, 0.1, 0.9}) <= 0.03;
-                if (table || ball || floater) {
-                    p[4 * (i + d[0] * (j + static_cast<std::size_t>(d[1]) * k))] =
-                        density_raw_for_sigma(400.0f);
-                }
-            }
+    RadianceGrid g = test::unit_box_field(resolution, [](const Vec3d& c, float* q) {
+        const bool table = c.z >= 0.25 && c.z <= 0.3;
+        const bool ball = norm(c - Vec3d{0.4, 0.6, 0.45}) <= 0.15;
+        const bool floater = norm(c - Vec3d{0.9, 0.1, 0.9}) <= 0.03;
+        if (table || ball || floater) {
+            q[0] = density_raw_for_sigma(400.0f);
         }
-    }
+    });
     g.update_occupancy(1e-3f);
     return g;
 }
