@@ -309,6 +309,9 @@ TEST(CcdQueries, ReadsMathematicaBools) {
     const fs::path bad_json = write_file(dir, "j.json", "[true, fals");
     expect_io_error([&] { read_mathematica_bools(bad_json); },
                     {bad_json.string() + ": not valid JSON"});
+    const fs::path overflow = write_file(dir, "h.json", "[true, 1e999]");
+    expect_io_error([&] { read_mathematica_bools(overflow); },
+                    {overflow.string() + ": not valid JSON", "number overflow"});
 }
 
 // ---------------------------------------------------------------------------------------------

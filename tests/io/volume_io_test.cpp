@@ -313,6 +313,10 @@ TEST(VolumeIo, RawSidecarBrokenInputs) {
     expect_io_error([&] { read_volume(dir / "v.json"); }, {"v.raw", "truncated", "120 bytes"});
     test::write_bytes(dir / "w.json", R"({"format": "pliant-raw-volume", "bogus": 1})");
     expect_io_error([&] { read_volume(dir / "w.json"); }, {"unknown key \"bogus\""});
+    // A number no double holds is refused by the JSON parser (out_of_range, not parse_error).
+    test::write_bytes(dir / "n.json", R"({"data_file": 88e0080000, "dims": [4, 4, 4]})");
+    expect_io_error([&] { read_volume(dir / "n.json"); },
+                    {"n.json", "not valid JSON", "number overflow"});
 }
 
 TEST(VolumeIo, UnknownExtensionIsUnsupported) {

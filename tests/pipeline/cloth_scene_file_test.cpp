@@ -176,7 +176,7 @@ TEST(ClothScene, NullStrainLimitIsAcceptedAsNoLimit) {
 }
 
 TEST(ClothScene, BrokenInputNamesTheKey) {
-    expect_error("{", {"not JSON"});
+    expect_error("{", {"not valid JSON"});
     expect_error("[]", {"expected an object"});
     expect_error("{}", {"cloth", "required"});
     expect_error(R"({"cloth": {"grid": {}}, "colth": 1})", {"colth", "unknown key"});
@@ -233,7 +233,7 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
                  {"pins.vertices[0]", "vertex index"});
     expect_error(R"({"cloth": {"grid": {}}, "output": {"format": "stl"}})",
                  {"output.format", "\"obj\"", "\"stl\""});
-    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})", {"not JSON", "overflow"});
+    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})", {"not valid JSON", "overflow"});
 }
 
 // Numbers a JSON parser accepts but the simulation cannot use: integers beyond 64 bits or whose

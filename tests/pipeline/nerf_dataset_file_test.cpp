@@ -138,6 +138,8 @@ TEST(NerfDataset, BrokenDatasetsGiveClearErrors) {
                               {"expected a regular file, got a directory"});
     write_bytes(json, "{ not json");
     io::test::expect_io_error(read, {"t.json", "not valid JSON"});
+    write_bytes(json, R"({"camera_angle_x": 1e999, "frames": []})");
+    io::test::expect_io_error(read, {"t.json", "not valid JSON", "number overflow"});
     write_bytes(json, R"({"camera_angle_x": 0.7, "frames": []})");
     io::test::expect_io_error(read, {"frames", "non-empty"});
     write_bytes(json, blender_json(R"(, {"file_path": "./train/missing", "transform_matrix": )" +

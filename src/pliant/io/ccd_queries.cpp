@@ -18,6 +18,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/io/detail/text.hpp"
+#include "pliant/io/json_text.hpp"
 #include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
@@ -265,12 +266,7 @@ CcdQuerySet read_ccd_queries(const std::filesystem::path& csv, CcdQueryKind kind
 
 std::vector<bool> read_mathematica_bools(const std::filesystem::path& json) {
     const std::string text = read_file(json);
-    nlohmann::json value;
-    try {
-        value = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
-        throw IoError(fmt::format("{}: not valid JSON: {}", json.string(), e.what()));
-    }
+    const nlohmann::json value = parse_json(text, json.string());
     if (!value.is_array()) {
         throw IoError(fmt::format("{}: expected a JSON array of booleans, got a {}", json.string(),
                                   value.type_name()));

@@ -11,6 +11,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/detail/volume_data.hpp"
+#include "pliant/io/json_text.hpp"
 #include "pliant/io/read_file.hpp"
 
 namespace pliant::io {
@@ -79,12 +80,7 @@ volume::Volume read_raw_volume(const std::filesystem::path& path, std::size_t ma
                                   MAX_SIDECAR_BYTES));
     }
     const std::string text = read_file(sidecar);
-    json doc;
-    try {
-        doc = json::parse(text);
-    } catch (const json::parse_error& e) {
-        fail(sidecar, fmt::format("not valid JSON: {}", e.what()));
-    }
+    const json doc = parse_json(text, sidecar.string());
     if (!doc.is_object()) {
         fail(sidecar, "expected a JSON object");
     }

@@ -100,12 +100,7 @@ private:
 
 volume::TransferFunction parse_transfer_function(std::string_view text, std::string_view name) {
     const Reader r{std::string(name)};
-    Json root;
-    try {
-        root = Json::parse(text);
-    } catch (const Json::exception& e) {  // parse_error, and out_of_range for 1e999
-        throw IoError(fmt::format("{}: not valid JSON: {}", name, e.what()));
-    }
+    const Json root = parse_json(text, name);
     if (!root.is_object()) {
         r.fail("the transfer function", "a JSON object", json_type_name(root));
     }

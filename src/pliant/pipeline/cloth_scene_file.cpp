@@ -605,12 +605,7 @@ void resolve_attachments(cloth::ClothScene& scene, const std::string& file) {
 cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name,
                                     const std::filesystem::path& base) {
     const std::string file(name);
-    Json json;
-    try {
-        json = Json::parse(text);
-    } catch (const Json::exception& e) {  // parse_error, and out_of_range for 1e999
-        throw IoError(fmt::format("{}: not JSON: {}", file, e.what()));
-    }
+    const Json json = io::parse_json(text, file);
     cloth::ClothScene scene;
     ObjectReader root(json, file, "");
 

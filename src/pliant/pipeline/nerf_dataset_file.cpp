@@ -15,6 +15,7 @@
 #include "pliant/core/log.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/colmap_model.hpp"
+#include "pliant/io/json_text.hpp"
 #include "pliant/io/read_file.hpp"
 
 namespace pliant::pipeline {
@@ -381,12 +382,7 @@ nerf::Dataset read_nerf_dataset(const std::filesystem::path& path,
             path.string()));
     }
     const std::string text = io::read_file(path);  // a missing file: IoError
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::exception& e) {
-        throw IoError(fmt::format("{}: not valid JSON: {}", path.string(), e.what()));
-    }
+    const json j = io::parse_json(text, path.string());
     if (!j.is_object()) {
         throw IoError(fmt::format("{}: expected a JSON object", path.string()));
     }
