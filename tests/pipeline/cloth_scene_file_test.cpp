@@ -233,7 +233,8 @@ TEST(ClothScene, BrokenInputNamesTheKey) {
                  {"pins.vertices[0]", "vertex index"});
     expect_error(R"({"cloth": {"grid": {}}, "output": {"format": "stl"}})",
                  {"output.format", "\"obj\"", "\"stl\""});
-    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})", {"not valid JSON", "overflow"});
+    expect_error(R"({"cloth": {"grid": {}}, "gravity": [0, 0, 1e999]})",
+                 {"not valid JSON", "overflow"});
 }
 
 // Numbers a JSON parser accepts but the simulation cannot use: integers beyond 64 bits or whose
