@@ -20,9 +20,24 @@ namespace {
 
 constexpr int BLOCK = 2;        // scalar sources' occupancy blocks, voxels per edge
 constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
+constexpr int BRICK = 4;        // RGBA sources' occupancy bricks (64 bits), voxels per edge
+constexpr int BRICK_SHIFT = 2;  // log2(BRICK)
 // Source grid units the box of a map cell's node values is widened by: far above the rounding
 // of the float trilinear interpolation of coordinates below a few thousand.
 constexpr float HULL_MARGIN = 1.0f / 32.0f;
+
+// The bits of a brick (bit x + 4 y + 16 z) whose coordinate along axis a lies in [lo, hi] ⊂ [0, 3].
+std::uint64_t brick_mask(int a, std::int64_t lo, std::int64_t hi) {
+    const std::uint64_t span = ((std::uint64_t{2} << hi) - 1) & ~((std::uint64_t{1} << lo) - 1);
+    if (a == 0) {
+        return span * 0x1111111111111111ULL;  // 4 bits per (y, z) row
+    }
+    std::uint64_t unit = 0;  // 0xF per selected y, or 0xFFFF per selected z
+    for (std::int64_t i = lo; i <= hi; ++i) {
+        unit |= a == 1 ? std::uint64_t{0xF} << (4 * i) : std::uint64_t{0xFFFF} << (16 * i);
+    }
+    return a == 1 ? unit * 0x0001000100010001ULL : unit;
+}
 
 double smallest(const Vec3d& s) {
     return std::min({s.x, s.y, s.z});
@@ -97,33 +112,32 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             1);
     }
     if (m_source->m_is_rgba) {
-        // Summed-volume table of the voxels with α > 0: m_sat[(x + 1) + sx (y + 1) + sxy (z + 1)]
-        // counts those in [0, x] × [0, y] × [0, z] (row and layer 0 are zeros).
-        const std::int64_t sx = n[0] + 1, sxy = sx * (n[1] + 1);
-        m_sat.assign(static_cast<std::size_t>(sxy * (n[2] + 1)), 0);
+        // Bricks of 4³ voxels, bit (x & 3) + 4 (y & 3) + 16 (z & 3) set for a voxel with α > 0
+        // (bits past the volume's end stay 0). Parallel over brick layers, each written by one
+        // task.
+        for (int a = 0; a < 3; ++a) {
+            m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
+        }
+        m_brick_bits.assign(static_cast<std::size_t>(m_bricks[0] * m_bricks[1] * m_bricks[2]), 0);
         parallel_for(
-            n[2],
-            [&](std::int64_t z) {
-                std::int32_t* layer = m_sat.data() + sxy * (z + 1);
-                for (std::int64_t y = 0; y < n[1]; ++y) {
-                    const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
-                    std::int32_t* out = layer + sx * (y + 1);
-                    const std::int32_t* above = layer + sx * y;
-                    std::int32_t run = 0;
-                    for (std::int64_t x = 0; x < n[0]; ++x) {
-                        run += row[4 * x] > 0.0f ? 1 : 0;
-                        out[x + 1] = run + above[x + 1];
+            m_bricks[2],
+            [&](std::int64_t bz) {
+                for (std::int64_t z = bz * BRICK; z < std::min(n[2], (bz + 1) * BRICK); ++z) {
+                    for (std::int64_t y = 0; y < n[1]; ++y) {
+                        const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
+                        std::uint64_t* out =
+                            m_brick_bits.data() + m_bricks[0] * ((y >> 2) + m_bricks[1] * bz);
+                        const int shift = static_cast<int>(4 * (y & 3) + 16 * (z & 3));
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            if (row[4 * x] > 0.0f) {
+                                out[x >> 2] |= std::uint64_t{1}
+                                               << (shift + static_cast<int>(x & 3));
+                            }
+                        }
                     }
                 }
             },
             1);
-        for (std::int64_t z = 1; z < n[2]; ++z) {
-            std::int32_t* layer = m_sat.data() + sxy * (z + 1);
-            const std::int32_t* below = layer - sxy;
-            for (std::int64_t i = 0; i < sxy; ++i) {
-                layer[i] += below[i];
-            }
-        }
     }
     m_prepare_ms = watch.elapsed_ms();
 }
@@ -162,18 +176,30 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
                 (n > 1 ? 1 : 0);
     }
     if (m_source->m_is_rgba) {
-        // Voxels with α > 0 in the box, from the summed-volume table.
-        const std::int64_t sx = m_source_dims[0] + 1;
-        const std::int64_t sxy = sx * (m_source_dims[1] + 1);
-        const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-            return static_cast<std::int64_t>(m_sat[static_cast<std::size_t>(x + sx * y + sxy * z)]);
-        };
-        const std::int64_t x0 = v0[0], y0 = v0[1], z0 = v0[2];
-        const std::int64_t x1 = v1[0] + 1, y1 = v1[1] + 1, z1 = v1[2] + 1;
-        const std::int64_t count = at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) -
-                                   at(x1, y1, z0) + at(x0, y0, z1) + at(x0, y1, z0) +
-                                   at(x1, y0, z0) - at(x0, y0, z0);
-        return count > 0;
+        // Voxels with α > 0 in the box, from the bricks it overlaps (exact per voxel).
+        std::int64_t b0[3], b1[3];
+        for (int a = 0; a < 3; ++a) {
+            b0[a] = v0[a] >> BRICK_SHIFT;
+            b1[a] = v1[a] >> BRICK_SHIFT;
+        }
+        for (std::int64_t bz = b0[2]; bz <= b1[2]; ++bz) {
+            const std::uint64_t mz =
+                brick_mask(2, bz == b0[2] ? v0[2] & 3 : 0, bz == b1[2] ? v1[2] & 3 : 3);
+            for (std::int64_t by = b0[1]; by <= b1[1]; ++by) {
+                const std::uint64_t myz =
+                    mz & brick_mask(1, by == b0[1] ? v0[1] & 3 : 0, by == b1[1] ? v1[1] & 3 : 3);
+                const std::uint64_t* row =
+                    m_brick_bits.data() + m_bricks[0] * (by + m_bricks[1] * bz);
+                for (std::int64_t bx = b0[0]; bx <= b1[0]; ++bx) {
+                    const std::uint64_t m = myz & brick_mask(0, bx == b0[0] ? v0[0] & 3 : 0,
+                                                             bx == b1[0] ? v1[0] & 3 : 3);
+                    if ((row[bx] & m) != 0) {
+                        return true;
+                    }
+                }
+            }
+        }
+        return false;
     }
     float vmin = std::numeric_limits<float>::infinity();
     float vmax = -std::numeric_limits<float>::infinity();

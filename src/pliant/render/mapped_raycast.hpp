@@ -28,8 +28,9 @@
 //     source voxel that a sample in it can read has opacity, tested conservatively: trilinear
 //     interpolation stays in the convex hull of its 8 nodes, so its samples lie in the box of
 //     the node values (widened by 1/32 voxel for rounding), and the voxels their interpolation
-//     reads are tested: RGBA through a summed-volume table of the voxels with α > 0 (exact per
-//     voxel; (n + 1)³ int32, built once), scalars through per-2³-block minima and maxima (the
+//     reads are tested: RGBA through bricks of 4³ voxels, 64 bits each, a bit set per voxel with
+//     α > 0 (exact per voxel; 2 MB for 256³, built once: a box reads a word per brick it
+//     overlaps), scalars through per-2³-block minima and maxima (the
 //     lookup entries of [min, max] widened by detail::LERP_ROUNDING, as RayCaster tests its
 //     cells). Empty cubes per octant over the cells (detail::empty_cubes) drive the jumps.
 //     Skipped samples would contribute nothing, so images are identical with and without
@@ -92,7 +93,7 @@ public:
 private:
     // Whether a sample whose source coordinate lies in the box [lo, hi] may have opacity: the
     // voxels its interpolation can read (the box widened by HULL_MARGIN, clamped as locate()
-    // clamps) hold α > 0 (RGBA: the summed-volume table, exact per voxel), or their 2³ blocks'
+    // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
     // value range reaches a lookup entry with opacity (scalar).
     bool hull_visible(const float lo[3], const float hi[3]) const;
 
@@ -112,8 +113,9 @@ private:
     std::array<int, 3> m_cells{0, 0, 0};
     std::vector<std::uint8_t> m_occupancy;  // per map cell, detail::MAP_CELL_* bits
     std::vector<std::uint8_t> m_visible;    // per map cell, 0 / 1 (empty_cubes' input)
-    // RGBA: summed-volume table of the source voxels with α > 0 ((n + 1)³, zeros first).
-    std::vector<std::int32_t> m_sat;
+    // RGBA: the source voxels with α > 0, a 64-bit word per brick of 4³ voxels (x fastest).
+    std::array<std::int64_t, 3> m_bricks{0, 0, 0};
+    std::vector<std::uint64_t> m_brick_bits;
     std::vector<std::uint8_t> m_empty_cube;  // 8 octants × map cells
     std::vector<float> m_nodes4;             // the map's nodes, 4 floats each (x, y, z, 0)
 };
