@@ -247,6 +247,50 @@ TEST(MappedRayCast, ScalarSourceThroughItsTransferFunction) {
     EXPECT_GE(db, 28.0);
 }
 
+// Sparse opaque voxels: most visible map cells have empty sub-cells, whose samples jump past
+// them; the images must stay those without skipping, from every side, shaded or not.
+TEST(MappedRayCast, SubCellJumpsChangeNothingOnASparseSource) {
+    volume::Volume source = volume::Volume::allocate({32, 32, 32}, volume::VoxelType::rgba8,
+                                                     {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
+    auto* v = reinterpret_cast<std::uint8_t*>(source.bytes().data());
+    std::uint32_t seed = 12345;
+    for (int i = 0; i < 40; ++i) {
+        std::int64_t at[3];
+        for (std::int64_t& c : at) {
+            seed = seed * 1664525u + 1013904223u;
+            c = 6 + static_cast<std::int64_t>((seed >> 8) % 20);
+        }
+        std::uint8_t* voxel = v + 4 * (at[0] + 32 * (at[1] + 32 * at[2]));
+        voxel[0] = 200;
+        voxel[1] = static_cast<std::uint8_t>(40 + 5 * i);
+        voxel[2] = 90;
+        voxel[3] = 255;
+    }
+    const Deformed d = deform(source, nullptr, Drive::twist, 6);
+    const volume::Volume target =
+        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
+    volume::InverseMap map;
+    map.build(source, target, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+    for (const bool shading : {false, true}) {
+        RayCastOptions options;
+        options.shading = shading;
+        MappedRayCaster skipping(source, nullptr, target, options);
+        skipping.set_map(map);
+        options.empty_space_skipping = false;
+        MappedRayCaster every(source, nullptr, target, options);
+        every.set_map(map);
+        for (const double azimuth : {0.0, 75.0, 160.0, 250.0}) {
+            const Camera camera = orbit_camera(source.bounds(), azimuth, 35.0, 0.0, 80, 80);
+            Image a, b;
+            const RayCastStats sa = skipping.render(camera, a);
+            const RayCastStats sb = every.render(camera, b);
+            EXPECT_EQ(a.pixels, b.pixels) << "azimuth " << azimuth << ", shading " << shading;
+            EXPECT_LT(2 * sa.samples, sb.samples) << "azimuth " << azimuth;
+            EXPECT_NE(a.pixels, Image(80, 80).pixels);
+        }
+    }
+}
+
 TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     const volume::Volume& source = rgba64();
     const Deformed d = deform(source, nullptr, Drive::twist, 12);

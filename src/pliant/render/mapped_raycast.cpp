@@ -27,16 +27,36 @@ constexpr int BRICK_SHIFT = 2;  // log2(BRICK)
 constexpr float HULL_MARGIN = 1.0f / 32.0f;
 
 // The bits of a brick (bit x + 4 y + 16 z) whose coordinate along axis a lies in [lo, hi] ⊂ [0, 3].
-std::uint64_t brick_mask(int a, std::int64_t lo, std::int64_t hi) {
-    const std::uint64_t span = ((std::uint64_t{2} << hi) - 1) & ~((std::uint64_t{1} << lo) - 1);
-    if (a == 0) {
-        return span * 0x1111111111111111ULL;  // 4 bits per (y, z) row
+constexpr std::uint64_t brick_mask(int a, int lo, int hi) {
+    std::uint64_t mask = 0;
+    for (int bit = 0; bit < 64; ++bit) {
+        const int c = (bit >> (2 * a)) & 3;
+        if (c >= lo && c <= hi) {
+            mask |= std::uint64_t{1} << bit;
+        }
     }
-    std::uint64_t unit = 0;  // 0xF per selected y, or 0xFFFF per selected z
-    for (std::int64_t i = lo; i <= hi; ++i) {
-        unit |= a == 1 ? std::uint64_t{0xF} << (4 * i) : std::uint64_t{0xFFFF} << (16 * i);
+    return mask;
+}
+
+// brick_mask(a, lo, hi) at [a][lo][hi].
+constexpr std::array<std::array<std::array<std::uint64_t, 4>, 4>, 3> BRICK_MASKS = [] {
+    std::array<std::array<std::array<std::uint64_t, 4>, 4>, 3> t{};
+    for (int a = 0; a < 3; ++a) {
+        for (int lo = 0; lo < 4; ++lo) {
+            for (int hi = lo; hi < 4; ++hi) {
+                t[static_cast<std::size_t>(a)][static_cast<std::size_t>(lo)]
+                 [static_cast<std::size_t>(hi)] = brick_mask(a, lo, hi);
+            }
+        }
     }
-    return a == 1 ? unit * 0x0001000100010001ULL : unit;
+    return t;
+}();
+
+// The bits of the bricks at brick coordinate b along axis a of the voxel range [v0, v1].
+inline std::uint64_t range_mask(int a, std::int64_t b, std::int64_t v0, std::int64_t v1) {
+    const auto lo = static_cast<std::size_t>((b << BRICK_SHIFT) >= v0 ? 0 : v0 & 3);
+    const auto hi = static_cast<std::size_t>(((b + 1) << BRICK_SHIFT) <= v1 ? 3 : v1 & 3);
+    return BRICK_MASKS[static_cast<std::size_t>(a)][lo][hi];
 }
 
 double smallest(const Vec3d& s) {
@@ -183,17 +203,13 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
             b1[a] = v1[a] >> BRICK_SHIFT;
         }
         for (std::int64_t bz = b0[2]; bz <= b1[2]; ++bz) {
-            const std::uint64_t mz =
-                brick_mask(2, bz == b0[2] ? v0[2] & 3 : 0, bz == b1[2] ? v1[2] & 3 : 3);
+            const std::uint64_t mz = range_mask(2, bz, v0[2], v1[2]);
             for (std::int64_t by = b0[1]; by <= b1[1]; ++by) {
-                const std::uint64_t myz =
-                    mz & brick_mask(1, by == b0[1] ? v0[1] & 3 : 0, by == b1[1] ? v1[1] & 3 : 3);
+                const std::uint64_t myz = mz & range_mask(1, by, v0[1], v1[1]);
                 const std::uint64_t* row =
                     m_brick_bits.data() + m_bricks[0] * (by + m_bricks[1] * bz);
                 for (std::int64_t bx = b0[0]; bx <= b1[0]; ++bx) {
-                    const std::uint64_t m = myz & brick_mask(0, bx == b0[0] ? v0[0] & 3 : 0,
-                                                             bx == b1[0] ? v1[0] & 3 : 3);
-                    if ((row[bx] & m) != 0) {
+                    if ((row[bx] & myz & range_mask(0, bx, v0[0], v1[0])) != 0) {
                         return true;
                     }
                 }
@@ -225,6 +241,68 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
            0;
 }
 
+std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,
+                                                const std::int64_t off[8], const float lo[3],
+                                                const float hi[3]) const {
+    // Every half-cell has the cell's centre (the mean of its nodes) as a corner, so its box
+    // holds the centre's: when the voxels the centre reads have opacity, all 8 are visible
+    // (inside the body, most cells). Else, when the cell's box has none, none is.
+    float centre[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        const float* v = g + 3 * base + ch;
+        centre[ch] = 0.5f * (0.5f * (0.5f * (v[3 * off[0]] + v[3 * off[1]]) +
+                                     0.5f * (v[3 * off[2]] + v[3 * off[3]])) +
+                             0.5f * (0.5f * (v[3 * off[4]] + v[3 * off[5]]) +
+                                     0.5f * (v[3 * off[6]] + v[3 * off[7]])));
+    }
+    if (hull_visible(centre, centre)) {
+        return 0xFF;
+    }
+    if (!hull_visible(lo, hi)) {
+        return 0;
+    }
+    // The map at the 3³ lattice of half-cell fractions: per channel, the node values (lattice
+    // points 0 and 2 per axis) and their midpoints, along x, then y, then z.
+    float lattice[27][3];
+    for (int c = 0; c < 8; ++c) {
+        const float* v = g + 3 * (base + off[c]);
+        const int at = 2 * (c & 1) + 6 * ((c >> 1) & 1) + 18 * (c >> 2);
+        for (int ch = 0; ch < 3; ++ch) {
+            lattice[at][ch] = v[ch];
+        }
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+        for (const int row : {0, 6, 18, 24}) {  // x midpoints of the rows y, z ∈ {0, 2}
+            lattice[row + 1][ch] = 0.5f * (lattice[row][ch] + lattice[row + 2][ch]);
+        }
+        for (const int z : {0, 18}) {  // y midpoints of the layers z ∈ {0, 2}
+            for (int x = 0; x < 3; ++x) {
+                lattice[z + 3 + x][ch] = 0.5f * (lattice[z + x][ch] + lattice[z + 6 + x][ch]);
+            }
+        }
+        for (int xy = 0; xy < 9; ++xy) {  // z midpoints
+            lattice[9 + xy][ch] = 0.5f * (lattice[xy][ch] + lattice[18 + xy][ch]);
+        }
+    }
+    std::uint8_t bits = 0;
+    for (int sub = 0; sub < 8; ++sub) {
+        const int first = (sub & 1) + 3 * ((sub >> 1) & 1) + 9 * (sub >> 2);
+        float sub_lo[3] = {lattice[first][0], lattice[first][1], lattice[first][2]};
+        float sub_hi[3] = {sub_lo[0], sub_lo[1], sub_lo[2]};
+        for (int c = 1; c < 8; ++c) {
+            const float* v = lattice[first + (c & 1) + 3 * ((c >> 1) & 1) + 9 * (c >> 2)];
+            for (int a = 0; a < 3; ++a) {
+                sub_lo[a] = std::min(sub_lo[a], v[a]);
+                sub_hi[a] = std::max(sub_hi[a], v[a]);
+            }
+        }
+        if (hull_visible(sub_lo, sub_hi)) {
+            bits = static_cast<std::uint8_t>(bits | (1 << sub));
+        }
+    }
+    return bits;
+}
+
 void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const Stopwatch watch;
     const std::array<std::int64_t, 3>& nodes = map.nodes();
@@ -250,6 +328,7 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const std::int64_t cx_n = m_cells[0], cy_n = m_cells[1], cz_n = m_cells[2];
     const auto total = static_cast<std::size_t>(cx_n * cy_n * cz_n);
     m_occupancy.resize(total);
+    m_sub_occupied.resize(total);
     m_visible.resize(total);
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
@@ -275,12 +354,13 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                         }
                     }
                     std::uint8_t bits = valid ? detail::MAP_CELL_VALID : 0;
-                    bool visible = valid && hull_visible(lo, hi);
-                    if (visible) {
+                    const std::uint8_t sub = valid ? sub_cells_visible(g, base, off, lo, hi) : 0;
+                    if (sub != 0) {
                         bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
                     }
                     m_occupancy[cell] = bits;
-                    m_visible[cell] = visible ? 1 : 0;
+                    m_sub_occupied[cell] = sub;
+                    m_visible[cell] = sub != 0 ? 1 : 0;
                 }
             }
         },
@@ -355,6 +435,8 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.b = static_cast<float>(m_map->node_voxels());
     m.inv_b = 1.0f / m.b;
     m.occupancy = m_occupancy.data();
+    m.sub_occupied = m_sub_occupied.data();
+    m.half_b = 0.5f * m.b;
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
