@@ -186,7 +186,8 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const std::int64_t nxy = m_nodes[0] * m_nodes[1];
     const std::int64_t num_nodes = nxy * m_nodes[2];
     m_g.assign(static_cast<std::size_t>(3 * num_nodes), std::numeric_limits<float>::quiet_NaN());
-    std::vector<std::int32_t> holder(static_cast<std::size_t>(num_nodes), -1);
+    m_holder.assign(static_cast<std::size_t>(num_nodes), -1);
+    std::vector<std::int32_t>& holder = m_holder;
     auto store = [&](std::int64_t q, const Vec3d& r) {
         float* out = m_g.data() + 3 * q;
         out[0] = static_cast<float>(r.x);
@@ -195,8 +196,10 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     };
 
     // 0. Every vertex in grid coordinates: deformed in the target's, rest in the source's.
-    std::vector<Vec3d> deformed_grid(deformed_positions.size());
-    std::vector<Vec3d> rest_grid(rest_positions.size());
+    m_deformed_grid.resize(deformed_positions.size());
+    m_rest_grid.resize(rest_positions.size());
+    std::vector<Vec3d>& deformed_grid = m_deformed_grid;
+    std::vector<Vec3d>& rest_grid = m_rest_grid;
     parallel_for(static_cast<std::int64_t>(deformed_positions.size()), [&](std::int64_t v) {
         const auto i = static_cast<std::size_t>(v);
         deformed_grid[i] = grid_coordinate(deformed_positions[i], tf);
@@ -282,14 +285,49 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
 
     // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated. Reads `holder` (inside
     // nodes only), writes only its own node: parallel over layers.
+    // First, per node, whether a node of its 3 × 3 in x and y is held (a separable dilation);
+    // a node whose 3 × 3 × 3 has none (most nodes away from the body) is passed over at once.
+    const std::int64_t ny = m_nodes[1];
+    std::vector<std::uint8_t> near_x(static_cast<std::size_t>(num_nodes));
+    std::vector<std::uint8_t> near_xy(static_cast<std::size_t>(num_nodes));
+    const auto held = [&](std::int64_t q) {
+        return holder[static_cast<std::size_t>(q)] >= 0 ? 1 : 0;
+    };
+    parallel_for(
+        m_nodes[2],
+        [&](std::int64_t z) {
+            for (std::int64_t q = nxy * z; q < nxy * (z + 1); q += nx) {
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    int any = held(q + x);
+                    any |= x > 0 ? held(q + x - 1) : 0;
+                    any |= x + 1 < nx ? held(q + x + 1) : 0;
+                    near_x[static_cast<std::size_t>(q + x)] = static_cast<std::uint8_t>(any);
+                }
+            }
+            for (std::int64_t y = 0; y < ny; ++y) {
+                const std::uint8_t* row = near_x.data() + nx * y + nxy * z;
+                const std::uint8_t* below = y > 0 ? row - nx : row;
+                const std::uint8_t* above = y + 1 < ny ? row + nx : row;
+                std::uint8_t* out = near_xy.data() + nx * y + nxy * z;
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    out[x] = static_cast<std::uint8_t>(row[x] | below[x] | above[x]);
+                }
+            }
+        },
+        1);
     std::vector<std::int64_t> extrapolated(static_cast<std::size_t>(m_nodes[2]), 0);
     parallel_for(
         m_nodes[2],
         [&](std::int64_t z) {
+            const std::uint8_t* layer = near_xy.data() + nxy * z;
+            const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
+            const std::uint8_t* layer_above = z + 1 < m_nodes[2] ? layer + nxy : layer;
             for (std::int64_t y = 0; y < m_nodes[1]; ++y) {
                 for (std::int64_t x = 0; x < nx; ++x) {
                     const std::int64_t q = x + nx * y + nxy * z;
-                    if (holder[static_cast<std::size_t>(q)] >= 0) {
+                    const std::int64_t in_layer = x + nx * y;
+                    if (holder[static_cast<std::size_t>(q)] >= 0 ||
+                        (layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) == 0) {
                         continue;
                     }
                     const Vec3d node = node_at(x, y, z);

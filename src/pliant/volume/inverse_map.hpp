@@ -77,6 +77,10 @@ private:
     int m_b = 4;
     std::array<std::int64_t, 3> m_nodes{0, 0, 0};
     std::vector<float> m_g;
+    // Scratch of build(), kept between builds (no allocation per frame): the holder tet per node
+    // (−1: none) and the vertices in grid coordinates (deformed: target's, rest: source's).
+    std::vector<std::int32_t> m_holder;
+    std::vector<Vec3d> m_deformed_grid, m_rest_grid;
 };
 
 // Every voxel of target = the source sampled (trilinearly, as volume/resample.hpp samples) at the
