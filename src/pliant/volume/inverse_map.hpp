@@ -25,7 +25,9 @@
 //
 // Cost: O(#V + #T) for the inside nodes (parallel over tets: each raises the holder of the
 // nodes it holds to its index, an atomic maximum; then parallel over nodes: each takes its
-// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers).
+// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers; a separable
+// dilation of the held nodes first, so that nodes with no held neighbour are passed over without
+// reading their 26 neighbours).
 // Deterministic: the same map for any number of threads. Not thread safe to build; const access
 // from many threads is.
 #pragma once
