@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <span>
 
 #include "pliant/core/error.hpp"
@@ -57,6 +58,48 @@ inline std::uint64_t range_mask(int a, std::int64_t b, std::int64_t v0, std::int
     const auto lo = static_cast<std::size_t>((b << BRICK_SHIFT) >= v0 ? 0 : v0 & 3);
     const auto hi = static_cast<std::size_t>(((b + 1) << BRICK_SHIFT) <= v1 ? 3 : v1 & 3);
     return BRICK_MASKS[static_cast<std::size_t>(a)][lo][hi];
+}
+
+// The octants (detail::octant_of(), and the flips of detail::zero_axes_of()) that the rays of
+// kernel k may have. A ray's grid direction has the signs of v = forward + cx·right + cy·up
+// (perspective; forward itself for orthographic: every ray), v affine in the pixel's (cx, cy):
+// over the image its smallest and largest values per axis are at the 4 corner pixels. An axis
+// whose corners all lie beyond 1e-5 of the terms' magnitude (far above the float rounding of v)
+// on one side gives its rays that sign; otherwise both (a ray there may have either sign, or 0).
+int ray_octants(const detail::RayCastKernel& k) {
+    const double cx[2] = {(0.5 - 0.5 * k.width) * k.inv_focal,
+                          (k.width - 0.5 - 0.5 * k.width) * k.inv_focal};
+    const double cy[2] = {(0.5 * k.height - 0.5) * k.inv_focal,
+                          (0.5 * k.height - (k.height - 0.5)) * k.inv_focal};
+    int signs[3] = {0, 0, 0};  // bit 0: a ray may go along +a (or not move), bit 1: along −a
+    for (int a = 0; a < 3; ++a) {
+        const double f = k.forward[a], r = k.right[a], u = k.up[a];
+        double lo = f, hi = f, scale = std::abs(f);
+        if (k.is_perspective) {
+            lo = std::numeric_limits<double>::infinity();
+            hi = -lo;
+            for (const double x : cx) {
+                for (const double y : cy) {
+                    const double v = f + x * r + y * u;
+                    lo = std::min(lo, v);
+                    hi = std::max(hi, v);
+                }
+            }
+            scale += std::max(std::abs(cx[0]), std::abs(cx[1])) * std::abs(r) +
+                     std::max(std::abs(cy[0]), std::abs(cy[1])) * std::abs(u);
+        }
+        const double margin = 1e-5 * scale;
+        signs[a] = lo > margin ? 1 : hi < -margin ? 2 : 3;
+    }
+    int octants = 0;
+    for (int octant = 0; octant < 8; ++octant) {
+        bool possible = true;
+        for (int a = 0; a < 3; ++a) {
+            possible = possible && (signs[a] >> (octant >> a & 1) & 1) != 0;
+        }
+        octants |= possible ? 1 << octant : 0;
+    }
+    return octants;
 }
 
 double smallest(const Vec3d& s) {
@@ -380,16 +423,35 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
+    // The empty cubes are computed by render() for the octants its rays use.
     m_empty_cube.resize(8 * total);
+    {
+        const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+        m_octants_ready = 0;
+    }
+    m_map_ms = watch.elapsed_ms();
+}
+
+void MappedRayCaster::prepare_octants(int octants) const {
+    const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+    int todo[8];
+    int count = 0;
+    for (int octant = 0; octant < 8; ++octant) {
+        if ((octants >> octant & 1) != 0 && (m_octants_ready >> octant & 1) == 0) {
+            todo[count++] = octant;
+        }
+    }
+    const std::size_t total = m_occupancy.size();
     parallel_for(
-        8,
-        [&](std::int64_t octant) {
-            detail::empty_cubes(m_visible, m_cells.data(), static_cast<int>(octant),
+        count,
+        [&](std::int64_t i) {
+            const int octant = todo[i];
+            detail::empty_cubes(m_visible, m_cells.data(), octant,
                                 std::span<std::uint8_t>(m_empty_cube)
                                     .subspan(static_cast<std::size_t>(octant) * total, total));
         },
         1);
-    m_map_ms = watch.elapsed_ms();
+    m_octants_ready |= octants;
 }
 
 RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
@@ -442,6 +504,9 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
     }
 
+    if (k.skipping) {
+        prepare_octants(ray_octants(k));
+    }
     image = Image(k.width, k.height);
     const bool is_rgba = m_source->m_is_rgba;
     // The AVX2 march gives the scalar kernel's bits (detail/mapped_raycast_avx2.hpp).

@@ -43,8 +43,11 @@
 //     At the source scale (twist) the sub-cells cut the samples classified from 1.62 M to
 //     1.30 M (the exact route: 1.27 M).
 //   - Composite mode only (MIP through the map: InvalidInput).
-// Cost per frame: set_map() is O(map cells) (parallel over layers) plus the empty cubes and a
-// copy of the nodes padded to 4 floats; a sample costs one more trilinear interpolation of 3
+// Cost per frame: set_map() is O(map cells) (parallel over layers) plus a copy of the nodes
+// padded to 4 floats; the first render() after it computes the empty cubes (O(map cells) each)
+// of the octants its rays can have (1–4 for a camera outside the volume: the signs of the ray
+// directions at the image's 4 corners, both signs of an axis where they are within 1e-5 of 0),
+// the next renders those not computed yet; a sample costs one more trilinear interpolation of 3
 // floats (the map) than RayCaster's, and shaded samples read their 6 gradient samples in the
 // source. A ray's march ends at its early termination (no sample past it is classified). RGBA
 // and scalar sources on a CPU with AVX2 march 8 rays per vector, a lane refilled from the tile's
@@ -57,6 +60,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -82,10 +86,11 @@ public:
     MappedRayCaster& operator=(const MappedRayCaster&) = delete;
 
     // The map of the next renders (built for this caster's source and target frames; it must
-    // stay alive and unchanged until the next set_map()): the cells' occupancy and empty cubes.
+    // stay alive and unchanged until the next set_map()): the cells' and sub-cells' occupancy.
     // InvalidInput for a map that was not built. Not to be called during a render.
     void set_map(const volume::InverseMap& map);
     // Renders through the current map (InvalidInput before the first set_map()); resizes image.
+    // Computes the empty cubes its rays need first (serialized between concurrent renders).
     RayCastStats render(const Camera& camera, Image& image) const;
     // Changes the clipping plane of later renders; InvalidInput as RayCaster::set_clip.
     void set_clip(const std::optional<ClipPlane>& clip);
@@ -102,6 +107,8 @@ private:
     // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
     // value range reaches a lookup entry with opacity (scalar).
     bool hull_visible(const float lo[3], const float hi[3]) const;
+    // Computes the empty cubes of the octants (bit per octant) not yet computed for this map.
+    void prepare_octants(int octants) const;
     // The sub-cells of a valid map cell (nodes g + 3 (base + off[c]), c = x + 2 y + 4 z; [lo, hi]
     // the box of their values) that may have opacity, bit s_x + 2 s_y + 4 s_z
     // (detail::sub_cell_of()): the map is trilinear in the cell, so on a half-cell it is
@@ -130,8 +137,12 @@ private:
     // RGBA: the source voxels with α > 0, a 64-bit word per brick of 4³ voxels (x fastest).
     std::array<std::int64_t, 3> m_bricks{0, 0, 0};
     std::vector<std::uint64_t> m_brick_bits;
-    std::vector<std::uint8_t> m_empty_cube;  // 8 octants × map cells
-    std::vector<float> m_nodes4;             // the map's nodes, 4 floats each (x, y, z, 0)
+    // 8 octants × map cells, those of m_octants_ready computed (render() computes the octants
+    // its rays use that are not, under m_cubes_mutex).
+    mutable std::vector<std::uint8_t> m_empty_cube;
+    mutable int m_octants_ready = 0;
+    mutable std::mutex m_cubes_mutex;
+    std::vector<float> m_nodes4;  // the map's nodes, 4 floats each (x, y, z, 0)
 };
 
 }  // namespace pliant::render
