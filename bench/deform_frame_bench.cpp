@@ -156,8 +156,8 @@ int main(int argc, char** argv) {
         }
         Stage step{"step (10 substeps)"}, resample{"exact: resample"},
             update{"exact: RayCaster prepare/update"}, render_exact{"exact: render"},
-            build{"map: InverseMap::build"}, set_map{"map: set_map (occupancy, cubes)"},
-            render_map{"map: render"};
+            build{"map: InverseMap::build"}, set_map{"map: set_map (occupancy)"},
+            render_map{"map: render (+ empty cubes)"};
         render::Image exact_image, map_image;
         std::int64_t exact_samples = 0, map_samples = 0;
         volume::InverseMap map;

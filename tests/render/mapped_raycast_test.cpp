@@ -247,6 +247,73 @@ TEST(MappedRayCast, ScalarSourceThroughItsTransferFunction) {
     EXPECT_GE(db, 28.0);
 }
 
+// Sparse opaque voxels: most visible map cells have empty sub-cells, whose samples jump past
+// them; the images must stay those without skipping, from every side, shaded or not, with the
+// map changing between renders (the empty cubes of each render's octants).
+TEST(MappedRayCast, SubCellJumpsChangeNothingOnASparseSource) {
+    volume::Volume source = volume::Volume::allocate({32, 32, 32}, volume::VoxelType::rgba8,
+                                                     {1.0, 1.0, 1.0}, {0.0, 0.0, 0.0});
+    auto* v = reinterpret_cast<std::uint8_t*>(source.bytes().data());
+    std::uint32_t seed = 12345;
+    for (int i = 0; i < 40; ++i) {
+        std::int64_t at[3];
+        for (std::int64_t& c : at) {
+            seed = seed * 1664525u + 1013904223u;
+            c = 6 + static_cast<std::int64_t>((seed >> 8) % 20);
+        }
+        std::uint8_t* voxel = v + 4 * (at[0] + 32 * (at[1] + 32 * at[2]));
+        voxel[0] = 200;
+        voxel[1] = static_cast<std::uint8_t>(40 + 5 * i);
+        voxel[2] = 90;
+        voxel[3] = 255;
+    }
+    const Deformed twisted = deform(source, nullptr, Drive::twist, 6);
+    const Deformed rest = deform(source, nullptr, Drive::none, 0);
+    const volume::Volume target =
+        volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
+    volume::InverseMap maps[2];
+    maps[0].build(source, target, twisted.grid.mesh.tets, twisted.grid.mesh.positions,
+                  twisted.positions);
+    maps[1].build(source, target, rest.grid.mesh.tets, rest.grid.mesh.positions, rest.positions);
+    const AABBd box = source.bounds();
+    // Views from every side, axis views (rays with zero direction components) and an
+    // orthographic one; the maps alternate, so a view whose octants' empty cubes were computed
+    // for the other map would show it.
+    const Camera cameras[] = {
+        orbit_camera(box, 0.0, 35.0, 0.0, 80, 80),
+        orbit_camera(box, 75.0, 35.0, 0.0, 80, 80),
+        orbit_camera(box, 160.0, -40.0, 0.0, 80, 80),
+        orbit_camera(box, 250.0, 35.0, 0.0, 80, 80),
+        orbit_camera(box, 0.0, 0.0, 0.0, 80, 80),
+        orbit_camera(box, 90.0, 0.0, 0.0, 80, 80),
+        Camera::orthographic({16.0, -40.0, 16.0}, {16.0, 16.0, 16.0}, {0.0, 0.0, 1.0}, 40.0, 80,
+                             80),
+        Camera::orthographic({60.0, -30.0, 50.0}, {16.0, 16.0, 16.0}, {0.0, 0.0, 1.0}, 40.0, 80,
+                             80),
+    };
+    for (const bool shading : {false, true}) {
+        RayCastOptions options;
+        options.shading = shading;
+        MappedRayCaster skipping(source, nullptr, target, options);
+        options.empty_space_skipping = false;
+        MappedRayCaster every(source, nullptr, target, options);
+        int view = 0;
+        for (int round = 0; round < 2; ++round) {
+            for (const Camera& camera : cameras) {
+                const volume::InverseMap& map = maps[(view++ + round) % 2];
+                skipping.set_map(map);
+                every.set_map(map);
+                Image a, b;
+                const RayCastStats sa = skipping.render(camera, a);
+                const RayCastStats sb = every.render(camera, b);
+                EXPECT_EQ(a.pixels, b.pixels) << "view " << view << ", shading " << shading;
+                EXPECT_LT(2 * sa.samples, sb.samples) << "view " << view;
+                EXPECT_NE(a.pixels, Image(80, 80).pixels) << "view " << view;
+            }
+        }
+    }
+}
+
 TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     const volume::Volume& source = rgba64();
     const Deformed d = deform(source, nullptr, Drive::twist, 12);

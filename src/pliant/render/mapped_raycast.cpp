@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <span>
 
 #include "pliant/core/error.hpp"
@@ -20,9 +21,86 @@ namespace {
 
 constexpr int BLOCK = 2;        // scalar sources' occupancy blocks, voxels per edge
 constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
+constexpr int BRICK = 4;        // RGBA sources' occupancy bricks (64 bits), voxels per edge
+constexpr int BRICK_SHIFT = 2;  // log2(BRICK)
 // Source grid units the box of a map cell's node values is widened by: far above the rounding
 // of the float trilinear interpolation of coordinates below a few thousand.
 constexpr float HULL_MARGIN = 1.0f / 32.0f;
+
+// The bits of a brick (bit x + 4 y + 16 z) whose coordinate along axis a lies in [lo, hi] ⊂ [0, 3].
+constexpr std::uint64_t brick_mask(int a, int lo, int hi) {
+    std::uint64_t mask = 0;
+    for (int bit = 0; bit < 64; ++bit) {
+        const int c = (bit >> (2 * a)) & 3;
+        if (c >= lo && c <= hi) {
+            mask |= std::uint64_t{1} << bit;
+        }
+    }
+    return mask;
+}
+
+// brick_mask(a, lo, hi) at [a][lo][hi].
+constexpr std::array<std::array<std::array<std::uint64_t, 4>, 4>, 3> BRICK_MASKS = [] {
+    std::array<std::array<std::array<std::uint64_t, 4>, 4>, 3> t{};
+    for (int a = 0; a < 3; ++a) {
+        for (int lo = 0; lo < 4; ++lo) {
+            for (int hi = lo; hi < 4; ++hi) {
+                t[static_cast<std::size_t>(a)][static_cast<std::size_t>(lo)]
+                 [static_cast<std::size_t>(hi)] = brick_mask(a, lo, hi);
+            }
+        }
+    }
+    return t;
+}();
+
+// The bits of the bricks at brick coordinate b along axis a of the voxel range [v0, v1].
+inline std::uint64_t range_mask(int a, std::int64_t b, std::int64_t v0, std::int64_t v1) {
+    const auto lo = static_cast<std::size_t>((b << BRICK_SHIFT) >= v0 ? 0 : v0 & 3);
+    const auto hi = static_cast<std::size_t>(((b + 1) << BRICK_SHIFT) <= v1 ? 3 : v1 & 3);
+    return BRICK_MASKS[static_cast<std::size_t>(a)][lo][hi];
+}
+
+// The octants (detail::octant_of(), and the flips of detail::zero_axes_of()) that the rays of
+// kernel k may have. A ray's grid direction has the signs of v = forward + cx·right + cy·up
+// (perspective; forward itself for orthographic: every ray), v affine in the pixel's (cx, cy):
+// over the image its smallest and largest values per axis are at the 4 corner pixels. An axis
+// whose corners all lie beyond 1e-5 of the terms' magnitude (far above the float rounding of v)
+// on one side gives its rays that sign; otherwise both (a ray there may have either sign, or 0).
+int ray_octants(const detail::RayCastKernel& k) {
+    const double cx[2] = {(0.5 - 0.5 * k.width) * k.inv_focal,
+                          (k.width - 0.5 - 0.5 * k.width) * k.inv_focal};
+    const double cy[2] = {(0.5 * k.height - 0.5) * k.inv_focal,
+                          (0.5 * k.height - (k.height - 0.5)) * k.inv_focal};
+    int signs[3] = {0, 0, 0};  // bit 0: a ray may go along +a (or not move), bit 1: along −a
+    for (int a = 0; a < 3; ++a) {
+        const double f = k.forward[a], r = k.right[a], u = k.up[a];
+        double lo = f, hi = f, scale = std::abs(f);
+        if (k.is_perspective) {
+            lo = std::numeric_limits<double>::infinity();
+            hi = -lo;
+            for (const double x : cx) {
+                for (const double y : cy) {
+                    const double v = f + x * r + y * u;
+                    lo = std::min(lo, v);
+                    hi = std::max(hi, v);
+                }
+            }
+            scale += std::max(std::abs(cx[0]), std::abs(cx[1])) * std::abs(r) +
+                     std::max(std::abs(cy[0]), std::abs(cy[1])) * std::abs(u);
+        }
+        const double margin = 1e-5 * scale;
+        signs[a] = lo > margin ? 1 : hi < -margin ? 2 : 3;
+    }
+    int octants = 0;
+    for (int octant = 0; octant < 8; ++octant) {
+        bool possible = true;
+        for (int a = 0; a < 3; ++a) {
+            possible = possible && (signs[a] >> (octant >> a & 1) & 1) != 0;
+        }
+        octants |= possible ? 1 << octant : 0;
+    }
+    return octants;
+}
 
 double smallest(const Vec3d& s) {
     return std::min({s.x, s.y, s.z});
@@ -97,33 +175,32 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             1);
     }
     if (m_source->m_is_rgba) {
-        // Summed-volume table of the voxels with α > 0: m_sat[(x + 1) + sx (y + 1) + sxy (z + 1)]
-        // counts those in [0, x] × [0, y] × [0, z] (row and layer 0 are zeros).
-        const std::int64_t sx = n[0] + 1, sxy = sx * (n[1] + 1);
-        m_sat.assign(static_cast<std::size_t>(sxy * (n[2] + 1)), 0);
+        // Bricks of 4³ voxels, bit (x & 3) + 4 (y & 3) + 16 (z & 3) set for a voxel with α > 0
+        // (bits past the volume's end stay 0). Parallel over brick layers, each written by one
+        // task.
+        for (int a = 0; a < 3; ++a) {
+            m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
+        }
+        m_brick_bits.assign(static_cast<std::size_t>(m_bricks[0] * m_bricks[1] * m_bricks[2]), 0);
         parallel_for(
-            n[2],
-            [&](std::int64_t z) {
-                std::int32_t* layer = m_sat.data() + sxy * (z + 1);
-                for (std::int64_t y = 0; y < n[1]; ++y) {
-                    const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
-                    std::int32_t* out = layer + sx * (y + 1);
-                    const std::int32_t* above = layer + sx * y;
-                    std::int32_t run = 0;
-                    for (std::int64_t x = 0; x < n[0]; ++x) {
-                        run += row[4 * x] > 0.0f ? 1 : 0;
-                        out[x + 1] = run + above[x + 1];
+            m_bricks[2],
+            [&](std::int64_t bz) {
+                for (std::int64_t z = bz * BRICK; z < std::min(n[2], (bz + 1) * BRICK); ++z) {
+                    for (std::int64_t y = 0; y < n[1]; ++y) {
+                        const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
+                        std::uint64_t* out =
+                            m_brick_bits.data() + m_bricks[0] * ((y >> 2) + m_bricks[1] * bz);
+                        const int shift = static_cast<int>(4 * (y & 3) + 16 * (z & 3));
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            if (row[4 * x] > 0.0f) {
+                                out[x >> 2] |= std::uint64_t{1}
+                                               << (shift + static_cast<int>(x & 3));
+                            }
+                        }
                     }
                 }
             },
             1);
-        for (std::int64_t z = 1; z < n[2]; ++z) {
-            std::int32_t* layer = m_sat.data() + sxy * (z + 1);
-            const std::int32_t* below = layer - sxy;
-            for (std::int64_t i = 0; i < sxy; ++i) {
-                layer[i] += below[i];
-            }
-        }
     }
     m_prepare_ms = watch.elapsed_ms();
 }
@@ -162,18 +239,26 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
                 (n > 1 ? 1 : 0);
     }
     if (m_source->m_is_rgba) {
-        // Voxels with α > 0 in the box, from the summed-volume table.
-        const std::int64_t sx = m_source_dims[0] + 1;
-        const std::int64_t sxy = sx * (m_source_dims[1] + 1);
-        const auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-            return static_cast<std::int64_t>(m_sat[static_cast<std::size_t>(x + sx * y + sxy * z)]);
-        };
-        const std::int64_t x0 = v0[0], y0 = v0[1], z0 = v0[2];
-        const std::int64_t x1 = v1[0] + 1, y1 = v1[1] + 1, z1 = v1[2] + 1;
-        const std::int64_t count = at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) -
-                                   at(x1, y1, z0) + at(x0, y0, z1) + at(x0, y1, z0) +
-                                   at(x1, y0, z0) - at(x0, y0, z0);
-        return count > 0;
+        // Voxels with α > 0 in the box, from the bricks it overlaps (exact per voxel).
+        std::int64_t b0[3], b1[3];
+        for (int a = 0; a < 3; ++a) {
+            b0[a] = v0[a] >> BRICK_SHIFT;
+            b1[a] = v1[a] >> BRICK_SHIFT;
+        }
+        for (std::int64_t bz = b0[2]; bz <= b1[2]; ++bz) {
+            const std::uint64_t mz = range_mask(2, bz, v0[2], v1[2]);
+            for (std::int64_t by = b0[1]; by <= b1[1]; ++by) {
+                const std::uint64_t myz = mz & range_mask(1, by, v0[1], v1[1]);
+                const std::uint64_t* row =
+                    m_brick_bits.data() + m_bricks[0] * (by + m_bricks[1] * bz);
+                for (std::int64_t bx = b0[0]; bx <= b1[0]; ++bx) {
+                    if ((row[bx] & myz & range_mask(0, bx, v0[0], v1[0])) != 0) {
+                        return true;
+                    }
+                }
+            }
+        }
+        return false;
     }
     float vmin = std::numeric_limits<float>::infinity();
     float vmax = -std::numeric_limits<float>::infinity();
@@ -197,6 +282,68 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
     return m_nonzero_prefix[static_cast<std::size_t>(i1) + 1] -
                m_nonzero_prefix[static_cast<std::size_t>(i0)] >
            0;
+}
+
+std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,
+                                                const std::int64_t off[8], const float lo[3],
+                                                const float hi[3]) const {
+    // Every half-cell has the cell's centre (the mean of its nodes) as a corner, so its box
+    // holds the centre's: when the voxels the centre reads have opacity, all 8 are visible
+    // (inside the body, most cells). Else, when the cell's box has none, none is.
+    float centre[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        const float* v = g + 3 * base + ch;
+        centre[ch] = 0.5f * (0.5f * (0.5f * (v[3 * off[0]] + v[3 * off[1]]) +
+                                     0.5f * (v[3 * off[2]] + v[3 * off[3]])) +
+                             0.5f * (0.5f * (v[3 * off[4]] + v[3 * off[5]]) +
+                                     0.5f * (v[3 * off[6]] + v[3 * off[7]])));
+    }
+    if (hull_visible(centre, centre)) {
+        return 0xFF;
+    }
+    if (!hull_visible(lo, hi)) {
+        return 0;
+    }
+    // The map at the 3³ lattice of half-cell fractions: per channel, the node values (lattice
+    // points 0 and 2 per axis) and their midpoints, along x, then y, then z.
+    float lattice[27][3];
+    for (int c = 0; c < 8; ++c) {
+        const float* v = g + 3 * (base + off[c]);
+        const int at = 2 * (c & 1) + 6 * ((c >> 1) & 1) + 18 * (c >> 2);
+        for (int ch = 0; ch < 3; ++ch) {
+            lattice[at][ch] = v[ch];
+        }
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+        for (const int row : {0, 6, 18, 24}) {  // x midpoints of the rows y, z ∈ {0, 2}
+            lattice[row + 1][ch] = 0.5f * (lattice[row][ch] + lattice[row + 2][ch]);
+        }
+        for (const int z : {0, 18}) {  // y midpoints of the layers z ∈ {0, 2}
+            for (int x = 0; x < 3; ++x) {
+                lattice[z + 3 + x][ch] = 0.5f * (lattice[z + x][ch] + lattice[z + 6 + x][ch]);
+            }
+        }
+        for (int xy = 0; xy < 9; ++xy) {  // z midpoints
+            lattice[9 + xy][ch] = 0.5f * (lattice[xy][ch] + lattice[18 + xy][ch]);
+        }
+    }
+    std::uint8_t bits = 0;
+    for (int sub = 0; sub < 8; ++sub) {
+        const int first = (sub & 1) + 3 * ((sub >> 1) & 1) + 9 * (sub >> 2);
+        float sub_lo[3] = {lattice[first][0], lattice[first][1], lattice[first][2]};
+        float sub_hi[3] = {sub_lo[0], sub_lo[1], sub_lo[2]};
+        for (int c = 1; c < 8; ++c) {
+            const float* v = lattice[first + (c & 1) + 3 * ((c >> 1) & 1) + 9 * (c >> 2)];
+            for (int a = 0; a < 3; ++a) {
+                sub_lo[a] = std::min(sub_lo[a], v[a]);
+                sub_hi[a] = std::max(sub_hi[a], v[a]);
+            }
+        }
+        if (hull_visible(sub_lo, sub_hi)) {
+            bits = static_cast<std::uint8_t>(bits | (1 << sub));
+        }
+    }
+    return bits;
 }
 
 void MappedRayCaster::set_map(const volume::InverseMap& map) {
@@ -224,6 +371,7 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const std::int64_t cx_n = m_cells[0], cy_n = m_cells[1], cz_n = m_cells[2];
     const auto total = static_cast<std::size_t>(cx_n * cy_n * cz_n);
     m_occupancy.resize(total);
+    m_sub_occupied.resize(total);
     m_visible.resize(total);
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
@@ -249,12 +397,13 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                         }
                     }
                     std::uint8_t bits = valid ? detail::MAP_CELL_VALID : 0;
-                    bool visible = valid && hull_visible(lo, hi);
-                    if (visible) {
+                    const std::uint8_t sub = valid ? sub_cells_visible(g, base, off, lo, hi) : 0;
+                    if (sub != 0) {
                         bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
                     }
                     m_occupancy[cell] = bits;
-                    m_visible[cell] = visible ? 1 : 0;
+                    m_sub_occupied[cell] = sub;
+                    m_visible[cell] = sub != 0 ? 1 : 0;
                 }
             }
         },
@@ -274,16 +423,35 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
+    // The empty cubes are computed by render() for the octants its rays use.
     m_empty_cube.resize(8 * total);
+    {
+        const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+        m_octants_ready = 0;
+    }
+    m_map_ms = watch.elapsed_ms();
+}
+
+void MappedRayCaster::prepare_octants(int octants) const {
+    const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+    int todo[8];
+    int count = 0;
+    for (int octant = 0; octant < 8; ++octant) {
+        if ((octants >> octant & 1) != 0 && (m_octants_ready >> octant & 1) == 0) {
+            todo[count++] = octant;
+        }
+    }
+    const std::size_t total = m_occupancy.size();
     parallel_for(
-        8,
-        [&](std::int64_t octant) {
-            detail::empty_cubes(m_visible, m_cells.data(), static_cast<int>(octant),
+        count,
+        [&](std::int64_t i) {
+            const int octant = todo[i];
+            detail::empty_cubes(m_visible, m_cells.data(), octant,
                                 std::span<std::uint8_t>(m_empty_cube)
                                     .subspan(static_cast<std::size_t>(octant) * total, total));
         },
         1);
-    m_map_ms = watch.elapsed_ms();
+    m_octants_ready |= octants;
 }
 
 RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
@@ -329,11 +497,16 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.b = static_cast<float>(m_map->node_voxels());
     m.inv_b = 1.0f / m.b;
     m.occupancy = m_occupancy.data();
+    m.sub_occupied = m_sub_occupied.data();
+    m.half_b = 0.5f * m.b;
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
     }
 
+    if (k.skipping) {
+        prepare_octants(ray_octants(k));
+    }
     image = Image(k.width, k.height);
     const bool is_rgba = m_source->m_is_rgba;
     // The AVX2 march gives the scalar kernel's bits (detail/mapped_raycast_avx2.hpp).

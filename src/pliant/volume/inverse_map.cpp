@@ -72,6 +72,47 @@ TetMap tet_frame(const Vec3d p[4]) {
     return m;
 }
 
+// tet_frame() for FRAME_BATCH tets at once, structure of arrays: p[vertex][axis][lane] in,
+// det[lane] and rows[k][axis][lane] out (rows for a degenerate tet are whatever the division
+// gives; tet_frame() refuses a det that is 0 or not finite). Lane by lane the operations and their
+// order are tet_frame()'s, so the rows are its bits.
+constexpr int FRAME_BATCH = 8;
+struct FrameBatch {
+    double p[4][3][FRAME_BATCH];
+    double det[FRAME_BATCH];
+    double rows[3][3][FRAME_BATCH];
+
+    void compute() {
+        for (int i = 0; i < FRAME_BATCH; ++i) {
+            const double e0x = p[0][0][i] - p[3][0][i], e0y = p[0][1][i] - p[3][1][i],
+                         e0z = p[0][2][i] - p[3][2][i];
+            const double e1x = p[1][0][i] - p[3][0][i], e1y = p[1][1][i] - p[3][1][i],
+                         e1z = p[1][2][i] - p[3][2][i];
+            const double e2x = p[2][0][i] - p[3][0][i], e2y = p[2][1][i] - p[3][1][i],
+                         e2z = p[2][2][i] - p[3][2][i];
+            // cross(e1, e2), cross(e2, e0), cross(e0, e1) as core/vec3.hpp's cross().
+            const double c0x = e1y * e2z - e1z * e2y, c0y = e1z * e2x - e1x * e2z,
+                         c0z = e1x * e2y - e1y * e2x;
+            const double c1x = e2y * e0z - e2z * e0y, c1y = e2z * e0x - e2x * e0z,
+                         c1z = e2x * e0y - e2y * e0x;
+            const double c2x = e0y * e1z - e0z * e1y, c2y = e0z * e1x - e0x * e1z,
+                         c2z = e0x * e1y - e0y * e1x;
+            const double d = e0x * c0x + e0y * c0y + e0z * c0z;  // dot(e0, cross(e1, e2))
+            const double inv = 1.0 / d;
+            det[i] = d;
+            rows[0][0][i] = c0x * inv;
+            rows[0][1][i] = c0y * inv;
+            rows[0][2][i] = c0z * inv;
+            rows[1][0][i] = c1x * inv;
+            rows[1][1][i] = c1y * inv;
+            rows[1][2][i] = c1z * inv;
+            rows[2][0][i] = c2x * inv;
+            rows[2][1][i] = c2y * inv;
+            rows[2][2][i] = c2z * inv;
+        }
+    }
+};
+
 // The map of a tet from its deformed vertices p and its rest vertices (source grid coordinates,
 // per vertex).
 TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3d> rest_grid, const Vec3d p[4]) {
@@ -186,7 +227,8 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const std::int64_t nxy = m_nodes[0] * m_nodes[1];
     const std::int64_t num_nodes = nxy * m_nodes[2];
     m_g.assign(static_cast<std::size_t>(3 * num_nodes), std::numeric_limits<float>::quiet_NaN());
-    std::vector<std::int32_t> holder(static_cast<std::size_t>(num_nodes), -1);
+    m_holder.assign(static_cast<std::size_t>(num_nodes), -1);
+    std::vector<std::int32_t>& holder = m_holder;
     auto store = [&](std::int64_t q, const Vec3d& r) {
         float* out = m_g.data() + 3 * q;
         out[0] = static_cast<float>(r.x);
@@ -195,8 +237,10 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     };
 
     // 0. Every vertex in grid coordinates: deformed in the target's, rest in the source's.
-    std::vector<Vec3d> deformed_grid(deformed_positions.size());
-    std::vector<Vec3d> rest_grid(rest_positions.size());
+    m_deformed_grid.resize(deformed_positions.size());
+    m_rest_grid.resize(rest_positions.size());
+    std::vector<Vec3d>& deformed_grid = m_deformed_grid;
+    std::vector<Vec3d>& rest_grid = m_rest_grid;
     parallel_for(static_cast<std::int64_t>(deformed_positions.size()), [&](std::int64_t v) {
         const auto i = static_cast<std::size_t>(v);
         deformed_grid[i] = grid_coordinate(deformed_positions[i], tf);
@@ -221,46 +265,76 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     // holder's map.
     InverseMapStats stats;
     stats.num_nodes = num_nodes;
+    // Tets in batches of FRAME_BATCH: their barycentric rows as tet_frame() computes them, the
+    // same operations in the same order lane by lane (arrays the compiler can vectorize; no
+    // contraction, -ffp-contract=off), then each tet's nodes.
+    const auto num_tets = static_cast<std::int64_t>(tets.size());
     parallel_for(
-        static_cast<std::int64_t>(tets.size()),
-        [&](std::int64_t t) {
-            const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-            Vec3d p[4];
-            tet_vertices(tet, deformed_grid, p);
-            std::int64_t lo[3], hi[3];
-            bool is_empty = false;
-            for (int a = 0; a < 3; ++a) {
-                node_range(p, a, b, exact_inv_b, m_nodes[static_cast<std::size_t>(a)], lo[a],
-                           hi[a]);
-                is_empty = is_empty || lo[a] > hi[a];
+        (num_tets + FRAME_BATCH - 1) / FRAME_BATCH,
+        [&](std::int64_t batch) {
+            const std::int64_t first = batch * FRAME_BATCH;
+            const int count =
+                static_cast<int>(std::min<std::int64_t>(FRAME_BATCH, num_tets - first));
+            FrameBatch f;
+            for (int i = 0; i < FRAME_BATCH; ++i) {
+                // Lanes past the end repeat the first tet (computed, not used).
+                const geometry::Tet& tet =
+                    tets[static_cast<std::size_t>(first + (i < count ? i : 0))];
+                for (int v = 0; v < 4; ++v) {
+                    const Vec3d& x =
+                        deformed_grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
+                    f.p[v][0][i] = x.x;
+                    f.p[v][1][i] = x.y;
+                    f.p[v][2][i] = x.z;
+                }
             }
-            // Most tets hold no node: their box is tested before their map is set up.
-            if (is_empty) {
-                return;
-            }
-            const TetMap m = tet_frame(p);  // λ only: the rest part is taken in (b)
-            if (!m.ok) {
-                return;
-            }
-            for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                    for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                        double l[3];
-                        if (!(m.lambda(node_at(x, y, z), l) >= -1e-9)) {
-                            continue;
-                        }
-                        std::atomic_ref<std::int32_t> h(
-                            holder[static_cast<std::size_t>(x + nx * y + nxy * z)]);
-                        std::int32_t current = h.load(std::memory_order_relaxed);
-                        const auto index = static_cast<std::int32_t>(t);
-                        while (current < index && !h.compare_exchange_weak(
-                                                      current, index, std::memory_order_relaxed)) {
+            f.compute();
+            for (int i = 0; i < count; ++i) {
+                Vec3d p[4];
+                for (int v = 0; v < 4; ++v) {
+                    p[v] = Vec3d{f.p[v][0][i], f.p[v][1][i], f.p[v][2][i]};
+                }
+                std::int64_t lo[3], hi[3];
+                bool is_empty = false;
+                for (int a = 0; a < 3; ++a) {
+                    node_range(p, a, b, exact_inv_b, m_nodes[static_cast<std::size_t>(a)], lo[a],
+                               hi[a]);
+                    is_empty = is_empty || lo[a] > hi[a];
+                }
+                if (is_empty) {
+                    continue;
+                }
+                const double det = f.det[i];
+                if (!(std::abs(det) > 0.0) || !std::isfinite(det)) {
+                    continue;  // degenerate (tet_frame(): not ok)
+                }
+                TetMap m;  // λ only: the rest part is taken in (b)
+                for (int k = 0; k < 3; ++k) {
+                    m.rows[k] = Vec3d{f.rows[k][0][i], f.rows[k][1][i], f.rows[k][2][i]};
+                }
+                m.p3 = p[3];
+                m.ok = true;
+                const auto index = static_cast<std::int32_t>(first + i);
+                for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                            double l[3];
+                            if (!(m.lambda(node_at(x, y, z), l) >= -1e-9)) {
+                                continue;
+                            }
+                            std::atomic_ref<std::int32_t> h(
+                                holder[static_cast<std::size_t>(x + nx * y + nxy * z)]);
+                            std::int32_t current = h.load(std::memory_order_relaxed);
+                            while (current < index &&
+                                   !h.compare_exchange_weak(current, index,
+                                                            std::memory_order_relaxed)) {
+                            }
                         }
                     }
                 }
             }
         },
-        1024);
+        128);
     parallel_for(
         m_nodes[2],
         [&](std::int64_t z) {
@@ -282,14 +356,49 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
 
     // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated. Reads `holder` (inside
     // nodes only), writes only its own node: parallel over layers.
+    // First, per node, whether a node of its 3 × 3 in x and y is held (a separable dilation);
+    // a node whose 3 × 3 × 3 has none (most nodes away from the body) is passed over at once.
+    const std::int64_t ny = m_nodes[1];
+    std::vector<std::uint8_t> near_x(static_cast<std::size_t>(num_nodes));
+    std::vector<std::uint8_t> near_xy(static_cast<std::size_t>(num_nodes));
+    const auto held = [&](std::int64_t q) {
+        return holder[static_cast<std::size_t>(q)] >= 0 ? 1 : 0;
+    };
+    parallel_for(
+        m_nodes[2],
+        [&](std::int64_t z) {
+            for (std::int64_t q = nxy * z; q < nxy * (z + 1); q += nx) {
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    int any = held(q + x);
+                    any |= x > 0 ? held(q + x - 1) : 0;
+                    any |= x + 1 < nx ? held(q + x + 1) : 0;
+                    near_x[static_cast<std::size_t>(q + x)] = static_cast<std::uint8_t>(any);
+                }
+            }
+            for (std::int64_t y = 0; y < ny; ++y) {
+                const std::uint8_t* row = near_x.data() + nx * y + nxy * z;
+                const std::uint8_t* below = y > 0 ? row - nx : row;
+                const std::uint8_t* above = y + 1 < ny ? row + nx : row;
+                std::uint8_t* out = near_xy.data() + nx * y + nxy * z;
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    out[x] = static_cast<std::uint8_t>(row[x] | below[x] | above[x]);
+                }
+            }
+        },
+        1);
     std::vector<std::int64_t> extrapolated(static_cast<std::size_t>(m_nodes[2]), 0);
     parallel_for(
         m_nodes[2],
         [&](std::int64_t z) {
+            const std::uint8_t* layer = near_xy.data() + nxy * z;
+            const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
+            const std::uint8_t* layer_above = z + 1 < m_nodes[2] ? layer + nxy : layer;
             for (std::int64_t y = 0; y < m_nodes[1]; ++y) {
                 for (std::int64_t x = 0; x < nx; ++x) {
                     const std::int64_t q = x + nx * y + nxy * z;
-                    if (holder[static_cast<std::size_t>(q)] >= 0) {
+                    const std::int64_t in_layer = x + nx * y;
+                    if (holder[static_cast<std::size_t>(q)] >= 0 ||
+                        (layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) == 0) {
                         continue;
                     }
                     const Vec3d node = node_at(x, y, z);

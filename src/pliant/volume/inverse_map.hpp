@@ -25,7 +25,9 @@
 //
 // Cost: O(#V + #T) for the inside nodes (parallel over tets: each raises the holder of the
 // nodes it holds to its index, an atomic maximum; then parallel over nodes: each takes its
-// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers).
+// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers; a separable
+// dilation of the held nodes first, so that nodes with no held neighbour are passed over without
+// reading their 26 neighbours).
 // Deterministic: the same map for any number of threads. Not thread safe to build; const access
 // from many threads is.
 #pragma once
@@ -77,6 +79,10 @@ private:
     int m_b = 4;
     std::array<std::int64_t, 3> m_nodes{0, 0, 0};
     std::vector<float> m_g;
+    // Scratch of build(), kept between builds (no allocation per frame): the holder tet per node
+    // (−1: none) and the vertices in grid coordinates (deformed: target's, rest: source's).
+    std::vector<std::int32_t> m_holder;
+    std::vector<Vec3d> m_deformed_grid, m_rest_grid;
 };
 
 // Every voxel of target = the source sampled (trilinearly, as volume/resample.hpp samples) at the

@@ -333,6 +333,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     const __m256 threshold = _mm256_set1_ps(k.threshold);
     const __m256 b = _mm256_set1_ps(m.b);
     const __m256 inv_b = _mm256_set1_ps(m.inv_b);
+    const __m256 half_b = _mm256_set1_ps(m.half_b);
     const __m256 g_max[3] = {_mm256_set1_ps(k.g_max[0]), _mm256_set1_ps(k.g_max[1]),
                              _mm256_set1_ps(k.g_max[2])};
     const __m256i last_cell[3] = {_mm256_set1_epi32(m.cells[0] - 1),
@@ -370,11 +371,35 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         __m256i classified;
         alignas(32) std::int32_t at[LANES];
         if (k.skipping) {
+            // Lanes in an empty cube of cells jump past it (map_jump()); the others, in an empty
+            // sub-cell (sub_cell_of(): s_a = f_a ≥ 1/2), past that sub-cell (sub_cell_jump()).
             const __m256i side = cube_side8(s, cubes, cubes, cell, slots.more_count > 0);
-            const __m256i jumps =
+            const __m256i cube_jumps =
                 _mm256_and_si256(live, _mm256_cmpgt_epi32(side, _mm256_setzero_si256()));
+            __m256i sub[3];
+            for (int a = 0; a < 3; ++a) {
+                sub[a] = _mm256_and_si256(as_int(_mm256_cmp_ps(f[a], half, _CMP_GE_OQ)), one_i);
+            }
+            const __m256i bit = _mm256_or_si256(
+                sub[0],
+                _mm256_or_si256(_mm256_slli_epi32(sub[1], 1), _mm256_slli_epi32(sub[2], 2)));
+            store(at, cell);
+            const __m256i occupied = _mm256_cmpgt_epi32(
+                _mm256_and_si256(_mm256_srlv_epi32(load_bytes(m.sub_occupied, at), bit), one_i),
+                _mm256_setzero_si256());
+            const __m256i sub_jumps =
+                _mm256_andnot_si256(_mm256_or_si256(cube_jumps, occupied), live);
+            const __m256i jumps = _mm256_or_si256(cube_jumps, sub_jumps);
             if (_mm256_movemask_ps(as_float(jumps)) != 0) {
-                n_next = jump8(s, q, side, b, jumps, n_next, num_full, t_near, inv_step);
+                __m256i jump_q[3];
+                for (int a = 0; a < 3; ++a) {
+                    jump_q[a] = _mm256_blendv_epi8(
+                        q[a], _mm256_add_epi32(_mm256_add_epi32(q[a], q[a]), sub[a]), sub_jumps);
+                }
+                const __m256i jump_side = _mm256_blendv_epi8(side, one_i, sub_jumps);
+                const __m256 jump_size = _mm256_blendv_ps(b, half_b, as_float(sub_jumps));
+                n_next = jump8(s, jump_q, jump_side, jump_size, jumps, n_next, num_full, t_near,
+                               inv_step);
             }
             classified = _mm256_andnot_si256(jumps, live);
         } else {

@@ -7,7 +7,9 @@
 // (B = node_voxels); a sample at target grid coordinate t (clamped to [0, n − 1] as locate()
 // clamps) is interpolated in node cell q = min(⌊t / B⌋, cells − 1) with fraction t / B − q.
 // The occupancy test of a sample is that same cell, and empty-space jumps leave a cube of empty
-// cells through its far planes pulled in by the ray's margin, as raycast_kernel.hpp's jump().
+// cells through its far planes pulled in by the ray's margin, as raycast_kernel.hpp's jump(); in
+// a visible cell, a sample in an empty sub-cell (sub_cell_of(): the half of the cell along each
+// axis its fraction lies in) jumps past that sub-cell the same way.
 #pragma once
 
 #include <algorithm>
@@ -37,7 +39,11 @@ struct MappedKernel {
     int cells[3] = {0, 0, 0};                 // map cells per axis: nodes − 1
     float b = 4.0f;                           // node_voxels
     float inv_b = 0.25f;
+    float half_b = 2.0f;                      // node_voxels / 2: a sub-cell's edge
     const std::uint8_t* occupancy = nullptr;  // per map cell: MAP_CELL_* bits
+    // Per map cell: bit sub_cell_of() set when some sample in that sub-cell may have opacity
+    // (0 for a cell that is not visible).
+    const std::uint8_t* sub_occupied = nullptr;
     const std::uint8_t* empty_cube[8] = {};   // per octant, per map cell (empty_cubes())
     float source_hi[3] = {0.0f, 0.0f, 0.0f};  // the source box [−0.5, n − 0.5] per axis
 };
@@ -60,6 +66,16 @@ PLIANT_HOST_DEVICE inline MapCell locate_map(const MappedKernel& m, Vec3f g) {
     c.index = c.q[0] + static_cast<std::int64_t>(m.cells[0]) *
                            (c.q[1] + static_cast<std::int64_t>(m.cells[1]) * c.q[2]);
     return c;
+}
+
+// The sub-cell of a sample in map cell c: its 2³ halves, s_a = 1 where the fraction f_a ≥ 1/2;
+// bit s_x + 2 s_y + 4 s_z of MappedKernel::sub_occupied.
+PLIANT_HOST_DEVICE inline int sub_cell_of(const MapCell& c) {
+    return (c.f[0] >= 0.5f ? 1 : 0) | (c.f[1] >= 0.5f ? 2 : 0) | (c.f[2] >= 0.5f ? 4 : 0);
+}
+
+PLIANT_HOST_DEVICE inline bool sub_cell_occupied(const MappedKernel& m, const MapCell& c) {
+    return ((m.sub_occupied[c.index] >> sub_cell_of(c)) & 1) != 0;
 }
 
 // The source grid coordinate of the sample in map cell c (trilinear in the 8 nodes) and, when
@@ -163,10 +179,25 @@ PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const Gri
     return sample_past_exit(r, exit_pos, exit_neg, m.target.inv_step, n, num_full);
 }
 
+// The first sample past the empty sub-cell that holds sample n (in map cell c), at least n + 1:
+// map_jump() of a cube of one sub-cell, B / 2 target voxels wide, at sub-cell 2 q + s.
+PLIANT_HOST_DEVICE inline std::int64_t sub_cell_jump(const MappedKernel& m, const GridRay& r,
+                                                     const MapCell& c, std::int64_t n,
+                                                     std::int64_t num_full) {
+    float exit_pos[3], exit_neg[3];
+    const int s = sub_cell_of(c);
+    for (int a = 0; a < 3; ++a) {
+        const int sub = 2 * c.q[a] + ((s >> a) & 1);
+        exit_pos[a] = static_cast<float>(sub + 1) * m.half_b;
+        exit_neg[a] = static_cast<float>(sub - 1 + 1) * m.half_b;
+    }
+    return sample_past_exit(r, exit_pos, exit_neg, m.target.inv_step, n, num_full);
+}
+
 // The end of a composite ray through the map after its march (end_composite() through the map):
-// the shortened last segment when the ray is not opaque and that sample's cell is valid (visible
-// when skipping), then the background behind. Adds the last sample, when classified, to
-// `samples`.
+// the shortened last segment when the ray is not opaque and that sample's cell is valid (visible,
+// and its sub-cell too, when skipping), then the background behind. Adds the last sample, when
+// classified, to `samples`.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay& p, Accumulated c,
                                            std::int64_t& samples) {
@@ -178,7 +209,7 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
             r.t_near + static_cast<float>(p.num_segments - 1) * k.step + 0.5f * partial;
         const MapCell cell = locate_map(m, r.go + tm * r.gd);
         const std::uint8_t need = k.skipping ? MAP_CELL_VISIBLE : MAP_CELL_VALID;
-        if ((m.occupancy[cell.index] & need) != 0) {
+        if ((m.occupancy[cell.index] & need) != 0 && (!k.skipping || sub_cell_occupied(m, cell))) {
             ++samples;
             const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
             composite_last(s, partial, k.step, c);
@@ -189,7 +220,8 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
 
 // The march of a composite ray through the map (march_composite() through the map): its
 // p.num_full samples front to back; a sample in an empty map cell jumps over the cube of empty
-// cells its cell starts towards the ray's octant(s) (skipping), or, without skipping, a sample in
+// cells its cell starts towards the ray's octant(s) (skipping), one in an empty sub-cell of a
+// visible cell past that sub-cell (sub_cell_jump()), or, without skipping, a sample in
 // a cell without a valid map (a node outside and away from the deformed body) is passed over,
 // transparent and not counted. Stops when the opacity exceeds the threshold. Adds the classified
 // samples to `samples`.
@@ -218,6 +250,10 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
             }
             if (side > 0) {
                 n = map_jump(m, r, cell, side, n, p.num_full);
+                continue;
+            }
+            if (!sub_cell_occupied(m, cell)) {
+                n = sub_cell_jump(m, r, cell, n, p.num_full);
                 continue;
             }
         } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
