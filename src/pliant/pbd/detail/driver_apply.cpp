@@ -157,20 +157,57 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
         return;
     }
     const bool reached_only = bubbles_only && cache.is_valid;
-
     const auto nv = static_cast<std::int64_t>(rest.size());
-    // Step 1: the displaced rest positions (double), only when a wave runs.
+    if (!cache.is_valid) {
+        // The waves' planes: a wave's displacement depends only on the rest coordinate along its
+        // direction, which takes few distinct values (one per lattice plane on a grid).
+        cache.wave_coordinates.assign(waves.size(), {});
+        cache.wave_plane.assign(waves.size(), {});
+        for (std::size_t w = 0; w < waves.size(); ++w) {
+            // Distinct by bit pattern (so that −0 and +0 stay apart).
+            const int d = static_cast<int>(waves[w]->direction);
+            std::vector<std::uint32_t> bits;
+            bits.reserve(rest.size());
+            for (const Vec3f& p : rest) {
+                bits.push_back(std::bit_cast<std::uint32_t>(p[d]));
+            }
+            std::vector<std::uint32_t> distinct = bits;
+            std::sort(distinct.begin(), distinct.end());
+            distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+            std::vector<double>& coordinates = cache.wave_coordinates[w];
+            for (const std::uint32_t b : distinct) {
+                coordinates.push_back(static_cast<double>(std::bit_cast<float>(b)));
+            }
+            std::vector<std::int32_t>& plane = cache.wave_plane[w];
+            plane.reserve(rest.size());
+            for (const std::uint32_t b : bits) {
+                plane.push_back(static_cast<std::int32_t>(
+                    std::lower_bound(distinct.begin(), distinct.end(), b) - distinct.begin()));
+            }
+        }
+    }
+    // Step 1: the displaced rest positions (double), only when a wave runs: each wave's
+    // displacement once per plane (wave_displacement reads only the coordinate along its
+    // direction), then added per vertex in the drivers' order.
     std::vector<Vec3d> shaped;
     if (!waves.empty()) {
+        std::vector<std::vector<Vec3d>> displacement(waves.size());
+        for (std::size_t w = 0; w < waves.size(); ++w) {
+            const int d = static_cast<int>(waves[w]->direction);
+            for (const double coordinate : cache.wave_coordinates[w]) {
+                Vec3d at{};
+                at[d] = coordinate;
+                displacement[w].push_back(wave_displacement(*waves[w], box, at, t));
+            }
+        }
         shaped.resize(static_cast<std::size_t>(nv));
         parallel_for(
             nv,
             [&](std::int64_t i) {
                 const auto v = static_cast<std::size_t>(i);
-                const Vec3d rest_v = vec3_cast<double>(rest[v]);
-                Vec3d p = rest_v;
-                for (const WaveDriver* w : waves) {
-                    p += wave_displacement(*w, box, rest_v, t);
+                Vec3d p = vec3_cast<double>(rest[v]);
+                for (std::size_t w = 0; w < waves.size(); ++w) {
+                    p += displacement[w][static_cast<std::size_t>(cache.wave_plane[w][v])];
                 }
                 shaped[v] = p;
             },
@@ -227,7 +264,7 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
     parallel_for(static_cast<std::int64_t>(edges.vertices.size()), write_edge_length, EDGE_GRAIN);
     parallel_for(static_cast<std::int64_t>(tets.vertices.size()), write_tet_volume, TET_GRAIN);
     if (!bubbles_only) {
-        cache = {};
+        cache.is_valid = true;
         return;
     }
     // Step 4: the constraints the bubbles reach, for the next calls.

@@ -57,14 +57,17 @@ void place_driven_vertices(Float4* x, std::span<const Driver> drivers, const Bod
                            std::span<const Vec3f> rest, const DrivenVertices& driven,
                            const DragGrab& grab, double t_end, float drag_fraction);
 
-// What apply_rest_drivers keeps from one call to the next when only bubbles run (no wave): the
+// What apply_rest_drivers keeps from one call to the next: per wave the distinct rest coordinates
+// along its direction and each vertex's among them; when only bubbles run (no wave), the
 // constraints some bubble reaches (bubble_reaches at the rest midpoint or centroid; every other
 // one keeps its construction's value) and the bubbles' ramps s(t) of the last call. Valid only
 // while the drivers and the rest state it wrote stay: reset it (= {}) when drivers are added or
 // cleared, or the rest state is replaced (load_state, back to the construction's).
 struct RestDriverCache {
     bool is_valid = false;
-    std::vector<std::int64_t> edges;  // colour-order indices, ascending
+    std::vector<std::vector<double>> wave_coordinates;  // per wave: ascending, distinct
+    std::vector<std::vector<std::int32_t>> wave_plane;  // per wave, #V: index into the above
+    std::vector<std::int64_t> edges;                    // colour-order indices, ascending
     std::vector<std::int64_t> tets;
     std::vector<double> ramps;  // per bubble, in the drivers' order
 };
