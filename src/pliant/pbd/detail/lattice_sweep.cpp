@@ -407,8 +407,9 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
                            coloring.offsets[colour + 1] - coloring.offsets[colour]};
     };
 
-    if (!sweep.edge_lane_begin.empty()) {
-        // Steps 2 and 3 through the lanes, flagging the tets at risk.
+    if (!sweep.edge_lane_begin.empty() && num_threads() > 1) {
+        // Steps 2 and 3 through the lanes, flagging the tets at risk (on one thread the chunks
+        // below are as fast or faster: fewer, longer kernel calls).
         sweep_lanes(edges.blocking, edges.coloring.num_colors(), sweep.edge_lane_begin,
                     [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
                         const LatticeRuns runs =

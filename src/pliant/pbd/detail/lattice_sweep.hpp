@@ -48,7 +48,8 @@ struct LatticeSweep {
     // depends only on slabs ≤ it of lanes ≤ it: the lanes run as a pipeline, each a slab behind
     // the previous, with no barrier between colours. lane_begin: per colour c, at
     // c · (num_layers · SWEEP_LANES + 1) + z · SWEEP_LANES + l, the first constraint (index within
-    // the colour) of layer key ≥ z in lane ≥ l; empty: no lanes (the chunked blocked sweep).
+    // the colour) of layer key ≥ z in lane ≥ l; empty: no lanes. On one thread, or without
+    // lanes, the blocked sweep runs each colour of a slab in fixed chunks (the same bits).
     std::vector<std::int64_t> edge_lane_begin;
     std::vector<std::int64_t> tet_lane_begin;
     // #V each, solver order: the substep's positions (world units) and inverse masses.
