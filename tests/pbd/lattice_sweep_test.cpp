@@ -12,6 +12,7 @@
 
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/simd_dispatch.hpp"
+#include "pliant/pbd/detail/grains.hpp"
 #include "pliant/pbd/tet_edges.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 #include "support/tet_grids.hpp"
@@ -137,6 +138,73 @@ TEST(LatticeSweep, RunsGiveEveryConstraintsVerticesInTheSolverOrder) {
         // up to 10 of a parity, more than 4 constraints per run on average.
         EXPECT_GT(laid.tets.vertices.size(), 4 * sweep.tet_runs.size());
         EXPECT_GT(laid.edges.vertices.size(), 4 * sweep.edge_runs.size());
+    }
+}
+
+// The lanes (LatticeSweep): lane_begin covers every colour in order of (layer key, lane); at
+// every vertex the constraints holding it have lanes that do not decrease with their colour (so a
+// lane's slab depends only on lanes ≤ it); both lanes hold a fair share of the constraints.
+template <std::size_t K>
+void expect_lanes_ordered(const TetGrid& grid, const ConstraintColoring& coloring,
+                          const LayerBlocking& blocking,
+                          const std::vector<std::array<std::int32_t, K>>& vertices,
+                          const std::vector<std::int64_t>& lane_begin) {
+    const std::int64_t per_colour = blocking.num_layers * SWEEP_LANES + 1;
+    ASSERT_EQ(lane_begin.size(), static_cast<std::size_t>(coloring.num_colors() * per_colour));
+    std::vector<std::int64_t> lane_of(vertices.size(), -1);
+    std::vector<std::int64_t> lane_count(SWEEP_LANES, 0);
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t* entry = lane_begin.data() + static_cast<std::size_t>(c * per_colour);
+        ASSERT_EQ(entry[0], 0);
+        ASSERT_EQ(entry[per_colour - 1], coloring.offsets[static_cast<std::size_t>(c) + 1] - begin);
+        for (std::int64_t slot = 0; slot + 1 < per_colour; ++slot) {
+            ASSERT_LE(entry[slot], entry[slot + 1]);
+            for (std::int64_t q = begin + entry[slot]; q < begin + entry[slot + 1]; ++q) {
+                std::int32_t key = grid.vertex_lattice[static_cast<std::size_t>(
+                    vertices[static_cast<std::size_t>(q)][0])][2];
+                for (std::size_t m = 1; m < K; ++m) {
+                    key = std::min(key, grid.vertex_lattice[static_cast<std::size_t>(
+                                            vertices[static_cast<std::size_t>(q)][m])][2]);
+                }
+                ASSERT_EQ(key, slot / SWEEP_LANES) << "colour " << c << " constraint " << q;
+                lane_of[static_cast<std::size_t>(q)] = slot % SWEEP_LANES;
+                ++lane_count[static_cast<std::size_t>(slot % SWEEP_LANES)];
+            }
+        }
+    }
+    // Per vertex, (colour, lane) of the constraints holding it.
+    std::vector<std::vector<std::pair<std::int32_t, std::int64_t>>> at(grid.vertex_lattice.size());
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        for (std::int64_t q = coloring.offsets[static_cast<std::size_t>(c)];
+             q < coloring.offsets[static_cast<std::size_t>(c) + 1]; ++q) {
+            for (const std::int32_t v : vertices[static_cast<std::size_t>(q)]) {
+                at[static_cast<std::size_t>(v)].emplace_back(c,
+                                                             lane_of[static_cast<std::size_t>(q)]);
+            }
+        }
+    }
+    for (std::size_t v = 0; v < at.size(); ++v) {
+        std::sort(at[v].begin(), at[v].end());
+        for (std::size_t i = 1; i < at[v].size(); ++i) {
+            ASSERT_LE(at[v][i - 1].second, at[v][i].second) << "vertex " << v;
+        }
+    }
+    const auto total = static_cast<double>(vertices.size());
+    for (const std::int64_t n : lane_count) {
+        EXPECT_GT(static_cast<double>(n), 0.3 * total);
+    }
+}
+
+TEST(LatticeSweep, LanesFollowTheColourOrderAtEveryVertex) {
+    for (const bool full_box : {true, false}) {
+        const TetGrid grid = test::ball_tet_grid({40, 36, 30}, full_box);
+        Layout laid = layout(grid);
+        const LatticeSweep sweep = build_lattice_sweep(grid, laid.edges, laid.tets);
+        expect_lanes_ordered(grid, laid.edges.coloring, laid.edges.blocking, laid.edges.vertices,
+                             sweep.edge_lane_begin);
+        expect_lanes_ordered(grid, laid.tets.coloring, laid.tets.blocking, laid.tets.vertices,
+                             sweep.tet_lane_begin);
     }
 }
 

@@ -119,12 +119,25 @@ Vec3d wave_displacement(const WaveDriver& wave, const BodyBox& box, const Vec3d&
     return out;
 }
 
-double bubble_factor(const BubbleDriver& bubble, const BodyBox& box, const Vec3d& rest, double t) {
+namespace {
+
+// (r / R)² of a rest point for the bubble: its squared distance from the centre over the radius's.
+double bubble_q2(const BubbleDriver& bubble, const BodyBox& box, const Vec3d& rest) {
     const Vec3d centre{box.lo.x + bubble.centre.x * (box.hi.x - box.lo.x),
                        box.lo.y + bubble.centre.y * (box.hi.y - box.lo.y),
                        box.lo.z + bubble.centre.z * (box.hi.z - box.lo.z)};
     const double radius = bubble.radius * box.size;
-    const double q2 = squared_norm(rest - centre) / (radius * radius);
+    return squared_norm(rest - centre) / (radius * radius);
+}
+
+}  // namespace
+
+bool bubble_reaches(const BubbleDriver& bubble, const BodyBox& box, const Vec3d& rest) {
+    return !(bubble_q2(bubble, box, rest) >= 1.0);
+}
+
+double bubble_factor(const BubbleDriver& bubble, const BodyBox& box, const Vec3d& rest, double t) {
+    const double q2 = bubble_q2(bubble, box, rest);
     if (q2 >= 1.0) {
         return 1.0;
     }

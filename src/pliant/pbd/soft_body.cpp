@@ -192,7 +192,8 @@ struct SoftBody::State {
 
     std::vector<Driver> drivers;
     bool has_rest_drivers = false;
-    bool rest_modified = false;  // rest lengths and volumes differ from the construction's
+    bool rest_modified = false;          // rest lengths and volumes differ from the construction's
+    detail::RestDriverCache rest_cache;  // reset whenever drivers or the rest state change
     detail::DrivenVertices driven;
     bool kinematics_dirty = false;  // `driven` is to be assigned again
     detail::DragGrab grab;
@@ -286,6 +287,7 @@ void SoftBody::add_driver(const Driver& driver) {
     s.drivers.push_back(driver);
     s.has_rest_drivers = s.has_rest_drivers || std::holds_alternative<WaveDriver>(driver) ||
                          std::holds_alternative<BubbleDriver>(driver);
+    s.rest_cache = {};
     s.kinematics_dirty = true;
 }
 
@@ -293,6 +295,7 @@ void SoftBody::clear_drivers() {
     State& s = *m_state;
     s.drivers.clear();
     s.has_rest_drivers = false;
+    s.rest_cache = {};
     s.kinematics_dirty = true;
 }
 
@@ -400,12 +403,13 @@ void SoftBody::prepare_drivers(double t_end) {
     }
     if (s.has_rest_drivers) {
         detail::apply_rest_drivers(s.drivers, s.box, s.rest, t_end, s.edge_constraints,
-                                   s.tet_constraints);
+                                   s.tet_constraints, s.rest_cache);
         s.rest_modified = true;
     } else if (s.rest_modified) {
         s.edge_constraints.rest_lengths = s.edge_constraints.rest_lengths0;
         s.tet_constraints.rest_volumes = s.tet_constraints.rest_volumes0;
         s.rest_modified = false;
+        s.rest_cache = {};
     }
     if (s.grab.drag && !s.grab.vertices.empty()) {
         s.grab.from = s.positions[static_cast<std::size_t>(s.grab.drag->vertex)];
@@ -601,6 +605,7 @@ void SoftBody::load_state(ByteReader& in) {
     in.get_vector("soft_body.colour_at_risk", s.inversion.colour_at_risk,
                   static_cast<std::int64_t>(s.inversion.colour_at_risk.size()));
     s.rest_modified = in.get_bool("soft_body.rest_modified");
+    s.rest_cache = {};
     s.kinematics_dirty = in.get_bool("soft_body.kinematics_dirty");
     in.get_vector("soft_body.driven.vertices", s.driven.vertices);
     in.get_vector("soft_body.driven.driver", s.driven.driver,

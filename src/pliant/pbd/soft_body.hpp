@@ -71,10 +71,13 @@
 // is blocked in slabs of lattice layers for cache reuse, with the results of the colour-by-colour
 // order (two constraints sharing a vertex are projected in the order of their colours), and with
 // AVX2 it runs on positions in float arrays in a solver order where a colour's constraints form
-// runs of consecutive vertices (detail/lattice_sweep.hpp: plain vector loads, no transposes). The
-// guard runs on one thread over the few flagged tets, flagged by index with the same float
-// comparison in every kernel. Results are bitwise identical for any number of threads and for
-// either SIMD width (the same arithmetic, no FMA).
+// runs of consecutive vertices (detail/lattice_sweep.hpp: plain vector loads, no transposes); on
+// more than one thread that sweep runs as a pipeline of two lanes of lattice rows, one slab apart,
+// instead of a parallel loop per colour and slab. The guard runs on one thread over the few
+// flagged tets, flagged by index with the same float comparison in every kernel. Rest-state
+// drivers recompute only what changes: bubbles alone rewrite the constraints they reach while
+// they ramp in and nothing after; a wave is evaluated once per lattice plane. Results are bitwise
+// identical for any number of threads and for either SIMD width (the same arithmetic, no FMA).
 //
 //   const TetGrid grid = build_tet_grid(volume, {.cell_voxels = 4});
 //   SoftBody body(grid, {.stiffness = 0.8});

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <iterator>
@@ -132,7 +133,7 @@ void place_driven_vertices(Float4* x, std::span<const Driver> drivers, const Bod
 
 void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                         std::span<const Vec3f> rest, double t, EdgeConstraints& edges,
-                        TetConstraints& tets) {
+                        TetConstraints& tets, RestDriverCache& cache) {
     std::vector<const WaveDriver*> waves;
     std::vector<const BubbleDriver*> bubbles;
     for (const Driver& d : drivers) {
@@ -142,19 +143,71 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
             bubbles.push_back(b);
         }
     }
+    // Bubbles alone: t enters the rest state only through their ramps.
+    std::vector<double> ramps;
+    ramps.reserve(bubbles.size());
+    for (const BubbleDriver* b : bubbles) {
+        ramps.push_back(ramp(t, b->ramp_time));
+    }
+    const bool bubbles_only = waves.empty() && !bubbles.empty();
+    if (bubbles_only && cache.is_valid && ramps.size() == cache.ramps.size() &&
+        std::equal(ramps.begin(), ramps.end(), cache.ramps.begin(), [](double a, double b) {
+            return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+        })) {
+        return;
+    }
+    const bool reached_only = bubbles_only && cache.is_valid;
     const auto nv = static_cast<std::int64_t>(rest.size());
-    // Step 1: the displaced rest positions (double), only when a wave runs.
+    if (!cache.is_valid) {
+        // The waves' planes: a wave's displacement depends only on the rest coordinate along its
+        // direction, which takes few distinct values (one per lattice plane on a grid).
+        cache.wave_coordinates.assign(waves.size(), {});
+        cache.wave_plane.assign(waves.size(), {});
+        for (std::size_t w = 0; w < waves.size(); ++w) {
+            // Distinct by bit pattern (so that −0 and +0 stay apart).
+            const int d = static_cast<int>(waves[w]->direction);
+            std::vector<std::uint32_t> bits;
+            bits.reserve(rest.size());
+            for (const Vec3f& p : rest) {
+                bits.push_back(std::bit_cast<std::uint32_t>(p[d]));
+            }
+            std::vector<std::uint32_t> distinct = bits;
+            std::sort(distinct.begin(), distinct.end());
+            distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+            std::vector<double>& coordinates = cache.wave_coordinates[w];
+            for (const std::uint32_t b : distinct) {
+                coordinates.push_back(static_cast<double>(std::bit_cast<float>(b)));
+            }
+            std::vector<std::int32_t>& plane = cache.wave_plane[w];
+            plane.reserve(rest.size());
+            for (const std::uint32_t b : bits) {
+                plane.push_back(static_cast<std::int32_t>(
+                    std::lower_bound(distinct.begin(), distinct.end(), b) - distinct.begin()));
+            }
+        }
+    }
+    // Step 1: the displaced rest positions (double), only when a wave runs: each wave's
+    // displacement once per plane (wave_displacement reads only the coordinate along its
+    // direction), then added per vertex in the drivers' order.
     std::vector<Vec3d> shaped;
     if (!waves.empty()) {
+        std::vector<std::vector<Vec3d>> displacement(waves.size());
+        for (std::size_t w = 0; w < waves.size(); ++w) {
+            const int d = static_cast<int>(waves[w]->direction);
+            for (const double coordinate : cache.wave_coordinates[w]) {
+                Vec3d at{};
+                at[d] = coordinate;
+                displacement[w].push_back(wave_displacement(*waves[w], box, at, t));
+            }
+        }
         shaped.resize(static_cast<std::size_t>(nv));
         parallel_for(
             nv,
             [&](std::int64_t i) {
                 const auto v = static_cast<std::size_t>(i);
-                const Vec3d rest_v = vec3_cast<double>(rest[v]);
-                Vec3d p = rest_v;
-                for (const WaveDriver* w : waves) {
-                    p += wave_displacement(*w, box, rest_v, t);
+                Vec3d p = vec3_cast<double>(rest[v]);
+                for (std::size_t w = 0; w < waves.size(); ++w) {
+                    p += displacement[w][static_cast<std::size_t>(cache.wave_plane[w][v])];
                 }
                 shaped[v] = p;
             },
@@ -163,42 +216,76 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
     const auto rest_at = [&](std::int32_t v) {
         return vec3_cast<double>(rest[static_cast<std::size_t>(v)]);
     };
+    const auto edge_midpoint = [&](std::int64_t k) {
+        const auto& e = edges.vertices[static_cast<std::size_t>(k)];
+        return (rest_at(e[0]) + rest_at(e[1])) * 0.5;
+    };
+    const auto tet_centroid = [&](std::int64_t k) {
+        const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
+        return (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25;
+    };
     // Step 2: edge lengths.
-    parallel_for(
-        static_cast<std::int64_t>(edges.vertices.size()),
-        [&](std::int64_t k) {
-            const auto& e = edges.vertices[static_cast<std::size_t>(k)];
-            double length = shaped.empty() ? edges.rest_lengths0[static_cast<std::size_t>(k)]
-                                           : norm(shaped[static_cast<std::size_t>(e[0])] -
-                                                  shaped[static_cast<std::size_t>(e[1])]);
-            if (!bubbles.empty()) {
-                length *= std::cbrt(
-                    bubble_product(bubbles, box, (rest_at(e[0]) + rest_at(e[1])) * 0.5, t));
-            }
-            edges.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
-        },
-        EDGE_GRAIN);
+    const auto write_edge_length = [&](std::int64_t k) {
+        const auto& e = edges.vertices[static_cast<std::size_t>(k)];
+        double length = shaped.empty() ? edges.rest_lengths0[static_cast<std::size_t>(k)]
+                                       : norm(shaped[static_cast<std::size_t>(e[0])] -
+                                              shaped[static_cast<std::size_t>(e[1])]);
+        if (!bubbles.empty()) {
+            length *= std::cbrt(bubble_product(bubbles, box, edge_midpoint(k), t));
+        }
+        edges.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
+    };
     // Step 3: tet volumes.
-    parallel_for(
-        static_cast<std::int64_t>(tets.vertices.size()),
-        [&](std::int64_t k) {
-            const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
-            double volume = tets.rest_volumes0[static_cast<std::size_t>(k)];
-            if (!shaped.empty()) {
-                volume = geometry::signed_volume(shaped[static_cast<std::size_t>(tet[0])],
-                                                 shaped[static_cast<std::size_t>(tet[1])],
-                                                 shaped[static_cast<std::size_t>(tet[2])],
-                                                 shaped[static_cast<std::size_t>(tet[3])]);
-            }
-            if (!bubbles.empty()) {
-                volume *= bubble_product(
-                    bubbles, box,
-                    (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25,
-                    t);
-            }
-            tets.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
-        },
-        TET_GRAIN);
+    const auto write_tet_volume = [&](std::int64_t k) {
+        const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
+        double volume = tets.rest_volumes0[static_cast<std::size_t>(k)];
+        if (!shaped.empty()) {
+            volume = geometry::signed_volume(
+                shaped[static_cast<std::size_t>(tet[0])], shaped[static_cast<std::size_t>(tet[1])],
+                shaped[static_cast<std::size_t>(tet[2])], shaped[static_cast<std::size_t>(tet[3])]);
+        }
+        if (!bubbles.empty()) {
+            volume *= bubble_product(bubbles, box, tet_centroid(k), t);
+        }
+        tets.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
+    };
+    if (reached_only) {
+        parallel_for(
+            static_cast<std::int64_t>(cache.edges.size()),
+            [&](std::int64_t i) { write_edge_length(cache.edges[static_cast<std::size_t>(i)]); },
+            EDGE_GRAIN);
+        parallel_for(
+            static_cast<std::int64_t>(cache.tets.size()),
+            [&](std::int64_t i) { write_tet_volume(cache.tets[static_cast<std::size_t>(i)]); },
+            TET_GRAIN);
+        cache.ramps = std::move(ramps);
+        return;
+    }
+    parallel_for(static_cast<std::int64_t>(edges.vertices.size()), write_edge_length, EDGE_GRAIN);
+    parallel_for(static_cast<std::int64_t>(tets.vertices.size()), write_tet_volume, TET_GRAIN);
+    if (!bubbles_only) {
+        cache.is_valid = true;
+        return;
+    }
+    // Step 4: the constraints the bubbles reach, for the next calls.
+    const auto reached = [&](const Vec3d& p) {
+        return std::any_of(bubbles.begin(), bubbles.end(),
+                           [&](const BubbleDriver* b) { return bubble_reaches(*b, box, p); });
+    };
+    cache.edges.clear();
+    for (std::int64_t k = 0; k < std::ssize(edges.vertices); ++k) {
+        if (reached(edge_midpoint(k))) {
+            cache.edges.push_back(k);
+        }
+    }
+    cache.tets.clear();
+    for (std::int64_t k = 0; k < std::ssize(tets.vertices); ++k) {
+        if (reached(tet_centroid(k))) {
+            cache.tets.push_back(k);
+        }
+    }
+    cache.ramps = std::move(ramps);
+    cache.is_valid = true;
 }
 
 }  // namespace pliant::pbd::detail

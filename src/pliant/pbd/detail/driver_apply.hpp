@@ -57,13 +57,31 @@ void place_driven_vertices(Float4* x, std::span<const Driver> drivers, const Bod
                            std::span<const Vec3f> rest, const DrivenVertices& driven,
                            const DragGrab& grab, double t_end, float drag_fraction);
 
+// What apply_rest_drivers keeps from one call to the next: per wave the distinct rest coordinates
+// along its direction and each vertex's among them; when only bubbles run (no wave), the
+// constraints some bubble reaches (bubble_reaches at the rest midpoint or centroid; every other
+// one keeps its construction's value) and the bubbles' ramps s(t) of the last call. Valid only
+// while the drivers and the rest state it wrote stay: reset it (= {}) when drivers are added or
+// cleared, or the rest state is replaced (load_state, back to the construction's).
+struct RestDriverCache {
+    bool is_valid = false;
+    std::vector<std::vector<double>> wave_coordinates;  // per wave: ascending, distinct
+    std::vector<std::vector<std::int32_t>> wave_plane;  // per wave, #V: index into the above
+    std::vector<std::int64_t> edges;                    // colour-order indices, ascending
+    std::vector<std::int64_t> tets;
+    std::vector<double> ramps;  // per bubble, in the drivers' order
+};
+
 // The rest state the rest-state drivers ask for at time t: rest positions (#V) displaced by the
 // sum of the waves, edge lengths and tet volumes of the displaced positions (in double, from the
 // construction's values when no wave runs), then scaled by the product of the bubbles' factors f
 // at the rest midpoint (edges: f^(1/3)) or rest centroid (tets). Writes edges.rest_lengths and
-// tets.rest_volumes (float, colour order); parallel, deterministic.
+// tets.rest_volumes (float, colour order); parallel, deterministic. With bubbles alone and a
+// valid cache it writes only the constraints the bubbles reach, and nothing when the bubbles'
+// ramps are those of the last call (a bubble that has ramped in is a constant rest state): the
+// same values as a full pass, bit for bit, at O(constraints reached) or O(1).
 void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                         std::span<const Vec3f> rest, double t, EdgeConstraints& edges,
-                        TetConstraints& tets);
+                        TetConstraints& tets, RestDriverCache& cache);
 
 }  // namespace pliant::pbd::detail

@@ -32,5 +32,8 @@ Vec3d wave_displacement(const WaveDriver& wave, const BodyBox& box, const Vec3d&
 
 // The bubble's rest-volume factor f at a rest point at time t (1 outside).
 double bubble_factor(const BubbleDriver& bubble, const BodyBox& box, const Vec3d& rest, double t);
+// Whether the bubble reaches a rest point: false exactly where bubble_factor is 1 at every t
+// for the bubble's distance alone (r ≥ R).
+bool bubble_reaches(const BubbleDriver& bubble, const BodyBox& box, const Vec3d& rest);
 
 }  // namespace pliant::pbd::detail

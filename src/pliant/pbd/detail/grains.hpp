@@ -17,4 +17,8 @@ inline constexpr std::int64_t TET_GRAIN = 1024;     // tet constraints per chunk
 inline constexpr std::int64_t LATTICE_EDGE_GRAIN = 512;
 inline constexpr std::int64_t LATTICE_TET_GRAIN = 256;
 
+// Lanes of the lattice sweep (lattice_sweep.hpp): bands of lattice rows pipelined on as many
+// threads.
+inline constexpr std::int64_t SWEEP_LANES = 2;
+
 }  // namespace pliant::pbd::detail

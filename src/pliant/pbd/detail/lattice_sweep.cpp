@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cstddef>
 #include <numeric>
+#include <thread>
+#include <utility>
 
 #include "pliant/core/parallel.hpp"
 #include "pliant/pbd/detail/grains.hpp"
@@ -42,6 +44,7 @@ void solver_order(const TetGrid& grid, std::vector<std::int32_t>& vertex_of,
 // constraint in colour order, grouped within each colour (sorted when the layout is blocked).
 template <std::size_t K>
 void reorder_into_runs(const ConstraintColoring& coloring, const std::vector<std::int32_t>& keys,
+                       std::vector<std::int8_t>& lanes,
                        std::vector<std::array<std::int32_t, K>>& vertices,
                        std::span<std::vector<float>* const> rest,
                        const std::vector<std::int32_t>& solver_index, std::vector<LatticeRun>& runs,
@@ -83,12 +86,16 @@ void reorder_into_runs(const ConstraintColoring& coloring, const std::vector<std
                 order.push_back(q);
             }
             std::sort(order.begin() + first, order.end(), [&](std::int64_t a, std::int64_t b) {
-                return shape(solver(a)) < shape(solver(b));
+                const std::int8_t lane_a = lanes[static_cast<std::size_t>(a)];
+                const std::int8_t lane_b = lanes[static_cast<std::size_t>(b)];
+                return lane_a != lane_b ? lane_a < lane_b : shape(solver(a)) < shape(solver(b));
             });
             // Runs: each vertex one further than in the previous constraint.
             for (auto i = static_cast<std::size_t>(first); i < order.size(); ++i) {
                 const Constraint p = solver(order[i]);
-                bool continues = i > static_cast<std::size_t>(first);
+                bool continues = i > static_cast<std::size_t>(first) &&
+                                 lanes[static_cast<std::size_t>(order[i])] ==
+                                     lanes[static_cast<std::size_t>(order[i - 1])];
                 if (continues) {
                     const Constraint previous = solver(order[i - 1]);
                     for (std::size_t m = 0; m < K; ++m) {
@@ -111,6 +118,12 @@ void reorder_into_runs(const ConstraintColoring& coloring, const std::vector<std
             sorted.push_back(vertices[static_cast<std::size_t>(q)]);
         }
         std::copy(sorted.begin(), sorted.end(), vertices.begin() + begin);
+        std::vector<std::int8_t> sorted_lanes;
+        sorted_lanes.reserve(order.size());
+        for (const std::int64_t q : order) {
+            sorted_lanes.push_back(lanes[static_cast<std::size_t>(q)]);
+        }
+        std::copy(sorted_lanes.begin(), sorted_lanes.end(), lanes.begin() + begin);
         for (std::vector<float>* data : rest) {
             sorted_rest.clear();
             for (const std::int64_t q : order) {
@@ -137,6 +150,195 @@ std::vector<std::int32_t> layer_keys(const TetGrid& grid,
     return keys;
 }
 
+// The lowest lattice y of each constraint (its row key).
+template <std::size_t K>
+std::vector<std::int32_t> row_keys(const TetGrid& grid,
+                                   const std::vector<std::array<std::int32_t, K>>& vertices) {
+    std::vector<std::int32_t> keys;
+    keys.reserve(vertices.size());
+    for (const auto& constraint : vertices) {
+        std::int32_t y = grid.vertex_lattice[static_cast<std::size_t>(constraint[0])][1];
+        for (std::size_t m = 1; m < K; ++m) {
+            y = std::min(y, grid.vertex_lattice[static_cast<std::size_t>(constraint[m])][1]);
+        }
+        keys.push_back(y);
+    }
+    return keys;
+}
+
+// The lanes' row skews (LatticeSweep): the smallest with skew[c'] − skew[c] ≥ y − y' for every two
+// constraints of colours c < c' (row keys y, y') that share a vertex, as LayerBlocking's skews in
+// z; empty when a vertex lies outside rows y, y + 1 of a constraint holding it, or for more than 64
+// colours.
+template <std::size_t K>
+std::vector<std::int64_t> lane_skews(const TetGrid& grid, const ConstraintColoring& coloring,
+                                     const std::vector<std::array<std::int32_t, K>>& vertices,
+                                     const std::vector<std::int32_t>& row) {
+    const std::int32_t num_colors = coloring.num_colors();
+    if (num_colors > 64) {
+        return {};
+    }
+    // Per vertex: bit c of `below` when colour c holds it in a constraint of row key y_v − 1, of
+    // `level` of key y_v.
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(grid.vertex_lattice.size(), {0, 0});
+    for (std::int32_t c = 0; c < num_colors; ++c) {
+        const std::uint64_t bit = std::uint64_t{1} << c;
+        for (std::int64_t q = coloring.offsets[static_cast<std::size_t>(c)];
+             q < coloring.offsets[static_cast<std::size_t>(c) + 1]; ++q) {
+            for (const std::int32_t v : vertices[static_cast<std::size_t>(q)]) {
+                const std::int32_t offset = row[static_cast<std::size_t>(q)] -
+                                            grid.vertex_lattice[static_cast<std::size_t>(v)][1];
+                if (offset == -1) {
+                    masks[static_cast<std::size_t>(v)].first |= bit;
+                } else if (offset == 0) {
+                    masks[static_cast<std::size_t>(v)].second |= bit;
+                } else {
+                    return {};
+                }
+            }
+        }
+    }
+    std::sort(masks.begin(), masks.end());
+    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
+    std::vector<std::int64_t> skew(static_cast<std::size_t>(num_colors), 0);
+    for (std::int32_t later = 0; later < num_colors; ++later) {
+        for (const auto& [below, level] : masks) {
+            if (((below | level) >> later & 1) == 0) {
+                continue;
+            }
+            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
+            for (std::int32_t c = 0; c < later; ++c) {
+                if (((below | level) >> c & 1) != 0) {
+                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
+                    skew[static_cast<std::size_t>(later)] =
+                        std::max(skew[static_cast<std::size_t>(later)],
+                                 skew[static_cast<std::size_t>(c)] + offset - later_offset);
+                }
+            }
+        }
+    }
+    return skew;
+}
+
+// The lane of each constraint (colour order): with y its row key plus its colour's skew, the
+// number of boundaries ≤ y, the boundaries splitting the constraints' y into SWEEP_LANES parts of
+// about equal counts; all 0 when skews is empty.
+std::vector<std::int8_t> constraint_lanes(const ConstraintColoring& coloring,
+                                          const std::vector<std::int32_t>& row,
+                                          const std::vector<std::int64_t>& skews) {
+    std::vector<std::int8_t> lanes(row.size(), 0);
+    if (skews.empty() || row.empty()) {
+        return lanes;
+    }
+    std::vector<std::int64_t> skewed(row.size());
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        for (std::int64_t q = coloring.offsets[static_cast<std::size_t>(c)];
+             q < coloring.offsets[static_cast<std::size_t>(c) + 1]; ++q) {
+            skewed[static_cast<std::size_t>(q)] =
+                row[static_cast<std::size_t>(q)] + skews[static_cast<std::size_t>(c)];
+        }
+    }
+    std::vector<std::int64_t> sorted = skewed;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::int64_t> boundaries;
+    for (std::int64_t b = 1; b < SWEEP_LANES; ++b) {
+        boundaries.push_back(
+            sorted[static_cast<std::size_t>(b * std::ssize(sorted) / SWEEP_LANES)]);
+    }
+    for (std::size_t q = 0; q < row.size(); ++q) {
+        std::int8_t lane = 0;
+        for (const std::int64_t b : boundaries) {
+            lane = static_cast<std::int8_t>(lane + (skewed[q] >= b ? 1 : 0));
+        }
+        lanes[q] = lane;
+    }
+    return lanes;
+}
+
+// lane_begin (LatticeSweep) from the layer keys and lanes of the reordered constraints.
+std::vector<std::int64_t> lane_begins(const ConstraintColoring& coloring,
+                                      const LayerBlocking& blocking,
+                                      const std::vector<std::int32_t>& keys,
+                                      const std::vector<std::int8_t>& lanes) {
+    const std::int64_t per_colour = blocking.num_layers * SWEEP_LANES + 1;
+    std::vector<std::int64_t> out(static_cast<std::size_t>(coloring.num_colors() * per_colour));
+    for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+        const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
+        const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
+        std::int64_t* entry = out.data() + static_cast<std::size_t>(c * per_colour);
+        std::int64_t q = begin;
+        for (std::int64_t slot = 0; slot < per_colour; ++slot) {
+            // The first constraint with (key, lane) ≥ (slot / SWEEP_LANES, slot % SWEEP_LANES).
+            while (q < end && std::int64_t{keys[static_cast<std::size_t>(q)]} * SWEEP_LANES +
+                                      lanes[static_cast<std::size_t>(q)] <
+                                  slot) {
+                ++q;
+            }
+            entry[slot] = q - begin;
+        }
+    }
+    return out;
+}
+
+// Steps 2 or 3 through the lanes (LatticeSweep): project_range(c, lo, hi) for the constraints
+// [lo, hi) of colour c, every (slab, lane) item's colours in order; items claimed in the order of
+// their diagonals slab + lane, each after items (slab − 1, lane) and (slab, lane − 1) are done.
+// Every item an item depends on was claimed before it by a running worker, so the waits end with
+// any number of workers (one worker: the items in claim order).
+template <typename ProjectRange>
+void sweep_lanes(const LayerBlocking& blocking, std::int32_t num_colors,
+                 const std::vector<std::int64_t>& lane_begin, const ProjectRange& project_range) {
+    const std::int64_t layers = blocking.num_layers;
+    const std::int64_t num_slabs =
+        (layers + blocking.max_skew + LAYERS_PER_SLAB - 1) / LAYERS_PER_SLAB;
+    const std::int64_t per_colour = layers * SWEEP_LANES + 1;
+    std::vector<std::array<std::int64_t, 2>> items;  // (slab, lane)
+    for (std::int64_t d = 0; d < num_slabs + SWEEP_LANES - 1; ++d) {
+        for (std::int64_t lane = 0; lane < SWEEP_LANES; ++lane) {
+            if (d - lane >= 0 && d - lane < num_slabs) {
+                items.push_back({d - lane, lane});
+            }
+        }
+    }
+    std::array<std::atomic<std::int64_t>, SWEEP_LANES> done{};  // slabs done, per lane
+    std::atomic<std::int64_t> next{0};
+    const auto wait_for = [](const std::atomic<std::int64_t>& counter, std::int64_t target) {
+        for (int spins = 0; counter.load(std::memory_order_acquire) < target; ++spins) {
+            if (spins >= 64) {
+                std::this_thread::yield();
+            }
+        }
+    };
+    const std::int64_t workers = std::min<std::int64_t>(num_threads(), SWEEP_LANES);
+    parallel_for_chunks(workers, 1, [&](std::int64_t, std::int64_t, std::int64_t) {
+        for (std::int64_t i = next.fetch_add(1, std::memory_order_relaxed); i < std::ssize(items);
+             i = next.fetch_add(1, std::memory_order_relaxed)) {
+            const auto [slab, lane] = items[static_cast<std::size_t>(i)];
+            wait_for(done[static_cast<std::size_t>(lane)], slab);
+            if (lane > 0) {
+                wait_for(done[static_cast<std::size_t>(lane - 1)], slab + 1);
+            }
+            const std::int64_t t = slab * LAYERS_PER_SLAB;
+            for (std::int32_t c = 0; c < num_colors; ++c) {
+                const std::int64_t skew = blocking.skew[static_cast<std::size_t>(c)];
+                const std::int64_t z0 = std::clamp<std::int64_t>(t - skew, 0, layers);
+                const std::int64_t z1 =
+                    std::clamp<std::int64_t>(t - skew + LAYERS_PER_SLAB, 0, layers);
+                const std::int64_t* begin =
+                    lane_begin.data() + static_cast<std::size_t>(c) * per_colour;
+                for (std::int64_t z = z0; z < z1; ++z) {
+                    const std::int64_t lo = begin[z * SWEEP_LANES + lane];
+                    const std::int64_t hi = begin[z * SWEEP_LANES + lane + 1];
+                    if (lo < hi) {
+                        project_range(c, lo, hi);
+                    }
+                }
+            }
+            done[static_cast<std::size_t>(lane)].store(slab + 1, std::memory_order_release);
+        }
+    });
+}
+
 }  // namespace
 
 LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
@@ -144,13 +346,29 @@ LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
     LatticeSweep out;
     std::vector<std::int32_t> solver_index;
     solver_order(grid, out.vertex_of, solver_index);
+    // Lanes (LatticeSweep): rows, per colour skewed, split at the median.
+    const std::vector<std::int32_t> edge_rows = row_keys(grid, edges.vertices);
+    const std::vector<std::int32_t> tet_rows = row_keys(grid, tets.vertices);
+    const std::vector<std::int64_t> edge_skews =
+        lane_skews(grid, edges.coloring, edges.vertices, edge_rows);
+    const std::vector<std::int64_t> tet_skews =
+        lane_skews(grid, tets.coloring, tets.vertices, tet_rows);
+    std::vector<std::int8_t> edge_lanes = constraint_lanes(edges.coloring, edge_rows, edge_skews);
+    std::vector<std::int8_t> tet_lanes = constraint_lanes(tets.coloring, tet_rows, tet_skews);
+
+    const std::vector<std::int32_t> edge_keys = layer_keys(grid, edges.vertices);
     std::vector<float>* edge_rest[] = {&edges.rest_lengths0, &edges.rest_lengths};
-    reorder_into_runs<2>(edges.coloring, layer_keys(grid, edges.vertices), edges.vertices,
-                         edge_rest, solver_index, out.edge_runs, out.edge_run_begins,
-                         out.edge_run_offsets);
+    reorder_into_runs<2>(edges.coloring, edge_keys, edge_lanes, edges.vertices, edge_rest,
+                         solver_index, out.edge_runs, out.edge_run_begins, out.edge_run_offsets);
+    const std::vector<std::int32_t> tet_keys = layer_keys(grid, tets.vertices);
     std::vector<float>* tet_rest[] = {&tets.rest_volumes0, &tets.rest_volumes};
-    reorder_into_runs<4>(tets.coloring, layer_keys(grid, tets.vertices), tets.vertices, tet_rest,
-                         solver_index, out.tet_runs, out.tet_run_begins, out.tet_run_offsets);
+    reorder_into_runs<4>(tets.coloring, tet_keys, tet_lanes, tets.vertices, tet_rest, solver_index,
+                         out.tet_runs, out.tet_run_begins, out.tet_run_offsets);
+    if (!edge_skews.empty() && !tet_skews.empty() && edges.blocking.num_layers > 0 &&
+        tets.blocking.num_layers > 0) {
+        out.edge_lane_begin = lane_begins(edges.coloring, edges.blocking, edge_keys, edge_lanes);
+        out.tet_lane_begin = lane_begins(tets.coloring, tets.blocking, tet_keys, tet_lanes);
+    }
     const std::size_t nv = out.vertex_of.size();
     out.x.resize(nv);
     out.y.resize(nv);
@@ -189,39 +407,71 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
                            coloring.offsets[colour + 1] - coloring.offsets[colour]};
     };
 
-    // Step 2: edges.
-    sweep_colours(
-        edges.blocking, edges.coloring, [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-            const LatticeRuns runs = colour_runs(edges.coloring, sweep.edge_runs,
-                                                 sweep.edge_run_begins, sweep.edge_run_offsets, c);
-            const float* lengths = edges.rest_lengths.data() + runs.begin;
-            parallel_for_chunks(
-                hi - lo, LATTICE_EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    project_edge_runs_soa_avx2(p, runs, lo + b, lo + e, lengths,
-                                               edge_stiffness.inv_k, edge_stiffness.alpha);
-                });
-        });
+    if (!sweep.edge_lane_begin.empty() && num_threads() > 1) {
+        // Steps 2 and 3 through the lanes, flagging the tets at risk (on one thread the chunks
+        // below are as fast or faster: fewer, longer kernel calls).
+        sweep_lanes(edges.blocking, edges.coloring.num_colors(), sweep.edge_lane_begin,
+                    [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
+                        const LatticeRuns runs =
+                            colour_runs(edges.coloring, sweep.edge_runs, sweep.edge_run_begins,
+                                        sweep.edge_run_offsets, c);
+                        project_edge_runs_soa_avx2(p, runs, lo, hi,
+                                                   edges.rest_lengths.data() + runs.begin,
+                                                   edge_stiffness.inv_k, edge_stiffness.alpha);
+                    });
+        sweep_lanes(
+            tets.blocking, tets.coloring.num_colors(), sweep.tet_lane_begin,
+            [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
+                const LatticeRuns runs = colour_runs(
+                    tets.coloring, sweep.tet_runs, sweep.tet_run_begins, sweep.tet_run_offsets, c);
+                std::int64_t num_at_risk = 0;
+                project_tet_runs_soa_avx2(p, runs, lo, hi, tets.rest_volumes.data() + runs.begin,
+                                          tet_at_risk.data() + runs.begin, tet_stiffness.inv_k,
+                                          tet_stiffness.alpha, num_at_risk);
+                if (num_at_risk > 0) {
+                    // Both lanes may set it concurrently: idempotent.
+                    std::atomic_ref<std::uint8_t>(colour_at_risk[static_cast<std::size_t>(c)])
+                        .store(1, std::memory_order_relaxed);
+                }
+            });
+    } else {
+        // Step 2: edges.
+        sweep_colours(
+            edges.blocking, edges.coloring, [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
+                const LatticeRuns runs =
+                    colour_runs(edges.coloring, sweep.edge_runs, sweep.edge_run_begins,
+                                sweep.edge_run_offsets, c);
+                const float* lengths = edges.rest_lengths.data() + runs.begin;
+                parallel_for_chunks(
+                    hi - lo, LATTICE_EDGE_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                        project_edge_runs_soa_avx2(p, runs, lo + b, lo + e, lengths,
+                                                   edge_stiffness.inv_k, edge_stiffness.alpha);
+                    });
+            });
 
-    // Step 3: tets, flagging those at risk.
-    sweep_colours(
-        tets.blocking, tets.coloring, [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
-            const LatticeRuns runs = colour_runs(tets.coloring, sweep.tet_runs,
-                                                 sweep.tet_run_begins, sweep.tet_run_offsets, c);
-            const float* volumes = tets.rest_volumes.data() + runs.begin;
-            std::uint8_t* at_risk = tet_at_risk.data() + runs.begin;
-            parallel_for_chunks(
-                hi - lo, LATTICE_TET_GRAIN, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-                    std::int64_t num_at_risk = 0;
-                    project_tet_runs_soa_avx2(p, runs, lo + b, lo + e, volumes, at_risk,
-                                              tet_stiffness.inv_k, tet_stiffness.alpha,
-                                              num_at_risk);
-                    if (num_at_risk > 0) {
-                        // Chunks of one colour may set it concurrently: idempotent.
-                        std::atomic_ref<std::uint8_t>(colour_at_risk[static_cast<std::size_t>(c)])
-                            .store(1, std::memory_order_relaxed);
-                    }
-                });
-        });
+        // Step 3: tets, flagging those at risk.
+        sweep_colours(
+            tets.blocking, tets.coloring, [&](std::int32_t c, std::int64_t lo, std::int64_t hi) {
+                const LatticeRuns runs = colour_runs(
+                    tets.coloring, sweep.tet_runs, sweep.tet_run_begins, sweep.tet_run_offsets, c);
+                const float* volumes = tets.rest_volumes.data() + runs.begin;
+                std::uint8_t* at_risk = tet_at_risk.data() + runs.begin;
+                parallel_for_chunks(hi - lo, LATTICE_TET_GRAIN,
+                                    [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                                        std::int64_t num_at_risk = 0;
+                                        project_tet_runs_soa_avx2(p, runs, lo + b, lo + e, volumes,
+                                                                  at_risk, tet_stiffness.inv_k,
+                                                                  tet_stiffness.alpha, num_at_risk);
+                                        if (num_at_risk > 0) {
+                                            // Chunks of one colour may set it concurrently:
+                                            // idempotent.
+                                            std::atomic_ref<std::uint8_t>(
+                                                colour_at_risk[static_cast<std::size_t>(c)])
+                                                .store(1, std::memory_order_relaxed);
+                                        }
+                                    });
+            });
+    }
 
     parallel_for(
         nv,

@@ -40,6 +40,18 @@ struct LatticeSweep {
     std::vector<LatticeRun> tet_runs;
     std::vector<std::int64_t> tet_run_begins;
     std::vector<std::int64_t> tet_run_offsets;
+    // Lanes: every constraint of colour c with row key y (lowest lattice y) is in lane
+    // #{boundaries ≤ y + row_skew[c]} of SWEEP_LANES, with the smallest row skews such that two
+    // constraints sharing a vertex are in lanes l ≤ l' when their colours are c < c' (as
+    // LayerBlocking's skews in z), boundaries splitting the constraints in about equal parts.
+    // Within each colour and layer key the constraints are ordered by lane, and a slab of one lane
+    // depends only on slabs ≤ it of lanes ≤ it: the lanes run as a pipeline, each a slab behind
+    // the previous, with no barrier between colours. lane_begin: per colour c, at
+    // c · (num_layers · SWEEP_LANES + 1) + z · SWEEP_LANES + l, the first constraint (index within
+    // the colour) of layer key ≥ z in lane ≥ l; empty: no lanes. On one thread, or without
+    // lanes, the blocked sweep runs each colour of a slab in fixed chunks (the same bits).
+    std::vector<std::int64_t> edge_lane_begin;
+    std::vector<std::int64_t> tet_lane_begin;
     // #V each, solver order: the substep's positions (world units) and inverse masses.
     std::vector<float> x, y, z, w;
 };
