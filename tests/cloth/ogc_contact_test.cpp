@@ -160,6 +160,18 @@ TEST(OgcContact, FollowsPinsFasterThanItsBall) {
         << "proximity " << reference.worst_strain_p99;
 }
 
+TEST(OgcContact, MovingPinsBitwiseIdenticalForOneAndTwoThreads) {
+    const auto make = [] {
+        return test::sheet_on_turning_pins([](ClothSolver& s) {
+            VBDOptions options;
+            options.ogc = test::small_ball_ogc();
+            s.use_vbd(options);
+        });
+    };
+    EXPECT_EQ(test::positions_after_8_frames(make, 1, 8),
+              test::positions_after_8_frames(make, 2, 8));
+}
+
 TEST(OgcContact, BitwiseIdenticalForOneAndTwoThreads) {
     const auto make = [] {
         return colliding_sheets(12);

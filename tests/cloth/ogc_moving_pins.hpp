@@ -20,8 +20,9 @@ namespace pliant::test {
 
 // OGC options whose ball (bound_share · query_factor · thickness = 0.1 · 2 · 5 mm = 1 mm) is
 // smaller than the pins' move per substep (they chase their target at up to half the thickness,
-// 2.5 mm, per substep; at 16 substeps per frame the row's ends move 2.45 mm), and whose re-detection share (20 %) is more than the pinned row's
-// neighbours (13 of 156 free vertices): only a rule that follows the motion re-detects for them.
+// 2.5 mm, per substep; at 16 substeps per frame the row's ends move 2.45 mm), and whose
+// re-detection share (20 %) is more than the pinned row's neighbours (13 of 156 free vertices):
+// only a rule that follows the motion re-detects for them.
 inline cloth::OgcOptions small_ball_ogc() {
     cloth::OgcOptions options;
     options.bound_share = 0.1;
@@ -39,10 +40,9 @@ inline std::unique_ptr<cloth::ClothSolver> sheet_on_turning_pins(
     for (Vec3d& p : mesh.positions) {
         p = {p.x, 0.0, p.y};  // hanging in the plane y = 0
     }
-    const double top =
-        std::max_element(mesh.positions.begin(), mesh.positions.end(),
-                         [](const Vec3d& a, const Vec3d& b) { return a.z < b.z; })
-            ->z;
+    const double top = std::max_element(mesh.positions.begin(), mesh.positions.end(),
+                                        [](const Vec3d& a, const Vec3d& b) { return a.z < b.z; })
+                           ->z;
     std::vector<std::int32_t> row;
     for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
         if (mesh.positions[v].z > top - 1e-9) {

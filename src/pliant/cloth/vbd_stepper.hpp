@@ -31,13 +31,16 @@
 // contact energy joins every vertex's Newton step, every move of a vertex (the prediction, each
 // Newton step after the obstacles' push, the Chebyshev extrapolation, the seams) is truncated to
 // the vertex's bound, and a detection runs before a substep without one and after every sweep
-// (or prediction) in which more than ogc.redetect_share of the free vertices hit their bound. No
-// proximity projection and no per-substep fail-safe: the bounds keep the cloth intersection-free.
-// With ogc.audit, the CCD fail-safe (ccd_fail_safe.hpp) stays as an audit and a fail-safe over
-// windows that end at every detection and at the step's end (its stats: ccd_pairs, ccd_hits,
-// reverted_vertices). Within a window every vertex stays in its feasible set, so the straight
-// motion from the window's start to its end is free of contact (ogc_contact.hpp) and the CCD
-// should clear it; a vertex it puts back at the step's end makes the next substep detect again.
+// (or prediction) in which more than ogc.redetect_share of the free vertices hit their bound, or,
+// in a substep whose pins left their sets, a ball held any vertex back; when a pin leaves its set
+// the prediction's truncation follows a detection with the pins where they moved and the free
+// vertices where the substep started (detail/ogc_step.hpp, pins_left_sets). No proximity projection
+// and no per-substep fail-safe: the bounds keep the cloth intersection-free. With ogc.audit, the
+// CCD fail-safe (ccd_fail_safe.hpp) stays as an audit and a fail-safe over windows that end at
+// every detection and at the step's end (its stats: ccd_pairs, ccd_hits, reverted_vertices). Within
+// a window every vertex stays in its feasible set, so the straight motion from the window's start
+// to its end is free of contact (ogc_contact.hpp) and the CCD should clear it; a vertex it puts
+// back at the step's end makes the next substep detect again.
 //
 // Units: SI. Not thread safe (one stepper per thread); step() parallelises internally.
 #pragma once
