@@ -217,7 +217,7 @@ bool OgcContact::set_shift(std::span<const Vec3d> predicted,
             std::int64_t count = 0;
             for (std::int64_t i = begin; i < end; ++i) {
                 const auto v = static_cast<std::size_t>(i);
-                count += inverse_masses[v] > 0.0 && !feasible(v, predicted[v]) ? 1 : 0;
+                count += feasible(v, predicted[v]) ? 0 : 1;
             }
             return count;
         },
@@ -272,6 +272,10 @@ bool OgcContact::feasible(std::size_t v, const Vec3d& x) const {
         }
     }
     return true;
+}
+
+bool OgcContact::at_ball(std::size_t v, const Vec3d& x) const {
+    return norm(x - m_detected[v] - m_shift) >= m_ball_radius * (1.0 - 1e-6);
 }
 
 void OgcContact::snapshot(std::span<const Vec3d> x) {

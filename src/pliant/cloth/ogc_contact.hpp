@@ -29,12 +29,12 @@
 //   frame shift. Distances do not change when every vertex is translated by the same vector, so
 //      the sets are centred at the detection's positions plus a shift S shared by all vertices:
 //      set_shift() takes the componentwise median, over every 16th free vertex, of a predicted
-//      position less its detection position, when every free vertex's prediction lies in its set
-//      at that shift (a falling sheet keeps its detection); else S stays as it was (the vertices'
-//      positions are in their sets at S; moving all sets by a shift some vertices do not follow
-//      would drag those along). Between substeps every vertex moves from its set at S to its set
-//      at S' (the sets are translates of one convex set, so every point between lies in the set
-//      at the shift between).
+//      position less its detection position, when every vertex's prediction (a pinned vertex's:
+//      its position) lies in its set at that shift (a falling sheet keeps its detection); else S
+//      stays as it was (the vertices' positions are in their sets at S; moving all sets by a shift
+//      some vertices do not follow would drag those along). Between substeps every vertex moves
+//      from its set at S to its set at S' (the sets are translates of one convex set, so every
+//      point between lies in the set at the shift between).
 //   contact energy (§3): for a detected pair at distance d < r (current positions),
 //      E = ½ k_c (r − d)², quadratic and barrier-free; on vertex i of the pair with weight w_i of
 //      the closest point (barycentric or segment parameter, sign by the feature's side) the force
@@ -43,15 +43,24 @@
 //      sweep (snapshot()), so that vertices of one colour solved in parallel read no position
 //      another thread writes: results are bitwise identical for 1 and N threads.
 //   re-detection: the caller counts the vertices truncate() held back in a sweep and calls
-//      detect() again when they exceed redetect_share of the free vertices; a settled sheet keeps
-//      one detection for many substeps.
+//      detect() again when they exceed redetect_share of the free vertices, and, in a substep
+//      whose pins left their sets, when the ball (not a plane: at_ball()) held back any vertex:
+//      pins drive the vertices beside them, too few for the share, and without a detection those
+//      would stay held back for good while the pins move on. XPBD then truncates the move again
+//      from the new detection (XPBDStepper::catch_up), VBD's next sweep moves on from it. A
+//      settled sheet keeps one detection for many substeps.
 //
 // XPBD (xpbd_stepper.hpp) uses the detection and the bounds with a hard constraint instead of the
 // energy: project() pushes every detected pair closer than r apart to r along its normal (XPBD
 // with zero compliance, as the proximity projection of self_collision.hpp), pair after pair.
 //
-// Pinned vertices follow their pins untruncated: a pin that moves a vertex out of its set can make
-// the cloth touch itself, which only the CCD audit (vbd_stepper.hpp) catches.
+// Pinned vertices follow their pins untruncated. A pin that leaves its set breaks the bounds'
+// guarantee for its pairs, so the steppers detect again before the substep goes on
+// (detail/ogc_step.hpp, pins_left_sets): with every pinned vertex at its new position and every
+// free vertex where the substep started, so that the pins are at the centres of their sets and
+// the free vertices beside them can follow them by a whole ball. A pin that moves farther than
+// the ball in one substep, or whose motion alone brings two features together, is caught only by
+// the CCD audit (vbd_stepper.hpp).
 //
 // Units: metres. Not thread safe except truncate() and add_forces() (const, read only).
 #pragma once
@@ -119,9 +128,10 @@ public:
     // The next substep must detect first (after a fail-safe moved vertices).
     void invalidate() { m_has_detection = false; }
 
-    // S from predicted positions (#V) of the free vertices (inverse_masses > 0): the median
-    // shift when every free vertex's prediction lies in its set at that shift (returns true),
-    // else S stays (a shift that some vertices do not follow would drag them along).
+    // S from predicted positions (#V): the median shift of the free vertices' (inverse_masses >
+    // 0) when every vertex's prediction, the pinned vertices' included, lies in its set at that
+    // shift (returns true), else S stays (a shift that some vertices do not follow would drag
+    // them along, or leave a pin outside its set).
     bool set_shift(std::span<const Vec3d> predicted, std::span<const double> inverse_masses);
     // Vertex v's move from `from` (in its feasible set) to x, truncated where it leaves the set:
     // x becomes the farthest point of the segment inside the set (from the set's centre when
@@ -129,6 +139,9 @@ public:
     bool truncate(std::size_t v, const Vec3d& from, Vec3d& x) const;
     // Whether x lies in v's feasible set.
     bool feasible(std::size_t v, const Vec3d& x) const;
+    // Whether x lies on (or beyond) the sphere of v's ball: where truncate() leaves a vertex the
+    // ball held back, rather than one of its planes (to a millionth of the radius).
+    bool at_ball(std::size_t v, const Vec3d& x) const;
     // The positions of the vertices in contact pairs (#V) for add_forces(), once per sweep.
     void snapshot(std::span<const Vec3d> x);
     // Adds the contact energy's force (−∂E/∂x_v) and Hessian on vertex v at x_v (its partners at

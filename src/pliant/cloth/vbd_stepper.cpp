@@ -438,7 +438,7 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
         push_out_of_obstacles(model, x[v], m_start[v], h, nullptr, nullptr);
     }
     if (m_ogc && m_ogc->truncate(v, before, x[v])) {
-        m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+        count_truncated(v, x[v]);
     }
     // No other vertex of this colour shares a hinge with v: b is updated without races.
     const Vec3d moved = x[v] - before;
@@ -453,8 +453,10 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
 
 void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
                               std::span<const double> inverse_masses) {
-    m_sweep_truncated.fetch_add(detail::truncate_moves(*m_ogc, from, x, inverse_masses),
+    std::int64_t ball_held = 0;
+    m_sweep_truncated.fetch_add(detail::truncate_moves(*m_ogc, from, x, inverse_masses, &ball_held),
                                 std::memory_order_relaxed);
+    m_sweep_ball_held.fetch_add(ball_held, std::memory_order_relaxed);
 }
 
 bool VBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
@@ -471,11 +473,23 @@ void VBDStepper::detect(std::span<Vec3d> x) {
     m_ogc->detect(x);
 }
 
+void VBDStepper::count_truncated(std::size_t v, const Vec3d& x) {
+    m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+    if (m_ogc->at_ball(v, x)) {
+        m_sweep_ball_held.fetch_add(1, std::memory_order_relaxed);
+    }
+}
+
 bool VBDStepper::redetect_if_needed(std::span<Vec3d> x) {
     const std::int64_t truncated = m_sweep_truncated.exchange(0);
+    const std::int64_t ball_held = m_sweep_ball_held.exchange(0);
     m_step_truncated += truncated;
-    if (static_cast<double>(truncated) >
-        m_options.ogc->redetect_share * static_cast<double>(m_num_free)) {
+    // Also when a ball held back any vertex in a substep whose pins left their sets: the pins
+    // drive the cloth faster than the detections follow, and too few vertices beside them are
+    // held back for the share.
+    if ((m_pins_left_sets && ball_held > 0) ||
+        static_cast<double>(truncated) >
+            m_options.ogc->redetect_share * static_cast<double>(m_num_free)) {
         detect(x);
         return true;
     }
@@ -547,9 +561,18 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         },
         VERTEX_GRAIN);
     if (m_ogc) {
-        // The frame shift from the prediction, then every vertex within its bound.
+        // The frame shift from the prediction; a detection where pins left their sets (with the
+        // pins where they moved, the free vertices where the substep started); then every vertex
+        // within its bound.
         m_ogc->set_shift(positions, inverse_masses);
+        m_pins_left_sets = detail::pins_left_sets(*m_ogc, positions, inverse_masses);
+        if (m_pins_left_sets) {
+            detail::pin_detection_positions(m_start, positions, inverse_masses, m_previous);
+            detect(m_previous);
+            m_ogc->set_shift(positions, inverse_masses);
+        }
         m_sweep_truncated = 0;
+        m_sweep_ball_held = 0;
         truncate_all(m_start, positions, inverse_masses);
         // Where many were held back, detect again and move toward the prediction once more: each
         // detection lets every vertex go up to its bound further (the block descent alone would
@@ -566,7 +589,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                             push_out_of_obstacles(model, x, m_start[v], h, nullptr, nullptr);
                         }
                         if (m_ogc->truncate(v, positions[v], x)) {
-                            m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+                            count_truncated(v, x);
                         }
                         positions[v] = x;
                     }
@@ -611,7 +634,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
                                                   nullptr);
                         }
                         if (m_ogc && m_ogc->truncate(v, from, positions[v])) {
-                            m_sweep_truncated.fetch_add(1, std::memory_order_relaxed);
+                            count_truncated(v, positions[v]);
                         }
                     }
                     m_previous[v] = m_current[v];

@@ -31,13 +31,16 @@
 // contact energy joins every vertex's Newton step, every move of a vertex (the prediction, each
 // Newton step after the obstacles' push, the Chebyshev extrapolation, the seams) is truncated to
 // the vertex's bound, and a detection runs before a substep without one and after every sweep
-// (or prediction) in which more than ogc.redetect_share of the free vertices hit their bound. No
-// proximity projection and no per-substep fail-safe: the bounds keep the cloth intersection-free.
-// With ogc.audit, the CCD fail-safe (ccd_fail_safe.hpp) stays as an audit and a fail-safe over
-// windows that end at every detection and at the step's end (its stats: ccd_pairs, ccd_hits,
-// reverted_vertices). Within a window every vertex stays in its feasible set, so the straight
-// motion from the window's start to its end is free of contact (ogc_contact.hpp) and the CCD
-// should clear it; a vertex it puts back at the step's end makes the next substep detect again.
+// (or prediction) in which more than ogc.redetect_share of the free vertices hit their bound, or,
+// in a substep whose pins left their sets, a ball held any vertex back; when a pin leaves its set
+// the prediction's truncation follows a detection with the pins where they moved and the free
+// vertices where the substep started (detail/ogc_step.hpp, pins_left_sets). No proximity projection
+// and no per-substep fail-safe: the bounds keep the cloth intersection-free. With ogc.audit, the
+// CCD fail-safe (ccd_fail_safe.hpp) stays as an audit and a fail-safe over windows that end at
+// every detection and at the step's end (its stats: ccd_pairs, ccd_hits, reverted_vertices). Within
+// a window every vertex stays in its feasible set, so the straight motion from the window's start
+// to its end is free of contact (ogc_contact.hpp) and the CCD should clear it; a vertex it puts
+// back at the step's end makes the next substep detect again.
 //
 // Units: SI. Not thread safe (one stepper per thread); step() parallelises internally.
 #pragma once
@@ -126,11 +129,14 @@ private:
                                Vec3d* normal, Vec3d* surface_velocity) const;
     void restart_self_collision(const ClothModel& model);
     // OGC: truncates every free vertex's move from `from` to x to its bound (counted in
-    // m_sweep_truncated).
+    // m_sweep_truncated, those the ball held back also in m_sweep_ball_held).
     void truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
                       std::span<const double> inverse_masses);
+    // OGC: counts vertex v, truncated to x, in m_sweep_truncated (and m_sweep_ball_held when x
+    // is on its ball's sphere). Thread safe.
+    void count_truncated(std::size_t v, const Vec3d& x);
     // OGC: after a sweep or the prediction, detects again (returns true) when too many vertices
-    // hit their bound.
+    // hit their bound, or a ball held any back in a substep whose pins left their sets.
     bool redetect_if_needed(std::span<Vec3d> x);
     // OGC: the audit's window ends at x (ogc.audit), then a detection at x.
     void detect(std::span<Vec3d> x);
@@ -190,7 +196,9 @@ private:
     std::vector<Vec3d> m_audit_velocities;
     std::int64_t m_num_free = 0;  // OGC: free vertices (inverse mass > 0) in this step
     std::atomic<std::int64_t> m_sweep_truncated{0};  // OGC: vertices held back in this sweep
-    std::int64_t m_step_truncated = 0;               // OGC: summed over this step
+    std::atomic<std::int64_t> m_sweep_ball_held{0};  // OGC: of them, by their balls
+    bool m_pins_left_sets = false;      // OGC: in this substep (detail::pins_left_sets)
+    std::int64_t m_step_truncated = 0;  // OGC: summed over this step
     std::int64_t m_num_position_resets = 0;
     double m_gather_start_time = 0.0;
     double m_gather_end_time = -std::numeric_limits<double>::infinity();

@@ -194,6 +194,20 @@ void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
     m_ogc->detect(x);
 }
 
+void XPBDStepper::catch_up(std::span<Vec3d> x, std::span<Vec3d> velocities,
+                           std::span<const double> inverse_masses) {
+    for (int round = 0; round < detail::MAX_CATCH_UP_DETECTIONS; ++round) {
+        // Velocities the audit sets are overwritten at the substep's end.
+        detect(x, velocities);  // the truncated positions, intersection-free
+        m_ogc_from.assign(x.begin(), x.end());
+        std::copy(m_ogc_wanted.begin(), m_ogc_wanted.end(), x.begin());
+        detail::truncate_moves(*m_ogc, m_ogc_from, x, inverse_masses);
+        if (!detail::held_back_by_ball(*m_ogc, m_ogc_wanted, x, inverse_masses)) {
+            return;
+        }
+    }
+}
+
 ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
     detail::check_step(model, dt, substeps, m_num_vertices, m_num_triangles);
     if (m_self_collision && m_num_position_resets != model.num_position_resets()) {
@@ -299,10 +313,25 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
                                ? detail::CATCH_UP_IN_THICKNESS * material.thickness
                                : std::numeric_limits<double>::infinity());
     if (m_ogc) {
-        // The frame shift from the prediction, then every free vertex within its bound.
+        // The frame shift from the prediction; a detection where pins left their sets (with the
+        // pins where they moved, the free vertices where the substep started); then every free
+        // vertex within its bound.
         m_ogc->set_shift(positions, inverse_masses);
+        m_pins_left_sets = detail::pins_left_sets(*m_ogc, positions, inverse_masses);
+        if (m_pins_left_sets) {
+            detail::pin_detection_positions(m_previous_positions, positions, inverse_masses,
+                                            m_ogc_from);
+            // Velocities the audit sets are overwritten at the substep's end.
+            detect(m_ogc_from, velocities);
+            m_ogc->set_shift(positions, inverse_masses);
+        }
+        m_ogc_wanted.assign(positions.begin(), positions.end());
         m_substep_truncated =
             detail::truncate_moves(*m_ogc, m_previous_positions, positions, inverse_masses);
+        if (m_pins_left_sets &&
+            detail::held_back_by_ball(*m_ogc, m_ogc_wanted, positions, inverse_masses)) {
+            catch_up(positions, velocities, inverse_masses);
+        }
         m_ogc_from.assign(positions.begin(), positions.end());
     }
     project_constraints(model, h);
@@ -320,8 +349,13 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         m_ogc->project(positions, m_previous_positions, inverse_masses,
                        material.self_static_friction, material.self_kinetic_friction);
         // Vertices held back in the prediction or here (a vertex held back in both counts twice).
+        m_ogc_wanted.assign(positions.begin(), positions.end());
         m_substep_truncated +=
             detail::truncate_moves(*m_ogc, m_ogc_from, positions, inverse_masses);
+        if (m_pins_left_sets &&
+            detail::held_back_by_ball(*m_ogc, m_ogc_wanted, positions, inverse_masses)) {
+            catch_up(positions, velocities, inverse_masses);
+        }
         m_step_truncated += m_substep_truncated;
         solve_ms += watch.elapsed_ms();
     } else if (m_self_collision) {

@@ -34,17 +34,21 @@
 // With OGC contact (set_ogc; ogc_contact.hpp: Offset Geometric Contact, Chen et al., SIGGRAPH
 // 2025), self-collision is instead: a detection (pairs within the query radius, their separating
 // planes, each vertex's conservative bound) before a substep without one; after 1, the frame
-// shift from the prediction and every free vertex's move truncated to its bound; after 4, every
-// detected pair closer than the contact radius pushed apart to it (OgcContact::project, with the
-// self-friction), then every free vertex's move since the truncated prediction truncated again;
-// after 5, a detection when the vertices held back in the substep's two truncations (a vertex
-// held back in both counts twice) exceed redetect_share of the free vertices. Every vertex stays in
-// its feasible set between detections, so the cloth stays intersection-free for any motion the
-// substeps make, with no gather and no per-window fail-safe: the cost follows how far the cloth
-// moves, not the substep count. With ogc.audit the CCD fail-safe (ccd_fail_safe.hpp) runs as an
-// audit and a fail-safe over windows that end at every detection and at the step's end (its stats:
-// ccd_pairs, ccd_hits, reverted_vertices); a vertex it puts back at the step's end makes the next
-// substep detect first.
+// shift from the prediction, a detection first if a pin left its set (with the pins where they
+// moved and the free vertices where the substep started, detail::pins_left_sets), and every free
+// vertex's move truncated to its bound; after 4, every detected pair closer than the contact
+// radius pushed apart to it (OgcContact::project, with the self-friction), then every free
+// vertex's move since the truncated prediction truncated again; in a substep whose pins left
+// their sets, after each of the two truncations, detections from the truncated positions that
+// let the vertices the balls held back go on toward where the substep took them (catch_up);
+// after 5, a detection when the vertices held back in
+// the substep's two truncations (a vertex held back in both counts twice) exceed redetect_share of
+// the free vertices. Every vertex stays in its feasible set between detections, so the cloth stays
+// intersection-free for any motion the substeps make, with no gather and no per-window fail-safe:
+// the cost follows how far the cloth moves, not the substep count. With ogc.audit the CCD fail-safe
+// (ccd_fail_safe.hpp) runs as an audit and a fail-safe over windows that end at every detection and
+// at the step's end (its stats: ccd_pairs, ccd_hits, reverted_vertices); a vertex it puts back at
+// the step's end makes the next substep detect first.
 //
 // Constraints of a kind are projected colour by colour (constraint_coloring.hpp), each colour in
 // parallel: Gauss-Seidel across colours, and results bitwise identical for 1 and N threads. The
@@ -193,6 +197,13 @@ private:
     // OGC: the audit's window ends at x (ogc.audit; velocities of the vertices it puts back are
     // set to zero), then a detection at x.
     void detect(std::span<Vec3d> x, std::span<Vec3d> velocities);
+    // OGC, in a substep whose pins left their sets (they drive the cloth faster than the
+    // detections follow): the vertices their balls held back at x are caught up: a detection at x
+    // (intersection-free), then every free vertex's move from there toward m_ogc_wanted
+    // truncated again, until no ball holds one back or detail::MAX_CATCH_UP_DETECTIONS
+    // detections were made.
+    void catch_up(std::span<Vec3d> x, std::span<Vec3d> velocities,
+                  std::span<const double> inverse_masses);
     // OGC: the CCD fail-safe over the motion from m_audit_start to x; returns whether it put any
     // vertex back. The next window starts at x.
     bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
@@ -250,6 +261,8 @@ private:
     std::unique_ptr<OgcContact> m_ogc;
     std::vector<Vec3d> m_audit_start;
     std::vector<Vec3d> m_ogc_from;
+    std::vector<Vec3d> m_ogc_wanted;  // a truncation's target (catch_up)
+    bool m_pins_left_sets = false;    // in this substep (detail::pins_left_sets)
     std::int64_t m_num_free = 0;
     std::int64_t m_step_truncated = 0;
     std::int64_t m_substep_truncated = 0;

@@ -1,6 +1,7 @@
 #include "pliant/cloth/detail/ogc_step.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include "pliant/core/parallel.hpp"
 
@@ -19,20 +20,78 @@ std::unique_ptr<OgcContact> make_ogc_contact(const ClothModel& model, const OgcO
 }
 
 std::int64_t truncate_moves(const OgcContact& ogc, std::span<const Vec3d> from, std::span<Vec3d> x,
-                            std::span<const double> inverse_masses) {
-    return parallel_reduce(
-        static_cast<std::int64_t>(x.size()), std::int64_t{0},
+                            std::span<const double> inverse_masses, std::int64_t* ball_held) {
+    using Counts = std::pair<std::int64_t, std::int64_t>;  // held back, by the ball
+    const Counts counts = parallel_reduce(
+        static_cast<std::int64_t>(x.size()), Counts{0, 0},
         [&](std::int64_t begin, std::int64_t end) {
-            std::int64_t count = 0;
+            Counts c{0, 0};
             for (std::int64_t i = begin; i < end; ++i) {
                 const auto v = static_cast<std::size_t>(i);
                 if (inverse_masses[v] > 0.0 && ogc.truncate(v, from[v], x[v])) {
-                    ++count;
+                    ++c.first;
+                    c.second += ogc.at_ball(v, x[v]) ? 1 : 0;
                 }
             }
-            return count;
+            return c;
         },
-        [](std::int64_t a, std::int64_t b) { return a + b; }, TRUNCATE_GRAIN);
+        [](const Counts& a, const Counts& b) {
+            return Counts{a.first + b.first, a.second + b.second};
+        },
+        TRUNCATE_GRAIN);
+    if (ball_held != nullptr) {
+        *ball_held += counts.second;
+    }
+    return counts.first;
+}
+
+bool pins_left_sets(const OgcContact& ogc, std::span<const Vec3d> x,
+                    std::span<const double> inverse_masses) {
+    return parallel_reduce(
+               static_cast<std::int64_t>(x.size()), std::int64_t{0},
+               [&](std::int64_t begin, std::int64_t end) {
+                   std::int64_t count = 0;
+                   for (std::int64_t i = begin; i < end; ++i) {
+                       const auto v = static_cast<std::size_t>(i);
+                       if (!(inverse_masses[v] > 0.0) && !ogc.feasible(v, x[v])) {
+                           ++count;
+                       }
+                   }
+                   return count;
+               },
+               [](std::int64_t a, std::int64_t b) { return a + b; }, TRUNCATE_GRAIN) > 0;
+}
+
+void pin_detection_positions(std::span<const Vec3d> start, std::span<const Vec3d> x,
+                             std::span<const double> inverse_masses, std::vector<Vec3d>& out) {
+    out.resize(x.size());
+    for (std::size_t v = 0; v < x.size(); ++v) {
+        out[v] = inverse_masses[v] > 0.0 ? start[v] : x[v];
+    }
+}
+
+namespace {
+
+bool ball_held(const OgcContact& ogc, std::size_t v, const Vec3d& wanted, const Vec3d& x) {
+    return !(wanted == x) && ogc.at_ball(v, x);
+}
+
+}  // namespace
+
+bool held_back_by_ball(const OgcContact& ogc, std::span<const Vec3d> wanted,
+                       std::span<const Vec3d> x, std::span<const double> inverse_masses) {
+    return parallel_reduce(
+               static_cast<std::int64_t>(x.size()), std::int64_t{0},
+               [&](std::int64_t begin, std::int64_t end) {
+                   std::int64_t held = 0;
+                   for (std::int64_t i = begin; i < end; ++i) {
+                       const auto v = static_cast<std::size_t>(i);
+                       held +=
+                           inverse_masses[v] > 0.0 && ball_held(ogc, v, wanted[v], x[v]) ? 1 : 0;
+                   }
+                   return held;
+               },
+               [](std::int64_t a, std::int64_t b) { return a + b; }, TRUNCATE_GRAIN) > 0;
 }
 
 OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positions,

@@ -28,9 +28,31 @@ std::unique_ptr<OgcContact> make_ogc_contact(const ClothModel& model, const OgcO
                                              double default_stiffness);
 
 // Truncates every free vertex's move from `from` to x to its bound (OgcContact::truncate, in
-// parallel: each vertex alone); returns the vertices held back.
+// parallel: each vertex alone); returns the vertices held back, and adds those of them the ball
+// held back (left on its sphere, OgcContact::at_ball) to *ball_held when given.
 std::int64_t truncate_moves(const OgcContact& ogc, std::span<const Vec3d> from, std::span<Vec3d> x,
-                            std::span<const double> inverse_masses);
+                            std::span<const double> inverse_masses,
+                            std::int64_t* ball_held = nullptr);
+
+// Whether some pinned vertex (inverse mass 0) lies outside its feasible set at x (#V).
+bool pins_left_sets(const OgcContact& ogc, std::span<const Vec3d> x,
+                    std::span<const double> inverse_masses);
+
+// Where a detection for pins that left their sets takes place: every pinned vertex at x (where
+// the pins moved it), every free vertex at start (where the substep started), into out (#V).
+// Detecting there puts the pins at the centres of their sets, and the free vertices' sets
+// around where the substep started.
+void pin_detection_positions(std::span<const Vec3d> start, std::span<const Vec3d> x,
+                             std::span<const double> inverse_masses, std::vector<Vec3d>& out);
+
+// Detections that XPBDStepper::catch_up makes at most per truncation.
+inline constexpr int MAX_CATCH_UP_DETECTIONS = 4;
+
+// Whether some free vertex's move toward `wanted` (#V) was held back by its ball at x (#V): x
+// differs from wanted and lies on the ball's sphere (a vertex held back by a contact plane
+// alone is resting on a contact, and stays).
+bool held_back_by_ball(const OgcContact& ogc, std::span<const Vec3d> wanted,
+                       std::span<const Vec3d> x, std::span<const double> inverse_masses);
 
 // Starts a step: the audit's first window starts at `positions` (into audit_start), num_free
 // becomes the number of free vertices (inverse mass > 0, what the re-detection share is of).
