@@ -3,6 +3,8 @@
 // vertex move in one substep, and what a run of it measures.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <functional>
@@ -84,6 +86,19 @@ inline MovingPinsRun run_moving_pins(cloth::ClothSolver& solver, int frames, int
         run.detections += stats.ogc_detections;
     }
     return run;
+}
+
+// An OGC run follows the pins as the proximity path's `reference` run of the same scene does:
+// both free of intersections, no vertex put back by the audit, more than one detection per frame
+// of `frames`, and strain p99 at worst 1.5 times the reference's plus 2 %.
+inline void expect_follows_pins(const MovingPinsRun& reference, const MovingPinsRun& run,
+                                int frames) {
+    EXPECT_EQ(reference.max_intersecting_pairs, 0);
+    EXPECT_EQ(run.max_intersecting_pairs, 0);
+    EXPECT_EQ(run.reverted_vertices, 0);
+    EXPECT_GT(run.detections, frames);
+    EXPECT_LT(run.worst_strain_p99, 1.5 * reference.worst_strain_p99 + 0.02)
+        << "proximity " << reference.worst_strain_p99;
 }
 
 }  // namespace pliant::test

@@ -13,29 +13,11 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/pbd/tet_edges.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "support/grid_constraints.hpp"
 #include "support/tet_grids.hpp"
 
 namespace pliant::pbd::detail {
 namespace {
-
-struct Layout {
-    EdgeConstraints edges;
-    TetConstraints tets;
-};
-
-Layout layout(const TetGrid& grid) {
-    const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
-    std::vector<double> volumes;
-    for (const geometry::Tet& t : grid.mesh.tets) {
-        const auto p = [&](int m) {
-            return vec3_cast<double>(grid.mesh.positions[static_cast<std::size_t>(t[m])]);
-        };
-        volumes.push_back(geometry::signed_volume(p(0), p(1), p(2), p(3)));
-    }
-    return {
-        layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions, &grid),
-        layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, volumes, &grid)};
-}
 
 BodyBox box_of(const std::vector<Vec3f>& rest) {
     BodyBox box{vec3_cast<double>(rest[0]), vec3_cast<double>(rest[0]), {}, 1.0};
@@ -51,7 +33,7 @@ BodyBox box_of(const std::vector<Vec3f>& rest) {
 // The rest state at time t straight from the formulas (driver_apply.hpp): every vertex displaced
 // by every wave, every constraint scaled by every bubble, no shortcut.
 void reference_rest_state(const std::vector<Driver>& drivers, const BodyBox& box,
-                          const std::vector<Vec3f>& rest, double t, Layout& out) {
+                          const std::vector<Vec3f>& rest, double t, test::GridConstraints& out) {
     std::vector<Vec3d> shaped;
     bool has_wave = false;
     for (const Vec3f& r : rest) {
@@ -112,8 +94,8 @@ TEST(ApplyRestDrivers, ShortcutsGiveTheFormulasBitForBit) {
     for (const int threads : {1, 2}) {
         set_num_threads(threads);
         for (std::size_t c = 0; c < cases.size(); ++c) {
-            Layout got = layout(grid);
-            Layout expected = layout(grid);
+            test::GridConstraints got = test::grid_constraints(grid);
+            test::GridConstraints expected = test::grid_constraints(grid);
             RestDriverCache cache;
             for (int frame = 1; frame <= 6; ++frame) {
                 const double t = frame / 24.0;
@@ -134,7 +116,7 @@ TEST(ApplyRestDrivers, ShortcutsGiveTheFormulasBitForBit) {
             EXPECT_NE(got.edges.rest_lengths, got.edges.rest_lengths0) << "case " << c;
         }
         // Bubbles alone: only the constraints they reach are listed, fewer than all.
-        Layout laid = layout(grid);
+        test::GridConstraints laid = test::grid_constraints(grid);
         RestDriverCache cache;
         apply_rest_drivers(cases[0], box, rest, 0.05, laid.edges, laid.tets, cache);
         EXPECT_GT(cache.tets.size(), 0u);

@@ -15,29 +15,11 @@
 #include "pliant/pbd/detail/grains.hpp"
 #include "pliant/pbd/tet_edges.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "support/grid_constraints.hpp"
 #include "support/tet_grids.hpp"
 
 namespace pliant::pbd::detail {
 namespace {
-
-struct Layout {
-    EdgeConstraints edges;
-    TetConstraints tets;
-};
-
-Layout layout(const TetGrid& grid) {
-    const auto edges = tet_edges(grid.mesh.tets, std::ssize(grid.mesh.positions));
-    std::vector<double> volumes;
-    for (const geometry::Tet& t : grid.mesh.tets) {
-        const auto p = [&](int m) {
-            return vec3_cast<double>(grid.mesh.positions[static_cast<std::size_t>(t[m])]);
-        };
-        volumes.push_back(geometry::signed_volume(p(0), p(1), p(2), p(3)));
-    }
-    return {
-        layout_edge_constraints(color_grid_edges(grid, edges), edges, grid.mesh.positions, &grid),
-        layout_tet_constraints(color_grid_tets(grid), grid.mesh.tets, volumes, &grid)};
-}
 
 // Per colour, the sorted (vertices, rest) pairs of constraints [offsets[c], offsets[c + 1]).
 template <typename Constraint>
@@ -111,8 +93,8 @@ void expect_runs_match(const std::vector<std::int32_t>& vertex_of, const TetGrid
 TEST(LatticeSweep, RunsGiveEveryConstraintsVerticesInTheSolverOrder) {
     for (const bool full_box : {true, false}) {
         const TetGrid grid = test::ball_tet_grid({40, 36, 30}, full_box);
-        const Layout plain = layout(grid);
-        Layout laid = layout(grid);
+        const test::GridConstraints plain = test::grid_constraints(grid);
+        test::GridConstraints laid = test::grid_constraints(grid);
         const LatticeSweep sweep = build_lattice_sweep(grid, laid.edges, laid.tets);
         // A permutation of the vertices.
         std::vector<std::int32_t> sorted = sweep.vertex_of;
@@ -199,7 +181,7 @@ void expect_lanes_ordered(const TetGrid& grid, const ConstraintColoring& colorin
 TEST(LatticeSweep, LanesFollowTheColourOrderAtEveryVertex) {
     for (const bool full_box : {true, false}) {
         const TetGrid grid = test::ball_tet_grid({40, 36, 30}, full_box);
-        Layout laid = layout(grid);
+        test::GridConstraints laid = test::grid_constraints(grid);
         const LatticeSweep sweep = build_lattice_sweep(grid, laid.edges, laid.tets);
         expect_lanes_ordered(grid, laid.edges.coloring, laid.edges.blocking, laid.edges.vertices,
                              sweep.edge_lane_begin);
@@ -216,8 +198,8 @@ TEST(LatticeSweep, ProjectsBitwiseAsTheColourSweep) {
     // sweep against the plain layout's scalar / SSE sweep, the same bits and the same tets at risk
     // (compared as vertex sets: the two layouts order a colour differently).
     const TetGrid grid = test::ball_tet_grid({40, 36, 30}, false);
-    Layout plain = layout(grid);
-    Layout laid = layout(grid);
+    test::GridConstraints plain = test::grid_constraints(grid);
+    test::GridConstraints laid = test::grid_constraints(grid);
     LatticeSweep sweep = build_lattice_sweep(grid, laid.edges, laid.tets);
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> jitter(-0.8f, 0.8f);

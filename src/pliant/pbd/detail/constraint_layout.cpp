@@ -5,17 +5,78 @@
 #include <utility>
 
 namespace pliant::pbd::detail {
-namespace {
 
-// Lattice z per vertex of a grid (#V).
-std::vector<std::int32_t> vertex_layers(const TetGrid& grid) {
-    std::vector<std::int32_t> vertex_z;
-    vertex_z.reserve(grid.vertex_lattice.size());
+std::vector<std::int32_t> vertex_lattice_axis(const TetGrid& grid, int axis) {
+    std::vector<std::int32_t> level;
+    level.reserve(grid.vertex_lattice.size());
     for (const auto& lattice : grid.vertex_lattice) {
-        vertex_z.push_back(lattice[2]);
+        level.push_back(lattice[static_cast<std::size_t>(axis)]);
     }
-    return vertex_z;
+    return level;
 }
+
+template <std::size_t K>
+std::vector<std::int64_t> colour_skews(const ConstraintColoring& coloring,
+                                       const std::vector<std::array<std::int32_t, K>>& constraints,
+                                       const std::vector<std::int32_t>& keys,
+                                       const std::vector<std::int32_t>& vertex_level) {
+    const std::int32_t num_colors = coloring.num_colors();
+    if (num_colors > 64) {
+        return {};
+    }
+    // Per vertex: bit c of `below` when colour c holds it in a constraint of key level_v − 1, of
+    // `level` of key level_v.
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(vertex_level.size(), {0, 0});
+    for (std::int32_t c = 0; c < num_colors; ++c) {
+        const std::uint64_t bit = std::uint64_t{1} << c;
+        for (std::int64_t q = coloring.offsets[static_cast<std::size_t>(c)];
+             q < coloring.offsets[static_cast<std::size_t>(c) + 1]; ++q) {
+            for (const std::int32_t v : constraints[static_cast<std::size_t>(q)]) {
+                const std::int32_t offset =
+                    keys[static_cast<std::size_t>(q)] - vertex_level[static_cast<std::size_t>(v)];
+                if (offset == -1) {
+                    masks[static_cast<std::size_t>(v)].first |= bit;
+                } else if (offset == 0) {
+                    masks[static_cast<std::size_t>(v)].second |= bit;
+                } else {
+                    return {};
+                }
+            }
+        }
+    }
+    std::sort(masks.begin(), masks.end());
+    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
+    // Colours in order: every bound on skew[c'] comes from colours c < c', already final.
+    std::vector<std::int64_t> skew(static_cast<std::size_t>(num_colors), 0);
+    for (std::int32_t later = 0; later < num_colors; ++later) {
+        for (const auto& [below, level] : masks) {
+            if (((below | level) >> later & 1) == 0) {
+                continue;
+            }
+            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
+            for (std::int32_t c = 0; c < later; ++c) {
+                if (((below | level) >> c & 1) != 0) {
+                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
+                    skew[static_cast<std::size_t>(later)] =
+                        std::max(skew[static_cast<std::size_t>(later)],
+                                 skew[static_cast<std::size_t>(c)] + offset - later_offset);
+                }
+            }
+        }
+    }
+    return skew;
+}
+
+template std::vector<std::int64_t> colour_skews<2>(const ConstraintColoring&,
+                                                   const std::vector<std::array<std::int32_t, 2>>&,
+                                                   const std::vector<std::int32_t>&,
+                                                   const std::vector<std::int32_t>&);
+template std::vector<std::int64_t> colour_skews<4>(const ConstraintColoring&,
+                                                   const std::vector<std::array<std::int32_t, 4>>&,
+                                                   const std::vector<std::int32_t>&,
+                                                   const std::vector<std::int32_t>&);
+
+namespace {
 
 // The blocking of constraints (in colour order, sorted by key within each colour; vertex_z:
 // lattice z per vertex); none when a key is out of order or a vertex lies outside layers z, z + 1
@@ -32,9 +93,6 @@ LayerBlocking block_layers(const ConstraintColoring& coloring,
     LayerBlocking blocking;
     blocking.num_layers = num_layers;
     blocking.layer_begin.resize(static_cast<std::size_t>(num_colors * (num_layers + 1)));
-    // Per vertex: bit c of `below` when colour c holds it in a constraint of key z_v − 1, of
-    // `level` of key z_v.
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(vertex_z.size(), {0, 0});
     for (std::int32_t c = 0; c < num_colors; ++c) {
         const std::int64_t begin = coloring.offsets[static_cast<std::size_t>(c)];
         const std::int64_t end = coloring.offsets[static_cast<std::size_t>(c) + 1];
@@ -47,42 +105,13 @@ LayerBlocking block_layers(const ConstraintColoring& coloring,
             blocking.layer_begin[static_cast<std::size_t>(c * (num_layers + 1) + z)] =
                 std::lower_bound(first, last, z) - first;
         }
-        const std::uint64_t bit = std::uint64_t{1} << c;
-        for (std::int64_t q = begin; q < end; ++q) {
-            for (const std::int32_t v : constraints[static_cast<std::size_t>(q)]) {
-                const std::int32_t offset =
-                    keys[static_cast<std::size_t>(q)] - vertex_z[static_cast<std::size_t>(v)];
-                if (offset == -1) {
-                    masks[static_cast<std::size_t>(v)].first |= bit;
-                } else if (offset == 0) {
-                    masks[static_cast<std::size_t>(v)].second |= bit;
-                } else {
-                    return {};
-                }
-            }
-        }
     }
-    std::sort(masks.begin(), masks.end());
-    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
-    // Colours in order: every bound on skew[c'] comes from colours c < c', already final.
-    blocking.skew.assign(static_cast<std::size_t>(num_colors), 0);
-    for (std::int32_t later = 0; later < num_colors; ++later) {
-        for (const auto& [below, level] : masks) {
-            if (((below | level) >> later & 1) == 0) {
-                continue;
-            }
-            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
-            for (std::int32_t c = 0; c < later; ++c) {
-                if (((below | level) >> c & 1) != 0) {
-                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
-                    auto& skew = blocking.skew[static_cast<std::size_t>(later)];
-                    skew = std::max(
-                        skew, blocking.skew[static_cast<std::size_t>(c)] + offset - later_offset);
-                }
-            }
-        }
-        blocking.max_skew =
-            std::max(blocking.max_skew, blocking.skew[static_cast<std::size_t>(later)]);
+    blocking.skew = colour_skews(coloring, constraints, keys, vertex_z);
+    if (std::ssize(blocking.skew) != num_colors) {
+        return {};
+    }
+    for (const std::int64_t skew : blocking.skew) {
+        blocking.max_skew = std::max(blocking.max_skew, skew);
     }
     return blocking;
 }
@@ -143,7 +172,7 @@ EdgeConstraints layout_edge_constraints(ConstraintColoring coloring,
         out.rest_lengths = out.rest_lengths0;
         return out;
     }
-    const std::vector<std::int32_t> vertex_z = vertex_layers(*grid);
+    const std::vector<std::int32_t> vertex_z = vertex_lattice_axis(*grid, 2);
     sort_edges_by_layer(out.coloring, vertex_z, out.vertices, out.rest_lengths0);
     out.rest_lengths = out.rest_lengths0;
     std::vector<std::int32_t> keys(out.vertices.size());
@@ -172,7 +201,7 @@ TetConstraints layout_tet_constraints(ConstraintColoring coloring,
     if (grid == nullptr) {
         return out;
     }
-    const std::vector<std::int32_t> vertex_z = vertex_layers(*grid);
+    const std::vector<std::int32_t> vertex_z = vertex_lattice_axis(*grid, 2);
     std::vector<std::int32_t> keys(out.vertices.size());
     const std::int64_t cells_xy = std::int64_t{grid->cells[0]} * grid->cells[1];
     for (std::size_t k = 0; k < keys.size(); ++k) {

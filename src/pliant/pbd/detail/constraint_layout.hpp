@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -39,6 +40,20 @@ struct LayerBlocking {
     // the colour) with key ≥ z.
     std::vector<std::int64_t> layer_begin;
 };
+
+// Lattice coordinate `axis` (0 x, 1 y, 2 z) of every vertex of a grid (#V).
+std::vector<std::int32_t> vertex_lattice_axis(const TetGrid& grid, int axis);
+
+// The smallest skews per colour with skew[c'] − skew[c] ≥ k − k' for every two constraints of
+// colours c < c' (in coloring's order; k, k' their keys) that share a vertex, every vertex a
+// constraint holds lying at level key or key + 1 (vertex_level: per vertex): LayerBlocking's
+// skews in z, and LatticeSweep's lanes' in y. Empty when a vertex lies elsewhere, or for more
+// than 64 colours. K = 2 (edges) or 4 (tets).
+template <std::size_t K>
+std::vector<std::int64_t> colour_skews(const ConstraintColoring& coloring,
+                                       const std::vector<std::array<std::int32_t, K>>& constraints,
+                                       const std::vector<std::int32_t>& keys,
+                                       const std::vector<std::int32_t>& vertex_level);
 
 // The edge-distance constraints C = |x_a − x_b| − L in colour order: colour c holds the entries
 // [coloring.offsets[c], coloring.offsets[c + 1]) of every per-constraint array. On a grid the

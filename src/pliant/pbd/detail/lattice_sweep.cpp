@@ -134,90 +134,23 @@ void reorder_into_runs(const ConstraintColoring& coloring, const std::vector<std
     }
 }
 
-// The layer key of each constraint (its lowest lattice z; a tet's is its cell's).
+// The lowest lattice coordinate `axis` of each constraint's vertices: its layer key (z; a tet's
+// is its cell's) or its row key (y).
 template <std::size_t K>
-std::vector<std::int32_t> layer_keys(const TetGrid& grid,
-                                     const std::vector<std::array<std::int32_t, K>>& vertices) {
+std::vector<std::int32_t> lowest_lattice(const TetGrid& grid,
+                                         const std::vector<std::array<std::int32_t, K>>& vertices,
+                                         int axis) {
+    const auto a = static_cast<std::size_t>(axis);
     std::vector<std::int32_t> keys;
     keys.reserve(vertices.size());
     for (const auto& constraint : vertices) {
-        std::int32_t z = grid.vertex_lattice[static_cast<std::size_t>(constraint[0])][2];
+        std::int32_t key = grid.vertex_lattice[static_cast<std::size_t>(constraint[0])][a];
         for (std::size_t m = 1; m < K; ++m) {
-            z = std::min(z, grid.vertex_lattice[static_cast<std::size_t>(constraint[m])][2]);
+            key = std::min(key, grid.vertex_lattice[static_cast<std::size_t>(constraint[m])][a]);
         }
-        keys.push_back(z);
+        keys.push_back(key);
     }
     return keys;
-}
-
-// The lowest lattice y of each constraint (its row key).
-template <std::size_t K>
-std::vector<std::int32_t> row_keys(const TetGrid& grid,
-                                   const std::vector<std::array<std::int32_t, K>>& vertices) {
-    std::vector<std::int32_t> keys;
-    keys.reserve(vertices.size());
-    for (const auto& constraint : vertices) {
-        std::int32_t y = grid.vertex_lattice[static_cast<std::size_t>(constraint[0])][1];
-        for (std::size_t m = 1; m < K; ++m) {
-            y = std::min(y, grid.vertex_lattice[static_cast<std::size_t>(constraint[m])][1]);
-        }
-        keys.push_back(y);
-    }
-    return keys;
-}
-
-// The lanes' row skews (LatticeSweep): the smallest with skew[c'] − skew[c] ≥ y − y' for every two
-// constraints of colours c < c' (row keys y, y') that share a vertex, as LayerBlocking's skews in
-// z; empty when a vertex lies outside rows y, y + 1 of a constraint holding it, or for more than 64
-// colours.
-template <std::size_t K>
-std::vector<std::int64_t> lane_skews(const TetGrid& grid, const ConstraintColoring& coloring,
-                                     const std::vector<std::array<std::int32_t, K>>& vertices,
-                                     const std::vector<std::int32_t>& row) {
-    const std::int32_t num_colors = coloring.num_colors();
-    if (num_colors > 64) {
-        return {};
-    }
-    // Per vertex: bit c of `below` when colour c holds it in a constraint of row key y_v − 1, of
-    // `level` of key y_v.
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> masks(grid.vertex_lattice.size(), {0, 0});
-    for (std::int32_t c = 0; c < num_colors; ++c) {
-        const std::uint64_t bit = std::uint64_t{1} << c;
-        for (std::int64_t q = coloring.offsets[static_cast<std::size_t>(c)];
-             q < coloring.offsets[static_cast<std::size_t>(c) + 1]; ++q) {
-            for (const std::int32_t v : vertices[static_cast<std::size_t>(q)]) {
-                const std::int32_t offset = row[static_cast<std::size_t>(q)] -
-                                            grid.vertex_lattice[static_cast<std::size_t>(v)][1];
-                if (offset == -1) {
-                    masks[static_cast<std::size_t>(v)].first |= bit;
-                } else if (offset == 0) {
-                    masks[static_cast<std::size_t>(v)].second |= bit;
-                } else {
-                    return {};
-                }
-            }
-        }
-    }
-    std::sort(masks.begin(), masks.end());
-    masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
-    std::vector<std::int64_t> skew(static_cast<std::size_t>(num_colors), 0);
-    for (std::int32_t later = 0; later < num_colors; ++later) {
-        for (const auto& [below, level] : masks) {
-            if (((below | level) >> later & 1) == 0) {
-                continue;
-            }
-            const std::int64_t later_offset = (below >> later & 1) != 0 ? -1 : 0;
-            for (std::int32_t c = 0; c < later; ++c) {
-                if (((below | level) >> c & 1) != 0) {
-                    const std::int64_t offset = (below >> c & 1) != 0 ? -1 : 0;
-                    skew[static_cast<std::size_t>(later)] =
-                        std::max(skew[static_cast<std::size_t>(later)],
-                                 skew[static_cast<std::size_t>(c)] + offset - later_offset);
-                }
-            }
-        }
-    }
-    return skew;
 }
 
 // The lane of each constraint (colour order): with y its row key plus its colour's skew, the
@@ -347,20 +280,21 @@ LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
     std::vector<std::int32_t> solver_index;
     solver_order(grid, out.vertex_of, solver_index);
     // Lanes (LatticeSweep): rows, per colour skewed, split at the median.
-    const std::vector<std::int32_t> edge_rows = row_keys(grid, edges.vertices);
-    const std::vector<std::int32_t> tet_rows = row_keys(grid, tets.vertices);
+    const std::vector<std::int32_t> edge_rows = lowest_lattice(grid, edges.vertices, 1);
+    const std::vector<std::int32_t> tet_rows = lowest_lattice(grid, tets.vertices, 1);
+    const std::vector<std::int32_t> vertex_rows = vertex_lattice_axis(grid, 1);
     const std::vector<std::int64_t> edge_skews =
-        lane_skews(grid, edges.coloring, edges.vertices, edge_rows);
+        colour_skews(edges.coloring, edges.vertices, edge_rows, vertex_rows);
     const std::vector<std::int64_t> tet_skews =
-        lane_skews(grid, tets.coloring, tets.vertices, tet_rows);
+        colour_skews(tets.coloring, tets.vertices, tet_rows, vertex_rows);
     std::vector<std::int8_t> edge_lanes = constraint_lanes(edges.coloring, edge_rows, edge_skews);
     std::vector<std::int8_t> tet_lanes = constraint_lanes(tets.coloring, tet_rows, tet_skews);
 
-    const std::vector<std::int32_t> edge_keys = layer_keys(grid, edges.vertices);
+    const std::vector<std::int32_t> edge_keys = lowest_lattice(grid, edges.vertices, 2);
     std::vector<float>* edge_rest[] = {&edges.rest_lengths0, &edges.rest_lengths};
     reorder_into_runs<2>(edges.coloring, edge_keys, edge_lanes, edges.vertices, edge_rest,
                          solver_index, out.edge_runs, out.edge_run_begins, out.edge_run_offsets);
-    const std::vector<std::int32_t> tet_keys = layer_keys(grid, tets.vertices);
+    const std::vector<std::int32_t> tet_keys = lowest_lattice(grid, tets.vertices, 2);
     std::vector<float>* tet_rest[] = {&tets.rest_volumes0, &tets.rest_volumes};
     reorder_into_runs<4>(tets.coloring, tet_keys, tet_lanes, tets.vertices, tet_rest, solver_index,
                          out.tet_runs, out.tet_run_begins, out.tet_run_offsets);
