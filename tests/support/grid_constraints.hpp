@@ -29,8 +29,8 @@ inline GridConstraints grid_constraints(const pbd::TetGrid& grid) {
     }
     return {pbd::detail::layout_edge_constraints(pbd::color_grid_edges(grid, edges), edges,
                                                  grid.mesh.positions, &grid),
-            pbd::detail::layout_tet_constraints(pbd::color_grid_tets(grid), grid.mesh.tets,
-                                                volumes, &grid)};
+            pbd::detail::layout_tet_constraints(pbd::color_grid_tets(grid), grid.mesh.tets, volumes,
+                                                &grid)};
 }
 
 }  // namespace pliant::test
