@@ -201,8 +201,9 @@ void XPBDStepper::catch_up(std::span<Vec3d> x, std::span<Vec3d> velocities,
         detect(x, velocities);  // the truncated positions, intersection-free
         m_ogc_from.assign(x.begin(), x.end());
         std::copy(m_ogc_wanted.begin(), m_ogc_wanted.end(), x.begin());
-        detail::truncate_moves(*m_ogc, m_ogc_from, x, inverse_masses);
-        if (!detail::held_back_by_ball(*m_ogc, m_ogc_wanted, x, inverse_masses)) {
+        std::int64_t ball_held = 0;
+        detail::truncate_moves(*m_ogc, m_ogc_from, x, inverse_masses, &ball_held);
+        if (ball_held == 0) {
             return;
         }
     }
@@ -325,11 +326,13 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
             detect(m_ogc_from, velocities);
             m_ogc->set_shift(positions, inverse_masses);
         }
-        m_ogc_wanted.assign(positions.begin(), positions.end());
-        m_substep_truncated =
-            detail::truncate_moves(*m_ogc, m_previous_positions, positions, inverse_masses);
-        if (m_pins_left_sets &&
-            detail::held_back_by_ball(*m_ogc, m_ogc_wanted, positions, inverse_masses)) {
+        if (m_pins_left_sets) {  // catch_up's target
+            m_ogc_wanted.assign(positions.begin(), positions.end());
+        }
+        std::int64_t ball_held = 0;
+        m_substep_truncated = detail::truncate_moves(*m_ogc, m_previous_positions, positions,
+                                                     inverse_masses, &ball_held);
+        if (m_pins_left_sets && ball_held > 0) {
             catch_up(positions, velocities, inverse_masses);
         }
         m_ogc_from.assign(positions.begin(), positions.end());
@@ -349,11 +352,13 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         m_ogc->project(positions, m_previous_positions, inverse_masses,
                        material.self_static_friction, material.self_kinetic_friction);
         // Vertices held back in the prediction or here (a vertex held back in both counts twice).
-        m_ogc_wanted.assign(positions.begin(), positions.end());
+        if (m_pins_left_sets) {  // catch_up's target
+            m_ogc_wanted.assign(positions.begin(), positions.end());
+        }
+        std::int64_t ball_held = 0;
         m_substep_truncated +=
-            detail::truncate_moves(*m_ogc, m_ogc_from, positions, inverse_masses);
-        if (m_pins_left_sets &&
-            detail::held_back_by_ball(*m_ogc, m_ogc_wanted, positions, inverse_masses)) {
+            detail::truncate_moves(*m_ogc, m_ogc_from, positions, inverse_masses, &ball_held);
+        if (m_pins_left_sets && ball_held > 0) {
             catch_up(positions, velocities, inverse_masses);
         }
         m_step_truncated += m_substep_truncated;

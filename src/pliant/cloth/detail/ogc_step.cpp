@@ -70,30 +70,6 @@ void pin_detection_positions(std::span<const Vec3d> start, std::span<const Vec3d
     }
 }
 
-namespace {
-
-bool ball_held(const OgcContact& ogc, std::size_t v, const Vec3d& wanted, const Vec3d& x) {
-    return !(wanted == x) && ogc.at_ball(v, x);
-}
-
-}  // namespace
-
-bool held_back_by_ball(const OgcContact& ogc, std::span<const Vec3d> wanted,
-                       std::span<const Vec3d> x, std::span<const double> inverse_masses) {
-    return parallel_reduce(
-               static_cast<std::int64_t>(x.size()), std::int64_t{0},
-               [&](std::int64_t begin, std::int64_t end) {
-                   std::int64_t held = 0;
-                   for (std::int64_t i = begin; i < end; ++i) {
-                       const auto v = static_cast<std::size_t>(i);
-                       held +=
-                           inverse_masses[v] > 0.0 && ball_held(ogc, v, wanted[v], x[v]) ? 1 : 0;
-                   }
-                   return held;
-               },
-               [](std::int64_t a, std::int64_t b) { return a + b; }, TRUNCATE_GRAIN) > 0;
-}
-
 OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positions,
                             std::span<const double> inverse_masses, std::vector<Vec3d>& audit_start,
                             std::int64_t& num_free) {

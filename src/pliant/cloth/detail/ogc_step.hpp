@@ -29,7 +29,8 @@ std::unique_ptr<OgcContact> make_ogc_contact(const ClothModel& model, const OgcO
 
 // Truncates every free vertex's move from `from` to x to its bound (OgcContact::truncate, in
 // parallel: each vertex alone); returns the vertices held back, and adds those of them the ball
-// held back (left on its sphere, OgcContact::at_ball) to *ball_held when given.
+// held back (left on its sphere, OgcContact::at_ball; a vertex held back by a contact plane alone
+// is resting on a contact, and stays) to *ball_held when given.
 std::int64_t truncate_moves(const OgcContact& ogc, std::span<const Vec3d> from, std::span<Vec3d> x,
                             std::span<const double> inverse_masses,
                             std::int64_t* ball_held = nullptr);
@@ -47,12 +48,6 @@ void pin_detection_positions(std::span<const Vec3d> start, std::span<const Vec3d
 
 // Detections that XPBDStepper::catch_up makes at most per truncation.
 inline constexpr int MAX_CATCH_UP_DETECTIONS = 4;
-
-// Whether some free vertex's move toward `wanted` (#V) was held back by its ball at x (#V): x
-// differs from wanted and lies on the ball's sphere (a vertex held back by a contact plane
-// alone is resting on a contact, and stays).
-bool held_back_by_ball(const OgcContact& ogc, std::span<const Vec3d> wanted,
-                       std::span<const Vec3d> x, std::span<const double> inverse_masses);
 
 // Starts a step: the audit's first window starts at `positions` (into audit_start), num_free
 // becomes the number of free vertices (inverse mass > 0, what the re-detection share is of).
