@@ -59,6 +59,11 @@
 // Sampling: trilinear at voxel centres (source grid coordinate g = (r − origin)/spacing − 0.5
 // has voxel centres at integers); inside the source box [origin, origin + dims·spacing] but within
 // half a voxel of a face the sample is clamped to the edge voxel; outside the box it is 0.
+// RGBA sources interpolate opacity-weighted colour (Wittenbrink, Malzbender & Goss 1998): the
+// sample's α is the trilinear α, its straight colour Σ w α c / Σ w α (0 where α = 0), so that a
+// surface's colour is not darkened by the transparent voxels beside it and the ray caster, which
+// interpolates premultiplied colour, sees the same colour in the resampled volume as in the
+// source (detail::interpolate_corners).
 //
 // Skipping: the Resampler keeps only tets whose rest box, grown by the trilinear footprint, holds
 // a visible source voxel (volume/visibility.hpp: value ≠ 0 for scalars, or opacity > 0 under

@@ -241,6 +241,25 @@ PLIANT_AVX2_INLINE __m256 spread_pair(__m128 x, int l) {
     return _mm256_permutevar8x32_ps(_mm256_castps128_ps256(x), idx);
 }
 
+// The trilinear interpolation of 8 corner vectors (x fastest), sample_trilinear's order.
+PLIANT_AVX2_INLINE __m256 trilinear8(__m256 v000, __m256 v100, __m256 v010, __m256 v110,
+                                     __m256 v001, __m256 v101, __m256 v011, __m256 v111, __m256 fx,
+                                     __m256 fy, __m256 fz) {
+    const __m256 v00 = lerp8(v000, v100, fx);
+    const __m256 v10 = lerp8(v010, v110, fx);
+    const __m256 v01 = lerp8(v001, v101, fx);
+    const __m256 v11 = lerp8(v011, v111, fx);
+    const __m256 v0 = lerp8(v00, v10, fy);
+    const __m256 v1 = lerp8(v01, v11, fy);
+    return lerp8(v0, v1, fz);
+}
+
+// Per lane, the α of its voxel for the colour lanes and 1 for the α lanes (two RGBA voxels).
+PLIANT_AVX2_INLINE __m256 alpha_or_one(__m256 v) {
+    const __m256 alpha = _mm256_permutevar8x32_ps(v, _mm256_setr_epi32(3, 3, 3, 3, 7, 7, 7, 7));
+    return _mm256_blend_ps(alpha, _mm256_set1_ps(1.0f), 0x88);
+}
+
 template <bool INTERIOR, typename D>
 PLIANT_AVX2_INLINE int sample_rgba8(const std::uint8_t* src, const std::int64_t n[3],
                                     const SpanBatch& batch, float scale, D* dst) {
@@ -264,6 +283,7 @@ PLIANT_AVX2_INLINE int sample_rgba8(const std::uint8_t* src, const std::int64_t 
     const __m256 zero8 = _mm256_setzero_ps();
     const __m256 top8 = _mm256_set1_ps(255.0f);
     const __m256 half8 = _mm256_set1_ps(0.5f);
+    const __m256i alpha_lanes = _mm256_setr_epi32(3, 3, 3, 3, 7, 7, 7, 7);
     for (int e = 0; e < count; e += 4) {
         const __m256d gx = _mm256_load_pd(batch.g[0] + e);
         const __m256d gy = _mm256_load_pd(batch.g[1] + e);
@@ -336,13 +356,24 @@ PLIANT_AVX2_INLINE int sample_rgba8(const std::uint8_t* src, const std::int64_t 
             const __m256 fx = spread_pair(ax.fraction, l);
             const __m256 fy = spread_pair(ay.fraction, l);
             const __m256 fz = spread_pair(az.fraction, l);
-            const __m256 v00 = lerp8(v000, v100, fx);
-            const __m256 v10 = lerp8(v010, v110, fx);
-            const __m256 v01 = lerp8(v001, v101, fx);
-            const __m256 v11 = lerp8(v011, v111, fx);
-            const __m256 v0 = lerp8(v00, v10, fy);
-            const __m256 v1 = lerp8(v01, v11, fy);
-            __m256 v = lerp8(v0, v1, fz);
+            // Opacity-weighted colours (interpolate_corners): each corner's colour · its α, the
+            // α lanes · 1; straight again by the interpolated α where it is > 0, else the plain
+            // interpolation.
+            const __m256 weighted = trilinear8(
+                _mm256_mul_ps(v000, alpha_or_one(v000)), _mm256_mul_ps(v100, alpha_or_one(v100)),
+                _mm256_mul_ps(v010, alpha_or_one(v010)), _mm256_mul_ps(v110, alpha_or_one(v110)),
+                _mm256_mul_ps(v001, alpha_or_one(v001)), _mm256_mul_ps(v101, alpha_or_one(v101)),
+                _mm256_mul_ps(v011, alpha_or_one(v011)), _mm256_mul_ps(v111, alpha_or_one(v111)),
+                fx, fy, fz);
+            const __m256 alpha = _mm256_permutevar8x32_ps(weighted, alpha_lanes);
+            const __m256 opaque = _mm256_cmp_ps(alpha, zero8, _CMP_GT_OQ);
+            __m256 v = _mm256_div_ps(weighted, alpha);
+            if (_mm256_movemask_ps(opaque) != 0xFF) {
+                const __m256 plain =
+                    trilinear8(v000, v100, v010, v110, v001, v101, v011, v111, fx, fy, fz);
+                v = _mm256_blendv_ps(plain, v, opaque);
+            }
+            v = _mm256_blend_ps(v, weighted, 0x88);
             if constexpr (!INTERIOR) {
                 v = _mm256_and_ps(v, spread_pair(in4, l));
             }

@@ -44,8 +44,8 @@ int sample_f32_avx2(const float* src, const std::int64_t n[3], const SpanBatch& 
 
 // The same for an rgba8 source (4 channels per voxel) into an rgba8 target
 // (convert_sample<uint8_t>: rounded, clamped) or an rgba32f one (channels · scale): dst[4·index +
-// c] = convert_sample(sample_trilinear<uint8_t, 4>(g)[c], scale), bit for bit, two voxels per
-// vector.
+// c] = convert_sample(sample_trilinear<uint8_t, 4>(g)[c], scale) (opacity-weighted colour), bit for
+// bit, two voxels per vector.
 int sample_rgba8_avx2(const std::uint8_t* src, const std::int64_t n[3], const SpanBatch& batch,
                       float scale, std::uint8_t* dst);
 int sample_rgba8_avx2(const std::uint8_t* src, const std::int64_t n[3], const SpanBatch& batch,

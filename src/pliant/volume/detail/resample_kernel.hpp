@@ -647,9 +647,75 @@ PLIANT_FORCE_INLINE std::int64_t append_spans(const TetRaster& t, std::int64_t k
     return num_voxels;
 }
 
+// u + f·(v − u) nested along x, y, z over 8 corner values (x fastest): the trilinear
+// interpolation in the order of operations of the AVX2 samplers.
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE float trilinear(const float v[8], float fx, float fy,
+                                                       float fz) {
+    const float v00 = v[0] + fx * (v[1] - v[0]);
+    const float v10 = v[2] + fx * (v[3] - v[2]);
+    const float v01 = v[4] + fx * (v[5] - v[4]);
+    const float v11 = v[6] + fx * (v[7] - v[6]);
+    const float v0 = v00 + fy * (v10 - v00);
+    const float v1 = v01 + fy * (v11 - v01);
+    return v0 + fz * (v1 - v0);
+}
+
+// The trilinear interpolation of the 8 voxels at p, p + ox, p + oy, … (C channels of type S
+// each) with fractions fx, fy, fz.
+// Scalars (C = 1): the value. RGBA (C = 4, straight colour and opacity): opacity-weighted colour
+// interpolation (Wittenbrink, Malzbender & Goss 1998, "Opacity-weighted color interpolation for
+// volume sampling"): α = Σ w_k α_k and colour = Σ w_k α_k c_k / α, i.e. the premultiplied colour
+// the ray caster interpolates (render/raycast.hpp), stored straight; where α = 0 (no corner with
+// opacity weighs) the plain interpolation of the corners' colours, so that a sample at a voxel
+// centre is that voxel, transparent or not. A plain interpolation of straight colours everywhere
+// would pull transparent voxels' colour into the visible ones at every surface. rgba8: the
+// corner products α_k c_k are exact in float.
+template <typename S, int C>
+PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void interpolate_corners(const S* p, std::int64_t ox,
+                                                                std::int64_t oy, std::int64_t oz,
+                                                                float fx, float fy, float fz,
+                                                                float out[C]) {
+    const std::int64_t at[8] = {0, ox, oy, oy + ox, oz, oz + ox, oz + oy, oz + oy + ox};
+    float v[C][8];
+    for (int c = 0; c < C; ++c) {
+        for (int k = 0; k < 8; ++k) {
+            v[c][k] = static_cast<float>(p[at[k] + c]);
+        }
+    }
+    if constexpr (C == 4) {
+        const float alpha = trilinear(v[3], fx, fy, fz);
+        out[3] = alpha;
+        for (int c = 0; c < 3; ++c) {
+            if (alpha > 0.0f) {
+                float weighted[8];
+                for (int k = 0; k < 8; ++k) {
+                    weighted[k] = v[c][k] * v[3][k];
+                }
+                const float sum = trilinear(weighted, fx, fy, fz);
+                if constexpr (std::is_integral_v<S>) {
+                    out[c] = sum / alpha;
+                } else {
+                    // Σ w α c / α written as plain + (Σ w α c − plain α) / α: the same value up to
+                    // rounding, and exactly the voxel's colour at a voxel centre (float products
+                    // are not exact).
+                    const float plain = trilinear(v[c], fx, fy, fz);
+                    out[c] = plain + (sum - plain * alpha) / alpha;
+                }
+            } else {
+                out[c] = trilinear(v[c], fx, fy, fz);
+            }
+        }
+    } else {
+        for (int c = 0; c < C; ++c) {
+            out[c] = trilinear(v[c], fx, fy, fz);
+        }
+    }
+}
+
 // Trilinear sample of a source grid (C channels of type S per voxel, x fastest) at grid
-// coordinate g (voxel centres at integers): 0 outside [−0.5, n − 0.5] on any axis (NaN too),
-// clamped to the edge voxels within half a voxel of the box faces.
+// coordinate g (voxel centres at integers; RGBA opacity-weighted, interpolate_corners): 0 outside
+// [−0.5, n − 0.5] on any axis (NaN too), clamped to the edge voxels within half a voxel of the box
+// faces.
 template <typename S, int C>
 PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void sample_trilinear(const S* data, const std::int64_t n[3],
                                                              double gx, double gy, double gz,
@@ -673,24 +739,8 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void sample_trilinear(const S* data, cons
     const std::int64_t ox = ix < n[0] - 1 ? C : 0;
     const std::int64_t oy = iy < n[1] - 1 ? C * n[0] : 0;
     const std::int64_t oz = iz < n[2] - 1 ? C * n[0] * n[1] : 0;
-    const S* p = data + C * (ix + n[0] * (iy + n[1] * iz));
-    for (int c = 0; c < C; ++c) {
-        const float v000 = static_cast<float>(p[c]);
-        const float v100 = static_cast<float>(p[ox + c]);
-        const float v010 = static_cast<float>(p[oy + c]);
-        const float v110 = static_cast<float>(p[oy + ox + c]);
-        const float v001 = static_cast<float>(p[oz + c]);
-        const float v101 = static_cast<float>(p[oz + ox + c]);
-        const float v011 = static_cast<float>(p[oz + oy + c]);
-        const float v111 = static_cast<float>(p[oz + oy + ox + c]);
-        const float v00 = v000 + fx * (v100 - v000);
-        const float v10 = v010 + fx * (v110 - v010);
-        const float v01 = v001 + fx * (v101 - v001);
-        const float v11 = v011 + fx * (v111 - v011);
-        const float v0 = v00 + fy * (v10 - v00);
-        const float v1 = v01 + fy * (v11 - v01);
-        out[c] = v0 + fz * (v1 - v0);
-    }
+    interpolate_corners<S, C>(data + C * (ix + n[0] * (iy + n[1] * iz)), ox, oy, oz, fx, fy, fz,
+                              out);
 }
 
 // sample_trilinear for a coordinate known to lie in [0, n − 1) on every axis (is_interior).
@@ -707,24 +757,8 @@ PLIANT_HOST_DEVICE PLIANT_FORCE_INLINE void sample_interior(const S* data, const
     const std::int64_t ox = C;
     const std::int64_t oy = C * n[0];
     const std::int64_t oz = C * n[0] * n[1];
-    const S* p = data + C * (ix + n[0] * (iy + n[1] * iz));
-    for (int c = 0; c < C; ++c) {
-        const float v000 = static_cast<float>(p[c]);
-        const float v100 = static_cast<float>(p[ox + c]);
-        const float v010 = static_cast<float>(p[oy + c]);
-        const float v110 = static_cast<float>(p[oy + ox + c]);
-        const float v001 = static_cast<float>(p[oz + c]);
-        const float v101 = static_cast<float>(p[oz + ox + c]);
-        const float v011 = static_cast<float>(p[oz + oy + c]);
-        const float v111 = static_cast<float>(p[oz + oy + ox + c]);
-        const float v00 = v000 + fx * (v100 - v000);
-        const float v10 = v010 + fx * (v110 - v010);
-        const float v01 = v001 + fx * (v101 - v001);
-        const float v11 = v011 + fx * (v111 - v011);
-        const float v0 = v00 + fy * (v10 - v00);
-        const float v1 = v01 + fy * (v11 - v01);
-        out[c] = v0 + fz * (v1 - v0);
-    }
+    interpolate_corners<S, C>(data + C * (ix + n[0] * (iy + n[1] * iz)), ox, oy, oz, fx, fy, fz,
+                              out);
 }
 
 // A sample converted to the target's channel type: floats scaled (1/255 from rgba8 to rgba32f,
