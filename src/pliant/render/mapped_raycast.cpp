@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <new>
 #include <span>
 
 #include "pliant/core/error.hpp"
@@ -15,7 +16,37 @@
 #include "pliant/render/detail/mapped_raycast_kernel.hpp"
 #include "pliant/render/detail/tiles.hpp"
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 namespace pliant::render {
+
+namespace detail {
+
+template <typename T>
+T* HugePageAllocator<T>::allocate(std::size_t n) {
+    constexpr std::size_t PAGE = std::size_t{1} << 21;  // 2 MiB
+    const std::size_t bytes = (n * sizeof(T) + PAGE - 1) / PAGE * PAGE;
+    void* p = std::aligned_alloc(PAGE, bytes);
+    if (p == nullptr) {
+        throw std::bad_alloc();
+    }
+#if defined(MADV_HUGEPAGE)
+    // A hint before the first touch; without transparent huge pages it changes nothing.
+    madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+    return static_cast<T*>(p);
+}
+
+template <typename T>
+void HugePageAllocator<T>::deallocate(T* p, std::size_t /*n*/) {
+    std::free(p);  // NOLINT(cppcoreguidelines-no-malloc): the pair of aligned_alloc
+}
+
+template struct HugePageAllocator<GradientValue>;
+
+}  // namespace detail
 
 namespace {
 
@@ -126,9 +157,9 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
     source_options.step = default_step(target, options);
     source_options.opacity_unit =
         options.opacity_unit > 0.0 ? options.opacity_unit : smallest(target.spacing());
-    // The gradients are taken here, not by the source's march; shading keeps the α copy of RGBA
-    // sources for them.
+    // The gradients are taken here (m_gradient), not by the source's march: no α copy.
     source_options.clip.reset();
+    source_options.shading = false;
     m_source = std::make_unique<RayCaster>(source, tf, source_options);
     m_step = m_source->step();
     m_source_dims = source.dims();
@@ -202,10 +233,71 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             },
             1);
     }
+    if (options.shading) {
+        build_gradient();
+    }
     m_prepare_ms = watch.elapsed_ms();
 }
 
 MappedRayCaster::~MappedRayCaster() = default;
+
+void MappedRayCaster::build_gradient() {
+    const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
+    const std::int64_t channels = m_source->m_is_rgba ? 4 : 1;
+    // The shaded value of voxel (x, y, z): the scalar's lookup coordinate, or α.
+    const float* values = m_source->m_values.data() + (channels - 1);
+    const auto value = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return values[channels * (x + n[0] * (y + n[1] * z))];
+    };
+    // D_a at voxel (x, y, z), the index clamped to the grid (detail::GradientValue).
+    const auto difference = [&](std::int64_t x, std::int64_t y, std::int64_t z, float out[3]) {
+        out[0] =
+            value(std::min(x + 1, n[0] - 1), y, z) - value(std::max<std::int64_t>(x - 1, 0), y, z);
+        out[1] =
+            value(x, std::min(y + 1, n[1] - 1), z) - value(x, std::max<std::int64_t>(y - 1, 0), z);
+        out[2] =
+            value(x, y, std::min(z + 1, n[2] - 1)) - value(x, y, std::max<std::int64_t>(z - 1, 0));
+    };
+    // 1. The largest |D| per layer, then of the volume (a maximum: the same for any split).
+    std::vector<float> layer_max(static_cast<std::size_t>(n[2]), 0.0f);
+    parallel_for(
+        n[2],
+        [&](std::int64_t z) {
+            float largest = 0.0f;
+            for (std::int64_t y = 0; y < n[1]; ++y) {
+                for (std::int64_t x = 0; x < n[0]; ++x) {
+                    float d[3];
+                    difference(x, y, z, d);
+                    largest = std::max({largest, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+                }
+            }
+            layer_max[static_cast<std::size_t>(z)] = largest;
+        },
+        1);
+    const float largest =
+        layer_max.empty() ? 0.0f : *std::max_element(layer_max.begin(), layer_max.end());
+    // 2. Quantized: round(D · 32767 / largest), then a 0 (all 0 for a constant volume).
+    const float scale = largest > 0.0f ? 32767.0f / largest : 0.0f;
+    m_gradient.resize(static_cast<std::size_t>(4 * n[0] * n[1] * n[2]));
+    parallel_for(
+        n[2],
+        [&](std::int64_t z) {
+            for (std::int64_t y = 0; y < n[1]; ++y) {
+                detail::GradientValue* out = m_gradient.data() + 4 * n[0] * (y + n[1] * z);
+                for (std::int64_t x = 0; x < n[0]; ++x) {
+                    float d[3];
+                    difference(x, y, z, d);
+                    for (int a = 0; a < 3; ++a) {
+                        const float q =
+                            std::clamp(std::nearbyint(d[a] * scale), -32767.0f, 32767.0f);
+                        out[4 * x + a] = static_cast<detail::GradientValue>(q);
+                    }
+                    out[4 * x + 3] = 0;
+                }
+            }
+        },
+        1);
+}
 
 void MappedRayCaster::set_clip(const std::optional<ClipPlane>& clip) {
     m_source->set_clip(clip);  // validates
@@ -499,6 +591,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.occupancy = m_occupancy.data();
     m.sub_occupied = m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
+    m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
