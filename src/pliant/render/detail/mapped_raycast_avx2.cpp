@@ -161,7 +161,6 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         }
         transpose8(rows, node[r]);
     }
-    const __m256 inv_b = _mm256_set1_ps(m.inv_b);
     __m256 g[3], jac[3][3];
     for (int ch = 0; ch < 3; ++ch) {
         const __m256 v[8] = {node[0][ch], node[0][4 + ch], node[1][ch], node[1][4 + ch],
@@ -174,16 +173,12 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         const __m256 y1 = lerp8(e2, e3, f[1]);
         g[ch] = lerp8(y0, y1, f[2]);
         if constexpr (SHADING) {
-            jac[0][ch] = _mm256_and_ps(
-                mask,
-                _mm256_mul_ps(
-                    lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f[1]),
-                          lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f[1]), f[2]),
-                    inv_b));
-            jac[1][ch] = _mm256_and_ps(
-                mask,
-                _mm256_mul_ps(lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f[2]), inv_b));
-            jac[2][ch] = _mm256_and_ps(mask, _mm256_mul_ps(_mm256_sub_ps(y1, y0), inv_b));
+            // B ∂g/∂t_a (map_coordinate()); lanes outside the mask may be NaN (not used).
+            jac[0][ch] =
+                lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f[1]),
+                      lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f[1]), f[2]);
+            jac[1][ch] = lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f[2]);
+            jac[2][ch] = _mm256_sub_ps(y1, y0);
         }
     }
     // 2. In the source box (in_source()); lanes outside the mask at 0 (a cell without a valid map

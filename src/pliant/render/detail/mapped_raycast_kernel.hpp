@@ -90,7 +90,8 @@ PLIANT_HOST_DEVICE inline bool sub_cell_occupied(const MappedKernel& m, const Ma
 }
 
 // The source grid coordinate of the sample in map cell c (trilinear in the 8 nodes) and, when
-// jacobian is not null, its derivatives along the target's grid axes: jacobian[a] = ∂g/∂t_a.
+// jacobian is not null, its derivatives along the map cell's axes: jacobian[a] = B ∂g/∂t_a
+// (B = node_voxels; shading normalizes the gradient, so the common factor B cancels).
 PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapCell& c,
                                                Vec3f* jacobian) {
     const float* p = m.nodes + 3 * (c.q[0] + m.node_stride[1] * c.q[1] + m.node_stride[2] * c.q[2]);
@@ -112,10 +113,9 @@ PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapC
         out[ch] = lerp(f0, f1, fz);
         if (jacobian != nullptr) {
             jacobian[0][ch] =
-                lerp(lerp(v[1] - v[0], v[3] - v[2], fy), lerp(v[5] - v[4], v[7] - v[6], fy), fz) *
-                m.inv_b;
-            jacobian[1][ch] = lerp(e1 - e0, e3 - e2, fz) * m.inv_b;
-            jacobian[2][ch] = (f1 - f0) * m.inv_b;
+                lerp(lerp(v[1] - v[0], v[3] - v[2], fy), lerp(v[5] - v[4], v[7] - v[6], fy), fz);
+            jacobian[1][ch] = lerp(e1 - e0, e3 - e2, fz);
+            jacobian[2][ch] = f1 - f0;
         }
     }
     return out;
@@ -152,8 +152,9 @@ PLIANT_HOST_DEVICE inline Vec3f source_gradient(const MappedKernel& m, const Tri
     return out;
 }
 
-// The gradient along the target's grid axis a by the chain rule: the source gradient d (per
-// source voxel) times ∂g/∂t_a (jac_a), then the target's 1 / spacing_a (shade()'s scale).
+// The gradient along the target's grid axis a by the chain rule, up to the factor B common to
+// the 3 axes: the source gradient d (per source voxel) times B ∂g/∂t_a (jac_a,
+// map_coordinate()), then the target's 1 / spacing_a (shade()'s scale).
 PLIANT_HOST_DEVICE inline float target_gradient(Vec3f d, Vec3f jac_a, float inv_spacing_a) {
     return ((d.x * jac_a.x + d.y * jac_a.y) + d.z * jac_a.z) * inv_spacing_a;
 }
