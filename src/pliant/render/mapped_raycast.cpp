@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
-#include <new>
 #include <span>
 
 #include "pliant/core/error.hpp"
@@ -16,37 +15,7 @@
 #include "pliant/render/detail/mapped_raycast_kernel.hpp"
 #include "pliant/render/detail/tiles.hpp"
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 namespace pliant::render {
-
-namespace detail {
-
-template <typename T>
-T* HugePageAllocator<T>::allocate(std::size_t n) {
-    constexpr std::size_t PAGE = std::size_t{1} << 21;  // 2 MiB
-    const std::size_t bytes = (n * sizeof(T) + PAGE - 1) / PAGE * PAGE;
-    void* p = std::aligned_alloc(PAGE, bytes);
-    if (p == nullptr) {
-        throw std::bad_alloc();
-    }
-#if defined(MADV_HUGEPAGE)
-    // A hint before the first touch; without transparent huge pages it changes nothing.
-    madvise(p, bytes, MADV_HUGEPAGE);
-#endif
-    return static_cast<T*>(p);
-}
-
-template <typename T>
-void HugePageAllocator<T>::deallocate(T* p, std::size_t /*n*/) {
-    std::free(p);  // NOLINT(cppcoreguidelines-no-malloc): the pair of aligned_alloc
-}
-
-template struct HugePageAllocator<GradientValue>;
-
-}  // namespace detail
 
 namespace {
 
@@ -244,54 +213,40 @@ MappedRayCaster::~MappedRayCaster() = default;
 void MappedRayCaster::build_gradient() {
     const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
     const std::int64_t channels = m_source->m_is_rgba ? 4 : 1;
-    // The shaded value of voxel (x, y, z): the scalar's lookup coordinate, or α.
+    // The shaded values lie in [0, 1] (α) or [0, LUT_SIZE − 1] (lookup coordinates), so |D| is
+    // at most that range: it maps to 32767.
+    const float scale = 32767.0f / (m_source->m_is_rgba ? 1.0f : float{detail::LUT_SIZE - 1});
     const float* values = m_source->m_values.data() + (channels - 1);
-    const auto value = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return values[channels * (x + n[0] * (y + n[1] * z))];
-    };
-    // D_a at voxel (x, y, z), the index clamped to the grid (detail::GradientValue).
-    const auto difference = [&](std::int64_t x, std::int64_t y, std::int64_t z, float out[3]) {
-        out[0] =
-            value(std::min(x + 1, n[0] - 1), y, z) - value(std::max<std::int64_t>(x - 1, 0), y, z);
-        out[1] =
-            value(x, std::min(y + 1, n[1] - 1), z) - value(x, std::max<std::int64_t>(y - 1, 0), z);
-        out[2] =
-            value(x, y, std::min(z + 1, n[2] - 1)) - value(x, y, std::max<std::int64_t>(z - 1, 0));
-    };
-    // 1. The largest |D| per layer, then of the volume (a maximum: the same for any split).
-    std::vector<float> layer_max(static_cast<std::size_t>(n[2]), 0.0f);
-    parallel_for(
-        n[2],
-        [&](std::int64_t z) {
-            float largest = 0.0f;
-            for (std::int64_t y = 0; y < n[1]; ++y) {
-                for (std::int64_t x = 0; x < n[0]; ++x) {
-                    float d[3];
-                    difference(x, y, z, d);
-                    largest = std::max({largest, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
-                }
-            }
-            layer_max[static_cast<std::size_t>(z)] = largest;
-        },
-        1);
-    const float largest =
-        layer_max.empty() ? 0.0f : *std::max_element(layer_max.begin(), layer_max.end());
-    // 2. Quantized: round(D · 32767 / largest), then a 0 (all 0 for a constant volume).
-    const float scale = largest > 0.0f ? 32767.0f / largest : 0.0f;
     m_gradient.resize(static_cast<std::size_t>(4 * n[0] * n[1] * n[2]));
+    const auto quantize = [scale](float d) {
+        return static_cast<detail::GradientValue>(
+            std::clamp(std::nearbyint(d * scale), -32767.0f, 32767.0f));
+    };
     parallel_for(
         n[2],
         [&](std::int64_t z) {
+            const std::int64_t z0 = std::max<std::int64_t>(z - 1, 0);
+            const std::int64_t z1 = std::min(z + 1, n[2] - 1);
             for (std::int64_t y = 0; y < n[1]; ++y) {
+                const std::int64_t y0 = std::max<std::int64_t>(y - 1, 0);
+                const std::int64_t y1 = std::min(y + 1, n[1] - 1);
+                // The shaded value of voxel x of row (y, z) is row[channels · x].
+                const auto row = [&](std::int64_t ry, std::int64_t rz) {
+                    return values + channels * n[0] * (ry + n[1] * rz);
+                };
+                const float* here = row(y, z);
+                const float* below_y = row(y0, z);
+                const float* above_y = row(y1, z);
+                const float* below_z = row(y, z0);
+                const float* above_z = row(y, z1);
                 detail::GradientValue* out = m_gradient.data() + 4 * n[0] * (y + n[1] * z);
                 for (std::int64_t x = 0; x < n[0]; ++x) {
-                    float d[3];
-                    difference(x, y, z, d);
-                    for (int a = 0; a < 3; ++a) {
-                        const float q =
-                            std::clamp(std::nearbyint(d[a] * scale), -32767.0f, 32767.0f);
-                        out[4 * x + a] = static_cast<detail::GradientValue>(q);
-                    }
+                    const std::int64_t x0 = channels * std::max<std::int64_t>(x - 1, 0);
+                    const std::int64_t x1 = channels * std::min(x + 1, n[0] - 1);
+                    const std::int64_t at = channels * x;
+                    out[4 * x] = quantize(here[x1] - here[x0]);
+                    out[4 * x + 1] = quantize(above_y[at] - below_y[at]);
+                    out[4 * x + 2] = quantize(above_z[at] - below_z[at]);
                     out[4 * x + 3] = 0;
                 }
             }

@@ -24,11 +24,10 @@
 //     0.3 + 0.7 |n · d| as RayCaster. ∇_s v(g) is RayCaster's central difference one source
 //     voxel apart, read from a gradient stored once (constructor, in parallel over layers): per
 //     source voxel the central differences of the shaded value (scalar, or α) along x, y, z,
-//     the index clamped to the grid, int16 by a per-volume scale, 8 bytes per voxel (134 MB at
-//     256³; huge pages where the kernel offers them), interpolated trilinearly: the central
-//     difference of a trilinear interpolant is the interpolant of the voxels' differences, so
-//     a translation's gradient is RayCaster's up to the quantization. (float storage, 16 bytes
-//     per voxel, was 1–3 ms per frame slower at 256³: docs/journal/2026-11-29-mapped-gradient.md.)
+//     the index clamped to the grid, in int16 (8 bytes per voxel, 134 MB at 256³; floats were
+//     slower, docs/journal/2026-11-29-mapped-gradient.md), interpolated trilinearly: the
+//     central difference of a trilinear interpolant is the interpolant of the voxels'
+//     differences, so a translation's gradient is RayCaster's up to the quantization.
 //   - Empty-space skipping on the map's node cells (B³ target voxels, B = node_voxels): a cell
 //     whose 8 nodes are not all set is transparent; one whose nodes are set is visible when some
 //     source voxel that a sample in it can read has opacity, tested conservatively: trilinear
@@ -65,7 +64,6 @@
 
 #include <array>
 #include <cstdint>
-#include <cstdlib>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -80,24 +78,6 @@
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::render {
-
-namespace detail {
-
-// An allocator of 2 MiB-aligned blocks advised as transparent huge pages (Linux; elsewhere
-// plain aligned blocks): the stored source gradient (134 MB at 256³) is read at random-ish
-// places by every shaded sample, and 4 KiB pages cost a TLB miss on most reads.
-template <typename T>
-struct HugePageAllocator {
-    using value_type = T;
-    HugePageAllocator() = default;
-    template <typename U>
-    explicit HugePageAllocator(const HugePageAllocator<U>& /*other*/) {}
-    T* allocate(std::size_t n);
-    void deallocate(T* p, std::size_t n);
-    bool operator==(const HugePageAllocator& /*other*/) const { return true; }
-};
-
-}  // namespace detail
 
 class MappedRayCaster {
 public:
@@ -173,7 +153,7 @@ private:
     mutable std::mutex m_cubes_mutex;
     std::vector<float> m_nodes4;  // the map's nodes, 4 floats each (x, y, z, 0)
     // Shading: the source's gradient, 4 values per voxel (detail::GradientValue), else empty.
-    std::vector<detail::GradientValue, detail::HugePageAllocator<detail::GradientValue>> m_gradient;
+    std::vector<detail::GradientValue> m_gradient;
 };
 
 }  // namespace pliant::render

@@ -25,9 +25,10 @@ namespace pliant::render::detail {
 // The stored source gradient (MappedRayCaster's constructor): per source voxel i, along each
 // axis a, the central difference of the shaded value (the scalar, or α) D_a(i) =
 // v(min(i + e_a, n − 1)) − v(max(i − e_a, 0)) (the index clamped as locate() clamps a sample,
-// so D_a(i) is shade()'s difference v(g + e_a) − v(g − e_a) at g = i), quantized to int16 by a
-// per-volume scale (the largest |D| maps to 32767; the scale cancels in the normalized normal),
-// then a 0: 4 values, 8 bytes per voxel, so a lane's x-adjacent voxel pair is one 16-byte load.
+// so D_a(i) is shade()'s difference v(g + e_a) − v(g − e_a) at g = i), rounded to int16 with
+// |D| ≤ the values' range (1 for α, LUT_SIZE − 1 for lookup coordinates) at 32767 (steps of
+// 1/32767 in α, 1/8 of a lookup entry; the scale cancels in the normalized normal), then a 0:
+// 4 values, 8 bytes per voxel, so a lane's x-adjacent voxel pair is one 16-byte load.
 using GradientValue = std::int16_t;
 
 // Occupancy bits of a map cell.
