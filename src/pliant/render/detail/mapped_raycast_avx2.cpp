@@ -195,6 +195,12 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
     store(at, locate8(src, g, fraction));
+    // Shading: the stored gradient's rows are read here, beside the voxels' (not after the
+    // classification, behind the branch on opacity): the loads of both overlap.
+    __m256 d[3];
+    if constexpr (SHADING) {
+        source_gradient8(m, src, at, fraction, d);
+    }
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 zero = _mm256_setzero_ps();
     __m256 positive;
@@ -249,8 +255,6 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     if constexpr (SHADING) {
         const __m256 shaded = _mm256_cmp_ps(a_step, zero, _CMP_GT_OQ);
         if (_mm256_movemask_ps(shaded) != 0) {
-            __m256 d[3];
-            source_gradient8(m, src, at, fraction, d);
             __m256 gradient[3];
             for (int axis = 0; axis < 3; ++axis) {
                 const __m256 dot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], jac[axis][0]),
