@@ -125,7 +125,10 @@ TEST(MappedRayCast, TranslationMatchesTheAnalyticImage) {
 
 // A rigid rotation about the volume's centre seen by a camera at azimuth 30° is the source seen
 // at azimuth 30° − θ (orbit_camera turns about +z): the analytic image. The map route is closer
-// to it than the exact route.
+// to it than the exact route. Shaded, the map route gives 42.4 dB: its normals are the source's
+// turned by the map's Jacobian (chain rule); the bar of 40 dB fails a broken chain rule (measured
+// with the AVX2 kernel broken on purpose: no Jacobian 28.2 dB, the Jacobian transposed 24.5 dB,
+// one source axis's sign flipped 35.7 dB).
 TEST(MappedRayCast, RotationIsCloserToTheAnalyticImageThanTheResample) {
     const volume::Volume& source = rgba64();
     const double theta = 30.0;
@@ -148,7 +151,7 @@ TEST(MappedRayCast, RotationIsCloserToTheAnalyticImageThanTheResample) {
         std::cout << "rotation " << theta << "°, shading " << shading << ": map " << db_map
                   << " dB, exact resample " << db_exact << " dB against the analytic image\n";
         EXPECT_GT(db_map, db_exact);
-        EXPECT_GT(db_map, shading ? 32.0 : 50.0);
+        EXPECT_GT(db_map, shading ? 40.0 : 50.0);
     }
 }
 

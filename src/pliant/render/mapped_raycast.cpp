@@ -126,9 +126,9 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
     source_options.step = default_step(target, options);
     source_options.opacity_unit =
         options.opacity_unit > 0.0 ? options.opacity_unit : smallest(target.spacing());
-    // The gradients are taken here, not by the source's march; shading keeps the α copy of RGBA
-    // sources for them.
+    // The gradients are taken here (m_gradient), not by the source's march: no α copy.
     source_options.clip.reset();
+    source_options.shading = false;
     m_source = std::make_unique<RayCaster>(source, tf, source_options);
     m_step = m_source->step();
     m_source_dims = source.dims();
@@ -202,10 +202,57 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             },
             1);
     }
+    if (options.shading) {
+        build_gradient();
+    }
     m_prepare_ms = watch.elapsed_ms();
 }
 
 MappedRayCaster::~MappedRayCaster() = default;
+
+void MappedRayCaster::build_gradient() {
+    const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
+    const std::int64_t channels = m_source->m_is_rgba ? 4 : 1;
+    // The shaded values lie in [0, 1] (α) or [0, LUT_SIZE − 1] (lookup coordinates), so |D| is
+    // at most that range: it maps to 32767.
+    const float scale = 32767.0f / (m_source->m_is_rgba ? 1.0f : float{detail::LUT_SIZE - 1});
+    const float* values = m_source->m_values.data() + (channels - 1);
+    m_gradient.resize(static_cast<std::size_t>(4 * n[0] * n[1] * n[2]));
+    const auto quantize = [scale](float d) {
+        return static_cast<detail::GradientValue>(
+            std::clamp(std::nearbyint(d * scale), -32767.0f, 32767.0f));
+    };
+    parallel_for(
+        n[2],
+        [&](std::int64_t z) {
+            const std::int64_t z0 = std::max<std::int64_t>(z - 1, 0);
+            const std::int64_t z1 = std::min(z + 1, n[2] - 1);
+            for (std::int64_t y = 0; y < n[1]; ++y) {
+                const std::int64_t y0 = std::max<std::int64_t>(y - 1, 0);
+                const std::int64_t y1 = std::min(y + 1, n[1] - 1);
+                // The shaded value of voxel x of row (y, z) is row[channels · x].
+                const auto row = [&](std::int64_t ry, std::int64_t rz) {
+                    return values + channels * n[0] * (ry + n[1] * rz);
+                };
+                const float* here = row(y, z);
+                const float* below_y = row(y0, z);
+                const float* above_y = row(y1, z);
+                const float* below_z = row(y, z0);
+                const float* above_z = row(y, z1);
+                detail::GradientValue* out = m_gradient.data() + 4 * n[0] * (y + n[1] * z);
+                for (std::int64_t x = 0; x < n[0]; ++x) {
+                    const std::int64_t x0 = channels * std::max<std::int64_t>(x - 1, 0);
+                    const std::int64_t x1 = channels * std::min(x + 1, n[0] - 1);
+                    const std::int64_t at = channels * x;
+                    out[4 * x] = quantize(here[x1] - here[x0]);
+                    out[4 * x + 1] = quantize(above_y[at] - below_y[at]);
+                    out[4 * x + 2] = quantize(above_z[at] - below_z[at]);
+                    out[4 * x + 3] = 0;
+                }
+            }
+        },
+        1);
+}
 
 void MappedRayCaster::set_clip(const std::optional<ClipPlane>& clip) {
     m_source->set_clip(clip);  // validates
@@ -499,6 +546,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.occupancy = m_occupancy.data();
     m.sub_occupied = m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
+    m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();

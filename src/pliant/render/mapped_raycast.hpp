@@ -19,10 +19,15 @@
 //   - Sample: t the target grid coordinate (clamped to [0, n − 1]), g = map(t); g outside the
 //     source box [−0.5, n_s − 0.5]³ is transparent (the resampler writes 0 there), else the source
 //     is classified at g exactly as RayCaster classifies a voxel-grid sample.
-//   - Shading: the gradient in the target frame by central differences one target voxel apart,
-//     each side taken in the source at g ± ∂g/∂t_a (the map's trilinear derivative: the map
-//     linearized at the sample), scaled by the target spacing; then 0.3 + 0.7 |n · d| as
-//     RayCaster.
+//   - Shading: the gradient in the target frame by the chain rule, component a = ∇_s v(g) ·
+//     ∂g/∂t_a (∂g/∂t_a the map's trilinear derivative) scaled by the target spacing, then
+//     0.3 + 0.7 |n · d| as RayCaster. ∇_s v(g) is RayCaster's central difference one source
+//     voxel apart, read from a gradient stored once (constructor, in parallel over layers): per
+//     source voxel the central differences of the shaded value (scalar, or α) along x, y, z,
+//     the index clamped to the grid, in int16 (8 bytes per voxel, 134 MB at 256³; floats were
+//     slower, docs/journal/2026-11-29-mapped-gradient.md), interpolated trilinearly: the
+//     central difference of a trilinear interpolant is the interpolant of the voxels'
+//     differences, so a translation's gradient is RayCaster's up to the quantization.
 //   - Empty-space skipping on the map's node cells (B³ target voxels, B = node_voxels): a cell
 //     whose 8 nodes are not all set is transparent; one whose nodes are set is visible when some
 //     source voxel that a sample in it can read has opacity, tested conservatively: trilinear
@@ -48,11 +53,11 @@
 // of the octants its rays can have (1–4 for a camera outside the volume: the signs of the ray
 // directions at the image's 4 corners, both signs of an axis where they are within 1e-5 of 0),
 // the next renders those not computed yet; a sample costs one more trilinear interpolation of 3
-// floats (the map) than RayCaster's, and shaded samples read their 6 gradient samples in the
-// source. A ray's march ends at its early termination (no sample past it is classified). RGBA
-// and scalar sources on a CPU with AVX2 march 8 rays per vector, a lane refilled from the tile's
-// rays as soon as its ray ends (detail/mapped_raycast_avx2.hpp), bitwise the scalar kernel
-// (images and sample counts).
+// floats (the map) than RayCaster's, and shaded samples one trilinear interpolation of the
+// stored gradient (3 channels, a 16-byte load per voxel pair and row). A ray's march ends at its
+// early termination (no sample past it is classified). RGBA and scalar sources on a CPU with AVX2
+// march 8 rays per vector, a lane refilled from the tile's rays as soon as its ray ends
+// (detail/mapped_raycast_avx2.hpp), bitwise the scalar kernel (images and sample counts).
 // Determinism: 16 × 16 tiles through core/parallel, every pixel the same float operations:
 // bitwise identical images for 1 and N threads.
 #pragma once
@@ -65,6 +70,7 @@
 #include <vector>
 
 #include "pliant/render/camera.hpp"
+#include "pliant/render/detail/mapped_raycast_kernel.hpp"
 #include "pliant/render/image.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/inverse_map.hpp"
@@ -107,6 +113,9 @@ private:
     // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
     // value range reaches a lookup entry with opacity (scalar).
     bool hull_visible(const float lo[3], const float hi[3]) const;
+    // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
+    // over layers (each written by one task: the same values for any number of threads).
+    void build_gradient();
     // Computes the empty cubes of the octants (bit per octant) not yet computed for this map.
     void prepare_octants(int octants) const;
     // The sub-cells of a valid map cell (nodes g + 3 (base + off[c]), c = x + 2 y + 4 z; [lo, hi]
@@ -143,6 +152,8 @@ private:
     mutable int m_octants_ready = 0;
     mutable std::mutex m_cubes_mutex;
     std::vector<float> m_nodes4;  // the map's nodes, 4 floats each (x, y, z, 0)
+    // Shading: the source's gradient, 4 values per voxel (detail::GradientValue), else empty.
+    std::vector<detail::GradientValue> m_gradient;
 };
 
 }  // namespace pliant::render

@@ -97,20 +97,36 @@ PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, PixelRay* ou
     return hits | (rays.too_long << LANES);
 }
 
-// mapped_shading_value<IS_RGBA>() at g, 8 lanes: the trilinear scalar, or α from the α copy
-// (x-adjacent pairs: dx = 1).
-template <bool IS_RGBA>
-PLIANT_AVX2_INLINE __m256 shading_value8(const Grid8& s, const __m256 g[3]) {
-    __m256 fraction[3];
-    alignas(32) std::int32_t at[LANES];
-    store(at, locate8(s, g, fraction));
-    const std::int32_t row[4] = {0, s.dy, s.dz, s.dz + s.dy};
-    const float* v = IS_RGBA ? s.alpha : s.v;
-    __m256 first[4], second[4];
+// A lane's stored gradient pair of a row, 2 voxels × 4 GradientValue from p: sign-extended to 8
+// int32 (in float registers, for transpose8()).
+PLIANT_AVX2_INLINE __m256 gradient_pair(const GradientValue* p) {
+    static_assert(sizeof(GradientValue) == 2);
+    return _mm256_castsi256_ps(
+        _mm256_cvtepi16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
+}
+
+// source_gradient() of 8 lanes located at voxel indices `at` with fractions `fraction`: out[a]
+// the interpolated difference along source axis a. A lane's x-adjacent pair of a row is one
+// 16-byte load, transposed, then converted to float (exact).
+PLIANT_AVX2_INLINE void source_gradient8(const MappedKernel& m, const Grid8& src,
+                                         const std::int32_t* at, const __m256 fraction[3],
+                                         __m256 out[3]) {
+    const std::int32_t row[4] = {0, src.dy, src.dz, src.dz + src.dy};
+    __m256 first[3][4], second[3][4];  // [axis][row]
     for (int r = 0; r < 4; ++r) {
-        load_pairs(v + row[r], at, first[r], second[r]);
+        __m256 rows[LANES], t[LANES];
+        for (int l = 0; l < LANES; ++l) {
+            rows[l] = gradient_pair(m.gradient + 4 * static_cast<std::int64_t>(at[l] + row[r]));
+        }
+        transpose8(rows, t);
+        for (int a = 0; a < 3; ++a) {
+            first[a][r] = _mm256_cvtepi32_ps(as_int(t[a]));
+            second[a][r] = _mm256_cvtepi32_ps(as_int(t[4 + a]));
+        }
     }
-    return trilinear8(first, second, fraction);
+    for (int a = 0; a < 3; ++a) {
+        out[a] = trilinear8(first[a], second[a], fraction);
+    }
 }
 
 // mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
@@ -145,7 +161,6 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         }
         transpose8(rows, node[r]);
     }
-    const __m256 inv_b = _mm256_set1_ps(m.inv_b);
     __m256 g[3], jac[3][3];
     for (int ch = 0; ch < 3; ++ch) {
         const __m256 v[8] = {node[0][ch], node[0][4 + ch], node[1][ch], node[1][4 + ch],
@@ -158,16 +173,12 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         const __m256 y1 = lerp8(e2, e3, f[1]);
         g[ch] = lerp8(y0, y1, f[2]);
         if constexpr (SHADING) {
-            jac[0][ch] = _mm256_and_ps(
-                mask,
-                _mm256_mul_ps(
-                    lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f[1]),
-                          lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f[1]), f[2]),
-                    inv_b));
-            jac[1][ch] = _mm256_and_ps(
-                mask,
-                _mm256_mul_ps(lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f[2]), inv_b));
-            jac[2][ch] = _mm256_and_ps(mask, _mm256_mul_ps(_mm256_sub_ps(y1, y0), inv_b));
+            // B ∂g/∂t_a (map_coordinate()); lanes outside the mask may be NaN (not used).
+            jac[0][ch] =
+                lerp8(lerp8(_mm256_sub_ps(v[1], v[0]), _mm256_sub_ps(v[3], v[2]), f[1]),
+                      lerp8(_mm256_sub_ps(v[5], v[4]), _mm256_sub_ps(v[7], v[6]), f[1]), f[2]);
+            jac[1][ch] = lerp8(_mm256_sub_ps(e1, e0), _mm256_sub_ps(e3, e2), f[2]);
+            jac[2][ch] = _mm256_sub_ps(y1, y0);
         }
     }
     // 2. In the source box (in_source()); lanes outside the mask at 0 (a cell without a valid map
@@ -184,6 +195,12 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     __m256 fraction[3];
     alignas(32) std::int32_t at[LANES];
     store(at, locate8(src, g, fraction));
+    // Shading: the stored gradient's rows are read here, beside the voxels' (not after the
+    // classification, behind the branch on opacity): the loads of both overlap.
+    __m256 d[3];
+    if constexpr (SHADING) {
+        source_gradient8(m, src, at, fraction, d);
+    }
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 zero = _mm256_setzero_ps();
     __m256 positive;
@@ -233,21 +250,17 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         }
     }
     const __m256 a_step = out[3];
-    // 4. Shading (mapped_classify()): central differences through the map's Jacobian, for the
-    // samples with opacity.
+    // 4. Shading (mapped_classify()): the stored source gradient at the sample through the map's
+    // Jacobian (target_gradient()), for the samples with opacity.
     if constexpr (SHADING) {
         const __m256 shaded = _mm256_cmp_ps(a_step, zero, _CMP_GT_OQ);
         if (_mm256_movemask_ps(shaded) != 0) {
             __m256 gradient[3];
             for (int axis = 0; axis < 3; ++axis) {
-                __m256 gp[3], gm[3];
-                for (int ch = 0; ch < 3; ++ch) {
-                    gp[ch] = _mm256_add_ps(g[ch], jac[axis][ch]);
-                    gm[ch] = _mm256_sub_ps(g[ch], jac[axis][ch]);
-                }
-                gradient[axis] = _mm256_mul_ps(_mm256_sub_ps(shading_value8<IS_RGBA>(src, gp),
-                                                             shading_value8<IS_RGBA>(src, gm)),
-                                               _mm256_set1_ps(m.target.inv_spacing[axis]));
+                const __m256 dot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], jac[axis][0]),
+                                                               _mm256_mul_ps(d[1], jac[axis][1])),
+                                                 _mm256_mul_ps(d[2], jac[axis][2]));
+                gradient[axis] = _mm256_mul_ps(dot, _mm256_set1_ps(m.target.inv_spacing[axis]));
             }
             __m256 nonzero;
             const __m256 factor = shade_factor8(gradient, dir8, nonzero);
@@ -440,6 +453,17 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                     _mm_prefetch(reinterpret_cast<const char*>(v + dy), _MM_HINT_T0);
                     _mm_prefetch(reinterpret_cast<const char*>(v + dz), _MM_HINT_T0);
                     _mm_prefetch(reinterpret_cast<const char*>(v + dz + dy), _MM_HINT_T0);
+                    if constexpr (SHADING) {
+                        // The stored gradient's rows of that voxel, 4 values per voxel.
+                        const GradientValue* d =
+                            m.gradient + 4 * static_cast<std::int64_t>(index[l]);
+                        const std::int64_t gy = 4 * std::int64_t{src.dy};
+                        const std::int64_t gz = 4 * std::int64_t{src.dz};
+                        _mm_prefetch(reinterpret_cast<const char*>(d), _MM_HINT_T0);
+                        _mm_prefetch(reinterpret_cast<const char*>(d + gy), _MM_HINT_T0);
+                        _mm_prefetch(reinterpret_cast<const char*>(d + gz), _MM_HINT_T0);
+                        _mm_prefetch(reinterpret_cast<const char*>(d + gz + gy), _MM_HINT_T0);
+                    }
                 }
             }
             for (int a = 0; a < 3; ++a) {
@@ -481,7 +505,7 @@ bool mapped_avx2_fits(const MappedKernel& m) {
     const std::int64_t floats_per_voxel = s.is_rgba ? 4 : 1;
     return has_avx2() && (s.is_rgba || s.lut != nullptr) && s.d[0] == 1 &&
            floats_per_voxel * voxels < INDEX_LIMIT / 2 && 8 * num_cells < INDEX_LIMIT &&
-           (!s.is_rgba || !m.target.shading || s.alpha != nullptr);
+           (!m.target.shading || m.gradient != nullptr);
 }
 
 PLIANT_AVX2_FN std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1,

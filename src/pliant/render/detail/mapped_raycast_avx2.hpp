@@ -10,7 +10,8 @@
 // set up (begin_pixel) and ended (mapped_end) by the scalar code, so every pixel and sample count
 // is bitwise what mapped_pixel<true> computes. The map's nodes and the voxels are loaded per lane
 // (no gathers, as raycast_avx2.hpp); an RGBA voxel pair is 8 consecutive floats, one load,
-// transposed; the gradients read the α copy. Step opacities other than the default step's
+// transposed; the stored gradient's voxel pair is 16 bytes, one load, sign-extended, transposed
+// (source_gradient()). Step opacities other than the default step's
 // (Δs/u = 1/2) go through the scalar libm calls lane by lane.
 #pragma once
 
@@ -21,8 +22,8 @@
 namespace pliant::render::detail {
 
 // Whether mapped_tile_avx2() can render for m: an RGBA source with at least 2 voxels along x,
-// float voxel indices below 2^31, the α copy when shading, the 8 octants' empty cubes in one
-// array with byte indices below 2^31, and a CPU that runs AVX2.
+// float voxel indices below 2^31, the stored gradient when shading, the 8 octants' empty cubes in
+// one array with byte indices below 2^31, and a CPU that runs AVX2.
 bool mapped_avx2_fits(const MappedKernel& m);
 
 // mapped_pixel<true>(m, x, y) for every pixel (x, y) of the tile [x0, x1) × [y0, y1): its colour

@@ -22,6 +22,15 @@
 
 namespace pliant::render::detail {
 
+// The stored source gradient (MappedRayCaster's constructor): per source voxel i, along each
+// axis a, the central difference of the shaded value (the scalar, or α) D_a(i) =
+// v(min(i + e_a, n − 1)) − v(max(i − e_a, 0)) (the index clamped as locate() clamps a sample,
+// so D_a(i) is shade()'s difference v(g + e_a) − v(g − e_a) at g = i), rounded to int16 with
+// |D| ≤ the values' range (1 for α, LUT_SIZE − 1 for lookup coordinates) at 32767 (steps of
+// 1/32767 in α, 1/8 of a lookup entry; the scale cancels in the normalized normal), then a 0:
+// 4 values, 8 bytes per voxel, so a lane's x-adjacent voxel pair is one 16-byte load.
+using GradientValue = std::int16_t;
+
 // Occupancy bits of a map cell.
 inline constexpr std::uint8_t MAP_CELL_VALID = 1;    // its 8 nodes hold source coordinates
 inline constexpr std::uint8_t MAP_CELL_VISIBLE = 2;  // some sample in it may have opacity
@@ -46,6 +55,9 @@ struct MappedKernel {
     const std::uint8_t* sub_occupied = nullptr;
     const std::uint8_t* empty_cube[8] = {};   // per octant, per map cell (empty_cubes())
     float source_hi[3] = {0.0f, 0.0f, 0.0f};  // the source box [−0.5, n − 0.5] per axis
+    // Shading: the stored source gradient, 4 GradientValue per source voxel (source_gradient());
+    // null when not shading.
+    const GradientValue* gradient = nullptr;
 };
 static_assert(std::is_trivially_copyable_v<MappedKernel>);
 
@@ -79,7 +91,8 @@ PLIANT_HOST_DEVICE inline bool sub_cell_occupied(const MappedKernel& m, const Ma
 }
 
 // The source grid coordinate of the sample in map cell c (trilinear in the 8 nodes) and, when
-// jacobian is not null, its derivatives along the target's grid axes: jacobian[a] = ∂g/∂t_a.
+// jacobian is not null, its derivatives along the map cell's axes: jacobian[a] = B ∂g/∂t_a
+// (B = node_voxels; shading normalizes the gradient, so the common factor B cancels).
 PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapCell& c,
                                                Vec3f* jacobian) {
     const float* p = m.nodes + 3 * (c.q[0] + m.node_stride[1] * c.q[1] + m.node_stride[2] * c.q[2]);
@@ -101,10 +114,9 @@ PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapC
         out[ch] = lerp(f0, f1, fz);
         if (jacobian != nullptr) {
             jacobian[0][ch] =
-                lerp(lerp(v[1] - v[0], v[3] - v[2], fy), lerp(v[5] - v[4], v[7] - v[6], fy), fz) *
-                m.inv_b;
-            jacobian[1][ch] = lerp(e1 - e0, e3 - e2, fz) * m.inv_b;
-            jacobian[2][ch] = (f1 - f0) * m.inv_b;
+                lerp(lerp(v[1] - v[0], v[3] - v[2], fy), lerp(v[5] - v[4], v[7] - v[6], fy), fz);
+            jacobian[1][ch] = lerp(e1 - e0, e3 - e2, fz);
+            jacobian[2][ch] = f1 - f0;
         }
     }
     return out;
@@ -117,22 +129,41 @@ PLIANT_HOST_DEVICE inline bool in_source(const MappedKernel& m, Vec3f g) {
            g.z >= -0.5f && g.z <= m.source_hi[2];
 }
 
-// The shaded value at source grid coordinate g: shading_value<IS_RGBA>(s, g), bit for bit; for
-// RGBA from the α copy (s.alpha, 4 bytes per voxel) when the source has one.
-template <bool IS_RGBA>
-PLIANT_HOST_DEVICE inline float mapped_shading_value(const RayCastKernel& s, Vec3f g) {
-    if constexpr (IS_RGBA) {
-        if (s.alpha != nullptr) {
-            return interpolate_float(s, s.alpha, locate(s, g));
-        }
+// The source gradient at the sample located at t: the trilinear interpolation (t's corner and
+// fractions, the operations of interpolate_rgba()) of the stored per-voxel differences
+// (GradientValue), converted to float exactly. The central difference of a trilinear
+// interpolant one voxel apart is the trilinear interpolation of the per-voxel differences, so
+// this is shade()'s gradient in the source frame, up to the quantization (the clamped border
+// included: on [0, 1] both are v(1 + f) − v(0)).
+PLIANT_HOST_DEVICE inline Vec3f source_gradient(const MappedKernel& m, const Trilinear& t) {
+    const RayCastKernel& s = m.source;
+    const GradientValue* p = m.gradient + 4 * voxel_index(s, t);
+    const std::int64_t dx = 4 * s.d[0], dy = 4 * s.d[1], dz = 4 * s.d[2];
+    Vec3f out;
+    for (int c = 0; c < 3; ++c) {
+        const float c00 = lerp(static_cast<float>(p[c]), static_cast<float>(p[dx + c]), t.fx);
+        const float c10 =
+            lerp(static_cast<float>(p[dy + c]), static_cast<float>(p[dy + dx + c]), t.fx);
+        const float c01 =
+            lerp(static_cast<float>(p[dz + c]), static_cast<float>(p[dz + dx + c]), t.fx);
+        const float c11 =
+            lerp(static_cast<float>(p[dz + dy + c]), static_cast<float>(p[dz + dy + dx + c]), t.fx);
+        out[c] = lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
     }
-    return shading_value<IS_RGBA>(s, g);
+    return out;
+}
+
+// The gradient along the target's grid axis a by the chain rule, up to the factor B common to
+// the 3 axes: the source gradient d (per source voxel) times B ∂g/∂t_a (jac_a,
+// map_coordinate()), then the target's 1 / spacing_a (shade()'s scale).
+PLIANT_HOST_DEVICE inline float target_gradient(Vec3f d, Vec3f jac_a, float inv_spacing_a) {
+    return ((d.x * jac_a.x + d.y * jac_a.y) + d.z * jac_a.z) * inv_spacing_a;
 }
 
 // The classified sample of map cell c (straight colour, opacity for a full step), shaded when
-// the options ask: the gradient of the shaded value in the target frame by central differences
-// one target voxel apart, each taken in the source at g ± ∂g/∂t_a (the map linearized at the
-// sample). Zero opacity outside the source box.
+// the options ask: the gradient of the shaded value in the target frame, the stored source
+// gradient at g (source_gradient()) through the map's Jacobian (target_gradient()), then
+// 0.3 + 0.7 |n · dir| as shade(). Zero opacity outside the source box.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c,
                                                  Vec3f dir) {
@@ -142,18 +173,14 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
     if (!in_source(m, g)) {
         return {0.0f, 0.0f, 0.0f, 0.0f};
     }
-    Sample out = classify<IS_RGBA>(s, locate(s, g));
+    const Trilinear t = locate(s, g);
+    Sample out = classify<IS_RGBA>(s, t);
     if (out.a > 0.0f && m.target.shading) {
+        const Vec3f d = source_gradient(m, t);
         const Vec3f& inv = m.target.inv_spacing;
-        const float gx = (mapped_shading_value<IS_RGBA>(s, g + jac[0]) -
-                          mapped_shading_value<IS_RGBA>(s, g - jac[0])) *
-                         inv.x;
-        const float gy = (mapped_shading_value<IS_RGBA>(s, g + jac[1]) -
-                          mapped_shading_value<IS_RGBA>(s, g - jac[1])) *
-                         inv.y;
-        const float gz = (mapped_shading_value<IS_RGBA>(s, g + jac[2]) -
-                          mapped_shading_value<IS_RGBA>(s, g - jac[2])) *
-                         inv.z;
+        const float gx = target_gradient(d, jac[0], inv.x);
+        const float gy = target_gradient(d, jac[1], inv.y);
+        const float gz = target_gradient(d, jac[2], inv.z);
         const float len2 = gx * gx + gy * gy + gz * gz;
         if (len2 > 1e-30f) {
             const float cosine = std::fabs(gx * dir.x + gy * dir.y + gz * dir.z) / std::sqrt(len2);
