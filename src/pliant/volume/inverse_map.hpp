@@ -39,6 +39,7 @@
 
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/tet_mesh.hpp"
+#include "pliant/volume/detail/tet_map.hpp"
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::volume {
@@ -80,9 +81,17 @@ private:
     std::array<std::int64_t, 3> m_nodes{0, 0, 0};
     std::vector<float> m_g;
     // Scratch of build(), kept between builds (no allocation per frame): the holder tet per node
-    // (−1: none) and the vertices in grid coordinates (deformed: target's, rest: source's).
+    // (−1: none), the vertices in grid coordinates (deformed: target's, rest: source's), the
+    // dilation and erosion of the held nodes, per held node next to the shell the index of its
+    // map in its layer's list, and the lists (3 layers per chunk of layers).
     std::vector<std::int32_t> m_holder;
     std::vector<Vec3d> m_deformed_grid, m_rest_grid;
+    std::vector<std::uint8_t> m_near_x, m_near_xy;
+    std::vector<std::int32_t> m_slot;
+    std::vector<std::vector<detail::TetMap>> m_lists;
+    // The tets of the last build and their cells' structure.
+    std::vector<geometry::Tet> m_cell_tets;
+    std::vector<detail::CellStructure> m_cells;
 };
 
 // Every voxel of target = the source sampled (trilinearly, as volume/resample.hpp samples) at the
