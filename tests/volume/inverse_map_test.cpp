@@ -446,11 +446,28 @@ TEST(InverseMap, BadInputsAreInvalidInputNamingTheArgument) {
                   map.build(source, source, g.mesh.tets, g.mesh.positions, bad);
               }).find("deformed_positions[3]"),
               std::string::npos);
+    std::vector<Vec3f> nan_rest(g.mesh.positions);
+    nan_rest.back().z = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_NE(message([&] {
+                  map.build(source, source, g.mesh.tets, nan_rest, g.mesh.positions);
+              }).find("rest_positions[" + std::to_string(nan_rest.size() - 1) + "]"),
+              std::string::npos);
     std::vector<geometry::Tet> tets(g.mesh.tets);
     tets[1][2] = 100000;
     EXPECT_NE(message([&] {
                   map.build(source, source, tets, g.mesh.positions, g.mesh.positions);
               }).find("tet 1"),
+              std::string::npos);
+    tets = g.mesh.tets;
+    tets.back()[0] = -1;
+    EXPECT_NE(message([&] {
+                  map.build(source, source, tets, g.mesh.positions, g.mesh.positions);
+              }).find("tet " + std::to_string(tets.size() - 1) + " has vertex index -1"),
+              std::string::npos);
+    tets.back()[0] = static_cast<std::int32_t>(g.mesh.positions.size());
+    EXPECT_NE(message([&] {
+                  map.build(source, source, tets, g.mesh.positions, g.mesh.positions);
+              }).find("outside [0, " + std::to_string(g.mesh.positions.size()) + ")"),
               std::string::npos);
     Volume target = like(source);
     EXPECT_NE(message([&] { resample_through(InverseMap{}, source, target); }).find("not built"),

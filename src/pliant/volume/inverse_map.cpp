@@ -210,6 +210,11 @@ struct NodePass {
         out[2] = static_cast<float>(r.z);
     }
 
+    void store_empty(std::int64_t q) const {
+        float* out = g + 3 * q;
+        out[0] = out[1] = out[2] = std::numeric_limits<float>::quiet_NaN();
+    }
+
     // The maps (frames and rest parts) of the holders of nodes q[0..n) (n ≤ FRAME_BATCH); with
     // values, each node's value; the maps of the nodes with keep[i] appended to list (slot[q]:
     // the index).
@@ -293,8 +298,9 @@ struct NodePass {
 
     // The extrapolated nodes of layer z: a node not held, with a held node among its 26
     // neighbours, takes the map of the neighbours' tet with the largest smallest barycentric
-    // coordinate at the node (the first in z, y, x order on a tie), extrapolated. lists[k % 3]:
-    // the maps of layer k's held nodes for k = z − 1 … z + 1 (layer_maps()). Returns their count.
+    // coordinate at the node (the first in z, y, x order on a tie), extrapolated; the other nodes
+    // not held are empty (NaN). lists[k % 3]: the maps of layer k's held nodes next to the shell
+    // for k = z − 1 … z + 1 (layer_maps()). Returns the count of extrapolated nodes.
     std::int64_t shell(std::int64_t z, std::vector<TetMap>* const lists[3]) const {
         const std::int64_t nx = nodes[0];
         const std::int64_t ny = nodes[1];
@@ -307,8 +313,11 @@ struct NodePass {
             for (std::int64_t x = 0; x < nx; ++x) {
                 const std::int64_t q = x + nx * y + nxy * z;
                 const std::int64_t in_layer = x + nx * y;
-                if (holder[q] >= 0 ||
-                    ((layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) & 1) == 0) {
+                if (holder[q] >= 0) {
+                    continue;  // written by layer_maps()
+                }
+                if (((layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) & 1) == 0) {
+                    store_empty(q);
                     continue;
                 }
                 const Vec3d node = node_at(x, y, z);
@@ -337,6 +346,8 @@ struct NodePass {
                 if (best > -std::numeric_limits<double>::infinity()) {
                     store(q, best_rest);
                     ++count;
+                } else {
+                    store_empty(q);
                 }
             }
         }
@@ -345,10 +356,46 @@ struct NodePass {
 };
 
 void check_positions(std::span<const Vec3f> positions, const char* what) {
+    // Any coordinate with all exponent bits set (infinite or NaN), without a branch per vertex;
+    // then the first one, for the message.
+    std::uint32_t bad = 0;
+    const float* x = &positions.data()->x;
+    for (std::size_t i = 0; i < 3 * positions.size(); ++i) {
+        const auto bits = std::bit_cast<std::uint32_t>(x[i]);
+        bad |= (bits & 0x7f800000u) == 0x7f800000u ? 1u : 0u;
+    }
+    if (bad == 0) {
+        return;
+    }
     for (std::size_t v = 0; v < positions.size(); ++v) {
         if (!is_finite(positions[v])) {
             throw InvalidInput(
                 fmt::format("volume::InverseMap::build: {}[{}] is not finite", what, v));
+        }
+    }
+}
+
+void check_tets(std::span<const geometry::Tet> tets, std::int64_t num_vertices) {
+    // Every index as unsigned below min(#V, 2³¹) (a negative index is ≥ 2³¹ as unsigned),
+    // without a branch per tet; then the first one outside, for the message.
+    const auto limit =
+        static_cast<std::uint32_t>(std::min<std::int64_t>(num_vertices, std::int64_t{1} << 31));
+    std::uint32_t bad = 0;
+    for (const geometry::Tet& tet : tets) {
+        for (const std::int32_t v : tet) {
+            bad |= static_cast<std::uint32_t>(v) >= limit ? 1u : 0u;
+        }
+    }
+    if (bad == 0) {
+        return;
+    }
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+        for (const std::int32_t v : tets[t]) {
+            if (v < 0 || v >= num_vertices) {
+                throw InvalidInput(fmt::format(
+                    "volume::InverseMap::build: tet {} has vertex index {} outside [0, {})", t, v,
+                    num_vertices));
+            }
         }
     }
 }
@@ -404,16 +451,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
             "({})",
             deformed_positions.size(), rest_positions.size()));
     }
-    const auto num_vertices = static_cast<std::int64_t>(rest_positions.size());
-    for (std::size_t t = 0; t < tets.size(); ++t) {
-        for (const std::int32_t v : tets[t]) {
-            if (v < 0 || v >= num_vertices) {
-                throw InvalidInput(fmt::format(
-                    "volume::InverseMap::build: tet {} has vertex index {} outside [0, {})", t, v,
-                    num_vertices));
-            }
-        }
-    }
+    check_tets(tets, static_cast<std::int64_t>(rest_positions.size()));
     check_positions(rest_positions, "rest_positions");
     check_positions(deformed_positions, "deformed_positions");
 
@@ -428,7 +466,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const std::int64_t nx = m_nodes[0];
     const std::int64_t nxy = m_nodes[0] * m_nodes[1];
     const std::int64_t num_nodes = nxy * m_nodes[2];
-    m_g.assign(static_cast<std::size_t>(3 * num_nodes), std::numeric_limits<float>::quiet_NaN());
+    m_g.resize(static_cast<std::size_t>(3 * num_nodes));  // every node written below
     m_holder.assign(static_cast<std::size_t>(num_nodes), -1);
     std::vector<std::int32_t>& holder = m_holder;
 

@@ -89,9 +89,6 @@ private:
     std::vector<std::uint8_t> m_near_x, m_near_xy;
     std::vector<std::int32_t> m_slot;
     std::vector<std::vector<detail::TetMap>> m_lists;
-    // The tets of the last build and their cells' structure.
-    std::vector<geometry::Tet> m_cell_tets;
-    std::vector<detail::CellStructure> m_cells;
 };
 
 // Every voxel of target = the source sampled (trilinearly, as volume/resample.hpp samples) at the

@@ -1,9 +1,8 @@
-// The pieces of volume::InverseMap's construction that its scratch keeps between builds (hence in a
-// header): a deformed tet's affine map, a tet grid cell's structure.
+// TetMap: a deformed tet's affine map, the unit of volume::InverseMap's construction (its scratch
+// keeps lists of them between builds, hence in a header).
 #pragma once
 
 #include <algorithm>
-#include <cstdint>
 
 #include "pliant/core/vec3.hpp"
 
@@ -26,16 +25,6 @@ struct TetMap {
         return std::min({l[0], l[1], l[2], 1.0 - l[0] - l[1] - l[2]});
     }
     Vec3d rest(const double l[3]) const { return r3 + dr[0] * l[0] + dr[1] * l[1] + dr[2] * l[2]; }
-};
-
-// A cell of pbd::TetGrid's layout (tets 5c … 5c + 4: four corner tets, each sharing a face with
-// the last, the central tet): per corner tet j, its vertex off the shared face (apex[j], a vertex
-// index) and the position in the central tet of the central tet's vertex off it (opposite[j]).
-// ok = 0: the cell's tets are not so.
-struct CellStructure {
-    std::int32_t apex[4] = {0, 0, 0, 0};
-    std::uint8_t opposite[4] = {0, 0, 0, 0};
-    std::uint8_t ok = 0;
 };
 
 }  // namespace pliant::volume::detail
