@@ -23,11 +23,14 @@
 // it only where neighbouring tets' maps differ (second order in the deformation's curvature);
 // tests/volume/inverse_map_test.cpp measures it against the exact resampler.
 //
-// Cost: O(#V + #T) for the inside nodes (parallel over tets: each raises the holder of the
-// nodes it holds to its index, an atomic maximum; then parallel over nodes: each takes its
-// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers; a separable
-// dilation of the held nodes first, so that nodes with no held neighbour are passed over without
-// reading their 26 neighbours).
+// Cost: O(#V + #T) for the inside nodes (parallel over tets, 8 frames at a time: each raises the
+// holder of the nodes it holds to its index, an atomic maximum) and O(#nodes) for their values
+// and the extrapolated ones, in one pass over chunks of node layers in parallel: per layer the
+// held nodes' maps (8 frames at a time) give their values, the maps of those next to the shell
+// are kept for three layers, and the shell nodes read their neighbours' maps from there; a
+// separable dilation of the held nodes first, so that nodes with no held neighbour are passed
+// over without reading their 26 neighbours. About 12 ms CPU at the source scale (435,160 tets,
+// 274,625 nodes), more than half of it the pass over the tets (docs/performance.md, issue 29).
 // Deterministic: the same map for any number of threads. Not thread safe to build; const access
 // from many threads is.
 #pragma once
