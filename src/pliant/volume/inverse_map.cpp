@@ -20,6 +20,7 @@ namespace {
 
 using detail::GridFrame;
 
+using detail::HeldValue;
 using detail::TetMap;
 
 Vec3d grid_coordinate(const Vec3f& x, const GridFrame& f) {
@@ -100,6 +101,7 @@ constexpr double INSIDE = -1e-9;
 struct HoldPass {
     std::span<const geometry::Tet> tets;
     std::span<const Vec3d> deformed_grid;
+    std::span<const Vec3d> rest_grid;
     std::int32_t* holder;
     std::array<std::int64_t, 3> nodes;
     double b;
@@ -109,12 +111,35 @@ struct HoldPass {
         return {static_cast<double>(x) * b, static_cast<double>(y) * b, static_cast<double>(z) * b};
     }
 
-    void raise(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t index) const {
+    // Raises the holder of node (x, y, z) to index; whether it was below (then tet `index` may
+    // be the node's holder in the end, and its value at the node is recorded).
+    bool raise(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t index) const {
         std::atomic_ref<std::int32_t> h(holder[x + nodes[0] * (y + nodes[1] * z)]);
         std::int32_t current = h.load(std::memory_order_relaxed);
-        while (current < index &&
-               !h.compare_exchange_weak(current, index, std::memory_order_relaxed)) {
+        while (current < index) {
+            if (h.compare_exchange_weak(current, index, std::memory_order_relaxed)) {
+                return true;
+            }
         }
+        return false;
+    }
+
+    // Records the value at node (x, y, z) of tet t's map (frame m, barycentric coordinates l
+    // there), as detail::TetMap::rest() computes it.
+    void record(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t t, const TetMap& m,
+                const double l[3], std::vector<HeldValue>& out) const {
+        Vec3d r[4];
+        tet_vertices(tets[static_cast<std::size_t>(t)], rest_grid, r);
+        TetMap full = m;
+        full.r3 = r[3];
+        for (int k = 0; k < 3; ++k) {
+            full.dr[k] = r[k] - r[3];
+        }
+        const Vec3d v = full.rest(l);
+        out.push_back(
+            {x + nodes[0] * (y + nodes[1] * z),
+             t,
+             {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}});
     }
 
     // The node box of deformed vertices p[0..3]; false when empty.
@@ -159,7 +184,7 @@ struct HoldPass {
     }
 
     // Tets [first, end), end − first ≤ FRAME_BATCH, each over the nodes of its box.
-    void tets_one_by_one(std::int64_t first, std::int64_t end) const {
+    void tets_one_by_one(std::int64_t first, std::int64_t end, std::vector<HeldValue>& out) const {
         FrameBatch f;
         frames(first, end, f);
         for (int i = 0; i < end - first; ++i) {
@@ -175,8 +200,8 @@ struct HoldPass {
                 for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
                     for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
                         double l[3];
-                        if (m.lambda(node_at(x, y, z), l) >= INSIDE) {
-                            raise(x, y, z, index);
+                        if (m.lambda(node_at(x, y, z), l) >= INSIDE && raise(x, y, z, index)) {
+                            record(x, y, z, index, m, l, out);
                         }
                     }
                 }
@@ -215,11 +240,9 @@ struct NodePass {
         out[0] = out[1] = out[2] = std::numeric_limits<float>::quiet_NaN();
     }
 
-    // The maps (frames and rest parts) of the holders of nodes q[0..n) (n ≤ FRAME_BATCH); with
-    // values, each node's value; the maps of the nodes with keep[i] appended to list (slot[q]:
-    // the index).
-    void flush(const std::int64_t q[FRAME_BATCH], const bool keep[FRAME_BATCH], int n,
-               std::vector<TetMap>& list, bool values) const {
+    // The maps (frames and rest parts) of the holders of nodes q[0..n) (n ≤ FRAME_BATCH),
+    // appended to list (slot[q]: the index).
+    void flush(const std::int64_t q[FRAME_BATCH], int n, std::vector<TetMap>& list) const {
         FrameBatch f;
         for (int i = 0; i < FRAME_BATCH; ++i) {
             // Lanes past n repeat the first node's tet (computed, not used).
@@ -233,8 +256,6 @@ struct NodePass {
             }
         }
         f.compute();
-        const std::int64_t nx = nodes[0];
-        const std::int64_t nxy = nodes[0] * nodes[1];
         for (int i = 0; i < n; ++i) {
             TetMap m;
             const double det = f.det[i];
@@ -249,50 +270,34 @@ struct NodePass {
             for (int k = 0; k < 3; ++k) {
                 m.dr[k] = r[k] - r[3];
             }
-            if (values) {
-                const std::int64_t z = q[i] / nxy;
-                const std::int64_t y = (q[i] - nxy * z) / nx;
-                const std::int64_t x = q[i] - nxy * z - nx * y;
-                double l[3];
-                m.lambda(node_at(x, y, z), l);
-                store(q[i], m.rest(l));
-            }
-            if (keep[i]) {
-                slot[q[i]] = static_cast<std::int32_t>(list.size());
-                list.push_back(m);
-            }
+            slot[q[i]] = static_cast<std::int32_t>(list.size());
+            list.push_back(m);
         }
     }
 
-    // Layer z's held nodes in node order: with values, their values; the maps of those with a
-    // neighbour in the shell into list (replacing its contents; slot[q]: the index).
-    void layer_maps(std::int64_t z, std::vector<TetMap>& list, bool values) const {
+    // The maps of layer z's held nodes next to the shell (a node not held in their 3 × 3 × 3),
+    // in node order, into list (replacing its contents; slot[q]: the index).
+    void layer_maps(std::int64_t z, std::vector<TetMap>& list) const {
         const std::int64_t nxy = nodes[0] * nodes[1];
         const std::uint8_t* layer = near_xy + nxy * z;
         const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
         const std::uint8_t* layer_above = z + 1 < nodes[2] ? layer + nxy : layer;
         list.clear();
         std::int64_t q[FRAME_BATCH];
-        bool keep[FRAME_BATCH];
         int n = 0;
         for (std::int64_t i = 0; i < nxy; ++i) {
             const std::int64_t p = nxy * z + i;
-            if (holder[p] < 0) {
+            if (holder[p] < 0 || (layer[i] & layer_below[i] & layer_above[i] & 2) != 0) {
                 continue;
             }
-            const bool boundary = (layer[i] & layer_below[i] & layer_above[i] & 2) == 0;
-            if (!values && !boundary) {
-                continue;
-            }
-            q[n] = p;
-            keep[n++] = boundary;
+            q[n++] = p;
             if (n == FRAME_BATCH) {
-                flush(q, keep, n, list, values);
+                flush(q, n, list);
                 n = 0;
             }
         }
         if (n > 0) {
-            flush(q, keep, n, list, values);
+            flush(q, n, list);
         }
     }
 
@@ -482,23 +487,49 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     });
     // 1. Inside nodes: the highest index of the tets holding a node wins, a rule independent of
     // the order tets are visited in. (a) Every tet, in parallel, raises the holder of each node it
-    // holds to its index (an atomic maximum); (b) every held node takes its holder's map (below,
-    // with the shell).
+    // holds to its index (an atomic maximum) and, where the holder was below its index, records
+    // its map's value at the node (per fixed chunk of tets); (b) every held node takes the value
+    // its holder recorded.
     InverseMapStats stats;
     stats.num_nodes = num_nodes;
     const HoldPass hold{.tets = tets,
                         .deformed_grid = deformed_grid,
+                        .rest_grid = rest_grid,
                         .holder = holder.data(),
                         .nodes = m_nodes,
                         .b = b,
                         .inv_b = exact_inv_b};
     const auto num_tets = static_cast<std::int64_t>(tets.size());
-    parallel_for((num_tets + FRAME_BATCH - 1) / FRAME_BATCH,
-                 [&](std::int64_t batch) {
-                     const std::int64_t first = batch * FRAME_BATCH;
-                     hold.tets_one_by_one(first, std::min(num_tets, first + FRAME_BATCH));
-                 },
-                 128);
+    const std::int64_t num_batches = (num_tets + FRAME_BATCH - 1) / FRAME_BATCH;
+    constexpr std::int64_t BATCHES_PER_CHUNK = 128;
+    const std::int64_t num_value_lists = num_chunks(num_batches, BATCHES_PER_CHUNK);
+    if (m_held_values.size() < static_cast<std::size_t>(num_value_lists)) {
+        m_held_values.resize(static_cast<std::size_t>(num_value_lists));
+    }
+    parallel_for_chunks(
+        num_batches, BATCHES_PER_CHUNK, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+            std::vector<HeldValue>& out = m_held_values[static_cast<std::size_t>(c)];
+            out.clear();
+            for (std::int64_t batch = begin; batch < end; ++batch) {
+                const std::int64_t first = batch * FRAME_BATCH;
+                hold.tets_one_by_one(first, std::min(num_tets, first + FRAME_BATCH), out);
+            }
+        });
+    // (b) Each held node's value: the one its holder recorded (exactly one record per node has
+    // the holder's index; nodes written once, so in parallel).
+    parallel_for(
+        num_value_lists,
+        [&](std::int64_t c) {
+            for (const HeldValue& h : m_held_values[static_cast<std::size_t>(c)]) {
+                if (holder[static_cast<std::size_t>(h.node)] == h.tet) {
+                    float* out = m_g.data() + 3 * h.node;
+                    out[0] = h.value[0];
+                    out[1] = h.value[1];
+                    out[2] = h.value[2];
+                }
+            }
+        },
+        1);
 
     // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated.
     // First, per node, whether a node of its 3 × 3 in x and y is held (a separable dilation);
@@ -538,11 +569,10 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
             }
         },
         1);
-    // Then (b) and the shell together, over chunks of layers in parallel: per chunk, layer by
-    // layer, the maps of the held nodes (each node's value, and a list of the layer's maps kept
-    // for three layers), then the shell nodes of the layer before, which read their held
-    // neighbours' maps from the lists instead of computing them again. A chunk also computes the
-    // maps of the layers on either side of it (not their values).
+    // Then the shell, over chunks of layers in parallel: per chunk, layer by layer, the maps of
+    // the held nodes next to the shell (a list per layer, kept for three layers), then the shell
+    // nodes of the layer before, which read their held neighbours' maps from the lists. A chunk
+    // also computes the lists of the layers on either side of it.
     const NodePass pass{.tets = tets,
                         .deformed_grid = deformed_grid,
                         .rest_grid = rest_grid,
@@ -572,7 +602,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
             }
             for (std::int64_t z = std::max<std::int64_t>(0, z0 - 1); z <= std::min(nz - 1, z1);
                  ++z) {
-                with_slots.layer_maps(z, *lists[z % 3], z >= z0 && z < z1);
+                with_slots.layer_maps(z, *lists[z % 3]);
                 if (z - 1 >= z0 && z - 1 < z1) {
                     extrapolated[static_cast<std::size_t>(z - 1)] = with_slots.shell(z - 1, lists);
                 }

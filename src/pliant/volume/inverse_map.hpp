@@ -92,6 +92,8 @@ private:
     std::vector<std::uint8_t> m_near_x, m_near_xy;
     std::vector<std::int32_t> m_slot;
     std::vector<std::vector<detail::TetMap>> m_lists;
+    // Per chunk of the pass over the tets: the values its tets recorded at the nodes they held.
+    std::vector<std::vector<detail::HeldValue>> m_held_values;
 };
 
 // Every voxel of target = the source sampled (trilinearly, as volume/resample.hpp samples) at the

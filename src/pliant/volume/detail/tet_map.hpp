@@ -1,8 +1,9 @@
-// TetMap: a deformed tet's affine map, the unit of volume::InverseMap's construction (its scratch
-// keeps lists of them between builds, hence in a header).
+// The records of volume::InverseMap's construction that its scratch keeps between builds (hence in
+// a header): a deformed tet's affine map, a node's value as a tet recorded it.
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 
 #include "pliant/core/vec3.hpp"
 
@@ -25,6 +26,14 @@ struct TetMap {
         return std::min({l[0], l[1], l[2], 1.0 - l[0] - l[1] - l[2]});
     }
     Vec3d rest(const double l[3]) const { return r3 + dr[0] * l[0] + dr[1] * l[1] + dr[2] * l[2]; }
+};
+
+// A tet that raised a node's holder to its index in InverseMap::build's pass over the tets, and
+// its map's value at the node (the node's value if the tet is its holder in the end).
+struct HeldValue {
+    std::int64_t node;
+    std::int32_t tet;
+    float value[3];
 };
 
 }  // namespace pliant::volume::detail
