@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -193,6 +194,208 @@ TEST(InverseMap, OverlappingTetsGiveTheSameMapOnAnyThreadCount) {
     }
 }
 
+// Every vertex moved by up to ±amplitude/2 cells along each axis (a fixed pseudo-random
+// sequence); amplitude 1.6 overlaps and inverts many tets.
+std::vector<Vec3f> jittered(const std::vector<Vec3f>& rest, const Volume& v, int cell_voxels,
+                            float amplitude, std::uint32_t seed) {
+    std::vector<Vec3f> out = rest;
+    const auto jitter = [&] {
+        seed = seed * 1664525u + 1013904223u;
+        return (static_cast<float>(seed >> 8) / 16777216.0f - 0.5f) * amplitude *
+               static_cast<float>(cell_voxels);
+    };
+    for (Vec3f& p : out) {
+        p.x += jitter() * static_cast<float>(v.spacing().x);
+        p.y += jitter() * static_cast<float>(v.spacing().y);
+        p.z += jitter() * static_cast<float>(v.spacing().z);
+    }
+    return out;
+}
+
+// The map as InverseMap's contract states it, node by node over every tet (O(#nodes · #T)):
+// the tets' affine maps computed with the same double operations in the same order as
+// InverseMap::build (barycentric rows cross(e1, e2) / det …, λ3 = 1 − λ0 − λ1 − λ2, the node
+// inside where the smallest λ ≥ −1e-9 and the node within the box of the tet's vertices), the
+// highest tet index holding a node wins; a node not held, next to held ones, takes the
+// extrapolated map of the neighbour (z, y, x order) whose tet gives it the largest smallest λ.
+std::vector<float> reference_map(const Volume& source, const Volume& target,
+                                 std::span<const geometry::Tet> tets, std::span<const Vec3f> rest,
+                                 std::span<const Vec3f> deformed, int b,
+                                 std::array<std::int64_t, 3>& nodes) {
+    const auto grid = [](const Volume& v, const Vec3f& x) {
+        return Vec3d{(x.x - v.origin().x) * (1.0 / v.spacing().x) - 0.5,
+                     (x.y - v.origin().y) * (1.0 / v.spacing().y) - 0.5,
+                     (x.z - v.origin().z) * (1.0 / v.spacing().z) - 0.5};
+    };
+    for (int a = 0; a < 3; ++a) {
+        nodes[static_cast<std::size_t>(a)] = (target.dims()[a] - 1) / b + 2;
+    }
+    const std::int64_t nx = nodes[0], ny = nodes[1], nz = nodes[2];
+    struct Map {
+        Vec3d p[4], p3, r3, rows[3], dr[3];
+        bool ok = false;
+        double lambda(const Vec3d& x, double l[3]) const {
+            const Vec3d d = x - p3;
+            l[0] = dot(rows[0], d);
+            l[1] = dot(rows[1], d);
+            l[2] = dot(rows[2], d);
+            return std::min({l[0], l[1], l[2], 1.0 - l[0] - l[1] - l[2]});
+        }
+        Vec3d at(const double l[3]) const {
+            return r3 + dr[0] * l[0] + dr[1] * l[1] + dr[2] * l[2];
+        }
+    };
+    std::vector<Map> maps(tets.size());
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+        Map& m = maps[t];
+        Vec3d r[4];
+        for (int v = 0; v < 4; ++v) {
+            const auto i = static_cast<std::size_t>(tets[t][static_cast<std::size_t>(v)]);
+            m.p[v] = grid(target, deformed[i]);
+            r[v] = grid(source, rest[i]);
+        }
+        const Vec3d e0 = m.p[0] - m.p[3], e1 = m.p[1] - m.p[3], e2 = m.p[2] - m.p[3];
+        const double det = dot(e0, cross(e1, e2));
+        m.ok = std::abs(det) > 0.0 && std::isfinite(det);
+        const double inv = 1.0 / det;
+        m.rows[0] = cross(e1, e2) * inv;
+        m.rows[1] = cross(e2, e0) * inv;
+        m.rows[2] = cross(e0, e1) * inv;
+        m.p3 = m.p[3];
+        m.r3 = r[3];
+        for (int k = 0; k < 3; ++k) {
+            m.dr[k] = r[k] - r[3];
+        }
+    }
+    const auto node = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return Vec3d{static_cast<double>(x * b), static_cast<double>(y * b),
+                     static_cast<double>(z * b)};
+    };
+    const auto in_box = [&](const Map& m, const Vec3d& x) {
+        for (int a = 0; a < 3; ++a) {
+            const double lo = std::min({m.p[0][a], m.p[1][a], m.p[2][a], m.p[3][a]});
+            const double hi = std::max({m.p[0][a], m.p[1][a], m.p[2][a], m.p[3][a]});
+            if (x[a] < std::ceil(lo / b) * b || x[a] > std::floor(hi / b) * b) {
+                return false;
+            }
+        }
+        return true;
+    };
+    std::vector<std::int64_t> holder(static_cast<std::size_t>(nx * ny * nz), -1);
+    std::vector<float> g(3 * holder.size(), std::numeric_limits<float>::quiet_NaN());
+    const auto put = [&](std::int64_t q, const Vec3d& r) {
+        g[3 * q] = static_cast<float>(r.x);
+        g[3 * q + 1] = static_cast<float>(r.y);
+        g[3 * q + 2] = static_cast<float>(r.z);
+    };
+    for (std::int64_t z = 0; z < nz; ++z) {
+        for (std::int64_t y = 0; y < ny; ++y) {
+            for (std::int64_t x = 0; x < nx; ++x) {
+                const std::int64_t q = x + nx * (y + ny * z);
+                for (auto t = static_cast<std::int64_t>(tets.size()) - 1; t >= 0; --t) {
+                    const Map& m = maps[static_cast<std::size_t>(t)];
+                    double l[3];
+                    if (m.ok && m.lambda(node(x, y, z), l) >= -1e-9 && in_box(m, node(x, y, z))) {
+                        holder[static_cast<std::size_t>(q)] = t;
+                        put(q, m.at(l));
+                        break;
+                    }
+                }
+            }
+        }
+    }
+    for (std::int64_t z = 0; z < nz; ++z) {
+        for (std::int64_t y = 0; y < ny; ++y) {
+            for (std::int64_t x = 0; x < nx; ++x) {
+                const std::int64_t q = x + nx * (y + ny * z);
+                if (holder[static_cast<std::size_t>(q)] >= 0) {
+                    continue;
+                }
+                double best = -std::numeric_limits<double>::infinity();
+                for (std::int64_t cz = std::max<std::int64_t>(0, z - 1);
+                     cz <= std::min(nz - 1, z + 1); ++cz) {
+                    for (std::int64_t cy = std::max<std::int64_t>(0, y - 1);
+                         cy <= std::min(ny - 1, y + 1); ++cy) {
+                        for (std::int64_t cx = std::max<std::int64_t>(0, x - 1);
+                             cx <= std::min(nx - 1, x + 1); ++cx) {
+                            const std::int64_t t =
+                                holder[static_cast<std::size_t>(cx + nx * (cy + ny * cz))];
+                            if (t < 0) {
+                                continue;
+                            }
+                            const Map& m = maps[static_cast<std::size_t>(t)];
+                            double l[3];
+                            const double score = m.lambda(node(x, y, z), l);
+                            if (score > best) {
+                                best = score;
+                                put(q, m.at(l));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    return g;
+}
+
+void expect_reference_map(const Volume& source, const Volume& target,
+                          std::span<const geometry::Tet> tets, std::span<const Vec3f> rest,
+                          std::span<const Vec3f> deformed, int b, const std::string& what) {
+    std::array<std::int64_t, 3> nodes{};
+    const std::vector<float> expected =
+        reference_map(source, target, tets, rest, deformed, b, nodes);
+    for (const int threads : {1, 2}) {
+        set_num_threads(threads);
+        InverseMap map;
+        const InverseMapStats stats =
+            map.build(source, target, tets, rest, deformed, {.node_voxels = b});
+        EXPECT_GT(stats.num_inside, 0) << what;
+        ASSERT_EQ(map.nodes(), nodes) << what;
+        ASSERT_EQ(map.node_coordinates().size(), expected.size()) << what;
+        EXPECT_EQ(std::memcmp(map.node_coordinates().data(), expected.data(),
+                              expected.size() * sizeof(float)),
+                  0)
+            << what << ", " << threads << " threads";
+    }
+    set_num_threads(0);
+}
+
+// InverseMap::build against the contract evaluated node by node over every tet, bit for bit:
+// smooth and rough deformations, inverted and overlapping tets, nodes exactly on the tets'
+// vertices, edges and faces (the target shifted by half a voxel puts every node on a lattice
+// vertex, held by up to 20 tets at once), B not a power of two, a mesh that is not a whole
+// number of cells and whose cells are out of TetGrid's order.
+TEST(InverseMap, BuildsTheMapOfItsContractBitForBit) {
+    const Volume source = shepp_logan_3d({30, 26, 34});
+    for (const int cell_voxels : {4, 3}) {
+        const pbd::TetGrid g = full_grid(source, cell_voxels);
+        const std::vector<Vec3f>& rest = g.mesh.positions;
+        const std::string b = "B " + std::to_string(cell_voxels) + ": ";
+        expect_reference_map(source, source, g.mesh.tets, rest, rest, cell_voxels, b + "identity");
+        Volume shifted = like(source);
+        shifted.set_origin(source.origin() - source.spacing() * 0.5);
+        expect_reference_map(source, shifted, g.mesh.tets, rest, rest, cell_voxels,
+                             b + "nodes on the lattice vertices");
+        expect_reference_map(source, shifted, g.mesh.tets, rest, twisted(rest, source, 90.0, true),
+                             cell_voxels, b + "rigid quarter turn, nodes on the lattice");
+        expect_reference_map(source, source, g.mesh.tets, rest, twisted(rest, source, 60.0, false),
+                             cell_voxels, b + "twist 60");
+        for (const float amplitude : {0.3f, 1.6f}) {
+            const std::vector<Vec3f> d = jittered(rest, source, cell_voxels, amplitude, 777u);
+            expect_reference_map(source, source, g.mesh.tets, rest, d, cell_voxels,
+                                 b + "jitter " + std::to_string(amplitude));
+            std::vector<geometry::Tet> tets = g.mesh.tets;
+            tets.resize(tets.size() - 3);
+            std::swap(tets[5], tets[12]);
+            std::swap(tets[15], tets[19]);
+            std::reverse(tets.begin() + 40, tets.end());
+            expect_reference_map(source, source, tets, rest, d, cell_voxels,
+                                 b + "shuffled, jitter " + std::to_string(amplitude));
+        }
+    }
+}
+
 TEST(InverseMap, PointsFarFromTheBodyAndOutsideTheNodesHaveNoSource) {
     const Volume source = shepp_logan_3d({32, 32, 32});
     const pbd::TetGrid g = full_grid(source, 4);
@@ -243,11 +446,28 @@ TEST(InverseMap, BadInputsAreInvalidInputNamingTheArgument) {
                   map.build(source, source, g.mesh.tets, g.mesh.positions, bad);
               }).find("deformed_positions[3]"),
               std::string::npos);
+    std::vector<Vec3f> nan_rest(g.mesh.positions);
+    nan_rest.back().z = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_NE(message([&] {
+                  map.build(source, source, g.mesh.tets, nan_rest, g.mesh.positions);
+              }).find("rest_positions[" + std::to_string(nan_rest.size() - 1) + "]"),
+              std::string::npos);
     std::vector<geometry::Tet> tets(g.mesh.tets);
     tets[1][2] = 100000;
     EXPECT_NE(message([&] {
                   map.build(source, source, tets, g.mesh.positions, g.mesh.positions);
               }).find("tet 1"),
+              std::string::npos);
+    tets = g.mesh.tets;
+    tets.back()[0] = -1;
+    EXPECT_NE(message([&] {
+                  map.build(source, source, tets, g.mesh.positions, g.mesh.positions);
+              }).find("tet " + std::to_string(tets.size() - 1) + " has vertex index -1"),
+              std::string::npos);
+    tets.back()[0] = static_cast<std::int32_t>(g.mesh.positions.size());
+    EXPECT_NE(message([&] {
+                  map.build(source, source, tets, g.mesh.positions, g.mesh.positions);
+              }).find("outside [0, " + std::to_string(g.mesh.positions.size()) + ")"),
               std::string::npos);
     Volume target = like(source);
     EXPECT_NE(message([&] { resample_through(InverseMap{}, source, target); }).find("not built"),

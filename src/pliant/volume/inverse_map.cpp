@@ -20,24 +20,8 @@ namespace {
 
 using detail::GridFrame;
 
-// A deformed tet's affine map in target grid coordinates: λk = rows[k] · (x − p3) for k < 3,
-// λ3 = 1 − λ0 − λ1 − λ2, rest r = r3 + Σ λk dr[k] (source grid coordinates).
-struct TetMap {
-    Vec3d p3, r3;
-    Vec3d rows[3];
-    Vec3d dr[3];
-    bool ok = false;
-
-    // The smallest barycentric coordinate of x (≥ 0: inside); l[0..2] = λ0..2.
-    double lambda(const Vec3d& x, double l[3]) const {
-        const Vec3d d = x - p3;
-        l[0] = dot(rows[0], d);
-        l[1] = dot(rows[1], d);
-        l[2] = dot(rows[2], d);
-        return std::min({l[0], l[1], l[2], 1.0 - l[0] - l[1] - l[2]});
-    }
-    Vec3d rest(const double l[3]) const { return r3 + dr[0] * l[0] + dr[1] * l[1] + dr[2] * l[2]; }
-};
+using detail::HeldValue;
+using detail::TetMap;
 
 Vec3d grid_coordinate(const Vec3f& x, const GridFrame& f) {
     return {(x.x - f.origin[0]) * f.inv_spacing[0] - 0.5,
@@ -52,30 +36,12 @@ void tet_vertices(const geometry::Tet& tet, std::span<const Vec3d> grid, Vec3d p
     }
 }
 
-// The barycentric rows of a tet from its deformed vertices p (target grid coordinates); ok is
-// false for a degenerate tet. The rest part (r3, dr) is left unset.
-TetMap tet_frame(const Vec3d p[4]) {
-    TetMap m;
-    const Vec3d e0 = p[0] - p[3];
-    const Vec3d e1 = p[1] - p[3];
-    const Vec3d e2 = p[2] - p[3];
-    const double det = dot(e0, cross(e1, e2));
-    if (!(std::abs(det) > 0.0) || !std::isfinite(det)) {
-        return m;
-    }
-    const double inv = 1.0 / det;
-    m.rows[0] = cross(e1, e2) * inv;
-    m.rows[1] = cross(e2, e0) * inv;
-    m.rows[2] = cross(e0, e1) * inv;
-    m.p3 = p[3];
-    m.ok = true;
-    return m;
-}
-
-// tet_frame() for FRAME_BATCH tets at once, structure of arrays: p[vertex][axis][lane] in,
-// det[lane] and rows[k][axis][lane] out (rows for a degenerate tet are whatever the division
-// gives; tet_frame() refuses a det that is 0 or not finite). Lane by lane the operations and their
-// order are tet_frame()'s, so the rows are its bits.
+// The barycentric rows of FRAME_BATCH tets from their deformed vertices (target grid
+// coordinates), structure of arrays: p[vertex][axis][lane] in, det[lane] and rows[k][axis][lane]
+// out. With ek = pk − p3 and det = e0 · (e1 × e2): rows = (e1 × e2, e2 × e0, e0 × e1) / det, the
+// products of core/vec3.hpp's cross() and dot() in their order (no contraction,
+// -ffp-contract=off), so that any other place computing a tet's rows this way gets the same
+// bits. A tet is degenerate (its rows unused) when det is 0 or not finite.
 constexpr int FRAME_BATCH = 8;
 struct FrameBatch {
     double p[4][3][FRAME_BATCH];
@@ -113,22 +79,6 @@ struct FrameBatch {
     }
 };
 
-// The map of a tet from its deformed vertices p and its rest vertices (source grid coordinates,
-// per vertex).
-TetMap tet_map(const geometry::Tet& tet, std::span<const Vec3d> rest_grid, const Vec3d p[4]) {
-    TetMap m = tet_frame(p);
-    if (!m.ok) {
-        return m;
-    }
-    Vec3d r[4];
-    tet_vertices(tet, rest_grid, r);
-    m.r3 = r[3];
-    for (int k = 0; k < 3; ++k) {
-        m.dr[k] = r[k] - r[3];
-    }
-    return m;
-}
-
 // The node range [lo, hi] along axis a that the box of deformed vertices p covers (nodes at
 // B·i, clamped to the grid of `nodes` nodes); empty when lo > hi. inv_b: 1 / B when that is exact
 // (B a power of two: x · inv_b has the bits of x / B), else 0 (divided).
@@ -142,11 +92,315 @@ void node_range(const Vec3d p[4], int a, double b, double inv_b, std::int64_t no
     hi = static_cast<std::int64_t>(std::min(static_cast<double>(nodes - 1), std::floor(hi_nodes)));
 }
 
+// Pass (a) of InverseMap::build: raises holder[node] to the index of a tet holding the node (its
+// smallest barycentric coordinate ≥ −1e-9, the node inside the tet's box), an atomic maximum, so
+// that after every tet has been visited, in any order and on any number of threads, holder[node]
+// is the highest index of the tets holding it (−1: none).
+constexpr double INSIDE = -1e-9;
+
+struct HoldPass {
+    std::span<const geometry::Tet> tets;
+    std::span<const Vec3d> deformed_grid;
+    std::span<const Vec3d> rest_grid;
+    std::int32_t* holder;
+    std::array<std::int64_t, 3> nodes;
+    double b;
+    double inv_b;
+
+    Vec3d node_at(std::int64_t x, std::int64_t y, std::int64_t z) const {
+        return {static_cast<double>(x) * b, static_cast<double>(y) * b, static_cast<double>(z) * b};
+    }
+
+    // Raises the holder of node (x, y, z) to index; whether it was below (then tet `index` may
+    // be the node's holder in the end, and its value at the node is recorded).
+    bool raise(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t index) const {
+        std::atomic_ref<std::int32_t> h(holder[x + nodes[0] * (y + nodes[1] * z)]);
+        std::int32_t current = h.load(std::memory_order_relaxed);
+        while (current < index) {
+            if (h.compare_exchange_weak(current, index, std::memory_order_relaxed)) {
+                return true;
+            }
+        }
+        return false;
+    }
+
+    // Records the value at node (x, y, z) of tet t's map (frame m, barycentric coordinates l
+    // there), as detail::TetMap::rest() computes it.
+    void record(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t t, const TetMap& m,
+                const double l[3], std::vector<HeldValue>& out) const {
+        Vec3d r[4];
+        tet_vertices(tets[static_cast<std::size_t>(t)], rest_grid, r);
+        TetMap full = m;
+        full.r3 = r[3];
+        for (int k = 0; k < 3; ++k) {
+            full.dr[k] = r[k] - r[3];
+        }
+        const Vec3d v = full.rest(l);
+        out.push_back(
+            {x + nodes[0] * (y + nodes[1] * z),
+             t,
+             {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}});
+    }
+
+    // The node box of deformed vertices p[0..3]; false when empty.
+    bool box(const Vec3d p[4], std::int64_t lo[3], std::int64_t hi[3]) const {
+        bool is_empty = false;
+        for (int a = 0; a < 3; ++a) {
+            node_range(p, a, b, inv_b, nodes[static_cast<std::size_t>(a)], lo[a], hi[a]);
+            is_empty = is_empty || lo[a] > hi[a];
+        }
+        return !is_empty;
+    }
+
+    // Gathers the deformed vertices of tets [first, first + FRAME_BATCH) into f (lanes past
+    // `end` repeat tet `first`: computed, not used) and computes their frames.
+    void frames(std::int64_t first, std::int64_t end, FrameBatch& f) const {
+        for (int i = 0; i < FRAME_BATCH; ++i) {
+            const std::int64_t t = first + i < end ? first + i : first;
+            const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
+            for (int v = 0; v < 4; ++v) {
+                const Vec3d& x =
+                    deformed_grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
+                f.p[v][0][i] = x.x;
+                f.p[v][1][i] = x.y;
+                f.p[v][2][i] = x.z;
+            }
+        }
+        f.compute();
+    }
+
+    // Lane i of f as a tet: its vertices p and its frame m (m.ok false when degenerate); its det.
+    static double lane(const FrameBatch& f, int i, Vec3d p[4], TetMap& m) {
+        for (int v = 0; v < 4; ++v) {
+            p[v] = Vec3d{f.p[v][0][i], f.p[v][1][i], f.p[v][2][i]};
+        }
+        const double det = f.det[i];
+        m.ok = std::abs(det) > 0.0 && std::isfinite(det);
+        for (int k = 0; k < 3; ++k) {
+            m.rows[k] = Vec3d{f.rows[k][0][i], f.rows[k][1][i], f.rows[k][2][i]};
+        }
+        m.p3 = p[3];
+        return det;
+    }
+
+    // Tets [first, end), end − first ≤ FRAME_BATCH, each over the nodes of its box.
+    void tets_one_by_one(std::int64_t first, std::int64_t end, std::vector<HeldValue>& out) const {
+        FrameBatch f;
+        frames(first, end, f);
+        for (int i = 0; i < end - first; ++i) {
+            Vec3d p[4];
+            TetMap m;
+            lane(f, i, p, m);
+            std::int64_t lo[3], hi[3];
+            if (!m.ok || !box(p, lo, hi)) {
+                continue;
+            }
+            const auto index = static_cast<std::int32_t>(first + i);
+            for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                    for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                        double l[3];
+                        if (m.lambda(node_at(x, y, z), l) >= INSIDE && raise(x, y, z, index)) {
+                            record(x, y, z, index, m, l, out);
+                        }
+                    }
+                }
+            }
+        }
+    }
+};
+
+// The held nodes' maps and the shell (steps 1 (b) and 2 of InverseMap::build), layer by layer.
+constexpr std::int64_t LAYERS_PER_CHUNK = 8;
+
+struct NodePass {
+    std::span<const geometry::Tet> tets;
+    std::span<const Vec3d> deformed_grid;  // target grid coordinates
+    std::span<const Vec3d> rest_grid;      // source grid coordinates
+    const std::int32_t* holder;            // per node, −1: none
+    const std::uint8_t* near_xy;           // per node: bit 0, 1 of the dilation, erosion (build())
+    std::int32_t* slot;                    // per held node: its index in its layer's list
+    float* g;                              // 3 per node: the map's values
+    std::array<std::int64_t, 3> nodes;
+    double b;
+
+    Vec3d node_at(std::int64_t x, std::int64_t y, std::int64_t z) const {
+        return {static_cast<double>(x) * b, static_cast<double>(y) * b, static_cast<double>(z) * b};
+    }
+
+    void store(std::int64_t q, const Vec3d& r) const {
+        float* out = g + 3 * q;
+        out[0] = static_cast<float>(r.x);
+        out[1] = static_cast<float>(r.y);
+        out[2] = static_cast<float>(r.z);
+    }
+
+    void store_empty(std::int64_t q) const {
+        float* out = g + 3 * q;
+        out[0] = out[1] = out[2] = std::numeric_limits<float>::quiet_NaN();
+    }
+
+    // The maps (frames and rest parts) of the holders of nodes q[0..n) (n ≤ FRAME_BATCH),
+    // appended to list (slot[q]: the index).
+    void flush(const std::int64_t q[FRAME_BATCH], int n, std::vector<TetMap>& list) const {
+        FrameBatch f;
+        for (int i = 0; i < FRAME_BATCH; ++i) {
+            // Lanes past n repeat the first node's tet (computed, not used).
+            const geometry::Tet& tet = tets[static_cast<std::size_t>(holder[q[i < n ? i : 0]])];
+            for (int v = 0; v < 4; ++v) {
+                const Vec3d& x =
+                    deformed_grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
+                f.p[v][0][i] = x.x;
+                f.p[v][1][i] = x.y;
+                f.p[v][2][i] = x.z;
+            }
+        }
+        f.compute();
+        for (int i = 0; i < n; ++i) {
+            TetMap m;
+            const double det = f.det[i];
+            m.ok = std::abs(det) > 0.0 && std::isfinite(det);
+            for (int k = 0; k < 3; ++k) {
+                m.rows[k] = Vec3d{f.rows[k][0][i], f.rows[k][1][i], f.rows[k][2][i]};
+            }
+            m.p3 = Vec3d{f.p[3][0][i], f.p[3][1][i], f.p[3][2][i]};
+            Vec3d r[4];
+            tet_vertices(tets[static_cast<std::size_t>(holder[q[i]])], rest_grid, r);
+            m.r3 = r[3];
+            for (int k = 0; k < 3; ++k) {
+                m.dr[k] = r[k] - r[3];
+            }
+            slot[q[i]] = static_cast<std::int32_t>(list.size());
+            list.push_back(m);
+        }
+    }
+
+    // The maps of layer z's held nodes next to the shell (a node not held in their 3 × 3 × 3),
+    // in node order, into list (replacing its contents; slot[q]: the index).
+    void layer_maps(std::int64_t z, std::vector<TetMap>& list) const {
+        const std::int64_t nxy = nodes[0] * nodes[1];
+        const std::uint8_t* layer = near_xy + nxy * z;
+        const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
+        const std::uint8_t* layer_above = z + 1 < nodes[2] ? layer + nxy : layer;
+        list.clear();
+        std::int64_t q[FRAME_BATCH];
+        int n = 0;
+        for (std::int64_t i = 0; i < nxy; ++i) {
+            const std::int64_t p = nxy * z + i;
+            if (holder[p] < 0 || (layer[i] & layer_below[i] & layer_above[i] & 2) != 0) {
+                continue;
+            }
+            q[n++] = p;
+            if (n == FRAME_BATCH) {
+                flush(q, n, list);
+                n = 0;
+            }
+        }
+        if (n > 0) {
+            flush(q, n, list);
+        }
+    }
+
+    // The extrapolated nodes of layer z: a node not held, with a held node among its 26
+    // neighbours, takes the map of the neighbours' tet with the largest smallest barycentric
+    // coordinate at the node (the first in z, y, x order on a tie), extrapolated; the other nodes
+    // not held are empty (NaN). lists[k % 3]: the maps of layer k's held nodes next to the shell
+    // for k = z − 1 … z + 1 (layer_maps()). Returns the count of extrapolated nodes.
+    std::int64_t shell(std::int64_t z, std::vector<TetMap>* const lists[3]) const {
+        const std::int64_t nx = nodes[0];
+        const std::int64_t ny = nodes[1];
+        const std::int64_t nxy = nx * ny;
+        const std::uint8_t* layer = near_xy + nxy * z;
+        const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
+        const std::uint8_t* layer_above = z + 1 < nodes[2] ? layer + nxy : layer;
+        std::int64_t count = 0;
+        for (std::int64_t y = 0; y < ny; ++y) {
+            for (std::int64_t x = 0; x < nx; ++x) {
+                const std::int64_t q = x + nx * y + nxy * z;
+                const std::int64_t in_layer = x + nx * y;
+                if (holder[q] >= 0) {
+                    continue;  // written by layer_maps()
+                }
+                if (((layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) & 1) == 0) {
+                    store_empty(q);
+                    continue;
+                }
+                const Vec3d node = node_at(x, y, z);
+                double best = -std::numeric_limits<double>::infinity();
+                Vec3d best_rest{};
+                for (std::int64_t cz = std::max<std::int64_t>(0, z - 1);
+                     cz <= std::min(nodes[2] - 1, z + 1); ++cz) {
+                    for (std::int64_t cy = std::max<std::int64_t>(0, y - 1);
+                         cy <= std::min(ny - 1, y + 1); ++cy) {
+                        for (std::int64_t cx = std::max<std::int64_t>(0, x - 1);
+                             cx <= std::min(nx - 1, x + 1); ++cx) {
+                            const std::int64_t c = cx + nx * cy + nxy * cz;
+                            if (holder[c] < 0) {
+                                continue;
+                            }
+                            const TetMap& m = (*lists[cz % 3])[static_cast<std::size_t>(slot[c])];
+                            double l[3];
+                            const double score = m.lambda(node, l);
+                            if (score > best) {
+                                best = score;
+                                best_rest = m.rest(l);
+                            }
+                        }
+                    }
+                }
+                if (best > -std::numeric_limits<double>::infinity()) {
+                    store(q, best_rest);
+                    ++count;
+                } else {
+                    store_empty(q);
+                }
+            }
+        }
+        return count;
+    }
+};
+
 void check_positions(std::span<const Vec3f> positions, const char* what) {
+    // Any coordinate with all exponent bits set (infinite or NaN), without a branch per vertex;
+    // then the first one, for the message.
+    std::uint32_t bad = 0;
+    const float* x = &positions.data()->x;
+    for (std::size_t i = 0; i < 3 * positions.size(); ++i) {
+        const auto bits = std::bit_cast<std::uint32_t>(x[i]);
+        bad |= (bits & 0x7f800000u) == 0x7f800000u ? 1u : 0u;
+    }
+    if (bad == 0) {
+        return;
+    }
     for (std::size_t v = 0; v < positions.size(); ++v) {
         if (!is_finite(positions[v])) {
             throw InvalidInput(
                 fmt::format("volume::InverseMap::build: {}[{}] is not finite", what, v));
+        }
+    }
+}
+
+void check_tets(std::span<const geometry::Tet> tets, std::int64_t num_vertices) {
+    // Every index as unsigned below min(#V, 2³¹) (a negative index is ≥ 2³¹ as unsigned),
+    // without a branch per tet; then the first one outside, for the message.
+    const auto limit =
+        static_cast<std::uint32_t>(std::min<std::int64_t>(num_vertices, std::int64_t{1} << 31));
+    std::uint32_t bad = 0;
+    for (const geometry::Tet& tet : tets) {
+        for (const std::int32_t v : tet) {
+            bad |= static_cast<std::uint32_t>(v) >= limit ? 1u : 0u;
+        }
+    }
+    if (bad == 0) {
+        return;
+    }
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+        for (const std::int32_t v : tets[t]) {
+            if (v < 0 || v >= num_vertices) {
+                throw InvalidInput(fmt::format(
+                    "volume::InverseMap::build: tet {} has vertex index {} outside [0, {})", t, v,
+                    num_vertices));
+            }
         }
     }
 }
@@ -202,16 +456,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
             "({})",
             deformed_positions.size(), rest_positions.size()));
     }
-    const auto num_vertices = static_cast<std::int64_t>(rest_positions.size());
-    for (std::size_t t = 0; t < tets.size(); ++t) {
-        for (const std::int32_t v : tets[t]) {
-            if (v < 0 || v >= num_vertices) {
-                throw InvalidInput(fmt::format(
-                    "volume::InverseMap::build: tet {} has vertex index {} outside [0, {})", t, v,
-                    num_vertices));
-            }
-        }
-    }
+    check_tets(tets, static_cast<std::int64_t>(rest_positions.size()));
     check_positions(rest_positions, "rest_positions");
     check_positions(deformed_positions, "deformed_positions");
 
@@ -226,15 +471,9 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const std::int64_t nx = m_nodes[0];
     const std::int64_t nxy = m_nodes[0] * m_nodes[1];
     const std::int64_t num_nodes = nxy * m_nodes[2];
-    m_g.assign(static_cast<std::size_t>(3 * num_nodes), std::numeric_limits<float>::quiet_NaN());
+    m_g.resize(static_cast<std::size_t>(3 * num_nodes));  // every node written below
     m_holder.assign(static_cast<std::size_t>(num_nodes), -1);
     std::vector<std::int32_t>& holder = m_holder;
-    auto store = [&](std::int64_t q, const Vec3d& r) {
-        float* out = m_g.data() + 3 * q;
-        out[0] = static_cast<float>(r.x);
-        out[1] = static_cast<float>(r.y);
-        out[2] = static_cast<float>(r.z);
-    };
 
     // 0. Every vertex in grid coordinates: deformed in the target's, rest in the source's.
     m_deformed_grid.resize(deformed_positions.size());
@@ -246,133 +485,76 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
         deformed_grid[i] = grid_coordinate(deformed_positions[i], tf);
         rest_grid[i] = grid_coordinate(rest_positions[i], sf);
     });
-    // Node (x, y, z) in target grid coordinates.
-    const auto node_at = [b](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return Vec3d{static_cast<double>(x) * b, static_cast<double>(y) * b,
-                     static_cast<double>(z) * b};
-    };
-    // The map of tet t (its deformed frame and rest part).
-    const auto map_of = [&](std::int32_t t) {
-        const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-        Vec3d p[4];
-        tet_vertices(tet, deformed_grid, p);
-        return tet_map(tet, rest_grid, p);
-    };
-
     // 1. Inside nodes: the highest index of the tets holding a node wins, a rule independent of
     // the order tets are visited in. (a) Every tet, in parallel, raises the holder of each node it
-    // holds to its index (an atomic maximum); (b) every held node, in parallel, takes its
-    // holder's map.
+    // holds to its index (an atomic maximum) and, where the holder was below its index, records
+    // its map's value at the node (per fixed chunk of tets); (b) every held node takes the value
+    // its holder recorded.
     InverseMapStats stats;
     stats.num_nodes = num_nodes;
-    // Tets in batches of FRAME_BATCH: their barycentric rows as tet_frame() computes them, the
-    // same operations in the same order lane by lane (arrays the compiler can vectorize; no
-    // contraction, -ffp-contract=off), then each tet's nodes.
+    const HoldPass hold{.tets = tets,
+                        .deformed_grid = deformed_grid,
+                        .rest_grid = rest_grid,
+                        .holder = holder.data(),
+                        .nodes = m_nodes,
+                        .b = b,
+                        .inv_b = exact_inv_b};
     const auto num_tets = static_cast<std::int64_t>(tets.size());
-    parallel_for(
-        (num_tets + FRAME_BATCH - 1) / FRAME_BATCH,
-        [&](std::int64_t batch) {
-            const std::int64_t first = batch * FRAME_BATCH;
-            const int count =
-                static_cast<int>(std::min<std::int64_t>(FRAME_BATCH, num_tets - first));
-            FrameBatch f;
-            for (int i = 0; i < FRAME_BATCH; ++i) {
-                // Lanes past the end repeat the first tet (computed, not used).
-                const geometry::Tet& tet =
-                    tets[static_cast<std::size_t>(first + (i < count ? i : 0))];
-                for (int v = 0; v < 4; ++v) {
-                    const Vec3d& x =
-                        deformed_grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
-                    f.p[v][0][i] = x.x;
-                    f.p[v][1][i] = x.y;
-                    f.p[v][2][i] = x.z;
-                }
+    const std::int64_t num_batches = (num_tets + FRAME_BATCH - 1) / FRAME_BATCH;
+    constexpr std::int64_t BATCHES_PER_CHUNK = 128;
+    const std::int64_t num_value_lists = num_chunks(num_batches, BATCHES_PER_CHUNK);
+    if (m_held_values.size() < static_cast<std::size_t>(num_value_lists)) {
+        m_held_values.resize(static_cast<std::size_t>(num_value_lists));
+    }
+    parallel_for_chunks(
+        num_batches, BATCHES_PER_CHUNK, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
+            std::vector<HeldValue>& out = m_held_values[static_cast<std::size_t>(c)];
+            out.clear();
+            for (std::int64_t batch = begin; batch < end; ++batch) {
+                const std::int64_t first = batch * FRAME_BATCH;
+                hold.tets_one_by_one(first, std::min(num_tets, first + FRAME_BATCH), out);
             }
-            f.compute();
-            for (int i = 0; i < count; ++i) {
-                Vec3d p[4];
-                for (int v = 0; v < 4; ++v) {
-                    p[v] = Vec3d{f.p[v][0][i], f.p[v][1][i], f.p[v][2][i]};
-                }
-                std::int64_t lo[3], hi[3];
-                bool is_empty = false;
-                for (int a = 0; a < 3; ++a) {
-                    node_range(p, a, b, exact_inv_b, m_nodes[static_cast<std::size_t>(a)], lo[a],
-                               hi[a]);
-                    is_empty = is_empty || lo[a] > hi[a];
-                }
-                if (is_empty) {
-                    continue;
-                }
-                const double det = f.det[i];
-                if (!(std::abs(det) > 0.0) || !std::isfinite(det)) {
-                    continue;  // degenerate (tet_frame(): not ok)
-                }
-                TetMap m;  // λ only: the rest part is taken in (b)
-                for (int k = 0; k < 3; ++k) {
-                    m.rows[k] = Vec3d{f.rows[k][0][i], f.rows[k][1][i], f.rows[k][2][i]};
-                }
-                m.p3 = p[3];
-                m.ok = true;
-                const auto index = static_cast<std::int32_t>(first + i);
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                            double l[3];
-                            if (!(m.lambda(node_at(x, y, z), l) >= -1e-9)) {
-                                continue;
-                            }
-                            std::atomic_ref<std::int32_t> h(
-                                holder[static_cast<std::size_t>(x + nx * y + nxy * z)]);
-                            std::int32_t current = h.load(std::memory_order_relaxed);
-                            while (current < index &&
-                                   !h.compare_exchange_weak(current, index,
-                                                            std::memory_order_relaxed)) {
-                            }
-                        }
-                    }
-                }
-            }
-        },
-        128);
+        });
+    // (b) Each held node's value: the one its holder recorded (exactly one record per node has
+    // the holder's index; nodes written once, so in parallel).
     parallel_for(
-        m_nodes[2],
-        [&](std::int64_t z) {
-            for (std::int64_t y = 0; y < m_nodes[1]; ++y) {
-                for (std::int64_t x = 0; x < nx; ++x) {
-                    const std::int64_t q = x + nx * y + nxy * z;
-                    const std::int32_t t = holder[static_cast<std::size_t>(q)];
-                    if (t < 0) {
-                        continue;
-                    }
-                    const TetMap m = map_of(t);
-                    double l[3];
-                    m.lambda(node_at(x, y, z), l);
-                    store(q, m.rest(l));
+        num_value_lists,
+        [&](std::int64_t c) {
+            for (const HeldValue& h : m_held_values[static_cast<std::size_t>(c)]) {
+                if (holder[static_cast<std::size_t>(h.node)] == h.tet) {
+                    float* out = m_g.data() + 3 * h.node;
+                    out[0] = h.value[0];
+                    out[1] = h.value[1];
+                    out[2] = h.value[2];
                 }
             }
         },
         1);
 
-    // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated. Reads `holder` (inside
-    // nodes only), writes only its own node: parallel over layers.
+    // 2. Nodes next to inside ones: a neighbour's tet map, extrapolated.
     // First, per node, whether a node of its 3 × 3 in x and y is held (a separable dilation);
     // a node whose 3 × 3 × 3 has none (most nodes away from the body) is passed over at once.
     const std::int64_t ny = m_nodes[1];
-    std::vector<std::uint8_t> near_x(static_cast<std::size_t>(num_nodes));
-    std::vector<std::uint8_t> near_xy(static_cast<std::size_t>(num_nodes));
+    m_near_x.resize(static_cast<std::size_t>(num_nodes));
+    m_near_xy.resize(static_cast<std::size_t>(num_nodes));
+    std::vector<std::uint8_t>& near_x = m_near_x;
+    std::vector<std::uint8_t>& near_xy = m_near_xy;
+    // Bit 0: some node of the 3 × 3 (in x, y) is held; bit 1: every node of it inside the grid
+    // is held (an erosion: a held node whose 3 × 3 × 3 has bit 1 everywhere has no neighbour in
+    // the shell, and no shell node reads its map).
     const auto held = [&](std::int64_t q) {
-        return holder[static_cast<std::size_t>(q)] >= 0 ? 1 : 0;
+        return holder[static_cast<std::size_t>(q)] >= 0 ? 3 : 0;
     };
     parallel_for(
         m_nodes[2],
         [&](std::int64_t z) {
             for (std::int64_t q = nxy * z; q < nxy * (z + 1); q += nx) {
                 for (std::int64_t x = 0; x < nx; ++x) {
-                    int any = held(q + x);
-                    any |= x > 0 ? held(q + x - 1) : 0;
-                    any |= x + 1 < nx ? held(q + x + 1) : 0;
-                    near_x[static_cast<std::size_t>(q + x)] = static_cast<std::uint8_t>(any);
+                    const int c = held(q + x);
+                    const int l = x > 0 ? held(q + x - 1) : 2;
+                    const int r = x + 1 < nx ? held(q + x + 1) : 2;
+                    near_x[static_cast<std::size_t>(q + x)] =
+                        static_cast<std::uint8_t>(((c | l | r) & 1) | (c & l & r & 2));
                 }
             }
             for (std::int64_t y = 0; y < ny; ++y) {
@@ -381,55 +563,52 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                 const std::uint8_t* above = y + 1 < ny ? row + nx : row;
                 std::uint8_t* out = near_xy.data() + nx * y + nxy * z;
                 for (std::int64_t x = 0; x < nx; ++x) {
-                    out[x] = static_cast<std::uint8_t>(row[x] | below[x] | above[x]);
+                    out[x] = static_cast<std::uint8_t>(((row[x] | below[x] | above[x]) & 1) |
+                                                       (row[x] & below[x] & above[x] & 2));
                 }
             }
         },
         1);
-    std::vector<std::int64_t> extrapolated(static_cast<std::size_t>(m_nodes[2]), 0);
+    // Then the shell, over chunks of layers in parallel: per chunk, layer by layer, the maps of
+    // the held nodes next to the shell (a list per layer, kept for three layers), then the shell
+    // nodes of the layer before, which read their held neighbours' maps from the lists. A chunk
+    // also computes the lists of the layers on either side of it.
+    const NodePass pass{.tets = tets,
+                        .deformed_grid = deformed_grid,
+                        .rest_grid = rest_grid,
+                        .holder = holder.data(),
+                        .near_xy = near_xy.data(),
+                        .slot = nullptr,
+                        .g = m_g.data(),
+                        .nodes = m_nodes,
+                        .b = b};
+    const std::int64_t nz = m_nodes[2];
+    const std::int64_t num_chunks = (nz + LAYERS_PER_CHUNK - 1) / LAYERS_PER_CHUNK;
+    m_slot.resize(static_cast<std::size_t>(num_nodes));
+    if (m_lists.size() < static_cast<std::size_t>(3 * num_chunks)) {
+        m_lists.resize(static_cast<std::size_t>(3 * num_chunks));
+    }
+    NodePass with_slots = pass;
+    with_slots.slot = m_slot.data();
+    std::vector<std::int64_t> extrapolated(static_cast<std::size_t>(nz), 0);
     parallel_for(
-        m_nodes[2],
-        [&](std::int64_t z) {
-            const std::uint8_t* layer = near_xy.data() + nxy * z;
-            const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
-            const std::uint8_t* layer_above = z + 1 < m_nodes[2] ? layer + nxy : layer;
-            for (std::int64_t y = 0; y < m_nodes[1]; ++y) {
-                for (std::int64_t x = 0; x < nx; ++x) {
-                    const std::int64_t q = x + nx * y + nxy * z;
-                    const std::int64_t in_layer = x + nx * y;
-                    if (holder[static_cast<std::size_t>(q)] >= 0 ||
-                        (layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) == 0) {
-                        continue;
-                    }
-                    const Vec3d node = node_at(x, y, z);
-                    double best = -std::numeric_limits<double>::infinity();
-                    Vec3d best_rest{};
-                    for (std::int64_t cz = std::max<std::int64_t>(0, z - 1);
-                         cz <= std::min(m_nodes[2] - 1, z + 1); ++cz) {
-                        for (std::int64_t cy = std::max<std::int64_t>(0, y - 1);
-                             cy <= std::min(m_nodes[1] - 1, y + 1); ++cy) {
-                            for (std::int64_t cx = std::max<std::int64_t>(0, x - 1);
-                                 cx <= std::min(nx - 1, x + 1); ++cx) {
-                                const std::int32_t t =
-                                    holder[static_cast<std::size_t>(cx + nx * cy + nxy * cz)];
-                                if (t < 0) {
-                                    continue;
-                                }
-                                const TetMap m = map_of(t);
-                                double l[3];
-                                const double score = m.lambda(node, l);
-                                if (score > best) {
-                                    best = score;
-                                    best_rest = m.rest(l);
-                                }
-                            }
-                        }
-                    }
-                    if (best > -std::numeric_limits<double>::infinity()) {
-                        store(q, best_rest);
-                        ++extrapolated[static_cast<std::size_t>(z)];
-                    }
+        num_chunks,
+        [&](std::int64_t chunk) {
+            const std::int64_t z0 = chunk * LAYERS_PER_CHUNK;
+            const std::int64_t z1 = std::min(nz, z0 + LAYERS_PER_CHUNK);
+            std::vector<TetMap>* lists[3];
+            for (int k = 0; k < 3; ++k) {
+                lists[k] = &m_lists[static_cast<std::size_t>(3 * chunk + k)];
+            }
+            for (std::int64_t z = std::max<std::int64_t>(0, z0 - 1); z <= std::min(nz - 1, z1);
+                 ++z) {
+                with_slots.layer_maps(z, *lists[z % 3]);
+                if (z - 1 >= z0 && z - 1 < z1) {
+                    extrapolated[static_cast<std::size_t>(z - 1)] = with_slots.shell(z - 1, lists);
                 }
+            }
+            if (z1 == nz) {
+                extrapolated[static_cast<std::size_t>(nz - 1)] = with_slots.shell(nz - 1, lists);
             }
         },
         1);

@@ -23,11 +23,14 @@
 // it only where neighbouring tets' maps differ (second order in the deformation's curvature);
 // tests/volume/inverse_map_test.cpp measures it against the exact resampler.
 //
-// Cost: O(#V + #T) for the inside nodes (parallel over tets: each raises the holder of the
-// nodes it holds to its index, an atomic maximum; then parallel over nodes: each takes its
-// holder's map) and O(#nodes) for the extrapolated ones (parallel over node layers; a separable
-// dilation of the held nodes first, so that nodes with no held neighbour are passed over without
-// reading their 26 neighbours).
+// Cost: O(#V + #T) for the inside nodes (parallel over tets, 8 frames at a time: each raises the
+// holder of the nodes it holds to its index, an atomic maximum, and records its map's value there
+// where the holder was below; each held node then takes its final holder's record) and
+// O(#nodes) for the extrapolated ones (parallel over chunks of node layers: per layer the maps
+// of the held nodes next to the shell, kept for three layers, read by the shell nodes; a
+// separable dilation of the held nodes first, so that nodes with no held neighbour are passed
+// over without reading their 26 neighbours). About 12 ms CPU at the source scale (435,160 tets,
+// 274,625 nodes), more than half of it the pass over the tets (docs/performance.md, issue 29).
 // Deterministic: the same map for any number of threads. Not thread safe to build; const access
 // from many threads is.
 #pragma once
@@ -39,6 +42,7 @@
 
 #include "pliant/core/vec3.hpp"
 #include "pliant/geometry/tet_mesh.hpp"
+#include "pliant/volume/detail/tet_map.hpp"
 #include "pliant/volume/volume.hpp"
 
 namespace pliant::volume {
@@ -80,9 +84,16 @@ private:
     std::array<std::int64_t, 3> m_nodes{0, 0, 0};
     std::vector<float> m_g;
     // Scratch of build(), kept between builds (no allocation per frame): the holder tet per node
-    // (−1: none) and the vertices in grid coordinates (deformed: target's, rest: source's).
+    // (−1: none), the vertices in grid coordinates (deformed: target's, rest: source's), the
+    // dilation and erosion of the held nodes, per held node next to the shell the index of its
+    // map in its layer's list, and the lists (3 layers per chunk of layers).
     std::vector<std::int32_t> m_holder;
     std::vector<Vec3d> m_deformed_grid, m_rest_grid;
+    std::vector<std::uint8_t> m_near_x, m_near_xy;
+    std::vector<std::int32_t> m_slot;
+    std::vector<std::vector<detail::TetMap>> m_lists;
+    // Per chunk of the pass over the tets: the values its tets recorded at the nodes they held.
+    std::vector<std::vector<detail::HeldValue>> m_held_values;
 };
 
 // Every voxel of target = the source sampled (trilinearly, as volume/resample.hpp samples) at the
