@@ -2,8 +2,6 @@
 // loop's, exceptions; and `run_deform` pipelined against sequential on 1 and 2 threads: every
 // rendered frame's bytes, the output volume, the deformed mesh and the JSON's non-timing
 // numbers, through both routes (exact, map).
-#include "pliant/pipeline/frame_pipeline.hpp"
-
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -16,6 +14,7 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/io/volume_io.hpp"
 #include "pliant/pipeline/deform_run.hpp"
+#include "pliant/pipeline/frame_pipeline.hpp"
 #include "pliant/volume/generate.hpp"
 #include "support/test_files.hpp"
 
@@ -34,7 +33,7 @@ TEST_F(FramePipelineTest, KeepsTheOrderTwoSlotsNeed) {
         for (const bool pipelined : {false, true}) {
             set_num_threads(threads);
             std::mutex mutex;
-            std::vector<int> produced, consumed;  // frames, in completion order
+            std::vector<int> produced, consumed;    // frames, in completion order
             std::array<int, 2> slot_frame{-1, -1};  // the frame each slot holds
             bool ok = true;
             const auto produce = [&](int frame, int slot) {
@@ -42,14 +41,14 @@ TEST_F(FramePipelineTest, KeepsTheOrderTwoSlotsNeed) {
                 ok = ok && slot == (frame & 1);
                 ok = ok && (produced.empty() || produced.back() == frame - 1);
                 // The slot's previous frame (frame − 2) was consumed already.
-                ok = ok && (frame - 2 < 3 ||
-                            (!consumed.empty() && consumed.back() >= frame - 2));
+                ok = ok && (frame - 2 < 3 || (!consumed.empty() && consumed.back() >= frame - 2));
                 slot_frame[static_cast<std::size_t>(slot)] = frame;
                 produced.push_back(frame);
             };
             const auto consume = [&](int frame, int slot) {
                 const std::lock_guard lock(mutex);
-                ok = ok && slot == (frame & 1) && slot_frame[static_cast<std::size_t>(slot)] == frame;
+                ok = ok && slot == (frame & 1) &&
+                     slot_frame[static_cast<std::size_t>(slot)] == frame;
                 ok = ok && (consumed.empty() || consumed.back() == frame - 1);
                 consumed.push_back(frame);
             };
@@ -119,8 +118,8 @@ RunResult run(const volume::Volume& source, const volume::TransferFunction& tf, 
     options.resample = mode;
     options.pipelined = pipelined;
     options.checkpoint_every = 0;
-    const std::string tag = std::string(name(mode)) + (pipelined ? "-p" : "-s") +
-                            std::to_string(threads);
+    const std::string tag =
+        std::string(name(mode)) + (pipelined ? "-p" : "-s") + std::to_string(threads);
     options.out = dir / (tag + ".nrrd");
     options.mesh_out = dir / (tag + ".vtu");
     RunResult result;

@@ -221,51 +221,38 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     std::optional<render::MappedRayCaster> mapped;
     RunningMean map_ms;
 
-    // The frames run through run_frame_pipeline (frame_pipeline.hpp): produce = step + the
-    // frame's inverse map or resampled volume into a slot, consume = render + write. Pipelined
-    // only when every frame renders and no checkpoint is saved (a checkpoint is the body at the
-    // frame just consumed, which the next frame's step has already moved on).
+    // The frames run through run_frame_pipeline (frame_pipeline.hpp): produce = the step, a copy
+    // of the positions and (map route) the frame's inverse map into a slot; consume = the
+    // resample (exact route, and the output volume at the last frame) from the slot's positions,
+    // set_map or the caster's update, render, write. The exact route resamples on the consuming
+    // side: on the producer's one thread it would take longer than all the rest. Pipelined only
+    // when every frame renders and no checkpoint is saved (a checkpoint is the body at the frame
+    // just consumed, which the next frame's step has already moved on).
     const bool every_frame = video.has_value() || static_cast<bool>(options.frame_sink);
     const bool pipelined = options.pipelined && every_frame && !checkpoints;
     const bool map_route = options.resample == ResampleMode::map;
     const auto renders = [&](int frame) {
         return every_frame || (frame == options.frames && !options.still.empty());
     };
-    const auto resamples = [&](int frame) {
-        return frame == options.frames || (every_frame && !map_route);
-    };
-    // Two resampled volumes when a frame's volume is rendered while the next one is filled.
-    std::array<volume::Volume, 2> targets{deformable.target_like(), volume::Volume()};
-    if (pipelined && !map_route) {
-        targets[1] = deformable.target_like();
-    }
-    const auto target_of = [&](int slot) -> volume::Volume& {
-        return targets[static_cast<std::size_t>(targets[1].empty() ? 0 : slot)];
-    };
+    volume::Volume target = deformable.target_like();  // the last resample
     struct Slot {
         pbd::SoftBodyStats stats;
-        double build_ms = 0.0;      // the inverse map
-        double resample_ms = -1.0;  // < 0: not resampled
-        volume::ResampleStats resampled;
+        std::vector<Vec3f> positions;  // the body's, after the frame's step
+        volume::InverseMap map;
+        double build_ms = 0.0;  // the inverse map
     };
     std::array<Slot, 2> slots;
-    std::array<volume::InverseMap, 2> maps;
     const auto produce = [&](int frame, int slot) {
         Slot& s = slots[static_cast<std::size_t>(slot)];
         body.step(dt);
         s.stats = body.stats();
+        s.positions.assign(body.positions().begin(), body.positions().end());
         s.build_ms = 0.0;
-        s.resample_ms = -1.0;
         if (renders(frame) && map_route) {
             // The frame through its inverse map: no resample, the source prepared once.
             const Stopwatch clock;
-            deformable.build_map(maps[static_cast<std::size_t>(slot)]);
+            deformable.build_map(s.positions, s.map);
             s.build_ms = clock.elapsed_ms();
-        }
-        if (resamples(frame)) {
-            const Stopwatch clock;
-            s.resampled = deformable.resample(target_of(slot));
-            s.resample_ms = clock.elapsed_ms();
         }
     };
     const Stopwatch run_clock;
@@ -284,21 +271,22 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             if (!mapped) {
                 mapped.emplace(source, tf, source, ray_options);
             }
-            mapped->set_map(maps[static_cast<std::size_t>(slot)]);
+            mapped->set_map(s.map);
             map_ms.add(s.build_ms + clock.elapsed_ms());
             render_ms.add(mapped->render(camera, image).ms);
         }
-        if (s.resample_ms >= 0.0) {
-            resampled = s.resampled;
-            resample_ms.add(s.resample_ms);
+        if (frame == options.frames || (every_frame && !map_route)) {
+            const Stopwatch clock;
+            resampled = deformable.resample(s.positions, target);
+            resample_ms.add(clock.elapsed_ms());
         }
         if (renders(frame) && !map_route) {
             // One caster for the run: later frames have the same size and kind, so update()
             // reuses its arrays instead of faulting in a new float copy every frame.
             if (caster) {
-                caster->update(target_of(slot), tf);
+                caster->update(target, tf);
             } else {
-                caster.emplace(target_of(slot), tf, ray_options);
+                caster.emplace(target, tf, ray_options);
             }
             render_ms.add(caster->render(camera, image).ms + caster->prepare_ms());
         }
@@ -335,7 +323,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     pipeline_options.producer_threads = std::max(1, num_threads() / 2);
     run_frame_pipeline(totals.frame + 1, options.frames, produce, consume, pipeline_options);
     const double frame_period_ms = frames_run > 0 ? run_clock.elapsed_ms() / frames_run : 0.0;
-    io::write_volume(options.out, target_of(options.frames & 1));  // the last frame's resample
+    io::write_volume(options.out, target);
     if (!options.still.empty()) {
         io::write_png(options.still, image);
     }

@@ -13,7 +13,9 @@ void run_frame_pipeline(int first, int last, FunctionRef<void(int frame, int slo
     if (options.producer_threads < 1) {
         throw InvalidInput("run_frame_pipeline: producer_threads must be >= 1");
     }
-    const auto slot = [](int frame) { return frame & 1; };
+    const auto slot = [](int frame) {
+        return frame & 1;
+    };
     if (!options.pipelined) {
         for (int f = first; f <= last; ++f) {
             produce(f, slot(f));

@@ -3,8 +3,9 @@
 // written) on the caller's threads — the throughput of `pliant deform --render` (issue 29).
 //
 //   run_frame_pipeline(1, frames, produce, consume, {});
-//   produce(f, slot): makes frame f into buffer slot (0 or 1), e.g. body.step(dt); build_map(maps[slot])
-//   consume(f, slot): uses frame f from that slot, e.g. set_map(maps[slot]); render; write
+//   produce(f, slot): makes frame f into buffer slot (0 or 1), e.g. body.step(dt);
+//   build_map(maps[slot]) consume(f, slot): uses frame f from that slot, e.g. set_map(maps[slot]);
+//   render; write
 //
 // Order (pipelined): produce(first) on the caller, then for every frame f: produce(f + 1) in a
 // BackgroundTask ‖ consume(f) on the caller, then wait. So produce(f) runs after produce(f − 1)
