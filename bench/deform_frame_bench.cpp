@@ -334,15 +334,23 @@ int main(int argc, char** argv) {
                         exact_cpu, 1e3 / exact_wall);
             std::printf("  %-36s %10.1f %10.1f  (%.1f fps)\n", "whole frame, map", map_wall,
                         map_cpu, 1e3 / map_wall);
-            for (const auto& [label, p] : {std::pair{"pipelined period, exact", &exact_pipe},
-                                           std::pair{"pipelined period, map", &map_pipe},
-                                           std::pair{"pipelined, map built late", &map_late}}) {
+            struct Row {
+                const char* label;
+                const Pipelined* p;
+                const char* produce;
+                const char* consume;
+            };
+            for (const Row& row :
+                 {Row{"pipelined period, exact", &exact_pipe, "step", "resample + update + render"},
+                  Row{"pipelined period, map", &map_pipe, "step + build", "set_map + render"},
+                  Row{"pipelined, map built late", &map_late, "step",
+                      "build + set_map + render"}}) {
                 std::printf(
-                    "  %-36s %10.1f %10.1f  (%.1f fps; %d frames; overlapped: step + %s %.1f, "
-                    "%s + render %.1f)\n",
-                    label, p->period_wall, p->period_cpu, 1e3 / p->period_wall, p->frames,
-                    p == &map_pipe ? "build" : "resample", p->produce_wall,
-                    p == &map_pipe ? "set_map" : "update", p->consume_wall);
+                    "  %-36s %10.1f %10.1f  (%.1f fps; %d frames; overlapped: %s %.1f, "
+                    "%s %.1f)\n",
+                    row.label, row.p->period_wall, row.p->period_cpu, 1e3 / row.p->period_wall,
+                    row.p->frames, row.produce, row.p->produce_wall, row.consume,
+                    row.p->consume_wall);
             }
             std::printf(
                 "  samples: exact %lld, map %lld; map cells visible %lld of %lld; PSNR "
