@@ -13,8 +13,10 @@
 // resample) of frame f + 1 on one thread while frame f's set_map (or update) and render run on
 // the others. The period is the wall (and process CPU) ms between the end of the first frame's
 // render and the end of the last one's, per frame: the throughput, with the stages overlapped.
-// Beside it the mean wall ms of the produce (step + map / resample) and consume (set_map /
-// update + render) sides as they ran overlapped.
+// Beside it the mean wall ms of the produce (step + map / copy of the positions) and consume
+// (set_map / resample + update, render) sides as they ran overlapped. Two alternatives of the
+// map route for comparison: the map built on the consuming side, and the producer on every
+// thread (the step's two lanes) instead of one.
 //
 //   bin/bench_deform_frame [--driver twist|wave|bubble|drag|all] [--frames N] [--size N]
 //                          [--threads N] [--pipe-frames N] [--no-shading] [--json]
@@ -84,7 +86,8 @@ struct Pipelined {
 
 // Frames first..last through run_frame_pipeline; produce / consume as there.
 template <typename Produce, typename Consume>
-Pipelined run_pipelined(int first, int last, Produce&& produce, Consume&& consume) {
+Pipelined run_pipelined(int first, int last, Produce&& produce, Consume&& consume,
+                        int producer_threads = 1) {
     Pipelined out;
     out.frames = last - first + 1;
     double wall0 = 0.0, cpu0 = 0.0, wall1 = 0.0, cpu1 = 0.0, produce_sum = 0.0, consume_sum = 0.0;
@@ -108,7 +111,7 @@ Pipelined run_pipelined(int first, int last, Produce&& produce, Consume&& consum
                 cpu1 = cpu_ms();
             }
         },
-        {});
+        {.producer_threads = producer_threads});
     const int periods = std::max(1, last - first);
     out.period_wall = (wall1 - wall0) / periods;
     out.period_cpu = (cpu1 - cpu0) / periods;
@@ -258,6 +261,22 @@ int main(int argc, char** argv) {
                 mapped->render(camera, map_image);
             });
         frame += pipe_frames;
+        // The same with the producer on every thread (BackgroundTask's default, the viewer's
+        // former scheme): the step's two lanes in the background.
+        const Pipelined map_all = run_pipelined(
+            frame, frame + pipe_frames - 1,
+            [&](int f, int slot) {
+                driven.step(f);
+                maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
+                                                           w.grid.mesh.positions, body.positions(),
+                                                           {.node_voxels = w.grid.cell_voxels});
+            },
+            [&](int, int slot) {
+                mapped->set_map(maps[static_cast<std::size_t>(slot)]);
+                mapped->render(camera, map_image);
+            },
+            0);
+        frame += pipe_frames;
         std::array<std::vector<Vec3f>, 2> positions;
         const Pipelined exact_pipe = run_pipelined(
             frame, frame + pipe_frames - 1,
@@ -314,7 +333,8 @@ int main(int argc, char** argv) {
                 exact_wall, exact_cpu, map_wall, map_cpu);
             for (const auto& [key, p] :
                  {std::pair{"map_pipelined", &map_pipe}, std::pair{"exact_pipelined", &exact_pipe},
-                  std::pair{"map_late_pipelined", &map_late}}) {
+                  std::pair{"map_late_pipelined", &map_late},
+                  std::pair{"map_all_threads_pipelined", &map_all}}) {
                 std::printf(
                     ", \"%s\": {\"frames\": %d, \"period_wall_ms\": %.2f, \"period_cpu_ms\": %.2f, "
                     "\"fps\": %.2f, \"produce_wall_ms\": %.2f, \"consume_wall_ms\": %.2f}",
@@ -343,8 +363,9 @@ int main(int argc, char** argv) {
             for (const Row& row :
                  {Row{"pipelined period, exact", &exact_pipe, "step", "resample + update + render"},
                   Row{"pipelined period, map", &map_pipe, "step + build", "set_map + render"},
-                  Row{"pipelined, map built late", &map_late, "step",
-                      "build + set_map + render"}}) {
+                  Row{"pipelined, map built late", &map_late, "step", "build + set_map + render"},
+                  Row{"pipelined, map, producer all threads", &map_all, "step + build",
+                      "set_map + render"}}) {
                 std::printf(
                     "  %-36s %10.1f %10.1f  (%.1f fps; %d frames; overlapped: %s %.1f, "
                     "%s %.1f)\n",

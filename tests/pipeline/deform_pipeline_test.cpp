@@ -66,7 +66,7 @@ TEST_F(FramePipelineTest, KeepsTheOrderTwoSlotsNeed) {
         5, 4, [&](int, int) { ++calls; }, [&](int, int) { ++calls; }, {});
     EXPECT_EQ(calls, 0);  // no frames
     EXPECT_THROW(run_frame_pipeline(
-                     1, 2, [](int, int) {}, [](int, int) {}, {.producer_threads = 0}),
+                     1, 2, [](int, int) {}, [](int, int) {}, {.producer_threads = -1}),
                  InvalidInput);
 }
 

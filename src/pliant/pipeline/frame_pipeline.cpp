@@ -10,8 +10,8 @@ namespace pliant::pipeline {
 void run_frame_pipeline(int first, int last, FunctionRef<void(int frame, int slot)> produce,
                         FunctionRef<void(int frame, int slot)> consume,
                         const FramePipelineOptions& options) {
-    if (options.producer_threads < 1) {
-        throw InvalidInput("run_frame_pipeline: producer_threads must be >= 1");
+    if (options.producer_threads < 0) {
+        throw InvalidInput("run_frame_pipeline: producer_threads must be >= 0");
     }
     const auto slot = [](int frame) {
         return frame & 1;

@@ -31,7 +31,9 @@ namespace pliant::pipeline {
 
 struct FramePipelineOptions {
     bool pipelined = true;
-    int producer_threads = 1;  // ≥ 1, the background work's concurrency
+    // The background work's concurrency: ≥ 1, or 0 for the thread limit (BackgroundTask's
+    // default: the work's loops may use every thread, the step its two lanes).
+    int producer_threads = 1;
 };
 
 // Frames first..last (none when last < first).
