@@ -8,14 +8,25 @@
 // (all threads), the classified samples, and the PSNR of the last frame's map render against
 // its exact render; --json prints the same as one JSON object.
 //
+// Then the frames pipelined as `pliant deform --render` runs them (pipeline/frame_pipeline.hpp):
+// for each route, --pipe-frames more frames (default max(8, frames)) with the step and map (or
+// resample) of frame f + 1 on one thread while frame f's set_map (or update) and render run on
+// the others. The period is the wall (and process CPU) ms between the end of the first frame's
+// render and the end of the last one's, per frame: the throughput, with the stages overlapped.
+// Beside it the mean wall ms of the produce (step + map / copy of the positions) and consume
+// (set_map / resample + update, render) sides as they ran overlapped. Two alternatives of the
+// map route for comparison: the map built on the consuming side, and the producer on every
+// thread (the step's two lanes) instead of one.
+//
 //   bin/bench_deform_frame [--driver twist|wave|bubble|drag|all] [--frames N] [--size N]
-//                          [--threads N] [--no-shading] [--json]
+//                          [--threads N] [--pipe-frames N] [--no-shading] [--json]
 //
 // bench/compare_deform_vtk runs it beside VTK's fixed-point ray caster on the undeformed 256³
 // phantom in the same run.
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -29,6 +40,7 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/pbd/soft_body.hpp"
+#include "pliant/pipeline/frame_pipeline.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/mapped_raycast.hpp"
 #include "pliant/render/raycast.hpp"
@@ -65,6 +77,49 @@ void timed(Stage& s, F&& f) {
     ++s.count;
 }
 
+// A pipelined run's numbers (see the top of the file).
+struct Pipelined {
+    double period_wall = 0.0, period_cpu = 0.0;     // ms per frame
+    double produce_wall = 0.0, consume_wall = 0.0;  // mean ms per frame
+    int frames = 0;
+};
+
+// Frames first..last through run_frame_pipeline; produce / consume as there.
+template <typename Produce, typename Consume>
+Pipelined run_pipelined(int first, int last, Produce&& produce, Consume&& consume,
+                        int producer_threads = 1) {
+    Pipelined out;
+    out.frames = last - first + 1;
+    double wall0 = 0.0, cpu0 = 0.0, wall1 = 0.0, cpu1 = 0.0, produce_sum = 0.0, consume_sum = 0.0;
+    const Stopwatch watch;
+    pipeline::run_frame_pipeline(
+        first, last,
+        [&](int frame, int slot) {
+            const Stopwatch clock;
+            produce(frame, slot);
+            produce_sum += clock.elapsed_ms();
+        },
+        [&](int frame, int slot) {
+            const Stopwatch clock;
+            consume(frame, slot);
+            consume_sum += clock.elapsed_ms();
+            if (frame == first) {
+                wall0 = watch.elapsed_ms();
+                cpu0 = cpu_ms();
+            } else if (frame == last) {
+                wall1 = watch.elapsed_ms();
+                cpu1 = cpu_ms();
+            }
+        },
+        {.producer_threads = producer_threads});
+    const int periods = std::max(1, last - first);
+    out.period_wall = (wall1 - wall0) / periods;
+    out.period_cpu = (cpu1 - cpu0) / periods;
+    out.produce_wall = produce_sum / out.frames;
+    out.consume_wall = consume_sum / out.frames;
+    return out;
+}
+
 double psnr(const render::Image& a, const render::Image& b) {
     double sum = 0.0;
     for (std::size_t i = 0; i < a.pixels.size(); ++i) {
@@ -83,6 +138,7 @@ int main(int argc, char** argv) {
     int frames = 4;
     int size = 512;
     int threads = 0;
+    int pipe_frames = 0;
     bool shading = true;
     bool json = false;
     for (int i = 1; i < argc; ++i) {
@@ -96,6 +152,8 @@ int main(int argc, char** argv) {
             size = std::max(8, std::atoi(argv[++i]));
         } else if (a == "--threads" && has_value) {
             threads = std::max(0, std::atoi(argv[++i]));
+        } else if (a == "--pipe-frames" && has_value) {
+            pipe_frames = std::max(2, std::atoi(argv[++i]));
         } else if (a == "--no-shading") {
             shading = false;
         } else if (a == "--json") {
@@ -103,7 +161,8 @@ int main(int argc, char** argv) {
         } else {
             std::fprintf(stderr,
                          "usage: bench_deform_frame [--driver twist|wave|bubble|drag|all] "
-                         "[--frames N] [--size N] [--threads N] [--no-shading] [--json]\n");
+                         "[--frames N] [--size N] [--threads N] [--pipe-frames N] [--no-shading] "
+                         "[--json]\n");
             return 2;
         }
     }
@@ -117,6 +176,9 @@ int main(int argc, char** argv) {
     if (drivers.empty()) {
         std::fprintf(stderr, "bench_deform_frame: unknown driver '%s'\n", driver.c_str());
         return 2;
+    }
+    if (pipe_frames == 0) {
+        pipe_frames = std::max(8, frames);
     }
     set_num_threads(threads);
     const bench::SourceScaleWorkload& w = bench::source_scale_workload();
@@ -181,6 +243,69 @@ int main(int argc, char** argv) {
             timed(render_map, [&] { map_samples = mapped->render(camera, map_image).samples; });
         }
         const double db = psnr(exact_image, map_image);
+        // The same stages pipelined, on the frames after these. Map route: step + build in the
+        // background, set_map + render on the caller. Exact route: step + a copy of the
+        // positions in the background, resample + update + render on the caller (a resample
+        // on one thread would take longer than the rest of the frame).
+        std::array<volume::InverseMap, 2> maps;
+        const Pipelined map_pipe = run_pipelined(
+            frame, frame + pipe_frames - 1,
+            [&](int f, int slot) {
+                driven.step(f);
+                maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
+                                                           w.grid.mesh.positions, body.positions(),
+                                                           {.node_voxels = w.grid.cell_voxels});
+            },
+            [&](int, int slot) {
+                mapped->set_map(maps[static_cast<std::size_t>(slot)]);
+                mapped->render(camera, map_image);
+            });
+        frame += pipe_frames;
+        // The same with the producer on every thread (BackgroundTask's default, the viewer's
+        // former scheme): the step's two lanes in the background.
+        const Pipelined map_all = run_pipelined(
+            frame, frame + pipe_frames - 1,
+            [&](int f, int slot) {
+                driven.step(f);
+                maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
+                                                           w.grid.mesh.positions, body.positions(),
+                                                           {.node_voxels = w.grid.cell_voxels});
+            },
+            [&](int, int slot) {
+                mapped->set_map(maps[static_cast<std::size_t>(slot)]);
+                mapped->render(camera, map_image);
+            },
+            0);
+        frame += pipe_frames;
+        std::array<std::vector<Vec3f>, 2> positions;
+        const Pipelined exact_pipe = run_pipelined(
+            frame, frame + pipe_frames - 1,
+            [&](int f, int slot) {
+                driven.step(f);
+                positions[static_cast<std::size_t>(slot)].assign(body.positions().begin(),
+                                                                 body.positions().end());
+            },
+            [&](int, int slot) {
+                resampler.resample(positions[static_cast<std::size_t>(slot)], target);
+                caster->update(target, nullptr);
+                caster->render(camera, exact_image);
+            });
+        frame += pipe_frames;
+        const Pipelined map_late = run_pipelined(
+            frame, frame + pipe_frames - 1,
+            [&](int f, int slot) {
+                driven.step(f);
+                positions[static_cast<std::size_t>(slot)].assign(body.positions().begin(),
+                                                                 body.positions().end());
+            },
+            [&](int, int slot) {
+                map.build(source, source, w.grid.mesh.tets, w.grid.mesh.positions,
+                          positions[static_cast<std::size_t>(slot)],
+                          {.node_voxels = w.grid.cell_voxels});
+                mapped->set_map(map);
+                mapped->render(camera, map_image);
+            });
+        frame += pipe_frames;
         const Stage* stages[] = {&step,  &resample, &update,    &render_exact,
                                  &build, &set_map,  &render_map};
         const double exact_wall =
@@ -204,8 +329,19 @@ int main(int argc, char** argv) {
             }
             std::printf(
                 "}, \"exact_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}, "
-                "\"map_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}}",
+                "\"map_frame\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}",
                 exact_wall, exact_cpu, map_wall, map_cpu);
+            for (const auto& [key, p] :
+                 {std::pair{"map_pipelined", &map_pipe}, std::pair{"exact_pipelined", &exact_pipe},
+                  std::pair{"map_late_pipelined", &map_late},
+                  std::pair{"map_all_threads_pipelined", &map_all}}) {
+                std::printf(
+                    ", \"%s\": {\"frames\": %d, \"period_wall_ms\": %.2f, \"period_cpu_ms\": %.2f, "
+                    "\"fps\": %.2f, \"produce_wall_ms\": %.2f, \"consume_wall_ms\": %.2f}",
+                    key, p->frames, p->period_wall, p->period_cpu, 1e3 / p->period_wall,
+                    p->produce_wall, p->consume_wall);
+            }
+            std::printf("}");
         } else {
             std::printf("\n%s: %d timed frames after 24, %lld inverted tets\n",
                         names[static_cast<std::size_t>(d)].c_str(), frames,
@@ -218,6 +354,25 @@ int main(int argc, char** argv) {
                         exact_cpu, 1e3 / exact_wall);
             std::printf("  %-36s %10.1f %10.1f  (%.1f fps)\n", "whole frame, map", map_wall,
                         map_cpu, 1e3 / map_wall);
+            struct Row {
+                const char* label;
+                const Pipelined* p;
+                const char* produce;
+                const char* consume;
+            };
+            for (const Row& row :
+                 {Row{"pipelined period, exact", &exact_pipe, "step", "resample + update + render"},
+                  Row{"pipelined period, map", &map_pipe, "step + build", "set_map + render"},
+                  Row{"pipelined, map built late", &map_late, "step", "build + set_map + render"},
+                  Row{"pipelined, map, producer all threads", &map_all, "step + build",
+                      "set_map + render"}}) {
+                std::printf(
+                    "  %-36s %10.1f %10.1f  (%.1f fps; %d frames; overlapped: %s %.1f, "
+                    "%s %.1f)\n",
+                    row.label, row.p->period_wall, row.p->period_cpu, 1e3 / row.p->period_wall,
+                    row.p->frames, row.produce, row.p->produce_wall, row.consume,
+                    row.p->consume_wall);
+            }
             std::printf(
                 "  samples: exact %lld, map %lld; map cells visible %lld of %lld; PSNR "
                 "map vs exact %.2f dB\n",

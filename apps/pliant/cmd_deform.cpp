@@ -3,7 +3,7 @@
 //               [--damping D] [--frames N] [--fps F] -o OUT [--render OUT.mp4] [--tf …]
 //               [--size WxH] [--camera AZ,EL,DIST] [--step S] [--max-memory MIB]
 //               [--mesh-out MESH.vtu] [--checkpoint-every N] [--resume] [--json]
-//               [--shading] [--resample exact|map]
+//               [--shading] [--resample exact|map] [--no-pipeline]
 //
 // The deformable-volume pipeline of Park & Kye 2022 on a volume file: a tet grid over it
 // (pbd::build_tet_grid: cells of B³ voxels, 5 tets each, only cells near visible voxels unless
@@ -12,7 +12,9 @@
 // (volume::Resampler) and written to OUT (any writable volume format, io/volume_io.hpp). With
 // --render, every frame is resampled and ray-cast (render::RayCaster) into an MP4 at --fps.
 // --resample map renders the frames through their inverse map instead (render::MappedRayCaster:
-// no resample per frame; OUT is still the exact resample); --shading shades the frames.
+// no resample per frame; OUT is still the exact resample); --shading shades the frames. With
+// --render the next frame is stepped while the current one renders (pipeline/frame_pipeline.hpp;
+// the same bytes); --no-pipeline runs the stages one after the other.
 // VOLUME may be a DICOM folder (--series UID picks a series, default the largest); an oblique
 // volume is resampled to an axis-aligned grid first (one info line on stderr).
 //
@@ -97,6 +99,7 @@ struct DeformCommandOptions {
     bool resume = false;
     bool shading = false;
     std::string resample = "exact";
+    bool no_pipeline = false;
 
     // The driver-specific options the user gave, for the usage check.
     std::vector<std::pair<const CLI::Option*, std::vector<std::string>>> driver_only;
@@ -197,6 +200,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.progress = frame_progress(stderr_is_terminal() && !global.json);
     run.checkpoint_every = options.checkpoint_every;
     run.resume = options.resume;
+    run.pipelined = !options.no_pipeline;
     const nlohmann::ordered_json result = pipeline::run_deform(source, tf ? &*tf : nullptr, run);
 
     if (global.json) {
@@ -318,6 +322,9 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "Video: render each frame from its exact resample (exact, default) or "
                     "through its inverse map without resampling (map)")
         ->check(CLI::IsMember({"exact", "map"}));
+    cmd->add_flag("--no-pipeline", options->no_pipeline,
+                  "Video: step each frame after the last one rendered, not while it renders "
+                  "(the same output)");
     add_max_memory_option(*cmd, options->max_memory_mib, "a volume and tet grid that need");
     cmd->footer("Global options --threads N and --json (see pliant --help) apply here too.");
     cmd->add_option("--checkpoint-every", options->checkpoint_every,

@@ -303,8 +303,23 @@ void VolumeSession::set_drag_radius(double box_units) {
 }
 
 void VolumeSession::step() {
-    start_step();
-    finish_step(true);
+    require_deformable("stepping");
+    settle();
+    // On the caller with every thread: the same frame as start_step's (deterministic stages).
+    run_frame(1 - m_front);
+    m_front = 1 - m_front;
+    publish();
+    apply_pending_drag();
+}
+
+void VolumeSession::run_frame(int buffer) {
+    pbd::SoftBody& body = m_deformable->body();
+    body.step(1.0 / m_options.fps);
+    const pbd::SoftBodyStats stats = body.stats();
+    m_solver_stats.step_ms = stats.step_ms;
+    m_solver_stats.volume_ratio = stats.volume_ratio;
+    m_solver_stats.inverted_tets = stats.inverted_tets;
+    fill(buffer);
 }
 
 bool VolumeSession::start_step() {
@@ -313,17 +328,8 @@ bool VolumeSession::start_step() {
         return false;
     }
     apply_pending_drag();
-    const double dt = 1.0 / m_options.fps;
     const int back = 1 - m_front;
-    m_task.start([this, dt, back] {
-        pbd::SoftBody& body = m_deformable->body();
-        body.step(dt);
-        const pbd::SoftBodyStats stats = body.stats();
-        m_solver_stats.step_ms = stats.step_ms;
-        m_solver_stats.volume_ratio = stats.volume_ratio;
-        m_solver_stats.inverted_tets = stats.inverted_tets;
-        fill(back);
-    });
+    m_task.start([this, back] { run_frame(back); });
     return true;
 }
 

@@ -115,11 +115,13 @@ public:
     void set_driver(const DriverSettings& driver);
     void set_stiffness(double stiffness);
     void set_drag_radius(double box_units);
-    // One frame: 1 / fps seconds of the soft body, then resampling. step() = start_step() +
-    // finish_step(true). In the background (core/parallel_task.hpp): start_step returns at once
-    // (false, doing nothing, while a frame is in flight) and finish_step publishes the frame when
-    // it is done (block: waits) — the resampled volume is double-buffered, so the current one
-    // can be ray-cast meanwhile. Rethrows what the frame threw.
+    // One frame: 1 / fps seconds of the soft body, then resampling. step(): on the caller, with
+    // every thread (after a frame in flight). In the background (core/parallel_task.hpp, on one
+    // thread: the step's one-thread path, which never waits for a second thread, and the other
+    // threads free for render()): start_step returns at once (false, doing nothing, while a
+    // frame is in flight) and finish_step publishes the frame when it is done (block: waits) —
+    // the resampled volume is double-buffered, so the current one can be ray-cast meanwhile.
+    // Both give the same frames bit for bit. Rethrows what the frame threw.
     void step();
     bool start_step();
     bool finish_step(bool block);
@@ -155,6 +157,8 @@ private:
     // Waits for a frame in flight and publishes it.
     void settle();
     void publish();
+    // The soft body's step and fill(buffer), with the frame's stats (start_step's work).
+    void run_frame(int buffer);
     void resample_front();  // the body as it is, into the shown buffer, published
     void apply_pending_drag();
     void require_deformable(const char* what) const;
@@ -194,7 +198,7 @@ private:
     double m_drag_radius = 0.0;  // world units
     bool m_drag_changed = false;
     unsigned long long m_generation = 0;
-    BackgroundTask m_task;  // last: destroyed first, waiting for a frame in flight
+    BackgroundTask m_task{1};  // last: destroyed first, waiting for a frame in flight
 };
 
 }  // namespace pliant::viewer

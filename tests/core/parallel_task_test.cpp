@@ -91,6 +91,80 @@ TEST_F(BackgroundTaskTest, ParallelLoopsInsideAreDeterministic) {
     }
 }
 
+// BackgroundTask(1): the work sees one thread (its parallel loops run inline), runs while the
+// caller goes on, and the caller's own parallel loops still see the thread limit.
+TEST_F(BackgroundTaskTest, ConcurrencyOneRunsTheWorkOnOneThread) {
+    set_num_threads(2);
+    BackgroundTask task(1);
+    std::atomic<bool> go{false};
+    std::atomic<bool> running{false};
+    std::atomic<bool> saw_go{false};
+    int inside = 0;
+    bool inline_loop = true;
+    task.start([&] {
+        inside = num_threads();
+        const std::thread::id me = std::this_thread::get_id();
+        parallel_for(
+            64,
+            [&](std::int64_t) { inline_loop = inline_loop && std::this_thread::get_id() == me; },
+            1);
+        running = true;
+        const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+        while (!go.load() && std::chrono::steady_clock::now() < limit) {
+            std::this_thread::yield();
+        }
+        saw_go = go.load();
+    });
+    EXPECT_EQ(num_threads(), 2);
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (!running.load() && std::chrono::steady_clock::now() < limit) {
+        std::this_thread::yield();
+    }
+    EXPECT_TRUE(running.load());
+    EXPECT_FALSE(task.is_done());
+    go = true;
+    task.wait();
+    EXPECT_TRUE(saw_go.load());
+    EXPECT_EQ(inside, 1);
+    EXPECT_TRUE(inline_loop);
+    // Reusable, and the default concurrency still sees the limit.
+    task.start([&] { inside = num_threads(); });
+    task.wait();
+    EXPECT_EQ(inside, 1);
+    BackgroundTask all;
+    all.start([&] { inside = num_threads(); });
+    all.wait();
+    EXPECT_EQ(inside, 2);
+    EXPECT_THROW(BackgroundTask(-1), InvalidInput);
+}
+
+// A one-thread work's parallel reductions give the bits of the caller's.
+TEST_F(BackgroundTaskTest, ConcurrencyOneIsDeterministic) {
+    set_num_threads(2);
+    std::vector<double> values(100000);
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        values[i] = std::sin(static_cast<double>(i)) * 1e3;
+    }
+    const auto sum = [&] {
+        return parallel_reduce(
+            static_cast<std::int64_t>(values.size()), 0.0,
+            [&](std::int64_t b, std::int64_t e) {
+                double s = 0.0;
+                for (std::int64_t i = b; i < e; ++i) {
+                    s += values[static_cast<std::size_t>(i)];
+                }
+                return s;
+            },
+            [](double a, double b) { return a + b; }, 1000);
+    };
+    BackgroundTask task(1);
+    double there = 0.0;
+    task.start([&] { there = sum(); });
+    const double here = sum();  // concurrently, on the caller's threads
+    task.wait();
+    EXPECT_EQ(std::memcmp(&here, &there, sizeof(double)), 0);
+}
+
 TEST_F(BackgroundTaskTest, ExceptionsAndMisuse) {
     set_num_threads(2);
     BackgroundTask task;

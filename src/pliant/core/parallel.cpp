@@ -4,6 +4,7 @@
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -13,6 +14,11 @@
 #include "pliant/core/error.hpp"
 
 namespace pliant {
+namespace detail {
+// The concurrency of the BackgroundTask whose work this thread runs (0: none; parallel_task.cpp).
+thread_local int t_concurrency_cap = 0;
+}  // namespace detail
+
 namespace {
 
 struct ThreadLimit {
@@ -46,12 +52,13 @@ void set_num_threads(int n) {
 }
 
 int num_threads() {
-    const int limit = thread_limit().limit.load();
-    if (limit > 0) {
-        return limit;
+    int limit = thread_limit().limit.load();
+    if (limit <= 0) {
+        limit = static_cast<int>(
+            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
     }
-    return static_cast<int>(
-        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    const int cap = detail::t_concurrency_cap;
+    return cap > 0 ? std::max(1, std::min(limit, cap)) : limit;
 }
 
 namespace detail {

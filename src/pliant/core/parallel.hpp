@@ -18,7 +18,9 @@ namespace pliant {
 // Limits every later parallel call in the process to n threads (n ≥ 1), or to all hardware
 // threads (n = 0). Not to be called while a parallel loop runs.
 void set_num_threads(int n);
-// The current limit (≥ 1).
+// The threads a parallel call made here may use (≥ 1): the limit, or less inside a
+// BackgroundTask of lower concurrency (core/parallel_task.hpp), whose work sees its own
+// concurrency — 1 there means every parallel call runs inline on the calling thread.
 int num_threads();
 // Hardware threads available to this process.
 int hardware_threads();

@@ -1,9 +1,11 @@
 #include "pliant/core/parallel_task.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <string>
 #include <utility>
 
 #include "pliant/core/error.hpp"
@@ -18,7 +20,12 @@
 
 namespace pliant {
 
+namespace detail {
+extern thread_local int t_concurrency_cap;  // parallel.cpp
+}  // namespace detail
+
 struct BackgroundTask::State {
+    int concurrency = 0;  // 0: the thread limit
     std::mutex mutex;
     std::condition_variable finished;
     std::atomic<bool> done{true};
@@ -38,6 +45,14 @@ struct BackgroundTask::State {
 
 BackgroundTask::BackgroundTask() : m_state(std::make_unique<State>()) {}
 
+BackgroundTask::BackgroundTask(int concurrency) : m_state(std::make_unique<State>()) {
+    if (concurrency < 0) {
+        throw InvalidInput("BackgroundTask: concurrency (" + std::to_string(concurrency) +
+                           ") must be >= 0");
+    }
+    m_state->concurrency = concurrency;
+}
+
 BackgroundTask::~BackgroundTask() {
     try {
         wait();
@@ -55,11 +70,15 @@ void BackgroundTask::start(std::function<void()> work) {
     s.error = nullptr;
     s.done.store(false);
     auto run = [&s, work = std::move(work)] {
+        // The work's thread answers num_threads() with the task's concurrency.
+        const int outer_cap = detail::t_concurrency_cap;
+        detail::t_concurrency_cap = s.concurrency;
         try {
             work();
         } catch (...) {
             s.error = std::current_exception();
         }
+        detail::t_concurrency_cap = outer_cap;
         {
             const std::lock_guard lock(s.mutex);
             s.done.store(true);
@@ -73,8 +92,12 @@ void BackgroundTask::start(std::function<void()> work) {
 #if defined(PLIANT_PARALLEL_STD_THREADS)
     s.thread = std::thread(std::move(run));
 #else
-    if (!s.arena) {
-        s.arena = std::make_unique<tbb::task_arena>(num_threads(), 1);
+    const int threads = num_threads();
+    const int concurrency = s.concurrency > 0 ? std::min(s.concurrency, threads) : threads;
+    if (!s.arena || s.arena->max_concurrency() != concurrency) {
+        // All threads: a slot kept for the caller, who helps inside wait(). Fewer: every slot
+        // for workers, the caller's wait() only blocks (it would add a thread).
+        s.arena = std::make_unique<tbb::task_arena>(concurrency, s.concurrency > 0 ? 0 : 1);
     }
     s.arena->execute([&s, &run] { s.group.run(std::move(run)); });
 #endif
@@ -103,6 +126,11 @@ void BackgroundTask::wait() {
     }
 #else
     if (s.arena) {
+        if (s.concurrency > 0) {
+            // No slot for the caller: block until the work has ended, then join the group.
+            std::unique_lock lock(s.mutex);
+            s.finished.wait(lock, [&s] { return s.done.load(); });
+        }
         s.arena->execute([&s] { s.group.wait(); });  // helps with the work's parallel loops
     }
 #endif

@@ -10,9 +10,17 @@
 //   task.wait();                                       // rethrows what the work threw
 //
 // With a thread limit of 1 (set_num_threads(1)) there is no second thread: start() runs the work
-// to completion before it returns. Results of the work are unaffected by where it runs (fixed
-// chunks, core/parallel.hpp). One task at a time per object; start, wait and is_done are called
-// from one thread; the destructor waits.
+// to completion before it returns.
+//
+// Concurrency: by default the work may use every thread of the limit (the caller helps only
+// inside wait()). BackgroundTask(1) runs the work on one thread: num_threads() answers 1 inside
+// it, so its parallel loops run inline, on their one-thread paths, and never wait for a second
+// thread; the other threads stay free for the caller's parallel loops (the frame pipeline,
+// pipeline/frame_pipeline.hpp: the soft body steps on one thread while the last frame renders on
+// the rest, and the stepping thread joins the render when its work ends). With concurrency
+// k > 1 the work's parallel loops use at most k threads. Results of the work are unaffected by
+// where it runs (fixed chunks, core/parallel.hpp). One task at a time per object; start, wait and
+// is_done are called from one thread; the destructor waits.
 #pragma once
 
 #include <functional>
@@ -23,6 +31,8 @@ namespace pliant {
 class BackgroundTask {
 public:
     BackgroundTask();
+    // concurrency ≥ 1: the most threads the work uses; 0: the thread limit (the default).
+    explicit BackgroundTask(int concurrency);
     ~BackgroundTask();
     BackgroundTask(const BackgroundTask&) = delete;
     BackgroundTask& operator=(const BackgroundTask&) = delete;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -15,6 +16,7 @@
 #include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/log.hpp"
+#include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
 #include "pliant/io/atomic_file.hpp"
 #include "pliant/io/checkpoint.hpp"
@@ -24,6 +26,7 @@
 #include "pliant/io/volume_io.hpp"
 #include "pliant/io/vtu.hpp"
 #include "pliant/pipeline/deformable_volume.hpp"
+#include "pliant/pipeline/frame_pipeline.hpp"
 #include "pliant/pipeline/memory_budget.hpp"
 #include "pliant/render/camera.hpp"
 #include "pliant/render/mapped_raycast.hpp"
@@ -154,7 +157,6 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     const pbd::TetGrid* grid = deformable.grid();
     body.add_driver(options.driver);
     const double dt = 1.0 / options.fps;
-    volume::Volume target = deformable.target_like();
     std::optional<io::VideoWriter> video;
     if (!options.video.empty()) {
         video.emplace(options.video, options.size[0], options.size[1], options.fps);
@@ -217,39 +219,68 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     render::Image image;
     std::optional<render::RayCaster> caster;
     std::optional<render::MappedRayCaster> mapped;
-    volume::InverseMap map;
     RunningMean map_ms;
-    for (int frame = totals.frame + 1; frame <= options.frames; ++frame) {
-        const Stopwatch frame_clock;
+
+    // The frames run through run_frame_pipeline (frame_pipeline.hpp): produce = the step, a copy
+    // of the positions and (map route) the frame's inverse map into a slot; consume = the
+    // resample (exact route, and the output volume at the last frame) from the slot's positions,
+    // set_map or the caster's update, render, write. The exact route resamples on the consuming
+    // side: on the producer's one thread it would take longer than all the rest. Pipelined only
+    // when every frame renders and no checkpoint is saved (a checkpoint is the body at the frame
+    // just consumed, which the next frame's step has already moved on).
+    const bool every_frame = video.has_value() || static_cast<bool>(options.frame_sink);
+    const bool pipelined = options.pipelined && every_frame && !checkpoints;
+    const bool map_route = options.resample == ResampleMode::map;
+    const auto renders = [&](int frame) {
+        return every_frame || (frame == options.frames && !options.still.empty());
+    };
+    volume::Volume target = deformable.target_like();  // the last resample
+    struct Slot {
+        pbd::SoftBodyStats stats;
+        std::vector<Vec3f> positions;  // the body's, after the frame's step
+        volume::InverseMap map;
+        double build_ms = 0.0;  // the inverse map
+    };
+    std::array<Slot, 2> slots;
+    const auto produce = [&](int frame, int slot) {
+        Slot& s = slots[static_cast<std::size_t>(slot)];
         body.step(dt);
-        stats = body.stats();
+        s.stats = body.stats();
+        s.positions.assign(body.positions().begin(), body.positions().end());
+        s.build_ms = 0.0;
+        if (renders(frame) && map_route) {
+            // The frame through its inverse map: no resample, the source prepared once.
+            const Stopwatch clock;
+            deformable.build_map(s.positions, s.map);
+            s.build_ms = clock.elapsed_ms();
+        }
+    };
+    const Stopwatch run_clock;
+    double last_frame_end = 0.0;
+    int frames_run = 0;
+    const auto consume = [&](int frame, int slot) {
+        const Slot& s = slots[static_cast<std::size_t>(slot)];
+        stats = s.stats;
         substep_ms.add(stats.ms_per_substep);
         step_ms.add(stats.step_ms);
         min_ratio = std::min(min_ratio, stats.volume_ratio);
         max_ratio = std::max(max_ratio, stats.volume_ratio);
         max_inverted = std::max(max_inverted, stats.inverted_tets);
-        const bool last = frame == options.frames;
-        const bool renders = video || (last && !options.still.empty());
-        if (renders && options.resample == ResampleMode::map) {
-            // The frame through its inverse map: no resample, the source prepared once.
+        if (renders(frame) && map_route) {
             const Stopwatch clock;
-            deformable.build_map(map);
             if (!mapped) {
                 mapped.emplace(source, tf, source, ray_options);
             }
-            mapped->set_map(map);
-            map_ms.add(clock.elapsed_ms());
+            mapped->set_map(s.map);
+            map_ms.add(s.build_ms + clock.elapsed_ms());
             render_ms.add(mapped->render(camera, image).ms);
-            if (video) {
-                video->write(image);
-            }
         }
-        if (last || (video && options.resample == ResampleMode::exact)) {
+        if (frame == options.frames || (every_frame && !map_route)) {
             const Stopwatch clock;
-            resampled = deformable.resample(target);
+            resampled = deformable.resample(s.positions, target);
             resample_ms.add(clock.elapsed_ms());
         }
-        if (renders && options.resample == ResampleMode::exact) {
+        if (renders(frame) && !map_route) {
             // One caster for the run: later frames have the same size and kind, so update()
             // reuses its arrays instead of faulting in a new float copy every frame.
             if (caster) {
@@ -258,11 +289,20 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
                 caster.emplace(target, tf, ray_options);
             }
             render_ms.add(caster->render(camera, image).ms + caster->prepare_ms());
+        }
+        if (renders(frame)) {
             if (video) {
                 video->write(image);
             }
+            if (options.frame_sink) {
+                options.frame_sink(frame, image);
+            }
         }
-        frame_ms.add(frame_clock.elapsed_ms());
+        // A frame's wall time: since the previous frame was done (pipelined: the period).
+        const double now = run_clock.elapsed_ms();
+        frame_ms.add(now - last_frame_end);
+        last_frame_end = now;
+        ++frames_run;
         if (checkpoints && frame % options.checkpoint_every == 0 && frame < options.frames) {
             totals.frame = frame;
             ByteWriter w;
@@ -277,7 +317,12 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         if (options.progress) {
             options.progress(frame, options.frames, frame_ms.mean());
         }
-    }
+    };
+    FramePipelineOptions pipeline_options;
+    pipeline_options.pipelined = pipelined;
+    pipeline_options.producer_threads = std::max(1, num_threads() / 2);
+    run_frame_pipeline(totals.frame + 1, options.frames, produce, consume, pipeline_options);
+    const double frame_period_ms = frames_run > 0 ? run_clock.elapsed_ms() / frames_run : 0.0;
     io::write_volume(options.out, target);
     if (!options.still.empty()) {
         io::write_png(options.still, image);
@@ -319,6 +364,8 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             {"map_ms", map_ms.mean()},
             {"render_ms", render_ms.mean()},
             {"ms_per_frame", frame_ms.mean()},
+            {"frame_period_ms", frame_period_ms},
+            {"pipelined", pipelined},
             {"volume_ratio", stats.volume_ratio},
             {"inverted_tets", stats.inverted_tets},
             {"max_displacement", max_displacement},

@@ -21,6 +21,7 @@
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "pliant/pbd/drivers.hpp"
@@ -28,6 +29,7 @@
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/pipeline/progress.hpp"
+#include "pliant/render/image.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "pliant/volume/volume.hpp"
 
@@ -60,6 +62,13 @@ struct DeformRunOptions {
     std::uint64_t max_memory_bytes = 0;
     int checkpoint_every = 12;  // frames between checkpoints; 0: none
     bool resume = false;        // continue from checkpoint_path(out)
+    // Every frame rendered (as the video gets it; set: every frame is rendered, also without a
+    // video). For tests and callers that show frames.
+    std::function<void(int frame, const render::Image& image)> frame_sink;
+    // When every frame renders and no checkpoint is saved: step and map (or resample) frame f + 1
+    // on one thread while frame f renders on the others (frame_pipeline.hpp). Every output is
+    // bitwise the sequential loop's; the JSON's ms_per_frame is then the period.
+    bool pipelined = true;
 };
 
 // Where a run writing the volume `out` keeps its checkpoint: OUT.checkpoint.bin beside it.

@@ -50,7 +50,12 @@ volume::Volume DeformableVolume::target_like() const {
 }
 
 volume::InverseMapStats DeformableVolume::build_map(volume::InverseMap& map) const {
-    return map.build(*m_source, *m_source, rest().tets, rest().positions, m_body->positions(),
+    return build_map(m_body->positions(), map);
+}
+
+volume::InverseMapStats DeformableVolume::build_map(std::span<const Vec3f> positions,
+                                                    volume::InverseMap& map) const {
+    return map.build(*m_source, *m_source, rest().tets, rest().positions, positions,
                      {.node_voxels = m_grid ? m_grid->cell_voxels : 4});
 }
 
@@ -69,7 +74,12 @@ const char* name(ResampleMode mode) {
 }
 
 volume::ResampleStats DeformableVolume::resample(volume::Volume& target) const {
-    return m_resampler->resample(m_body->positions(), target);
+    return resample(m_body->positions(), target);
+}
+
+volume::ResampleStats DeformableVolume::resample(std::span<const Vec3f> positions,
+                                                 volume::Volume& target) const {
+    return m_resampler->resample(positions, target);
 }
 
 }  // namespace pliant::pipeline

@@ -15,6 +15,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "pliant/geometry/tet_mesh.hpp"
@@ -65,10 +66,14 @@ public:
     volume::Volume target_like() const;
     // The body's current positions resampled into `target` (volume::Resampler::resample).
     volume::ResampleStats resample(volume::Volume& target) const;
+    // The same for positions of the body's vertices saved earlier (#V, world units).
+    volume::ResampleStats resample(std::span<const Vec3f> positions, volume::Volume& target) const;
     // The body's current positions as an inverse map over the source's frame (target_like()'s),
     // one node every cell_voxels voxels of the grid (4 for a TetGen mesh): what
     // render::MappedRayCaster(source, tf, source, …) renders.
     volume::InverseMapStats build_map(volume::InverseMap& map) const;
+    volume::InverseMapStats build_map(std::span<const Vec3f> positions,
+                                      volume::InverseMap& map) const;
 
 private:
     const volume::Volume* m_source;
