@@ -10,9 +10,10 @@
 // --full-box; or a TetGen mesh with --mesh), deformed by the XPBD soft body (pbd::SoftBody) under
 // one driver for N frames of 1/fps seconds, then resampled back into a grid like the source
 // (volume::Resampler) and written to OUT (any writable volume format, io/volume_io.hpp). With
-// --render, every frame is resampled and ray-cast (render::RayCaster) into an MP4 at --fps.
-// --resample map renders the frames through their inverse map instead (render::MappedRayCaster:
-// no resample per frame; OUT is still the exact resample); --shading shades the frames. With
+// --render, every frame is ray-cast into an MP4 at --fps through its inverse map
+// (render::MappedRayCaster: no resample per frame), or with --resample exact resampled and
+// ray-cast (render::RayCaster); OUT is the exact resample either way. --shading shades the frames.
+// With
 // --render the next frame is stepped while the current one renders (pipeline/frame_pipeline.hpp;
 // the same bytes); --no-pipeline runs the stages one after the other.
 // VOLUME may be a DICOM folder (--series UID picks a series, default the largest); an oblique
@@ -98,7 +99,7 @@ struct DeformCommandOptions {
     int checkpoint_every = pipeline::DeformRunOptions{}.checkpoint_every;
     bool resume = false;
     bool shading = false;
-    std::string resample = "exact";
+    std::string resample = "map";
     bool no_pipeline = false;
 
     // The driver-specific options the user gave, for the usage check.
@@ -319,8 +320,8 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
         ->check(finite_in_range(-1e6, 1e6));
     cmd->add_flag("--shading", options->shading, "Video: gradient (headlight) shading");
     cmd->add_option("--resample", options->resample,
-                    "Video: render each frame from its exact resample (exact, default) or "
-                    "through its inverse map without resampling (map)")
+                    "Video: render each frame through its inverse map without resampling (map, "
+                    "default) or from its exact resample (exact)")
         ->check(CLI::IsMember({"exact", "map"}));
     cmd->add_flag("--no-pipeline", options->no_pipeline,
                   "Video: step each frame after the last one rendered, not while it renders "

@@ -13,8 +13,8 @@
 // obstacles shaded like the preview; the left button grabs a cloth vertex and drags it. `volume`
 // shows the library's ray caster live, with transfer function presets, opacity scale, the
 // cleaning threshold and a clipping plane; --deform adds the tet grid + XPBD soft body +
-// resampling of `pliant deform`, drivers and mouse drag (--resample map: each frame ray-cast
-// through its inverse map instead of resampled, as `pliant deform --resample map`). An oblique
+// rendering of `pliant deform`, drivers and mouse drag (each frame ray-cast through its inverse
+// map, or with --resample exact resampled, as `pliant deform --resample`). An oblique
 // volume is shown as it lies (as `pliant render`); --axis-aligned, and --deform (as `pliant
 // deform`), resample it onto an axis-aligned grid first.
 //   --camera AZ,EL,DIST  azimuth, elevation (degrees, render::frame_box's convention) and distance
@@ -60,7 +60,7 @@ struct ViewCommandOptions {
     std::string screenshot;
     std::array<double, 6> clip{};
     std::string driver = "none";
-    std::string resample = "exact";
+    std::string resample = "map";
     bool no_ui = false;
 };
 
@@ -257,8 +257,8 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
     vol->add_option("--driver", volume_o->driver, "Initial driver (with --deform)")
         ->check(CLI::IsMember({"none", "wave", "twist", "bubble"}));
     vol->add_option("--resample", volume_o->resample,
-                    "Show each frame from its exact resample (exact, default) or through its "
-                    "inverse map without resampling (map; with --deform)")
+                    "Show each frame through its inverse map without resampling (map, default) "
+                    "or from its exact resample (exact; with --deform)")
         ->check(CLI::IsMember({"exact", "map"}));
     vol->add_option("--stiffness", s.body.stiffness, "PBD stiffness in (0, 1] (default 1)")
         ->check(finite_in_range(1e-6, 1.0));

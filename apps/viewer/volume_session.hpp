@@ -79,7 +79,7 @@ struct VolumeSessionOptions {
     DriverSettings driver{};
     double fps = 24.0;          // a frame simulates 1 / fps seconds
     double drag_radius = 0.05;  // box units (fraction of the volume's largest side)
-    pipeline::ResampleMode resample = pipeline::ResampleMode::exact;  // how frames are shown
+    pipeline::ResampleMode resample = pipeline::ResampleMode::map;  // how frames are shown
 };
 
 struct VolumeFrameStats {

@@ -52,9 +52,11 @@ struct DeformRunOptions {
     std::array<int, 2> size{512, 512};
     std::array<double, 3> camera{30.0, 20.0, 0.0};  // azimuth, elevation (degrees), distance
     bool shading = false;
-    // How rendered frames (video, still) are made: resampled (exact) or through the inverse map
-    // (deformable_volume.hpp). The output volume is always the exact resample.
-    ResampleMode resample = ResampleMode::exact;
+    // How rendered frames (video, still) are made: through the inverse map (the default: one
+    // interpolation, closer to a converged resample than the exact route, and faster at 256³;
+    // deformable_volume.hpp) or resampled (exact). The output volume is always the exact
+    // resample.
+    ResampleMode resample = ResampleMode::map;
     double step = 0.0;    // ray-casting step, world units (0: half the smallest spacing)
     ProgressFn progress;  // after every frame (progress.hpp)
     // The most memory the run may need (bytes; memory_budget.hpp's deform_need_bytes, checked
