@@ -241,7 +241,7 @@ struct NodePass {
     }
 
     // The maps (frames and rest parts) of the holders of nodes q[0..n) (n ≤ FRAME_BATCH),
-    // appended to list (slot[q]: the index).
+    // appended to list (at slot[q], layer_slots()).
     void flush(const std::int64_t q[FRAME_BATCH], int n, std::vector<TetMap>& list) const {
         FrameBatch f;
         for (int i = 0; i < FRAME_BATCH; ++i) {
@@ -270,27 +270,46 @@ struct NodePass {
             for (int k = 0; k < 3; ++k) {
                 m.dr[k] = r[k] - r[3];
             }
-            slot[q[i]] = static_cast<std::int32_t>(list.size());
             list.push_back(m);
         }
     }
 
-    // The maps of layer z's held nodes next to the shell (a node not held in their 3 × 3 × 3),
-    // in node order, into list (replacing its contents; slot[q]: the index).
-    void layer_maps(std::int64_t z, std::vector<TetMap>& list) const {
+    // Whether node i of layer z (i = x + nodes[0] · y) is held and next to the shell (a node not
+    // held in its 3 × 3 × 3).
+    bool next_to_shell(std::int64_t z, std::int64_t i) const {
         const std::int64_t nxy = nodes[0] * nodes[1];
         const std::uint8_t* layer = near_xy + nxy * z;
         const std::uint8_t* layer_below = z > 0 ? layer - nxy : layer;
         const std::uint8_t* layer_above = z + 1 < nodes[2] ? layer + nxy : layer;
+        return holder[nxy * z + i] >= 0 && (layer[i] & layer_below[i] & layer_above[i] & 2) == 0;
+    }
+
+    // slot[q] for layer z's held nodes next to the shell: their index in node order, the index
+    // of their map in layer_maps()' list. Written once per layer before any list is built, so
+    // that the chunks of the shell pass, which build the lists of the layers beside them too,
+    // only read it.
+    void layer_slots(std::int64_t z) const {
+        const std::int64_t nxy = nodes[0] * nodes[1];
+        std::int32_t count = 0;
+        for (std::int64_t i = 0; i < nxy; ++i) {
+            if (next_to_shell(z, i)) {
+                slot[nxy * z + i] = count++;
+            }
+        }
+    }
+
+    // The maps of layer z's held nodes next to the shell, in node order, into list (replacing
+    // its contents; slot[q]: the index, layer_slots()).
+    void layer_maps(std::int64_t z, std::vector<TetMap>& list) const {
+        const std::int64_t nxy = nodes[0] * nodes[1];
         list.clear();
         std::int64_t q[FRAME_BATCH];
         int n = 0;
         for (std::int64_t i = 0; i < nxy; ++i) {
-            const std::int64_t p = nxy * z + i;
-            if (holder[p] < 0 || (layer[i] & layer_below[i] & layer_above[i] & 2) != 0) {
+            if (!next_to_shell(z, i)) {
                 continue;
             }
-            q[n++] = p;
+            q[n++] = nxy * z + i;
             if (n == FRAME_BATCH) {
                 flush(q, n, list);
                 n = 0;
@@ -591,6 +610,8 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     NodePass with_slots = pass;
     with_slots.slot = m_slot.data();
     std::vector<std::int64_t> extrapolated(static_cast<std::size_t>(nz), 0);
+    parallel_for(
+        nz, [&](std::int64_t z) { with_slots.layer_slots(z); }, 1);
     parallel_for(
         num_chunks,
         [&](std::int64_t chunk) {
