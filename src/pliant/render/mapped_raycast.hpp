@@ -127,7 +127,10 @@ private:
                                    const float lo[3], const float hi[3]) const;
 
     RayCastOptions m_options;
-    std::unique_ptr<RayCaster> m_source;  // the source's floats and lookup table
+    // The source's floats and lookup table (an rgba8 source: one voxel, for the options' fields).
+    std::unique_ptr<RayCaster> m_source;
+    // An rgba8 source's bytes (4 per voxel), read by the march in place of a float copy.
+    std::vector<std::uint8_t> m_rgba8;
     volume::Dims m_source_dims{0, 0, 0};
     volume::Dims m_target_dims{0, 0, 0};
     Vec3d m_target_spacing, m_target_origin;
