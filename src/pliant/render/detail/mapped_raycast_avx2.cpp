@@ -133,14 +133,13 @@ PLIANT_AVX2_INLINE void source_gradient8(const MappedKernel& m, const Grid8& src
 // is the binary fraction 0.cccc… (the byte c repeated), so with X = c · 0x01010101 (below 2^32)
 // its correctly rounded float is that of (X + c / 255) / 2^32. For c ≥ 1, X ≥ 2^24: the floats
 // near X are integers, so are their midpoints, and X + 1/2 rounds as X + c / 255 does (both lie
-// in (X, X + 1), the same for c = 255 where X + 1 = 2^32 is a float). (c · 0x010101) · 256 = X − c
-// is exact, (c + min(c, 1/2)) is c + 1/2 (0 for c = 0), one rounded sum, then the exact scaling
-// by 2^−32. The AVX2 tests compare it with the division for all 256 bytes.
+// in (X, X + 1); for c = 255, X + 1 = 2^32 is a float). X − c = c · 16843008 (0x01010100) is
+// exact in float (24 significant bits), c + min(c, 1/2) is c + 1/2 (0 for c = 0): one rounded
+// sum, then the exact scaling by 2^−32. Its test compares it with the division for all 256 bytes
+// (unit8_table_avx2()).
 PLIANT_AVX2_INLINE __m256 unit8_8(__m256i c) {
-    const __m256 high =
-        _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_mullo_epi32(c, _mm256_set1_epi32(0x010101))),
-                      _mm256_set1_ps(256.0f));
     const __m256 low = _mm256_cvtepi32_ps(c);
+    const __m256 high = _mm256_mul_ps(low, _mm256_set1_ps(16843008.0f));
     const __m256 rest = _mm256_add_ps(low, _mm256_min_ps(low, _mm256_set1_ps(0.5f)));
     return _mm256_mul_ps(_mm256_add_ps(high, rest), _mm256_set1_ps(0x1p-32f));
 }
