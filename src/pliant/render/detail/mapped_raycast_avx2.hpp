@@ -10,9 +10,11 @@
 // set up (begin_pixel) and ended (mapped_end) by the scalar code, so every pixel and sample count
 // is bitwise what mapped_pixel<true> computes. The map's nodes and the voxels are loaded per lane
 // (no gathers, as raycast_avx2.hpp); an RGBA voxel pair is 8 consecutive floats, one load,
-// transposed; the stored gradient's voxel pair is 16 bytes, one load, sign-extended, transposed
-// (source_gradient()). Step opacities other than the default step's
-// (Δs/u = 1/2) go through the scalar libm calls lane by lane.
+// transposed (an rgba8 source's pair is 8 bytes, one load, widened, transposed, each channel
+// c / 255 without a division, then premultiplied: bitwise interpolate_rgba8()); the stored
+// gradient's voxel pair is 16 bytes, one load, sign-extended, transposed (source_gradient()).
+// Step opacities other than the default step's (Δs/u = 1/2) go through the scalar libm calls
+// lane by lane.
 #pragma once
 
 #include <cstdint>
