@@ -13,6 +13,7 @@
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
+#include "pliant/render/detail/mapped_raycast_avx2.hpp"
 #include "pliant/render/raycast.hpp"
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/inverse_map.hpp"
@@ -368,6 +369,65 @@ TEST(MappedRayCast, Avx2MarchMatchesTheScalarKernelOnScalars) {
     const volume::Volume source = volume::shepp_logan_3d({48, 40, 44});
     const volume::TransferFunction tf = volume::preset("mri-brain", source);
     expect_avx2_matches_scalar(source, &tf);
+}
+
+// The march reads an rgba8 source's bytes, premultiplying each corner as RayCaster's float copy
+// does: the AVX2 march's c / 255 (no division) is the division for every byte.
+TEST(MappedRayCast, Avx2ByteConversionIsTheDivision) {
+    float table[256];
+    if (!detail::unit8_table_avx2(table)) {
+        GTEST_SKIP() << "no AVX2 on this CPU";
+    }
+    for (int c = 0; c < 256; ++c) {
+        EXPECT_EQ(table[c], static_cast<float>(c) / 255.0f) << c;
+    }
+}
+
+// The same source as rgba8 (read in its bytes) and as rgba32f holding c / 255 (the float copy's
+// route) renders the same image bit for bit, with the same sample counts, through a twist, on
+// the AVX2 march and the scalar kernel, shaded or not: the phantom, and noise whose channels
+// take every byte value.
+TEST(MappedRayCast, Rgba8SourceGivesTheFloatSourceImage) {
+    volume::Volume noise = volume::Volume::allocate({40, 36, 32}, volume::VoxelType::rgba8,
+                                                    rgba64().spacing(), rgba64().origin());
+    {
+        std::uint32_t state = 12345;
+        for (std::uint8_t& b : noise.values<volume::VoxelType::rgba8>()) {
+            state = state * 1664525u + 1013904223u;
+            b = static_cast<std::uint8_t>(state >> 24);
+        }
+    }
+    for (const volume::Volume* bytes : {&rgba64(), static_cast<const volume::Volume*>(&noise)}) {
+        volume::Volume floats = volume::Volume::allocate(bytes->dims(), volume::VoxelType::rgba32f,
+                                                         bytes->spacing(), bytes->origin());
+        const auto in = bytes->values<volume::VoxelType::rgba8>();
+        const auto out = floats.values<volume::VoxelType::rgba32f>();
+        for (std::size_t i = 0; i < in.size(); ++i) {
+            out[i] = static_cast<float>(in[i]) / 255.0f;
+        }
+        const Deformed d = deform(*bytes, nullptr, Drive::twist, 12);
+        volume::InverseMap map;
+        map.build(*bytes, *bytes, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+        const Camera camera = orbit_camera(bytes->bounds(), 30.0, 20.0, 0.0, 80, 80);
+        for (const bool shading : {false, true}) {
+            for (const bool avx2 : {true, false}) {
+                RayCastOptions options;
+                options.shading = shading;
+                MappedRayCaster from_bytes(*bytes, nullptr, *bytes, options);
+                MappedRayCaster from_floats(floats, nullptr, floats, options);
+                from_bytes.set_map(map);
+                from_floats.set_map(map);
+                Image a, b;
+                allow_avx2(avx2);
+                const RayCastStats sa = from_bytes.render(camera, a);
+                const RayCastStats sb = from_floats.render(camera, b);
+                allow_avx2(true);
+                EXPECT_EQ(a.pixels, b.pixels) << "shading " << shading << ", avx2 " << avx2;
+                EXPECT_EQ(sa.samples, sb.samples);
+                EXPECT_GT(sa.samples, 0);
+            }
+        }
+    }
 }
 
 TEST(MappedRayCast, EarlyTerminationStillWorks) {

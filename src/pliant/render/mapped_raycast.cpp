@@ -129,7 +129,18 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
     // The gradients are taken here (m_gradient), not by the source's march: no α copy.
     source_options.clip.reset();
     source_options.shading = false;
-    m_source = std::make_unique<RayCaster>(source, tf, source_options);
+    // An rgba8 source is read in its bytes (detail::MappedKernel::rgba8, a copy: 4 bytes per
+    // voxel instead of the float copy's 16): its RayCaster, for the options' fields alone, is
+    // that of one voxel with the source's spacing (render() sets the grid's fields).
+    if (source.type() == volume::VoxelType::rgba8 && !source.empty()) {
+        const std::span<const std::uint8_t> bytes = source.values<volume::VoxelType::rgba8>();
+        m_rgba8.assign(bytes.begin(), bytes.end());
+        const volume::Volume proxy = volume::Volume::allocate({1, 1, 1}, volume::VoxelType::rgba8,
+                                                              source.spacing(), source.origin());
+        m_source = std::make_unique<RayCaster>(proxy, tf, source_options);
+    } else {
+        m_source = std::make_unique<RayCaster>(source, tf, source_options);
+    }
     m_step = m_source->step();
     m_source_dims = source.dims();
     m_target_dims = target.dims();
@@ -187,12 +198,14 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             [&](std::int64_t bz) {
                 for (std::int64_t z = bz * BRICK; z < std::min(n[2], (bz + 1) * BRICK); ++z) {
                     for (std::int64_t y = 0; y < n[1]; ++y) {
-                        const float* row = values + 4 * n[0] * (y + n[1] * z) + 3;
+                        const std::int64_t first = 4 * n[0] * (y + n[1] * z) + 3;
+                        const float* row = m_rgba8.empty() ? values + first : nullptr;
+                        const std::uint8_t* bytes = m_rgba8.empty() ? nullptr : &m_rgba8[first];
                         std::uint64_t* out =
                             m_brick_bits.data() + m_bricks[0] * ((y >> 2) + m_bricks[1] * bz);
                         const int shift = static_cast<int>(4 * (y & 3) + 16 * (z & 3));
                         for (std::int64_t x = 0; x < n[0]; ++x) {
-                            if (row[4 * x] > 0.0f) {
+                            if (row != nullptr ? row[4 * x] > 0.0f : bytes[4 * x] > 0) {
                                 out[x >> 2] |= std::uint64_t{1}
                                                << (shift + static_cast<int>(x & 3));
                             }
@@ -216,7 +229,7 @@ void MappedRayCaster::build_gradient() {
     // The shaded values lie in [0, 1] (α) or [0, LUT_SIZE − 1] (lookup coordinates), so |D| is
     // at most that range: it maps to 32767.
     const float scale = 32767.0f / (m_source->m_is_rgba ? 1.0f : float{detail::LUT_SIZE - 1});
-    const float* values = m_source->m_values.data() + (channels - 1);
+    const float* values = m_rgba8.empty() ? m_source->m_values.data() + (channels - 1) : nullptr;
     m_gradient.resize(static_cast<std::size_t>(4 * n[0] * n[1] * n[2]));
     const auto quantize = [scale](float d) {
         return static_cast<detail::GradientValue>(
@@ -227,23 +240,35 @@ void MappedRayCaster::build_gradient() {
         [&](std::int64_t z) {
             const std::int64_t z0 = std::max<std::int64_t>(z - 1, 0);
             const std::int64_t z1 = std::min(z + 1, n[2] - 1);
+            // rgba8: the α rows as the float copy holds them (detail::unit8()), 1 float per
+            // voxel; else the float copy's rows, `channels` floats per voxel.
+            std::vector<float> alpha_rows(m_rgba8.empty() ? 0 : static_cast<std::size_t>(5 * n[0]));
+            const std::int64_t stride = m_rgba8.empty() ? channels : 1;
             for (std::int64_t y = 0; y < n[1]; ++y) {
                 const std::int64_t y0 = std::max<std::int64_t>(y - 1, 0);
                 const std::int64_t y1 = std::min(y + 1, n[1] - 1);
-                // The shaded value of voxel x of row (y, z) is row[channels · x].
-                const auto row = [&](std::int64_t ry, std::int64_t rz) {
-                    return values + channels * n[0] * (ry + n[1] * rz);
+                // The shaded value of voxel x of the k-th row (ry, rz) is row[stride · x].
+                const auto row = [&](int k, std::int64_t ry, std::int64_t rz) -> const float* {
+                    if (m_rgba8.empty()) {
+                        return values + channels * n[0] * (ry + n[1] * rz);
+                    }
+                    const std::uint8_t* in = &m_rgba8[4 * n[0] * (ry + n[1] * rz) + 3];
+                    float* out = alpha_rows.data() + k * n[0];
+                    for (std::int64_t x = 0; x < n[0]; ++x) {
+                        out[x] = detail::unit8(in[4 * x]);
+                    }
+                    return out;
                 };
-                const float* here = row(y, z);
-                const float* below_y = row(y0, z);
-                const float* above_y = row(y1, z);
-                const float* below_z = row(y, z0);
-                const float* above_z = row(y, z1);
+                const float* here = row(0, y, z);
+                const float* below_y = row(1, y0, z);
+                const float* above_y = row(2, y1, z);
+                const float* below_z = row(3, y, z0);
+                const float* above_z = row(4, y, z1);
                 detail::GradientValue* out = m_gradient.data() + 4 * n[0] * (y + n[1] * z);
                 for (std::int64_t x = 0; x < n[0]; ++x) {
-                    const std::int64_t x0 = channels * std::max<std::int64_t>(x - 1, 0);
-                    const std::int64_t x1 = channels * std::min(x + 1, n[0] - 1);
-                    const std::int64_t at = channels * x;
+                    const std::int64_t x0 = stride * std::max<std::int64_t>(x - 1, 0);
+                    const std::int64_t x1 = stride * std::min(x + 1, n[0] - 1);
+                    const std::int64_t at = stride * x;
                     out[4 * x] = quantize(here[x1] - here[x0]);
                     out[4 * x + 1] = quantize(above_y[at] - below_y[at]);
                     out[4 * x + 2] = quantize(above_z[at] - below_z[at]);
@@ -547,6 +572,25 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.sub_occupied = m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
     m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
+    if (!m_rgba8.empty()) {
+        // The source's grid (its RayCaster holds one voxel, for the options' fields).
+        detail::RayCastKernel& s = m.source;
+        const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
+        for (int a = 0; a < 3; ++a) {
+            s.n[a] = static_cast<int>(n[a]);
+            s.g_max[a] = static_cast<float>(s.n[a] - 1);
+            s.max_i0[a] = std::max(0, s.n[a] - 2);
+        }
+        s.d[0] = n[0] > 1 ? 1 : 0;
+        s.d[1] = n[1] > 1 ? n[0] : 0;
+        s.d[2] = n[2] > 1 ? n[0] * n[1] : 0;
+        s.stride[0] = 1;
+        s.stride[1] = n[0];
+        s.stride[2] = n[0] * n[1];
+        s.values = nullptr;
+        s.alpha = nullptr;
+        m.rgba8 = m_rgba8.data();
+    }
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();

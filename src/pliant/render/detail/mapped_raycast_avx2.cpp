@@ -129,6 +129,52 @@ PLIANT_AVX2_INLINE void source_gradient8(const MappedKernel& m, const Grid8& src
     }
 }
 
+// unit8() of 8 bytes c (int32 lanes in [0, 255]), bitwise c / 255 without a division: c / 255
+// is the binary fraction 0.cccc… (the byte c repeated), so with X = c · 0x01010101 (below 2^32)
+// its correctly rounded float is that of (X + c / 255) / 2^32. For c ≥ 1, X ≥ 2^24: the floats
+// near X are integers, so are their midpoints, and X + 1/2 rounds as X + c / 255 does (both lie
+// in (X, X + 1); for c = 255, X + 1 = 2^32 is a float). X − c = c · 16843008 (0x01010100) is
+// exact in float (24 significant bits), c + min(c, 1/2) is c + 1/2 (0 for c = 0): one rounded
+// sum, then the exact scaling by 2^−32. Its test compares it with the division for all 256 bytes
+// (unit8_table_avx2()).
+PLIANT_AVX2_INLINE __m256 unit8_8(__m256i c) {
+    const __m256 low = _mm256_cvtepi32_ps(c);
+    const __m256 high = _mm256_mul_ps(low, _mm256_set1_ps(16843008.0f));
+    const __m256 rest = _mm256_add_ps(low, _mm256_min_ps(low, _mm256_set1_ps(0.5f)));
+    return _mm256_mul_ps(_mm256_add_ps(high, rest), _mm256_set1_ps(0x1p-32f));
+}
+
+// interpolate_rgba8() of 8 lanes at voxel indices `at`: out[c] is channel c (α·r, α·g, α·b,
+// α). A lane's x-adjacent voxel pair of a row is 8 consecutive bytes: one load, widened to
+// int32, transposed, then each corner's channels c / 255 (unit8_8()) and premultiplied as
+// rgba8_voxel().
+PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& grid,
+                                           const std::int32_t* at, const __m256 fraction[3],
+                                           __m256 out[4]) {
+    const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+    __m256 first[4][4], second[4][4];  // [channel][row]
+    for (int r = 0; r < 4; ++r) {
+        __m256 rows[LANES], t[LANES];
+        for (int l = 0; l < LANES; ++l) {
+            const std::uint8_t* p = m.rgba8 + 4 * static_cast<std::int64_t>(at[l] + row[r]);
+            rows[l] = as_float(
+                _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+        }
+        transpose8(rows, t);
+        const __m256 a0 = unit8_8(as_int(t[3]));
+        const __m256 a1 = unit8_8(as_int(t[7]));
+        for (int c = 0; c < 3; ++c) {
+            first[c][r] = _mm256_mul_ps(unit8_8(as_int(t[c])), a0);
+            second[c][r] = _mm256_mul_ps(unit8_8(as_int(t[4 + c])), a1);
+        }
+        first[3][r] = a0;
+        second[3][r] = a1;
+    }
+    for (int c = 0; c < 4; ++c) {
+        out[c] = trilinear8(first[c], second[c], fraction);
+    }
+}
+
 // mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
 // out[0 … 2] the straight colour (shaded when SHADING), out[3] the step opacity (RGBA) or the
 // lookup entry's, all 0 where the sample has no opacity (outside the source box, or none). Lanes
@@ -206,7 +252,11 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     __m256 positive;
     if constexpr (IS_RGBA) {
         __m256 rgba[4];
-        interpolate_rgba8(src, at, fraction, rgba);
+        if (m.rgba8 != nullptr) {
+            interpolate_bytes8(m, src, at, fraction, rgba);
+        } else {
+            interpolate_rgba8(src, at, fraction, rgba);
+        }
         const __m256 a = clamp8(rgba[3], zero, one);
         positive = _mm256_and_ps(inside, _mm256_cmp_ps(a, zero, _CMP_GT_OQ));
         __m256 a_step;
@@ -445,14 +495,19 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                 constexpr std::int64_t CH = IS_RGBA ? 4 : 1;  // floats per voxel
                 const std::int64_t dy = CH * std::int64_t{src.dy};
                 const std::int64_t dz = CH * std::int64_t{src.dz};
+                // The voxels' first bytes: the floats', or the rgba8 source's (4 per voxel).
+                const auto* bytes = m.rgba8 != nullptr ? reinterpret_cast<const char*>(m.rgba8)
+                                                       : reinterpret_cast<const char*>(src.v);
+                const std::int64_t size = m.rgba8 != nullptr ? 1 : std::int64_t{sizeof(float)};
+                const std::int64_t by = size * dy, bz = size * dz;
                 while (ahead_mask != 0) {
                     const int l = __builtin_ctz(static_cast<unsigned>(ahead_mask));
                     ahead_mask &= ahead_mask - 1;
-                    const float* v = src.v + CH * static_cast<std::int64_t>(index[l]);
-                    _mm_prefetch(reinterpret_cast<const char*>(v), _MM_HINT_T0);
-                    _mm_prefetch(reinterpret_cast<const char*>(v + dy), _MM_HINT_T0);
-                    _mm_prefetch(reinterpret_cast<const char*>(v + dz), _MM_HINT_T0);
-                    _mm_prefetch(reinterpret_cast<const char*>(v + dz + dy), _MM_HINT_T0);
+                    const char* v = bytes + size * CH * static_cast<std::int64_t>(index[l]);
+                    _mm_prefetch(v, _MM_HINT_T0);
+                    _mm_prefetch(v + by, _MM_HINT_T0);
+                    _mm_prefetch(v + bz, _MM_HINT_T0);
+                    _mm_prefetch(v + bz + by, _MM_HINT_T0);
                     if constexpr (SHADING) {
                         // The stored gradient's rows of that voxel, 4 values per voxel.
                         const GradientValue* d =
@@ -508,6 +563,22 @@ bool mapped_avx2_fits(const MappedKernel& m) {
            (!m.target.shading || m.gradient != nullptr);
 }
 
+PLIANT_AVX2_FN static void unit8_table(float out[256]) {
+    for (int c = 0; c < 256; c += LANES) {
+        _mm256_storeu_ps(out + c,
+                         unit8_8(_mm256_add_epi32(_mm256_set1_epi32(c),
+                                                  _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7))));
+    }
+}
+
+bool unit8_table_avx2(float out[256]) {
+    if (!has_avx2()) {
+        return false;
+    }
+    unit8_table(out);
+    return true;
+}
+
 PLIANT_AVX2_FN std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1,
                                              Color* colors) {
     if (m.source.is_rgba) {
@@ -526,6 +597,10 @@ bool mapped_avx2_fits(const MappedKernel&) {
 
 std::int64_t mapped_tile_avx2(const MappedKernel&, int, int, int, int, Color*) {
     return 0;
+}
+
+bool unit8_table_avx2(float*) {
+    return false;
 }
 
 #endif

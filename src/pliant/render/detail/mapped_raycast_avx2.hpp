@@ -10,9 +10,11 @@
 // set up (begin_pixel) and ended (mapped_end) by the scalar code, so every pixel and sample count
 // is bitwise what mapped_pixel<true> computes. The map's nodes and the voxels are loaded per lane
 // (no gathers, as raycast_avx2.hpp); an RGBA voxel pair is 8 consecutive floats, one load,
-// transposed; the stored gradient's voxel pair is 16 bytes, one load, sign-extended, transposed
-// (source_gradient()). Step opacities other than the default step's
-// (Δs/u = 1/2) go through the scalar libm calls lane by lane.
+// transposed (an rgba8 source's pair is 8 bytes, one load, widened, transposed, each channel
+// c / 255 without a division, then premultiplied: bitwise interpolate_rgba8()); the stored
+// gradient's voxel pair is 16 bytes, one load, sign-extended, transposed (source_gradient()).
+// Step opacities other than the default step's (Δs/u = 1/2) go through the scalar libm calls
+// lane by lane.
 #pragma once
 
 #include <cstdint>
@@ -30,5 +32,9 @@ bool mapped_avx2_fits(const MappedKernel& m);
 // into colors[(y − y0)·(x1 − x0) + (x − x0)], bit for bit; returns the sum of the pixels'
 // samples. Precondition: mapped_avx2_fits(m), x1 − x0 and y1 − y0 at most TILE.
 std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1, Color* colors);
+
+// The AVX2 march's c / 255 of every byte c into out[c] (its tests compare it with the division);
+// false, out untouched, without AVX2.
+bool unit8_table_avx2(float out[256]);
 
 }  // namespace pliant::render::detail

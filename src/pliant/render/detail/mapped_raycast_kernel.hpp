@@ -58,6 +58,9 @@ struct MappedKernel {
     // Shading: the stored source gradient, 4 GradientValue per source voxel (source_gradient());
     // null when not shading.
     const GradientValue* gradient = nullptr;
+    // An rgba8 source: its bytes (r, g, b, α per voxel), read in place of source.values (null:
+    // the floats of source.values), each corner premultiplied as it is read (rgba8_voxel()).
+    const std::uint8_t* rgba8 = nullptr;
 };
 static_assert(std::is_trivially_copyable_v<MappedKernel>);
 
@@ -122,6 +125,59 @@ PLIANT_HOST_DEVICE inline Vec3f map_coordinate(const MappedKernel& m, const MapC
     return out;
 }
 
+// Channel value c of an rgba8 voxel as RayCaster's float copy holds it: c / 255 (exact in
+// [0, 1], so its clamp changes nothing).
+PLIANT_HOST_DEVICE inline float unit8(std::uint8_t c) {
+    return static_cast<float>(c) / 255.0f;
+}
+
+// The float copy's 4 values of rgba8 voxel p (RayCaster's preparation, the same operations): the
+// channels c / 255, then α·r, α·g, α·b, α.
+PLIANT_HOST_DEVICE inline void rgba8_voxel(const std::uint8_t* p, float out[4]) {
+    const float a = unit8(p[3]);
+    out[0] = unit8(p[0]) * a;
+    out[1] = unit8(p[1]) * a;
+    out[2] = unit8(p[2]) * a;
+    out[3] = a;
+}
+
+// interpolate_rgba() of an rgba8 source at t: the same trilinear operations on the corners'
+// premultiplied values (rgba8_voxel()), so bitwise interpolate_rgba() of RayCaster's float copy.
+PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const Trilinear& t) {
+    const RayCastKernel& s = m.source;
+    const std::uint8_t* p = m.rgba8 + 4 * voxel_index(s, t);
+    const std::int64_t dx = 4 * s.d[0], dy = 4 * s.d[1], dz = 4 * s.d[2];
+    const std::int64_t corner[8] = {0, dx, dy, dy + dx, dz, dz + dx, dz + dy, dz + dy + dx};
+    float v[8][4];
+    for (int i = 0; i < 8; ++i) {
+        rgba8_voxel(p + corner[i], v[i]);
+    }
+    float out[4];
+    for (int c = 0; c < 4; ++c) {
+        const float c00 = lerp(v[0][c], v[1][c], t.fx);
+        const float c10 = lerp(v[2][c], v[3][c], t.fx);
+        const float c01 = lerp(v[4][c], v[5][c], t.fx);
+        const float c11 = lerp(v[6][c], v[7][c], t.fx);
+        out[c] = lerp(lerp(c00, c10, t.fy), lerp(c01, c11, t.fy), t.fz);
+    }
+    return {out[0], out[1], out[2], out[3]};
+}
+
+// classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set.
+PLIANT_HOST_DEVICE inline Sample classify_rgba_source(const MappedKernel& m, const Trilinear& t) {
+    if (m.rgba8 == nullptr) {
+        return classify<true>(m.source, t);
+    }
+    const Sample s = interpolate_rgba8(m, t);
+    const float a = clampf(s.a, 0.0f, 1.0f);
+    if (!(a > 0.0f)) {
+        return {0.0f, 0.0f, 0.0f, 0.0f};
+    }
+    const float a_step = rgba_step_opacity(a, m.source.step_over_unit);
+    const float inv = 1.0f / s.a;
+    return {s.r * inv, s.g * inv, s.b * inv, a_step};
+}
+
 // Whether source grid coordinate g lies in the source box (outside it the source is 0, as the
 // resampler samples it).
 PLIANT_HOST_DEVICE inline bool in_source(const MappedKernel& m, Vec3f g) {
@@ -174,7 +230,12 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
         return {0.0f, 0.0f, 0.0f, 0.0f};
     }
     const Trilinear t = locate(s, g);
-    Sample out = classify<IS_RGBA>(s, t);
+    Sample out;
+    if constexpr (IS_RGBA) {
+        out = classify_rgba_source(m, t);
+    } else {
+        out = classify<false>(s, t);
+    }
     if (out.a > 0.0f && m.target.shading) {
         const Vec3f d = source_gradient(m, t);
         const Vec3f& inv = m.target.inv_spacing;
