@@ -248,34 +248,23 @@ int main(int argc, char** argv) {
         // positions in the background, resample + update + render on the caller (a resample
         // on one thread would take longer than the rest of the frame).
         std::array<volume::InverseMap, 2> maps;
-        const Pipelined map_pipe = run_pipelined(
-            frame, frame + pipe_frames - 1,
-            [&](int f, int slot) {
-                driven.step(f);
-                maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
-                                                           w.grid.mesh.positions, body.positions(),
-                                                           {.node_voxels = w.grid.cell_voxels});
-            },
-            [&](int, int slot) {
-                mapped->set_map(maps[static_cast<std::size_t>(slot)]);
-                mapped->render(camera, map_image);
-            });
+        const auto step_and_map = [&](int f, int slot) {
+            driven.step(f);
+            maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
+                                                       w.grid.mesh.positions, body.positions(),
+                                                       {.node_voxels = w.grid.cell_voxels});
+        };
+        const auto show_map = [&](int, int slot) {
+            mapped->set_map(maps[static_cast<std::size_t>(slot)]);
+            mapped->render(camera, map_image);
+        };
+        const Pipelined map_pipe =
+            run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map);
         frame += pipe_frames;
         // The same with the producer on every thread (BackgroundTask's default, the viewer's
         // former scheme): the step's two lanes in the background.
-        const Pipelined map_all = run_pipelined(
-            frame, frame + pipe_frames - 1,
-            [&](int f, int slot) {
-                driven.step(f);
-                maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
-                                                           w.grid.mesh.positions, body.positions(),
-                                                           {.node_voxels = w.grid.cell_voxels});
-            },
-            [&](int, int slot) {
-                mapped->set_map(maps[static_cast<std::size_t>(slot)]);
-                mapped->render(camera, map_image);
-            },
-            0);
+        const Pipelined map_all =
+            run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map, 0);
         frame += pipe_frames;
         std::array<std::vector<Vec3f>, 2> positions;
         const Pipelined exact_pipe = run_pipelined(

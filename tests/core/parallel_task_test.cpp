@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -20,6 +21,31 @@ class BackgroundTaskTest : public ::testing::Test {
 protected:
     void TearDown() override { set_num_threads(0); }
 };
+
+// n values of 1000 sin(i), and their sum by a chunked parallel reduction (grain 1000), whose
+// bits depend on the chunks only.
+template <typename T>
+std::vector<T> sine_values(std::size_t n) {
+    std::vector<T> values(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        values[i] = std::sin(static_cast<T>(i)) * T{1000};
+    }
+    return values;
+}
+
+template <typename T>
+T chunked_sum(const std::vector<T>& values) {
+    return parallel_reduce(
+        static_cast<std::int64_t>(values.size()), T{0},
+        [&](std::int64_t b, std::int64_t e) {
+            T s{0};
+            for (std::int64_t i = b; i < e; ++i) {
+                s += values[static_cast<std::size_t>(i)];
+            }
+            return s;
+        },
+        [](T a, T b) { return a + b; }, 1000);
+}
 
 // The work runs while the caller goes on: it waits for a flag only the caller sets after
 // start() returned (a work run inside start() would give up after its time limit), and it runs
@@ -65,21 +91,9 @@ TEST_F(BackgroundTaskTest, OneThreadRunsTheWorkInStart) {
 // Parallel loops inside the work give the results they give on the caller's thread.
 TEST_F(BackgroundTaskTest, ParallelLoopsInsideAreDeterministic) {
     set_num_threads(2);
-    std::vector<float> values(200000);
-    for (std::size_t i = 0; i < values.size(); ++i) {
-        values[i] = std::sin(static_cast<float>(i)) * 1e3f;
-    }
+    const std::vector<float> values = sine_values<float>(200000);
     const auto sum = [&] {
-        return parallel_reduce(
-            static_cast<std::int64_t>(values.size()), 0.0f,
-            [&](std::int64_t b, std::int64_t e) {
-                float s = 0.0f;
-                for (std::int64_t i = b; i < e; ++i) {
-                    s += values[static_cast<std::size_t>(i)];
-                }
-                return s;
-            },
-            [](float a, float b) { return a + b; }, 1000);
+        return chunked_sum(values);
     };
     const float here = sum();
     float there = 0.0f;
@@ -141,21 +155,9 @@ TEST_F(BackgroundTaskTest, ConcurrencyOneRunsTheWorkOnOneThread) {
 // A one-thread work's parallel reductions give the bits of the caller's.
 TEST_F(BackgroundTaskTest, ConcurrencyOneIsDeterministic) {
     set_num_threads(2);
-    std::vector<double> values(100000);
-    for (std::size_t i = 0; i < values.size(); ++i) {
-        values[i] = std::sin(static_cast<double>(i)) * 1e3;
-    }
+    const std::vector<double> values = sine_values<double>(100000);
     const auto sum = [&] {
-        return parallel_reduce(
-            static_cast<std::int64_t>(values.size()), 0.0,
-            [&](std::int64_t b, std::int64_t e) {
-                double s = 0.0;
-                for (std::int64_t i = b; i < e; ++i) {
-                    s += values[static_cast<std::size_t>(i)];
-                }
-                return s;
-            },
-            [](double a, double b) { return a + b; }, 1000);
+        return chunked_sum(values);
     };
     BackgroundTask task(1);
     double there = 0.0;

@@ -79,6 +79,17 @@ struct FrameBatch {
     }
 };
 
+// Lane i of f: the vertices of `tet` in `grid` (its deformed vertices in target grid
+// coordinates).
+void load_lane(std::span<const Vec3d> grid, const geometry::Tet& tet, int i, FrameBatch& f) {
+    for (int v = 0; v < 4; ++v) {
+        const Vec3d& x = grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
+        f.p[v][0][i] = x.x;
+        f.p[v][1][i] = x.y;
+        f.p[v][2][i] = x.z;
+    }
+}
+
 // The node range [lo, hi] along axis a that the box of deformed vertices p covers (nodes at
 // B·i, clamped to the grid of `nodes` nodes); empty when lo > hi. inv_b: 1 / B when that is exact
 // (B a power of two: x · inv_b has the bits of x / B), else 0 (divided).
@@ -156,15 +167,8 @@ struct HoldPass {
     // `end` repeat tet `first`: computed, not used) and computes their frames.
     void frames(std::int64_t first, std::int64_t end, FrameBatch& f) const {
         for (int i = 0; i < FRAME_BATCH; ++i) {
-            const std::int64_t t = first + i < end ? first + i : first;
-            const geometry::Tet& tet = tets[static_cast<std::size_t>(t)];
-            for (int v = 0; v < 4; ++v) {
-                const Vec3d& x =
-                    deformed_grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
-                f.p[v][0][i] = x.x;
-                f.p[v][1][i] = x.y;
-                f.p[v][2][i] = x.z;
-            }
+            load_lane(deformed_grid,
+                      tets[static_cast<std::size_t>(first + i < end ? first + i : first)], i, f);
         }
         f.compute();
     }
@@ -246,14 +250,8 @@ struct NodePass {
         FrameBatch f;
         for (int i = 0; i < FRAME_BATCH; ++i) {
             // Lanes past n repeat the first node's tet (computed, not used).
-            const geometry::Tet& tet = tets[static_cast<std::size_t>(holder[q[i < n ? i : 0]])];
-            for (int v = 0; v < 4; ++v) {
-                const Vec3d& x =
-                    deformed_grid[static_cast<std::size_t>(tet[static_cast<std::size_t>(v)])];
-                f.p[v][0][i] = x.x;
-                f.p[v][1][i] = x.y;
-                f.p[v][2][i] = x.z;
-            }
+            load_lane(deformed_grid, tets[static_cast<std::size_t>(holder[q[i < n ? i : 0]])], i,
+                      f);
         }
         f.compute();
         for (int i = 0; i < n; ++i) {
