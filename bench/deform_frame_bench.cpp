@@ -267,27 +267,20 @@ int main(int argc, char** argv) {
             run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map, 0);
         frame += pipe_frames;
         std::array<std::vector<Vec3f>, 2> positions;
-        const Pipelined exact_pipe = run_pipelined(
-            frame, frame + pipe_frames - 1,
-            [&](int f, int slot) {
-                driven.step(f);
-                positions[static_cast<std::size_t>(slot)].assign(body.positions().begin(),
-                                                                 body.positions().end());
-            },
-            [&](int, int slot) {
+        const auto step_and_copy = [&](int f, int slot) {
+            driven.step(f);
+            positions[static_cast<std::size_t>(slot)].assign(body.positions().begin(),
+                                                             body.positions().end());
+        };
+        const Pipelined exact_pipe =
+            run_pipelined(frame, frame + pipe_frames - 1, step_and_copy, [&](int, int slot) {
                 resampler.resample(positions[static_cast<std::size_t>(slot)], target);
                 caster->update(target, nullptr);
                 caster->render(camera, exact_image);
             });
         frame += pipe_frames;
-        const Pipelined map_late = run_pipelined(
-            frame, frame + pipe_frames - 1,
-            [&](int f, int slot) {
-                driven.step(f);
-                positions[static_cast<std::size_t>(slot)].assign(body.positions().begin(),
-                                                                 body.positions().end());
-            },
-            [&](int, int slot) {
+        const Pipelined map_late =
+            run_pipelined(frame, frame + pipe_frames - 1, step_and_copy, [&](int, int slot) {
                 map.build(source, source, w.grid.mesh.tets, w.grid.mesh.positions,
                           positions[static_cast<std::size_t>(slot)],
                           {.node_voxels = w.grid.cell_voxels});

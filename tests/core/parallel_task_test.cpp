@@ -22,6 +22,15 @@ protected:
     void TearDown() override { set_num_threads(0); }
 };
 
+// Whether `flag` was set within 10 seconds (yielding while it is not).
+bool wait_for(const std::atomic<bool>& flag) {
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (!flag.load() && std::chrono::steady_clock::now() < limit) {
+        std::this_thread::yield();
+    }
+    return flag.load();
+}
+
 // n values of 1000 sin(i), and their sum by a chunked parallel reduction (grain 1000), whose
 // bits depend on the chunks only.
 template <typename T>
@@ -58,18 +67,10 @@ TEST_F(BackgroundTaskTest, RunsConcurrentlyWithTheCaller) {
     BackgroundTask task;
     task.start([&] {
         running = true;
-        const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-        while (!go.load() && std::chrono::steady_clock::now() < limit) {
-            std::this_thread::yield();
-        }
-        saw_go = go.load();
+        saw_go = wait_for(go);
     });
     EXPECT_TRUE(task.is_started());
-    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (!running.load() && std::chrono::steady_clock::now() < limit) {
-        std::this_thread::yield();
-    }
-    EXPECT_TRUE(running.load());
+    EXPECT_TRUE(wait_for(running));
     EXPECT_FALSE(task.is_done());
     go = true;
     task.wait();
@@ -123,18 +124,10 @@ TEST_F(BackgroundTaskTest, ConcurrencyOneRunsTheWorkOnOneThread) {
             [&](std::int64_t) { inline_loop = inline_loop && std::this_thread::get_id() == me; },
             1);
         running = true;
-        const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-        while (!go.load() && std::chrono::steady_clock::now() < limit) {
-            std::this_thread::yield();
-        }
-        saw_go = go.load();
+        saw_go = wait_for(go);
     });
     EXPECT_EQ(num_threads(), 2);
-    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (!running.load() && std::chrono::steady_clock::now() < limit) {
-        std::this_thread::yield();
-    }
-    EXPECT_TRUE(running.load());
+    EXPECT_TRUE(wait_for(running));
     EXPECT_FALSE(task.is_done());
     go = true;
     task.wait();
