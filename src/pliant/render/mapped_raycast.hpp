@@ -153,7 +153,8 @@ private:
     std::vector<std::uint8_t> m_occupancy;     // per map cell, detail::MAP_CELL_* bits
     std::vector<std::uint8_t> m_sub_occupied;  // per map cell, its visible sub-cells' bits
     std::vector<std::uint8_t> m_visible;       // per map cell, 0 / 1 (empty_cubes' input)
-    // RGBA: the source voxels with α > 0, a 64-bit word per brick of 4³ voxels (x fastest).
+    // RGBA: the source voxels with α > 0 dilated by one voxel toward −x, −y, −z (bit v set when
+    // a voxel of {v, v + 1}³ has α > 0), a 64-bit word per brick of 4³ voxels (x fastest).
     std::array<std::int64_t, 3> m_bricks{0, 0, 0};
     std::vector<std::uint64_t> m_brick_bits;
     // 8 octants × map cells, those of m_octants_ready computed (render() computes the octants
