@@ -11,7 +11,9 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
+#include "pliant/volume/detail/tet_map_avx2.hpp"
 #include "pliant/volume/resample.hpp"
 
 namespace pliant::volume {
@@ -42,7 +44,7 @@ void tet_vertices(const geometry::Tet& tet, std::span<const Vec3d> grid, Vec3d p
 // products of core/vec3.hpp's cross() and dot() in their order (no contraction,
 // -ffp-contract=off), so that any other place computing a tet's rows this way gets the same
 // bits. A tet is degenerate (its rows unused) when det is 0 or not finite.
-constexpr int FRAME_BATCH = 8;
+constexpr int FRAME_BATCH = detail::TET_BATCH;
 struct FrameBatch {
     double p[4][3][FRAME_BATCH];
     double det[FRAME_BATCH];
@@ -135,13 +137,13 @@ struct HoldPass {
         return false;
     }
 
-    // Records the value at node (x, y, z) of tet t's map (frame m, barycentric coordinates l
-    // there), as detail::TetMap::rest() computes it.
-    void record(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t t, const TetMap& m,
-                const double l[3], std::vector<HeldValue>& out) const {
+    // Records the value at node (x, y, z) of tet t's map (barycentric coordinates l there), as
+    // detail::TetMap::rest() computes it.
+    void record(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t t, const double l[3],
+                std::vector<HeldValue>& out) const {
         Vec3d r[4];
         tet_vertices(tets[static_cast<std::size_t>(t)], rest_grid, r);
-        TetMap full = m;
+        TetMap full;
         full.r3 = r[3];
         for (int k = 0; k < 3; ++k) {
             full.dr[k] = r[k] - r[3];
@@ -187,6 +189,49 @@ struct HoldPass {
         return det;
     }
 
+    // tets_one_by_one() with the boxes and their first nodes' tests 8 tets at a time
+    // (detail::box_first_avx2(), the same bits); false (nothing done) without AVX2.
+    bool tets_batched(std::int64_t first, std::int64_t end, std::vector<HeldValue>& out) const {
+        FrameBatch f;
+        frames(first, end, f);
+        detail::BoxFirst boxes;
+        const std::int64_t n[3] = {nodes[0], nodes[1], nodes[2]};
+        if (!detail::box_first_avx2(f.p, f.rows, f.det, b, inv_b, n, boxes)) {
+            return false;
+        }
+        unsigned todo =
+            static_cast<unsigned>(boxes.boxes) & ((1u << static_cast<unsigned>(end - first)) - 1u);
+        while (todo != 0) {
+            const int i = std::countr_zero(todo);
+            todo &= todo - 1;
+            const auto index = static_cast<std::int32_t>(first + i);
+            const std::int64_t lo[3] = {boxes.lo[0][i], boxes.lo[1][i], boxes.lo[2][i]};
+            const std::int64_t hi[3] = {boxes.hi[0][i], boxes.hi[1][i], boxes.hi[2][i]};
+            if ((boxes.inside >> i & 1) != 0 && raise(lo[0], lo[1], lo[2], index)) {
+                const double l[3] = {boxes.l[0][i], boxes.l[1][i], boxes.l[2][i]};
+                record(lo[0], lo[1], lo[2], index, l, out);
+            }
+            if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
+                continue;  // one node (most boxes)
+            }
+            Vec3d p[4];
+            TetMap m;
+            lane(f, i, p, m);
+            for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                    for (std::int64_t x = z == lo[2] && y == lo[1] ? lo[0] + 1 : lo[0]; x <= hi[0];
+                         ++x) {
+                        double l[3];
+                        if (m.lambda(node_at(x, y, z), l) >= INSIDE && raise(x, y, z, index)) {
+                            record(x, y, z, index, l, out);
+                        }
+                    }
+                }
+            }
+        }
+        return true;
+    }
+
     // Tets [first, end), end − first ≤ FRAME_BATCH, each over the nodes of its box.
     void tets_one_by_one(std::int64_t first, std::int64_t end, std::vector<HeldValue>& out) const {
         FrameBatch f;
@@ -205,7 +250,7 @@ struct HoldPass {
                     for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
                         double l[3];
                         if (m.lambda(node_at(x, y, z), l) >= INSIDE && raise(x, y, z, index)) {
-                            record(x, y, z, index, m, l, out);
+                            record(x, y, z, index, l, out);
                         }
                     }
                 }
@@ -523,13 +568,17 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     if (m_held_values.size() < static_cast<std::size_t>(num_value_lists)) {
         m_held_values.resize(static_cast<std::size_t>(num_value_lists));
     }
+    const bool use_avx2 = has_avx2();
     parallel_for_chunks(
         num_batches, BATCHES_PER_CHUNK, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
             std::vector<HeldValue>& out = m_held_values[static_cast<std::size_t>(c)];
             out.clear();
             for (std::int64_t batch = begin; batch < end; ++batch) {
                 const std::int64_t first = batch * FRAME_BATCH;
-                hold.tets_one_by_one(first, std::min(num_tets, first + FRAME_BATCH), out);
+                const std::int64_t last = std::min(num_tets, first + FRAME_BATCH);
+                if (!use_avx2 || !hold.tets_batched(first, last, out)) {
+                    hold.tets_one_by_one(first, last, out);
+                }
             }
         });
     // (b) Each held node's value: the one its holder recorded (exactly one record per node has
