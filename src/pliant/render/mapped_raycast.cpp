@@ -188,6 +188,7 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         m_source = std::make_unique<RayCaster>(source, tf, source_options);
     }
     m_step = m_source->step();
+    m_is_rgba = m_source->m_is_rgba;
     m_source_dims = source.dims();
     m_target_dims = target.dims();
     m_target_spacing = target.spacing();
@@ -357,7 +358,7 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
         v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
                 (n > 1 ? 1 : 0);
     }
-    if (m_source->m_is_rgba) {
+    if (m_is_rgba) {
         // Voxels with α > 0 in the box [v0, v1], from the dilated bricks (dilate_bricks(): bit
         // v covers voxels v and v + 1 per axis) at [v0, v1 − 1] (exact per voxel; v1 = v0 on an
         // axis of one voxel, whose bits cover that voxel alone). A point (the cell's centre)
@@ -420,6 +421,39 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
            0;
 }
 
+bool MappedRayCaster::point_visible(const float p[3]) const {
+    if (!m_is_rgba) {
+        return hull_visible(p, p);
+    }
+    // hull_visible(p, p)'s voxel range and dilated bits, the common case of one brick inline.
+    std::int64_t v0[3], v1[3];
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t n = m_source_dims[static_cast<std::size_t>(a)];
+        const auto last = static_cast<float>(n - 1);
+        const float l = p[a] - HULL_MARGIN;
+        const float h = p[a] + HULL_MARGIN;
+        if (h < -0.5f || l > last + 0.5f) {
+            return false;
+        }
+        const std::int64_t max_i0 = std::max<std::int64_t>(0, n - 2);
+        v0[a] = std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
+        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0);
+        if ((v0[a] >> BRICK_SHIFT) != (v1[a] >> BRICK_SHIFT)) {
+            return hull_visible(p, p);
+        }
+    }
+    const std::uint64_t word = m_brick_bits[static_cast<std::size_t>(
+        (v0[0] >> BRICK_SHIFT) +
+        m_bricks[0] * ((v0[1] >> BRICK_SHIFT) + m_bricks[1] * (v0[2] >> BRICK_SHIFT)))];
+    return (word &
+            BRICK_MASKS[0][static_cast<std::size_t>(v0[0] & 3)]
+                       [static_cast<std::size_t>(v1[0] & 3)] &
+            BRICK_MASKS[1][static_cast<std::size_t>(v0[1] & 3)]
+                       [static_cast<std::size_t>(v1[1] & 3)] &
+            BRICK_MASKS[2][static_cast<std::size_t>(v0[2] & 3)]
+                       [static_cast<std::size_t>(v1[2] & 3)]) != 0;
+}
+
 std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,
                                                 const std::int64_t off[8], const float lo[3],
                                                 const float hi[3]) const {
@@ -434,7 +468,7 @@ std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t bas
                              0.5f * (0.5f * (v[3 * off[4]] + v[3 * off[5]]) +
                                      0.5f * (v[3 * off[6]] + v[3 * off[7]])));
     }
-    if (hull_visible(centre, centre)) {
+    if (point_visible(centre)) {
         return 0xFF;
     }
     if (!hull_visible(lo, hi)) {

@@ -120,6 +120,8 @@ private:
     // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
     // value range reaches a lookup entry with opacity (scalar).
     bool hull_visible(const float lo[3], const float hi[3]) const;
+    // hull_visible(p, p), an RGBA source's common case (one brick) without the loops.
+    bool point_visible(const float p[3]) const;
     // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
     // over layers (each written by one task: the same values for any number of threads).
     void build_gradient();
@@ -155,6 +157,7 @@ private:
     std::vector<std::uint8_t> m_visible;       // per map cell, 0 / 1 (empty_cubes' input)
     // RGBA: the source voxels with α > 0 dilated by one voxel toward −x, −y, −z (bit v set when
     // a voxel of {v, v + 1}³ has α > 0), a 64-bit word per brick of 4³ voxels (x fastest).
+    bool m_is_rgba = false;  // the source's, read per test
     std::array<std::int64_t, 3> m_bricks{0, 0, 0};
     std::vector<std::uint64_t> m_brick_bits;
     // 8 octants × map cells, those of m_octants_ready computed (render() computes the octants

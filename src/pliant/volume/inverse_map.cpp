@@ -259,8 +259,11 @@ struct HoldPass {
     }
 };
 
-// The held nodes' maps and the shell (steps 1 (b) and 2 of InverseMap::build), layer by layer.
-constexpr std::int64_t LAYERS_PER_CHUNK = 8;
+// The held nodes' maps and the shell (steps 1 (b) and 2 of InverseMap::build), layer by layer,
+// over chunks of layers: 2 per thread, 1 on one thread (a chunk also computes the maps of the
+// layers on either side of it, so fewer chunks compute fewer maps twice; the map is the same for
+// any chunking).
+constexpr std::int64_t CHUNKS_PER_THREAD = 2;
 
 struct NodePass {
     std::span<const geometry::Tet> tets;
@@ -608,19 +611,25 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     // Bit 0: some node of the 3 × 3 (in x, y) is held; bit 1: every node of it inside the grid
     // is held (an erosion: a held node whose 3 × 3 × 3 has bit 1 everywhere has no neighbour in
     // the shell, and no shell node reads its map).
-    const auto held = [&](std::int64_t q) {
-        return holder[static_cast<std::size_t>(q)] >= 0 ? 3 : 0;
-    };
     parallel_for(
         m_nodes[2],
         [&](std::int64_t z) {
+            // Per row: 3 where held, 0 where not, 2 past either end (no node: not held, and no
+            // obstacle to the erosion); two loops without branches, which the compiler
+            // vectorizes.
+            std::vector<std::uint8_t> h(static_cast<std::size_t>(nx + 2), 2);
             for (std::int64_t q = nxy * z; q < nxy * (z + 1); q += nx) {
+                const std::int32_t* in = holder.data() + q;
                 for (std::int64_t x = 0; x < nx; ++x) {
-                    const int c = held(q + x);
-                    const int l = x > 0 ? held(q + x - 1) : 2;
-                    const int r = x + 1 < nx ? held(q + x + 1) : 2;
-                    near_x[static_cast<std::size_t>(q + x)] =
-                        static_cast<std::uint8_t>(((c | l | r) & 1) | (c & l & r & 2));
+                    h[static_cast<std::size_t>(x + 1)] = in[x] >= 0 ? 3 : 0;
+                }
+                std::uint8_t* out = near_x.data() + q;
+                const std::uint8_t* l = h.data();
+                const std::uint8_t* c = l + 1;
+                const std::uint8_t* r = l + 2;
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    out[x] = static_cast<std::uint8_t>(((c[x] | l[x] | r[x]) & 1) |
+                                                       (c[x] & l[x] & r[x] & 2));
                 }
             }
             for (std::int64_t y = 0; y < ny; ++y) {
@@ -649,7 +658,10 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                         .nodes = m_nodes,
                         .b = b};
     const std::int64_t nz = m_nodes[2];
-    const std::int64_t num_chunks = (nz + LAYERS_PER_CHUNK - 1) / LAYERS_PER_CHUNK;
+    const std::int64_t chunks_wanted = num_threads() > 1 ? CHUNKS_PER_THREAD * num_threads() : 1;
+    const std::int64_t layers_per_chunk =
+        std::max<std::int64_t>(1, (nz + chunks_wanted - 1) / chunks_wanted);
+    const std::int64_t num_chunks = (nz + layers_per_chunk - 1) / layers_per_chunk;
     m_slot.resize(static_cast<std::size_t>(num_nodes));
     if (m_lists.size() < static_cast<std::size_t>(3 * num_chunks)) {
         m_lists.resize(static_cast<std::size_t>(3 * num_chunks));
@@ -662,8 +674,8 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     parallel_for(
         num_chunks,
         [&](std::int64_t chunk) {
-            const std::int64_t z0 = chunk * LAYERS_PER_CHUNK;
-            const std::int64_t z1 = std::min(nz, z0 + LAYERS_PER_CHUNK);
+            const std::int64_t z0 = chunk * layers_per_chunk;
+            const std::int64_t z1 = std::min(nz, z0 + layers_per_chunk);
             std::vector<TetMap>* lists[3];
             for (int k = 0; k < 3; ++k) {
                 lists[k] = &m_lists[static_cast<std::size_t>(3 * chunk + k)];

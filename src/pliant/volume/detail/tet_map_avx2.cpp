@@ -48,8 +48,8 @@ PLIANT_AVX2_INLINE void half(const double p[4][3][TET_BATCH], const double rows[
         // std::max(0.0, ceil), std::min(nodes − 1, floor); the box is empty when lo > hi (for
         // boxes that are not, both are integers in [0, nodes − 1]).
         lo[a] = std_max(zero, _mm256_round_pd(lo_nodes, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
-        const __m256d hi = std_min(
-            last, _mm256_round_pd(hi_nodes, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+        const __m256d hi =
+            std_min(last, _mm256_round_pd(hi_nodes, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
         ok = _mm256_and_pd(ok, _mm256_cmp_pd(lo[a], hi, _CMP_LE_OQ));
         const __m128i lo32 = _mm256_cvttpd_epi32(lo[a]);
         const __m128i hi32 = _mm256_cvttpd_epi32(hi);
@@ -93,8 +93,8 @@ PLIANT_AVX2_FN bool box_first_avx2(const double p[4][3][TET_BATCH],
 }
 
 #else  // no AVX2 on this target
-bool box_first_avx2(const double (*)[3][TET_BATCH], const double (*)[3][TET_BATCH],
-                    const double*, double, double, const std::int64_t*, BoxFirst&) {
+bool box_first_avx2(const double (*)[3][TET_BATCH], const double (*)[3][TET_BATCH], const double*,
+                    double, double, const std::int64_t*, BoxFirst&) {
     return false;
 }
 #endif
