@@ -361,6 +361,22 @@ void expect_reference_map(const Volume& source, const Volume& target,
                                   expected.size() * sizeof(float)),
                       0)
                 << what << ", " << threads << " threads, AVX2 allowed: " << avx2;
+            // Each row's extent: from its first node that is not empty to its last.
+            const std::span<const std::int32_t> extents = map.node_row_extents();
+            ASSERT_EQ(extents.size(), static_cast<std::size_t>(2 * nodes[1] * nodes[2])) << what;
+            for (std::int64_t row = 0; row < nodes[1] * nodes[2]; ++row) {
+                std::int64_t first = 0, end = 0;
+                for (std::int64_t x = 0; x < nodes[0]; ++x) {
+                    if (!std::isnan(expected[static_cast<std::size_t>(3 * (x + nodes[0] * row))])) {
+                        first = end == 0 ? x : first;
+                        end = x + 1;
+                    }
+                }
+                EXPECT_EQ(extents[static_cast<std::size_t>(2 * row)], first)
+                    << what << ", row " << row;
+                EXPECT_EQ(extents[static_cast<std::size_t>(2 * row + 1)], end)
+                    << what << ", row " << row;
+            }
         }
     }
     allow_avx2(true);

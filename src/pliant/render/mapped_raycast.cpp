@@ -546,11 +546,30 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
+    const std::int32_t* extents = map.node_row_extents().data();
     parallel_for(
         cz_n,
         [&](std::int64_t cz) {
             for (std::int64_t cy = 0; cy < cy_n; ++cy) {
-                for (std::int64_t cx = 0; cx < cx_n; ++cx) {
+                // Cells with both x nodes inside the 4 node rows' extents (the others have an
+                // empty node): [x0, x1).
+                std::int64_t x0 = 0;
+                std::int64_t x1 = cx_n;
+                for (const std::int64_t row :
+                     {cy + nodes[1] * cz, cy + 1 + nodes[1] * cz, cy + nodes[1] * (cz + 1),
+                      cy + 1 + nodes[1] * (cz + 1)}) {
+                    x0 = std::max<std::int64_t>(x0, extents[2 * row]);
+                    x1 = std::min<std::int64_t>(x1, extents[2 * row + 1] - 1);
+                }
+                const auto row_cell = static_cast<std::size_t>(cx_n * (cy + cy_n * cz));
+                if (x0 >= x1) {
+                    x0 = x1 = 0;
+                }
+                std::fill_n(m_occupancy.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
+                std::fill_n(m_sub_occupied.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
+                            0);
+                std::fill_n(m_visible.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
+                for (std::int64_t cx = x0; cx < x1; ++cx) {
                     const auto cell = static_cast<std::size_t>(cx + cx_n * (cy + cy_n * cz));
                     const std::int64_t base = cx + nx * cy + nxy * cz;
                     // Most cells away from the body have an empty node: passed over at the

@@ -273,6 +273,7 @@ struct NodePass {
     const std::uint8_t* near_xy;           // per node: bit 0, 1 of the dilation, erosion (build())
     std::int32_t* slot;                    // per held node: its index in its layer's list
     float* g;                              // 3 per node: the map's values
+    std::int32_t* row_extents;             // 2 per row of nodes (InverseMap::node_row_extents())
     std::array<std::int64_t, 3> nodes;
     double b;
 
@@ -285,6 +286,15 @@ struct NodePass {
         out[0] = static_cast<float>(r.x);
         out[1] = static_cast<float>(r.y);
         out[2] = static_cast<float>(r.z);
+    }
+
+    // Widens a row's extent [first, end) of nodes that are not empty (first = end: none yet) to
+    // node x, the row's nodes visited in increasing x.
+    static void widen(std::int32_t extent[2], std::int64_t x) {
+        if (extent[0] == extent[1]) {
+            extent[0] = static_cast<std::int32_t>(x);
+        }
+        extent[1] = static_cast<std::int32_t>(x + 1);
     }
 
     void store_empty(std::int64_t q) const {
@@ -380,10 +390,13 @@ struct NodePass {
         const std::uint8_t* layer_above = z + 1 < nodes[2] ? layer + nxy : layer;
         std::int64_t count = 0;
         for (std::int64_t y = 0; y < ny; ++y) {
+            std::int32_t* extent = row_extents + 2 * (y + ny * z);
+            extent[0] = extent[1] = 0;
             for (std::int64_t x = 0; x < nx; ++x) {
                 const std::int64_t q = x + nx * y + nxy * z;
                 const std::int64_t in_layer = x + nx * y;
                 if (holder[q] >= 0) {
+                    widen(extent, x);
                     continue;  // written by layer_maps()
                 }
                 if (((layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) & 1) == 0) {
@@ -415,6 +428,7 @@ struct NodePass {
                 }
                 if (best > -std::numeric_limits<double>::infinity()) {
                     store(q, best_rest);
+                    widen(extent, x);
                     ++count;
                 } else {
                     store_empty(q);
@@ -538,6 +552,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const std::int64_t num_nodes = nxy * m_nodes[2];
     m_g.resize(static_cast<std::size_t>(3 * num_nodes));  // every node written below
     m_holder.assign(static_cast<std::size_t>(num_nodes), -1);
+    m_row_extents.resize(static_cast<std::size_t>(2 * m_nodes[1] * m_nodes[2]));
     std::vector<std::int32_t>& holder = m_holder;
 
     // 0. Every vertex in grid coordinates: deformed in the target's, rest in the source's.
@@ -655,6 +670,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                         .near_xy = near_xy.data(),
                         .slot = nullptr,
                         .g = m_g.data(),
+                        .row_extents = m_row_extents.data(),
                         .nodes = m_nodes,
                         .b = b};
     const std::int64_t nz = m_nodes[2];

@@ -78,11 +78,15 @@ public:
     const std::array<std::int64_t, 3>& nodes() const { return m_nodes; }
     // 3 floats per node (x fastest), source grid coordinates; NaN: empty.
     std::span<const float> node_coordinates() const { return m_g; }
+    // Per row of nodes (y, z), at 2 (y + nodes()[1] · z): [first, end) along x, the range that
+    // holds every node of the row that is not empty (first = end: every node is empty).
+    std::span<const std::int32_t> node_row_extents() const { return m_row_extents; }
 
 private:
     int m_b = 4;
     std::array<std::int64_t, 3> m_nodes{0, 0, 0};
     std::vector<float> m_g;
+    std::vector<std::int32_t> m_row_extents;
     // Scratch of build(), kept between builds (no allocation per frame): the holder tet per node
     // (−1: none), the vertices in grid coordinates (deformed: target's, rest: source's), the
     // dilation and erosion of the held nodes, per held node next to the shell the index of its
