@@ -12,6 +12,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 #include "pliant/volume/generate.hpp"
 #include "pliant/volume/resample.hpp"
@@ -345,19 +346,40 @@ void expect_reference_map(const Volume& source, const Volume& target,
     std::array<std::int64_t, 3> nodes{};
     const std::vector<float> expected =
         reference_map(source, target, tets, rest, deformed, b, nodes);
-    for (const int threads : {1, 2}) {
-        set_num_threads(threads);
-        InverseMap map;
-        const InverseMapStats stats =
-            map.build(source, target, tets, rest, deformed, {.node_voxels = b});
-        EXPECT_GT(stats.num_inside, 0) << what;
-        ASSERT_EQ(map.nodes(), nodes) << what;
-        ASSERT_EQ(map.node_coordinates().size(), expected.size()) << what;
-        EXPECT_EQ(std::memcmp(map.node_coordinates().data(), expected.data(),
-                              expected.size() * sizeof(float)),
-                  0)
-            << what << ", " << threads << " threads";
+    // The AVX2 pass over the tets (where the CPU has AVX2) and the scalar one.
+    for (const bool avx2 : {true, false}) {
+        allow_avx2(avx2);
+        for (const int threads : {1, 2}) {
+            set_num_threads(threads);
+            InverseMap map;
+            const InverseMapStats stats =
+                map.build(source, target, tets, rest, deformed, {.node_voxels = b});
+            EXPECT_GT(stats.num_inside, 0) << what;
+            ASSERT_EQ(map.nodes(), nodes) << what;
+            ASSERT_EQ(map.node_coordinates().size(), expected.size()) << what;
+            EXPECT_EQ(std::memcmp(map.node_coordinates().data(), expected.data(),
+                                  expected.size() * sizeof(float)),
+                      0)
+                << what << ", " << threads << " threads, AVX2 allowed: " << avx2;
+            // Each row's extent: from its first node that is not empty to its last.
+            const std::span<const std::int32_t> extents = map.node_row_extents();
+            ASSERT_EQ(extents.size(), static_cast<std::size_t>(2 * nodes[1] * nodes[2])) << what;
+            for (std::int64_t row = 0; row < nodes[1] * nodes[2]; ++row) {
+                std::int64_t first = 0, end = 0;
+                for (std::int64_t x = 0; x < nodes[0]; ++x) {
+                    if (!std::isnan(expected[static_cast<std::size_t>(3 * (x + nodes[0] * row))])) {
+                        first = end == 0 ? x : first;
+                        end = x + 1;
+                    }
+                }
+                EXPECT_EQ(extents[static_cast<std::size_t>(2 * row)], first)
+                    << what << ", row " << row;
+                EXPECT_EQ(extents[static_cast<std::size_t>(2 * row + 1)], end)
+                    << what << ", row " << row;
+            }
+        }
     }
+    allow_avx2(true);
     set_num_threads(0);
 }
 

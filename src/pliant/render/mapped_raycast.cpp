@@ -60,6 +60,52 @@ inline std::uint64_t range_mask(int a, std::int64_t b, std::int64_t v0, std::int
     return BRICK_MASKS[static_cast<std::size_t>(a)][lo][hi];
 }
 
+// Dilates brick bits (bricks[a] bricks of 4³ voxels per axis, x fastest) by one voxel toward
+// −x, −y and −z: voxel (x, y, z) of the result is set when a voxel of {x, x + 1} × {y, y + 1} ×
+// {z, z + 1} is set in the input (bits past the volume's end are 0 in the input). Separable:
+// x and y in place per brick layer (a brick reads its successor before the successor is
+// written), then z per brick row.
+void dilate_bricks(std::vector<std::uint64_t>& bits, const std::array<std::int64_t, 3>& bricks) {
+    const std::uint64_t x0 = brick_mask(0, 0, 0), x3 = brick_mask(0, 3, 3);
+    const std::uint64_t y0 = brick_mask(1, 0, 0), y3 = brick_mask(1, 3, 3);
+    const std::uint64_t z0 = brick_mask(2, 0, 0);
+    const std::int64_t bx = bricks[0], by = bricks[1], bz = bricks[2];
+    std::uint64_t* w = bits.data();
+    parallel_for(
+        bz,
+        [&](std::int64_t z) {
+            for (std::int64_t y = 0; y < by; ++y) {
+                std::uint64_t* row = w + bx * (y + by * z);
+                for (std::int64_t x = 0; x < bx; ++x) {
+                    const std::uint64_t next = x + 1 < bx ? row[x + 1] : 0;
+                    row[x] |= ((row[x] >> 1) & ~x3) | ((next & x0) << 3);
+                }
+            }
+            for (std::int64_t y = 0; y < by; ++y) {
+                std::uint64_t* row = w + bx * (y + by * z);
+                const std::uint64_t* next = y + 1 < by ? row + bx : nullptr;
+                for (std::int64_t x = 0; x < bx; ++x) {
+                    const std::uint64_t n = next != nullptr ? next[x] : 0;
+                    row[x] |= ((row[x] >> 4) & ~y3) | ((n & y0) << 12);
+                }
+            }
+        },
+        1);
+    parallel_for(
+        by,
+        [&](std::int64_t y) {
+            for (std::int64_t z = 0; z < bz; ++z) {
+                std::uint64_t* row = w + bx * (y + by * z);
+                const std::uint64_t* next = z + 1 < bz ? row + bx * by : nullptr;
+                for (std::int64_t x = 0; x < bx; ++x) {
+                    const std::uint64_t n = next != nullptr ? next[x] : 0;
+                    row[x] |= (row[x] >> 16) | ((n & z0) << 48);
+                }
+            }
+        },
+        1);
+}
+
 // The octants (detail::octant_of(), and the flips of detail::zero_axes_of()) that the rays of
 // kernel k may have. A ray's grid direction has the signs of v = forward + cx·right + cy·up
 // (perspective; forward itself for orthographic: every ray), v affine in the pixel's (cx, cy):
@@ -142,6 +188,7 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         m_source = std::make_unique<RayCaster>(source, tf, source_options);
     }
     m_step = m_source->step();
+    m_is_rgba = m_source->m_is_rgba;
     m_source_dims = source.dims();
     m_target_dims = target.dims();
     m_target_spacing = target.spacing();
@@ -187,8 +234,8 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
     }
     if (m_source->m_is_rgba) {
         // Bricks of 4³ voxels, bit (x & 3) + 4 (y & 3) + 16 (z & 3) set for a voxel with α > 0
-        // (bits past the volume's end stay 0). Parallel over brick layers, each written by one
-        // task.
+        // (bits past the volume's end stay 0), then dilated (dilate_bricks()). Parallel over
+        // brick layers, each written by one task.
         for (int a = 0; a < 3; ++a) {
             m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
         }
@@ -214,6 +261,7 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
                 }
             },
             1);
+        dilate_bricks(m_brick_bits, m_bricks);
     }
     if (options.shading) {
         build_gradient();
@@ -310,12 +358,29 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
         v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
                 (n > 1 ? 1 : 0);
     }
-    if (m_source->m_is_rgba) {
-        // Voxels with α > 0 in the box, from the bricks it overlaps (exact per voxel).
+    if (m_is_rgba) {
+        // Voxels with α > 0 in the box [v0, v1], from the dilated bricks (dilate_bricks(): bit
+        // v covers voxels v and v + 1 per axis) at [v0, v1 − 1] (exact per voxel; v1 = v0 on an
+        // axis of one voxel, whose bits cover that voxel alone). A point (the cell's centre)
+        // reads one bit.
+        for (int a = 0; a < 3; ++a) {
+            v1[a] -= m_source_dims[static_cast<std::size_t>(a)] > 1 ? 1 : 0;
+        }
         std::int64_t b0[3], b1[3];
         for (int a = 0; a < 3; ++a) {
             b0[a] = v0[a] >> BRICK_SHIFT;
             b1[a] = v1[a] >> BRICK_SHIFT;
+        }
+        if (b0[0] == b1[0] && b0[1] == b1[1] && b0[2] == b1[2]) {  // one brick (most points)
+            const std::uint64_t word = m_brick_bits[static_cast<std::size_t>(
+                b0[0] + m_bricks[0] * (b0[1] + m_bricks[1] * b0[2]))];
+            std::uint64_t mask = word;
+            for (int a = 0; a < 3; ++a) {
+                mask &=
+                    BRICK_MASKS[static_cast<std::size_t>(a)][static_cast<std::size_t>(v0[a] & 3)]
+                               [static_cast<std::size_t>(v1[a] & 3)];
+            }
+            return mask != 0;
         }
         for (std::int64_t bz = b0[2]; bz <= b1[2]; ++bz) {
             const std::uint64_t mz = range_mask(2, bz, v0[2], v1[2]);
@@ -356,6 +421,39 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
            0;
 }
 
+bool MappedRayCaster::point_visible(const float p[3]) const {
+    if (!m_is_rgba) {
+        return hull_visible(p, p);
+    }
+    // hull_visible(p, p)'s voxel range and dilated bits, the common case of one brick inline.
+    std::int64_t v0[3], v1[3];
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t n = m_source_dims[static_cast<std::size_t>(a)];
+        const auto last = static_cast<float>(n - 1);
+        const float l = p[a] - HULL_MARGIN;
+        const float h = p[a] + HULL_MARGIN;
+        if (h < -0.5f || l > last + 0.5f) {
+            return false;
+        }
+        const std::int64_t max_i0 = std::max<std::int64_t>(0, n - 2);
+        v0[a] = std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
+        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0);
+        if ((v0[a] >> BRICK_SHIFT) != (v1[a] >> BRICK_SHIFT)) {
+            return hull_visible(p, p);
+        }
+    }
+    const std::uint64_t word = m_brick_bits[static_cast<std::size_t>(
+        (v0[0] >> BRICK_SHIFT) +
+        m_bricks[0] * ((v0[1] >> BRICK_SHIFT) + m_bricks[1] * (v0[2] >> BRICK_SHIFT)))];
+    return (word &
+            BRICK_MASKS[0][static_cast<std::size_t>(v0[0] & 3)]
+                       [static_cast<std::size_t>(v1[0] & 3)] &
+            BRICK_MASKS[1][static_cast<std::size_t>(v0[1] & 3)]
+                       [static_cast<std::size_t>(v1[1] & 3)] &
+            BRICK_MASKS[2][static_cast<std::size_t>(v0[2] & 3)]
+                       [static_cast<std::size_t>(v1[2] & 3)]) != 0;
+}
+
 std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,
                                                 const std::int64_t off[8], const float lo[3],
                                                 const float hi[3]) const {
@@ -370,7 +468,7 @@ std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t bas
                              0.5f * (0.5f * (v[3 * off[4]] + v[3 * off[5]]) +
                                      0.5f * (v[3 * off[6]] + v[3 * off[7]])));
     }
-    if (hull_visible(centre, centre)) {
+    if (point_visible(centre)) {
         return 0xFF;
     }
     if (!hull_visible(lo, hi)) {
@@ -448,28 +546,58 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
+    const std::int32_t* extents = map.node_row_extents().data();
     parallel_for(
         cz_n,
         [&](std::int64_t cz) {
             for (std::int64_t cy = 0; cy < cy_n; ++cy) {
-                for (std::int64_t cx = 0; cx < cx_n; ++cx) {
+                // Cells with both x nodes inside the 4 node rows' extents (the others have an
+                // empty node): [x0, x1).
+                std::int64_t x0 = 0;
+                std::int64_t x1 = cx_n;
+                for (const std::int64_t row :
+                     {cy + nodes[1] * cz, cy + 1 + nodes[1] * cz, cy + nodes[1] * (cz + 1),
+                      cy + 1 + nodes[1] * (cz + 1)}) {
+                    x0 = std::max<std::int64_t>(x0, extents[2 * row]);
+                    x1 = std::min<std::int64_t>(x1, extents[2 * row + 1] - 1);
+                }
+                const auto row_cell = static_cast<std::size_t>(cx_n * (cy + cy_n * cz));
+                if (x0 >= x1) {
+                    x0 = x1 = 0;
+                }
+                std::fill_n(m_occupancy.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
+                std::fill_n(m_sub_occupied.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
+                            0);
+                std::fill_n(m_visible.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
+                for (std::int64_t cx = x0; cx < x1; ++cx) {
                     const auto cell = static_cast<std::size_t>(cx + cx_n * (cy + cy_n * cz));
                     const std::int64_t base = cx + nx * cy + nxy * cz;
-                    float lo[3] = {std::numeric_limits<float>::infinity(),
-                                   std::numeric_limits<float>::infinity(),
-                                   std::numeric_limits<float>::infinity()};
-                    float hi[3] = {-lo[0], -lo[1], -lo[2]};
+                    // Most cells away from the body have an empty node: passed over at the
+                    // first one.
                     bool valid = true;
                     for (const std::int64_t o : off) {
-                        const float* v = g + 3 * (base + o);
-                        valid = valid && !std::isnan(v[0]);
+                        if (std::isnan(g[3 * (base + o)])) {
+                            valid = false;
+                            break;
+                        }
+                    }
+                    if (!valid) {
+                        m_occupancy[cell] = 0;
+                        m_sub_occupied[cell] = 0;
+                        m_visible[cell] = 0;
+                        continue;
+                    }
+                    float lo[3] = {g[3 * base], g[3 * base + 1], g[3 * base + 2]};
+                    float hi[3] = {lo[0], lo[1], lo[2]};
+                    for (int c = 1; c < 8; ++c) {
+                        const float* v = g + 3 * (base + off[c]);
                         for (int a = 0; a < 3; ++a) {
                             lo[a] = std::min(lo[a], v[a]);
                             hi[a] = std::max(hi[a], v[a]);
                         }
                     }
-                    std::uint8_t bits = valid ? detail::MAP_CELL_VALID : 0;
-                    const std::uint8_t sub = valid ? sub_cells_visible(g, base, off, lo, hi) : 0;
+                    std::uint8_t bits = detail::MAP_CELL_VALID;
+                    const std::uint8_t sub = sub_cells_visible(g, base, off, lo, hi);
                     if (sub != 0) {
                         bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
                     }

@@ -33,8 +33,10 @@
 //     source voxel that a sample in it can read has opacity, tested conservatively: trilinear
 //     interpolation stays in the convex hull of its 8 nodes, so its samples lie in the box of
 //     the node values (widened by 1/32 voxel for rounding), and the voxels their interpolation
-//     reads are tested: RGBA through bricks of 4³ voxels, 64 bits each, a bit set per voxel with
-//     α > 0 (exact per voxel; 2 MB for 256³, built once: a box reads a word per brick it
+//     reads are tested: RGBA through bricks of 4³ voxels, 64 bits each, the bit of voxel v set
+//     when a voxel of {v, v + 1}³ has α > 0 (the α bits dilated toward −x, −y, −z once: the
+//     voxel range [v0, v1] of a box is exactly bits [v0, v1 − 1], so the point at a cell's
+//     centre reads one bit of one word; 2 MB for 256³; a box reads a word per brick it
 //     overlaps), scalars through per-2³-block minima and maxima (the
 //     lookup entries of [min, max] widened by detail::LERP_ROUNDING, as RayCaster tests its
 //     cells). Each visible cell has 8 sub-cells (its halves along each axis, (B/2)³ target
@@ -54,7 +56,8 @@
 //     (tested against the same source as rgba32f). rgba32f and scalar sources are read from the
 //     float copy.
 //   - Composite mode only (MIP through the map: InvalidInput).
-// Cost per frame: set_map() is O(map cells) (parallel over layers) plus a copy of the nodes
+// Cost per frame: set_map() is O(map cells) (parallel over layers; the cells outside the map's
+// node row extents, InverseMap::node_row_extents(), only cleared) plus a copy of the nodes
 // padded to 4 floats; the first render() after it computes the empty cubes (O(map cells) each)
 // of the octants its rays can have (1–4 for a camera outside the volume: the signs of the ray
 // directions at the image's 4 corners, both signs of an axis where they are within 1e-5 of 0),
@@ -120,6 +123,8 @@ private:
     // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
     // value range reaches a lookup entry with opacity (scalar).
     bool hull_visible(const float lo[3], const float hi[3]) const;
+    // hull_visible(p, p), an RGBA source's common case (one brick) without the loops.
+    bool point_visible(const float p[3]) const;
     // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
     // over layers (each written by one task: the same values for any number of threads).
     void build_gradient();
@@ -153,7 +158,9 @@ private:
     std::vector<std::uint8_t> m_occupancy;     // per map cell, detail::MAP_CELL_* bits
     std::vector<std::uint8_t> m_sub_occupied;  // per map cell, its visible sub-cells' bits
     std::vector<std::uint8_t> m_visible;       // per map cell, 0 / 1 (empty_cubes' input)
-    // RGBA: the source voxels with α > 0, a 64-bit word per brick of 4³ voxels (x fastest).
+    // RGBA: the source voxels with α > 0 dilated by one voxel toward −x, −y, −z (bit v set when
+    // a voxel of {v, v + 1}³ has α > 0), a 64-bit word per brick of 4³ voxels (x fastest).
+    bool m_is_rgba = false;  // the source's, read per test
     std::array<std::int64_t, 3> m_bricks{0, 0, 0};
     std::vector<std::uint64_t> m_brick_bits;
     // 8 octants × map cells, those of m_octants_ready computed (render() computes the octants

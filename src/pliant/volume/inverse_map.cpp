@@ -11,7 +11,9 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/volume/detail/resample_kernel.hpp"
+#include "pliant/volume/detail/tet_map_avx2.hpp"
 #include "pliant/volume/resample.hpp"
 
 namespace pliant::volume {
@@ -42,7 +44,7 @@ void tet_vertices(const geometry::Tet& tet, std::span<const Vec3d> grid, Vec3d p
 // products of core/vec3.hpp's cross() and dot() in their order (no contraction,
 // -ffp-contract=off), so that any other place computing a tet's rows this way gets the same
 // bits. A tet is degenerate (its rows unused) when det is 0 or not finite.
-constexpr int FRAME_BATCH = 8;
+constexpr int FRAME_BATCH = detail::TET_BATCH;
 struct FrameBatch {
     double p[4][3][FRAME_BATCH];
     double det[FRAME_BATCH];
@@ -135,13 +137,13 @@ struct HoldPass {
         return false;
     }
 
-    // Records the value at node (x, y, z) of tet t's map (frame m, barycentric coordinates l
-    // there), as detail::TetMap::rest() computes it.
-    void record(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t t, const TetMap& m,
-                const double l[3], std::vector<HeldValue>& out) const {
+    // Records the value at node (x, y, z) of tet t's map (barycentric coordinates l there), as
+    // detail::TetMap::rest() computes it.
+    void record(std::int64_t x, std::int64_t y, std::int64_t z, std::int32_t t, const double l[3],
+                std::vector<HeldValue>& out) const {
         Vec3d r[4];
         tet_vertices(tets[static_cast<std::size_t>(t)], rest_grid, r);
-        TetMap full = m;
+        TetMap full;
         full.r3 = r[3];
         for (int k = 0; k < 3; ++k) {
             full.dr[k] = r[k] - r[3];
@@ -187,6 +189,49 @@ struct HoldPass {
         return det;
     }
 
+    // tets_one_by_one() with the boxes and their first nodes' tests 8 tets at a time
+    // (detail::box_first_avx2(), the same bits); false (nothing done) without AVX2.
+    bool tets_batched(std::int64_t first, std::int64_t end, std::vector<HeldValue>& out) const {
+        FrameBatch f;
+        frames(first, end, f);
+        detail::BoxFirst boxes;
+        const std::int64_t n[3] = {nodes[0], nodes[1], nodes[2]};
+        if (!detail::box_first_avx2(f.p, f.rows, f.det, b, inv_b, n, boxes)) {
+            return false;
+        }
+        unsigned todo =
+            static_cast<unsigned>(boxes.boxes) & ((1u << static_cast<unsigned>(end - first)) - 1u);
+        while (todo != 0) {
+            const int i = std::countr_zero(todo);
+            todo &= todo - 1;
+            const auto index = static_cast<std::int32_t>(first + i);
+            const std::int64_t lo[3] = {boxes.lo[0][i], boxes.lo[1][i], boxes.lo[2][i]};
+            const std::int64_t hi[3] = {boxes.hi[0][i], boxes.hi[1][i], boxes.hi[2][i]};
+            if ((boxes.inside >> i & 1) != 0 && raise(lo[0], lo[1], lo[2], index)) {
+                const double l[3] = {boxes.l[0][i], boxes.l[1][i], boxes.l[2][i]};
+                record(lo[0], lo[1], lo[2], index, l, out);
+            }
+            if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
+                continue;  // one node (most boxes)
+            }
+            Vec3d p[4];
+            TetMap m;
+            lane(f, i, p, m);
+            for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                    for (std::int64_t x = z == lo[2] && y == lo[1] ? lo[0] + 1 : lo[0]; x <= hi[0];
+                         ++x) {
+                        double l[3];
+                        if (m.lambda(node_at(x, y, z), l) >= INSIDE && raise(x, y, z, index)) {
+                            record(x, y, z, index, l, out);
+                        }
+                    }
+                }
+            }
+        }
+        return true;
+    }
+
     // Tets [first, end), end − first ≤ FRAME_BATCH, each over the nodes of its box.
     void tets_one_by_one(std::int64_t first, std::int64_t end, std::vector<HeldValue>& out) const {
         FrameBatch f;
@@ -205,7 +250,7 @@ struct HoldPass {
                     for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
                         double l[3];
                         if (m.lambda(node_at(x, y, z), l) >= INSIDE && raise(x, y, z, index)) {
-                            record(x, y, z, index, m, l, out);
+                            record(x, y, z, index, l, out);
                         }
                     }
                 }
@@ -214,8 +259,11 @@ struct HoldPass {
     }
 };
 
-// The held nodes' maps and the shell (steps 1 (b) and 2 of InverseMap::build), layer by layer.
-constexpr std::int64_t LAYERS_PER_CHUNK = 8;
+// The held nodes' maps and the shell (steps 1 (b) and 2 of InverseMap::build), layer by layer,
+// over chunks of layers: 2 per thread, 1 on one thread (a chunk also computes the maps of the
+// layers on either side of it, so fewer chunks compute fewer maps twice; the map is the same for
+// any chunking).
+constexpr std::int64_t CHUNKS_PER_THREAD = 2;
 
 struct NodePass {
     std::span<const geometry::Tet> tets;
@@ -225,6 +273,7 @@ struct NodePass {
     const std::uint8_t* near_xy;           // per node: bit 0, 1 of the dilation, erosion (build())
     std::int32_t* slot;                    // per held node: its index in its layer's list
     float* g;                              // 3 per node: the map's values
+    std::int32_t* row_extents;             // 2 per row of nodes (InverseMap::node_row_extents())
     std::array<std::int64_t, 3> nodes;
     double b;
 
@@ -237,6 +286,15 @@ struct NodePass {
         out[0] = static_cast<float>(r.x);
         out[1] = static_cast<float>(r.y);
         out[2] = static_cast<float>(r.z);
+    }
+
+    // Widens a row's extent [first, end) of nodes that are not empty (first = end: none yet) to
+    // node x, the row's nodes visited in increasing x.
+    static void widen(std::int32_t extent[2], std::int64_t x) {
+        if (extent[0] == extent[1]) {
+            extent[0] = static_cast<std::int32_t>(x);
+        }
+        extent[1] = static_cast<std::int32_t>(x + 1);
     }
 
     void store_empty(std::int64_t q) const {
@@ -332,10 +390,13 @@ struct NodePass {
         const std::uint8_t* layer_above = z + 1 < nodes[2] ? layer + nxy : layer;
         std::int64_t count = 0;
         for (std::int64_t y = 0; y < ny; ++y) {
+            std::int32_t* extent = row_extents + 2 * (y + ny * z);
+            extent[0] = extent[1] = 0;
             for (std::int64_t x = 0; x < nx; ++x) {
                 const std::int64_t q = x + nx * y + nxy * z;
                 const std::int64_t in_layer = x + nx * y;
                 if (holder[q] >= 0) {
+                    widen(extent, x);
                     continue;  // written by layer_maps()
                 }
                 if (((layer[in_layer] | layer_below[in_layer] | layer_above[in_layer]) & 1) == 0) {
@@ -367,6 +428,7 @@ struct NodePass {
                 }
                 if (best > -std::numeric_limits<double>::infinity()) {
                     store(q, best_rest);
+                    widen(extent, x);
                     ++count;
                 } else {
                     store_empty(q);
@@ -490,6 +552,7 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     const std::int64_t num_nodes = nxy * m_nodes[2];
     m_g.resize(static_cast<std::size_t>(3 * num_nodes));  // every node written below
     m_holder.assign(static_cast<std::size_t>(num_nodes), -1);
+    m_row_extents.resize(static_cast<std::size_t>(2 * m_nodes[1] * m_nodes[2]));
     std::vector<std::int32_t>& holder = m_holder;
 
     // 0. Every vertex in grid coordinates: deformed in the target's, rest in the source's.
@@ -523,13 +586,17 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     if (m_held_values.size() < static_cast<std::size_t>(num_value_lists)) {
         m_held_values.resize(static_cast<std::size_t>(num_value_lists));
     }
+    const bool use_avx2 = has_avx2();
     parallel_for_chunks(
         num_batches, BATCHES_PER_CHUNK, [&](std::int64_t c, std::int64_t begin, std::int64_t end) {
             std::vector<HeldValue>& out = m_held_values[static_cast<std::size_t>(c)];
             out.clear();
             for (std::int64_t batch = begin; batch < end; ++batch) {
                 const std::int64_t first = batch * FRAME_BATCH;
-                hold.tets_one_by_one(first, std::min(num_tets, first + FRAME_BATCH), out);
+                const std::int64_t last = std::min(num_tets, first + FRAME_BATCH);
+                if (!use_avx2 || !hold.tets_batched(first, last, out)) {
+                    hold.tets_one_by_one(first, last, out);
+                }
             }
         });
     // (b) Each held node's value: the one its holder recorded (exactly one record per node has
@@ -559,19 +626,25 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     // Bit 0: some node of the 3 × 3 (in x, y) is held; bit 1: every node of it inside the grid
     // is held (an erosion: a held node whose 3 × 3 × 3 has bit 1 everywhere has no neighbour in
     // the shell, and no shell node reads its map).
-    const auto held = [&](std::int64_t q) {
-        return holder[static_cast<std::size_t>(q)] >= 0 ? 3 : 0;
-    };
     parallel_for(
         m_nodes[2],
         [&](std::int64_t z) {
+            // Per row: 3 where held, 0 where not, 2 past either end (no node: not held, and no
+            // obstacle to the erosion); two loops without branches, which the compiler
+            // vectorizes.
+            std::vector<std::uint8_t> h(static_cast<std::size_t>(nx + 2), 2);
             for (std::int64_t q = nxy * z; q < nxy * (z + 1); q += nx) {
+                const std::int32_t* in = holder.data() + q;
                 for (std::int64_t x = 0; x < nx; ++x) {
-                    const int c = held(q + x);
-                    const int l = x > 0 ? held(q + x - 1) : 2;
-                    const int r = x + 1 < nx ? held(q + x + 1) : 2;
-                    near_x[static_cast<std::size_t>(q + x)] =
-                        static_cast<std::uint8_t>(((c | l | r) & 1) | (c & l & r & 2));
+                    h[static_cast<std::size_t>(x + 1)] = in[x] >= 0 ? 3 : 0;
+                }
+                std::uint8_t* out = near_x.data() + q;
+                const std::uint8_t* l = h.data();
+                const std::uint8_t* c = l + 1;
+                const std::uint8_t* r = l + 2;
+                for (std::int64_t x = 0; x < nx; ++x) {
+                    out[x] = static_cast<std::uint8_t>(((c[x] | l[x] | r[x]) & 1) |
+                                                       (c[x] & l[x] & r[x] & 2));
                 }
             }
             for (std::int64_t y = 0; y < ny; ++y) {
@@ -597,10 +670,14 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
                         .near_xy = near_xy.data(),
                         .slot = nullptr,
                         .g = m_g.data(),
+                        .row_extents = m_row_extents.data(),
                         .nodes = m_nodes,
                         .b = b};
     const std::int64_t nz = m_nodes[2];
-    const std::int64_t num_chunks = (nz + LAYERS_PER_CHUNK - 1) / LAYERS_PER_CHUNK;
+    const std::int64_t chunks_wanted = num_threads() > 1 ? CHUNKS_PER_THREAD * num_threads() : 1;
+    const std::int64_t layers_per_chunk =
+        std::max<std::int64_t>(1, (nz + chunks_wanted - 1) / chunks_wanted);
+    const std::int64_t num_chunks = (nz + layers_per_chunk - 1) / layers_per_chunk;
     m_slot.resize(static_cast<std::size_t>(num_nodes));
     if (m_lists.size() < static_cast<std::size_t>(3 * num_chunks)) {
         m_lists.resize(static_cast<std::size_t>(3 * num_chunks));
@@ -613,8 +690,8 @@ InverseMapStats InverseMap::build(const Volume& source, const Volume& target,
     parallel_for(
         num_chunks,
         [&](std::int64_t chunk) {
-            const std::int64_t z0 = chunk * LAYERS_PER_CHUNK;
-            const std::int64_t z1 = std::min(nz, z0 + LAYERS_PER_CHUNK);
+            const std::int64_t z0 = chunk * layers_per_chunk;
+            const std::int64_t z1 = std::min(nz, z0 + layers_per_chunk);
             std::vector<TetMap>* lists[3];
             for (int k = 0; k < 3; ++k) {
                 lists[k] = &m_lists[static_cast<std::size_t>(3 * chunk + k)];

@@ -23,14 +23,16 @@
 // it only where neighbouring tets' maps differ (second order in the deformation's curvature);
 // tests/volume/inverse_map_test.cpp measures it against the exact resampler.
 //
-// Cost: O(#V + #T) for the inside nodes (parallel over tets, 8 frames at a time: each raises the
-// holder of the nodes it holds to its index, an atomic maximum, and records its map's value there
-// where the holder was below; each held node then takes its final holder's record) and
+// Cost: O(#V + #T) for the inside nodes (parallel over tets, 8 frames at a time, with AVX2 also
+// their node boxes and the test of each box's first node, detail/tet_map_avx2.hpp: each raises
+// the holder of the nodes it holds to its index, an atomic maximum, and records its map's value
+// there where the holder was below; each held node then takes its final holder's record) and
 // O(#nodes) for the extrapolated ones (parallel over chunks of node layers: per layer the maps
 // of the held nodes next to the shell, kept for three layers, read by the shell nodes; a
 // separable dilation of the held nodes first, so that nodes with no held neighbour are passed
-// over without reading their 26 neighbours). About 12 ms CPU at the source scale (435,160 tets,
-// 274,625 nodes), more than half of it the pass over the tets (docs/performance.md, issue 29).
+// over without reading their 26 neighbours; 2 chunks per thread, 1 on one thread). About 10 ms
+// CPU at the source scale (435,160 tets, 274,625 nodes), half of it the pass over the tets
+// (docs/performance.md, issue 29).
 // Deterministic: the same map for any number of threads. Not thread safe to build; const access
 // from many threads is.
 #pragma once
@@ -78,11 +80,15 @@ public:
     const std::array<std::int64_t, 3>& nodes() const { return m_nodes; }
     // 3 floats per node (x fastest), source grid coordinates; NaN: empty.
     std::span<const float> node_coordinates() const { return m_g; }
+    // Per row of nodes (y, z), at 2 (y + nodes()[1] · z): [first, end) along x, the range that
+    // holds every node of the row that is not empty (first = end: every node is empty).
+    std::span<const std::int32_t> node_row_extents() const { return m_row_extents; }
 
 private:
     int m_b = 4;
     std::array<std::int64_t, 3> m_nodes{0, 0, 0};
     std::vector<float> m_g;
+    std::vector<std::int32_t> m_row_extents;
     // Scratch of build(), kept between builds (no allocation per frame): the holder tet per node
     // (−1: none), the vertices in grid coordinates (deformed: target's, rest: source's), the
     // dilation and erosion of the held nodes, per held node next to the shell the index of its
