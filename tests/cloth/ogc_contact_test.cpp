@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <memory>
 #include <random>
 #include <vector>
@@ -11,7 +14,9 @@
 #include "pliant/cloth/solver.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/collision/point_triangle.hpp"
+#include "pliant/collision/segment_segment.hpp"
 #include "pliant/core/error.hpp"
+#include "pliant/geometry/topology.hpp"
 #include "support/sheets.hpp"
 
 namespace pliant::cloth {
@@ -54,6 +59,61 @@ TEST(OgcContact, TruncationKeepsAVertexOnItsSideOfThePlane) {
         ASSERT_GT(prox.distance, 0.0) << trial;
         ASSERT_EQ(collision::count_intersecting_pairs(y, t.triangles), 0) << trial;
     }
+}
+
+// Detection against every non-incident VF and EE pair by brute force: a sheet folded into
+// layers a few millimetres apart, its vertices jittered, finds exactly the pairs closer than the
+// query radius, each once.
+TEST(OgcContact, DetectsExactlyThePairsWithinTheQueryRadius) {
+    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
+    std::mt19937 random(3);
+    std::uniform_real_distribution<double> jitter(-0.002, 0.002);
+    for (Vec3d& p : sheet.positions) {
+        // Folded twice along x (layers at z = 0, 4 mm and 8 mm), then jittered.
+        const double u = p.x / 0.04 + 1.5;
+        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
+        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
+        p = {along * 0.04 + jitter(random), p.y + jitter(random), 0.004 * layer + jitter(random)};
+    }
+    const double radius = 0.003;
+    OgcContact contact(sheet.triangles, sheet.positions.size(), OgcOptions{}, radius, 100.0);
+    contact.detect(sheet.positions);
+    using Key = std::array<std::int32_t, 5>;
+    std::vector<Key> found;
+    for (const OgcContact::Pair& pair : contact.pairs()) {
+        found.push_back({pair.is_edge_edge ? 1 : 0, pair.v[0], pair.v[1], pair.v[2], pair.v[3]});
+    }
+    std::sort(found.begin(), found.end());
+    EXPECT_EQ(std::adjacent_find(found.begin(), found.end()), found.end());
+
+    const auto& x = sheet.positions;
+    const double rq = contact.query_radius();
+    std::vector<Key> expected;
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(x.size()); ++v) {
+        for (const geometry::Triangle& t : sheet.triangles) {
+            if (t[0] != v && t[1] != v && t[2] != v &&
+                collision::point_triangle_proximity(x[v], x[t[0]], x[t[1]], x[t[2]]).distance <
+                    rq) {
+                expected.push_back({0, v, t[0], t[1], t[2]});
+            }
+        }
+    }
+    const geometry::MeshTopology topology =
+        geometry::build_topology(sheet.triangles, sheet.positions.size());
+    for (std::size_t a = 0; a < topology.edges.size(); ++a) {
+        for (std::size_t b = a + 1; b < topology.edges.size(); ++b) {
+            const geometry::Edge& ea = topology.edges[a];
+            const geometry::Edge& eb = topology.edges[b];
+            if (ea[0] != eb[0] && ea[0] != eb[1] && ea[1] != eb[0] && ea[1] != eb[1] &&
+                collision::segment_segment_proximity(x[ea[0]], x[ea[1]], x[eb[0]], x[eb[1]])
+                        .distance < rq) {
+                expected.push_back({1, ea[0], ea[1], eb[0], eb[1]});
+            }
+        }
+    }
+    std::sort(expected.begin(), expected.end());
+    EXPECT_GT(expected.size(), 100U);
+    EXPECT_EQ(found, expected);
 }
 
 TEST(OgcContact, ShiftMovesTheFeasibleSetsTogether) {

@@ -81,6 +81,9 @@ OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_
             radius, stiffness));
     }
     m_broad_phase.set_pair_limit(PAIR_LIMIT);
+    // The pairs are kept by their exact distances: the float boxes alone (rounded outward) give
+    // a superset of the broad phase's exact pairs, in the same order, without its double boxes.
+    m_broad_phase.set_exact(false);
     m_snapshot.resize(num_vertices);
 }
 
