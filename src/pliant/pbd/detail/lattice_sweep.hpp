@@ -13,8 +13,10 @@
 // and the kernels are project_edges8 / project_tets8's arithmetic: results are bitwise those of
 // the plain colour-by-colour sweep (constraint_sweep.hpp), for any number of threads.
 //
-// A substep's sweep copies x into the arrays, runs the blocked edge and tet sweeps on them, and
-// copies the positions back (#V each way, parallel).
+// project_lattice copies x into the arrays, runs the blocked edge and tet sweeps on them, and
+// copies the positions back (#V each way, parallel); a step of one plain iteration instead copies
+// x in once and runs every stage of every substep on the arrays (load_lattice ..
+// finish_lattice_step).
 #pragma once
 
 #include <cstdint>
