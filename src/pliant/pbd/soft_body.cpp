@@ -443,6 +443,9 @@ void SoftBody::step(double dt) {
         s.chebyshev_current.resize(s.x.size());
         s.chebyshev_previous.resize(s.x.size());
     }
+    // One plain iteration on a grid with AVX2: the whole step on the lattice sweep's arrays, x
+    // copied into them once (lattice_sweep.hpp; the same bits as the general loop below).
+    const bool in_solver_order = use_lattice && m_options.iterations == 1 && !accelerate;
     Stopwatch substeps_watch;
     for (int sub = 0; sub < n; ++sub) {
         // Step 1 (soft_body.hpp): predict; after the first substep, fused into the previous
@@ -454,6 +457,24 @@ void SoftBody::step(double dt) {
             detail::place_driven_vertices(x, s.drivers, s.box, s.rest, s.driven, s.grab,
                                           m_time + h * (sub + 1),
                                           static_cast<float>(sub + 1) / static_cast<float>(n));
+            if (in_solver_order && sub > 0) {
+                detail::load_lattice_vertices(x, s.driven.vertices, s.lattice);
+            }
+        }
+        if (in_solver_order) {
+            if (sub == 0) {
+                detail::load_lattice(x, s.previous, s.inv_masses, s.pinned, s.lattice);
+            }
+            detail::sweep_lattice(s.lattice, s.edge_constraints, s.tet_constraints, k.edges,
+                                  k.volumes, s.inversion.tet_at_risk, s.inversion.colour_at_risk);
+            detail::guard_lattice(s.lattice, s.tet_constraints, s.inversion);
+            if (sub + 1 < n) {
+                detail::finish_lattice_substep(s.lattice, k.motion);
+            } else {
+                detail::finish_lattice_step(s.lattice, k.motion, x, s.previous, s.velocities,
+                                            s.positions);
+            }
+            continue;
         }
         if (accelerate) {
             detail::chebyshev_begin(x, s.chebyshev_current, s.chebyshev_previous);

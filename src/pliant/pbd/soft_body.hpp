@@ -12,7 +12,8 @@
 //      ∇_1 C = (x2 − x0) × (x3 − x0) / 6 (and cyclically), ∇_0 C = −Σ ∇_k C (Müller et al.,
 //      "Position Based Dynamics", 2007, eq. 16);
 //      each constraint: Δλ = −C / (Σ_k w_k |∇_k C|² + α̃), x_k += w_k ∇_k C Δλ (XPBD eq. 17–18,
-//      λ starting at 0 in every substep);
+//      λ starting at 0 in every substep; the kernels project a tet as C' = 6 C with 36 α̃, the
+//      same motion without the products by 1/6, detail/projection.hpp);
 //   3b. inversion guard (below): for the tets flagged at risk, C = V − 0.1 V0 ≥ 0, hard;
 //   4. v = (x − x_previous) / h, then v *= max(0, 1 − damping · h).
 //

@@ -12,7 +12,52 @@ InversionFlags unflagged(const TetConstraints& tets) {
     return flags;
 }
 
-void guard_flagged_tets(Float4* x, const TetConstraints& tets, InversionFlags& flags) {
+namespace {
+
+// The guard's access to the vertices: on Float4s by vertex index.
+struct PackedVertices {
+    Float4* x;
+    bool guard(const geometry::Tet& t, float rest_volume) const {
+        return guard_tet(x, t, rest_volume);
+    }
+    float volume(const geometry::Tet& t) const { return tet_volume(x, t); }
+};
+
+// On arrays in a solver order: the tet's 4 vertices gathered into Float4s, guard_tet on them, the
+// positions scattered back when it moved them.
+struct SolverOrderVertices {
+    const SoaPositions& p;
+    const std::int32_t* solver_index;
+    void gather(const geometry::Tet& t, Float4 (&q)[4]) const {
+        for (std::size_t k = 0; k < 4; ++k) {
+            const auto i = static_cast<std::size_t>(solver_index[t[k]]);
+            q[k] = {p.x[i], p.y[i], p.z[i], p.w[i]};
+        }
+    }
+    bool guard(const geometry::Tet& t, float rest_volume) const {
+        Float4 q[4];
+        gather(t, q);
+        if (!guard_tet(q, LOCAL, rest_volume)) {
+            return false;
+        }
+        for (std::size_t k = 0; k < 4; ++k) {
+            const auto i = static_cast<std::size_t>(solver_index[t[k]]);
+            p.x[i] = q[k].x;
+            p.y[i] = q[k].y;
+            p.z[i] = q[k].z;
+        }
+        return true;
+    }
+    float volume(const geometry::Tet& t) const {
+        Float4 q[4];
+        gather(t, q);
+        return tet_volume(q, LOCAL);
+    }
+    static constexpr geometry::Tet LOCAL{0, 1, 2, 3};
+};
+
+template <typename Vertices>
+void guard_flagged(Vertices& x, const TetConstraints& tets, InversionFlags& flags) {
     const ConstraintColoring& coloring = tets.coloring;
     // Step 1: the flagged tets in colour order, flags cleared.
     flags.guarded.clear();
@@ -33,8 +78,8 @@ void guard_flagged_tets(Float4* x, const TetConstraints& tets, InversionFlags& f
     for (int pass = 0; pass < GUARD_PASSES && !flags.guarded.empty(); ++pass) {
         bool moved = false;
         for (const std::int64_t k : flags.guarded) {
-            moved = guard_tet(x, tets.vertices[static_cast<std::size_t>(k)],
-                              tets.rest_volumes[static_cast<std::size_t>(k)]) ||
+            moved = x.guard(tets.vertices[static_cast<std::size_t>(k)],
+                            tets.rest_volumes[static_cast<std::size_t>(k)]) ||
                     moved;
         }
         if (!moved) {
@@ -45,7 +90,7 @@ void guard_flagged_tets(Float4* x, const TetConstraints& tets, InversionFlags& f
     // colour sharing their vertices can have lifted them above the threshold in the sweep too).
     for (const std::int64_t k : flags.guarded) {
         const auto i = static_cast<std::size_t>(k);
-        if (tet_volume(x, tets.vertices[i]) < tets.rest_volumes[i] * AT_RISK_RATIO) {
+        if (x.volume(tets.vertices[i]) < tets.rest_volumes[i] * AT_RISK_RATIO) {
             flags.tet_at_risk[i] = 1;
             const auto colour =
                 std::upper_bound(coloring.offsets.begin(), coloring.offsets.end(), k) -
@@ -53,6 +98,19 @@ void guard_flagged_tets(Float4* x, const TetConstraints& tets, InversionFlags& f
             flags.colour_at_risk[static_cast<std::size_t>(colour)] = 1;
         }
     }
+}
+
+}  // namespace
+
+void guard_flagged_tets(Float4* x, const TetConstraints& tets, InversionFlags& flags) {
+    PackedVertices vertices{x};
+    guard_flagged(vertices, tets, flags);
+}
+
+void guard_flagged_tets(const SoaPositions& p, const std::int32_t* solver_index,
+                        const TetConstraints& tets, InversionFlags& flags) {
+    SolverOrderVertices vertices{p, solver_index};
+    guard_flagged(vertices, tets, flags);
 }
 
 }  // namespace pliant::pbd::detail

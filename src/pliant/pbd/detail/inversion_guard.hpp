@@ -10,6 +10,7 @@
 
 #include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/projection.hpp"
+#include "pliant/pbd/detail/projection_avx2.hpp"
 
 namespace pliant::pbd::detail {
 
@@ -31,5 +32,11 @@ InversionFlags unflagged(const TetConstraints& tets);
 // current rest volume): their own projection may lift them above the kernels' threshold before
 // later colours push them back. O(flagged tets + tet colours); one thread.
 void guard_flagged_tets(Float4* x, const TetConstraints& tets, InversionFlags& flags);
+
+// The same guard on positions held as arrays in a solver order (lattice_sweep.hpp): vertex v at
+// p's index solver_index[v]. The same arithmetic on the same values: the same bits as the guard
+// on x holding those positions.
+void guard_flagged_tets(const SoaPositions& p, const std::int32_t* solver_index,
+                        const TetConstraints& tets, InversionFlags& flags);
 
 }  // namespace pliant::pbd::detail

@@ -277,7 +277,7 @@ void sweep_lanes(const LayerBlocking& blocking, std::int32_t num_colors,
 LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
                                  TetConstraints& tets) {
     LatticeSweep out;
-    std::vector<std::int32_t> solver_index;
+    std::vector<std::int32_t>& solver_index = out.solver_index;
     solver_order(grid, out.vertex_of, solver_index);
     // Lanes (LatticeSweep): rows, per colour skewed, split at the median.
     const std::vector<std::int32_t> edge_rows = lowest_lattice(grid, edges.vertices, 1);
@@ -311,12 +311,15 @@ LatticeSweep build_lattice_sweep(const TetGrid& grid, EdgeConstraints& edges,
     return out;
 }
 
-void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edges,
-                     const TetConstraints& tets, ConstraintStiffness edge_stiffness,
-                     ConstraintStiffness tet_stiffness, std::span<std::uint8_t> tet_at_risk,
-                     std::span<std::uint8_t> colour_at_risk) {
+namespace {
+SoaPositions positions_of(LatticeSweep& sweep) {
+    return {sweep.x.data(), sweep.y.data(), sweep.z.data(), sweep.w.data()};
+}
+
+// x's positions and inverse masses into the arrays.
+void load_positions(const Float4* x, LatticeSweep& sweep) {
     const auto nv = static_cast<std::int64_t>(sweep.vertex_of.size());
-    const SoaPositions p{sweep.x.data(), sweep.y.data(), sweep.z.data(), sweep.w.data()};
+    const SoaPositions p = positions_of(sweep);
     const std::int32_t* vertex_of = sweep.vertex_of.data();
     parallel_for(
         nv,
@@ -328,6 +331,124 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
             p.w[i] = v.w;
         },
         VERTEX_GRAIN);
+}
+
+}  // namespace
+
+void load_lattice(const Float4* x, std::span<const Vec3f> previous,
+                  std::span<const float> inv_masses, std::span<const std::uint8_t> pinned,
+                  LatticeSweep& sweep) {
+    const auto nv = static_cast<std::int64_t>(sweep.vertex_of.size());
+    sweep.previous_x.resize(static_cast<std::size_t>(nv));
+    sweep.previous_y.resize(static_cast<std::size_t>(nv));
+    sweep.previous_z.resize(static_cast<std::size_t>(nv));
+    sweep.inv_masses.resize(static_cast<std::size_t>(nv));
+    sweep.pinned.resize(static_cast<std::size_t>(nv));
+    load_positions(x, sweep);
+    const std::int32_t* vertex_of = sweep.vertex_of.data();
+    parallel_for(
+        nv,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(vertex_of[i]);
+            const auto k = static_cast<std::size_t>(i);
+            sweep.previous_x[k] = previous[v].x;
+            sweep.previous_y[k] = previous[v].y;
+            sweep.previous_z[k] = previous[v].z;
+            sweep.inv_masses[k] = inv_masses[v];
+            sweep.pinned[k] = pinned[v];
+        },
+        VERTEX_GRAIN);
+}
+
+void load_lattice_vertices(const Float4* x, std::span<const std::int32_t> vertices,
+                           LatticeSweep& sweep) {
+    const SoaPositions p = positions_of(sweep);
+    for (const std::int32_t v : vertices) {
+        const Float4& q = x[v];
+        const auto i = static_cast<std::size_t>(sweep.solver_index[static_cast<std::size_t>(v)]);
+        p.x[i] = q.x;
+        p.y[i] = q.y;
+        p.z[i] = q.z;
+        p.w[i] = q.w;
+    }
+}
+
+void guard_lattice(LatticeSweep& sweep, const TetConstraints& tets, InversionFlags& flags) {
+    guard_flagged_tets(positions_of(sweep), sweep.solver_index.data(), tets, flags);
+}
+
+void finish_lattice_substep(LatticeSweep& sweep, const SubstepMotion& m) {
+    const auto nv = static_cast<std::int64_t>(sweep.vertex_of.size());
+    const SoaPositions p = positions_of(sweep);
+    float* px = sweep.previous_x.data();
+    float* py = sweep.previous_y.data();
+    float* pz = sweep.previous_z.data();
+    const float* inv_masses = sweep.inv_masses.data();
+    const std::uint8_t* pinned = sweep.pinned.data();
+    // update_velocities_and_predict's substep_velocity and predict_vertex, per array.
+    parallel_for_chunks(nv, VERTEX_GRAIN, [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+        for (std::int64_t i = begin; i < end; ++i) {
+            Float4 q{p.x[i], p.y[i], p.z[i], p.w[i]};
+            Vec3f previous{px[i], py[i], pz[i]};
+            Vec3f vel = pinned[i] != 0 ? Vec3f{} : substep_velocity(q, previous, m);
+            predict_vertex(q, previous, vel, inv_masses[i], m);
+            p.x[i] = q.x;
+            p.y[i] = q.y;
+            p.z[i] = q.z;
+            p.w[i] = q.w;
+            px[i] = previous.x;
+            py[i] = previous.y;
+            pz[i] = previous.z;
+        }
+    });
+}
+
+void finish_lattice_step(const LatticeSweep& sweep, const SubstepMotion& m, Float4* x,
+                         std::span<Vec3f> previous, std::span<Vec3f> velocities,
+                         std::span<Vec3f> positions) {
+    const auto nv = static_cast<std::int64_t>(sweep.vertex_of.size());
+    const std::int32_t* vertex_of = sweep.vertex_of.data();
+    parallel_for(
+        nv,
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(vertex_of[i]);
+            const auto k = static_cast<std::size_t>(i);
+            const Float4 q{sweep.x[k], sweep.y[k], sweep.z[k], sweep.w[k]};
+            const Vec3f before{sweep.previous_x[k], sweep.previous_y[k], sweep.previous_z[k]};
+            x[v] = q;
+            previous[v] = before;
+            if (sweep.pinned[k] == 0) {
+                velocities[v] = substep_velocity(q, before, m);
+            }
+            positions[v] = {q.x, q.y, q.z};
+        },
+        VERTEX_GRAIN);
+}
+
+void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edges,
+                     const TetConstraints& tets, ConstraintStiffness edge_stiffness,
+                     ConstraintStiffness tet_stiffness, std::span<std::uint8_t> tet_at_risk,
+                     std::span<std::uint8_t> colour_at_risk) {
+    load_positions(x, sweep);
+    sweep_lattice(sweep, edges, tets, edge_stiffness, tet_stiffness, tet_at_risk, colour_at_risk);
+    const auto nv = static_cast<std::int64_t>(sweep.vertex_of.size());
+    const SoaPositions p = positions_of(sweep);
+    const std::int32_t* vertex_of = sweep.vertex_of.data();
+    parallel_for(
+        nv,
+        [&](std::int64_t i) {
+            Float4& v = x[vertex_of[i]];
+            v.x = p.x[i];
+            v.y = p.y[i];
+            v.z = p.z[i];
+        },
+        VERTEX_GRAIN);
+}
+
+void sweep_lattice(LatticeSweep& sweep, const EdgeConstraints& edges, const TetConstraints& tets,
+                   ConstraintStiffness edge_stiffness, ConstraintStiffness tet_stiffness,
+                   std::span<std::uint8_t> tet_at_risk, std::span<std::uint8_t> colour_at_risk) {
+    const SoaPositions p = positions_of(sweep);
 
     // The runs of colour c.
     const auto colour_runs = [](const ConstraintColoring& coloring,
@@ -406,16 +527,6 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
                                     });
             });
     }
-
-    parallel_for(
-        nv,
-        [&](std::int64_t i) {
-            Float4& v = x[vertex_of[i]];
-            v.x = p.x[i];
-            v.y = p.y[i];
-            v.z = p.z[i];
-        },
-        VERTEX_GRAIN);
 }
 
 }  // namespace pliant::pbd::detail

@@ -13,17 +13,22 @@
 // and the kernels are project_edges8 / project_tets8's arithmetic: results are bitwise those of
 // the plain colour-by-colour sweep (constraint_sweep.hpp), for any number of threads.
 //
-// A substep's sweep copies x into the arrays, runs the blocked edge and tet sweeps on them, and
-// copies the positions back (#V each way, parallel).
+// project_lattice copies x into the arrays, runs the blocked edge and tet sweeps on them, and
+// copies the positions back (#V each way, parallel); a step of one plain iteration instead copies
+// x in once and runs every stage of every substep on the arrays (load_lattice ..
+// finish_lattice_step).
 #pragma once
 
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#include "pliant/core/vec3.hpp"
 #include "pliant/geometry/tet_mesh.hpp"
 #include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/constraint_sweep.hpp"
+#include "pliant/pbd/detail/integration.hpp"
+#include "pliant/pbd/detail/inversion_guard.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 #include "pliant/pbd/tet_grid.hpp"
@@ -31,7 +36,8 @@
 namespace pliant::pbd::detail {
 
 struct LatticeSweep {
-    std::vector<std::int32_t> vertex_of;  // #V: the vertex at each solver index
+    std::vector<std::int32_t> vertex_of;     // #V: the vertex at each solver index
+    std::vector<std::int32_t> solver_index;  // #V: the solver index of each vertex
     // Runs (projection_avx2.hpp) of colour c at runs[run_offsets[c] .. run_offsets[c + 1]),
     // run_begins[r] = runs[r].begin.
     std::vector<LatticeRun> edge_runs;
@@ -54,6 +60,11 @@ struct LatticeSweep {
     std::vector<std::int64_t> tet_lane_begin;
     // #V each, solver order: the substep's positions (world units) and inverse masses.
     std::vector<float> x, y, z, w;
+    // #V each, solver order, within a step in solver order (load_lattice .. finish_lattice_step):
+    // the positions at the substep's start, the inverse masses (1/kg, 0 = pinned or in no tet) and
+    // the pinned flags.
+    std::vector<float> previous_x, previous_y, previous_z, inv_masses;
+    std::vector<std::uint8_t> pinned;
 };
 
 // The sweep of a grid's constraints (laid out by constraint_layout.hpp for that grid): reorders
@@ -69,5 +80,31 @@ void project_lattice(Float4* x, LatticeSweep& sweep, const EdgeConstraints& edge
                      const TetConstraints& tets, ConstraintStiffness edge_stiffness,
                      ConstraintStiffness tet_stiffness, std::span<std::uint8_t> tet_at_risk,
                      std::span<std::uint8_t> colour_at_risk);
+
+// A whole step on the arrays (soft_body.hpp's step with one plain iteration): x copied into them
+// once, the same arithmetic on the same values as project_lattice, guard_flagged_tets and the
+// passes of integration.hpp on x, so the same bits.
+//
+// After the first substep's prediction: x's positions and inverse masses, previous, inv_masses
+// and pinned (#V each) into the arrays.
+void load_lattice(const Float4* x, std::span<const Vec3f> previous,
+                  std::span<const float> inv_masses, std::span<const std::uint8_t> pinned,
+                  LatticeSweep& sweep);
+// x's entries of `vertices` (vertex indices) into the arrays (the driven vertices' targets).
+void load_lattice_vertices(const Float4* x, std::span<const std::int32_t> vertices,
+                           LatticeSweep& sweep);
+// Steps 2 and 3 on the arrays (project_lattice without the copies).
+void sweep_lattice(LatticeSweep& sweep, const EdgeConstraints& edges, const TetConstraints& tets,
+                   ConstraintStiffness edge_stiffness, ConstraintStiffness tet_stiffness,
+                   std::span<std::uint8_t> tet_at_risk, std::span<std::uint8_t> colour_at_risk);
+// Step 3b on the arrays (guard_flagged_tets).
+void guard_lattice(LatticeSweep& sweep, const TetConstraints& tets, InversionFlags& flags);
+// Between substeps, on the arrays: update_velocities_and_predict's velocity and prediction.
+void finish_lattice_substep(LatticeSweep& sweep, const SubstepMotion& m);
+// After the last substep: update_velocities's velocities and positions, and x and previous (#V)
+// as the general loop leaves them.
+void finish_lattice_step(const LatticeSweep& sweep, const SubstepMotion& m, Float4* x,
+                         std::span<Vec3f> previous, std::span<Vec3f> velocities,
+                         std::span<Vec3f> positions);
 
 }  // namespace pliant::pbd::detail

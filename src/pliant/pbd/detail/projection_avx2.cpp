@@ -80,8 +80,8 @@ PLIANT_AVX2_INLINE void project_edges8(Lanes8& a, Lanes8& b, const float* rest_l
         _mm256_and_ps(_mm256_cmp_ps(w, zero, _CMP_GT_OQ), _mm256_cmp_ps(length, zero, _CMP_GT_OQ));
     const __m256 denominator = add(mul(w, inv_k8), alpha8);
     const __m256 violation = sub(length, _mm256_loadu_ps(rest_lengths));
-    const __m256 dlambda = _mm256_div_ps(sub(zero, violation), denominator);
-    const __m256 s = _mm256_and_ps(valid, _mm256_div_ps(dlambda, length));
+    const __m256 s =
+        _mm256_and_ps(valid, _mm256_div_ps(sub(zero, violation), mul(denominator, length)));
     const __m256 sa = mul(a.w, s);
     const __m256 sb = mul(b.w, s);
     a.x = add(a.x, mul(sa, dx));
@@ -118,24 +118,24 @@ PLIANT_AVX2_FN std::int64_t project_edges_avx2(Float4* x, const std::array<std::
 
 namespace {
 
-// The projection of 8 tets whose vertices p0..p3 are loaded; updates their positions in place and
-// returns the mask of the tets at risk (bit l: lane l).
+// The projection of 8 tets whose vertices p0..p3 are loaded (project_tet's arithmetic,
+// tet_gradient6; alpha8 = 36 α); updates their positions in place and returns the mask of the
+// tets at risk (bit l: lane l).
 PLIANT_AVX2_INLINE int project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8& p3,
                                      const float* rest_volumes, __m256 inv_k8, __m256 alpha8) {
     const __m256 zero = _mm256_setzero_ps();
-    const __m256 sixth = _mm256_set1_ps(1.0f / 6.0f);
     const __m256 e1x = sub(p1.x, p0.x), e1y = sub(p1.y, p0.y), e1z = sub(p1.z, p0.z);
     const __m256 e2x = sub(p2.x, p0.x), e2y = sub(p2.y, p0.y), e2z = sub(p2.z, p0.z);
     const __m256 e3x = sub(p3.x, p0.x), e3y = sub(p3.y, p0.y), e3z = sub(p3.z, p0.z);
-    const __m256 g1x = mul(sub(mul(e2y, e3z), mul(e2z, e3y)), sixth);
-    const __m256 g1y = mul(sub(mul(e2z, e3x), mul(e2x, e3z)), sixth);
-    const __m256 g1z = mul(sub(mul(e2x, e3y), mul(e2y, e3x)), sixth);
-    const __m256 g2x = mul(sub(mul(e3y, e1z), mul(e3z, e1y)), sixth);
-    const __m256 g2y = mul(sub(mul(e3z, e1x), mul(e3x, e1z)), sixth);
-    const __m256 g2z = mul(sub(mul(e3x, e1y), mul(e3y, e1x)), sixth);
-    const __m256 g3x = mul(sub(mul(e1y, e2z), mul(e1z, e2y)), sixth);
-    const __m256 g3y = mul(sub(mul(e1z, e2x), mul(e1x, e2z)), sixth);
-    const __m256 g3z = mul(sub(mul(e1x, e2y), mul(e1y, e2x)), sixth);
+    const __m256 g1x = sub(mul(e2y, e3z), mul(e2z, e3y));
+    const __m256 g1y = sub(mul(e2z, e3x), mul(e2x, e3z));
+    const __m256 g1z = sub(mul(e2x, e3y), mul(e2y, e3x));
+    const __m256 g2x = sub(mul(e3y, e1z), mul(e3z, e1y));
+    const __m256 g2y = sub(mul(e3z, e1x), mul(e3x, e1z));
+    const __m256 g2z = sub(mul(e3x, e1y), mul(e3y, e1x));
+    const __m256 g3x = sub(mul(e1y, e2z), mul(e1z, e2y));
+    const __m256 g3y = sub(mul(e1z, e2x), mul(e1x, e2z));
+    const __m256 g3z = sub(mul(e1x, e2y), mul(e1y, e2x));
     const __m256 g0x = sub(zero, add(add(g1x, g2x), g3x));
     const __m256 g0y = sub(zero, add(add(g1y, g2y), g3y));
     const __m256 g0z = sub(zero, add(add(g1z, g2z), g3z));
@@ -144,7 +144,7 @@ PLIANT_AVX2_INLINE int project_tets8(Lanes8& p0, Lanes8& p1, Lanes8& p2, Lanes8&
         add(add(add(mul(p0.w, norm2(g0x, g0y, g0z)), mul(p1.w, norm2(g1x, g1y, g1z))),
                 mul(p2.w, norm2(g2x, g2y, g2z))),
             mul(p3.w, norm2(g3x, g3y, g3z)));
-    const __m256 rest = _mm256_loadu_ps(rest_volumes);
+    const __m256 rest = mul(_mm256_loadu_ps(rest_volumes), _mm256_set1_ps(6.0f));
     const int at_risk = _mm256_movemask_ps(
         _mm256_cmp_ps(volume, mul(rest, _mm256_set1_ps(AT_RISK_RATIO)), _CMP_LT_OQ));
     const __m256 valid = _mm256_cmp_ps(weight, zero, _CMP_GT_OQ);
@@ -185,7 +185,7 @@ PLIANT_AVX2_FN std::int64_t project_tets_avx2(Float4* x, const geometry::Tet* t,
                                               std::int64_t count, float inv_k, float alpha,
                                               std::int64_t& num_at_risk) {
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
-    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    const __m256 alpha8 = _mm256_set1_ps(tet_alpha36(alpha));
     std::int64_t flagged = 0;  // a local: the stores below may alias num_at_risk
     std::int64_t k = 0;
     for (; k + 8 <= count; k += 8) {
@@ -360,7 +360,7 @@ PLIANT_AVX2_FN void project_tet_runs_soa_avx2(const SoaPositions& p, const Latti
                                               const float* rest_volumes, std::uint8_t* at_risk,
                                               float inv_k, float alpha, std::int64_t& num_at_risk) {
     const __m256 inv_k8 = _mm256_set1_ps(inv_k);
-    const __m256 alpha8 = _mm256_set1_ps(alpha);
+    const __m256 alpha8 = _mm256_set1_ps(tet_alpha36(alpha));
     std::int64_t flagged = 0;  // a local: the stores may alias num_at_risk
     RunPieces pieces(runs, b, e);
     for (RunPiece c; pieces.next(c);) {
