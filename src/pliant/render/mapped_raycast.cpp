@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <span>
@@ -217,11 +218,33 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
     }
     if (options.shading) {
         build_gradient();
+        if (!m_rgba8.empty()) {
+            pack_voxels();
+        }
     }
     m_prepare_ms = watch.elapsed_ms();
 }
 
 MappedRayCaster::~MappedRayCaster() = default;
+
+void MappedRayCaster::pack_voxels() {
+    const std::int64_t layer = m_source_dims[0] * m_source_dims[1];
+    constexpr std::int64_t WORDS = detail::PACKED_VOXEL_BYTES / 4;
+    m_packed.resize(static_cast<std::size_t>(WORDS * layer * m_source_dims[2]));
+    parallel_for(
+        m_source_dims[2],
+        [&](std::int64_t z) {
+            for (std::int64_t i = z * layer; i < (z + 1) * layer; ++i) {
+                std::uint32_t* out = m_packed.data() + WORDS * i;
+                std::memcpy(out, &m_rgba8[4 * i], 4);
+                std::memcpy(out + 1, &m_gradient[4 * i], 8);
+                out[3] = 0;
+            }
+        },
+        1);
+    m_rgba8 = {};
+    m_gradient = {};
+}
 
 void MappedRayCaster::build_gradient() {
     const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
@@ -572,7 +595,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.sub_occupied = m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
     m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
-    if (!m_rgba8.empty()) {
+    if (!m_rgba8.empty() || !m_packed.empty()) {
         // The source's grid (its RayCaster holds one voxel, for the options' fields).
         detail::RayCastKernel& s = m.source;
         const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
@@ -589,7 +612,16 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         s.stride[2] = n[0] * n[1];
         s.values = nullptr;
         s.alpha = nullptr;
-        m.rgba8 = m_rgba8.data();
+        if (m_packed.empty()) {
+            m.rgba8 = m_rgba8.data();
+        } else {
+            // The packed records (detail::PACKED_VOXEL_BYTES): the bytes, then the gradient.
+            const auto* record = reinterpret_cast<const std::uint8_t*>(m_packed.data());
+            m.rgba8 = record;
+            m.rgba8_stride = detail::PACKED_VOXEL_BYTES;
+            m.gradient = reinterpret_cast<const detail::GradientValue*>(record + 4);
+            m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
+        }
     }
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =

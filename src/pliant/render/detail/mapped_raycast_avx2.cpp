@@ -175,6 +175,51 @@ PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& g
     }
 }
 
+// interpolate_bytes8() and source_gradient8() of 8 lanes of a packed source
+// (PACKED_VOXEL_BYTES per voxel): a lane's x-adjacent voxel pair of a row is one 32-byte load
+// that holds both voxels' bytes and gradients, transposed once; then the bytes' channels
+// (shifts and masks) as interpolate_bytes8() and the gradient's (sign-extended halves) as
+// source_gradient8(), the same values.
+PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& grid,
+                                            const std::int32_t* at, const __m256 fraction[3],
+                                            __m256 out[4], __m256 gradient[3]) {
+    const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+    const __m256i byte = _mm256_set1_epi32(0xff);
+    __m256 first[4][4], second[4][4];  // [channel][row]
+    __m256 first_d[3][4], second_d[3][4];
+    for (int r = 0; r < 4; ++r) {
+        __m256 rows[LANES], t[LANES];
+        for (int l = 0; l < LANES; ++l) {
+            rows[l] = _mm256_loadu_ps(reinterpret_cast<const float*>(
+                m.rgba8 + PACKED_VOXEL_BYTES * static_cast<std::int64_t>(at[l] + row[r])));
+        }
+        transpose8(rows, t);
+        for (int x = 0; x < 2; ++x) {
+            const __m256i v = as_int(t[4 * x]);
+            const __m256 a = unit8_8(_mm256_srli_epi32(v, 24));
+            __m256(&corner)[4][4] = x == 0 ? first : second;
+            corner[0][r] = _mm256_mul_ps(unit8_8(_mm256_and_si256(v, byte)), a);
+            corner[1][r] =
+                _mm256_mul_ps(unit8_8(_mm256_and_si256(_mm256_srli_epi32(v, 8), byte)), a);
+            corner[2][r] =
+                _mm256_mul_ps(unit8_8(_mm256_and_si256(_mm256_srli_epi32(v, 16), byte)), a);
+            corner[3][r] = a;
+            const __m256i xy = as_int(t[4 * x + 1]);
+            const __m256i z = as_int(t[4 * x + 2]);
+            __m256(&d)[3][4] = x == 0 ? first_d : second_d;
+            d[0][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16));
+            d[1][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(xy, 16));
+            d[2][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(z, 16), 16));
+        }
+    }
+    for (int c = 0; c < 4; ++c) {
+        out[c] = trilinear8(first[c], second[c], fraction);
+    }
+    for (int a = 0; a < 3; ++a) {
+        gradient[a] = trilinear8(first_d[a], second_d[a], fraction);
+    }
+}
+
 // mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
 // out[0 … 2] the straight colour (shaded when SHADING), out[3] the step opacity (RGBA) or the
 // lookup entry's, all 0 where the sample has no opacity (outside the source box, or none). Lanes
@@ -244,7 +289,8 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     // Shading: the stored gradient's rows are read here, beside the voxels' (not after the
     // classification, behind the branch on opacity): the loads of both overlap.
     __m256 d[3];
-    if constexpr (SHADING) {
+    const bool packed = IS_RGBA && SHADING && m.rgba8_stride == PACKED_VOXEL_BYTES;
+    if (SHADING && !packed) {
         source_gradient8(m, src, at, fraction, d);
     }
     const __m256 one = _mm256_set1_ps(1.0f);
@@ -252,7 +298,9 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     __m256 positive;
     if constexpr (IS_RGBA) {
         __m256 rgba[4];
-        if (m.rgba8 != nullptr) {
+        if (packed) {
+            interpolate_packed8(m, src, at, fraction, rgba, d);
+        } else if (m.rgba8 != nullptr) {
             interpolate_bytes8(m, src, at, fraction, rgba);
         } else {
             interpolate_rgba8(src, at, fraction, rgba);
@@ -495,10 +543,13 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                 constexpr std::int64_t CH = IS_RGBA ? 4 : 1;  // floats per voxel
                 const std::int64_t dy = CH * std::int64_t{src.dy};
                 const std::int64_t dz = CH * std::int64_t{src.dz};
-                // The voxels' first bytes: the floats', or the rgba8 source's (4 per voxel).
+                // The voxels' first bytes: the floats', or the rgba8 source's (4 per voxel, or
+                // the packed records, gradient included).
                 const auto* bytes = m.rgba8 != nullptr ? reinterpret_cast<const char*>(m.rgba8)
                                                        : reinterpret_cast<const char*>(src.v);
-                const std::int64_t size = m.rgba8 != nullptr ? 1 : std::int64_t{sizeof(float)};
+                const bool packed = IS_RGBA && SHADING && m.rgba8_stride == PACKED_VOXEL_BYTES;
+                const std::int64_t size =
+                    m.rgba8 != nullptr ? m.rgba8_stride / CH : std::int64_t{sizeof(float)};
                 const std::int64_t by = size * dy, bz = size * dz;
                 while (ahead_mask != 0) {
                     const int l = __builtin_ctz(static_cast<unsigned>(ahead_mask));
@@ -508,7 +559,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                     _mm_prefetch(v + by, _MM_HINT_T0);
                     _mm_prefetch(v + bz, _MM_HINT_T0);
                     _mm_prefetch(v + bz + by, _MM_HINT_T0);
-                    if constexpr (SHADING) {
+                    if (SHADING && !packed) {
                         // The stored gradient's rows of that voxel, 4 values per voxel.
                         const GradientValue* d =
                             m.gradient + 4 * static_cast<std::int64_t>(index[l]);
