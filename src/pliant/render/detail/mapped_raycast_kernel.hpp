@@ -142,18 +142,19 @@ PLIANT_HOST_DEVICE inline float unit8(std::uint8_t c) {
     return static_cast<float>(c) / 255.0f;
 }
 
-// The float copy's 4 values of rgba8 voxel p (RayCaster's preparation, the same operations): the
-// channels c / 255, then α·r, α·g, α·b, α.
+// The 4 values of rgba8 voxel p in units of 1/255² (colour) and 1/255 (α): α·r, α·g, α·b, α
+// for the bytes c, α (each product exact: at most 255², an integer below 2^24).
 PLIANT_HOST_DEVICE inline void rgba8_voxel(const std::uint8_t* p, float out[4]) {
-    const float a = unit8(p[3]);
-    out[0] = unit8(p[0]) * a;
-    out[1] = unit8(p[1]) * a;
-    out[2] = unit8(p[2]) * a;
+    const float a = static_cast<float>(p[3]);
+    out[0] = static_cast<float>(p[0]) * a;
+    out[1] = static_cast<float>(p[1]) * a;
+    out[2] = static_cast<float>(p[2]) * a;
     out[3] = a;
 }
 
-// interpolate_rgba() of an rgba8 source at t: the same trilinear operations on the corners'
-// premultiplied values (rgba8_voxel()), so bitwise interpolate_rgba() of RayCaster's float copy.
+// interpolate_rgba() of an rgba8 source at t in the units of rgba8_voxel(): the same trilinear
+// operations on the corners' premultiplied values (RayCaster's float copy holds them divided by
+// 255² and 255: the same values up to rounding, without a conversion per corner).
 PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const Trilinear& t) {
     const RayCastKernel& s = m.source;
     const std::int64_t stride = m.rgba8_stride;
@@ -175,18 +176,19 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
     return {out[0], out[1], out[2], out[3]};
 }
 
-// classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set.
+// classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set
+// (interpolate_rgba8(): the opacity α / 255, the straight colour α·c / (255 α)).
 PLIANT_HOST_DEVICE inline Sample classify_rgba_source(const MappedKernel& m, const Trilinear& t) {
     if (m.rgba8 == nullptr) {
         return classify<true>(m.source, t);
     }
     const Sample s = interpolate_rgba8(m, t);
-    const float a = clampf(s.a, 0.0f, 1.0f);
+    const float a = clampf(s.a * (1.0f / 255.0f), 0.0f, 1.0f);
     if (!(a > 0.0f)) {
         return {0.0f, 0.0f, 0.0f, 0.0f};
     }
     const float a_step = rgba_step_opacity(a, m.source.step_over_unit);
-    const float inv = 1.0f / s.a;
+    const float inv = 1.0f / (s.a * 255.0f);
     return {s.r * inv, s.g * inv, s.b * inv, a_step};
 }
 
