@@ -122,10 +122,8 @@ private:
     bool hull_visible(const float lo[3], const float hi[3]) const;
     // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
     // over layers (each written by one task: the same values for any number of threads).
+    // An rgba8 source's gradient goes into m_packed with its bytes (m_rgba8, then released).
     void build_gradient();
-    // A shaded rgba8 source: m_packed from m_rgba8 and m_gradient (which it releases), in
-    // parallel over layers.
-    void pack_voxels();
     // Computes the empty cubes of the octants (bit per octant) not yet computed for this map.
     void prepare_octants(int octants) const;
     // The sub-cells of a valid map cell (nodes g + 3 (base + off[c]), c = x + 2 y + 4 z; [lo, hi]
@@ -168,8 +166,9 @@ private:
     // Shading: the source's gradient, 4 values per voxel (detail::GradientValue), else empty.
     std::vector<detail::GradientValue> m_gradient;
     // A shaded rgba8 source: per voxel its bytes and gradient in one record
-    // (detail::PACKED_VOXEL_BYTES, 4 words: 268 MB at 256³), in place of m_rgba8 and m_gradient.
-    std::vector<std::uint32_t> m_packed;
+    // (detail::PACKED_VOXEL_BYTES, as 8 GradientValues: 268 MB at 256³), in place of m_rgba8
+    // and m_gradient.
+    std::vector<detail::GradientValue> m_packed;
 };
 
 }  // namespace pliant::render
