@@ -179,7 +179,7 @@ PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& 
                 m.rgba8 + PACKED_VOXEL_BYTES * static_cast<std::int64_t>(at[l] + row[r])));
         }
         transpose8(rows, t);
-        for (int x = 0; x < 2; ++x) {
+        for (std::int64_t x = 0; x < 2; ++x) {
             const __m256i v = as_int(t[4 * x]);
             const __m256 a = _mm256_cvtepi32_ps(_mm256_srli_epi32(v, 24));
             __m256(&corner)[4][4] = x == 0 ? first : second;
