@@ -371,22 +371,10 @@ TEST(MappedRayCast, Avx2MarchMatchesTheScalarKernelOnScalars) {
     expect_avx2_matches_scalar(source, &tf);
 }
 
-// The march reads an rgba8 source's bytes, premultiplying each corner as RayCaster's float copy
-// does: the AVX2 march's c / 255 (no division) is the division for every byte.
-TEST(MappedRayCast, Avx2ByteConversionIsTheDivision) {
-    float table[256];
-    if (!detail::unit8_table_avx2(table)) {
-        GTEST_SKIP() << "no AVX2 on this CPU";
-    }
-    for (int c = 0; c < 256; ++c) {
-        EXPECT_EQ(table[c], static_cast<float>(c) / 255.0f) << c;
-    }
-}
-
-// The same source as rgba8 (read in its bytes) and as rgba32f holding c / 255 (the float copy's
-// route) renders the same image bit for bit, with the same sample counts, through a twist, on
-// the AVX2 march and the scalar kernel, shaded or not: the phantom, and noise whose channels
-// take every byte value.
+// The same source as rgba8 (read in its bytes, premultiplied in units of 1/255²) and as rgba32f
+// holding c / 255 (the float copy's route) renders the same pixels, with the same sample counts,
+// through a twist, on the AVX2 march and the scalar kernel, shaded or not (with the bytes
+// packed beside the gradient): the phantom, and noise whose channels take every byte value.
 TEST(MappedRayCast, Rgba8SourceGivesTheFloatSourceImage) {
     volume::Volume noise = volume::Volume::allocate({40, 36, 32}, volume::VoxelType::rgba8,
                                                     rgba64().spacing(), rgba64().origin());

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <span>
@@ -278,7 +279,20 @@ void MappedRayCaster::build_gradient() {
     // at most that range: it maps to 32767.
     const float scale = 32767.0f / (m_source->m_is_rgba ? 1.0f : float{detail::LUT_SIZE - 1});
     const float* values = m_rgba8.empty() ? m_source->m_values.data() + (channels - 1) : nullptr;
-    m_gradient.resize(static_cast<std::size_t>(4 * n[0] * n[1] * n[2]));
+    // An rgba8 source: the packed records (detail::PACKED_VOXEL_BYTES: the bytes, the gradient,
+    // 0), which replace m_rgba8; else m_gradient, 4 values per voxel.
+    const bool packed = !m_rgba8.empty();
+    constexpr std::int64_t VALUES = detail::PACKED_VOXEL_BYTES / 2;  // GradientValues per record
+    detail::GradientValue* gradient = nullptr;
+    std::int64_t stride = 4;  // GradientValues per voxel
+    if (packed) {
+        m_packed.resize(static_cast<std::size_t>(VALUES * n[0] * n[1] * n[2]));
+        gradient = m_packed.data() + 2;
+        stride = VALUES;
+    } else {
+        m_gradient.resize(static_cast<std::size_t>(4 * n[0] * n[1] * n[2]));
+        gradient = m_gradient.data();
+    }
     const auto quantize = [scale](float d) {
         return static_cast<detail::GradientValue>(
             std::clamp(std::nearbyint(d * scale), -32767.0f, 32767.0f));
@@ -291,11 +305,11 @@ void MappedRayCaster::build_gradient() {
             // rgba8: the α rows as the float copy holds them (detail::unit8()), 1 float per
             // voxel; else the float copy's rows, `channels` floats per voxel.
             std::vector<float> alpha_rows(m_rgba8.empty() ? 0 : static_cast<std::size_t>(5 * n[0]));
-            const std::int64_t stride = m_rgba8.empty() ? channels : 1;
+            const std::int64_t step = m_rgba8.empty() ? channels : 1;
             for (std::int64_t y = 0; y < n[1]; ++y) {
                 const std::int64_t y0 = std::max<std::int64_t>(y - 1, 0);
                 const std::int64_t y1 = std::min(y + 1, n[1] - 1);
-                // The shaded value of voxel x of the k-th row (ry, rz) is row[stride · x].
+                // The shaded value of voxel x of the k-th row (ry, rz) is row[step · x].
                 const auto row = [&](int k, std::int64_t ry, std::int64_t rz) -> const float* {
                     if (m_rgba8.empty()) {
                         return values + channels * n[0] * (ry + n[1] * rz);
@@ -312,19 +326,31 @@ void MappedRayCaster::build_gradient() {
                 const float* above_y = row(2, y1, z);
                 const float* below_z = row(3, y, z0);
                 const float* above_z = row(4, y, z1);
-                detail::GradientValue* out = m_gradient.data() + 4 * n[0] * (y + n[1] * z);
+                const std::int64_t first = n[0] * (y + n[1] * z);
+                detail::GradientValue* out = gradient + stride * first;
                 for (std::int64_t x = 0; x < n[0]; ++x) {
-                    const std::int64_t x0 = stride * std::max<std::int64_t>(x - 1, 0);
-                    const std::int64_t x1 = stride * std::min(x + 1, n[0] - 1);
-                    const std::int64_t at = stride * x;
-                    out[4 * x] = quantize(here[x1] - here[x0]);
-                    out[4 * x + 1] = quantize(above_y[at] - below_y[at]);
-                    out[4 * x + 2] = quantize(above_z[at] - below_z[at]);
-                    out[4 * x + 3] = 0;
+                    const std::int64_t x0 = step * std::max<std::int64_t>(x - 1, 0);
+                    const std::int64_t x1 = step * std::min(x + 1, n[0] - 1);
+                    const std::int64_t at = step * x;
+                    out[stride * x] = quantize(here[x1] - here[x0]);
+                    out[stride * x + 1] = quantize(above_y[at] - below_y[at]);
+                    out[stride * x + 2] = quantize(above_z[at] - below_z[at]);
+                    out[stride * x + 3] = 0;
+                }
+                if (packed) {
+                    detail::GradientValue* record = m_packed.data() + VALUES * first;
+                    for (std::int64_t x = 0; x < n[0]; ++x) {
+                        std::memcpy(record + VALUES * x, &m_rgba8[4 * (first + x)], 4);
+                        record[VALUES * x + 6] = 0;
+                        record[VALUES * x + 7] = 0;
+                    }
                 }
             }
         },
         1);
+    if (packed) {
+        m_rgba8 = {};
+    }
 }
 
 void MappedRayCaster::set_clip(const std::optional<ClipPlane>& clip) {
@@ -700,7 +726,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m.sub_occupied = m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
     m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
-    if (!m_rgba8.empty()) {
+    if (!m_rgba8.empty() || !m_packed.empty()) {
         // The source's grid (its RayCaster holds one voxel, for the options' fields).
         detail::RayCastKernel& s = m.source;
         const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
@@ -717,7 +743,16 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         s.stride[2] = n[0] * n[1];
         s.values = nullptr;
         s.alpha = nullptr;
-        m.rgba8 = m_rgba8.data();
+        if (m_packed.empty()) {
+            m.rgba8 = m_rgba8.data();
+        } else {
+            // The packed records (detail::PACKED_VOXEL_BYTES): the bytes, then the gradient.
+            const auto* record = reinterpret_cast<const std::uint8_t*>(m_packed.data());
+            m.rgba8 = record;
+            m.rgba8_stride = detail::PACKED_VOXEL_BYTES;
+            m.gradient = m_packed.data() + 2;
+            m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
+        }
     }
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =

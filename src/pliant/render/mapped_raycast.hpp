@@ -51,10 +51,12 @@
 //     1.30 M (the exact route: 1.27 M).
 //   - An rgba8 source is kept as its bytes (4 per voxel, 67 MB at 256³) instead of RayCaster's
 //     premultiplied float copy (16 bytes per voxel, 268 MB, not built): a sample premultiplies
-//     each of its 8 corners as RayCaster's preparation does (c / 255, then α·r, α·g, α·b, α;
-//     detail::rgba8_voxel()), so its values, and the images, are bitwise the float copy's
-//     (tested against the same source as rgba32f). rgba32f and scalar sources are read from the
-//     float copy.
+//     each of its 8 corners in integers (α·c and α, exact in float; detail::rgba8_voxel()) and
+//     scales the interpolated values once (opacity α / 255, straight colour α·c / (255 α)): the
+//     float copy's values up to rounding (tested against the same source as rgba32f: the same
+//     pixels and samples). Shaded, each voxel's bytes and its stored gradient share one 16-byte
+//     record (detail::PACKED_VOXEL_BYTES; 268 MB at 256³), so a lane's voxel pair of a row is one
+//     32-byte load for both. rgba32f and scalar sources are read from the float copy.
 //   - Composite mode only (MIP through the map: InvalidInput).
 // Cost per frame: set_map() is O(map cells) (parallel over layers; the cells outside the map's
 // node row extents, InverseMap::node_row_extents(), only cleared) plus a copy of the nodes
@@ -63,7 +65,8 @@
 // directions at the image's 4 corners, both signs of an axis where they are within 1e-5 of 0),
 // the next renders those not computed yet; a sample costs one more trilinear interpolation of 3
 // floats (the map) than RayCaster's, and shaded samples one trilinear interpolation of the
-// stored gradient (3 channels, a 16-byte load per voxel pair and row). A ray's march ends at its
+// stored gradient (3 channels; a 16-byte load per voxel pair and row, or the packed records'
+// 32-byte load, shared with an rgba8 source's bytes). A ray's march ends at its
 // early termination (no sample past it is classified). RGBA and scalar sources on a CPU with AVX2
 // march 8 rays per vector, a lane refilled from the tile's rays as soon as its ray ends
 // (detail/mapped_raycast_avx2.hpp), bitwise the scalar kernel (images and sample counts).
@@ -127,6 +130,7 @@ private:
     bool point_visible(const float p[3]) const;
     // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
     // over layers (each written by one task: the same values for any number of threads).
+    // An rgba8 source's gradient goes into m_packed with its bytes (m_rgba8, then released).
     void build_gradient();
     // Computes the empty cubes of the octants (bit per octant) not yet computed for this map.
     void prepare_octants(int octants) const;
@@ -171,6 +175,10 @@ private:
     std::vector<float> m_nodes4;  // the map's nodes, 4 floats each (x, y, z, 0)
     // Shading: the source's gradient, 4 values per voxel (detail::GradientValue), else empty.
     std::vector<detail::GradientValue> m_gradient;
+    // A shaded rgba8 source: per voxel its bytes and gradient in one record
+    // (detail::PACKED_VOXEL_BYTES, as 8 GradientValues: 268 MB at 256³), in place of m_rgba8
+    // and m_gradient.
+    std::vector<detail::GradientValue> m_packed;
 };
 
 }  // namespace pliant::render

@@ -129,24 +129,9 @@ PLIANT_AVX2_INLINE void source_gradient8(const MappedKernel& m, const Grid8& src
     }
 }
 
-// unit8() of 8 bytes c (int32 lanes in [0, 255]), bitwise c / 255 without a division: c / 255
-// is the binary fraction 0.cccc… (the byte c repeated), so with X = c · 0x01010101 (below 2^32)
-// its correctly rounded float is that of (X + c / 255) / 2^32. For c ≥ 1, X ≥ 2^24: the floats
-// near X are integers, so are their midpoints, and X + 1/2 rounds as X + c / 255 does (both lie
-// in (X, X + 1); for c = 255, X + 1 = 2^32 is a float). X − c = c · 16843008 (0x01010100) is
-// exact in float (24 significant bits), c + min(c, 1/2) is c + 1/2 (0 for c = 0): one rounded
-// sum, then the exact scaling by 2^−32. Its test compares it with the division for all 256 bytes
-// (unit8_table_avx2()).
-PLIANT_AVX2_INLINE __m256 unit8_8(__m256i c) {
-    const __m256 low = _mm256_cvtepi32_ps(c);
-    const __m256 high = _mm256_mul_ps(low, _mm256_set1_ps(16843008.0f));
-    const __m256 rest = _mm256_add_ps(low, _mm256_min_ps(low, _mm256_set1_ps(0.5f)));
-    return _mm256_mul_ps(_mm256_add_ps(high, rest), _mm256_set1_ps(0x1p-32f));
-}
-
 // interpolate_rgba8() of 8 lanes at voxel indices `at`: out[c] is channel c (α·r, α·g, α·b,
-// α). A lane's x-adjacent voxel pair of a row is 8 consecutive bytes: one load, widened to
-// int32, transposed, then each corner's channels c / 255 (unit8_8()) and premultiplied as
+// α, in rgba8_voxel()'s units). A lane's x-adjacent voxel pair of a row is 8 consecutive bytes:
+// one load, widened to int32, transposed, converted to float (exact) and premultiplied as
 // rgba8_voxel().
 PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& grid,
                                            const std::int32_t* at, const __m256 fraction[3],
@@ -161,17 +146,62 @@ PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& g
                 _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
         }
         transpose8(rows, t);
-        const __m256 a0 = unit8_8(as_int(t[3]));
-        const __m256 a1 = unit8_8(as_int(t[7]));
+        const __m256 a0 = _mm256_cvtepi32_ps(as_int(t[3]));
+        const __m256 a1 = _mm256_cvtepi32_ps(as_int(t[7]));
         for (int c = 0; c < 3; ++c) {
-            first[c][r] = _mm256_mul_ps(unit8_8(as_int(t[c])), a0);
-            second[c][r] = _mm256_mul_ps(unit8_8(as_int(t[4 + c])), a1);
+            first[c][r] = _mm256_mul_ps(_mm256_cvtepi32_ps(as_int(t[c])), a0);
+            second[c][r] = _mm256_mul_ps(_mm256_cvtepi32_ps(as_int(t[4 + c])), a1);
         }
         first[3][r] = a0;
         second[3][r] = a1;
     }
     for (int c = 0; c < 4; ++c) {
         out[c] = trilinear8(first[c], second[c], fraction);
+    }
+}
+
+// interpolate_bytes8() and source_gradient8() of 8 lanes of a packed source
+// (PACKED_VOXEL_BYTES per voxel): a lane's x-adjacent voxel pair of a row is one 32-byte load
+// that holds both voxels' bytes and gradients, transposed once; then the bytes' channels
+// (shifts and masks, converted and premultiplied) as interpolate_bytes8() and the gradient's
+// (sign-extended halves) as source_gradient8(), the same values.
+PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& grid,
+                                            const std::int32_t* at, const __m256 fraction[3],
+                                            __m256 out[4], __m256 gradient[3]) {
+    const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
+    const __m256i byte = _mm256_set1_epi32(0xff);
+    __m256 first[4][4], second[4][4];  // [channel][row]
+    __m256 first_d[3][4], second_d[3][4];
+    for (int r = 0; r < 4; ++r) {
+        __m256 rows[LANES], t[LANES];
+        for (int l = 0; l < LANES; ++l) {
+            rows[l] = _mm256_loadu_ps(reinterpret_cast<const float*>(
+                m.rgba8 + PACKED_VOXEL_BYTES * static_cast<std::int64_t>(at[l] + row[r])));
+        }
+        transpose8(rows, t);
+        for (std::int64_t x = 0; x < 2; ++x) {
+            const __m256i v = as_int(t[4 * x]);
+            const __m256 a = _mm256_cvtepi32_ps(_mm256_srli_epi32(v, 24));
+            __m256(&corner)[4][4] = x == 0 ? first : second;
+            corner[0][r] = _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_and_si256(v, byte)), a);
+            corner[1][r] = _mm256_mul_ps(
+                _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(v, 8), byte)), a);
+            corner[2][r] = _mm256_mul_ps(
+                _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(v, 16), byte)), a);
+            corner[3][r] = a;
+            const __m256i xy = as_int(t[4 * x + 1]);
+            const __m256i z = as_int(t[4 * x + 2]);
+            __m256(&d)[3][4] = x == 0 ? first_d : second_d;
+            d[0][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16));
+            d[1][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(xy, 16));
+            d[2][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(z, 16), 16));
+        }
+    }
+    for (int c = 0; c < 4; ++c) {
+        out[c] = trilinear8(first[c], second[c], fraction);
+    }
+    for (int a = 0; a < 3; ++a) {
+        gradient[a] = trilinear8(first_d[a], second_d[a], fraction);
     }
 }
 
@@ -244,7 +274,8 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     // Shading: the stored gradient's rows are read here, beside the voxels' (not after the
     // classification, behind the branch on opacity): the loads of both overlap.
     __m256 d[3];
-    if constexpr (SHADING) {
+    const bool packed = IS_RGBA && SHADING && m.rgba8_stride == PACKED_VOXEL_BYTES;
+    if (SHADING && !packed) {
         source_gradient8(m, src, at, fraction, d);
     }
     const __m256 one = _mm256_set1_ps(1.0f);
@@ -252,12 +283,17 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     __m256 positive;
     if constexpr (IS_RGBA) {
         __m256 rgba[4];
-        if (m.rgba8 != nullptr) {
+        if (packed) {
+            interpolate_packed8(m, src, at, fraction, rgba, d);
+        } else if (m.rgba8 != nullptr) {
             interpolate_bytes8(m, src, at, fraction, rgba);
         } else {
             interpolate_rgba8(src, at, fraction, rgba);
         }
-        const __m256 a = clamp8(rgba[3], zero, one);
+        // rgba8: α and α·c in units of 1/255 and 1/255² (classify_rgba_source()).
+        const bool bytes = m.rgba8 != nullptr;
+        const __m256 a = clamp8(
+            bytes ? _mm256_mul_ps(rgba[3], _mm256_set1_ps(1.0f / 255.0f)) : rgba[3], zero, one);
         positive = _mm256_and_ps(inside, _mm256_cmp_ps(a, zero, _CMP_GT_OQ));
         __m256 a_step;
         if (s.step_over_unit == 0.5f) {
@@ -276,7 +312,8 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
             }
             a_step = load(st);
         }
-        const __m256 inv = _mm256_div_ps(one, rgba[3]);
+        const __m256 inv =
+            _mm256_div_ps(one, bytes ? _mm256_mul_ps(rgba[3], _mm256_set1_ps(255.0f)) : rgba[3]);
         for (int ch = 0; ch < 3; ++ch) {
             out[ch] = _mm256_and_ps(positive, _mm256_mul_ps(rgba[ch], inv));
         }
@@ -495,10 +532,13 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                 constexpr std::int64_t CH = IS_RGBA ? 4 : 1;  // floats per voxel
                 const std::int64_t dy = CH * std::int64_t{src.dy};
                 const std::int64_t dz = CH * std::int64_t{src.dz};
-                // The voxels' first bytes: the floats', or the rgba8 source's (4 per voxel).
+                // The voxels' first bytes: the floats', or the rgba8 source's (4 per voxel, or
+                // the packed records, gradient included).
                 const auto* bytes = m.rgba8 != nullptr ? reinterpret_cast<const char*>(m.rgba8)
                                                        : reinterpret_cast<const char*>(src.v);
-                const std::int64_t size = m.rgba8 != nullptr ? 1 : std::int64_t{sizeof(float)};
+                const bool packed = IS_RGBA && SHADING && m.rgba8_stride == PACKED_VOXEL_BYTES;
+                const std::int64_t size =
+                    m.rgba8 != nullptr ? m.rgba8_stride / CH : std::int64_t{sizeof(float)};
                 const std::int64_t by = size * dy, bz = size * dz;
                 while (ahead_mask != 0) {
                     const int l = __builtin_ctz(static_cast<unsigned>(ahead_mask));
@@ -508,7 +548,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                     _mm_prefetch(v + by, _MM_HINT_T0);
                     _mm_prefetch(v + bz, _MM_HINT_T0);
                     _mm_prefetch(v + bz + by, _MM_HINT_T0);
-                    if constexpr (SHADING) {
+                    if (SHADING && !packed) {
                         // The stored gradient's rows of that voxel, 4 values per voxel.
                         const GradientValue* d =
                             m.gradient + 4 * static_cast<std::int64_t>(index[l]);
@@ -563,22 +603,6 @@ bool mapped_avx2_fits(const MappedKernel& m) {
            (!m.target.shading || m.gradient != nullptr);
 }
 
-PLIANT_AVX2_FN static void unit8_table(float out[256]) {
-    for (int c = 0; c < 256; c += LANES) {
-        _mm256_storeu_ps(out + c,
-                         unit8_8(_mm256_add_epi32(_mm256_set1_epi32(c),
-                                                  _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7))));
-    }
-}
-
-bool unit8_table_avx2(float out[256]) {
-    if (!has_avx2()) {
-        return false;
-    }
-    unit8_table(out);
-    return true;
-}
-
 PLIANT_AVX2_FN std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1,
                                              Color* colors) {
     if (m.source.is_rgba) {
@@ -597,10 +621,6 @@ bool mapped_avx2_fits(const MappedKernel&) {
 
 std::int64_t mapped_tile_avx2(const MappedKernel&, int, int, int, int, Color*) {
     return 0;
-}
-
-bool unit8_table_avx2(float*) {
-    return false;
 }
 
 #endif

@@ -33,8 +33,4 @@ bool mapped_avx2_fits(const MappedKernel& m);
 // samples. Precondition: mapped_avx2_fits(m), x1 − x0 and y1 − y0 at most TILE.
 std::int64_t mapped_tile_avx2(const MappedKernel& m, int x0, int y0, int x1, int y1, Color* colors);
 
-// The AVX2 march's c / 255 of every byte c into out[c] (its tests compare it with the division);
-// false, out untouched, without AVX2.
-bool unit8_table_avx2(float out[256]);
-
 }  // namespace pliant::render::detail

@@ -31,6 +31,12 @@ namespace pliant::render::detail {
 // 4 values, 8 bytes per voxel, so a lane's x-adjacent voxel pair is one 16-byte load.
 using GradientValue = std::int16_t;
 
+// A shaded rgba8 source packs each voxel's bytes and its stored gradient in one record: r, g,
+// b, α (bytes 0–3), then the gradient's 4 GradientValues (bytes 4–11: x, y, z, 0), then 4 bytes
+// of 0, so that a lane's x-adjacent voxel pair of a row is one 32-byte load that holds both
+// (MappedKernel::rgba8 at byte 0, MappedKernel::gradient at byte 4 of the first record).
+inline constexpr std::int64_t PACKED_VOXEL_BYTES = 16;
+
 // Occupancy bits of a map cell.
 inline constexpr std::uint8_t MAP_CELL_VALID = 1;    // its 8 nodes hold source coordinates
 inline constexpr std::uint8_t MAP_CELL_VISIBLE = 2;  // some sample in it may have opacity
@@ -61,6 +67,11 @@ struct MappedKernel {
     // An rgba8 source: its bytes (r, g, b, α per voxel), read in place of source.values (null:
     // the floats of source.values), each corner premultiplied as it is read (rgba8_voxel()).
     const std::uint8_t* rgba8 = nullptr;
+    // Bytes from one voxel's r to the next's (4; PACKED_VOXEL_BYTES when the voxels are packed
+    // with their gradient) and GradientValues from one voxel's gradient to the next's (4;
+    // PACKED_VOXEL_BYTES / 2 packed).
+    std::int64_t rgba8_stride = 4;
+    std::int64_t gradient_stride = 4;
 };
 static_assert(std::is_trivially_copyable_v<MappedKernel>);
 
@@ -131,22 +142,24 @@ PLIANT_HOST_DEVICE inline float unit8(std::uint8_t c) {
     return static_cast<float>(c) / 255.0f;
 }
 
-// The float copy's 4 values of rgba8 voxel p (RayCaster's preparation, the same operations): the
-// channels c / 255, then α·r, α·g, α·b, α.
+// The 4 values of rgba8 voxel p in units of 1/255² (colour) and 1/255 (α): α·r, α·g, α·b, α
+// for the bytes c, α (each product exact: at most 255², an integer below 2^24).
 PLIANT_HOST_DEVICE inline void rgba8_voxel(const std::uint8_t* p, float out[4]) {
-    const float a = unit8(p[3]);
-    out[0] = unit8(p[0]) * a;
-    out[1] = unit8(p[1]) * a;
-    out[2] = unit8(p[2]) * a;
+    const float a = static_cast<float>(p[3]);
+    out[0] = static_cast<float>(p[0]) * a;
+    out[1] = static_cast<float>(p[1]) * a;
+    out[2] = static_cast<float>(p[2]) * a;
     out[3] = a;
 }
 
-// interpolate_rgba() of an rgba8 source at t: the same trilinear operations on the corners'
-// premultiplied values (rgba8_voxel()), so bitwise interpolate_rgba() of RayCaster's float copy.
+// interpolate_rgba() of an rgba8 source at t in the units of rgba8_voxel(): the same trilinear
+// operations on the corners' premultiplied values (RayCaster's float copy holds them divided by
+// 255² and 255: the same values up to rounding, without a conversion per corner).
 PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const Trilinear& t) {
     const RayCastKernel& s = m.source;
-    const std::uint8_t* p = m.rgba8 + 4 * voxel_index(s, t);
-    const std::int64_t dx = 4 * s.d[0], dy = 4 * s.d[1], dz = 4 * s.d[2];
+    const std::int64_t stride = m.rgba8_stride;
+    const std::uint8_t* p = m.rgba8 + stride * voxel_index(s, t);
+    const std::int64_t dx = stride * s.d[0], dy = stride * s.d[1], dz = stride * s.d[2];
     const std::int64_t corner[8] = {0, dx, dy, dy + dx, dz, dz + dx, dz + dy, dz + dy + dx};
     float v[8][4];
     for (int i = 0; i < 8; ++i) {
@@ -163,18 +176,19 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
     return {out[0], out[1], out[2], out[3]};
 }
 
-// classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set.
+// classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set
+// (interpolate_rgba8(): the opacity α / 255, the straight colour α·c / (255 α)).
 PLIANT_HOST_DEVICE inline Sample classify_rgba_source(const MappedKernel& m, const Trilinear& t) {
     if (m.rgba8 == nullptr) {
         return classify<true>(m.source, t);
     }
     const Sample s = interpolate_rgba8(m, t);
-    const float a = clampf(s.a, 0.0f, 1.0f);
+    const float a = clampf(s.a * (1.0f / 255.0f), 0.0f, 1.0f);
     if (!(a > 0.0f)) {
         return {0.0f, 0.0f, 0.0f, 0.0f};
     }
     const float a_step = rgba_step_opacity(a, m.source.step_over_unit);
-    const float inv = 1.0f / s.a;
+    const float inv = 1.0f / (s.a * 255.0f);
     return {s.r * inv, s.g * inv, s.b * inv, a_step};
 }
 
@@ -193,8 +207,9 @@ PLIANT_HOST_DEVICE inline bool in_source(const MappedKernel& m, Vec3f g) {
 // included: on [0, 1] both are v(1 + f) − v(0)).
 PLIANT_HOST_DEVICE inline Vec3f source_gradient(const MappedKernel& m, const Trilinear& t) {
     const RayCastKernel& s = m.source;
-    const GradientValue* p = m.gradient + 4 * voxel_index(s, t);
-    const std::int64_t dx = 4 * s.d[0], dy = 4 * s.d[1], dz = 4 * s.d[2];
+    const std::int64_t stride = m.gradient_stride;
+    const GradientValue* p = m.gradient + stride * voxel_index(s, t);
+    const std::int64_t dx = stride * s.d[0], dy = stride * s.d[1], dz = stride * s.d[2];
     Vec3f out;
     for (int c = 0; c < 3; ++c) {
         const float c00 = lerp(static_cast<float>(p[c]), static_cast<float>(p[dx + c]), t.fx);
