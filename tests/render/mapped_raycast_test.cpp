@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 
@@ -372,7 +373,8 @@ TEST(MappedRayCast, Avx2MarchMatchesTheScalarKernelOnScalars) {
 }
 
 // The same source as rgba8 (read in its bytes, premultiplied in units of 1/255²) and as rgba32f
-// holding c / 255 (the float copy's route) renders the same pixels, with the same sample counts,
+// holding c / 255 (the float copy's route) renders the same pixels up to rounding (a byte in a
+// thousand one level apart at most), with the same sample counts,
 // through a twist, on the AVX2 march and the scalar kernel, shaded or not (with the bytes
 // packed beside the gradient): the phantom, and noise whose channels take every byte value.
 TEST(MappedRayCast, Rgba8SourceGivesTheFloatSourceImage) {
@@ -410,7 +412,18 @@ TEST(MappedRayCast, Rgba8SourceGivesTheFloatSourceImage) {
                 const RayCastStats sa = from_bytes.render(camera, a);
                 const RayCastStats sb = from_floats.render(camera, b);
                 allow_avx2(true);
-                EXPECT_EQ(a.pixels, b.pixels) << "shading " << shading << ", avx2 " << avx2;
+                // The two routes round differently (integer corners against c / 255 floats):
+                // a pixel may land one level apart, rarely.
+                ASSERT_EQ(a.pixels.size(), b.pixels.size());
+                std::size_t differing = 0;
+                for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+                    const int diff = std::abs(int{a.pixels[i]} - int{b.pixels[i]});
+                    EXPECT_LE(diff, 1)
+                        << "pixel byte " << i << ", shading " << shading << ", avx2 " << avx2;
+                    differing += diff != 0 ? 1 : 0;
+                }
+                EXPECT_LE(differing, a.pixels.size() / 1000)
+                    << "shading " << shading << ", avx2 " << avx2;
                 EXPECT_EQ(sa.samples, sb.samples);
                 EXPECT_GT(sa.samples, 0);
             }
