@@ -51,12 +51,15 @@ TEST(OgcAudit, PairAuditPutsBackWhatTheFullAuditDoes) {
     std::vector<Vec3d> end = w.x;
     end[3].z = -0.001;
     end[4].x += 0.001;
-    ASSERT_TRUE(detail::ogc_pairs_cover_window(w.contact, [&] {
-        detail::OgcAuditWindow window;
-        window.start = w.x;
-        window.detections = w.contact.detections();
-        return window;
-    }(), end));
+    ASSERT_TRUE(detail::ogc_pairs_cover_window(
+        w.contact,
+        [&] {
+            detail::OgcAuditWindow window;
+            window.start = w.x;
+            window.detections = w.contact.detections();
+            return window;
+        }(),
+        end));
     const Window::Result pairs = w.audit(end, true);
     const Window::Result full = w.audit(end, false);
     EXPECT_EQ(pairs.window.pair_audits, 1);
@@ -92,6 +95,31 @@ TEST(OgcAudit, VertexBeyondItsBoundTakesTheFullAudit) {
     EXPECT_EQ(w.audit(near, true).window.full_audits, 1);
     const Window::Result still = w.audit(w.x, true);
     EXPECT_EQ(still.window.full_audits + still.window.pair_audits, 0);
+}
+
+// The sheet carried 10 cm along x by the frame shift within the window, vertex 3 pushed through
+// the lower triangle: the pair audit puts the four back at their starts, off the moving frame,
+// so the check fails on the changed motion and the full fail-safe runs on it as well.
+TEST(OgcAudit, VertexPutBackOffTheMovingFrameTakesTheFullAuditToo) {
+    Window w;
+    const Vec3d carried{0.1, 0.0, 0.0};
+    SelfCollision self_collision(w.triangles, w.x.size(), 0.005);
+    detail::OgcAuditWindow window;
+    std::int64_t num_free = 0;
+    detail::begin_ogc_step(w.contact, w.x, w.inverse_masses, window, num_free);
+    std::vector<Vec3d> end = w.x;
+    for (Vec3d& p : end) {
+        p += carried;
+    }
+    ASSERT_TRUE(w.contact.set_shift(end, w.inverse_masses));
+    end[3].z = -0.001;
+    std::vector<Vec3d> v(end.size(), Vec3d{1.0, 0.0, 0.0});
+    EXPECT_TRUE(detail::audit_ogc_window(self_collision, w.contact, window, end, v));
+    EXPECT_EQ(window.pair_audits, 1);
+    EXPECT_EQ(window.full_audits, 1);
+    EXPECT_EQ(end[3], w.x[3]);
+    EXPECT_EQ(end[0], w.x[0]);
+    EXPECT_EQ(collision::count_intersecting_pairs(end, w.triangles), 0);
 }
 
 }  // namespace
