@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
+#include "pliant/collision/ccd.hpp"
 #include "pliant/collision/narrow_phase.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -353,6 +355,115 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
         std::fill(m_changed.begin(), m_changed.end(), std::uint8_t{0});
         stats.response_ms += stage.elapsed_ms();
     }
+}
+
+void CCDFailSafe::enforce_pairs(std::span<const detail::FeatureVertices> pairs,
+                                std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                                std::span<Vec3d> velocities, SelfCollisionStats& stats) {
+    Stopwatch watch;
+    const std::span<const Vec3d> end(positions);
+    const std::size_t n = positions.size();
+    const double margin = 1e-9 * (1.0 + detail::largest_coordinate(positions_t0, end));
+    m_reverted.assign(n, 0);
+    m_changed.assign(n, 0);
+    m_window_motion.resize(n);
+    parallel_for(
+        static_cast<std::int64_t>(n),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            m_window_motion[v] = end[v] - positions_t0[v];
+        },
+        detail::SELF_VERTEX_GRAIN);
+    const std::span<const Vec3d> motion(m_window_motion);
+    const auto marked = [&](const FeatureVertices& f) {
+        return (m_changed[static_cast<std::size_t>(f.v[0])] |
+                m_changed[static_cast<std::size_t>(f.v[1])] |
+                m_changed[static_cast<std::size_t>(f.v[2])] |
+                m_changed[static_cast<std::size_t>(f.v[3])]) != 0;
+    };
+    const auto at = [](std::span<const Vec3d> x, std::int32_t v) {
+        return x[static_cast<std::size_t>(v)];
+    };
+    const auto num_pairs = static_cast<std::int64_t>(pairs.size());
+    m_pair_hits.assign(pairs.size(), 0);
+    Stopwatch stage;
+    for (int round = 0;; ++round) {
+        stats.enforce_rounds = std::max(stats.enforce_rounds, round + 1);
+        stage.restart();
+        // Per pair: tested (counted) and hit (m_pair_hits), each pair alone: any thread count.
+        using Counts = std::pair<std::int64_t, std::int64_t>;  // tested, hits
+        const Counts counts = parallel_reduce(
+            num_pairs, Counts{0, 0},
+            [&](std::int64_t begin, std::int64_t stop) {
+                Counts c{0, 0};
+                for (std::int64_t i = begin; i < stop; ++i) {
+                    const auto k = static_cast<std::size_t>(i);
+                    const FeatureVertices& f = pairs[k];
+                    m_pair_hits[k] = 0;
+                    if ((round > 0 && !marked(f)) ||
+                        separation_exceeds(f, positions_t0, motion, margin)) {
+                        continue;
+                    }
+                    ++c.first;
+                    const collision::CcdResult r =
+                        f.num_first == 1 ? collision::vertex_face_ccd(
+                                               at(positions_t0, f.v[0]), at(positions_t0, f.v[1]),
+                                               at(positions_t0, f.v[2]), at(positions_t0, f.v[3]),
+                                               at(end, f.v[0]), at(end, f.v[1]), at(end, f.v[2]),
+                                               at(end, f.v[3]))
+                                         : collision::edge_edge_ccd(
+                                               at(positions_t0, f.v[0]), at(positions_t0, f.v[1]),
+                                               at(positions_t0, f.v[2]), at(positions_t0, f.v[3]),
+                                               at(end, f.v[0]), at(end, f.v[1]), at(end, f.v[2]),
+                                               at(end, f.v[3]));
+                    if (r.hit) {
+                        m_pair_hits[k] = 1;
+                        ++c.second;
+                    }
+                }
+                return c;
+            },
+            [](const Counts& a, const Counts& b) {
+                return Counts{a.first + b.first, a.second + b.second};
+            },
+            detail::PAIR_GRAIN);
+        stats.ccd_pairs += counts.first;
+        if (round == 0) {
+            stats.ccd_hits += counts.second;
+        }
+        stats.narrow_ms += stage.elapsed_ms();
+        if (counts.second == 0) {
+            break;
+        }
+        // The vertices of every hit, in pair order (deterministic).
+        stage.restart();
+        std::fill(m_changed.begin(), m_changed.end(), std::uint8_t{0});
+        bool moved_any = false;
+        for (std::size_t k = 0; k < pairs.size(); ++k) {
+            if (m_pair_hits[k] == 0) {
+                continue;
+            }
+            for (const std::int32_t vertex : pairs[k].v) {
+                const auto v = static_cast<std::size_t>(vertex);
+                stats.reverted_vertices += m_reverted[v] == 0 ? 1 : 0;
+                m_reverted[v] = 1;
+                if (positions[v] == positions_t0[v]) {
+                    continue;
+                }
+                positions[v] = positions_t0[v];
+                velocities[v] = {0.0, 0.0, 0.0};
+                m_window_motion[v] = {0.0, 0.0, 0.0};
+                m_changed[v] = 1;
+                moved_any = true;
+            }
+        }
+        stats.response_ms += stage.elapsed_ms();
+        if (!moved_any) {
+            // Every vertex of every hit is at its start: touching at the window's start.
+            break;
+        }
+    }
+    stats.enforce_ms += watch.elapsed_ms();
 }
 
 void CCDFailSafe::save_state(ByteWriter& out) const {

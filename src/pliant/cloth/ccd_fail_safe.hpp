@@ -84,6 +84,19 @@ public:
                  std::span<Vec3d> positions, std::span<Vec3d> velocities, double time_t0,
                  double time, SelfCollisionStats& stats);
 
+    // The fail-safe on a given list of feature pairs instead of the candidate set: the caller
+    // guarantees that no pair outside `pairs` (#pairs, vertex-face: the vertex then the face's
+    // three; edge-edge: edge a's two then edge b's two; no vertex shared) can touch over the
+    // window (detail/ogc_step.hpp: OGC's displacement bounds). The same rounds as enforce(): the
+    // conservative CCD on every pair that separation_exceeds() does not clear, the vertices of
+    // every hit put back at positions_t0 with zero velocity (in pair order), then only the pairs
+    // with a vertex just put back, until no pair touches or nothing moves. No broad phase, no
+    // budget (the caller bounds the list). stats: reverted_vertices, ccd_pairs, ccd_hits,
+    // enforce_rounds, narrow_ms, response_ms and enforce_ms as enforce() counts them.
+    void enforce_pairs(std::span<const detail::FeatureVertices> pairs,
+                       std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                       std::span<Vec3d> velocities, SelfCollisionStats& stats);
+
     // The state later steps read (core/bytes.hpp), so that a run resumed from a checkpoint
     // continues bit for bit; load_state: InvalidInput for a state of another mesh or a
     // truncated one.
@@ -126,6 +139,7 @@ private:
     std::vector<std::int64_t> m_pair_order;
     std::vector<std::uint8_t> m_reverted;
     std::vector<std::uint8_t> m_changed;
+    std::vector<std::uint8_t> m_pair_hits;  // enforce_pairs(): per pair, the CCD's hit
     detail::IndexFilter m_index_filter;
 };
 

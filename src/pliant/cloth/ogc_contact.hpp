@@ -178,6 +178,9 @@ public:
     // Pairs closer than r at the last detection.
     std::int64_t close_pairs() const { return m_close_pairs; }
     std::span<const Pair> pairs() const { return m_pairs; }
+    // The positions of the last detection (#V; empty before one) and the frame shift S.
+    std::span<const Vec3d> detected_positions() const { return m_detected; }
+    const Vec3d& shift() const { return m_shift; }
     // Detections since construction.
     std::int64_t detections() const { return m_detections; }
     // Wall-clock time of the detections since construction (ms).

@@ -78,6 +78,14 @@ public:
                             m_stats);
     }
 
+    // Step 3 on a given pair list (CCDFailSafe::enforce_pairs): the caller guarantees that no
+    // pair outside `pairs` can touch over the window positions_t0 → positions.
+    void enforce_pairs(std::span<const detail::FeatureVertices> pairs,
+                       std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                       std::span<Vec3d> velocities) {
+        m_fail_safe.enforce_pairs(pairs, positions_t0, positions, velocities, m_stats);
+    }
+
     const SelfCollisionStats& stats() const { return m_stats; }
     void reset_stats() { m_stats = {}; }
     const SelfCollisionCandidates& candidates() const { return m_candidates; }

@@ -213,8 +213,8 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     const std::span<Vec3d> velocities = model.mutable_velocities();
     detail::OgcStepStart ogc_start;
     if (m_ogc) {
-        ogc_start = detail::begin_ogc_step(*m_ogc, positions, model.inverse_masses(), m_audit_start,
-                                           m_num_free);
+        ogc_start =
+            detail::begin_ogc_step(*m_ogc, positions, model.inverse_masses(), m_audit, m_num_free);
         m_step_truncated = 0;
     }
     m_step_swept = 0;
@@ -247,7 +247,7 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
         if (m_options.ogc->audit && audit(positions, velocities)) {
             m_ogc->invalidate();
         }
-        detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, stats);
+        detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, m_audit, stats);
     }
     model.end_step();
     if (m_self_collision) {
@@ -460,7 +460,7 @@ void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
 }
 
 bool VBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
-    return detail::audit_ogc_window(*m_self_collision, m_audit_start, x, velocities);
+    return detail::audit_ogc_window(*m_self_collision, *m_ogc, m_audit, x, velocities);
 }
 
 void VBDStepper::detect(std::span<Vec3d> x) {

@@ -55,6 +55,7 @@
 #include <vector>
 
 #include "pliant/cloth/cloth_model.hpp"
+#include "pliant/cloth/detail/ogc_audit_window.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
 #include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
@@ -140,8 +141,9 @@ private:
     bool redetect_if_needed(std::span<Vec3d> x);
     // OGC: the audit's window ends at x (ogc.audit), then a detection at x.
     void detect(std::span<Vec3d> x);
-    // OGC: the CCD fail-safe over the motion from m_audit_start to x (velocities: of the vertices
-    // it puts back, set to zero); returns whether it put any back. The next window starts at x.
+    // OGC: the CCD fail-safe over the motion from the audit window's start to x (velocities: of the
+    // vertices it puts back, set to zero); returns whether it put any back. The next window starts
+    // at x.
     bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
     // The unit normals n̂ of the isometric hinges at positions x (zero for degenerate ones).
     void update_hinge_normals(std::span<const Vec3d> x);
@@ -192,7 +194,7 @@ private:
     std::unique_ptr<OgcContact> m_ogc;
     // OGC: positions where the audit's window starts (the step's start or the last detection),
     // and scratch velocities for an audit within a substep.
-    std::vector<Vec3d> m_audit_start;
+    detail::OgcAuditWindow m_audit;
     std::vector<Vec3d> m_audit_velocities;
     std::int64_t m_num_free = 0;  // OGC: free vertices (inverse mass > 0) in this step
     std::atomic<std::int64_t> m_sweep_truncated{0};  // OGC: vertices held back in this sweep

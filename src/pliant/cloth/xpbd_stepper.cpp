@@ -184,7 +184,7 @@ bool XPBDStepper::needs_detection(std::int64_t truncated) const {
 }
 
 bool XPBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
-    return detail::audit_ogc_window(*m_self_collision, m_audit_start, x, velocities);
+    return detail::audit_ogc_window(*m_self_collision, *m_ogc, m_audit, x, velocities);
 }
 
 void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
@@ -232,8 +232,8 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
     const std::span<Vec3d> velocities = model.mutable_velocities();
     detail::OgcStepStart ogc_start;
     if (m_ogc) {
-        ogc_start = detail::begin_ogc_step(*m_ogc, positions, model.inverse_masses(), m_audit_start,
-                                           m_num_free);
+        ogc_start =
+            detail::begin_ogc_step(*m_ogc, positions, model.inverse_masses(), m_audit, m_num_free);
         m_step_truncated = 0;
     }
     for (int s = 0; s < substeps; ++s) {
@@ -272,7 +272,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         if (m_ogc->options().audit && audit(positions, velocities)) {
             m_ogc->invalidate();
         }
-        detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, stats);
+        detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, m_audit, stats);
     }
     model.end_step();
     if (m_self_collision) {

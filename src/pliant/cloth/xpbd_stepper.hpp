@@ -86,6 +86,7 @@
 #include "pliant/cloth/cloth_model.hpp"
 #include "pliant/cloth/constraint_coloring.hpp"
 #include "pliant/cloth/detail/constraint_kernels.hpp"
+#include "pliant/cloth/detail/ogc_audit_window.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
 #include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
@@ -124,6 +125,10 @@ struct ClothStepStats {
     std::int64_t ogc_pairs = 0;
     std::int64_t ogc_close_pairs = 0;
     double ogc_detect_ms = 0.0;  // the detections' time
+    // The CCD audit's windows in the step: on the detection's pairs alone, and by the full
+    // fail-safe (detail/ogc_step.hpp, audit_ogc_window).
+    std::int64_t ogc_pair_audits = 0;
+    std::int64_t ogc_full_audits = 0;
 };
 
 class XPBDStepper {
@@ -204,8 +209,8 @@ private:
     // detections were made.
     void catch_up(std::span<Vec3d> x, std::span<Vec3d> velocities,
                   std::span<const double> inverse_masses);
-    // OGC: the CCD fail-safe over the motion from m_audit_start to x; returns whether it put any
-    // vertex back. The next window starts at x.
+    // OGC: the CCD fail-safe over the motion from the audit window's start to x; returns whether it
+    // put any vertex back. The next window starts at x.
     bool audit(std::span<Vec3d> x, std::span<Vec3d> velocities);
 
     std::size_t m_num_vertices = 0;
@@ -259,7 +264,7 @@ private:
     // substep, the free vertices and the vertices held back in this step.
     std::optional<OgcOptions> m_ogc_options;
     std::unique_ptr<OgcContact> m_ogc;
-    std::vector<Vec3d> m_audit_start;
+    detail::OgcAuditWindow m_audit;
     std::vector<Vec3d> m_ogc_from;
     std::vector<Vec3d> m_ogc_wanted;  // a truncation's target (catch_up)
     bool m_pins_left_sets = false;    // in this substep (detail::pins_left_sets)

@@ -501,6 +501,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                 record["ogc_pairs"] = step.ogc_pairs;
                 record["ogc_close_pairs"] = step.ogc_close_pairs;
                 record["ogc_detect_ms"] = step.ogc_detect_ms;
+                record["ogc_pair_audits"] = step.ogc_pair_audits;
+                record["ogc_full_audits"] = step.ogc_full_audits;
             }
         }
         if (sim.solver().model().has_obstacles()) {

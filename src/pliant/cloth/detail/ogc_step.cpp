@@ -1,6 +1,8 @@
 #include "pliant/cloth/detail/ogc_step.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <utility>
 
 #include "pliant/core/parallel.hpp"
@@ -71,24 +73,90 @@ void pin_detection_positions(std::span<const Vec3d> start, std::span<const Vec3d
 }
 
 OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positions,
-                            std::span<const double> inverse_masses, std::vector<Vec3d>& audit_start,
+                            std::span<const double> inverse_masses, OgcAuditWindow& audit,
                             std::int64_t& num_free) {
-    audit_start.assign(positions.begin(), positions.end());
+    audit.start.assign(positions.begin(), positions.end());
+    audit.detections = ogc.detections();
+    audit.shift = ogc.shift();
+    audit.pair_audits = 0;
+    audit.full_audits = 0;
     num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
                              [](double w) { return w > 0.0; });
     return {ogc.detections(), ogc.detect_ms()};
 }
 
-bool audit_ogc_window(SelfCollision& self_collision, std::vector<Vec3d>& audit_start,
-                      std::span<Vec3d> x, std::span<Vec3d> velocities) {
+bool ogc_pairs_cover_window(const OgcContact& ogc, const OgcAuditWindow& audit,
+                            std::span<const Vec3d> x) {
+    const std::span<const Vec3d> detected = ogc.detected_positions();
+    const std::size_t n = x.size();
+    if (!ogc.has_detection() || detected.size() != n || audit.start.size() != n ||
+        static_cast<std::int64_t>(ogc.num_pairs()) > CCDFailSafe::pair_budget(n)) {
+        return false;
+    }
+    const Vec3d shift_end = ogc.shift();
+    const Vec3d shift_start =
+        audit.detections == ogc.detections() ? audit.shift : Vec3d{0.0, 0.0, 0.0};
+    // The largest deviations at the window's ends (a non-finite one counts as infinite).
+    using Ends = std::pair<double, double>;
+    const auto larger = [](const Ends& a, const Ends& b) {
+        return Ends{std::max(a.first, b.first), std::max(a.second, b.second)};
+    };
+    const auto finite_or_inf = [](double d) {
+        return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
+    };
+    const Ends ends = parallel_reduce(
+        static_cast<std::int64_t>(n), Ends{0.0, 0.0},
+        [&](std::int64_t begin, std::int64_t end) {
+            Ends e{0.0, 0.0};
+            for (std::int64_t i = begin; i < end; ++i) {
+                const auto v = static_cast<std::size_t>(i);
+                e = larger(e, Ends{finite_or_inf(norm(audit.start[v] - detected[v] - shift_start)),
+                                   finite_or_inf(norm(x[v] - detected[v] - shift_end))});
+            }
+            return e;
+        },
+        larger, TRUNCATE_GRAIN);
+    const double deviation = std::max(ends.first, ends.second);
+    const double margin = 1e-9 * (1.0 + largest_coordinate(audit.start, x));
+    return 2.0 * deviation < ogc.query_radius() - margin;
+}
+
+bool audit_ogc_window(SelfCollision& self_collision, const OgcContact& ogc, OgcAuditWindow& audit,
+                      std::span<Vec3d> x, std::span<Vec3d> velocities, bool use_pairs) {
     const std::int64_t reverted = self_collision.stats().reverted_vertices;
-    self_collision.enforce(audit_start, x, velocities);
-    audit_start.assign(x.begin(), x.end());
+    if (!std::equal(audit.start.begin(), audit.start.end(), x.begin(), x.end())) {
+        if (use_pairs && ogc_pairs_cover_window(ogc, audit, x)) {
+            const std::span<const OgcContact::Pair> pairs = ogc.pairs();
+            audit.pairs.resize(pairs.size());
+            std::transform(pairs.begin(), pairs.end(), audit.pairs.begin(),
+                           [](const OgcContact::Pair& p) {
+                               return FeatureVertices{{p.v[0], p.v[1], p.v[2], p.v[3]},
+                                                      p.is_edge_edge ? 2U : 1U};
+                           });
+            self_collision.enforce_pairs(audit.pairs, audit.start, x, velocities);
+            ++audit.pair_audits;
+            if (self_collision.stats().reverted_vertices != reverted &&
+                !ogc_pairs_cover_window(ogc, audit, x)) {
+                // The vertices put back stand at their starts, off the moving frame: on the
+                // changed motion the pairs may no longer cover every contact.
+                self_collision.enforce(audit.start, x, velocities);
+                ++audit.full_audits;
+            }
+        } else {
+            self_collision.enforce(audit.start, x, velocities);
+            ++audit.full_audits;
+        }
+    }
+    audit.start.assign(x.begin(), x.end());
+    audit.detections = ogc.detections();
+    audit.shift = ogc.shift();
     return self_collision.stats().reverted_vertices != reverted;
 }
 
 void ogc_step_stats(const OgcContact& ogc, const OgcStepStart& start, std::int64_t truncated,
-                    ClothStepStats& stats) {
+                    const OgcAuditWindow& audit, ClothStepStats& stats) {
+    stats.ogc_pair_audits = audit.pair_audits;
+    stats.ogc_full_audits = audit.full_audits;
     stats.has_ogc = true;
     stats.ogc_detections = ogc.detections() - start.detections;
     stats.ogc_detect_ms = ogc.detect_ms() - start.detect_ms;
