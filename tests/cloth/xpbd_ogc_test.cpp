@@ -99,6 +99,19 @@ TEST(XPBDOgc, SavedStateContinuesBitForBit) {
     test::expect_saved_state_continues_bit_for_bit([] { return colliding_sheets(10); }, 4, 12);
 }
 
+// Choosing the contact does not switch self-collision on: a scene with "self_collision": false
+// and "contact": "ogc" has no self-contact at all (the sheets fall through each other).
+TEST(XPBDOgc, ContactChoiceKeepsSelfCollisionOff) {
+    auto solver = test::colliding_sheets(8);
+    solver->enable_self_collision(false);
+    solver->use_xpbd_ogc(OgcOptions{});
+    EXPECT_FALSE(solver->stepper().has_self_collision());
+    EXPECT_EQ(solver->stepper().ogc(), nullptr);
+    EXPECT_FALSE(solver->step(1.0 / 24.0, 4).has_ogc);
+    solver->enable_self_collision(true);
+    EXPECT_NE(solver->stepper().ogc(), nullptr);
+}
+
 TEST(XPBDOgc, RejectsBadOptionsAndAStateWithoutOgc) {
     ClothSolver solver(test::flat_sheet(6, 1.0, 0.02), ClothMaterial{});
     solver.enable_self_collision(true);

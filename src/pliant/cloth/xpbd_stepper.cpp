@@ -174,8 +174,10 @@ void XPBDStepper::set_ogc(const ClothModel& model, const std::optional<OgcOption
         OgcContact::check_options(*options);
     }
     m_ogc_options = options;
+    // Self-collision stays as it was (on or off), with the new contact when on.
+    const bool enabled = m_self_collision != nullptr;
     enable_self_collision(model, false);
-    enable_self_collision(model, true);
+    enable_self_collision(model, enabled);
 }
 
 bool XPBDStepper::needs_detection(std::int64_t truncated) const {
