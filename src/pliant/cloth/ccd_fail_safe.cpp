@@ -191,18 +191,8 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
     const std::span<const SelfCollisionCandidates::Candidate> pairs_to_check =
         candidates.candidates();
     const std::span<const Vec3d> end(positions);
-    m_reverted.assign(n, 0);
-    m_changed.assign(n, 0);
     // Each vertex's motion over the window (zero once put back).
-    m_window_motion.resize(n);
-    parallel_for(
-        static_cast<std::int64_t>(n),
-        [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(i);
-            m_window_motion[v] = end[v] - positions_t0[v];
-        },
-        detail::SELF_VERTEX_GRAIN);
-    const std::span<const Vec3d> motion(m_window_motion);
+    const std::span<const Vec3d> motion = begin_window(positions_t0, end);
     bool over_budget = false;  // this window's pair budget is spent (set by the rounds below)
     // Puts v back at its start with zero velocity; true when that moved it.
     const auto revert = [&](std::size_t v) {
@@ -357,13 +347,9 @@ void CCDFailSafe::run_rounds(SelfCollisionCandidates& candidates,
     }
 }
 
-void CCDFailSafe::enforce_pairs(std::span<const detail::FeatureVertices> pairs,
-                                std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
-                                std::span<Vec3d> velocities, SelfCollisionStats& stats) {
-    Stopwatch watch;
-    const std::span<const Vec3d> end(positions);
-    const std::size_t n = positions.size();
-    const double margin = 1e-9 * (1.0 + detail::largest_coordinate(positions_t0, end));
+std::span<const Vec3d> CCDFailSafe::begin_window(std::span<const Vec3d> start,
+                                                 std::span<const Vec3d> end) {
+    const std::size_t n = end.size();
     m_reverted.assign(n, 0);
     m_changed.assign(n, 0);
     m_window_motion.resize(n);
@@ -371,10 +357,19 @@ void CCDFailSafe::enforce_pairs(std::span<const detail::FeatureVertices> pairs,
         static_cast<std::int64_t>(n),
         [&](std::int64_t i) {
             const auto v = static_cast<std::size_t>(i);
-            m_window_motion[v] = end[v] - positions_t0[v];
+            m_window_motion[v] = end[v] - start[v];
         },
         detail::SELF_VERTEX_GRAIN);
-    const std::span<const Vec3d> motion(m_window_motion);
+    return m_window_motion;
+}
+
+void CCDFailSafe::enforce_pairs(std::span<const detail::FeatureVertices> pairs,
+                                std::span<const Vec3d> positions_t0, std::span<Vec3d> positions,
+                                std::span<Vec3d> velocities, SelfCollisionStats& stats) {
+    Stopwatch watch;
+    const std::span<const Vec3d> end(positions);
+    const double margin = 1e-9 * (1.0 + detail::largest_coordinate(positions_t0, end));
+    const std::span<const Vec3d> motion = begin_window(positions_t0, end);
     const auto marked = [&](const FeatureVertices& f) {
         return (m_changed[static_cast<std::size_t>(f.v[0])] |
                 m_changed[static_cast<std::size_t>(f.v[1])] |

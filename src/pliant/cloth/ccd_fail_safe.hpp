@@ -123,6 +123,9 @@ private:
     void run_rounds(SelfCollisionCandidates& candidates, std::span<const Vec3d> positions_t0,
                     std::span<Vec3d> positions, std::span<Vec3d> velocities, const Vec3d& shift_t0,
                     const Vec3d& shift, double time, double margin, SelfCollisionStats& stats);
+    // Clears the per-vertex put-back and changed marks and sets m_window_motion to end − start;
+    // returns it.
+    std::span<const Vec3d> begin_window(std::span<const Vec3d> start, std::span<const Vec3d> end);
     // Whether the distance at `start` minus the largest relative displacement (motion: per vertex,
     // end − start) of a vertex of one feature and one of the other exceeds threshold (box
     // distance first).

@@ -69,21 +69,23 @@ struct TetGradient {
     float weight = 0.0f;
     float gx[4]{}, gy[4]{}, gz[4]{};
 };
-PLIANT_HOST_DEVICE inline TetGradient tet_gradient(const Float4 (&p)[4]) {
+// The gradients' cross products times scale, the volume e1 · (scaled ∇_1) and the weight from
+// them: scale 1/6 gives V and ∇_k V (tet_gradient), scale 1 gives 6 V and ∇_k (6 V)
+// (tet_gradient6; x · 1 is x, so its bits are those of the unscaled products).
+PLIANT_HOST_DEVICE inline TetGradient scaled_tet_gradient(const Float4 (&p)[4], float scale) {
     const float e1x = p[1].x - p[0].x, e1y = p[1].y - p[0].y, e1z = p[1].z - p[0].z;
     const float e2x = p[2].x - p[0].x, e2y = p[2].y - p[0].y, e2z = p[2].z - p[0].z;
     const float e3x = p[3].x - p[0].x, e3y = p[3].y - p[0].y, e3z = p[3].z - p[0].z;
-    constexpr float SIXTH = 1.0f / 6.0f;
     TetGradient g;
-    g.gx[1] = (e2y * e3z - e2z * e3y) * SIXTH;
-    g.gy[1] = (e2z * e3x - e2x * e3z) * SIXTH;
-    g.gz[1] = (e2x * e3y - e2y * e3x) * SIXTH;
-    g.gx[2] = (e3y * e1z - e3z * e1y) * SIXTH;
-    g.gy[2] = (e3z * e1x - e3x * e1z) * SIXTH;
-    g.gz[2] = (e3x * e1y - e3y * e1x) * SIXTH;
-    g.gx[3] = (e1y * e2z - e1z * e2y) * SIXTH;
-    g.gy[3] = (e1z * e2x - e1x * e2z) * SIXTH;
-    g.gz[3] = (e1x * e2y - e1y * e2x) * SIXTH;
+    g.gx[1] = (e2y * e3z - e2z * e3y) * scale;
+    g.gy[1] = (e2z * e3x - e2x * e3z) * scale;
+    g.gz[1] = (e2x * e3y - e2y * e3x) * scale;
+    g.gx[2] = (e3y * e1z - e3z * e1y) * scale;
+    g.gy[2] = (e3z * e1x - e3x * e1z) * scale;
+    g.gz[2] = (e3x * e1y - e3y * e1x) * scale;
+    g.gx[3] = (e1y * e2z - e1z * e2y) * scale;
+    g.gy[3] = (e1z * e2x - e1x * e2z) * scale;
+    g.gz[3] = (e1x * e2y - e1y * e2x) * scale;
     g.gx[0] = 0.0f - (g.gx[1] + g.gx[2] + g.gx[3]);
     g.gy[0] = 0.0f - (g.gy[1] + g.gy[2] + g.gy[3]);
     g.gz[0] = 0.0f - (g.gz[1] + g.gz[2] + g.gz[3]);
@@ -93,6 +95,10 @@ PLIANT_HOST_DEVICE inline TetGradient tet_gradient(const Float4 (&p)[4]) {
     };
     g.weight = p[0].w * norm2(0) + p[1].w * norm2(1) + p[2].w * norm2(2) + p[3].w * norm2(3);
     return g;
+}
+PLIANT_HOST_DEVICE inline TetGradient tet_gradient(const Float4 (&p)[4]) {
+    constexpr float SIXTH = 1.0f / 6.0f;
+    return scaled_tet_gradient(p, SIXTH);
 }
 
 // x_k += w_k ∇_k V Δλ for the vertices of tet t, loaded as p.
@@ -109,28 +115,7 @@ PLIANT_HOST_DEVICE inline void move_tet(Float4* x, const geometry::Tet& t, const
 // e3 × e1, e1 × e2, minus their sum), weight = Σ_k w_k |∇_k (6 V)|² (= 36 Σ_k w_k |∇_k V|²): the
 // projection's form, without the 9 products by 1/6.
 PLIANT_HOST_DEVICE inline TetGradient tet_gradient6(const Float4 (&p)[4]) {
-    const float e1x = p[1].x - p[0].x, e1y = p[1].y - p[0].y, e1z = p[1].z - p[0].z;
-    const float e2x = p[2].x - p[0].x, e2y = p[2].y - p[0].y, e2z = p[2].z - p[0].z;
-    const float e3x = p[3].x - p[0].x, e3y = p[3].y - p[0].y, e3z = p[3].z - p[0].z;
-    TetGradient g;
-    g.gx[1] = e2y * e3z - e2z * e3y;
-    g.gy[1] = e2z * e3x - e2x * e3z;
-    g.gz[1] = e2x * e3y - e2y * e3x;
-    g.gx[2] = e3y * e1z - e3z * e1y;
-    g.gy[2] = e3z * e1x - e3x * e1z;
-    g.gz[2] = e3x * e1y - e3y * e1x;
-    g.gx[3] = e1y * e2z - e1z * e2y;
-    g.gy[3] = e1z * e2x - e1x * e2z;
-    g.gz[3] = e1x * e2y - e1y * e2x;
-    g.gx[0] = 0.0f - (g.gx[1] + g.gx[2] + g.gx[3]);
-    g.gy[0] = 0.0f - (g.gy[1] + g.gy[2] + g.gy[3]);
-    g.gz[0] = 0.0f - (g.gz[1] + g.gz[2] + g.gz[3]);
-    g.volume = e1x * g.gx[1] + e1y * g.gy[1] + e1z * g.gz[1];
-    const auto norm2 = [&](int k) {
-        return g.gx[k] * g.gx[k] + g.gy[k] * g.gy[k] + g.gz[k] * g.gz[k];
-    };
-    g.weight = p[0].w * norm2(0) + p[1].w * norm2(1) + p[2].w * norm2(2) + p[3].w * norm2(3);
-    return g;
+    return scaled_tet_gradient(p, 1.0f);
 }
 
 // C = V − V0, projected as the equivalent C' = 6 C (tet_gradient6): Δx_k = w_k ∇_k C' Δλ' with
