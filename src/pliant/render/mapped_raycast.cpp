@@ -367,10 +367,8 @@ std::int64_t MappedRayCaster::num_visible_cells() const {
     return count;
 }
 
-bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
-    // The source voxels samples in the box [lo, hi] (source grid coordinates) can read.
-    std::int64_t v0[3] = {0, 0, 0};
-    std::int64_t v1[3] = {0, 0, 0};
+bool MappedRayCaster::corner_range(const float lo[3], const float hi[3], std::int64_t v0[3],
+                                   std::int64_t v1[3]) const {
     for (int a = 0; a < 3; ++a) {
         const std::int64_t n = m_source_dims[static_cast<std::size_t>(a)];
         const auto last = static_cast<float>(n - 1);
@@ -381,47 +379,55 @@ bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
         }
         const std::int64_t max_i0 = std::max<std::int64_t>(0, n - 2);
         v0[a] = std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
-        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0) +
-                (n > 1 ? 1 : 0);
+        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0);
     }
-    if (m_is_rgba) {
-        // Voxels with α > 0 in the box [v0, v1], from the dilated bricks (dilate_bricks(): bit
-        // v covers voxels v and v + 1 per axis) at [v0, v1 − 1] (exact per voxel; v1 = v0 on an
-        // axis of one voxel, whose bits cover that voxel alone). A point (the cell's centre)
-        // reads one bit.
+    return true;
+}
+
+bool MappedRayCaster::bricks_visible(const std::int64_t v0[3], const std::int64_t v1[3]) const {
+    // The dilated bricks (dilate_bricks(): bit v covers voxels v and v + 1 per axis) at
+    // [v0, v1]: exact per voxel; on an axis of one voxel v1 = v0, whose bit covers that voxel
+    // alone. A point (the cell's centre) reads one bit.
+    std::int64_t b0[3], b1[3];
+    for (int a = 0; a < 3; ++a) {
+        b0[a] = v0[a] >> BRICK_SHIFT;
+        b1[a] = v1[a] >> BRICK_SHIFT;
+    }
+    if (b0[0] == b1[0] && b0[1] == b1[1] && b0[2] == b1[2]) {  // one brick (most points)
+        std::uint64_t mask = m_brick_bits[static_cast<std::size_t>(
+            b0[0] + m_bricks[0] * (b0[1] + m_bricks[1] * b0[2]))];
         for (int a = 0; a < 3; ++a) {
-            v1[a] -= m_source_dims[static_cast<std::size_t>(a)] > 1 ? 1 : 0;
-        }
-        std::int64_t b0[3], b1[3];
-        for (int a = 0; a < 3; ++a) {
-            b0[a] = v0[a] >> BRICK_SHIFT;
-            b1[a] = v1[a] >> BRICK_SHIFT;
-        }
-        if (b0[0] == b1[0] && b0[1] == b1[1] && b0[2] == b1[2]) {  // one brick (most points)
-            const std::uint64_t word = m_brick_bits[static_cast<std::size_t>(
-                b0[0] + m_bricks[0] * (b0[1] + m_bricks[1] * b0[2]))];
-            std::uint64_t mask = word;
-            for (int a = 0; a < 3; ++a) {
-                mask &=
-                    BRICK_MASKS[static_cast<std::size_t>(a)][static_cast<std::size_t>(v0[a] & 3)]
+            mask &= BRICK_MASKS[static_cast<std::size_t>(a)][static_cast<std::size_t>(v0[a] & 3)]
                                [static_cast<std::size_t>(v1[a] & 3)];
-            }
-            return mask != 0;
         }
-        for (std::int64_t bz = b0[2]; bz <= b1[2]; ++bz) {
-            const std::uint64_t mz = range_mask(2, bz, v0[2], v1[2]);
-            for (std::int64_t by = b0[1]; by <= b1[1]; ++by) {
-                const std::uint64_t myz = mz & range_mask(1, by, v0[1], v1[1]);
-                const std::uint64_t* row =
-                    m_brick_bits.data() + m_bricks[0] * (by + m_bricks[1] * bz);
-                for (std::int64_t bx = b0[0]; bx <= b1[0]; ++bx) {
-                    if ((row[bx] & myz & range_mask(0, bx, v0[0], v1[0])) != 0) {
-                        return true;
-                    }
+        return mask != 0;
+    }
+    for (std::int64_t bz = b0[2]; bz <= b1[2]; ++bz) {
+        const std::uint64_t mz = range_mask(2, bz, v0[2], v1[2]);
+        for (std::int64_t by = b0[1]; by <= b1[1]; ++by) {
+            const std::uint64_t myz = mz & range_mask(1, by, v0[1], v1[1]);
+            const std::uint64_t* row = m_brick_bits.data() + m_bricks[0] * (by + m_bricks[1] * bz);
+            for (std::int64_t bx = b0[0]; bx <= b1[0]; ++bx) {
+                if ((row[bx] & myz & range_mask(0, bx, v0[0], v1[0])) != 0) {
+                    return true;
                 }
             }
         }
+    }
+    return false;
+}
+
+bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
+    std::int64_t v0[3] = {}, v1[3] = {};
+    if (!corner_range(lo, hi, v0, v1)) {
         return false;
+    }
+    if (m_is_rgba) {
+        return bricks_visible(v0, v1);
+    }
+    // The voxels [v0, v1 + 1] (v1 on an axis of one voxel) in their 2³ blocks.
+    for (int a = 0; a < 3; ++a) {
+        v1[a] += m_source_dims[static_cast<std::size_t>(a)] > 1 ? 1 : 0;
     }
     float vmin = std::numeric_limits<float>::infinity();
     float vmax = -std::numeric_limits<float>::infinity();
@@ -451,33 +457,8 @@ bool MappedRayCaster::point_visible(const float p[3]) const {
     if (!m_is_rgba) {
         return hull_visible(p, p);
     }
-    // hull_visible(p, p)'s voxel range and dilated bits, the common case of one brick inline.
-    std::int64_t v0[3], v1[3];
-    for (int a = 0; a < 3; ++a) {
-        const std::int64_t n = m_source_dims[static_cast<std::size_t>(a)];
-        const auto last = static_cast<float>(n - 1);
-        const float l = p[a] - HULL_MARGIN;
-        const float h = p[a] + HULL_MARGIN;
-        if (h < -0.5f || l > last + 0.5f) {
-            return false;
-        }
-        const std::int64_t max_i0 = std::max<std::int64_t>(0, n - 2);
-        v0[a] = std::min(static_cast<std::int64_t>(std::clamp(l, 0.0f, last)), max_i0);
-        v1[a] = std::min(static_cast<std::int64_t>(std::clamp(h, 0.0f, last)), max_i0);
-        if ((v0[a] >> BRICK_SHIFT) != (v1[a] >> BRICK_SHIFT)) {
-            return hull_visible(p, p);
-        }
-    }
-    const std::uint64_t word = m_brick_bits[static_cast<std::size_t>(
-        (v0[0] >> BRICK_SHIFT) +
-        m_bricks[0] * ((v0[1] >> BRICK_SHIFT) + m_bricks[1] * (v0[2] >> BRICK_SHIFT)))];
-    return (word &
-            BRICK_MASKS[0][static_cast<std::size_t>(v0[0] & 3)]
-                       [static_cast<std::size_t>(v1[0] & 3)] &
-            BRICK_MASKS[1][static_cast<std::size_t>(v0[1] & 3)]
-                       [static_cast<std::size_t>(v1[1] & 3)] &
-            BRICK_MASKS[2][static_cast<std::size_t>(v0[2] & 3)]
-                       [static_cast<std::size_t>(v1[2] & 3)]) != 0;
+    std::int64_t v0[3] = {}, v1[3] = {};
+    return corner_range(p, p, v0, v1) && bricks_visible(v0, v1);
 }
 
 std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,

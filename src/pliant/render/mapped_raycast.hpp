@@ -126,8 +126,14 @@ private:
     // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
     // value range reaches a lookup entry with opacity (scalar).
     bool hull_visible(const float lo[3], const float hi[3]) const;
-    // hull_visible(p, p), an RGBA source's common case (one brick) without the loops.
+    // hull_visible(p, p) for a cell's centre.
     bool point_visible(const float p[3]) const;
+    // Per axis the first corners [v0, v1] of the cells samples in [lo, hi] (widened by
+    // HULL_MARGIN, clamped as locate() clamps) interpolate in; false when all lie outside.
+    bool corner_range(const float lo[3], const float hi[3], std::int64_t v0[3],
+                      std::int64_t v1[3]) const;
+    // Whether an RGBA source has α > 0 in the cells with first corners [v0, v1] (the bricks).
+    bool bricks_visible(const std::int64_t v0[3], const std::int64_t v1[3]) const;
     // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
     // over layers (each written by one task: the same values for any number of threads).
     // An rgba8 source's gradient goes into m_packed with its bytes (m_rgba8, then released).
