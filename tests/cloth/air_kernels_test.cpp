@@ -113,14 +113,15 @@ TEST(AirKernels, VectorAndScalarKernelsGiveTheSameBits) {
     const Triangles t = random_triangles(131, 9);
     const AirTerms terms = air_terms(gusty_air(), 0.1, 1.0 / 960.0, 0.41);
     // Ranges with every remainder of four and starts off a multiple of four.
-    for (const auto& [begin, end] : {std::array<std::int64_t, 2>{0, 131}, {3, 130}, {1, 4}, {6, 6}}) {
+    for (const auto& [begin, end] :
+         {std::array<std::int64_t, 2>{0, 131}, {3, 130}, {1, 4}, {6, 6}}) {
         std::vector<Vec3d> vector(t.triangles.size(), Vec3d{7.0, 7.0, 7.0});
         std::vector<Vec3d> scalar = vector;
-        triangle_air_forces(t.positions.data(), t.velocities.data(), t.triangles.data(), begin,
-                            end, terms, vector.data());
+        triangle_air_forces(t.positions.data(), t.velocities.data(), t.triangles.data(), begin, end,
+                            terms, vector.data());
         allow_avx2(false);
-        triangle_air_forces(t.positions.data(), t.velocities.data(), t.triangles.data(), begin,
-                            end, terms, scalar.data());
+        triangle_air_forces(t.positions.data(), t.velocities.data(), t.triangles.data(), begin, end,
+                            terms, scalar.data());
         allow_avx2(true);
         for (std::size_t i = 0; i < vector.size(); ++i) {
             ASSERT_TRUE(same_bits(vector[i], scalar[i])) << "triangle " << i;

@@ -41,7 +41,7 @@ SurfaceDistance surface_distance(const Obstacle& obstacle, const Vec3d& x);
 
 // The positional part of a contact: when x is closer than thickness to the surface, moves it out
 // along the surface normal to distance thickness. Returns the correction's length (0 when x was
-// not in contact) and the normal it moved along.
+// not in contact) and the normal it moved along (meaningful only when the length is > 0).
 struct ContactCorrection {
     double depth;
     Vec3d normal;

@@ -102,9 +102,9 @@ PLIANT_AVX2_FN void four_forces(const Vec3d* positions, const Vec3d* velocities,
     const V area = _mm256_sqrt_pd(dot(area_normal, area_normal));
     const V has_area = _mm256_cmp_pd(area, zero, _CMP_GT_OQ);
     const V third = set1(THIRD);
-    const Vec4 velocity =
-        scale(add(add(gather(velocities, t, 0), gather(velocities, t, 1)), gather(velocities, t, 2)),
-              third);
+    const Vec4 velocity = scale(
+        add(add(gather(velocities, t, 0), gather(velocities, t, 1)), gather(velocities, t, 2)),
+        third);
     const Vec4 normal = scale(area_normal, div(set1(1.0), area));
     Vec4 wind = broadcast(terms.wind);
     if (terms.has_gusts) {
@@ -129,9 +129,8 @@ PLIANT_AVX2_FN void four_forces(const Vec3d* positions, const Vec3d* velocities,
     // std::min(drag, stopping) = stopping < drag ? stopping : drag.
     const V smaller = _mm256_min_pd(stopping, drag);
     // −copysign(smaller, u_n): smaller's magnitude with the opposite of u_n's sign.
-    const V magnitude =
-        _mm256_xor_pd(_mm256_or_pd(_mm256_andnot_pd(sign_bit, smaller), _mm256_and_pd(sign_bit, u_n)),
-                      sign_bit);
+    const V magnitude = _mm256_xor_pd(
+        _mm256_or_pd(_mm256_andnot_pd(sign_bit, smaller), _mm256_and_pd(sign_bit, u_n)), sign_bit);
     const V s = select(has_area, magnitude, zero);
     // normal · s; a lane without area gets exact zeros (its normal may be NaN).
     const Vec4 force = {select(has_area, mul(normal.x, s), zero),
@@ -190,10 +189,12 @@ void triangle_air_forces(const Vec3d* positions, const Vec3d* velocities,
 #endif
     for (; i < end; ++i) {
         const std::array<std::int32_t, 3>& t = triangles[i];
-        const auto at = [](const Vec3d* p, std::int32_t v) { return p[static_cast<std::size_t>(v)]; };
-        forces[i] = triangle_force(at(positions, t[0]), at(positions, t[1]), at(positions, t[2]),
-                                   at(velocities, t[0]), at(velocities, t[1]),
-                                   at(velocities, t[2]), terms);
+        const auto at = [](const Vec3d* p, std::int32_t v) {
+            return p[static_cast<std::size_t>(v)];
+        };
+        forces[i] =
+            triangle_force(at(positions, t[0]), at(positions, t[1]), at(positions, t[2]),
+                           at(velocities, t[0]), at(velocities, t[1]), at(velocities, t[2]), terms);
     }
 }
 

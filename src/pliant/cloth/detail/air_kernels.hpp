@@ -25,10 +25,10 @@ struct AirTerms {
     bool has_gusts = false;         // gust_amplitude > 0 and |wind| > 0
     double wind_speed = 0.0;        // |wind|, m/s
     double gust_amplitude = 0.0;
-    double time_phase = 0.0;        // t / gust_period
-    double gust_wavelength = 1.0;   // m
-    double areal_density = 0.0;     // kg/m²
-    double h = 1.0;                 // the substep, s
+    double time_phase = 0.0;       // t / gust_period
+    double gust_wavelength = 1.0;  // m
+    double areal_density = 0.0;    // kg/m²
+    double h = 1.0;                // the substep, s
 };
 AirTerms air_terms(const Air& air, double areal_density, double h, double t);
 
