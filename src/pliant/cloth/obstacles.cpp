@@ -62,15 +62,9 @@ SurfaceDistance surface_distance(const Obstacle& obstacle, const Vec3d& x) {
 }
 
 ContactCorrection push_out(const Obstacle& obstacle, Vec3d& x, double thickness) {
-    if (const auto* sphere = std::get_if<SphereObstacle>(&obstacle)) {
-        // Beyond the radius plus the thickness by a relative 1e-9 (far more than the rounding
-        // of the exact test below, a few 1e-16): not in contact, found without the square root
-        // and the division most vertices of a sheet over a sphere would otherwise pay.
-        const Vec3d d = x - sphere->center;
-        const double reach = (sphere->radius + thickness) * (1.0 + 1e-9);
-        if (dot(d, d) > reach * reach) {
-            return {0.0, Vec3d{0.0, 0.0, 1.0}};
-        }
+    // Most vertices of a sheet over a sphere are out of its reach: no square root and division.
+    if (out_of_reach(obstacle, x, thickness)) {
+        return {0.0, Vec3d{0.0, 0.0, 1.0}};
     }
     const SurfaceDistance surface = surface_distance(obstacle, x);
     const double depth = thickness - surface.distance;
