@@ -5,6 +5,9 @@
 // frames per second, a counter) and the strain the sheet is left with (edge length / rest length
 // − 1: p99 and max over the edges, counters).
 // The sheet hangs in the x-z plane; no obstacles, no self-collision.
+// BM_SceneSolver: the XPBD solver alone (self-collision off, the scene's other keys) on the
+// built-in scenes' first frames (scenes/NAME.json): the drape's 12 frames of free fall and first
+// contact with the sphere, the flag's 24 frames in gusty wind; wall time for those frames.
 //   bin/bench_cloth [--benchmark_filter=...]     (PLIANT_THREADS=N limits the threads)
 #include <benchmark/benchmark.h>
 
@@ -17,6 +20,8 @@
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/generate.hpp"
 #include "pliant/geometry/topology.hpp"
+#include "pliant/pipeline/cloth_scene_file.hpp"
+#include "pliant/pipeline/cloth_setup.hpp"
 
 namespace {
 
@@ -98,5 +103,35 @@ BENCHMARK(BM_HangingSheet)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(2);
+
+// Arg: 0 the drape (12 frames), 1 the flag (24 frames).
+void BM_SceneSolver(benchmark::State& state) {
+    set_threads_from_environment();
+    const bool drape = state.range(0) == 0;
+    const std::string name = drape ? "drape" : "flag";
+    cloth::ClothScene scene =
+        pipeline::read_cloth_scene(std::string(PLIANT_SOURCE_DIR) + "/scenes/" + name + ".json");
+    scene.self_collision = false;
+    const pipeline::ClothSetup setup = pipeline::load_cloth_setup(scene, name);
+    const int frames = drape ? 12 : 24;
+    for (auto _ : state) {
+        state.PauseTiming();
+        const std::unique_ptr<cloth::ClothSolver> solver = pipeline::make_solver(scene, setup);
+        state.ResumeTiming();
+        for (int f = 0; f < frames; ++f) {
+            solver->step(1.0 / scene.frames_per_second, scene.substeps);
+        }
+    }
+    state.counters["ms_per_frame"] = benchmark::Counter(
+        frames * 1e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+    state.SetLabel(name);
+}
+BENCHMARK(BM_SceneSolver)
+    ->Arg(0)
+    ->Arg(1)
+    ->ArgNames({"scene"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
 
 }  // namespace

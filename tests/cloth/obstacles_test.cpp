@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <random>
+
 namespace pliant::cloth {
 namespace {
 
@@ -37,6 +40,42 @@ TEST(Obstacles, PushOutToThickness) {
     Vec3d inside{0.0, 0.2, 0.0};
     push_out(SphereObstacle{{0.0, 0.0, 0.0}, 0.5}, inside, 0.01);
     EXPECT_NEAR(inside.y, 0.51, 1e-15);
+}
+
+// push_out on a sphere skips the exact distance far from it: the same depth and the same bits of
+// x as the exact test, at the edge of the reach (the thickness away, within a few 1e-9) and far.
+TEST(Obstacles, SpherePushOutIsTheExactTestAtTheEdgeOfItsReach) {
+    const SphereObstacle sphere{{0.1, -0.2, 0.3}, 0.5};
+    const double thickness = 0.005;
+    std::mt19937_64 random(3);
+    std::normal_distribution<double> gaussian;
+    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+    int touching = 0;
+    int apart = 0;
+    for (int i = 0; i < 20000; ++i) {
+        Vec3d direction{gaussian(random), gaussian(random), gaussian(random)};
+        direction = direction * (1.0 / norm(direction));
+        // Distances from the centre around radius + thickness: within 5e-9 relative, or far.
+        const double scale =
+            i % 4 == 0 ? 1.0 + 0.5 * uniform(random) : 1.0 + 5e-9 * uniform(random);
+        const Vec3d start = sphere.center + direction * ((sphere.radius + thickness) * scale);
+        Vec3d x = start;
+        const ContactCorrection contact = push_out(sphere, x, thickness);
+        // The exact test: surface_distance, then the move along its normal.
+        const SurfaceDistance surface = surface_distance(sphere, start);
+        const double depth = thickness - surface.distance;
+        Vec3d expected = start;
+        if (depth > 0.0) {
+            expected += surface.normal * depth;
+            ++touching;
+        } else {
+            ++apart;
+        }
+        ASSERT_EQ(contact.depth, depth > 0.0 ? depth : 0.0) << i;
+        ASSERT_EQ(std::memcmp(&x, &expected, sizeof(Vec3d)), 0) << i;
+    }
+    EXPECT_GT(touching, 5000);
+    EXPECT_GT(apart, 5000);
 }
 
 TEST(Obstacles, CoulombFrictionSticksOrSlows) {

@@ -13,6 +13,9 @@
 // a gust travelling downwind with the wind's direction ŵ, so that a flag flutters instead of
 // settling into a steady billow.
 //
+// ClothModel::apply_air evaluates the force per triangle with detail/air_kernels.hpp (four
+// triangles at a time, the bits of wind_at and the formula above).
+//
 // Units: kg/m³, m/s, s, m. density 0 (the default) turns air off.
 #pragma once
 

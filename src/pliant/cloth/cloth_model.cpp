@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pliant/cloth/detail/air_kernels.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/validate.hpp"
@@ -538,36 +539,15 @@ void ClothModel::apply_air(double h, double t) {
     if (!m_air.is_active()) {
         return;
     }
-    // Per triangle, then per vertex over its incident triangles in ascending order: no
-    // concurrent writes, the same sums for any number of threads.
-    parallel_for(
-        static_cast<std::int64_t>(m_triangles.size()),
-        [&](std::int64_t i) {
-            const geometry::Triangle& tri = m_triangles[static_cast<std::size_t>(i)];
-            const Vec3d& a = m_positions[static_cast<std::size_t>(tri[0])];
-            const Vec3d& b = m_positions[static_cast<std::size_t>(tri[1])];
-            const Vec3d& c = m_positions[static_cast<std::size_t>(tri[2])];
-            const Vec3d area_normal = cross(b - a, c - a) * 0.5;  // |.| = area
-            const double area = norm(area_normal);
-            Vec3d force{0.0, 0.0, 0.0};
-            if (area > 0.0) {
-                const Vec3d velocity = (m_velocities[static_cast<std::size_t>(tri[0])] +
-                                        m_velocities[static_cast<std::size_t>(tri[1])] +
-                                        m_velocities[static_cast<std::size_t>(tri[2])]) *
-                                       (1.0 / 3.0);
-                const Vec3d centre = (a + b + c) * (1.0 / 3.0);
-                const Vec3d normal = area_normal * (1.0 / area);
-                const double u_n = dot(velocity - m_air.wind_at(centre, t), normal);
-                // Drag can at most stop the relative motion within the substep: the impulse is
-                // capped at the triangle's momentum normal to it (explicit quadratic drag would
-                // overshoot and blow up once h ρ C_d |u·n| / areal_density > 2).
-                const double drag = 0.5 * m_air.density * m_air.drag_coefficient * area * u_n * u_n;
-                const double stopping = m_material.areal_density * area * std::abs(u_n) / h;
-                force = normal * (-std::copysign(std::min(drag, stopping), u_n));
-            }
-            m_triangle_forces[static_cast<std::size_t>(i)] = force;
-        },
-        VERTEX_GRAIN);
+    // Per triangle (detail/air_kernels.hpp), then per vertex over its incident triangles in
+    // ascending order: no concurrent writes, the same sums for any number of threads.
+    const detail::AirTerms terms = detail::air_terms(m_air, m_material.areal_density, h, t);
+    parallel_for_chunks(static_cast<std::int64_t>(m_triangles.size()), VERTEX_GRAIN,
+                        [&](std::int64_t, std::int64_t begin, std::int64_t end) {
+                            detail::triangle_air_forces(m_positions.data(), m_velocities.data(),
+                                                        m_triangles.data(), begin, end, terms,
+                                                        m_triangle_forces.data());
+                        });
     parallel_for(
         static_cast<std::int64_t>(m_positions.size()),
         [&](std::int64_t i) {

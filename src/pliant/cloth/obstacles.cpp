@@ -62,6 +62,10 @@ SurfaceDistance surface_distance(const Obstacle& obstacle, const Vec3d& x) {
 }
 
 ContactCorrection push_out(const Obstacle& obstacle, Vec3d& x, double thickness) {
+    // Most vertices of a sheet over a sphere are out of its reach: no square root and division.
+    if (out_of_reach(obstacle, x, thickness)) {
+        return {0.0, Vec3d{0.0, 0.0, 1.0}};
+    }
     const SurfaceDistance surface = surface_distance(obstacle, x);
     const double depth = thickness - surface.distance;
     if (!(depth > 0.0)) {

@@ -532,6 +532,9 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
                 const Vec3d& start = m_previous_positions[v];
                 double lag = 0.0;
                 for (const MovingObstacle& obstacle : obstacles) {
+                    if (out_of_reach(obstacle.current, positions[v], thickness)) {
+                        continue;  // push_out's answer, without the call
+                    }
                     const Vec3d before_push = positions[v];
                     ContactCorrection contact = push_out(obstacle.current, positions[v], thickness);
                     if (contact.depth > 0.0) {

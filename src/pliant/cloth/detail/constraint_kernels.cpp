@@ -411,8 +411,8 @@ PLIANT_AVX2_INLINE V wrap4(V c) {
 }
 
 template <bool WITH_LAMBDA>
-PLIANT_AVX2_FN void stretch_avx2(PackedVertex* x, const StretchColumns& c, std::int64_t k,
-                                 V alpha) {
+PLIANT_AVX2_INLINE void stretch_avx2(PackedVertex* x, const StretchColumns& c, std::int64_t k,
+                                     V alpha) {
     Lanes a = load4(x, c.p + k);
     Lanes b = load4(x, c.q + k);
     const V zero = _mm256_setzero_pd();
@@ -503,12 +503,17 @@ PLIANT_AVX2_FN std::int64_t project_stretch_avx2(PackedVertex* x, const StretchC
                                                  std::int64_t begin, std::int64_t end,
                                                  double alpha) {
     const V alpha4 = set1(alpha);
+    // A local copy: the compiler then knows the kernel's stores to x leave the columns alone and
+    // keeps their pointers in registers.
+    const StretchColumns columns = c;
     std::int64_t k = begin;
-    for (; k + 4 <= end; k += 4) {
-        if (c.lambda != nullptr) {
-            stretch_avx2<true>(x, c, k, alpha4);
-        } else {
-            stretch_avx2<false>(x, c, k, alpha4);
+    if (columns.lambda != nullptr) {
+        for (; k + 4 <= end; k += 4) {
+            stretch_avx2<true>(x, columns, k, alpha4);
+        }
+    } else {
+        for (; k + 4 <= end; k += 4) {
+            stretch_avx2<false>(x, columns, k, alpha4);
         }
     }
     return k;
@@ -528,8 +533,8 @@ PLIANT_AVX2_INLINE void move_by_stencil(Lanes& p, const Vec4& lambda, V stencil)
     p.z = add(p.z, mul(lambda.z, s));
 }
 
-PLIANT_AVX2_FN void isometric_avx2(PackedVertex* x, const IsometricBendingColumns& c,
-                                   std::int64_t k, V alpha) {
+PLIANT_AVX2_INLINE void isometric_avx2(PackedVertex* x, const IsometricBendingColumns& c,
+                                       std::int64_t k, V alpha) {
     Lanes p0 = load4(x, c.v0 + k);
     Lanes p1 = load4(x, c.v1 + k);
     Lanes p2 = load4(x, c.v2 + k);
@@ -574,9 +579,10 @@ PLIANT_AVX2_FN std::int64_t project_isometric_avx2(PackedVertex* x,
                                                    std::int64_t begin, std::int64_t end,
                                                    double alpha) {
     const V alpha4 = set1(alpha);
+    const IsometricBendingColumns columns = c;  // in registers, as in project_stretch_avx2
     std::int64_t k = begin;
     for (; k + 4 <= end; k += 4) {
-        isometric_avx2(x, c, k, alpha4);
+        isometric_avx2(x, columns, k, alpha4);
     }
     return k;
 }
