@@ -54,12 +54,12 @@ PLIANT_AVX2_FN void finish_substep_soa_avx2(const SoaMotion& a, std::int64_t beg
         const __m256 free = _mm256_castsi256_ps(
             _mm256_cmpeq_epi32(_mm256_cvtepu8_epi32(pinned8), _mm256_setzero_si256()));
         // substep_velocity: ((p − previous) · inv_h) · keep, 0 when pinned.
-        const __m256 vx = _mm256_and_ps(
-            free, mul(mul(sub(x, _mm256_loadu_ps(a.previous_x + i)), inv_h), keep));
-        const __m256 vy = _mm256_and_ps(
-            free, mul(mul(sub(y, _mm256_loadu_ps(a.previous_y + i)), inv_h), keep));
-        const __m256 vz = _mm256_and_ps(
-            free, mul(mul(sub(z, _mm256_loadu_ps(a.previous_z + i)), inv_h), keep));
+        const __m256 vx =
+            _mm256_and_ps(free, mul(mul(sub(x, _mm256_loadu_ps(a.previous_x + i)), inv_h), keep));
+        const __m256 vy =
+            _mm256_and_ps(free, mul(mul(sub(y, _mm256_loadu_ps(a.previous_y + i)), inv_h), keep));
+        const __m256 vz =
+            _mm256_and_ps(free, mul(mul(sub(z, _mm256_loadu_ps(a.previous_z + i)), inv_h), keep));
         // predict_vertex: previous = p; w > 0: p += h (v + g h), p.w = w; else p kept, p.w = 0.
         _mm256_storeu_ps(a.previous_x + i, x);
         _mm256_storeu_ps(a.previous_y + i, y);
