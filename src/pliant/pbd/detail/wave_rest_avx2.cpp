@@ -107,10 +107,10 @@ PLIANT_AVX2_FN void displaced_volumes_runs_avx2(const SoaDisplaced& p, const Lat
 }
 
 #else  // no AVX2 on this target
-void displaced_lengths_runs_avx2(const SoaDisplaced&, const LatticeRun*, std::int64_t,
-                                 std::int64_t, std::int64_t, std::int64_t, float*) {}
-void displaced_volumes_runs_avx2(const SoaDisplaced&, const LatticeRun*, std::int64_t,
-                                 std::int64_t, std::int64_t, std::int64_t, float*) {}
+void displaced_lengths_runs_avx2(const SoaDisplaced&, const LatticeRun*, std::int64_t, std::int64_t,
+                                 std::int64_t, std::int64_t, float*) {}
+void displaced_volumes_runs_avx2(const SoaDisplaced&, const LatticeRun*, std::int64_t, std::int64_t,
+                                 std::int64_t, std::int64_t, float*) {}
 #endif
 
 }  // namespace pliant::pbd::detail
