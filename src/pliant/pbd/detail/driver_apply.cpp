@@ -100,7 +100,7 @@ void parallel_for_runs_by_layer(const LayerBlocking& blocking, const ConstraintC
 // The waves' rest lengths and volumes over the lattice sweep's runs (AVX2): the rest positions
 // (once per cache) and the displacements displacement_of(v) in the solver order, then every run.
 template <typename DisplacementOf>
-void wave_rest_on_runs(const LatticeSweep& lattice, std::span<const Vec3f> rest,
+void wave_rest_on_runs(const LatticeSweep& lattice, std::span<const Vec3f> rest, int axes,
                        const DisplacementOf& displacement_of, EdgeConstraints& edges,
                        TetConstraints& tets, RestDriverCache& cache) {
     const auto nv = static_cast<std::int64_t>(lattice.vertex_of.size());
@@ -135,15 +135,15 @@ void wave_rest_on_runs(const LatticeSweep& lattice, std::span<const Vec3f> rest,
                          cache.solver_u_y.data(),    cache.solver_u_z.data()};
     parallel_for_runs_by_layer(edges.blocking, edges.coloring, lattice.edge_run_begins,
                                lattice.edge_run_offsets, [&](std::int64_t r0, std::int64_t r1) {
-                                   displaced_lengths_runs_avx2(p, lattice.edge_runs.data(), r0, r1,
-                                                               std::ssize(lattice.edge_runs),
-                                                               std::ssize(edges.vertices),
-                                                               edges.rest_lengths.data());
+                                   displaced_lengths_runs_avx2(
+                                       p, axes, lattice.edge_runs.data(), r0, r1,
+                                       std::ssize(lattice.edge_runs), std::ssize(edges.vertices),
+                                       edges.rest_lengths.data());
                                });
     parallel_for_runs_by_layer(tets.blocking, tets.coloring, lattice.tet_run_begins,
                                lattice.tet_run_offsets, [&](std::int64_t r0, std::int64_t r1) {
-                                   displaced_volumes_runs_avx2(p, lattice.tet_runs.data(), r0, r1,
-                                                               std::ssize(lattice.tet_runs),
+                                   displaced_volumes_runs_avx2(p, axes, lattice.tet_runs.data(), r0,
+                                                               r1, std::ssize(lattice.tet_runs),
                                                                std::ssize(tets.vertices),
                                                                tets.rest_volumes.data());
                                });
@@ -289,6 +289,11 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                 displacement[w].push_back(wave_displacement(*waves[w], box, at, t));
             }
         }
+        // The axes the waves displace along (wave_rest.hpp): u is 0 along the others.
+        int axes = 0;
+        for (const WaveDriver* w : waves) {
+            axes |= 1 << static_cast<int>(w->displacement);
+        }
         const auto displacement_of = [&](std::size_t v) {
             Vec3d u{};
             for (std::size_t w = 0; w < waves.size(); ++w) {
@@ -297,7 +302,7 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
             return vec3_cast<float>(u);
         };
         if (lattice != nullptr && pliant::has_avx2() && !lattice->vertex_of.empty()) {
-            wave_rest_on_runs(*lattice, rest, displacement_of, edges, tets, cache);
+            wave_rest_on_runs(*lattice, rest, axes, displacement_of, edges, tets, cache);
         } else {
             std::vector<Vec3f> u(static_cast<std::size_t>(nv));
             parallel_for(
@@ -314,7 +319,7 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                     const auto b =
                         static_cast<std::size_t>(edges.vertices[static_cast<std::size_t>(k)][1]);
                     edges.rest_lengths[static_cast<std::size_t>(k)] =
-                        displaced_length(rest[a], u[a], rest[b], u[b]);
+                        displaced_length(rest[a], u[a], rest[b], u[b], axes);
                 },
                 EDGE_GRAIN);
             parallel_for(
@@ -328,7 +333,7 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                         d[m] = u[static_cast<std::size_t>(tet[m])];
                     }
                     tets.rest_volumes[static_cast<std::size_t>(k)] =
-                        displaced_volume(r.data(), d.data());
+                        displaced_volume(r.data(), d.data(), axes);
                 },
                 TET_GRAIN);
         }
