@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -11,6 +12,8 @@
 #include <vector>
 
 #include "pliant/core/parallel.hpp"
+#include "pliant/pbd/detail/lattice_sweep.hpp"
+#include "pliant/pbd/detail/wave_rest.hpp"
 #include "pliant/pbd/tet_edges.hpp"
 #include "pliant/pbd/tet_grid.hpp"
 #include "support/grid_constraints.hpp"
@@ -31,20 +34,28 @@ BodyBox box_of(const std::vector<Vec3f>& rest) {
 }
 
 // The rest state at time t straight from the formulas (driver_apply.hpp): every vertex displaced
-// by every wave, every constraint scaled by every bubble, no shortcut.
+// by every wave (summed in double, rounded to float), the lengths and volumes of the displaced
+// positions (wave_rest.hpp's scalar formulas), every constraint scaled by every bubble, no
+// shortcut.
 void reference_rest_state(const std::vector<Driver>& drivers, const BodyBox& box,
                           const std::vector<Vec3f>& rest, double t, test::GridConstraints& out) {
-    std::vector<Vec3d> shaped;
+    std::vector<Vec3f> displacement;
     bool has_wave = false;
+    int axes = 0;  // the axes the waves displace along
+    for (const Driver& d : drivers) {
+        if (const auto* w = std::get_if<WaveDriver>(&d)) {
+            axes |= 1 << static_cast<int>(w->displacement);
+        }
+    }
     for (const Vec3f& r : rest) {
-        Vec3d p = vec3_cast<double>(r);
+        Vec3d u{};
         for (const Driver& d : drivers) {
             if (const auto* w = std::get_if<WaveDriver>(&d)) {
-                p += wave_displacement(*w, box, vec3_cast<double>(r), t);
+                u += wave_displacement(*w, box, vec3_cast<double>(r), t);
                 has_wave = true;
             }
         }
-        shaped.push_back(p);
+        displacement.push_back(vec3_cast<float>(u));
     }
     const auto bubble = [&](const Vec3d& p) {
         double f = 1.0;
@@ -58,21 +69,25 @@ void reference_rest_state(const std::vector<Driver>& drivers, const BodyBox& box
     const auto at = [&](std::int32_t v) {
         return vec3_cast<double>(rest[static_cast<std::size_t>(v)]);
     };
+    const auto r = [&](std::int32_t v) {
+        return rest[static_cast<std::size_t>(v)];
+    };
+    const auto u = [&](std::int32_t v) {
+        return displacement[static_cast<std::size_t>(v)];
+    };
     for (std::size_t k = 0; k < out.edges.vertices.size(); ++k) {
         const auto& e = out.edges.vertices[k];
-        double length = has_wave ? norm(shaped[static_cast<std::size_t>(e[0])] -
-                                        shaped[static_cast<std::size_t>(e[1])])
+        double length = has_wave ? displaced_length(r(e[0]), u(e[0]), r(e[1]), u(e[1]), axes)
                                  : out.edges.rest_lengths0[k];
         length *= std::cbrt(bubble((at(e[0]) + at(e[1])) * 0.5));
         out.edges.rest_lengths[k] = static_cast<float>(length);
     }
     for (std::size_t k = 0; k < out.tets.vertices.size(); ++k) {
         const geometry::Tet& q = out.tets.vertices[k];
-        double volume = has_wave ? geometry::signed_volume(shaped[static_cast<std::size_t>(q[0])],
-                                                           shaped[static_cast<std::size_t>(q[1])],
-                                                           shaped[static_cast<std::size_t>(q[2])],
-                                                           shaped[static_cast<std::size_t>(q[3])])
-                                 : out.tets.rest_volumes0[k];
+        const std::array<Vec3f, 4> rq{r(q[0]), r(q[1]), r(q[2]), r(q[3])};
+        const std::array<Vec3f, 4> uq{u(q[0]), u(q[1]), u(q[2]), u(q[3])};
+        double volume =
+            has_wave ? displaced_volume(rq.data(), uq.data(), axes) : out.tets.rest_volumes0[k];
         volume *= bubble((at(q[0]) + at(q[1]) + at(q[2]) + at(q[3])) * 0.25);
         out.tets.rest_volumes[k] = static_cast<float>(volume);
     }
@@ -80,7 +95,9 @@ void reference_rest_state(const std::vector<Driver>& drivers, const BodyBox& box
 
 // apply_rest_drivers over a sequence of times (one cache, as SoftBody calls it frame by frame:
 // through the ramps, then ramped in) against the formulas at every time, bitwise, on 1 and 2
-// threads; a ball (rows of different lengths) with a bubble reaching past it.
+// threads, with and without the lattice sweep's runs (the waves' AVX2 kernels where the CPU has
+// them); a ball (rows of different lengths, so runs of every length) with a bubble reaching past
+// it.
 TEST(ApplyRestDrivers, ShortcutsGiveTheFormulasBitForBit) {
     const TetGrid grid = test::ball_tet_grid({24, 20, 18}, false);
     const std::vector<Vec3f>& rest = grid.mesh.positions;
@@ -89,18 +106,25 @@ TEST(ApplyRestDrivers, ShortcutsGiveTheFormulasBitForBit) {
         {Driver{BubbleDriver{.centre = {0.8, 0.2, 0.5}, .radius = 0.4, .ramp_time = 0.1}},
          Driver{BubbleDriver{.radius = 0.2, .inflation = 0.5, .ramp_time = 0.0}}},
         {Driver{WaveDriver{.amplitude = 0.05, .ramp_time = 0.1}},
-         Driver{WaveDriver{.direction = Axis::z, .displacement = Axis::y, .speed = 0.0}}},
+         Driver{WaveDriver{.direction = Axis::z, .displacement = Axis::y, .speed = 0.0}},
+         Driver{WaveDriver{.direction = Axis::y, .displacement = Axis::x, .wavelength = 0.3}}},
         {Driver{WaveDriver{}}, Driver{BubbleDriver{}}}};
     for (const int threads : {1, 2}) {
         set_num_threads(threads);
-        for (std::size_t c = 0; c < cases.size(); ++c) {
+        for (std::size_t c = 0; c < cases.size() * 2; ++c) {
             test::GridConstraints got = test::grid_constraints(grid);
             test::GridConstraints expected = test::grid_constraints(grid);
+            LatticeSweep lattice;
+            if (c % 2 == 1) {
+                lattice = build_lattice_sweep(grid, got.edges, got.tets);
+                build_lattice_sweep(grid, expected.edges, expected.tets);
+            }
             RestDriverCache cache;
             for (int frame = 1; frame <= 6; ++frame) {
                 const double t = frame / 24.0;
-                apply_rest_drivers(cases[c], box, rest, t, got.edges, got.tets, cache);
-                reference_rest_state(cases[c], box, rest, t, expected);
+                apply_rest_drivers(cases[c / 2], box, rest, t, got.edges, got.tets, cache,
+                                   c % 2 == 1 ? &lattice : nullptr);
+                reference_rest_state(cases[c / 2], box, rest, t, expected);
                 ASSERT_EQ(
                     std::memcmp(got.edges.rest_lengths.data(), expected.edges.rest_lengths.data(),
                                 got.edges.rest_lengths.size() * sizeof(float)),

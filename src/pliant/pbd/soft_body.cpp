@@ -403,7 +403,7 @@ void SoftBody::prepare_drivers(double t_end) {
     }
     if (s.has_rest_drivers) {
         detail::apply_rest_drivers(s.drivers, s.box, s.rest, t_end, s.edge_constraints,
-                                   s.tet_constraints, s.rest_cache);
+                                   s.tet_constraints, s.rest_cache, &s.lattice);
         s.rest_modified = true;
     } else if (s.rest_modified) {
         s.edge_constraints.rest_lengths = s.edge_constraints.rest_lengths0;

@@ -9,7 +9,9 @@
 #include <variant>
 
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/detail/grains.hpp"
+#include "pliant/pbd/detail/wave_rest.hpp"
 
 namespace pliant::pbd::detail {
 namespace {
@@ -59,6 +61,92 @@ double bubble_product(std::span<const BubbleDriver* const> bubbles, const BodyBo
         f *= bubble_factor(*b, box, p, t);
     }
     return f;
+}
+
+// call(r0, r1) for ranges of runs (lattice_sweep.hpp; run_begins and run_offsets of one kind of
+// constraint) that together cover every run once, layer by layer (every colour's runs of layer
+// keys [z0, z1), LAYERS_PER_SLAB layers per chunk of a parallel loop), so that a chunk reads one
+// slab of the vertices rather than the whole body per colour; without a blocking, all the runs in
+// fixed chunks. A run never spans two layer keys (build_lattice_sweep).
+template <typename Call>
+void parallel_for_runs_by_layer(const LayerBlocking& blocking, const ConstraintColoring& coloring,
+                                const std::vector<std::int64_t>& run_begins,
+                                const std::vector<std::int64_t>& run_offsets, const Call& call) {
+    if (blocking.num_layers == 0) {
+        parallel_for_chunks(std::ssize(run_begins), RUN_GRAIN,
+                            [&](std::int64_t, std::int64_t r0, std::int64_t r1) { call(r0, r1); });
+        return;
+    }
+    const std::int64_t layers = blocking.num_layers;
+    parallel_for_chunks(
+        layers, LAYERS_PER_SLAB, [&](std::int64_t, std::int64_t z0, std::int64_t z1) {
+            for (std::int32_t c = 0; c < coloring.num_colors(); ++c) {
+                const auto colour = static_cast<std::size_t>(c);
+                const std::int64_t* layer_begin =
+                    blocking.layer_begin.data() + colour * static_cast<std::size_t>(layers + 1);
+                const std::int64_t lo = coloring.offsets[colour] + layer_begin[z0];
+                const std::int64_t hi = coloring.offsets[colour] + layer_begin[z1];
+                const auto first = run_begins.begin() + run_offsets[colour];
+                const auto last = run_begins.begin() + run_offsets[colour + 1];
+                const auto r0 = std::lower_bound(first, last, lo) - run_begins.begin();
+                const auto r1 = std::lower_bound(first, last, hi) - run_begins.begin();
+                if (r0 < r1) {
+                    call(r0, r1);
+                }
+            }
+        });
+}
+
+// The waves' rest lengths and volumes over the lattice sweep's runs (AVX2): the rest positions
+// (once per cache) and the displacements displacement_of(v) in the solver order, then every run.
+template <typename DisplacementOf>
+void wave_rest_on_runs(const LatticeSweep& lattice, std::span<const Vec3f> rest, int axes,
+                       const DisplacementOf& displacement_of, EdgeConstraints& edges,
+                       TetConstraints& tets, RestDriverCache& cache) {
+    const auto nv = static_cast<std::int64_t>(lattice.vertex_of.size());
+    const std::int32_t* vertex_of = lattice.vertex_of.data();
+    // Every array with 8 floats of padding (wave_rest.hpp).
+    const auto padded = static_cast<std::size_t>(nv + 8);
+    if (cache.solver_rest_x.size() != padded) {
+        cache.solver_rest_x.assign(padded, 0.0f);
+        cache.solver_rest_y.assign(padded, 0.0f);
+        cache.solver_rest_z.assign(padded, 0.0f);
+        for (std::int64_t i = 0; i < nv; ++i) {
+            const Vec3f& r = rest[static_cast<std::size_t>(vertex_of[i])];
+            cache.solver_rest_x[static_cast<std::size_t>(i)] = r.x;
+            cache.solver_rest_y[static_cast<std::size_t>(i)] = r.y;
+            cache.solver_rest_z[static_cast<std::size_t>(i)] = r.z;
+        }
+    }
+    cache.solver_u_x.resize(padded, 0.0f);
+    cache.solver_u_y.resize(padded, 0.0f);
+    cache.solver_u_z.resize(padded, 0.0f);
+    parallel_for(
+        nv,
+        [&](std::int64_t i) {
+            const Vec3f u = displacement_of(static_cast<std::size_t>(vertex_of[i]));
+            cache.solver_u_x[static_cast<std::size_t>(i)] = u.x;
+            cache.solver_u_y[static_cast<std::size_t>(i)] = u.y;
+            cache.solver_u_z[static_cast<std::size_t>(i)] = u.z;
+        },
+        VERTEX_GRAIN);
+    const SoaDisplaced p{cache.solver_rest_x.data(), cache.solver_rest_y.data(),
+                         cache.solver_rest_z.data(), cache.solver_u_x.data(),
+                         cache.solver_u_y.data(),    cache.solver_u_z.data()};
+    parallel_for_runs_by_layer(edges.blocking, edges.coloring, lattice.edge_run_begins,
+                               lattice.edge_run_offsets, [&](std::int64_t r0, std::int64_t r1) {
+                                   displaced_lengths_runs_avx2(
+                                       p, axes, lattice.edge_runs.data(), r0, r1,
+                                       std::ssize(lattice.edge_runs), std::ssize(edges.vertices),
+                                       edges.rest_lengths.data());
+                               });
+    parallel_for_runs_by_layer(tets.blocking, tets.coloring, lattice.tet_run_begins,
+                               lattice.tet_run_offsets, [&](std::int64_t r0, std::int64_t r1) {
+                                   displaced_volumes_runs_avx2(p, axes, lattice.tet_runs.data(), r0,
+                                                               r1, std::ssize(lattice.tet_runs),
+                                                               std::ssize(tets.vertices),
+                                                               tets.rest_volumes.data());
+                               });
 }
 
 }  // namespace
@@ -133,7 +221,7 @@ void place_driven_vertices(Float4* x, std::span<const Driver> drivers, const Bod
 
 void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                         std::span<const Vec3f> rest, double t, EdgeConstraints& edges,
-                        TetConstraints& tets, RestDriverCache& cache) {
+                        TetConstraints& tets, RestDriverCache& cache, const LatticeSweep* lattice) {
     std::vector<const WaveDriver*> waves;
     std::vector<const BubbleDriver*> bubbles;
     for (const Driver& d : drivers) {
@@ -186,11 +274,12 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
             }
         }
     }
-    // Step 1: the displaced rest positions (double), only when a wave runs: each wave's
-    // displacement once per plane (wave_displacement reads only the coordinate along its
-    // direction), then added per vertex in the drivers' order.
-    std::vector<Vec3d> shaped;
-    if (!waves.empty()) {
+    // Step 1, only when a wave runs: each wave's displacement once per plane (wave_displacement
+    // reads only the coordinate along its direction), summed per vertex in the drivers' order and
+    // rounded to float; then the edge lengths and tet volumes of the displaced positions
+    // (wave_rest.hpp).
+    const bool has_waves = !waves.empty();
+    if (has_waves) {
         std::vector<std::vector<Vec3d>> displacement(waves.size());
         for (std::size_t w = 0; w < waves.size(); ++w) {
             const int d = static_cast<int>(waves[w]->direction);
@@ -200,18 +289,58 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                 displacement[w].push_back(wave_displacement(*waves[w], box, at, t));
             }
         }
-        shaped.resize(static_cast<std::size_t>(nv));
-        parallel_for(
-            nv,
-            [&](std::int64_t i) {
-                const auto v = static_cast<std::size_t>(i);
-                Vec3d p = vec3_cast<double>(rest[v]);
-                for (std::size_t w = 0; w < waves.size(); ++w) {
-                    p += displacement[w][static_cast<std::size_t>(cache.wave_plane[w][v])];
-                }
-                shaped[v] = p;
-            },
-            VERTEX_GRAIN);
+        // The axes the waves displace along (wave_rest.hpp): u is 0 along the others.
+        int axes = 0;
+        for (const WaveDriver* w : waves) {
+            axes |= 1 << static_cast<int>(w->displacement);
+        }
+        const auto displacement_of = [&](std::size_t v) {
+            Vec3d u{};
+            for (std::size_t w = 0; w < waves.size(); ++w) {
+                u += displacement[w][static_cast<std::size_t>(cache.wave_plane[w][v])];
+            }
+            return vec3_cast<float>(u);
+        };
+        if (lattice != nullptr && pliant::has_avx2() && !lattice->vertex_of.empty()) {
+            wave_rest_on_runs(*lattice, rest, axes, displacement_of, edges, tets, cache);
+        } else {
+            std::vector<Vec3f> u(static_cast<std::size_t>(nv));
+            parallel_for(
+                nv,
+                [&](std::int64_t v) {
+                    u[static_cast<std::size_t>(v)] = displacement_of(static_cast<std::size_t>(v));
+                },
+                VERTEX_GRAIN);
+            parallel_for(
+                static_cast<std::int64_t>(edges.vertices.size()),
+                [&](std::int64_t k) {
+                    const auto a =
+                        static_cast<std::size_t>(edges.vertices[static_cast<std::size_t>(k)][0]);
+                    const auto b =
+                        static_cast<std::size_t>(edges.vertices[static_cast<std::size_t>(k)][1]);
+                    edges.rest_lengths[static_cast<std::size_t>(k)] =
+                        displaced_length(rest[a], u[a], rest[b], u[b], axes);
+                },
+                EDGE_GRAIN);
+            parallel_for(
+                static_cast<std::int64_t>(tets.vertices.size()),
+                [&](std::int64_t k) {
+                    const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
+                    std::array<Vec3f, 4> r{};
+                    std::array<Vec3f, 4> d{};
+                    for (std::size_t m = 0; m < 4; ++m) {
+                        r[m] = rest[static_cast<std::size_t>(tet[m])];
+                        d[m] = u[static_cast<std::size_t>(tet[m])];
+                    }
+                    tets.rest_volumes[static_cast<std::size_t>(k)] =
+                        displaced_volume(r.data(), d.data(), axes);
+                },
+                TET_GRAIN);
+        }
+        if (bubbles.empty()) {
+            cache.is_valid = true;
+            return;
+        }
     }
     const auto rest_at = [&](std::int32_t v) {
         return vec3_cast<double>(rest[static_cast<std::size_t>(v)]);
@@ -224,30 +353,19 @@ void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
         const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
         return (rest_at(tet[0]) + rest_at(tet[1]) + rest_at(tet[2]) + rest_at(tet[3])) * 0.25;
     };
-    // Step 2: edge lengths.
+    // Step 2: the bubbles' factors on the edge lengths (the waves' or the construction's).
     const auto write_edge_length = [&](std::int64_t k) {
-        const auto& e = edges.vertices[static_cast<std::size_t>(k)];
-        double length = shaped.empty() ? edges.rest_lengths0[static_cast<std::size_t>(k)]
-                                       : norm(shaped[static_cast<std::size_t>(e[0])] -
-                                              shaped[static_cast<std::size_t>(e[1])]);
-        if (!bubbles.empty()) {
-            length *= std::cbrt(bubble_product(bubbles, box, edge_midpoint(k), t));
-        }
-        edges.rest_lengths[static_cast<std::size_t>(k)] = static_cast<float>(length);
+        const auto q = static_cast<std::size_t>(k);
+        double length = has_waves ? edges.rest_lengths[q] : edges.rest_lengths0[q];
+        length *= std::cbrt(bubble_product(bubbles, box, edge_midpoint(k), t));
+        edges.rest_lengths[q] = static_cast<float>(length);
     };
-    // Step 3: tet volumes.
+    // Step 3: and on the tet volumes.
     const auto write_tet_volume = [&](std::int64_t k) {
-        const geometry::Tet& tet = tets.vertices[static_cast<std::size_t>(k)];
-        double volume = tets.rest_volumes0[static_cast<std::size_t>(k)];
-        if (!shaped.empty()) {
-            volume = geometry::signed_volume(
-                shaped[static_cast<std::size_t>(tet[0])], shaped[static_cast<std::size_t>(tet[1])],
-                shaped[static_cast<std::size_t>(tet[2])], shaped[static_cast<std::size_t>(tet[3])]);
-        }
-        if (!bubbles.empty()) {
-            volume *= bubble_product(bubbles, box, tet_centroid(k), t);
-        }
-        tets.rest_volumes[static_cast<std::size_t>(k)] = static_cast<float>(volume);
+        const auto q = static_cast<std::size_t>(k);
+        double volume = has_waves ? tets.rest_volumes[q] : tets.rest_volumes0[q];
+        volume *= bubble_product(bubbles, box, tet_centroid(k), t);
+        tets.rest_volumes[q] = static_cast<float>(volume);
     };
     if (reached_only) {
         parallel_for(

@@ -12,6 +12,7 @@
 #include "pliant/core/vec3.hpp"
 #include "pliant/pbd/detail/constraint_layout.hpp"
 #include "pliant/pbd/detail/driver_eval.hpp"
+#include "pliant/pbd/detail/lattice_sweep.hpp"
 #include "pliant/pbd/detail/projection.hpp"
 #include "pliant/pbd/drivers.hpp"
 
@@ -70,18 +71,26 @@ struct RestDriverCache {
     std::vector<std::int64_t> edges;                    // colour-order indices, ascending
     std::vector<std::int64_t> tets;
     std::vector<double> ramps;  // per bubble, in the drivers' order
+    // With a lattice sweep and waves: the rest positions in its solver order, and the
+    // displacements' arrays (rewritten by every call; kept for their storage).
+    std::vector<float> solver_rest_x, solver_rest_y, solver_rest_z;
+    std::vector<float> solver_u_x, solver_u_y, solver_u_z;
 };
 
-// The rest state the rest-state drivers ask for at time t: rest positions (#V) displaced by the
-// sum of the waves, edge lengths and tet volumes of the displaced positions (in double, from the
-// construction's values when no wave runs), then scaled by the product of the bubbles' factors f
-// at the rest midpoint (edges: f^(1/3)) or rest centroid (tets). Writes edges.rest_lengths and
-// tets.rest_volumes (float, colour order); parallel, deterministic. With bubbles alone and a
-// valid cache it writes only the constraints the bubbles reach, and nothing when the bubbles'
-// ramps are those of the last call (a bubble that has ramped in is a constant rest state): the
-// same values as a full pass, bit for bit, at O(constraints reached) or O(1).
+// The rest state the rest-state drivers ask for at time t: rest positions r (#V) displaced by u,
+// the sum of the waves (in double, rounded to float per vertex), edge lengths and tet volumes of
+// the displaced positions in float (wave_rest.hpp: differences as (r_a − r_b) + (u_a − u_b); the
+// construction's values when no wave runs), then scaled in double by the product of the bubbles'
+// factors f at the rest midpoint (edges: f^(1/3)) or rest centroid (tets). Writes
+// edges.rest_lengths and tets.rest_volumes (float, colour order); parallel, deterministic. With
+// `lattice` (the constraints' lattice sweep, or nullptr) and AVX2 the waves' values are computed
+// over its runs 8 at a time, the same bits. With bubbles alone and a valid cache it writes only
+// the constraints the bubbles reach, and nothing when the bubbles' ramps are those of the last
+// call (a bubble that has ramped in is a constant rest state): the same values as a full pass,
+// bit for bit, at O(constraints reached) or O(1).
 void apply_rest_drivers(std::span<const Driver> drivers, const BodyBox& box,
                         std::span<const Vec3f> rest, double t, EdgeConstraints& edges,
-                        TetConstraints& tets, RestDriverCache& cache);
+                        TetConstraints& tets, RestDriverCache& cache,
+                        const LatticeSweep* lattice = nullptr);
 
 }  // namespace pliant::pbd::detail

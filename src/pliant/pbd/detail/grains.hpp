@@ -16,6 +16,9 @@ inline constexpr std::int64_t TET_GRAIN = 1024;     // tet constraints per chunk
 // slab (with the grains above most slabs were one chunk, one thread).
 inline constexpr std::int64_t LATTICE_EDGE_GRAIN = 512;
 inline constexpr std::int64_t LATTICE_TET_GRAIN = 256;
+// Runs of the lattice sweep per chunk where whole runs are the unit (the waves' rest state:
+// about 16 constraints per run at the source's scale).
+inline constexpr std::int64_t RUN_GRAIN = 256;
 
 // Lanes of the lattice sweep (lattice_sweep.hpp): bands of lattice rows pipelined on as many
 // threads.

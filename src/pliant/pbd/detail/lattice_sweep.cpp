@@ -10,6 +10,7 @@
 
 #include "pliant/core/parallel.hpp"
 #include "pliant/pbd/detail/grains.hpp"
+#include "pliant/pbd/detail/integration_avx2.hpp"
 #include "pliant/pbd/detail/projection_avx2.hpp"
 
 namespace pliant::pbd::detail {
@@ -379,27 +380,13 @@ void guard_lattice(LatticeSweep& sweep, const TetConstraints& tets, InversionFla
 
 void finish_lattice_substep(LatticeSweep& sweep, const SubstepMotion& m) {
     const auto nv = static_cast<std::int64_t>(sweep.vertex_of.size());
-    const SoaPositions p = positions_of(sweep);
-    float* px = sweep.previous_x.data();
-    float* py = sweep.previous_y.data();
-    float* pz = sweep.previous_z.data();
-    const float* inv_masses = sweep.inv_masses.data();
-    const std::uint8_t* pinned = sweep.pinned.data();
-    // update_velocities_and_predict's substep_velocity and predict_vertex, per array.
+    const SoaMotion arrays{positions_of(sweep),     sweep.previous_x.data(),
+                           sweep.previous_y.data(), sweep.previous_z.data(),
+                           sweep.inv_masses.data(), sweep.pinned.data()};
+    // update_velocities_and_predict's substep_velocity and predict_vertex, 8 vertices at a time
+    // (the same bits).
     parallel_for_chunks(nv, VERTEX_GRAIN, [&](std::int64_t, std::int64_t begin, std::int64_t end) {
-        for (std::int64_t i = begin; i < end; ++i) {
-            Float4 q{p.x[i], p.y[i], p.z[i], p.w[i]};
-            Vec3f previous{px[i], py[i], pz[i]};
-            Vec3f vel = pinned[i] != 0 ? Vec3f{} : substep_velocity(q, previous, m);
-            predict_vertex(q, previous, vel, inv_masses[i], m);
-            p.x[i] = q.x;
-            p.y[i] = q.y;
-            p.z[i] = q.z;
-            p.w[i] = q.w;
-            px[i] = previous.x;
-            py[i] = previous.y;
-            pz[i] = previous.z;
-        }
+        finish_substep_soa_avx2(arrays, begin, end, m);
     });
 }
 

@@ -99,7 +99,8 @@ void sweep_lattice(LatticeSweep& sweep, const EdgeConstraints& edges, const TetC
                    std::span<std::uint8_t> tet_at_risk, std::span<std::uint8_t> colour_at_risk);
 // Step 3b on the arrays (guard_flagged_tets).
 void guard_lattice(LatticeSweep& sweep, const TetConstraints& tets, InversionFlags& flags);
-// Between substeps, on the arrays: update_velocities_and_predict's velocity and prediction.
+// Between substeps, on the arrays: update_velocities_and_predict's velocity and prediction
+// (integration_avx2.hpp: AVX2, the same bits).
 void finish_lattice_substep(LatticeSweep& sweep, const SubstepMotion& m);
 // After the last substep: update_velocities's velocities and positions, and x and previous (#V)
 // as the general loop leaves them.
