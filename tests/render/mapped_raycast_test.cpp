@@ -263,6 +263,71 @@ TEST(MappedRayCast, SubCellJumpsChangeNothingOnASparseSource) {
     }
 }
 
+// detail::visible_samples() must keep every sample whose map cell (locate_map(), the clamp
+// included) lies in the box of the visible cells: random rays (axis-parallel ones among them,
+// origins inside and outside the grid, two steps) against random boxes, boxes at the grid's
+// sides and no visible cell.
+TEST(MappedRayCast, VisibleSamplesKeepEverySampleInTheVisibleBox) {
+    detail::MappedKernel m;
+    const int n = 33;  // target voxels per axis; 4 voxels per map cell: 9 cells
+    m.b = 4.0f;
+    m.inv_b = 0.25f;
+    for (int a = 0; a < 3; ++a) {
+        m.cells[a] = 9;
+        m.target.n[a] = n;
+        m.target.g_max[a] = static_cast<float>(n - 1);
+    }
+    std::uint32_t seed = 777;
+    const auto uniform = [&seed](float lo, float hi) {
+        seed = seed * 1664525u + 1013904223u;
+        return lo + (hi - lo) * static_cast<float>(seed >> 8) / static_cast<float>(1 << 24);
+    };
+    std::int64_t kept = 0, skipped = 0;
+    for (int trial = 0; trial < 1500; ++trial) {
+        std::int64_t first[3], last[3];
+        for (int a = 0; a < 3; ++a) {
+            first[a] = static_cast<std::int64_t>(uniform(0.0f, 8.99f));
+            last[a] =
+                trial % 7 == 0 ? first[a] - 1 : static_cast<std::int64_t>(uniform(0.0f, 8.99f));
+            if (last[a] < first[a] && trial % 7 != 0) {
+                std::swap(first[a], last[a]);
+            }
+        }
+        detail::set_visible_box(m, first, last);
+        m.target.step = trial % 2 == 0 ? 0.5f : 0.37f;
+        m.target.inv_step = 1.0f / m.target.step;
+        detail::GridRay r{};
+        for (int a = 0; a < 3; ++a) {
+            r.go[a] = uniform(-20.0f, 52.0f);
+            r.gd[a] = trial % 5 == a ? 0.0f : uniform(-1.0f, 1.0f);
+            r.inv_gd[a] = r.gd[a] != 0.0f ? 1.0f / r.gd[a] : 0.0f;
+        }
+        r.t_near = uniform(0.0f, 10.0f);
+        r.t_far = r.t_near + uniform(0.0f, 120.0f);
+        const auto num_full = static_cast<std::int64_t>((r.t_far - r.t_near) * m.target.inv_step);
+        std::int64_t begin = 0, end = 0;
+        detail::visible_samples(m, r, num_full, begin, end);
+        ASSERT_LE(0, begin);
+        ASSERT_LE(begin, end);
+        ASSERT_LE(end, num_full);
+        for (std::int64_t s = 0; s < num_full; ++s) {
+            const detail::MapCell c =
+                detail::locate_map(m, detail::sample_position(m.target, r, s));
+            bool inside = true;
+            for (int a = 0; a < 3; ++a) {
+                inside = inside && c.q[a] >= first[a] && c.q[a] <= last[a];
+            }
+            if (inside) {
+                ASSERT_TRUE(s >= begin && s < end)
+                    << "trial " << trial << ", sample " << s << " of " << num_full << " not in ["
+                    << begin << ", " << end << ")";
+            }
+            (s >= begin && s < end ? kept : skipped) += 1;
+        }
+    }
+    EXPECT_GT(skipped, kept / 4);  // the span does skip samples
+}
+
 TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     const volume::Volume& source = rgba64();
     const Deformed d = deform(source, nullptr, Drive::twist, 12);

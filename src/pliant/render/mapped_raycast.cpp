@@ -554,9 +554,14 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
     const std::int32_t* extents = map.node_row_extents().data();
+    // Per layer of cells the box of its visible cells (first, last per axis), then their union.
+    constexpr std::int64_t NONE = std::numeric_limits<std::int64_t>::max();
+    std::vector<std::array<std::int64_t, 6>> layer_box(static_cast<std::size_t>(cz_n),
+                                                       {NONE, NONE, NONE, -NONE, -NONE, -NONE});
     parallel_for(
         cz_n,
         [&](std::int64_t cz) {
+            std::array<std::int64_t, 6>& box = layer_box[static_cast<std::size_t>(cz)];
             for (std::int64_t cy = 0; cy < cy_n; ++cy) {
                 // Cells with both x nodes inside the 4 node rows' extents (the others have an
                 // empty node): [x0, x1).
@@ -611,10 +616,24 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                     m_occupancy[cell] = bits;
                     m_sub_occupied[cell] = sub;
                     m_visible[cell] = sub != 0 ? 1 : 0;
+                    if (sub != 0) {
+                        const std::int64_t at[3] = {cx, cy, cz};
+                        for (std::size_t a = 0; a < 3; ++a) {
+                            box[a] = std::min(box[a], at[a]);
+                            box[a + 3] = std::max(box[a + 3], at[a]);
+                        }
+                    }
                 }
             }
         },
         1);
+    m_visible_box = {NONE, NONE, NONE, -NONE, -NONE, -NONE};
+    for (const std::array<std::int64_t, 6>& box : layer_box) {
+        for (std::size_t a = 0; a < 3; ++a) {
+            m_visible_box[a] = std::min(m_visible_box[a], box[a]);
+            m_visible_box[a + 3] = std::max(m_visible_box[a + 3], box[a + 3]);
+        }
+    }
     // The nodes padded to 4 floats (the AVX2 march loads a node pair as 8 floats).
     m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
     parallel_for(
@@ -735,6 +754,8 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
         }
     }
+    const std::int64_t* box = m_visible_box.data();
+    detail::set_visible_box(m, box, box + 3);
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();

@@ -168,6 +168,8 @@ private:
     std::vector<std::uint8_t> m_occupancy;     // per map cell, detail::MAP_CELL_* bits
     std::vector<std::uint8_t> m_sub_occupied;  // per map cell, its visible sub-cells' bits
     std::vector<std::uint8_t> m_visible;       // per map cell, 0 / 1 (empty_cubes' input)
+    // The visible cells' box: first cell per axis, then last (first > last: none visible).
+    std::array<std::int64_t, 6> m_visible_box{0, 0, 0, -1, -1, -1};
     // RGBA: the source voxels with α > 0 dilated by one voxel toward −x, −y, −z (bit v set when
     // a voxel of {v, v + 1}³ has α > 0), a 64-bit word per brick of 4³ voxels (x fastest).
     bool m_is_rgba = false;  // the source's, read per test

@@ -26,8 +26,9 @@ struct alignas(32) MapLanes : Lanes {
     std::int32_t last_n[LANES];
 };
 
-// Puts ray p into lane l, marched from its first sample.
-void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
+// Puts ray p into lane l, marched over its samples [first, end) (visible_samples()).
+void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int32_t num_cells,
+               MapLanes& s, int l) {
     for (int a = 0; a < 3; ++a) {
         s.dir[a][l] = p.dir[a];
         s.go[a][l] = p.r.go[a];
@@ -38,8 +39,8 @@ void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
     s.t_far[l] = p.r.t_far;
     s.margin[l] = p.r.margin;
     s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
-    s.n[l] = 0;
-    s.num_full[l] = static_cast<std::int32_t>(p.num_full);
+    s.n[l] = first;
+    s.num_full[l] = end;
     s.samples[l] = 0;
     s.last_n[l] = -2;
     const int octant = octant_of(p.r);
@@ -371,6 +372,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     // 1. The tile's rays; those with samples to march are queued for the lanes.
     PixelRay rays[TILE * TILE];
     std::int32_t queue[TILE * TILE];
+    std::int32_t first[TILE * TILE], end[TILE * TILE];  // per pixel, visible_samples()
     int queue_size = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; x += LANES) {
@@ -386,12 +388,18 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                     colors[pixel] = k.background;
                     continue;
                 }
-                if (p.num_full == 0) {
+                std::int64_t span[2] = {0, p.num_full};
+                if (k.skipping && p.num_full < MAX_LANE_SAMPLES) {
+                    visible_samples(m, p.r, p.num_full, span[0], span[1]);
+                }
+                if (span[0] >= span[1]) {  // no sample to march (or none in a visible cell)
                     colors[pixel] = mapped_end<IS_RGBA>(m, p, Accumulated{}, samples);
                 } else if (p.num_full >= MAX_LANE_SAMPLES) {
                     const Accumulated c = mapped_march<IS_RGBA>(m, p, samples);
                     colors[pixel] = mapped_end<IS_RGBA>(m, p, c, samples);
                 } else {
+                    first[pixel] = static_cast<std::int32_t>(span[0]);
+                    end[pixel] = static_cast<std::int32_t>(span[1]);
                     queue[queue_size++] = pixel;
                 }
             }
@@ -412,7 +420,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         if (slots.next < queue_size) {
             const int pixel = queue[slots.next++];
             const PixelRay& p = rays[pixel];
-            fill_lane(p, num_cells, s, l);
+            fill_lane(p, first[pixel], end[pixel], num_cells, s, l);
             slots.take(l, pixel, zero_axes_of(p.r) != 0);
             return;
         }

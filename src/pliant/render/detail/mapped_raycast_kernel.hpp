@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 
 #include "pliant/core/host_device.hpp"
@@ -59,7 +60,13 @@ struct MappedKernel {
     // Per map cell: bit sub_cell_of() set when some sample in that sub-cell may have opacity
     // (0 for a cell that is not visible).
     const std::uint8_t* sub_occupied = nullptr;
-    const std::uint8_t* empty_cube[8] = {};   // per octant, per map cell (empty_cubes())
+    const std::uint8_t* empty_cube[8] = {};  // per octant, per map cell (empty_cubes())
+    // The box of the visible map cells in target grid coordinates, widened by
+    // VISIBLE_BOX_MARGIN, −∞ / +∞ on a side where it reaches the grid's first / last cell (the
+    // clamp of locate_map() puts samples beyond the grid there); empty (lo > hi) when no cell
+    // is visible. With skipping, a sample outside it lies in a cell that is not visible.
+    float visible_lo[3] = {0.0f, 0.0f, 0.0f};
+    float visible_hi[3] = {0.0f, 0.0f, 0.0f};
     float source_hi[3] = {0.0f, 0.0f, 0.0f};  // the source box [−0.5, n − 0.5] per axis
     // Shading: the stored source gradient, 4 GradientValue per source voxel (source_gradient());
     // null when not shading.
@@ -269,6 +276,83 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
     return out;
 }
 
+// Target grid units MappedKernel's box of the visible cells is widened by (far above the float
+// rounding of sample positions below a few thousand).
+inline constexpr float VISIBLE_BOX_MARGIN = 1.0f / 16.0f;
+
+// Sets m.visible_lo / visible_hi from the visible cells' box, cells first[a] … last[a] per axis
+// (first[a] > last[a]: no cell is visible). Uses m.b and m.cells.
+inline void set_visible_box(MappedKernel& m, const std::int64_t first[3],
+                            const std::int64_t last[3]) {
+    const float inf = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (first[a] > last[a]) {
+            m.visible_lo[a] = inf;
+            m.visible_hi[a] = -inf;
+            continue;
+        }
+        m.visible_lo[a] =
+            first[a] == 0 ? -inf : static_cast<float>(first[a]) * m.b - VISIBLE_BOX_MARGIN;
+        m.visible_hi[a] = last[a] == m.cells[a] - 1
+                              ? inf
+                              : static_cast<float>(last[a] + 1) * m.b + VISIBLE_BOX_MARGIN;
+    }
+}
+
+// The samples [first, end) of ray r (num_full full samples) that may lie in the box of the
+// visible cells (MappedKernel::visible_lo / visible_hi); with skipping, the others lie in cells
+// that are not visible, which the march passes over without classifying them, so marching
+// [first, end) alone gives the same colour and samples. The ray's parameter interval in the
+// box (slabs), then the samples whose midpoints t_near + (m + ½)Δs lie in it, one more on each
+// side (rounding). Returns the whole [0, num_full) when the interval is not finite.
+PLIANT_HOST_DEVICE inline void visible_samples(const MappedKernel& m, const GridRay& r,
+                                               std::int64_t num_full, std::int64_t& first,
+                                               std::int64_t& end) {
+    first = 0;
+    end = num_full;
+    double t0 = r.t_near;
+    double t1 = r.t_far;
+    for (int a = 0; a < 3; ++a) {
+        const double lo = m.visible_lo[a];
+        const double hi = m.visible_hi[a];
+        if (!(lo <= hi)) {
+            first = end = num_full;  // no visible cell
+            return;
+        }
+        const double o = r.go[a];
+        const double d = r.gd[a];
+        if (d == 0.0) {
+            if (o < lo || o > hi) {
+                first = end = num_full;
+                return;
+            }
+            continue;
+        }
+        const double ta = (lo - o) / d;
+        const double tb = (hi - o) / d;
+        t0 = std::max(t0, std::min(ta, tb));
+        t1 = std::min(t1, std::max(ta, tb));
+    }
+    if (t0 > t1) {
+        first = end = num_full;  // the ray misses the box
+        return;
+    }
+    if (!(t0 <= t1)) {
+        return;  // NaN: the whole ray
+    }
+    const double step = m.target.step;
+    const double x0 = (t0 - r.t_near) / step - 0.5;
+    const double x1 = (t1 - r.t_near) / step - 0.5;
+    if (std::isfinite(x0) && x0 > 1.0) {
+        first = std::min(num_full, static_cast<std::int64_t>(std::min(x0, 1e18)) - 1);
+    }
+    if (std::isfinite(x1)) {
+        end = x1 < 0.0 ? std::min<std::int64_t>(num_full, 2)
+                       : std::min(num_full, static_cast<std::int64_t>(std::min(x1, 1e18)) + 2);
+    }
+    end = std::max(end, first);
+}
+
 // jump() for map cells: the first sample past the cube of `side` empty map cells that has c as
 // its corner and extends along the ray, at least n + 1.
 PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const GridRay& r,
@@ -344,7 +428,11 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
     }
     Accumulated c;
     std::int64_t n = 0;
-    while (n < p.num_full) {
+    std::int64_t end = p.num_full;
+    if (k.skipping) {
+        visible_samples(m, r, p.num_full, n, end);
+    }
+    while (n < end) {
         const MapCell cell = locate_map(m, sample_position(k, r, n));
         if (k.skipping) {
             int side = cubes[0][cell.index];
@@ -352,11 +440,11 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
                 side = std::max<int>(side, cubes[q][cell.index]);
             }
             if (side > 0) {
-                n = map_jump(m, r, cell, side, n, p.num_full);
+                n = map_jump(m, r, cell, side, n, end);
                 continue;
             }
             if (!sub_cell_occupied(m, cell)) {
-                n = sub_cell_jump(m, r, cell, n, p.num_full);
+                n = sub_cell_jump(m, r, cell, n, end);
                 continue;
             }
         } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
