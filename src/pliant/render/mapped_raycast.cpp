@@ -554,14 +554,13 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
     const std::int32_t* extents = map.node_row_extents().data();
-    // Per layer of cells the box of its visible cells (first, last per axis), then their union.
-    constexpr std::int64_t NONE = std::numeric_limits<std::int64_t>::max();
-    std::vector<std::array<std::int64_t, 6>> layer_box(static_cast<std::size_t>(cz_n),
-                                                       {NONE, NONE, NONE, -NONE, -NONE, -NONE});
+    // Per layer of cells the extents of its visible cells (detail::VisibleCells), then their
+    // union.
+    std::vector<detail::VisibleCells> layer_cells(static_cast<std::size_t>(cz_n));
     parallel_for(
         cz_n,
         [&](std::int64_t cz) {
-            std::array<std::int64_t, 6>& box = layer_box[static_cast<std::size_t>(cz)];
+            detail::VisibleCells& layer = layer_cells[static_cast<std::size_t>(cz)];
             for (std::int64_t cy = 0; cy < cy_n; ++cy) {
                 // Cells with both x nodes inside the 4 node rows' extents (the others have an
                 // empty node): [x0, x1).
@@ -618,21 +617,15 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                     m_visible[cell] = sub != 0 ? 1 : 0;
                     if (sub != 0) {
                         const std::int64_t at[3] = {cx, cy, cz};
-                        for (std::size_t a = 0; a < 3; ++a) {
-                            box[a] = std::min(box[a], at[a]);
-                            box[a + 3] = std::max(box[a + 3], at[a]);
-                        }
+                        layer.add(at);
                     }
                 }
             }
         },
         1);
-    m_visible_box = {NONE, NONE, NONE, -NONE, -NONE, -NONE};
-    for (const std::array<std::int64_t, 6>& box : layer_box) {
-        for (std::size_t a = 0; a < 3; ++a) {
-            m_visible_box[a] = std::min(m_visible_box[a], box[a]);
-            m_visible_box[a + 3] = std::max(m_visible_box[a + 3], box[a + 3]);
-        }
+    m_visible_cells = detail::VisibleCells();
+    for (const detail::VisibleCells& layer : layer_cells) {
+        m_visible_cells.merge(layer);
     }
     // The nodes padded to 4 floats (the AVX2 march loads a node pair as 8 floats).
     m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
@@ -754,8 +747,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
         }
     }
-    const std::int64_t* box = m_visible_box.data();
-    detail::set_visible_box(m, box, box + 3);
+    detail::set_visible_cells(m, m_visible_cells);
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();

@@ -61,12 +61,12 @@ struct MappedKernel {
     // (0 for a cell that is not visible).
     const std::uint8_t* sub_occupied = nullptr;
     const std::uint8_t* empty_cube[8] = {};  // per octant, per map cell (empty_cubes())
-    // The box of the visible map cells in target grid coordinates, widened by
-    // VISIBLE_BOX_MARGIN, −∞ / +∞ on a side where it reaches the grid's first / last cell (the
-    // clamp of locate_map() puts samples beyond the grid there); empty (lo > hi) when no cell
-    // is visible. With skipping, a sample outside it lies in a cell that is not visible.
-    float visible_lo[3] = {0.0f, 0.0f, 0.0f};
-    float visible_hi[3] = {0.0f, 0.0f, 0.0f};
+    // The slabs of the visible map cells in target grid coordinates t (VISIBLE_SLABS: e_k · t
+    // for the 3 axes and the 4 diagonals, set_visible_cells()), widened by VISIBLE_BOX_MARGIN per
+    // axis; empty (lo > hi) when no cell is visible. With skipping, a sample outside them lies
+    // in a cell that is not visible.
+    float visible_lo[7] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    float visible_hi[7] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     float source_hi[3] = {0.0f, 0.0f, 0.0f};  // the source box [−0.5, n − 0.5] per axis
     // Shading: the stored source gradient, 4 GradientValue per source voxel (source_gradient());
     // null when not shading.
@@ -276,35 +276,91 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
     return out;
 }
 
-// Target grid units MappedKernel's box of the visible cells is widened by (far above the float
-// rounding of sample positions below a few thousand).
+// Target grid units per axis MappedKernel's slabs of the visible cells are widened by (far above
+// the float rounding of sample positions below a few thousand).
 inline constexpr float VISIBLE_BOX_MARGIN = 1.0f / 16.0f;
 
-// Sets m.visible_lo / visible_hi from the visible cells' box, cells first[a] … last[a] per axis
-// (first[a] > last[a]: no cell is visible). Uses m.b and m.cells.
-inline void set_visible_box(MappedKernel& m, const std::int64_t first[3],
-                            const std::int64_t last[3]) {
-    const float inf = std::numeric_limits<float>::infinity();
-    for (int a = 0; a < 3; ++a) {
-        if (first[a] > last[a]) {
-            m.visible_lo[a] = inf;
-            m.visible_hi[a] = -inf;
-            continue;
+// The directions e_k of the visible cells' slabs: the 3 axes, then the 4 diagonals (a 14-sided
+// polytope around the visible cells; a box alone leaves its corners, empty around a rounded
+// body, to the empty-cube jumps).
+inline constexpr int VISIBLE_SLABS = 7;
+inline constexpr int SLAB_SIGNS[VISIBLE_SLABS][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 1},
+                                                     {1, 1, -1}, {1, -1, 1}, {1, -1, -1}};
+
+// The extents of a set of map cells along the slabs: per slab k the smallest and largest
+// L_k(c) = Σ_a (s_ka > 0 ? c_a : s_ka < 0 ? −c_a − 1 : 0) over the cells c (s = SLAB_SIGNS),
+// so that every point t of cell c (B target voxels per cell) has e_k · t in [B L_k(c),
+// B (L_k(c) + |s_k|₁)].
+struct VisibleCells {
+    std::int64_t lo[VISIBLE_SLABS];
+    std::int64_t hi[VISIBLE_SLABS];
+    VisibleCells() {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            lo[k] = std::numeric_limits<std::int64_t>::max();
+            hi[k] = std::numeric_limits<std::int64_t>::min();
         }
-        m.visible_lo[a] =
-            first[a] == 0 ? -inf : static_cast<float>(first[a]) * m.b - VISIBLE_BOX_MARGIN;
-        m.visible_hi[a] = last[a] == m.cells[a] - 1
-                              ? inf
-                              : static_cast<float>(last[a] + 1) * m.b + VISIBLE_BOX_MARGIN;
+    }
+    bool empty() const { return lo[0] > hi[0]; }
+    void add(const std::int64_t c[3]) {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            std::int64_t l = 0;
+            for (int a = 0; a < 3; ++a) {
+                l += SLAB_SIGNS[k][a] > 0 ? c[a] : SLAB_SIGNS[k][a] < 0 ? -c[a] - 1 : 0;
+            }
+            lo[k] = std::min(lo[k], l);
+            hi[k] = std::max(hi[k], l);
+        }
+    }
+    void merge(const VisibleCells& o) {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            lo[k] = std::min(lo[k], o.lo[k]);
+            hi[k] = std::max(hi[k], o.hi[k]);
+        }
+    }
+};
+
+// Sets m.visible_lo / visible_hi from the visible cells v (uses m.b and m.cells). The clamp of
+// locate_map() puts samples beyond the grid into its border cells: an axis slab is open (−∞ /
+// +∞) on a side where a visible cell lies at the grid's border, and the diagonal slabs are
+// open when any does.
+inline void set_visible_cells(MappedKernel& m, const VisibleCells& v) {
+    const float inf = std::numeric_limits<float>::infinity();
+    if (v.empty()) {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            m.visible_lo[k] = inf;
+            m.visible_hi[k] = -inf;
+        }
+        return;
+    }
+    bool border = false;
+    for (int k = 0; k < VISIBLE_SLABS; ++k) {
+        const int width =
+            std::abs(SLAB_SIGNS[k][0]) + std::abs(SLAB_SIGNS[k][1]) + std::abs(SLAB_SIGNS[k][2]);
+        const float margin = static_cast<float>(width) * VISIBLE_BOX_MARGIN;
+        m.visible_lo[k] = static_cast<float>(v.lo[k]) * m.b - margin;
+        m.visible_hi[k] = static_cast<float>(v.hi[k] + width) * m.b + margin;
+        if (k < 3) {
+            if (v.lo[k] == 0) {
+                m.visible_lo[k] = -inf;
+                border = true;
+            }
+            if (v.hi[k] == m.cells[k] - 1) {
+                m.visible_hi[k] = inf;
+                border = true;
+            }
+        } else if (border) {
+            m.visible_lo[k] = -inf;
+            m.visible_hi[k] = inf;
+        }
     }
 }
 
-// The samples [first, end) of ray r (num_full full samples) that may lie in the box of the
+// The samples [first, end) of ray r (num_full full samples) that may lie in the slabs of the
 // visible cells (MappedKernel::visible_lo / visible_hi); with skipping, the others lie in cells
 // that are not visible, which the march passes over without classifying them, so marching
 // [first, end) alone gives the same colour and samples. The ray's parameter interval in the
-// box (slabs), then the samples whose midpoints t_near + (m + ½)Δs lie in it, one more on each
-// side (rounding). Returns the whole [0, num_full) when the interval is not finite.
+// slabs, then the samples whose midpoints t_near + (m + ½)Δs lie in it, one more on each side
+// (rounding). Returns the whole [0, num_full) when the interval is not finite.
 PLIANT_HOST_DEVICE inline void visible_samples(const MappedKernel& m, const GridRay& r,
                                                std::int64_t num_full, std::int64_t& first,
                                                std::int64_t& end) {
@@ -312,15 +368,18 @@ PLIANT_HOST_DEVICE inline void visible_samples(const MappedKernel& m, const Grid
     end = num_full;
     double t0 = r.t_near;
     double t1 = r.t_far;
-    for (int a = 0; a < 3; ++a) {
-        const double lo = m.visible_lo[a];
-        const double hi = m.visible_hi[a];
+    for (int k = 0; k < VISIBLE_SLABS; ++k) {
+        const double lo = m.visible_lo[k];
+        const double hi = m.visible_hi[k];
         if (!(lo <= hi)) {
             first = end = num_full;  // no visible cell
             return;
         }
-        const double o = r.go[a];
-        const double d = r.gd[a];
+        double o = 0.0, d = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            o += SLAB_SIGNS[k][a] * static_cast<double>(r.go[a]);
+            d += SLAB_SIGNS[k][a] * static_cast<double>(r.gd[a]);
+        }
         if (d == 0.0) {
             if (o < lo || o > hi) {
                 first = end = num_full;
@@ -334,7 +393,7 @@ PLIANT_HOST_DEVICE inline void visible_samples(const MappedKernel& m, const Grid
         t1 = std::min(t1, std::max(ta, tb));
     }
     if (t0 > t1) {
-        first = end = num_full;  // the ray misses the box
+        first = end = num_full;  // the ray misses the slabs
         return;
     }
     if (!(t0 <= t1)) {
