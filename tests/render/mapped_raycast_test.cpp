@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -261,6 +262,82 @@ TEST(MappedRayCast, SubCellJumpsChangeNothingOnASparseSource) {
             }
         }
     }
+}
+
+// detail::visible_samples() must keep every sample whose map cell (locate_map(), the clamp
+// included) is visible: random rays (axis-parallel ones among them, origins inside and outside
+// the grid, two steps) against random sets of visible cells (blobs inside the grid, blobs at
+// its sides, none).
+TEST(MappedRayCast, VisibleSamplesKeepEverySampleInAVisibleCell) {
+    detail::MappedKernel m;
+    const int n = 33;  // target voxels per axis; 4 voxels per map cell: 9 cells
+    const int cells = 9;
+    m.b = 4.0f;
+    m.inv_b = 0.25f;
+    for (int a = 0; a < 3; ++a) {
+        m.cells[a] = cells;
+        m.target.n[a] = n;
+        m.target.g_max[a] = static_cast<float>(n - 1);
+    }
+    std::uint32_t seed = 777;
+    const auto uniform = [&seed](float lo, float hi) {
+        seed = seed * 1664525u + 1013904223u;
+        return lo + (hi - lo) * static_cast<float>(seed >> 8) / static_cast<float>(1 << 24);
+    };
+    std::vector<std::uint8_t> visible(static_cast<std::size_t>(cells * cells * cells));
+    std::int64_t kept = 0, skipped = 0;
+    for (int trial = 0; trial < 1500; ++trial) {
+        // A ball of cells (centre and radius random; trial % 3 == 1 lets it reach the grid's
+        // sides; every 7th trial none).
+        detail::VisibleCells v;
+        const float lo = trial % 3 == 1 ? -2.0f : 1.0f;
+        const float hi = trial % 3 == 1 ? 10.0f : 7.0f;
+        const float centre[3] = {uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)};
+        const float radius = trial % 7 == 0 ? -1.0f : uniform(0.3f, 3.5f);
+        for (int z = 0; z < cells; ++z) {
+            for (int y = 0; y < cells; ++y) {
+                for (int x = 0; x < cells; ++x) {
+                    const float dx = static_cast<float>(x) + 0.5f - centre[0];
+                    const float dy = static_cast<float>(y) + 0.5f - centre[1];
+                    const float dz = static_cast<float>(z) + 0.5f - centre[2];
+                    const bool in = dx * dx + dy * dy + dz * dz <= radius * radius;
+                    visible[static_cast<std::size_t>(x + cells * (y + cells * z))] = in ? 1 : 0;
+                    if (in) {
+                        const std::int64_t c[3] = {x, y, z};
+                        v.add(c);
+                    }
+                }
+            }
+        }
+        detail::set_visible_cells(m, v);
+        m.target.step = trial % 2 == 0 ? 0.5f : 0.37f;
+        m.target.inv_step = 1.0f / m.target.step;
+        detail::GridRay r{};
+        for (int a = 0; a < 3; ++a) {
+            r.go[a] = uniform(-20.0f, 52.0f);
+            r.gd[a] = trial % 5 == a ? 0.0f : uniform(-1.0f, 1.0f);
+            r.inv_gd[a] = r.gd[a] != 0.0f ? 1.0f / r.gd[a] : 0.0f;
+        }
+        r.t_near = uniform(0.0f, 10.0f);
+        r.t_far = r.t_near + uniform(0.0f, 120.0f);
+        const auto num_full = static_cast<std::int64_t>((r.t_far - r.t_near) * m.target.inv_step);
+        std::int64_t begin = 0, end = 0;
+        detail::visible_samples(m, r, num_full, begin, end);
+        ASSERT_LE(0, begin);
+        ASSERT_LE(begin, end);
+        ASSERT_LE(end, num_full);
+        for (std::int64_t s = 0; s < num_full; ++s) {
+            const detail::MapCell c =
+                detail::locate_map(m, detail::sample_position(m.target, r, s));
+            if (visible[static_cast<std::size_t>(c.index)] != 0) {
+                ASSERT_TRUE(s >= begin && s < end)
+                    << "trial " << trial << ", sample " << s << " of " << num_full << " not in ["
+                    << begin << ", " << end << ")";
+            }
+            (s >= begin && s < end ? kept : skipped) += 1;
+        }
+    }
+    EXPECT_GT(skipped, kept);  // the span does skip samples
 }
 
 TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {

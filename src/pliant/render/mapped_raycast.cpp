@@ -554,9 +554,13 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
     const std::int32_t* extents = map.node_row_extents().data();
+    // Per layer of cells the extents of its visible cells (detail::VisibleCells), then their
+    // union.
+    std::vector<detail::VisibleCells> layer_cells(static_cast<std::size_t>(cz_n));
     parallel_for(
         cz_n,
         [&](std::int64_t cz) {
+            detail::VisibleCells& layer = layer_cells[static_cast<std::size_t>(cz)];
             for (std::int64_t cy = 0; cy < cy_n; ++cy) {
                 // Cells with both x nodes inside the 4 node rows' extents (the others have an
                 // empty node): [x0, x1).
@@ -611,10 +615,18 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                     m_occupancy[cell] = bits;
                     m_sub_occupied[cell] = sub;
                     m_visible[cell] = sub != 0 ? 1 : 0;
+                    if (sub != 0) {
+                        const std::int64_t at[3] = {cx, cy, cz};
+                        layer.add(at);
+                    }
                 }
             }
         },
         1);
+    m_visible_cells = detail::VisibleCells();
+    for (const detail::VisibleCells& layer : layer_cells) {
+        m_visible_cells.merge(layer);
+    }
     // The nodes padded to 4 floats (the AVX2 march loads a node pair as 8 floats).
     m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
     parallel_for(
@@ -735,6 +747,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
         }
     }
+    detail::set_visible_cells(m, m_visible_cells);
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
             m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();

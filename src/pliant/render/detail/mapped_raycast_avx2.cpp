@@ -26,8 +26,9 @@ struct alignas(32) MapLanes : Lanes {
     std::int32_t last_n[LANES];
 };
 
-// Puts ray p into lane l, marched from its first sample.
-void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
+// Puts ray p into lane l, marched over its samples [first, end) (visible_samples()).
+void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int32_t num_cells,
+               MapLanes& s, int l) {
     for (int a = 0; a < 3; ++a) {
         s.dir[a][l] = p.dir[a];
         s.go[a][l] = p.r.go[a];
@@ -38,8 +39,8 @@ void fill_lane(const PixelRay& p, std::int32_t num_cells, MapLanes& s, int l) {
     s.t_far[l] = p.r.t_far;
     s.margin[l] = p.r.margin;
     s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
-    s.n[l] = 0;
-    s.num_full[l] = static_cast<std::int32_t>(p.num_full);
+    s.n[l] = first;
+    s.num_full[l] = end;
     s.samples[l] = 0;
     s.last_n[l] = -2;
     const int octant = octant_of(p.r);
@@ -56,11 +57,86 @@ void clear_map_lane(MapLanes& s, int l) {
     s.last_n[l] = -2;
 }
 
-// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7 (begin_pixels8()), into out[l]. Returns bit
-// l set when lane l's ray hits the box with fewer than 2^30 segments (out[l] set), bit 8 + l when
-// it hits with more (for the scalar code), neither when it misses.
-PLIANT_AVX2_FN int setup_rays(const RayCastKernel& k, int x, int y, PixelRay* out) {
+// visible_samples() of 8 rays in floats (the span need only hold every sample of a visible
+// cell, not be the scalar code's: float rounding of the slabs' coordinates stays far below
+// VISIBLE_BOX_MARGIN and the sample of slack per side): into first and end; the whole
+// [0, num_full) for a lane where a slab's parameters are NaN.
+PLIANT_AVX2_INLINE void visible_samples8(const MappedKernel& m, const Rays8& rays, __m256i num_full,
+                                         __m256i& first, __m256i& end) {
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 t0 = rays.t_near;
+    __m256 t1 = rays.t_far;
+    __m256 unordered = zero;
+    __m256 outside = zero;  // a ray parallel to a slab, outside it
+    for (int k = 0; k < VISIBLE_SLABS; ++k) {
+        __m256 o = zero, d = zero;
+        for (int a = 0; a < 3; ++a) {
+            if (SLAB_SIGNS[k][a] > 0) {
+                o = _mm256_add_ps(o, rays.go[a]);
+                d = _mm256_add_ps(d, rays.gd[a]);
+            } else if (SLAB_SIGNS[k][a] < 0) {
+                o = _mm256_sub_ps(o, rays.go[a]);
+                d = _mm256_sub_ps(d, rays.gd[a]);
+            }
+        }
+        const __m256 lo = _mm256_set1_ps(m.visible_lo[k]);
+        const __m256 hi = _mm256_set1_ps(m.visible_hi[k]);
+        const __m256 parallel = _mm256_cmp_ps(d, zero, _CMP_EQ_OQ);
+        outside = _mm256_or_ps(
+            outside, _mm256_and_ps(parallel, _mm256_or_ps(_mm256_cmp_ps(o, lo, _CMP_LT_OQ),
+                                                          _mm256_cmp_ps(o, hi, _CMP_GT_OQ))));
+        const __m256 ta = _mm256_div_ps(_mm256_sub_ps(lo, o), d);
+        const __m256 tb = _mm256_div_ps(_mm256_sub_ps(hi, o), d);
+        const __m256 use = _mm256_andnot_ps(parallel, _mm256_cmp_ps(ta, tb, _CMP_ORD_Q));
+        unordered = _mm256_or_ps(unordered,
+                                 _mm256_andnot_ps(parallel, _mm256_cmp_ps(ta, tb, _CMP_UNORD_Q)));
+        t0 = _mm256_blendv_ps(t0, _mm256_max_ps(t0, _mm256_min_ps(ta, tb)), use);
+        t1 = _mm256_blendv_ps(t1, _mm256_min_ps(t1, _mm256_max_ps(ta, tb)), use);
+    }
+    const __m256 inv_step = _mm256_set1_ps(m.target.inv_step);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 top = _mm256_cvtepi32_ps(num_full);
+    const __m256 bottom = _mm256_set1_ps(-4.0f);
+    // Samples before ⌊x0⌋ − 1 and from ⌊x1⌋ + 2 on lie outside (the clamps keep the
+    // conversions in range; NaN lanes are replaced below).
+    const __m256 x0 = _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t0, rays.t_near), inv_step), half);
+    const __m256 x1 = _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(t1, rays.t_near), inv_step), half);
+    const __m256 c0 = _mm256_floor_ps(_mm256_min_ps(_mm256_max_ps(x0, bottom), top));
+    const __m256 c1 = _mm256_floor_ps(_mm256_min_ps(_mm256_max_ps(x1, bottom), top));
+    const __m256i zero_i = _mm256_setzero_si256();
+    __m256i f =
+        _mm256_max_epi32(_mm256_sub_epi32(_mm256_cvttps_epi32(c0), _mm256_set1_epi32(1)), zero_i);
+    __m256i e =
+        _mm256_min_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(c1), _mm256_set1_epi32(2)), num_full);
+    f = _mm256_min_epi32(f, num_full);
+    e = _mm256_max_epi32(e, f);
+    // A ray that misses the slabs (t0 > t1) or lies outside one: nothing; NaN: everything.
+    const __m256 missing = _mm256_or_ps(outside, _mm256_cmp_ps(t0, t1, _CMP_GT_OQ));
+    const __m256 whole = _mm256_or_ps(unordered, _mm256_or_ps(_mm256_cmp_ps(x0, x0, _CMP_UNORD_Q),
+                                                              _mm256_cmp_ps(x1, x1, _CMP_UNORD_Q)));
+    f = _mm256_blendv_epi8(f, num_full, as_int(missing));
+    e = _mm256_blendv_epi8(e, num_full, as_int(missing));
+    first = _mm256_blendv_epi8(f, zero_i, as_int(whole));
+    end = _mm256_blendv_epi8(e, num_full, as_int(whole));
+}
+
+// begin_pixel() for the 8 pixels (x + l, y), l = 0 … 7 (begin_pixels8()), into out[l], and with
+// skipping the span of each ray's samples that may lie in a visible cell (visible_samples8())
+// into first[l], end[l] (else 0, num_full). Returns bit l set when lane l's ray hits the box with
+// fewer than 2^30 segments (out[l] set), bit 8 + l when it hits with more (for the scalar code),
+// neither when it misses.
+PLIANT_AVX2_FN int setup_rays(const MappedKernel& m, int x, int y, PixelRay* out,
+                              std::int32_t* first, std::int32_t* end) {
+    const RayCastKernel& k = m.target;
     const Rays8 rays = begin_pixels8(k, x, y);
+    const __m256i num_full = _mm256_sub_epi32(rays.num_segments, _mm256_set1_epi32(1));
+    __m256i span_first = _mm256_setzero_si256();
+    __m256i span_end = num_full;
+    if (k.skipping) {
+        visible_samples8(m, rays, num_full, span_first, span_end);
+    }
+    store(first, span_first);
+    store(end, span_end);
     alignas(32) float v_dir[3][LANES], v_go[3][LANES], v_gd[3][LANES], inv_gd[3][LANES];
     alignas(32) float v_near[LANES], v_far[LANES], v_margin[LANES], v_length[LANES];
     alignas(32) std::int32_t v_segments[LANES];
@@ -371,11 +447,13 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     // 1. The tile's rays; those with samples to march are queued for the lanes.
     PixelRay rays[TILE * TILE];
     std::int32_t queue[TILE * TILE];
+    std::int32_t first[TILE * TILE], end[TILE * TILE];  // per pixel, visible_samples()
     int queue_size = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; x += LANES) {
             PixelRay group[LANES];
-            const int bits = setup_rays(k, x, y, group);
+            alignas(32) std::int32_t group_first[LANES], group_end[LANES];
+            const int bits = setup_rays(m, x, y, group, group_first, group_end);
             const int count = std::min(LANES, x1 - x);
             for (int l = 0; l < count; ++l) {
                 const int pixel = (y - y0) * tile_width + (x + l - x0);
@@ -386,12 +464,19 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                     colors[pixel] = k.background;
                     continue;
                 }
-                if (p.num_full == 0) {
+                std::int64_t span[2] = {0, p.num_full};
+                if ((bits >> l & 1) != 0) {
+                    span[0] = group_first[l];
+                    span[1] = group_end[l];
+                }
+                if (span[0] >= span[1]) {  // no sample to march (or none in a visible cell)
                     colors[pixel] = mapped_end<IS_RGBA>(m, p, Accumulated{}, samples);
                 } else if (p.num_full >= MAX_LANE_SAMPLES) {
                     const Accumulated c = mapped_march<IS_RGBA>(m, p, samples);
                     colors[pixel] = mapped_end<IS_RGBA>(m, p, c, samples);
                 } else {
+                    first[pixel] = static_cast<std::int32_t>(span[0]);
+                    end[pixel] = static_cast<std::int32_t>(span[1]);
                     queue[queue_size++] = pixel;
                 }
             }
@@ -412,7 +497,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         if (slots.next < queue_size) {
             const int pixel = queue[slots.next++];
             const PixelRay& p = rays[pixel];
-            fill_lane(p, num_cells, s, l);
+            fill_lane(p, first[pixel], end[pixel], num_cells, s, l);
             slots.take(l, pixel, zero_axes_of(p.r) != 0);
             return;
         }

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 
 #include "pliant/core/host_device.hpp"
@@ -59,7 +60,13 @@ struct MappedKernel {
     // Per map cell: bit sub_cell_of() set when some sample in that sub-cell may have opacity
     // (0 for a cell that is not visible).
     const std::uint8_t* sub_occupied = nullptr;
-    const std::uint8_t* empty_cube[8] = {};   // per octant, per map cell (empty_cubes())
+    const std::uint8_t* empty_cube[8] = {};  // per octant, per map cell (empty_cubes())
+    // The slabs of the visible map cells in target grid coordinates t (VISIBLE_SLABS: e_k · t
+    // for the 3 axes and the 4 diagonals, set_visible_cells()), widened by VISIBLE_BOX_MARGIN per
+    // axis; empty (lo > hi) when no cell is visible. With skipping, a sample outside them lies
+    // in a cell that is not visible.
+    float visible_lo[7] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    float visible_hi[7] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     float source_hi[3] = {0.0f, 0.0f, 0.0f};  // the source box [−0.5, n − 0.5] per axis
     // Shading: the stored source gradient, 4 GradientValue per source voxel (source_gradient());
     // null when not shading.
@@ -269,6 +276,142 @@ PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const Ma
     return out;
 }
 
+// Target grid units per axis MappedKernel's slabs of the visible cells are widened by (far above
+// the float rounding of sample positions below a few thousand).
+inline constexpr float VISIBLE_BOX_MARGIN = 1.0f / 16.0f;
+
+// The directions e_k of the visible cells' slabs: the 3 axes, then the 4 diagonals (a 14-sided
+// polytope around the visible cells; a box alone leaves its corners, empty around a rounded
+// body, to the empty-cube jumps).
+inline constexpr int VISIBLE_SLABS = 7;
+inline constexpr int SLAB_SIGNS[VISIBLE_SLABS][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 1},
+                                                     {1, 1, -1}, {1, -1, 1}, {1, -1, -1}};
+
+// The extents of a set of map cells along the slabs: per slab k the smallest and largest
+// L_k(c) = Σ_a (s_ka > 0 ? c_a : s_ka < 0 ? −c_a − 1 : 0) over the cells c (s = SLAB_SIGNS),
+// so that every point t of cell c (B target voxels per cell) has e_k · t in [B L_k(c),
+// B (L_k(c) + |s_k|₁)].
+struct VisibleCells {
+    std::int64_t lo[VISIBLE_SLABS];
+    std::int64_t hi[VISIBLE_SLABS];
+    VisibleCells() {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            lo[k] = std::numeric_limits<std::int64_t>::max();
+            hi[k] = std::numeric_limits<std::int64_t>::min();
+        }
+    }
+    bool empty() const { return lo[0] > hi[0]; }
+    void add(const std::int64_t c[3]) {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            std::int64_t l = 0;
+            for (int a = 0; a < 3; ++a) {
+                l += SLAB_SIGNS[k][a] > 0 ? c[a] : SLAB_SIGNS[k][a] < 0 ? -c[a] - 1 : 0;
+            }
+            lo[k] = std::min(lo[k], l);
+            hi[k] = std::max(hi[k], l);
+        }
+    }
+    void merge(const VisibleCells& o) {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            lo[k] = std::min(lo[k], o.lo[k]);
+            hi[k] = std::max(hi[k], o.hi[k]);
+        }
+    }
+};
+
+// Sets m.visible_lo / visible_hi from the visible cells v (uses m.b and m.cells). The clamp of
+// locate_map() puts samples beyond the grid into its border cells: an axis slab is open (−∞ /
+// +∞) on a side where a visible cell lies at the grid's border, and the diagonal slabs are
+// open when any does.
+inline void set_visible_cells(MappedKernel& m, const VisibleCells& v) {
+    const float inf = std::numeric_limits<float>::infinity();
+    if (v.empty()) {
+        for (int k = 0; k < VISIBLE_SLABS; ++k) {
+            m.visible_lo[k] = inf;
+            m.visible_hi[k] = -inf;
+        }
+        return;
+    }
+    bool border = false;
+    for (int k = 0; k < VISIBLE_SLABS; ++k) {
+        const int width =
+            std::abs(SLAB_SIGNS[k][0]) + std::abs(SLAB_SIGNS[k][1]) + std::abs(SLAB_SIGNS[k][2]);
+        const float margin = static_cast<float>(width) * VISIBLE_BOX_MARGIN;
+        m.visible_lo[k] = static_cast<float>(v.lo[k]) * m.b - margin;
+        m.visible_hi[k] = static_cast<float>(v.hi[k] + width) * m.b + margin;
+        if (k < 3) {
+            if (v.lo[k] == 0) {
+                m.visible_lo[k] = -inf;
+                border = true;
+            }
+            if (v.hi[k] == m.cells[k] - 1) {
+                m.visible_hi[k] = inf;
+                border = true;
+            }
+        } else if (border) {
+            m.visible_lo[k] = -inf;
+            m.visible_hi[k] = inf;
+        }
+    }
+}
+
+// The samples [first, end) of ray r (num_full full samples) that may lie in the slabs of the
+// visible cells (MappedKernel::visible_lo / visible_hi); with skipping, the others lie in cells
+// that are not visible, which the march passes over without classifying them, so marching
+// [first, end) alone gives the same colour and samples. The ray's parameter interval in the
+// slabs, then the samples whose midpoints t_near + (m + ½)Δs lie in it, one more on each side
+// (rounding). Returns the whole [0, num_full) when the interval is not finite.
+PLIANT_HOST_DEVICE inline void visible_samples(const MappedKernel& m, const GridRay& r,
+                                               std::int64_t num_full, std::int64_t& first,
+                                               std::int64_t& end) {
+    first = 0;
+    end = num_full;
+    double t0 = r.t_near;
+    double t1 = r.t_far;
+    for (int k = 0; k < VISIBLE_SLABS; ++k) {
+        const double lo = m.visible_lo[k];
+        const double hi = m.visible_hi[k];
+        if (!(lo <= hi)) {
+            first = end = num_full;  // no visible cell
+            return;
+        }
+        double o = 0.0, d = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            o += SLAB_SIGNS[k][a] * static_cast<double>(r.go[a]);
+            d += SLAB_SIGNS[k][a] * static_cast<double>(r.gd[a]);
+        }
+        if (d == 0.0) {
+            if (o < lo || o > hi) {
+                first = end = num_full;
+                return;
+            }
+            continue;
+        }
+        const double ta = (lo - o) / d;
+        const double tb = (hi - o) / d;
+        t0 = std::max(t0, std::min(ta, tb));
+        t1 = std::min(t1, std::max(ta, tb));
+    }
+    if (t0 > t1) {
+        first = end = num_full;  // the ray misses the slabs
+        return;
+    }
+    if (!(t0 <= t1)) {
+        return;  // NaN: the whole ray
+    }
+    const double step = m.target.step;
+    const double x0 = (t0 - r.t_near) / step - 0.5;
+    const double x1 = (t1 - r.t_near) / step - 0.5;
+    if (std::isfinite(x0) && x0 > 1.0) {
+        first = std::min(num_full, static_cast<std::int64_t>(std::min(x0, 1e18)) - 1);
+    }
+    if (std::isfinite(x1)) {
+        end = x1 < 0.0 ? std::min<std::int64_t>(num_full, 2)
+                       : std::min(num_full, static_cast<std::int64_t>(std::min(x1, 1e18)) + 2);
+    }
+    end = std::max(end, first);
+}
+
 // jump() for map cells: the first sample past the cube of `side` empty map cells that has c as
 // its corner and extends along the ray, at least n + 1.
 PLIANT_HOST_DEVICE inline std::int64_t map_jump(const MappedKernel& m, const GridRay& r,
@@ -344,7 +487,11 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
     }
     Accumulated c;
     std::int64_t n = 0;
-    while (n < p.num_full) {
+    std::int64_t end = p.num_full;
+    if (k.skipping) {
+        visible_samples(m, r, p.num_full, n, end);
+    }
+    while (n < end) {
         const MapCell cell = locate_map(m, sample_position(k, r, n));
         if (k.skipping) {
             int side = cubes[0][cell.index];
@@ -352,11 +499,11 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
                 side = std::max<int>(side, cubes[q][cell.index]);
             }
             if (side > 0) {
-                n = map_jump(m, r, cell, side, n, p.num_full);
+                n = map_jump(m, r, cell, side, n, end);
                 continue;
             }
             if (!sub_cell_occupied(m, cell)) {
-                n = sub_cell_jump(m, r, cell, n, p.num_full);
+                n = sub_cell_jump(m, r, cell, n, end);
                 continue;
             }
         } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
