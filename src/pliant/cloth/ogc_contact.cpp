@@ -183,6 +183,25 @@ void OgcContact::detect(std::span<const Vec3d> x) {
             m_planes[slot] = {side, dot(side, middle) + keep};
         }
     }
+    // The planes a vertex's ball can reach: a plane whose half-space holds the whole ball (its
+    // value at the centre, x_v here, at least b, with a relative margin far above rounding) never
+    // truncates a move that the ball has not truncated first, nor rejects a point inside the
+    // ball, so truncate() and feasible() skip it. A larger query radius adds many such pairs (the
+    // in-plane neighbours one ring beyond a vertex's triangles), which cost nothing here then.
+    m_plane_first.assign(m_num_vertices + 1, 0);
+    std::size_t kept_planes = 0;
+    const double reach = m_ball_radius * (1.0 + 1e-6);
+    for (std::size_t v = 0; v < m_num_vertices; ++v) {
+        m_plane_first[v] = static_cast<std::int32_t>(kept_planes);
+        for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+            const Plane& plane = m_planes[static_cast<std::size_t>(k)];
+            if (!(dot(plane.normal, x[v]) - plane.offset > reach)) {
+                m_planes[kept_planes++] = plane;
+            }
+        }
+    }
+    m_plane_first[m_num_vertices] = static_cast<std::int32_t>(kept_planes);
+    m_planes.resize(kept_planes);
     m_contact_vertices.clear();
     for (std::size_t v = 0; v < m_num_vertices; ++v) {
         if (m_pair_first[v + 1] > m_pair_first[v]) {
@@ -248,7 +267,7 @@ bool OgcContact::truncate(std::size_t v, const Vec3d& from, Vec3d& x) const {
     }
     const Vec3d local_start = start - m_shift;
     const Vec3d local_end = x - m_shift;
-    for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+    for (auto k = m_plane_first[v]; k < m_plane_first[v + 1]; ++k) {
         const Plane& plane = m_planes[static_cast<std::size_t>(k)];
         const double end = dot(plane.normal, local_end) - plane.offset;
         if (end < 0.0) {
@@ -268,7 +287,7 @@ bool OgcContact::feasible(std::size_t v, const Vec3d& x) const {
     if (norm(x - m_detected[v] - m_shift) > m_ball_radius + slop) {
         return false;
     }
-    for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+    for (auto k = m_plane_first[v]; k < m_plane_first[v + 1]; ++k) {
         const Plane& plane = m_planes[static_cast<std::size_t>(k)];
         if (dot(plane.normal, x - m_shift) - plane.offset < -slop) {
             return false;

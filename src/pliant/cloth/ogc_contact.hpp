@@ -213,7 +213,8 @@ private:
     std::vector<double> m_pair_distances;  // per pair, its distance at the detection
     std::vector<double> m_deviations;      // project(): |x_v − (detected_v + S)| per vertex
     std::vector<std::uint8_t> m_close;     // project(): per pair, closer than r
-    // Per vertex (CSR): its planes, and its pairs as pair index · 4 + its place in the pair.
+    // Per vertex (CSR): the planes its ball can reach (of its pairs', in pair order), and its
+    // pairs as pair index · 4 + its place in the pair.
     std::vector<std::int32_t> m_plane_first;
     std::vector<Plane> m_planes;
     std::vector<std::int32_t> m_pair_first;
