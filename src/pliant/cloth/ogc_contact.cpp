@@ -93,7 +93,22 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     // Built from scratch at every detection, so that the pairs' order (and the contact forces'
     // summation order) depends on x only: a resumed run detects the same.
     m_broad_phase.request_rebuild();
-    const collision::FeaturePairs& found = m_broad_phase.update(x, x, 0.5 * m_query_radius);
+    // Triangle pairs whose separating-axis lower bound on their distance (detail/pair_bounds.hpp)
+    // is at least r_q, with a relative margin far above the bound's few ulps of rounding, hold no
+    // feature pair within r_q: they emit none (the pairs kept and their order do not change).
+    const double far = m_query_radius * (1.0 + 1e-9);
+    const auto within_reach = [&](std::int32_t a, std::int32_t b) {
+        const geometry::Triangle& ta = m_triangles[static_cast<std::size_t>(a)];
+        const geometry::Triangle& tb = m_triangles[static_cast<std::size_t>(b)];
+        const Vec3d pa[3] = {x[static_cast<std::size_t>(ta[0])], x[static_cast<std::size_t>(ta[1])],
+                             x[static_cast<std::size_t>(ta[2])]};
+        const Vec3d pb[3] = {x[static_cast<std::size_t>(tb[0])], x[static_cast<std::size_t>(tb[1])],
+                             x[static_cast<std::size_t>(tb[2])]};
+        return detail::centroid_axis_gap(pa, pb) < far;
+    };
+    const collision::SelfCollisionBroadPhase<double>::TrianglePairFilter filter(within_reach);
+    const collision::FeaturePairs& found =
+        m_broad_phase.update(x, x, 0.5 * m_query_radius, &filter);
     if (m_broad_phase.pair_limit_exceeded()) {
         m_has_detection = false;
         throw InvalidInput(fmt::format(
@@ -109,11 +124,9 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_geometry.resize(static_cast<std::size_t>(total));
     std::vector<Pair> candidates(static_cast<std::size_t>(total));
     // Closest points: geometry[i] = {point of the first feature, of the second, normal from the
-    // second toward the first}. Nearly every candidate is an in-plane neighbour beyond the query
-    // radius (the boxes meet two rings out): a separating-axis lower bound on its distance at
-    // least r_q (with a relative margin far above the bound's few ulps of rounding) rejects it
-    // without the exact distance (detail/pair_bounds.hpp); the kept pairs are the same.
-    const double far = m_query_radius * (1.0 + 1e-9);
+    // second toward the first}. Most candidates are in-plane neighbours beyond the query radius
+    // (the boxes meet two rings out): the same separating-axis bound on the features rejects
+    // them without the exact distance; the kept pairs are the same.
     parallel_for(
         total,
         [&](std::int64_t i) {
