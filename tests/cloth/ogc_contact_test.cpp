@@ -116,6 +116,83 @@ TEST(OgcContact, DetectsExactlyThePairsWithinTheQueryRadius) {
     EXPECT_EQ(found, expected);
 }
 
+// Truncation against the ball and every detected pair's plane, recomputed here from the pairs'
+// closest points at the detection: equal to OgcContact's, which skips the planes its ball cannot
+// reach. Layers 4 mm apart, jittered by 2 mm: pairs from 0 to 6 mm apart, their planes 0 to 2.7 mm
+// from the vertices against a 1.5 mm ball.
+TEST(OgcContact, TruncationMatchesTheBallAndEveryPlane) {
+    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
+    std::mt19937 random(5);
+    std::uniform_real_distribution<double> jitter(-0.002, 0.002);
+    for (Vec3d& p : sheet.positions) {
+        const double u = p.x / 0.04 + 1.5;
+        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
+        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
+        p = {along * 0.04 + jitter(random), p.y + jitter(random), 0.004 * layer + jitter(random)};
+    }
+    const std::vector<Vec3d>& x = sheet.positions;
+    OgcContact contact(sheet.triangles, x.size(), OgcOptions{}, 0.003, 100.0);
+    contact.detect(x);
+    const double ball = contact.ball_radius();
+    // Every vertex's planes: {normal on its side, offset}.
+    std::vector<std::vector<std::pair<Vec3d, double>>> planes(x.size());
+    int beyond_ball = 0;
+    for (const OgcContact::Pair& pair : contact.pairs()) {
+        const std::array<Vec3d, 4> p = {x[pair.v[0]], x[pair.v[1]], x[pair.v[2]], x[pair.v[3]]};
+        Vec3d first;
+        Vec3d second;
+        Vec3d normal;
+        double distance = 0.0;
+        if (pair.is_edge_edge) {
+            const auto prox = collision::segment_segment_proximity(p[0], p[1], p[2], p[3]);
+            first = p[0] + (p[1] - p[0]) * prox.s;
+            second = p[2] + (p[3] - p[2]) * prox.t;
+            normal = prox.normal;
+            distance = prox.distance;
+        } else {
+            const auto prox = collision::point_triangle_proximity(p[0], p[1], p[2], p[3]);
+            first = p[0];
+            second = p[0] - prox.normal * prox.distance;
+            normal = prox.normal;
+            distance = prox.distance;
+        }
+        const Vec3d middle = (first + second) * 0.5;
+        const double keep = OgcContact::PLANE_MARGIN * 0.5 * distance;
+        for (int k = 0; k < 4; ++k) {
+            const Vec3d side = k < (pair.is_edge_edge ? 2 : 1) ? normal : normal * -1.0;
+            const double offset = dot(side, middle) + keep;
+            planes[static_cast<std::size_t>(pair.v[k])].emplace_back(side, offset);
+            beyond_ball += dot(side, p[static_cast<std::size_t>(k)]) - offset > ball ? 1 : 0;
+        }
+    }
+    EXPECT_GT(beyond_ball, 100);
+    std::uniform_real_distribution<double> move(-0.004, 0.004);
+    int held_by_planes = 0;
+    for (int trial = 0; trial < 20; ++trial) {
+        for (std::size_t v = 0; v < x.size(); ++v) {
+            const Vec3d target = x[v] + Vec3d{move(random), move(random), move(random)};
+            // The farthest point of the segment from x_v inside the ball and every half-space.
+            const Vec3d step = target - x[v];
+            double t = norm(step) > ball ? ball / norm(step) : 1.0;
+            double t_ball = t;
+            for (const auto& [normal, offset] : planes[v]) {
+                const double end = dot(normal, target) - offset;
+                if (end < 0.0) {
+                    const double begin = dot(normal, x[v]) - offset;
+                    t = std::min(t, begin > 0.0 ? begin / (begin - end) : 0.0);
+                }
+            }
+            held_by_planes += t < t_ball ? 1 : 0;
+            Vec3d truncated = target;
+            contact.truncate(v, x[v], truncated);
+            const Vec3d expected = x[v] + step * t;
+            ASSERT_LT(norm(truncated - expected), 1e-12) << v << " " << trial;
+            ASSERT_TRUE(contact.feasible(v, truncated));
+        }
+    }
+    EXPECT_GT(held_by_planes, 100);
+}
+
 TEST(OgcContact, ShiftMovesTheFeasibleSetsTogether) {
     TwoTriangles t;
     OgcContact contact(t.triangles, t.x.size(), OgcOptions{}, 0.005, 100.0);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pliant/cloth/detail/pair_bounds.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/collision/segment_segment.hpp"
 #include "pliant/core/error.hpp"
@@ -92,7 +93,22 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     // Built from scratch at every detection, so that the pairs' order (and the contact forces'
     // summation order) depends on x only: a resumed run detects the same.
     m_broad_phase.request_rebuild();
-    const collision::FeaturePairs& found = m_broad_phase.update(x, x, 0.5 * m_query_radius);
+    // Triangle pairs whose separating-axis lower bound on their distance (detail/pair_bounds.hpp)
+    // is at least r_q, with a relative margin far above the bound's few ulps of rounding, hold no
+    // feature pair within r_q: they emit none (the pairs kept and their order do not change).
+    const double far = m_query_radius * (1.0 + 1e-9);
+    const auto within_reach = [&](std::int32_t a, std::int32_t b) {
+        const geometry::Triangle& ta = m_triangles[static_cast<std::size_t>(a)];
+        const geometry::Triangle& tb = m_triangles[static_cast<std::size_t>(b)];
+        const Vec3d pa[3] = {x[static_cast<std::size_t>(ta[0])], x[static_cast<std::size_t>(ta[1])],
+                             x[static_cast<std::size_t>(ta[2])]};
+        const Vec3d pb[3] = {x[static_cast<std::size_t>(tb[0])], x[static_cast<std::size_t>(tb[1])],
+                             x[static_cast<std::size_t>(tb[2])]};
+        return detail::centroid_axis_gap(pa, pb) < far;
+    };
+    const collision::SelfCollisionBroadPhase<double>::TrianglePairFilter filter(within_reach);
+    const collision::FeaturePairs& found =
+        m_broad_phase.update(x, x, 0.5 * m_query_radius, &filter);
     if (m_broad_phase.pair_limit_exceeded()) {
         m_has_detection = false;
         throw InvalidInput(fmt::format(
@@ -108,7 +124,9 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_geometry.resize(static_cast<std::size_t>(total));
     std::vector<Pair> candidates(static_cast<std::size_t>(total));
     // Closest points: geometry[i] = {point of the first feature, of the second, normal from the
-    // second toward the first}.
+    // second toward the first}. Most candidates are in-plane neighbours beyond the query radius
+    // (the boxes meet two rings out): the same separating-axis bound on the features rejects
+    // them without the exact distance; the kept pairs are the same.
     parallel_for(
         total,
         [&](std::int64_t i) {
@@ -119,9 +137,15 @@ void OgcContact::detect(std::span<const Vec3d> x) {
                 const geometry::Triangle& t = triangles[static_cast<std::size_t>(vf.face)];
                 pair = {{vf.vertex, t[0], t[1], t[2]}, false};
                 const Vec3d& p = x[static_cast<std::size_t>(vf.vertex)];
-                const auto prox = collision::point_triangle_proximity(
-                    p, x[static_cast<std::size_t>(t[0])], x[static_cast<std::size_t>(t[1])],
-                    x[static_cast<std::size_t>(t[2])]);
+                const Vec3d& a = x[static_cast<std::size_t>(t[0])];
+                const Vec3d& b = x[static_cast<std::size_t>(t[1])];
+                const Vec3d& c = x[static_cast<std::size_t>(t[2])];
+                const double gap = detail::centroid_axis_gap<false>(p, a, b, c);
+                if (gap >= far) {
+                    m_distances[slot] = gap;
+                    return;
+                }
+                const auto prox = collision::point_triangle_proximity(p, a, b, c);
                 m_distances[slot] = prox.distance;
                 m_geometry[slot] = {p, p - prox.normal * prox.distance, prox.normal};
             } else {
@@ -134,6 +158,11 @@ void OgcContact::detect(std::span<const Vec3d> x) {
                 const Vec3d& p1 = x[static_cast<std::size_t>(a[1])];
                 const Vec3d& q0 = x[static_cast<std::size_t>(b[0])];
                 const Vec3d& q1 = x[static_cast<std::size_t>(b[1])];
+                const double gap = detail::centroid_axis_gap<true>(p0, p1, q0, q1);
+                if (gap >= far) {
+                    m_distances[slot] = gap;
+                    return;
+                }
                 const auto prox = collision::segment_segment_proximity(p0, p1, q0, q1);
                 m_distances[slot] = prox.distance;
                 m_geometry[slot] = {p0 + (p1 - p0) * prox.s, q0 + (q1 - q0) * prox.t, prox.normal};
@@ -183,6 +212,25 @@ void OgcContact::detect(std::span<const Vec3d> x) {
             m_planes[slot] = {side, dot(side, middle) + keep};
         }
     }
+    // The planes a vertex's ball can reach: a plane whose half-space holds the whole ball (its
+    // value at the centre, x_v here, at least b, with a relative margin far above rounding) never
+    // truncates a move that the ball has not truncated first, nor rejects a point inside the
+    // ball, so truncate() and feasible() skip it. A larger query radius adds many such pairs (the
+    // in-plane neighbours one ring beyond a vertex's triangles), which cost nothing here then.
+    m_plane_first.assign(m_num_vertices + 1, 0);
+    std::size_t kept_planes = 0;
+    const double reach = m_ball_radius * (1.0 + 1e-6);
+    for (std::size_t v = 0; v < m_num_vertices; ++v) {
+        m_plane_first[v] = static_cast<std::int32_t>(kept_planes);
+        for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+            const Plane& plane = m_planes[static_cast<std::size_t>(k)];
+            if (!(dot(plane.normal, x[v]) - plane.offset > reach)) {
+                m_planes[kept_planes++] = plane;
+            }
+        }
+    }
+    m_plane_first[m_num_vertices] = static_cast<std::int32_t>(kept_planes);
+    m_planes.resize(kept_planes);
     m_contact_vertices.clear();
     for (std::size_t v = 0; v < m_num_vertices; ++v) {
         if (m_pair_first[v + 1] > m_pair_first[v]) {
@@ -248,7 +296,7 @@ bool OgcContact::truncate(std::size_t v, const Vec3d& from, Vec3d& x) const {
     }
     const Vec3d local_start = start - m_shift;
     const Vec3d local_end = x - m_shift;
-    for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+    for (auto k = m_plane_first[v]; k < m_plane_first[v + 1]; ++k) {
         const Plane& plane = m_planes[static_cast<std::size_t>(k)];
         const double end = dot(plane.normal, local_end) - plane.offset;
         if (end < 0.0) {
@@ -268,7 +316,7 @@ bool OgcContact::feasible(std::size_t v, const Vec3d& x) const {
     if (norm(x - m_detected[v] - m_shift) > m_ball_radius + slop) {
         return false;
     }
-    for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+    for (auto k = m_plane_first[v]; k < m_plane_first[v + 1]; ++k) {
         const Plane& plane = m_planes[static_cast<std::size_t>(k)];
         if (dot(plane.normal, x - m_shift) - plane.offset < -slop) {
             return false;

@@ -6,7 +6,9 @@
 //
 //   detection (detect(x), x intersection-free): every non-incident vertex-face and edge-edge
 //      pair (collision/self_broad_phase.hpp: LBVH + representative triangles + orphan sets, boxes
-//      grown by r_q / 2) whose distance d at x is below the query radius r_q = query_factor · r.
+//      grown by r_q / 2) whose distance d at x is below the query radius r_q = query_factor · r
+//      (triangle pairs, then feature pairs, whose separating-axis lower bound on the distance,
+//      detail/pair_bounds.hpp, reaches r_q are dropped before any exact distance).
 //      Each kept pair has a separating plane: normal n̂ along the closest points (from the second
 //      feature to the first), through their midpoint c; every vertex of the first feature lies at
 //      least d / 2 on n̂'s side, every vertex of the second at least d / 2 on the other (the plane
@@ -213,7 +215,8 @@ private:
     std::vector<double> m_pair_distances;  // per pair, its distance at the detection
     std::vector<double> m_deviations;      // project(): |x_v − (detected_v + S)| per vertex
     std::vector<std::uint8_t> m_close;     // project(): per pair, closer than r
-    // Per vertex (CSR): its planes, and its pairs as pair index · 4 + its place in the pair.
+    // Per vertex (CSR): the planes its ball can reach (of its pairs', in pair order), and its
+    // pairs as pair index · 4 + its place in the pair.
     std::vector<std::int32_t> m_plane_first;
     std::vector<Plane> m_planes;
     std::vector<std::int32_t> m_pair_first;
