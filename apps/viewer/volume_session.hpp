@@ -30,6 +30,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -121,11 +122,15 @@ public:
     // threads free for render()): start_step returns at once (false, doing nothing, while a
     // frame is in flight) and finish_step publishes the frame when it is done (block: waits) —
     // the resampled volume is double-buffered, so the current one can be ray-cast meanwhile.
-    // Both give the same frames bit for bit. Rethrows what the frame threw.
+    // Both give the same frames bit for bit. Rethrows what the frame threw. start_step returns
+    // once the frame runs on its thread: the caller's parallel loops cannot take that thread
+    // from it (the frame overlaps them instead of waiting for them to end).
     void step();
     bool start_step();
     bool finish_step(bool block);
     bool is_stepping() const { return m_task.is_started(); }
+    // True when no frame is in flight or it has ended; the one call that any thread may make.
+    bool is_frame_done() const { return m_task.is_done(); }
     void reset_deformation();  // back to rest, time 0, the driver ramping in again
     // Dragging picks on the published vertices; the body gets the drag now, or at the next
     // start_step while a frame is in flight.
@@ -198,7 +203,8 @@ private:
     double m_drag_radius = 0.0;  // world units
     bool m_drag_changed = false;
     unsigned long long m_generation = 0;
-    BackgroundTask m_task{1};  // last: destroyed first, waiting for a frame in flight
+    std::atomic<bool> m_frame_begun{false};  // the frame in flight has begun on its thread
+    BackgroundTask m_task{1};                // last: destroyed first, waiting for a frame in flight
 };
 
 }  // namespace pliant::viewer

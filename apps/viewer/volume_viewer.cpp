@@ -76,6 +76,9 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     Stopwatch since_scroll;
     bool scrolled = false;
     Mean step_ms, resample_ms, prepare_ms, render_ms;
+    // The main thread's share of a frame: the wait for the deformed frame in flight, the image's
+    // texture upload, the drawing (image and overlay) and the buffer swap.
+    Mean wait_ms, upload_ms, draw_ms, swap_ms;
     std::int64_t full_frames = 0, preview_frames = 0;
     bool dragging = false;
     render::Image image;
@@ -138,8 +141,11 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
                 step_ms.add(session.stats().step_ms);
                 resample_ms.add(session.stats().resample_ms);
             };
-            if (session.is_stepping() &&
-                session.finish_step(run.sync || (!input && !state.paused))) {
+            const Stopwatch waiting;
+            const bool published =
+                session.is_stepping() && session.finish_step(run.sync || (!input && !state.paused));
+            if (published) {
+                wait_ms.add(waiting.elapsed_ms());
                 on_published();
             }
             if (!session.is_stepping() && (!state.paused || state.step_requested)) {
@@ -164,7 +170,9 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
         if (rendered) {
             const render::Camera camera = controller.camera(w, h);
             session.render(camera, image);
+            const Stopwatch uploading;
             drawer.upload(image);
+            upload_ms.add(uploading.elapsed_ms());
             shown = wanted;
             render_ms.add(session.stats().render_ms);
             if (session.stats().prepared) {
@@ -178,6 +186,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
                 last_camera = camera;
             }
         }
+        const Stopwatch drawing;
         glViewport(0, 0, window_width, height);
         glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
         glClear(GL_COLOR_BUFFER_BIT);
@@ -192,7 +201,10 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
             window.end_ui_frame();
         }
         check_gl("volume frame");
+        draw_ms.add(drawing.elapsed_ms());
+        const Stopwatch swapping;
         window.swap_buffers();
+        swap_ms.add(swapping.elapsed_ms());
         clock.tick();
     }
 
@@ -216,6 +228,10 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     result["mean_resample_ms"] = resample_ms.value();
     result["mean_prepare_ms"] = prepare_ms.value();
     result["mean_render_ms"] = render_ms.value();
+    result["mean_wait_ms"] = wait_ms.value();
+    result["mean_upload_ms"] = upload_ms.value();
+    result["mean_draw_ms"] = draw_ms.value();
+    result["mean_swap_ms"] = swap_ms.value();
     return result;
 }
 

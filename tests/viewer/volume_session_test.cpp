@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include "pliant/core/error.hpp"
+#include "pliant/core/parallel.hpp"
 #include "pliant/volume/clean.hpp"
 #include "pliant/volume/generate.hpp"
 
@@ -200,6 +203,30 @@ TEST(VolumeSession, BackgroundFramesPublishTheSameVolumes) {
     background.set_stiffness(0.9);
     EXPECT_FALSE(background.is_stepping());
     EXPECT_NEAR(background.time(), 5.0 / 24.0, 1e-12);
+}
+
+// A started frame runs on its own thread: it ends while every thread of the caller's parallel
+// loop waits for it (a frame that waited for a worker taken by the loop would never end).
+TEST(VolumeSession, StartedFramesRunBesideTheCallersLoops) {
+    const Volume phantom = volume::shepp_logan_3d({16, 16, 16});
+    VolumeSessionOptions options{.tf = "mri-brain", .deform = true};
+    options.driver.kind = DriverKind::wave;
+    VolumeSession session(phantom, options);
+    set_num_threads(2);
+    for (int f = 1; f <= 3; ++f) {
+        ASSERT_TRUE(session.start_step());
+        parallel_for(
+            2,
+            [&](std::int64_t) {
+                while (!session.is_frame_done()) {
+                    std::this_thread::yield();
+                }
+            },
+            1);
+        EXPECT_TRUE(session.finish_step(false)) << "frame " << f;
+    }
+    set_num_threads(0);
+    EXPECT_NEAR(session.time(), 3.0 / 24.0, 1e-12);
 }
 
 // resample = map: the frames through their inverse maps, double-buffered like the resampled
