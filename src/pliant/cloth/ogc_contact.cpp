@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "pliant/cloth/detail/pair_bounds.hpp"
 #include "pliant/collision/point_triangle.hpp"
@@ -232,9 +233,20 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_plane_first[m_num_vertices] = static_cast<std::int32_t>(kept_planes);
     m_planes.resize(kept_planes);
     m_contact_vertices.clear();
+    m_slack.assign(m_num_vertices, 0.0);
     for (std::size_t v = 0; v < m_num_vertices; ++v) {
         if (m_pair_first[v + 1] > m_pair_first[v]) {
             m_contact_vertices.push_back(static_cast<std::int32_t>(v));
+            // project()'s per-vertex slack: half the least margin d − r of v's pairs, less a
+            // rounding margin of 1e-14 d (0 or less: v's pairs are always tested).
+            double slack = std::numeric_limits<double>::infinity();
+            for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+                const auto p =
+                    static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(k)]) / 4;
+                const double d = m_pair_distances[p];
+                slack = std::min(slack, 0.5 * (d - m_radius) - 1e-14 * d);
+            }
+            m_slack[v] = slack;
         }
     }
     m_detected.assign(x.begin(), x.end());
@@ -387,20 +399,44 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
         }
         return g;
     };
+    // A pair is tested only when one of its vertices deviates from its shifted detection
+    // position by at least its slack (detect(): half the least margin d − r of its pairs, less a
+    // rounding margin). A pair none of whose vertices does is inactive: with first, second < (d −
+    // r) / 2 − 1e-14 d each, d − first − second > r + 2e-14 d, so the per-pair skip below (whose
+    // evaluation rounds by a few ulps of d) skips it too, and a feature's distance moves by at
+    // most its vertices' largest deviation (every point of a feature is a convex combination of
+    // its vertices; a common translation S leaves distances unchanged): it stays at least r
+    // apart. The pairs tested and pushed, and their order, are those of a test of every pair.
     m_deviations.resize(m_num_vertices);
+    m_hot.resize(m_num_vertices);
     parallel_for(
         static_cast<std::int64_t>(m_contact_vertices.size()),
         [&](std::int64_t i) {
             const auto v =
                 static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
             m_deviations[v] = norm(x[v] - m_detected[v] - m_shift);
+            m_hot[v] = m_deviations[v] < m_slack[v] ? 0 : 1;
         },
         PAIR_GRAIN);
-    m_close.resize(m_pairs.size());
+    m_close.assign(m_pairs.size(), 0);
+    for (const std::int32_t v : m_contact_vertices) {
+        const auto u = static_cast<std::size_t>(v);
+        if (m_hot[u] != 0) {
+            for (auto r = m_pair_first[u]; r < m_pair_first[u + 1]; ++r) {
+                m_close[static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(r)]) / 4] = 1;
+            }
+        }
+    }
+    m_tested.clear();
+    for (std::size_t i = 0; i < m_pairs.size(); ++i) {
+        if (m_close[i] != 0) {
+            m_tested.push_back(static_cast<std::int32_t>(i));
+        }
+    }
     parallel_for(
-        static_cast<std::int64_t>(m_pairs.size()),
+        static_cast<std::int64_t>(m_tested.size()),
         [&](std::int64_t i) {
-            const auto slot = static_cast<std::size_t>(i);
+            const auto slot = static_cast<std::size_t>(m_tested[static_cast<std::size_t>(i)]);
             const Pair& pair = m_pairs[slot];
             const auto deviation = [&](std::size_t j) {
                 return m_deviations[static_cast<std::size_t>(pair.v[j])];
@@ -436,7 +472,8 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
         }
     };
     std::int64_t pushed = 0;
-    for (std::size_t i = 0; i < m_pairs.size(); ++i) {
+    for (const std::int32_t tested : m_tested) {
+        const auto i = static_cast<std::size_t>(tested);
         if (m_close[i] == 0) {
             continue;
         }

@@ -160,7 +160,10 @@ public:
     // r are found in parallel, then pushed sequentially in pair order: bitwise identical for any
     // number of threads. A pair whose distance at the detection less its features' largest
     // deviations from the shifted detection (a feature's distance moves by at most that) is at
-    // least r is skipped without a proximity test. Returns the pairs pushed.
+    // least r is skipped without a proximity test, and a pair none of whose vertices deviates by
+    // its slack (half the least margin d − r of its pairs at the detection) without even that
+    // test: a substep's cost follows the vertices that moved, not the pairs (a larger query radius
+    // keeps every vertex's in-plane neighbours one ring out). Returns the pairs pushed.
     std::int64_t project(std::span<Vec3d> x, std::span<const Vec3d> previous,
                          std::span<const double> inverse_masses, double static_friction,
                          double kinetic_friction);
@@ -215,6 +218,9 @@ private:
     std::vector<double> m_pair_distances;  // per pair, its distance at the detection
     std::vector<double> m_deviations;      // project(): |x_v − (detected_v + S)| per vertex
     std::vector<std::uint8_t> m_close;     // project(): per pair, closer than r
+    std::vector<double> m_slack;           // per vertex: its pairs are tested from this deviation
+    std::vector<std::uint8_t> m_hot;       // project(): per vertex, deviation >= slack
+    std::vector<std::int32_t> m_tested;    // project(): the pairs tested, ascending
     // Per vertex (CSR): the planes its ball can reach (of its pairs', in pair order), and its
     // pairs as pair index · 4 + its place in the pair.
     std::vector<std::int32_t> m_plane_first;
