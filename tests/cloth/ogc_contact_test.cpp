@@ -193,11 +193,11 @@ TEST(OgcContact, TruncationMatchesTheBallAndEveryPlane) {
     EXPECT_GT(held_by_planes, 100);
 }
 
-// project() tests only the pairs with a vertex past its slack (half its pairs' least margin
-// d − r): the same pushes, bit for bit, as a projection that tests every detected pair, written
-// out here without friction. A folded sheet at the larger query radius (2.5 r, ball 0.3 r_q =
-// 2.25 mm), every vertex moved by up to 0 to 3 mm: some stay within their slack, some pass it,
-// some pairs come closer than r.
+// project() looks only at the pairs with a vertex past its slack (half its pairs' least margin
+// d − r) and skips those whose relative motion cannot close their margin: the same pushes, bit
+// for bit, as a projection that tests every detected pair, written out here without friction. A
+// folded sheet at the larger query radius (2.5 r, ball 0.3 r_q = 2.25 mm), every vertex moved by up
+// to 0 to 3 mm: some stay within their slack, some pass it, some pairs come closer than r.
 TEST(OgcContact, ProjectionSkipsOnlyPairsThatCannotBeClose) {
     geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
     std::mt19937 random(11);
