@@ -234,7 +234,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_plane_first[m_num_vertices] = static_cast<std::int32_t>(kept_planes);
     m_planes.resize(kept_planes);
     m_contact_vertices.clear();
-    m_slack.assign(m_num_vertices, 0.0);
+    m_slack.assign(m_num_vertices, std::numeric_limits<double>::infinity());
     for (std::size_t v = 0; v < m_num_vertices; ++v) {
         if (m_pair_first[v + 1] > m_pair_first[v]) {
             m_contact_vertices.push_back(static_cast<std::int32_t>(v));

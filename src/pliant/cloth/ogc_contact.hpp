@@ -189,6 +189,10 @@ public:
     // The positions of the last detection (#V; empty before one) and the frame shift S.
     std::span<const Vec3d> detected_positions() const { return m_detected; }
     const Vec3d& shift() const { return m_shift; }
+    // Per vertex (#V, empty before a detection): half the least margin d − r of its pairs at the
+    // detection less 1e-14 d (+∞ without pairs): while each vertex of a pair deviates less than
+    // its slack from its shifted detection position, the pair stays at least r apart.
+    std::span<const double> slacks() const { return m_slack; }
     // Detections since construction.
     std::int64_t detections() const { return m_detections; }
     // Wall-clock time of the detections since construction (ms).
