@@ -193,6 +193,96 @@ TEST(OgcContact, TruncationMatchesTheBallAndEveryPlane) {
     EXPECT_GT(held_by_planes, 100);
 }
 
+// project() looks only at the pairs with a vertex past its slack (half its pairs' least margin
+// d − r) and skips those whose relative motion cannot close their margin: the same pushes, bit
+// for bit, as a projection that tests every detected pair, written out here without friction. A
+// folded sheet at the larger query radius (2.5 r, ball 0.3 r_q = 2.25 mm), every vertex moved by up
+// to 0 to 3 mm: some stay within their slack, some pass it, some pairs come closer than r.
+TEST(OgcContact, ProjectionSkipsOnlyPairsThatCannotBeClose) {
+    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
+    std::mt19937 random(11);
+    std::uniform_real_distribution<double> jitter(-0.001, 0.001);
+    for (Vec3d& p : sheet.positions) {
+        const double u = p.x / 0.04 + 1.5;
+        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
+        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
+        p = {along * 0.04 + jitter(random), p.y + jitter(random), 0.005 * layer + jitter(random)};
+    }
+    const std::vector<Vec3d>& x = sheet.positions;
+    const double radius = 0.003;
+    OgcOptions options;
+    options.query_factor = 2.5;
+    options.bound_share = 0.3;
+    OgcContact contact(sheet.triangles, x.size(), options, radius, 100.0);
+    contact.detect(x);
+    ASSERT_GT(contact.num_pairs(), 100U);
+    const std::vector<double> inverse_masses(x.size(), 1.0);
+    // A pair's distance, normal and signed weights (first feature +, second −) at positions y.
+    struct Geometry {
+        double distance;
+        Vec3d normal;
+        std::array<double, 4> weights;
+    };
+    const auto geometry = [](const OgcContact::Pair& pair, const std::vector<Vec3d>& y) {
+        const std::array<Vec3d, 4> p = {y[pair.v[0]], y[pair.v[1]], y[pair.v[2]], y[pair.v[3]]};
+        if (pair.is_edge_edge) {
+            const auto prox = collision::segment_segment_proximity(p[0], p[1], p[2], p[3]);
+            return Geometry{
+                prox.distance, prox.normal, {1.0 - prox.s, prox.s, -(1.0 - prox.t), -prox.t}};
+        }
+        const auto prox = collision::point_triangle_proximity(p[0], p[1], p[2], p[3]);
+        return Geometry{prox.distance,
+                        prox.normal,
+                        {1.0, -prox.barycentric.x, -prox.barycentric.y, -prox.barycentric.z}};
+    };
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::uniform_real_distribution<double> reach(0.0, 0.003);
+    std::int64_t total_pushed = 0;
+    for (int trial = 0; trial < 10; ++trial) {
+        std::vector<Vec3d> y = x;
+        for (Vec3d& p : y) {
+            const Vec3d direction{unit(random), unit(random), unit(random)};
+            p += direction * (reach(random) / std::max(norm(direction), 1e-3));
+        }
+        std::vector<Vec3d> expected = y;
+        std::int64_t expected_pushed = 0;
+        for (const OgcContact::Pair& pair : contact.pairs()) {
+            Geometry g = geometry(pair, expected);
+            const Vec3d detected = geometry(pair, x).normal;
+            if (dot(g.normal, detected) < 0.0) {
+                Vec3d gap{0.0, 0.0, 0.0};
+                for (std::size_t j = 0; j < 4; ++j) {
+                    gap += expected[pair.v[j]] * g.weights[j];
+                }
+                g.normal = detected;
+                g.distance = dot(gap, detected);
+            }
+            if (!(g.distance < radius)) {
+                continue;
+            }
+            double denominator = 0.0;
+            for (std::size_t j = 0; j < 4; ++j) {
+                denominator += inverse_masses[pair.v[j]] * g.weights[j] * g.weights[j];
+            }
+            const double lambda = (radius - g.distance) / denominator;
+            for (std::size_t j = 0; j < 4; ++j) {
+                expected[pair.v[j]] +=
+                    g.normal * (inverse_masses[pair.v[j]] * g.weights[j] * lambda);
+            }
+            ++expected_pushed;
+        }
+        const std::int64_t pushed = contact.project(y, x, inverse_masses, 0.0, 0.0);
+        EXPECT_EQ(pushed, expected_pushed) << trial;
+        for (std::size_t v = 0; v < y.size(); ++v) {
+            ASSERT_EQ(y[v].x, expected[v].x) << v << " " << trial;
+            ASSERT_EQ(y[v].y, expected[v].y) << v << " " << trial;
+            ASSERT_EQ(y[v].z, expected[v].z) << v << " " << trial;
+        }
+        total_pushed += pushed;
+    }
+    EXPECT_GT(total_pushed, 10);
+}
+
 TEST(OgcContact, ShiftMovesTheFeasibleSetsTogether) {
     TwoTriangles t;
     OgcContact contact(t.triangles, t.x.size(), OgcOptions{}, 0.005, 100.0);

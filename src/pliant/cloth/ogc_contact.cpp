@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <limits>
 
 #include "pliant/cloth/detail/pair_bounds.hpp"
 #include "pliant/collision/point_triangle.hpp"
@@ -232,9 +234,20 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_plane_first[m_num_vertices] = static_cast<std::int32_t>(kept_planes);
     m_planes.resize(kept_planes);
     m_contact_vertices.clear();
+    m_slack.assign(m_num_vertices, std::numeric_limits<double>::infinity());
     for (std::size_t v = 0; v < m_num_vertices; ++v) {
         if (m_pair_first[v + 1] > m_pair_first[v]) {
             m_contact_vertices.push_back(static_cast<std::int32_t>(v));
+            // project()'s per-vertex slack: half the least margin d − r of v's pairs, less a
+            // rounding margin of 1e-14 d (0 or less: v's pairs are always tested).
+            double slack = std::numeric_limits<double>::infinity();
+            for (auto k = m_pair_first[v]; k < m_pair_first[v + 1]; ++k) {
+                const auto p =
+                    static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(k)]) / 4;
+                const double d = m_pair_distances[p];
+                slack = std::min(slack, 0.5 * (d - m_radius) - 1e-14 * d);
+            }
+            m_slack[v] = slack;
         }
     }
     m_detected.assign(x.begin(), x.end());
@@ -387,20 +400,52 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
         }
         return g;
     };
+    // A pair is tested only when one of its vertices deviates from its shifted detection
+    // position by at least its slack (detect(): half the least margin d − r of its pairs, less a
+    // rounding margin). A pair none of whose vertices does is inactive: with first, second < (d −
+    // r) / 2 − 1e-14 d each, d − first − second > r + 2e-14 d, so the per-pair skip below (whose
+    // evaluation rounds by a few ulps of d) skips it too, and a feature's distance moves by at
+    // most its vertices' largest deviation (every point of a feature is a convex combination of
+    // its vertices; a common translation S leaves distances unchanged): it stays at least r
+    // apart. The pairs tested and pushed, and their order, are those of a test of every pair.
     m_deviations.resize(m_num_vertices);
+    m_hot.resize(m_num_vertices);
     parallel_for(
         static_cast<std::int64_t>(m_contact_vertices.size()),
         [&](std::int64_t i) {
             const auto v =
                 static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
             m_deviations[v] = norm(x[v] - m_detected[v] - m_shift);
+            m_hot[v] = m_deviations[v] < m_slack[v] ? 0 : 1;
         },
         PAIR_GRAIN);
-    m_close.resize(m_pairs.size());
+    // The pairs of the vertices past their slack, in pair order: marked in a bit set (cleared as
+    // it is read), so that a substep costs O(#V + #pairs / 64 + the pairs tested).
+    m_marks.resize((m_pairs.size() + 63) / 64, 0);
+    for (const std::int32_t v : m_contact_vertices) {
+        const auto u = static_cast<std::size_t>(v);
+        if (m_hot[u] != 0) {
+            for (auto r = m_pair_first[u]; r < m_pair_first[u + 1]; ++r) {
+                const auto p =
+                    static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(r)]) / 4;
+                m_marks[p / 64] |= std::uint64_t{1} << (p % 64);
+            }
+        }
+    }
+    m_tested.clear();
+    for (std::size_t word = 0; word < m_marks.size(); ++word) {
+        for (std::uint64_t bits = m_marks[word]; bits != 0; bits &= bits - 1) {
+            m_tested.push_back(static_cast<std::int32_t>(
+                word * 64 + static_cast<std::size_t>(std::countr_zero(bits))));
+        }
+        m_marks[word] = 0;
+    }
+    m_close.resize(m_tested.size());
     parallel_for(
-        static_cast<std::int64_t>(m_pairs.size()),
+        static_cast<std::int64_t>(m_tested.size()),
         [&](std::int64_t i) {
-            const auto slot = static_cast<std::size_t>(i);
+            const auto slot = static_cast<std::size_t>(m_tested[static_cast<std::size_t>(i)]);
+            const auto entry = static_cast<std::size_t>(i);
             const Pair& pair = m_pairs[slot];
             const auto deviation = [&](std::size_t j) {
                 return m_deviations[static_cast<std::size_t>(pair.v[j])];
@@ -410,11 +455,45 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
             const double second = pair.is_edge_edge
                                       ? std::max(deviation(2), deviation(3))
                                       : std::max({deviation(1), deviation(2), deviation(3)});
-            if (m_pair_distances[slot] - first - second >= m_radius) {
-                m_close[slot] = 0;
+            const double detected = m_pair_distances[slot];
+            if (detected - first - second >= m_radius) {
+                m_close[entry] = 0;
                 return;
             }
-            m_close[slot] = contact(slot).distance < m_radius ? 1 : 0;
+            // The features' relative motion since the detection, δ = max |u_i − u_j| over a
+            // vertex i of the first feature and j of the second, u = x − detected position. The
+            // pair's Minkowski difference M = {p − q} moves by at most δ point by point (every
+            // point is Σ a_i b_j (x_i − x_j), Σ a_i = Σ b_j = 1), and every point of M at the
+            // detection lies at least d₀ along the detection's normal n₀ (n₀ is its least point's
+            // direction; M is convex). So the least point w of M now has |w| >= dot(w, n₀) >=
+            // d₀ − δ: with d₀ − δ >= r (less a rounding margin) the distance is at least r and
+            // the normal is not against n₀, so contact() finds the pair no closer than r. In-plane
+            // neighbours that move with the sheet (past the frame shift's translation) move little
+            // relative to each other.
+            const auto at = [&](std::size_t j) {
+                return static_cast<std::size_t>(pair.v[j]);
+            };
+            std::array<Vec3d, 4> u;
+            for (std::size_t j = 0; j < 4; ++j) {
+                u[j] = x[at(j)] - m_detected[at(j)];
+            }
+            const std::size_t num_first = pair.is_edge_edge ? 2 : 1;
+            double relative = 0.0;
+            for (std::size_t a = 0; a < num_first; ++a) {
+                for (std::size_t b = num_first; b < 4; ++b) {
+                    const Vec3d d = u[a] - u[b];
+                    relative = std::max(relative, dot(d, d));
+                }
+            }
+            const Vec3d& anchor = x[at(0)];
+            const double rounding =
+                1e-9 * (1.0 + detected +
+                        std::max({std::abs(anchor.x), std::abs(anchor.y), std::abs(anchor.z)}));
+            if (detected - std::sqrt(relative) >= m_radius + rounding) {
+                m_close[entry] = 0;
+                return;
+            }
+            m_close[entry] = contact(slot).distance < m_radius ? 1 : 0;
         },
         PAIR_GRAIN);
     // Moves the pair's vertices along `direction` so that their weighted difference grows by
@@ -436,10 +515,11 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
         }
     };
     std::int64_t pushed = 0;
-    for (std::size_t i = 0; i < m_pairs.size(); ++i) {
-        if (m_close[i] == 0) {
+    for (std::size_t entry = 0; entry < m_tested.size(); ++entry) {
+        if (m_close[entry] == 0) {
             continue;
         }
+        const auto i = static_cast<std::size_t>(m_tested[entry]);
         const Pair& pair = m_pairs[i];
         const PairGeometry g = contact(i);
         if (!(g.distance < m_radius)) {

@@ -160,7 +160,13 @@ public:
     // r are found in parallel, then pushed sequentially in pair order: bitwise identical for any
     // number of threads. A pair whose distance at the detection less its features' largest
     // deviations from the shifted detection (a feature's distance moves by at most that) is at
-    // least r is skipped without a proximity test. Returns the pairs pushed.
+    // least r is skipped without a proximity test, and so is one whose distance at the detection
+    // less its vertices' largest relative motion since (max |u_i − u_j|, u = x − detected) is at
+    // least r; a pair none of whose vertices deviates by its slack (half the least margin d − r
+    // of its pairs at the detection) is not even looked at: a substep's cost follows the vertices
+    // that moved, not the pairs (a larger query radius keeps every vertex's in-plane neighbours
+    // one ring out). The pairs pushed are those a proximity test of every pair finds. Returns the
+    // pairs pushed.
     std::int64_t project(std::span<Vec3d> x, std::span<const Vec3d> previous,
                          std::span<const double> inverse_masses, double static_friction,
                          double kinetic_friction);
@@ -183,6 +189,10 @@ public:
     // The positions of the last detection (#V; empty before one) and the frame shift S.
     std::span<const Vec3d> detected_positions() const { return m_detected; }
     const Vec3d& shift() const { return m_shift; }
+    // Per vertex (#V, empty before a detection): half the least margin d − r of its pairs at the
+    // detection less 1e-14 d (+∞ without pairs): while each vertex of a pair deviates less than
+    // its slack from its shifted detection position, the pair stays at least r apart.
+    std::span<const double> slacks() const { return m_slack; }
     // Detections since construction.
     std::int64_t detections() const { return m_detections; }
     // Wall-clock time of the detections since construction (ms).
@@ -214,7 +224,11 @@ private:
     std::vector<Vec3d> m_pair_normals;     // per pair, its normal at the detection
     std::vector<double> m_pair_distances;  // per pair, its distance at the detection
     std::vector<double> m_deviations;      // project(): |x_v − (detected_v + S)| per vertex
-    std::vector<std::uint8_t> m_close;     // project(): per pair, closer than r
+    std::vector<std::uint8_t> m_close;     // project(): per pair tested, closer than r
+    std::vector<std::uint64_t> m_marks;    // project(): a bit per pair, zero between calls
+    std::vector<double> m_slack;           // per vertex: its pairs are tested from this deviation
+    std::vector<std::uint8_t> m_hot;       // project(): per vertex, deviation >= slack
+    std::vector<std::int32_t> m_tested;    // project(): the pairs tested, ascending
     // Per vertex (CSR): the planes its ball can reach (of its pairs', in pair order), and its
     // pairs as pair index · 4 + its place in the pair.
     std::vector<std::int32_t> m_plane_first;

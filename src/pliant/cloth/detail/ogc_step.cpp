@@ -121,18 +121,50 @@ bool ogc_pairs_cover_window(const OgcContact& ogc, const OgcAuditWindow& audit,
     return 2.0 * deviation < ogc.query_radius() - margin;
 }
 
+namespace {
+
+// The detection's pairs the CCD must test over the window from audit.start to x, into
+// audit.pairs: those with a vertex whose larger deviation at the window's ends (from D_v + T_0,
+// D_v + T_1 as in ogc_pairs_cover_window) reaches its slack (OgcContact::slacks(): half the least
+// margin d − r of its pairs at D, less a rounding margin). A pair whose vertices all stay within
+// their slacks stays at least r apart over the whole window (the deviations are convex in τ, a
+// feature's distance moves by at most its vertices' largest deviation), and the CCD's hits need
+// its features within the CCD's tolerance of each other, far below r: the CCD finds nothing
+// there. A vertex the CCD puts back returns to its start, within its slack too.
+void audit_pairs(const OgcContact& ogc, OgcAuditWindow& audit, std::span<const Vec3d> x) {
+    const std::span<const Vec3d> detected = ogc.detected_positions();
+    const std::span<const double> slacks = ogc.slacks();
+    const Vec3d shift_end = ogc.shift();
+    const Vec3d shift_start =
+        audit.detections == ogc.detections() ? audit.shift : Vec3d{0.0, 0.0, 0.0};
+    std::vector<std::uint8_t> hot(x.size());
+    parallel_for(
+        static_cast<std::int64_t>(x.size()),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            const double deviation = std::max(norm(audit.start[v] - detected[v] - shift_start),
+                                              norm(x[v] - detected[v] - shift_end));
+            hot[v] = deviation < slacks[v] ? 0 : 1;  // NaN: hot
+        },
+        TRUNCATE_GRAIN);
+    audit.pairs.clear();
+    for (const OgcContact::Pair& p : ogc.pairs()) {
+        if ((hot[static_cast<std::size_t>(p.v[0])] | hot[static_cast<std::size_t>(p.v[1])] |
+             hot[static_cast<std::size_t>(p.v[2])] | hot[static_cast<std::size_t>(p.v[3])]) != 0) {
+            audit.pairs.push_back(
+                FeatureVertices{{p.v[0], p.v[1], p.v[2], p.v[3]}, p.is_edge_edge ? 2U : 1U});
+        }
+    }
+}
+
+}  // namespace
+
 bool audit_ogc_window(SelfCollision& self_collision, const OgcContact& ogc, OgcAuditWindow& audit,
                       std::span<Vec3d> x, std::span<Vec3d> velocities, bool use_pairs) {
     const std::int64_t reverted = self_collision.stats().reverted_vertices;
     if (!std::equal(audit.start.begin(), audit.start.end(), x.begin(), x.end())) {
         if (use_pairs && ogc_pairs_cover_window(ogc, audit, x)) {
-            const std::span<const OgcContact::Pair> pairs = ogc.pairs();
-            audit.pairs.resize(pairs.size());
-            std::transform(pairs.begin(), pairs.end(), audit.pairs.begin(),
-                           [](const OgcContact::Pair& p) {
-                               return FeatureVertices{{p.v[0], p.v[1], p.v[2], p.v[3]},
-                                                      p.is_edge_edge ? 2U : 1U};
-                           });
+            audit_pairs(ogc, audit, x);
             self_collision.enforce_pairs(audit.pairs, audit.start, x, velocities);
             ++audit.pair_audits;
             if (self_collision.stats().reverted_vertices != reverted &&
