@@ -29,6 +29,20 @@ struct TwoTriangles {
                          {0.02, 0.02, 0.004}, {0.2, 0.02, 0.05}, {0.02, 0.2, 0.05}};
 };
 
+// A 0.12 m sheet of 12 × 12 quads folded twice along x into three layers `gap` apart (z = 0,
+// gap, 2 gap), every coordinate jittered uniformly by ± `jitter_m` drawn from `random`.
+geometry::TriangleMeshD folded_sheet(std::mt19937& random, double jitter_m, double gap) {
+    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
+    std::uniform_real_distribution<double> jitter(-jitter_m, jitter_m);
+    for (Vec3d& p : sheet.positions) {
+        const double u = p.x / 0.04 + 1.5;
+        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
+        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
+        p = {along * 0.04 + jitter(random), p.y + jitter(random), gap * layer + jitter(random)};
+    }
+    return sheet;
+}
+
 TEST(OgcContact, TruncationKeepsAVertexOnItsSideOfThePlane) {
     TwoTriangles t;
     OgcContact contact(t.triangles, t.x.size(), OgcOptions{}, 0.005, 100.0);
@@ -65,16 +79,8 @@ TEST(OgcContact, TruncationKeepsAVertexOnItsSideOfThePlane) {
 // layers a few millimetres apart, its vertices jittered, finds exactly the pairs closer than the
 // query radius, each once.
 TEST(OgcContact, DetectsExactlyThePairsWithinTheQueryRadius) {
-    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
     std::mt19937 random(3);
-    std::uniform_real_distribution<double> jitter(-0.002, 0.002);
-    for (Vec3d& p : sheet.positions) {
-        // Folded twice along x (layers at z = 0, 4 mm and 8 mm), then jittered.
-        const double u = p.x / 0.04 + 1.5;
-        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
-        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
-        p = {along * 0.04 + jitter(random), p.y + jitter(random), 0.004 * layer + jitter(random)};
-    }
+    geometry::TriangleMeshD sheet = folded_sheet(random, 0.002, 0.004);
     const double radius = 0.003;
     OgcContact contact(sheet.triangles, sheet.positions.size(), OgcOptions{}, radius, 100.0);
     contact.detect(sheet.positions);
@@ -121,15 +127,8 @@ TEST(OgcContact, DetectsExactlyThePairsWithinTheQueryRadius) {
 // reach. Layers 4 mm apart, jittered by 2 mm: pairs from 0 to 6 mm apart, their planes 0 to 2.7 mm
 // from the vertices against a 1.5 mm ball.
 TEST(OgcContact, TruncationMatchesTheBallAndEveryPlane) {
-    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
     std::mt19937 random(5);
-    std::uniform_real_distribution<double> jitter(-0.002, 0.002);
-    for (Vec3d& p : sheet.positions) {
-        const double u = p.x / 0.04 + 1.5;
-        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
-        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
-        p = {along * 0.04 + jitter(random), p.y + jitter(random), 0.004 * layer + jitter(random)};
-    }
+    geometry::TriangleMeshD sheet = folded_sheet(random, 0.002, 0.004);
     const std::vector<Vec3d>& x = sheet.positions;
     OgcContact contact(sheet.triangles, x.size(), OgcOptions{}, 0.003, 100.0);
     contact.detect(x);
@@ -199,15 +198,8 @@ TEST(OgcContact, TruncationMatchesTheBallAndEveryPlane) {
 // folded sheet at the larger query radius (2.5 r, ball 0.3 r_q = 2.25 mm), every vertex moved by up
 // to 0 to 3 mm: some stay within their slack, some pass it, some pairs come closer than r.
 TEST(OgcContact, ProjectionSkipsOnlyPairsThatCannotBeClose) {
-    geometry::TriangleMeshD sheet = test::flat_sheet(12, 0.12, 0.0);
     std::mt19937 random(11);
-    std::uniform_real_distribution<double> jitter(-0.001, 0.001);
-    for (Vec3d& p : sheet.positions) {
-        const double u = p.x / 0.04 + 1.5;
-        const int layer = std::clamp(static_cast<int>(std::floor(u)), 0, 2);
-        const double along = layer % 2 == 0 ? u - layer : layer + 1 - u;
-        p = {along * 0.04 + jitter(random), p.y + jitter(random), 0.005 * layer + jitter(random)};
-    }
+    geometry::TriangleMeshD sheet = folded_sheet(random, 0.001, 0.005);
     const std::vector<Vec3d>& x = sheet.positions;
     const double radius = 0.003;
     OgcOptions options;
