@@ -409,14 +409,12 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
     // its vertices; a common translation S leaves distances unchanged): it stays at least r
     // apart. The pairs tested and pushed, and their order, are those of a test of every pair.
     m_deviations.resize(m_num_vertices);
-    m_hot.resize(m_num_vertices);
     parallel_for(
         static_cast<std::int64_t>(m_contact_vertices.size()),
         [&](std::int64_t i) {
             const auto v =
                 static_cast<std::size_t>(m_contact_vertices[static_cast<std::size_t>(i)]);
             m_deviations[v] = norm(x[v] - m_detected[v] - m_shift);
-            m_hot[v] = m_deviations[v] < m_slack[v] ? 0 : 1;
         },
         PAIR_GRAIN);
     // The pairs of the vertices past their slack, in pair order: marked in a bit set (cleared as
@@ -424,7 +422,7 @@ std::int64_t OgcContact::project(std::span<Vec3d> x, std::span<const Vec3d> prev
     m_marks.resize((m_pairs.size() + 63) / 64, 0);
     for (const std::int32_t v : m_contact_vertices) {
         const auto u = static_cast<std::size_t>(v);
-        if (m_hot[u] != 0) {
+        if (!(m_deviations[u] < m_slack[u])) {  // past its slack (NaN: tested)
             for (auto r = m_pair_first[u]; r < m_pair_first[u + 1]; ++r) {
                 const auto p =
                     static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(r)]) / 4;

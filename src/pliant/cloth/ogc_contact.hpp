@@ -227,7 +227,6 @@ private:
     std::vector<std::uint8_t> m_close;     // project(): per pair tested, closer than r
     std::vector<std::uint64_t> m_marks;    // project(): a bit per pair, zero between calls
     std::vector<double> m_slack;           // per vertex: its pairs are tested from this deviation
-    std::vector<std::uint8_t> m_hot;       // project(): per vertex, deviation >= slack
     std::vector<std::int32_t> m_tested;    // project(): the pairs tested, ascending
     // Per vertex (CSR): the planes its ball can reach (of its pairs', in pair order), and its
     // pairs as pair index · 4 + its place in the pair.

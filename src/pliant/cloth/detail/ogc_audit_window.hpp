@@ -18,6 +18,7 @@ struct OgcAuditWindow {
     std::int64_t pair_audits = 0;
     std::int64_t full_audits = 0;
     std::vector<FeatureVertices> pairs;  // scratch: the detection's pairs
+    std::vector<double> deviations;      // scratch: per vertex, its deviation over the window
 };
 
 }  // namespace pliant::cloth::detail

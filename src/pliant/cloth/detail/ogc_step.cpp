@@ -85,72 +85,67 @@ OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positi
     return {ogc.detections(), ogc.detect_ms()};
 }
 
-bool ogc_pairs_cover_window(const OgcContact& ogc, const OgcAuditWindow& audit,
-                            std::span<const Vec3d> x) {
+namespace {
+
+// Per vertex v, the larger of its deviations at the window's ends, |a_v − D_v − T_0| and
+// |x_v − D_v − T_1| (ogc_pairs_cover_window's terms; a non-finite one counts as infinite), into
+// `deviations`; returns their largest.
+double window_deviations(const OgcContact& ogc, const OgcAuditWindow& audit,
+                         std::span<const Vec3d> x, std::vector<double>& deviations) {
     const std::span<const Vec3d> detected = ogc.detected_positions();
-    const std::size_t n = x.size();
-    if (!ogc.has_detection() || detected.size() != n || audit.start.size() != n ||
-        static_cast<std::int64_t>(ogc.num_pairs()) > CCDFailSafe::pair_budget(n)) {
-        return false;
-    }
     const Vec3d shift_end = ogc.shift();
     const Vec3d shift_start =
         audit.detections == ogc.detections() ? audit.shift : Vec3d{0.0, 0.0, 0.0};
-    // The largest deviations at the window's ends (a non-finite one counts as infinite).
-    using Ends = std::pair<double, double>;
-    const auto larger = [](const Ends& a, const Ends& b) {
-        return Ends{std::max(a.first, b.first), std::max(a.second, b.second)};
-    };
     const auto finite_or_inf = [](double d) {
         return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
     };
-    const Ends ends = parallel_reduce(
-        static_cast<std::int64_t>(n), Ends{0.0, 0.0},
+    deviations.resize(x.size());
+    return parallel_reduce(
+        static_cast<std::int64_t>(x.size()), 0.0,
         [&](std::int64_t begin, std::int64_t end) {
-            Ends e{0.0, 0.0};
+            double largest = 0.0;
             for (std::int64_t i = begin; i < end; ++i) {
                 const auto v = static_cast<std::size_t>(i);
-                e = larger(e, Ends{finite_or_inf(norm(audit.start[v] - detected[v] - shift_start)),
-                                   finite_or_inf(norm(x[v] - detected[v] - shift_end))});
+                const double d =
+                    std::max(finite_or_inf(norm(audit.start[v] - detected[v] - shift_start)),
+                             finite_or_inf(norm(x[v] - detected[v] - shift_end)));
+                deviations[v] = d;
+                largest = std::max(largest, d);
             }
-            return e;
+            return largest;
         },
-        larger, TRUNCATE_GRAIN);
-    const double deviation = std::max(ends.first, ends.second);
+        [](double a, double b) { return std::max(a, b); }, TRUNCATE_GRAIN);
+}
+
+bool covers_window(const OgcContact& ogc, const OgcAuditWindow& audit, std::span<const Vec3d> x,
+                   std::vector<double>& deviations) {
+    const std::size_t n = x.size();
+    if (!ogc.has_detection() || ogc.detected_positions().size() != n || audit.start.size() != n ||
+        static_cast<std::int64_t>(ogc.num_pairs()) > CCDFailSafe::pair_budget(n)) {
+        return false;
+    }
+    const double deviation = window_deviations(ogc, audit, x, deviations);
     const double margin = 1e-9 * (1.0 + largest_coordinate(audit.start, x));
     return 2.0 * deviation < ogc.query_radius() - margin;
 }
 
-namespace {
-
 // The detection's pairs the CCD must test over the window from audit.start to x, into
-// audit.pairs: those with a vertex whose larger deviation at the window's ends (from D_v + T_0,
-// D_v + T_1 as in ogc_pairs_cover_window) reaches its slack (OgcContact::slacks(): half the least
+// audit.pairs, given each vertex's larger deviation at the window's ends (window_deviations):
+// those with a vertex whose deviation reaches its slack (OgcContact::slacks(): half the least
 // margin d − r of its pairs at D, less a rounding margin). A pair whose vertices all stay within
 // their slacks stays at least r apart over the whole window (the deviations are convex in τ, a
 // feature's distance moves by at most its vertices' largest deviation), and the CCD's hits need
 // its features within the CCD's tolerance of each other, far below r: the CCD finds nothing
 // there. A vertex the CCD puts back returns to its start, within its slack too.
-void audit_pairs(const OgcContact& ogc, OgcAuditWindow& audit, std::span<const Vec3d> x) {
-    const std::span<const Vec3d> detected = ogc.detected_positions();
+void audit_pairs(const OgcContact& ogc, std::span<const double> deviations, OgcAuditWindow& audit) {
     const std::span<const double> slacks = ogc.slacks();
-    const Vec3d shift_end = ogc.shift();
-    const Vec3d shift_start =
-        audit.detections == ogc.detections() ? audit.shift : Vec3d{0.0, 0.0, 0.0};
-    std::vector<std::uint8_t> hot(x.size());
-    parallel_for(
-        static_cast<std::int64_t>(x.size()),
-        [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(i);
-            const double deviation = std::max(norm(audit.start[v] - detected[v] - shift_start),
-                                              norm(x[v] - detected[v] - shift_end));
-            hot[v] = deviation < slacks[v] ? 0 : 1;  // NaN: hot
-        },
-        TRUNCATE_GRAIN);
+    const auto hot = [&](std::int32_t v) {
+        const auto u = static_cast<std::size_t>(v);
+        return !(deviations[u] < slacks[u]);
+    };
     audit.pairs.clear();
     for (const OgcContact::Pair& p : ogc.pairs()) {
-        if ((hot[static_cast<std::size_t>(p.v[0])] | hot[static_cast<std::size_t>(p.v[1])] |
-             hot[static_cast<std::size_t>(p.v[2])] | hot[static_cast<std::size_t>(p.v[3])]) != 0) {
+        if (hot(p.v[0]) || hot(p.v[1]) || hot(p.v[2]) || hot(p.v[3])) {
             audit.pairs.push_back(
                 FeatureVertices{{p.v[0], p.v[1], p.v[2], p.v[3]}, p.is_edge_edge ? 2U : 1U});
         }
@@ -159,16 +154,22 @@ void audit_pairs(const OgcContact& ogc, OgcAuditWindow& audit, std::span<const V
 
 }  // namespace
 
+bool ogc_pairs_cover_window(const OgcContact& ogc, const OgcAuditWindow& audit,
+                            std::span<const Vec3d> x) {
+    std::vector<double> deviations;
+    return covers_window(ogc, audit, x, deviations);
+}
+
 bool audit_ogc_window(SelfCollision& self_collision, const OgcContact& ogc, OgcAuditWindow& audit,
                       std::span<Vec3d> x, std::span<Vec3d> velocities, bool use_pairs) {
     const std::int64_t reverted = self_collision.stats().reverted_vertices;
     if (!std::equal(audit.start.begin(), audit.start.end(), x.begin(), x.end())) {
-        if (use_pairs && ogc_pairs_cover_window(ogc, audit, x)) {
-            audit_pairs(ogc, audit, x);
+        if (use_pairs && covers_window(ogc, audit, x, audit.deviations)) {
+            audit_pairs(ogc, audit.deviations, audit);
             self_collision.enforce_pairs(audit.pairs, audit.start, x, velocities);
             ++audit.pair_audits;
             if (self_collision.stats().reverted_vertices != reverted &&
-                !ogc_pairs_cover_window(ogc, audit, x)) {
+                !covers_window(ogc, audit, x, audit.deviations)) {
                 // The vertices put back stand at their starts, off the moving frame: on the
                 // changed motion the pairs may no longer cover every contact.
                 self_collision.enforce(audit.start, x, velocities);
