@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 #include <utility>
 
 #include "picking.hpp"
@@ -314,7 +313,6 @@ void VolumeSession::step() {
 }
 
 void VolumeSession::run_frame(int buffer) {
-    m_frame_begun.store(true, std::memory_order_release);
     pbd::SoftBody& body = m_deformable->body();
     body.step(1.0 / m_options.fps);
     const pbd::SoftBodyStats stats = body.stats();
@@ -331,16 +329,7 @@ bool VolumeSession::start_step() {
     }
     apply_pending_drag();
     const int back = 1 - m_front;
-    m_frame_begun.store(false, std::memory_order_relaxed);
     m_task.start([this, back] { run_frame(back); });
-    // The frame must be running on its thread before render()'s parallel loops start: oneTBB
-    // gives an idle worker to either arena, and a worker taken by the render's loops would
-    // leave the frame waiting for the whole render instead of overlapping it (docs/
-    // performance.md "The viewer"). The worker is idle here (nothing else runs), so this waits
-    // for its wake-up only.
-    while (!m_frame_begun.load(std::memory_order_acquire) && !m_task.is_done()) {
-        std::this_thread::yield();
-    }
     return true;
 }
 

@@ -30,7 +30,6 @@
 #pragma once
 
 #include <array>
-#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -203,8 +202,7 @@ private:
     double m_drag_radius = 0.0;  // world units
     bool m_drag_changed = false;
     unsigned long long m_generation = 0;
-    std::atomic<bool> m_frame_begun{false};  // the frame in flight has begun on its thread
-    BackgroundTask m_task{1};                // last: destroyed first, waiting for a frame in flight
+    BackgroundTask m_task{1};  // last: destroyed first, waiting for a frame in flight
 };
 
 }  // namespace pliant::viewer

@@ -6,14 +6,13 @@
 #include <exception>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 
-#if defined(PLIANT_PARALLEL_STD_THREADS)
-#include <thread>
-#else
+#if !defined(PLIANT_PARALLEL_STD_THREADS)
 #include <oneapi/tbb/task_arena.h>
 #include <oneapi/tbb/task_group.h>
 #endif
@@ -29,6 +28,7 @@ struct BackgroundTask::State {
     std::mutex mutex;
     std::condition_variable finished;
     std::atomic<bool> done{true};
+    std::atomic<bool> begun{false};  // the work started on its thread
     bool started = false;
     std::exception_ptr error;
 #if defined(PLIANT_PARALLEL_STD_THREADS)
@@ -69,7 +69,9 @@ void BackgroundTask::start(std::function<void()> work) {
     s.started = true;
     s.error = nullptr;
     s.done.store(false);
+    s.begun.store(false);
     auto run = [&s, work = std::move(work)] {
+        s.begun.store(true, std::memory_order_release);
         // The work's thread answers num_threads() with the task's concurrency.
         const int outer_cap = detail::t_concurrency_cap;
         detail::t_concurrency_cap = s.concurrency;
@@ -100,6 +102,15 @@ void BackgroundTask::start(std::function<void()> work) {
         s.arena = std::make_unique<tbb::task_arena>(concurrency, s.concurrency > 0 ? 0 : 1);
     }
     s.arena->execute([&s, &run] { s.group.run(std::move(run)); });
+    if (s.concurrency > 0) {
+        // No slot for the caller: only a worker runs the work, and oneTBB gives an idle worker
+        // to whichever arena asks first. Were the caller's next parallel loops to take it, the
+        // work would wait for them to end instead of overlapping them: return once it runs (the
+        // workers are idle here, so this waits for a wake-up only).
+        while (!s.begun.load(std::memory_order_acquire) && !s.done.load()) {
+            std::this_thread::yield();
+        }
+    }
 #endif
 }
 

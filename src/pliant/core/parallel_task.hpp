@@ -18,9 +18,11 @@
 // thread; the other threads stay free for the caller's parallel loops (the frame pipeline,
 // pipeline/frame_pipeline.hpp: the soft body steps on one thread while the last frame renders on
 // the rest, and the stepping thread joins the render when its work ends). With concurrency
-// k > 1 the work's parallel loops use at most k threads. Results of the work are unaffected by
-// where it runs (fixed chunks, core/parallel.hpp). One task at a time per object; start, wait and
-// is_done are called from one thread; the destructor waits.
+// k > 1 the work's parallel loops use at most k threads. With a concurrency k ≥ 1 start()
+// returns once the work runs on its thread, so the caller's parallel loops that follow cannot
+// take that thread from it (they overlap the work instead of delaying it). Results of the work are
+// unaffected by where it runs (fixed chunks, core/parallel.hpp). One task at a time per object;
+// start, wait and is_done are called from one thread; the destructor waits.
 #pragma once
 
 #include <functional>
