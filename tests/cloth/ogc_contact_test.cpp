@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/collision/segment_segment.hpp"
+#include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/geometry/topology.hpp"
 #include "support/sheets.hpp"
@@ -291,6 +293,203 @@ TEST(OgcContact, ShiftMovesTheFeasibleSetsTogether) {
         Vec3d p = moved[v];
         EXPECT_FALSE(contact.truncate(v, moved[v], p)) << v;
     }
+}
+
+// The wide radius (OgcOptions::wide_query_factor): a detection the truncations ask for within
+// WIDE_TRIGGER_SUBSTEPS substeps of the previous one starts a hold of WIDE_HOLD_SUBSTEPS
+// substeps of wide detections; other detections neither start nor end it.
+TEST(OgcContact, WideRadiusFollowsShortDetectionIntervals) {
+    TwoTriangles t;
+    OgcOptions options;
+    options.wide_query_factor = 2.5;
+    const double r = 0.005;
+    OgcContact contact(t.triangles, t.x.size(), options, r, 100.0);
+    const auto expect_radii = [&](bool wide, int line) {
+        SCOPED_TRACE(line);
+        EXPECT_EQ(contact.wide(), wide);
+        EXPECT_DOUBLE_EQ(contact.query_radius(), (wide ? 2.5 : 2.0) * r);
+        // Pairs not detected keep (1 − 2 · 0.25) · 2 r = r apart either way.
+        EXPECT_DOUBLE_EQ(contact.ball_radius(), (wide ? 0.75 : 0.5) * r);
+    };
+    contact.begin_substep();
+    contact.detect(t.x);
+    expect_radii(false, __LINE__);
+    contact.begin_substep();
+    contact.redetect(t.x);  // the first the truncations asked for: no interval yet
+    expect_radii(false, __LINE__);
+    for (int s = 0; s < 3; ++s) {
+        contact.begin_substep();
+    }
+    contact.redetect(t.x);  // 3 substeps later
+    expect_radii(false, __LINE__);
+    contact.begin_substep();
+    contact.begin_substep();
+    contact.detect(t.x);  // a pin's detection: not an interval
+    expect_radii(false, __LINE__);
+    contact.redetect(t.x);  // 2 substeps after the last redetect()
+    expect_radii(true, __LINE__);
+    EXPECT_EQ(contact.wide_detections(), 1);
+    for (std::int64_t s = 0; s + 1 < OgcContact::WIDE_HOLD_SUBSTEPS; ++s) {
+        contact.begin_substep();
+    }
+    contact.detect(t.x);  // the hold's last substep
+    expect_radii(true, __LINE__);
+    contact.begin_substep();
+    contact.detect(t.x);
+    expect_radii(false, __LINE__);
+    EXPECT_EQ(contact.wide_detections(), 2);
+    options.wide_query_factor = 1.5;  // below query_factor
+    EXPECT_THROW(OgcContact::check_options(options), InvalidInput);
+    // VBD detects several times within a substep: the wide radius is XPBD's.
+    options.wide_query_factor = 2.5;
+    const ClothModel model(test::flat_sheet(2, 1.0, 0.0), ClothMaterial{});
+    VBDOptions vbd;
+    vbd.ogc = options;
+    EXPECT_THROW(VBDStepper(model, vbd), InvalidInput);
+}
+
+// A wide detection's guarantee, by brute force: the pairs of a folded, jittered sheet that the
+// detection left out (every non-incident VF and EE pair at least r_w apart), the nearest first,
+// each pair's vertices pushed 1 cm straight toward each other along its closest points (the
+// move that closes a pair fastest) and truncated: every such pair stays at least the contact
+// radius r apart, and the nearest come within a few percent of r (the ball is as large as the
+// guarantee allows: (r_w − (1 − 2 g) r_q) / 2).
+TEST(OgcContact, WideBallsKeepUndetectedPairsApart) {
+    std::mt19937 random(11);
+    geometry::TriangleMeshD sheet = folded_sheet(random, 0.002, 0.006);
+    const std::vector<Vec3d>& x = sheet.positions;
+    const double radius = 0.003;
+    OgcOptions options;
+    options.wide_query_factor = 3.0;
+    OgcContact contact(sheet.triangles, x.size(), options, radius, 100.0);
+    contact.redetect(x);
+    contact.begin_substep();
+    contact.redetect(x);
+    ASSERT_TRUE(contact.wide());
+    const double r_w = contact.query_radius();
+    // Undetected pairs: vertices (VF: the vertex first; EE: edge a's two first) and distance.
+    struct Undetected {
+        std::array<std::int32_t, 4> v;
+        int num_first;
+        double distance;
+    };
+    std::vector<Undetected> pairs;
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(x.size()); ++v) {
+        for (const geometry::Triangle& t : sheet.triangles) {
+            if (t[0] != v && t[1] != v && t[2] != v) {
+                const double d =
+                    collision::point_triangle_proximity(x[v], x[t[0]], x[t[1]], x[t[2]]).distance;
+                if (d >= r_w) {
+                    pairs.push_back({{v, t[0], t[1], t[2]}, 1, d});
+                }
+            }
+        }
+    }
+    const geometry::MeshTopology topology = geometry::build_topology(sheet.triangles, x.size());
+    for (std::size_t a = 0; a < topology.edges.size(); ++a) {
+        for (std::size_t b = a + 1; b < topology.edges.size(); ++b) {
+            const geometry::Edge& ea = topology.edges[a];
+            const geometry::Edge& eb = topology.edges[b];
+            if (ea[0] != eb[0] && ea[0] != eb[1] && ea[1] != eb[0] && ea[1] != eb[1]) {
+                const double d =
+                    collision::segment_segment_proximity(x[ea[0]], x[ea[1]], x[eb[0]], x[eb[1]])
+                        .distance;
+                if (d >= r_w) {
+                    pairs.push_back({{ea[0], ea[1], eb[0], eb[1]}, 2, d});
+                }
+            }
+        }
+    }
+    std::sort(pairs.begin(), pairs.end(),
+              [](const Undetected& a, const Undetected& b) { return a.distance < b.distance; });
+    ASSERT_GT(pairs.size(), 200U);
+    double least = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < 200; ++i) {
+        const Undetected& pair = pairs[i];
+        std::array<Vec3d, 4> p;
+        for (std::size_t k = 0; k < 4; ++k) {
+            p[k] = x[static_cast<std::size_t>(pair.v[k])];
+        }
+        // The closest points' direction, from the second feature toward the first.
+        Vec3d n;
+        if (pair.num_first == 1) {
+            const auto prox = collision::point_triangle_proximity(p[0], p[1], p[2], p[3]);
+            n = prox.normal;
+        } else {
+            const auto prox = collision::segment_segment_proximity(p[0], p[1], p[2], p[3]);
+            n = prox.normal;
+        }
+        for (int k = 0; k < 4; ++k) {
+            const auto v = static_cast<std::size_t>(pair.v[static_cast<std::size_t>(k)]);
+            Vec3d& q = p[static_cast<std::size_t>(k)];
+            q += n * (k < pair.num_first ? -0.01 : 0.01);
+            contact.truncate(v, x[v], q);
+        }
+        const double d =
+            pair.num_first == 1
+                ? collision::point_triangle_proximity(p[0], p[1], p[2], p[3]).distance
+                : collision::segment_segment_proximity(p[0], p[1], p[2], p[3]).distance;
+        least = std::min(least, d);
+    }
+    EXPECT_GE(least, radius * (1.0 - 1e-9));
+    EXPECT_LT(least, radius * 1.05);
+}
+
+// The wide radius's state (the current detection's radius, the hold, the substeps since the
+// last redetect()) survives save_state / load_state: a loaded contact detects as the original.
+TEST(OgcContact, WideStateSurvivesSaveAndLoad) {
+    TwoTriangles t;
+    OgcOptions options;
+    options.wide_query_factor = 2.5;
+    // In a hold: a redetect() 1 substep after the previous one, then 1 substep.
+    const auto original = [&] {
+        auto c = std::make_unique<OgcContact>(t.triangles, t.x.size(), options, 0.005, 100.0);
+        c->redetect(t.x);
+        c->begin_substep();
+        c->redetect(t.x);
+        c->begin_substep();
+        return c;
+    };
+    ByteWriter out;
+    original()->save_state(out);
+    const auto loaded = [&] {
+        auto c = std::make_unique<OgcContact>(t.triangles, t.x.size(), options, 0.005, 100.0);
+        ByteReader in(out.bytes(), "state");
+        c->load_state(in);
+        return c;
+    };
+    for (const bool load : {false, true}) {
+        SCOPED_TRACE(load ? "loaded" : "original");
+        std::unique_ptr<OgcContact> c = load ? loaded() : original();
+        EXPECT_TRUE(c->wide());
+        EXPECT_DOUBLE_EQ(c->query_radius(), 2.5 * 0.005);
+        EXPECT_EQ(c->wide_detections(), 1);
+        // The hold goes on: 3 substeps later a detection is still wide.
+        for (int s = 0; s < 3; ++s) {
+            c->begin_substep();
+        }
+        c->detect(t.x);
+        EXPECT_TRUE(c->wide());
+        // 2 substeps after the last redetect(): a new hold, whose last substep detects wide.
+        c = load ? loaded() : original();
+        c->begin_substep();
+        c->redetect(t.x);
+        for (std::int64_t s = 0; s + 1 < OgcContact::WIDE_HOLD_SUBSTEPS; ++s) {
+            c->begin_substep();
+        }
+        c->detect(t.x);
+        EXPECT_TRUE(c->wide());
+        c->begin_substep();
+        c->detect(t.x);
+        EXPECT_FALSE(c->wide());
+        EXPECT_EQ(c->wide_detections(), 3);
+    }
+    // A truncated state.
+    std::vector<std::byte> bytes(out.bytes().begin(), out.bytes().end());
+    bytes.resize(bytes.size() - 4);
+    ByteReader truncated(bytes, "state");
+    OgcContact c(t.triangles, t.x.size(), options, 0.005, 100.0);
+    EXPECT_THROW(c.load_state(truncated), InvalidInput);
 }
 
 TEST(OgcContact, RejectsBadOptions) {

@@ -99,6 +99,54 @@ TEST(XPBDOgc, SavedStateContinuesBitForBit) {
     test::expect_saved_state_continues_bit_for_bit([] { return colliding_sheets(10); }, 4, 12);
 }
 
+// colliding_sheets() with the wide query radius (OgcOptions::wide_query_factor 2.5).
+std::unique_ptr<ClothSolver> colliding_sheets_wide(int n) {
+    auto solver = test::colliding_sheets(n);
+    OgcOptions options;
+    options.wide_query_factor = 2.5;
+    solver->use_xpbd_ogc(options);
+    return solver;
+}
+
+// The upper sheet lands at 2 m/s, 7 mm per substep against a 2.5 mm ball: the truncations ask
+// for a detection every substep or two, so the wide radius takes over; with its 3.75 mm ball
+// the impact needs fewer detections, and the sheets stay apart.
+TEST(XPBDOgc, WideRadiusTakesTheImpactWithFewerDetections) {
+    const auto run = [](std::unique_ptr<ClothSolver> solver, std::int64_t& wide) {
+        std::int64_t detections = 0;
+        wide = 0;
+        for (int f = 0; f < 6; ++f) {
+            const ClothStepStats stats = solver->step(1.0 / 24.0, 12);
+            detections += stats.ogc_detections;
+            wide += stats.ogc_wide_detections;
+            EXPECT_EQ(stats.self.reverted_vertices, 0) << "frame " << f;
+            EXPECT_EQ(collision::count_intersecting_pairs(solver->positions(), solver->triangles()),
+                      0)
+                << "frame " << f;
+        }
+        return detections;
+    };
+    std::int64_t wide_off = 0;
+    std::int64_t wide_on = 0;
+    const std::int64_t base = run(colliding_sheets(16), wide_off);
+    const std::int64_t wide = run(colliding_sheets_wide(16), wide_on);
+    EXPECT_EQ(wide_off, 0);
+    EXPECT_GT(wide_on, 0);
+    EXPECT_LT(wide, base);
+}
+
+TEST(XPBDOgc, WideRadiusBitwiseIdenticalForOneAndTwoThreads) {
+    const auto make = [] {
+        return colliding_sheets_wide(12);
+    };
+    EXPECT_EQ(test::positions_after_8_frames(make, 1, 12),
+              test::positions_after_8_frames(make, 2, 12));
+}
+
+TEST(XPBDOgc, WideRadiusSavedStateContinuesBitForBit) {
+    test::expect_saved_state_continues_bit_for_bit([] { return colliding_sheets_wide(10); }, 1, 12);
+}
+
 // Choosing the contact does not switch self-collision on: a scene with "self_collision": false
 // and "contact": "ogc" has no self-contact at all (the sheets fall through each other).
 TEST(XPBDOgc, ContactChoiceKeepsSelfCollisionOff) {

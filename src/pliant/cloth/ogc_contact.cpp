@@ -63,6 +63,12 @@ void OgcContact::check_options(const OgcOptions& options) {
             options.radius, options.query_factor, options.bound_share, options.redetect_share,
             options.stiffness));
     }
+    if (options.wide_query_factor != 0.0 &&
+        !finite_at_least(options.wide_query_factor, options.query_factor)) {
+        throw InvalidInput(fmt::format(
+            "cloth: ogc contact: expected wide_query_factor 0 (off) or >= query_factor {}, got {}",
+            options.query_factor, options.wide_query_factor));
+    }
 }
 
 OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_t num_vertices,
@@ -72,6 +78,14 @@ OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_
       m_radius(radius),
       m_query_radius(radius * options.query_factor),
       m_ball_radius(radius * options.query_factor * options.bound_share),
+      m_base_query_radius(m_query_radius),
+      m_base_ball_radius(m_ball_radius),
+      m_wide_query_radius(options.wide_query_factor > 0.0 ? radius * options.wide_query_factor
+                                                          : m_query_radius),
+      m_wide_ball_radius(
+          options.wide_query_factor > 0.0
+              ? 0.5 * (m_wide_query_radius - (1.0 - 2.0 * options.bound_share) * m_query_radius)
+              : m_ball_radius),
       m_stiffness(stiffness),
       m_broad_phase(triangles, num_vertices),
       m_triangles(triangles.begin(), triangles.end()) {
@@ -90,8 +104,24 @@ OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_
     m_snapshot.resize(num_vertices);
 }
 
+void OgcContact::begin_substep() {
+    ++m_since_redetect;
+    m_wide_hold = std::max<std::int64_t>(0, m_wide_hold - 1);
+}
+
+void OgcContact::redetect(std::span<const Vec3d> x) {
+    if (m_options.wide_query_factor > 0.0 && m_since_redetect <= WIDE_TRIGGER_SUBSTEPS) {
+        m_wide_hold = WIDE_HOLD_SUBSTEPS;
+    }
+    m_since_redetect = 0;
+    detect(x);
+}
+
 void OgcContact::detect(std::span<const Vec3d> x) {
     const Stopwatch watch;
+    m_wide = m_wide_hold > 0;
+    m_query_radius = m_wide ? m_wide_query_radius : m_base_query_radius;
+    m_ball_radius = m_wide ? m_wide_ball_radius : m_base_ball_radius;
     // Built from scratch at every detection, so that the pairs' order (and the contact forces'
     // summation order) depends on x only: a resumed run detects the same.
     m_broad_phase.request_rebuild();
@@ -254,6 +284,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
     m_shift = {0.0, 0.0, 0.0};
     m_has_detection = true;
     ++m_detections;
+    m_wide_detections += m_wide ? 1 : 0;
     m_detect_ms += watch.elapsed_ms();
 }
 
@@ -583,6 +614,12 @@ void OgcContact::save_state(ByteWriter& out) const {
         out.put_vector(m_detected);
         out.put(m_shift);
     }
+    if (m_options.wide_query_factor > 0.0) {
+        out.put(m_wide);
+        out.put(m_wide_detections);
+        out.put(m_since_redetect);
+        out.put(m_wide_hold);
+    }
 }
 
 void OgcContact::load_state(ByteReader& in) {
@@ -593,20 +630,45 @@ void OgcContact::load_state(ByteReader& in) {
     }
     const bool has_detection = in.get_bool("ogc.has_detection");
     const auto detections = in.get<std::int64_t>("ogc.detections");
+    std::vector<Vec3d> detected;
+    Vec3d shift{0.0, 0.0, 0.0};
     if (has_detection) {
-        std::vector<Vec3d> detected;
         in.get_vector("ogc.detected", detected, static_cast<std::int64_t>(m_num_vertices));
-        detect(detected);
-        const auto shift = in.get<Vec3d>("ogc.shift");
+        shift = in.get<Vec3d>("ogc.shift");
         if (!std::isfinite(shift.x) || !std::isfinite(shift.y) || !std::isfinite(shift.z)) {
             throw InvalidInput(
                 fmt::format("{}: ogc contact: a frame shift that is not finite", in.source()));
         }
+    }
+    bool wide = false;
+    std::int64_t wide_detections = 0;
+    std::int64_t since_redetect = m_since_redetect;
+    std::int64_t wide_hold = 0;
+    if (m_options.wide_query_factor > 0.0) {
+        wide = in.get_bool("ogc.wide");
+        wide_detections = in.get<std::int64_t>("ogc.wide_detections");
+        since_redetect = in.get<std::int64_t>("ogc.since_redetect");
+        wide_hold = in.get<std::int64_t>("ogc.wide_hold");
+        if (wide_detections < 0 || since_redetect < 0 || wide_hold < 0 ||
+            wide_hold > WIDE_HOLD_SUBSTEPS) {
+            throw InvalidInput(fmt::format(
+                "{}: ogc contact: expected wide-radius counters >= 0 and a hold <= {}, got {}, {} "
+                "and {}",
+                in.source(), WIDE_HOLD_SUBSTEPS, wide_detections, since_redetect, wide_hold));
+        }
+    }
+    if (has_detection) {
+        // The detection again, at the radius it had.
+        m_wide_hold = wide ? 1 : 0;
+        detect(detected);
         m_shift = shift;
     } else {
         m_has_detection = false;
     }
     m_detections = detections;
+    m_wide_detections = wide_detections;
+    m_since_redetect = since_redetect;
+    m_wide_hold = wide_hold;
 }
 
 }  // namespace pliant::cloth

@@ -51,6 +51,13 @@
 //      would stay held back for good while the pins move on. XPBD then truncates the move again
 //      from the new detection (XPBDStepper::catch_up), VBD's next sweep moves on from it. A
 //      settled sheet keeps one detection for many substeps.
+//   wide radius (wide_query_factor w, off by default): while the truncations ask for detections
+//      every substep or two (the cloth moves against itself faster than the ball per substep:
+//      the drape's impact, where the sphere stops part of the sheet and the rest falls on), the
+//      detections use r_w = w r and the ball b_w = (r_w − (1 − 2 bound_share) r_q) / 2: pairs
+//      left out still keep (1 − 2 bound_share) r_q apart, and the larger ball lets the sheet
+//      move on for several substeps per detection. A wide detection costs more (it keeps the
+//      in-plane neighbours one ring out), so the radius returns to r_q after a hold (redetect()).
 //
 // XPBD (xpbd_stepper.hpp) uses the detection and the bounds with a hard constraint instead of the
 // energy: project() pushes every detected pair closer than r apart to r along its normal (XPBD
@@ -69,6 +76,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -89,6 +97,12 @@ struct OgcOptions {
     double query_factor = 2.0;
     // The ball's radius bound_share · r_q, in (0, 0.5).
     double bound_share = 0.25;
+    // A wider query radius while the cloth moves fast against itself: r_w = wide_query_factor · r
+    // (0: off; else >= query_factor), its ball b_w = r_w / 2 − (1 − 2 bound_share) r_q / 2, so
+    // that pairs not detected keep the same distance (1 − 2 bound_share) r_q. A ball that covers
+    // a substep's relative motion lets the sheet move on between detections instead of being
+    // held back every substep (the drape's impact); see redetect().
+    double wide_query_factor = 0.0;
     // Re-detect when more than this share of the free vertices hit their bound in a sweep, in
     // [0, 1].
     double redetect_share = 0.01;
@@ -113,6 +127,9 @@ public:
 
     // The fraction of d / 2 a vertex keeps from its pair's plane.
     static constexpr double PLANE_MARGIN = 0.1;
+    // redetect(): the wide radius's trigger and hold, in substeps.
+    static constexpr std::int64_t WIDE_TRIGGER_SUBSTEPS = 2;
+    static constexpr std::int64_t WIDE_HOLD_SUBSTEPS = 40;
 
     // triangles: #T, indices into [0, num_vertices); radius r (m, > 0); stiffness k_c (N/m, > 0).
     // InvalidInput for options out of range.
@@ -120,12 +137,27 @@ public:
                const OgcOptions& options, double radius, double stiffness);
 
     // InvalidInput unless radius >= 0, query_factor >= 1, 0 < bound_share < 0.5,
-    // 0 <= redetect_share <= 1 and stiffness >= 0 (all finite).
+    // 0 <= redetect_share <= 1, stiffness >= 0 and wide_query_factor 0 or >= query_factor (all
+    // finite).
     static void check_options(const OgcOptions& options);
 
-    // Detection at x (#V, intersection-free): pairs, planes; the shift restarts at zero.
-    // InvalidInput when the pairs exceed the memory guard (a diverged simulation).
+    // Detection at x (#V, intersection-free): pairs, planes; the shift restarts at zero. The
+    // query radius and ball are the wide ones while the wide hold lasts (redetect()), else the
+    // base ones. InvalidInput when the pairs exceed the memory guard (a diverged simulation).
     void detect(std::span<const Vec3d> x);
+    // The detection the truncations asked for (more than redetect_share of the free vertices
+    // held back). With wide_query_factor, one that comes at most WIDE_TRIGGER_SUBSTEPS substeps
+    // after the previous such detection (the base ball is shorter than the motion of a substep
+    // or two) starts a hold of WIDE_HOLD_SUBSTEPS substeps in which detections use the wide
+    // radius; after the hold the next detection is a base one again. Detections that pins or
+    // fail-safes ask for (detect()) do not count: their motion is the pins'. XPBDStepper calls it
+    // (VBDStepper rejects wide_query_factor: it detects several times within a substep).
+    void redetect(std::span<const Vec3d> x);
+    // Once at the start of every substep (the wide hold counts substeps).
+    void begin_substep();
+    // Whether the current detection used the wide radius; wide detections since construction.
+    bool wide() const { return m_wide; }
+    std::int64_t wide_detections() const { return m_wide_detections; }
     bool has_detection() const { return m_has_detection; }
     // The next substep must detect first (after a fail-safe moved vertices).
     void invalidate() { m_has_detection = false; }
@@ -208,8 +240,16 @@ private:
     OgcOptions m_options;
     std::size_t m_num_vertices;
     double m_radius;
-    double m_query_radius;
-    double m_ball_radius;
+    double m_query_radius;  // of the current detection
+    double m_ball_radius;   // of the current detection
+    double m_base_query_radius;
+    double m_base_ball_radius;
+    double m_wide_query_radius;  // the base ones without wide_query_factor
+    double m_wide_ball_radius;
+    bool m_wide = false;  // the current detection is a wide one
+    std::int64_t m_wide_detections = 0;
+    std::int64_t m_since_redetect = std::numeric_limits<std::int64_t>::max() / 2;  // substeps
+    std::int64_t m_wide_hold = 0;  // substeps left in the wide hold
     double m_stiffness;
     collision::SelfCollisionBroadPhase<double> m_broad_phase;
     std::vector<geometry::Triangle> m_triangles;

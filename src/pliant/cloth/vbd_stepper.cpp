@@ -51,6 +51,15 @@ VBDStepper::VBDStepper(const ClothModel& model, const VBDOptions& options)
     }
     if (options.ogc) {
         OgcContact::check_options(*options.ogc);
+        // VBD detects again within a substep as its prediction needs (MAX_PREDICTION_DETECTIONS):
+        // redetect()'s intervals would always be short and every detection wide (layers: 1.7
+        // times the CPU time, docs/performance.md).
+        if (options.ogc->wide_query_factor != 0.0) {
+            throw InvalidInput(fmt::format(
+                "cloth: vbd: ogc contact's wide_query_factor is for the xpbd solver; expected 0 "
+                "(off), got {}",
+                options.ogc->wide_query_factor));
+        }
     }
     const std::size_t n = model.num_vertices();
     const std::span<const Vec3d> rest = model.rest_positions();

@@ -189,11 +189,15 @@ bool XPBDStepper::audit(std::span<Vec3d> x, std::span<Vec3d> velocities) {
     return detail::audit_ogc_window(*m_self_collision, *m_ogc, m_audit, x, velocities);
 }
 
-void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities) {
+void XPBDStepper::detect(std::span<Vec3d> x, std::span<Vec3d> velocities, bool held_back) {
     if (m_ogc->options().audit) {
         audit(x, velocities);
     }
-    m_ogc->detect(x);
+    if (held_back) {
+        m_ogc->redetect(x);
+    } else {
+        m_ogc->detect(x);
+    }
 }
 
 void XPBDStepper::catch_up(std::span<Vec3d> x, std::span<Vec3d> velocities,
@@ -293,6 +297,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     const std::span<const double> inverse_masses = model.inverse_masses();
     const ClothMaterial& material = model.material();
     const auto n = static_cast<std::int64_t>(positions.size());
+    if (m_ogc) {
+        m_ogc->begin_substep();
+    }
     if (m_ogc && !m_ogc->has_detection()) {
         solve_ms += watch.elapsed_ms();
         detect(positions, velocities);  // x_t, intersection-free
@@ -393,7 +400,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         VERTEX_GRAIN);
     solve_ms += watch.elapsed_ms();
     if (m_ogc && needs_detection(m_substep_truncated)) {
-        detect(positions, velocities);
+        detect(positions, velocities, /*held_back=*/true);
     }
     return contacts;
 }

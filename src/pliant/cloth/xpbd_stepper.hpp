@@ -116,11 +116,12 @@ struct ClothStepStats {
     std::int64_t solver_sweeps = 0;   // VBD (vbd_stepper.hpp): sweeps over the vertices; else 0
     bool has_self_collision = false;  // the fields below are filled
     SelfCollisionStats self;          // self_collision.hpp
-    // VBD with OGC contact (ogc_contact.hpp): detections in the step, vertices held back by their
-    // bounds (summed over moves), pairs within the query radius and within the contact radius at
-    // the last detection.
+    // OGC contact (ogc_contact.hpp): detections in the step (those with the wide query radius),
+    // vertices held back by their bounds (summed over moves), pairs within the query radius and
+    // within the contact radius at the last detection.
     bool has_ogc = false;
     std::int64_t ogc_detections = 0;
+    std::int64_t ogc_wide_detections = 0;
     std::int64_t ogc_truncated = 0;
     std::int64_t ogc_pairs = 0;
     std::int64_t ogc_close_pairs = 0;
@@ -200,8 +201,9 @@ private:
     // OGC: whether `truncated` vertices held back call for a new detection.
     bool needs_detection(std::int64_t truncated) const;
     // OGC: the audit's window ends at x (ogc.audit; velocities of the vertices it puts back are
-    // set to zero), then a detection at x.
-    void detect(std::span<Vec3d> x, std::span<Vec3d> velocities);
+    // set to zero), then a detection at x: OgcContact::redetect() when held_back (the detection
+    // the truncations asked for), else OgcContact::detect().
+    void detect(std::span<Vec3d> x, std::span<Vec3d> velocities, bool held_back = false);
     // OGC, in a substep whose pins left their sets (they drive the cloth faster than the
     // detections follow): the vertices their balls held back at x are caught up: a detection at x
     // (intersection-free), then every free vertex's move from there toward m_ogc_wanted

@@ -497,6 +497,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["new_paths"] = step.self.new_paths;
             if (step.has_ogc) {
                 record["ogc_detections"] = step.ogc_detections;
+                record["ogc_wide_detections"] = step.ogc_wide_detections;
                 record["ogc_truncated_vertices"] = step.ogc_truncated;
                 record["ogc_pairs"] = step.ogc_pairs;
                 record["ogc_close_pairs"] = step.ogc_close_pairs;

@@ -752,8 +752,8 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
     }
     if (const Json* contact = root.find("contact")) {
         // "proximity" (the default), "ogc", or {"type": "ogc", "radius": r, "query_factor": q,
-        // "bound_share": g, "redetect_share": s, "stiffness": k, "audit": b}
-        // (cloth/ogc_contact.hpp), for either solver.
+        // "bound_share": g, "wide_query_factor": w, "redetect_share": s, "stiffness": k,
+        // "audit": b} (cloth/ogc_contact.hpp), for either solver.
         std::optional<cloth::OgcOptions> ogc;
         if (contact->is_object()) {
             root.object("contact", [&](ObjectReader& c) {
@@ -762,6 +762,8 @@ cloth::ClothScene parse_cloth_scene(std::string_view text, std::string_view name
                     o.radius = c.number("radius", o.radius, 0.0, 1e3);
                     o.query_factor = c.number("query_factor", o.query_factor, 1.0, 100.0);
                     o.bound_share = c.number("bound_share", o.bound_share, 1e-3, 0.49);
+                    o.wide_query_factor =
+                        c.number("wide_query_factor", o.wide_query_factor, 0.0, 100.0);
                     o.redetect_share = c.number("redetect_share", o.redetect_share, 0.0, 1.0);
                     o.stiffness = c.number("stiffness", o.stiffness, 0.0, 1e15);
                     if (const Json* audit = c.find("audit")) {

@@ -82,7 +82,7 @@ OgcStepStart begin_ogc_step(const OgcContact& ogc, std::span<const Vec3d> positi
     audit.full_audits = 0;
     num_free = std::count_if(inverse_masses.begin(), inverse_masses.end(),
                              [](double w) { return w > 0.0; });
-    return {ogc.detections(), ogc.detect_ms()};
+    return {ogc.detections(), ogc.wide_detections(), ogc.detect_ms()};
 }
 
 namespace {
@@ -192,6 +192,7 @@ void ogc_step_stats(const OgcContact& ogc, const OgcStepStart& start, std::int64
     stats.ogc_full_audits = audit.full_audits;
     stats.has_ogc = true;
     stats.ogc_detections = ogc.detections() - start.detections;
+    stats.ogc_wide_detections = ogc.wide_detections() - start.wide_detections;
     stats.ogc_detect_ms = ogc.detect_ms() - start.detect_ms;
     stats.ogc_truncated = truncated;
     stats.ogc_pairs = static_cast<std::int64_t>(ogc.num_pairs());

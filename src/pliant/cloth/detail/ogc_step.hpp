@@ -22,6 +22,7 @@ namespace pliant::cloth::detail {
 // The contact's counters at a step's start (ogc_step_stats() reports the step's share).
 struct OgcStepStart {
     std::int64_t detections = 0;
+    std::int64_t wide_detections = 0;
     double detect_ms = 0.0;
 };
 
