@@ -359,6 +359,14 @@ void MappedRayCaster::set_clip(const std::optional<ClipPlane>& clip) {
     m_options.clip = clip;
 }
 
+void MappedRayCaster::set_thin_alpha(double thin_alpha) {
+    if (!(thin_alpha >= 0.0 && thin_alpha <= 1.0)) {
+        throw InvalidInput(
+            fmt::format("raycast through a map: thin_alpha must be in [0, 1], got {}", thin_alpha));
+    }
+    m_thin_alpha = thin_alpha;
+}
+
 std::int64_t MappedRayCaster::num_visible_cells() const {
     std::int64_t count = 0;
     for (const std::uint8_t v : m_visible) {
@@ -746,6 +754,8 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m.gradient = m_packed.data() + 2;
             m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
         }
+        // The adaptive step's threshold on the α bytes.
+        m.thin_alpha = static_cast<float>(m_thin_alpha * 255.0);
     }
     detail::set_visible_cells(m, m_visible_cells);
     for (int octant = 0; octant < 8; ++octant) {

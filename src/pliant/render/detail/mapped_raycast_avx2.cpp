@@ -20,15 +20,20 @@ constexpr std::int64_t INDEX_LIMIT = std::int64_t{1} << 31;
 constexpr std::int64_t MAX_LANE_SAMPLES = std::int64_t{1} << 30;
 
 // The march state of 8 rays (Lanes) and, per lane, the source coordinate of the lane's last
-// classified sample and its index (−2: none), for the prefetch of the sample after next.
+// classified sample and the index of the sample after it (−2: none), for the prefetch of the
+// sample after next; the adaptive step's state (mapped_march()): whether the ray is thin (all
+// ones) and its number of full samples (a coarse sample needs two of them left).
 struct alignas(32) MapLanes : Lanes {
     float last_g[3][LANES];
-    std::int32_t last_n[LANES];
+    std::int32_t last_next[LANES];
+    std::int32_t thin[LANES];
+    std::int32_t total[LANES];
 };
 
-// Puts ray p into lane l, marched over its samples [first, end) (visible_samples()).
+// Puts ray p into lane l, marched over its samples [first, end) (visible_samples()); with the
+// adaptive step from the pair that holds sample `first`, thin (mapped_march()).
 void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int32_t num_cells,
-               MapLanes& s, int l) {
+               bool adaptive, MapLanes& s, int l) {
     for (int a = 0; a < 3; ++a) {
         s.dir[a][l] = p.dir[a];
         s.go[a][l] = p.r.go[a];
@@ -39,10 +44,12 @@ void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int
     s.t_far[l] = p.r.t_far;
     s.margin[l] = p.r.margin;
     s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
-    s.n[l] = first;
+    s.n[l] = adaptive ? first & ~1 : first;
     s.num_full[l] = end;
     s.samples[l] = 0;
-    s.last_n[l] = -2;
+    s.last_next[l] = -2;
+    s.thin[l] = adaptive ? -1 : 0;
+    s.total[l] = static_cast<std::int32_t>(p.num_full);
     const int octant = octant_of(p.r);
     s.cube[l] = octant * num_cells;
     for (auto& m : s.more) {
@@ -54,7 +61,9 @@ void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int
 // An idle lane (clear_lane()) with no classified sample.
 void clear_map_lane(MapLanes& s, int l) {
     clear_lane(s, l);
-    s.last_n[l] = -2;
+    s.last_next[l] = -2;
+    s.thin[l] = 0;
+    s.total[l] = 0;
 }
 
 // visible_samples() of 8 rays in floats (the span need only hold every sample of a visible
@@ -211,7 +220,7 @@ PLIANT_AVX2_INLINE void source_gradient8(const MappedKernel& m, const Grid8& src
 // rgba8_voxel().
 PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& grid,
                                            const std::int32_t* at, const __m256 fraction[3],
-                                           __m256 out[4]) {
+                                           __m256 out[4], __m256& max_alpha) {
     const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
     __m256 first[4][4], second[4][4];  // [channel][row]
     for (int r = 0; r < 4; ++r) {
@@ -234,16 +243,21 @@ PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& g
     for (int c = 0; c < 4; ++c) {
         out[c] = trilinear8(first[c], second[c], fraction);
     }
+    max_alpha = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(first[3][0], second[3][0]),
+                                            _mm256_max_ps(first[3][1], second[3][1])),
+                              _mm256_max_ps(_mm256_max_ps(first[3][2], second[3][2]),
+                                            _mm256_max_ps(first[3][3], second[3][3])));
 }
 
 // interpolate_bytes8() and source_gradient8() of 8 lanes of a packed source
 // (PACKED_VOXEL_BYTES per voxel): a lane's x-adjacent voxel pair of a row is one 32-byte load
 // that holds both voxels' bytes and gradients, transposed once; then the bytes' channels
 // (shifts and masks, converted and premultiplied) as interpolate_bytes8() and the gradient's
-// (sign-extended halves) as source_gradient8(), the same values.
+// (sign-extended halves) as source_gradient8(), the same values; max_alpha the largest α byte
+// of the 8 voxels.
 PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& grid,
                                             const std::int32_t* at, const __m256 fraction[3],
-                                            __m256 out[4], __m256 gradient[3]) {
+                                            __m256 out[4], __m256 gradient[3], __m256& max_alpha) {
     const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
     const __m256i byte = _mm256_set1_epi32(0xff);
     __m256 first[4][4], second[4][4];  // [channel][row]
@@ -276,6 +290,10 @@ PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& 
     for (int c = 0; c < 4; ++c) {
         out[c] = trilinear8(first[c], second[c], fraction);
     }
+    max_alpha = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(first[3][0], second[3][0]),
+                                            _mm256_max_ps(first[3][1], second[3][1])),
+                              _mm256_max_ps(_mm256_max_ps(first[3][2], second[3][2]),
+                                            _mm256_max_ps(first[3][3], second[3][3])));
     for (int a = 0; a < 3; ++a) {
         gradient[a] = trilinear8(first_d[a], second_d[a], fraction);
     }
@@ -283,13 +301,13 @@ PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& 
 
 // mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
 // out[0 … 2] the straight colour (shaded when SHADING), out[3] the step opacity (RGBA) or the
-// lookup entry's, all 0 where the sample has no opacity (outside the source box, or none). Lanes
-// outside `mask` are sampled at source coordinate 0 (their loads stay in bounds; their results are
-// not used).
+// lookup entry's, all 0 where the sample has no opacity (outside the source box, or none);
+// max_alpha as mapped_classify()'s (0 outside the source box). Lanes outside `mask` are sampled
+// at source coordinate 0 (their loads stay in bounds; their results are not used).
 template <bool IS_RGBA, bool SHADING>
 PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const __m256i q[3],
                                   const __m256 f[3], __m256 mask, const __m256 dir8[3],
-                                  __m256 out[4], __m256 source[3]) {
+                                  __m256 out[4], __m256 source[3], __m256& max_alpha) {
     const RayCastKernel& s = m.source;
     // 1. The map: the 8 nodes of each lane's cell, per channel, then the trilinear value and
     // (shading) its derivatives, as map_coordinate().
@@ -357,12 +375,13 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 zero = _mm256_setzero_ps();
     __m256 positive;
+    max_alpha = _mm256_set1_ps(std::numeric_limits<float>::infinity());
     if constexpr (IS_RGBA) {
         __m256 rgba[4];
         if (packed) {
-            interpolate_packed8(m, src, at, fraction, rgba, d);
+            interpolate_packed8(m, src, at, fraction, rgba, d, max_alpha);
         } else if (m.rgba8 != nullptr) {
-            interpolate_bytes8(m, src, at, fraction, rgba);
+            interpolate_bytes8(m, src, at, fraction, rgba, max_alpha);
         } else {
             interpolate_rgba8(src, at, fraction, rgba);
         }
@@ -412,6 +431,7 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
             out[ch] = _mm256_and_ps(positive, e[ch]);
         }
     }
+    max_alpha = _mm256_and_ps(max_alpha, inside);  // 0 outside the source box
     const __m256 a_step = out[3];
     // 4. Shading (mapped_classify()): the stored source gradient at the sample through the map's
     // Jacobian (target_gradient()), for the samples with opacity.
@@ -484,6 +504,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     }
 
     // 2. The queued rays in the 8 lanes, a lane taking the next ray as soon as its ray ends.
+    const bool adaptive = m.thin_alpha > 0.0f;
     MapLanes s;
     LaneSlots slots;
     const auto end_lane = [&](int l) {
@@ -497,7 +518,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         if (slots.next < queue_size) {
             const int pixel = queue[slots.next++];
             const PixelRay& p = rays[pixel];
-            fill_lane(p, first[pixel], end[pixel], num_cells, s, l);
+            fill_lane(p, first[pixel], end[pixel], num_cells, adaptive, s, l);
             slots.take(l, pixel, zero_axes_of(p.r) != 0);
             return;
         }
@@ -527,6 +548,13 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     const __m256i cells_x = _mm256_set1_epi32(m.cells[0]);
     const __m256i cells_y = _mm256_set1_epi32(m.cells[1]);
     const __m256i one_i = _mm256_set1_epi32(1);
+    const __m256i two_i = _mm256_set1_epi32(2);
+    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 two = _mm256_set1_ps(2.0f);
+    const __m256 thin_alpha = _mm256_set1_ps(m.thin_alpha);
+    // The lanes' state after a sample they did not classify (skipped or without a valid map):
+    // thin with the adaptive step (mapped_march()).
+    const __m256i empty_thin = adaptive ? _mm256_set1_epi32(-1) : _mm256_setzero_si256();
     Grid8 src;
     load_grid8(m.source, src);
     const std::uint8_t* cubes = m.empty_cube[0];
@@ -536,11 +564,18 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         const __m256i live = lanes_of8(slots.live_mask);
         const __m256i n = load(s.n);
         const __m256i num_full = load(s.num_full);
-        // sample_position(): go + (t_near + (n + 0.5)·Δs)·gd; locate_map(): the clamp to
+        // The adaptive step: a thin lane with two full segments left takes a coarse sample.
+        const __m256i coarse =
+            adaptive
+                ? _mm256_and_si256(load(s.thin),
+                                   _mm256_cmpgt_epi32(load(s.total), _mm256_add_epi32(n, one_i)))
+                : _mm256_setzero_si256();
+        // adaptive_position(): go + (t_near + (n + ½ or 1)·Δs)·gd; locate_map(): the clamp to
         // [0, n − 1], the map cell min(⌊t / B⌋, cells − 1) and the fraction.
         const __m256 t_near = load(s.t_near);
-        const __m256 tm =
-            _mm256_add_ps(t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), half), step));
+        const __m256 offset = _mm256_blendv_ps(half, one, as_float(coarse));
+        const __m256 tm = _mm256_add_ps(
+            t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), offset), step));
         __m256i q[3];
         __m256 f[3];
         for (int a = 0; a < 3; ++a) {
@@ -553,6 +588,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
             q[0],
             _mm256_mullo_epi32(cells_x, _mm256_add_epi32(q[1], _mm256_mullo_epi32(cells_y, q[2]))));
         __m256i n_next = _mm256_add_epi32(n, one_i);
+        __m256i thin_next = empty_thin;
         __m256i classified;
         alignas(32) std::int32_t at[LANES];
         if (k.skipping) {
@@ -585,6 +621,20 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                 const __m256 jump_size = _mm256_blendv_ps(b, half_b, as_float(sub_jumps));
                 n_next = jump8(s, jump_q, jump_side, jump_size, jumps, n_next, num_full, t_near,
                                inv_step);
+                if (adaptive) {
+                    // thin_jump(): the pairs from n (coarse) or n + 1 (fine), the last start at
+                    // or before the sample past the region, at least the pair after the
+                    // sample's own; from the span's end on, that sample.
+                    const __m256i pairs = _mm256_add_epi32(_mm256_add_epi32(n, one_i), coarse);
+                    const __m256i rounded = _mm256_add_epi32(
+                        pairs, _mm256_andnot_si256(one_i, _mm256_sub_epi32(n_next, pairs)));
+                    const __m256i least =
+                        _mm256_blendv_epi8(pairs, _mm256_add_epi32(n, two_i), coarse);
+                    const __m256i lattice = _mm256_max_epi32(rounded, least);
+                    const __m256i before_end =
+                        _mm256_and_si256(jumps, _mm256_cmpgt_epi32(num_full, n_next));
+                    n_next = _mm256_blendv_epi8(n_next, lattice, before_end);
+                }
             }
             classified = _mm256_andnot_si256(jumps, live);
         } else {
@@ -592,16 +642,37 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
             const __m256i valid =
                 _mm256_and_si256(load_bytes(m.occupancy, at), _mm256_set1_epi32(MAP_CELL_VALID));
             classified = _mm256_and_si256(live, _mm256_cmpgt_epi32(valid, _mm256_setzero_si256()));
+            // Lanes without a valid map pass their sample (two segments when coarse).
+            n_next = _mm256_sub_epi32(n_next, _mm256_andnot_si256(classified, coarse));
         }
         __m256i terminated = _mm256_setzero_si256();
         if (_mm256_movemask_ps(as_float(classified)) != 0) {
             const __m256 dir8[3] = {load(s.dir[0]), load(s.dir[1]), load(s.dir[2])};
-            __m256 rgba[4], g[3];
-            classify8<IS_RGBA, SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g);
+            __m256 rgba[4], g[3], max_alpha;
+            classify8<IS_RGBA, SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g,
+                                        max_alpha);
+            // The adaptive step: a coarse sample whose voxels are not all thin is discarded (the
+            // lane takes its pair in fine samples: n again, not thin); one that is thin
+            // composites with the opacity of 2Δs (coarse_opacity()) and moves on by 2.
+            __m256i composited = classified;
+            if (adaptive) {
+                const __m256i is_thin = as_int(_mm256_cmp_ps(max_alpha, thin_alpha, _CMP_LT_OQ));
+                const __m256i discarded =
+                    _mm256_andnot_si256(is_thin, _mm256_and_si256(classified, coarse));
+                composited = _mm256_andnot_si256(discarded, classified);
+                rgba[3] = _mm256_blendv_ps(
+                    rgba[3], _mm256_mul_ps(rgba[3], _mm256_sub_ps(two, rgba[3])), as_float(coarse));
+                n_next = _mm256_blendv_epi8(n_next, _mm256_add_epi32(n, two_i),
+                                            _mm256_and_si256(composited, coarse));
+                n_next = _mm256_blendv_epi8(n_next, n, discarded);
+                thin_next = _mm256_blendv_epi8(thin_next, _mm256_and_si256(composited, is_thin),
+                                               classified);
+            }
             // Prefetch: the voxel rows of the sample after next, extrapolated from this sample's
-            // source coordinate and the last one's when they are consecutive samples.
-            const __m256i consecutive = _mm256_and_si256(
-                classified, _mm256_cmpeq_epi32(load(s.last_n), _mm256_sub_epi32(n, one_i)));
+            // source coordinate and the last one's when they are consecutive samples (this one
+            // the sample after the last).
+            const __m256i consecutive =
+                _mm256_and_si256(classified, _mm256_cmpeq_epi32(load(s.last_next), n));
             int ahead_mask = _mm256_movemask_ps(as_float(consecutive));
             if (ahead_mask != 0) {
                 __m256i corner[3];
@@ -649,13 +720,17 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
             for (int a = 0; a < 3; ++a) {
                 store(s.last_g[a], _mm256_blendv_ps(load(s.last_g[a]), g[a], as_float(classified)));
             }
-            store(s.last_n, _mm256_blendv_epi8(load(s.last_n), n, classified));
+            store(s.last_next,
+                  _mm256_blendv_epi8(load(s.last_next),
+                                     _mm256_blendv_epi8(_mm256_set1_epi32(-2), n_next, composited),
+                                     classified));
             // composite(): front to back, the samples with opacity.
             const __m256 blend =
-                _mm256_and_ps(as_float(classified), _mm256_cmp_ps(rgba[3], zero, _CMP_GT_OQ));
+                _mm256_and_ps(as_float(composited), _mm256_cmp_ps(rgba[3], zero, _CMP_GT_OQ));
             terminated = composite8(s, rgba, blend, classified, threshold);
         }
         store(s.n, n_next);
+        store(s.thin, thin_next);
         // Done: opaque (accumulated opacity above the threshold), or no sample left.
         const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);
         const __m256i done =

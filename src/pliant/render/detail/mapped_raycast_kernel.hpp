@@ -79,6 +79,11 @@ struct MappedKernel {
     // PACKED_VOXEL_BYTES / 2 packed).
     std::int64_t rgba8_stride = 4;
     std::int64_t gradient_stride = 4;
+    // The opacity-adaptive step (an rgba8 source; 0: off): a ray is marched in pairs of
+    // samples where its source is thin, each pair represented by one sample at the pair's
+    // middle (coarse_sample()), while the largest α byte of the 8 voxels every sample reads
+    // stays below thin_alpha (thin()).
+    float thin_alpha = 0.0f;
 };
 static_assert(std::is_trivially_copyable_v<MappedKernel>);
 
@@ -162,7 +167,8 @@ PLIANT_HOST_DEVICE inline void rgba8_voxel(const std::uint8_t* p, float out[4]) 
 // interpolate_rgba() of an rgba8 source at t in the units of rgba8_voxel(): the same trilinear
 // operations on the corners' premultiplied values (RayCaster's float copy holds them divided by
 // 255² and 255: the same values up to rounding, without a conversion per corner).
-PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const Trilinear& t) {
+PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const Trilinear& t,
+                                                   float& max_alpha) {
     const RayCastKernel& s = m.source;
     const std::int64_t stride = m.rgba8_stride;
     const std::uint8_t* p = m.rgba8 + stride * voxel_index(s, t);
@@ -171,6 +177,10 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
     float v[8][4];
     for (int i = 0; i < 8; ++i) {
         rgba8_voxel(p + corner[i], v[i]);
+    }
+    max_alpha = v[0][3];
+    for (int i = 1; i < 8; ++i) {
+        max_alpha = std::max(max_alpha, v[i][3]);
     }
     float out[4];
     for (int c = 0; c < 4; ++c) {
@@ -184,12 +194,15 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
 }
 
 // classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set
-// (interpolate_rgba8(): the opacity α / 255, the straight colour α·c / (255 α)).
-PLIANT_HOST_DEVICE inline Sample classify_rgba_source(const MappedKernel& m, const Trilinear& t) {
+// (interpolate_rgba8(): the opacity α / 255, the straight colour α·c / (255 α)); max_alpha the
+// largest α byte of the 8 voxels read (rgba8), else +∞.
+PLIANT_HOST_DEVICE inline Sample classify_rgba_source(const MappedKernel& m, const Trilinear& t,
+                                                      float& max_alpha) {
     if (m.rgba8 == nullptr) {
+        max_alpha = std::numeric_limits<float>::infinity();
         return classify<true>(m.source, t);
     }
-    const Sample s = interpolate_rgba8(m, t);
+    const Sample s = interpolate_rgba8(m, t, max_alpha);
     const float a = clampf(s.a * (1.0f / 255.0f), 0.0f, 1.0f);
     if (!(a > 0.0f)) {
         return {0.0f, 0.0f, 0.0f, 0.0f};
@@ -241,21 +254,25 @@ PLIANT_HOST_DEVICE inline float target_gradient(Vec3f d, Vec3f jac_a, float inv_
 // The classified sample of map cell c (straight colour, opacity for a full step), shaded when
 // the options ask: the gradient of the shaded value in the target frame, the stored source
 // gradient at g (source_gradient()) through the map's Jacobian (target_gradient()), then
-// 0.3 + 0.7 |n · dir| as shade(). Zero opacity outside the source box.
+// 0.3 + 0.7 |n · dir| as shade(). Zero opacity outside the source box. max_alpha: the largest
+// α byte of the source voxels the sample reads (classify_rgba_source()), 0 outside the source
+// box, +∞ for sources other than rgba8.
 template <bool IS_RGBA>
-PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c,
-                                                 Vec3f dir) {
+PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c, Vec3f dir,
+                                                 float& max_alpha) {
     const RayCastKernel& s = m.source;
     Vec3f jac[3];
     const Vec3f g = map_coordinate(m, c, m.target.shading ? jac : nullptr);
     if (!in_source(m, g)) {
+        max_alpha = 0.0f;
         return {0.0f, 0.0f, 0.0f, 0.0f};
     }
     const Trilinear t = locate(s, g);
     Sample out;
     if constexpr (IS_RGBA) {
-        out = classify_rgba_source(m, t);
+        out = classify_rgba_source(m, t, max_alpha);
     } else {
+        max_alpha = std::numeric_limits<float>::infinity();
         out = classify<false>(s, t);
     }
     if (out.a > 0.0f && m.target.shading) {
@@ -457,11 +474,55 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
         const std::uint8_t need = k.skipping ? MAP_CELL_VISIBLE : MAP_CELL_VALID;
         if ((m.occupancy[cell.index] & need) != 0 && (!k.skipping || sub_cell_occupied(m, cell))) {
             ++samples;
-            const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
+            float max_alpha = 0.0f;
+            const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir, max_alpha);
             composite_last(s, partial, k.step, c);
         }
     }
     return over_background(k, c);
+}
+
+// The opacity-adaptive step (MappedKernel::thin_alpha > 0). A ray is marched in fine samples
+// (segment n, at its midpoint t_near + (n + ½)Δs, as without it) and coarse samples (segments n
+// and n + 1 as one segment of 2Δs, sampled at its midpoint t_near + (n + 1)Δs, with the step
+// opacity α_2Δs = 1 − (1 − α_Δs)² = α_Δs (2 − α_Δs): the opacity correction of RayCaster for
+// a step twice as long). The ray starts thin; after a sample it is thin when every voxel that
+// sample read has an α byte below thin_alpha (the haze of a radiance field), else not. A thin
+// ray takes a coarse sample while two full segments are left; a coarse sample whose voxels are
+// not all thin is discarded (counted, not composited) and its two segments are taken as fine
+// samples. So where the source is not thin the samples are those of the fixed step; where it
+// is, half as many, each trilinear in thin voxels (docs/journal/2026-11-30-dense.md measures
+// the PSNR against the fixed step). Samples in empty cells read only α = 0 and are thin, so
+// the march skips them without changing what it classifies (thin_jump()): images are the same
+// with and without empty-space skipping.
+inline constexpr float THIN_ALPHA_BYTES = 32.0f;  // MappedRayCaster's default thin_alpha
+
+// The sample position of sample n, coarse (t_near + (n + 1)Δs) or fine (sample_position()).
+PLIANT_HOST_DEVICE inline Vec3f adaptive_position(const RayCastKernel& k, const GridRay& r,
+                                                  std::int64_t n, bool coarse) {
+    return r.go + (r.t_near + (static_cast<float>(n) + (coarse ? 1.0f : 0.5f)) * k.step) * r.gd;
+}
+
+// The step opacity of a coarse sample (2Δs) from that of its fine step α_Δs.
+PLIANT_HOST_DEVICE inline float coarse_opacity(float a) {
+    return a * (2.0f - a);
+}
+
+// The next sample of an adaptive march after a jump from sample n (coarse or fine) to past, the
+// first fine sample past the empty region (map_jump(), sub_cell_jump(); at most end). A march
+// that classified the skipped samples would have found them thin and gone on in coarse
+// samples at the pairs starting at n (coarse) or n + 1 (fine) and every second sample after:
+// the last such start at or before past (the pairs skipped start before past, so their sample
+// lies before the region's exit: in it), at least the pair after n's own. From end on, the
+// march ends either way (the samples there lie in no visible cell).
+PLIANT_HOST_DEVICE inline std::int64_t thin_jump(std::int64_t n, bool coarse, std::int64_t past,
+                                                 std::int64_t end) {
+    if (past >= end) {
+        return past;
+    }
+    const std::int64_t first = coarse ? n : n + 1;
+    const std::int64_t next = first + ((past - first) & ~std::int64_t{1});
+    return std::max(next, coarse ? n + 2 : first);
 }
 
 // The march of a composite ray through the map (march_composite() through the map): its
@@ -469,8 +530,9 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
 // cells its cell starts towards the ray's octant(s) (skipping), one in an empty sub-cell of a
 // visible cell past that sub-cell (sub_cell_jump()), or, without skipping, a sample in
 // a cell without a valid map (a node outside and away from the deformed body) is passed over,
-// transparent and not counted. Stops when the opacity exceeds the threshold. Adds the classified
-// samples to `samples`.
+// transparent and not counted. With the adaptive step (thin_alpha > 0) thin stretches are
+// sampled in coarse samples (above; a ray's pairs start at even samples). Stops when the
+// opacity exceeds the threshold. Adds the classified samples to `samples`.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const PixelRay& p,
                                                    std::int64_t& samples) {
@@ -485,36 +547,51 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
             cubes[num_cubes++] = m.empty_cube[octant ^ flip];
         }
     }
+    const bool adaptive = m.thin_alpha > 0.0f;
     Accumulated c;
     std::int64_t n = 0;
     std::int64_t end = p.num_full;
     if (k.skipping) {
         visible_samples(m, r, p.num_full, n, end);
     }
+    bool thin = adaptive;
+    if (adaptive) {
+        n &= ~std::int64_t{1};
+    }
     while (n < end) {
-        const MapCell cell = locate_map(m, sample_position(k, r, n));
+        const bool coarse = thin && n + 1 < p.num_full;
+        const MapCell cell = locate_map(m, adaptive_position(k, r, n, coarse));
         if (k.skipping) {
             int side = cubes[0][cell.index];
             for (int q = 1; q < num_cubes && side > 0; ++q) {
                 side = std::max<int>(side, cubes[q][cell.index]);
             }
-            if (side > 0) {
-                n = map_jump(m, r, cell, side, n, end);
-                continue;
-            }
-            if (!sub_cell_occupied(m, cell)) {
-                n = sub_cell_jump(m, r, cell, n, end);
+            const bool empty_sub_cell = side == 0 && !sub_cell_occupied(m, cell);
+            if (side > 0 || empty_sub_cell) {
+                const std::int64_t past = side > 0 ? map_jump(m, r, cell, side, n, end)
+                                                   : sub_cell_jump(m, r, cell, n, end);
+                n = adaptive ? thin_jump(n, coarse, past, end) : past;
+                thin = adaptive;
                 continue;
             }
         } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
-            ++n;
+            n += coarse ? 2 : 1;
+            thin = adaptive;
             continue;
         }
         ++samples;
-        ++n;
-        const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir);
-        if (s.a > 0.0f) {
-            composite(s, s.a, c.r, c.g, c.b, c.a);
+        float max_alpha = 0.0f;
+        const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir, max_alpha);
+        const bool is_thin = max_alpha < m.thin_alpha;
+        if (coarse && !is_thin) {
+            thin = false;  // the pair again, in fine samples
+            continue;
+        }
+        n += coarse ? 2 : 1;
+        thin = adaptive && is_thin;
+        const float a = coarse ? coarse_opacity(s.a) : s.a;
+        if (a > 0.0f) {
+            composite(s, a, c.r, c.g, c.b, c.a);
             if (c.a > k.threshold) {
                 break;
             }
