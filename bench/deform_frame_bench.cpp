@@ -9,14 +9,16 @@
 // its exact render; --json prints the same as one JSON object.
 //
 // Then the frames pipelined as `pliant deform --render` runs them (pipeline/frame_pipeline.hpp):
-// for each route, --pipe-frames more frames (default max(8, frames)) with the step and map (or
-// resample) of frame f + 1 on one thread while frame f's set_map (or update) and render run on
-// the others. The period is the wall (and process CPU) ms between the end of the first frame's
-// render and the end of the last one's, per frame: the throughput, with the stages overlapped.
-// Beside it the mean wall ms of the produce (step + map / copy of the positions) and consume
-// (set_map / resample + update, render) sides as they ran overlapped. Two alternatives of the
-// map route for comparison: the map built on the consuming side, and the producer on every
-// thread (the step's two lanes) instead of one.
+// for each route, --pipe-frames more frames (default max(8, frames)) with the step and map and
+// its state (MappedRayCaster::compute_map, the occupancy and the camera's empty cubes) (or the
+// step alone) of frame f + 1 on one thread while frame f's install_map and render (or resample,
+// update and render) run on the others. The period is the wall (and process CPU) ms between the
+// end of the first frame's render and the end of the last one's, per frame: the throughput,
+// with the stages overlapped. Beside it the mean wall ms of the produce (step + map + state /
+// copy of the positions) and consume (install + render / resample + update + render) sides as
+// they ran overlapped. Three alternatives of the map route for comparison: the state computed on
+// the consuming side (set_map before the render), the map built there too, and the producer on
+// every thread (the step's two lanes) instead of one.
 //
 //   bin/bench_deform_frame [--driver twist|wave|bubble|drag|all] [--frames N] [--size N]
 //                          [--threads N] [--pipe-frames N] [--no-shading] [--json]
@@ -248,23 +250,37 @@ int main(int argc, char** argv) {
         // positions in the background, resample + update + render on the caller (a resample
         // on one thread would take longer than the rest of the frame).
         std::array<volume::InverseMap, 2> maps;
+        std::array<render::MapOccupancy, 2> states;
+        const int octants = mapped->octants_of(camera);
         const auto step_and_map = [&](int f, int slot) {
             driven.step(f);
             maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
                                                        w.grid.mesh.positions, body.positions(),
                                                        {.node_voxels = w.grid.cell_voxels});
         };
+        const auto step_map_and_state = [&](int f, int slot) {
+            step_and_map(f, slot);
+            mapped->compute_map(maps[static_cast<std::size_t>(slot)],
+                                states[static_cast<std::size_t>(slot)], octants);
+        };
+        const auto show_state = [&](int, int slot) {
+            mapped->install_map(states[static_cast<std::size_t>(slot)]);
+            mapped->render(camera, map_image);
+        };
         const auto show_map = [&](int, int slot) {
             mapped->set_map(maps[static_cast<std::size_t>(slot)]);
             mapped->render(camera, map_image);
         };
         const Pipelined map_pipe =
+            run_pipelined(frame, frame + pipe_frames - 1, step_map_and_state, show_state);
+        frame += pipe_frames;
+        const Pipelined map_consumer_state =
             run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map);
         frame += pipe_frames;
         // The same with the producer on every thread (BackgroundTask's default, the viewer's
         // former scheme): the step's two lanes in the background.
         const Pipelined map_all =
-            run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map, 0);
+            run_pipelined(frame, frame + pipe_frames - 1, step_map_and_state, show_state, 0);
         frame += pipe_frames;
         std::array<std::vector<Vec3f>, 2> positions;
         const auto step_and_copy = [&](int f, int slot) {
@@ -315,6 +331,7 @@ int main(int argc, char** argv) {
                 exact_wall, exact_cpu, map_wall, map_cpu);
             for (const auto& [key, p] :
                  {std::pair{"map_pipelined", &map_pipe}, std::pair{"exact_pipelined", &exact_pipe},
+                  std::pair{"map_state_on_consumer_pipelined", &map_consumer_state},
                   std::pair{"map_late_pipelined", &map_late},
                   std::pair{"map_all_threads_pipelined", &map_all}}) {
                 std::printf(
@@ -344,10 +361,13 @@ int main(int argc, char** argv) {
             };
             for (const Row& row :
                  {Row{"pipelined period, exact", &exact_pipe, "step", "resample + update + render"},
-                  Row{"pipelined period, map", &map_pipe, "step + build", "set_map + render"},
+                  Row{"pipelined period, map", &map_pipe, "step + build + state",
+                      "install + render"},
+                  Row{"pipelined, map state on consumer", &map_consumer_state, "step + build",
+                      "set_map + render"},
                   Row{"pipelined, map built late", &map_late, "step", "build + set_map + render"},
-                  Row{"pipelined, map, producer all threads", &map_all, "step + build",
-                      "set_map + render"}}) {
+                  Row{"pipelined, map, producer all threads", &map_all, "step + build + state",
+                      "install + render"}}) {
                 std::printf(
                     "  %-36s %10.1f %10.1f  (%.1f fps; %d frames; overlapped: %s %.1f, "
                     "%s %.1f)\n",

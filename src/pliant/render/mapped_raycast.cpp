@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <mutex>
 #include <span>
+#include <utility>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -153,11 +155,26 @@ double smallest(const Vec3d& s) {
     return std::min({s.x, s.y, s.z});
 }
 
+// The camera's fields of a kernel (image size, projection, eye relative to `origin`, frame).
+void set_camera(const Camera& camera, const Vec3d& origin, detail::RayCastKernel& k) {
+    k.width = camera.width();
+    k.height = camera.height();
+    k.is_perspective = camera.projection() == Projection::perspective;
+    k.eye = vec3_cast<float>(camera.eye() - origin);
+    k.forward = vec3_cast<float>(camera.forward());
+    k.right = vec3_cast<float>(camera.right());
+    k.up = vec3_cast<float>(camera.up());
+    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+}
+
+// The last MappedRayCaster id handed out (ids start at 1; 0 tags no caster).
+std::atomic<std::uint64_t> last_caster_id{0};
+
 }  // namespace
 
 MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::TransferFunction* tf,
                                  const volume::Volume& target, const RayCastOptions& options)
-    : m_options(options) {
+    : m_id(++last_caster_id), m_options(options) {
     const Stopwatch watch;
     if (target.empty()) {
         throw InvalidInput("raycast through a map: the target frame is empty (no voxels)");
@@ -359,12 +376,17 @@ void MappedRayCaster::set_clip(const std::optional<ClipPlane>& clip) {
     m_options.clip = clip;
 }
 
-std::int64_t MappedRayCaster::num_visible_cells() const {
+std::int64_t MapOccupancy::num_visible_cells() const {
     std::int64_t count = 0;
     for (const std::uint8_t v : m_visible) {
         count += v;
     }
     return count;
+}
+
+void MapOccupancy::clear() {
+    m_map = nullptr;
+    m_octants_ready = 0;
 }
 
 bool MappedRayCaster::corner_range(const float lo[3], const float hi[3], std::int64_t v0[3],
@@ -523,7 +545,8 @@ std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t bas
     return bits;
 }
 
-void MappedRayCaster::set_map(const volume::InverseMap& map) {
+void MappedRayCaster::compute_map(const volume::InverseMap& map, MapOccupancy& state,
+                                  int octants) const {
     const Stopwatch watch;
     const std::array<std::int64_t, 3>& nodes = map.nodes();
     const int b = map.node_voxels();
@@ -540,16 +563,17 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                 m_target_dims[static_cast<std::size_t>(a)], b));
         }
     }
-    m_map = &map;
+    state.m_map = nullptr;  // until it is complete (an exception leaves it without a map)
+    std::array<int, 3>& cells = state.m_cells;
     for (int a = 0; a < 3; ++a) {
-        m_cells[static_cast<std::size_t>(a)] =
+        cells[static_cast<std::size_t>(a)] =
             static_cast<int>(nodes[static_cast<std::size_t>(a)] - 1);
     }
-    const std::int64_t cx_n = m_cells[0], cy_n = m_cells[1], cz_n = m_cells[2];
+    const std::int64_t cx_n = cells[0], cy_n = cells[1], cz_n = cells[2];
     const auto total = static_cast<std::size_t>(cx_n * cy_n * cz_n);
-    m_occupancy.resize(total);
-    m_sub_occupied.resize(total);
-    m_visible.resize(total);
+    state.m_occupancy.resize(total);
+    state.m_sub_occupied.resize(total);
+    state.m_visible.resize(total);
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
@@ -576,10 +600,12 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                 if (x0 >= x1) {
                     x0 = x1 = 0;
                 }
-                std::fill_n(m_occupancy.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
-                std::fill_n(m_sub_occupied.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
+                std::fill_n(state.m_occupancy.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
                             0);
-                std::fill_n(m_visible.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
+                std::fill_n(state.m_sub_occupied.begin() + static_cast<std::ptrdiff_t>(row_cell),
+                            cx_n, 0);
+                std::fill_n(state.m_visible.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
+                            0);
                 for (std::int64_t cx = x0; cx < x1; ++cx) {
                     const auto cell = static_cast<std::size_t>(cx + cx_n * (cy + cy_n * cz));
                     const std::int64_t base = cx + nx * cy + nxy * cz;
@@ -593,9 +619,9 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                         }
                     }
                     if (!valid) {
-                        m_occupancy[cell] = 0;
-                        m_sub_occupied[cell] = 0;
-                        m_visible[cell] = 0;
+                        state.m_occupancy[cell] = 0;
+                        state.m_sub_occupied[cell] = 0;
+                        state.m_visible[cell] = 0;
                         continue;
                     }
                     float lo[3] = {g[3 * base], g[3 * base + 1], g[3 * base + 2]};
@@ -612,9 +638,9 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                     if (sub != 0) {
                         bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
                     }
-                    m_occupancy[cell] = bits;
-                    m_sub_occupied[cell] = sub;
-                    m_visible[cell] = sub != 0 ? 1 : 0;
+                    state.m_occupancy[cell] = bits;
+                    state.m_sub_occupied[cell] = sub;
+                    state.m_visible[cell] = sub != 0 ? 1 : 0;
                     if (sub != 0) {
                         const std::int64_t at[3] = {cx, cy, cz};
                         layer.add(at);
@@ -623,18 +649,18 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
-    m_visible_cells = detail::VisibleCells();
+    state.m_visible_cells = detail::VisibleCells();
     for (const detail::VisibleCells& layer : layer_cells) {
-        m_visible_cells.merge(layer);
+        state.m_visible_cells.merge(layer);
     }
     // The nodes padded to 4 floats (the AVX2 march loads a node pair as 8 floats).
-    m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
+    state.m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
     parallel_for(
         nodes[2],
         [&](std::int64_t z) {
             for (std::int64_t q = nxy * z; q < nxy * (z + 1); ++q) {
                 const float* in = g + 3 * q;
-                float* out = m_nodes4.data() + 4 * q;
+                float* out = state.m_nodes4.data() + 4 * q;
                 out[0] = in[0];
                 out[1] = in[1];
                 out[2] = in[2];
@@ -642,39 +668,62 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
-    // The empty cubes are computed by render() for the octants its rays use.
-    m_empty_cube.resize(8 * total);
-    {
-        const std::lock_guard<std::mutex> lock(m_cubes_mutex);
-        m_octants_ready = 0;
-    }
-    m_map_ms = watch.elapsed_ms();
+    state.m_empty_cube.resize(8 * total);
+    state.m_octants_ready = 0;
+    state.m_caster = m_id;
+    state.m_map = &map;
+    compute_cubes(state, octants);
+    state.m_ms = watch.elapsed_ms();
 }
 
-void MappedRayCaster::prepare_octants(int octants) const {
-    const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+void MappedRayCaster::install_map(MapOccupancy& state) {
+    if (!state.has_map()) {
+        throw InvalidInput("raycast through a map: the state to install has no map");
+    }
+    if (state.m_caster != m_id) {
+        throw InvalidInput(
+            "raycast through a map: the state to install was computed by another caster");
+    }
+    std::swap(m_state, state);
+}
+
+void MappedRayCaster::set_map(const volume::InverseMap& map) {
+    compute_map(map, m_state);
+}
+
+int MappedRayCaster::octants_of(const Camera& camera) const {
+    detail::RayCastKernel k;
+    set_camera(camera, m_target_origin, k);
+    return ray_octants(k);
+}
+
+void MappedRayCaster::compute_cubes(const MapOccupancy& state, int octants) {
     int todo[8];
     int count = 0;
     for (int octant = 0; octant < 8; ++octant) {
-        if ((octants >> octant & 1) != 0 && (m_octants_ready >> octant & 1) == 0) {
+        if ((octants >> octant & 1) != 0 && (state.m_octants_ready >> octant & 1) == 0) {
             todo[count++] = octant;
         }
     }
-    const std::size_t total = m_occupancy.size();
+    if (count == 0) {
+        return;
+    }
+    const std::size_t total = state.m_occupancy.size();
     parallel_for(
         count,
         [&](std::int64_t i) {
             const int octant = todo[i];
-            detail::empty_cubes(m_visible, m_cells.data(), octant,
-                                std::span<std::uint8_t>(m_empty_cube)
+            detail::empty_cubes(state.m_visible, state.m_cells.data(), octant,
+                                std::span<std::uint8_t>(state.m_empty_cube)
                                     .subspan(static_cast<std::size_t>(octant) * total, total));
         },
         1);
-    m_octants_ready |= octants;
+    state.m_octants_ready |= octants;
 }
 
 RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
-    if (m_map == nullptr) {
+    const MapOccupancy& state = m_state;
+    if (state.m_map == nullptr) {
         throw InvalidInput("raycast through a map: set_map() was not called");
     }
     const Stopwatch watch;
@@ -682,14 +731,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m_source->fill_kernel(m.source);
     detail::RayCastKernel& k = m.target;
     k = m.source;  // options (step, opacity correction, threshold, background, skipping)
-    k.width = camera.width();
-    k.height = camera.height();
-    k.is_perspective = camera.projection() == Projection::perspective;
-    k.eye = vec3_cast<float>(camera.eye() - m_target_origin);
-    k.forward = vec3_cast<float>(camera.forward());
-    k.right = vec3_cast<float>(camera.right());
-    k.up = vec3_cast<float>(camera.up());
-    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+    set_camera(camera, m_target_origin, k);
     const Vec3d inv{1.0 / m_target_spacing.x, 1.0 / m_target_spacing.y, 1.0 / m_target_spacing.z};
     k.inv_spacing = vec3_cast<float>(inv);
     for (int a = 0; a < 3; ++a) {
@@ -697,7 +739,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         k.g_max[a] = static_cast<float>(k.n[a] - 1);
         k.max_i0[a] = std::max(0, k.n[a] - 2);
         m.source_hi[a] = static_cast<float>(m_source_dims[static_cast<std::size_t>(a)]) - 0.5f;
-        m.cells[a] = m_cells[static_cast<std::size_t>(a)];
+        m.cells[a] = state.m_cells[static_cast<std::size_t>(a)];
     }
     k.shading = m_options.shading;
     k.skipping = m_options.empty_space_skipping;
@@ -708,15 +750,15 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         k.clip_normal = vec3_cast<float>(nrm);
         k.clip_offset = static_cast<float>(dot(nrm, m_options.clip->point - m_target_origin));
     }
-    m.nodes = m_map->node_coordinates().data();
-    m.nodes4 = m_nodes4.data();
+    m.nodes = state.m_map->node_coordinates().data();
+    m.nodes4 = state.m_nodes4.data();
     m.node_stride[0] = 1;
-    m.node_stride[1] = m_map->nodes()[0];
-    m.node_stride[2] = m_map->nodes()[0] * m_map->nodes()[1];
-    m.b = static_cast<float>(m_map->node_voxels());
+    m.node_stride[1] = state.m_map->nodes()[0];
+    m.node_stride[2] = state.m_map->nodes()[0] * state.m_map->nodes()[1];
+    m.b = static_cast<float>(state.m_map->node_voxels());
     m.inv_b = 1.0f / m.b;
-    m.occupancy = m_occupancy.data();
-    m.sub_occupied = m_sub_occupied.data();
+    m.occupancy = state.m_occupancy.data();
+    m.sub_occupied = state.m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
     m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
     if (!m_rgba8.empty() || !m_packed.empty()) {
@@ -747,14 +789,15 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
         }
     }
-    detail::set_visible_cells(m, m_visible_cells);
+    detail::set_visible_cells(m, state.m_visible_cells);
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
-            m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
+            state.m_empty_cube.data() + static_cast<std::size_t>(octant) * state.m_occupancy.size();
     }
 
     if (k.skipping) {
-        prepare_octants(ray_octants(k));
+        const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+        compute_cubes(state, ray_octants(k));
     }
     image = Image(k.width, k.height);
     const bool is_rgba = m_source->m_is_rgba;

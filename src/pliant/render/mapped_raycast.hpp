@@ -60,18 +60,27 @@
 //     record (detail::PACKED_VOXEL_BYTES; 268 MB at 256³), so a lane's voxel pair of a row is one
 //     32-byte load for both. rgba32f and scalar sources are read from the float copy.
 //   - Composite mode only (MIP through the map: InvalidInput).
-// Cost per frame: set_map() is O(map cells) (parallel over layers; the cells outside the map's
-// node row extents, InverseMap::node_row_extents(), only cleared) plus a copy of the nodes
-// padded to 4 floats; the first render() after it computes the empty cubes (O(map cells) each)
-// of the octants its rays can have (1–4 for a camera outside the volume: the signs of the ray
-// directions at the image's 4 corners, both signs of an axis where they are within 1e-5 of 0),
-// the next renders those not computed yet; a sample costs one more trilinear interpolation of 3
+// Cost per frame: the map's state (MapOccupancy, compute_map()) is O(map cells) (parallel over
+// layers; the cells outside the map's node row extents, InverseMap::node_row_extents(), only
+// cleared) plus a copy of the nodes padded to 4 floats, plus the empty cubes (O(map cells) each)
+// of the octants asked for; render() computes the empty cubes of the octants its rays can have
+// (1–4 for a camera outside the volume: the signs of the ray directions at the image's 4
+// corners, both signs of an axis where they are within 1e-5 of 0, octants_of()) that are not
+// computed yet; a sample costs one more trilinear interpolation of 3
 // floats (the map) than RayCaster's, and shaded samples one trilinear interpolation of the
 // stored gradient (3 channels; a 16-byte load per voxel pair and row, or the packed records'
 // 32-byte load, shared with an rgba8 source's bytes). A ray's march ends at its
 // early termination (no sample past it is classified). RGBA and scalar sources on a CPU with AVX2
 // march 8 rays per vector, a lane refilled from the tile's rays as soon as its ray ends
 // (detail/mapped_raycast_avx2.hpp), bitwise the scalar kernel (images and sample counts).
+// Off the render thread: compute_map() is const and reads only what the constructor prepared,
+// so a frame pipeline computes the next map's state on the thread that built the map while the
+// caster renders the current one, and install_map() swaps it in (O(1)) before the next render:
+//
+//   render::MapOccupancy next;                                   // per map buffer
+//   caster.compute_map(maps[back], next, caster.octants_of(camera));   // background thread
+//   caster.install_map(next);  caster.render(camera, image);    // render thread, in turn
+//
 // Determinism: 16 × 16 tiles through core/parallel, every pixel the same float operations:
 // bitwise identical images for 1 and N threads.
 #pragma once
@@ -93,6 +102,45 @@
 
 namespace pliant::render {
 
+class MappedRayCaster;
+
+// The per-map state of a MappedRayCaster: what it derives from one inverse map for its march —
+// the map cells' and sub-cells' occupancy (detail::MAP_CELL_* bits), the visible cells' extents,
+// the nodes padded to 4 floats and the empty cubes of some octants. Computed by
+// MappedRayCaster::compute_map() (for that caster alone: it is tagged with the caster, and
+// install_map() refuses another caster's), installed by MappedRayCaster::install_map() in O(1).
+// It refers to its map, which must stay alive and unchanged while the state is used. A value:
+// movable, and its buffers are reused by the next compute_map() into it. Not thread safe: one
+// thread at a time (the one computing it, then the one installing it).
+class MapOccupancy {
+public:
+    bool has_map() const { return m_map != nullptr; }
+    const volume::InverseMap* map() const { return m_map; }
+    double ms() const { return m_ms; }  // compute_map()'s wall time
+    // The octants (bit per octant, detail::octant_of()) whose empty cubes are computed.
+    int octants() const { return m_octants_ready; }
+    std::int64_t num_cells() const { return static_cast<std::int64_t>(m_occupancy.size()); }
+    std::int64_t num_visible_cells() const;
+    // Forgets the map (has_map() false; the buffers are kept for the next compute_map()).
+    void clear();
+
+private:
+    friend class MappedRayCaster;
+    std::uint64_t m_caster = 0;  // the id of the caster that computed it (0: none)
+    const volume::InverseMap* m_map = nullptr;
+    double m_ms = 0.0;
+    std::array<int, 3> m_cells{0, 0, 0};
+    std::vector<std::uint8_t> m_occupancy;     // per map cell, detail::MAP_CELL_* bits
+    std::vector<std::uint8_t> m_sub_occupied;  // per map cell, its visible sub-cells' bits
+    std::vector<std::uint8_t> m_visible;       // per map cell, 0 / 1 (empty_cubes' input)
+    detail::VisibleCells m_visible_cells;      // their extents (detail::visible_samples())
+    std::vector<float> m_nodes4;               // the map's nodes, 4 floats each (x, y, z, 0)
+    // 8 octants × map cells, those of m_octants_ready computed (a render of the installed state
+    // computes the octants its rays use that are not, under its caster's mutex).
+    mutable std::vector<std::uint8_t> m_empty_cube;
+    mutable int m_octants_ready = 0;
+};
+
 class MappedRayCaster {
 public:
     // source: the rest volume, prepared once as RayCaster prepares it (tf for scalar volumes, as
@@ -106,21 +154,41 @@ public:
     MappedRayCaster(const MappedRayCaster&) = delete;
     MappedRayCaster& operator=(const MappedRayCaster&) = delete;
 
-    // The map of the next renders (built for this caster's source and target frames; it must
-    // stay alive and unchanged until the next set_map()): the cells' and sub-cells' occupancy.
-    // InvalidInput for a map that was not built. Not to be called during a render.
+    // The state of `map` (built for this caster's source and target frames) into `state`, its
+    // buffers reused, with the empty cubes of `octants` (bit per octant, e.g. octants_of() of
+    // the next render's camera; render() computes the others it needs). InvalidInput for a map
+    // that was not built or was built for another target frame. Thread safety: it reads only
+    // what the constructor prepared, so it may run on any thread concurrently with render(),
+    // set_map(), install_map(), set_clip() and other compute_map() calls (into other states);
+    // not with the destructor. Deterministic: the same state for any number of threads.
+    void compute_map(const volume::InverseMap& map, MapOccupancy& state, int octants = 0) const;
+    // Makes `state` (computed by this caster's compute_map()) the map of the next renders, in
+    // O(1): `state` gets the state installed before (its buffers reusable). InvalidInput for a
+    // state without a map or computed by another caster (e.g. a caster since rebuilt for a new
+    // transfer function). Not during a render.
+    void install_map(MapOccupancy& state);
+    // Whether compute_map() of this caster made `state` (install_map() accepts it).
+    bool is_own(const MapOccupancy& state) const {
+        return state.m_caster == m_id && state.has_map();
+    }
+    // compute_map() into the installed state, on the caller: the one-call form. The map must
+    // stay alive and unchanged while it is installed. Not during a render.
     void set_map(const volume::InverseMap& map);
-    // Renders through the current map (InvalidInput before the first set_map()); resizes image.
-    // Computes the empty cubes its rays need first (serialized between concurrent renders).
+    // Renders through the installed map (InvalidInput before the first set_map() or
+    // install_map()); resizes image. Computes the empty cubes its rays need first (serialized
+    // between concurrent renders).
     RayCastStats render(const Camera& camera, Image& image) const;
+    // The octants (bit per octant) the rays of `camera` can have: the empty cubes render()
+    // needs.
+    int octants_of(const Camera& camera) const;
     // Changes the clipping plane of later renders; InvalidInput as RayCaster::set_clip.
     void set_clip(const std::optional<ClipPlane>& clip);
 
     double step() const { return m_step; }
     double prepare_ms() const { return m_prepare_ms; }  // the source's preparation (constructor)
-    double map_ms() const { return m_map_ms; }          // the last set_map()
-    std::int64_t num_cells() const { return static_cast<std::int64_t>(m_occupancy.size()); }
-    std::int64_t num_visible_cells() const;
+    double map_ms() const { return m_state.ms(); }      // the installed state's compute_map()
+    std::int64_t num_cells() const { return m_state.num_cells(); }
+    std::int64_t num_visible_cells() const { return m_state.num_visible_cells(); }
 
 private:
     // Whether a sample whose source coordinate lies in the box [lo, hi] may have opacity: the
@@ -140,8 +208,9 @@ private:
     // over layers (each written by one task: the same values for any number of threads).
     // An rgba8 source's gradient goes into m_packed with its bytes (m_rgba8, then released).
     void build_gradient();
-    // Computes the empty cubes of the octants (bit per octant) not yet computed for this map.
-    void prepare_octants(int octants) const;
+    // Computes the empty cubes of the octants (bit per octant) of `state` not yet computed
+    // (the caller serializes access to `state`).
+    static void compute_cubes(const MapOccupancy& state, int octants);
     // The sub-cells of a valid map cell (nodes g + 3 (base + off[c]), c = x + 2 y + 4 z; [lo, hi]
     // the box of their values) that may have opacity, bit s_x + 2 s_y + 4 s_z
     // (detail::sub_cell_of()): the map is trilinear in the cell, so on a half-cell it is
@@ -150,6 +219,7 @@ private:
     std::uint8_t sub_cells_visible(const float* g, std::int64_t base, const std::int64_t off[8],
                                    const float lo[3], const float hi[3]) const;
 
+    std::uint64_t m_id = 0;  // unique per caster of the process (MapOccupancy's tag)
     RayCastOptions m_options;
     // The source's floats and lookup table (an rgba8 source: one voxel, for the options' fields).
     std::unique_ptr<RayCaster> m_source;
@@ -160,28 +230,18 @@ private:
     Vec3d m_target_spacing, m_target_origin;
     double m_step = 0.0;
     double m_prepare_ms = 0.0;
-    double m_map_ms = 0.0;
     // Scalar sources: blocks of 2³ voxels, min and max of the lookup coordinates.
     std::array<std::int64_t, 3> m_blocks{0, 0, 0};
     std::vector<float> m_block_min, m_block_max;
     std::array<int, 4096 + 1> m_nonzero_prefix{};  // lookup entries with opacity, prefix counts
-    const volume::InverseMap* m_map = nullptr;
-    std::array<int, 3> m_cells{0, 0, 0};
-    std::vector<std::uint8_t> m_occupancy;     // per map cell, detail::MAP_CELL_* bits
-    std::vector<std::uint8_t> m_sub_occupied;  // per map cell, its visible sub-cells' bits
-    std::vector<std::uint8_t> m_visible;       // per map cell, 0 / 1 (empty_cubes' input)
-    detail::VisibleCells m_visible_cells;      // their extents (detail::visible_samples())
     // RGBA: the source voxels with α > 0 dilated by one voxel toward −x, −y, −z (bit v set when
     // a voxel of {v, v + 1}³ has α > 0), a 64-bit word per brick of 4³ voxels (x fastest).
     bool m_is_rgba = false;  // the source's, read per test
     std::array<std::int64_t, 3> m_bricks{0, 0, 0};
     std::vector<std::uint64_t> m_brick_bits;
-    // 8 octants × map cells, those of m_octants_ready computed (render() computes the octants
-    // its rays use that are not, under m_cubes_mutex).
-    mutable std::vector<std::uint8_t> m_empty_cube;
-    mutable int m_octants_ready = 0;
+    // The installed map's state; render() computes its missing empty cubes under m_cubes_mutex.
+    MapOccupancy m_state;
     mutable std::mutex m_cubes_mutex;
-    std::vector<float> m_nodes4;  // the map's nodes, 4 floats each (x, y, z, 0)
     // Shading: the source's gradient, 4 values per voxel (detail::GradientValue), else empty.
     std::vector<detail::GradientValue> m_gradient;
     // A shaded rgba8 source: per voxel its bytes and gradient in one record
