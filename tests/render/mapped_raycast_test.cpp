@@ -372,6 +372,47 @@ TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     }
 }
 
+// A scalar source whose transfer function has opacity only strictly between two of its values
+// (the voxels themselves transparent, a sample visible only where interpolation crosses an
+// edge between them): the cells' bits (their value ranges) keep every such sample — skipping
+// changes no pixel — and skip some of the volume.
+TEST(MappedRayCast, ScalarSkippingKeepsSamplesBetweenVoxelValues) {
+    const volume::Volume source = volume::shepp_logan_3d({40, 36, 32});
+    std::vector<float> values(source.values<volume::VoxelType::f32>().begin(),
+                              source.values<volume::VoxelType::f32>().end());
+    std::sort(values.begin(), values.end());
+    values.erase(std::unique(values.begin(), values.end()), values.end());
+    ASSERT_GE(values.size(), 3U);
+    const double v1 = values[values.size() - 2], v2 = values.back();
+    const double mid = 0.5 * (v1 + v2), half = 0.1 * (v2 - v1);
+    volume::TransferFunction tf;
+    tf.name = "band";
+    tf.color = {{v1, {1.0f, 0.8f, 0.6f}}};
+    tf.opacity = {{mid - half, 0.0f}, {mid, 0.9f}, {mid + half, 0.0f}};
+    tf.validate();
+    const Deformed d = deform(source, nullptr, Drive::twist, 12);  // the whole box's grid
+    volume::InverseMap map;
+    map.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+    const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 80, 80);
+    RayCastOptions options;
+    MappedRayCaster skipping(source, &tf, source, options);
+    options.empty_space_skipping = false;
+    MappedRayCaster every(source, &tf, source, options);
+    skipping.set_map(map);
+    every.set_map(map);
+    Image a, b;
+    const RayCastStats sa = skipping.render(camera, a);
+    const RayCastStats sb = every.render(camera, b);
+    EXPECT_EQ(a.pixels, b.pixels);
+    EXPECT_LT(sa.samples, sb.samples);
+    EXPECT_LT(skipping.num_visible_cells(), skipping.num_cells());
+    std::int64_t lit = 0;
+    for (const std::uint8_t v : a.pixels) {
+        lit += v > 0 ? 1 : 0;
+    }
+    EXPECT_GT(lit, 0);
+}
+
 // The AVX2 march (8 rays per vector) is the scalar kernel's bits: images and sample counts, for
 // every kind the mapped caster renders: RGBA and scalar sources (through a transfer function),
 // shaded or not, at the default step (Δs/u = 1/2) and another, clipped, without skipping,

@@ -22,9 +22,7 @@ namespace pliant::render {
 
 namespace {
 
-constexpr int BLOCK = 2;        // scalar sources' occupancy blocks, voxels per edge
-constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
-constexpr int BRICK = 4;        // RGBA sources' occupancy bricks (64 bits), voxels per edge
+constexpr int BRICK = 4;        // occupancy bricks (64 bits), voxels per edge
 constexpr int BRICK_SHIFT = 2;  // log2(BRICK)
 // Source grid units the box of a map cell's node values is widened by: far above the rounding
 // of the float trilinear interpolation of coordinates below a few thousand.
@@ -206,44 +204,67 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         m_source = std::make_unique<RayCaster>(source, tf, source_options);
     }
     m_step = m_source->step();
-    m_is_rgba = m_source->m_is_rgba;
     m_source_dims = source.dims();
     m_target_dims = target.dims();
     m_target_spacing = target.spacing();
     m_target_origin = target.origin();
 
-    // Lookup entries with opacity (scalar sources), as RayCaster's cell test counts them.
-    m_nonzero_prefix.fill(0);
-    if (!m_source->m_is_rgba) {
-        for (std::size_t e = 0; e < static_cast<std::size_t>(detail::LUT_SIZE); ++e) {
-            m_nonzero_prefix[e + 1] =
-                m_nonzero_prefix[e] + (m_source->m_lut[4 * e + 3] > 0.0f ? 1 : 0);
-        }
-    }
     const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
     const float* values = m_source->m_values.data();
+    for (int a = 0; a < 3; ++a) {
+        m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
+    }
+    m_brick_bits.assign(static_cast<std::size_t>(m_bricks[0] * m_bricks[1] * m_bricks[2]), 0);
     if (!m_source->m_is_rgba) {
-        // Per source block of 2³ voxels: min and max of the lookup coordinates.
-        for (int a = 0; a < 3; ++a) {
-            m_blocks[static_cast<std::size_t>(a)] = (n[a] + BLOCK - 1) / BLOCK;
+        // Lookup entries with opacity, prefix counts.
+        std::vector<int> nonzero_prefix(static_cast<std::size_t>(detail::LUT_SIZE) + 1, 0);
+        for (std::size_t e = 0; e < static_cast<std::size_t>(detail::LUT_SIZE); ++e) {
+            nonzero_prefix[e + 1] = nonzero_prefix[e] + (m_source->m_lut[4 * e + 3] > 0.0f ? 1 : 0);
         }
-        const std::int64_t num_blocks = m_blocks[0] * m_blocks[1] * m_blocks[2];
-        m_block_min.assign(static_cast<std::size_t>(num_blocks),
-                           std::numeric_limits<float>::infinity());
-        m_block_max.assign(static_cast<std::size_t>(num_blocks),
-                           -std::numeric_limits<float>::infinity());
+        // Per source cell (first corner v, the voxels {v, v + 1}³ clamped to the grid), bit v of
+        // the bricks: the lookup entries of the cell's value range, widened by
+        // detail::LERP_ROUNDING, have opacity (RayCaster's test of its cells: a sample
+        // interpolated in the cell lies in that range). The bits of the RGBA bricks after
+        // dilate_bricks(), for the lookup's opacity. Parallel over brick layers, each written
+        // by one task.
         parallel_for(
-            m_blocks[2],
+            m_bricks[2],
             [&](std::int64_t bz) {
-                for (std::int64_t z = bz * BLOCK; z < std::min(n[2], (bz + 1) * BLOCK); ++z) {
+                // Per x the min and max over the 4 rows (y, y + 1) × (z, z + 1), clamped.
+                std::vector<float> row_min(static_cast<std::size_t>(n[0]));
+                std::vector<float> row_max(static_cast<std::size_t>(n[0]));
+                for (std::int64_t z = bz * BRICK; z < std::min(n[2], (bz + 1) * BRICK); ++z) {
+                    const std::int64_t z1 = std::min(z + 1, n[2] - 1);
                     for (std::int64_t y = 0; y < n[1]; ++y) {
-                        const float* row = values + n[0] * (y + n[1] * z);
-                        const std::int64_t first =
-                            m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
+                        const std::int64_t y1 = std::min(y + 1, n[1] - 1);
+                        const float* r0 = values + n[0] * (y + n[1] * z);
+                        const float* r1 = values + n[0] * (y1 + n[1] * z);
+                        const float* r2 = values + n[0] * (y + n[1] * z1);
+                        const float* r3 = values + n[0] * (y1 + n[1] * z1);
                         for (std::int64_t x = 0; x < n[0]; ++x) {
-                            const auto b = static_cast<std::size_t>(first + (x >> BLOCK_SHIFT));
-                            m_block_min[b] = std::min(m_block_min[b], row[x]);
-                            m_block_max[b] = std::max(m_block_max[b], row[x]);
+                            const auto i = static_cast<std::size_t>(x);
+                            row_min[i] = std::min(std::min(r0[x], r1[x]), std::min(r2[x], r3[x]));
+                            row_max[i] = std::max(std::max(r0[x], r1[x]), std::max(r2[x], r3[x]));
+                        }
+                        std::uint64_t* out =
+                            m_brick_bits.data() + m_bricks[0] * ((y >> 2) + m_bricks[1] * bz);
+                        const int shift = static_cast<int>(4 * (y & 3) + 16 * (z & 3));
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            const auto i0 = static_cast<std::size_t>(x);
+                            const auto i1 = static_cast<std::size_t>(std::min(x + 1, n[0] - 1));
+                            const float lo = std::min(row_min[i0], row_min[i1]);
+                            const float hi = std::max(row_max[i0], row_max[i1]);
+                            const int e0 =
+                                static_cast<int>(std::max(0.0f, lo - detail::LERP_ROUNDING) + 0.5f);
+                            const int e1 =
+                                std::min(detail::LUT_SIZE - 1,
+                                         static_cast<int>(hi + detail::LERP_ROUNDING + 0.5f));
+                            if (e0 <= e1 && nonzero_prefix[static_cast<std::size_t>(e1) + 1] -
+                                                    nonzero_prefix[static_cast<std::size_t>(e0)] >
+                                                0) {
+                                out[x >> 2] |= std::uint64_t{1}
+                                               << (shift + static_cast<int>(x & 3));
+                            }
                         }
                     }
                 }
@@ -254,10 +275,6 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         // Bricks of 4³ voxels, bit (x & 3) + 4 (y & 3) + 16 (z & 3) set for a voxel with α > 0
         // (bits past the volume's end stay 0), then dilated (dilate_bricks()). Parallel over
         // brick layers, each written by one task.
-        for (int a = 0; a < 3; ++a) {
-            m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
-        }
-        m_brick_bits.assign(static_cast<std::size_t>(m_bricks[0] * m_bricks[1] * m_bricks[2]), 0);
         parallel_for(
             m_bricks[2],
             [&](std::int64_t bz) {
@@ -441,46 +458,7 @@ bool MappedRayCaster::bricks_visible(const std::int64_t v0[3], const std::int64_
 
 bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
     std::int64_t v0[3] = {}, v1[3] = {};
-    if (!corner_range(lo, hi, v0, v1)) {
-        return false;
-    }
-    if (m_is_rgba) {
-        return bricks_visible(v0, v1);
-    }
-    // The voxels [v0, v1 + 1] (v1 on an axis of one voxel) in their 2³ blocks.
-    for (int a = 0; a < 3; ++a) {
-        v1[a] += m_source_dims[static_cast<std::size_t>(a)] > 1 ? 1 : 0;
-    }
-    float vmin = std::numeric_limits<float>::infinity();
-    float vmax = -std::numeric_limits<float>::infinity();
-    for (std::int64_t z = v0[2] >> BLOCK_SHIFT; z <= v1[2] >> BLOCK_SHIFT; ++z) {
-        for (std::int64_t y = v0[1] >> BLOCK_SHIFT; y <= v1[1] >> BLOCK_SHIFT; ++y) {
-            const std::int64_t row = m_blocks[0] * (y + m_blocks[1] * z);
-            for (std::int64_t x = v0[0] >> BLOCK_SHIFT; x <= v1[0] >> BLOCK_SHIFT; ++x) {
-                const auto k = static_cast<std::size_t>(row + x);
-                vmin = std::min(vmin, m_block_min[k]);
-                vmax = std::max(vmax, m_block_max[k]);
-            }
-        }
-    }
-    if (!(vmin <= vmax)) {
-        return false;
-    }
-    const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
-    const int i0 = static_cast<int>(widened_lo + 0.5f);
-    const int i1 =
-        std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
-    return m_nonzero_prefix[static_cast<std::size_t>(i1) + 1] -
-               m_nonzero_prefix[static_cast<std::size_t>(i0)] >
-           0;
-}
-
-bool MappedRayCaster::point_visible(const float p[3]) const {
-    if (!m_is_rgba) {
-        return hull_visible(p, p);
-    }
-    std::int64_t v0[3] = {}, v1[3] = {};
-    return corner_range(p, p, v0, v1) && bricks_visible(v0, v1);
+    return corner_range(lo, hi, v0, v1) && bricks_visible(v0, v1);
 }
 
 std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,
@@ -497,7 +475,7 @@ std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t bas
                              0.5f * (0.5f * (v[3 * off[4]] + v[3 * off[5]]) +
                                      0.5f * (v[3 * off[6]] + v[3 * off[7]])));
     }
-    if (point_visible(centre)) {
+    if (hull_visible(centre, centre)) {
         return 0xFF;
     }
     if (!hull_visible(lo, hi)) {

@@ -33,21 +33,22 @@
 //     source voxel that a sample in it can read has opacity, tested conservatively: trilinear
 //     interpolation stays in the convex hull of its 8 nodes, so its samples lie in the box of
 //     the node values (widened by 1/32 voxel for rounding), and the voxels their interpolation
-//     reads are tested: RGBA through bricks of 4³ voxels, 64 bits each, the bit of voxel v set
-//     when a voxel of {v, v + 1}³ has α > 0 (the α bits dilated toward −x, −y, −z once: the
-//     voxel range [v0, v1] of a box is exactly bits [v0, v1 − 1], so the point at a cell's
-//     centre reads one bit of one word; 2 MB for 256³; a box reads a word per brick it
-//     overlaps), scalars through per-2³-block minima and maxima (the
-//     lookup entries of [min, max] widened by detail::LERP_ROUNDING, as RayCaster tests its
-//     cells). Each visible cell has 8 sub-cells (its halves along each axis, (B/2)³ target
-//     voxels), each tested the same way on the box of the map at its 8 corners (the map is
+//     reads are tested through bricks of 4³ voxels, 64 bits each, the bit of voxel v set when
+//     the cell with first corner v (the voxels {v, v + 1}³) may have opacity: RGBA when one of
+//     its voxels has α > 0 (the α bits dilated toward −x, −y, −z once), scalars when the
+//     lookup entries of its value range widened by detail::LERP_ROUNDING have opacity (as
+//     RayCaster tests its cells; once per transfer function, in the constructor). The cells a
+//     box's samples interpolate in are exactly bits [v0, v1], so the point at a cell's centre
+//     reads one bit of one word (2 MB for 256³; a box reads a word per brick it overlaps).
+//     Each visible cell has 8 sub-cells (its halves along each axis, (B/2)³ target voxels),
+//     each tested the same way on the box of the map at its 8 corners (the map is
 //     trilinear on a half-cell too; the lattice of fractions 0, 1/2, 1): when the voxels the
 //     cell's centre reads (a corner of every sub-cell) have opacity all 8 are visible without
 //     a test, which settles most cells inside the body; a cell whose sub-cells are all empty
 //     is empty. Empty cubes per octant over the cells (detail::empty_cubes) drive the jumps; a
 //     sample in an empty sub-cell of a visible cell jumps past that sub-cell; a ray is marched
 //     only over its samples within the visible cells' extents along the axes and the 4
-//     diagonals (kept by set_map(), detail::visible_samples()), so a lane does not jump
+//     diagonals (kept by compute_map(), detail::visible_samples()), so a lane does not jump
 //     through the empty space before and after them. Skipped samples would contribute nothing, so
 //     images are identical with and without skipping (tested). At the source scale (twist) the
 //     sub-cells cut the samples classified from 1.62 M to 1.30 M (the exact route: 1.27 M).
@@ -191,18 +192,16 @@ public:
     std::int64_t num_visible_cells() const { return m_state.num_visible_cells(); }
 
 private:
-    // Whether a sample whose source coordinate lies in the box [lo, hi] may have opacity: the
-    // voxels its interpolation can read (the box widened by HULL_MARGIN, clamped as locate()
-    // clamps) hold α > 0 (RGBA: the α bricks, exact per voxel), or their 2³ blocks'
-    // value range reaches a lookup entry with opacity (scalar).
+    // Whether a sample whose source coordinate lies in the box [lo, hi] may have opacity: some
+    // source cell its interpolation can read (the box widened by HULL_MARGIN, clamped as
+    // locate() clamps) may (the bricks: RGBA, a voxel of the cell has α > 0; scalar, the
+    // cell's value range reaches a lookup entry with opacity). Exact per cell.
     bool hull_visible(const float lo[3], const float hi[3]) const;
-    // hull_visible(p, p) for a cell's centre.
-    bool point_visible(const float p[3]) const;
     // Per axis the first corners [v0, v1] of the cells samples in [lo, hi] (widened by
     // HULL_MARGIN, clamped as locate() clamps) interpolate in; false when all lie outside.
     bool corner_range(const float lo[3], const float hi[3], std::int64_t v0[3],
                       std::int64_t v1[3]) const;
-    // Whether an RGBA source has α > 0 in the cells with first corners [v0, v1] (the bricks).
+    // Whether a cell with first corner in [v0, v1] may have opacity (the bricks).
     bool bricks_visible(const std::int64_t v0[3], const std::int64_t v1[3]) const;
     // The stored source gradient (detail::GradientValue) of the prepared source, in parallel
     // over layers (each written by one task: the same values for any number of threads).
@@ -230,13 +229,12 @@ private:
     Vec3d m_target_spacing, m_target_origin;
     double m_step = 0.0;
     double m_prepare_ms = 0.0;
-    // Scalar sources: blocks of 2³ voxels, min and max of the lookup coordinates.
-    std::array<std::int64_t, 3> m_blocks{0, 0, 0};
-    std::vector<float> m_block_min, m_block_max;
-    std::array<int, 4096 + 1> m_nonzero_prefix{};  // lookup entries with opacity, prefix counts
-    // RGBA: the source voxels with α > 0 dilated by one voxel toward −x, −y, −z (bit v set when
-    // a voxel of {v, v + 1}³ has α > 0), a 64-bit word per brick of 4³ voxels (x fastest).
-    bool m_is_rgba = false;  // the source's, read per test
+    // Per source cell (first corner v, the voxels {v, v + 1}³ clamped to the grid) whether a
+    // sample interpolated in it may have opacity, a bit per cell, a 64-bit word per brick of 4³
+    // cells (x fastest): RGBA, a voxel of the cell has α > 0 (the α bits dilated by one voxel
+    // toward −x, −y, −z); scalar, the lookup entries of the cell's value range widened by
+    // detail::LERP_ROUNDING have opacity (RayCaster's cell test), set once per transfer
+    // function (the constructor).
     std::array<std::int64_t, 3> m_bricks{0, 0, 0};
     std::vector<std::uint64_t> m_brick_bits;
     // The installed map's state; render() computes its missing empty cubes under m_cubes_mutex.
