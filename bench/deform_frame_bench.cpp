@@ -9,16 +9,16 @@
 // its exact render; --json prints the same as one JSON object.
 //
 // Then the frames pipelined as `pliant deform --render` runs them (pipeline/frame_pipeline.hpp):
-// for each route, --pipe-frames more frames (default max(8, frames)) with the step and map and
-// its state (MappedRayCaster::compute_map, the occupancy and the camera's empty cubes) (or the
-// step alone) of frame f + 1 on one thread while frame f's install_map and render (or resample,
+// for each route, --pipe-frames more frames (default max(8, frames)) with the step and map (or
+// the step alone) of frame f + 1 on one thread while frame f's set_map and render (or resample,
 // update and render) run on the others. The period is the wall (and process CPU) ms between the
 // end of the first frame's render and the end of the last one's, per frame: the throughput,
-// with the stages overlapped. Beside it the mean wall ms of the produce (step + map + state /
-// copy of the positions) and consume (install + render / resample + update + render) sides as
-// they ran overlapped. Three alternatives of the map route for comparison: the state computed on
-// the consuming side (set_map before the render), the map built there too, and the producer on
-// every thread (the step's two lanes) instead of one.
+// with the stages overlapped. Beside it the mean wall ms of the produce (step + map / copy of
+// the positions) and consume (set_map + render / resample + update + render) sides as they ran
+// overlapped. Three alternatives of the map route for comparison: the map's state computed on
+// the producing side too (MappedRayCaster::compute_map with the camera's empty cubes; the
+// consumer installs it), the map built on the consuming side, and the producer on every thread
+// (the step's two lanes) instead of one.
 //
 // --scalar adds a stage: set_map of the same maps for the 256³ phantom as an f32 scalar source
 // through `mri-brain` (the viewer's and `pliant deform`'s input), whose occupancy tests its
@@ -297,15 +297,15 @@ int main(int argc, char** argv) {
             mapped->render(camera, map_image);
         };
         const Pipelined map_pipe =
-            run_pipelined(frame, frame + pipe_frames - 1, step_map_and_state, show_state);
-        frame += pipe_frames;
-        const Pipelined map_consumer_state =
             run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map);
+        frame += pipe_frames;
+        const Pipelined map_producer_state =
+            run_pipelined(frame, frame + pipe_frames - 1, step_map_and_state, show_state);
         frame += pipe_frames;
         // The same with the producer on every thread (BackgroundTask's default, the viewer's
         // former scheme): the step's two lanes in the background.
         const Pipelined map_all =
-            run_pipelined(frame, frame + pipe_frames - 1, step_map_and_state, show_state, 0);
+            run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map, 0);
         frame += pipe_frames;
         std::array<std::vector<Vec3f>, 2> positions;
         const auto step_and_copy = [&](int f, int slot) {
@@ -359,7 +359,7 @@ int main(int argc, char** argv) {
                 exact_wall, exact_cpu, map_wall, map_cpu);
             for (const auto& [key, p] :
                  {std::pair{"map_pipelined", &map_pipe}, std::pair{"exact_pipelined", &exact_pipe},
-                  std::pair{"map_state_on_consumer_pipelined", &map_consumer_state},
+                  std::pair{"map_state_on_producer_pipelined", &map_producer_state},
                   std::pair{"map_late_pipelined", &map_late},
                   std::pair{"map_all_threads_pipelined", &map_all}}) {
                 std::printf(
@@ -389,13 +389,12 @@ int main(int argc, char** argv) {
             };
             for (const Row& row :
                  {Row{"pipelined period, exact", &exact_pipe, "step", "resample + update + render"},
-                  Row{"pipelined period, map", &map_pipe, "step + build + state",
-                      "install + render"},
-                  Row{"pipelined, map state on consumer", &map_consumer_state, "step + build",
-                      "set_map + render"},
+                  Row{"pipelined period, map", &map_pipe, "step + build", "set_map + render"},
+                  Row{"pipelined, map state on producer", &map_producer_state,
+                      "step + build + state", "install + render"},
                   Row{"pipelined, map built late", &map_late, "step", "build + set_map + render"},
-                  Row{"pipelined, map, producer all threads", &map_all, "step + build + state",
-                      "install + render"}}) {
+                  Row{"pipelined, map, producer all threads", &map_all, "step + build",
+                      "set_map + render"}}) {
                 std::printf(
                     "  %-36s %10.1f %10.1f  (%.1f fps; %d frames; overlapped: %s %.1f, "
                     "%s %.1f)\n",

@@ -222,14 +222,12 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     RunningMean map_ms;
 
     // The frames run through run_frame_pipeline (frame_pipeline.hpp): produce = the step, a copy
-    // of the positions and (map route) the frame's inverse map and its state for the caster
-    // (render::MapOccupancy, with the empty cubes of the camera's octants) into a slot; consume
-    // = the resample (exact route, and the output volume at the last frame) from the slot's
-    // positions, the state's installation (O(1)) or the caster's update, render, write. The
-    // exact route resamples on the consuming side: on the producer's one thread it would take
-    // longer than all the rest. Pipelined only when every frame renders and no checkpoint is
-    // saved (a checkpoint is the body at the frame just consumed, which the next frame's step
-    // has already moved on).
+    // of the positions and (map route) the frame's inverse map into a slot; consume = the
+    // resample (exact route, and the output volume at the last frame) from the slot's positions,
+    // set_map or the caster's update, render, write. The exact route resamples on the consuming
+    // side: on the producer's one thread it would take longer than all the rest. Pipelined only
+    // when every frame renders and no checkpoint is saved (a checkpoint is the body at the frame
+    // just consumed, which the next frame's step has already moved on).
     const bool every_frame = video.has_value() || static_cast<bool>(options.frame_sink);
     const bool pipelined = options.pipelined && every_frame && !checkpoints;
     const bool map_route = options.resample == ResampleMode::map;
@@ -241,15 +239,9 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         pbd::SoftBodyStats stats;
         std::vector<Vec3f> positions;  // the body's, after the frame's step
         volume::InverseMap map;
-        render::MapOccupancy state;  // the map's, for `mapped` (installed by the consume)
-        double build_ms = 0.0;       // the inverse map
+        double build_ms = 0.0;  // the inverse map
     };
     std::array<Slot, 2> slots;
-    // The mapped caster exists before the frames: the producer computes each map's state with it.
-    if (map_route && (every_frame || !options.still.empty())) {
-        mapped.emplace(source, tf, source, ray_options);
-    }
-    const int octants = mapped ? mapped->octants_of(camera) : 0;
     const auto produce = [&](int frame, int slot) {
         Slot& s = slots[static_cast<std::size_t>(slot)];
         body.step(dt);
@@ -261,14 +253,13 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             const Stopwatch clock;
             deformable.build_map(s.positions, s.map);
             s.build_ms = clock.elapsed_ms();
-            mapped->compute_map(s.map, s.state, octants);
         }
     };
     const Stopwatch run_clock;
     double last_frame_end = 0.0;
     int frames_run = 0;
     const auto consume = [&](int frame, int slot) {
-        Slot& s = slots[static_cast<std::size_t>(slot)];
+        const Slot& s = slots[static_cast<std::size_t>(slot)];
         stats = s.stats;
         substep_ms.add(stats.ms_per_substep);
         step_ms.add(stats.step_ms);
@@ -276,8 +267,12 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         max_ratio = std::max(max_ratio, stats.volume_ratio);
         max_inverted = std::max(max_inverted, stats.inverted_tets);
         if (renders(frame) && map_route) {
-            mapped->install_map(s.state);
-            map_ms.add(s.build_ms + mapped->map_ms());
+            const Stopwatch clock;
+            if (!mapped) {
+                mapped.emplace(source, tf, source, ray_options);
+            }
+            mapped->set_map(s.map);
+            map_ms.add(s.build_ms + clock.elapsed_ms());
             render_ms.add(mapped->render(camera, image).ms);
         }
         if (frame == options.frames || (every_frame && !map_route)) {
