@@ -10,16 +10,22 @@
 //
 // Then the frames pipelined as `pliant deform --render` runs them (pipeline/frame_pipeline.hpp):
 // for each route, --pipe-frames more frames (default max(8, frames)) with the step and map (or
-// resample) of frame f + 1 on one thread while frame f's set_map (or update) and render run on
-// the others. The period is the wall (and process CPU) ms between the end of the first frame's
-// render and the end of the last one's, per frame: the throughput, with the stages overlapped.
-// Beside it the mean wall ms of the produce (step + map / copy of the positions) and consume
-// (set_map / resample + update, render) sides as they ran overlapped. Two alternatives of the
-// map route for comparison: the map built on the consuming side, and the producer on every
-// thread (the step's two lanes) instead of one.
+// the step alone) of frame f + 1 on one thread while frame f's set_map and render (or resample,
+// update and render) run on the others. The period is the wall (and process CPU) ms between the
+// end of the first frame's render and the end of the last one's, per frame: the throughput,
+// with the stages overlapped. Beside it the mean wall ms of the produce (step + map / copy of
+// the positions) and consume (set_map + render / resample + update + render) sides as they ran
+// overlapped. Three alternatives of the map route for comparison: the map's state computed on
+// the producing side too (MappedRayCaster::compute_map with the camera's empty cubes; the
+// consumer installs it), the map built on the consuming side, and the producer on every thread
+// (the step's two lanes) instead of one.
+//
+// --scalar adds a stage: set_map of the same maps for the 256³ phantom as an f32 scalar source
+// through `mri-brain` (the viewer's and `pliant deform`'s input), whose occupancy tests its
+// cells' value ranges through the lookup table.
 //
 //   bin/bench_deform_frame [--driver twist|wave|bubble|drag|all] [--frames N] [--size N]
-//                          [--threads N] [--pipe-frames N] [--no-shading] [--json]
+//                          [--threads N] [--pipe-frames N] [--no-shading] [--scalar] [--json]
 //
 // bench/compare_deform_vtk runs it beside VTK's fixed-point ray caster on the undeformed 256³
 // phantom in the same run.
@@ -32,7 +38,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
-#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,8 +49,10 @@
 #include "pliant/render/camera.hpp"
 #include "pliant/render/mapped_raycast.hpp"
 #include "pliant/render/raycast.hpp"
+#include "pliant/volume/generate.hpp"
 #include "pliant/volume/inverse_map.hpp"
 #include "pliant/volume/resample.hpp"
+#include "pliant/volume/transfer_function.hpp"
 #include "source_scale_body.hpp"
 #include "source_scale_phantom.hpp"
 
@@ -140,6 +147,7 @@ int main(int argc, char** argv) {
     int threads = 0;
     int pipe_frames = 0;
     bool shading = true;
+    bool scalar = false;
     bool json = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -156,13 +164,15 @@ int main(int argc, char** argv) {
             pipe_frames = std::max(2, std::atoi(argv[++i]));
         } else if (a == "--no-shading") {
             shading = false;
+        } else if (a == "--scalar") {
+            scalar = true;
         } else if (a == "--json") {
             json = true;
         } else {
             std::fprintf(stderr,
                          "usage: bench_deform_frame [--driver twist|wave|bubble|drag|all] "
                          "[--frames N] [--size N] [--threads N] [--pipe-frames N] [--no-shading] "
-                         "[--json]\n");
+                         "[--scalar] [--json]\n");
             return 2;
         }
     }
@@ -190,6 +200,19 @@ int main(int argc, char** argv) {
     Stage prepare_map{"map route: source preparation (once)"};
     std::optional<render::MappedRayCaster> mapped;
     timed(prepare_map, [&] { mapped.emplace(source, nullptr, source, options); });
+    // --scalar: the phantom as f32 values through mri-brain.
+    volume::Volume scalar_source;
+    volume::TransferFunction scalar_tf;
+    std::optional<render::MappedRayCaster> scalar_mapped;
+    if (scalar) {
+        scalar_source = volume::shepp_logan_3d(source.dims());
+        scalar_tf = volume::preset("mri-brain", scalar_source);
+        scalar_mapped.emplace(scalar_source, &scalar_tf, scalar_source, options);
+        if (!json) {
+            std::printf("f32 source's preparation (--scalar, once): %.1f ms\n",
+                        scalar_mapped->prepare_ms());
+        }
+    }
     const volume::Resampler resampler(source, w.grid.mesh.tets, w.grid.mesh.positions);
     volume::Volume target =
         volume::Volume::allocate(source.dims(), source.type(), source.spacing(), source.origin());
@@ -219,7 +242,8 @@ int main(int argc, char** argv) {
         Stage step{"step (10 substeps)"}, resample{"exact: resample"},
             update{"exact: RayCaster prepare/update"}, render_exact{"exact: render"},
             build{"map: InverseMap::build"}, set_map{"map: set_map (occupancy)"},
-            render_map{"map: render (+ empty cubes)"};
+            render_map{"map: render (+ empty cubes)"},
+            set_map_scalar{"map: set_map, f32 source (--scalar)"};
         render::Image exact_image, map_image;
         std::int64_t exact_samples = 0, map_samples = 0;
         volume::InverseMap map;
@@ -241,6 +265,9 @@ int main(int argc, char** argv) {
             });
             timed(set_map, [&] { mapped->set_map(map); });
             timed(render_map, [&] { map_samples = mapped->render(camera, map_image).samples; });
+            if (scalar_mapped) {
+                timed(set_map_scalar, [&] { scalar_mapped->set_map(map); });
+            }
         }
         const double db = psnr(exact_image, map_image);
         // The same stages pipelined, on the frames after these. Map route: step + build in the
@@ -248,11 +275,22 @@ int main(int argc, char** argv) {
         // positions in the background, resample + update + render on the caller (a resample
         // on one thread would take longer than the rest of the frame).
         std::array<volume::InverseMap, 2> maps;
+        std::array<render::MapOccupancy, 2> states;
+        const int octants = mapped->octants_of(camera);
         const auto step_and_map = [&](int f, int slot) {
             driven.step(f);
             maps[static_cast<std::size_t>(slot)].build(source, source, w.grid.mesh.tets,
                                                        w.grid.mesh.positions, body.positions(),
                                                        {.node_voxels = w.grid.cell_voxels});
+        };
+        const auto step_map_and_state = [&](int f, int slot) {
+            step_and_map(f, slot);
+            mapped->compute_map(maps[static_cast<std::size_t>(slot)],
+                                states[static_cast<std::size_t>(slot)], octants);
+        };
+        const auto show_state = [&](int, int slot) {
+            mapped->install_map(states[static_cast<std::size_t>(slot)]);
+            mapped->render(camera, map_image);
         };
         const auto show_map = [&](int, int slot) {
             mapped->set_map(maps[static_cast<std::size_t>(slot)]);
@@ -260,6 +298,9 @@ int main(int argc, char** argv) {
         };
         const Pipelined map_pipe =
             run_pipelined(frame, frame + pipe_frames - 1, step_and_map, show_map);
+        frame += pipe_frames;
+        const Pipelined map_producer_state =
+            run_pipelined(frame, frame + pipe_frames - 1, step_map_and_state, show_state);
         frame += pipe_frames;
         // The same with the producer on every thread (BackgroundTask's default, the viewer's
         // former scheme): the step's two lanes in the background.
@@ -288,8 +329,11 @@ int main(int argc, char** argv) {
                 mapped->render(camera, map_image);
             });
         frame += pipe_frames;
-        const Stage* stages[] = {&step,  &resample, &update,    &render_exact,
-                                 &build, &set_map,  &render_map};
+        std::vector<const Stage*> stages = {&step,  &resample, &update,    &render_exact,
+                                            &build, &set_map,  &render_map};
+        if (scalar_mapped) {
+            stages.push_back(&set_map_scalar);
+        }
         const double exact_wall =
             (step.wall + resample.wall + update.wall + render_exact.wall) / frames;
         const double exact_cpu = (step.cpu + resample.cpu + update.cpu + render_exact.cpu) / frames;
@@ -305,7 +349,7 @@ int main(int argc, char** argv) {
                 static_cast<long long>(exact_samples), static_cast<long long>(map_samples), db,
                 static_cast<long long>(mapped->num_visible_cells()),
                 static_cast<long long>(mapped->num_cells()));
-            for (std::size_t s = 0; s < std::size(stages); ++s) {
+            for (std::size_t s = 0; s < stages.size(); ++s) {
                 std::printf("%s\"%s\": {\"wall_ms\": %.2f, \"cpu_ms\": %.2f}", s == 0 ? "" : ", ",
                             stages[s]->name, stages[s]->wall / frames, stages[s]->cpu / frames);
             }
@@ -315,6 +359,7 @@ int main(int argc, char** argv) {
                 exact_wall, exact_cpu, map_wall, map_cpu);
             for (const auto& [key, p] :
                  {std::pair{"map_pipelined", &map_pipe}, std::pair{"exact_pipelined", &exact_pipe},
+                  std::pair{"map_state_on_producer_pipelined", &map_producer_state},
                   std::pair{"map_late_pipelined", &map_late},
                   std::pair{"map_all_threads_pipelined", &map_all}}) {
                 std::printf(
@@ -345,6 +390,8 @@ int main(int argc, char** argv) {
             for (const Row& row :
                  {Row{"pipelined period, exact", &exact_pipe, "step", "resample + update + render"},
                   Row{"pipelined period, map", &map_pipe, "step + build", "set_map + render"},
+                  Row{"pipelined, map state on producer", &map_producer_state,
+                      "step + build + state", "install + render"},
                   Row{"pipelined, map built late", &map_late, "step", "build + set_map + render"},
                   Row{"pipelined, map, producer all threads", &map_all, "step + build",
                       "set_map + render"}}) {

@@ -127,18 +127,34 @@ void VolumeSession::build_deformable() {
     resample_front();
 }
 
-void VolumeSession::fill(int buffer) {
+void VolumeSession::fill(int buffer, const render::MappedRayCaster* caster, int octants) {
     const Stopwatch watch;
+    const auto b = static_cast<std::size_t>(buffer);
+    m_solver_stats.occupancy_ms = 0.0;
     if (m_options.resample == pipeline::ResampleMode::map) {
-        m_deformable->build_map(m_maps[static_cast<std::size_t>(buffer)]);
-    } else {
-        m_deformable->resample(m_targets[static_cast<std::size_t>(buffer)]);
+        m_deformable->build_map(m_maps[b]);
+        m_solver_stats.resample_ms = watch.elapsed_ms();
+        if (caster != nullptr) {
+            caster->compute_map(m_maps[b], m_map_states[b], octants);
+            m_solver_stats.occupancy_ms = m_map_states[b].ms();
+        } else {
+            m_map_states[b].clear();
+        }
+        return;
     }
+    m_deformable->resample(m_targets[b]);
     m_solver_stats.resample_ms = watch.elapsed_ms();
 }
 
+std::shared_ptr<const render::MappedRayCaster> VolumeSession::frame_caster() const {
+    if (!uses_map() || m_caster_dirty) {
+        return nullptr;
+    }
+    return m_mapped;
+}
+
 void VolumeSession::resample_front() {
-    fill(m_front);
+    fill(m_front, frame_caster().get(), m_octants);
     publish();
 }
 
@@ -148,6 +164,7 @@ void VolumeSession::publish() {
     m_time = body.time();
     m_stats.step_ms = m_solver_stats.step_ms;
     m_stats.resample_ms = m_solver_stats.resample_ms;
+    m_stats.occupancy_ms = m_solver_stats.occupancy_ms;
     m_stats.volume_ratio = m_solver_stats.volume_ratio;
     m_stats.inverted_tets = m_solver_stats.inverted_tets;
     m_volume_changed = true;
@@ -306,20 +323,20 @@ void VolumeSession::step() {
     require_deformable("stepping");
     settle();
     // On the caller with every thread: the same frame as start_step's (deterministic stages).
-    run_frame(1 - m_front);
+    run_frame(1 - m_front, frame_caster().get(), m_octants);
     m_front = 1 - m_front;
     publish();
     apply_pending_drag();
 }
 
-void VolumeSession::run_frame(int buffer) {
+void VolumeSession::run_frame(int buffer, const render::MappedRayCaster* caster, int octants) {
     pbd::SoftBody& body = m_deformable->body();
     body.step(1.0 / m_options.fps);
     const pbd::SoftBodyStats stats = body.stats();
     m_solver_stats.step_ms = stats.step_ms;
     m_solver_stats.volume_ratio = stats.volume_ratio;
     m_solver_stats.inverted_tets = stats.inverted_tets;
-    fill(buffer);
+    fill(buffer, caster, octants);
 }
 
 bool VolumeSession::start_step() {
@@ -329,7 +346,11 @@ bool VolumeSession::start_step() {
     }
     apply_pending_drag();
     const int back = 1 - m_front;
-    m_task.start([this, back] { run_frame(back); });
+    // The frame holds the caster it computes the map state with: one rebuilt meanwhile on this
+    // thread leaves it alive until the frame ends (its state is then not installed).
+    m_task.start([this, back, caster = frame_caster(), octants = m_octants] {
+        run_frame(back, caster.get(), octants);
+    });
     return true;
 }
 
@@ -407,13 +428,20 @@ void VolumeSession::prepare_caster() {
         const volume::InverseMap& map = m_maps[static_cast<std::size_t>(m_front)];
         if (m_caster_dirty || !m_mapped) {
             const render::RayCastOptions options = caster_options();
-            m_mapped = std::make_unique<render::MappedRayCaster>(
+            m_mapped = std::make_shared<render::MappedRayCaster>(
                 m_source, m_is_rgba ? nullptr : &m_render_tf, m_source, options);
             m_mapped->set_map(map);
             m_stats.prepare_ms = m_mapped->prepare_ms() + m_mapped->map_ms();
         } else if (m_volume_changed) {
-            m_mapped->set_map(map);
-            m_stats.prepare_ms = m_mapped->map_ms();
+            // The state the frame computed with this caster (O(1)), else computed here.
+            render::MapOccupancy& state = m_map_states[static_cast<std::size_t>(m_front)];
+            const Stopwatch watch;
+            if (m_mapped->is_own(state) && state.map() == &map) {
+                m_mapped->install_map(state);
+            } else {
+                m_mapped->set_map(map);
+            }
+            m_stats.prepare_ms = watch.elapsed_ms();
         } else {
             return;
         }
@@ -445,6 +473,9 @@ void VolumeSession::prepare_caster() {
 render::RayCastStats VolumeSession::render(const render::Camera& camera, render::Image& image) {
     m_stats.prepared = false;
     prepare_caster();
+    if (uses_map()) {
+        m_octants = m_mapped->octants_of(camera);
+    }
     const render::RayCastStats stats =
         uses_map() ? m_mapped->render(camera, image) : m_caster->render(camera, image);
     m_stats.render_ms = stats.ms;

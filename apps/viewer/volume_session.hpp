@@ -24,7 +24,11 @@
 // Every frame of a deforming volume: SoftBody::step(1 / fps), resampling into a grid like the
 // source, a new RayCaster over it, one render; or with resample = map, the frame's inverse map
 // (DeformableVolume::build_map, double-buffered like the resampled volumes) and one render of
-// the source through it (render::MappedRayCaster, the source prepared once). Static volumes prepare
+// the source through it (render::MappedRayCaster, the source prepared once); the map's state
+// (render::MapOccupancy: its cells' occupancy, and the empty cubes of the last render's octants)
+// is computed by the frame right after its map, on the frame's thread, and swapped into the
+// caster before the render (computed on the render's thread instead when the caster was
+// rebuilt since the frame began: the state is the caster's own). Static volumes prepare
 // the RayCaster only when the transfer function, opacity or threshold change. Not thread safe; the
 // library calls parallelise internally and stay deterministic.
 #pragma once
@@ -85,7 +89,10 @@ struct VolumeSessionOptions {
 struct VolumeFrameStats {
     double step_ms = 0.0;      // soft body, last frame
     double resample_ms = 0.0;  // last resampling (or inverse map, resample = map)
-    double prepare_ms = 0.0;   // last RayCaster preparation
+    // resample = map: the last frame's map state (MapOccupancy) on the frame's thread; 0 when
+    // the render computed it (no caster yet, or one rebuilt since the frame began).
+    double occupancy_ms = 0.0;
+    double prepare_ms = 0.0;   // last RayCaster preparation (or map state computed or installed)
     bool prepared = false;     // the last render() prepared a RayCaster
     double render_ms = 0.0;    // last render
     std::int64_t samples = 0;  // of the last render
@@ -161,16 +168,21 @@ private:
     // Waits for a frame in flight and publishes it.
     void settle();
     void publish();
-    // The soft body's step and fill(buffer), with the frame's stats (start_step's work).
-    void run_frame(int buffer);
+    // The soft body's step and fill(buffer, caster), with the frame's stats (start_step's work).
+    void run_frame(int buffer, const render::MappedRayCaster* caster, int octants);
     void resample_front();  // the body as it is, into the shown buffer, published
     void apply_pending_drag();
     void require_deformable(const char* what) const;
     bool uses_map() const {
         return m_deformable != nullptr && m_options.resample == pipeline::ResampleMode::map;
     }
-    // The body's current positions into the shown buffer (resampled volume or inverse map).
-    void fill(int buffer);
+    // The body's current positions into buffer `buffer` (resampled volume or inverse map); with
+    // a caster (resample = map) the map's state too, with the empty cubes of `octants`, else
+    // that state is cleared.
+    void fill(int buffer, const render::MappedRayCaster* caster, int octants);
+    // The mapped caster a frame may compute its map state with: the current one unless it is to
+    // be rebuilt (null then, and without one).
+    std::shared_ptr<const render::MappedRayCaster> frame_caster() const;
 
     volume::Volume m_original;  // as read (RGBA: before the threshold)
     volume::Volume m_source;    // what is deformed and shown (RGBA: thresholded copy)
@@ -184,9 +196,14 @@ private:
     // frame in flight.
     std::array<volume::Volume, 2> m_targets;
     int m_front = 0;
-    // resample = map: the frames' inverse maps (the same double buffer) and their caster.
+    // resample = map: the frames' inverse maps (the same double buffer), their states
+    // (computed by the frame that built the map; the one of the front buffer is swapped into
+    // the caster by the next render) and their caster (shared with the frame in flight, which
+    // computes the state with it: a caster rebuilt meanwhile leaves the old one to that frame).
     std::array<volume::InverseMap, 2> m_maps;
-    std::unique_ptr<render::MappedRayCaster> m_mapped;
+    std::array<render::MapOccupancy, 2> m_map_states;
+    std::shared_ptr<render::MappedRayCaster> m_mapped;
+    int m_octants = 0;  // of the last render's camera (render::MappedRayCaster::octants_of)
     std::unique_ptr<render::RayCaster> m_caster;
     bool m_caster_dirty = true;     // options changed: a new caster
     bool m_volume_changed = false;  // only the shown volume changed: update() the caster

@@ -75,7 +75,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     FrameClock clock;
     Stopwatch since_scroll;
     bool scrolled = false;
-    Mean step_ms, resample_ms, prepare_ms, render_ms;
+    Mean step_ms, resample_ms, occupancy_ms, prepare_ms, render_ms;
     // The main thread's share of a frame: the wait for the deformed frame in flight, the image's
     // texture upload, the drawing (image and overlay) and the buffer swap.
     Mean wait_ms, upload_ms, draw_ms, swap_ms;
@@ -140,6 +140,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
             const auto on_published = [&] {
                 step_ms.add(session.stats().step_ms);
                 resample_ms.add(session.stats().resample_ms);
+                occupancy_ms.add(session.stats().occupancy_ms);
             };
             const Stopwatch waiting;
             const bool published =
@@ -226,6 +227,7 @@ nlohmann::ordered_json run_volume_view(const std::filesystem::path& volume_path,
     add_run_summary(result, clock, run, window, last_camera);
     result["mean_step_ms"] = step_ms.value();
     result["mean_resample_ms"] = resample_ms.value();
+    result["mean_occupancy_ms"] = occupancy_ms.value();
     result["mean_prepare_ms"] = prepare_ms.value();
     result["mean_render_ms"] = render_ms.value();
     result["mean_wait_ms"] = wait_ms.value();

@@ -12,6 +12,7 @@
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
+#include "pliant/core/parallel_task.hpp"
 #include "pliant/core/simd_dispatch.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pbd/tet_grid.hpp"
@@ -371,6 +372,47 @@ TEST(MappedRayCast, SkippingChangesNothingAndThreadsChangeNothing) {
     }
 }
 
+// A scalar source whose transfer function has opacity only strictly between two of its values
+// (the voxels themselves transparent, a sample visible only where interpolation crosses an
+// edge between them): the cells' bits (their value ranges) keep every such sample — skipping
+// changes no pixel — and skip some of the volume.
+TEST(MappedRayCast, ScalarSkippingKeepsSamplesBetweenVoxelValues) {
+    const volume::Volume source = volume::shepp_logan_3d({40, 36, 32});
+    std::vector<float> values(source.values<volume::VoxelType::f32>().begin(),
+                              source.values<volume::VoxelType::f32>().end());
+    std::sort(values.begin(), values.end());
+    values.erase(std::unique(values.begin(), values.end()), values.end());
+    ASSERT_GE(values.size(), 3U);
+    const double v1 = values[values.size() - 2], v2 = values.back();
+    const double mid = 0.5 * (v1 + v2), half = 0.1 * (v2 - v1);
+    volume::TransferFunction tf;
+    tf.name = "band";
+    tf.color = {{v1, {1.0f, 0.8f, 0.6f}}};
+    tf.opacity = {{mid - half, 0.0f}, {mid, 0.9f}, {mid + half, 0.0f}};
+    tf.validate();
+    const Deformed d = deform(source, nullptr, Drive::twist, 12);  // the whole box's grid
+    volume::InverseMap map;
+    map.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+    const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 80, 80);
+    RayCastOptions options;
+    MappedRayCaster skipping(source, &tf, source, options);
+    options.empty_space_skipping = false;
+    MappedRayCaster every(source, &tf, source, options);
+    skipping.set_map(map);
+    every.set_map(map);
+    Image a, b;
+    const RayCastStats sa = skipping.render(camera, a);
+    const RayCastStats sb = every.render(camera, b);
+    EXPECT_EQ(a.pixels, b.pixels);
+    EXPECT_LT(sa.samples, sb.samples);
+    EXPECT_LT(skipping.num_visible_cells(), skipping.num_cells());
+    std::int64_t lit = 0;
+    for (const std::uint8_t v : a.pixels) {
+        lit += v > 0 ? 1 : 0;
+    }
+    EXPECT_GT(lit, 0);
+}
+
 // The AVX2 march (8 rays per vector) is the scalar kernel's bits: images and sample counts, for
 // every kind the mapped caster renders: RGBA and scalar sources (through a transfer function),
 // shaded or not, at the default step (Δs/u = 1/2) and another, clipped, without skipping,
@@ -602,6 +644,87 @@ TEST(MappedRayCast, EarlyTerminationStillWorks) {
     const std::int64_t without = never.render(camera, b).samples;
     EXPECT_LT(with, without);
     EXPECT_GT(psnr(a, b), 40.0);
+}
+
+// A map's state computed on another thread (compute_map() on a BackgroundTask, while the caster
+// renders the previous map on this one) and installed gives set_map()'s image and sample counts,
+// RGBA and scalar, shaded or not; the empty cubes asked for are computed with it, and the
+// installation hands back the state it replaced.
+TEST(MappedRayCast, StateComputedOnAnotherThreadGivesSetMapsImage) {
+    const volume::Volume scalar = volume::shepp_logan_3d({48, 40, 44});
+    const volume::TransferFunction tf = volume::preset("mri-brain", scalar);
+    struct Source {
+        const volume::Volume* volume;
+        const volume::TransferFunction* tf;
+    };
+    for (const Source& src : {Source{&rgba64(), nullptr}, Source{&scalar, &tf}}) {
+        const volume::Volume& source = *src.volume;
+        const Deformed d = deform(source, src.tf, Drive::twist, 12);
+        volume::InverseMap first, second;  // at rest, twisted
+        first.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.grid.mesh.positions);
+        second.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+        const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 64, 64);
+        for (const bool shading : {false, true}) {
+            RayCastOptions options;
+            options.shading = shading;
+            MappedRayCaster reference(source, src.tf, source, options);
+            reference.set_map(second);
+            Image expected;
+            const RayCastStats want = reference.render(camera, expected);
+
+            MappedRayCaster caster(source, src.tf, source, options);
+            caster.set_map(first);
+            MapOccupancy next;
+            EXPECT_FALSE(next.has_map());
+            const int octants = caster.octants_of(camera);
+            EXPECT_NE(octants, 0);
+            BackgroundTask task(1);
+            task.start([&] { caster.compute_map(second, next, octants); });
+            Image during;
+            caster.render(camera, during);  // the first map, beside the computation
+            task.wait();
+            ASSERT_TRUE(caster.is_own(next));
+            EXPECT_EQ(next.map(), &second);
+            EXPECT_EQ(next.octants() & octants, octants);
+            EXPECT_EQ(next.num_visible_cells(), reference.num_visible_cells());
+            caster.install_map(next);
+            EXPECT_EQ(next.map(), &first);  // the state it replaced
+            Image got;
+            const RayCastStats have = caster.render(camera, got);
+            EXPECT_EQ(got.pixels, expected.pixels) << "shading " << shading;
+            EXPECT_EQ(have.samples, want.samples) << "shading " << shading;
+            EXPECT_NE(got.pixels, during.pixels);  // the maps differ
+        }
+    }
+}
+
+// A state is its caster's own: another caster (e.g. one rebuilt for a new transfer function)
+// refuses it, as it refuses a state without a map; a refused map leaves the state as it was.
+TEST(MappedRayCast, RefusesAnotherCastersState) {
+    const volume::Volume& source = rgba64();
+    const Deformed d = deform(source, nullptr, Drive::twist, 6);
+    volume::InverseMap map;
+    map.build(source, source, d.grid.mesh.tets, d.grid.mesh.positions, d.positions);
+    MappedRayCaster old_caster(source, nullptr, source);
+    MappedRayCaster new_caster(source, nullptr, source);
+    MapOccupancy state;
+    EXPECT_THROW(new_caster.install_map(state), InvalidInput);  // no map
+    old_caster.compute_map(map, state);
+    EXPECT_TRUE(old_caster.is_own(state));
+    EXPECT_FALSE(new_caster.is_own(state));
+    EXPECT_THROW(new_caster.install_map(state), InvalidInput);
+    Image image;
+    const Camera camera = orbit_camera(source.bounds(), 30.0, 20.0, 0.0, 8, 8);
+    EXPECT_THROW(new_caster.render(camera, image), InvalidInput);  // nothing installed
+    EXPECT_TRUE(state.has_map());                                  // left as it was
+    state.clear();
+    EXPECT_FALSE(old_caster.is_own(state));
+    EXPECT_THROW(old_caster.install_map(state), InvalidInput);
+    old_caster.compute_map(map, state);
+    volume::InverseMap unbuilt;
+    EXPECT_THROW(old_caster.compute_map(unbuilt, state), InvalidInput);
+    old_caster.install_map(state);
+    EXPECT_NO_THROW(old_caster.render(camera, image));
 }
 
 TEST(MappedRayCast, RefusesMipAnUnbuiltMapAndAForeignMap) {

@@ -268,6 +268,54 @@ TEST(VolumeSession, RendersThroughTheInverseMap) {
     EXPECT_GT(differing_pixels(shaded, clipped), 100);
 }
 
+// resample = map: a frame computes its map's state (the occupancy) on its own thread with the
+// caster, and the render installs it: the images and sample counts of a session stepping on the
+// caller. A caster rebuilt while the frame is in flight (the threshold lowered: more of the
+// volume seen) does not take the state made with the old one (it computes its own).
+TEST(VolumeSession, FramesComputeTheMapStateForTheirCaster) {
+    const Volume phantom = volume::shepp_logan_3d(DIMS);
+    const render::Camera camera = camera_for(phantom, 64, 64);
+    VolumeSessionOptions options{.tf = "mri-brain", .threshold = 60.0, .deform = true};
+    options.driver.kind = DriverKind::twist;
+    options.driver.twist.ramp_time = 0.2;
+    options.resample = pipeline::ResampleMode::map;
+    VolumeSession background(phantom, options);
+    VolumeSession foreground(phantom, options);
+    render::Image a, b;
+    for (int f = 1; f <= 3; ++f) {
+        background.render(camera, a);
+        foreground.render(camera, b);
+        ASSERT_TRUE(background.start_step());
+        while (!background.finish_step(false)) {
+        }
+        foreground.step();
+    }
+    // The last frames began with a caster: their states were computed beside the render.
+    EXPECT_GT(background.stats().occupancy_ms, 0.0);
+    EXPECT_GT(foreground.stats().occupancy_ms, 0.0);
+    const render::RayCastStats sa = background.render(camera, a);
+    const render::RayCastStats sb = foreground.render(camera, b);
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(sa.samples, sb.samples);
+    EXPECT_GT(sb.samples, 0);
+    // The caster rebuilt (render) while the frame computes its state with the old one.
+    ASSERT_TRUE(background.start_step());
+    background.set_threshold(0.0);
+    background.render(camera, a);
+    while (!background.finish_step(false)) {
+    }
+    foreground.set_threshold(0.0);
+    foreground.step();
+    EXPECT_EQ(foreground.stats().occupancy_ms, 0.0);  // no caster to compute it with
+    render::Image lowered_a, lowered_b;
+    const render::RayCastStats la = background.render(camera, lowered_a);
+    const render::RayCastStats lb = foreground.render(camera, lowered_b);
+    EXPECT_EQ(lowered_a, lowered_b);
+    EXPECT_EQ(la.samples, lb.samples);
+    EXPECT_GT(la.samples, sb.samples);  // the lowered threshold shows more
+    EXPECT_GT(differing_pixels(lowered_b, b), 0);
+}
+
 TEST(VolumeSession, ErrorsNameTheProblem) {
     const Volume phantom = volume::shepp_logan_3d({8, 8, 8});
     EXPECT_THROW(VolumeSession(phantom, {.opacity_scale = 0.0}), InvalidInput);

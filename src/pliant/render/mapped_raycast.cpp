@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <mutex>
 #include <span>
+#include <utility>
 
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -20,9 +22,7 @@ namespace pliant::render {
 
 namespace {
 
-constexpr int BLOCK = 2;        // scalar sources' occupancy blocks, voxels per edge
-constexpr int BLOCK_SHIFT = 1;  // log2(BLOCK)
-constexpr int BRICK = 4;        // RGBA sources' occupancy bricks (64 bits), voxels per edge
+constexpr int BRICK = 4;        // occupancy bricks (64 bits), voxels per edge
 constexpr int BRICK_SHIFT = 2;  // log2(BRICK)
 // Source grid units the box of a map cell's node values is widened by: far above the rounding
 // of the float trilinear interpolation of coordinates below a few thousand.
@@ -153,11 +153,26 @@ double smallest(const Vec3d& s) {
     return std::min({s.x, s.y, s.z});
 }
 
+// The camera's fields of a kernel (image size, projection, eye relative to `origin`, frame).
+void set_camera(const Camera& camera, const Vec3d& origin, detail::RayCastKernel& k) {
+    k.width = camera.width();
+    k.height = camera.height();
+    k.is_perspective = camera.projection() == Projection::perspective;
+    k.eye = vec3_cast<float>(camera.eye() - origin);
+    k.forward = vec3_cast<float>(camera.forward());
+    k.right = vec3_cast<float>(camera.right());
+    k.up = vec3_cast<float>(camera.up());
+    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+}
+
+// The last MappedRayCaster id handed out (ids start at 1; 0 tags no caster).
+std::atomic<std::uint64_t> last_caster_id{0};
+
 }  // namespace
 
 MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::TransferFunction* tf,
                                  const volume::Volume& target, const RayCastOptions& options)
-    : m_options(options) {
+    : m_id(++last_caster_id), m_options(options) {
     const Stopwatch watch;
     if (target.empty()) {
         throw InvalidInput("raycast through a map: the target frame is empty (no voxels)");
@@ -189,44 +204,67 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         m_source = std::make_unique<RayCaster>(source, tf, source_options);
     }
     m_step = m_source->step();
-    m_is_rgba = m_source->m_is_rgba;
     m_source_dims = source.dims();
     m_target_dims = target.dims();
     m_target_spacing = target.spacing();
     m_target_origin = target.origin();
 
-    // Lookup entries with opacity (scalar sources), as RayCaster's cell test counts them.
-    m_nonzero_prefix.fill(0);
-    if (!m_source->m_is_rgba) {
-        for (std::size_t e = 0; e < static_cast<std::size_t>(detail::LUT_SIZE); ++e) {
-            m_nonzero_prefix[e + 1] =
-                m_nonzero_prefix[e] + (m_source->m_lut[4 * e + 3] > 0.0f ? 1 : 0);
-        }
-    }
     const std::int64_t n[3] = {m_source_dims[0], m_source_dims[1], m_source_dims[2]};
     const float* values = m_source->m_values.data();
+    for (int a = 0; a < 3; ++a) {
+        m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
+    }
+    m_brick_bits.assign(static_cast<std::size_t>(m_bricks[0] * m_bricks[1] * m_bricks[2]), 0);
     if (!m_source->m_is_rgba) {
-        // Per source block of 2³ voxels: min and max of the lookup coordinates.
-        for (int a = 0; a < 3; ++a) {
-            m_blocks[static_cast<std::size_t>(a)] = (n[a] + BLOCK - 1) / BLOCK;
+        // Lookup entries with opacity, prefix counts.
+        std::vector<int> nonzero_prefix(static_cast<std::size_t>(detail::LUT_SIZE) + 1, 0);
+        for (std::size_t e = 0; e < static_cast<std::size_t>(detail::LUT_SIZE); ++e) {
+            nonzero_prefix[e + 1] = nonzero_prefix[e] + (m_source->m_lut[4 * e + 3] > 0.0f ? 1 : 0);
         }
-        const std::int64_t num_blocks = m_blocks[0] * m_blocks[1] * m_blocks[2];
-        m_block_min.assign(static_cast<std::size_t>(num_blocks),
-                           std::numeric_limits<float>::infinity());
-        m_block_max.assign(static_cast<std::size_t>(num_blocks),
-                           -std::numeric_limits<float>::infinity());
+        // Per source cell (first corner v, the voxels {v, v + 1}³ clamped to the grid), bit v of
+        // the bricks: the lookup entries of the cell's value range, widened by
+        // detail::LERP_ROUNDING, have opacity (RayCaster's test of its cells: a sample
+        // interpolated in the cell lies in that range). The bits of the RGBA bricks after
+        // dilate_bricks(), for the lookup's opacity. Parallel over brick layers, each written
+        // by one task.
         parallel_for(
-            m_blocks[2],
+            m_bricks[2],
             [&](std::int64_t bz) {
-                for (std::int64_t z = bz * BLOCK; z < std::min(n[2], (bz + 1) * BLOCK); ++z) {
+                // Per x the min and max over the 4 rows (y, y + 1) × (z, z + 1), clamped.
+                std::vector<float> row_min(static_cast<std::size_t>(n[0]));
+                std::vector<float> row_max(static_cast<std::size_t>(n[0]));
+                for (std::int64_t z = bz * BRICK; z < std::min(n[2], (bz + 1) * BRICK); ++z) {
+                    const std::int64_t z1 = std::min(z + 1, n[2] - 1);
                     for (std::int64_t y = 0; y < n[1]; ++y) {
-                        const float* row = values + n[0] * (y + n[1] * z);
-                        const std::int64_t first =
-                            m_blocks[0] * ((y >> BLOCK_SHIFT) + m_blocks[1] * bz);
+                        const std::int64_t y1 = std::min(y + 1, n[1] - 1);
+                        const float* r0 = values + n[0] * (y + n[1] * z);
+                        const float* r1 = values + n[0] * (y1 + n[1] * z);
+                        const float* r2 = values + n[0] * (y + n[1] * z1);
+                        const float* r3 = values + n[0] * (y1 + n[1] * z1);
                         for (std::int64_t x = 0; x < n[0]; ++x) {
-                            const auto b = static_cast<std::size_t>(first + (x >> BLOCK_SHIFT));
-                            m_block_min[b] = std::min(m_block_min[b], row[x]);
-                            m_block_max[b] = std::max(m_block_max[b], row[x]);
+                            const auto i = static_cast<std::size_t>(x);
+                            row_min[i] = std::min(std::min(r0[x], r1[x]), std::min(r2[x], r3[x]));
+                            row_max[i] = std::max(std::max(r0[x], r1[x]), std::max(r2[x], r3[x]));
+                        }
+                        std::uint64_t* out =
+                            m_brick_bits.data() + m_bricks[0] * ((y >> 2) + m_bricks[1] * bz);
+                        const int shift = static_cast<int>(4 * (y & 3) + 16 * (z & 3));
+                        for (std::int64_t x = 0; x < n[0]; ++x) {
+                            const auto i0 = static_cast<std::size_t>(x);
+                            const auto i1 = static_cast<std::size_t>(std::min(x + 1, n[0] - 1));
+                            const float lo = std::min(row_min[i0], row_min[i1]);
+                            const float hi = std::max(row_max[i0], row_max[i1]);
+                            const int e0 =
+                                static_cast<int>(std::max(0.0f, lo - detail::LERP_ROUNDING) + 0.5f);
+                            const int e1 =
+                                std::min(detail::LUT_SIZE - 1,
+                                         static_cast<int>(hi + detail::LERP_ROUNDING + 0.5f));
+                            if (e0 <= e1 && nonzero_prefix[static_cast<std::size_t>(e1) + 1] -
+                                                    nonzero_prefix[static_cast<std::size_t>(e0)] >
+                                                0) {
+                                out[x >> 2] |= std::uint64_t{1}
+                                               << (shift + static_cast<int>(x & 3));
+                            }
                         }
                     }
                 }
@@ -237,10 +275,6 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
         // Bricks of 4³ voxels, bit (x & 3) + 4 (y & 3) + 16 (z & 3) set for a voxel with α > 0
         // (bits past the volume's end stay 0), then dilated (dilate_bricks()). Parallel over
         // brick layers, each written by one task.
-        for (int a = 0; a < 3; ++a) {
-            m_bricks[static_cast<std::size_t>(a)] = (n[a] + BRICK - 1) / BRICK;
-        }
-        m_brick_bits.assign(static_cast<std::size_t>(m_bricks[0] * m_bricks[1] * m_bricks[2]), 0);
         parallel_for(
             m_bricks[2],
             [&](std::int64_t bz) {
@@ -367,12 +401,17 @@ void MappedRayCaster::set_thin_alpha(double thin_alpha) {
     m_thin_alpha = thin_alpha;
 }
 
-std::int64_t MappedRayCaster::num_visible_cells() const {
+std::int64_t MapOccupancy::num_visible_cells() const {
     std::int64_t count = 0;
     for (const std::uint8_t v : m_visible) {
         count += v;
     }
     return count;
+}
+
+void MapOccupancy::clear() {
+    m_map = nullptr;
+    m_octants_ready = 0;
 }
 
 bool MappedRayCaster::corner_range(const float lo[3], const float hi[3], std::int64_t v0[3],
@@ -427,46 +466,7 @@ bool MappedRayCaster::bricks_visible(const std::int64_t v0[3], const std::int64_
 
 bool MappedRayCaster::hull_visible(const float lo[3], const float hi[3]) const {
     std::int64_t v0[3] = {}, v1[3] = {};
-    if (!corner_range(lo, hi, v0, v1)) {
-        return false;
-    }
-    if (m_is_rgba) {
-        return bricks_visible(v0, v1);
-    }
-    // The voxels [v0, v1 + 1] (v1 on an axis of one voxel) in their 2³ blocks.
-    for (int a = 0; a < 3; ++a) {
-        v1[a] += m_source_dims[static_cast<std::size_t>(a)] > 1 ? 1 : 0;
-    }
-    float vmin = std::numeric_limits<float>::infinity();
-    float vmax = -std::numeric_limits<float>::infinity();
-    for (std::int64_t z = v0[2] >> BLOCK_SHIFT; z <= v1[2] >> BLOCK_SHIFT; ++z) {
-        for (std::int64_t y = v0[1] >> BLOCK_SHIFT; y <= v1[1] >> BLOCK_SHIFT; ++y) {
-            const std::int64_t row = m_blocks[0] * (y + m_blocks[1] * z);
-            for (std::int64_t x = v0[0] >> BLOCK_SHIFT; x <= v1[0] >> BLOCK_SHIFT; ++x) {
-                const auto k = static_cast<std::size_t>(row + x);
-                vmin = std::min(vmin, m_block_min[k]);
-                vmax = std::max(vmax, m_block_max[k]);
-            }
-        }
-    }
-    if (!(vmin <= vmax)) {
-        return false;
-    }
-    const float widened_lo = std::max(0.0f, vmin - detail::LERP_ROUNDING);
-    const int i0 = static_cast<int>(widened_lo + 0.5f);
-    const int i1 =
-        std::min(detail::LUT_SIZE - 1, static_cast<int>(vmax + detail::LERP_ROUNDING + 0.5f));
-    return m_nonzero_prefix[static_cast<std::size_t>(i1) + 1] -
-               m_nonzero_prefix[static_cast<std::size_t>(i0)] >
-           0;
-}
-
-bool MappedRayCaster::point_visible(const float p[3]) const {
-    if (!m_is_rgba) {
-        return hull_visible(p, p);
-    }
-    std::int64_t v0[3] = {}, v1[3] = {};
-    return corner_range(p, p, v0, v1) && bricks_visible(v0, v1);
+    return corner_range(lo, hi, v0, v1) && bricks_visible(v0, v1);
 }
 
 std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t base,
@@ -483,7 +483,7 @@ std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t bas
                              0.5f * (0.5f * (v[3 * off[4]] + v[3 * off[5]]) +
                                      0.5f * (v[3 * off[6]] + v[3 * off[7]])));
     }
-    if (point_visible(centre)) {
+    if (hull_visible(centre, centre)) {
         return 0xFF;
     }
     if (!hull_visible(lo, hi)) {
@@ -531,7 +531,8 @@ std::uint8_t MappedRayCaster::sub_cells_visible(const float* g, std::int64_t bas
     return bits;
 }
 
-void MappedRayCaster::set_map(const volume::InverseMap& map) {
+void MappedRayCaster::compute_map(const volume::InverseMap& map, MapOccupancy& state,
+                                  int octants) const {
     const Stopwatch watch;
     const std::array<std::int64_t, 3>& nodes = map.nodes();
     const int b = map.node_voxels();
@@ -548,16 +549,17 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                 m_target_dims[static_cast<std::size_t>(a)], b));
         }
     }
-    m_map = &map;
+    state.m_map = nullptr;  // until it is complete (an exception leaves it without a map)
+    std::array<int, 3>& cells = state.m_cells;
     for (int a = 0; a < 3; ++a) {
-        m_cells[static_cast<std::size_t>(a)] =
+        cells[static_cast<std::size_t>(a)] =
             static_cast<int>(nodes[static_cast<std::size_t>(a)] - 1);
     }
-    const std::int64_t cx_n = m_cells[0], cy_n = m_cells[1], cz_n = m_cells[2];
+    const std::int64_t cx_n = cells[0], cy_n = cells[1], cz_n = cells[2];
     const auto total = static_cast<std::size_t>(cx_n * cy_n * cz_n);
-    m_occupancy.resize(total);
-    m_sub_occupied.resize(total);
-    m_visible.resize(total);
+    state.m_occupancy.resize(total);
+    state.m_sub_occupied.resize(total);
+    state.m_visible.resize(total);
     const float* g = map.node_coordinates().data();
     const std::int64_t nx = nodes[0], nxy = nodes[0] * nodes[1];
     const std::int64_t off[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
@@ -584,10 +586,12 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                 if (x0 >= x1) {
                     x0 = x1 = 0;
                 }
-                std::fill_n(m_occupancy.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
-                std::fill_n(m_sub_occupied.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
+                std::fill_n(state.m_occupancy.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
                             0);
-                std::fill_n(m_visible.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n, 0);
+                std::fill_n(state.m_sub_occupied.begin() + static_cast<std::ptrdiff_t>(row_cell),
+                            cx_n, 0);
+                std::fill_n(state.m_visible.begin() + static_cast<std::ptrdiff_t>(row_cell), cx_n,
+                            0);
                 for (std::int64_t cx = x0; cx < x1; ++cx) {
                     const auto cell = static_cast<std::size_t>(cx + cx_n * (cy + cy_n * cz));
                     const std::int64_t base = cx + nx * cy + nxy * cz;
@@ -601,9 +605,9 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                         }
                     }
                     if (!valid) {
-                        m_occupancy[cell] = 0;
-                        m_sub_occupied[cell] = 0;
-                        m_visible[cell] = 0;
+                        state.m_occupancy[cell] = 0;
+                        state.m_sub_occupied[cell] = 0;
+                        state.m_visible[cell] = 0;
                         continue;
                     }
                     float lo[3] = {g[3 * base], g[3 * base + 1], g[3 * base + 2]};
@@ -620,9 +624,9 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
                     if (sub != 0) {
                         bits = static_cast<std::uint8_t>(bits | detail::MAP_CELL_VISIBLE);
                     }
-                    m_occupancy[cell] = bits;
-                    m_sub_occupied[cell] = sub;
-                    m_visible[cell] = sub != 0 ? 1 : 0;
+                    state.m_occupancy[cell] = bits;
+                    state.m_sub_occupied[cell] = sub;
+                    state.m_visible[cell] = sub != 0 ? 1 : 0;
                     if (sub != 0) {
                         const std::int64_t at[3] = {cx, cy, cz};
                         layer.add(at);
@@ -631,18 +635,18 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
-    m_visible_cells = detail::VisibleCells();
+    state.m_visible_cells = detail::VisibleCells();
     for (const detail::VisibleCells& layer : layer_cells) {
-        m_visible_cells.merge(layer);
+        state.m_visible_cells.merge(layer);
     }
     // The nodes padded to 4 floats (the AVX2 march loads a node pair as 8 floats).
-    m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
+    state.m_nodes4.resize(static_cast<std::size_t>(4 * nxy * nodes[2]));
     parallel_for(
         nodes[2],
         [&](std::int64_t z) {
             for (std::int64_t q = nxy * z; q < nxy * (z + 1); ++q) {
                 const float* in = g + 3 * q;
-                float* out = m_nodes4.data() + 4 * q;
+                float* out = state.m_nodes4.data() + 4 * q;
                 out[0] = in[0];
                 out[1] = in[1];
                 out[2] = in[2];
@@ -650,39 +654,62 @@ void MappedRayCaster::set_map(const volume::InverseMap& map) {
             }
         },
         1);
-    // The empty cubes are computed by render() for the octants its rays use.
-    m_empty_cube.resize(8 * total);
-    {
-        const std::lock_guard<std::mutex> lock(m_cubes_mutex);
-        m_octants_ready = 0;
-    }
-    m_map_ms = watch.elapsed_ms();
+    state.m_empty_cube.resize(8 * total);
+    state.m_octants_ready = 0;
+    state.m_caster = m_id;
+    state.m_map = &map;
+    compute_cubes(state, octants);
+    state.m_ms = watch.elapsed_ms();
 }
 
-void MappedRayCaster::prepare_octants(int octants) const {
-    const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+void MappedRayCaster::install_map(MapOccupancy& state) {
+    if (!state.has_map()) {
+        throw InvalidInput("raycast through a map: the state to install has no map");
+    }
+    if (state.m_caster != m_id) {
+        throw InvalidInput(
+            "raycast through a map: the state to install was computed by another caster");
+    }
+    std::swap(m_state, state);
+}
+
+void MappedRayCaster::set_map(const volume::InverseMap& map) {
+    compute_map(map, m_state);
+}
+
+int MappedRayCaster::octants_of(const Camera& camera) const {
+    detail::RayCastKernel k;
+    set_camera(camera, m_target_origin, k);
+    return ray_octants(k);
+}
+
+void MappedRayCaster::compute_cubes(const MapOccupancy& state, int octants) {
     int todo[8];
     int count = 0;
     for (int octant = 0; octant < 8; ++octant) {
-        if ((octants >> octant & 1) != 0 && (m_octants_ready >> octant & 1) == 0) {
+        if ((octants >> octant & 1) != 0 && (state.m_octants_ready >> octant & 1) == 0) {
             todo[count++] = octant;
         }
     }
-    const std::size_t total = m_occupancy.size();
+    if (count == 0) {
+        return;
+    }
+    const std::size_t total = state.m_occupancy.size();
     parallel_for(
         count,
         [&](std::int64_t i) {
             const int octant = todo[i];
-            detail::empty_cubes(m_visible, m_cells.data(), octant,
-                                std::span<std::uint8_t>(m_empty_cube)
+            detail::empty_cubes(state.m_visible, state.m_cells.data(), octant,
+                                std::span<std::uint8_t>(state.m_empty_cube)
                                     .subspan(static_cast<std::size_t>(octant) * total, total));
         },
         1);
-    m_octants_ready |= octants;
+    state.m_octants_ready |= octants;
 }
 
 RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
-    if (m_map == nullptr) {
+    const MapOccupancy& state = m_state;
+    if (state.m_map == nullptr) {
         throw InvalidInput("raycast through a map: set_map() was not called");
     }
     const Stopwatch watch;
@@ -690,14 +717,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
     m_source->fill_kernel(m.source);
     detail::RayCastKernel& k = m.target;
     k = m.source;  // options (step, opacity correction, threshold, background, skipping)
-    k.width = camera.width();
-    k.height = camera.height();
-    k.is_perspective = camera.projection() == Projection::perspective;
-    k.eye = vec3_cast<float>(camera.eye() - m_target_origin);
-    k.forward = vec3_cast<float>(camera.forward());
-    k.right = vec3_cast<float>(camera.right());
-    k.up = vec3_cast<float>(camera.up());
-    k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
+    set_camera(camera, m_target_origin, k);
     const Vec3d inv{1.0 / m_target_spacing.x, 1.0 / m_target_spacing.y, 1.0 / m_target_spacing.z};
     k.inv_spacing = vec3_cast<float>(inv);
     for (int a = 0; a < 3; ++a) {
@@ -705,7 +725,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         k.g_max[a] = static_cast<float>(k.n[a] - 1);
         k.max_i0[a] = std::max(0, k.n[a] - 2);
         m.source_hi[a] = static_cast<float>(m_source_dims[static_cast<std::size_t>(a)]) - 0.5f;
-        m.cells[a] = m_cells[static_cast<std::size_t>(a)];
+        m.cells[a] = state.m_cells[static_cast<std::size_t>(a)];
     }
     k.shading = m_options.shading;
     k.skipping = m_options.empty_space_skipping;
@@ -716,15 +736,15 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         k.clip_normal = vec3_cast<float>(nrm);
         k.clip_offset = static_cast<float>(dot(nrm, m_options.clip->point - m_target_origin));
     }
-    m.nodes = m_map->node_coordinates().data();
-    m.nodes4 = m_nodes4.data();
+    m.nodes = state.m_map->node_coordinates().data();
+    m.nodes4 = state.m_nodes4.data();
     m.node_stride[0] = 1;
-    m.node_stride[1] = m_map->nodes()[0];
-    m.node_stride[2] = m_map->nodes()[0] * m_map->nodes()[1];
-    m.b = static_cast<float>(m_map->node_voxels());
+    m.node_stride[1] = state.m_map->nodes()[0];
+    m.node_stride[2] = state.m_map->nodes()[0] * state.m_map->nodes()[1];
+    m.b = static_cast<float>(state.m_map->node_voxels());
     m.inv_b = 1.0f / m.b;
-    m.occupancy = m_occupancy.data();
-    m.sub_occupied = m_sub_occupied.data();
+    m.occupancy = state.m_occupancy.data();
+    m.sub_occupied = state.m_sub_occupied.data();
     m.half_b = 0.5f * m.b;
     m.gradient = m_gradient.empty() ? nullptr : m_gradient.data();
     if (!m_rgba8.empty() || !m_packed.empty()) {
@@ -757,14 +777,15 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         // The adaptive step's threshold on the α bytes.
         m.thin_alpha = static_cast<float>(m_thin_alpha * 255.0);
     }
-    detail::set_visible_cells(m, m_visible_cells);
+    detail::set_visible_cells(m, state.m_visible_cells);
     for (int octant = 0; octant < 8; ++octant) {
         m.empty_cube[octant] =
-            m_empty_cube.data() + static_cast<std::size_t>(octant) * m_occupancy.size();
+            state.m_empty_cube.data() + static_cast<std::size_t>(octant) * state.m_occupancy.size();
     }
 
     if (k.skipping) {
-        prepare_octants(ray_octants(k));
+        const std::lock_guard<std::mutex> lock(m_cubes_mutex);
+        compute_cubes(state, ray_octants(k));
     }
     image = Image(k.width, k.height);
     const bool is_rgba = m_source->m_is_rgba;
