@@ -153,6 +153,14 @@ std::shared_ptr<const render::MappedRayCaster> VolumeSession::frame_caster() con
     return m_mapped;
 }
 
+std::shared_ptr<const render::MappedRayCaster> VolumeSession::step_caster() const {
+    if (m_options.map_state == MapStatePlacement::balanced &&
+        !(m_stats.step_ms + m_stats.resample_ms + m_state_ms < m_stats.render_ms)) {
+        return nullptr;
+    }
+    return frame_caster();
+}
+
 void VolumeSession::resample_front() {
     fill(m_front, frame_caster().get(), m_octants);
     publish();
@@ -348,7 +356,7 @@ bool VolumeSession::start_step() {
     const int back = 1 - m_front;
     // The frame holds the caster it computes the map state with: one rebuilt meanwhile on this
     // thread leaves it alive until the frame ends (its state is then not installed).
-    m_task.start([this, back, caster = frame_caster(), octants = m_octants] {
+    m_task.start([this, back, caster = step_caster(), octants = m_octants] {
         run_frame(back, caster.get(), octants);
     });
     return true;
@@ -438,8 +446,10 @@ void VolumeSession::prepare_caster() {
             const Stopwatch watch;
             if (m_mapped->is_own(state) && state.map() == &map) {
                 m_mapped->install_map(state);
+                m_state_ms = state.ms();
             } else {
                 m_mapped->set_map(map);
+                m_state_ms = m_mapped->map_ms();
             }
             m_stats.prepare_ms = watch.elapsed_ms();
         } else {

@@ -56,6 +56,13 @@
 namespace pliant::viewer {
 
 enum class DriverKind { none, wave, twist, bubble };
+// Where a frame in flight's map state (render::MapOccupancy) is computed, resample = map.
+//   balanced: on the frame's thread when the last frame's step, map and state took less than
+//             the last render (the main thread's side), so that the frame stays the shorter
+//             side; else by render() on the main thread (the state costs the same on either);
+//   frame:    always on the frame's thread.
+// The images are the same either way.
+enum class MapStatePlacement { balanced, frame };
 
 // "none", "wave", "twist", "bubble"; InvalidInput listing them otherwise.
 DriverKind parse_driver_kind(const std::string& name);
@@ -84,6 +91,7 @@ struct VolumeSessionOptions {
     double fps = 24.0;          // a frame simulates 1 / fps seconds
     double drag_radius = 0.05;  // box units (fraction of the volume's largest side)
     pipeline::ResampleMode resample = pipeline::ResampleMode::map;  // how frames are shown
+    MapStatePlacement map_state = MapStatePlacement::balanced;
 };
 
 struct VolumeFrameStats {
@@ -183,6 +191,9 @@ private:
     // The mapped caster a frame may compute its map state with: the current one unless it is to
     // be rebuilt (null then, and without one).
     std::shared_ptr<const render::MappedRayCaster> frame_caster() const;
+    // frame_caster() when the frame in flight should compute the map state
+    // (MapStatePlacement), else null.
+    std::shared_ptr<const render::MappedRayCaster> step_caster() const;
 
     volume::Volume m_original;  // as read (RGBA: before the threshold)
     volume::Volume m_source;    // what is deformed and shown (RGBA: thresholded copy)
@@ -203,7 +214,8 @@ private:
     std::array<volume::InverseMap, 2> m_maps;
     std::array<render::MapOccupancy, 2> m_map_states;
     std::shared_ptr<render::MappedRayCaster> m_mapped;
-    int m_octants = 0;  // of the last render's camera (render::MappedRayCaster::octants_of)
+    int m_octants = 0;        // of the last render's camera (render::MappedRayCaster::octants_of)
+    double m_state_ms = 0.0;  // the last map state's computation, on either thread
     std::unique_ptr<render::RayCaster> m_caster;
     bool m_caster_dirty = true;     // options changed: a new caster
     bool m_volume_changed = false;  // only the shown volume changed: update() the caster

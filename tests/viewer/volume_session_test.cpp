@@ -279,6 +279,7 @@ TEST(VolumeSession, FramesComputeTheMapStateForTheirCaster) {
     options.driver.kind = DriverKind::twist;
     options.driver.twist.ramp_time = 0.2;
     options.resample = pipeline::ResampleMode::map;
+    options.map_state = MapStatePlacement::frame;
     VolumeSession background(phantom, options);
     VolumeSession foreground(phantom, options);
     render::Image a, b;
@@ -314,6 +315,37 @@ TEST(VolumeSession, FramesComputeTheMapStateForTheirCaster) {
     EXPECT_EQ(la.samples, lb.samples);
     EXPECT_GT(la.samples, sb.samples);  // the lowered threshold shows more
     EXPECT_GT(differing_pixels(lowered_b, b), 0);
+}
+
+// MapStatePlacement::balanced: a frame computes the map state only when the last frame's step,
+// map and state took less than the last render; before any render (0 ms) the render computes
+// it. The images are those of MapStatePlacement::frame.
+TEST(VolumeSession, BalancedMapStateKeepsTheImages) {
+    const Volume phantom = volume::shepp_logan_3d(DIMS);
+    const render::Camera camera = camera_for(phantom, 64, 64);
+    VolumeSessionOptions options{.tf = "mri-brain", .threshold = 60.0, .deform = true};
+    options.driver.kind = DriverKind::twist;
+    options.driver.twist.ramp_time = 0.2;
+    options.resample = pipeline::ResampleMode::map;
+    VolumeSession balanced(phantom, options);
+    options.map_state = MapStatePlacement::frame;
+    VolumeSession frame(phantom, options);
+    ASSERT_TRUE(balanced.start_step());  // no render yet: no time to hide the state behind
+    balanced.finish_step(true);
+    EXPECT_EQ(balanced.stats().occupancy_ms, 0.0);
+    ASSERT_TRUE(frame.start_step());
+    frame.finish_step(true);
+    render::Image a, b;
+    for (int f = 1; f <= 3; ++f) {
+        const render::RayCastStats sa = balanced.render(camera, a);
+        const render::RayCastStats sb = frame.render(camera, b);
+        ASSERT_EQ(a, b) << "frame " << f;
+        ASSERT_EQ(sa.samples, sb.samples);
+        ASSERT_TRUE(balanced.start_step());
+        balanced.finish_step(true);
+        ASSERT_TRUE(frame.start_step());
+        frame.finish_step(true);
+    }
 }
 
 TEST(VolumeSession, ErrorsNameTheProblem) {
