@@ -154,8 +154,10 @@ std::shared_ptr<const render::MappedRayCaster> VolumeSession::frame_caster() con
 }
 
 std::shared_ptr<const render::MappedRayCaster> VolumeSession::step_caster() const {
+    // The installed state's cost, whichever thread computed it (MappedRayCaster::map_ms()).
+    const double state_ms = m_mapped ? m_mapped->map_ms() : 0.0;
     if (m_options.map_state == MapStatePlacement::balanced &&
-        !(m_stats.step_ms + m_stats.resample_ms + m_state_ms < m_stats.render_ms)) {
+        !(m_stats.step_ms + m_stats.resample_ms + state_ms < m_stats.render_ms)) {
         return nullptr;
     }
     return frame_caster();
@@ -446,10 +448,8 @@ void VolumeSession::prepare_caster() {
             const Stopwatch watch;
             if (m_mapped->is_own(state) && state.map() == &map) {
                 m_mapped->install_map(state);
-                m_state_ms = state.ms();
             } else {
                 m_mapped->set_map(map);
-                m_state_ms = m_mapped->map_ms();
             }
             m_stats.prepare_ms = watch.elapsed_ms();
         } else {

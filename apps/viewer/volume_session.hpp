@@ -214,8 +214,7 @@ private:
     std::array<volume::InverseMap, 2> m_maps;
     std::array<render::MapOccupancy, 2> m_map_states;
     std::shared_ptr<render::MappedRayCaster> m_mapped;
-    int m_octants = 0;        // of the last render's camera (render::MappedRayCaster::octants_of)
-    double m_state_ms = 0.0;  // the last map state's computation, on either thread
+    int m_octants = 0;  // of the last render's camera (render::MappedRayCaster::octants_of)
     std::unique_ptr<render::RayCaster> m_caster;
     bool m_caster_dirty = true;     // options changed: a new caster
     bool m_volume_changed = false;  // only the shown volume changed: update() the caster

@@ -354,9 +354,9 @@ TEST(ViewCli, DeformingVolumeRunsAndChanges) {
     EXPECT_EQ(j["full_resolution_images"].get<int>(), 12);  // a new image every frame
     EXPECT_NEAR(j["simulated_seconds"].get<double>(), 12.0 / 24.0, 1e-9);
     EXPECT_GT(j["mean_resample_ms"].get<double>(), 0.0);
-    // Each frame's map state, on the frame's thread (mean_occupancy_ms) where the render is the
-    // longer side, else installed or computed by the render (mean_prepare_ms).
-    EXPECT_GE(j["mean_occupancy_ms"].get<double>(), 0.0);
+    // Each frame's map state is installed or computed by the render (mean_prepare_ms); where the
+    // render is the longer side the frame's thread computes it (mean_occupancy_ms, timing-bound:
+    // tests/viewer/volume_session_test.cpp checks both placements).
     EXPECT_GT(j["mean_prepare_ms"].get<double>(), 0.0);
     EXPECT_LT(psnr(io::read_png(scratch / "rest.png"), io::read_png(scratch / "twist.png")), 40.0);
 }

@@ -268,6 +268,15 @@ TEST(VolumeSession, RendersThroughTheInverseMap) {
     EXPECT_GT(differing_pixels(shaded, clipped), 100);
 }
 
+// The phantom under mri-brain (threshold 60), twisting, shown through the inverse map.
+VolumeSessionOptions twisting_through_the_map() {
+    VolumeSessionOptions options{.tf = "mri-brain", .threshold = 60.0, .deform = true};
+    options.driver.kind = DriverKind::twist;
+    options.driver.twist.ramp_time = 0.2;
+    options.resample = pipeline::ResampleMode::map;
+    return options;
+}
+
 // resample = map: a frame computes its map's state (the occupancy) on its own thread with the
 // caster, and the render installs it: the images and sample counts of a session stepping on the
 // caller. A caster rebuilt while the frame is in flight (the threshold lowered: more of the
@@ -275,10 +284,7 @@ TEST(VolumeSession, RendersThroughTheInverseMap) {
 TEST(VolumeSession, FramesComputeTheMapStateForTheirCaster) {
     const Volume phantom = volume::shepp_logan_3d(DIMS);
     const render::Camera camera = camera_for(phantom, 64, 64);
-    VolumeSessionOptions options{.tf = "mri-brain", .threshold = 60.0, .deform = true};
-    options.driver.kind = DriverKind::twist;
-    options.driver.twist.ramp_time = 0.2;
-    options.resample = pipeline::ResampleMode::map;
+    VolumeSessionOptions options = twisting_through_the_map();
     options.map_state = MapStatePlacement::frame;
     VolumeSession background(phantom, options);
     VolumeSession foreground(phantom, options);
@@ -323,10 +329,7 @@ TEST(VolumeSession, FramesComputeTheMapStateForTheirCaster) {
 TEST(VolumeSession, BalancedMapStateKeepsTheImages) {
     const Volume phantom = volume::shepp_logan_3d(DIMS);
     const render::Camera camera = camera_for(phantom, 64, 64);
-    VolumeSessionOptions options{.tf = "mri-brain", .threshold = 60.0, .deform = true};
-    options.driver.kind = DriverKind::twist;
-    options.driver.twist.ramp_time = 0.2;
-    options.resample = pipeline::ResampleMode::map;
+    VolumeSessionOptions options = twisting_through_the_map();
     VolumeSession balanced(phantom, options);
     options.map_state = MapStatePlacement::frame;
     VolumeSession frame(phantom, options);
