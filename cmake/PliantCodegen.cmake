@@ -20,3 +20,13 @@ add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-ffp-contract=off>)
 if(PLIANT_NATIVE)
   add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-march=native>)
 endif()
+
+# PLIANT_GLUE_OPTIMIZATION (default empty: the build type's): the optimization flag of the sources
+# that read, write, parse and call rather than compute: the io and pipeline modules
+# (pliant_add_module's GLUE) and the command-line tool (apps/pliant). scripts/sanitize sets -O0:
+# with ASan + UBSan they are the costliest sources to compile (nlohmann::json, CLI11, OpenVDB
+# and GDCM headers: io, pipeline and apps/pliant were 42 % of the ASan tree's build;
+# apps/pliant/cmd_cloth.cpp compiles in 23 s at -O0 against 41 at -O1), and the tests spend
+# little of their time in them.
+set(PLIANT_GLUE_OPTIMIZATION "" CACHE STRING
+  "Optimization flag of the io and pipeline modules and the CLI (empty: the build type's)")

@@ -1,12 +1,14 @@
-# pliant_add_module(NAME <name> SOURCES <files...> DEPS <targets...> [PRIVATE_DEPS <targets...>])
+# pliant_add_module(NAME <name> SOURCES <files...> DEPS <targets...> [PRIVATE_DEPS <targets...>]
+#                   [GLUE])
 # One static library per module, target pliant_<name>, alias pliant::<name>. Headers live beside
 # the sources under src/pliant/<name>/ and are included as "pliant/<name>/<file>.hpp".
 # DEPS are PUBLIC: the pliant modules this one builds on and the third-party libraries its public
 # headers include; the module graph in docs/architecture.md is exactly the pliant:: entries.
 # PRIVATE_DEPS are used by the sources only, so they do not reach a caller's compile line (a static
-# library still passes them on to the final link).
+# library still passes them on to the final link). GLUE: the module reads, writes, parses and
+# calls rather than computes; it compiles with PLIANT_GLUE_OPTIMIZATION (cmake/PliantCodegen.cmake).
 function(pliant_add_module)
-  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "GLUE" "NAME" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
   set(target pliant_${ARG_NAME})
   add_library(${target} STATIC ${ARG_SOURCES})
   add_library(pliant::${ARG_NAME} ALIAS ${target})
@@ -14,4 +16,7 @@ function(pliant_add_module)
   target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_features(${target} PUBLIC cxx_std_20)
   pliant_set_warnings(${target})
+  if(ARG_GLUE)
+    target_compile_options(${target} PRIVATE ${PLIANT_GLUE_OPTIMIZATION})
+  endif()
 endfunction()
