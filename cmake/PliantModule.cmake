@@ -6,7 +6,11 @@
 # headers include; the module graph in docs/architecture.md is exactly the pliant:: entries.
 # PRIVATE_DEPS are used by the sources only, so they do not reach a caller's compile line (a static
 # library still passes them on to the final link). GLUE: the module reads, writes, parses and
-# calls rather than computes; it compiles with PLIANT_GLUE_OPTIMIZATION (cmake/PliantCodegen.cmake).
+# calls rather than computes; it compiles with PLIANT_GLUE_OPTIMIZATION (cmake/PliantCodegen.cmake)
+# and, with PLIANT_FUZZ, with libFuzzer's coverage instrumentation: the file readers the harnesses
+# in fuzz/ call are in these modules (io, pipeline). The computing modules go without it, so the
+# sanitized tests that share the fuzzing tree (scripts/sanitizer-tree) run at ASan's speed rather
+# than with a coverage callback on every comparison.
 function(pliant_add_module)
   cmake_parse_arguments(ARG "GLUE" "NAME" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
   set(target pliant_${ARG_NAME})
@@ -18,5 +22,8 @@ function(pliant_add_module)
   pliant_set_warnings(${target})
   if(ARG_GLUE)
     target_compile_options(${target} PRIVATE ${PLIANT_GLUE_OPTIMIZATION})
+    if(PLIANT_FUZZ)
+      target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+    endif()
   endif()
 endfunction()

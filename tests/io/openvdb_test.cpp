@@ -53,10 +53,12 @@ Volume patterned(VoxelType type, const volume::Dims& dims = {6, 5, 4}) {
                                 static_cast<std::uint8_t>(std::fmod(x, 255.0));
                             break;
                         case VoxelType::i16:
-                            v.values<VoxelType::i16>()[at] = static_cast<std::int16_t>(-x * 97);
+                            v.values<VoxelType::i16>()[at] = static_cast<std::int16_t>(
+                                x == 0.0 ? 0.0 : -1.0 - std::fmod(x * 97.0, 32767.0));
                             break;
                         case VoxelType::u16:
-                            v.values<VoxelType::u16>()[at] = static_cast<std::uint16_t>(x * 523);
+                            v.values<VoxelType::u16>()[at] = static_cast<std::uint16_t>(
+                                x == 0.0 ? 0.0 : 1.0 + std::fmod(x * 523.0, 65535.0));
                             break;
                         case VoxelType::f32:
                             v.values<VoxelType::f32>()[at] = static_cast<float>(x / 7.0 - 3.5);
