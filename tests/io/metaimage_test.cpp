@@ -169,8 +169,8 @@ TEST(MetaImage, TwoDimensionalImagesAreOneSlice) {
     TempDir dir;
     test::write_bytes(dir / "s.mha",
                       std::string("NDims = 2\nDimSize = 2 2\nElementType = MET_UCHAR\n"
-                                  "ElementSpacing = 0.5 0.25\nElementDataFile = LOCAL\n") +
-                          "\x01\x02\x03\x04");
+                                  "ElementSpacing = 0.5 0.25\nElementDataFile = LOCAL\n"
+                                  "\x01\x02\x03\x04"));
     const Volume v = read_metaimage(dir / "s.mha", MAX);
     EXPECT_EQ(v.dims(), (volume::Dims{2, 2, 1}));
     EXPECT_EQ(v.spacing(), (Vec3d{0.5, 0.25, 1.0}));
