@@ -56,14 +56,23 @@ struct BoxesSoA {
         const std::int32_t a0 = v0[i], a1 = v1[i], a2 = v2[i];
         std::int32_t count = 0;  // ≤ n - 1 < 2^31
         for (std::size_t j = i + 1; j < n; ++j) {
-            // Non-short-circuit & and | on 0/1 integers keep the loop free of branches.
-            const std::int32_t overlap = int{lo_x[j] <= ahx} & int{alx <= hi_x[j]} &
-                                         int{lo_y[j] <= ahy} & int{aly <= hi_y[j]} &
-                                         int{lo_z[j] <= ahz} & int{alz <= hi_z[j]};
-            const std::int32_t shared = int{v0[j] == a0} | int{v0[j] == a1} | int{v0[j] == a2} |
-                                        int{v1[j] == a0} | int{v1[j] == a1} | int{v1[j] == a2} |
-                                        int{v2[j] == a0} | int{v2[j] == a1} | int{v2[j] == a2};
-            count += overlap & (shared ^ 1);
+            // Non-short-circuit & and | on bools keep the loop free of branches; clang's
+            // -Wbitwise-instead-of-logical would flag them. (Rewritten on 0/1 integers, GCC's loop
+            // took 0.64-0.67 s against 0.58 on bools at 35,912 triangles, `pliant --threads 1
+            // bench bvh`.)
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wbitwise-instead-of-logical"
+#endif
+            const bool overlap = (lo_x[j] <= ahx) & (alx <= hi_x[j]) & (lo_y[j] <= ahy) &
+                                 (aly <= hi_y[j]) & (lo_z[j] <= ahz) & (alz <= hi_z[j]);
+            const bool shared = (v0[j] == a0) | (v0[j] == a1) | (v0[j] == a2) | (v1[j] == a0) |
+                                (v1[j] == a1) | (v1[j] == a2) | (v2[j] == a0) | (v2[j] == a1) |
+                                (v2[j] == a2);
+            count += static_cast<std::int32_t>(overlap & !shared);
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
         }
         return count;
     }
