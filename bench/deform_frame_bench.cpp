@@ -22,10 +22,14 @@
 //
 // --scalar adds a stage: set_map of the same maps for the 256³ phantom as an f32 scalar source
 // through `mri-brain` (the viewer's and `pliant deform`'s input), whose occupancy tests its
-// cells' value ranges through the lookup table.
+// cells' value ranges through the lookup table. --volume FILE replaces the phantom with an rgba8
+// volume file (a radiance field's cleaned reconstruction, `pliant demo`'s nerf/cleaned.nrrd) and
+// its grid of cells of 4 voxels. Beside the map route's render, the same map rendered with the
+// adaptive step's first level only (MappedRayCaster::set_thin_levels(1)): its time and samples.
 //
 //   bin/bench_deform_frame [--driver twist|wave|bubble|drag|all] [--frames N] [--size N]
-//                          [--threads N] [--pipe-frames N] [--no-shading] [--scalar] [--json]
+//                          [--threads N] [--pipe-frames N] [--no-shading] [--scalar]
+//                          [--volume FILE] [--json]
 //
 // bench/compare_deform_vtk runs it beside VTK's fixed-point ray caster on the undeformed 256³
 // phantom in the same run.
@@ -42,8 +46,10 @@
 #include <string>
 #include <vector>
 
+#include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/io/volume_io.hpp"
 #include "pliant/pbd/soft_body.hpp"
 #include "pliant/pipeline/frame_pipeline.hpp"
 #include "pliant/render/camera.hpp"
@@ -149,6 +155,7 @@ int main(int argc, char** argv) {
     bool shading = true;
     bool scalar = false;
     bool json = false;
+    std::string volume_path;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has_value = i + 1 < argc;
@@ -168,11 +175,13 @@ int main(int argc, char** argv) {
             scalar = true;
         } else if (a == "--json") {
             json = true;
+        } else if (a == "--volume" && has_value) {
+            volume_path = argv[++i];
         } else {
             std::fprintf(stderr,
                          "usage: bench_deform_frame [--driver twist|wave|bubble|drag|all] "
                          "[--frames N] [--size N] [--threads N] [--pipe-frames N] [--no-shading] "
-                         "[--scalar] [--json]\n");
+                         "[--scalar] [--volume FILE] [--json]\n");
             return 2;
         }
     }
@@ -190,8 +199,25 @@ int main(int argc, char** argv) {
     if (pipe_frames == 0) {
         pipe_frames = std::max(8, frames);
     }
+    if (scalar && !volume_path.empty()) {
+        std::fprintf(stderr, "bench_deform_frame: --scalar is the phantom's, not --volume's\n");
+        return 2;
+    }
     set_num_threads(threads);
-    const bench::SourceScaleWorkload& w = bench::source_scale_workload();
+    std::unique_ptr<bench::SourceScaleWorkload> from_file;
+    if (!volume_path.empty()) {
+        try {
+            volume::Volume v = io::read_volume(volume_path);
+            if (v.type() != volume::VoxelType::rgba8) {
+                throw InvalidInput(volume_path + ": expected an rgba8 volume");
+            }
+            from_file = bench::source_scale_workload_of(std::move(v));
+        } catch (const Error& e) {
+            std::fprintf(stderr, "bench_deform_frame: error: %s\n", e.what());
+            return 1;
+        }
+    }
+    const bench::SourceScaleWorkload& w = from_file ? *from_file : bench::source_scale_workload();
     const volume::Volume& source = w.source;
     const render::Camera camera =
         render::orbit_camera(source.bounds(), 30.0, 20.0, 0.0, size, size);
@@ -226,14 +252,16 @@ int main(int argc, char** argv) {
             prepare_map.wall);
     } else {
         std::printf(
-            "source scale: 256^3 rgba8, %zu tets, %dx%d, %s, %d threads; map route's "
-            "source preparation (once) %.1f ms\n",
-            w.grid.mesh.tets.size(), size, size, shading ? "shaded" : "unshaded", num_threads(),
-            prepare_map.wall);
+            "source scale: %s (%lldx%lldx%lld rgba8), %zu tets, %dx%d, %s, %d threads; map "
+            "route's source preparation (once) %.1f ms\n",
+            volume_path.empty() ? "phantom" : volume_path.c_str(),
+            static_cast<long long>(source.dims()[0]), static_cast<long long>(source.dims()[1]),
+            static_cast<long long>(source.dims()[2]), w.grid.mesh.tets.size(), size, size,
+            shading ? "shaded" : "unshaded", num_threads(), prepare_map.wall);
     }
     for (std::size_t di = 0; di < drivers.size(); ++di) {
         const int d = drivers[di];
-        bench::DrivenBody driven = bench::source_scale_driven_body(d, {});
+        bench::DrivenBody driven = bench::source_scale_driven_body(d, {}, w);
         pbd::SoftBody& body = driven.body;
         int frame = 0;
         for (; frame < 24; ++frame) {
@@ -243,9 +271,10 @@ int main(int argc, char** argv) {
             update{"exact: RayCaster prepare/update"}, render_exact{"exact: render"},
             build{"map: InverseMap::build"}, set_map{"map: set_map (occupancy)"},
             render_map{"map: render (+ empty cubes)"},
+            render_one_level{"map: render, first thin level only"},
             set_map_scalar{"map: set_map, f32 source (--scalar)"};
-        render::Image exact_image, map_image;
-        std::int64_t exact_samples = 0, map_samples = 0;
+        render::Image exact_image, map_image, one_level_image;
+        std::int64_t exact_samples = 0, map_samples = 0, one_level_samples = 0;
         volume::InverseMap map;
         for (int f = 0; f < frames; ++f, ++frame) {
             timed(step, [&] { driven.step(frame); });
@@ -265,11 +294,16 @@ int main(int argc, char** argv) {
             });
             timed(set_map, [&] { mapped->set_map(map); });
             timed(render_map, [&] { map_samples = mapped->render(camera, map_image).samples; });
+            mapped->set_thin_levels(1);
+            timed(render_one_level,
+                  [&] { one_level_samples = mapped->render(camera, one_level_image).samples; });
+            mapped->set_thin_levels(render::detail::THIN_LEVELS);
             if (scalar_mapped) {
                 timed(set_map_scalar, [&] { scalar_mapped->set_map(map); });
             }
         }
         const double db = psnr(exact_image, map_image);
+        const double one_level_db = psnr(exact_image, one_level_image);
         // The same stages pipelined, on the frames after these. Map route: step + build in the
         // background, set_map + render on the caller. Exact route: step + a copy of the
         // positions in the background, resample + update + render on the caller (a resample
@@ -329,8 +363,8 @@ int main(int argc, char** argv) {
                 mapped->render(camera, map_image);
             });
         frame += pipe_frames;
-        std::vector<const Stage*> stages = {&step,  &resample, &update,    &render_exact,
-                                            &build, &set_map,  &render_map};
+        std::vector<const Stage*> stages = {&step,  &resample, &update,     &render_exact,
+                                            &build, &set_map,  &render_map, &render_one_level};
         if (scalar_mapped) {
             stages.push_back(&set_map_scalar);
         }
@@ -343,10 +377,12 @@ int main(int argc, char** argv) {
             std::printf(
                 "%s{\"driver\": \"%s\", \"frames\": %d, \"inverted\": %lld, "
                 "\"exact_samples\": %lld, \"map_samples\": %lld, \"psnr_map_vs_exact_db\": "
-                "%.2f, \"visible_cells\": %lld, \"cells\": %lld, \"stages\": {",
+                "%.2f, \"one_level_samples\": %lld, \"psnr_one_level_vs_exact_db\": %.2f, "
+                "\"visible_cells\": %lld, \"cells\": %lld, \"stages\": {",
                 di == 0 ? "" : ", ", names[static_cast<std::size_t>(d)].c_str(), frames,
                 static_cast<long long>(body.stats().inverted_tets),
                 static_cast<long long>(exact_samples), static_cast<long long>(map_samples), db,
+                static_cast<long long>(one_level_samples), one_level_db,
                 static_cast<long long>(mapped->num_visible_cells()),
                 static_cast<long long>(mapped->num_cells()));
             for (std::size_t s = 0; s < stages.size(); ++s) {
@@ -403,11 +439,12 @@ int main(int argc, char** argv) {
                     row.p->consume_wall);
             }
             std::printf(
-                "  samples: exact %lld, map %lld; map cells visible %lld of %lld; PSNR "
-                "map vs exact %.2f dB\n",
+                "  samples: exact %lld, map %lld (first thin level only %lld); map cells visible "
+                "%lld of %lld; PSNR map vs exact %.2f dB (first thin level only %.2f dB)\n",
                 static_cast<long long>(exact_samples), static_cast<long long>(map_samples),
+                static_cast<long long>(one_level_samples),
                 static_cast<long long>(mapped->num_visible_cells()),
-                static_cast<long long>(mapped->num_cells()), db);
+                static_cast<long long>(mapped->num_cells()), db, one_level_db);
         }
     }
     if (json) {

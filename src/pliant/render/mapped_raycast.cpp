@@ -165,6 +165,58 @@ void set_camera(const Camera& camera, const Vec3d& origin, detail::RayCastKernel
     k.inv_focal = static_cast<float>(1.0 / camera.focal_pixels());
 }
 
+// Per voxel i of an rgba8 volume of dims n (4 bytes per voxel, x fastest) the largest α byte of
+// its 3³ neighbourhood (the voxels within one step along each axis, clipped to the grid), into
+// out[i · out_stride]: a maximum along x, then y, then z, each pass in parallel over z (every
+// value written by one task: the same bytes for any number of threads).
+void neighbourhood_alpha(const std::uint8_t* rgba8, const std::int64_t n[3], std::uint8_t* out,
+                         std::int64_t out_stride) {
+    const std::int64_t row = n[0], layer = n[0] * n[1];
+    std::vector<std::uint8_t> along_x(static_cast<std::size_t>(layer * n[2]));
+    std::vector<std::uint8_t> along_y(along_x.size());
+    // dst[i · stride] = max(below[i], here[i], above[i]) for i < count.
+    const auto widest = [](const std::uint8_t* below, const std::uint8_t* here,
+                           const std::uint8_t* above, std::uint8_t* dst, std::int64_t stride,
+                           std::int64_t count) {
+        for (std::int64_t i = 0; i < count; ++i) {
+            dst[i * stride] = std::max({below[i], here[i], above[i]});
+        }
+    };
+    parallel_for(
+        n[2],
+        [&](std::int64_t z) {
+            for (std::int64_t y = 0; y < n[1]; ++y) {
+                const std::uint8_t* a = rgba8 + 4 * (layer * z + row * y) + 3;
+                std::uint8_t* dst = &along_x[static_cast<std::size_t>(layer * z + row * y)];
+                for (std::int64_t x = 0; x < n[0]; ++x) {
+                    dst[x] = std::max({a[4 * std::max<std::int64_t>(x - 1, 0)], a[4 * x],
+                                       a[4 * std::min(x + 1, n[0] - 1)]});
+                }
+            }
+        },
+        1);
+    parallel_for(
+        n[2],
+        [&](std::int64_t z) {
+            const std::uint8_t* in = &along_x[static_cast<std::size_t>(layer * z)];
+            for (std::int64_t y = 0; y < n[1]; ++y) {
+                widest(in + row * std::max<std::int64_t>(y - 1, 0), in + row * y,
+                       in + row * std::min(y + 1, n[1] - 1),
+                       &along_y[static_cast<std::size_t>(layer * z + row * y)], 1, row);
+            }
+        },
+        1);
+    parallel_for(
+        n[2],
+        [&](std::int64_t z) {
+            const std::uint8_t* in = along_y.data();
+            widest(in + layer * std::max<std::int64_t>(z - 1, 0), in + layer * z,
+                   in + layer * std::min(z + 1, n[2] - 1), out + out_stride * layer * z, out_stride,
+                   layer);
+        },
+        1);
+}
+
 // The last MappedRayCaster id handed out (ids start at 1; 0 tags no caster).
 std::atomic<std::uint64_t> last_caster_id{0};
 
@@ -314,7 +366,8 @@ void MappedRayCaster::build_gradient() {
     const float scale = 32767.0f / (m_source->m_is_rgba ? 1.0f : float{detail::LUT_SIZE - 1});
     const float* values = m_rgba8.empty() ? m_source->m_values.data() + (channels - 1) : nullptr;
     // An rgba8 source: the packed records (detail::PACKED_VOXEL_BYTES: the bytes, the gradient,
-    // 0), which replace m_rgba8; else m_gradient, 4 values per voxel.
+    // 0, the neighbourhood's α byte, 0), which replace m_rgba8; else m_gradient, 4 values per
+    // voxel.
     const bool packed = !m_rgba8.empty();
     constexpr std::int64_t VALUES = detail::PACKED_VOXEL_BYTES / 2;  // GradientValues per record
     detail::GradientValue* gradient = nullptr;
@@ -383,6 +436,10 @@ void MappedRayCaster::build_gradient() {
         },
         1);
     if (packed) {
+        neighbourhood_alpha(
+            m_rgba8.data(), n,
+            reinterpret_cast<std::uint8_t*>(m_packed.data()) + detail::PACKED_WIDE_ALPHA,
+            detail::PACKED_VOXEL_BYTES);
         m_rgba8 = {};
     }
 }
@@ -399,6 +456,15 @@ void MappedRayCaster::set_thin_alpha(double thin_alpha) {
             fmt::format("raycast through a map: thin_alpha must be in [0, 1], got {}", thin_alpha));
     }
     m_thin_alpha = thin_alpha;
+}
+
+void MappedRayCaster::set_thin_levels(int levels) {
+    if (levels < 0 || levels > detail::MAX_THIN_LEVELS) {
+        throw InvalidInput(
+            fmt::format("raycast through a map: thin_levels must be in [0, {}], got {}",
+                        detail::MAX_THIN_LEVELS, levels));
+    }
+    m_thin_levels = levels;
 }
 
 std::int64_t MapOccupancy::num_visible_cells() const {
@@ -774,8 +840,14 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
             m.gradient = m_packed.data() + 2;
             m.gradient_stride = detail::PACKED_VOXEL_BYTES / sizeof(detail::GradientValue);
         }
-        // The adaptive step's threshold on the α bytes.
-        m.thin_alpha = static_cast<float>(m_thin_alpha * 255.0);
+        // The adaptive step's thresholds on the α bytes: thin_alpha, halved per level.
+        const auto thin_bytes = static_cast<float>(m_thin_alpha * 255.0);
+        // The second level needs the packed records' neighbourhood byte (a shaded source).
+        m.thin_levels =
+            thin_bytes > 0.0f ? std::min(m_thin_levels, m_packed.empty() ? 1 : m_thin_levels) : 0;
+        for (int l = 0; l < m.thin_levels; ++l) {
+            m.thin_limit[l] = std::ldexp(thin_bytes, -l);
+        }
     }
     detail::set_visible_cells(m, state.m_visible_cells);
     for (int octant = 0; octant < 8; ++octant) {

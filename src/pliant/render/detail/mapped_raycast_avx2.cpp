@@ -21,19 +21,20 @@ constexpr std::int64_t MAX_LANE_SAMPLES = std::int64_t{1} << 30;
 
 // The march state of 8 rays (Lanes) and, per lane, the source coordinate of the lane's last
 // classified sample and the index of the sample after it (−2: none), for the prefetch of the
-// sample after next; the adaptive step's state (mapped_march()): whether the ray is thin (all
-// ones) and its number of full samples (a coarse sample needs two of them left).
+// sample after next; the adaptive step's state (mapped_march()): the level the ray wants and
+// its number of full samples (a run of 2^l segments needs that many left).
 struct alignas(32) MapLanes : Lanes {
     float last_g[3][LANES];
     std::int32_t last_next[LANES];
-    std::int32_t thin[LANES];
+    std::int32_t want[LANES];
     std::int32_t total[LANES];
 };
 
 // Puts ray p into lane l, marched over its samples [first, end) (visible_samples()); with the
-// adaptive step from the pair that holds sample `first`, thin (mapped_march()).
+// adaptive step (`levels` > 0) from the coarsest run that holds sample `first`, at that level
+// (mapped_march()).
 void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int32_t num_cells,
-               bool adaptive, MapLanes& s, int l) {
+               int levels, MapLanes& s, int l) {
     for (int a = 0; a < 3; ++a) {
         s.dir[a][l] = p.dir[a];
         s.go[a][l] = p.r.go[a];
@@ -44,11 +45,11 @@ void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int
     s.t_far[l] = p.r.t_far;
     s.margin[l] = p.r.margin;
     s.cr[l] = s.cg[l] = s.cb[l] = s.acc[l] = 0.0f;
-    s.n[l] = adaptive ? first & ~1 : first;
+    s.n[l] = first & ~((std::int32_t{1} << levels) - 1);
     s.num_full[l] = end;
     s.samples[l] = 0;
     s.last_next[l] = -2;
-    s.thin[l] = adaptive ? -1 : 0;
+    s.want[l] = levels;
     s.total[l] = static_cast<std::int32_t>(p.num_full);
     const int octant = octant_of(p.r);
     s.cube[l] = octant * num_cells;
@@ -62,7 +63,7 @@ void fill_lane(const PixelRay& p, std::int32_t first, std::int32_t end, std::int
 void clear_map_lane(MapLanes& s, int l) {
     clear_lane(s, l);
     s.last_next[l] = -2;
-    s.thin[l] = 0;
+    s.want[l] = 0;
     s.total[l] = 0;
 }
 
@@ -254,14 +255,17 @@ PLIANT_AVX2_INLINE void interpolate_bytes8(const MappedKernel& m, const Grid8& g
 // that holds both voxels' bytes and gradients, transposed once; then the bytes' channels
 // (shifts and masks, converted and premultiplied) as interpolate_bytes8() and the gradient's
 // (sign-extended halves) as source_gradient8(), the same values; max_alpha the largest α byte
-// of the 8 voxels.
+// of the 8 voxels, wide_alpha the largest of their neighbourhoods' (PACKED_WIDE_ALPHA).
 PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& grid,
                                             const std::int32_t* at, const __m256 fraction[3],
-                                            __m256 out[4], __m256 gradient[3], __m256& max_alpha) {
+                                            __m256 out[4], __m256 gradient[3], __m256& max_alpha,
+                                            __m256& wide_alpha) {
+    static_assert(PACKED_WIDE_ALPHA == 12);  // the 4th int32 of a record, alone in it
     const std::int32_t row[4] = {0, grid.dy, grid.dz, grid.dz + grid.dy};
     const __m256i byte = _mm256_set1_epi32(0xff);
     __m256 first[4][4], second[4][4];  // [channel][row]
     __m256 first_d[3][4], second_d[3][4];
+    __m256i wide = _mm256_setzero_si256();
     for (int r = 0; r < 4; ++r) {
         __m256 rows[LANES], t[LANES];
         for (int l = 0; l < LANES; ++l) {
@@ -285,8 +289,10 @@ PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& 
             d[0][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16));
             d[1][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(xy, 16));
             d[2][r] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(z, 16), 16));
+            wide = _mm256_max_epi32(wide, as_int(t[4 * x + 3]));
         }
     }
+    wide_alpha = _mm256_cvtepi32_ps(wide);
     for (int c = 0; c < 4; ++c) {
         out[c] = trilinear8(first[c], second[c], fraction);
     }
@@ -302,12 +308,14 @@ PLIANT_AVX2_INLINE void interpolate_packed8(const MappedKernel& m, const Grid8& 
 // mapped_classify<IS_RGBA>() of 8 samples in map cells q (fractions f) for rays along dir:
 // out[0 … 2] the straight colour (shaded when SHADING), out[3] the step opacity (RGBA) or the
 // lookup entry's, all 0 where the sample has no opacity (outside the source box, or none);
-// max_alpha as mapped_classify()'s (0 outside the source box). Lanes outside `mask` are sampled
-// at source coordinate 0 (their loads stay in bounds; their results are not used).
+// max_alpha and wide_alpha as mapped_classify()'s (0 outside the source box). Lanes outside
+// `mask` are sampled at source coordinate 0 (their loads stay in bounds; their results are not
+// used).
 template <bool IS_RGBA, bool SHADING>
 PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const __m256i q[3],
                                   const __m256 f[3], __m256 mask, const __m256 dir8[3],
-                                  __m256 out[4], __m256 source[3], __m256& max_alpha) {
+                                  __m256 out[4], __m256 source[3], __m256& max_alpha,
+                                  __m256& wide_alpha) {
     const RayCastKernel& s = m.source;
     // 1. The map: the 8 nodes of each lane's cell, per channel, then the trilinear value and
     // (shading) its derivatives, as map_coordinate().
@@ -376,10 +384,11 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
     const __m256 zero = _mm256_setzero_ps();
     __m256 positive;
     max_alpha = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    wide_alpha = max_alpha;
     if constexpr (IS_RGBA) {
         __m256 rgba[4];
         if (packed) {
-            interpolate_packed8(m, src, at, fraction, rgba, d, max_alpha);
+            interpolate_packed8(m, src, at, fraction, rgba, d, max_alpha, wide_alpha);
         } else if (m.rgba8 != nullptr) {
             interpolate_bytes8(m, src, at, fraction, rgba, max_alpha);
         } else {
@@ -432,6 +441,7 @@ PLIANT_AVX2_INLINE void classify8(const MappedKernel& m, const Grid8& src, const
         }
     }
     max_alpha = _mm256_and_ps(max_alpha, inside);  // 0 outside the source box
+    wide_alpha = _mm256_and_ps(wide_alpha, inside);
     const __m256 a_step = out[3];
     // 4. Shading (mapped_classify()): the stored source gradient at the sample through the map's
     // Jacobian (target_gradient()), for the samples with opacity.
@@ -504,7 +514,8 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     }
 
     // 2. The queued rays in the 8 lanes, a lane taking the next ray as soon as its ray ends.
-    const bool adaptive = m.thin_alpha > 0.0f;
+    const int levels = m.thin_levels;
+    const bool adaptive = levels > 0;
     MapLanes s;
     LaneSlots slots;
     const auto end_lane = [&](int l) {
@@ -518,7 +529,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         if (slots.next < queue_size) {
             const int pixel = queue[slots.next++];
             const PixelRay& p = rays[pixel];
-            fill_lane(p, first[pixel], end[pixel], num_cells, adaptive, s, l);
+            fill_lane(p, first[pixel], end[pixel], num_cells, levels, s, l);
             slots.take(l, pixel, zero_axes_of(p.r) != 0);
             return;
         }
@@ -548,13 +559,16 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
     const __m256i cells_x = _mm256_set1_epi32(m.cells[0]);
     const __m256i cells_y = _mm256_set1_epi32(m.cells[1]);
     const __m256i one_i = _mm256_set1_epi32(1);
-    const __m256i two_i = _mm256_set1_epi32(2);
-    const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 two = _mm256_set1_ps(2.0f);
-    const __m256 thin_alpha = _mm256_set1_ps(m.thin_alpha);
-    // The lanes' state after a sample they did not classify (skipped or without a valid map):
-    // thin with the adaptive step (mapped_march()).
-    const __m256i empty_thin = adaptive ? _mm256_set1_epi32(-1) : _mm256_setzero_si256();
+    // The adaptive step (mapped_march()): the α byte limits of its levels, the runs of the
+    // coarsest level (a jump lands on them), and the level a lane wants after a sample it did
+    // not classify (skipped or without a valid map): the coarsest.
+    __m256 thin_limit[MAX_THIN_LEVELS];
+    for (int l = 0; l < levels; ++l) {
+        thin_limit[l] = _mm256_set1_ps(m.thin_limit[l]);
+    }
+    const __m256i lattice_mask = _mm256_set1_epi32(~((std::int32_t{1} << levels) - 1));
+    const __m256i levels_i = _mm256_set1_epi32(levels);
     Grid8 src;
     load_grid8(m.source, src);
     const std::uint8_t* cubes = m.empty_cube[0];
@@ -564,16 +578,25 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         const __m256i live = lanes_of8(slots.live_mask);
         const __m256i n = load(s.n);
         const __m256i num_full = load(s.num_full);
-        // The adaptive step: a thin lane with two full segments left takes a coarse sample.
-        const __m256i coarse =
-            adaptive
-                ? _mm256_and_si256(load(s.thin),
-                                   _mm256_cmpgt_epi32(load(s.total), _mm256_add_epi32(n, one_i)))
-                : _mm256_setzero_si256();
-        // adaptive_position(): go + (t_near + (n + ½ or 1)·Δs)·gd; locate_map(): the clamp to
-        // [0, n − 1], the map cell min(⌊t / B⌋, cells − 1) and the fraction.
+        // The adaptive step: the run's level, level_at(): the number of levels l ≤ want whose
+        // run of 2^l segments fits (both conditions hold for every level below one that holds).
+        __m256i level = _mm256_setzero_si256();
+        if (adaptive) {
+            const __m256i want = load(s.want);
+            const __m256i total = load(s.total);
+            for (int l = 1; l <= levels; ++l) {
+                const __m256i beyond =
+                    _mm256_cmpgt_epi32(_mm256_add_epi32(n, _mm256_set1_epi32(1 << l)), total);
+                level = _mm256_sub_epi32(
+                    level, _mm256_andnot_si256(beyond,
+                                               _mm256_cmpgt_epi32(want, _mm256_set1_epi32(l - 1))));
+            }
+        }
+        const __m256i span = _mm256_sllv_epi32(one_i, level);
+        // adaptive_position(): go + (t_near + (n + span / 2)·Δs)·gd; locate_map(): the clamp
+        // to [0, n − 1], the map cell min(⌊t / B⌋, cells − 1) and the fraction.
         const __m256 t_near = load(s.t_near);
-        const __m256 offset = _mm256_blendv_ps(half, one, as_float(coarse));
+        const __m256 offset = _mm256_mul_ps(half, _mm256_cvtepi32_ps(span));
         const __m256 tm = _mm256_add_ps(
             t_near, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(n), offset), step));
         __m256i q[3];
@@ -587,8 +610,8 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
         const __m256i cell = _mm256_add_epi32(
             q[0],
             _mm256_mullo_epi32(cells_x, _mm256_add_epi32(q[1], _mm256_mullo_epi32(cells_y, q[2]))));
-        __m256i n_next = _mm256_add_epi32(n, one_i);
-        __m256i thin_next = empty_thin;
+        __m256i n_next = _mm256_add_epi32(n, span);
+        __m256i want_next = levels_i;
         __m256i classified;
         alignas(32) std::int32_t at[LANES];
         if (k.skipping) {
@@ -622,15 +645,13 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
                 n_next = jump8(s, jump_q, jump_side, jump_size, jumps, n_next, num_full, t_near,
                                inv_step);
                 if (adaptive) {
-                    // thin_jump(): the pairs from n (coarse) or n + 1 (fine), the last start at
-                    // or before the sample past the region, at least the pair after the
-                    // sample's own; from the span's end on, that sample.
-                    const __m256i pairs = _mm256_add_epi32(_mm256_add_epi32(n, one_i), coarse);
+                    // thin_jump(): the runs of 2^levels from n + span, the last start at or
+                    // before the sample past the region, at least n + span; from the span's end
+                    // on, that sample.
+                    const __m256i runs = _mm256_add_epi32(n, span);
                     const __m256i rounded = _mm256_add_epi32(
-                        pairs, _mm256_andnot_si256(one_i, _mm256_sub_epi32(n_next, pairs)));
-                    const __m256i least =
-                        _mm256_blendv_epi8(pairs, _mm256_add_epi32(n, two_i), coarse);
-                    const __m256i lattice = _mm256_max_epi32(rounded, least);
+                        runs, _mm256_and_si256(lattice_mask, _mm256_sub_epi32(n_next, runs)));
+                    const __m256i lattice = _mm256_max_epi32(rounded, runs);
                     const __m256i before_end =
                         _mm256_and_si256(jumps, _mm256_cmpgt_epi32(num_full, n_next));
                     n_next = _mm256_blendv_epi8(n_next, lattice, before_end);
@@ -642,31 +663,38 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
             const __m256i valid =
                 _mm256_and_si256(load_bytes(m.occupancy, at), _mm256_set1_epi32(MAP_CELL_VALID));
             classified = _mm256_and_si256(live, _mm256_cmpgt_epi32(valid, _mm256_setzero_si256()));
-            // Lanes without a valid map pass their sample (two segments when coarse).
-            n_next = _mm256_sub_epi32(n_next, _mm256_andnot_si256(classified, coarse));
+            // Lanes without a valid map pass their run (n_next above).
         }
         __m256i terminated = _mm256_setzero_si256();
         if (_mm256_movemask_ps(as_float(classified)) != 0) {
             const __m256 dir8[3] = {load(s.dir[0]), load(s.dir[1]), load(s.dir[2])};
-            __m256 rgba[4], g[3], max_alpha;
+            __m256 rgba[4], g[3], max_alpha, wide_alpha;
             classify8<IS_RGBA, SHADING>(m, src, q, f, as_float(classified), dir8, rgba, g,
-                                        max_alpha);
-            // The adaptive step: a coarse sample whose voxels are not all thin is discarded (the
-            // lane takes its pair in fine samples: n again, not thin); one that is thin
-            // composites with the opacity of 2Δs (coarse_opacity()) and moves on by 2.
+                                        max_alpha, wide_alpha);
+            // The adaptive step: the sample wants the level its voxels allow (thin_level(), the
+            // sum of its two conditions); below the run's own level it is discarded (the lane
+            // marches its run again from n at that level); else it composites with the opacity
+            // of its run (run_opacity()).
             __m256i composited = classified;
             if (adaptive) {
-                const __m256i is_thin = as_int(_mm256_cmp_ps(max_alpha, thin_alpha, _CMP_LT_OQ));
+                static_assert(MAX_THIN_LEVELS == 2);
+                __m256i allowed = as_int(_mm256_cmp_ps(max_alpha, thin_limit[0], _CMP_LT_OQ));
+                if (levels >= 2) {
+                    allowed = _mm256_add_epi32(
+                        allowed, as_int(_mm256_cmp_ps(wide_alpha, thin_limit[1], _CMP_LT_OQ)));
+                }
+                allowed = _mm256_sub_epi32(_mm256_setzero_si256(), allowed);
                 const __m256i discarded =
-                    _mm256_andnot_si256(is_thin, _mm256_and_si256(classified, coarse));
+                    _mm256_and_si256(classified, _mm256_cmpgt_epi32(level, allowed));
                 composited = _mm256_andnot_si256(discarded, classified);
-                rgba[3] = _mm256_blendv_ps(
-                    rgba[3], _mm256_mul_ps(rgba[3], _mm256_sub_ps(two, rgba[3])), as_float(coarse));
-                n_next = _mm256_blendv_epi8(n_next, _mm256_add_epi32(n, two_i),
-                                            _mm256_and_si256(composited, coarse));
+                for (int l = 1; l <= levels; ++l) {
+                    const __m256i longer = _mm256_cmpgt_epi32(level, _mm256_set1_epi32(l - 1));
+                    rgba[3] = _mm256_blendv_ps(rgba[3],
+                                               _mm256_mul_ps(rgba[3], _mm256_sub_ps(two, rgba[3])),
+                                               as_float(longer));
+                }
                 n_next = _mm256_blendv_epi8(n_next, n, discarded);
-                thin_next = _mm256_blendv_epi8(thin_next, _mm256_and_si256(composited, is_thin),
-                                               classified);
+                want_next = _mm256_blendv_epi8(want_next, allowed, classified);
             }
             // Prefetch: the voxel rows of the sample after next, extrapolated from this sample's
             // source coordinate and the last one's when they are consecutive samples (this one
@@ -730,7 +758,7 @@ PLIANT_AVX2_FN std::int64_t mapped_tile(const MappedKernel& m, int x0, int y0, i
             terminated = composite8(s, rgba, blend, classified, threshold);
         }
         store(s.n, n_next);
-        store(s.thin, thin_next);
+        store(s.want, want_next);
         // Done: opaque (accumulated opacity above the threshold), or no sample left.
         const __m256i more_to_march = _mm256_cmpgt_epi32(num_full, n_next);
         const __m256i done =

@@ -14,8 +14,8 @@
 // c / 255 without a division, then premultiplied: bitwise interpolate_rgba8()); the stored
 // gradient's voxel pair is 16 bytes, one load, sign-extended, transposed (source_gradient()).
 // Step opacities other than the default step's (Δs/u = 1/2) go through the scalar libm calls
-// lane by lane. The adaptive step's state (thin, coarse samples, discarded ones, jumps onto the
-// pairs) is the scalar march's, lane by lane.
+// lane by lane. The adaptive step's state (the level wanted, the run's level, discarded samples,
+// jumps onto the coarsest runs) is the scalar march's, lane by lane.
 #pragma once
 
 #include <cstdint>

@@ -33,14 +33,21 @@ namespace pliant::render::detail {
 using GradientValue = std::int16_t;
 
 // A shaded rgba8 source packs each voxel's bytes and its stored gradient in one record: r, g,
-// b, α (bytes 0–3), then the gradient's 4 GradientValues (bytes 4–11: x, y, z, 0), then 4 bytes
-// of 0, so that a lane's x-adjacent voxel pair of a row is one 32-byte load that holds both
-// (MappedKernel::rgba8 at byte 0, MappedKernel::gradient at byte 4 of the first record).
+// b, α (bytes 0–3), then the gradient's 4 GradientValues (bytes 4–11: x, y, z, 0), then the
+// largest α byte of the voxel's 3³ neighbourhood (the grid's voxels within one step along each
+// axis; byte 12, the adaptive step's second level, thin_level()) and 3 bytes of 0, so that a
+// lane's x-adjacent voxel pair of a row is one 32-byte load that holds both (MappedKernel::rgba8
+// at byte 0, MappedKernel::gradient at byte 4 of the first record).
 inline constexpr std::int64_t PACKED_VOXEL_BYTES = 16;
+inline constexpr std::int64_t PACKED_WIDE_ALPHA = 12;  // the neighbourhood's α byte
 
 // Occupancy bits of a map cell.
 inline constexpr std::uint8_t MAP_CELL_VALID = 1;    // its 8 nodes hold source coordinates
 inline constexpr std::uint8_t MAP_CELL_VISIBLE = 2;  // some sample in it may have opacity
+
+// The opacity-adaptive step's coarsest level: runs of at most 2^MAX_THIN_LEVELS steps
+// (thin_level()).
+inline constexpr int MAX_THIN_LEVELS = 2;
 
 struct MappedKernel {
     // Camera, the target frame (n, inv_spacing, grid_offset, clamp bounds) and the options;
@@ -79,11 +86,13 @@ struct MappedKernel {
     // PACKED_VOXEL_BYTES / 2 packed).
     std::int64_t rgba8_stride = 4;
     std::int64_t gradient_stride = 4;
-    // The opacity-adaptive step (an rgba8 source; 0: off): a ray is marched in pairs of
-    // samples where its source is thin, each pair represented by one sample at the pair's
-    // middle (coarse_sample()), while the largest α byte of the 8 voxels every sample reads
-    // stays below thin_alpha (thin()).
-    float thin_alpha = 0.0f;
+    // The opacity-adaptive step (an rgba8 source; thin_levels 0: off, mapped_march()): a ray
+    // is marched in runs of 2^l steps, l ≤ thin_levels, each represented by one sample at the
+    // run's middle, while the largest α byte of the 8 voxels every sample reads (l = 1), and of
+    // their neighbourhoods (l = 2), stays below thin_limit[l − 1] = thin_alpha / 2^(l − 1)
+    // (thin_level()).
+    int thin_levels = 0;
+    float thin_limit[MAX_THIN_LEVELS] = {};
 };
 static_assert(std::is_trivially_copyable_v<MappedKernel>);
 
@@ -166,9 +175,12 @@ PLIANT_HOST_DEVICE inline void rgba8_voxel(const std::uint8_t* p, float out[4]) 
 
 // interpolate_rgba() of an rgba8 source at t in the units of rgba8_voxel(): the same trilinear
 // operations on the corners' premultiplied values (RayCaster's float copy holds them divided by
-// 255² and 255: the same values up to rounding, without a conversion per corner).
+// 255² and 255: the same values up to rounding, without a conversion per corner). max_alpha:
+// the largest α byte of the 8 corners; wide_alpha: the largest of their neighbourhoods' (the
+// packed records' PACKED_WIDE_ALPHA byte: every voxel within one step of the corners), +∞
+// without packed records.
 PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const Trilinear& t,
-                                                   float& max_alpha) {
+                                                   float& max_alpha, float& wide_alpha) {
     const RayCastKernel& s = m.source;
     const std::int64_t stride = m.rgba8_stride;
     const std::uint8_t* p = m.rgba8 + stride * voxel_index(s, t);
@@ -182,6 +194,13 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
     for (int i = 1; i < 8; ++i) {
         max_alpha = std::max(max_alpha, v[i][3]);
     }
+    wide_alpha = std::numeric_limits<float>::infinity();
+    if (stride == PACKED_VOXEL_BYTES) {
+        wide_alpha = 0.0f;
+        for (int i = 0; i < 8; ++i) {
+            wide_alpha = std::max(wide_alpha, static_cast<float>(p[corner[i] + PACKED_WIDE_ALPHA]));
+        }
+    }
     float out[4];
     for (int c = 0; c < 4; ++c) {
         const float c00 = lerp(v[0][c], v[1][c], t.fx);
@@ -194,15 +213,16 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
 }
 
 // classify<true>() of the source at t, its values from the rgba8 bytes when m.rgba8 is set
-// (interpolate_rgba8(): the opacity α / 255, the straight colour α·c / (255 α)); max_alpha the
-// largest α byte of the 8 voxels read (rgba8), else +∞.
+// (interpolate_rgba8(): the opacity α / 255, the straight colour α·c / (255 α)); max_alpha and
+// wide_alpha as interpolate_rgba8()'s (rgba8), else +∞.
 PLIANT_HOST_DEVICE inline Sample classify_rgba_source(const MappedKernel& m, const Trilinear& t,
-                                                      float& max_alpha) {
+                                                      float& max_alpha, float& wide_alpha) {
     if (m.rgba8 == nullptr) {
         max_alpha = std::numeric_limits<float>::infinity();
+        wide_alpha = max_alpha;
         return classify<true>(m.source, t);
     }
-    const Sample s = interpolate_rgba8(m, t, max_alpha);
+    const Sample s = interpolate_rgba8(m, t, max_alpha, wide_alpha);
     const float a = clampf(s.a * (1.0f / 255.0f), 0.0f, 1.0f);
     if (!(a > 0.0f)) {
         return {0.0f, 0.0f, 0.0f, 0.0f};
@@ -255,24 +275,26 @@ PLIANT_HOST_DEVICE inline float target_gradient(Vec3f d, Vec3f jac_a, float inv_
 // the options ask: the gradient of the shaded value in the target frame, the stored source
 // gradient at g (source_gradient()) through the map's Jacobian (target_gradient()), then
 // 0.3 + 0.7 |n · dir| as shade(). Zero opacity outside the source box. max_alpha: the largest
-// α byte of the source voxels the sample reads (classify_rgba_source()), 0 outside the source
-// box, +∞ for sources other than rgba8.
+// α byte of the source voxels the sample reads, wide_alpha that of their neighbourhoods
+// (classify_rgba_source()); both 0 outside the source box, +∞ for sources other than rgba8.
 template <bool IS_RGBA>
 PLIANT_HOST_DEVICE inline Sample mapped_classify(const MappedKernel& m, const MapCell& c, Vec3f dir,
-                                                 float& max_alpha) {
+                                                 float& max_alpha, float& wide_alpha) {
     const RayCastKernel& s = m.source;
     Vec3f jac[3];
     const Vec3f g = map_coordinate(m, c, m.target.shading ? jac : nullptr);
     if (!in_source(m, g)) {
         max_alpha = 0.0f;
+        wide_alpha = 0.0f;
         return {0.0f, 0.0f, 0.0f, 0.0f};
     }
     const Trilinear t = locate(s, g);
     Sample out;
     if constexpr (IS_RGBA) {
-        out = classify_rgba_source(m, t, max_alpha);
+        out = classify_rgba_source(m, t, max_alpha, wide_alpha);
     } else {
         max_alpha = std::numeric_limits<float>::infinity();
+        wide_alpha = max_alpha;
         out = classify<false>(s, t);
     }
     if (out.a > 0.0f && m.target.shading) {
@@ -474,55 +496,85 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
         const std::uint8_t need = k.skipping ? MAP_CELL_VISIBLE : MAP_CELL_VALID;
         if ((m.occupancy[cell.index] & need) != 0 && (!k.skipping || sub_cell_occupied(m, cell))) {
             ++samples;
-            float max_alpha = 0.0f;
-            const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir, max_alpha);
+            float max_alpha = 0.0f, wide_alpha = 0.0f;
+            const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir, max_alpha, wide_alpha);
             composite_last(s, partial, k.step, c);
         }
     }
     return over_background(k, c);
 }
 
-// The opacity-adaptive step (MappedKernel::thin_alpha > 0). A ray is marched in fine samples
-// (segment n, at its midpoint t_near + (n + ½)Δs, as without it) and coarse samples (segments n
-// and n + 1 as one segment of 2Δs, sampled at its midpoint t_near + (n + 1)Δs, with the step
-// opacity α_2Δs = 1 − (1 − α_Δs)² = α_Δs (2 − α_Δs): the opacity correction of RayCaster for
-// a step twice as long). The ray starts thin; after a sample it is thin when every voxel that
-// sample read has an α byte below thin_alpha (the haze of a radiance field), else not. A thin
-// ray takes a coarse sample while two full segments are left; a coarse sample whose voxels are
-// not all thin is discarded (counted, not composited) and its two segments are taken as fine
-// samples. So where the source is not thin the samples are those of the fixed step; where it
-// is, half as many, each trilinear in thin voxels (docs/journal/2026-11-30-dense.md measures
-// the PSNR against the fixed step). Samples in empty cells read only α = 0 and are thin, so
-// the march skips them without changing what it classifies (thin_jump()): images are the same
-// with and without empty-space skipping.
+// The opacity-adaptive step (MappedKernel::thin_levels > 0). A ray is marched in runs of 2^l
+// segments, l = 0 … thin_levels: the run of segments n … n + 2^l − 1 (each of length Δs) is one
+// sample at the run's middle t_near + (n + 2^l / 2)Δs (for l = 0 segment n's midpoint, as
+// without the adaptive step), with the step opacity of 2^l Δs, α_2Δs = α_Δs (2 − α_Δs) applied
+// l times (the opacity correction of RayCaster for a step 2^l times as long). The level a
+// sample allows (thin_level()): 1 when every voxel it read has an α byte below thin_limit[0] =
+// thin_alpha (the haze of a radiance field); 2 when, besides, every voxel within one voxel step
+// of those has one below thin_limit[1] = thin_alpha / 2 (the packed records' neighbourhood byte:
+// the voxels a run of 4 steps of half a voxel can read, also where its middle sample does not;
+// a run twice as long asks for half the opacity, so that its error stays of the same order).
+// The ray starts at the coarsest level; after a sample it wants the level that sample allows;
+// it takes the level it wants while the run fits in its segments (level_at()). A sample that
+// does not allow its own run's level is discarded (counted, not composited) and the run is
+// marched again at the level it allows. So where the source is not thin the samples are those
+// of the fixed step; where it is, a run of up to 4 steps is one sample (docs/journal/
+// 2026-11-30-dense.md and 2026-11-30-thin-levels.md measure the PSNR against the fixed step).
+// Empty-space skipping lands on the runs of the coarsest level that a march through the empty
+// region would have taken had its samples all allowed that level (thin_jump()). With one level
+// they do (samples in empty cells read only α = 0), so images are the same with and without
+// skipping; the second level's neighbourhood can reach a visible voxel from an empty cell, so
+// with it a march that classifies such samples may take finer runs there, and its samples after
+// the region may differ in phase (tests: within 65 dB).
 inline constexpr float THIN_ALPHA_BYTES = 32.0f;  // MappedRayCaster's default thin_alpha
+inline constexpr int THIN_LEVELS = 2;             // MappedRayCaster's default thin_levels
 
-// The sample position of sample n, coarse (t_near + (n + 1)Δs) or fine (sample_position()).
+// The coarsest level (0 … thin_levels) a sample allows whose 8 voxels' largest α byte is
+// max_alpha and their neighbourhoods' wide_alpha (≥ max_alpha; mapped_classify()).
+PLIANT_HOST_DEVICE inline int thin_level(const MappedKernel& m, float max_alpha, float wide_alpha) {
+    static_assert(MAX_THIN_LEVELS == 2);
+    const int first = m.thin_levels >= 1 && max_alpha < m.thin_limit[0] ? 1 : 0;
+    const int second = m.thin_levels >= 2 && wide_alpha < m.thin_limit[1] ? 1 : 0;
+    return first + second;
+}
+
+// The level of the run from segment n of a ray with `total` segments that wants level `want`:
+// the coarsest l ≤ want whose run fits, n + 2^l ≤ total.
+PLIANT_HOST_DEVICE inline int level_at(int want, std::int64_t n, std::int64_t total) {
+    int level = want;
+    while (level > 0 && n + (std::int64_t{1} << level) > total) {
+        --level;
+    }
+    return level;
+}
+
+// The sample position of the run of 2^level segments from segment n (adaptive step).
 PLIANT_HOST_DEVICE inline Vec3f adaptive_position(const RayCastKernel& k, const GridRay& r,
-                                                  std::int64_t n, bool coarse) {
-    return r.go + (r.t_near + (static_cast<float>(n) + (coarse ? 1.0f : 0.5f)) * k.step) * r.gd;
+                                                  std::int64_t n, int level) {
+    const float middle = 0.5f * static_cast<float>(std::int64_t{1} << level);
+    return r.go + (r.t_near + (static_cast<float>(n) + middle) * k.step) * r.gd;
 }
 
-// The step opacity of a coarse sample (2Δs) from that of its fine step α_Δs.
-PLIANT_HOST_DEVICE inline float coarse_opacity(float a) {
-    return a * (2.0f - a);
+// The step opacity of a run of 2^level segments from that of one segment α_Δs.
+PLIANT_HOST_DEVICE inline float run_opacity(float a, int level) {
+    for (int l = 0; l < level; ++l) {
+        a = a * (2.0f - a);
+    }
+    return a;
 }
 
-// The next sample of an adaptive march after a jump from sample n (coarse or fine) to past, the
-// first fine sample past the empty region (map_jump(), sub_cell_jump(); at most end). A march
-// that classified the skipped samples would have found them thin and gone on in coarse
-// samples at the pairs starting at n (coarse) or n + 1 (fine) and every second sample after:
-// the last such start at or before past (the pairs skipped start before past, so their sample
-// lies before the region's exit: in it), at least the pair after n's own. From end on, the
-// march ends either way (the samples there lie in no visible cell).
-PLIANT_HOST_DEVICE inline std::int64_t thin_jump(std::int64_t n, bool coarse, std::int64_t past,
-                                                 std::int64_t end) {
+// The next segment of an adaptive march after a jump from the run that ends at first = n + span
+// to past, the first segment past the empty region (map_jump(), sub_cell_jump(); at most end):
+// a march whose samples there all allowed the coarsest level would have gone on from `first`
+// in runs of `lattice` = 2^levels segments: the last start at or before past (the runs skipped
+// end at or before past, so their samples lie in the region), at least `first`. From end on,
+// the march ends either way (the samples there lie in no visible cell).
+PLIANT_HOST_DEVICE inline std::int64_t thin_jump(std::int64_t first, std::int64_t lattice,
+                                                 std::int64_t past, std::int64_t end) {
     if (past >= end) {
         return past;
     }
-    const std::int64_t first = coarse ? n : n + 1;
-    const std::int64_t next = first + ((past - first) & ~std::int64_t{1});
-    return std::max(next, coarse ? n + 2 : first);
+    return std::max(first, first + ((past - first) & ~(lattice - 1)));
 }
 
 // The march of a composite ray through the map (march_composite() through the map): its
@@ -547,20 +599,20 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
             cubes[num_cubes++] = m.empty_cube[octant ^ flip];
         }
     }
-    const bool adaptive = m.thin_alpha > 0.0f;
+    const int levels = m.thin_levels;  // 0: the fixed step
+    const std::int64_t lattice = std::int64_t{1} << levels;
     Accumulated c;
     std::int64_t n = 0;
     std::int64_t end = p.num_full;
     if (k.skipping) {
         visible_samples(m, r, p.num_full, n, end);
     }
-    bool thin = adaptive;
-    if (adaptive) {
-        n &= ~std::int64_t{1};
-    }
+    n &= ~(lattice - 1);  // the runs of the coarsest level from segment 0
+    int want = levels;
     while (n < end) {
-        const bool coarse = thin && n + 1 < p.num_full;
-        const MapCell cell = locate_map(m, adaptive_position(k, r, n, coarse));
+        const int level = level_at(want, n, p.num_full);
+        const std::int64_t span = std::int64_t{1} << level;
+        const MapCell cell = locate_map(m, adaptive_position(k, r, n, level));
         if (k.skipping) {
             int side = cubes[0][cell.index];
             for (int q = 1; q < num_cubes && side > 0; ++q) {
@@ -570,26 +622,24 @@ PLIANT_HOST_DEVICE inline Accumulated mapped_march(const MappedKernel& m, const 
             if (side > 0 || empty_sub_cell) {
                 const std::int64_t past = side > 0 ? map_jump(m, r, cell, side, n, end)
                                                    : sub_cell_jump(m, r, cell, n, end);
-                n = adaptive ? thin_jump(n, coarse, past, end) : past;
-                thin = adaptive;
+                n = levels > 0 ? thin_jump(n + span, lattice, past, end) : past;
+                want = levels;
                 continue;
             }
         } else if ((m.occupancy[cell.index] & MAP_CELL_VALID) == 0) {
-            n += coarse ? 2 : 1;
-            thin = adaptive;
+            n += span;
+            want = levels;
             continue;
         }
         ++samples;
-        float max_alpha = 0.0f;
-        const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir, max_alpha);
-        const bool is_thin = max_alpha < m.thin_alpha;
-        if (coarse && !is_thin) {
-            thin = false;  // the pair again, in fine samples
-            continue;
+        float max_alpha = 0.0f, wide_alpha = 0.0f;
+        const Sample s = mapped_classify<IS_RGBA>(m, cell, p.dir, max_alpha, wide_alpha);
+        want = thin_level(m, max_alpha, wide_alpha);
+        if (want < level) {
+            continue;  // the run again, at the level this sample allows
         }
-        n += coarse ? 2 : 1;
-        thin = adaptive && is_thin;
-        const float a = coarse ? coarse_opacity(s.a) : s.a;
+        n += span;
+        const float a = run_opacity(s.a, level);
         if (a > 0.0f) {
             composite(s, a, c.r, c.g, c.b, c.a);
             if (c.a > k.threshold) {
