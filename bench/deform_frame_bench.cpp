@@ -297,7 +297,7 @@ int main(int argc, char** argv) {
             mapped->set_thin_levels(1);
             timed(render_one_level,
                   [&] { one_level_samples = mapped->render(camera, one_level_image).samples; });
-            mapped->set_thin_levels(render::detail::THIN_LEVELS);
+            mapped->set_thin_levels(options.thin_levels);
             if (scalar_mapped) {
                 timed(set_map_scalar, [&] { scalar_mapped->set_map(map); });
             }

@@ -100,6 +100,7 @@ struct DeformCommandOptions {
     bool resume = false;
     bool shading = false;
     std::string resample = "map";
+    int thin_levels = pipeline::DeformRunOptions{}.thin_levels;
     bool no_pipeline = false;
 
     // The driver-specific options the user gave, for the usage check.
@@ -198,6 +199,7 @@ void run_deform_command(const DeformCommandOptions& options, const GlobalOptions
     run.step = options.step;
     run.shading = options.shading;
     run.resample = pipeline::parse_resample_mode(options.resample);
+    run.thin_levels = options.thin_levels;
     run.progress = frame_progress(stderr_is_terminal() && !global.json);
     run.checkpoint_every = options.checkpoint_every;
     run.resume = options.resume;
@@ -323,6 +325,10 @@ void register_deform(CLI::App& app, const GlobalOptions& global) {
                     "Video: render each frame through its inverse map without resampling (map, "
                     "default) or from its exact resample (exact)")
         ->check(CLI::IsMember({"exact", "map"}));
+    cmd->add_option("--thin-levels", options->thin_levels,
+                    "Video through the map, an rgba8 volume: faint haze sampled once per 2^N "
+                    "steps, N = 0 (every step), 1 or 2 (default 2)")
+        ->check(CLI::Range(0, 2));
     cmd->add_flag("--no-pipeline", options->no_pipeline,
                   "Video: step each frame after the last one rendered, not while it renders "
                   "(the same output)");

@@ -4,7 +4,8 @@
 //                                [--axis-aligned]
 //                                [--preview-divisor D] [--deform [--driver none|wave|twist|bubble]
 //                                [--stiffness K] [--cells B] [--substeps N] [--fps F]
-//                                [--drag-radius R] [--resample exact|map]] [--max-memory MIB]
+//                                [--drag-radius R] [--resample exact|map] [--thin-levels N]]
+//                                [--max-memory MIB]
 // view options: [--size WxH] [--camera AZ,EL,DIST] [--frames N [--screenshot FILE.png]]
 //               [--no-ui] [--paused] [--sync] [--msaa N]
 //
@@ -171,12 +172,13 @@ void run_view_volume(const ViewCommandOptions& o, viewer::VolumeViewOptions opti
     const bool deform_only = cmd->count("--driver") + cmd->count("--stiffness") +
                                  cmd->count("--cells") + cmd->count("--substeps") +
                                  cmd->count("--fps") + cmd->count("--drag-radius") +
-                                 cmd->count("--resample") >
+                                 cmd->count("--resample") + cmd->count("--thin-levels") >
                              0;
     if (deform_only && !options.session.deform) {
         throw CLI::ValidationError("--deform",
                                    "--driver, --stiffness, --cells, --substeps, --fps, "
-                                   "--drag-radius and --resample apply with --deform only");
+                                   "--drag-radius, --resample and --thin-levels apply with "
+                                   "--deform only");
     }
 #ifdef PLIANT_HAS_VIEWER
     print_summary(viewer::run_volume_view(o.input, options), global);
@@ -260,6 +262,10 @@ void register_view(CLI::App& app, const GlobalOptions& global) {
                     "Show each frame through its inverse map without resampling (map, default) "
                     "or from its exact resample (exact; with --deform)")
         ->check(CLI::IsMember({"exact", "map"}));
+    vol->add_option("--thin-levels", s.thin_levels,
+                    "Through the map, an rgba8 volume: faint haze sampled once per 2^N steps, N "
+                    "= 0 (every step), 1 or 2 (default 2; with --deform)")
+        ->check(CLI::Range(0, 2));
     vol->add_option("--stiffness", s.body.stiffness, "PBD stiffness in (0, 1] (default 1)")
         ->check(finite_in_range(1e-6, 1.0));
     vol->add_option("--cells", s.grid.cell_voxels, "Voxels per tet-grid cell side (default 4)")

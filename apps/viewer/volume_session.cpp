@@ -426,6 +426,7 @@ render::RayCastOptions VolumeSession::caster_options() const {
     options.step = m_options.step;
     options.shading = m_options.shading;
     options.clip = m_options.clip;
+    options.thin_levels = m_options.thin_levels;
     options.background = m_options.background;
     if (m_is_rgba) {
         options.opacity_unit = volume::smallest_spacing(m_source) / m_options.opacity_scale;

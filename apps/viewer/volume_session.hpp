@@ -91,6 +91,8 @@ struct VolumeSessionOptions {
     double fps = 24.0;          // a frame simulates 1 / fps seconds
     double drag_radius = 0.05;  // box units (fraction of the volume's largest side)
     pipeline::ResampleMode resample = pipeline::ResampleMode::map;  // how frames are shown
+    // Through the map, an rgba8 volume: render::RayCastOptions::thin_levels.
+    int thin_levels = render::RayCastOptions{}.thin_levels;
     MapStatePlacement map_state = MapStatePlacement::balanced;
 };
 

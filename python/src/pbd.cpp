@@ -409,7 +409,8 @@ InvalidInput while a reference to `body` (or a view of its arrays) is alive.
            const std::optional<std::filesystem::path>& still, std::pair<int, int> size,
            std::array<double, 3> camera, bool shading, double step, int cell_voxels, bool full_box,
            const std::optional<std::filesystem::path>& mesh, const std::string& driver_name,
-           const std::function<void(int, int, double)>& progress, const py::kwargs& kwargs) {
+           const std::function<void(int, int, double)>& progress, int thin_levels,
+           const py::kwargs& kwargs) {
             pipeline::DeformRunOptions options;
             options.driver_name = driver_name;
             options.driver = driver;
@@ -425,6 +426,7 @@ InvalidInput while a reference to `body` (or a view of its arrays) is alive.
             options.camera = camera;
             options.shading = shading;
             options.step = step;
+            options.thin_levels = thin_levels;
             if (progress) {
                 options.progress = [&progress](int done, int total, double ms) {
                     py::gil_scoped_acquire gil;
@@ -446,11 +448,14 @@ InvalidInput while a reference to `body` (or a view of its arrays) is alive.
         py::arg("step") = 0.0, py::arg("cell_voxels") = 4, py::arg("full_box") = false,
         py::arg("mesh") = py::none(), py::arg("driver_name") = "python",
         py::arg("progress") = py::none(),
+        py::arg("thin_levels") = pipeline::DeformRunOptions{}.thin_levels,
         (std::string(
              "What `pliant deform` does: `frames` steps of 1/fps s under `driver`, the "
              "last frame resampled into the volume file `out` (written); `video` (MP4) and `still` "
              "(PNG) rendered with the orbit camera (azimuth, elevation, distance; 0: "
-             "framed). Returns the command's JSON as a dict. Releases the GIL.") +
+             "framed); an rgba8 source's faint haze sampled once per 2^thin_levels steps "
+             "(0: every step; default 2). Returns the command's JSON as a dict. Releases the "
+             "GIL.") +
          BODY_OPTIONS_DOC)
             .c_str());
 }

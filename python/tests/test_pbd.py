@@ -84,5 +84,13 @@ def test_run_deform(ball, tmp_path):
                                frames=3, cell_voxels=4, still=tmp_path / "last.png",
                                size=(32, 32))
     assert result["frames"] == 3 and result["inverted_tets"] == 0
+    assert result["thin_levels"] == 2
     assert pliant.read_volume(tmp_path / "twisted.nrrd").dims == ball.dims
     assert pliant.read_png(tmp_path / "last.png").shape == (32, 32, 3)
+    fixed = pliant.run_deform(ball, tmp_path / "fixed.nrrd", driver=pliant.TwistDriver(),
+                              frames=1, cell_voxels=4, thin_levels=0)
+    assert fixed["thin_levels"] == 0
+    with pytest.raises(pliant.InvalidInput, match="thin_levels"):
+        pliant.run_deform(ball, tmp_path / "bad.nrrd", driver=pliant.TwistDriver(), frames=1,
+                          thin_levels=3)
+    assert not (tmp_path / "bad.nrrd").exists()

@@ -192,6 +192,13 @@ TEST(DeformCommand, RendersThroughTheInverseMap) {
     EXPECT_EQ(bad.exit_code, 2);
     EXPECT_NE(bad.err.find("--resample"), std::string::npos) << bad.err;
     EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd"));
+    const CliResult levels =
+        run_cli("deform " + quoted(scratch / "rt.nrrd") + " --driver twist --thin-levels 3 -o " +
+                    quoted(scratch / "bad.nrrd"),
+                scratch);
+    EXPECT_EQ(levels.exit_code, 2);
+    EXPECT_NE(levels.err.find("--thin-levels"), std::string::npos) << levels.err;
+    EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd"));
 }
 
 TEST(DeformCommand, DeformsATetGenMesh) {

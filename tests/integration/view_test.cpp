@@ -84,7 +84,9 @@ TEST(ViewCli, UsageErrorsExitTwo) {
           "view volume " + volume + " --driver twist",
           "view volume " + volume + " --deform --driver spin",
           "view volume " + volume + " --clip 1,2,3", "view volume " + volume + " --threshold 300",
-          "view volume " + volume + " --opacity-scale 0"}) {
+          "view volume " + volume + " --opacity-scale 0",
+          "view volume " + volume + " --thin-levels 1",
+          "view volume " + volume + " --deform --thin-levels 3"}) {
         const CliResult r = run_cli(args + " 2>&1", scratch, "env -u DISPLAY");
         EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.out << r.err;
     }

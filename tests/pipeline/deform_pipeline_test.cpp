@@ -16,6 +16,7 @@
 #include "pliant/pipeline/deform_run.hpp"
 #include "pliant/pipeline/frame_pipeline.hpp"
 #include "pliant/volume/generate.hpp"
+#include "support/deformed_phantom.hpp"
 #include "support/test_files.hpp"
 
 namespace pliant::pipeline {
@@ -103,8 +104,9 @@ struct RunResult {
     nlohmann::ordered_json json;
 };
 
-RunResult run(const volume::Volume& source, const volume::TransferFunction& tf, ResampleMode mode,
-              bool pipelined, int threads, const io::test::TempDir& dir) {
+// A scalar source needs tf; an rgba8 one takes nullptr.
+RunResult run(const volume::Volume& source, const volume::TransferFunction* tf, ResampleMode mode,
+              bool pipelined, int threads, const io::test::TempDir& dir, int thin_levels = 2) {
     set_num_threads(threads);
     DeformRunOptions options;
     options.driver_name = "twist";
@@ -118,8 +120,9 @@ RunResult run(const volume::Volume& source, const volume::TransferFunction& tf, 
     options.resample = mode;
     options.pipelined = pipelined;
     options.checkpoint_every = 0;
-    const std::string tag =
-        std::string(name(mode)) + (pipelined ? "-p" : "-s") + std::to_string(threads);
+    options.thin_levels = thin_levels;
+    const std::string tag = std::string(name(mode)) + (pipelined ? "-p" : "-s") +
+                            std::to_string(threads) + "-" + std::to_string(thin_levels);
     options.out = dir / (tag + ".nrrd");
     options.mesh_out = dir / (tag + ".vtu");
     RunResult result;
@@ -127,7 +130,7 @@ RunResult run(const volume::Volume& source, const volume::TransferFunction& tf, 
         EXPECT_EQ(frame, static_cast<int>(result.frames.size()) + 1);
         result.frames.push_back(image.pixels);
     };
-    result.json = run_deform(source, &tf, options);
+    result.json = run_deform(source, tf, options);
     result.volume = io::test::read_bytes(options.out);
     result.mesh = io::test::read_bytes(options.mesh_out);
     return result;
@@ -138,7 +141,7 @@ TEST_F(FramePipelineTest, DeformRunsGiveTheSequentialBytes) {
     const volume::Volume source = volume::shepp_logan_3d({28, 26, 24});
     const volume::TransferFunction tf = volume::preset("mri-brain", source);
     for (const ResampleMode mode : {ResampleMode::exact, ResampleMode::map}) {
-        const RunResult reference = run(source, tf, mode, false, 1, dir);
+        const RunResult reference = run(source, &tf, mode, false, 1, dir);
         ASSERT_EQ(reference.frames.size(), 6u);
         EXPECT_FALSE(reference.json.at("pipelined").get<bool>());
         std::int64_t lit = 0;
@@ -149,7 +152,7 @@ TEST_F(FramePipelineTest, DeformRunsGiveTheSequentialBytes) {
         EXPECT_NE(reference.frames.front(), reference.frames.back()) << "the body moves";
         for (const auto& [pipelined, threads] :
              std::vector<std::pair<bool, int>>{{true, 1}, {true, 2}, {false, 2}}) {
-            const RunResult r = run(source, tf, mode, pipelined, threads, dir);
+            const RunResult r = run(source, &tf, mode, pipelined, threads, dir);
             const std::string what = std::string(name(mode)) + (pipelined ? " pipelined " : " ") +
                                      std::to_string(threads) + " threads";
             EXPECT_EQ(r.json.at("pipelined").get<bool>(), pipelined) << what;
@@ -170,6 +173,29 @@ TEST_F(FramePipelineTest, DeformRunsGiveTheSequentialBytes) {
             EXPECT_GT(r.json.at("render_ms").get<double>(), 0.0);
         }
     }
+}
+
+// thin_levels reaches the ray caster: an rgba8 source through the map renders other frames with
+// the fixed step (0) than with the adaptive step's levels (1, 2), the output volume (the exact
+// resample) is the same, and the JSON says which; out of [0, 2] the run refuses before writing.
+TEST_F(FramePipelineTest, DeformRunsPassTheAdaptiveStepsLevels) {
+    const io::test::TempDir dir;
+    const volume::Volume source = test::rgba_phantom(28);
+    std::vector<RunResult> runs;
+    for (int levels = 0; levels <= 2; ++levels) {
+        runs.push_back(run(source, nullptr, ResampleMode::map, true, 2, dir, levels));
+        EXPECT_EQ(runs.back().json.at("thin_levels").get<int>(), levels);
+        ASSERT_EQ(runs.back().frames.size(), 6u);
+        EXPECT_TRUE(runs.back().volume == runs.front().volume);
+    }
+    EXPECT_NE(runs[0].frames.back(), runs[1].frames.back()) << "one level samples less";
+    EXPECT_NE(runs[1].frames.back(), runs[2].frames.back()) << "the second level, shaded";
+    DeformRunOptions bad;
+    bad.driver = pbd::TwistDriver{};
+    bad.out = dir / "bad.nrrd";
+    bad.thin_levels = 3;
+    EXPECT_THROW(run_deform(source, nullptr, bad), InvalidInput);
+    EXPECT_FALSE(std::filesystem::exists(bad.out));
 }
 
 }  // namespace

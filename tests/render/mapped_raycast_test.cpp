@@ -615,7 +615,7 @@ TEST(MappedRayCast, AdaptiveStepStaysNearTheFixedStep) {
             MappedRayCaster every(*source, nullptr, *source, options);
             every.set_map(map);
             EXPECT_DOUBLE_EQ(caster.thin_alpha(), detail::THIN_ALPHA_BYTES / 255.0);
-            EXPECT_EQ(caster.thin_levels(), detail::THIN_LEVELS);
+            EXPECT_EQ(caster.thin_levels(), RayCastOptions{}.thin_levels);
             caster.set_thin_alpha(0.0);
             Image fixed;
             const RayCastStats c = caster.render(camera, fixed);
@@ -664,6 +664,9 @@ TEST(MappedRayCast, AdaptiveStepStaysNearTheFixedStep) {
     EXPECT_THROW(caster.set_thin_alpha(1.5), InvalidInput);
     EXPECT_THROW(caster.set_thin_levels(-1), InvalidInput);
     EXPECT_THROW(caster.set_thin_levels(detail::MAX_THIN_LEVELS + 1), InvalidInput);
+    RayCastOptions three_levels;
+    three_levels.thin_levels = 3;
+    EXPECT_THROW(MappedRayCaster(cloud, nullptr, cloud, three_levels), InvalidInput);
 }
 
 TEST(MappedRayCast, EarlyTerminationStillWorks) {

@@ -130,6 +130,10 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
         throw InvalidInput(fmt::format("deform: the mesh output {} must be a .vtu file (VTK XML)",
                                        options.mesh_out.string()));
     }
+    if (options.thin_levels < 0 || options.thin_levels > render::detail::MAX_THIN_LEVELS) {
+        throw InvalidInput(fmt::format("deform: thin_levels must be in [0, {}], got {}",
+                                       render::detail::MAX_THIN_LEVELS, options.thin_levels));
+    }
     if (options.mesh.empty() && options.grid.cell_voxels >= 1) {
         // Every cell of the grid counted: an upper bound on the soft body's size.
         const volume::Dims& d = source.dims();
@@ -167,6 +171,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
     render::RayCastOptions ray_options;
     ray_options.shading = options.shading;
     ray_options.step = options.step;
+    ray_options.thin_levels = options.thin_levels;
 
     const std::filesystem::path checkpoint_path = deform_checkpoint_path(options.out);
     const bool checkpoints = options.checkpoint_every > 0 && !video;
@@ -361,6 +366,7 @@ nlohmann::ordered_json run_deform(const volume::Volume& source, const volume::Tr
             {"step_ms", step_ms.mean()},
             {"resample_ms", resample_ms.mean()},
             {"resample_mode", name(options.resample)},
+            {"thin_levels", options.thin_levels},
             {"map_ms", map_ms.mean()},
             {"render_ms", render_ms.mean()},
             {"ms_per_frame", frame_ms.mean()},

@@ -30,6 +30,7 @@
 #include "pliant/pipeline/deformable_volume.hpp"
 #include "pliant/pipeline/progress.hpp"
 #include "pliant/render/image.hpp"
+#include "pliant/render/raycast.hpp"
 #include "pliant/volume/transfer_function.hpp"
 #include "pliant/volume/volume.hpp"
 
@@ -57,7 +58,10 @@ struct DeformRunOptions {
     // deformable_volume.hpp) or resampled (exact). The output volume is always the exact
     // resample.
     ResampleMode resample = ResampleMode::map;
-    double step = 0.0;    // ray-casting step, world units (0: half the smallest spacing)
+    double step = 0.0;  // ray-casting step, world units (0: half the smallest spacing)
+    // Through the map, an rgba8 source: the levels of the ray caster's opacity-adaptive step
+    // (render::RayCastOptions::thin_levels; 0: every step sampled).
+    int thin_levels = render::RayCastOptions{}.thin_levels;
     ProgressFn progress;  // after every frame (progress.hpp)
     // The most memory the run may need (bytes; memory_budget.hpp's deform_need_bytes, checked
     // before the tet grid is built); 0: the memory available.

@@ -234,6 +234,7 @@ MappedRayCaster::MappedRayCaster(const volume::Volume& source, const volume::Tra
             "raycast through a map: only composite rendering is supported (got mip); resample "
             "the volume instead");
     }
+    set_thin_levels(options.thin_levels);
     // The source prepared with the target's step and opacity unit (those of a RayCaster of the
     // resampled target).
     RayCastOptions source_options = options;

@@ -204,8 +204,8 @@ public:
     // level also asks the voxels around those read to be below thin_alpha / 2 and is taken for
     // shaded sources only (their packed records hold that neighbourhood's α). thin_alpha 0 or
     // thin_levels 0: every step sampled (RayCaster's samples). Defaults
-    // detail::THIN_ALPHA_BYTES / 255 and detail::THIN_LEVELS. InvalidInput outside [0, 1] and
-    // [0, detail::MAX_THIN_LEVELS].
+    // detail::THIN_ALPHA_BYTES / 255 and RayCastOptions::thin_levels. InvalidInput outside
+    // [0, 1] and [0, detail::MAX_THIN_LEVELS].
     void set_thin_alpha(double thin_alpha);
     double thin_alpha() const { return m_thin_alpha; }
     void set_thin_levels(int levels);
@@ -255,7 +255,7 @@ private:
     Vec3d m_target_spacing, m_target_origin;
     double m_step = 0.0;
     double m_thin_alpha = detail::THIN_ALPHA_BYTES / 255.0;
-    int m_thin_levels = detail::THIN_LEVELS;
+    int m_thin_levels = 0;  // RayCastOptions::thin_levels
     double m_prepare_ms = 0.0;
     // Per source cell (first corner v, the voxels {v, v + 1}³ clamped to the grid) whether a
     // sample interpolated in it may have opacity, a bit per cell, a 64-bit word per brick of 4³

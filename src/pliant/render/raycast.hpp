@@ -125,6 +125,10 @@ struct RayCastOptions {
     Color background{0.0f, 0.0f, 0.0f};
     bool empty_space_skipping = true;  // off: every sample evaluated (for tests and benchmarks)
     std::optional<ClipPlane> clip;     // none: the whole volume
+    // MappedRayCaster with an rgba8 source only (others ignore it): the levels of its
+    // opacity-adaptive step, 0 … 2 (MappedRayCaster::set_thin_levels(): runs of up to 2^levels
+    // steps sampled once in faint haze); 0: every step sampled, as RayCaster samples.
+    int thin_levels = 2;
 };
 
 struct RayCastStats {

@@ -527,7 +527,6 @@ PLIANT_HOST_DEVICE inline Color mapped_end(const MappedKernel& m, const PixelRay
 // with it a march that classifies such samples may take finer runs there, and its samples after
 // the region may differ in phase (tests: within 65 dB).
 inline constexpr float THIN_ALPHA_BYTES = 32.0f;  // MappedRayCaster's default thin_alpha
-inline constexpr int THIN_LEVELS = 2;             // MappedRayCaster's default thin_levels
 
 // The coarsest level (0 … thin_levels) a sample allows whose 8 voxels' largest α byte is
 // max_alpha and their neighbourhoods' wide_alpha (≥ max_alpha; mapped_classify()).
