@@ -69,15 +69,31 @@ std::uint64_t image_bytes(std::int64_t width, std::int64_t height) {
         3);
 }
 
-std::uint64_t ray_cast_bytes(const volume::Dims& dims, int channels) {
+namespace {
+
+// The voxels of a grid of `dims` (saturating; a negative extent counts as 0).
+std::uint64_t voxel_count(const volume::Dims& dims) {
     std::uint64_t voxels = 1;
     for (const std::int64_t d : dims) {
         voxels =
             saturating_product(voxels, static_cast<std::uint64_t>(std::max<std::int64_t>(d, 0)));
     }
+    return voxels;
+}
+
+}  // namespace
+
+std::uint64_t ray_cast_bytes(const volume::Dims& dims, int channels) {
+    const std::uint64_t voxels = voxel_count(dims);
     // RGBA: 4 floats, and a fifth (α apart) when shaded; counted always (an upper bound).
     const std::uint64_t floats = channels == 4 ? 5 : 1;
     return saturating_sum(saturating_product(voxels, floats * sizeof(float)), voxels);
+}
+
+std::uint64_t mapped_ray_cast_bytes(const volume::Dims& dims, int channels) {
+    const std::uint64_t voxels = voxel_count(dims);
+    const std::uint64_t per_voxel = channels == 4 ? 24 : 12;
+    return saturating_sum(saturating_product(voxels, per_voxel), voxels);
 }
 
 std::uint64_t available_memory_bytes() {
@@ -120,7 +136,11 @@ std::uint64_t deform_need_bytes(const volume::Volume& source, std::uint64_t cell
         saturating_sum(saturating_product(saturating_product(cells, 5), SOFT_BODY_BYTES_PER_TET),
                        source.size_bytes());
     if (width > 0 && height > 0) {
-        bytes = saturating_sum(bytes, ray_cast_need_bytes(source, width, height));
+        const int channels = volume::channels(source.type());
+        const std::uint64_t caster = std::max(ray_cast_bytes(source.dims(), channels),
+                                              mapped_ray_cast_bytes(source.dims(), channels));
+        bytes = saturating_sum(saturating_sum(bytes, saturating_sum(source.size_bytes(), caster)),
+                               image_bytes(width, height));
     } else {
         bytes = saturating_sum(bytes, source.size_bytes());
     }

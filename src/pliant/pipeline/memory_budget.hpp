@@ -66,6 +66,13 @@ std::uint64_t image_bytes(std::int64_t width, std::int64_t height);
 // byte per voxel).
 std::uint64_t ray_cast_bytes(const volume::Dims& dims, int channels);
 
+// Bytes render::MappedRayCaster prepares for a source of `dims` with `channels` channels (1 or
+// 4), shaded or not: its float copy (4 bytes per channel; an rgba8 source: its 4 bytes), the
+// stored gradient (8 bytes; a shaded rgba8 source: the 16-byte packed records, with the 2 bytes
+// of their neighbourhood passes while its bytes are still held), and the occupancy bits (less
+// than a byte per voxel): at most 24 bytes per voxel (RGBA) or 12 (scalar), plus one.
+std::uint64_t mapped_ray_cast_bytes(const volume::Dims& dims, int channels);
+
 // Bytes of ray-casting `source` into one image of width × height pixels at a time: the volume
 // itself, ray_cast_bytes() and the image.
 std::uint64_t ray_cast_need_bytes(const volume::Volume& source, std::int64_t width,
@@ -79,8 +86,8 @@ std::uint64_t broad_phase_need_bytes(std::uint64_t triangles);
 
 // Bytes of `pliant deform` on a grid of `cells` cells of B³ voxels over `source` (5 tets per
 // cell; every cell counted, so an upper bound when cells are empty): the soft body, the
-// resampling target (a volume like the source) and, with width × height > 0, the ray caster and
-// one image.
+// resampling target (a volume like the source) and, with width × height > 0, the ray caster (the
+// larger of RayCaster's and MappedRayCaster's: either route) and one image.
 std::uint64_t deform_need_bytes(const volume::Volume& source, std::uint64_t cells,
                                 std::int64_t width, std::int64_t height);
 
