@@ -197,8 +197,8 @@ PLIANT_HOST_DEVICE inline Sample interpolate_rgba8(const MappedKernel& m, const 
     wide_alpha = std::numeric_limits<float>::infinity();
     if (stride == PACKED_VOXEL_BYTES) {
         wide_alpha = 0.0f;
-        for (int i = 0; i < 8; ++i) {
-            wide_alpha = std::max(wide_alpha, static_cast<float>(p[corner[i] + PACKED_WIDE_ALPHA]));
+        for (const std::int64_t c : corner) {
+            wide_alpha = std::max(wide_alpha, static_cast<float>(p[c + PACKED_WIDE_ALPHA]));
         }
     }
     float out[4];
