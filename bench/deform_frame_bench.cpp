@@ -25,7 +25,9 @@
 // cells' value ranges through the lookup table. --volume FILE replaces the phantom with an rgba8
 // volume file (a radiance field's cleaned reconstruction, `pliant demo`'s nerf/cleaned.nrrd) and
 // its grid of cells of 4 voxels. Beside the map route's render, the same map rendered with the
-// adaptive step's first level only (MappedRayCaster::set_thin_levels(1)): its time and samples.
+// adaptive step's first level only (MappedRayCaster::set_thin_levels(1)): its time and samples;
+// after the timed frames, the last one's map once more with every step sampled (thin_levels 0):
+// its samples, and both levels' PSNR against it.
 //
 //   bin/bench_deform_frame [--driver twist|wave|bubble|drag|all] [--frames N] [--size N]
 //                          [--threads N] [--pipe-frames N] [--no-shading] [--scalar]
@@ -304,6 +306,12 @@ int main(int argc, char** argv) {
         }
         const double db = psnr(exact_image, map_image);
         const double one_level_db = psnr(exact_image, one_level_image);
+        render::Image fixed_image;
+        mapped->set_thin_levels(0);
+        const std::int64_t fixed_samples = mapped->render(camera, fixed_image).samples;
+        mapped->set_thin_levels(options.thin_levels);
+        const double map_fixed_db = psnr(fixed_image, map_image);
+        const double one_level_fixed_db = psnr(fixed_image, one_level_image);
         // The same stages pipelined, on the frames after these. Map route: step + build in the
         // background, set_map + render on the caller. Exact route: step + a copy of the
         // positions in the background, resample + update + render on the caller (a resample
@@ -378,11 +386,14 @@ int main(int argc, char** argv) {
                 "%s{\"driver\": \"%s\", \"frames\": %d, \"inverted\": %lld, "
                 "\"exact_samples\": %lld, \"map_samples\": %lld, \"psnr_map_vs_exact_db\": "
                 "%.2f, \"one_level_samples\": %lld, \"psnr_one_level_vs_exact_db\": %.2f, "
+                "\"fixed_step_samples\": %lld, \"psnr_map_vs_fixed_step_db\": %.2f, "
+                "\"psnr_one_level_vs_fixed_step_db\": %.2f, "
                 "\"visible_cells\": %lld, \"cells\": %lld, \"stages\": {",
                 di == 0 ? "" : ", ", names[static_cast<std::size_t>(d)].c_str(), frames,
                 static_cast<long long>(body.stats().inverted_tets),
                 static_cast<long long>(exact_samples), static_cast<long long>(map_samples), db,
                 static_cast<long long>(one_level_samples), one_level_db,
+                static_cast<long long>(fixed_samples), map_fixed_db, one_level_fixed_db,
                 static_cast<long long>(mapped->num_visible_cells()),
                 static_cast<long long>(mapped->num_cells()));
             for (std::size_t s = 0; s < stages.size(); ++s) {
@@ -445,6 +456,10 @@ int main(int argc, char** argv) {
                 static_cast<long long>(one_level_samples),
                 static_cast<long long>(mapped->num_visible_cells()),
                 static_cast<long long>(mapped->num_cells()), db, one_level_db);
+            std::printf(
+                "  every step sampled (last frame): %lld samples; PSNR against it: map %.2f dB, "
+                "first thin level only %.2f dB\n",
+                static_cast<long long>(fixed_samples), map_fixed_db, one_level_fixed_db);
         }
     }
     if (json) {

@@ -185,20 +185,16 @@ TEST(DeformCommand, RendersThroughTheInverseMap) {
     const Volume map = io::read_volume(scratch / "map.nrrd");
     EXPECT_TRUE(std::equal(exact.bytes().begin(), exact.bytes().end(), map.bytes().begin(),
                            map.bytes().end()));
-    const CliResult bad =
-        run_cli("deform " + quoted(scratch / "rt.nrrd") + " --driver twist --resample nearest -o " +
-                    quoted(scratch / "bad.nrrd"),
-                scratch);
-    EXPECT_EQ(bad.exit_code, 2);
-    EXPECT_NE(bad.err.find("--resample"), std::string::npos) << bad.err;
-    EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd"));
-    const CliResult levels =
-        run_cli("deform " + quoted(scratch / "rt.nrrd") + " --driver twist --thin-levels 3 -o " +
-                    quoted(scratch / "bad.nrrd"),
-                scratch);
-    EXPECT_EQ(levels.exit_code, 2);
-    EXPECT_NE(levels.err.find("--thin-levels"), std::string::npos) << levels.err;
-    EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd"));
+    for (const auto& [option, value] :
+         {std::pair{"--resample", "nearest"}, std::pair{"--thin-levels", "3"}}) {
+        const CliResult bad =
+            run_cli("deform " + quoted(scratch / "rt.nrrd") + " --driver twist " + option + " " +
+                        value + " -o " + quoted(scratch / "bad.nrrd"),
+                    scratch);
+        EXPECT_EQ(bad.exit_code, 2) << option;
+        EXPECT_NE(bad.err.find(option), std::string::npos) << bad.err;
+        EXPECT_FALSE(std::filesystem::exists(scratch / "bad.nrrd")) << option;
+    }
 }
 
 TEST(DeformCommand, DeformsATetGenMesh) {

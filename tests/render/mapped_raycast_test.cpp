@@ -597,7 +597,7 @@ volume::Volume haze(std::int64_t n) {
 // fixed step: the image within 40 dB, fewer samples, on the haze above (most of its samples
 // thin; the second level, shaded, fewer again) and on the phantom, shaded and not, through a
 // twist; the AVX2 march is the scalar kernel's bits (discarded runs, jumps onto the coarsest
-// runs); skipping changes nothing with the first level and stays within 65 dB with the second.
+// runs); skipping changes nothing with the first level and stays at PSNR ≥ 65 dB with the second.
 // A coarse sample given the fine step's opacity (half the haze's) fails the PSNR bar (29 dB).
 TEST(MappedRayCast, AdaptiveStepStaysNearTheFixedStep) {
     const volume::Volume cloud = haze(48);

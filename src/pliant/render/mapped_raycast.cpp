@@ -845,7 +845,7 @@ RayCastStats MappedRayCaster::render(const Camera& camera, Image& image) const {
         const auto thin_bytes = static_cast<float>(m_thin_alpha * 255.0);
         // The second level needs the packed records' neighbourhood byte (a shaded source).
         m.thin_levels =
-            thin_bytes > 0.0f ? std::min(m_thin_levels, m_packed.empty() ? 1 : m_thin_levels) : 0;
+            thin_bytes > 0.0f ? (m_packed.empty() ? std::min(m_thin_levels, 1) : m_thin_levels) : 0;
         for (int l = 0; l < m.thin_levels; ++l) {
             m.thin_limit[l] = std::ldexp(thin_bytes, -l);
         }
