@@ -8,7 +8,8 @@
 //     not installed; --no-preview: none; --preview-size WxH, default 640x480);
 //   DIR/stats.json: the scene's sizes and, per frame, `frame`, `ms` (the simulation step),
 //     the step's stages (`step_ms`, `refit_ms`, `traverse_ms`, `narrow_ms`, `response_ms`),
-//     `contacts`, `ccd_hits`, `intersecting_pairs` (exact count on the frame as written); and
+//     `contacts`, `ccd_hits`, `intersecting_pairs` and `obstacle_intersections` (exact counts on
+//     the frame as written); and
 //     `mean_ms_per_frame` (schema in docs/formats.md). Written last, atomically.
 // Ctrl-C (SIGINT) stops the run after the frame in progress: frames, preview and stats.json so
 // far are complete, stderr says where, exit code 130. DIR/checkpoint.bin (every
@@ -85,10 +86,12 @@ void run_cloth(const ClothCommandOptions& options, const GlobalOptions& global) 
     } else {
         std::printf(
             "%d frames of %zu triangles, %.1f ms per frame (%d substeps), at most %lld "
-            "intersecting triangle pairs in a frame; frames in %s, stats in %s%s\n",
+            "intersecting triangle pairs and %lld obstacle intersections in a frame; frames in "
+            "%s, stats in %s%s\n",
             frames, stats["triangles"].get<std::size_t>(), stats["mean_ms_per_frame"].get<double>(),
             scene.substeps,
             static_cast<long long>(stats["max_intersecting_pairs"].get<std::int64_t>()),
+            static_cast<long long>(stats["max_obstacle_intersections"].get<std::int64_t>()),
             (out / "frames").string().c_str(), (out / "stats.json").string().c_str(),
             stats.contains("preview") ? (", preview " + stats["preview"].get<std::string>()).c_str()
                                       : "");

@@ -99,11 +99,18 @@ the attributes below can be changed before the scene is simulated.
     py::class_<pipeline::ClothFrameCheck>(m, "ClothFrameCheck")
         .def_readonly("intersecting_pairs", &pipeline::ClothFrameCheck::intersecting_pairs,
                       "Intersecting non-adjacent triangle pairs, decided exactly.")
+        .def_readonly("obstacle_intersections",
+                      &pipeline::ClothFrameCheck::obstacle_intersections,
+                      "Where the cloth passes into an obstacle, decided exactly: intersecting "
+                      "(cloth triangle, mesh obstacle triangle) pairs and cloth triangles "
+                      "reaching into an analytic obstacle.")
         .def_readonly("strain", &pipeline::ClothFrameCheck::strain)
         .def_readonly("ms", &pipeline::ClothFrameCheck::ms)
         .def("__repr__", [](const pipeline::ClothFrameCheck& c) {
-            return fmt::format("pliant.ClothFrameCheck(intersecting_pairs={}, strain_p99={:.4f})",
-                               c.intersecting_pairs, c.strain.p99);
+            return fmt::format(
+                "pliant.ClothFrameCheck(intersecting_pairs={}, obstacle_intersections={}, "
+                "strain_p99={:.4f})",
+                c.intersecting_pairs, c.obstacle_intersections, c.strain.p99);
         });
 
     using cloth::SelfCollisionStats;

@@ -38,6 +38,7 @@ def test_small_scene_steps_without_intersections(scene_file):
         assert stats.ms > 0.0
         assert sim.frame == frame
         assert sim.check().intersecting_pairs == 0
+        assert sim.check().obstacle_intersections == 0
     assert sim.time == pytest.approx(4 / 24)
     assert np.all(sim.positions[:, 2] < start[:, 2])  # it fell
     distance = np.linalg.norm(sim.positions, axis=1)  # from the sphere's centre

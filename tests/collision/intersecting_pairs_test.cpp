@@ -165,6 +165,93 @@ TEST(IntersectingPairs, EmptyAndSingleTriangle) {
         find_intersecting_pairs(positions, std::vector<geometry::Triangle>{{0, 1, 2}}).empty());
 }
 
+// Reference for two meshes: every (i, j), no BVH, no boxes.
+std::int64_t brute_force_between(std::span<const Vec3d> pa, std::span<const geometry::Triangle> ta,
+                                 std::span<const Vec3d> pb,
+                                 std::span<const geometry::Triangle> tb) {
+    std::int64_t count = 0;
+    for (const geometry::Triangle& a : ta) {
+        for (const geometry::Triangle& b : tb) {
+            const auto at = [](std::span<const Vec3d> p, std::int32_t v) {
+                return p[static_cast<std::size_t>(v)];
+            };
+            count += geometry::triangles_intersect(at(pa, a[0]), at(pa, a[1]), at(pa, a[2]),
+                                                   at(pb, b[0]), at(pb, b[1]), at(pb, b[2]))
+                         ? 1
+                         : 0;
+        }
+    }
+    return count;
+}
+
+TEST(IntersectingPairsBetween, RandomSoupsMatchBruteForceForAnyThreads) {
+    for (const std::uint32_t seed : {4u, 5u}) {
+        const geometry::TriangleMesh a = test::random_triangle_soup(300, 0.2f, seed);
+        const geometry::TriangleMesh b = test::random_triangle_soup(200, 0.2f, seed + 10);
+        const std::vector<Vec3d> pa = to_double(a.positions);
+        const std::vector<Vec3d> pb = to_double(b.positions);
+        const std::int64_t expected = brute_force_between(pa, a.triangles, pb, b.triangles);
+        EXPECT_GT(expected, 0) << "seed " << seed;
+        set_num_threads(1);
+        const std::int64_t one = count_intersecting_pairs(pa, a.triangles, pb, b.triangles);
+        set_num_threads(2);
+        const std::int64_t two = count_intersecting_pairs(pa, a.triangles, pb, b.triangles);
+        set_num_threads(0);
+        EXPECT_EQ(one, expected) << "seed " << seed;
+        EXPECT_EQ(two, expected) << "seed " << seed;
+        // Swapping the meshes counts the same pairs.
+        EXPECT_EQ(count_intersecting_pairs(pb, b.triangles, pa, a.triangles), expected);
+    }
+}
+
+TEST(IntersectingPairsBetween, EdgeThroughAThinPartBetweenVerticesOutside) {
+    // A "finger": a thin vertical triangle; a cloth quad whose four vertices are all outside it
+    // and whose diagonal edge crosses it.
+    const std::vector<Vec3d> finger = {{0, -0.001, -1}, {0, 0.001, -1}, {0, 0, 1}};
+    const std::vector<geometry::Triangle> finger_triangles = {{0, 1, 2}};
+    std::vector<Vec3d> cloth = {{-0.5, -0.5, 0}, {0.5, -0.5, 0}, {0.5, 0.5, 0}, {-0.5, 0.5, 0}};
+    const std::vector<geometry::Triangle> quad = {{0, 1, 2}, {0, 2, 3}};
+    EXPECT_EQ(count_intersecting_pairs(cloth, quad, finger, finger_triangles), 2);
+    // Lifted above the tip: none; touching the tip exactly: counted.
+    for (Vec3d& p : cloth) {
+        p.z = 1.0 + 0x1p-40;
+    }
+    EXPECT_EQ(count_intersecting_pairs(cloth, quad, finger, finger_triangles), 0);
+    for (Vec3d& p : cloth) {
+        p.z = 1.0;
+    }
+    EXPECT_EQ(count_intersecting_pairs(cloth, quad, finger, finger_triangles),
+              brute_force_between(cloth, quad, finger, finger_triangles));
+    EXPECT_GT(count_intersecting_pairs(cloth, quad, finger, finger_triangles), 0);
+    // Empty meshes.
+    EXPECT_EQ(count_intersecting_pairs(cloth, quad, finger, {}), 0);
+    EXPECT_EQ(count_intersecting_pairs({}, {}, finger, finger_triangles), 0);
+}
+
+TEST(IntersectingPairsBetween, RejectsBadInputNamingTheMesh) {
+    const std::vector<Vec3d> positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    const std::vector<geometry::Triangle> good = {{0, 1, 2}};
+    const std::vector<geometry::Triangle> bad = {{0, 1, 3}};
+    const auto message = [&](auto&& call) {
+        try {
+            call();
+        } catch (const InvalidInput& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(message([&] { count_intersecting_pairs(positions, good, positions, bad); })
+                  .find("count_intersecting_pairs: mesh b: triangles: triangle 0 corner 2 has "
+                        "vertex index 3"),
+              std::string::npos);
+    std::vector<Vec3d> nan = positions;
+    nan[1].x = NAN;
+    EXPECT_NE(message([&] {
+                  count_intersecting_pairs(nan, good, positions, good);
+              }).find("mesh a: positions[1] coordinate x is nan"),
+              std::string::npos);
+}
+
 void expect_invalid(const std::vector<Vec3d>& positions,
                     const std::vector<geometry::Triangle>& triangles, const std::string& needle) {
     try {

@@ -252,6 +252,8 @@ f 4 5 8
     }
     EXPECT_NEAR(mean_x / static_cast<double>(last.positions.size()), 0.2, 0.03);
     EXPECT_EQ(r.err.find("wound inward"), std::string::npos) << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(read_text(scratch / "out" / "stats.json"));
+    EXPECT_EQ(stats.at("max_obstacle_intersections"), 0);
 
     // The same table wound inward (every face reversed) holds cloth inside it, as a container:
     // the command says so.
@@ -289,6 +291,11 @@ TEST(ClothCommand, ClothGivenInsideAnObstacleIsReportedAndComesOut) {
                          "0.3 m in)"),
               std::string::npos)
         << r.err;
+    // Every triangle is behind the plane in the first frames, none at the last.
+    const nlohmann::json stats = nlohmann::json::parse(read_text(scratch / "out" / "stats.json"));
+    EXPECT_EQ(stats.at("frames").front().at("obstacle_intersections"), 128);
+    EXPECT_EQ(stats.at("frames").back().at("obstacle_intersections"), 0);
+    EXPECT_EQ(stats.at("max_obstacle_intersections"), 128);
     const geometry::TriangleMeshD last =
         io::read_mesh(scratch / "out" / "frames" / "frame_0004.obj");
     for (const Vec3d& p : last.positions) {
@@ -297,6 +304,43 @@ TEST(ClothCommand, ClothGivenInsideAnObstacleIsReportedAndComesOut) {
         EXPECT_LT(p.z, -0.005);
         EXPECT_GT(p.z, -0.005 - 0.137);
     }
+}
+
+// A thin blade (one triangle of a mesh obstacle) through a pinned sheet, between its vertices: no
+// vertex is inside or near it, and the frames count where it passes through the cloth.
+TEST(ClothCommand, AThinObstacleThroughTheClothIsCounted) {
+    ScratchDir scratch;
+    write(scratch / "blade.obj", R"(v 0.05 -0.1 -0.1
+v 0.05 0.1 -0.1
+v 0.05 0 0.1
+f 1 2 3
+)");
+    std::string pins;
+    for (int v = 0; v < 25; ++v) {
+        pins += (v > 0 ? ", " : "") + std::to_string(v);
+    }
+    const CliResult r = run_scene(scratch, "blade", R"({
+        "cloth": {"grid": {"size": [0.4, 0.4], "quads": [4, 4]}},
+        "pins": {"vertices": [)" + pins + R"(]},
+        "obstacles": [{"mesh": {"file": "blade.obj"}}],
+        "frames": 3, "substeps": 4
+    })");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(read_text(scratch / "blade" / "stats.json"));
+    // The blade's cross-section with the sheet (x = 0.05, |y| ≤ 0.05) lies in the triangles
+    // between x = 0 and 0.1; the reference counts them on the written frame.
+    const geometry::TriangleMeshD cloth =
+        io::read_mesh(scratch / "blade" / "frames" / "frame_0003.obj");
+    const geometry::TriangleMeshD blade = io::read_mesh(scratch / "blade.obj");
+    const std::int64_t expected = collision::count_intersecting_pairs(
+        cloth.positions, cloth.triangles, blade.positions, blade.triangles);
+    EXPECT_GE(expected, 2);
+    for (const nlohmann::json& frame : stats.at("frames")) {
+        EXPECT_EQ(frame.at("obstacle_intersections"), expected) << frame.at("frame");
+    }
+    EXPECT_EQ(stats.at("max_obstacle_intersections"), expected);
+    EXPECT_NE(r.out.find(fmt::format("and {} obstacle intersections", expected)), std::string::npos)
+        << r.out;
 }
 
 // A seam left unwelded in the file (two squares whose shared edge has its own vertices in each)

@@ -227,6 +227,7 @@ TEST(GarmentCommand, SkirtOnTheWalkingBodyStaysOutsideItAndNearItsLength) {
     std::int64_t contacts = 0;
     for (const nlohmann::json& frame : stats.at("frames")) {
         EXPECT_EQ(frame.at("intersecting_pairs"), 0) << frame.at("frame");
+        EXPECT_EQ(frame.at("obstacle_intersections"), 0) << frame.at("frame");
         contacts += frame.at("obstacle_contacts").get<std::int64_t>();
     }
     EXPECT_GT(contacts, 0);

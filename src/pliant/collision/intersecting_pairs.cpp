@@ -144,6 +144,40 @@ std::vector<std::array<std::int32_t, 2>> find_intersecting_pairs(
     return pairs;
 }
 
+std::int64_t count_intersecting_pairs(std::span<const Vec3d> positions_a,
+                                      std::span<const geometry::Triangle> triangles_a,
+                                      std::span<const Vec3d> positions_b,
+                                      std::span<const geometry::Triangle> triangles_b) {
+    validate(positions_a, triangles_a, "count_intersecting_pairs: mesh a");
+    validate(positions_b, triangles_b, "count_intersecting_pairs: mesh b");
+    if (triangles_a.empty() || triangles_b.empty()) {
+        return 0;
+    }
+    Candidates a;
+    Candidates b;
+    build_candidates(positions_a, triangles_a, a);
+    build_candidates(positions_b, triangles_b, b);
+    std::vector<std::int64_t> counts(static_cast<std::size_t>(bvh::num_overlap_chunks(a.tree)), 0);
+    bvh::for_each_overlap(
+        a.tree, b.tree, [&](std::int64_t chunk, std::uint32_t i, std::uint32_t j) {
+            if (!overlaps(a.exact_boxes[i], b.exact_boxes[j])) {
+                return;
+            }
+            const geometry::Triangle& ti = triangles_a[i];
+            const geometry::Triangle& tj = triangles_b[j];
+            if (geometry::triangles_intersect(at(positions_a, ti[0]), at(positions_a, ti[1]),
+                                              at(positions_a, ti[2]), at(positions_b, tj[0]),
+                                              at(positions_b, tj[1]), at(positions_b, tj[2]))) {
+                ++counts[static_cast<std::size_t>(chunk)];
+            }
+        });
+    std::int64_t total = 0;
+    for (const std::int64_t c : counts) {
+        total += c;
+    }
+    return total;
+}
+
 std::int64_t count_intersecting_pairs(std::span<const Vec3f> positions,
                                       std::span<const geometry::Triangle> triangles) {
     const std::vector<Vec3d> converted = to_double(positions);

@@ -1,7 +1,9 @@
 // Intersecting triangle pairs of a triangle mesh: an exact certificate that a frame has no
-// self-intersection.
+// self-intersection; and of two meshes: that cloth does not pass through an obstacle's surface.
 //
 //   const std::int64_t n = count_intersecting_pairs(positions, triangles);  // 0: no intersection
+//   const std::int64_t m = count_intersecting_pairs(cloth_positions, cloth_triangles,
+//                                                   body_positions, body_triangles);
 //
 // Counts the unordered pairs {i, j}, i ≠ j, of triangles that share no vertex index and whose
 // closed point sets intersect (touching at a point counts), decided exactly by
@@ -18,6 +20,11 @@
 // O(T) for boxes and the LBVH build, then the traversal and one exact test per candidate pair
 // (most end after 6 orient3d; exactly coplanar pairs, as in a flat sheet, take the predicates'
 // exact path). Measured in bench/ (docs/performance.md).
+//
+// Two meshes A and B: the pairs (i, j) of triangle i of A and triangle j of B whose closed point
+// sets intersect, by the same exact test; no pair is excluded (the meshes share no vertex). An
+// LBVH over each mesh and their pair traversal give the candidates; the count is the same for any
+// number of threads.
 //
 // positions: #V points (world units); triangles: #T index triples into positions.
 // Throws InvalidInput naming the offending element when an index is out of [0, #V), a triangle
@@ -42,6 +49,13 @@ std::int64_t count_intersecting_pairs(std::span<const Vec3d> positions,
                                       std::span<const geometry::Triangle> triangles);
 std::int64_t count_intersecting_pairs(std::span<const Vec3f> positions,
                                       std::span<const geometry::Triangle> triangles);
+
+// Number of intersecting pairs (triangle of A, triangle of B). InvalidInput as above, naming the
+// mesh ("a" or "b").
+std::int64_t count_intersecting_pairs(std::span<const Vec3d> positions_a,
+                                      std::span<const geometry::Triangle> triangles_a,
+                                      std::span<const Vec3d> positions_b,
+                                      std::span<const geometry::Triangle> triangles_b);
 
 // The same pairs as triangle indices {i, j} with i < j, sorted lexicographically.
 std::vector<std::array<std::int32_t, 2>> find_intersecting_pairs(

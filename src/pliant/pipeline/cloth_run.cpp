@@ -220,6 +220,16 @@ std::uint64_t cloth_fingerprint(const cloth::ClothScene& scene, const ClothSimul
     return io::run_fingerprint(w.bytes());
 }
 
+// The most obstacle intersections in a frame of the records (records of a checkpoint written
+// before they were counted have none).
+std::int64_t max_obstacle_intersections(const nlohmann::ordered_json& per_frame) {
+    std::int64_t most = 0;
+    for (const nlohmann::ordered_json& record : per_frame) {
+        most = std::max(most, record.value("obstacle_intersections", std::int64_t{0}));
+    }
+    return most;
+}
+
 // The run's own part of a checkpoint, before the simulation's state.
 struct ClothRunTotals {
     std::int32_t frame = 0;  // the last frame written
@@ -451,6 +461,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
                                          {"obstacle_contacts", step.obstacle_contacts},
                                          {"solver_sweeps", step.solver_sweeps},
                                          {"intersecting_pairs", intersecting},
+                                         {"obstacle_intersections", check.obstacle_intersections},
                                          {"strain_p90", strain.p90},
                                          {"strain_p99", strain.p99},
                                          {"strain_max", strain.max},
@@ -566,6 +577,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
         {"initial_intersecting_pairs", initial_intersections},
         {"untangle", untangle_report(start)},
         {"max_intersecting_pairs", totals.worst_intersections},
+        {"max_obstacle_intersections", max_obstacle_intersections(per_frame)},
         {"max_strain_p99", totals.worst_strain_p99},
         {"max_strain", totals.worst_strain},
         {"frames", per_frame},

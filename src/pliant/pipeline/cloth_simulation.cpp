@@ -4,6 +4,7 @@
 
 #include <utility>
 
+#include "pliant/cloth/obstacle_intersections.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/aabb.hpp"
 #include "pliant/core/error.hpp"
@@ -50,6 +51,7 @@ ClothFrameCheck ClothSimulation::check() const {
     ClothFrameCheck check;
     check.intersecting_pairs =
         collision::count_intersecting_pairs(m_solver->positions(), m_solver->triangles());
+    check.obstacle_intersections = cloth::count_obstacle_intersections(m_solver->model());
     check.strain = m_edge_strain->measure(m_solver->positions());
     check.ms = watch.elapsed_ms();
     return check;

@@ -36,11 +36,16 @@ struct ClothSimulationOptions {
     std::uint64_t max_memory_bytes = 0;
 };
 
-// The independent checks of a frame: they read only the mesh, never the solver's state.
+// The independent checks of a frame: they read only the mesh and the obstacles' placements,
+// never the solver's state.
 struct ClothFrameCheck {
     std::int64_t intersecting_pairs = 0;  // exact triangle-triangle tests, non-adjacent pairs
-    cloth::StrainStats strain;            // edge lengths against the start (the rest shape)
-    double ms = 0.0;                      // wall time of both checks
+    // Where the cloth passes into an obstacle (cloth/obstacle_intersections.hpp): (cloth
+    // triangle, mesh obstacle triangle) pairs that intersect, and cloth triangles reaching into
+    // an analytic obstacle, with the obstacles where they are now.
+    std::int64_t obstacle_intersections = 0;
+    cloth::StrainStats strain;  // edge lengths against the start (the rest shape)
+    double ms = 0.0;            // wall time of both checks
 };
 
 class ClothSimulation {
@@ -59,7 +64,8 @@ public:
     // such as self-collision's pair limit); the state is then that of the failed frame.
     cloth::ClothStepStats step();
 
-    // Counts intersecting triangle pairs exactly and measures edge strain, now.
+    // Counts intersecting triangle pairs and the cloth's intersections with the obstacles
+    // exactly, and measures edge strain, now.
     ClothFrameCheck check() const;
 
     // The state that changes as the simulation runs (the frame count and the solver's
