@@ -17,7 +17,9 @@
 
 #include "pliant/cloth/mesh_animation.hpp"
 #include "pliant/cloth/mesh_obstacle.hpp"
+#include "pliant/cloth/obstacle_intersections.hpp"
 #include "pliant/cloth/solver.hpp"
+#include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/core/bytes.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
@@ -251,6 +253,106 @@ TEST(MeshContact, ABladeBetweenTheVerticesIsCaughtByTheEdges) {
     const std::vector<Vec3d> four = run(4);
     ASSERT_EQ(one.size(), four.size());
     EXPECT_EQ(0, std::memcmp(one.data(), four.data(), one.size() * sizeof(Vec3d)));
+}
+
+// A closed spike (a pyramid on a 4 mm square base, 20 cm high) with its apex at `apex`.
+TriangleMeshD spike(const Vec3d& apex) {
+    constexpr double W = 0.002;
+    TriangleMeshD mesh;
+    mesh.positions = {apex + Vec3d{-W, -W, -0.2}, apex + Vec3d{W, -W, -0.2},
+                      apex + Vec3d{W, W, -0.2}, apex + Vec3d{-W, W, -0.2}, apex};
+    mesh.triangles = {{0, 2, 1}, {0, 3, 2}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+    return mesh;
+}
+
+// The centroid of the sheet's triangle nearest (0.025, 0.025): 1.4 cm from its edges.
+Vec3d centroid_near_quad_centre(const TriangleMeshD& sheet) {
+    Vec3d best{1e9, 1e9, 1e9};
+    for (const geometry::Triangle& t : sheet.triangles) {
+        const Vec3d c = (sheet.positions[static_cast<std::size_t>(t[0])] +
+                         sheet.positions[static_cast<std::size_t>(t[1])] +
+                         sheet.positions[static_cast<std::size_t>(t[2])]) *
+                        (1.0 / 3.0);
+        if (norm(c - Vec3d{0.025, 0.025, c.z}) < norm(best - Vec3d{0.025, 0.025, best.z})) {
+            best = c;
+        }
+    }
+    return best;
+}
+
+TEST(MeshObstacle, SweepTriangleFindsASurfaceVertexEnteringIt) {
+    const Vec3d a{0.0, 0.0, 0.0};
+    const Vec3d b{0.06, 0.0, 0.0};
+    const Vec3d c{0.0, 0.06, 0.0};
+    const Vec3d centre{0.02, 0.02, 0.0};
+    MeshObstacle rising(spike(centre + Vec3d{0, 0, -0.05}));
+    TriangleMeshD up = rising.mesh();
+    for (Vec3d& p : up.positions) {
+        p.z += 0.1;  // the apex from 5 cm below the triangle to 5 cm above it
+    }
+    rising.move_to(up.positions);
+    const auto hit = rising.sweep_triangle(a, b, c, a, b, c);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->vertex, 4);
+    EXPECT_NEAR(hit->toi, 0.5, 1e-5);
+    EXPECT_NEAR(hit->barycentric.y, 1.0 / 3.0, 1e-6);
+    EXPECT_NEAR(hit->barycentric.z, 1.0 / 3.0, 1e-6);
+    // The same meeting seen from a triangle that falls onto the apex while it rises less.
+    const Vec3d down{0.0, 0.0, -0.2};
+    EXPECT_TRUE(rising.sweep_triangle(a - down, b - down, c - down, a + down, b + down, c + down));
+    // Not: a triangle that moves up faster than the apex (leaving it), one beside its path, one
+    // under the spike's whole path.
+    const Vec3d up_fast{0.0, 0.0, 0.3};
+    EXPECT_FALSE(rising.sweep_triangle(a, b, c, a + up_fast, b + up_fast, c + up_fast));
+    const Vec3d aside{0.3, 0.0, 0.0};
+    EXPECT_FALSE(
+        rising.sweep_triangle(a + aside, b + aside, c + aside, a + aside, b + aside, c + aside));
+    const Vec3d below{0.0, 0.0, -0.3};
+    EXPECT_FALSE(
+        rising.sweep_triangle(a + below, b + below, c + below, a + below, b + below, c + below));
+}
+
+// A spike rising into a sheet inside one of its triangles, 1.4 cm from its edges and farther
+// from its vertices: neither the vertices' nor the edges' contact sees it; the face pass lifts
+// the triangle onto the tip.
+TEST(MeshContact, ASpikeInsideAClothTriangleIsCaughtByTheFaces) {
+    const TriangleMeshD sheet = test::flat_sheet(4, 0.2, 0.0);
+    const Vec3d centre = centroid_near_quad_centre(sheet);
+    const TriangleMeshD low = spike(centre + Vec3d{0, 0, -0.05});  // tip 5 cm below the sheet
+    const auto rising = animate(low, 2, 100.0, false, [](Vec3d p, int k) {
+        return p + Vec3d{0, 0, 0.15 * k};  // tip 10 cm above the sheet at 0.01 s
+    });
+    TriangleMeshD high = low;
+    rising->positions_at(0.01, high.positions);
+    // The sheet left where it is would have the spike through it.
+    EXPECT_GT(collision::count_intersecting_pairs(sheet.positions, sheet.triangles, high.positions,
+                                                  high.triangles),
+              0);
+    const auto run = [&](int threads) {
+        set_num_threads(threads);
+        ClothSolver solver(sheet, material());
+        solver.set_gravity({0.0, 0.0, 0.0});
+        solver.add_animated_mesh_obstacle(MeshObstacle(low), rising);
+        const ClothStepStats stats = solver.step(0.01, 10);
+        set_num_threads(0);
+        EXPECT_EQ(stats.obstacle_swept_contacts, 0);
+        EXPECT_EQ(stats.obstacle_edge_contacts, 0);
+        EXPECT_GT(stats.obstacle_face_contacts, 0);
+        EXPECT_EQ(count_obstacle_intersections(solver.model()), 0);
+        EXPECT_EQ(collision::count_intersecting_pairs(solver.positions(), solver.triangles(),
+                                                      high.positions, high.triangles),
+                  0);
+        double top = -1.0;
+        for (const Vec3d& p : solver.positions()) {
+            top = std::max(top, p.z);
+        }
+        EXPECT_GT(top, 0.05);  // carried up on the tip
+        return std::vector<Vec3d>(solver.positions().begin(), solver.positions().end());
+    };
+    const std::vector<Vec3d> one = run(1);
+    const std::vector<Vec3d> two = run(2);
+    ASSERT_EQ(one.size(), two.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(Vec3d)));
 }
 
 TEST(MeshContact, FrictionDragsTheClothWithTheSurfacesOwnMotion) {

@@ -84,11 +84,10 @@ TEST(ObstacleIntersections, BoxesMatchClipping) {
         ASSERT_EQ(triangle_reaches_into(box, t[0], t[1], t[2]), expected) << "triangle " << i;
         reaching += expected ? 1 : 0;
         const auto inside = [&](const Vec3d& p) {
-            return p.x >= box.min.x && p.x <= box.max.x && p.y >= box.min.y &&
-                   p.y <= box.max.y && p.z >= box.min.z && p.z <= box.max.z;
+            return p.x >= box.min.x && p.x <= box.max.x && p.y >= box.min.y && p.y <= box.max.y &&
+                   p.z >= box.min.z && p.z <= box.max.z;
         };
-        corners_outside +=
-            expected && !inside(t[0]) && !inside(t[1]) && !inside(t[2]) ? 1 : 0;
+        corners_outside += expected && !inside(t[0]) && !inside(t[1]) && !inside(t[2]) ? 1 : 0;
     }
     // Both answers occur, and many triangles cut into the box with every corner outside it.
     EXPECT_GT(reaching, 2000);
@@ -104,8 +103,7 @@ TEST(ObstacleIntersections, SpheresAndPlanesMatchSampling) {
     for (int i = 0; i < 4000; ++i) {
         const std::array<Vec3d, 3> t = random_triangle(random);
         // The grid's points are within spacing · longest edge of every point of the triangle.
-        const double longest =
-            std::max({norm(t[1] - t[0]), norm(t[2] - t[1]), norm(t[0] - t[2])});
+        const double longest = std::max({norm(t[1] - t[0]), norm(t[2] - t[1]), norm(t[0] - t[2])});
         const int n = 64;
         const double d = sampled_distance(sphere.center, t, n);
         const bool reaches = triangle_reaches_into(sphere, t[0], t[1], t[2]);
@@ -150,13 +148,13 @@ TEST(ObstacleIntersections, CountsMeshObstaclesWherePlacedAndAnalyticOnes) {
     std::int64_t expected = 0;
     for (const geometry::Triangle& c : model.triangles()) {
         for (const geometry::Triangle& b : box.triangles) {
-            expected += geometry::triangles_intersect(
-                            cloth_at(c[0]), cloth_at(c[1]), cloth_at(c[2]),
-                            placed[static_cast<std::size_t>(b[0])],
-                            placed[static_cast<std::size_t>(b[1])],
-                            placed[static_cast<std::size_t>(b[2])])
-                            ? 1
-                            : 0;
+            expected +=
+                geometry::triangles_intersect(cloth_at(c[0]), cloth_at(c[1]), cloth_at(c[2]),
+                                              placed[static_cast<std::size_t>(b[0])],
+                                              placed[static_cast<std::size_t>(b[1])],
+                                              placed[static_cast<std::size_t>(b[2])])
+                    ? 1
+                    : 0;
         }
     }
     EXPECT_GT(expected, 10);
@@ -169,9 +167,8 @@ TEST(ObstacleIntersections, CountsMeshObstaclesWherePlacedAndAnalyticOnes) {
     model.add_obstacle(PlaneObstacle{{0.0, 0.0, -0.5}, {0.0, 0.0, 1.0}});
     std::int64_t in_sphere = 0;
     for (const geometry::Triangle& c : model.triangles()) {
-        in_sphere += triangle_reaches_into(sphere, cloth_at(c[0]), cloth_at(c[1]), cloth_at(c[2]))
-                         ? 1
-                         : 0;
+        in_sphere +=
+            triangle_reaches_into(sphere, cloth_at(c[0]), cloth_at(c[1]), cloth_at(c[2])) ? 1 : 0;
     }
     // The cap's disc has radius √(0.3² − 0.25²) ≈ 0.166 m: about 0.087 m² of the sheet's 1 m²
     // (1,800 triangles).

@@ -261,6 +261,44 @@ TEST(GarmentCommand, SkirtOnTheWalkingBodyStaysOutsideItAndNearItsLength) {
     }
 }
 
+// The skirt with fewer substeps or a thinner fabric than the scene's: where, before the
+// self-contacts' pushes were kept out of the body and the body's vertices swept against the
+// cloth's triangles (mesh_contact.hpp), a skirt edge crossed the swinging arm (10 substeps, frame
+// 38: 12 intersecting pairs) and a tip of the body entered a skirt triangle (30 substeps, 3 mm,
+// frame 19: 6 pairs). Every frame's exact count (stats.json) is checked.
+TEST(GarmentCommand, SkirtStaysOutOfTheBodyAtOtherSubstepsAndThicknesses) {
+    ScratchDir scratch;
+    const std::filesystem::path dir =
+        std::filesystem::path(PLIANT_SOURCE_DIR) / "scenes" / "garment";
+    nlohmann::json scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+    scene["cloth"]["mesh"] = (dir / "skirt.obj").string();
+    scene["obstacles"][0]["mesh"]["frames"] = (dir / "body" / "frame_%04d.obj").string();
+    struct Variant {
+        int substeps;
+        double thickness;
+        int frames;
+    };
+    for (const Variant& v : {Variant{10, 0.005, 40}, Variant{30, 0.003, 20}}) {
+        scene["substeps"] = v.substeps;
+        scene["material"]["thickness"] = v.thickness;
+        const std::string name = "skirt_" + std::to_string(v.substeps);
+        write(scratch / (name + ".json"), scene.dump());
+        const CliResult r =
+            run_cli("cloth " + quoted(scratch / (name + ".json")) + " --no-preview --frames " +
+                        std::to_string(v.frames) + " --out " + quoted(scratch / name),
+                    scratch);
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        const nlohmann::json stats =
+            nlohmann::json::parse(read_text(scratch / name / "stats.json"));
+        EXPECT_EQ(stats.at("max_intersecting_pairs"), 0) << name;
+        EXPECT_EQ(stats.at("max_obstacle_intersections"), 0) << name;
+        for (const nlohmann::json& frame : stats.at("frames")) {
+            EXPECT_EQ(frame.at("obstacle_intersections"), 0)
+                << name << " frame " << frame.at("frame");
+        }
+    }
+}
+
 // The built-in skirt (scenes/garment): bitwise the same frames and point cache for 1 and 2
 // threads, and after a resume.
 TEST(GarmentCommand, SkirtIsDeterministicAndResumes) {

@@ -94,21 +94,62 @@ MeshContact resolve_mesh_contact(const MovingMeshObstacle& obstacle, Vec3d& x, c
     return contact;
 }
 
+namespace {
+
+constexpr std::int64_t FEATURE_GRAIN = 256;
+
+// Step 2 of the edge and face passes: each feature's corrections (of its N corners, in
+// scratch.corrections) averaged per free vertex, summed in feature order; returns the features
+// with a correction.
+template <std::size_t N>
+std::int64_t apply_averaged(std::span<Vec3d> positions, std::span<const double> inverse_masses,
+                            std::span<const std::array<std::int32_t, N>> features,
+                            MeshFeatureContactScratch& scratch) {
+    scratch.sums.assign(positions.size(), Vec3d{});
+    scratch.counts.assign(positions.size(), 0);
+    std::int64_t corrected = 0;
+    for (std::size_t k = 0; k < features.size(); ++k) {
+        if (scratch.has_correction[k] == 0) {
+            continue;
+        }
+        ++corrected;
+        for (std::size_t corner = 0; corner < N; ++corner) {
+            const auto v = static_cast<std::size_t>(features[k][corner]);
+            if (inverse_masses[v] > 0.0) {
+                scratch.sums[v] += scratch.corrections[k][corner];
+                ++scratch.counts[v];
+            }
+        }
+    }
+    if (corrected == 0) {
+        return 0;
+    }
+    parallel_for(
+        static_cast<std::int64_t>(positions.size()),
+        [&](std::int64_t i) {
+            const auto v = static_cast<std::size_t>(i);
+            if (scratch.counts[v] > 0) {
+                positions[v] += scratch.sums[v] * (1.0 / scratch.counts[v]);
+            }
+        },
+        FEATURE_GRAIN);
+    return corrected;
+}
+
+}  // namespace
+
 std::int64_t resolve_mesh_edge_contacts(const MovingMeshObstacle& obstacle,
                                         std::span<Vec3d> positions, std::span<const Vec3d> start,
                                         std::span<const Vec3d> before_contact,
                                         std::span<const double> inverse_masses,
                                         std::span<const geometry::Edge> edges, double thickness,
-                                        double max_push, MeshEdgeContactScratch& scratch) {
-    constexpr std::int64_t EDGE_GRAIN = 256;
+                                        double max_push, MeshFeatureContactScratch& scratch) {
     const MeshObstacle& mesh = *obstacle.mesh;
     const Pose& pose = obstacle.state.pose;
     const Pose& previous_pose = obstacle.state.previous_pose;
     const std::span<const Vec3d> now = mesh.mesh().positions;
     scratch.corrections.resize(edges.size());
     scratch.has_correction.assign(edges.size(), 0);
-    scratch.sums.assign(positions.size(), Vec3d{});
-    scratch.counts.assign(positions.size(), 0);
 
     // Step 1: per cloth edge, its correction.
     parallel_for(
@@ -161,39 +202,95 @@ std::int64_t resolve_mesh_edge_contacts(const MovingMeshObstacle& obstacle,
             const double lambda = std::min(-c, allowed) / denominator;
             const Vec3d world_n = pose.rotation.apply(n);
             scratch.corrections[k] = {world_n * (wa * (1.0 - s) * lambda),
-                                      world_n * (wb * s * lambda)};
+                                      world_n * (wb * s * lambda), Vec3d{}};
             scratch.has_correction[k] = 1;
         },
-        EDGE_GRAIN);
+        FEATURE_GRAIN);
 
     // Step 2: averaged per vertex, summed in edge order.
-    std::int64_t corrected = 0;
-    for (std::size_t k = 0; k < edges.size(); ++k) {
-        if (scratch.has_correction[k] == 0) {
-            continue;
-        }
-        ++corrected;
-        for (std::size_t end = 0; end < 2; ++end) {
-            const auto v = static_cast<std::size_t>(edges[k][end]);
-            if (inverse_masses[v] > 0.0) {
-                scratch.sums[v] += scratch.corrections[k][end];
-                ++scratch.counts[v];
-            }
-        }
-    }
-    if (corrected == 0) {
-        return 0;
-    }
+    return apply_averaged<2>(positions, inverse_masses, edges, scratch);
+}
+
+std::int64_t resolve_mesh_face_contacts(const MovingMeshObstacle& obstacle,
+                                        std::span<Vec3d> positions, std::span<const Vec3d> start,
+                                        std::span<const Vec3d> before_contact,
+                                        std::span<const double> inverse_masses,
+                                        std::span<const geometry::Triangle> triangles,
+                                        double thickness, double max_push,
+                                        MeshFeatureContactScratch& scratch) {
+    const MeshObstacle& mesh = *obstacle.mesh;
+    const Pose& pose = obstacle.state.pose;
+    const Pose& previous_pose = obstacle.state.previous_pose;
+    const std::span<const Vec3d> now = mesh.mesh().positions;
+    scratch.corrections.resize(triangles.size());
+    scratch.has_correction.assign(triangles.size(), 0);
+
+    // Step 1: per cloth triangle, its correction.
     parallel_for(
-        static_cast<std::int64_t>(positions.size()),
+        static_cast<std::int64_t>(triangles.size()),
         [&](std::int64_t i) {
-            const auto v = static_cast<std::size_t>(i);
-            if (scratch.counts[v] > 0) {
-                positions[v] += scratch.sums[v] * (1.0 / scratch.counts[v]);
+            const auto k = static_cast<std::size_t>(i);
+            std::array<std::size_t, 3> v{};
+            std::array<double, 3> w{};
+            bool free = false;
+            for (std::size_t j = 0; j < 3; ++j) {
+                v[j] = static_cast<std::size_t>(triangles[k][j]);
+                w[j] = inverse_masses[v[j]];
+                free = free || w[j] > 0.0;
             }
+            if (!free) {
+                return;
+            }
+            std::array<Vec3d, 3> x{};
+            std::array<Vec3d, 3> x0{};
+            for (std::size_t j = 0; j < 3; ++j) {
+                x[j] = pose.apply_inverse(positions[v[j]]);
+                x0[j] = previous_pose.apply_inverse(start[v[j]]);
+            }
+            const std::optional<MeshObstacle::VertexHit> hit =
+                mesh.sweep_triangle(x0[0], x0[1], x0[2], x[0], x[1], x[2]);
+            if (!hit) {
+                return;
+            }
+            const auto vertex = static_cast<std::size_t>(hit->vertex);
+            const Vec3d n_sum = mesh.vertex_normals()[vertex];
+            const double n_length = norm(n_sum);
+            if (!(n_length > 0.0)) {
+                return;
+            }
+            const Vec3d n = n_sum * (1.0 / n_length);
+            const std::array<double, 3> b = {hit->barycentric.x, hit->barycentric.y,
+                                             hit->barycentric.z};
+            const auto point = [&b](const auto& corner) {
+                return corner(0) * b[0] + corner(1) * b[1] + corner(2) * b[2];
+            };
+            const double c =
+                dot(point([&](std::size_t j) { return x[j]; }) - now[vertex], n) - thickness;
+            const double denominator = w[0] * b[0] * b[0] + w[1] * b[1] * b[1] + w[2] * b[2] * b[2];
+            if (!(c < 0.0) || !(denominator > 0.0)) {
+                return;
+            }
+            // As for edges: the point's whole correction in this substep at most its own motion,
+            // the thickness and max_push.
+            const Vec3d free_move = point([&](std::size_t j) { return before_contact[v[j]]; }) -
+                                    point([&](std::size_t j) { return start[v[j]]; });
+            const Vec3d pushed = point([&](std::size_t j) { return positions[v[j]]; }) -
+                                 point([&](std::size_t j) { return before_contact[v[j]]; });
+            const double allowed = norm(free_move) + thickness + max_push - norm(pushed);
+            if (!(allowed > 0.0)) {
+                return;
+            }
+            const double lambda = std::min(-c, allowed) / denominator;
+            const Vec3d world_n = pose.rotation.apply(n);
+            for (std::size_t j = 0; j < 3; ++j) {
+                scratch.corrections[k][j] = world_n * (w[j] * b[j] * lambda);
+            }
+            scratch.has_correction[k] = 1;
         },
-        EDGE_GRAIN);
-    return corrected;
+        FEATURE_GRAIN);
+
+    // Step 2: averaged per vertex, summed in triangle order.
+    return apply_averaged<3>(positions, inverse_masses, triangles, scratch);
 }
 
 }  // namespace pliant::cloth

@@ -39,6 +39,16 @@
 // pass's and the edge pass's, from `before_contact`, the positions before the vertex pass) is at
 // most its own motion from the start to before_contact + thickness + max_push.
 //
+// Faces (resolve_mesh_face_contacts): a tip of the surface (a fingertip, the pole of a capsule)
+// can enter a cloth triangle between its vertices and edges, where neither pass looks. After the
+// edge pass, every cloth triangle moving as above is swept against the surface's vertices
+// (MeshObstacle::sweep_triangle: vertex-face CCD, entering meetings only). For a meeting at the
+// triangle's barycentric weights w, with n the surface vertex's unit pseudo-normal at the
+// substep's end (angle-weighted, MeshObstacle::vertex_normals) and o the vertex there,
+//   C = (Σ_i w_i x_i - o) · n - thickness ≥ 0
+// is projected as for edges: x_i += w_i inv_i λ n, λ = -C / Σ_i w_i² inv_i, bounded and averaged
+// per vertex in triangle order the same way.
+//
 // Units: metres, seconds. Thread safe for distinct vertices (const obstacle).
 #pragma once
 
@@ -68,10 +78,10 @@ MeshContact resolve_mesh_contact(const MovingMeshObstacle& obstacle, Vec3d& x, c
                                  double thickness, double h, double max_settle, double max_push,
                                  double extra_depth);
 
-// Buffers resolve_mesh_edge_contacts reuses from substep to substep.
-struct MeshEdgeContactScratch {
-    std::vector<std::array<Vec3d, 2>> corrections;  // #E, world frame (m)
-    std::vector<std::uint8_t> has_correction;       // #E
+// Buffers the edge and face passes reuse from substep to substep.
+struct MeshFeatureContactScratch {
+    std::vector<std::array<Vec3d, 3>> corrections;  // per cloth edge or triangle, world frame (m)
+    std::vector<std::uint8_t> has_correction;       // per cloth edge or triangle
     std::vector<Vec3d> sums;                        // #V
     std::vector<std::int32_t> counts;               // #V
 };
@@ -87,6 +97,17 @@ std::int64_t resolve_mesh_edge_contacts(const MovingMeshObstacle& obstacle,
                                         std::span<const Vec3d> before_contact,
                                         std::span<const double> inverse_masses,
                                         std::span<const geometry::Edge> edges, double thickness,
-                                        double max_push, MeshEdgeContactScratch& scratch);
+                                        double max_push, MeshFeatureContactScratch& scratch);
+
+// The face pass of the header: cloth `triangles` (#T vertex triples into positions) moving as in
+// the edge pass, against the surface's vertices (MeshObstacle::sweep_triangle); the same
+// arguments and result (the cloth triangles corrected).
+std::int64_t resolve_mesh_face_contacts(const MovingMeshObstacle& obstacle,
+                                        std::span<Vec3d> positions, std::span<const Vec3d> start,
+                                        std::span<const Vec3d> before_contact,
+                                        std::span<const double> inverse_masses,
+                                        std::span<const geometry::Triangle> triangles,
+                                        double thickness, double max_push,
+                                        MeshFeatureContactScratch& scratch);
 
 }  // namespace pliant::cloth

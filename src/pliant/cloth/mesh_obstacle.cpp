@@ -13,6 +13,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/geometry/topology.hpp"
+#include "pliant/geometry/triangle_intersection.hpp"
 #include "pliant/geometry/validate.hpp"
 
 namespace pliant::cloth {
@@ -72,6 +73,19 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     update_geometry();
     m_tree.build(m_boxes);
     m_leaf_corners.resize(m_mesh.triangles.size());
+    // Each vertex belongs to the leaf of its first triangle (sweep_triangle tests it once).
+    const std::span<const std::uint32_t> primitives = m_tree.primitives();
+    m_leaf_vertex_offsets.assign(primitives.size() + 1, 0);
+    for (std::size_t leaf = 0; leaf < primitives.size(); ++leaf) {
+        const auto t = static_cast<std::int32_t>(primitives[leaf]);
+        for (const std::int32_t v : m_mesh.triangles[index(t)]) {
+            if (m_vertex_triangles[index(m_vertex_triangle_offsets[index(v)])] == t) {
+                m_leaf_vertices.push_back(v);
+            }
+        }
+        m_leaf_vertex_offsets[leaf + 1] = static_cast<std::int32_t>(m_leaf_vertices.size());
+    }
+    m_leaf_vertex_paths.resize(m_leaf_vertices.size());
     gather_leaf_corners();
 }
 
@@ -145,6 +159,12 @@ void MeshObstacle::move_to(std::span<const Vec3d> positions) {
 }
 
 void MeshObstacle::gather_leaf_corners() {
+    const std::span<const Vec3d> start = previous_positions();
+    parallel_for(static_cast<std::int64_t>(m_leaf_vertices.size()), [&](std::int64_t k) {
+        const auto i = static_cast<std::size_t>(k);
+        const std::size_t v = index(m_leaf_vertices[i]);
+        m_leaf_vertex_paths[i] = {start[v], m_mesh.positions[v]};
+    });
     const std::span<const std::uint32_t> primitives = m_tree.primitives();
     parallel_for(
         static_cast<std::int64_t>(primitives.size()),
@@ -295,6 +315,29 @@ std::optional<MeshObstacle::SweptHit> MeshObstacle::sweep(const Vec3d& x_t0,
     return best;
 }
 
+bool MeshObstacle::meets_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+    if (!is_finite(a) || !is_finite(b) || !is_finite(c)) {
+        return false;
+    }
+    AABBd box = AABBd::of_point(a);
+    box.extend(b);
+    box.extend(c);
+    const std::span<const Vec3d> now = m_mesh.positions;
+    const std::uint32_t* primitives = m_tree.primitives().data();
+    bool meets = false;
+    bvh::query_wide(m_tree.nodes().data(), outward_float(box), -1,
+                    [&](std::int32_t leaf, const AABB&) {
+                        if (meets) {
+                            return;
+                        }
+                        const geometry::Triangle& tri =
+                            m_mesh.triangles[index(static_cast<std::int32_t>(primitives[leaf]))];
+                        meets = geometry::triangles_intersect(
+                            a, b, c, now[index(tri[0])], now[index(tri[1])], now[index(tri[2])]);
+                    });
+    return meets;
+}
+
 std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0, const Vec3d& q_t0,
                                                               const Vec3d& p_t1,
                                                               const Vec3d& q_t1) const {
@@ -369,6 +412,76 @@ std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0,
                     continue;
                 }
                 best = EdgeHit{e, r.toi, at.s, at.t};
+            }
+        });
+    return best;
+}
+
+std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
+    const Vec3d& a_t0, const Vec3d& b_t0, const Vec3d& c_t0, const Vec3d& a_t1, const Vec3d& b_t1,
+    const Vec3d& c_t1) const {
+    AABBd swept;
+    for (const Vec3d& x : {a_t0, b_t0, c_t0, a_t1, b_t1, c_t1}) {
+        if (!is_finite(x)) {
+            return std::nullopt;
+        }
+        swept.extend(x);
+    }
+    const std::span<const Vec3d> start = previous_positions();
+    const std::span<const Vec3d> end = m_mesh.positions;
+    collision::CcdOptions options;
+    options.max_iterations = SWEEP_MAX_ITERATIONS;
+    std::optional<VertexHit> best;
+    bvh::query_wide(
+        m_tree.nodes().data(), outward_float(swept), -1, [&](std::int32_t leaf, const AABB&) {
+            // The vertices whose first triangle is this leaf's: each vertex tested once.
+            for (std::int32_t owned = m_leaf_vertex_offsets[index(leaf)];
+                 owned < m_leaf_vertex_offsets[index(leaf) + 1]; ++owned) {
+                const std::int32_t v = m_leaf_vertices[index(owned)];
+                const std::size_t vi = index(v);
+                const auto& [x0, x1] = m_leaf_vertex_paths[index(owned)];
+                if (std::min(x0.x, x1.x) > swept.hi.x || std::max(x0.x, x1.x) < swept.lo.x ||
+                    std::min(x0.y, x1.y) > swept.hi.y || std::max(x0.y, x1.y) < swept.lo.y ||
+                    std::min(x0.z, x1.z) > swept.hi.z || std::max(x0.z, x1.z) < swept.lo.z) {
+                    continue;
+                }
+                const collision::CcdResult r =
+                    collision::vertex_face_ccd(x0, a_t0, b_t0, c_t0, x1, a_t1, b_t1, c_t1, options);
+                if (!r.hit ||
+                    (best && (r.toi > best->toi || (r.toi == best->toi && v > best->vertex)))) {
+                    continue;
+                }
+                const double u = r.toi;
+                const Vec3d a = a_t0 + (a_t1 - a_t0) * u;
+                const Vec3d b = b_t0 + (b_t1 - b_t0) * u;
+                const Vec3d c = c_t0 + (c_t1 - c_t0) * u;
+                const collision::PointTriangleProximity<double> at =
+                    collision::point_triangle_proximity(x0 + (x1 - x0) * u, a, b, c);
+                // Entering: the surface vertex's motion relative to the triangle point's, along
+                // its pseudo-normal at the meeting.
+                Vec3d normal{};
+                for (std::int32_t k = m_vertex_triangle_offsets[vi];
+                     k < m_vertex_triangle_offsets[vi + 1]; ++k) {
+                    const geometry::Triangle& tri =
+                        m_mesh.triangles[index(m_vertex_triangles[index(k)])];
+                    Vec3d corner[3];
+                    for (std::size_t j = 0; j < 3; ++j) {
+                        const Vec3d& y0 = start[index(tri[j])];
+                        corner[j] = y0 + (end[index(tri[j])] - y0) * u;
+                    }
+                    const Vec3d n = cross(corner[1] - corner[0], corner[2] - corner[0]);
+                    const double length = norm(n);
+                    if (length > 0.0) {
+                        normal += n * (1.0 / length);
+                    }
+                }
+                const Vec3d& w = at.barycentric;
+                const Vec3d cloth_motion =
+                    (a_t1 - a_t0) * w.x + (b_t1 - b_t0) * w.y + (c_t1 - c_t0) * w.z;
+                if (!(dot(x1 - x0 - cloth_motion, normal) > 0.0)) {
+                    continue;
+                }
+                best = VertexHit{v, r.toi, w};
             }
         });
     return best;

@@ -129,6 +129,25 @@ public:
     std::optional<EdgeHit> sweep_edge(const Vec3d& p_t0, const Vec3d& q_t0, const Vec3d& p_t1,
                                       const Vec3d& q_t1) const;
 
+    // A triangle (a cloth triangle) whose corners move on straight lines from (a_t0, b_t0, c_t0)
+    // to (a_t1, b_t1, c_t1) over the last step (as sweep's point) that one of the surface's
+    // vertices meets while entering it: at the meeting the vertex moves, relative to the
+    // triangle's point there, along the vertex's pseudo-normal (the sum of its triangles' unit
+    // normals at that time). That is what the cloth's vertex-face and edge-edge contact miss: a
+    // tip of the surface (a fingertip, the pole of a capsule) pushed into a cloth face between
+    // its vertices and edges. The earliest such meeting (conservative, collision::
+    // vertex_face_ccd), the surface vertex, the time of impact in [0, 1] and the barycentric
+    // weights of the meeting point on the triangle. Ties go to the lowest vertex. Each surface
+    // vertex is tested once (from its first triangle). Thread safe.
+    struct VertexHit {
+        std::int32_t vertex = -1;
+        double toi = 1.0;
+        Vec3d barycentric{};
+    };
+    std::optional<VertexHit> sweep_triangle(const Vec3d& a_t0, const Vec3d& b_t0, const Vec3d& c_t0,
+                                            const Vec3d& a_t1, const Vec3d& b_t1,
+                                            const Vec3d& c_t1) const;
+
     // The point of the surface closest to x, if one is within max_distance (≥ 0, may be +inf):
     // its signed distance (|x - closest|, negative inside / behind the surface, see the header) and
     // the unit outward normal there — (x - closest) / distance outside, its opposite inside, and
@@ -137,6 +156,11 @@ public:
     // depend on the traversal. std::nullopt when every triangle is farther than max_distance
     // (also for a NaN max_distance or x). Thread safe; no allocation.
     std::optional<SurfaceDistance> surface_distance(const Vec3d& x, double max_distance) const;
+
+    // Whether the closed triangle (a, b, c) meets the surface where it is now (the closed
+    // triangles intersect: geometry::triangles_intersect, exact). False for non-finite corners.
+    // Thread safe; no allocation.
+    bool meets_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
 
     const geometry::TriangleMeshD& mesh() const { return m_mesh; }
     // The volume the mesh encloses (m³, by the divergence theorem: Σ a · (b × c) / 6) when it is
@@ -181,6 +205,11 @@ private:
     // The corners of the triangle at each leaf position of the LBVH (Morton order): the query
     // reads one contiguous record per leaf instead of chasing triangle and vertex indices.
     std::vector<std::array<Vec3d, 3>> m_leaf_corners;
+    // Per leaf position, the vertices whose first triangle it is (CSR), and their paths over the
+    // last step (previous_positions() to now), for sweep_triangle.
+    std::vector<std::int32_t> m_leaf_vertex_offsets;
+    std::vector<std::int32_t> m_leaf_vertices;
+    std::vector<std::array<Vec3d, 2>> m_leaf_vertex_paths;
     AABBd m_bounds;
     bvh::LBVH m_tree;
     // The last move_to's start (empty: none since construction or set_positions).

@@ -4,6 +4,7 @@
 #include <variant>
 #include <vector>
 
+#include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/collision/intersecting_pairs.hpp"
 #include "pliant/collision/point_triangle.hpp"
 #include "pliant/core/parallel.hpp"
@@ -29,12 +30,8 @@ bool reaches_into_box(const BoxObstacle& box, const Vec3d& a, const Vec3d& b, co
                      (k & 4) != 0 ? box.max.z : box.min.z};
     };
     // The six faces, each as two triangles of its corners (k with one bit fixed).
-    static constexpr std::array<std::array<int, 4>, 6> FACES = {{{0, 2, 6, 4},
-                                                                {1, 3, 7, 5},
-                                                                {0, 1, 5, 4},
-                                                                {2, 3, 7, 6},
-                                                                {0, 1, 3, 2},
-                                                                {4, 5, 7, 6}}};
+    static constexpr std::array<std::array<int, 4>, 6> FACES = {
+        {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}}};
     for (const std::array<int, 4>& face : FACES) {
         const Vec3d p0 = corner(face[0]);
         const Vec3d p1 = corner(face[1]);
@@ -63,6 +60,23 @@ bool triangle_reaches_into(const Obstacle& obstacle, const Vec3d& a, const Vec3d
                sphere->radius;
     }
     return reaches_into_box(std::get<BoxObstacle>(obstacle), a, b, c);
+}
+
+bool triangle_meets_obstacles(const ClothModel& model, const Vec3d& a, const Vec3d& b,
+                              const Vec3d& c) {
+    for (const MovingMeshObstacle& mesh : model.mesh_obstacles()) {
+        const Pose& pose = mesh.state.pose;
+        if (mesh.mesh->meets_triangle(pose.apply_inverse(a), pose.apply_inverse(b),
+                                      pose.apply_inverse(c))) {
+            return true;
+        }
+    }
+    for (const MovingObstacle& obstacle : model.obstacles()) {
+        if (triangle_reaches_into(obstacle.current, a, b, c)) {
+            return true;
+        }
+    }
+    return false;
 }
 
 std::int64_t count_obstacle_intersections(const ClothModel& model) {

@@ -228,6 +228,7 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     }
     m_step_swept = 0;
     m_step_edges = 0;
+    m_step_faces = 0;
     m_step_max_lag = 0.0;
     for (int s = 0; s < substeps; ++s) {
         const double window_start = start_time + s * h;
@@ -250,6 +251,7 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     }
     stats.obstacle_swept_contacts = m_step_swept;
     stats.obstacle_edge_contacts = m_step_edges;
+    stats.obstacle_face_contacts = m_step_faces;
     stats.obstacle_max_lag = m_step_max_lag;
     if (m_ogc) {
         // The audit's last window ends with the step; vertices it put back left their sets.
@@ -318,6 +320,11 @@ void VBDStepper::resolve_mesh_obstacles(const ClothModel& model, std::span<Vec3d
         m_step_edges += resolve_mesh_edge_contacts(mesh, positions, m_start, m_before_mesh_contacts,
                                                    inverse_masses, model.topology().edges,
                                                    thickness, max_push, m_mesh_edge_contacts);
+    }
+    for (const MovingMeshObstacle& mesh : meshes) {
+        m_step_faces += resolve_mesh_face_contacts(mesh, positions, m_start, m_before_mesh_contacts,
+                                                   inverse_masses, model.triangles(), thickness,
+                                                   max_push, m_mesh_edge_contacts);
     }
     m_step_swept += tally.swept;
     m_substep_lagging = tally.lagging;

@@ -12,6 +12,7 @@
 #include "pliant/cloth/dihedral.hpp"
 #include "pliant/cloth/isometric_bending.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
+#include "pliant/cloth/obstacle_intersections.hpp"
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
@@ -21,6 +22,8 @@ namespace {
 
 constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
 constexpr std::int64_t VERTEX_GRAIN = 2048;
+// Triangles tested against the obstacles per task (an LBVH query and exact tests each).
+constexpr std::int64_t TRIANGLE_GRAIN = 256;
 constexpr std::int64_t CHAIN_PACKET_GRAIN = 2;
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
@@ -234,6 +237,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
     // frame crosses it on the straight line between the frame's ends), and a vertex put back loses
     // only that window's motion.
     model.begin_step(dt);
+    m_step_pushes_undone = 0;
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<Vec3d> velocities = model.mutable_velocities();
     detail::OgcStepStart ogc_start;
@@ -264,6 +268,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         stats.obstacle_contacts = tally.contacts;
         stats.obstacle_swept_contacts += tally.swept;
         stats.obstacle_edge_contacts += tally.edges;
+        stats.obstacle_face_contacts += tally.faces;
         stats.obstacles_lagging = tally.lagging;
         stats.obstacle_max_lag = std::max(stats.obstacle_max_lag, tally.max_lag);
         stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
@@ -281,6 +286,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         detail::ogc_step_stats(*m_ogc, ogc_start, m_step_truncated, m_audit, stats);
     }
     model.end_step();
+    stats.obstacle_pushes_undone = m_step_pushes_undone;
     if (m_self_collision) {
         stats.has_self_collision = true;
         stats.self = m_self_collision->stats();
@@ -373,8 +379,14 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         m_step_truncated += m_substep_truncated;
         solve_ms += watch.elapsed_ms();
     } else if (m_self_collision) {
+        if (model.has_obstacles()) {
+            m_before_self.assign(positions.begin(), positions.end());
+        }
         m_self_collision->project(positions, m_previous_positions, inverse_masses, material, t_end,
                                   h);
+        if (model.has_obstacles()) {
+            m_step_pushes_undone += undo_pushes_into_obstacles(model);
+        }
     }
     watch.restart();
     const double keep = std::max(0.0, 1.0 - material.damping * h);
@@ -592,8 +604,9 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
             return tally;
         },
         [](const ObstacleTally& a, const ObstacleTally& b) {
-            return ObstacleTally{a.contacts + b.contacts, a.swept + b.swept, 0,
-                                 a.lagging + b.lagging, std::max(a.max_lag, b.max_lag)};
+            return ObstacleTally{
+                a.contacts + b.contacts,       a.swept + b.swept, 0, 0, a.lagging + b.lagging,
+                std::max(a.max_lag, b.max_lag)};
         },
         VERTEX_GRAIN);
     // Then the cloth's edges against the mesh obstacles' edges.
@@ -602,7 +615,83 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
             mesh, positions, m_previous_positions, m_before_contacts, inverse_masses,
             model.topology().edges, thickness, max_push, m_edge_contacts);
     }
+    // Then the cloth's triangles against the mesh obstacles' vertices.
+    for (const MovingMeshObstacle& mesh : mesh_obstacles) {
+        total.faces += resolve_mesh_face_contacts(
+            mesh, positions, m_previous_positions, m_before_contacts, inverse_masses,
+            model.triangles(), thickness, max_push, m_edge_contacts);
+    }
     return total;
+}
+
+std::int64_t XPBDStepper::undo_pushes_into_obstacles(ClothModel& model) {
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<const geometry::Triangle> triangles = model.triangles();
+    const geometry::MeshTopology& topology = model.topology();
+    m_triangle_marks.assign(triangles.size(), 0);
+    const auto pushed = [&](std::int32_t v) {
+        const auto k = static_cast<std::size_t>(v);
+        return !(positions[k] == m_before_self[k]);
+    };
+    // Adds the triangles of v that still have a pushed vertex (each once per round).
+    const auto add_triangles_of = [&](std::int32_t v) {
+        for (const std::int32_t t : topology.triangles_of_vertex(v)) {
+            const auto k = static_cast<std::size_t>(t);
+            const geometry::Triangle& tri = triangles[k];
+            if (m_triangle_marks[k] == 0 && (pushed(tri[0]) || pushed(tri[1]) || pushed(tri[2]))) {
+                m_triangle_marks[k] = 1;
+                m_pushed_triangles.push_back(t);
+            }
+        }
+    };
+    m_pushed_triangles.clear();
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        if (pushed(static_cast<std::int32_t>(v))) {
+            add_triangles_of(static_cast<std::int32_t>(v));
+        }
+    }
+    std::int64_t undone = 0;
+    while (!m_pushed_triangles.empty()) {
+        std::sort(m_pushed_triangles.begin(), m_pushed_triangles.end());
+        m_pushed_meets.assign(m_pushed_triangles.size(), 0);
+        parallel_for(
+            static_cast<std::int64_t>(m_pushed_triangles.size()),
+            [&](std::int64_t i) {
+                const auto k = static_cast<std::size_t>(i);
+                const geometry::Triangle& tri =
+                    triangles[static_cast<std::size_t>(m_pushed_triangles[k])];
+                m_pushed_meets[k] =
+                    triangle_meets_obstacles(model, positions[static_cast<std::size_t>(tri[0])],
+                                             positions[static_cast<std::size_t>(tri[1])],
+                                             positions[static_cast<std::size_t>(tri[2])])
+                        ? 1
+                        : 0;
+            },
+            TRIANGLE_GRAIN);
+        for (const std::int32_t t : m_pushed_triangles) {
+            m_triangle_marks[static_cast<std::size_t>(t)] = 0;
+        }
+        std::vector<std::int32_t> back;
+        for (std::size_t i = 0; i < m_pushed_triangles.size(); ++i) {
+            if (m_pushed_meets[i] == 0) {
+                continue;
+            }
+            for (const std::int32_t v :
+                 triangles[static_cast<std::size_t>(m_pushed_triangles[i])]) {
+                if (pushed(v)) {
+                    positions[static_cast<std::size_t>(v)] =
+                        m_before_self[static_cast<std::size_t>(v)];
+                    back.push_back(v);
+                    ++undone;
+                }
+            }
+        }
+        m_pushed_triangles.clear();
+        for (const std::int32_t v : back) {
+            add_triangles_of(v);
+        }
+    }
+    return undone;
 }
 
 void XPBDStepper::save_state(ByteWriter& out) const {

@@ -106,6 +106,13 @@ struct ClothStepStats {
     // Cloth edges a mesh obstacle's edges met while entering it (mesh_contact.hpp,
     // resolve_mesh_edge_contacts) and that were lifted out, summed over the substeps.
     std::int64_t obstacle_edge_contacts = 0;
+    // Cloth triangles a mesh obstacle's vertices met while entering them (mesh_contact.hpp,
+    // resolve_mesh_face_contacts) and that were lifted off, summed over the substeps.
+    std::int64_t obstacle_face_contacts = 0;
+    // Vertices put back where they were before the self-contacts because their pushes took a
+    // cloth triangle into an obstacle (XPBD with the proximity contact), summed over the
+    // substeps.
+    std::int64_t obstacle_pushes_undone = 0;
     // Obstacles that jump: the farthest an obstacle's surface moved in one substep (m), the free
     // vertices whose push out of an obstacle was bounded in the last substep (with
     // self-collision, half the thickness per substep beyond the vertex's own motion and the
@@ -183,6 +190,7 @@ private:
         std::int64_t contacts = 0;  // vertices in contact
         std::int64_t swept = 0;     // vertices a mesh obstacle's swept test caught
         std::int64_t edges = 0;     // cloth edges a mesh obstacle's edges met (edge pass)
+        std::int64_t faces = 0;     // cloth triangles a mesh obstacle's vertices met (face pass)
         std::int64_t lagging = 0;   // vertices whose push was bounded
         double max_lag = 0.0;       // m
     };
@@ -195,6 +203,11 @@ private:
     // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
     // and the obstacle surface's velocity there for friction; returns the vertices in contact.
     ObstacleTally resolve_obstacles(ClothModel& model, double h);
+    // After the self-contacts (positions before them in m_before_self): a vertex whose push took
+    // one of its triangles into an obstacle goes back to where it was before the pushes, until
+    // no triangle a push moved meets an obstacle (obstacle_intersections.hpp,
+    // triangle_meets_obstacles). Returns the vertices put back.
+    std::int64_t undo_pushes_into_obstacles(ClothModel& model);
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
@@ -244,9 +257,16 @@ private:
     // out, but not turned into velocity.
     std::vector<double> m_contact_settled;
     std::vector<Vec3d> m_contact_normals;
-    std::vector<Vec3d> m_contact_velocities;  // the obstacle surface's velocity at the contact
-    MeshEdgeContactScratch m_edge_contacts;   // mesh obstacles' edge pass (mesh_contact.hpp)
-    std::vector<Vec3d> m_before_contacts;     // positions before the obstacle pass (with meshes)
+    std::vector<Vec3d> m_contact_velocities;    // the obstacle surface's velocity at the contact
+    MeshFeatureContactScratch m_edge_contacts;  // mesh obstacles' edge and face passes
+    std::vector<Vec3d> m_before_contacts;       // positions before the obstacle pass (with meshes)
+    // undo_pushes_into_obstacles: positions before the self-contacts, per triangle a mark, the
+    // triangles to test and whether each meets an obstacle.
+    std::vector<Vec3d> m_before_self;
+    std::vector<std::uint8_t> m_triangle_marks;
+    std::vector<std::int32_t> m_pushed_triangles;
+    std::vector<std::uint8_t> m_pushed_meets;
+    std::int64_t m_step_pushes_undone = 0;
     // The largest push an obstacle held back in the last substep (m): how far behind a mesh
     // obstacle's surface a vertex can be at the next (mesh_contact.hpp, extra_depth).
     double m_obstacle_lag = 0.0;

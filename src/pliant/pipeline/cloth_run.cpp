@@ -521,6 +521,8 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["obstacle_max_step"] = step.obstacle_max_step;
             record["obstacle_swept_contacts"] = step.obstacle_swept_contacts;
             record["obstacle_edge_contacts"] = step.obstacle_edge_contacts;
+            record["obstacle_face_contacts"] = step.obstacle_face_contacts;
+            record["obstacle_pushes_undone"] = step.obstacle_pushes_undone;
             record["obstacles_lagging"] = step.obstacles_lagging;
             record["obstacle_max_lag"] = step.obstacle_max_lag;
             if (step.obstacle_max_lag > 0.0 && !warned_obstacle_lag) {
