@@ -19,8 +19,12 @@
 //      (λ starts at 0 every substep: one iteration per substep);
 //   3b. seams (seams.hpp), pair after pair;
 //   4. obstacles, placed at t (ClothModel::move_obstacles): every vertex is pushed `thickness`
-//      away from every obstacle (obstacles.hpp, mesh_obstacle.hpp);
-//   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart; the CCD
+//      away from every obstacle (obstacles.hpp, mesh_obstacle.hpp); with mesh obstacles, then the
+//      cloth's edges and triangles swept against the surface's edges and vertices
+//      (mesh_contact.hpp);
+//   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart, and a
+//   vertex whose push took one of its triangles into an obstacle is put back where 4 left it
+//   (undo_pushes_into_obstacles; obstacle_intersections.hpp); the CCD
 //   fail-safe runs after every 4 substeps (a window) on the motion of those 4 substeps, and the
 //   candidate pairs are gathered before every window or, while contact is sparse, every second
 //   one; self_collision.hpp)
