@@ -73,19 +73,13 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     update_geometry();
     m_tree.build(m_boxes);
     m_leaf_corners.resize(m_mesh.triangles.size());
-    // Each vertex belongs to the leaf of its first triangle (sweep_triangle tests it once).
-    const std::span<const std::uint32_t> primitives = m_tree.primitives();
-    m_leaf_vertex_offsets.assign(primitives.size() + 1, 0);
-    for (std::size_t leaf = 0; leaf < primitives.size(); ++leaf) {
-        const auto t = static_cast<std::int32_t>(primitives[leaf]);
-        for (const std::int32_t v : m_mesh.triangles[index(t)]) {
-            if (m_vertex_triangles[index(m_vertex_triangle_offsets[index(v)])] == t) {
-                m_leaf_vertices.push_back(v);
-            }
-        }
-        m_leaf_vertex_offsets[leaf + 1] = static_cast<std::int32_t>(m_leaf_vertices.size());
+    // The vertices' own LBVH (sweep_triangle), over their paths over the last step.
+    m_vertex_boxes.resize(m_mesh.positions.size());
+    for (std::size_t v = 0; v < m_mesh.positions.size(); ++v) {
+        m_vertex_boxes[v] = outward_float(AABBd::of_point(m_mesh.positions[v]));
     }
-    m_leaf_vertex_paths.resize(m_leaf_vertices.size());
+    m_vertex_tree.build(m_vertex_boxes);
+    m_vertex_paths.resize(m_mesh.positions.size());
     gather_leaf_corners();
 }
 
@@ -159,12 +153,18 @@ void MeshObstacle::move_to(std::span<const Vec3d> positions) {
 }
 
 void MeshObstacle::gather_leaf_corners() {
+    // The vertices' paths: boxes (refit) and, per leaf position, the path's two ends.
     const std::span<const Vec3d> start = previous_positions();
-    parallel_for(static_cast<std::int64_t>(m_leaf_vertices.size()), [&](std::int64_t k) {
-        const auto i = static_cast<std::size_t>(k);
-        const std::size_t v = index(m_leaf_vertices[i]);
-        m_leaf_vertex_paths[i] = {start[v], m_mesh.positions[v]};
+    const std::span<const std::uint32_t> vertices = m_vertex_tree.primitives();
+    parallel_for(static_cast<std::int64_t>(vertices.size()), [&](std::int64_t k) {
+        const auto v = static_cast<std::size_t>(k);
+        AABBd path = AABBd::of_point(start[v]);
+        path.extend(m_mesh.positions[v]);
+        m_vertex_boxes[v] = outward_float(path);
+        const auto leaf = static_cast<std::size_t>(k);
+        m_vertex_paths[leaf] = {start[vertices[leaf]], m_mesh.positions[vertices[leaf]]};
     });
+    m_vertex_tree.refit(m_vertex_boxes);
     const std::span<const std::uint32_t> primitives = m_tree.primitives();
     parallel_for(
         static_cast<std::int64_t>(primitives.size()),
@@ -432,57 +432,50 @@ std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
     collision::CcdOptions options;
     options.max_iterations = SWEEP_MAX_ITERATIONS;
     std::optional<VertexHit> best;
+    const std::uint32_t* vertices = m_vertex_tree.primitives().data();
     bvh::query_wide(
-        m_tree.nodes().data(), outward_float(swept), -1, [&](std::int32_t leaf, const AABB&) {
-            // The vertices whose first triangle is this leaf's: each vertex tested once.
-            for (std::int32_t owned = m_leaf_vertex_offsets[index(leaf)];
-                 owned < m_leaf_vertex_offsets[index(leaf) + 1]; ++owned) {
-                const std::int32_t v = m_leaf_vertices[index(owned)];
-                const std::size_t vi = index(v);
-                const auto& [x0, x1] = m_leaf_vertex_paths[index(owned)];
-                if (std::min(x0.x, x1.x) > swept.hi.x || std::max(x0.x, x1.x) < swept.lo.x ||
-                    std::min(x0.y, x1.y) > swept.hi.y || std::max(x0.y, x1.y) < swept.lo.y ||
-                    std::min(x0.z, x1.z) > swept.hi.z || std::max(x0.z, x1.z) < swept.lo.z) {
-                    continue;
-                }
-                const collision::CcdResult r =
-                    collision::vertex_face_ccd(x0, a_t0, b_t0, c_t0, x1, a_t1, b_t1, c_t1, options);
-                if (!r.hit ||
-                    (best && (r.toi > best->toi || (r.toi == best->toi && v > best->vertex)))) {
-                    continue;
-                }
-                const double u = r.toi;
-                const Vec3d a = a_t0 + (a_t1 - a_t0) * u;
-                const Vec3d b = b_t0 + (b_t1 - b_t0) * u;
-                const Vec3d c = c_t0 + (c_t1 - c_t0) * u;
-                const collision::PointTriangleProximity<double> at =
-                    collision::point_triangle_proximity(x0 + (x1 - x0) * u, a, b, c);
-                // Entering: the surface vertex's motion relative to the triangle point's, along
-                // its pseudo-normal at the meeting.
-                Vec3d normal{};
-                for (std::int32_t k = m_vertex_triangle_offsets[vi];
-                     k < m_vertex_triangle_offsets[vi + 1]; ++k) {
-                    const geometry::Triangle& tri =
-                        m_mesh.triangles[index(m_vertex_triangles[index(k)])];
-                    Vec3d corner[3];
-                    for (std::size_t j = 0; j < 3; ++j) {
-                        const Vec3d& y0 = start[index(tri[j])];
-                        corner[j] = y0 + (end[index(tri[j])] - y0) * u;
-                    }
-                    const Vec3d n = cross(corner[1] - corner[0], corner[2] - corner[0]);
-                    const double length = norm(n);
-                    if (length > 0.0) {
-                        normal += n * (1.0 / length);
-                    }
-                }
-                const Vec3d& w = at.barycentric;
-                const Vec3d cloth_motion =
-                    (a_t1 - a_t0) * w.x + (b_t1 - b_t0) * w.y + (c_t1 - c_t0) * w.z;
-                if (!(dot(x1 - x0 - cloth_motion, normal) > 0.0)) {
-                    continue;
-                }
-                best = VertexHit{v, r.toi, w};
+        m_vertex_tree.nodes().data(), outward_float(swept), -1,
+        [&](std::int32_t leaf, const AABB&) {
+            const auto v = static_cast<std::int32_t>(vertices[leaf]);
+            const std::size_t vi = index(v);
+            const auto& [x0, x1] = m_vertex_paths[index(leaf)];
+            const collision::CcdResult r =
+                collision::vertex_face_ccd(x0, a_t0, b_t0, c_t0, x1, a_t1, b_t1, c_t1, options);
+            if (!r.hit ||
+                (best && (r.toi > best->toi || (r.toi == best->toi && v > best->vertex)))) {
+                return;
             }
+            const double u = r.toi;
+            const Vec3d a = a_t0 + (a_t1 - a_t0) * u;
+            const Vec3d b = b_t0 + (b_t1 - b_t0) * u;
+            const Vec3d c = c_t0 + (c_t1 - c_t0) * u;
+            const collision::PointTriangleProximity<double> at =
+                collision::point_triangle_proximity(x0 + (x1 - x0) * u, a, b, c);
+            // Entering: the surface vertex's motion relative to the triangle point's, along
+            // its pseudo-normal at the meeting.
+            Vec3d normal{};
+            for (std::int32_t k = m_vertex_triangle_offsets[vi];
+                 k < m_vertex_triangle_offsets[vi + 1]; ++k) {
+                const geometry::Triangle& tri =
+                    m_mesh.triangles[index(m_vertex_triangles[index(k)])];
+                Vec3d corner[3];
+                for (std::size_t j = 0; j < 3; ++j) {
+                    const Vec3d& y0 = start[index(tri[j])];
+                    corner[j] = y0 + (end[index(tri[j])] - y0) * u;
+                }
+                const Vec3d n = cross(corner[1] - corner[0], corner[2] - corner[0]);
+                const double length = norm(n);
+                if (length > 0.0) {
+                    normal += n * (1.0 / length);
+                }
+            }
+            const Vec3d& w = at.barycentric;
+            const Vec3d cloth_motion =
+                (a_t1 - a_t0) * w.x + (b_t1 - b_t0) * w.y + (c_t1 - c_t0) * w.z;
+            if (!(dot(x1 - x0 - cloth_motion, normal) > 0.0)) {
+                return;
+            }
+            best = VertexHit{v, r.toi, w};
         });
     return best;
 }

@@ -137,8 +137,9 @@ public:
     // tip of the surface (a fingertip, the pole of a capsule) pushed into a cloth face between
     // its vertices and edges. The earliest such meeting (conservative, collision::
     // vertex_face_ccd), the surface vertex, the time of impact in [0, 1] and the barycentric
-    // weights of the meeting point on the triangle. Ties go to the lowest vertex. Each surface
-    // vertex is tested once (from its first triangle). Thread safe.
+    // weights of the meeting point on the triangle. Ties go to the lowest vertex. The candidates
+    // come from an LBVH over the vertices' paths (refit by move_to and set_positions). Thread
+    // safe.
     struct VertexHit {
         std::int32_t vertex = -1;
         double toi = 1.0;
@@ -205,11 +206,11 @@ private:
     // The corners of the triangle at each leaf position of the LBVH (Morton order): the query
     // reads one contiguous record per leaf instead of chasing triangle and vertex indices.
     std::vector<std::array<Vec3d, 3>> m_leaf_corners;
-    // Per leaf position, the vertices whose first triangle it is (CSR), and their paths over the
-    // last step (previous_positions() to now), for sweep_triangle.
-    std::vector<std::int32_t> m_leaf_vertex_offsets;
-    std::vector<std::int32_t> m_leaf_vertices;
-    std::vector<std::array<Vec3d, 2>> m_leaf_vertex_paths;
+    // sweep_triangle's LBVH over the vertices' paths over the last step (float boxes rounded
+    // outward, refit with the placement) and, per leaf position, each path's two ends.
+    std::vector<AABB> m_vertex_boxes;
+    bvh::LBVH m_vertex_tree;
+    std::vector<std::array<Vec3d, 2>> m_vertex_paths;
     AABBd m_bounds;
     bvh::LBVH m_tree;
     // The last move_to's start (empty: none since construction or set_positions).
