@@ -49,16 +49,16 @@ bool clipped_by_box_is_not_empty(const BoxObstacle& box, const std::array<Vec3d,
     return true;
 }
 
-// The smallest distance from c to the triangle over a fine barycentric grid (an upper bound of the
-// true distance, within the grid's spacing of it).
-double sampled_distance(const Vec3d& c, const std::array<Vec3d, 3>& t, int n) {
+// The smallest f(p) over the points p of a barycentric grid of n + 1 points per edge on the
+// triangle (its corners included).
+template <typename F>
+double smallest_on_grid(const std::array<Vec3d, 3>& t, int n, F&& f) {
     double best = INFINITY;
     for (int i = 0; i <= n; ++i) {
         for (int j = 0; i + j <= n; ++j) {
             const double u = static_cast<double>(i) / n;
             const double v = static_cast<double>(j) / n;
-            const Vec3d p = t[0] * (1.0 - u - v) + t[1] * u + t[2] * v;
-            best = std::min(best, norm(p - c));
+            best = std::min(best, f(t[0] * (1.0 - u - v) + t[1] * u + t[2] * v));
         }
     }
     return best;
@@ -105,7 +105,9 @@ TEST(ObstacleIntersections, SpheresAndPlanesMatchSampling) {
         // The grid's points are within spacing · longest edge of every point of the triangle.
         const double longest = std::max({norm(t[1] - t[0]), norm(t[2] - t[1]), norm(t[0] - t[2])});
         const int n = 64;
-        const double d = sampled_distance(sphere.center, t, n);
+        // An upper bound of the distance from the centre, within the grid's spacing of it.
+        const double d =
+            smallest_on_grid(t, n, [&](const Vec3d& p) { return norm(p - sphere.center); });
         const bool reaches = triangle_reaches_into(sphere, t[0], t[1], t[2]);
         if (d <= sphere.radius) {
             EXPECT_TRUE(reaches) << "triangle " << i;
@@ -113,11 +115,10 @@ TEST(ObstacleIntersections, SpheresAndPlanesMatchSampling) {
             EXPECT_FALSE(reaches) << "triangle " << i;
         }
         reaching += reaches ? 1 : 0;
-        const auto behind = [&](const Vec3d& p) {
-            return dot(p - plane.point, plane.normal) <= 0.0;
-        };
-        EXPECT_EQ(triangle_reaches_into(plane, t[0], t[1], t[2]),
-                  behind(t[0]) || behind(t[1]) || behind(t[2]));
+        // The plane: the smallest offset along the normal over the grid (linear: at a corner).
+        const double lowest = smallest_on_grid(
+            t, n, [&](const Vec3d& p) { return dot(p - plane.point, plane.normal); });
+        EXPECT_EQ(triangle_reaches_into(plane, t[0], t[1], t[2]), lowest <= 0.0) << i;
     }
     EXPECT_GT(reaching, 200);
 }

@@ -28,6 +28,12 @@ std::size_t index(std::int32_t i) {
     return static_cast<std::size_t>(i);
 }
 
+// Row r of a CSR table (offsets of #rows + 1, values).
+std::span<const std::int32_t> csr_row(std::span<const std::int32_t> offsets,
+                                      std::span<const std::int32_t> values, std::size_t r) {
+    return values.subspan(index(offsets[r]), index(offsets[r + 1] - offsets[r]));
+}
+
 }  // namespace
 
 MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh)) {
@@ -80,7 +86,7 @@ MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh
     }
     m_vertex_tree.build(m_vertex_boxes);
     m_vertex_paths.resize(m_mesh.positions.size());
-    gather_leaf_corners();
+    gather_leaves();
 }
 
 std::optional<double> MeshObstacle::enclosed_volume() const {
@@ -110,7 +116,7 @@ void MeshObstacle::set_positions(std::span<const Vec3d> positions) {
     m_max_vertex_step = 0.0;
     update_geometry();
     m_tree.refit(m_boxes);
-    gather_leaf_corners();
+    gather_leaves();
 }
 
 void MeshObstacle::move_to(std::span<const Vec3d> positions) {
@@ -149,11 +155,12 @@ void MeshObstacle::move_to(std::span<const Vec3d> positions) {
         },
         [](double a, double b) { return std::max(a, b); }, GEOMETRY_GRAIN);
     m_tree.refit(m_boxes);
-    gather_leaf_corners();
+    gather_leaves();
 }
 
-void MeshObstacle::gather_leaf_corners() {
-    // The vertices' paths: boxes (refit) and, per leaf position, the path's two ends.
+void MeshObstacle::gather_leaves() {
+    // The vertices' paths: their boxes (the vertex tree refit) and, per leaf position, the
+    // path's two ends.
     const std::span<const Vec3d> start = previous_positions();
     const std::span<const std::uint32_t> vertices = m_vertex_tree.primitives();
     parallel_for(static_cast<std::int64_t>(vertices.size()), [&](std::int64_t k) {
@@ -390,22 +397,8 @@ std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0,
                     collision::segment_segment_proximity(p, q, a, b);
                 // Entering: the cloth point's motion relative to the surface point's, against
                 // the edge's pseudo-normal at the meeting.
-                Vec3d normal{};
-                for (std::int32_t k = m_edge_triangle_offsets[ei];
-                     k < m_edge_triangle_offsets[ei + 1]; ++k) {
-                    const geometry::Triangle& tri =
-                        m_mesh.triangles[index(m_edge_triangles[index(k)])];
-                    Vec3d c[3];
-                    for (std::size_t j = 0; j < 3; ++j) {
-                        const Vec3d& x0 = start[index(tri[j])];
-                        c[j] = x0 + (end[index(tri[j])] - x0) * u;
-                    }
-                    const Vec3d n = cross(c[1] - c[0], c[2] - c[0]);
-                    const double length = norm(n);
-                    if (length > 0.0) {
-                        normal += n * (1.0 / length);
-                    }
-                }
+                const Vec3d normal =
+                    unit_normal_sum(csr_row(m_edge_triangle_offsets, m_edge_triangles, ei), u);
                 const Vec3d cloth_motion = (p_t1 - p_t0) * (1.0 - at.s) + (q_t1 - q_t0) * at.s;
                 const Vec3d surface_motion = (a1 - a0) * (1.0 - at.t) + (b1 - b0) * at.t;
                 if (!(dot(cloth_motion - surface_motion, normal) < 0.0)) {
@@ -415,6 +408,26 @@ std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0,
             }
         });
     return best;
+}
+
+Vec3d MeshObstacle::unit_normal_sum(std::span<const std::int32_t> triangles, double u) const {
+    const std::span<const Vec3d> start = previous_positions();
+    const std::span<const Vec3d> end = m_mesh.positions;
+    Vec3d sum{};
+    for (const std::int32_t t : triangles) {
+        const geometry::Triangle& tri = m_mesh.triangles[index(t)];
+        std::array<Vec3d, 3> corner;
+        for (std::size_t j = 0; j < 3; ++j) {
+            const Vec3d& x0 = start[index(tri[j])];
+            corner[j] = x0 + (end[index(tri[j])] - x0) * u;
+        }
+        const Vec3d n = cross(corner[1] - corner[0], corner[2] - corner[0]);
+        const double length = norm(n);
+        if (length > 0.0) {
+            sum += n * (1.0 / length);
+        }
+    }
+    return sum;
 }
 
 std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
@@ -427,8 +440,6 @@ std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
         }
         swept.extend(x);
     }
-    const std::span<const Vec3d> start = previous_positions();
-    const std::span<const Vec3d> end = m_mesh.positions;
     collision::CcdOptions options;
     options.max_iterations = SWEEP_MAX_ITERATIONS;
     std::optional<VertexHit> best;
@@ -453,22 +464,8 @@ std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
                 collision::point_triangle_proximity(x0 + (x1 - x0) * u, a, b, c);
             // Entering: the surface vertex's motion relative to the triangle point's, along
             // its pseudo-normal at the meeting.
-            Vec3d normal{};
-            for (std::int32_t k = m_vertex_triangle_offsets[vi];
-                 k < m_vertex_triangle_offsets[vi + 1]; ++k) {
-                const geometry::Triangle& tri =
-                    m_mesh.triangles[index(m_vertex_triangles[index(k)])];
-                Vec3d corner[3];
-                for (std::size_t j = 0; j < 3; ++j) {
-                    const Vec3d& y0 = start[index(tri[j])];
-                    corner[j] = y0 + (end[index(tri[j])] - y0) * u;
-                }
-                const Vec3d n = cross(corner[1] - corner[0], corner[2] - corner[0]);
-                const double length = norm(n);
-                if (length > 0.0) {
-                    normal += n * (1.0 / length);
-                }
-            }
+            const Vec3d normal =
+                unit_normal_sum(csr_row(m_vertex_triangle_offsets, m_vertex_triangles, vi), u);
             const Vec3d& w = at.barycentric;
             const Vec3d cloth_motion =
                 (a_t1 - a_t0) * w.x + (b_t1 - b_t0) * w.y + (c_t1 - c_t0) * w.z;

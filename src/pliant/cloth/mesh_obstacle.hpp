@@ -185,7 +185,12 @@ public:
 
 private:
     void update_geometry();
-    void gather_leaf_corners();
+    // The triangles' corners per leaf (m_leaf_corners) and the vertices' paths and boxes (the
+    // vertex tree refit), for the current and previous placements.
+    void gather_leaves();
+    // Σ of the unit normals (zero-area ones skipped) of `triangles` at fraction u of the last
+    // step, the triangles moving on straight lines from previous_positions() to now.
+    Vec3d unit_normal_sum(std::span<const std::int32_t> triangles, double u) const;
     std::optional<SurfacePoint> closest(const Vec3d& x, double max_distance) const;
 
     geometry::TriangleMeshD m_mesh;

@@ -319,12 +319,12 @@ void VBDStepper::resolve_mesh_obstacles(const ClothModel& model, std::span<Vec3d
     for (const MovingMeshObstacle& mesh : meshes) {
         m_step_edges += resolve_mesh_edge_contacts(mesh, positions, m_start, m_before_mesh_contacts,
                                                    inverse_masses, model.topology().edges,
-                                                   thickness, max_push, m_mesh_edge_contacts);
+                                                   thickness, max_push, m_mesh_feature_contacts);
     }
     for (const MovingMeshObstacle& mesh : meshes) {
         m_step_faces += resolve_mesh_face_contacts(mesh, positions, m_start, m_before_mesh_contacts,
                                                    inverse_masses, model.triangles(), thickness,
-                                                   max_push, m_mesh_edge_contacts);
+                                                   max_push, m_mesh_feature_contacts);
     }
     m_step_swept += tally.swept;
     m_substep_lagging = tally.lagging;

@@ -183,7 +183,7 @@ private:
     // substep (m; saved with the state) and this step's tallies.
     std::vector<MeshContact> m_mesh_contacts;
     std::vector<Vec3d> m_before_mesh_contacts;
-    MeshFeatureContactScratch m_mesh_edge_contacts;
+    MeshFeatureContactScratch m_mesh_feature_contacts;
     double m_obstacle_lag = 0.0;
     std::int64_t m_step_swept = 0;
     std::int64_t m_step_edges = 0;

@@ -604,22 +604,23 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
             return tally;
         },
         [](const ObstacleTally& a, const ObstacleTally& b) {
-            return ObstacleTally{
-                a.contacts + b.contacts,       a.swept + b.swept, 0, 0, a.lagging + b.lagging,
-                std::max(a.max_lag, b.max_lag)};
+            return ObstacleTally{.contacts = a.contacts + b.contacts,
+                                 .swept = a.swept + b.swept,
+                                 .lagging = a.lagging + b.lagging,
+                                 .max_lag = std::max(a.max_lag, b.max_lag)};
         },
         VERTEX_GRAIN);
     // Then the cloth's edges against the mesh obstacles' edges.
     for (const MovingMeshObstacle& mesh : mesh_obstacles) {
         total.edges += resolve_mesh_edge_contacts(
             mesh, positions, m_previous_positions, m_before_contacts, inverse_masses,
-            model.topology().edges, thickness, max_push, m_edge_contacts);
+            model.topology().edges, thickness, max_push, m_feature_contacts);
     }
     // Then the cloth's triangles against the mesh obstacles' vertices.
     for (const MovingMeshObstacle& mesh : mesh_obstacles) {
         total.faces += resolve_mesh_face_contacts(
             mesh, positions, m_previous_positions, m_before_contacts, inverse_masses,
-            model.triangles(), thickness, max_push, m_edge_contacts);
+            model.triangles(), thickness, max_push, m_feature_contacts);
     }
     return total;
 }
@@ -628,7 +629,8 @@ std::int64_t XPBDStepper::undo_pushes_into_obstacles(ClothModel& model) {
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<const geometry::Triangle> triangles = model.triangles();
     const geometry::MeshTopology& topology = model.topology();
-    m_triangle_marks.assign(triangles.size(), 0);
+    // Every mark is cleared again before this returns.
+    m_triangle_marks.resize(triangles.size(), 0);
     const auto pushed = [&](std::int32_t v) {
         const auto k = static_cast<std::size_t>(v);
         return !(positions[k] == m_before_self[k]);
@@ -671,7 +673,7 @@ std::int64_t XPBDStepper::undo_pushes_into_obstacles(ClothModel& model) {
         for (const std::int32_t t : m_pushed_triangles) {
             m_triangle_marks[static_cast<std::size_t>(t)] = 0;
         }
-        std::vector<std::int32_t> back;
+        m_put_back.clear();
         for (std::size_t i = 0; i < m_pushed_triangles.size(); ++i) {
             if (m_pushed_meets[i] == 0) {
                 continue;
@@ -681,13 +683,13 @@ std::int64_t XPBDStepper::undo_pushes_into_obstacles(ClothModel& model) {
                 if (pushed(v)) {
                     positions[static_cast<std::size_t>(v)] =
                         m_before_self[static_cast<std::size_t>(v)];
-                    back.push_back(v);
+                    m_put_back.push_back(v);
                     ++undone;
                 }
             }
         }
         m_pushed_triangles.clear();
-        for (const std::int32_t v : back) {
+        for (const std::int32_t v : m_put_back) {
             add_triangles_of(v);
         }
     }

@@ -261,15 +261,17 @@ private:
     // out, but not turned into velocity.
     std::vector<double> m_contact_settled;
     std::vector<Vec3d> m_contact_normals;
-    std::vector<Vec3d> m_contact_velocities;    // the obstacle surface's velocity at the contact
-    MeshFeatureContactScratch m_edge_contacts;  // mesh obstacles' edge and face passes
-    std::vector<Vec3d> m_before_contacts;       // positions before the obstacle pass (with meshes)
-    // undo_pushes_into_obstacles: positions before the self-contacts, per triangle a mark, the
-    // triangles to test and whether each meets an obstacle.
+    std::vector<Vec3d> m_contact_velocities;       // the obstacle surface's velocity at the contact
+    MeshFeatureContactScratch m_feature_contacts;  // mesh obstacles' edge and face passes
+    std::vector<Vec3d> m_before_contacts;  // positions before the obstacle pass (with meshes)
+    // undo_pushes_into_obstacles: positions before the self-contacts, per triangle a mark (all
+    // clear between calls), the triangles to test, whether each meets an obstacle, and the
+    // vertices put back in a round.
     std::vector<Vec3d> m_before_self;
     std::vector<std::uint8_t> m_triangle_marks;
     std::vector<std::int32_t> m_pushed_triangles;
     std::vector<std::uint8_t> m_pushed_meets;
+    std::vector<std::int32_t> m_put_back;
     std::int64_t m_step_pushes_undone = 0;
     // The largest push an obstacle held back in the last substep (m): how far behind a mesh
     // obstacle's surface a vertex can be at the next (mesh_contact.hpp, extra_depth).
