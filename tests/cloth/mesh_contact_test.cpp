@@ -312,6 +312,69 @@ TEST(MeshObstacle, SweepTriangleFindsASurfaceVertexEnteringIt) {
         rising.sweep_triangle(a + below, b + below, c + below, a + below, b + below, c + below));
 }
 
+// The box of scenes/stress/box.obj: 0.5 m × 0.5 m × 0.4 m on z = 0, with that file's
+// triangulation, in which the corner (-0.25, 0.25, 0.4) (vertex 7) has one triangle of the top,
+// two of the +y side and one of the -x side.
+TriangleMeshD stress_box() {
+    TriangleMeshD box;
+    box.positions = {{-0.25, -0.25, 0.0}, {0.25, -0.25, 0.0},  {0.25, 0.25, 0.0},
+                     {-0.25, 0.25, 0.0},  {-0.25, -0.25, 0.4}, {0.25, -0.25, 0.4},
+                     {0.25, 0.25, 0.4},   {-0.25, 0.25, 0.4}};
+    box.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                     {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+    return box;
+}
+
+// A triangle of the turning-box stress scene (scenes/stress/turning_box.json, frame 42, in the
+// box's frame) sliding over the box's corner: it moves 6 mm, mostly along the surface, and the
+// corner comes 1 mm through it. Along the corner's pseudo-normal the motion is a fraction of a
+// millimetre, and against it with the pseudo-normal of this triangulation; through the triangle
+// it is 1.8 mm.
+TEST(MeshObstacle, SweepTriangleCatchesACornerTheClothSlidesOnto) {
+    const MeshObstacle box(stress_box());
+    const Vec3d a0{-0.26264820940495326, 0.25823020814275033, 0.38873889409615831};
+    const Vec3d b0{-0.25601794506848202, 0.22897631505080218, 0.4073574022342949};
+    const Vec3d c0{-0.24154539198334873, 0.25134943331296045, 0.40481446048211767};
+    const Vec3d a1{-0.25940639383069175, 0.26323416587179066, 0.38704388081320951};
+    const Vec3d b1{-0.2525520500617518, 0.2346168802830314, 0.40686381069146488};
+    const Vec3d c1{-0.23955829252362429, 0.25520962485320164, 0.39997764558924653};
+    ASSERT_FALSE(box.meets_triangle(a0, b0, c0));
+    ASSERT_TRUE(box.meets_triangle(a1, b1, c1));
+    const auto hit = box.sweep_triangle(a0, b0, c0, a1, b1, c1);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->vertex, 7);
+    // The same motion backwards takes the triangle off the corner: not entering.
+    EXPECT_FALSE(box.sweep_triangle(a1, b1, c1, a0, b0, c0));
+}
+
+// A cloth edge sliding 1 cm along itself across the box's top +y edge while it passes 2 mm
+// through it: its motion points outward along the edge's pseudo-normal, yet it ends cutting the
+// box's corner off.
+TEST(MeshObstacle, SweepEdgeCatchesAnEdgeSlidingThroughAnEdge) {
+    const MeshObstacle box(stress_box());
+    const Vec3d on_edge{0.0, 0.25, 0.4};
+    const Vec3d along = Vec3d{0.0, 1.0, -0.3} * (1.0 / std::sqrt(1.09));   // the cloth edge
+    const Vec3d through = Vec3d{0.0, 0.3, 1.0} * (1.0 / std::sqrt(1.09));  // normal to both
+    const Vec3d p0 = on_edge + through * 0.001 - along * 0.02;
+    const Vec3d q0 = on_edge + through * 0.001 + along * 0.02;
+    const Vec3d move = along * 0.01 - through * 0.002;
+    const Vec3d p1 = p0 + move;
+    const Vec3d q1 = q0 + move;
+    ASSERT_GT(dot(move, Vec3d{0.0, 1.0, 1.0}), 0.0);
+    // The end's point 1 mm inside the edge is inside the box.
+    const Vec3d cut = on_edge - through * 0.001;
+    ASSERT_NEAR(norm(cross(cut - p1, q1 - p1)), 0.0, 1e-15);
+    ASSERT_TRUE(cut.y < 0.25 && cut.z < 0.4);
+    const auto hit = box.sweep_edge(p0, q0, p1, q1);
+    ASSERT_TRUE(hit);
+    const geometry::Edge& edge = box.edges()[static_cast<std::size_t>(hit->edge)];
+    for (const std::int32_t v : edge) {
+        EXPECT_EQ(box.mesh().positions[static_cast<std::size_t>(v)].y, 0.25);
+        EXPECT_EQ(box.mesh().positions[static_cast<std::size_t>(v)].z, 0.4);
+    }
+    EXPECT_FALSE(box.sweep_edge(p1, q1, p0, q0));
+}
+
 // A spike rising into a sheet inside one of its triangles, 1.4 cm from its edges and farther
 // from its vertices: neither the vertices' nor the edges' contact sees it; the face pass lifts
 // the triangle onto the tip.

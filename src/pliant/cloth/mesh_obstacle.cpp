@@ -34,6 +34,19 @@ std::span<const std::int32_t> csr_row(std::span<const std::int32_t> offsets,
     return values.subspan(index(offsets[r]), index(offsets[r + 1] - offsets[r]));
 }
 
+// The direction in which two features meeting in a sweep pass through each other: `common`, the
+// cross product of their directions (a cloth triangle's normal; two edges' common normal), turned
+// to the side of the surface's outward `pseudo_normal` at the meeting. The pseudo-normal itself
+// where it leaves the side open: `common` zero (parallel edges, a degenerate triangle) or nearly
+// perpendicular to it (features that meet edge-on).
+Vec3d crossing_normal(const Vec3d& common, const Vec3d& pseudo_normal) {
+    const double along = dot(common, pseudo_normal);
+    if (!(std::abs(along) > 1e-9 * norm(common) * norm(pseudo_normal))) {
+        return pseudo_normal;
+    }
+    return along > 0.0 ? common : -common;
+}
+
 }  // namespace
 
 MeshObstacle::MeshObstacle(geometry::TriangleMeshD mesh) : m_mesh(std::move(mesh)) {
@@ -395,10 +408,12 @@ std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0,
                 const Vec3d b = b0 + (b1 - b0) * u;
                 const collision::SegmentSegmentProximity<double> at =
                     collision::segment_segment_proximity(p, q, a, b);
-                // Entering: the cloth point's motion relative to the surface point's, against
-                // the edge's pseudo-normal at the meeting.
-                const Vec3d normal =
-                    unit_normal_sum(csr_row(m_edge_triangle_offsets, m_edge_triangles, ei), u);
+                // Entering: the cloth point crosses the surface edge toward the inside, along the
+                // edges' common normal turned to the outside (the edge's pseudo-normal at the
+                // meeting; the pseudo-normal itself for parallel edges).
+                const Vec3d normal = crossing_normal(
+                    cross(q - p, b - a),
+                    unit_normal_sum(csr_row(m_edge_triangle_offsets, m_edge_triangles, ei), u));
                 const Vec3d cloth_motion = (p_t1 - p_t0) * (1.0 - at.s) + (q_t1 - q_t0) * at.s;
                 const Vec3d surface_motion = (a1 - a0) * (1.0 - at.t) + (b1 - b0) * at.t;
                 if (!(dot(cloth_motion - surface_motion, normal) < 0.0)) {
@@ -462,10 +477,12 @@ std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
             const Vec3d c = c_t0 + (c_t1 - c_t0) * u;
             const collision::PointTriangleProximity<double> at =
                 collision::point_triangle_proximity(x0 + (x1 - x0) * u, a, b, c);
-            // Entering: the surface vertex's motion relative to the triangle point's, along
-            // its pseudo-normal at the meeting.
-            const Vec3d normal =
-                unit_normal_sum(csr_row(m_vertex_triangle_offsets, m_vertex_triangles, vi), u);
+            // Entering: the surface vertex crosses the triangle toward the cloth's side, along
+            // the triangle's normal turned to the outside (the vertex's pseudo-normal at the
+            // meeting; the pseudo-normal itself for a degenerate triangle).
+            const Vec3d normal = crossing_normal(
+                cross(b - a, c - a),
+                unit_normal_sum(csr_row(m_vertex_triangle_offsets, m_vertex_triangles, vi), u));
             const Vec3d& w = at.barycentric;
             const Vec3d cloth_motion =
                 (a_t1 - a_t0) * w.x + (b_t1 - b_t0) * w.y + (c_t1 - c_t0) * w.z;

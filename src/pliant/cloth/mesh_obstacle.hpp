@@ -112,14 +112,17 @@ public:
 
     // An edge (a cloth edge) whose ends move on straight lines from (p_t0, q_t0) to (p_t1, q_t1)
     // over the last step (as sweep's point) that meets one of the surface's edges while entering
-    // the surface: at the meeting, the edge's point moves toward the inside of the surface edge
-    // (relative to it, against the edge's pseudo-normal, the sum of its triangles' normals at
-    // that time). That is what vertex-face contact misses: a thin part of the surface (a ridge, a
-    // finger) passing between the cloth's vertices. The earliest such meeting (conservative,
-    // collision::edge_edge_ccd), the surface edge (an index into edges()), the time of impact in
-    // [0, 1] and the parameters of the meeting points: s along p → q, t along the surface
-    // edge's first → second vertex. Ties go to the lowest edge. Each surface edge is tested once
-    // (from its first triangle); the LBVH's swept leaf boxes find the candidates. Thread safe.
+    // the surface: at the meeting, the edge's point moves, relative to the surface edge's point,
+    // along the two edges' common normal turned to the inside (against the surface edge's
+    // pseudo-normal, the sum of its triangles' normals at that time; along the pseudo-normal
+    // itself for edges that meet parallel or edge-on). Crossing motion decides it, so cloth that
+    // slides across the edge and through it is caught. That is what vertex-face contact misses: a
+    // thin part of the surface (a ridge, a finger) passing between the cloth's vertices. The
+    // earliest such meeting (conservative, collision::edge_edge_ccd), the surface edge (an index
+    // into edges()), the time of impact in [0, 1] and the parameters of the meeting points: s along
+    // p → q, t along the surface edge's first → second vertex. Ties go to the lowest edge. Each
+    // surface edge is tested once (from its first triangle); the LBVH's swept leaf boxes find the
+    // candidates. Thread safe.
     struct EdgeHit {
         std::int32_t edge = -1;
         double toi = 1.0;
@@ -132,14 +135,16 @@ public:
     // A triangle (a cloth triangle) whose corners move on straight lines from (a_t0, b_t0, c_t0)
     // to (a_t1, b_t1, c_t1) over the last step (as sweep's point) that one of the surface's
     // vertices meets while entering it: at the meeting the vertex moves, relative to the
-    // triangle's point there, along the vertex's pseudo-normal (the sum of its triangles' unit
-    // normals at that time). That is what the cloth's vertex-face and edge-edge contact miss: a
-    // tip of the surface (a fingertip, the pole of a capsule) pushed into a cloth face between
-    // its vertices and edges. The earliest such meeting (conservative, collision::
-    // vertex_face_ccd), the surface vertex, the time of impact in [0, 1] and the barycentric
-    // weights of the meeting point on the triangle. Ties go to the lowest vertex. The candidates
-    // come from an LBVH over the vertices' paths (refit by move_to and set_positions). Thread
-    // safe.
+    // triangle's point there, through the triangle toward the side the vertex's pseudo-normal
+    // (the sum of its triangles' unit normals at that time) points to (along the pseudo-normal
+    // itself for a triangle that meets it edge-on). Crossing motion decides it, so cloth that
+    // slides over a corner and through it is caught. That is what the cloth's vertex-face and
+    // edge-edge contact miss: a tip of the surface (a fingertip, the pole of a capsule) pushed into
+    // a cloth face between its vertices and edges. The earliest such meeting (conservative,
+    // collision:: vertex_face_ccd), the surface vertex, the time of impact in [0, 1] and the
+    // barycentric weights of the meeting point on the triangle. Ties go to the lowest vertex. The
+    // candidates come from an LBVH over the vertices' paths (refit by move_to and set_positions).
+    // Thread safe.
     struct VertexHit {
         std::int32_t vertex = -1;
         double toi = 1.0;
