@@ -62,21 +62,28 @@ bool triangle_reaches_into(const Obstacle& obstacle, const Vec3d& a, const Vec3d
     return reaches_into_box(std::get<BoxObstacle>(obstacle), a, b, c);
 }
 
+std::int32_t obstacle_met_by(const ClothModel& model, const Vec3d& a, const Vec3d& b,
+                             const Vec3d& c) {
+    const std::span<const MovingMeshObstacle> meshes = model.mesh_obstacles();
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+        const Pose& pose = meshes[k].state.pose;
+        if (meshes[k].mesh->meets_triangle(pose.apply_inverse(a), pose.apply_inverse(b),
+                                           pose.apply_inverse(c))) {
+            return static_cast<std::int32_t>(k);
+        }
+    }
+    const std::span<const MovingObstacle> obstacles = model.obstacles();
+    for (std::size_t k = 0; k < obstacles.size(); ++k) {
+        if (triangle_reaches_into(obstacles[k].current, a, b, c)) {
+            return static_cast<std::int32_t>(meshes.size() + k);
+        }
+    }
+    return -1;
+}
+
 bool triangle_meets_obstacles(const ClothModel& model, const Vec3d& a, const Vec3d& b,
                               const Vec3d& c) {
-    for (const MovingMeshObstacle& mesh : model.mesh_obstacles()) {
-        const Pose& pose = mesh.state.pose;
-        if (mesh.mesh->meets_triangle(pose.apply_inverse(a), pose.apply_inverse(b),
-                                      pose.apply_inverse(c))) {
-            return true;
-        }
-    }
-    for (const MovingObstacle& obstacle : model.obstacles()) {
-        if (triangle_reaches_into(obstacle.current, a, b, c)) {
-            return true;
-        }
-    }
-    return false;
+    return obstacle_met_by(model, a, b, c) >= 0;
 }
 
 std::int64_t count_obstacle_intersections(const ClothModel& model) {

@@ -36,10 +36,16 @@ std::int64_t count_obstacle_intersections(const ClothModel& model);
 bool triangle_reaches_into(const Obstacle& obstacle, const Vec3d& a, const Vec3d& b,
                            const Vec3d& c);
 
-// Whether the closed triangle (a, b, c) meets any of the model's obstacles where they are now,
-// as count_obstacle_intersections decides it: a mesh obstacle's surface (MeshObstacle::
-// meets_triangle, the corners taken into its rest frame) or an analytic obstacle's solid. Thread
-// safe; no allocation.
+// The first of the model's obstacles, where they are now, that the closed triangle (a, b, c)
+// meets as count_obstacle_intersections decides it: a mesh obstacle's surface (MeshObstacle::
+// meets_triangle, the corners taken into its rest frame), then an analytic obstacle's solid. The
+// index among mesh_obstacles(), or mesh_obstacles().size() + the index among obstacles(); -1 when
+// it meets none. Thread safe; no allocation.
+std::int32_t obstacle_met_by(const ClothModel& model, const Vec3d& a, const Vec3d& b,
+                             const Vec3d& c);
+
+// Whether the closed triangle (a, b, c) meets any of the model's obstacles where they are now
+// (obstacle_met_by).
 bool triangle_meets_obstacles(const ClothModel& model, const Vec3d& a, const Vec3d& b,
                               const Vec3d& c);
 

@@ -229,6 +229,8 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     m_step_swept = 0;
     m_step_edges = 0;
     m_step_faces = 0;
+    m_step_carried = 0;
+    m_step_pushes_undone = 0;
     m_step_max_lag = 0.0;
     for (int s = 0; s < substeps; ++s) {
         const double window_start = start_time + s * h;
@@ -252,6 +254,8 @@ ClothStepStats VBDStepper::step(ClothModel& model, double dt, int substeps) {
     stats.obstacle_swept_contacts = m_step_swept;
     stats.obstacle_edge_contacts = m_step_edges;
     stats.obstacle_face_contacts = m_step_faces;
+    stats.obstacle_carried = m_step_carried;
+    stats.obstacle_pushes_undone = m_step_pushes_undone;
     stats.obstacle_max_lag = m_step_max_lag;
     if (m_ogc) {
         // The audit's last window ends with the step; vertices it put back left their sets.
@@ -674,14 +678,32 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
     m_substep_lagging = 0;
     if (!model.mesh_obstacles().empty()) {
         resolve_mesh_obstacles(model, positions, h);
+        m_put_back.seed(positions, m_before_mesh_contacts);
         if (m_ogc) {
             truncate_all(m_before_mesh_contacts, positions, inverse_masses);
+        }
+        // What the passes left in an obstacle (or OGC's truncation took back into one) goes back
+        // to where it was, carried along.
+        m_step_carried += m_put_back.run(model, m_start, ObstaclePutBack::Fallback::Carried);
+        for (const std::int32_t v : m_put_back.moved()) {
+            m_mesh_contacts[static_cast<std::size_t>(v)] = MeshContact{};  // moves with it
+        }
+        if (m_ogc) {
             redetect_if_needed(positions);
         }
     }
     solve_ms += watch.elapsed_ms();
     if (m_self_collision && !m_ogc) {
+        if (has_obstacles) {
+            m_before_self.assign(positions.begin(), positions.end());
+        }
         m_self_collision->project(positions, m_start, inverse_masses, material, t_end, h);
+        if (has_obstacles) {
+            // A push that took a triangle into an obstacle is undone.
+            m_put_back.seed(positions, m_before_self);
+            m_step_pushes_undone +=
+                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::Reference);
+        }
     }
     watch.restart();
     const double keep = std::max(0.0, 1.0 - material.damping * h);

@@ -57,6 +57,7 @@
 #include "pliant/cloth/cloth_model.hpp"
 #include "pliant/cloth/detail/ogc_audit_window.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
+#include "pliant/cloth/obstacle_put_back.hpp"
 #include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/vertex_coloring.hpp"
@@ -188,6 +189,13 @@ private:
     std::int64_t m_step_swept = 0;
     std::int64_t m_step_edges = 0;
     std::int64_t m_step_faces = 0;
+    // Triangles the passes left in a mesh obstacle, and self-contact pushes into an obstacle
+    // (the positions before the self-contacts: m_before_self), are put back
+    // (obstacle_put_back.hpp); the vertices moved in this step.
+    ObstaclePutBack m_put_back;
+    std::vector<Vec3d> m_before_self;
+    std::int64_t m_step_carried = 0;
+    std::int64_t m_step_pushes_undone = 0;
     std::int64_t m_substep_lagging = 0;
     double m_step_max_lag = 0.0;
 

@@ -269,6 +269,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         stats.obstacle_swept_contacts += tally.swept;
         stats.obstacle_edge_contacts += tally.edges;
         stats.obstacle_face_contacts += tally.faces;
+        stats.obstacle_carried += tally.carried;
         stats.obstacles_lagging = tally.lagging;
         stats.obstacle_max_lag = std::max(stats.obstacle_max_lag, tally.max_lag);
         stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
@@ -355,9 +356,17 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     project_constraints(model, h);
     model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     model.move_obstacles(t_end);
-    const ObstacleTally contacts = resolve_obstacles(model, h);
+    ObstacleTally contacts = resolve_obstacles(model, h);
     // Vertices left behind a mesh obstacle's surface are found there next substep.
     m_obstacle_lag = contacts.max_lag;
+    if (model.has_obstacles()) {
+        // What the passes left in an obstacle goes back to where it was, carried along (with OGC
+        // after its truncation, which can pull part of a correction back).
+        m_put_back.seed(positions, m_before_contacts);
+        if (!m_ogc) {
+            contacts.carried = put_back_into_obstacle_motion(model);
+        }
+    }
     solve_ms += watch.elapsed_ms();
     // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
     // may have pressed one layer into the next); a vertex pushed back into an obstacle is
@@ -376,6 +385,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         if (m_pins_left_sets && ball_held > 0) {
             catch_up(positions, velocities, inverse_masses);
         }
+        if (model.has_obstacles()) {
+            contacts.carried = put_back_into_obstacle_motion(model);
+        }
         m_step_truncated += m_substep_truncated;
         solve_ms += watch.elapsed_ms();
     } else if (m_self_collision) {
@@ -385,7 +397,10 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         m_self_collision->project(positions, m_previous_positions, inverse_masses, material, t_end,
                                   h);
         if (model.has_obstacles()) {
-            m_step_pushes_undone += undo_pushes_into_obstacles(model);
+            // A push that took a triangle into an obstacle is undone.
+            m_put_back.seed(positions, m_before_self);
+            m_step_pushes_undone +=
+                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::Reference);
         }
     }
     watch.restart();
@@ -534,9 +549,7 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
     // much per substep: an obstacle that jumps pushes cloth out at a bounded speed (the vertex
     // lags behind its surface) instead of sweeping it through the cloth in one substep.
     const double max_push = max_settle;
-    if (!mesh_obstacles.empty()) {
-        m_before_contacts.assign(positions.begin(), positions.end());
-    }
+    m_before_contacts.assign(positions.begin(), positions.end());
     ObstacleTally total = parallel_reduce(
         static_cast<std::int64_t>(positions.size()), ObstacleTally{},
         [&](std::int64_t begin, std::int64_t end) {
@@ -625,75 +638,13 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
     return total;
 }
 
-std::int64_t XPBDStepper::undo_pushes_into_obstacles(ClothModel& model) {
-    const std::span<Vec3d> positions = model.mutable_positions();
-    const std::span<const geometry::Triangle> triangles = model.triangles();
-    const geometry::MeshTopology& topology = model.topology();
-    // Every mark is cleared again before this returns.
-    m_triangle_marks.resize(triangles.size(), 0);
-    const auto pushed = [&](std::int32_t v) {
-        const auto k = static_cast<std::size_t>(v);
-        return !(positions[k] == m_before_self[k]);
-    };
-    // Adds the triangles of v that still have a pushed vertex (each once per round).
-    const auto add_triangles_of = [&](std::int32_t v) {
-        for (const std::int32_t t : topology.triangles_of_vertex(v)) {
-            const auto k = static_cast<std::size_t>(t);
-            const geometry::Triangle& tri = triangles[k];
-            if (m_triangle_marks[k] == 0 && (pushed(tri[0]) || pushed(tri[1]) || pushed(tri[2]))) {
-                m_triangle_marks[k] = 1;
-                m_pushed_triangles.push_back(t);
-            }
-        }
-    };
-    m_pushed_triangles.clear();
-    for (std::size_t v = 0; v < positions.size(); ++v) {
-        if (pushed(static_cast<std::int32_t>(v))) {
-            add_triangles_of(static_cast<std::int32_t>(v));
-        }
+std::int64_t XPBDStepper::put_back_into_obstacle_motion(ClothModel& model) {
+    const std::int64_t moved =
+        m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::Carried);
+    for (const std::int32_t v : m_put_back.moved()) {
+        m_contact_depths[static_cast<std::size_t>(v)] = 0.0;  // it moves with the surface
     }
-    std::int64_t undone = 0;
-    while (!m_pushed_triangles.empty()) {
-        std::sort(m_pushed_triangles.begin(), m_pushed_triangles.end());
-        m_pushed_meets.assign(m_pushed_triangles.size(), 0);
-        parallel_for(
-            static_cast<std::int64_t>(m_pushed_triangles.size()),
-            [&](std::int64_t i) {
-                const auto k = static_cast<std::size_t>(i);
-                const geometry::Triangle& tri =
-                    triangles[static_cast<std::size_t>(m_pushed_triangles[k])];
-                m_pushed_meets[k] =
-                    triangle_meets_obstacles(model, positions[static_cast<std::size_t>(tri[0])],
-                                             positions[static_cast<std::size_t>(tri[1])],
-                                             positions[static_cast<std::size_t>(tri[2])])
-                        ? 1
-                        : 0;
-            },
-            TRIANGLE_GRAIN);
-        for (const std::int32_t t : m_pushed_triangles) {
-            m_triangle_marks[static_cast<std::size_t>(t)] = 0;
-        }
-        m_put_back.clear();
-        for (std::size_t i = 0; i < m_pushed_triangles.size(); ++i) {
-            if (m_pushed_meets[i] == 0) {
-                continue;
-            }
-            for (const std::int32_t v :
-                 triangles[static_cast<std::size_t>(m_pushed_triangles[i])]) {
-                if (pushed(v)) {
-                    positions[static_cast<std::size_t>(v)] =
-                        m_before_self[static_cast<std::size_t>(v)];
-                    m_put_back.push_back(v);
-                    ++undone;
-                }
-            }
-        }
-        m_pushed_triangles.clear();
-        for (const std::int32_t v : m_put_back) {
-            add_triangles_of(v);
-        }
-    }
-    return undone;
+    return moved;
 }
 
 void XPBDStepper::save_state(ByteWriter& out) const {

@@ -92,6 +92,7 @@
 #include "pliant/cloth/detail/constraint_kernels.hpp"
 #include "pliant/cloth/detail/ogc_audit_window.hpp"
 #include "pliant/cloth/mesh_contact.hpp"
+#include "pliant/cloth/obstacle_put_back.hpp"
 #include "pliant/cloth/ogc_contact.hpp"
 #include "pliant/cloth/self_collision.hpp"
 #include "pliant/cloth/strain_hierarchy.hpp"
@@ -113,9 +114,12 @@ struct ClothStepStats {
     // Cloth triangles a mesh obstacle's vertices met while entering them (mesh_contact.hpp,
     // resolve_mesh_face_contacts) and that were lifted off, summed over the substeps.
     std::int64_t obstacle_face_contacts = 0;
+    // Vertices of cloth triangles that the obstacle passes left in an obstacle, put back where
+    // they started the substep, carried with the obstacle (obstacle_put_back.hpp), summed over
+    // the substeps.
+    std::int64_t obstacle_carried = 0;
     // Vertices put back where they were before the self-contacts because their pushes took a
-    // cloth triangle into an obstacle (XPBD with the proximity contact), summed over the
-    // substeps.
+    // cloth triangle into an obstacle (the proximity contact), summed over the substeps.
     std::int64_t obstacle_pushes_undone = 0;
     // Obstacles that jump: the farthest an obstacle's surface moved in one substep (m), the free
     // vertices whose push out of an obstacle was bounded in the last substep (with
@@ -195,6 +199,7 @@ private:
         std::int64_t swept = 0;     // vertices a mesh obstacle's swept test caught
         std::int64_t edges = 0;     // cloth edges a mesh obstacle's edges met (edge pass)
         std::int64_t faces = 0;     // cloth triangles a mesh obstacle's vertices met (face pass)
+        std::int64_t carried = 0;   // vertices put back, carried with an obstacle
         std::int64_t lagging = 0;   // vertices whose push was bounded
         double max_lag = 0.0;       // m
     };
@@ -207,11 +212,10 @@ private:
     // Pushes every free vertex out of the obstacles, recording the deepest correction per vertex
     // and the obstacle surface's velocity there for friction; returns the vertices in contact.
     ObstacleTally resolve_obstacles(ClothModel& model, double h);
-    // After the self-contacts (positions before them in m_before_self): a vertex whose push took
-    // one of its triangles into an obstacle goes back to where it was before the pushes, until
-    // no triangle a push moved meets an obstacle (obstacle_intersections.hpp,
-    // triangle_meets_obstacles). Returns the vertices put back.
-    std::int64_t undo_pushes_into_obstacles(ClothModel& model);
+    // The triangles seeded in m_put_back that meet an obstacle go back to the substep's start,
+    // carried with the obstacle (obstacle_put_back.hpp); their vertices' obstacle contacts are
+    // dropped (they move with the surface). Returns the vertices moved.
+    std::int64_t put_back_into_obstacle_motion(ClothModel& model);
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
@@ -263,15 +267,11 @@ private:
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;       // the obstacle surface's velocity at the contact
     MeshFeatureContactScratch m_feature_contacts;  // mesh obstacles' edge and face passes
-    std::vector<Vec3d> m_before_contacts;  // positions before the obstacle pass (with meshes)
-    // undo_pushes_into_obstacles: positions before the self-contacts, per triangle a mark (all
-    // clear between calls), the triangles to test, whether each meets an obstacle, and the
-    // vertices put back in a round.
+    std::vector<Vec3d> m_before_contacts;          // positions before the obstacle passes
+    // Triangles the passes left in an obstacle, and self-contact pushes into one (the positions
+    // before the self-contacts: m_before_self), are put back (obstacle_put_back.hpp).
     std::vector<Vec3d> m_before_self;
-    std::vector<std::uint8_t> m_triangle_marks;
-    std::vector<std::int32_t> m_pushed_triangles;
-    std::vector<std::uint8_t> m_pushed_meets;
-    std::vector<std::int32_t> m_put_back;
+    ObstaclePutBack m_put_back;
     std::int64_t m_step_pushes_undone = 0;
     // The largest push an obstacle held back in the last substep (m): how far behind a mesh
     // obstacle's surface a vertex can be at the next (mesh_contact.hpp, extra_depth).

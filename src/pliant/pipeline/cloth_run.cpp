@@ -522,6 +522,7 @@ nlohmann::ordered_json run_cloth_scene(const cloth::ClothScene& scene,
             record["obstacle_swept_contacts"] = step.obstacle_swept_contacts;
             record["obstacle_edge_contacts"] = step.obstacle_edge_contacts;
             record["obstacle_face_contacts"] = step.obstacle_face_contacts;
+            record["obstacle_carried"] = step.obstacle_carried;
             record["obstacle_pushes_undone"] = step.obstacle_pushes_undone;
             record["obstacles_lagging"] = step.obstacles_lagging;
             record["obstacle_max_lag"] = step.obstacle_max_lag;

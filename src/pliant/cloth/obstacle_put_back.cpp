@@ -1,0 +1,144 @@
+#include "pliant/cloth/obstacle_put_back.hpp"
+
+#include <algorithm>
+#include <array>
+#include <optional>
+
+#include "pliant/cloth/mesh_obstacle.hpp"
+#include "pliant/cloth/obstacle_intersections.hpp"
+#include "pliant/core/parallel.hpp"
+
+namespace pliant::cloth {
+namespace {
+
+constexpr std::int64_t TRIANGLE_GRAIN = 256;
+
+// Where the motion of obstacle `met` (obstacle_met_by's index) since its previous placement
+// carries the point `start`.
+Vec3d carried(const ClothModel& model, std::int32_t met, const Vec3d& start) {
+    const std::span<const MovingMeshObstacle> meshes = model.mesh_obstacles();
+    const auto k = static_cast<std::size_t>(met);
+    if (k >= meshes.size()) {
+        const MotionState& state = model.obstacles()[k - meshes.size()].state;
+        return state.pose.apply(state.previous_pose.apply_inverse(start));
+    }
+    const MovingMeshObstacle& obstacle = meshes[k];
+    Vec3d x = obstacle.state.previous_pose.apply_inverse(start);
+    if (obstacle.animation) {
+        const MeshObstacle& mesh = *obstacle.mesh;
+        const double radius = mesh.max_vertex_step() + model.material().thickness;
+        if (const std::optional<MeshObstacle::SurfacePoint> point = mesh.surface_point(x, radius)) {
+            const geometry::Triangle& tri =
+                mesh.mesh().triangles[static_cast<std::size_t>(point->triangle)];
+            const std::span<const Vec3d> now = mesh.mesh().positions;
+            const std::span<const Vec3d> before = mesh.previous_positions();
+            const Vec3d& b = point->barycentric;
+            const auto moved = [&](std::size_t j) {
+                const auto v = static_cast<std::size_t>(tri[j]);
+                return now[v] - before[v];
+            };
+            x += moved(0) * b.x + moved(1) * b.y + moved(2) * b.z;
+        }
+    }
+    return obstacle.state.pose.apply(x);
+}
+
+}  // namespace
+
+void ObstaclePutBack::seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from) {
+    m_seeded.resize(positions.size(), 0);
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        if (!(positions[v] == changed_from[v])) {
+            m_seeded[v] = 1;
+        }
+    }
+}
+
+std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> reference,
+                                  Fallback fallback) {
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<const double> inverse_masses = model.inverse_masses();
+    const std::span<const geometry::Triangle> triangles = model.triangles();
+    const geometry::MeshTopology& topology = model.topology();
+    m_triangle_marks.resize(triangles.size(), 0);
+    m_vertex_moved.resize(positions.size(), 0);
+    m_moved.clear();
+    m_marked.clear();
+    m_seeds.clear();
+    m_stuck = 0;
+    const auto add_triangles_of = [&](std::int32_t v) {
+        for (const std::int32_t t : topology.triangles_of_vertex(v)) {
+            const auto k = static_cast<std::size_t>(t);
+            if (m_triangle_marks[k] == 0) {
+                m_triangle_marks[k] = 1;
+                m_seeds.push_back(t);
+            }
+        }
+    };
+    m_seeded.resize(positions.size(), 0);
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        if (m_seeded[v] != 0) {
+            m_seeded[v] = 0;
+            add_triangles_of(static_cast<std::int32_t>(v));
+        }
+    }
+    std::array<Vec3d, 3> corners{};
+    while (!m_seeds.empty()) {
+        std::sort(m_seeds.begin(), m_seeds.end());
+        m_met.assign(m_seeds.size(), -1);
+        parallel_for(
+            static_cast<std::int64_t>(m_seeds.size()),
+            [&](std::int64_t i) {
+                const auto k = static_cast<std::size_t>(i);
+                const geometry::Triangle& tri = triangles[static_cast<std::size_t>(m_seeds[k])];
+                m_met[k] = obstacle_met_by(model, positions[static_cast<std::size_t>(tri[0])],
+                                           positions[static_cast<std::size_t>(tri[1])],
+                                           positions[static_cast<std::size_t>(tri[2])]);
+            },
+            TRIANGLE_GRAIN);
+        for (const std::int32_t t : m_seeds) {
+            m_triangle_marks[static_cast<std::size_t>(t)] = 0;
+        }
+        const std::size_t round_start = m_moved.size();
+        for (std::size_t i = 0; i < m_seeds.size(); ++i) {
+            if (m_met[i] < 0) {
+                continue;
+            }
+            const geometry::Triangle& tri = triangles[static_cast<std::size_t>(m_seeds[i])];
+            // The triangle at its fallback: free vertices not yet moved go there, the rest stay.
+            std::array<bool, 3> moves{};
+            for (std::size_t j = 0; j < 3; ++j) {
+                const auto v = static_cast<std::size_t>(tri[j]);
+                moves[j] = inverse_masses[v] > 0.0 && m_vertex_moved[v] == 0;
+                corners[j] = !moves[j]                      ? positions[v]
+                             : fallback == Fallback::Carried ? carried(model, m_met[i], reference[v])
+                                                             : reference[v];
+            }
+            if (triangle_meets_obstacles(model, corners[0], corners[1], corners[2])) {
+                ++m_stuck;
+                continue;
+            }
+            for (std::size_t j = 0; j < 3; ++j) {
+                if (moves[j]) {
+                    const auto v = static_cast<std::size_t>(tri[j]);
+                    m_vertex_moved[v] = 1;
+                    m_marked.push_back(tri[j]);
+                    if (!(positions[v] == corners[j])) {
+                        positions[v] = corners[j];
+                        m_moved.push_back(tri[j]);
+                    }
+                }
+            }
+        }
+        m_seeds.clear();
+        for (std::size_t i = round_start; i < m_moved.size(); ++i) {
+            add_triangles_of(m_moved[i]);
+        }
+    }
+    for (const std::int32_t v : m_marked) {
+        m_vertex_moved[static_cast<std::size_t>(v)] = 0;
+    }
+    return static_cast<std::int64_t>(m_moved.size());
+}
+
+}  // namespace pliant::cloth

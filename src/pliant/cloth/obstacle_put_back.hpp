@@ -1,0 +1,76 @@
+// The last word on cloth through obstacles in a substep: cloth triangles that meet an obstacle
+// after a pass that moved them go to a fallback that is clear of it.
+//
+//   ObstaclePutBack put_back;  // scratch, reused substep after substep
+//   // After the obstacle passes: what they left in an obstacle goes back to the substep's start,
+//   // carried with the obstacles.
+//   put_back.seed(positions, before_passes);
+//   put_back.run(model, start, ObstaclePutBack::Fallback::Carried);
+//   // After a pass that must not move cloth into an obstacle (self-contact pushes): undone.
+//   put_back.seed(positions, before_pushes);
+//   put_back.run(model, before_pushes, ObstaclePutBack::Fallback::Reference);
+//
+// Why: the obstacle passes (push_out, mesh_contact.hpp) each resolve what entered in the substep,
+// one after the other, with bounded and averaged corrections. They can leave a triangle in an
+// obstacle (a push bounded by max_push, a vertex whose features' corrections average out, a pass
+// that moves a vertex the previous pass placed), and every pass acts only on motion that enters,
+// so such a crossing stays. This pass is checked against the exact predicate instead.
+//
+// Contract:
+//   - seed(positions, changed_from) marks the vertices whose position differs from
+//     changed_from[v] (a pass moved them); the marks add up until run(), which clears them. A
+//     later pass may move the marked vertices again before run() (OGC's truncation pulls part of
+//     an obstacle pass's corrections back: seed before it, run after it).
+//   - run(model, reference, fallback): the triangles with a marked vertex are the first round's
+//     seeds. Rounds: each seed triangle that meets an obstacle (obstacle_met_by, exact) has its
+//     free vertices (inverse mass > 0) moved to their fallback, unless the triangle at the
+//     fallback meets one as well (the fallback cannot clear it: it stays, counted in stuck()).
+//     The triangles of the vertices moved are the next round's seeds. A vertex moves at most
+//     once per run, so the rounds end.
+//   - Fallback::Reference: the vertex goes to reference[v].
+//   - Fallback::Carried: reference[v] is where the vertex was when the obstacles were last
+//     placed (the substep's start); the vertex goes where the met obstacle's motion since then
+//     carries that point: rigid motion exactly (a triangle clear of a rigidly moving obstacle at
+//     the start is clear of it carried along: a fallback that always exists), a deforming mesh's
+//     deformation by the displacement of the surface point nearest to it (within the mesh's
+//     largest vertex step and `thickness` of the carried point; approximate, and checked like
+//     every fallback). The vertex then moves with the obstacle's surface.
+// run() returns the vertices moved (moved() lists them, in the order they moved). Deterministic:
+// the tests run in parallel into one flag per triangle, the moves in triangle order, so any
+// number of threads gives the same positions. Cost: one obstacle query per seed triangle per
+// round (MeshObstacle::meets_triangle, an LBVH query) and O(moved vertices) besides; seed() and
+// finding the seeds are O(V).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pliant/cloth/cloth_model.hpp"
+#include "pliant/core/vec3.hpp"
+
+namespace pliant::cloth {
+
+class ObstaclePutBack {
+public:
+    enum class Fallback { Reference, Carried };
+
+    void seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from);
+    std::int64_t run(ClothModel& model, std::span<const Vec3d> reference, Fallback fallback);
+
+    std::span<const std::int32_t> moved() const { return m_moved; }
+    // Triangles of the last run that met an obstacle at their fallback too (left as they were).
+    std::int64_t stuck() const { return m_stuck; }
+
+private:
+    std::vector<std::uint8_t> m_seeded;          // per vertex: seed() marked it
+    std::vector<std::uint8_t> m_triangle_marks;  // all clear between runs
+    std::vector<std::uint8_t> m_vertex_moved;    // all clear between runs
+    std::vector<std::int32_t> m_seeds;
+    std::vector<std::int32_t> m_met;  // per seed: the obstacle it meets (obstacle_met_by), or -1
+    std::vector<std::int32_t> m_moved;
+    std::vector<std::int32_t> m_marked;  // the vertices whose m_vertex_moved is set
+    std::int64_t m_stuck = 0;
+};
+
+}  // namespace pliant::cloth
