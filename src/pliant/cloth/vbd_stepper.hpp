@@ -19,9 +19,12 @@
 //
 // After the sweeps: mesh obstacles over the whole substep (mesh_contact.hpp, as XPBDStepper: each
 // vertex's path swept against the moving triangles, then each cloth edge against the surface's
-// edges, pushes bounded the same way), since the sweeps' push sees only where the surface is at
-// the substep's end; then the cloth's own contacts (self-collision: the same proximity projection
-// and CCD fail-safe as XPBDStepper, self_collision.hpp, with a window of one substep), then
+// edges and each cloth triangle against its vertices, pushes bounded the same way), since the
+// sweeps' push sees only where the surface is at the substep's end, and a triangle of a vertex
+// these passes moved that still meets an obstacle goes where the substep began, carried with the
+// obstacle (obstacle_put_back.hpp; with OGC after OGC's truncation); then the cloth's own
+// contacts (self-collision: the same proximity projection, undo of pushes into obstacles and CCD
+// fail-safe as XPBDStepper, self_collision.hpp, with a window of one substep), then
 // v = (x − x_t) / h; at obstacle contacts the velocity relative to the surface loses its outward
 // normal part (inelastic) and Coulomb friction acts on its tangential part, bounded by the
 // normal speed the contact took away (obstacles.hpp, apply_friction); then

@@ -21,10 +21,12 @@
 //   4. obstacles, placed at t (ClothModel::move_obstacles): every vertex is pushed `thickness`
 //      away from every obstacle (obstacles.hpp, mesh_obstacle.hpp); with mesh obstacles, then the
 //      cloth's edges and triangles swept against the surface's edges and vertices
-//      (mesh_contact.hpp);
+//      (mesh_contact.hpp); a triangle of a vertex these passes moved that still meets an
+//      obstacle goes where the substep began, carried with the obstacle (obstacle_put_back.hpp;
+//      with OGC after OGC's truncation);
 //   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart, and a
 //   vertex whose push took one of its triangles into an obstacle is put back where 4 left it
-//   (undo_pushes_into_obstacles; obstacle_intersections.hpp); the CCD
+//   (obstacle_put_back.hpp, Fallback::Reference); the CCD
 //   fail-safe runs after every 4 substeps (a window) on the motion of those 4 substeps, and the
 //   candidate pairs are gathered before every window or, while contact is sparse, every second
 //   one; self_collision.hpp)
