@@ -28,8 +28,8 @@ ClothModel sheet_beside_a_turning_box() {
     ClothModel model(sheet, ClothMaterial{});
     Motion turning;
     turning.keyframes = {Keyframe{0.0, {}, {}}, Keyframe{1.0, {}, {0.0, 0.0, 100.0}}};
-    model.add_mesh_obstacle(std::make_shared<const MeshObstacle>(geometry::make_box(
-                                {-0.25, -0.25, 0.0}, {0.25, 0.25, 0.4})),
+    model.add_mesh_obstacle(std::make_shared<const MeshObstacle>(
+                                geometry::make_box({-0.25, -0.25, 0.0}, {0.25, 0.25, 0.4})),
                             turning);
     return model;
 }

@@ -110,9 +110,10 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
             for (std::size_t j = 0; j < 3; ++j) {
                 const auto v = static_cast<std::size_t>(tri[j]);
                 moves[j] = inverse_masses[v] > 0.0 && m_vertex_moved[v] == 0;
-                corners[j] = !moves[j]                      ? positions[v]
-                             : fallback == Fallback::Carried ? carried(model, m_met[i], reference[v])
-                                                             : reference[v];
+                corners[j] = !moves[j] ? positions[v]
+                             : fallback == Fallback::Carried
+                                 ? carried(model, m_met[i], reference[v])
+                                 : reference[v];
             }
             if (triangle_meets_obstacles(model, corners[0], corners[1], corners[2])) {
                 ++m_stuck;
