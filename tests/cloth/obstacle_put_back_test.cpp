@@ -53,7 +53,7 @@ TEST(ObstaclePutBack, TrianglesATurningBoxEnteredAreCarriedOutWithIt) {
         }
         ObstaclePutBack put_back;
         put_back.seed(model.positions(), before);
-        const std::int64_t moved = put_back.run(model, start, ObstaclePutBack::Fallback::Carried);
+        const std::int64_t moved = put_back.run(model, start, ObstaclePutBack::Fallback::carried);
         EXPECT_EQ(count_obstacle_intersections(model), 0) << threads << " threads";
         EXPECT_GT(moved, 0);
         EXPECT_EQ(put_back.stuck(), 0);
@@ -97,7 +97,7 @@ TEST(ObstaclePutBack, APushIntoAnObstacleIsUndoneAndOthersStay) {
     EXPECT_GT(count_obstacle_intersections(model), 0);
     ObstaclePutBack put_back;
     put_back.seed(model.positions(), before);
-    EXPECT_EQ(put_back.run(model, before, ObstaclePutBack::Fallback::Reference), 1);
+    EXPECT_EQ(put_back.run(model, before, ObstaclePutBack::Fallback::reference), 1);
     ASSERT_EQ(put_back.moved().size(), 1U);
     EXPECT_EQ(put_back.moved()[0], 12);
     EXPECT_EQ(model.positions()[12], before[12]);
@@ -115,7 +115,7 @@ TEST(ObstaclePutBack, AFallbackInsideTheObstacleLeavesTheTriangleStuck) {
     model.mutable_positions()[6].z -= 0.01;
     ObstaclePutBack put_back;
     put_back.seed(model.positions(), before);
-    EXPECT_EQ(put_back.run(model, before, ObstaclePutBack::Fallback::Reference), 0);
+    EXPECT_EQ(put_back.run(model, before, ObstaclePutBack::Fallback::reference), 0);
     EXPECT_GT(put_back.stuck(), 0);
     EXPECT_EQ(model.positions()[6].z, before[6].z - 0.01);
 }

@@ -111,7 +111,7 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
                 const auto v = static_cast<std::size_t>(tri[j]);
                 moves[j] = inverse_masses[v] > 0.0 && m_vertex_moved[v] == 0;
                 corners[j] = !moves[j] ? positions[v]
-                             : fallback == Fallback::Carried
+                             : fallback == Fallback::carried
                                  ? carried(model, m_met[i], reference[v])
                                  : reference[v];
             }

@@ -5,10 +5,10 @@
 //   // After the obstacle passes: what they left in an obstacle goes back to the substep's start,
 //   // carried with the obstacles.
 //   put_back.seed(positions, before_passes);
-//   put_back.run(model, start, ObstaclePutBack::Fallback::Carried);
+//   put_back.run(model, start, ObstaclePutBack::Fallback::carried);
 //   // After a pass that must not move cloth into an obstacle (self-contact pushes): undone.
 //   put_back.seed(positions, before_pushes);
-//   put_back.run(model, before_pushes, ObstaclePutBack::Fallback::Reference);
+//   put_back.run(model, before_pushes, ObstaclePutBack::Fallback::reference);
 //
 // Why: the obstacle passes (push_out, mesh_contact.hpp) each resolve what entered in the substep,
 // one after the other, with bounded and averaged corrections. They can leave a triangle in an
@@ -27,8 +27,8 @@
 //     fallback meets one as well (the fallback cannot clear it: it stays, counted in stuck()).
 //     The triangles of the vertices moved are the next round's seeds. A vertex moves at most
 //     once per run, so the rounds end.
-//   - Fallback::Reference: the vertex goes to reference[v].
-//   - Fallback::Carried: reference[v] is where the vertex was when the obstacles were last
+//   - Fallback::reference: the vertex goes to reference[v].
+//   - Fallback::carried: reference[v] is where the vertex was when the obstacles were last
 //     placed (the substep's start); the vertex goes where the met obstacle's motion since then
 //     carries that point: rigid motion exactly (a triangle clear of a rigidly moving obstacle at
 //     the start is clear of it carried along: a fallback that always exists), a deforming mesh's
@@ -53,7 +53,7 @@ namespace pliant::cloth {
 
 class ObstaclePutBack {
 public:
-    enum class Fallback { Reference, Carried };
+    enum class Fallback { reference, carried };
 
     void seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from);
     std::int64_t run(ClothModel& model, std::span<const Vec3d> reference, Fallback fallback);

@@ -684,7 +684,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         }
         // What the passes left in an obstacle (or OGC's truncation took back into one) goes back
         // to where it was, carried along.
-        m_step_carried += m_put_back.run(model, m_start, ObstaclePutBack::Fallback::Carried);
+        m_step_carried += m_put_back.run(model, m_start, ObstaclePutBack::Fallback::carried);
         for (const std::int32_t v : m_put_back.moved()) {
             m_mesh_contacts[static_cast<std::size_t>(v)] = MeshContact{};  // moves with it
         }
@@ -702,7 +702,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
             // A push that took a triangle into an obstacle is undone.
             m_put_back.seed(positions, m_before_self);
             m_step_pushes_undone +=
-                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::Reference);
+                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::reference);
         }
     }
     watch.restart();

@@ -22,8 +22,6 @@ namespace {
 
 constexpr std::int64_t CONSTRAINT_GRAIN = 1024;
 constexpr std::int64_t VERTEX_GRAIN = 2048;
-// Triangles tested against the obstacles per task (an LBVH query and exact tests each).
-constexpr std::int64_t TRIANGLE_GRAIN = 256;
 constexpr std::int64_t CHAIN_PACKET_GRAIN = 2;
 // The self-collision fail-safe checks the motion of every this many substeps (a window); the
 // candidate pairs are gathered for one or two windows (SelfCollision::windows_for_next_gather).
@@ -400,7 +398,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
             // A push that took a triangle into an obstacle is undone.
             m_put_back.seed(positions, m_before_self);
             m_step_pushes_undone +=
-                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::Reference);
+                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::reference);
         }
     }
     watch.restart();
@@ -640,7 +638,7 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
 
 std::int64_t XPBDStepper::put_back_into_obstacle_motion(ClothModel& model) {
     const std::int64_t moved =
-        m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::Carried);
+        m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::carried);
     for (const std::int32_t v : m_put_back.moved()) {
         m_contact_depths[static_cast<std::size_t>(v)] = 0.0;  // it moves with the surface
     }

@@ -26,7 +26,7 @@
 //      with OGC after OGC's truncation);
 //   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart, and a
 //   vertex whose push took one of its triangles into an obstacle is put back where 4 left it
-//   (obstacle_put_back.hpp, Fallback::Reference); the CCD
+//   (obstacle_put_back.hpp, Fallback::reference); the CCD
 //   fail-safe runs after every 4 substeps (a window) on the motion of those 4 substeps, and the
 //   candidate pairs are gathered before every window or, while contact is sparse, every second
 //   one; self_collision.hpp)
