@@ -120,5 +120,41 @@ TEST(ObstaclePutBack, AFallbackInsideTheObstacleLeavesTheTriangleStuck) {
     EXPECT_EQ(model.positions()[6].z, before[6].z - 0.01);
 }
 
+// The turn carries the sheet's vertices 4.5–4.9 cm: with max_carry 1 cm (an obstacle that jumps,
+// as far as the passes may push) nothing is carried, the triangles are reported stuck.
+TEST(ObstaclePutBack, NoCarryFartherThanMaxCarry) {
+    ClothModel model = sheet_beside_a_turning_box();
+    const std::vector<Vec3d> start(model.positions().begin(), model.positions().end());
+    model.begin_step(0.1);
+    model.move_obstacles(0.1);
+    std::vector<Vec3d> before(start);
+    for (Vec3d& p : before) {
+        p.x += 1.0;
+    }
+    ObstaclePutBack put_back;
+    put_back.seed(model.positions(), before);
+    EXPECT_EQ(put_back.run(model, start, ObstaclePutBack::Fallback::carried, 0.01), 0);
+    EXPECT_GT(put_back.stuck(), 0);
+    EXPECT_GT(count_obstacle_intersections(model), 0);
+}
+
+// Cloth that began a substep wholly inside a closed mesh (given there, or lagging behind a surface
+// that jumped) with one vertex pushed out through the surface: carrying it back inside would
+// meet nothing (meets_triangle sees the surface only), but it is refused, so the cloth keeps
+// coming out.
+TEST(ObstaclePutBack, NoFallbackInsideAClosedMesh) {
+    ClothModel model(test::flat_sheet(4, 0.1, 0.2), ClothMaterial{});
+    model.add_mesh_obstacle(std::make_shared<const MeshObstacle>(
+        geometry::make_box({-0.25, -0.25, 0.0}, {0.25, 0.25, 0.4})));
+    const std::vector<Vec3d> start(model.positions().begin(), model.positions().end());
+    model.mutable_positions()[12].z = 0.45;  // the centre pushed out through the top
+    EXPECT_GT(count_obstacle_intersections(model), 0);
+    ObstaclePutBack put_back;
+    put_back.seed(model.positions(), start);
+    EXPECT_EQ(put_back.run(model, start, ObstaclePutBack::Fallback::carried), 0);
+    EXPECT_GT(put_back.stuck(), 0);
+    EXPECT_EQ(model.positions()[12].z, 0.45);
+}
+
 }  // namespace
 }  // namespace pliant::cloth

@@ -35,13 +35,17 @@ std::span<const std::int32_t> csr_row(std::span<const std::int32_t> offsets,
 }
 
 // The direction in which two features meeting in a sweep pass through each other: `common`, the
-// cross product of their directions (a cloth triangle's normal; two edges' common normal), turned
-// to the side of the surface's outward `pseudo_normal` at the meeting. The pseudo-normal itself
-// where it leaves the side open: `common` zero (parallel edges, a degenerate triangle) or nearly
-// perpendicular to it (features that meet edge-on).
-Vec3d crossing_normal(const Vec3d& common, const Vec3d& pseudo_normal) {
+// cross product of their directions u × w (a cloth triangle's normal; two edges' common normal),
+// turned to the side of the surface's outward `pseudo_normal` at the meeting. The pseudo-normal
+// itself where `common` does not decide a side: shorter than 1e-6 |u| |w| (parallel edges, a
+// degenerate triangle: its direction is rounding) or within 0.06° of perpendicular to the
+// pseudo-normal (features that meet edge-on).
+Vec3d crossing_normal(const Vec3d& u, const Vec3d& w, const Vec3d& pseudo_normal) {
+    const Vec3d common = cross(u, w);
+    const double length = norm(common);
     const double along = dot(common, pseudo_normal);
-    if (!(std::abs(along) > 1e-9 * norm(common) * norm(pseudo_normal))) {
+    if (!(length > 1e-6 * norm(u) * norm(w)) ||
+        !(std::abs(along) > 1e-3 * length * norm(pseudo_normal))) {
         return pseudo_normal;
     }
     return along > 0.0 ? common : -common;
@@ -412,7 +416,7 @@ std::optional<MeshObstacle::EdgeHit> MeshObstacle::sweep_edge(const Vec3d& p_t0,
                 // edges' common normal turned to the outside (the edge's pseudo-normal at the
                 // meeting; the pseudo-normal itself for parallel edges).
                 const Vec3d normal = crossing_normal(
-                    cross(q - p, b - a),
+                    q - p, b - a,
                     unit_normal_sum(csr_row(m_edge_triangle_offsets, m_edge_triangles, ei), u));
                 const Vec3d cloth_motion = (p_t1 - p_t0) * (1.0 - at.s) + (q_t1 - q_t0) * at.s;
                 const Vec3d surface_motion = (a1 - a0) * (1.0 - at.t) + (b1 - b0) * at.t;
@@ -477,11 +481,11 @@ std::optional<MeshObstacle::VertexHit> MeshObstacle::sweep_triangle(
             const Vec3d c = c_t0 + (c_t1 - c_t0) * u;
             const collision::PointTriangleProximity<double> at =
                 collision::point_triangle_proximity(x0 + (x1 - x0) * u, a, b, c);
-            // Entering: the surface vertex crosses the triangle toward the cloth's side, along
+            // Entering: the surface vertex crosses the triangle toward the outside, along
             // the triangle's normal turned to the outside (the vertex's pseudo-normal at the
             // meeting; the pseudo-normal itself for a degenerate triangle).
             const Vec3d normal = crossing_normal(
-                cross(b - a, c - a),
+                b - a, c - a,
                 unit_normal_sum(csr_row(m_vertex_triangle_offsets, m_vertex_triangles, vi), u));
             const Vec3d& w = at.barycentric;
             const Vec3d cloth_motion =

@@ -141,7 +141,7 @@ public:
     // slides over a corner and through it is caught. That is what the cloth's vertex-face and
     // edge-edge contact miss: a tip of the surface (a fingertip, the pole of a capsule) pushed into
     // a cloth face between its vertices and edges. The earliest such meeting (conservative,
-    // collision:: vertex_face_ccd), the surface vertex, the time of impact in [0, 1] and the
+    // collision::vertex_face_ccd), the surface vertex, the time of impact in [0, 1] and the
     // barycentric weights of the meeting point on the triangle. Ties go to the lowest vertex. The
     // candidates come from an LBVH over the vertices' paths (refit by move_to and set_positions).
     // Thread safe.
@@ -174,6 +174,8 @@ public:
     // in opposite directions), else none. Negative when it is wound inward: its normals point in,
     // so its inside is everything outside it, and cloth is kept inside it, as in a container.
     std::optional<double> enclosed_volume() const;
+    // Whether enclosed_volume() has a value (closed and consistently wound).
+    bool is_closed() const { return m_closed; }
     std::size_t num_triangles() const { return m_mesh.triangles.size(); }
     // Box of the surface (double, exact).
     const AABBd& bounds() const { return m_bounds; }

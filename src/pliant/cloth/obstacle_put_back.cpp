@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <optional>
 
 #include "pliant/cloth/mesh_obstacle.hpp"
@@ -43,6 +44,21 @@ Vec3d carried(const ClothModel& model, std::int32_t met, const Vec3d& start) {
     return obstacle.state.pose.apply(x);
 }
 
+// Whether x is inside a closed mesh obstacle (behind its surface; meets_triangle sees only a
+// triangle through the surface, not one wholly inside).
+bool inside_a_closed_mesh(const ClothModel& model, const Vec3d& x) {
+    for (const MovingMeshObstacle& mesh : model.mesh_obstacles()) {
+        if (mesh.mesh->is_closed()) {
+            const std::optional<SurfaceDistance> surface = mesh.mesh->surface_distance(
+                mesh.state.pose.apply_inverse(x), std::numeric_limits<double>::infinity());
+            if (surface && surface->distance < 0.0) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
 }  // namespace
 
 void ObstaclePutBack::seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from) {
@@ -55,7 +71,7 @@ void ObstaclePutBack::seed(std::span<const Vec3d> positions, std::span<const Vec
 }
 
 std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> reference,
-                                  Fallback fallback) {
+                                  Fallback fallback, double max_carry) {
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<const double> inverse_masses = model.inverse_masses();
     const std::span<const geometry::Triangle> triangles = model.triangles();
@@ -105,8 +121,19 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
                 continue;
             }
             const geometry::Triangle& tri = triangles[static_cast<std::size_t>(m_seeds[i])];
+            const auto at = [&](std::size_t j) -> const Vec3d& {
+                return positions[static_cast<std::size_t>(tri[j])];
+            };
+            // A triangle whose vertex an earlier one of this round moved may be clear now.
+            const bool touched = m_vertex_moved[static_cast<std::size_t>(tri[0])] != 0 ||
+                                 m_vertex_moved[static_cast<std::size_t>(tri[1])] != 0 ||
+                                 m_vertex_moved[static_cast<std::size_t>(tri[2])] != 0;
+            if (touched && !triangle_meets_obstacles(model, at(0), at(1), at(2))) {
+                continue;
+            }
             // The triangle at its fallback: free vertices not yet moved go there, the rest stay.
             std::array<bool, 3> moves{};
+            bool usable = true;
             for (std::size_t j = 0; j < 3; ++j) {
                 const auto v = static_cast<std::size_t>(tri[j]);
                 moves[j] = inverse_masses[v] > 0.0 && m_vertex_moved[v] == 0;
@@ -114,8 +141,12 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
                              : fallback == Fallback::carried
                                  ? carried(model, m_met[i], reference[v])
                                  : reference[v];
+                if (moves[j]) {
+                    usable = usable && norm(corners[j] - reference[v]) <= max_carry &&
+                             !inside_a_closed_mesh(model, corners[j]);
+                }
             }
-            if (triangle_meets_obstacles(model, corners[0], corners[1], corners[2])) {
+            if (!usable || triangle_meets_obstacles(model, corners[0], corners[1], corners[2])) {
                 ++m_stuck;
                 continue;
             }

@@ -1,5 +1,5 @@
-// The last word on cloth through obstacles in a substep: cloth triangles that meet an obstacle
-// after a pass that moved them go to a fallback that is clear of it.
+// Cloth triangles that meet an obstacle after a pass that moved them go to a fallback that is
+// clear of it: after a substep's obstacle passes, and after the self-contact pushes.
 //
 //   ObstaclePutBack put_back;  // scratch, reused substep after substep
 //   // After the obstacle passes: what they left in an obstacle goes back to the substep's start,
@@ -21,28 +21,34 @@
 //     changed_from[v] (a pass moved them); the marks add up until run(), which clears them. A
 //     later pass may move the marked vertices again before run() (OGC's truncation pulls part of
 //     an obstacle pass's corrections back: seed before it, run after it).
-//   - run(model, reference, fallback): the triangles with a marked vertex are the first round's
-//     seeds. Rounds: each seed triangle that meets an obstacle (obstacle_met_by, exact) has its
-//     free vertices (inverse mass > 0) moved to their fallback, unless the triangle at the
-//     fallback meets one as well (the fallback cannot clear it: it stays, counted in stuck()).
-//     The triangles of the vertices moved are the next round's seeds. A vertex moves at most
-//     once per run, so the rounds end.
+//   - run(model, reference, fallback, max_carry): the triangles with a marked vertex are the
+//     first round's seeds. Rounds: each seed triangle that meets an obstacle (obstacle_met_by,
+//     exact; a triangle a vertex moved earlier in the round is tested again) has its free
+//     vertices (inverse mass > 0) moved to their fallback, unless the fallback cannot clear it:
+//     the triangle there meets an obstacle as well, a vertex's fallback is inside a closed mesh
+//     obstacle (meets_triangle sees only triangles through the surface) or farther than
+//     max_carry (m) from reference[v] (an obstacle that jumps: the passes bound their pushes so
+//     that cloth is not swept through cloth). Such a triangle stays, counted in stuck(). The
+//     triangles of the vertices moved are the next round's seeds. A vertex moves at most once
+//     per run, so the rounds end.
 //   - Fallback::reference: the vertex goes to reference[v].
-//   - Fallback::carried: reference[v] is where the vertex was when the obstacles were last
-//     placed (the substep's start); the vertex goes where the met obstacle's motion since then
-//     carries that point: rigid motion exactly (a triangle clear of a rigidly moving obstacle at
-//     the start is clear of it carried along: a fallback that always exists), a deforming mesh's
-//     deformation by the displacement of the surface point nearest to it (within the mesh's
-//     largest vertex step and `thickness` of the carried point; approximate, and checked like
-//     every fallback). The vertex then moves with the obstacle's surface.
+//   - Fallback::carried: reference[v] is where the vertex was at the obstacles' previous
+//     placement (ClothModel::move_obstacles keeps it: the substep's start); the vertex goes where
+//     the met obstacle's motion since then carries that point: rigid motion exactly (a triangle
+//     clear of a rigidly moving obstacle at the start is clear of it carried along, when all its
+//     vertices move), a deforming mesh's deformation by the displacement of the current
+//     surface's point nearest to the start (within the mesh's largest vertex step and
+//     `thickness`; approximate, and checked like every fallback). The vertex then moves with the
+//     obstacle's surface for the substep (it does not slide).
 // run() returns the vertices moved (moved() lists them, in the order they moved). Deterministic:
-// the tests run in parallel into one flag per triangle, the moves in triangle order, so any
+// the tests run in parallel into one entry per seed triangle, the moves in triangle order, so any
 // number of threads gives the same positions. Cost: one obstacle query per seed triangle per
 // round (MeshObstacle::meets_triangle, an LBVH query) and O(moved vertices) besides; seed() and
 // finding the seeds are O(V).
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -56,7 +62,8 @@ public:
     enum class Fallback { reference, carried };
 
     void seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from);
-    std::int64_t run(ClothModel& model, std::span<const Vec3d> reference, Fallback fallback);
+    std::int64_t run(ClothModel& model, std::span<const Vec3d> reference, Fallback fallback,
+                     double max_carry = std::numeric_limits<double>::infinity());
 
     std::span<const std::int32_t> moved() const { return m_moved; }
     // Triangles of the last run that met an obstacle at their fallback too (left as they were).

@@ -684,12 +684,19 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         }
         // What the passes left in an obstacle (or OGC's truncation took back into one) goes back
         // to where it was, carried along.
-        m_step_carried += m_put_back.run(model, m_start, ObstaclePutBack::Fallback::carried);
+        // As far as the passes may push (resolve_mesh_obstacles' max_push, beyond the thickness).
+        const double thickness = material.thickness;
+        const double max_carry = m_self_collision && thickness > 0.0
+                                     ? (1.0 + detail::CATCH_UP_IN_THICKNESS) * thickness
+                                     : std::numeric_limits<double>::infinity();
+        m_step_carried +=
+            m_put_back.run(model, m_start, ObstaclePutBack::Fallback::carried, max_carry);
         for (const std::int32_t v : m_put_back.moved()) {
             m_mesh_contacts[static_cast<std::size_t>(v)] = MeshContact{};  // moves with it
         }
-        if (m_ogc) {
-            redetect_if_needed(positions);
+        // Carried vertices left their OGC sets: a detection there (its audit checks their move).
+        if (m_ogc && !redetect_if_needed(positions) && !m_put_back.moved().empty()) {
+            detect(positions);
         }
     }
     solve_ms += watch.elapsed_ms();

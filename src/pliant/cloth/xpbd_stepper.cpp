@@ -367,8 +367,8 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     }
     solve_ms += watch.elapsed_ms();
     // Self-contacts last: the substep ends with the cloth apart from itself (an obstacle's push
-    // may have pressed one layer into the next); a vertex pushed back into an obstacle is
-    // pushed out again next substep, while layers that pass through each other stay entangled.
+    // may have pressed one layer into the next), and a push that takes cloth into an obstacle is
+    // undone.
     if (m_ogc) {
         watch.restart();
         m_ogc->project(positions, m_previous_positions, inverse_masses,
@@ -426,6 +426,8 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     solve_ms += watch.elapsed_ms();
     if (m_ogc && needs_detection(m_substep_truncated)) {
         detect(positions, velocities, /*held_back=*/true);
+    } else if (m_ogc && contacts.carried > 0) {
+        detect(positions, velocities);  // carried vertices left their sets
     }
     return contacts;
 }
@@ -637,8 +639,13 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
 }
 
 std::int64_t XPBDStepper::put_back_into_obstacle_motion(ClothModel& model) {
+    // As far as the passes may push (resolve_obstacles' max_push, beyond the thickness).
+    const double thickness = model.material().thickness;
+    const double max_carry = m_self_collision && thickness > 0.0
+                                 ? (1.0 + detail::CATCH_UP_IN_THICKNESS) * thickness
+                                 : std::numeric_limits<double>::infinity();
     const std::int64_t moved =
-        m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::carried);
+        m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::carried, max_carry);
     for (const std::int32_t v : m_put_back.moved()) {
         m_contact_depths[static_cast<std::size_t>(v)] = 0.0;  // it moves with the surface
     }
