@@ -357,9 +357,10 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     ObstacleTally contacts = resolve_obstacles(model, h);
     // Vertices left behind a mesh obstacle's surface are found there next substep.
     m_obstacle_lag = contacts.max_lag;
-    if (model.has_obstacles()) {
-        // What the passes left in an obstacle goes back to where it was, carried along (with OGC
-        // after its truncation, which can pull part of a correction back).
+    if (!model.mesh_obstacles().empty()) {
+        // What the passes left in a mesh obstacle goes back to where it was, carried along (with
+        // OGC after its truncation, which can pull part of a correction back). Analytic
+        // obstacles need no such pass: their vertex pass projects each vertex exactly.
         m_put_back.seed(positions, m_before_contacts);
         if (!m_ogc) {
             contacts.carried = put_back_into_obstacle_motion(model);
@@ -383,7 +384,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         if (m_pins_left_sets && ball_held > 0) {
             catch_up(positions, velocities, inverse_masses);
         }
-        if (model.has_obstacles()) {
+        if (!model.mesh_obstacles().empty()) {
             contacts.carried = put_back_into_obstacle_motion(model);
         }
         m_step_truncated += m_substep_truncated;
@@ -549,7 +550,9 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
     // much per substep: an obstacle that jumps pushes cloth out at a bounded speed (the vertex
     // lags behind its surface) instead of sweeping it through the cloth in one substep.
     const double max_push = max_settle;
-    m_before_contacts.assign(positions.begin(), positions.end());
+    if (!mesh_obstacles.empty()) {
+        m_before_contacts.assign(positions.begin(), positions.end());
+    }
     ObstacleTally total = parallel_reduce(
         static_cast<std::int64_t>(positions.size()), ObstacleTally{},
         [&](std::int64_t begin, std::int64_t end) {

@@ -21,7 +21,7 @@
 //   4. obstacles, placed at t (ClothModel::move_obstacles): every vertex is pushed `thickness`
 //      away from every obstacle (obstacles.hpp, mesh_obstacle.hpp); with mesh obstacles, then the
 //      cloth's edges and triangles swept against the surface's edges and vertices
-//      (mesh_contact.hpp); a triangle of a vertex these passes moved that still meets an
+//      (mesh_contact.hpp); a triangle of a vertex these passes moved that still meets a mesh
 //      obstacle goes where the substep began, carried with the obstacle (obstacle_put_back.hpp;
 //      with OGC after OGC's truncation);
 //   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart, and a
@@ -269,7 +269,7 @@ private:
     std::vector<Vec3d> m_contact_normals;
     std::vector<Vec3d> m_contact_velocities;       // the obstacle surface's velocity at the contact
     MeshFeatureContactScratch m_feature_contacts;  // mesh obstacles' edge and face passes
-    std::vector<Vec3d> m_before_contacts;          // positions before the obstacle passes
+    std::vector<Vec3d> m_before_contacts;          // positions before the passes (with meshes)
     // Triangles the passes left in an obstacle, and self-contact pushes into one (the positions
     // before the self-contacts: m_before_self), are put back (obstacle_put_back.hpp).
     std::vector<Vec3d> m_before_self;
