@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -35,6 +36,7 @@ ClothModel sheet_beside_a_turning_box() {
 }
 
 TEST(ObstaclePutBack, TrianglesATurningBoxEnteredAreCarriedOutWithIt) {
+    std::vector<Vec3d> one_thread;
     for (const int threads : {1, 2}) {
         set_num_threads(threads);
         ClothModel model = sheet_beside_a_turning_box();
@@ -80,6 +82,14 @@ TEST(ObstaclePutBack, TrianglesATurningBoxEnteredAreCarriedOutWithIt) {
         }
         // The half of the sheet the corner does not reach is left alone.
         EXPECT_GT(on_the_far_side, 9);
+        // The same bits on 1 and 2 threads.
+        if (threads == 1) {
+            one_thread.assign(model.positions().begin(), model.positions().end());
+        } else {
+            EXPECT_EQ(std::memcmp(one_thread.data(), model.positions().data(),
+                                  one_thread.size() * sizeof(Vec3d)),
+                      0);
+        }
     }
     set_num_threads(0);
 }
