@@ -181,12 +181,11 @@ void MeshObstacle::gather_leaves() {
     const std::span<const Vec3d> start = previous_positions();
     const std::span<const std::uint32_t> vertices = m_vertex_tree.primitives();
     parallel_for(static_cast<std::int64_t>(vertices.size()), [&](std::int64_t k) {
-        const auto v = static_cast<std::size_t>(k);
-        AABBd path = AABBd::of_point(start[v]);
-        path.extend(m_mesh.positions[v]);
-        m_vertex_boxes[v] = outward_float(path);
-        const auto leaf = static_cast<std::size_t>(k);
-        m_vertex_paths[leaf] = {start[vertices[leaf]], m_mesh.positions[vertices[leaf]]};
+        const auto i = static_cast<std::size_t>(k);  // vertex i's box, leaf i's path
+        AABBd path = AABBd::of_point(start[i]);
+        path.extend(m_mesh.positions[i]);
+        m_vertex_boxes[i] = outward_float(path);
+        m_vertex_paths[i] = {start[vertices[i]], m_mesh.positions[vertices[i]]};
     });
     m_vertex_tree.refit(m_vertex_boxes);
     const std::span<const std::uint32_t> primitives = m_tree.primitives();

@@ -99,7 +99,7 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
         }
     }
     std::array<Vec3d, 3> corners{};
-    while (!m_seeds.empty()) {
+    for (std::int32_t round = 1; !m_seeds.empty(); ++round) {
         std::sort(m_seeds.begin(), m_seeds.end());
         m_met.assign(m_seeds.size(), -1);
         parallel_for(
@@ -124,10 +124,11 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
             const auto at = [&](std::size_t j) -> const Vec3d& {
                 return positions[static_cast<std::size_t>(tri[j])];
             };
-            // A triangle whose vertex an earlier one of this round moved may be clear now.
-            const bool touched = m_vertex_moved[static_cast<std::size_t>(tri[0])] != 0 ||
-                                 m_vertex_moved[static_cast<std::size_t>(tri[1])] != 0 ||
-                                 m_vertex_moved[static_cast<std::size_t>(tri[2])] != 0;
+            // A triangle whose vertex an earlier one of this round moved may be clear now (the
+            // moves of earlier rounds are in m_met already).
+            const bool touched = m_vertex_moved[static_cast<std::size_t>(tri[0])] == round ||
+                                 m_vertex_moved[static_cast<std::size_t>(tri[1])] == round ||
+                                 m_vertex_moved[static_cast<std::size_t>(tri[2])] == round;
             if (touched && !triangle_meets_obstacles(model, at(0), at(1), at(2))) {
                 continue;
             }
@@ -153,7 +154,7 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
             for (std::size_t j = 0; j < 3; ++j) {
                 if (moves[j]) {
                     const auto v = static_cast<std::size_t>(tri[j]);
-                    m_vertex_moved[v] = 1;
+                    m_vertex_moved[v] = round;
                     m_marked.push_back(tri[j]);
                     if (!(positions[v] == corners[j])) {
                         positions[v] = corners[j];

@@ -72,7 +72,7 @@ public:
 private:
     std::vector<std::uint8_t> m_seeded;          // per vertex: seed() marked it
     std::vector<std::uint8_t> m_triangle_marks;  // all clear between runs
-    std::vector<std::uint8_t> m_vertex_moved;    // all clear between runs
+    std::vector<std::int32_t> m_vertex_moved;  // the round it moved in (0: not); clear between runs
     std::vector<std::int32_t> m_seeds;
     std::vector<std::int32_t> m_met;  // per seed: the obstacle it meets (obstacle_met_by), or -1
     std::vector<std::int32_t> m_moved;

@@ -280,9 +280,7 @@ void VBDStepper::resolve_mesh_obstacles(const ClothModel& model, std::span<Vec3d
     const double thickness = model.material().thickness;
     // The bounds of the XPBD stepper (xpbd_stepper.cpp, resolve_obstacles): with self-collision a
     // jumping surface pushes cloth out at a bounded speed instead of through the cloth.
-    const double max_push = m_self_collision && thickness > 0.0
-                                ? detail::CATCH_UP_IN_THICKNESS * thickness
-                                : std::numeric_limits<double>::infinity();
+    const double max_push = detail::catch_up_step(m_self_collision != nullptr, thickness);
     const double max_settle = max_push;
     m_before_mesh_contacts.assign(positions.begin(), positions.end());
     m_mesh_contacts.assign(positions.size(), MeshContact{});
@@ -566,9 +564,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
             }
         },
         VERTEX_GRAIN);
-    model.move_pins(t_end, m_self_collision && material.thickness > 0.0
-                               ? detail::CATCH_UP_IN_THICKNESS * material.thickness
-                               : std::numeric_limits<double>::infinity());
+    model.move_pins(t_end, detail::catch_up_step(m_self_collision != nullptr, material.thickness));
     model.move_obstacles(t_end);
     const bool has_obstacles = model.has_obstacles();
     parallel_for(
@@ -685,10 +681,9 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         // What the passes left in an obstacle (or OGC's truncation took back into one) goes back
         // to where it was, carried along.
         // As far as the passes may push (resolve_mesh_obstacles' max_push, beyond the thickness).
-        const double thickness = material.thickness;
-        const double max_carry = m_self_collision && thickness > 0.0
-                                     ? (1.0 + detail::CATCH_UP_IN_THICKNESS) * thickness
-                                     : std::numeric_limits<double>::infinity();
+        const double max_carry =
+            material.thickness +
+            detail::catch_up_step(m_self_collision != nullptr, material.thickness);
         m_step_carried +=
             m_put_back.run(model, m_start, ObstaclePutBack::Fallback::carried, max_carry);
         for (const std::int32_t v : m_put_back.moved()) {

@@ -324,9 +324,7 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         },
         VERTEX_GRAIN);
     // With self-collision, pins move at most CATCH_UP_IN_THICKNESS thickness per substep.
-    model.move_pins(t_end, m_self_collision && material.thickness > 0.0
-                               ? detail::CATCH_UP_IN_THICKNESS * material.thickness
-                               : std::numeric_limits<double>::infinity());
+    model.move_pins(t_end, detail::catch_up_step(m_self_collision != nullptr, material.thickness));
     if (m_ogc) {
         // The frame shift from the prediction; a detection where pins left their sets (with the
         // pins where they moved, the free vertices where the substep started); then every free
@@ -534,9 +532,7 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
     // Of a penetration the substep began with, at most this much is undone per substep (the
     // rest stays for the next substeps): cloth given deep inside an obstacle, or left there by
     // an obstacle that jumps, comes out at a bounded speed, as a jumping pin chases its target.
-    const double max_settle = m_self_collision && thickness > 0.0
-                                  ? detail::CATCH_UP_IN_THICKNESS * thickness
-                                  : std::numeric_limits<double>::infinity();
+    const double max_settle = detail::catch_up_step(m_self_collision != nullptr, thickness);
     // Holds back the part of a push of `depth` along `normal` that undoes more than max_settle of
     // the penetration `settled` the substep began with: moves x back by it and returns it.
     const auto bound_settle = [max_settle](Vec3d& x, const Vec3d& normal, double settled) {
@@ -644,9 +640,8 @@ XPBDStepper::ObstacleTally XPBDStepper::resolve_obstacles(ClothModel& model, dou
 std::int64_t XPBDStepper::put_back_into_obstacle_motion(ClothModel& model) {
     // As far as the passes may push (resolve_obstacles' max_push, beyond the thickness).
     const double thickness = model.material().thickness;
-    const double max_carry = m_self_collision && thickness > 0.0
-                                 ? (1.0 + detail::CATCH_UP_IN_THICKNESS) * thickness
-                                 : std::numeric_limits<double>::infinity();
+    const double max_carry =
+        thickness + detail::catch_up_step(m_self_collision != nullptr, thickness);
     const std::int64_t moved =
         m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::carried, max_carry);
     for (const std::int32_t v : m_put_back.moved()) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <span>
 
@@ -26,6 +27,13 @@ inline constexpr double MAX_THICKNESS_IN_EDGES = 4.0;
 // from frame 8; with half, never). The proximity constraints act once per substep, so a move
 // well under the thickness keeps them ahead of it (as the strain limits' moves in XPBDStepper).
 inline constexpr double CATCH_UP_IN_THICKNESS = 0.5;
+
+// That bound for a stepper (m per substep): CATCH_UP_IN_THICKNESS · thickness with self-collision
+// and a thickness > 0, else none (infinity).
+inline double catch_up_step(bool self_collision, double thickness) {
+    return self_collision && thickness > 0.0 ? CATCH_UP_IN_THICKNESS * thickness
+                                             : std::numeric_limits<double>::infinity();
+}
 
 // InvalidInput unless dt > 0 (finite), substeps ≥ 1 and the model has the vertex and triangle
 // counts the stepper was built for.
