@@ -23,6 +23,9 @@ constexpr std::int64_t VERTEX_GRAIN = 1024;
 constexpr double MIN_COMPLIANCE = 1e-12;
 // OGC: detections at most per substep to bring the prediction within the bounds.
 constexpr int MAX_PREDICTION_DETECTIONS = 8;
+// OGC: a round of detection for the obstacle corrections continues the rounds only when it
+// moved some held-back vertex this share of the thickness.
+constexpr double MIN_OBSTACLE_ROUND_PROGRESS = 0.01;
 
 using detail::solve;
 using detail::Sym3;
@@ -469,6 +472,51 @@ void VBDStepper::update_vertex(const ClothModel& model, std::size_t v, double h,
     }
 }
 
+void VBDStepper::truncate_mesh_contacts(std::span<Vec3d> x, std::span<const double> inverse_masses,
+                                        double thickness) {
+    // The passes' corrections are the targets. Each round after the first starts from a
+    // detection where the last round stopped, so that every vertex may go up to its new bound;
+    // the rounds end when none is held back, or when the held ones no longer get anywhere
+    // (cloth caught between the obstacle and other cloth: the put-back handles what is left).
+    m_mesh_contact_targets.assign(x.begin(), x.end());
+    std::copy(m_before_mesh_contacts.begin(), m_before_mesh_contacts.end(), x.begin());
+    const double min_progress = MIN_OBSTACLE_ROUND_PROGRESS * thickness;
+    struct Round {
+        std::int64_t held = 0;
+        double max_held_move = 0.0;  // m
+    };
+    for (int round = 0; round <= MAX_PREDICTION_DETECTIONS; ++round) {
+        if (round > 0) {
+            detect(x);
+        }
+        const Round done = parallel_reduce(
+            static_cast<std::int64_t>(x.size()), Round{},
+            [&](std::int64_t begin, std::int64_t end) {
+                Round part;
+                for (std::int64_t i = begin; i < end; ++i) {
+                    const auto v = static_cast<std::size_t>(i);
+                    if (inverse_masses[v] > 0.0) {
+                        Vec3d target = m_mesh_contact_targets[v];
+                        if (m_ogc->truncate(v, x[v], target)) {
+                            ++part.held;
+                            part.max_held_move = std::max(part.max_held_move, norm(target - x[v]));
+                        }
+                        x[v] = target;
+                    }
+                }
+                return part;
+            },
+            [](const Round& a, const Round& b) {
+                return Round{a.held + b.held, std::max(a.max_held_move, b.max_held_move)};
+            },
+            VERTEX_GRAIN);
+        m_step_truncated += done.held;
+        if (done.held == 0 || (round > 0 && done.max_held_move < min_progress)) {
+            break;
+        }
+    }
+}
+
 void VBDStepper::truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
                               std::span<const double> inverse_masses) {
     std::int64_t ball_held = 0;
@@ -676,7 +724,7 @@ std::int64_t VBDStepper::substep(ClothModel& model, double h, double t_end, doub
         resolve_mesh_obstacles(model, positions, h);
         m_put_back.seed(positions, m_before_mesh_contacts);
         if (m_ogc) {
-            truncate_all(m_before_mesh_contacts, positions, inverse_masses);
+            truncate_mesh_contacts(positions, inverse_masses, material.thickness);
         }
         // What the passes left in an obstacle (or OGC's truncation took back into one) goes back
         // to where it was, carried along.

@@ -137,6 +137,11 @@ private:
     // m_sweep_truncated, those the ball held back also in m_sweep_ball_held).
     void truncate_all(std::span<const Vec3d> from, std::span<Vec3d> x,
                       std::span<const double> inverse_masses);
+    // OGC: takes the mesh-obstacle passes' corrections (from m_before_mesh_contacts to x) within
+    // the bounds, with detections between rounds (MAX_PREDICTION_DETECTIONS at most) while held
+    // back vertices still get on; x ends within its bounds. Thickness in m.
+    void truncate_mesh_contacts(std::span<Vec3d> x, std::span<const double> inverse_masses,
+                                double thickness);
     // OGC: counts vertex v, truncated to x, in m_sweep_truncated (and m_sweep_ball_held when x
     // is on its ball's sphere). Thread safe.
     void count_truncated(std::size_t v, const Vec3d& x);
@@ -187,6 +192,7 @@ private:
     // substep (m; saved with the state) and this step's tallies.
     std::vector<MeshContact> m_mesh_contacts;
     std::vector<Vec3d> m_before_mesh_contacts;
+    std::vector<Vec3d> m_mesh_contact_targets;  // OGC: the passes' corrections
     MeshFeatureContactScratch m_mesh_feature_contacts;
     double m_obstacle_lag = 0.0;
     std::int64_t m_step_swept = 0;
