@@ -384,7 +384,8 @@ void OgcContact::snapshot(std::span<const Vec3d> x) {
         PAIR_GRAIN);
 }
 
-void OgcContact::add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force,
+void OgcContact::add_forces(std::size_t v, const Vec3d& x_v, std::span<const Vec3d> start,
+                            double friction, double slip, Vec3d& force,
                             detail::Sym3& hessian) const {
     for (auto r = m_pair_first[v]; r < m_pair_first[v + 1]; ++r) {
         const auto ref = static_cast<std::size_t>(m_pair_refs[static_cast<std::size_t>(r)]);
@@ -398,11 +399,31 @@ void OgcContact::add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force,
         const double distance = g.distance;
         const double weight = g.weights[k];
         const Vec3d& normal = g.normal;
-        if (distance < m_radius && weight != 0.0) {
-            // E = ½ k_c (r − d)², ∂d/∂x_v = weight · n̂.
-            force += normal * (m_stiffness * (m_radius - distance) * weight);
-            hessian.add_outer(normal, m_stiffness * weight * weight);
+        if (!(distance < m_radius) || weight == 0.0) {
+            continue;
         }
+        // E = ½ k_c (r − d)², ∂d/∂x_v = weight · n̂.
+        const double lambda = m_stiffness * (m_radius - distance);
+        force += normal * (lambda * weight);
+        hessian.add_outer(normal, m_stiffness * weight * weight);
+        if (!(friction > 0.0)) {
+            continue;
+        }
+        Vec3d relative{0.0, 0.0, 0.0};
+        for (std::size_t j = 0; j < 4; ++j) {
+            relative += (p[j] - start[static_cast<std::size_t>(pair.v[j])]) * g.weights[j];
+        }
+        const Vec3d tangential = relative - normal * dot(relative, normal);
+        const double y = norm(tangential);
+        // f₁(y) / y: 2/ε − y/ε² while sticking, 1/y sliding.
+        const double f1_over_y = y < slip ? (2.0 - y / slip) / slip : 1.0 / y;
+        const double scale = friction * lambda * f1_over_y;
+        force -= tangential * (scale * weight);
+        // μ λ w² f₁/y (I − n̂n̂ᵀ): the identity's part on the diagonal, less the normal's outer
+        // product.
+        const double diagonal = scale * weight * weight;
+        hessian.add_outer(normal, -diagonal);
+        hessian.add_diagonal(diagonal);
     }
 }
 

@@ -179,8 +179,15 @@ public:
     // The positions of the vertices in contact pairs (#V) for add_forces(), once per sweep.
     void snapshot(std::span<const Vec3d> x);
     // Adds the contact energy's force (−∂E/∂x_v) and Hessian on vertex v at x_v (its partners at
-    // the snapshot).
-    void add_forces(std::size_t v, const Vec3d& x_v, Vec3d& force, detail::Sym3& hessian) const;
+    // the snapshot), E = ½ k_c (r − d)² per pair closer than r. With friction μ > 0 also the
+    // lagged, smoothed Coulomb friction of every such pair (Chen et al., "Vertex Block Descent",
+    // SIGGRAPH 2024, §3.6, after IPC, Li et al. 2020, §5): u is the pair's relative tangential
+    // displacement since `start` (#V, the substep's start; the closest points' weights on the
+    // four vertices' moves, projected on the plane of the normal n̂), λ = k_c (r − d) the normal
+    // force, and the force on v is −μ λ w_v f₁(|u|) u / |u| with f₁(y) = 2y/ε − y²/ε² below the
+    // slip ε (m, > 0: sticking) and 1 above (sliding), its Hessian μ λ w_v² f₁(|u|)/|u| (I − n̂n̂ᵀ).
+    void add_forces(std::size_t v, const Vec3d& x_v, std::span<const Vec3d> start, double friction,
+                    double slip, Vec3d& force, detail::Sym3& hessian) const;
 
     // XPBD's contact constraint: every detected pair closer than r at positions x (#V) is pushed
     // apart to r along its normal, the push split by the closest point's weights and the inverse

@@ -26,6 +26,9 @@ constexpr int MAX_PREDICTION_DETECTIONS = 8;
 // OGC: a round of detection for the obstacle corrections continues the rounds only when it
 // moved some held-back vertex this share of the thickness.
 constexpr double MIN_OBSTACLE_ROUND_PROGRESS = 0.01;
+// OGC friction: the relative tangential speed (m/s) below which a contact sticks (IPC's ε_v;
+// OgcContact::add_forces's slip is ε_v h).
+constexpr double FRICTION_SLIP_SPEED = 0.01;
 
 using detail::solve;
 using detail::Sym3;
@@ -443,7 +446,10 @@ void VBDStepper::solve_vertex(const ClothModel& model, std::size_t v, double h,
         hessian.add_outer(gradient, k_bend);
     }
     if (m_ogc) {
-        m_ogc->add_forces(v, xi, f, hessian);
+        // Friction between layers, sticking below a relative tangential speed of
+        // FRICTION_SLIP_SPEED over the substep (the sliding coefficient: the smoothed law has one).
+        m_ogc->add_forces(v, xi, m_start, model.material().self_kinetic_friction,
+                          FRICTION_SLIP_SPEED * h, f, hessian);
     }
     Vec3d step;
     if (solve(hessian, f, step)) {
