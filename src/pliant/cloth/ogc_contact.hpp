@@ -180,8 +180,9 @@ public:
     void snapshot(std::span<const Vec3d> x);
     // Adds the contact energy's force (−∂E/∂x_v) and Hessian on vertex v at x_v (its partners at
     // the snapshot), E = ½ k_c (r − d)² per pair closer than r. With friction μ > 0 also the
-    // lagged, smoothed Coulomb friction of every such pair (Chen et al., "Vertex Block Descent",
-    // SIGGRAPH 2024, §3.6, after IPC, Li et al. 2020, §5): u is the pair's relative tangential
+    // smoothed Coulomb friction of every such pair (Chen et al., "Vertex Block Descent", SIGGRAPH
+    // 2024, §3.6, after IPC, Li et al. 2020, §5; λ and n̂ of the current iterate, not lagged from
+    // the substep's start): u is the pair's relative tangential
     // displacement since `start` (#V, the substep's start; the closest points' weights on the
     // four vertices' moves, projected on the plane of the normal n̂), λ = k_c (r − d) the normal
     // force, and the force on v is −μ λ w_v f₁(|u|) u / |u| with f₁(y) = 2y/ε − y²/ε² below the
