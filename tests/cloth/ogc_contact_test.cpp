@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <random>
 #include <span>
 #include <vector>
@@ -659,6 +660,69 @@ TEST(OgcContact, BitwiseIdenticalForOneAndTwoThreads) {
 
 TEST(OgcContact, SavedStateContinuesBitForBit) {
     test::expect_saved_state_continues_bit_for_bit([] { return colliding_sheets(10); }, 4, 6);
+}
+
+// Two identical sheets of n × n quads, `size` wide, the upper one `gap` straight above the lower
+// one: every upper vertex over a lower vertex, every upper edge over a lower edge.
+geometry::TriangleMeshD stacked_sheets(int n, double size, double gap) {
+    geometry::TriangleMeshD mesh = test::flat_sheet(n, size, 0.0);
+    const geometry::TriangleMeshD upper = test::flat_sheet(n, size, gap);
+    const auto offset = static_cast<std::int32_t>(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), upper.positions.begin(), upper.positions.end());
+    for (const geometry::Triangle& t : upper.triangles) {
+        mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    return mesh;
+}
+
+// A vertex straight over a vertex is one contact, though 6 vertex-face pairs each way and 36
+// edge-edge pairs see it at the same distance: the energy counts it once, so the push on an
+// inner upper vertex is k_c (r − d), and on its lower partner the same, downward.
+TEST(OgcContact, AContactSeenByManyPairsCountsOnce) {
+    const double radius = 0.005;
+    const double stiffness = 100.0;
+    const double gap = 0.004;
+    const geometry::TriangleMeshD mesh = stacked_sheets(4, 0.04, gap);
+    OgcContact contact(mesh.triangles, mesh.positions.size(), OgcOptions{}, radius, stiffness);
+    contact.detect(mesh.positions);
+    contact.snapshot(mesh.positions);
+    EXPECT_GT(contact.close_pairs(), 48);
+    const std::size_t lower = 12;  // an inner vertex of the 5 × 5 grid (row 2, column 2)
+    const std::size_t upper = lower + 25;
+    ASSERT_NEAR(mesh.positions[upper].x, mesh.positions[lower].x, 1e-12);
+    ASSERT_NEAR(mesh.positions[upper].y, mesh.positions[lower].y, 1e-12);
+    for (const auto& [v, sign] : {std::pair{upper, 1.0}, std::pair{lower, -1.0}}) {
+        Vec3d force{0.0, 0.0, 0.0};
+        detail::Sym3 hessian;
+        contact.add_forces(v, mesh.positions[v], mesh.positions, 0.0, 1.0, force, hessian);
+        EXPECT_NEAR(force.z, sign * stiffness * (radius - gap), 1e-12) << v;
+        EXPECT_NEAR(force.x, 0.0, 1e-12) << v;
+        EXPECT_NEAR(force.y, 0.0, 1e-12) << v;
+        EXPECT_NEAR(hessian.zz, stiffness, 1e-9) << v;
+    }
+}
+
+// Stacked 0.4 m sheets of 16 × 16 quads 5.5 mm apart, the lower one pinned, under gravity tilted
+// 8° (friction holds the upper one: tan 8° < 0.2), with VBD: the upper one settles onto it and
+// lies flat. When every pair counted its contact, the upper sheet was thrown up (scenes/stress/
+// resting_sheet_vbd_ogc.json stacked so: by 3 cm within 2 frames).
+TEST(OgcContact, StackedSheetsSettleFlat) {
+    const geometry::TriangleMeshD mesh = stacked_sheets(16, 0.4, 0.0055);
+    const std::size_t per_sheet = mesh.positions.size() / 2;
+    std::vector<std::int32_t> pinned(per_sheet);
+    std::iota(pinned.begin(), pinned.end(), 0);  // the lower sheet
+    ClothSolver solver(mesh, ClothMaterial{}, pinned);
+    solver.set_gravity({0.0, -1.3653, -9.7145});
+    solver.enable_self_collision(true);
+    solver.use_vbd(ogc_options());
+    for (int f = 0; f < 2; ++f) {
+        solver.step(1.0 / 24.0, 40);
+    }
+    const std::span<const Vec3d> x = solver.positions();
+    for (std::size_t v = per_sheet; v < x.size(); ++v) {
+        EXPECT_GT(x[v].z, 0.0049) << v;
+        EXPECT_LT(x[v].z, 0.0055) << v;
+    }
 }
 
 }  // namespace

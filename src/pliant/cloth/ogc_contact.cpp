@@ -13,6 +13,7 @@
 #include "pliant/core/error.hpp"
 #include "pliant/core/parallel.hpp"
 #include "pliant/core/timer.hpp"
+#include "pliant/geometry/topology.hpp"
 
 namespace pliant::cloth {
 namespace {
@@ -34,17 +35,25 @@ struct PairGeometry {
     double distance;
     Vec3d normal;
     std::array<double, 4> weights;
+    // Vertex-face: the closest point's collision::PointTriangleRegion; edge-edge: 0 when both
+    // closest points are inside their edges, else 1.
+    int region;
 };
 
 PairGeometry pair_geometry(const OgcContact::Pair& pair, const std::array<Vec3d, 4>& p) {
     if (pair.is_edge_edge) {
         const auto prox = collision::segment_segment_proximity(p[0], p[1], p[2], p[3]);
-        return {prox.distance, prox.normal, {1.0 - prox.s, prox.s, -(1.0 - prox.t), -prox.t}};
+        const bool inside = prox.s > 0.0 && prox.s < 1.0 && prox.t > 0.0 && prox.t < 1.0;
+        return {prox.distance,
+                prox.normal,
+                {1.0 - prox.s, prox.s, -(1.0 - prox.t), -prox.t},
+                inside ? 0 : 1};
     }
     const auto prox = collision::point_triangle_proximity(p[0], p[1], p[2], p[3]);
     return {prox.distance,
             prox.normal,
-            {1.0, -prox.barycentric.x, -prox.barycentric.y, -prox.barycentric.z}};
+            {1.0, -prox.barycentric.x, -prox.barycentric.y, -prox.barycentric.z},
+            prox.region};
 }
 
 }  // namespace
@@ -102,6 +111,37 @@ OgcContact::OgcContact(std::span<const geometry::Triangle> triangles, std::size_
     // a superset of the broad phase's exact pairs, in the same order, without its double boxes.
     m_broad_phase.set_exact(false);
     m_snapshot.resize(num_vertices);
+    const geometry::MeshTopology& topology = m_broad_phase.topology();
+    m_owned_features.assign(m_triangles.size(), 0);
+    for (std::size_t f = 0; f < m_triangles.size(); ++f) {
+        std::uint8_t owned = 0;
+        for (std::size_t k = 0; k < 3; ++k) {
+            const auto e = static_cast<std::size_t>(topology.triangle_edges[f][k]);
+            const auto first_of_edge = static_cast<std::size_t>(
+                topology
+                    .edge_triangles[static_cast<std::size_t>(topology.edge_triangle_offsets[e])]);
+            const auto corner = static_cast<std::size_t>(m_triangles[f][k]);
+            const auto first_at_corner =
+                static_cast<std::size_t>(topology.vertex_triangles[static_cast<std::size_t>(
+                    topology.vertex_triangle_offsets[corner])]);
+            owned |= static_cast<std::uint8_t>((first_of_edge == f ? 1U : 0U) << k);
+            owned |= static_cast<std::uint8_t>((first_at_corner == f ? 1U : 0U) << (3 + k));
+        }
+        m_owned_features[f] = owned;
+    }
+}
+
+bool OgcContact::counts_once(const Pair& pair, int region) const {
+    using Region = collision::PointTriangleRegion;
+    if (pair.is_edge_edge || region == Region::FACE) {
+        return region == 0;
+    }
+    const std::uint8_t owned = m_owned_features[static_cast<std::size_t>(pair.face)];
+    if (region >= Region::EDGE_AB) {
+        return ((owned >> (region - Region::EDGE_AB)) & 1U) != 0;
+    }
+    const int corner = region - Region::VERTEX_A;
+    return ((owned >> (3 + corner)) & 1U) != 0 && pair.v[0] < pair.v[1 + corner];
 }
 
 void OgcContact::begin_substep() {
@@ -167,7 +207,7 @@ void OgcContact::detect(std::span<const Vec3d> x) {
             if (i < num_vf) {
                 const collision::VertexFacePair& vf = found.vertex_face[slot];
                 const geometry::Triangle& t = triangles[static_cast<std::size_t>(vf.face)];
-                pair = {{vf.vertex, t[0], t[1], t[2]}, false};
+                pair = {{vf.vertex, t[0], t[1], t[2]}, false, vf.face};
                 const Vec3d& p = x[static_cast<std::size_t>(vf.vertex)];
                 const Vec3d& a = x[static_cast<std::size_t>(t[0])];
                 const Vec3d& b = x[static_cast<std::size_t>(t[1])];
@@ -399,7 +439,7 @@ void OgcContact::add_forces(std::size_t v, const Vec3d& x_v, std::span<const Vec
         const double distance = g.distance;
         const double weight = g.weights[k];
         const Vec3d& normal = g.normal;
-        if (!(distance < m_radius) || weight == 0.0) {
+        if (!(distance < m_radius) || weight == 0.0 || !counts_once(pair, g.region)) {
             continue;
         }
         // E = ½ k_c (r − d)², ∂d/∂x_v = weight · n̂.

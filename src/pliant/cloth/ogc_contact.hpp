@@ -123,6 +123,7 @@ public:
     struct Pair {
         std::int32_t v[4];
         bool is_edge_edge;
+        std::int32_t face = -1;  // vertex-face: the face's index (v[1..3] are its corners)
     };
 
     // The fraction of d / 2 a vertex keeps from its pair's plane.
@@ -179,7 +180,14 @@ public:
     // The positions of the vertices in contact pairs (#V) for add_forces(), once per sweep.
     void snapshot(std::span<const Vec3d> x);
     // Adds the contact energy's force (−∂E/∂x_v) and Hessian on vertex v at x_v (its partners at
-    // the snapshot), E = ½ k_c (r − d)² per pair closer than r. With friction μ > 0 also the
+    // the snapshot), E = ½ k_c (r − d)² per contact closer than r. Every contact counts once,
+    // whatever the pairs that see it (the offset geometry's blocks, Chen et al. 2025, §4): a
+    // vertex-face pair whose closest point is the face's interior; on an edge, only for the
+    // edge's lowest-indexed face; on a corner, only for the corner's lowest-indexed face and
+    // when the vertex's index is below the corner's (the pair the other way round speaks for
+    // it otherwise); an edge-edge pair only when both closest points are inside their edges
+    // (an end's contact is a vertex-face pair's). Stacked cloth whose vertices lie over vertices
+    // would otherwise have each contact counted by up to 48 pairs. With friction μ > 0 also the
     // smoothed Coulomb friction of every such pair (Chen et al., "Vertex Block Descent", SIGGRAPH
     // 2024, §3.6, after IPC, Li et al. 2020, §5; λ and n̂ of the current iterate, not lagged from
     // the substep's start): u is the pair's relative tangential
@@ -245,6 +253,10 @@ public:
     void load_state(ByteReader& in);
 
 private:
+    // Whether a pair closer than r speaks for its contact in the energy (add_forces), given its
+    // PairGeometry region.
+    bool counts_once(const Pair& pair, int region) const;
+
     OgcOptions m_options;
     std::size_t m_num_vertices;
     double m_radius;
@@ -261,6 +273,10 @@ private:
     double m_stiffness;
     collision::SelfCollisionBroadPhase<double> m_broad_phase;
     std::vector<geometry::Triangle> m_triangles;
+    // Per face, the features it speaks for in the contact energy (add_forces: every contact
+    // once): bit k its edge k (corners k, k + 1), bit 3 + k its corner k, set when it is that
+    // feature's lowest-indexed triangle.
+    std::vector<std::uint8_t> m_owned_features;
 
     bool m_has_detection = false;
     std::int64_t m_detections = 0;
