@@ -7,6 +7,7 @@
 
 #include "pliant/cloth/mesh_obstacle.hpp"
 #include "pliant/cloth/obstacle_intersections.hpp"
+#include "pliant/core/check.hpp"
 #include "pliant/core/parallel.hpp"
 
 namespace pliant::cloth {
@@ -14,34 +15,78 @@ namespace {
 
 constexpr std::int64_t TRIANGLE_GRAIN = 256;
 
-// Where the motion of obstacle `met` (obstacle_met_by's index) since its previous placement
-// carries the point `start`.
-Vec3d carried(const ClothModel& model, std::int32_t met, const Vec3d& start) {
+// Where each obstacle was when a carry starts: its pose, and a deforming mesh's vertices with
+// the radius within which a point's nearest surface point is looked up (its largest vertex move
+// since, plus the thickness).
+struct CarryStart {
+    const Pose* pose;
+    std::span<const Vec3d> positions;  // a deforming mesh's vertices then (else empty)
+    double radius;
+};
+
+// Where the motion of obstacle `met` (obstacle_met_by's index) since `from` carries the point
+// `start`.
+Vec3d carried(const ClothModel& model, std::int32_t met, const CarryStart& from,
+              const Vec3d& start) {
     const std::span<const MovingMeshObstacle> meshes = model.mesh_obstacles();
     const auto k = static_cast<std::size_t>(met);
     if (k >= meshes.size()) {
         const MotionState& state = model.obstacles()[k - meshes.size()].state;
-        return state.pose.apply(state.previous_pose.apply_inverse(start));
+        return state.pose.apply(from.pose->apply_inverse(start));
     }
     const MovingMeshObstacle& obstacle = meshes[k];
-    Vec3d x = obstacle.state.previous_pose.apply_inverse(start);
-    if (obstacle.animation) {
+    Vec3d x = from.pose->apply_inverse(start);
+    if (obstacle.animation && !from.positions.empty()) {
         const MeshObstacle& mesh = *obstacle.mesh;
-        const double radius = mesh.max_vertex_step() + model.material().thickness;
-        if (const std::optional<MeshObstacle::SurfacePoint> point = mesh.surface_point(x, radius)) {
+        if (const std::optional<MeshObstacle::SurfacePoint> point =
+                mesh.surface_point(x, from.radius)) {
             const geometry::Triangle& tri =
                 mesh.mesh().triangles[static_cast<std::size_t>(point->triangle)];
             const std::span<const Vec3d> now = mesh.mesh().positions;
-            const std::span<const Vec3d> before = mesh.previous_positions();
             const Vec3d& b = point->barycentric;
             const auto moved = [&](std::size_t j) {
                 const auto v = static_cast<std::size_t>(tri[j]);
-                return now[v] - before[v];
+                return now[v] - from.positions[v];
             };
             x += moved(0) * b.x + moved(1) * b.y + moved(2) * b.z;
         }
     }
     return obstacle.state.pose.apply(x);
+}
+
+// Per obstacle (obstacle_met_by's indices), where a carry starts: the previous placement, or
+// `since`.
+void carry_starts(const ClothModel& model, const ObstaclePlacements* since,
+                  std::vector<CarryStart>& out) {
+    const std::span<const MovingMeshObstacle> meshes = model.mesh_obstacles();
+    const std::span<const MovingObstacle> analytic = model.obstacles();
+    const double thickness = model.material().thickness;
+    if (since != nullptr) {
+        PLIANT_CHECK_EQ(since->mesh_poses.size(), meshes.size());
+        PLIANT_CHECK_EQ(since->poses.size(), analytic.size());
+    }
+    out.clear();
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+        const MovingMeshObstacle& obstacle = meshes[k];
+        if (since == nullptr) {
+            out.push_back({&obstacle.state.previous_pose, obstacle.mesh->previous_positions(),
+                           obstacle.mesh->max_vertex_step() + thickness});
+            continue;
+        }
+        const std::span<const Vec3d> then(since->mesh_positions[k]);
+        double step = 0.0;
+        if (obstacle.animation && then.size() == obstacle.mesh->mesh().positions.size()) {
+            const std::span<const Vec3d> now = obstacle.mesh->mesh().positions;
+            for (std::size_t v = 0; v < then.size(); ++v) {
+                step = std::max(step, norm(now[v] - then[v]));
+            }
+        }
+        out.push_back({&since->mesh_poses[k], then, step + thickness});
+    }
+    for (std::size_t k = 0; k < analytic.size(); ++k) {
+        out.push_back(
+            {since != nullptr ? &since->poses[k] : &analytic[k].state.previous_pose, {}, 0.0});
+    }
 }
 
 // Whether x is inside a closed mesh obstacle (behind its surface; meets_triangle sees only a
@@ -61,6 +106,25 @@ bool inside_a_closed_mesh(const ClothModel& model, const Vec3d& x) {
 
 }  // namespace
 
+void ObstaclePlacements::capture(const ClothModel& model) {
+    const std::span<const MovingMeshObstacle> meshes = model.mesh_obstacles();
+    mesh_poses.resize(meshes.size());
+    mesh_positions.resize(meshes.size());
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+        mesh_poses[k] = meshes[k].state.pose;
+        if (meshes[k].animation) {
+            const std::span<const Vec3d> now = meshes[k].mesh->mesh().positions;
+            mesh_positions[k].assign(now.begin(), now.end());
+        } else {
+            mesh_positions[k].clear();
+        }
+    }
+    poses.clear();
+    for (const MovingObstacle& obstacle : model.obstacles()) {
+        poses.push_back(obstacle.state.pose);
+    }
+}
+
 void ObstaclePutBack::seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from) {
     m_seeded.resize(positions.size(), 0);
     for (std::size_t v = 0; v < positions.size(); ++v) {
@@ -71,7 +135,8 @@ void ObstaclePutBack::seed(std::span<const Vec3d> positions, std::span<const Vec
 }
 
 std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> reference,
-                                  Fallback fallback, double max_carry) {
+                                  Fallback fallback, double max_carry,
+                                  const ObstaclePlacements* since) {
     const std::span<Vec3d> positions = model.mutable_positions();
     const std::span<const double> inverse_masses = model.inverse_masses();
     const std::span<const geometry::Triangle> triangles = model.triangles();
@@ -97,6 +162,10 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
             m_seeded[v] = 0;
             add_triangles_of(static_cast<std::int32_t>(v));
         }
+    }
+    std::vector<CarryStart> carry_from;  // per obstacle, with Fallback::carried
+    if (fallback == Fallback::carried && !m_seeds.empty()) {
+        carry_starts(model, since, carry_from);
     }
     std::array<Vec3d, 3> corners{};
     for (std::int32_t round = 1; !m_seeds.empty(); ++round) {
@@ -138,10 +207,12 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
             for (std::size_t j = 0; j < 3; ++j) {
                 const auto v = static_cast<std::size_t>(tri[j]);
                 moves[j] = inverse_masses[v] > 0.0 && m_vertex_moved[v] == 0;
-                corners[j] = !moves[j] ? positions[v]
-                             : fallback == Fallback::carried
-                                 ? carried(model, m_met[i], reference[v])
-                                 : reference[v];
+                corners[j] =
+                    !moves[j] ? positions[v]
+                    : fallback == Fallback::carried
+                        ? carried(model, m_met[i], carry_from[static_cast<std::size_t>(m_met[i])],
+                                  reference[v])
+                        : reference[v];
                 if (moves[j]) {
                     usable = usable && norm(corners[j] - reference[v]) <= max_carry &&
                              !inside_a_closed_mesh(model, corners[j]);

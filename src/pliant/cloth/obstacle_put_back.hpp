@@ -40,6 +40,12 @@
 //     surface's point nearest to the start (within the mesh's largest vertex step and
 //     `thickness`; approximate, and checked like every fallback). The vertex then moves with the
 //     obstacle's surface for the substep (it does not slide).
+//   - Fallback::carried with `since` (an ObstaclePlacements captured earlier): reference[v] is
+//     where the vertex was when the placements were captured, and the vertex goes where the met
+//     obstacle's motion since then carries that point (the same rules; for a deforming mesh the
+//     radius is its largest vertex move since then). For positions older than one substep: the
+//     self-collision fail-safe puts vertices back where its window of several substeps began,
+//     which a moving obstacle may have taken since.
 // run() returns the vertices moved (moved() lists them, in the order they moved). Deterministic:
 // the tests run in parallel into one entry per seed triangle, the moves in triangle order, so any
 // number of threads gives the same positions. Cost: one obstacle query per seed triangle per
@@ -53,9 +59,20 @@
 #include <vector>
 
 #include "pliant/cloth/cloth_model.hpp"
+#include "pliant/cloth/motion.hpp"
 #include "pliant/core/vec3.hpp"
 
 namespace pliant::cloth {
+
+// Where a model's obstacles are at one time (capture()): their rigid placements and a deforming
+// mesh's vertices (world units), for Fallback::carried from then.
+struct ObstaclePlacements {
+    std::vector<Pose> mesh_poses;                    // per mesh obstacle
+    std::vector<std::vector<Vec3d>> mesh_positions;  // per mesh obstacle; empty when rigid
+    std::vector<Pose> poses;                         // per analytic obstacle
+
+    void capture(const ClothModel& model);
+};
 
 class ObstaclePutBack {
 public:
@@ -63,7 +80,8 @@ public:
 
     void seed(std::span<const Vec3d> positions, std::span<const Vec3d> changed_from);
     std::int64_t run(ClothModel& model, std::span<const Vec3d> reference, Fallback fallback,
-                     double max_carry = std::numeric_limits<double>::infinity());
+                     double max_carry = std::numeric_limits<double>::infinity(),
+                     const ObstaclePlacements* since = nullptr);
 
     std::span<const std::int32_t> moved() const { return m_moved; }
     // Triangles of the last run that met an obstacle at their fallback too (left as they were).

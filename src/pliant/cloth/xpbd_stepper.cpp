@@ -261,6 +261,9 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
             }
             m_window_start.assign(positions.begin(), positions.end());
             m_window_start_time = window_start;
+            if (!model.mesh_obstacles().empty()) {
+                m_window_obstacles.capture(model);
+            }
         }
         const ObstacleTally tally = substep(model, h, start_time + (s + 1) * h, stats.solve_ms);
         stats.obstacle_contacts = tally.contacts;
@@ -273,8 +276,7 @@ ClothStepStats XPBDStepper::step(ClothModel& model, double dt, int substeps) {
         stats.obstacle_max_step = std::max(stats.obstacle_max_step, model.obstacle_step());
         if (m_self_collision && !m_ogc &&
             (s % FAIL_SAFE_WINDOW == FAIL_SAFE_WINDOW - 1 || s == substeps - 1)) {
-            m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time,
-                                      start_time + (s + 1) * h);
+            stats.obstacle_carried += enforce_window(model, start_time + (s + 1) * h);
         }
     }
     if (m_ogc) {
@@ -648,6 +650,34 @@ std::int64_t XPBDStepper::put_back_into_obstacle_motion(ClothModel& model) {
         m_contact_depths[static_cast<std::size_t>(v)] = 0.0;  // it moves with the surface
     }
     return moved;
+}
+
+std::int64_t XPBDStepper::enforce_window(ClothModel& model, double t_end) {
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<Vec3d> velocities = model.mutable_velocities();
+    if (model.mesh_obstacles().empty()) {
+        m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time,
+                                  t_end);
+        return 0;
+    }
+    m_before_fail_safe.assign(positions.begin(), positions.end());
+    m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time, t_end);
+    m_put_back.seed(positions, m_before_fail_safe);
+    const std::int64_t carried =
+        m_put_back.run(model, m_window_start, ObstaclePutBack::Fallback::carried,
+                       std::numeric_limits<double>::infinity(), &m_window_obstacles);
+    if (carried == 0) {
+        return 0;
+    }
+    // A carried vertex moves with the surface: the window's mean velocity, no obstacle contact.
+    const double window = t_end - m_window_start_time;
+    for (const std::int32_t v : m_put_back.moved()) {
+        const auto k = static_cast<std::size_t>(v);
+        velocities[k] = (positions[k] - m_window_start[k]) * (1.0 / window);
+        m_contact_depths[k] = 0.0;
+    }
+    m_self_collision->enforce(m_window_start, positions, velocities, m_window_start_time, t_end);
+    return carried;
 }
 
 void XPBDStepper::save_state(ByteWriter& out) const {

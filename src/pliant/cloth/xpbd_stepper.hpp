@@ -218,6 +218,12 @@ private:
     // carried with the obstacle (obstacle_put_back.hpp); their vertices' obstacle contacts are
     // dropped (they move with the surface). Returns the vertices moved.
     std::int64_t put_back_into_obstacle_motion(ClothModel& model);
+    // The self-collision fail-safe over the window that ends at t_end (s). With mesh obstacles,
+    // the triangles of the vertices it put back that meet an obstacle (which moved on over the
+    // window) go where the obstacles' motion since the window's start carries them, and the
+    // fail-safe checks that motion again, so the window still ends with the cloth apart from
+    // itself; what it puts back once more stays. Returns the vertices carried.
+    std::int64_t enforce_window(ClothModel& model, double t_end);
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
@@ -284,6 +290,10 @@ private:
     std::int64_t m_num_position_resets = 0;  // the model's when self-collision last started
     std::vector<Vec3d> m_window_start;       // positions at the start of a fail-safe window
     double m_window_start_time = 0.0;        // s
+    // With mesh obstacles: where the obstacles were at the window's start, and the positions
+    // before the fail-safe (enforce_window).
+    ObstaclePlacements m_window_obstacles;
+    std::vector<Vec3d> m_before_fail_safe;
     // The span [start, end] (s) the last self-collision gather covers; it outlives a step, so
     // that steps of one window each gather at the same substeps as longer steps.
     double m_gather_start_time = 0.0;
