@@ -372,8 +372,21 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     // undone.
     if (m_ogc) {
         watch.restart();
+        const bool meshes = !model.mesh_obstacles().empty();
+        if (meshes) {
+            m_before_self.assign(positions.begin(), positions.end());
+        }
         m_ogc->project(positions, m_previous_positions, inverse_masses,
                        material.self_static_friction, material.self_kinetic_friction);
+        if (meshes) {
+            // A push that took a triangle into an obstacle is undone (the truncation below keeps
+            // every vertex within its bound either way); then the passes' vertices are seeded
+            // again for the put-back after the truncation.
+            m_put_back.seed(positions, m_before_self);
+            m_step_pushes_undone +=
+                m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::reference);
+            m_put_back.seed(positions, m_before_contacts);
+        }
         // Vertices held back in the prediction or here (a vertex held back in both counts twice).
         if (m_pins_left_sets) {  // catch_up's target
             m_ogc_wanted.assign(positions.begin(), positions.end());

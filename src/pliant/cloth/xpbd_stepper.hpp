@@ -29,7 +29,9 @@
 //   (obstacle_put_back.hpp, Fallback::reference); the CCD
 //   fail-safe runs after every 4 substeps (a window) on the motion of those 4 substeps, and the
 //   candidate pairs are gathered before every window or, while contact is sparse, every second
-//   one; self_collision.hpp)
+//   one; self_collision.hpp; with mesh obstacles, the triangles of vertices the fail-safe put
+//   back that meet an obstacle go where the obstacle's motion over the window carries their
+//   start, and the fail-safe checks the window again: enforce_window)
 //   5. v = (x - x_previous) / h, less the part of an obstacle's push that undid a penetration
 //      the vertex began the substep with (cloth given inside an obstacle comes out without being
 //      thrown); Coulomb friction on the velocities of vertices in contact (relative to the
@@ -43,7 +45,8 @@
 // shift from the prediction, a detection first if a pin left its set (with the pins where they
 // moved and the free vertices where the substep started, detail::pins_left_sets), and every free
 // vertex's move truncated to its bound; after 4, every detected pair closer than the contact
-// radius pushed apart to it (OgcContact::project, with the self-friction), then every free
+// radius pushed apart to it (OgcContact::project, with the self-friction; with mesh obstacles a
+// push that took a triangle into one undone, as on the proximity path), then every free
 // vertex's move since the truncated prediction truncated again; in a substep whose pins left
 // their sets, after each of the two truncations, detections from the truncated positions that
 // let the vertices the balls held back go on toward where the substep took them (catch_up);
@@ -117,11 +120,13 @@ struct ClothStepStats {
     // resolve_mesh_face_contacts) and that were lifted off, summed over the substeps.
     std::int64_t obstacle_face_contacts = 0;
     // Vertices of cloth triangles that the obstacle passes left in an obstacle, put back where
-    // they started the substep, carried with the obstacle (obstacle_put_back.hpp), summed over
-    // the substeps.
+    // they started the substep, carried with the obstacle (obstacle_put_back.hpp), and of
+    // triangles the fail-safe put back into one, carried over its window (enforce_window),
+    // summed over the substeps.
     std::int64_t obstacle_carried = 0;
     // Vertices put back where they were before the self-contacts because their pushes took a
-    // cloth triangle into an obstacle (the proximity contact), summed over the substeps.
+    // cloth triangle into an obstacle (the proximity contact, and OGC's with mesh obstacles),
+    // summed over the substeps.
     std::int64_t obstacle_pushes_undone = 0;
     // Obstacles that jump: the farthest an obstacle's surface moved in one substep (m), the free
     // vertices whose push out of an obstacle was bounded in the last substep (with
