@@ -146,7 +146,7 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
     m_moved.clear();
     m_marked.clear();
     m_seeds.clear();
-    m_stuck = 0;
+    m_stuck.clear();
     const auto add_triangles_of = [&](std::int32_t v) {
         for (const std::int32_t t : topology.triangles_of_vertex(v)) {
             const auto k = static_cast<std::size_t>(t);
@@ -219,7 +219,7 @@ std::int64_t ObstaclePutBack::run(ClothModel& model, std::span<const Vec3d> refe
                 }
             }
             if (!usable || triangle_meets_obstacles(model, corners[0], corners[1], corners[2])) {
-                ++m_stuck;
+                m_stuck.push_back(m_seeds[i]);
                 continue;
             }
             for (std::size_t j = 0; j < 3; ++j) {

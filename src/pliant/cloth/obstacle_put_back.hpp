@@ -85,7 +85,9 @@ public:
 
     std::span<const std::int32_t> moved() const { return m_moved; }
     // Triangles of the last run that met an obstacle at their fallback too (left as they were).
-    std::int64_t stuck() const { return m_stuck; }
+    std::int64_t stuck() const { return static_cast<std::int64_t>(m_stuck.size()); }
+    // Those triangles, in the order they were found.
+    std::span<const std::int32_t> stuck_triangles() const { return m_stuck; }
 
 private:
     std::vector<std::uint8_t> m_seeded;          // per vertex: seed() marked it
@@ -95,7 +97,7 @@ private:
     std::vector<std::int32_t> m_met;  // per seed: the obstacle it meets (obstacle_met_by), or -1
     std::vector<std::int32_t> m_moved;
     std::vector<std::int32_t> m_marked;  // the vertices whose m_vertex_moved is set
-    std::int64_t m_stuck = 0;
+    std::vector<std::int32_t> m_stuck;
 };
 
 }  // namespace pliant::cloth

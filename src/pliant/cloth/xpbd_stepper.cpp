@@ -355,6 +355,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     model.move_obstacles(t_end);
     ObstacleTally contacts = resolve_obstacles(model, h);
+    if (m_ogc && !model.mesh_obstacles().empty()) {
+        m_after_passes.assign(positions.begin(), positions.end());
+    }
     // Vertices left behind a mesh obstacle's surface are found there next substep.
     m_obstacle_lag = contacts.max_lag;
     if (!model.mesh_obstacles().empty()) {
@@ -397,8 +400,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         if (m_pins_left_sets && ball_held > 0) {
             catch_up(positions, velocities, inverse_masses);
         }
-        if (!model.mesh_obstacles().empty()) {
+        if (meshes) {
             contacts.carried = put_back_into_obstacle_motion(model);
+            contacts.carried += release_stuck_triangles(model);
         }
         m_step_truncated += m_substep_truncated;
         solve_ms += watch.elapsed_ms();
@@ -661,6 +665,26 @@ std::int64_t XPBDStepper::put_back_into_obstacle_motion(ClothModel& model) {
         m_put_back.run(model, m_previous_positions, ObstaclePutBack::Fallback::carried, max_carry);
     for (const std::int32_t v : m_put_back.moved()) {
         m_contact_depths[static_cast<std::size_t>(v)] = 0.0;  // it moves with the surface
+    }
+    return moved;
+}
+
+std::int64_t XPBDStepper::release_stuck_triangles(ClothModel& model) {
+    if (m_put_back.stuck() == 0 || !m_ogc->options().audit) {
+        return 0;
+    }
+    const std::span<Vec3d> positions = model.mutable_positions();
+    const std::span<const double> inverse_masses = model.inverse_masses();
+    std::int64_t moved = 0;
+    for (const std::int32_t t : m_put_back.stuck_triangles()) {
+        for (const std::int32_t corner : model.triangles()[static_cast<std::size_t>(t)]) {
+            const auto v = static_cast<std::size_t>(corner);
+            if (inverse_masses[v] > 0.0 && !(positions[v] == m_after_passes[v])) {
+                positions[v] = m_after_passes[v];
+                m_contact_depths[v] = 0.0;
+                ++moved;
+            }
+        }
     }
     return moved;
 }

@@ -23,7 +23,9 @@
 //      cloth's edges and triangles swept against the surface's edges and vertices
 //      (mesh_contact.hpp); a triangle of a vertex these passes moved that still meets a mesh
 //      obstacle goes where the substep began, carried with the obstacle (obstacle_put_back.hpp;
-//      with OGC after OGC's truncation);
+//      with OGC after OGC's truncation, and a triangle that cannot go there goes where these
+//      passes left it, with a detection at the substep's end whose audit checks the move:
+//      release_stuck_triangles);
 //   (with self-collision: after 4, the cloth's own contacts are pushed thickness apart, and a
 //   vertex whose push took one of its triangles into an obstacle is put back where 4 left it
 //   (obstacle_put_back.hpp, Fallback::reference); the CCD
@@ -229,6 +231,13 @@ private:
     // fail-safe checks that motion again, so the window still ends with the cloth apart from
     // itself; what it puts back once more stays. Returns the vertices carried.
     std::int64_t enforce_window(ClothModel& model, double t_end);
+    // OGC with ogc.audit: the triangles the put-back left in an obstacle (their fallback meets it
+    // too: OGC's truncation took back the passes' correction, and the carried start of a
+    // deforming body's surface is inside it as well) have their free vertices put where the
+    // passes left them, clear of the obstacles. That move leaves the vertices' bounds, so the
+    // caller detects at the substep's end, whose audit (the CCD) puts back any vertex whose
+    // move could make the cloth pass through itself. Returns the vertices moved.
+    std::int64_t release_stuck_triangles(ClothModel& model);
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
     void restart_self_collision(const ClothModel& model);
@@ -284,6 +293,7 @@ private:
     // Triangles the passes left in an obstacle, and self-contact pushes into one (the positions
     // before the self-contacts: m_before_self), are put back (obstacle_put_back.hpp).
     std::vector<Vec3d> m_before_self;
+    std::vector<Vec3d> m_after_passes;  // OGC with mesh obstacles: positions after the passes
     ObstaclePutBack m_put_back;
     std::int64_t m_step_pushes_undone = 0;
     // The largest push an obstacle held back in the last substep (m): how far behind a mesh
