@@ -383,8 +383,9 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
                        material.self_static_friction, material.self_kinetic_friction);
         if (meshes) {
             // A push that took a triangle into an obstacle is undone (the truncation below keeps
-            // every vertex within its bound either way); then the passes' vertices are seeded
-            // again for the put-back after the truncation.
+            // every vertex within its bound either way); then every vertex moved since the
+            // passes began (by them or by the contact) is seeded for the put-back after the
+            // truncation.
             m_put_back.seed(positions, m_before_self);
             m_step_pushes_undone +=
                 m_put_back.run(model, m_before_self, ObstaclePutBack::Fallback::reference);
