@@ -355,9 +355,6 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
     model.seams().project(positions, inverse_masses, t_end);  // seams.hpp
     model.move_obstacles(t_end);
     ObstacleTally contacts = resolve_obstacles(model, h);
-    if (m_ogc && !model.mesh_obstacles().empty()) {
-        m_after_passes.assign(positions.begin(), positions.end());
-    }
     // Vertices left behind a mesh obstacle's surface are found there next substep.
     m_obstacle_lag = contacts.max_lag;
     if (!model.mesh_obstacles().empty()) {
@@ -377,6 +374,8 @@ XPBDStepper::ObstacleTally XPBDStepper::substep(ClothModel& model, double h, dou
         watch.restart();
         const bool meshes = !model.mesh_obstacles().empty();
         if (meshes) {
+            // Where the passes left the cloth: the undo's fallback below, and
+            // release_stuck_triangles'.
             m_before_self.assign(positions.begin(), positions.end());
         }
         m_ogc->project(positions, m_previous_positions, inverse_masses,
@@ -680,8 +679,8 @@ std::int64_t XPBDStepper::release_stuck_triangles(ClothModel& model) {
     for (const std::int32_t t : m_put_back.stuck_triangles()) {
         for (const std::int32_t corner : model.triangles()[static_cast<std::size_t>(t)]) {
             const auto v = static_cast<std::size_t>(corner);
-            if (inverse_masses[v] > 0.0 && !(positions[v] == m_after_passes[v])) {
-                positions[v] = m_after_passes[v];
+            if (inverse_masses[v] > 0.0 && !(positions[v] == m_before_self[v])) {
+                positions[v] = m_before_self[v];
                 m_contact_depths[v] = 0.0;
                 ++moved;
             }

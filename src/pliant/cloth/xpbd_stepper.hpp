@@ -234,9 +234,9 @@ private:
     // OGC with ogc.audit: the triangles the put-back left in an obstacle (their fallback meets it
     // too: OGC's truncation took back the passes' correction, and the carried start of a
     // deforming body's surface is inside it as well) have their free vertices put where the
-    // passes left them, clear of the obstacles. That move leaves the vertices' bounds, so the
-    // caller detects at the substep's end, whose audit (the CCD) puts back any vertex whose
-    // move could make the cloth pass through itself. Returns the vertices moved.
+    // passes left them (m_before_self), clear of the obstacles. That move leaves the vertices'
+    // bounds, so the caller detects at the substep's end, whose audit (the CCD) puts back any
+    // vertex whose move could make the cloth pass through itself. Returns the vertices moved.
     std::int64_t release_stuck_triangles(ClothModel& model);
     // Self-collision's paths and candidates describe positions that are gone: it starts over
     // (when it is on).
@@ -293,7 +293,6 @@ private:
     // Triangles the passes left in an obstacle, and self-contact pushes into one (the positions
     // before the self-contacts: m_before_self), are put back (obstacle_put_back.hpp).
     std::vector<Vec3d> m_before_self;
-    std::vector<Vec3d> m_after_passes;  // OGC with mesh obstacles: positions after the passes
     ObstaclePutBack m_put_back;
     std::int64_t m_step_pushes_undone = 0;
     // The largest push an obstacle held back in the last substep (m): how far behind a mesh
